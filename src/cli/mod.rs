@@ -1,0 +1,89 @@
+//! The `mra` command line. A thin `clap` shell: every command calls the library and
+//! adds the file name to errors. One file per command group.
+
+use clap::{Parser, Subcommand};
+
+pub mod curve;
+pub mod mesh;
+pub mod surface;
+
+/// Multiresolution codec, upscaler and terrain synthesis for images, volumes and heightmaps.
+#[derive(Parser, Debug)]
+#[command(name = "mra", version, about, long_about = None)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+pub enum Command {
+    /// Curves: Bézier, B-splines, NURBS (evaluate, split, elevate, insert knots, plot).
+    #[command(subcommand)]
+    Curve(curve::Command),
+    /// Surfaces: patches, lofts, Coons, revolution, sweeps, blends.
+    #[command(subcommand)]
+    Surface(surface::Command),
+    /// Polygon meshes: info, subdivision, smoothing, simplification, rendering.
+    #[command(subcommand)]
+    Mesh(mesh::Command),
+}
+
+/// A failure on the command line: one line on stderr, exit code 2.
+#[derive(Debug)]
+pub struct Failure(pub String);
+
+impl std::fmt::Display for Failure {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl From<crate::Error> for Failure {
+    fn from(e: crate::Error) -> Self {
+        Failure(e.to_string())
+    }
+}
+
+impl Failure {
+    /// Prefix the message with the file (or other context) it concerns.
+    pub fn context(what: impl std::fmt::Display, e: impl std::fmt::Display) -> Self {
+        Failure(format!("{what}: {e}"))
+    }
+}
+
+pub type CliResult = std::result::Result<(), Failure>;
+
+/// Parse the arguments, run the command, and return the process exit code.
+pub fn main() -> i32 {
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) => {
+            use clap::error::ErrorKind as K;
+            let code = match e.kind() {
+                K::DisplayHelp | K::DisplayVersion | K::DisplayHelpOnMissingArgumentOrSubcommand => 0,
+                _ => 2,
+            };
+            if code == 0 {
+                let _ = e.print();
+            } else {
+                // one line: clap's first line of the message
+                let msg = e.to_string();
+                let first = msg.lines().find(|l| !l.trim().is_empty()).unwrap_or("invalid arguments");
+                eprintln!("mra: {}", first.trim_start_matches("error: "));
+            }
+            return code;
+        }
+    };
+    let result = match cli.command {
+        Command::Curve(c) => curve::run(c),
+        Command::Surface(c) => surface::run(c),
+        Command::Mesh(c) => mesh::run(c),
+    };
+    match result {
+        Ok(()) => 0,
+        Err(f) => {
+            eprintln!("mra: {f}");
+            2
+        }
+    }
+}

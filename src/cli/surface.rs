@@ -1,0 +1,14 @@
+//! `mra surface …` (to be written).
+
+use clap::Subcommand;
+
+#[derive(Subcommand, Debug)]
+pub enum Command {
+    /// Placeholder until the surface commands land.
+    #[command(hide = true)]
+    Placeholder,
+}
+
+pub fn run(_c: Command) -> super::CliResult {
+    Err(super::Failure("not implemented yet".into()))
+}

@@ -1,0 +1,30 @@
+//! # mra — multiresolution analysis for images, volumes, heightmaps and curves
+//!
+//! One idea runs through the crate: a banded two-scale operator (the notes' A, B, P, Q,
+//! each written as start block + regular rows + end block) applied along any axis of any
+//! array. On it stand the codec, the upscaler, terrain synthesis and the course module.
+//!
+//! ```text
+//! src/error.rs        Error with kind(): Parameter, Format, Unsupported, LimitsExceeded, Io
+//! src/scheme/         1D schemes (Haar, Chaikin, cubic B-spline), boundary modes, subdivision
+//! src/tensor/         N-d arrays, transforms along any axis, pyramids; par.rs holds the rayon code
+//! src/io/             images, volumes, heightmaps, point lists (one file per format)
+//! src/metrics.rs      MSE, PSNR, SSIM
+//! src/curve/          Bézier, B-spline (de Boor), NURBS, knot insertion
+//! src/surface/        patches, Coons, revolution, sweep, blends
+//! src/mesh/           half-edge meshes, I/O, topology, subdivision surfaces
+//! src/solid/          implicit solids, CSG, ray casting, polygonisation
+//! src/cli/            the `mra` command line, a thin shell over the above
+//! ```
+//!
+//! Data flows one way: read → array → transform → (quantize → code → container) → back.
+
+pub mod cli;
+pub mod curve;
+pub mod error;
+pub mod mesh;
+pub mod scheme;
+pub mod surface;
+pub mod tensor;
+
+pub use error::{Error, ErrorKind, Result};

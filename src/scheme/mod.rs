@@ -1,0 +1,1 @@
+//! One-dimensional multiresolution schemes and subdivision.

@@ -1,0 +1,1 @@
+//! Tensor-product engine: N-d arrays, transforms along any axis, pyramids.
