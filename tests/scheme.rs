@@ -1,7 +1,9 @@
 //! Exactness of the 1D schemes: perfect reconstruction for every scheme × boundary ×
 //! length, the filter rows as written in the notes, worked examples.
 
-use mra::scheme::{analyze_lane, max_levels, synthesize_lane, Boundary, LevelKind, Scheme, TwoScale};
+use mra::scheme::{
+    analyze_lane, max_levels, synthesize_lane, Boundary, LevelKind, Scheme, TwoScale,
+};
 use proptest::prelude::*;
 
 fn dense_product(t: &TwoScale) -> Vec<Vec<f64>> {
@@ -58,16 +60,29 @@ fn native_levels_are_used_from_the_documented_lengths_on() {
         (Scheme::Cubic, Symmetric, 3),
     ];
     for (s, b, m) in cases {
-        assert_eq!(TwoScale::new(s, b, m).kind, LevelKind::Native, "{s} {b} {m}");
-        assert_ne!(TwoScale::new(s, b, m - 1).kind, LevelKind::Native, "{s} {b} {}", m - 1);
+        assert_eq!(
+            TwoScale::new(s, b, m).kind,
+            LevelKind::Native,
+            "{s} {b} {m}"
+        );
+        assert_ne!(
+            TwoScale::new(s, b, m - 1).kind,
+            LevelKind::Native,
+            "{s} {b} {}",
+            m - 1
+        );
     }
 }
 
 fn lcg(seed: u64, n: usize) -> Vec<f64> {
-    let mut x = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+    let mut x = seed
+        .wrapping_mul(6364136223846793005)
+        .wrapping_add(1442695040888963407);
     (0..n)
         .map(|_| {
-            x = x.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            x = x
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             ((x >> 11) as f64 / (1u64 << 53) as f64) * 200.0 - 100.0
         })
         .collect()
@@ -97,7 +112,6 @@ fn row(t: &MraCsr, r: usize) -> Vec<(usize, f64)> {
     t.row(r).collect()
 }
 
-
 #[test]
 fn interior_rows_equal_the_regular_filters_exactly() {
     // Chaikin, all three boundaries: interior analysis rows a and b, interior synthesis
@@ -109,11 +123,23 @@ fn interior_rows_equal_the_regular_filters_exactly() {
         let j = n / 2; // well inside
         let a = row(&t.analysis, j);
         let first = a[0].0;
-        assert_eq!(a.iter().map(|x| x.1).collect::<Vec<_>>(), vec![-0.25, 0.75, 0.75, -0.25], "{boundary}");
+        assert_eq!(
+            a.iter().map(|x| x.1).collect::<Vec<_>>(),
+            vec![-0.25, 0.75, 0.75, -0.25],
+            "{boundary}"
+        );
         assert!(a.windows(2).all(|w| w[1].0 == w[0].0 + 1));
         let b = row(&t.analysis, n + j);
-        assert_eq!(b.iter().map(|x| x.1).collect::<Vec<_>>(), vec![0.25, -0.75, 0.75, -0.25], "{boundary}");
-        assert_eq!(b[0].0, first + 2, "{boundary}: b sits two fine samples right of a");
+        assert_eq!(
+            b.iter().map(|x| x.1).collect::<Vec<_>>(),
+            vec![0.25, -0.75, 0.75, -0.25],
+            "{boundary}"
+        );
+        assert_eq!(
+            b[0].0,
+            first + 2,
+            "{boundary}: b sits two fine samples right of a"
+        );
         // columns of P and Q from the synthesis rows
         let s = t.synthesis.to_dense();
         let pcol: Vec<f64> = (0..m).map(|i| s[i][j]).filter(|&x| x != 0.0).collect();
@@ -127,14 +153,22 @@ fn interior_rows_equal_the_regular_filters_exactly() {
         let n = t.coarse;
         let j = n / 2;
         let a: Vec<f64> = row(&t.analysis, j).iter().map(|x| x.1).collect();
-        assert_eq!(a, vec![0.125, -0.5, 0.375, 1.0, 0.375, -0.5, 0.125], "{boundary}");
+        assert_eq!(
+            a,
+            vec![0.125, -0.5, 0.375, 1.0, 0.375, -0.5, 0.125],
+            "{boundary}"
+        );
         let b: Vec<f64> = row(&t.analysis, n + j).iter().map(|x| x.1).collect();
         assert_eq!(b, vec![-0.125, 0.5, -0.75, 0.5, -0.125], "{boundary}");
         let s = t.synthesis.to_dense();
         let pcol: Vec<f64> = (0..m).map(|i| s[i][j]).filter(|&x| x != 0.0).collect();
         assert_eq!(pcol, vec![0.125, 0.5, 0.75, 0.5, 0.125], "{boundary}");
         let qcol: Vec<f64> = (0..m).map(|i| s[i][n + j]).filter(|&x| x != 0.0).collect();
-        assert_eq!(qcol, vec![0.125, 0.5, 0.375, -1.0, 0.375, 0.5, 0.125], "{boundary}");
+        assert_eq!(
+            qcol,
+            vec![0.125, 0.5, 0.375, -1.0, 0.375, 0.5, 0.125],
+            "{boundary}"
+        );
     }
 }
 
@@ -144,12 +178,27 @@ fn chaikin_interpolating_blocks_are_those_of_reduce_resolution_and_find_details(
     let t = TwoScale::new(Scheme::Chaikin, Boundary::Interpolating, m);
     assert_eq!((t.coarse, t.details()), (7, 5));
     assert_eq!(row(&t.analysis, 0), vec![(0, 1.0)]);
-    assert_eq!(row(&t.analysis, 1), vec![(0, -0.5), (1, 1.0), (2, 0.75), (3, -0.25)]);
-    assert_eq!(row(&t.analysis, 5), vec![(8, -0.25), (9, 0.75), (10, 1.0), (11, -0.5)]);
+    assert_eq!(
+        row(&t.analysis, 1),
+        vec![(0, -0.5), (1, 1.0), (2, 0.75), (3, -0.25)]
+    );
+    assert_eq!(
+        row(&t.analysis, 5),
+        vec![(8, -0.25), (9, 0.75), (10, 1.0), (11, -0.5)]
+    );
     assert_eq!(row(&t.analysis, 6), vec![(11, 1.0)]);
-    assert_eq!(row(&t.analysis, 7), vec![(0, -0.5), (1, 1.0), (2, -0.75), (3, 0.25)]);
-    assert_eq!(row(&t.analysis, 8), vec![(2, -0.25), (3, 0.75), (4, -0.75), (5, 0.25)]);
-    assert_eq!(row(&t.analysis, 11), vec![(8, 0.25), (9, -0.75), (10, 1.0), (11, -0.5)]);
+    assert_eq!(
+        row(&t.analysis, 7),
+        vec![(0, -0.5), (1, 1.0), (2, -0.75), (3, 0.25)]
+    );
+    assert_eq!(
+        row(&t.analysis, 8),
+        vec![(2, -0.25), (3, 0.75), (4, -0.75), (5, 0.25)]
+    );
+    assert_eq!(
+        row(&t.analysis, 11),
+        vec![(8, 0.25), (9, -0.75), (10, 1.0), (11, -0.5)]
+    );
     // RECONSTRUCTION lines 1-2 and 13-14: E_1 = 0·D_1, E_2 = ½D_1, E_{m-1} = ½D_s, E_m = 0·D_s
     assert_eq!(row(&t.synthesis, 0), vec![(0, 1.0)]);
     assert_eq!(row(&t.synthesis, 1), vec![(0, 0.5), (1, 0.5), (7, 0.5)]);
@@ -169,7 +218,10 @@ fn interpolating_ends_keep_the_first_and_last_points() {
             let mut packed = vec![0.0; m];
             t.decompose(&f, 1, &mut packed);
             assert_eq!(packed[0], f[0], "{scheme} m={m}");
-            assert!((packed[t.coarse - 1] - f[m - 1]).abs() < 1e-12, "{scheme} m={m}");
+            assert!(
+                (packed[t.coarse - 1] - f[m - 1]).abs() < 1e-12,
+                "{scheme} m={m}"
+            );
         }
     }
 }
@@ -183,7 +235,10 @@ fn constant_input_has_zero_details_and_linear_input_zero_interior_details() {
                 let mut packed = vec![0.0f64; m];
                 t.decompose(&vec![3.5f64; m], 1, &mut packed);
                 for (k, d) in packed[t.coarse..].iter().enumerate() {
-                    assert!(d.abs() < 1e-12, "{scheme} {boundary} m={m}: constant gives detail {k} = {d}");
+                    assert!(
+                        d.abs() < 1e-12,
+                        "{scheme} {boundary} m={m}: constant gives detail {k} = {d}"
+                    );
                 }
                 if scheme == Scheme::Haar {
                     continue;
@@ -192,8 +247,16 @@ fn constant_input_has_zero_details_and_linear_input_zero_interior_details() {
                 t.decompose(&f, 1, &mut packed);
                 let s = t.details();
                 // away from the ends (and the carried sample), details of a line vanish
-                for (k, d) in packed[t.coarse..].iter().enumerate().skip(3).take(s.saturating_sub(6)) {
-                    assert!(d.abs() < 1e-12, "{scheme} {boundary} m={m}: linear gives detail {k} = {d}");
+                for (k, d) in packed[t.coarse..]
+                    .iter()
+                    .enumerate()
+                    .skip(3)
+                    .take(s.saturating_sub(6))
+                {
+                    assert!(
+                        d.abs() < 1e-12,
+                        "{scheme} {boundary} m={m}: linear gives detail {k} = {d}"
+                    );
                 }
             }
         }
@@ -205,8 +268,16 @@ fn haar_worked_example_of_section_9_2() {
     let f = [5.0, 7.0, 10.0, 14.0, 13.0, 13.0, 8.0, 6.0];
     let (packed, plan) = analyze_lane(&f, 1, Scheme::Haar, Boundary::Symmetric, 2).unwrap();
     assert_eq!(&packed[..2], &[9.0, 10.0], "coarse");
-    assert_eq!(&packed[plan.detail_range(2)], &[-3.0, 3.0], "coarsest details");
-    assert_eq!(&packed[plan.detail_range(1)], &[-1.0, -2.0, 0.0, 1.0], "finest details");
+    assert_eq!(
+        &packed[plan.detail_range(2)],
+        &[-3.0, 3.0],
+        "coarsest details"
+    );
+    assert_eq!(
+        &packed[plan.detail_range(1)],
+        &[-1.0, -2.0, 0.0, 1.0],
+        "finest details"
+    );
     assert_eq!(synthesize_lane(&packed, 1, &plan).unwrap(), f.to_vec());
 }
 
@@ -215,7 +286,7 @@ fn max_levels_follow_the_coarse_lengths() {
     assert_eq!(max_levels(Scheme::Haar, Boundary::Periodic, 8), 3);
     assert_eq!(max_levels(Scheme::Haar, Boundary::Periodic, 1), 0);
     assert_eq!(max_levels(Scheme::Haar, Boundary::Periodic, 9), 4); // 9 → 5 → 3 → 2 → 1
-    // Chaikin interpolating: 64 → 33 → 17(carry 16) → 9 (carry 8) → 5: 4 levels
+                                                                    // Chaikin interpolating: 64 → 33 → 17(carry 16) → 9 (carry 8) → 5: 4 levels
     assert_eq!(max_levels(Scheme::Chaikin, Boundary::Interpolating, 64), 4);
     assert_eq!(max_levels(Scheme::Chaikin, Boundary::Interpolating, 7), 0);
 

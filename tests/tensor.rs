@@ -17,14 +17,31 @@ fn noise(seed: u64, n: usize) -> Vec<f64> {
         .collect()
 }
 
-fn round_trip(shape: &[usize], axes: Vec<usize>, s: usize, b: usize, order: Order, levels: usize, seed: u64) {
+fn round_trip(
+    shape: &[usize],
+    axes: Vec<usize>,
+    s: usize,
+    b: usize,
+    order: Order,
+    levels: usize,
+    seed: u64,
+) {
     let data = noise(seed, shape.iter().product());
     let mut a = Array::from_shape_vec(shape, data.clone()).unwrap();
-    let spec = PyramidSpec { scheme: Scheme::ALL[s], boundary: Boundary::ALL[b], levels, order, axes };
+    let spec = PyramidSpec {
+        scheme: Scheme::ALL[s],
+        boundary: Boundary::ALL[b],
+        levels,
+        order,
+        axes,
+    };
     let pyr = analyze(&mut a, &spec).unwrap();
     synthesize(&mut a, &pyr).unwrap();
     for (i, (x, y)) in data.iter().zip(a.data()).enumerate() {
-        assert!((x - y).abs() <= 1e-12 * 100.0, "{spec:?} shape {shape:?}: sample {i}: {x} vs {y}");
+        assert!(
+            (x - y).abs() <= 1e-12 * 100.0,
+            "{spec:?} shape {shape:?}: sample {i}: {x} vs {y}"
+        );
     }
 }
 
@@ -60,23 +77,49 @@ fn large_rows_take_the_row_path_and_reconstruct() {
 #[test]
 fn f32_arrays_reconstruct_to_f32_precision() {
     let shape = [129usize, 257];
-    let data: Vec<f32> = noise(3, shape[0] * shape[1]).iter().map(|&x| x as f32).collect();
+    let data: Vec<f32> = noise(3, shape[0] * shape[1])
+        .iter()
+        .map(|&x| x as f32)
+        .collect();
     for scheme in Scheme::ALL {
         for boundary in Boundary::ALL {
             let mut a = Array::from_shape_vec(&shape, data.clone()).unwrap();
-            let spec = PyramidSpec { scheme, boundary, levels: 5, order: Order::NonStandard, axes: vec![0, 1] };
+            let spec = PyramidSpec {
+                scheme,
+                boundary,
+                levels: 5,
+                order: Order::NonStandard,
+                axes: vec![0, 1],
+            };
             let pyr = analyze(&mut a, &spec).unwrap();
             synthesize(&mut a, &pyr).unwrap();
-            let err = data.iter().zip(a.data()).map(|(x, y)| (x - y).abs()).fold(0.0f32, f32::max);
-            assert!(err < 2e-3, "{scheme} {boundary}: max error {err} on values up to 100");
+            let err = data
+                .iter()
+                .zip(a.data())
+                .map(|(x, y)| (x - y).abs())
+                .fold(0.0f32, f32::max);
+            assert!(
+                err < 2e-3,
+                "{scheme} {boundary}: max error {err} on values up to 100"
+            );
         }
     }
 }
 
 #[test]
 fn subbands_tile_the_array_exactly_once() {
-    for (shape, axes) in [(vec![37usize, 64], vec![0usize, 1]), (vec![10, 17, 33], vec![0, 1, 2]), (vec![20, 30, 3], vec![0, 1])] {
-        let spec = PyramidSpec { scheme: Scheme::Chaikin, boundary: Boundary::Interpolating, levels: 3, order: Order::NonStandard, axes };
+    for (shape, axes) in [
+        (vec![37usize, 64], vec![0usize, 1]),
+        (vec![10, 17, 33], vec![0, 1, 2]),
+        (vec![20, 30, 3], vec![0, 1]),
+    ] {
+        let spec = PyramidSpec {
+            scheme: Scheme::Chaikin,
+            boundary: Boundary::Interpolating,
+            levels: 3,
+            order: Order::NonStandard,
+            axes,
+        };
         let pyr = Pyramid::plan(&shape, &spec).unwrap();
         let mut count = vec![0u8; shape.iter().product()];
         for band in pyr.subbands() {
@@ -102,13 +145,23 @@ fn constant_image_has_zero_detail_bands() {
     for scheme in Scheme::ALL {
         for boundary in Boundary::ALL {
             let mut a = Array::from_shape_vec(&shape, vec![42.0f64; 64 * 96]).unwrap();
-            let spec = PyramidSpec { scheme, boundary, levels: 3, order: Order::NonStandard, axes: vec![0, 1] };
+            let spec = PyramidSpec {
+                scheme,
+                boundary,
+                levels: 3,
+                order: Order::NonStandard,
+                axes: vec![0, 1],
+            };
             let pyr = analyze(&mut a, &spec).unwrap();
             for band in pyr.subbands().iter().skip(1) {
                 for i in band.ranges[0].clone() {
                     for j in band.ranges[1].clone() {
                         let v = a.data()[i * shape[1] + j];
-                        assert!(v.abs() < 1e-10, "{scheme} {boundary} band {:?}: {v}", band.high);
+                        assert!(
+                            v.abs() < 1e-10,
+                            "{scheme} {boundary} band {:?}: {v}",
+                            band.high
+                        );
                     }
                 }
             }
