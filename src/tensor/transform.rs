@@ -17,7 +17,7 @@ use crate::scheme::Sample;
 /// Elements narrower than this go through gather mode.
 const ROW_MIN: usize = 32;
 /// Samples per strip in row mode.
-const STRIP: usize = 512;
+const STRIP: usize = 128;
 /// Target width of a gathered element in gather mode.
 const GATHER: usize = 64;
 
@@ -114,29 +114,63 @@ pub fn transform_axis<T: Sample>(
                 // SAFETY: the lanes of this group are disjoint from every other group's.
                 unsafe {
                     for (gi, &b) in lanes.iter().enumerate() {
-                        for i in 0..len {
-                            std::ptr::copy_nonoverlapping(
-                                p.0.add(b + i * es),
-                                sin.as_mut_ptr().add(i * gw + gi * w),
-                                w,
-                            );
-                        }
+                        gather(p.0.add(b) as *const T, es, w, len, &mut sin[gi * w..], gw);
                     }
                 }
                 let cw = lanes.len() * w;
                 op.apply(sin, gw, sout, gw, cw);
                 unsafe {
                     for (gi, &b) in lanes.iter().enumerate() {
-                        for i in 0..len {
-                            std::ptr::copy_nonoverlapping(
-                                sout.as_ptr().add(i * gw + gi * w),
-                                p.0.add(b + i * es),
-                                w,
-                            );
-                        }
+                        scatter(&sout[gi * w..], gw, p.0.add(b), es, w, len);
                     }
                 }
             },
         );
+    }
+}
+
+/// Copy `len` elements of `w` samples at stride `es` from `src` into `dst` at stride `ds`.
+///
+/// # Safety
+/// The `len` source elements must be valid for reads and not written concurrently.
+#[inline]
+unsafe fn gather<T: Sample>(
+    src: *const T,
+    es: usize,
+    w: usize,
+    len: usize,
+    dst: &mut [T],
+    ds: usize,
+) {
+    if w == 1 {
+        // the last axis: a contiguous lane, written into one column of the scratch
+        let lane = unsafe { std::slice::from_raw_parts(src, (len - 1) * es + 1) };
+        for (i, d) in dst.iter_mut().step_by(ds).take(len).enumerate() {
+            *d = lane[i * es];
+        }
+    } else {
+        for i in 0..len {
+            let e = unsafe { std::slice::from_raw_parts(src.add(i * es), w) };
+            dst[i * ds..i * ds + w].copy_from_slice(e);
+        }
+    }
+}
+
+/// The inverse of [`gather`].
+///
+/// # Safety
+/// The `len` destination elements must be valid for writes and touched by no other thread.
+#[inline]
+unsafe fn scatter<T: Sample>(src: &[T], ss: usize, dst: *mut T, es: usize, w: usize, len: usize) {
+    if w == 1 {
+        let lane = unsafe { std::slice::from_raw_parts_mut(dst, (len - 1) * es + 1) };
+        for (i, s) in src.iter().step_by(ss).take(len).enumerate() {
+            lane[i * es] = *s;
+        }
+    } else {
+        for i in 0..len {
+            let e = unsafe { std::slice::from_raw_parts_mut(dst.add(i * es), w) };
+            e.copy_from_slice(&src[i * ss..i * ss + w]);
+        }
     }
 }
