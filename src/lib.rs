@@ -22,7 +22,11 @@
 pub mod cli;
 pub mod curve;
 pub mod error;
+pub mod generate;
+pub mod io;
 pub mod mesh;
+pub mod metrics;
+pub mod progress;
 pub mod scheme;
 pub mod surface;
 pub mod tensor;

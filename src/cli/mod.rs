@@ -4,6 +4,7 @@
 use clap::{Parser, Subcommand};
 
 pub mod curve;
+pub mod io_cmds;
 pub mod mesh;
 pub mod surface;
 
@@ -26,6 +27,14 @@ pub enum Command {
     /// Polygon meshes: info, subdivision, smoothing, simplification, rendering.
     #[command(subcommand)]
     Mesh(mesh::Command),
+    /// Compare two images / volumes / heightmaps: MSE, PSNR, max error, SSIM.
+    Compare(io_cmds::CompareArgs),
+    /// Generate test data: zone plate, gradient, edges, strokes, noise, phantom, terrain.
+    Generate(io_cmds::GenerateArgs),
+    /// Show format, shape, sample type, range and metadata of a file or folder.
+    InfoFile(io_cmds::InfoFileArgs),
+    /// Convert between image / volume / heightmap formats, keeping samples exact.
+    Convert(io_cmds::ConvertArgs),
 }
 
 /// A failure on the command line: one line on stderr, exit code 2.
@@ -60,7 +69,9 @@ pub fn main() -> i32 {
         Err(e) => {
             use clap::error::ErrorKind as K;
             let code = match e.kind() {
-                K::DisplayHelp | K::DisplayVersion | K::DisplayHelpOnMissingArgumentOrSubcommand => 0,
+                K::DisplayHelp
+                | K::DisplayVersion
+                | K::DisplayHelpOnMissingArgumentOrSubcommand => 0,
                 _ => 2,
             };
             if code == 0 {
@@ -68,7 +79,10 @@ pub fn main() -> i32 {
             } else {
                 // one line: clap's first line of the message
                 let msg = e.to_string();
-                let first = msg.lines().find(|l| !l.trim().is_empty()).unwrap_or("invalid arguments");
+                let first = msg
+                    .lines()
+                    .find(|l| !l.trim().is_empty())
+                    .unwrap_or("invalid arguments");
                 eprintln!("mra: {}", first.trim_start_matches("error: "));
             }
             return code;
@@ -78,6 +92,10 @@ pub fn main() -> i32 {
         Command::Curve(c) => curve::run(c),
         Command::Surface(c) => surface::run(c),
         Command::Mesh(c) => mesh::run(c),
+        Command::Compare(a) => io_cmds::compare(a),
+        Command::Generate(a) => io_cmds::generate(a),
+        Command::InfoFile(a) => io_cmds::info_file(a),
+        Command::Convert(a) => io_cmds::convert(a),
     };
     match result {
         Ok(()) => 0,
