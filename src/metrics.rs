@@ -35,8 +35,11 @@ pub enum Convention {
     Skimage,
     /// `ImageBufAlgo.compare` / `oiiotool --diff`: samples are converted to float the way
     /// OpenImageIO reads them (u8 /255, u16 /65535, u32 /(2³²−1), i8 /127, i16 /32767,
-    /// i32 /(2³¹−1), floats unchanged), then `PSNR = 20 log10(1 / RMS)`. In the data's own
-    /// units this is R = that divisor (1 for floats).
+    /// i32 /(2³¹−1), floats unchanged), then `PSNR = 20 log10(peak / RMS)` with
+    /// `peak = max(1, largest value of either input)` and RMS over all samples. In the
+    /// data's own units this is R = peak × that divisor (255 for u8, 1 for floats in
+    /// [0, 1], the maximum for HDR floats); `--data-range R` replaces it by
+    /// `10 log10(R² / MSE)`.
     Oiio,
 }
 
@@ -114,17 +117,32 @@ fn squared_error(a: &Samples, b: &Samples) -> (f64, f64) {
     (sum, max)
 }
 
-/// `Σ (a/sa − b/sb)²` with the conversion to f32 that OpenImageIO performs.
-fn oiio_squared_error(a: &Samples, b: &Samples) -> f64 {
-    let (sa, sb) = (oiio_scale(a.sample_type()), oiio_scale(b.sample_type()));
-    let mut sum = 0.0f64;
-    for i in 0..a.len() {
-        let x = (a.get_f64(i) / sa) as f32;
-        let y = (b.get_f64(i) / sb) as f32;
-        let d = (x - y) as f64;
-        sum += d * d;
+/// A sample as OpenImageIO's float iterator reads it: integers times the f32 constant
+/// `1 / scale`, floats cast to f32.
+fn oiio_value(s: &Samples, i: usize, inv: f32) -> f32 {
+    match s {
+        Samples::F16(v) => v[i].to_f32(),
+        Samples::F32(v) => v[i],
+        Samples::F64(v) => v[i] as f32,
+        other => other.get_f64(i) as f32 * inv,
     }
-    sum
+}
+
+/// `(Σ d², peak)` as `ImageBufAlgo.compare` computes them: `d = a − b` and `d²` in f32,
+/// summed in f64; `peak = max(1, largest value of a or b)`.
+fn oiio_squared_error(a: &Samples, b: &Samples) -> (f64, f64) {
+    let ia = (1.0 / oiio_scale(a.sample_type())) as f32;
+    let ib = (1.0 / oiio_scale(b.sample_type())) as f32;
+    let mut sum = 0.0f64;
+    let mut peak = 1.0f32;
+    for i in 0..a.len() {
+        let x = oiio_value(a, i, ia);
+        let y = oiio_value(b, i, ib);
+        peak = peak.max(x).max(y);
+        let d = x - y;
+        sum += (d * d) as f64;
+    }
+    (sum, peak as f64)
 }
 
 /// Compare reference `a` with test `b` (same dims and channels).
@@ -153,10 +171,10 @@ pub fn compare(a: &Raster, b: &Raster, opts: &CompareOptions) -> Result<Comparis
         Convention::Oiio => match opts.data_range {
             Some(r) => (r, (mse > 0.0).then(|| 10.0 * (r * r / mse).log10()), "oiio"),
             None => {
-                let r = oiio_scale(a.sample_type());
-                let rms = (oiio_squared_error(&a.samples, &b.samples) / n).sqrt();
-                let psnr = (rms > 0.0).then(|| 20.0 * (1.0 / rms).log10());
-                (r, psnr, "oiio")
+                let (sq, peak) = oiio_squared_error(&a.samples, &b.samples);
+                let rms = (sq / n).sqrt();
+                let psnr = (rms > 0.0).then(|| 20.0 * (peak / rms).log10());
+                (peak * oiio_scale(a.sample_type()), psnr, "oiio")
             }
         },
     };
