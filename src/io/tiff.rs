@@ -217,6 +217,17 @@ pub fn read(path: &Path) -> Result<Raster> {
     let (w, h) = dec.dimensions().map_err(tiff_error)?;
     let ct = dec.colortype().map_err(tiff_error)?;
     let channels = channels_of(ct)?;
+    let planar = dec
+        .find_tag_unsigned::<u16>(Tag::PlanarConfiguration)
+        .ok()
+        .flatten()
+        .unwrap_or(1);
+    if planar == 2 && channels > 1 {
+        return Err(Error::Unsupported {
+            what: "TIFF layout",
+            value: "planar (separate) channels; expected interleaved (chunky) samples".into(),
+        });
+    }
     let bits = ct.bit_depth() as u64;
     let compression = dec
         .find_tag_unsigned::<u16>(Tag::Compression)
