@@ -796,3 +796,92 @@ fn corpus_terrain_loads_with_voids_and_geotags() {
     let back = roundtrip(&asc, "boulder.asc");
     assert_eq!(back.meta.extra, asc.meta.extra);
 }
+
+#[test]
+fn committed_corpus_files_match_their_generate_commands() {
+    use mra::generate::{generate, Kind};
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("corpus");
+    type Case = (&'static str, Kind, Vec<usize>, usize, u64, SampleType);
+    let cases: [Case; 8] = [
+        (
+            "zone_plate_256.png",
+            Kind::ZonePlate,
+            vec![256, 256],
+            1,
+            1,
+            SampleType::U8,
+        ),
+        (
+            "gradient_rgb16_256.png",
+            Kind::Gradient,
+            vec![256, 256],
+            3,
+            1,
+            SampleType::U16,
+        ),
+        (
+            "edges_256.png",
+            Kind::Edges,
+            vec![256, 256],
+            1,
+            1,
+            SampleType::U8,
+        ),
+        (
+            "strokes_256.png",
+            Kind::Strokes,
+            vec![256, 256],
+            1,
+            1,
+            SampleType::U8,
+        ),
+        (
+            "noise_rgb_128.png",
+            Kind::Noise,
+            vec![128, 128],
+            3,
+            1,
+            SampleType::U8,
+        ),
+        (
+            "phantom_64.nrrd",
+            Kind::Phantom,
+            vec![64, 64, 64],
+            1,
+            1,
+            SampleType::U16,
+        ),
+        (
+            "terrain_257.png",
+            Kind::Terrain,
+            vec![257, 257],
+            1,
+            7,
+            SampleType::U16,
+        ),
+        (
+            "terrain_129_f32.tif",
+            Kind::Terrain,
+            vec![129, 129],
+            1,
+            7,
+            SampleType::F32,
+        ),
+    ];
+    for (file, kind, dims, channels, seed, ty) in cases {
+        let want = generate(kind, &dims, channels, seed)
+            .unwrap()
+            .to_raster(ty)
+            .unwrap();
+        let got = io::read(&dir.join(file)).unwrap();
+        assert_eq!(got.dims, want.dims, "{file}");
+        assert!(
+            got.samples == want.samples,
+            "{file}: regenerate it (corpus/README.md)"
+        );
+        assert!(
+            std::fs::metadata(dir.join(file)).unwrap().len() < 200_000,
+            "{file}"
+        );
+    }
+}

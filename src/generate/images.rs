@@ -94,7 +94,7 @@ fn segment_distance(p: (f64, f64), a: (f64, f64), b: (f64, f64)) -> f64 {
 pub fn strokes(h: usize, w: usize, seed: u64) -> Field {
     let mut rng = SplitMix64::new(seed);
     let cell = (h.min(w) as f64 / 10.0).max(6.0);
-    let pen = (cell / 10.0).max(0.8);
+    let pen = (cell / 22.0).max(0.6);
     let mut segs: Vec<((f64, f64), (f64, f64))> = Vec::new();
     let mut y0 = cell * 0.5;
     while y0 + cell <= h as f64 {

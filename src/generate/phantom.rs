@@ -7,18 +7,36 @@
 use super::Field;
 use crate::io::DataKind;
 
-/// (value, a, b, c, x0, y0, z0, φ degrees)
-const ELLIPSOIDS: [(f64, f64, f64, f64, f64, f64, f64, f64); 10] = [
-    (1.0, 0.69, 0.92, 0.81, 0.0, 0.0, 0.0, 0.0),
-    (-0.8, 0.6624, 0.874, 0.78, 0.0, -0.0184, 0.0, 0.0),
-    (-0.2, 0.11, 0.31, 0.22, 0.22, 0.0, 0.0, -18.0),
-    (-0.2, 0.16, 0.41, 0.28, -0.22, 0.0, 0.0, 18.0),
-    (0.1, 0.21, 0.25, 0.41, 0.0, 0.35, -0.15, 0.0),
-    (0.1, 0.046, 0.046, 0.05, 0.0, 0.1, 0.25, 0.0),
-    (0.1, 0.046, 0.046, 0.05, 0.0, -0.1, 0.25, 0.0),
-    (0.1, 0.046, 0.023, 0.05, -0.08, -0.605, 0.0, 0.0),
-    (0.1, 0.023, 0.023, 0.02, 0.0, -0.606, 0.0, 0.0),
-    (0.1, 0.023, 0.046, 0.02, 0.06, -0.605, 0.0, 0.0),
+/// One ellipsoid: added `value`, semi-axes `(a, b, c)`, centre `(x0, y0, z0)`, rotation
+/// `phi` (degrees) about the z axis.
+struct Ellipsoid {
+    value: f64,
+    axes: [f64; 3],
+    centre: [f64; 3],
+    phi: f64,
+}
+
+#[allow(clippy::too_many_arguments)]
+const fn e(value: f64, a: f64, b: f64, c: f64, x0: f64, y0: f64, z0: f64, phi: f64) -> Ellipsoid {
+    Ellipsoid {
+        value,
+        axes: [a, b, c],
+        centre: [x0, y0, z0],
+        phi,
+    }
+}
+
+const ELLIPSOIDS: [Ellipsoid; 10] = [
+    e(1.0, 0.69, 0.92, 0.81, 0.0, 0.0, 0.0, 0.0),
+    e(-0.8, 0.6624, 0.874, 0.78, 0.0, -0.0184, 0.0, 0.0),
+    e(-0.2, 0.11, 0.31, 0.22, 0.22, 0.0, 0.0, -18.0),
+    e(-0.2, 0.16, 0.41, 0.28, -0.22, 0.0, 0.0, 18.0),
+    e(0.1, 0.21, 0.25, 0.41, 0.0, 0.35, -0.15, 0.0),
+    e(0.1, 0.046, 0.046, 0.05, 0.0, 0.1, 0.25, 0.0),
+    e(0.1, 0.046, 0.046, 0.05, 0.0, -0.1, 0.25, 0.0),
+    e(0.1, 0.046, 0.023, 0.05, -0.08, -0.605, 0.0, 0.0),
+    e(0.1, 0.023, 0.023, 0.02, 0.0, -0.606, 0.0, 0.0),
+    e(0.1, 0.023, 0.046, 0.02, 0.06, -0.605, 0.0, 0.0),
 ];
 
 /// The phantom sampled at voxel centres of a `[D, H, W]` grid; y points up (row 0 is
@@ -29,7 +47,7 @@ pub fn shepp_logan(d: usize, h: usize, w: usize) -> Field {
     let rot: Vec<(f64, f64)> = ELLIPSOIDS
         .iter()
         .map(|e| {
-            let phi = e.7.to_radians();
+            let phi = e.phi.to_radians();
             (phi.cos(), phi.sin())
         })
         .collect();
@@ -41,10 +59,11 @@ pub fn shepp_logan(d: usize, h: usize, w: usize) -> Field {
                 let x = coord(j, w);
                 let mut v = 0.0;
                 for (e, &(c, s)) in ELLIPSOIDS.iter().zip(&rot) {
-                    let (dx, dy, dz) = (x - e.4, y - e.5, z - e.6);
+                    let (dx, dy, dz) = (x - e.centre[0], y - e.centre[1], z - e.centre[2]);
                     let (u, t) = (c * dx + s * dy, -s * dx + c * dy);
-                    if (u / e.1).powi(2) + (t / e.2).powi(2) + (dz / e.3).powi(2) <= 1.0 {
-                        v += e.0;
+                    let [a, b, cz] = e.axes;
+                    if (u / a).powi(2) + (t / b).powi(2) + (dz / cz).powi(2) <= 1.0 {
+                        v += e.value;
                     }
                 }
                 data.push(v.clamp(0.0, 1.0));

@@ -144,7 +144,7 @@ pub fn read(path: &Path) -> Result<Raster> {
     }
     let (ty, channels) = datatype(i16_at(70))?;
     let vox_offset = f32_at(108);
-    if !(vox_offset >= HDR as f32) {
+    if vox_offset.is_nan() || vox_offset < HDR as f32 {
         return Err(bad(format!("vox_offset {vox_offset} (expected ≥ 352)")));
     }
     let off = vox_offset as usize;
@@ -298,9 +298,9 @@ pub fn encode(r: &Raster) -> Result<Vec<u8>> {
     let affine = r.meta.affine.unwrap_or_else(|| {
         let o = r.meta.origin.clone().unwrap_or_default();
         let mut a = [[0.0; 4]; 3];
-        for i in 0..3 {
-            a[i][i] = *spacing.get(i).unwrap_or(&1.0);
-            a[i][3] = *o.get(i).unwrap_or(&0.0);
+        for (i, row) in a.iter_mut().enumerate() {
+            row[i] = *spacing.get(i).unwrap_or(&1.0);
+            row[3] = *o.get(i).unwrap_or(&0.0);
         }
         a
     });
