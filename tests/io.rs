@@ -118,6 +118,13 @@ fn tiff_roundtrip_every_type_rgb_and_stacks_with_metadata() {
         roundtrip(&random(&[4, 7], 3, ty, 6), &format!("rt_{ty}_rgb.tif"));
         roundtrip(&random(&[4, 7], 4, ty, 7), &format!("rt_{ty}_rgba.tif"));
     }
+    for ty in [SampleType::U8, SampleType::U16, SampleType::F32] {
+        roundtrip(&random(&[4, 7], 2, ty, 8), &format!("rt_{ty}_graya.tif"));
+        roundtrip(
+            &random(&[3, 4, 7], 2, ty, 9),
+            &format!("rt_{ty}_graya_stack.tif"),
+        );
+    }
 }
 
 #[test]
@@ -660,8 +667,11 @@ fn cli_generate_compare_info_and_convert() {
 
 // ---------------------------------------------------------------- shared corpus
 
+/// `../shared/corpus` beside the repository, or `$MRA_CORPUS` when set (worktrees).
 fn corpus() -> Option<PathBuf> {
-    let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/corpus");
+    let p = std::env::var_os("MRA_CORPUS")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/corpus"));
     if p.is_dir() {
         Some(p)
     } else {

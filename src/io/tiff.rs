@@ -338,6 +338,30 @@ fn description(r: &Raster) -> String {
     lines.join("\n")
 }
 
+/// Gray + alpha colour types (the `tiff` crate has none): two samples, the second an
+/// unassociated alpha (ExtraSamples = 2, written in [`write_pages`]).
+macro_rules! gray_alpha {
+    ($name:ident, $inner:ty, $bits:expr, $fmt:ident) => {
+        struct $name;
+        impl colortype::ColorType for $name {
+            type Inner = $inner;
+            const TIFF_VALUE: tiff::tags::PhotometricInterpretation =
+                tiff::tags::PhotometricInterpretation::BlackIsZero;
+            const BITS_PER_SAMPLE: &'static [u16] = &[$bits, $bits];
+            const SAMPLE_FORMAT: &'static [tiff::tags::SampleFormat] = &[
+                tiff::tags::SampleFormat::$fmt,
+                tiff::tags::SampleFormat::$fmt,
+            ];
+            fn horizontal_predict(row: &[Self::Inner], result: &mut Vec<Self::Inner>) {
+                result.extend_from_slice(row);
+            }
+        }
+    };
+}
+gray_alpha!(GrayA8, u8, 8, Uint);
+gray_alpha!(GrayA16, u16, 16, Uint);
+gray_alpha!(GrayA32Float, f32, 32, IEEEFP);
+
 /// Write one page per `[H, W]` slice, with ImageDescription and GeoTIFF tags on each.
 fn write_pages<W, C>(w: &mut W, r: &Raster, data: &[C::Inner]) -> Result<()>
 where
@@ -365,13 +389,20 @@ where
             }
             .map_err(tiff_error)?;
         }
+        if r.channels == 2 {
+            // ExtraSamples = 2 (unassociated alpha) for the second of the two samples
+            img.encoder()
+                .write_tag(Tag::ExtraSamples, &[2u16][..])
+                .map_err(tiff_error)?;
+        }
         img.write_data(chunk).map_err(tiff_error)?;
     }
     Ok(())
 }
 
 /// Write a 2-D raster as one TIFF page or a 3-D raster as a page stack. Gray, RGB and
-/// RGBA of u8, i8, u16, i16, u32, i32, f32, f64 (RGB/RGBA unsigned or float only).
+/// RGBA of u8, i8, u16, i16, u32, i32, f32, f64 (RGB/RGBA unsigned or float only;
+/// gray+alpha u8, u16, f32).
 pub fn write<W: Write + Seek>(w: &mut W, r: &Raster) -> Result<()> {
     if r.dims.len() < 2 || r.dims.len() > 3 {
         return Err(Error::Unsupported {
@@ -390,6 +421,9 @@ pub fn write<W: Write + Seek>(w: &mut W, r: &Raster) -> Result<()> {
         (S::I32(v), 1) => write_pages::<_, c::GrayI32>(w, r, v),
         (S::F32(v), 1) => write_pages::<_, c::Gray32Float>(w, r, v),
         (S::F64(v), 1) => write_pages::<_, c::Gray64Float>(w, r, v),
+        (S::U8(v), 2) => write_pages::<_, GrayA8>(w, r, v),
+        (S::U16(v), 2) => write_pages::<_, GrayA16>(w, r, v),
+        (S::F32(v), 2) => write_pages::<_, GrayA32Float>(w, r, v),
         (S::U8(v), 3) => write_pages::<_, c::RGB8>(w, r, v),
         (S::U16(v), 3) => write_pages::<_, c::RGB16>(w, r, v),
         (S::U32(v), 3) => write_pages::<_, c::RGB32>(w, r, v),
