@@ -895,3 +895,98 @@ fn committed_corpus_files_match_their_generate_commands() {
         );
     }
 }
+
+// ---------------------------------------------------------------- pyramid files
+
+#[test]
+fn pyramid_container_keeps_source_type_and_metadata() {
+    use mra::io::pyramid_file::{self, PyramidInfo};
+    for (dims, ty, ext) in [
+        (vec![6, 7], SampleType::U16, "tif"),
+        (vec![3, 6, 7], SampleType::I16, "nrrd"),
+    ] {
+        let mut src = random(&dims, 1, ty, 40);
+        src.meta.spacing = Some(vec![0.5; dims.len()]);
+        src.meta.nodata = Some(-7.0);
+        src.meta.description = Some("first line\nsecond".into());
+        src.meta.extra.insert("dicom.modality".into(), "CT".into());
+        let info = PyramidInfo {
+            scheme: "cubic".into(),
+            boundary: "symmetric".into(),
+            levels: 3,
+            order: "non-standard".into(),
+            axes: (0..dims.len()).collect(),
+            source_type: ty,
+            source_kind: src.kind,
+        };
+        // coefficients = the samples + 0.25 (any f32 data will do here)
+        let coeffs: Vec<f32> = src.to_f32().iter().map(|v| v + 0.25).collect();
+        let c = pyramid_file::container(&src, coeffs, &info).unwrap();
+        let p = tmp(&format!("pyr.{ext}"));
+        pyramid_file::write(&p, &c).unwrap();
+        let wrong = tmp(&format!(
+            "pyr.{}",
+            if ext == "tif" { "nrrd" } else { "tif" }
+        ));
+        assert!(pyramid_file::write(&wrong, &c).is_err());
+        let (back, info2) = pyramid_file::read(&p).unwrap();
+        assert_eq!(info2, info);
+        assert_eq!(back.sample_type(), SampleType::F32);
+        let values: Vec<f32> = back.to_f32().iter().map(|v| v - 0.25).collect();
+        let restored = pyramid_file::restore(&back, &values, &info2).unwrap();
+        assert_eq!(restored.samples, src.samples, "{ext}");
+        assert_eq!(restored.meta.spacing, src.meta.spacing);
+        assert_eq!(restored.meta.nodata, src.meta.nodata);
+        assert_eq!(restored.meta.description, src.meta.description);
+        assert_eq!(
+            restored
+                .meta
+                .extra
+                .get("dicom.modality")
+                .map(String::as_str),
+            Some("CT")
+        );
+        assert!(restored.meta.extra.keys().all(|k| !k.starts_with("mra.")));
+    }
+    // a plain TIFF is not a pyramid
+    let p = tmp("plain.tif");
+    io::write(&p, &random(&[4, 4], 1, SampleType::F32, 41)).unwrap();
+    assert_eq!(
+        mra::io::pyramid_file::read(&p).unwrap_err().kind(),
+        ErrorKind::Format
+    );
+}
+
+#[test]
+fn pyramid_pictures_stretch_each_block() {
+    use mra::io::visual::{picture, slice, standard_blocks, Block};
+    // 4×4: coarse 2×2 block with values 10..13, details ±1, ±2
+    let mut data = vec![0f32; 16];
+    data[0] = 10.0;
+    data[1] = 11.0;
+    data[4] = 12.0;
+    data[5] = 13.0;
+    data[2] = 2.0;
+    data[3] = -2.0;
+    data[8] = 1.0;
+    let blocks = standard_blocks(&[vec![4, 2], vec![4, 2]]);
+    assert_eq!(blocks.len(), 4);
+    assert_eq!(blocks.iter().filter(|b| b.coarse).count(), 1);
+    let pic = picture(&data, &[4, 4], 1, &blocks).unwrap();
+    let Samples::U8(p) = &pic.samples else {
+        panic!()
+    };
+    assert_eq!((p[0], p[5]), (0, 255), "coarse block stretched to 0..255");
+    assert_eq!((p[2], p[3]), (255, 1), "detail ±max → 255 / 1");
+    assert_eq!(p[8], 255, "its own block's max");
+    assert_eq!(p[15], 128, "zero detail is mid-grey");
+    let vol = vec![1f32; 2 * 4 * 4];
+    let blocks3 = vec![Block {
+        ranges: vec![0..1, 0..4, 0..4],
+        coarse: true,
+    }];
+    let (s, b) = slice(&vol, &[2, 4, 4], 1, &blocks3, 0).unwrap();
+    assert_eq!((s.len(), b.len()), (16, 1));
+    let (_, b) = slice(&vol, &[2, 4, 4], 1, &blocks3, 1).unwrap();
+    assert!(b.is_empty());
+}

@@ -24,6 +24,8 @@
 //! asc.rs    ESRI ASCII grid
 //! raw.rs    headerless raw (.raw with dims/dtype/endian, .r16, .r32)
 //! bytes.rs  endian decoding, size checks before allocation, atomic writes
+//! pyramid_file.rs  the float32 TIFF / NRRD a pyramid is stored in, with its keys
+//! visual.rs  8-bit pictures of pyramids, each block contrast-stretched
 //! ```
 
 use std::collections::BTreeMap;
@@ -41,9 +43,11 @@ pub mod nifti;
 pub mod nrrd;
 pub mod png;
 pub mod pnm;
+pub mod pyramid_file;
 pub mod raw;
 pub mod slices;
 pub mod tiff;
+pub mod visual;
 
 /// The largest number of samples a reader accepts (2^34, 64 GiB of f32): a declared size
 /// beyond this is reported as [`Error::LimitsExceeded`] before anything is allocated.

@@ -213,6 +213,9 @@ fn parse_header(text: &str) -> Result<Header> {
             }
         }
     }
+    if let Some(nd) = h.meta.extra.remove("mra.nodata") {
+        h.meta.nodata = nd.trim().parse().ok();
+    }
     if h.sample_type.is_none() {
         return Err(bad("no 'type' field"));
     }
@@ -480,15 +483,13 @@ fn header_text(r: &Raster, encoding: &str, data_file: Option<&str>) -> Result<St
         s += &format!("data file: {df}\n");
     }
     for (k, v) in &r.meta.extra {
-        if k.starts_with("nrrd.") || k.contains(":=") || k.contains('\n') {
+        if k.starts_with("nrrd.") || k == "mra.nodata" || k.contains(":=") || k.contains('\n') {
             continue;
         }
         s += &format!("{k}:={}\n", v.replace('\n', "\\n"));
     }
     if let Some(nd) = r.meta.nodata {
-        if !r.meta.extra.contains_key("mra.nodata") {
-            s += &format!("mra.nodata:={nd}\n");
-        }
+        s += &format!("mra.nodata:={nd}\n");
     }
     Ok(s)
 }
