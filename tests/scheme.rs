@@ -1,7 +1,9 @@
 //! Exactness of the 1D schemes: perfect reconstruction for every scheme × boundary ×
 //! length, the filter rows as written in the notes, worked examples.
 
-use mra::scheme::{analyze_lane, max_levels, synthesize_lane, Boundary, LevelKind, Scheme, TwoScale};
+use mra::scheme::{
+    analyze_lane, max_levels, synthesize_lane, Boundary, LevelKind, Scheme, TwoScale,
+};
 use proptest::prelude::*;
 
 fn dense_product(t: &TwoScale) -> Vec<Vec<f64>> {
@@ -58,16 +60,29 @@ fn native_levels_are_used_from_the_documented_lengths_on() {
         (Scheme::Cubic, Symmetric, 3),
     ];
     for (s, b, m) in cases {
-        assert_eq!(TwoScale::new(s, b, m).kind, LevelKind::Native, "{s} {b} {m}");
-        assert_ne!(TwoScale::new(s, b, m - 1).kind, LevelKind::Native, "{s} {b} {}", m - 1);
+        assert_eq!(
+            TwoScale::new(s, b, m).kind,
+            LevelKind::Native,
+            "{s} {b} {m}"
+        );
+        assert_ne!(
+            TwoScale::new(s, b, m - 1).kind,
+            LevelKind::Native,
+            "{s} {b} {}",
+            m - 1
+        );
     }
 }
 
 fn lcg(seed: u64, n: usize) -> Vec<f64> {
-    let mut x = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+    let mut x = seed
+        .wrapping_mul(6364136223846793005)
+        .wrapping_add(1442695040888963407);
     (0..n)
         .map(|_| {
-            x = x.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            x = x
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             ((x >> 11) as f64 / (1u64 << 53) as f64) * 200.0 - 100.0
         })
         .collect()

@@ -3,6 +3,7 @@
 
 use clap::{Parser, Subcommand};
 
+pub mod array;
 pub mod curve;
 pub mod io_cmds;
 pub mod mesh;

@@ -24,6 +24,7 @@
 //! asc.rs    ESRI ASCII grid
 //! raw.rs    headerless raw (.raw with dims/dtype/endian, .r16, .r32)
 //! bytes.rs  endian decoding, size checks before allocation, atomic writes
+//! array.rs  rasters through the tensor engine (analyze / synthesize / pictures)
 //! pyramid_file.rs  the float32 TIFF / NRRD a pyramid is stored in, with its keys
 //! visual.rs  8-bit pictures of pyramids, each block contrast-stretched
 //! ```
@@ -33,6 +34,7 @@ use std::path::Path;
 
 use crate::{Error, Result};
 
+pub mod array;
 pub mod asc;
 pub mod bytes;
 pub mod dicom;

@@ -134,10 +134,22 @@ pub fn write(path: &Path, r: &Raster) -> Result<()> {
 /// Read a pyramid file: the f32 coefficients as a raster and the recorded [`PyramidInfo`].
 pub fn read(path: &Path) -> Result<(Raster, PyramidInfo)> {
     let r = super::read(path)?;
+    let info = read_info(&r).map_err(|e| match e {
+        Error::Format { what, expected } => Error::Format {
+            what: format!("{what} in {}", path.display()),
+            expected,
+        },
+        e => e,
+    })?;
+    Ok((r, info))
+}
+
+/// The [`PyramidInfo`] recorded in a container's metadata.
+pub fn read_info(r: &Raster) -> Result<PyramidInfo> {
     let ex = &r.meta.extra;
     if ex.get("mra.pyramid").map(String::as_str) != Some("1") {
         return Err(Error::format(
-            format!("{} holds no mra pyramid keys", path.display()),
+            "no mra pyramid keys",
             "a file written by `mra analyze`",
         ));
     }
@@ -161,7 +173,7 @@ pub fn read(path: &Path) -> Result<(Raster, PyramidInfo)> {
         .map(|s| s.trim().parse::<usize>())
         .collect::<std::result::Result<Vec<_>, _>>()
         .map_err(|_| Error::format("mra.axes is not a list of axes", "e.g. 0,1"))?;
-    let info = PyramidInfo {
+    Ok(PyramidInfo {
         scheme: get("mra.scheme")?,
         boundary: get("mra.boundary")?,
         levels,
@@ -169,8 +181,7 @@ pub fn read(path: &Path) -> Result<(Raster, PyramidInfo)> {
         axes,
         source_type: SampleType::parse(&get("mra.source.dtype")?)?,
         source_kind: parse_kind(&get("mra.source.kind")?)?,
-    };
-    Ok((r, info))
+    })
 }
 
 /// The reconstructed raster: `values` converted to the source type (integers rounded to

@@ -101,5 +101,9 @@ pub fn interpolating(m: usize) -> LevelTriplets {
     }
     // Qe
     sy.add(m - 2, d(s - 1), 0.5);
-    LevelTriplets { n, analysis: an, synthesis: sy }
+    LevelTriplets {
+        n,
+        analysis: an,
+        synthesis: sy,
+    }
 }

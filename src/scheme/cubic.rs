@@ -101,7 +101,16 @@ const BS: [[f64; 7]; 2] = [
 
 /// `Q` columns 0 and 1 over rows `F_0 … F_7`.
 const QS: [[f64; 8]; 2] = [
-    [0.0, 1050.0 / 599.0, -1.0, 3139.0 / 9584.0, 1107.0 / 2396.0, 1107.0 / 9584.0, 0.0, 0.0],
+    [
+        0.0,
+        1050.0 / 599.0,
+        -1.0,
+        3139.0 / 9584.0,
+        1107.0 / 2396.0,
+        1107.0 / 9584.0,
+        0.0,
+        0.0,
+    ],
     [
         0.0,
         -135104940.0 / 614543773.0,
@@ -175,5 +184,9 @@ pub fn interpolating(m: usize) -> LevelTriplets {
             sy.add(2 * i - 1 + t, n + i, w);
         }
     }
-    LevelTriplets { n, analysis: an, synthesis: sy }
+    LevelTriplets {
+        n,
+        analysis: an,
+        synthesis: sy,
+    }
 }

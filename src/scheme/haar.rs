@@ -23,5 +23,9 @@ pub fn level(m: usize) -> LevelTriplets {
         sy.add(2 * j + 1, j, 1.0);
         sy.add(2 * j + 1, n + j, -1.0);
     }
-    LevelTriplets { n, analysis: an, synthesis: sy }
+    LevelTriplets {
+        n,
+        analysis: an,
+        synthesis: sy,
+    }
 }

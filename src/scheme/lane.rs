@@ -33,7 +33,11 @@ impl LanePyramid {
             let n = TwoScale::coarse_len(scheme, boundary, *lengths.last().unwrap());
             lengths.push(n);
         }
-        Ok(LanePyramid { scheme, boundary, lengths })
+        Ok(LanePyramid {
+            scheme,
+            boundary,
+            lengths,
+        })
     }
     pub fn levels(&self) -> usize {
         self.lengths.len() - 1
@@ -53,7 +57,11 @@ pub fn analyze_lane<T: Sample>(
     levels: usize,
 ) -> Result<(Vec<T>, LanePyramid)> {
     if width == 0 || data.len() % width != 0 {
-        return Err(Error::parameter("lane data length", data.len(), "a multiple of the element width"));
+        return Err(Error::parameter(
+            "lane data length",
+            data.len(),
+            "a multiple of the element width",
+        ));
     }
     let plan = LanePyramid::plan(scheme, boundary, data.len() / width, levels)?;
     let mut packed = data.to_vec();
@@ -68,7 +76,11 @@ pub fn analyze_lane<T: Sample>(
 }
 
 /// Invert [`analyze_lane`].
-pub fn synthesize_lane<T: Sample>(packed: &[T], width: usize, plan: &LanePyramid) -> Result<Vec<T>> {
+pub fn synthesize_lane<T: Sample>(
+    packed: &[T],
+    width: usize,
+    plan: &LanePyramid,
+) -> Result<Vec<T>> {
     if width == 0 || packed.len() != plan.lengths[0] * width {
         return Err(Error::parameter(
             "packed lane length",

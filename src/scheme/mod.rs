@@ -61,7 +61,11 @@ impl Scheme {
 }
 
 impl Boundary {
-    pub const ALL: [Boundary; 3] = [Boundary::Interpolating, Boundary::Periodic, Boundary::Symmetric];
+    pub const ALL: [Boundary; 3] = [
+        Boundary::Interpolating,
+        Boundary::Periodic,
+        Boundary::Symmetric,
+    ];
     pub fn name(self) -> &'static str {
         match self {
             Boundary::Interpolating => "interpolating",
@@ -101,7 +105,11 @@ impl FromStr for Boundary {
             "interpolating" | "open" => Ok(Boundary::Interpolating),
             "periodic" | "closed" => Ok(Boundary::Periodic),
             "symmetric" | "mirror" => Ok(Boundary::Symmetric),
-            _ => Err(Error::parameter("boundary", s, "interpolating, periodic or symmetric")),
+            _ => Err(Error::parameter(
+                "boundary",
+                s,
+                "interpolating, periodic or symmetric",
+            )),
         }
     }
 }

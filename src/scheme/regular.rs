@@ -59,25 +59,45 @@ pub fn periodic(f: &RegularFilters, m: usize) -> LevelTriplets {
     let mut sy = Triplets::new(m, m);
     for j in 0..ni {
         for (t, &w) in f.a.w.iter().enumerate() {
-            an.add(j as usize, (2 * j + f.a.first + t as isize).rem_euclid(mi) as usize, w);
+            an.add(
+                j as usize,
+                (2 * j + f.a.first + t as isize).rem_euclid(mi) as usize,
+                w,
+            );
         }
     }
     for j in 0..si {
         for (t, &w) in f.b.w.iter().enumerate() {
-            an.add(n + j as usize, (2 * j + f.b.first + t as isize).rem_euclid(mi) as usize, w);
+            an.add(
+                n + j as usize,
+                (2 * j + f.b.first + t as isize).rem_euclid(mi) as usize,
+                w,
+            );
         }
     }
     for j in 0..ni {
         for (t, &w) in f.p.w.iter().enumerate() {
-            sy.add((2 * j + f.p.first + t as isize).rem_euclid(mi) as usize, j as usize, w);
+            sy.add(
+                (2 * j + f.p.first + t as isize).rem_euclid(mi) as usize,
+                j as usize,
+                w,
+            );
         }
     }
     for j in 0..si {
         for (t, &w) in f.q.w.iter().enumerate() {
-            sy.add((2 * j + f.q.first + t as isize).rem_euclid(mi) as usize, n + j as usize, w);
+            sy.add(
+                (2 * j + f.q.first + t as isize).rem_euclid(mi) as usize,
+                n + j as usize,
+                w,
+            );
         }
     }
-    LevelTriplets { n, analysis: an, synthesis: sy }
+    LevelTriplets {
+        n,
+        analysis: an,
+        synthesis: sy,
+    }
 }
 
 /// The mirror points (half-samples) of a lane of `m` fine samples.
@@ -151,9 +171,15 @@ impl Mirror {
 pub fn symmetric(f: &RegularFilters, m: usize, whole: bool) -> LevelTriplets {
     let mi = m as isize;
     let mir = if whole {
-        Mirror { lo: 0, hi: 2 * mi - 2 }
+        Mirror {
+            lo: 0,
+            hi: 2 * mi - 2,
+        }
     } else {
-        Mirror { lo: -1, hi: 2 * mi - 1 }
+        Mirror {
+            lo: -1,
+            hi: 2 * mi - 1,
+        }
     };
     let n = mir.count(&f.a);
     let s = mir.count(&f.b);
@@ -177,7 +203,9 @@ pub fn symmetric(f: &RegularFilters, m: usize, whole: bool) -> LevelTriplets {
         let cnt = if col0 == 0 { n } else { s } as isize;
         let first = mir.first(taps);
         for j in first - reach..first + cnt + reach {
-            let Some((jj, sign)) = mir.fold_index(taps, j) else { continue };
+            let Some((jj, sign)) = mir.fold_index(taps, j) else {
+                continue;
+            };
             for (t, &w) in taps.w.iter().enumerate() {
                 let i = 2 * j + taps.first + t as isize;
                 if (0..mi).contains(&i) {
@@ -186,5 +214,9 @@ pub fn symmetric(f: &RegularFilters, m: usize, whole: bool) -> LevelTriplets {
             }
         }
     }
-    LevelTriplets { n, analysis: an, synthesis: sy }
+    LevelTriplets {
+        n,
+        analysis: an,
+        synthesis: sy,
+    }
 }

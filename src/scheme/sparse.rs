@@ -103,7 +103,12 @@ impl Triplets {
     /// their index arithmetic is covered by the perfect-reconstruction tests.
     #[inline]
     pub fn add(&mut self, r: usize, c: usize, w: f64) {
-        assert!(r < self.rows && c < self.cols, "entry ({r},{c}) outside {}x{}", self.rows, self.cols);
+        assert!(
+            r < self.rows && c < self.cols,
+            "entry ({r},{c}) outside {}x{}",
+            self.rows,
+            self.cols
+        );
         self.entries.push((r as u32, c as u32, w));
     }
     /// Add a run of taps `w[t]` at columns `first + t` of row `r`.
@@ -158,7 +163,12 @@ impl Triplets {
 
 impl Triplets {
     /// Move every entry through `f(row, col) -> (row, col)` into a `rows × cols` set.
-    pub fn remap(self, rows: usize, cols: usize, f: impl Fn(usize, usize) -> (usize, usize)) -> Triplets {
+    pub fn remap(
+        self,
+        rows: usize,
+        cols: usize,
+        f: impl Fn(usize, usize) -> (usize, usize),
+    ) -> Triplets {
         let mut t = Triplets::new(rows, cols);
         for (r, c, w) in self.entries {
             let (r2, c2) = f(r as usize, c as usize);
@@ -195,13 +205,17 @@ impl Csr {
                 out.fill(T::default());
                 continue;
             }
-            let x0 = unsafe { std::slice::from_raw_parts(src.add(self.index[a] as usize * src_stride), width) };
+            let x0 = unsafe {
+                std::slice::from_raw_parts(src.add(self.index[a] as usize * src_stride), width)
+            };
             let w0 = T::from_f64(self.weight[a]);
             for (o, &x) in out.iter_mut().zip(x0) {
                 *o = w0 * x;
             }
             for k in a + 1..b {
-                let x = unsafe { std::slice::from_raw_parts(src.add(self.index[k] as usize * src_stride), width) };
+                let x = unsafe {
+                    std::slice::from_raw_parts(src.add(self.index[k] as usize * src_stride), width)
+                };
                 let w = T::from_f64(self.weight[k]);
                 for (o, &x) in out.iter_mut().zip(x) {
                     *o += w * x;

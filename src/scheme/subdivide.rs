@@ -135,7 +135,11 @@ fn binomial_mask(k: usize) -> Vec<f64> {
 pub fn matrix(rule: Refinement, ends: Ends, n: usize) -> Result<Csr> {
     let min = rule.min_points(ends);
     if n < min {
-        return Err(Error::parameter("number of points", n, "at least the rule's minimum (see `Refinement::min_points`)"));
+        return Err(Error::parameter(
+            "number of points",
+            n,
+            "at least the rule's minimum (see `Refinement::min_points`)",
+        ));
     }
     let m = rule.refined_len(ends, n);
     let mut t = Triplets::new(m, n);
@@ -154,7 +158,11 @@ fn closed(rule: Refinement, n: usize, t: &mut Triplets) {
             let first = -((k / 2) as isize) - if k % 2 == 1 && k > 1 { 1 } else { 0 };
             for j in 0..ni {
                 for (tt, &w) in mask.iter().enumerate() {
-                    t.add((2 * j + first + tt as isize).rem_euclid(m) as usize, j as usize, w);
+                    t.add(
+                        (2 * j + first + tt as isize).rem_euclid(m) as usize,
+                        j as usize,
+                        w,
+                    );
                 }
             }
         }
@@ -162,7 +170,12 @@ fn closed(rule: Refinement, n: usize, t: &mut Triplets) {
             for j in 0..ni {
                 let r = 2 * j as usize;
                 t.add(r, j as usize, 1.0);
-                for (d, w) in [(-1, -1.0 / 16.0), (0, 9.0 / 16.0), (1, 9.0 / 16.0), (2, -1.0 / 16.0)] {
+                for (d, w) in [
+                    (-1, -1.0 / 16.0),
+                    (0, 9.0 / 16.0),
+                    (1, 9.0 / 16.0),
+                    (2, -1.0 / 16.0),
+                ] {
                     t.add(r + 1, (j + d).rem_euclid(ni) as usize, w);
                 }
             }
@@ -240,7 +253,11 @@ fn open(rule: Refinement, n: usize, m: usize, t: &mut Triplets) {
             }
             for i in 6..m - 6 {
                 let j = i / 2;
-                let w = if i % 2 == 0 { [5.0 / 16.0, 0.625, 1.0 / 16.0] } else { [1.0 / 16.0, 0.625, 5.0 / 16.0] };
+                let w = if i % 2 == 0 {
+                    [5.0 / 16.0, 0.625, 1.0 / 16.0]
+                } else {
+                    [1.0 / 16.0, 0.625, 5.0 / 16.0]
+                };
                 for (d, &x) in w.iter().enumerate() {
                     t.add(i, j + d, x);
                 }
@@ -250,9 +267,23 @@ fn open(rule: Refinement, n: usize, m: usize, t: &mut Triplets) {
             for j in 0..n {
                 t.add(2 * j, j, 1.0);
             }
-            both(t, 1, &[(0, 5.0 / 16.0), (1, 15.0 / 16.0), (2, -5.0 / 16.0), (3, 1.0 / 16.0)]);
+            both(
+                t,
+                1,
+                &[
+                    (0, 5.0 / 16.0),
+                    (1, 15.0 / 16.0),
+                    (2, -5.0 / 16.0),
+                    (3, 1.0 / 16.0),
+                ],
+            );
             for j in 1..n - 2 {
-                for (d, w) in [(0, -1.0 / 16.0), (1, 9.0 / 16.0), (2, 9.0 / 16.0), (3, -1.0 / 16.0)] {
+                for (d, w) in [
+                    (0, -1.0 / 16.0),
+                    (1, 9.0 / 16.0),
+                    (2, 9.0 / 16.0),
+                    (3, -1.0 / 16.0),
+                ] {
                     t.add(2 * j + 1, j - 1 + d, w);
                 }
             }
@@ -263,7 +294,11 @@ fn open(rule: Refinement, n: usize, m: usize, t: &mut Triplets) {
 /// One refinement step of `points` (`n` elements of `dim` values, row-major).
 pub fn refine(points: &[f64], dim: usize, rule: Refinement, ends: Ends) -> Result<Vec<f64>> {
     if dim == 0 || points.len() % dim != 0 {
-        return Err(Error::parameter("point data length", points.len(), "a multiple of the dimension"));
+        return Err(Error::parameter(
+            "point data length",
+            points.len(),
+            "a multiple of the dimension",
+        ));
     }
     let n = points.len() / dim;
     let s = matrix(rule, ends, n)?;
@@ -273,7 +308,13 @@ pub fn refine(points: &[f64], dim: usize, rule: Refinement, ends: Ends) -> Resul
 }
 
 /// `steps` refinement steps.
-pub fn refine_steps(points: &[f64], dim: usize, rule: Refinement, ends: Ends, steps: usize) -> Result<Vec<f64>> {
+pub fn refine_steps(
+    points: &[f64],
+    dim: usize,
+    rule: Refinement,
+    ends: Ends,
+    steps: usize,
+) -> Result<Vec<f64>> {
     let mut p = points.to_vec();
     for _ in 0..steps {
         p = refine(&p, dim, rule, ends)?;

@@ -51,13 +51,21 @@ fn native(scheme: Scheme, boundary: Boundary, m: usize) -> Option<LevelTriplets>
         (Scheme::Chaikin, Interpolating) => {
             (m >= chaikin::MIN_INTERPOLATING && m % 2 == 0).then(|| chaikin::interpolating(m))
         }
-        (Scheme::Chaikin, Periodic) => (m >= 4 && m % 2 == 0).then(|| regular::periodic(&chaikin::REGULAR, m)),
-        (Scheme::Chaikin, Symmetric) => (m >= 3).then(|| regular::symmetric(&chaikin::REGULAR, m, false)),
+        (Scheme::Chaikin, Periodic) => {
+            (m >= 4 && m % 2 == 0).then(|| regular::periodic(&chaikin::REGULAR, m))
+        }
+        (Scheme::Chaikin, Symmetric) => {
+            (m >= 3).then(|| regular::symmetric(&chaikin::REGULAR, m, false))
+        }
         (Scheme::Cubic, Interpolating) => {
             (m >= cubic::MIN_INTERPOLATING && m % 2 == 1).then(|| cubic::interpolating(m))
         }
-        (Scheme::Cubic, Periodic) => (m >= 8 && m % 2 == 0).then(|| regular::periodic(&cubic::REGULAR, m)),
-        (Scheme::Cubic, Symmetric) => (m >= 3).then(|| regular::symmetric(&cubic::REGULAR, m, true)),
+        (Scheme::Cubic, Periodic) => {
+            (m >= 8 && m % 2 == 0).then(|| regular::periodic(&cubic::REGULAR, m))
+        }
+        (Scheme::Cubic, Symmetric) => {
+            (m >= 3).then(|| regular::symmetric(&cubic::REGULAR, m, true))
+        }
     }
 }
 
@@ -84,9 +92,13 @@ pub fn max_levels(scheme: Scheme, boundary: Boundary, m: usize) -> usize {
 /// Carry the last sample of a lane of `m` past a level built for `m − 1`.
 fn carry(t: LevelTriplets, m: usize) -> (usize, Triplets, Triplets) {
     let n1 = t.n;
-    let mut an = t.analysis.remap(m, m, |r, c| (if r < n1 { r } else { r + 1 }, c));
+    let mut an = t
+        .analysis
+        .remap(m, m, |r, c| (if r < n1 { r } else { r + 1 }, c));
     an.add(n1, m - 1, 1.0);
-    let mut sy = t.synthesis.remap(m, m, |r, c| (r, if c < n1 { c } else { c + 1 }));
+    let mut sy = t
+        .synthesis
+        .remap(m, m, |r, c| (r, if c < n1 { c } else { c + 1 }));
     sy.add(m - 1, n1, 1.0);
     (n1 + 1, an, sy)
 }

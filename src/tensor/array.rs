@@ -16,7 +16,10 @@ pub struct Array<T> {
 impl<T: Clone + Default> Array<T> {
     pub fn zeros(shape: &[usize]) -> Self {
         let n = shape.iter().product();
-        Array { shape: shape.to_vec(), data: vec![T::default(); n] }
+        Array {
+            shape: shape.to_vec(),
+            data: vec![T::default(); n],
+        }
     }
 }
 
@@ -26,7 +29,13 @@ impl<T> Array<T> {
         let n = shape
             .iter()
             .try_fold(1usize, |a, &d| a.checked_mul(d))
-            .ok_or_else(|| Error::parameter("array shape", format!("{shape:?}"), "a product that fits in memory"))?;
+            .ok_or_else(|| {
+                Error::parameter(
+                    "array shape",
+                    format!("{shape:?}"),
+                    "a product that fits in memory",
+                )
+            })?;
         if shape.is_empty() || n != data.len() || n == 0 {
             return Err(Error::parameter(
                 "array data length",
@@ -34,7 +43,10 @@ impl<T> Array<T> {
                 "the product of the (non-empty, non-zero) shape",
             ));
         }
-        Ok(Array { shape: shape.to_vec(), data })
+        Ok(Array {
+            shape: shape.to_vec(),
+            data,
+        })
     }
     pub fn shape(&self) -> &[usize] {
         &self.shape

@@ -24,6 +24,8 @@ where
             task(i, &mut s);
         }
     } else {
-        (0..count).into_par_iter().for_each_init(init, |s, i| task(i, s));
+        (0..count)
+            .into_par_iter()
+            .for_each_init(init, |s, i| task(i, s));
     }
 }

@@ -77,7 +77,11 @@ impl Pyramid {
         let mut seen = vec![false; shape.len()];
         for &a in &spec.axes {
             if a >= shape.len() || seen[a] {
-                return Err(Error::parameter("axes", format!("{:?}", spec.axes), "distinct axes of the array"));
+                return Err(Error::parameter(
+                    "axes",
+                    format!("{:?}", spec.axes),
+                    "distinct axes of the array",
+                ));
             }
             seen[a] = true;
         }
@@ -85,15 +89,25 @@ impl Pyramid {
             .axes
             .iter()
             .map(|&a| {
-                let l = spec.levels.min(max_levels(spec.scheme, spec.boundary, shape[a]));
+                let l = spec
+                    .levels
+                    .min(max_levels(spec.scheme, spec.boundary, shape[a]));
                 let mut v = vec![shape[a]];
                 for _ in 0..l {
-                    v.push(TwoScale::coarse_len(spec.scheme, spec.boundary, *v.last().unwrap()));
+                    v.push(TwoScale::coarse_len(
+                        spec.scheme,
+                        spec.boundary,
+                        *v.last().unwrap(),
+                    ));
                 }
                 v
             })
             .collect();
-        Ok(Pyramid { spec: spec.clone(), shape: shape.to_vec(), lengths })
+        Ok(Pyramid {
+            spec: spec.clone(),
+            shape: shape.to_vec(),
+            lengths,
+        })
     }
 
     /// Levels actually done along transformed axis number `i` (index into `spec.axes`).
@@ -102,7 +116,10 @@ impl Pyramid {
     }
     /// The deepest level over all axes.
     pub fn depth(&self) -> usize {
-        (0..self.lengths.len()).map(|i| self.axis_levels(i)).max().unwrap_or(0)
+        (0..self.lengths.len())
+            .map(|i| self.axis_levels(i))
+            .max()
+            .unwrap_or(0)
     }
 
     /// The steps of the forward transform in order: (axis index into spec.axes, level, region).
@@ -157,7 +174,9 @@ impl Pyramid {
             ranges: (0..nd).map(|k| 0..regions[depth][k]).collect(),
         }];
         for l in (0..depth).rev() {
-            let active: Vec<usize> = (0..self.spec.axes.len()).filter(|&i| l < self.axis_levels(i)).collect();
+            let active: Vec<usize> = (0..self.spec.axes.len())
+                .filter(|&i| l < self.axis_levels(i))
+                .collect();
             for mask in 1u32..(1 << active.len()) {
                 let mut high = vec![false; self.spec.axes.len()];
                 let mut ranges: Vec<_> = (0..nd).map(|k| 0..regions[l][k]).collect();
@@ -170,7 +189,11 @@ impl Pyramid {
                         ranges[a] = 0..regions[l + 1][a];
                     }
                 }
-                out.push(Subband { level: l + 1, high, ranges });
+                out.push(Subband {
+                    level: l + 1,
+                    high,
+                    ranges,
+                });
             }
         }
         out

@@ -44,7 +44,13 @@ fn lane_bases(shape: &[usize], region: &[usize], skip: usize, skip_last: bool) -
 
 /// Apply `op` (`region[axis]` × `region[axis]`, an analysis `[A;B]` or synthesis `[P|Q]`
 /// level) to every lane along `axis` inside `region`.
-pub fn transform_axis<T: Sample>(data: &mut [T], shape: &[usize], region: &[usize], axis: usize, op: &Csr) {
+pub fn transform_axis<T: Sample>(
+    data: &mut [T],
+    shape: &[usize],
+    region: &[usize],
+    axis: usize,
+    op: &Csr,
+) {
     let nd = shape.len();
     assert!(axis < nd && region.len() == nd);
     assert!(region.iter().zip(shape).all(|(r, s)| r <= s));
@@ -79,7 +85,11 @@ pub fn transform_axis<T: Sample>(data: &mut [T], shape: &[usize], region: &[usiz
                     let base = p.0.add(b + off);
                     op.apply_raw(base as *const T, es, scratch.as_mut_ptr(), sw, sw);
                     for i in 0..len {
-                        std::ptr::copy_nonoverlapping(scratch.as_ptr().add(i * sw), base.add(i * es), sw);
+                        std::ptr::copy_nonoverlapping(
+                            scratch.as_ptr().add(i * sw),
+                            base.add(i * es),
+                            sw,
+                        );
                     }
                 }
             },
@@ -105,7 +115,11 @@ pub fn transform_axis<T: Sample>(data: &mut [T], shape: &[usize], region: &[usiz
                 unsafe {
                     for (gi, &b) in lanes.iter().enumerate() {
                         for i in 0..len {
-                            std::ptr::copy_nonoverlapping(p.0.add(b + i * es), sin.as_mut_ptr().add(i * gw + gi * w), w);
+                            std::ptr::copy_nonoverlapping(
+                                p.0.add(b + i * es),
+                                sin.as_mut_ptr().add(i * gw + gi * w),
+                                w,
+                            );
                         }
                     }
                 }
@@ -114,7 +128,11 @@ pub fn transform_axis<T: Sample>(data: &mut [T], shape: &[usize], region: &[usiz
                 unsafe {
                     for (gi, &b) in lanes.iter().enumerate() {
                         for i in 0..len {
-                            std::ptr::copy_nonoverlapping(sout.as_ptr().add(i * gw + gi * w), p.0.add(b + i * es), w);
+                            std::ptr::copy_nonoverlapping(
+                                sout.as_ptr().add(i * gw + gi * w),
+                                p.0.add(b + i * es),
+                                w,
+                            );
                         }
                     }
                 }
