@@ -21,11 +21,14 @@
 
 pub mod cli;
 pub mod curve;
+pub mod demo;
 pub mod error;
+pub mod fsutil;
 pub mod generate;
 pub mod io;
 pub mod mesh;
 pub mod metrics;
+pub mod points;
 pub mod progress;
 pub mod scheme;
 pub mod surface;

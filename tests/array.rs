@@ -4,7 +4,7 @@
 
 use std::path::{Path, PathBuf};
 
-use mra::cli::array::{analyze, synthesize, AnalyzeOptions};
+use mra::cli::array::{analyze_path as analyze, synthesize_path as synthesize, AnalyzeOptions};
 use mra::generate::{generate, Kind};
 use mra::io::{self, ReadOptions, SampleType, Samples};
 use mra::scheme::{Boundary, Scheme};

@@ -1,6 +1,7 @@
 //! `mra analyze` / `mra synthesize` on images, volumes and heightmaps (any input
 //! [`crate::io`] reads). `src/cli/analyze.rs` parses the arguments and calls
-//! [`analyze`] / [`synthesize`] for every input that is not a point list.
+//! [`analyze`] / [`synthesize`] for every input that is not a point list; the
+//! `*_path` functions take the options directly (tests, other commands).
 //!
 //! `analyze IN -o OUT` writes the pyramid in the Mallat layout as float32 TIFF (2-D,
 //! all channels) or float32 NRRD (3-D) with scheme, boundary, levels, order and the
@@ -8,14 +9,51 @@
 //! (`--slice z` picks the slice of a volume). `synthesize PYRAMID -o OUT` reconstructs
 //! the input in its own sample type, in the format OUT's extension names.
 
-use std::path::Path;
-use std::time::Instant;
+use std::path::{Path, PathBuf};
 
+use super::analyze::{AnalyzeArgs, SynthesizeArgs};
 use super::io_cmds::{read_input, write_output};
 use super::{CliResult, Failure};
 use crate::io::{self, pyramid_file, ReadOptions};
 use crate::progress::Progress;
 use crate::tensor::PyramidSpec;
+
+/// Levels for arrays when `--levels` is not given.
+pub const DEFAULT_LEVELS: usize = 3;
+
+fn required_output(o: &Option<PathBuf>, input: &Path) -> Result<PathBuf, Failure> {
+    o.clone().ok_or_else(|| {
+        Failure(format!(
+            "{}: images, volumes and heightmaps need an output file (-o OUT)",
+            input.display()
+        ))
+    })
+}
+
+/// `mra analyze IN -o OUT` (arguments parsed by `src/cli/analyze.rs`).
+pub fn analyze(a: &AnalyzeArgs) -> CliResult {
+    let output = required_output(&a.output, &a.input)?;
+    let o = AnalyzeOptions {
+        spec: PyramidSpec {
+            scheme: a.scheme,
+            boundary: a.boundary,
+            levels: a.levels.unwrap_or(DEFAULT_LEVELS),
+            order: a.order,
+            axes: vec![],
+        },
+        visual: a.visual,
+        slice: a.slice,
+        read: ReadOptions::default(),
+        quiet: false,
+    };
+    analyze_path(&a.input, &output, &o)
+}
+
+/// `mra synthesize PYRAMID -o OUT` (arguments parsed by `src/cli/analyze.rs`).
+pub fn synthesize(a: &SynthesizeArgs) -> CliResult {
+    let output = required_output(&a.output, &a.input)?;
+    synthesize_path(&a.input, &output, false)
+}
 
 /// What `mra analyze` needs besides the paths.
 #[derive(Clone, Debug)]
@@ -32,10 +70,9 @@ pub struct AnalyzeOptions {
     pub quiet: bool,
 }
 
-/// `mra analyze IN -o OUT` for array data.
-pub fn analyze(input: &Path, output: &Path, o: &AnalyzeOptions) -> CliResult {
+/// Analyze the array file `input` into the pyramid file (or picture) `output`.
+pub fn analyze_path(input: &Path, output: &Path, o: &AnalyzeOptions) -> CliResult {
     let bar = Progress::new(3, "analyze", o.quiet);
-    let t0 = Instant::now();
     let r = read_input(input, &o.read)?;
     bar.inc(1);
     let ndims = r.dims.len();
@@ -78,22 +115,12 @@ pub fn analyze(input: &Path, output: &Path, o: &AnalyzeOptions) -> CliResult {
     }
     bar.inc(1);
     bar.finish();
-    if !o.quiet {
-        eprintln!(
-            "analyzed {} ({} levels, {} {} {}) in {:.2} s",
-            input.display(),
-            pyr.depth(),
-            o.spec.scheme,
-            o.spec.boundary,
-            o.spec.order,
-            t0.elapsed().as_secs_f64()
-        );
-    }
     Ok(())
 }
 
-/// `mra synthesize PYRAMID -o OUT` for array pyramids (files written by [`analyze`]).
-pub fn synthesize(input: &Path, output: &Path, quiet: bool) -> CliResult {
+/// Reconstruct the array file `output` from the pyramid file `input` (written by
+/// [`analyze_path`]).
+pub fn synthesize_path(input: &Path, output: &Path, quiet: bool) -> CliResult {
     let bar = Progress::new(3, "synthesize", quiet);
     let (container, info) =
         pyramid_file::read(input).map_err(|e| Failure::context(input.display(), e))?;
