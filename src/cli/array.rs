@@ -62,7 +62,7 @@ pub struct AnalyzeOptions {
     pub spec: PyramidSpec,
     /// Write an 8-bit PNG picture of the pyramid instead of the coefficients.
     pub visual: bool,
-    /// Slice of a volume to picture (default: the middle one).
+    /// Slice of a volume to picture (default 0, through the coarse block).
     pub slice: Option<usize>,
     /// Layout of headerless input (`--dims/--dtype/--endian`).
     pub read: ReadOptions,

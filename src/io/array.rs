@@ -133,7 +133,7 @@ pub fn blocks(pyr: &Pyramid, ndims: usize) -> Vec<Block> {
 }
 
 /// The 8-bit picture of a pyramid container (`--visual`): 2-D data whole, 3-D data at
-/// slice `z` (default: the middle slice).
+/// slice `z` (default 0: the slice through the coarse block).
 pub fn picture(container: &Raster, pyr: &Pyramid, z: Option<usize>) -> Result<Raster> {
     let Samples::F32(data) = &container.samples else {
         return Err(Error::format("coefficients are not float32", "float32"));
@@ -143,7 +143,7 @@ pub fn picture(container: &Raster, pyr: &Pyramid, z: Option<usize>) -> Result<Ra
     match nd {
         2 => visual::picture(data, &container.dims, container.channels, &bl),
         3 => {
-            let z = z.unwrap_or(container.dims[0] / 2);
+            let z = z.unwrap_or(0);
             let (s, b) = visual::slice(data, &container.dims, container.channels, &bl, z)?;
             visual::picture(&s, &container.dims[1..], container.channels, &b)
         }

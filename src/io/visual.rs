@@ -1,7 +1,9 @@
 //! Pictures of pyramids (like the notes' Figure 9.11): each block of coefficients is
 //! contrast-stretched on its own and drawn where it sits in the Mallat layout. The
 //! coarse block maps its `[min, max]` to `[0, 255]`; a detail block maps `v` to
-//! `128 + 127 · v / max|v|` (zero details are mid-grey). Stretches are per channel.
+//! `128 + 127 · v / s`, clamped, with `s` the 99.5th percentile of `|v|` over the block
+//! (so that a few large details do not flatten the rest; zero details are mid-grey).
+//! Stretches are per channel.
 
 use std::ops::Range;
 
@@ -39,17 +41,23 @@ pub fn picture(data: &[f32], dims: &[usize], channels: usize, blocks: &[Block]) 
             let at = |y: usize, x: usize| data[(y * w + x) * channels + c];
             let mut lo = f32::INFINITY;
             let mut hi = f32::NEG_INFINITY;
-            let mut amax = 0f32;
+            let mut mags: Vec<f32> = Vec::with_capacity(ry.len() * rx.len());
             for y in ry.clone() {
                 for x in rx.clone() {
                     let v = at(y, x);
                     if v.is_finite() {
                         lo = lo.min(v);
                         hi = hi.max(v);
-                        amax = amax.max(v.abs());
+                        mags.push(v.abs());
                     }
                 }
             }
+            let amax = if b.coarse || mags.is_empty() {
+                0.0
+            } else {
+                let k = ((mags.len() - 1) as f64 * 0.995) as usize;
+                *mags.select_nth_unstable_by(k, f32::total_cmp).1
+            };
             for y in ry.clone() {
                 for x in rx.clone() {
                     let v = at(y, x);
