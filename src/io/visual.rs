@@ -55,7 +55,7 @@ pub fn picture(data: &[f32], dims: &[usize], channels: usize, blocks: &[Block]) 
             let amax = if b.coarse || mags.is_empty() {
                 0.0
             } else {
-                let k = ((mags.len() - 1) as f64 * 0.995) as usize;
+                let k = ((mags.len() - 1) as f64 * 0.995).ceil() as usize;
                 *mags.select_nth_unstable_by(k, f32::total_cmp).1
             };
             for y in ry.clone() {
