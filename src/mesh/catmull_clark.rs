@@ -67,48 +67,56 @@ pub fn step(mesh: &Mesh, he: &HalfEdgeMesh, tags: &Tags) -> Result<(Mesh, Featur
     let (epart, fpart) = rest.split_at_mut(ne);
     fpart.copy_from_slice(&face_points(mesh));
     let fp: &[[f64; 3]] = fpart;
-    epart.par_iter_mut().with_min_len(GRAIN).enumerate().for_each(|(e, o)| {
-        let [a, b] = he.edges.verts[e];
-        let (pa, pb) = (p[a as usize], p[b as usize]);
-        *o = if tags.sharp[e] {
-            std::array::from_fn(|k| 0.5 * (pa[k] + pb[k]))
-        } else {
-            let [c0, c1] = he.edges.corners[e];
-            let f0 = fp[he.face[c0 as usize] as usize];
-            let f1 = fp[he.face[c1 as usize] as usize];
-            std::array::from_fn(|k| 0.25 * (pa[k] + pb[k] + f0[k] + f1[k]))
-        };
-    });
-    vpart.par_iter_mut().with_min_len(GRAIN).enumerate().for_each(|(v, o)| {
-        let pv = p[v];
-        *o = match tags.rule(he, v as u32) {
-            VertexRule::Corner => pv,
-            VertexRule::Crease(a, b) => {
-                let (a, b) = (p[a as usize], p[b as usize]);
-                std::array::from_fn(|k| 0.75 * pv[k] + 0.125 * (a[k] + b[k]))
-            }
-            VertexRule::Smooth => {
-                let mut s = [0.0; 3];
-                let mut n = 0usize;
-                for h in he.outgoing(VertexId(v as u32)) {
-                    let q = p[he.from[he.twin[h.idx()] as usize] as usize];
-                    let f = fp[he.face[h.idx()] as usize];
-                    for k in 0..3 {
-                        s[k] += q[k] + f[k];
+    epart
+        .par_iter_mut()
+        .with_min_len(GRAIN)
+        .enumerate()
+        .for_each(|(e, o)| {
+            let [a, b] = he.edges.verts[e];
+            let (pa, pb) = (p[a as usize], p[b as usize]);
+            *o = if tags.sharp[e] {
+                std::array::from_fn(|k| 0.5 * (pa[k] + pb[k]))
+            } else {
+                let [c0, c1] = he.edges.corners[e];
+                let f0 = fp[he.face[c0 as usize] as usize];
+                let f1 = fp[he.face[c1 as usize] as usize];
+                std::array::from_fn(|k| 0.25 * (pa[k] + pb[k] + f0[k] + f1[k]))
+            };
+        });
+    vpart
+        .par_iter_mut()
+        .with_min_len(GRAIN)
+        .enumerate()
+        .for_each(|(v, o)| {
+            let pv = p[v];
+            *o = match tags.rule(he, v as u32) {
+                VertexRule::Corner => pv,
+                VertexRule::Crease(a, b) => {
+                    let (a, b) = (p[a as usize], p[b as usize]);
+                    std::array::from_fn(|k| 0.75 * pv[k] + 0.125 * (a[k] + b[k]))
+                }
+                VertexRule::Smooth => {
+                    let mut s = [0.0; 3];
+                    let mut n = 0usize;
+                    for h in he.outgoing(VertexId(v as u32)) {
+                        let q = p[he.from[he.twin[h.idx()] as usize] as usize];
+                        let f = fp[he.face[h.idx()] as usize];
+                        for k in 0..3 {
+                            s[k] += q[k] + f[k];
+                        }
+                        n += 1;
                     }
-                    n += 1;
+                    if n == 0 {
+                        pv
+                    } else {
+                        let nn = n as f64;
+                        let w = (nn - 2.0) / nn;
+                        let u = 1.0 / (nn * nn);
+                        std::array::from_fn(|k| w * pv[k] + u * s[k])
+                    }
                 }
-                if n == 0 {
-                    pv
-                } else {
-                    let nn = n as f64;
-                    let w = (nn - 2.0) / nn;
-                    let u = 1.0 / (nn * nn);
-                    std::array::from_fn(|k| w * pv[k] + u * s[k])
-                }
-            }
-        };
-    });
+            };
+        });
     let mut indices = vec![0u32; 4 * nc];
     let ce = &he.edges.corner_edge;
     let (vb, fb) = (nv as u32, (nv + ne) as u32);

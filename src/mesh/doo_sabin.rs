@@ -27,27 +27,30 @@ pub fn step(mesh: &Mesh, he: &HalfEdgeMesh) -> Result<Mesh> {
     super::catmull_clark::check_size(nc, 4 * nc + 4 * he.edge_count())?;
     let mut out = vec![[0.0f64; 3]; nc];
     let fo = &mesh.offsets;
-    out.par_iter_mut().with_min_len(GRAIN).enumerate().for_each(|(c, o)| {
-        let f = he.face[c] as usize;
-        let (s, e) = (fo[f] as usize, fo[f + 1] as usize);
-        let n = e - s;
-        let i = c - s;
-        let nf64 = n as f64;
-        let mut acc = [0.0; 3];
-        for j in 0..n {
-            let k = (i + n - j) % n;
-            let w = if k == 0 {
-                0.25 + 5.0 / (4.0 * nf64)
-            } else {
-                (3.0 + 2.0 * (2.0 * PI * k as f64 / nf64).cos()) / (4.0 * nf64)
-            };
-            let q = p[mesh.indices[s + j] as usize];
-            for d in 0..3 {
-                acc[d] += w * q[d];
+    out.par_iter_mut()
+        .with_min_len(GRAIN)
+        .enumerate()
+        .for_each(|(c, o)| {
+            let f = he.face[c] as usize;
+            let (s, e) = (fo[f] as usize, fo[f + 1] as usize);
+            let n = e - s;
+            let i = c - s;
+            let nf64 = n as f64;
+            let mut acc = [0.0; 3];
+            for j in 0..n {
+                let k = (i + n - j) % n;
+                let w = if k == 0 {
+                    0.25 + 5.0 / (4.0 * nf64)
+                } else {
+                    (3.0 + 2.0 * (2.0 * PI * k as f64 / nf64).cos()) / (4.0 * nf64)
+                };
+                let q = p[mesh.indices[s + j] as usize];
+                for d in 0..3 {
+                    acc[d] += w * q[d];
+                }
             }
-        }
-        *o = acc;
-    });
+            *o = acc;
+        });
     let mut offsets = Vec::with_capacity(nf + he.edge_count() + mesh.vertex_count() + 1);
     offsets.extend_from_slice(&mesh.offsets);
     let mut indices: Vec<u32> = (0..nc as u32).collect();

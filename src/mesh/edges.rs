@@ -65,7 +65,8 @@ impl Edges {
     /// Build the table of `mesh` in one pass.
     pub fn build(mesh: &Mesh) -> Edges {
         let nc = mesh.indices.len();
-        let mut map: PairMap<u32> = PairMap::with_capacity_and_hasher(nc / 2 + 16, Default::default());
+        let mut map: PairMap<u32> =
+            PairMap::with_capacity_and_hasher(nc / 2 + 16, Default::default());
         let mut verts = Vec::with_capacity(nc / 2 + 16);
         let mut corners = Vec::with_capacity(nc / 2 + 16);
         let mut uses = Vec::with_capacity(nc / 2 + 16);

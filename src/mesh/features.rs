@@ -62,7 +62,10 @@ impl Features {
             let t: Vec<&str> = l.split_whitespace().collect();
             let num = |s: &str| {
                 s.parse::<u32>().map_err(|_| {
-                    Error::format(format!("line {}: {s:?} is not a vertex index", i + 1), "a vertex index")
+                    Error::format(
+                        format!("line {}: {s:?} is not a vertex index", i + 1),
+                        "a vertex index",
+                    )
                 })
             };
             match t.as_slice() {
@@ -83,7 +86,11 @@ impl Features {
     /// exceeds `degrees`.
     pub fn from_crease_angle(mesh: &Mesh, he: &HalfEdgeMesh, degrees: f64) -> Result<Features> {
         if !(0.0..=180.0).contains(&degrees) {
-            return Err(Error::parameter("crease angle", degrees, "degrees in [0, 180]"));
+            return Err(Error::parameter(
+                "crease angle",
+                degrees,
+                "degrees in [0, 180]",
+            ));
         }
         let normals = super::normals::face_normals(mesh);
         let cos_limit = degrees.to_radians().cos();
@@ -117,7 +124,11 @@ impl Features {
                 ));
             }
             let h = he.find_halfedge(VertexId(a), VertexId(b)).ok_or_else(|| {
-                Error::parameter("sharp edge", format!("({a}, {b})"), "a pair of vertices joined by an edge")
+                Error::parameter(
+                    "sharp edge",
+                    format!("({a}, {b})"),
+                    "a pair of vertices joined by an edge",
+                )
             })?;
             let e = he.edge[h.idx()] as usize;
             if he.edges.uses[e] == 2 {
@@ -127,7 +138,11 @@ impl Features {
         }
         for &v in &self.corners {
             if v >= nv {
-                return Err(Error::parameter("corner vertex", v, "a vertex index of the mesh"));
+                return Err(Error::parameter(
+                    "corner vertex",
+                    v,
+                    "a vertex index of the mesh",
+                ));
             }
             corner[v as usize] = true;
         }
@@ -184,7 +199,9 @@ impl Tags {
                 f.sharp_edges.push([m, b]);
             }
         }
-        f.corners = (0..self.corner.len() as u32).filter(|&v| self.corner[v as usize]).collect();
+        f.corners = (0..self.corner.len() as u32)
+            .filter(|&v| self.corner[v as usize])
+            .collect();
         f
     }
 }

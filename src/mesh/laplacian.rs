@@ -105,7 +105,11 @@ pub fn smooth(
         return Err(Error::parameter("lambda", lambda, "a positive number"));
     }
     if method == Method::Explicit && lambda > 1.0 {
-        return Err(Error::parameter("lambda", lambda, "at most 1 for explicit smoothing"));
+        return Err(Error::parameter(
+            "lambda",
+            lambda,
+            "at most 1 for explicit smoothing",
+        ));
     }
     let nv = mesh.vertex_count();
     let edges = Edges::build(mesh);

@@ -12,6 +12,7 @@
 //! sparse.rs         CSR matrices and conjugate gradients (for implicit smoothing)
 //! simplify.rs       edge collapse with the link condition, quadric error simplification (§6.6.3)
 //! subdivide.rs      Scheme and the multi-step driver
+//! shapes.rs         generated meshes: cube, tetrahedron, octahedron, torus, quad grid, sphere
 //! features.rs       sharp edges and corners: sidecar files, dihedral angle, vertex rules (§8.2.4)
 //! loop.rs  catmull_clark.rs  doo_sabin.rs  butterfly.rs   the schemes of ch. 8
 //! adaptive.rs       incremental adaptive Loop / Catmull-Clark (Pakdel–Samavati, §8.5)
@@ -34,6 +35,7 @@ pub mod laplacian;
 pub mod loop_subdivision;
 pub mod normals;
 pub mod render;
+pub mod shapes;
 pub mod simplify;
 pub mod sparse;
 pub mod subdivide;
@@ -65,9 +67,15 @@ pub struct Mesh {
 /// Faces given to [`Mesh::from_faces`]: a list of index lists, or flat indices with offsets.
 pub enum Faces {
     Lists(Vec<Vec<u32>>),
-    Flat { indices: Vec<u32>, offsets: Vec<u32> },
+    Flat {
+        indices: Vec<u32>,
+        offsets: Vec<u32>,
+    },
     /// All faces have the same degree (3 for triangles, 4 for quads).
-    Uniform { indices: Vec<u32>, degree: usize },
+    Uniform {
+        indices: Vec<u32>,
+        degree: usize,
+    },
 }
 
 impl From<Vec<Vec<u32>>> for Faces {
@@ -127,7 +135,9 @@ impl Mesh {
                         "≥ 3 and dividing the index count",
                     ));
                 }
-                let offsets = (0..=indices.len() / degree).map(|i| (i * degree) as u32).collect();
+                let offsets = (0..=indices.len() / degree)
+                    .map(|i| (i * degree) as u32)
+                    .collect();
                 (indices, offsets)
             }
         };
@@ -143,14 +153,18 @@ impl Mesh {
 
     /// Check the invariants of the face-vertex list (see [`Mesh::from_faces`]).
     pub fn validate(&self) -> Result<()> {
-        if self.indices.len() > u32::MAX as usize - 1 || self.positions.len() > u32::MAX as usize - 1 {
+        if self.indices.len() > u32::MAX as usize - 1
+            || self.positions.len() > u32::MAX as usize - 1
+        {
             return Err(Error::LimitsExceeded {
                 what: "mesh size",
                 requested: self.indices.len().max(self.positions.len()) as u64,
                 limit: u32::MAX as u64 - 1,
             });
         }
-        if self.offsets.first() != Some(&0) || *self.offsets.last().unwrap() as usize != self.indices.len() {
+        if self.offsets.first() != Some(&0)
+            || *self.offsets.last().unwrap() as usize != self.indices.len()
+        {
             return Err(Error::format(
                 format!(
                     "face offsets start at {:?} and end at {:?} for {} indices",

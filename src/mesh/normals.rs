@@ -39,7 +39,11 @@ pub fn face_area_vector(mesh: &Mesh, f: usize) -> [f64; 3] {
     let face = mesh.face(f);
     let p = &mesh.positions;
     if face.len() == 3 {
-        let (a, b, c) = (p[face[0] as usize], p[face[1] as usize], p[face[2] as usize]);
+        let (a, b, c) = (
+            p[face[0] as usize],
+            p[face[1] as usize],
+            p[face[2] as usize],
+        );
         return vec3::scale(vec3::cross(vec3::sub(b, a), vec3::sub(c, a)), 0.5);
     }
     let mut n = [0.0; 3];
@@ -112,11 +116,17 @@ pub fn vertex_normals(mesh: &Mesh, weighting: Weighting) -> Vec<[f64; 3]> {
         let mut it = partial.into_iter();
         let mut acc = it.next().unwrap_or_else(|| vec![[0.0; 3]; nv]);
         for part in it {
-            acc.par_iter_mut().zip(part.par_iter()).with_min_len(GRAIN).for_each(|(a, b)| {
-                *a = vec3::add(*a, *b);
-            });
+            acc.par_iter_mut()
+                .zip(part.par_iter())
+                .with_min_len(GRAIN)
+                .for_each(|(a, b)| {
+                    *a = vec3::add(*a, *b);
+                });
         }
         acc
     };
-    sum.into_par_iter().with_min_len(GRAIN).map(vec3::normalized).collect()
+    sum.into_par_iter()
+        .with_min_len(GRAIN)
+        .map(vec3::normalized)
+        .collect()
 }

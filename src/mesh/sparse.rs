@@ -53,17 +53,20 @@ impl Csr {
     /// y = A x for a column of 3-vectors.
     pub fn mul3(&self, x: &[[f64; 3]], y: &mut [[f64; 3]]) {
         use rayon::prelude::*;
-        y.par_iter_mut().with_min_len(2048).enumerate().for_each(|(i, yi)| {
-            let mut s = [0.0; 3];
-            for k in self.row_start[i]..self.row_start[i + 1] {
-                let xj = x[self.col[k] as usize];
-                let a = self.val[k];
-                s[0] += a * xj[0];
-                s[1] += a * xj[1];
-                s[2] += a * xj[2];
-            }
-            *yi = s;
-        });
+        y.par_iter_mut()
+            .with_min_len(2048)
+            .enumerate()
+            .for_each(|(i, yi)| {
+                let mut s = [0.0; 3];
+                for k in self.row_start[i]..self.row_start[i + 1] {
+                    let xj = x[self.col[k] as usize];
+                    let a = self.val[k];
+                    s[0] += a * xj[0];
+                    s[1] += a * xj[1];
+                    s[2] += a * xj[2];
+                }
+                *yi = s;
+            });
     }
 
     pub fn diagonal(&self) -> Vec<f64> {
@@ -73,14 +76,28 @@ impl Csr {
 
 /// Solve A X = B (three right-hand sides at once) for symmetric positive definite A by
 /// conjugate gradients with a Jacobi preconditioner, to relative residual `tol`.
-pub fn conjugate_gradient(a: &Csr, b: &[[f64; 3]], x0: &[[f64; 3]], tol: f64, max_iter: usize) -> Result<Vec<[f64; 3]>> {
+pub fn conjugate_gradient(
+    a: &Csr,
+    b: &[[f64; 3]],
+    x0: &[[f64; 3]],
+    tol: f64,
+    max_iter: usize,
+) -> Result<Vec<[f64; 3]>> {
     let n = a.n;
-    let dinv: Vec<f64> = a.diagonal().iter().map(|&d| if d != 0.0 { 1.0 / d } else { 1.0 }).collect();
+    let dinv: Vec<f64> = a
+        .diagonal()
+        .iter()
+        .map(|&d| if d != 0.0 { 1.0 / d } else { 1.0 })
+        .collect();
     let mut x = x0.to_vec();
     let mut ax = vec![[0.0; 3]; n];
     a.mul3(&x, &mut ax);
-    let mut r: Vec<[f64; 3]> = (0..n).map(|i| std::array::from_fn(|k| b[i][k] - ax[i][k])).collect();
-    let mut z: Vec<[f64; 3]> = (0..n).map(|i| std::array::from_fn(|k| dinv[i] * r[i][k])).collect();
+    let mut r: Vec<[f64; 3]> = (0..n)
+        .map(|i| std::array::from_fn(|k| b[i][k] - ax[i][k]))
+        .collect();
+    let mut z: Vec<[f64; 3]> = (0..n)
+        .map(|i| std::array::from_fn(|k| dinv[i] * r[i][k]))
+        .collect();
     let mut p = z.clone();
     let dot = |u: &[[f64; 3]], v: &[[f64; 3]]| -> [f64; 3] {
         let mut s = [0.0; 3];
@@ -101,7 +118,8 @@ pub fn conjugate_gradient(a: &Csr, b: &[[f64; 3]], x0: &[[f64; 3]], tol: f64, ma
         }
         a.mul3(&p, &mut ap);
         let pap = dot(&p, &ap);
-        let alpha: [f64; 3] = std::array::from_fn(|k| if pap[k] != 0.0 { rz[k] / pap[k] } else { 0.0 });
+        let alpha: [f64; 3] =
+            std::array::from_fn(|k| if pap[k] != 0.0 { rz[k] / pap[k] } else { 0.0 });
         for i in 0..n {
             for k in 0..3 {
                 x[i][k] += alpha[k] * p[i][k];
@@ -110,7 +128,8 @@ pub fn conjugate_gradient(a: &Csr, b: &[[f64; 3]], x0: &[[f64; 3]], tol: f64, ma
             }
         }
         let rz_new = dot(&r, &z);
-        let beta: [f64; 3] = std::array::from_fn(|k| if rz[k] != 0.0 { rz_new[k] / rz[k] } else { 0.0 });
+        let beta: [f64; 3] =
+            std::array::from_fn(|k| if rz[k] != 0.0 { rz_new[k] / rz[k] } else { 0.0 });
         rz = rz_new;
         for i in 0..n {
             for k in 0..3 {

@@ -49,7 +49,12 @@ impl Scheme {
 }
 
 /// One step with already resolved tags; returns the refined mesh and its child tags.
-pub fn step(mesh: &Mesh, he: &HalfEdgeMesh, scheme: Scheme, tags: &Tags) -> Result<(Mesh, Features)> {
+pub fn step(
+    mesh: &Mesh,
+    he: &HalfEdgeMesh,
+    scheme: Scheme,
+    tags: &Tags,
+) -> Result<(Mesh, Features)> {
     match scheme {
         Scheme::Loop(w) => super::loop_subdivision::step(mesh, he, tags, w),
         Scheme::CatmullClark => super::catmull_clark::step(mesh, he, tags),

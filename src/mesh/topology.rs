@@ -120,7 +120,11 @@ pub fn orientation_signs(mesh: &Mesh, edges: &Edges) -> std::result::Result<Vec<
                 let g = edges.corner_face[o as usize] as usize;
                 // consistent neighbours traverse the shared edge in opposite directions
                 let same_dir = mesh.indices[c as usize] == mesh.indices[o as usize];
-                let want = if same_dir { -sign[f as usize] } else { sign[f as usize] };
+                let want = if same_dir {
+                    -sign[f as usize]
+                } else {
+                    sign[f as usize]
+                };
                 if sign[g] == 0 {
                     sign[g] = want;
                     stack.push(g as u32);
@@ -325,7 +329,13 @@ pub fn analyze_with(mesh: &Mesh, edges: &Edges) -> Report {
     }
 }
 
-fn mark_non_orientable(mesh: &Mesh, edges: &Edges, sign: &mut [i8], vcomp: &[u32], comps: &mut [Component]) {
+fn mark_non_orientable(
+    mesh: &Mesh,
+    edges: &Edges,
+    sign: &mut [i8],
+    vcomp: &[u32],
+    comps: &mut [Component],
+) {
     let nf = mesh.face_count();
     let mut stack = Vec::new();
     for seed in 0..nf {
@@ -343,7 +353,11 @@ fn mark_non_orientable(mesh: &Mesh, edges: &Edges, sign: &mut [i8], vcomp: &[u32
                 let o = edges.opposite(e, c);
                 let g = edges.corner_face[o as usize] as usize;
                 let same_dir = mesh.indices[c as usize] == mesh.indices[o as usize];
-                let want = if same_dir { -sign[f as usize] } else { sign[f as usize] };
+                let want = if same_dir {
+                    -sign[f as usize]
+                } else {
+                    sign[f as usize]
+                };
                 if sign[g] == 0 {
                     sign[g] = want;
                     stack.push(g as u32);

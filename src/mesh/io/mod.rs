@@ -81,7 +81,10 @@ pub fn write_as(path: &Path, mesh: &Mesh, format: Format) -> Result<()> {
 
 /// Write bytes to `path` through a temporary file in the same folder and a rename.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
-    let dir = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    let dir = path
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
     let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("out");
     let tmp = dir.join(format!(".{name}.tmp{}", std::process::id()));
     let r = std::fs::write(&tmp, bytes).and_then(|_| std::fs::rename(&tmp, path));
@@ -98,7 +101,8 @@ pub(crate) mod text {
     /// Split `s` at ASCII whitespace.
     #[inline]
     pub fn tokens(s: &[u8]) -> impl Iterator<Item = &[u8]> {
-        s.split(|b| b.is_ascii_whitespace()).filter(|t| !t.is_empty())
+        s.split(|b| b.is_ascii_whitespace())
+            .filter(|t| !t.is_empty())
     }
 
     #[inline]
@@ -108,7 +112,10 @@ pub(crate) mod text {
             .and_then(|s| s.parse::<f64>().ok())
             .ok_or_else(|| {
                 Error::format(
-                    format!("line {line}: {:?} is not a number", String::from_utf8_lossy(t)),
+                    format!(
+                        "line {line}: {:?} is not a number",
+                        String::from_utf8_lossy(t)
+                    ),
                     "a decimal number",
                 )
             })
@@ -126,7 +133,10 @@ pub(crate) mod text {
         }
         if s.is_empty() || s.len() > 18 || !s.iter().all(|b| b.is_ascii_digit()) {
             return Err(Error::format(
-                format!("line {line}: {:?} is not an integer", String::from_utf8_lossy(t)),
+                format!(
+                    "line {line}: {:?} is not an integer",
+                    String::from_utf8_lossy(t)
+                ),
                 "an integer index",
             ));
         }

@@ -37,7 +37,10 @@ fn index(t: &[u8], local: usize, line: usize) -> Result<i64> {
     } else if i < 0 {
         Ok(REL + local as i64 + i)
     } else {
-        Err(Error::format(format!("line {line}: index 0"), "1-based or negative OBJ indices"))
+        Err(Error::format(
+            format!("line {line}: index 0"),
+            "1-based or negative OBJ indices",
+        ))
     }
 }
 
@@ -61,7 +64,10 @@ fn parse_chunk(bytes: &[u8]) -> Result<Chunk> {
                     *x = parse_f64(t, line)?;
                 }
                 if !p.iter().all(|x| x.is_finite()) {
-                    return Err(Error::format(format!("line {line}: coordinates {p:?}"), "finite numbers"));
+                    return Err(Error::format(
+                        format!("line {line}: coordinates {p:?}"),
+                        "finite numbers",
+                    ));
                 }
                 if kw == b"v" {
                     c.v.push(p)
@@ -77,7 +83,10 @@ fn parse_chunk(bytes: &[u8]) -> Result<Chunk> {
                     k += 1;
                 }
                 if k == 0 {
-                    return Err(Error::format(format!("line {line}: empty vt"), "vt u [v [w]]"));
+                    return Err(Error::format(
+                        format!("line {line}: empty vt"),
+                        "vt u [v [w]]",
+                    ));
                 }
                 c.vt_dim = c.vt_dim.max(k.max(2));
                 c.vt.push(p);
@@ -89,9 +98,17 @@ fn parse_chunk(bytes: &[u8]) -> Result<Chunk> {
                     let v = parts.next().unwrap_or(b"");
                     c.fv.push(index(v, c.v.len(), line)?);
                     let vt = parts.next().unwrap_or(b"");
-                    c.ft.push(if vt.is_empty() { ABSENT } else { index(vt, c.vt.len(), line)? });
+                    c.ft.push(if vt.is_empty() {
+                        ABSENT
+                    } else {
+                        index(vt, c.vt.len(), line)?
+                    });
                     let vn = parts.next().unwrap_or(b"");
-                    c.fn_.push(if vn.is_empty() { ABSENT } else { index(vn, c.vn.len(), line)? });
+                    c.fn_.push(if vn.is_empty() {
+                        ABSENT
+                    } else {
+                        index(vn, c.vn.len(), line)?
+                    });
                     deg += 1;
                 }
                 if deg < 3 {
@@ -143,7 +160,11 @@ pub fn parse(bytes: &[u8]) -> Result<Mesh> {
     } else {
         split_lines(bytes, 4 * rayon::current_num_threads())
     };
-    let chunks: Vec<Chunk> = match pieces.par_iter().map(|p| parse_chunk(p)).collect::<Result<Vec<_>>>() {
+    let chunks: Vec<Chunk> = match pieces
+        .par_iter()
+        .map(|p| parse_chunk(p))
+        .collect::<Result<Vec<_>>>()
+    {
         Ok(c) => c,
         // re-parse sequentially so the error names the global line number
         Err(e) => return Err(parse_chunk(bytes).err().unwrap_or(e)),
@@ -176,10 +197,19 @@ pub fn parse(bytes: &[u8]) -> Result<Mesh> {
         .par_iter()
         .zip(bases.par_iter())
         .map(|(c, &(bv, bt, bn))| -> Result<Resolved> {
-            let v = c.fv.iter().map(|&x| resolve(x, bv, nv, "vertex")).collect::<Result<Vec<_>>>()?;
+            let v =
+                c.fv.iter()
+                    .map(|&x| resolve(x, bv, nv, "vertex"))
+                    .collect::<Result<Vec<_>>>()?;
             let t = if has_t {
                 c.ft.iter()
-                    .map(|&x| if x == ABSENT { Ok(NONE) } else { resolve(x, bt, nt, "texture") })
+                    .map(|&x| {
+                        if x == ABSENT {
+                            Ok(NONE)
+                        } else {
+                            resolve(x, bt, nt, "texture")
+                        }
+                    })
                     .collect::<Result<Vec<_>>>()?
             } else {
                 Vec::new()
@@ -187,7 +217,13 @@ pub fn parse(bytes: &[u8]) -> Result<Mesh> {
             let n = if has_n {
                 c.fn_
                     .iter()
-                    .map(|&x| if x == ABSENT { Ok(NONE) } else { resolve(x, bn, nn, "normal") })
+                    .map(|&x| {
+                        if x == ABSENT {
+                            Ok(NONE)
+                        } else {
+                            resolve(x, bn, nn, "normal")
+                        }
+                    })
                     .collect::<Result<Vec<_>>>()?
             } else {
                 Vec::new()

@@ -34,7 +34,10 @@ pub fn parse(bytes: &[u8]) -> Result<Mesh> {
         counts = tokens(l).map(|t| parse_i64(t, ln)).collect::<Result<_>>()?;
     }
     if counts.len() < 2 || counts[0] < 0 || counts[1] < 0 {
-        return Err(Error::format(format!("counts {counts:?}"), "V F E with V, F ≥ 0"));
+        return Err(Error::format(
+            format!("counts {counts:?}"),
+            "V F E with V, F ≥ 0",
+        ));
     }
     let (nv, nf) = (counts[0] as usize, counts[1] as usize);
     if nv.saturating_add(nf) > bytes.len() {
@@ -46,9 +49,12 @@ pub fn parse(bytes: &[u8]) -> Result<Mesh> {
     }
     let mut positions = Vec::with_capacity(nv);
     for _ in 0..nv {
-        let (ln, l) = lines
-            .next()
-            .ok_or_else(|| Error::format(format!("file ends after {} of {nv} vertices", positions.len()), "V vertex lines"))?;
+        let (ln, l) = lines.next().ok_or_else(|| {
+            Error::format(
+                format!("file ends after {} of {nv} vertices", positions.len()),
+                "V vertex lines",
+            )
+        })?;
         let mut t = tokens(l);
         let mut p = [0.0; 3];
         for x in p.iter_mut() {
@@ -60,13 +66,16 @@ pub fn parse(bytes: &[u8]) -> Result<Mesh> {
     offsets.push(0u32);
     let mut indices = Vec::with_capacity(3 * nf);
     for f in 0..nf {
-        let (ln, l) = lines
-            .next()
-            .ok_or_else(|| Error::format(format!("file ends after {f} of {nf} faces"), "F face lines"))?;
+        let (ln, l) = lines.next().ok_or_else(|| {
+            Error::format(format!("file ends after {f} of {nf} faces"), "F face lines")
+        })?;
         let mut t = tokens(l);
         let n = parse_i64(t.next().unwrap_or(b""), ln)?;
         if !(3..=1_000_000).contains(&n) {
-            return Err(Error::format(format!("line {ln}: face with {n} vertices"), "at least 3 vertices per face"));
+            return Err(Error::format(
+                format!("line {ln}: face with {n} vertices"),
+                "at least 3 vertices per face",
+            ));
         }
         for _ in 0..n {
             let i = parse_i64(t.next().unwrap_or(b""), ln)?;

@@ -77,7 +77,10 @@ fn parse_header(bytes: &[u8]) -> Result<(Encoding, Vec<ElementDecl>, usize)> {
                 })
             }
             Some("element") => {
-                let name = t.get(1).ok_or_else(|| bad("element without a name"))?.to_string();
+                let name = t
+                    .get(1)
+                    .ok_or_else(|| bad("element without a name"))?
+                    .to_string();
                 let count = t
                     .get(2)
                     .and_then(|c| c.parse::<usize>().ok())
@@ -89,7 +92,9 @@ fn parse_header(bytes: &[u8]) -> Result<(Encoding, Vec<ElementDecl>, usize)> {
                 });
             }
             Some("property") => {
-                let el = elements.last_mut().ok_or_else(|| bad("property before any element"))?;
+                let el = elements
+                    .last_mut()
+                    .ok_or_else(|| bad("property before any element"))?;
                 let ty = |s: Option<&&str>| {
                     s.and_then(|s| ScalarType::from_ply(s))
                         .ok_or_else(|| bad(format!("unknown property type in {line:?}")))
@@ -124,16 +129,22 @@ impl Body<'_> {
     #[inline]
     fn binary(&mut self, ty: ScalarType) -> Result<f64> {
         let n = ty.size();
-        let b = self
-            .bytes
-            .get(self.pos..self.pos + n)
-            .ok_or_else(|| bad(format!("file ends at byte {} inside the body", self.bytes.len())))?;
+        let b = self.bytes.get(self.pos..self.pos + n).ok_or_else(|| {
+            bad(format!(
+                "file ends at byte {} inside the body",
+                self.bytes.len()
+            ))
+        })?;
         self.pos += n;
         let le = self.enc == Encoding::BinaryLittleEndian;
         macro_rules! rd {
             ($t:ty) => {{
                 let a = b.try_into().unwrap();
-                (if le { <$t>::from_le_bytes(a) } else { <$t>::from_be_bytes(a) }) as f64
+                (if le {
+                    <$t>::from_le_bytes(a)
+                } else {
+                    <$t>::from_be_bytes(a)
+                }) as f64
             }};
         }
         Ok(match ty {
@@ -166,7 +177,12 @@ impl Body<'_> {
         std::str::from_utf8(&b[s..i])
             .ok()
             .and_then(|t| t.parse::<f64>().ok())
-            .ok_or_else(|| bad(format!("{:?} is not a number", String::from_utf8_lossy(&b[s..i]))))
+            .ok_or_else(|| {
+                bad(format!(
+                    "{:?} is not a number",
+                    String::from_utf8_lossy(&b[s..i])
+                ))
+            })
     }
 
     #[inline]
@@ -184,7 +200,10 @@ pub fn parse(bytes: &[u8]) -> Result<Mesh> {
     let (enc, elements, body) = parse_header(bytes)?;
     let remaining = bytes.len() - body;
     // every element takes at least one byte (binary) or two (ascii: a digit and a separator)
-    let total: usize = elements.iter().map(|e| e.count).fold(0usize, |a, c| a.saturating_add(c));
+    let total: usize = elements
+        .iter()
+        .map(|e| e.count)
+        .fold(0usize, |a, c| a.saturating_add(c));
     if total > remaining {
         return Err(Error::LimitsExceeded {
             what: "PLY element count",
@@ -192,7 +211,11 @@ pub fn parse(bytes: &[u8]) -> Result<Mesh> {
             limit: remaining as u64,
         });
     }
-    let mut b = Body { bytes, pos: body, enc };
+    let mut b = Body {
+        bytes,
+        pos: body,
+        enc,
+    };
     let mut positions = Vec::new();
     let mut offsets = vec![0u32];
     let mut indices = Vec::new();
@@ -225,7 +248,9 @@ pub fn parse(bytes: &[u8]) -> Result<Mesh> {
                             xyz[k] = i;
                             attributes.position_type = Some(ty);
                         }
-                        PropKind::List(..) => return Err(bad("vertex coordinate declared as a list")),
+                        PropKind::List(..) => {
+                            return Err(bad("vertex coordinate declared as a list"))
+                        }
                     }
                 }
                 if xyz.contains(&usize::MAX) {
@@ -327,7 +352,10 @@ pub fn parse(bytes: &[u8]) -> Result<Mesh> {
                             PropKind::List(ct, it) => {
                                 let n = b.value(ct)?;
                                 if !(0.0..=1e6).contains(&n) {
-                                    return Err(bad(format!("list length {n} in element {}", el.name)));
+                                    return Err(bad(format!(
+                                        "list length {n} in element {}",
+                                        el.name
+                                    )));
                                 }
                                 for _ in 0..n as usize {
                                     b.value(it)?;
@@ -390,11 +418,23 @@ fn put(out: &mut Vec<u8>, enc: Encoding, ty: ScalarType, x: f64) {
 pub fn to_bytes(mesh: &Mesh, enc: Encoding) -> Result<Vec<u8>> {
     let a = &mesh.attributes;
     let pty = a.position_type.unwrap_or(ScalarType::F64);
-    let (ct, it) = a.face_list_types.unwrap_or((ScalarType::U8, ScalarType::I32));
-    let max_deg = (0..mesh.face_count()).map(|f| mesh.face_degree(f)).max().unwrap_or(0);
-    let ct = if max_deg > 255 && ct.size() == 1 { ScalarType::I32 } else { ct };
-    let mut vprops: Vec<(&str, ScalarType, &[f64])> =
-        a.vertex.iter().map(|p| (p.name.as_str(), p.ty, &p.values[..])).collect();
+    let (ct, it) = a
+        .face_list_types
+        .unwrap_or((ScalarType::U8, ScalarType::I32));
+    let max_deg = (0..mesh.face_count())
+        .map(|f| mesh.face_degree(f))
+        .max()
+        .unwrap_or(0);
+    let ct = if max_deg > 255 && ct.size() == 1 {
+        ScalarType::I32
+    } else {
+        ct
+    };
+    let mut vprops: Vec<(&str, ScalarType, &[f64])> = a
+        .vertex
+        .iter()
+        .map(|p| (p.name.as_str(), p.ty, &p.values[..]))
+        .collect();
     let normals_flat: Vec<Vec<f64>>;
     if let Some(n) = &a.vertex_normals {
         if !a.vertex.iter().any(|p| p.name == "nx") {
@@ -406,12 +446,20 @@ pub fn to_bytes(mesh: &Mesh, enc: Encoding) -> Result<Vec<u8>> {
     }
     for (name, _, vals) in &vprops {
         if vals.len() != mesh.vertex_count() {
-            return Err(Error::parameter("vertex property length", name, "one value per vertex"));
+            return Err(Error::parameter(
+                "vertex property length",
+                name,
+                "one value per vertex",
+            ));
         }
     }
     for p in &a.face {
         if p.values.len() != mesh.face_count() {
-            return Err(Error::parameter("face property length", &p.name, "one value per face"));
+            return Err(Error::parameter(
+                "face property length",
+                &p.name,
+                "one value per face",
+            ));
         }
     }
     let mut out = Vec::with_capacity(mesh.vertex_count() * 24 + mesh.indices.len() * 4 + 256);
@@ -431,7 +479,12 @@ pub fn to_bytes(mesh: &Mesh, enc: Encoding) -> Result<Vec<u8>> {
     }
     let _ = writeln!(h, "element face {}", mesh.face_count());
     let list_name = a.face_list_name.as_deref().unwrap_or("vertex_indices");
-    let _ = writeln!(h, "property list {} {} {list_name}", ct.ply_name(), it.ply_name());
+    let _ = writeln!(
+        h,
+        "property list {} {} {list_name}",
+        ct.ply_name(),
+        it.ply_name()
+    );
     for p in &a.face {
         let _ = writeln!(h, "property {} {}", p.ty.ply_name(), p.name);
     }
