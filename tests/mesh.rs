@@ -915,3 +915,37 @@ fn normals_and_cotangent_laplacian_equal_libigl_to_1e_12() {
         assert_eq!(count, l.val.len(), "{name}: same sparsity");
     }
 }
+
+#[test]
+fn catmull_clark_and_loop_equal_opensubdiv_with_boundaries_creases_and_corners_to_1e_12() {
+    let fx = fixture("mesh_opensubdiv.json");
+    let cases = fx["cases"].as_array().unwrap();
+    assert!(cases.len() >= 10);
+    for c in cases {
+        let name = c["name"].as_str().unwrap();
+        let input = mesh_of(&c["input"]);
+        let pairs = |v: &serde_json::Value| -> Vec<[u32; 2]> {
+            v.as_array()
+                .unwrap()
+                .iter()
+                .map(|p| [p[0].as_u64().unwrap() as u32, p[1].as_u64().unwrap() as u32])
+                .collect()
+        };
+        let features = Features {
+            sharp_edges: pairs(&c["creases"]),
+            corners: c["corners"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|x| x.as_u64().unwrap() as u32)
+                .collect(),
+        };
+        let scheme = match c["scheme"].as_str().unwrap() {
+            "loop" => Scheme::Loop(LoopWeights::Loop),
+            _ => Scheme::CatmullClark,
+        };
+        let levels = c["levels"].as_u64().unwrap() as usize;
+        let ours = subdivide(&input, scheme, levels, &features).unwrap();
+        assert_same_mesh(&ours, &mesh_of(&c["output"]), 1e-12, name);
+    }
+}
