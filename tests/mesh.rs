@@ -976,3 +976,36 @@ fn butterfly_equals_vtk_to_float_precision() {
         assert_same_mesh_rel(&ours, &mesh_of(&c["output"]), 1e-6, 1e-6, name);
     }
 }
+
+#[test]
+fn quadric_simplification_keeps_a_manifold_of_the_same_topology_close_to_the_input() {
+    use mra::mesh::simplify::{simplify, vertex_to_surface_distance};
+    // a tetrahedron cannot lose an edge without breaking the link condition
+    let t = simplify(&shapes::tetrahedron(), 0).unwrap();
+    assert_eq!(t.face_count(), 4);
+    let torus = shapes::torus_triangles(40, 20, 3.0, 1.0);
+    let s = simplify(&torus, 400).unwrap();
+    assert!(
+        s.face_count() <= 400 && s.face_count() >= 396,
+        "{}",
+        s.face_count()
+    );
+    let r = topology::analyze(&s);
+    assert!(r.manifold && r.oriented);
+    assert_eq!(r.genus, Some(1));
+    let d = vertex_to_surface_distance(&torus, &s).max(vertex_to_surface_distance(&s, &torus));
+    assert!(d < 0.1, "Hausdorff {d}");
+    // a planar grid collapses to two triangles without moving its boundary off the square
+    let g = simplify(&shapes::quad_grid(6, 6).triangulated(), 2).unwrap();
+    assert!(g.face_count() <= 8, "{}", g.face_count());
+    for p in &g.positions {
+        assert!(p[2].abs() < 1e-9 && p[0] > -1e-9 && p[0] < 6.0 + 1e-9);
+    }
+    if let Some(dir) = corpus() {
+        let bunny = io::read(dir.join("bunny.ply")).unwrap();
+        let s = simplify(&bunny, 660).unwrap();
+        assert_eq!(s.face_count(), 660);
+        let r = topology::analyze(&s);
+        assert!(r.manifold && r.closed && r.genus == Some(0));
+    }
+}

@@ -86,6 +86,9 @@ pub enum Command {
         /// Draw the edges.
         #[arg(long)]
         wireframe: bool,
+        /// The model's up axis is +z (default +y).
+        #[arg(long)]
+        z_up: bool,
     },
     /// Eigenvalues of the local subdivision matrix of Loop or Catmull-Clark at valence N.
     ///
@@ -263,6 +266,7 @@ pub fn run(c: Command) -> CliResult {
             size,
             view,
             wireframe,
+            z_up,
         } => {
             let m = read(&input)?;
             let (w, h) = size
@@ -278,6 +282,7 @@ pub fn run(c: Command) -> CliResult {
                 azimuth: v[0],
                 elevation: v[1],
                 wireframe,
+                z_up,
             };
             let png = mesh::render::render_png(&m, &opts)?;
             io::write_atomic(&output, &png).map_err(|e| Failure::context(output.display(), e))

@@ -1,5 +1,5 @@
 //! A small software rasteriser for looking at meshes: orthographic camera from an azimuth and
-//! elevation, z-buffer, Gouraud shading with angle-weighted vertex normals (two-sided
+//! elevation (about the +y axis, or +z with `z_up`), z-buffer, Gouraud shading with angle-weighted vertex normals (two-sided
 //! headlight plus ambient), optional wireframe, written as an RGB PNG by a minimal encoder
 //! (stored deflate blocks: larger files, no compression dependency).
 
@@ -17,6 +17,8 @@ pub struct Options {
     /// Camera elevation above the xy-plane, degrees.
     pub elevation: f64,
     pub wireframe: bool,
+    /// The model's up axis is +z (default: +y, as in most OBJ/PLY files).
+    pub z_up: bool,
 }
 
 impl Default for Options {
@@ -27,6 +29,7 @@ impl Default for Options {
             azimuth: 30.0,
             elevation: 20.0,
             wireframe: false,
+            z_up: false,
         }
     }
 }
@@ -70,12 +73,22 @@ pub fn render(mesh: &Mesh, o: &Options) -> Result<Image> {
     let radius = 0.5 * vec3::norm(vec3::sub(hi, lo)).max(1e-300);
     let (az, el) = (o.azimuth.to_radians(), o.elevation.to_radians());
     // camera frame: view direction d points from the camera to the scene
-    let eye = [el.cos() * az.cos(), el.cos() * az.sin(), el.sin()];
+    let (eye, up0) = if o.z_up {
+        (
+            [el.cos() * az.cos(), el.cos() * az.sin(), el.sin()],
+            [0.0, 0.0, 1.0],
+        )
+    } else {
+        (
+            [el.cos() * az.sin(), el.sin(), el.cos() * az.cos()],
+            [0.0, 1.0, 0.0],
+        )
+    };
     let d = vec3::scale(eye, -1.0);
     let up0 = if el.cos().abs() < 1e-6 {
-        [0.0, 1.0, 0.0]
+        vec3::cross(up0, [1.0, 0.0, 0.0])
     } else {
-        [0.0, 0.0, 1.0]
+        up0
     };
     let right = vec3::normalized(vec3::cross(d, up0));
     let up = vec3::cross(right, d);
