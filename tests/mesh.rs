@@ -1009,3 +1009,119 @@ fn quadric_simplification_keeps_a_manifold_of_the_same_topology_close_to_the_inp
         assert!(r.manifold && r.closed && r.genus == Some(0));
     }
 }
+
+/// Every vertex of the faces descending from `selection` after adaptive refinement must be a
+/// vertex of uniform refinement (same position to 1e-12).
+fn adaptive_matches_uniform(
+    mesh: &Mesh,
+    scheme: Scheme,
+    steps: usize,
+    selection: &[u32],
+    features: &Features,
+) {
+    use mra::mesh::adaptive;
+    let a = adaptive::subdivide(mesh, scheme, steps, selection, features).unwrap();
+    let u = subdivide(mesh, scheme, steps, features).unwrap();
+    // crack-free manifold with the input's topology
+    let (ra, r0) = (topology::analyze(&a), topology::analyze(mesh));
+    assert!(ra.manifold && ra.oriented, "{scheme:?}");
+    assert_eq!(
+        (ra.euler, ra.boundary_loops),
+        (r0.euler, r0.boundary_loops),
+        "{scheme:?}: no cracks"
+    );
+    HalfEdgeMesh::build(&a).unwrap();
+    assert!(a.face_count() < u.face_count());
+    // uniform's children of the selection: faces of u whose centroid is nearest a selected face
+    // is awkward, so compare positions: count adaptive vertices found in the uniform mesh
+    let mut grid: std::collections::HashMap<[i64; 3], Vec<usize>> = Default::default();
+    let key = |p: [f64; 3]| p.map(|x| (x * 1e6).round() as i64);
+    for (i, p) in u.positions.iter().enumerate() {
+        grid.entry(key(*p)).or_default().push(i);
+    }
+    let found = |p: [f64; 3]| {
+        let k = key(p);
+        (-1..=1).any(|dx| {
+            (-1..=1).any(|dy| {
+                (-1..=1).any(|dz| {
+                    grid.get(&[k[0] + dx, k[1] + dy, k[2] + dz])
+                        .is_some_and(|v| v.iter().any(|&i| close(p, u.positions[i], 1e-12)))
+                })
+            })
+        })
+    };
+    // the finest faces around the selection: faces of `a` whose vertices are all uniform vertices
+    let matched: Vec<bool> = a.positions.iter().map(|&p| found(p)).collect();
+    let exact_faces = a
+        .faces()
+        .filter(|f| f.iter().all(|&v| matched[v as usize]))
+        .count();
+    // the selection's descendants are exact: per selected face 4^steps (Loop) or deg·4^(steps−1) (CC)
+    let per_face = |f: u32| match scheme {
+        Scheme::Loop(_) => 4usize.pow(steps as u32),
+        _ => mesh.face_degree(f as usize) * 4usize.pow(steps as u32 - 1),
+    };
+    let want: usize = selection.iter().map(|&f| per_face(f)).sum();
+    assert!(
+        exact_faces >= want,
+        "{scheme:?}: {exact_faces} exact faces < {want}"
+    );
+}
+
+#[test]
+fn adaptive_subdivision_equals_uniform_in_the_selected_region_and_leaves_no_cracks() {
+    let sphere = shapes::sphere(2);
+    for steps in 1..=3 {
+        adaptive_matches_uniform(
+            &sphere,
+            Scheme::Loop(LoopWeights::Loop),
+            steps,
+            &[0, 1, 17],
+            &Features::default(),
+        );
+    }
+    let torus = shapes::torus(12, 8, 3.0, 1.0);
+    for steps in 1..=3 {
+        adaptive_matches_uniform(
+            &torus,
+            Scheme::CatmullClark,
+            steps,
+            &[5, 40],
+            &Features::default(),
+        );
+    }
+    // mixed polygons, boundaries, creases
+    let grid = shapes::quad_grid(8, 8);
+    adaptive_matches_uniform(
+        &grid,
+        Scheme::CatmullClark,
+        3,
+        &[0, 27],
+        &Features::default(),
+    );
+    let tri = shapes::quad_grid(8, 8).triangulated();
+    let f = Features {
+        sharp_edges: vec![[30, 31], [31, 32], [32, 33]],
+        corners: vec![],
+    };
+    adaptive_matches_uniform(&tri, Scheme::Loop(LoopWeights::Loop), 3, &[60, 61], &f);
+    let box_faces = mra::mesh::adaptive::faces_in_box(&sphere, [0.5, -1.0, -1.0], [1.0, 1.0, 1.0]);
+    assert!(!box_faces.is_empty());
+    adaptive_matches_uniform(
+        &sphere,
+        Scheme::Loop(LoopWeights::Loop),
+        2,
+        &box_faces,
+        &Features::default(),
+    );
+    if let Some(dir) = corpus() {
+        let spot = io::read(dir.join("spot_control_mesh.obj")).unwrap();
+        adaptive_matches_uniform(
+            &spot,
+            Scheme::CatmullClark,
+            3,
+            &[0, 100],
+            &Features::default(),
+        );
+    }
+}

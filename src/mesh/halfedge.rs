@@ -180,6 +180,7 @@ impl HalfEdgeMesh {
         Ok(he)
     }
 
+    #[allow(clippy::needless_range_loop)]
     /// Every outgoing half-edge of a vertex must be reached by rotating around it once.
     fn check_vertex_fans(&self) -> Result<()> {
         let nv = self.vert_out.len();
