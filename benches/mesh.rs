@@ -4,7 +4,8 @@
 //! meshes are generated (closed torus grids) and written to `target/mesh_bench/` as OBJ so the
 //! peer script (`benches/peers/mesh_peers.py`) times other libraries on the same files.
 //!
-//! Options: `--quick` (smaller meshes), `--json` (one JSON object on stdout).
+//! Options: `--quick` (smaller meshes), `--json` (one JSON object on stdout), `--no-simplify`,
+//! `--hausdorff A B` (print the symmetric vertex-to-surface distance of two mesh files).
 
 use mra::mesh::features::Tags;
 use mra::mesh::{io, normals, shapes, simplify, HalfEdgeMesh, Mesh};
@@ -40,6 +41,15 @@ fn main() {
     let args: Vec<String> = std::env::args().collect();
     let quick = args.iter().any(|a| a == "--quick");
     let json = args.iter().any(|a| a == "--json");
+    if let Some(i) = args.iter().position(|a| a == "--hausdorff") {
+        // symmetric vertex-to-surface Hausdorff distance between two mesh files
+        let a = io::read(&args[i + 1]).unwrap();
+        let b = io::read(&args[i + 2]).unwrap();
+        let d = simplify::vertex_to_surface_distance(&a, &b)
+            .max(simplify::vertex_to_surface_distance(&b, &a));
+        println!("{d:e}");
+        return;
+    }
     let (nt, nq) = if quick { (200, 200) } else { (806, 1000) };
     let dir = std::path::PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/target/mesh_bench"));
     std::fs::create_dir_all(&dir).unwrap();

@@ -8,7 +8,7 @@
 //! are known. Floats use the standard library's correctly rounded parser, so writing with `{}`
 //! (shortest round-trip) and reading back gives the same bits.
 
-use super::text::{parse_f64, parse_i64, tokens};
+use super::text::{parse_f64, parse_i64};
 use crate::mesh::{Attributes, Mesh, NONE};
 use crate::{Error, Result};
 use rayon::prelude::*;
@@ -44,56 +44,94 @@ fn index(t: &[u8], local: usize, line: usize) -> Result<i64> {
     }
 }
 
+/// A single pass over the chunk: a cursor reads each line's keyword and then its numbers in
+/// place (no per-line splitting or token iterators: the parser touches each byte about once).
 fn parse_chunk(bytes: &[u8]) -> Result<Chunk> {
     let mut c = Chunk::default();
-    for (ln, raw) in bytes.split(|&b| b == b'\n').enumerate() {
-        let line = ln + 1;
-        let l = match raw.iter().position(|&b| b == b'#') {
-            Some(p) => &raw[..p],
-            None => raw,
+    let n = bytes.len();
+    let mut i = 0;
+    let mut line = 0;
+    #[inline]
+    fn skip_blank(b: &[u8], mut i: usize) -> usize {
+        while i < b.len() && (b[i] == b' ' || b[i] == b'\t' || b[i] == b'\r') {
+            i += 1;
+        }
+        i
+    }
+    #[inline]
+    fn token_end(b: &[u8], mut i: usize) -> usize {
+        while i < b.len() && !b[i].is_ascii_whitespace() && b[i] != b'#' {
+            i += 1;
+        }
+        i
+    }
+    while i < n {
+        line += 1;
+        let eol = match memchr_nl(&bytes[i..]) {
+            Some(k) => i + k,
+            None => n,
         };
-        let mut it = tokens(l);
-        let Some(kw) = it.next() else { continue };
+        let l = &bytes[..eol];
+        let mut j = skip_blank(l, i);
+        let ke = token_end(l, j);
+        let kw = &l[j..ke];
+        j = ke;
         match kw {
-            b"v" | b"vn" => {
-                let mut p = [0.0; 3];
-                for x in p.iter_mut() {
-                    let t = it.next().ok_or_else(|| {
-                        Error::format(format!("line {line}: fewer than 3 coordinates"), "x y z")
-                    })?;
-                    *x = parse_f64(t, line)?;
-                }
-                if !p.iter().all(|x| x.is_finite()) {
-                    return Err(Error::format(
-                        format!("line {line}: coordinates {p:?}"),
-                        "finite numbers",
-                    ));
-                }
-                if kw == b"v" {
-                    c.v.push(p)
-                } else {
-                    c.vn.push(p)
-                }
-            }
-            b"vt" => {
+            b"v" | b"vn" | b"vt" => {
                 let mut p = [0.0; 3];
                 let mut k = 0;
-                for t in it.by_ref().take(3) {
-                    p[k] = parse_f64(t, line)?;
+                loop {
+                    j = skip_blank(l, j);
+                    if j >= eol || l[j] == b'#' || k == 3 {
+                        break;
+                    }
+                    let e = token_end(l, j);
+                    p[k] = parse_f64(&l[j..e], line)?;
                     k += 1;
+                    j = e;
                 }
-                if k == 0 {
-                    return Err(Error::format(
-                        format!("line {line}: empty vt"),
-                        "vt u [v [w]]",
-                    ));
+                match kw {
+                    b"vt" => {
+                        if k == 0 {
+                            return Err(Error::format(
+                                format!("line {line}: empty vt"),
+                                "vt u [v [w]]",
+                            ));
+                        }
+                        c.vt_dim = c.vt_dim.max(k.max(2));
+                        c.vt.push(p);
+                    }
+                    _ => {
+                        if k < 3 {
+                            return Err(Error::format(
+                                format!("line {line}: fewer than 3 coordinates"),
+                                "x y z",
+                            ));
+                        }
+                        if !p.iter().all(|x| x.is_finite()) {
+                            return Err(Error::format(
+                                format!("line {line}: coordinates {p:?}"),
+                                "finite numbers",
+                            ));
+                        }
+                        if kw == b"v" {
+                            c.v.push(p)
+                        } else {
+                            c.vn.push(p)
+                        }
+                    }
                 }
-                c.vt_dim = c.vt_dim.max(k.max(2));
-                c.vt.push(p);
             }
             b"f" => {
                 let mut deg = 0u32;
-                for t in it {
+                loop {
+                    j = skip_blank(l, j);
+                    if j >= eol || l[j] == b'#' {
+                        break;
+                    }
+                    let e = token_end(l, j);
+                    let t = &l[j..e];
+                    j = e;
                     let mut parts = t.split(|&b| b == b'/');
                     let v = parts.next().unwrap_or(b"");
                     c.fv.push(index(v, c.v.len(), line)?);
@@ -121,8 +159,27 @@ fn parse_chunk(bytes: &[u8]) -> Result<Chunk> {
             }
             _ => {}
         }
+        i = eol + 1;
     }
     Ok(c)
+}
+
+/// Position of the next line break (word-at-a-time scan).
+#[inline]
+fn memchr_nl(b: &[u8]) -> Option<usize> {
+    const LO: u64 = 0x0101_0101_0101_0101;
+    const HI: u64 = 0x8080_8080_8080_8080;
+    const NL: u64 = LO * b'\n' as u64;
+    let mut i = 0;
+    while i + 8 <= b.len() {
+        let w = u64::from_le_bytes(b[i..i + 8].try_into().unwrap()) ^ NL;
+        let z = w.wrapping_sub(LO) & !w & HI;
+        if z != 0 {
+            return Some(i + (z.trailing_zeros() / 8) as usize);
+        }
+        i += 8;
+    }
+    b[i..].iter().position(|&c| c == b'\n').map(|k| i + k)
 }
 
 /// Cut `bytes` into about `n` pieces at line breaks.
