@@ -68,6 +68,7 @@ impl Edges {
     /// map keyed by the pair does the same job but its random accesses into a table of
     /// millions of entries made it ~5× slower on 10⁶-face meshes.) Edge ids are ordered by
     /// (smaller vertex, larger vertex).
+    #[allow(clippy::needless_range_loop, clippy::type_complexity)]
     pub fn build(mesh: &Mesh) -> Edges {
         use rayon::prelude::*;
         let nc = mesh.indices.len();

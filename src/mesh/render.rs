@@ -1,7 +1,6 @@
 //! A small software rasteriser for looking at meshes: orthographic camera from an azimuth and
 //! elevation (about the +y axis, or +z with `z_up`), z-buffer, Gouraud shading with angle-weighted vertex normals (two-sided
-//! headlight plus ambient), optional wireframe, written as an RGB PNG by a minimal encoder
-//! (stored deflate blocks: larger files, no compression dependency).
+//! headlight plus ambient), optional wireframe, written as an RGB PNG.
 
 use super::normals::{vertex_normals, Weighting};
 use super::{vec3, Mesh};
@@ -186,59 +185,16 @@ pub fn render_png(mesh: &Mesh, o: &Options) -> Result<Vec<u8>> {
     Ok(encode_png(&img))
 }
 
-fn crc32(data: &[u8], mut crc: u32) -> u32 {
-    crc = !crc;
-    for &b in data {
-        crc ^= b as u32;
-        for _ in 0..8 {
-            crc = if crc & 1 != 0 {
-                (crc >> 1) ^ 0xEDB8_8320
-            } else {
-                crc >> 1
-            };
-        }
-    }
-    !crc
-}
-
-fn chunk(out: &mut Vec<u8>, kind: &[u8; 4], data: &[u8]) {
-    out.extend_from_slice(&(data.len() as u32).to_be_bytes());
-    let start = out.len();
-    out.extend_from_slice(kind);
-    out.extend_from_slice(data);
-    let crc = crc32(&out[start..], 0);
-    out.extend_from_slice(&crc.to_be_bytes());
-}
-
-/// Encode an RGB image as PNG (filter 0 rows in stored deflate blocks).
+/// Encode an RGB image as PNG (the `png` crate, default compression).
 pub fn encode_png(img: &Image) -> Vec<u8> {
-    let mut raw = Vec::with_capacity((img.width * 3 + 1) * img.height);
-    for row in img.rgb.chunks(img.width * 3) {
-        raw.push(0);
-        raw.extend_from_slice(row);
+    let mut out = Vec::new();
+    {
+        let mut enc = png::Encoder::new(&mut out, img.width as u32, img.height as u32);
+        enc.set_color(png::ColorType::Rgb);
+        enc.set_depth(png::BitDepth::Eight);
+        // writing to a Vec cannot fail and the sizes match by construction
+        let mut w = enc.write_header().expect("in-memory PNG header");
+        w.write_image_data(&img.rgb).expect("in-memory PNG data");
     }
-    let mut z = vec![0x78, 0x01];
-    let blocks: Vec<&[u8]> = raw.chunks(65535).collect();
-    for (i, b) in blocks.iter().enumerate() {
-        z.push((i + 1 == blocks.len()) as u8);
-        let len = b.len() as u16;
-        z.extend_from_slice(&len.to_le_bytes());
-        z.extend_from_slice(&(!len).to_le_bytes());
-        z.extend_from_slice(b);
-    }
-    let (mut s1, mut s2) = (1u32, 0u32);
-    for &b in &raw {
-        s1 = (s1 + b as u32) % 65521;
-        s2 = (s2 + s1) % 65521;
-    }
-    z.extend_from_slice(&((s2 << 16) | s1).to_be_bytes());
-    let mut out = vec![0x89, b'P', b'N', b'G', 0x0D, 0x0A, 0x1A, 0x0A];
-    let mut ihdr = Vec::new();
-    ihdr.extend_from_slice(&(img.width as u32).to_be_bytes());
-    ihdr.extend_from_slice(&(img.height as u32).to_be_bytes());
-    ihdr.extend_from_slice(&[8, 2, 0, 0, 0]);
-    chunk(&mut out, b"IHDR", &ihdr);
-    chunk(&mut out, b"IDAT", &z);
-    chunk(&mut out, b"IEND", &[]);
     out
 }
