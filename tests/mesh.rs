@@ -143,36 +143,27 @@ fn butterfly_keeps_the_original_vertices_exactly() {
     }
 }
 
-/// Closed cubic B-spline refinement of a periodic sequence of points (mask ⅛ ¾ ⅛ and ½ ½).
-fn closed_cubic(p: &[[f64; 3]]) -> Vec<[f64; 3]> {
-    let n = p.len();
-    let mut out = Vec::with_capacity(2 * n);
-    for i in 0..n {
-        let (a, b, c) = (p[(i + n - 1) % n], p[i], p[(i + 1) % n]);
-        out.push(std::array::from_fn(|k| {
-            0.125 * a[k] + 0.75 * b[k] + 0.125 * c[k]
-        }));
-        out.push(std::array::from_fn(|k| 0.5 * (b[k] + c[k])));
-    }
-    out
-}
-
 #[test]
 fn catmull_clark_of_a_regular_torus_grid_is_tensor_product_cubic_b_spline_subdivision() {
+    use mra::scheme::subdivide::{refine, Ends, Refinement};
     let (n, m) = (10, 7);
     let t = shapes::torus(n, m, 3.0, 1.0);
     let out = subdivide(&t, Scheme::CatmullClark, 1, &Features::default()).unwrap();
-    // tensor product: refine along j within each row i, then along i
-    let rows: Vec<Vec<[f64; 3]>> = (0..n)
-        .map(|i| closed_cubic(&t.positions[i * m..(i + 1) * m]))
-        .collect();
-    let mut grid = vec![vec![[0.0; 3]; 2 * m]; 2 * n];
-    for j in 0..2 * m {
-        let col: Vec<[f64; 3]> = (0..n).map(|i| rows[i][j]).collect();
-        for (i, q) in closed_cubic(&col).into_iter().enumerate() {
-            grid[i][j] = q;
-        }
+    // the engine's closed cubic refinement: along j within each row (points of dim 3), then
+    // along i with whole rows as elements (dim = 2m · 3)
+    let mut rows = Vec::with_capacity(n * 2 * m * 3);
+    for i in 0..n {
+        let row: Vec<f64> = t.positions[i * m..(i + 1) * m]
+            .iter()
+            .flatten()
+            .copied()
+            .collect();
+        rows.extend(refine(&row, 3, Refinement::Cubic, Ends::Closed).unwrap());
     }
+    let fine = refine(&rows, 2 * m * 3, Refinement::Cubic, Ends::Closed).unwrap();
+    assert_eq!(fine.len(), 4 * n * m * 3);
+    let grid =
+        |i: usize, j: usize| -> [f64; 3] { std::array::from_fn(|k| fine[(i * 2 * m + j) * 3 + k]) };
     // locate CC's points: vertex (i,j) keeps its index; edge and face points by adjacency
     let he = HalfEdgeMesh::build(&t).unwrap();
     let (nv, ne) = (t.vertex_count(), he.edge_count());
@@ -180,7 +171,7 @@ fn catmull_clark_of_a_regular_torus_grid_is_tensor_product_cubic_b_spline_subdiv
     for i in 0..n {
         for j in 0..m {
             let v = i * m + j;
-            assert!(close(out.positions[v], grid[2 * i][2 * j], 1e-12));
+            assert!(close(out.positions[v], grid(2 * i, 2 * j), 1e-12));
             let right = ((i + 1) % n) * m + j;
             let up = i * m + (j + 1) % m;
             let h = he
@@ -191,7 +182,7 @@ fn catmull_clark_of_a_regular_torus_grid_is_tensor_product_cubic_b_spline_subdiv
                 .unwrap();
             assert!(close(
                 out.positions[nv + he.edge[h.idx()] as usize],
-                grid[2 * i + 1][2 * j],
+                grid(2 * i + 1, 2 * j),
                 1e-12
             ));
             let h = he
@@ -202,12 +193,12 @@ fn catmull_clark_of_a_regular_torus_grid_is_tensor_product_cubic_b_spline_subdiv
                 .unwrap();
             assert!(close(
                 out.positions[nv + he.edge[h.idx()] as usize],
-                grid[2 * i][2 * j + 1],
+                grid(2 * i, 2 * j + 1),
                 1e-12
             ));
             assert!(close(
                 out.positions[nv + ne + v],
-                grid[2 * i + 1][2 * j + 1],
+                grid(2 * i + 1, 2 * j + 1),
                 1e-12
             ));
             checked += 4;
