@@ -1116,3 +1116,219 @@ fn adaptive_subdivision_equals_uniform_in_the_selected_region_and_leaves_no_crac
         );
     }
 }
+
+#[test]
+fn loop_on_a_regular_triangulated_torus_is_quartic_box_spline_subdivision() {
+    // three-direction box spline with directions (1,0), (0,1), (1,1):
+    // mask a(z) = (1 + z₁)² (1 + z₂)² (1 + z₁z₂)² / 16,  F(p) = Σ_k a(p − 2k) C(k)
+    let mut mask = [[0.0f64; 5]; 5];
+    for (a, ca) in [1.0, 2.0, 1.0].iter().enumerate() {
+        for (b, cb) in [1.0, 2.0, 1.0].iter().enumerate() {
+            for (c, cc) in [1.0, 2.0, 1.0].iter().enumerate() {
+                mask[a + c][b + c] += ca * cb * cc / 16.0;
+            }
+        }
+    }
+    let (n, m) = (9, 8);
+    let t = shapes::torus_triangles(n, m, 3.0, 1.0);
+    let out = subdivide(&t, Scheme::Loop(LoopWeights::Loop), 1, &Features::default()).unwrap();
+    let fine = |p: (usize, usize)| -> [f64; 3] {
+        let mut s = [0.0; 3];
+        for i in 0..n {
+            for j in 0..m {
+                // offset p − 2k + (2, 2), taken modulo the fine lattice
+                let di = (p.0 + 2 + 2 * n - 2 * i) % (2 * n);
+                let dj = (p.1 + 2 + 2 * m - 2 * j) % (2 * m);
+                if di < 5 && dj < 5 {
+                    let w = mask[di][dj];
+                    let q = t.positions[i * m + j];
+                    for k in 0..3 {
+                        s[k] += w * q[k];
+                    }
+                }
+            }
+        }
+        s
+    };
+    let he = HalfEdgeMesh::build(&t).unwrap();
+    let nv = t.vertex_count();
+    let id = |i: usize, j: usize| mra::mesh::VertexId(((i % n) * m + j % m) as u32);
+    for i in 0..n {
+        for j in 0..m {
+            assert!(close(out.positions[i * m + j], fine((2 * i, 2 * j)), 1e-12));
+            for (di, dj) in [(1, 0), (0, 1), (1, 1)] {
+                let h = he
+                    .find_halfedge(id(i, j), id(i + di, j + dj))
+                    .or_else(|| he.find_halfedge(id(i + di, j + dj), id(i, j)))
+                    .unwrap();
+                let p = out.positions[nv + he.edge[h.idx()] as usize];
+                assert!(
+                    close(p, fine((2 * i + di, 2 * j + dj)), 1e-12),
+                    "edge ({i},{j}) + ({di},{dj})"
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn every_mesh_command_runs_and_writes_a_readable_file() {
+    let d = tmpdir("cmds");
+    let input = d.join("s.obj");
+    io::write(&input, &shapes::sphere(2)).unwrap();
+    let i = input.to_str().unwrap();
+    let path = |n: &str| d.join(n).to_str().unwrap().to_string();
+    let runs: Vec<(Vec<String>, Option<String>)> = vec![
+        (
+            vec![
+                "smooth".into(),
+                i.into(),
+                "-o".into(),
+                path("a.ply"),
+                "--laplacian".into(),
+                "cotangent".into(),
+                "--method".into(),
+                "implicit".into(),
+            ],
+            Some(path("a.ply")),
+        ),
+        (
+            vec![
+                "normals".into(),
+                i.into(),
+                "-o".into(),
+                path("n.ply"),
+                "--weighting".into(),
+                "area".into(),
+            ],
+            Some(path("n.ply")),
+        ),
+        (
+            vec!["normals".into(), i.into(), "-o".into(), path("n.obj")],
+            Some(path("n.obj")),
+        ),
+        (
+            vec![
+                "convert".into(),
+                i.into(),
+                "-o".into(),
+                path("c.ply"),
+                "--big-endian".into(),
+            ],
+            Some(path("c.ply")),
+        ),
+        (
+            vec!["convert".into(), i.into(), "-o".into(), path("c.off")],
+            Some(path("c.off")),
+        ),
+        (
+            vec![
+                "simplify".into(),
+                i.into(),
+                "-o".into(),
+                path("s.obj"),
+                "--faces".into(),
+                "40".into(),
+            ],
+            Some(path("s.obj")),
+        ),
+        (
+            vec!["orient".into(), i.into(), "-o".into(), path("o.obj")],
+            Some(path("o.obj")),
+        ),
+        (
+            vec![
+                "subdivide".into(),
+                i.into(),
+                "-o".into(),
+                path("d.obj"),
+                "--scheme".into(),
+                "doo-sabin".into(),
+            ],
+            Some(path("d.obj")),
+        ),
+        (
+            vec![
+                "subdivide".into(),
+                i.into(),
+                "-o".into(),
+                path("ad.obj"),
+                "--scheme".into(),
+                "loop".into(),
+                "--steps".into(),
+                "2".into(),
+                "--adaptive".into(),
+                "0,1,2".into(),
+            ],
+            Some(path("ad.obj")),
+        ),
+        (vec!["info".into(), i.into()], None),
+        (
+            vec![
+                "analyze".into(),
+                "--scheme".into(),
+                "catmull-clark".into(),
+                "--valence".into(),
+                "5".into(),
+                "--json".into(),
+            ],
+            None,
+        ),
+    ];
+    for (args, out) in runs {
+        let mut a: Vec<&str> = vec!["mesh"];
+        a.extend(args.iter().map(|s| s.as_str()));
+        let o = mra(&a);
+        assert!(
+            o.status.success(),
+            "{args:?}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        if let Some(out) = out {
+            let m = io::read(&out).unwrap();
+            assert!(topology::analyze(&m).manifold, "{out}");
+        }
+    }
+    let n = io::read(d.join("n.ply")).unwrap();
+    assert_eq!(
+        n.attributes
+            .vertex
+            .iter()
+            .map(|p| p.name.as_str())
+            .collect::<Vec<_>>(),
+        ["nx", "ny", "nz"]
+    );
+    assert_eq!(io::read(d.join("s.obj")).unwrap().face_count(), 40);
+    let o = mra(&[
+        "mesh",
+        "analyze",
+        "--scheme",
+        "loop",
+        "--valence",
+        "6",
+        "--json",
+    ]);
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(j["eigenvalues"][1], 0.5);
+    // a non-manifold input fails where a manifold is needed, with the edge named
+    let bad = d.join("nm.obj");
+    std::fs::write(
+        &bad,
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 -1 0\nv 0 0 1\nf 1 2 3\nf 2 1 4\nf 1 2 5\n",
+    )
+    .unwrap();
+    let o = mra(&[
+        "mesh",
+        "subdivide",
+        bad.to_str().unwrap(),
+        "-o",
+        &path("x.obj"),
+        "--scheme",
+        "loop",
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("non-manifold edge (0, 1)"));
+    let o = mra(&["mesh", "info", bad.to_str().unwrap()]);
+    assert!(o.status.success());
+    let _ = std::fs::remove_dir_all(&d);
+}
