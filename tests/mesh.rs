@@ -1332,3 +1332,39 @@ fn every_mesh_command_runs_and_writes_a_readable_file() {
     assert!(o.status.success());
     let _ = std::fs::remove_dir_all(&d);
 }
+
+#[test]
+fn edge_collapse_and_vertex_removal_check_the_link_condition() {
+    use mra::mesh::simplify::{collapse_edge, remove_vertex};
+    let o = shapes::octahedron();
+    let c = collapse_edge(&o, 0, 2, [0.5, 0.5, 0.0]).unwrap();
+    assert_eq!((c.vertex_count(), c.face_count()), (5, 6));
+    let r = topology::analyze(&c);
+    assert!(r.manifold && r.oriented && r.euler == 2);
+    // a tetrahedron has no collapsible edge
+    assert_eq!(
+        collapse_edge(&shapes::tetrahedron(), 0, 1, [0.0; 3])
+            .unwrap_err()
+            .kind(),
+        ErrorKind::Format
+    );
+    // not an edge
+    assert_eq!(
+        collapse_edge(&o, 0, 1, [0.0; 3]).unwrap_err().kind(),
+        ErrorKind::Parameter
+    );
+    let v = remove_vertex(&o, 4).unwrap();
+    assert_eq!((v.vertex_count(), v.face_count()), (5, 6));
+    let r = topology::analyze(&v);
+    assert!(r.manifold && r.oriented && r.euler == 2);
+    let s = shapes::sphere(2);
+    let r0 = remove_vertex(&s, 20).unwrap();
+    assert_eq!(r0.face_count(), s.face_count() - 2);
+    assert!(topology::analyze(&r0).oriented);
+    assert_eq!(
+        remove_vertex(&shapes::quad_grid(2, 2).triangulated(), 0)
+            .unwrap_err()
+            .kind(),
+        ErrorKind::Unsupported
+    );
+}

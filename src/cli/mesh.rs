@@ -21,6 +21,8 @@ pub enum Command {
     /// B-spline curve rules; sharp edges from a file or by dihedral angle).
     ///
     /// Example: mra mesh subdivide spot.obj -o spot2.obj --scheme catmull-clark --steps 2 --crease-angle 60
+    ///
+    /// Adaptive: mra mesh subdivide spot.obj -o part.obj --scheme loop --steps 3 --box=-1,0,-1,1,1,1
     Subdivide(SubdivideArgs),
     /// Laplacian smoothing (uniform or cotangent, explicit or implicit).
     ///
@@ -130,6 +132,9 @@ pub struct SubdivideArgs {
         allow_hyphen_values = true
     )]
     r#box: Option<String>,
+    /// Adaptive: refine the faces whose area exceeds A.
+    #[arg(long, value_name = "A", conflicts_with_all = ["adaptive", "box"])]
+    area_above: Option<f64>,
 }
 
 #[derive(Args, Debug)]
@@ -343,6 +348,13 @@ fn subdivide(a: SubdivideArgs) -> CliResult {
             [v[0], v[1], v[2]],
             [v[3], v[4], v[5]],
         ))
+    } else if let Some(area) = a.area_above {
+        if !(area.is_finite() && area >= 0.0) {
+            return Err(Failure(format!(
+                "invalid area: {area} (expected a number ≥ 0)"
+            )));
+        }
+        Some(mesh::adaptive::faces_larger_than(&m, area))
     } else {
         None
     };

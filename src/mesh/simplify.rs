@@ -563,3 +563,168 @@ pub fn point_triangle_distance(p: [f64; 3], a: [f64; 3], b: [f64; 3], c: [f64; 3
         vec3::add(a, vec3::add(vec3::scale(ab, v), vec3::scale(ac, w))),
     ))
 }
+
+/// Collapse the edge `a`–`b` of a triangle mesh into one vertex at `position` (§6.6.3). Fails
+/// when there is no such edge or when the collapse would break the 2-manifold: the link
+/// condition Lk(a) ∩ Lk(b) = Lk(ab), and no interior edge joining two boundary vertices.
+/// Vertex `b` is removed (later vertices shift down by one).
+pub fn collapse_edge(mesh: &Mesh, a: u32, b: u32, position: [f64; 3]) -> Result<Mesh> {
+    if !mesh.is_triangle_mesh() {
+        return Err(Error::Unsupported {
+            what: "edge collapse on faces that are not triangles",
+            value: format!("{} faces", mesh.face_count()),
+        });
+    }
+    let nv = mesh.vertex_count() as u32;
+    if a >= nv || b >= nv || a == b {
+        return Err(Error::parameter(
+            "edge",
+            format!("({a}, {b})"),
+            "two distinct vertex indices",
+        ));
+    }
+    let he = super::HalfEdgeMesh::build(mesh)?;
+    let (va, vb) = (super::VertexId(a), super::VertexId(b));
+    let h = he.find_halfedge(va, vb).ok_or_else(|| {
+        Error::parameter(
+            "edge",
+            format!("({a}, {b})"),
+            "two vertices joined by an edge",
+        )
+    })?;
+    let ring =
+        |v: super::VertexId| -> Vec<u32> { he.outgoing(v).map(|h| he.to_vertex(h).0).collect() };
+    let (ra, rb) = (ring(va), ring(vb));
+    let opposite: Vec<u32> = [h, he.twin(h)]
+        .iter()
+        .filter(|&&x| !he.is_boundary_halfedge(x))
+        .map(|&x| he.from_vertex(he.prev(x)).0)
+        .collect();
+    let common: Vec<u32> = ra.iter().copied().filter(|v| rb.contains(v)).collect();
+    let fail = |why: &str| {
+        Error::format(
+            format!("collapsing edge ({a}, {b}) {why}"),
+            "an edge whose collapse keeps the mesh a manifold (link condition)",
+        )
+    };
+    if common.len() != opposite.len() || !common.iter().all(|v| opposite.contains(v)) {
+        return Err(fail(
+            "would pinch the surface: a and b share a neighbour off their faces",
+        ));
+    }
+    if he.is_boundary_vertex(va) && he.is_boundary_vertex(vb) && !he.is_boundary_edge(he.edge(h)) {
+        return Err(fail("would join two boundary arcs through the interior"));
+    }
+    if opposite.len() == 2 {
+        let (c, d) = (super::VertexId(opposite[0]), super::VertexId(opposite[1]));
+        if let Some(hcd) = he.find_halfedge(c, d) {
+            // faces (a, c, d) and (b, c, d) both present: the edge cd is in both links
+            let faces_with = |w: u32| {
+                [hcd, he.twin(hcd)]
+                    .iter()
+                    .any(|&x| !he.is_boundary_halfedge(x) && he.from_vertex(he.prev(x)).0 == w)
+            };
+            if faces_with(a) && faces_with(b) {
+                return Err(fail("would create a doubled face"));
+            }
+        }
+    }
+    let mut positions = mesh.positions.clone();
+    positions[a as usize] = position;
+    positions.remove(b as usize);
+    let map = |v: u32| {
+        let v = if v == b { a } else { v };
+        if v > b {
+            v - 1
+        } else {
+            v
+        }
+    };
+    let mut indices = Vec::with_capacity(mesh.indices.len());
+    for f in mesh.faces() {
+        if f.contains(&a) && f.contains(&b) {
+            continue;
+        }
+        indices.extend(f.iter().map(|&v| map(v)));
+    }
+    let n = indices.len() / 3;
+    Ok(Mesh {
+        positions,
+        offsets: (0..=n as u32).map(|i| 3 * i).collect(),
+        indices,
+        attributes: Attributes::default(),
+    })
+}
+
+/// Remove an interior vertex of a triangle mesh and fill its hole with a fan of triangles from
+/// one of its neighbours (§6.6.3), chosen so that no fan edge already exists. Later vertices
+/// shift down by one.
+pub fn remove_vertex(mesh: &Mesh, v: u32) -> Result<Mesh> {
+    if !mesh.is_triangle_mesh() {
+        return Err(Error::Unsupported {
+            what: "vertex removal on faces that are not triangles",
+            value: format!("{} faces", mesh.face_count()),
+        });
+    }
+    if v as usize >= mesh.vertex_count() {
+        return Err(Error::parameter("vertex", v, "a vertex index of the mesh"));
+    }
+    let he = super::HalfEdgeMesh::build(mesh)?;
+    let vid = super::VertexId(v);
+    if he.is_boundary_vertex(vid) {
+        return Err(Error::Unsupported {
+            what: "removal of a boundary vertex",
+            value: v.to_string(),
+        });
+    }
+    // ring in counter-clockwise order: in face (v, x, y) the link edge runs x → y
+    let mut next_of = std::collections::HashMap::new();
+    for h in he.outgoing(vid) {
+        let x = he.to_vertex(h).0;
+        let y = he.to_vertex(he.next(h)).0;
+        next_of.insert(x, y);
+    }
+    let start = *next_of.keys().min().unwrap();
+    let mut ring = vec![start];
+    while ring.len() < next_of.len() {
+        let n = next_of[ring.last().unwrap()];
+        if n == start {
+            break;
+        }
+        ring.push(n);
+    }
+    let k = ring.len();
+    let pick = (0..k).find(|&s| {
+        (2..k - 1).all(|i| {
+            he.find_halfedge(super::VertexId(ring[s]), super::VertexId(ring[(s + i) % k]))
+                .is_none()
+        })
+    });
+    let s = pick.ok_or_else(|| {
+        Error::format(
+            format!(
+                "vertex {v}: every fan over its {k} neighbours would duplicate an existing edge"
+            ),
+            "a vertex whose hole can be filled without creating a non-manifold edge",
+        )
+    })?;
+    let map = |w: u32| if w > v { w - 1 } else { w };
+    let mut indices = Vec::with_capacity(mesh.indices.len());
+    for f in mesh.faces() {
+        if !f.contains(&v) {
+            indices.extend(f.iter().map(|&w| map(w)));
+        }
+    }
+    for i in 1..k - 1 {
+        indices.extend([ring[s], ring[(s + i) % k], ring[(s + i + 1) % k]].map(map));
+    }
+    let mut positions = mesh.positions.clone();
+    positions.remove(v as usize);
+    let n = indices.len() / 3;
+    Ok(Mesh {
+        positions,
+        offsets: (0..=n as u32).map(|i| 3 * i).collect(),
+        indices,
+        attributes: Attributes::default(),
+    })
+}
