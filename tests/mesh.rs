@@ -111,24 +111,48 @@ fn one_step_of_each_scheme_gives_the_expected_counts() {
                     assert_eq!(out.vertex_count(), v + e + f);
                 }
                 Scheme::DooSabin => {
-                    if loops == 0 {
-                        assert_eq!(
-                            out.face_count(),
-                            f + e + v,
-                            "{name}: Doo-Sabin gives F + E + V faces"
-                        );
-                    }
-                    assert_eq!(out.vertex_count(), c);
+                    assert_eq!(
+                        out.face_count(),
+                        f + e + v,
+                        "{name}: Doo-Sabin gives F + E + V faces"
+                    );
+                    assert_eq!(out.vertex_count(), c + 2 * r0_boundary_edges(&m));
                 }
             }
             let r = topology::analyze(&out);
             assert!(r.manifold && r.oriented, "{name} {s:?}");
-            if !(s == Scheme::DooSabin && loops > 0) {
-                assert_eq!(r.euler, chi, "{name} {s:?} keeps χ");
-                assert_eq!(r.boundary_loops, loops, "{name} {s:?}");
-            }
+            assert_eq!(r.euler, chi, "{name} {s:?} keeps χ");
+            assert_eq!(r.boundary_loops, loops, "{name} {s:?}");
         }
     }
+}
+
+fn r0_boundary_edges(m: &Mesh) -> usize {
+    topology::analyze(m).boundary_edges
+}
+
+#[test]
+fn doo_sabin_boundaries_follow_chaikin_and_a_planar_grid_stays_in_its_rectangle() {
+    // on a planar regular grid one Doo-Sabin step is tensor-product Chaikin: contracted corners
+    // and the boundary's Chaikin points all lie on the quarter grid inside the rectangle
+    let g = shapes::quad_grid(4, 3);
+    let out = subdivide(&g, Scheme::DooSabin, 1, &Features::default()).unwrap();
+    for p in &out.positions {
+        assert_eq!(p[2], 0.0);
+        for k in 0..2 {
+            let q = p[k] * 4.0;
+            assert!((q - q.round()).abs() < 1e-12, "{p:?}");
+        }
+    }
+    // straight boundary sides stay put: after two steps points reach within 1/16 of the ends
+    let out = subdivide(&g, Scheme::DooSabin, 2, &Features::default()).unwrap();
+    let r = topology::analyze(&out);
+    assert!(r.manifold && r.oriented && r.euler == 1 && r.boundary_loops == 1);
+    for p in &out.positions {
+        assert!(p[2] == 0.0 && p[0] >= 0.0 && p[0] <= 4.0 && p[1] >= 0.0 && p[1] <= 3.0);
+    }
+    let xmax = out.positions.iter().map(|p| p[0]).fold(f64::MIN, f64::max);
+    assert!(xmax >= 4.0 - 1.0 / 16.0 - 1e-12, "{xmax}");
 }
 
 #[test]
@@ -661,14 +685,11 @@ fn every_corpus_mesh_loads_reports_its_euler_characteristic_and_subdivides() {
             let out = subdivide(&m, s, 1, &Features::default()).unwrap();
             let r2 = topology::analyze(&out);
             assert!(r2.manifold, "{name} {s:?}");
-            if r.closed {
-                assert_eq!(r2.euler, chi, "{name} {s:?}");
-            }
+            assert_eq!(r2.euler, chi, "{name} {s:?}");
             let faces = match s {
                 Scheme::Loop(_) | Scheme::Butterfly => 4 * f,
                 Scheme::CatmullClark => m.corner_count(),
-                Scheme::DooSabin if r.closed => f + e + v,
-                Scheme::DooSabin => out.face_count(),
+                Scheme::DooSabin => f + e + v,
             };
             assert_eq!(out.face_count(), faces, "{name} {s:?}");
         }
