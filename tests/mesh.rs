@@ -1389,3 +1389,44 @@ fn edge_collapse_and_vertex_removal_check_the_link_condition() {
         ErrorKind::Unsupported
     );
 }
+
+#[test]
+fn truncated_and_corrupted_files_give_errors_not_panics() {
+    let mut m = shapes::sphere(1);
+    m.attributes.vertex.push(mra::mesh::Property {
+        name: "quality".into(),
+        ty: mra::mesh::attributes::ScalarType::F32,
+        values: (0..m.vertex_count()).map(|i| i as f64).collect(),
+    });
+    let mut seed = 7u64;
+    let mut rnd = move || {
+        seed = seed
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (seed >> 33) as usize
+    };
+    for fmt in [
+        Format::Obj,
+        Format::Off,
+        Format::Ply(Encoding::Ascii),
+        Format::Ply(Encoding::BinaryLittleEndian),
+        Format::Ply(Encoding::BinaryBigEndian),
+    ] {
+        let bytes = io::to_bytes(&m, fmt).unwrap();
+        for cut in (0..bytes.len()).step_by(7) {
+            let _ = io::parse(&bytes[..cut], fmt);
+        }
+        for _ in 0..300 {
+            let mut b = bytes.clone();
+            for _ in 0..4 {
+                let i = rnd() % b.len();
+                b[i] = (rnd() % 256) as u8;
+            }
+            if let Ok(parsed) = io::parse(&b, fmt) {
+                // whatever parsed is a valid face-vertex list; the mesh tools must not panic on it
+                let _ = topology::analyze(&parsed);
+                let _ = subdivide(&parsed, Scheme::CatmullClark, 1, &Features::default());
+            }
+        }
+    }
+}
