@@ -128,7 +128,7 @@ fn main() {
         return;
     }
     let target = tri.face_count() / 10;
-    let (t, s) = best_of(1, || simplify::simplify(&tri, target).unwrap());
+    let (t, s) = best_of(2, || simplify::simplify(&tri, target).unwrap());
     let err = simplify::vertex_to_surface_distance(&tri, &s)
         .max(simplify::vertex_to_surface_distance(&s, &tri));
     record(

@@ -1,5 +1,6 @@
-//! The undirected edge table of a face-vertex list, built in O(n): one pass over the corners
-//! with a hash map keyed by the vertex pair (min, max). Corner `c` of face `f` (vertex `v_i`)
+//! The undirected edge table of a face-vertex list, built in O(n) by bucketing the corners by
+//! their smaller vertex (see [`Edges::build`]); `PairMap` (a hash map keyed by the vertex
+//! pair) serves lookups elsewhere. Corner `c` of face `f` (vertex `v_i`)
 //! owns the edge `v_i → v_{i+1}`. An edge is used by one corner (boundary), two (interior) or
 //! more (non-manifold). This table works for any input, including non-orientable and
 //! non-manifold meshes, so topology queries run on it; the half-edge structure
@@ -62,7 +63,8 @@ pub struct Edges {
 }
 
 impl Edges {
-    /// Build the table of `mesh` in O(n): corners are bucketed by their smaller vertex
+    /// Build the table of `mesh` in O(n) (O(n log n) if one vertex has a huge valence):
+    /// corners are bucketed by their smaller vertex
     /// (counting sort), then each bucket, a handful of corners, is sorted by the larger vertex
     /// so equal pairs become neighbours. Buckets are independent and run in parallel. (A hash
     /// map keyed by the pair does the same job but its random accesses into a table of

@@ -7,7 +7,7 @@
 //! - half-edges `C .. C + B` are *boundary* half-edges (no face), one per boundary edge, running
 //!   opposite to its interior half-edge and linked head to tail around each hole, so every
 //!   half-edge has a twin and walking `next(twin(h))` around a vertex never stops early;
-//! - twins come from the edge table ([`super::Edges`], one hash-map pass);
+//! - twins come from the edge table ([`super::Edges`], built in O(n));
 //! - `vert_out[v]` is an outgoing half-edge of `v`, the boundary one when `v` is on a boundary.
 //!
 //! Building fails with a message naming the edge or vertex when the mesh is not an oriented

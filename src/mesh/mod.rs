@@ -3,7 +3,7 @@
 //! ```text
 //! mod.rs            Mesh: the face-vertex list (§6.7.1), flat storage: positions, offsets, indices
 //! attributes.rs     per-vertex / per-face properties kept through I/O (normals, colours, PLY extras)
-//! edges.rs          undirected edge table built in O(n) with a hash map (corner → edge, edge → faces)
+//! edges.rs          undirected edge table built in O(n) (corner → edge, edge → faces)
 //! halfedge.rs       half-edge structure with typed handles and boundary half-edges (§6.7.2)
 //! io/               obj.rs, ply.rs, off.rs, and `io::read` / `io::write` choosing by extension
 //! topology.rs       components, boundary loops, manifoldness, orientability, χ and genus (§6.2–6.5)

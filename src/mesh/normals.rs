@@ -70,7 +70,34 @@ pub fn vertex_normals(mesh: &Mesh, weighting: Weighting) -> Vec<[f64; 3]> {
     let nv = mesh.vertex_count();
     let nf = mesh.face_count();
     let p = &mesh.positions;
+    let tri = mesh.is_triangle_mesh();
     let accumulate = |acc: &mut Vec<[f64; 3]>, f: usize| {
+        if tri {
+            // triangles: one cross product gives the normal, the area and, with the three dot
+            // products, every corner angle: θ_i = atan2(|e × e'|, e · e') with |e × e'| = 2A
+            let t = &mesh.indices[3 * f..3 * f + 3];
+            let (a, b, c) = (p[t[0] as usize], p[t[1] as usize], p[t[2] as usize]);
+            let (ab, bc, ca) = (vec3::sub(b, a), vec3::sub(c, b), vec3::sub(a, c));
+            let cr = vec3::cross(ab, vec3::scale(ca, -1.0));
+            let twice_area = vec3::norm(cr);
+            if twice_area == 0.0 {
+                return;
+            }
+            let n = vec3::scale(cr, 1.0 / twice_area);
+            let w = match weighting {
+                Weighting::Uniform => [1.0; 3],
+                Weighting::Area => [0.5 * twice_area; 3],
+                Weighting::Angle => [
+                    twice_area.atan2(-vec3::dot(ca, ab)),
+                    twice_area.atan2(-vec3::dot(ab, bc)),
+                    twice_area.atan2(-vec3::dot(bc, ca)),
+                ],
+            };
+            for i in 0..3 {
+                vec3::axpy(&mut acc[t[i] as usize], w[i], n);
+            }
+            return;
+        }
         let av = face_area_vector(mesh, f);
         let area = vec3::norm(av);
         if area == 0.0 {
