@@ -60,7 +60,9 @@ pub fn main() -> i32 {
         Err(e) => {
             use clap::error::ErrorKind as K;
             let code = match e.kind() {
-                K::DisplayHelp | K::DisplayVersion | K::DisplayHelpOnMissingArgumentOrSubcommand => 0,
+                K::DisplayHelp
+                | K::DisplayVersion
+                | K::DisplayHelpOnMissingArgumentOrSubcommand => 0,
                 _ => 2,
             };
             if code == 0 {
@@ -68,7 +70,10 @@ pub fn main() -> i32 {
             } else {
                 // one line: clap's first line of the message
                 let msg = e.to_string();
-                let first = msg.lines().find(|l| !l.trim().is_empty()).unwrap_or("invalid arguments");
+                let first = msg
+                    .lines()
+                    .find(|l| !l.trim().is_empty())
+                    .unwrap_or("invalid arguments");
                 eprintln!("mra: {}", first.trim_start_matches("error: "));
             }
             return code;

@@ -1,0 +1,767 @@
+//! Curves: Bézier, B-spline, NURBS, knot insertion and scheme eigen-analysis (issue 8).
+
+use mra::curve::analysis::{analyze, named_mask, parse_mask};
+use mra::curve::basis::{basis_brute, basis_derivs, basis_funs, span, DerivWork, KnotVector};
+use mra::curve::eigen::eigenvalues;
+use mra::curve::geometry::curvature;
+use mra::curve::knot::{
+    insert, insert_midpoints, insert_midpoints_nurbs, insert_nurbs, refine_periodic,
+};
+use mra::curve::{BSpline, Bezier, Curve, Nurbs};
+use mra::ErrorKind;
+
+/// A small deterministic generator (no extra dependency).
+struct Lcg(u64);
+impl Lcg {
+    fn next(&mut self) -> f64 {
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (self.0 >> 11) as f64 / (1u64 << 53) as f64
+    }
+    fn range(&mut self, a: f64, b: f64) -> f64 {
+        a + (b - a) * self.next()
+    }
+    fn int(&mut self, a: usize, b: usize) -> usize {
+        a + (self.next() * (b - a + 1) as f64) as usize % (b - a + 1)
+    }
+}
+
+fn close(a: &[f64], b: &[f64], tol: f64) -> bool {
+    a.len() == b.len()
+        && a.iter()
+            .zip(b)
+            .all(|(x, y)| (x - y).abs() <= tol * (1.0 + y.abs()))
+}
+
+fn assert_close(a: &[f64], b: &[f64], tol: f64, what: &str) {
+    assert!(close(a, b, tol), "{what}: {a:?} vs {b:?}");
+}
+
+/// Random non-decreasing knots for n points of order k, with some repeated interior knots.
+fn random_knots(g: &mut Lcg, n: usize, k: usize) -> Vec<f64> {
+    let mut t: Vec<f64> = (0..n + k).map(|_| g.range(-2.0, 3.0)).collect();
+    t.sort_by(|a, b| a.partial_cmp(b).unwrap());
+    // repeat a few knots (multiplicity below k inside the range)
+    for _ in 0..2 {
+        if k > 2 {
+            let i = g.int(1, n + k - 2);
+            t[i] = t[i - 1];
+        }
+    }
+    t.sort_by(|a, b| a.partial_cmp(b).unwrap());
+    if t[k - 1] >= t[n] {
+        t[n] = t[k - 1] + 1.0;
+        for j in n + 1..n + k {
+            t[j] = t[j].max(t[n]);
+        }
+    }
+    t
+}
+
+#[test]
+fn example_2_4_de_casteljau_gives_3_5_and_1_5_at_one_half() {
+    let b = Bezier::new(vec![4.0, 0.0, 8.0, 2.0, 0.0, 2.0, 0.0, 0.0], 2).unwrap();
+    assert_close(&b.eval(0.5).unwrap(), &[3.5, 1.5], 1e-15, "de Casteljau");
+    assert_close(
+        &b.eval_bernstein(0.5).unwrap(),
+        &[3.5, 1.5],
+        1e-15,
+        "Bernstein",
+    );
+    // Example 2.1: Q(0) = P0, Q(1/2) = (4, 1), Q(1) = P2
+    let q = Bezier::new(vec![0.0, 0.0, 4.0, 2.0, 8.0, 0.0], 2).unwrap();
+    assert_close(&q.eval(0.0).unwrap(), &[0.0, 0.0], 0.0, "Q(0)");
+    assert_close(&q.eval(0.5).unwrap(), &[4.0, 1.0], 0.0, "Q(1/2)");
+    assert_close(&q.eval(1.0).unwrap(), &[8.0, 0.0], 0.0, "Q(1)");
+    // Example 2.2 (general form §2.2): T(0) = d(P1 − P0), T(1) = d(Pd − Pd−1)
+    assert_close(&q.derivative(0.0, 1).unwrap(), &[8.0, 4.0], 1e-15, "T(0)");
+    assert_close(&q.derivative(1.0, 1).unwrap(), &[8.0, -4.0], 1e-15, "T(1)");
+}
+
+#[test]
+fn de_casteljau_matches_bernstein_sum_in_any_dimension() {
+    let mut g = Lcg(1);
+    for dim in 1..=4 {
+        for d in 0..8 {
+            let pts: Vec<f64> = (0..(d + 1) * dim).map(|_| g.range(-5.0, 5.0)).collect();
+            let b = Bezier::new(pts, dim).unwrap();
+            for _ in 0..20 {
+                let u = g.next();
+                assert_close(
+                    &b.eval(u).unwrap(),
+                    &b.eval_bernstein(u).unwrap(),
+                    1e-13,
+                    "bezier",
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn splitting_gives_two_curves_that_trace_the_original() {
+    let mut g = Lcg(2);
+    let pts: Vec<f64> = (0..6 * 3).map(|_| g.range(-5.0, 5.0)).collect();
+    let b = Bezier::new(pts, 3).unwrap();
+    let s = 0.3;
+    let (l, r) = b.split(s).unwrap();
+    assert_eq!(l.degree(), 5);
+    for i in 0..=20 {
+        let t = i as f64 / 20.0;
+        assert_close(&l.eval(t).unwrap(), &b.eval(s * t).unwrap(), 1e-13, "left");
+        assert_close(
+            &r.eval(t).unwrap(),
+            &b.eval(s + (1.0 - s) * t).unwrap(),
+            1e-13,
+            "right",
+        );
+    }
+    assert_close(&l.points()[15..], &r.points()[..3], 0.0, "shared point");
+}
+
+#[test]
+fn degree_elevation_keeps_the_curve() {
+    let mut g = Lcg(3);
+    let b = Bezier::new((0..4 * 2).map(|_| g.range(-5.0, 5.0)).collect(), 2).unwrap();
+    let e = b.elevate().elevate();
+    assert_eq!(e.degree(), 5);
+    for i in 0..=50 {
+        let u = i as f64 / 50.0;
+        assert_close(&e.eval(u).unwrap(), &b.eval(u).unwrap(), 1e-13, "elevated");
+    }
+}
+
+#[test]
+fn bezier_derivatives_match_finite_differences_and_vanish_above_the_degree() {
+    let mut g = Lcg(4);
+    let b = Bezier::new((0..5 * 2).map(|_| g.range(-5.0, 5.0)).collect(), 2).unwrap();
+    let h = 1e-5;
+    for i in 1..10 {
+        let u = i as f64 / 10.0;
+        let d1 = b.derivative(u, 1).unwrap();
+        let p = b.eval(u + h).unwrap();
+        let m = b.eval(u - h).unwrap();
+        let fd: Vec<f64> = p.iter().zip(&m).map(|(a, c)| (a - c) / (2.0 * h)).collect();
+        assert_close(&d1, &fd, 1e-7, "first derivative");
+        assert_close(
+            &b.derivative(u, 5).unwrap(),
+            &[0.0, 0.0],
+            0.0,
+            "fifth derivative",
+        );
+    }
+}
+
+#[test]
+fn bezier_is_a_bspline_on_the_standard_knots_without_interior_knots() {
+    let mut g = Lcg(5);
+    for d in 0..6 {
+        let b = Bezier::new((0..(d + 1) * 3).map(|_| g.range(-5.0, 5.0)).collect(), 3).unwrap();
+        let s = b.to_bspline();
+        for i in 0..=30 {
+            let u = i as f64 / 30.0;
+            assert_close(
+                &s.eval(u).unwrap(),
+                &b.eval(u).unwrap(),
+                1e-13,
+                "bezier as bspline",
+            );
+        }
+    }
+}
+
+/// Closed forms of §3.4.3–3.4.6 for N_{0,k} on the integer knots.
+fn n0(k: usize, u: f64) -> f64 {
+    match k {
+        1 => (0.0..1.0).contains(&u) as u8 as f64,
+        2 => {
+            if (0.0..1.0).contains(&u) {
+                u
+            } else if (1.0..2.0).contains(&u) {
+                2.0 - u
+            } else {
+                0.0
+            }
+        }
+        3 => {
+            if (0.0..1.0).contains(&u) {
+                u * u / 2.0
+            } else if (1.0..2.0).contains(&u) {
+                0.75 - (u - 1.5).powi(2)
+            } else if (2.0..3.0).contains(&u) {
+                (3.0 - u).powi(2) / 2.0
+            } else {
+                0.0
+            }
+        }
+        4 => {
+            if (0.0..1.0).contains(&u) {
+                u.powi(3) / 6.0
+            } else if (1.0..2.0).contains(&u) {
+                (-3.0 * (u - 1.0).powi(3) + 3.0 * (u - 1.0).powi(2) + 3.0 * (u - 1.0) + 1.0) / 6.0
+            } else if (2.0..3.0).contains(&u) {
+                (3.0 * (u - 2.0).powi(3) - 6.0 * (u - 2.0).powi(2) + 4.0) / 6.0
+            } else if (3.0..4.0).contains(&u) {
+                (4.0 - u).powi(3) / 6.0
+            } else {
+                0.0
+            }
+        }
+        _ => unreachable!(),
+    }
+}
+
+#[test]
+fn uniform_basis_functions_of_orders_one_to_four_match_section_3_4() {
+    // (the notes print the second cubic piece as (−3(u−1)³ + 3(u−1)² + 3u − 2)/6, which equals
+    // the form above: 3u − 2 = 3(u − 1) + 1)
+    for k in 1..=4 {
+        let n = 8;
+        let t = KnotVector::uniform(n, k);
+        for s in 0..=80 {
+            let u = (k - 1) as f64 + s as f64 * (n - k + 1) as f64 / 80.0;
+            for i in 0..n {
+                let want = n0(k, u - i as f64);
+                let got = basis_brute(t.as_slice(), n, i, k, u);
+                // at the right end of the range the last span is closed
+                if u == n as f64 {
+                    continue;
+                }
+                assert!(
+                    (got - want).abs() < 1e-14,
+                    "N_{i},{k}({u}) = {got}, expected {want}"
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn basis_sums_to_one_and_has_local_support_on_random_knot_vectors() {
+    let mut g = Lcg(6);
+    for _ in 0..200 {
+        let k = g.int(1, 6);
+        let n = g.int(k, k + 8);
+        let t = random_knots(&mut g, n, k);
+        let (a, b) = (t[k - 1], t[n]);
+        for _ in 0..20 {
+            let u = g.range(a, b);
+            let mut sum = 0.0;
+            for i in 0..n {
+                let v = basis_brute(&t, n, i, k, u);
+                assert!(v >= 0.0, "positivity");
+                if !(t[i] <= u && u <= t[i + k]) {
+                    assert_eq!(v, 0.0, "local support of N_{i},{k} at {u} on {t:?}");
+                }
+                sum += v;
+            }
+            assert!(
+                (sum - 1.0).abs() < 1e-13,
+                "partition of unity: {sum} at {u} on {t:?}"
+            );
+        }
+    }
+}
+
+#[test]
+fn triangular_basis_equals_the_recursion_at_and_near_knots() {
+    let mut g = Lcg(7);
+    for _ in 0..200 {
+        let k = g.int(1, 6);
+        let n = g.int(k, k + 8);
+        let t = random_knots(&mut g, n, k);
+        let (a, b) = (t[k - 1], t[n]);
+        let mut params: Vec<f64> = (0..10).map(|_| g.range(a, b)).collect();
+        for &x in &t[k - 1..=n] {
+            for e in [0.0, 1e-9, -1e-9, 1e-12, -1e-12] {
+                if x + e >= a && x + e <= b {
+                    params.push(x + e);
+                }
+            }
+        }
+        let mut nb = vec![0.0; k];
+        let (mut l, mut r) = (vec![0.0; k], vec![0.0; k]);
+        for &u in &params {
+            let d = span(&t, n, k, u);
+            assert!(t[d] <= u && (u < t[d + 1] || u == b) && t[d] < t[d + 1]);
+            basis_funs(&t, d, u, k, &mut nb, &mut l, &mut r);
+            for i in 0..n {
+                let want = basis_brute(&t, n, i, k, u);
+                let got = if i + k > d && i <= d {
+                    nb[i + k - 1 - d]
+                } else {
+                    0.0
+                };
+                assert!(
+                    (got - want).abs() < 1e-13,
+                    "N_{i},{k}({u}): {got} vs {want} on {t:?}"
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn de_boor_equals_the_brute_force_sum_and_eval_many() {
+    let mut g = Lcg(8);
+    for _ in 0..100 {
+        let k = g.int(1, 6);
+        let n = g.int(k, k + 8);
+        let dim = g.int(1, 4);
+        let t = random_knots(&mut g, n, k);
+        let pts: Vec<f64> = (0..n * dim).map(|_| g.range(-5.0, 5.0)).collect();
+        let c = BSpline::new(pts, dim, k, t.clone()).unwrap();
+        let (a, b) = c.range();
+        let mut params: Vec<f64> = (0..20).map(|_| g.range(a, b)).collect();
+        params.extend(
+            t[k - 1..=n]
+                .iter()
+                .flat_map(|&x| [x, x + 1e-9, x - 1e-9])
+                .filter(|&u| u >= a && u <= b),
+        );
+        params.sort_by(|x, y| x.partial_cmp(y).unwrap());
+        let mut many = vec![0.0; params.len() * dim];
+        c.eval_many(&params, &mut many).unwrap();
+        for (j, &u) in params.iter().enumerate() {
+            let brute = c.eval_brute(u).unwrap();
+            assert_close(&c.eval(u).unwrap(), &brute, 1e-12, "de Boor");
+            assert_close(&many[j * dim..(j + 1) * dim], &brute, 1e-12, "eval_many");
+        }
+    }
+}
+
+#[test]
+fn parameters_outside_the_valid_range_and_bad_curves_are_parameter_errors() {
+    let pts = vec![0.0, 0.0, 1.0, 1.0, 2.0, 0.0, 3.0, 1.0];
+    let c = BSpline::uniform(pts.clone(), 2, 3).unwrap();
+    assert_eq!(c.range(), (2.0, 4.0));
+    for u in [1.999999, 4.000001, f64::NAN] {
+        let e = c.eval(u).unwrap_err();
+        assert_eq!(e.kind(), ErrorKind::Parameter);
+        assert!(e.to_string().contains("valid range"), "{e}");
+    }
+    // too few points for the order
+    assert_eq!(
+        BSpline::uniform(pts.clone(), 2, 5).unwrap_err().kind(),
+        ErrorKind::Parameter
+    );
+    // decreasing knots
+    let e = BSpline::new(pts.clone(), 2, 2, vec![0.0, 1.0, 3.0, 2.0, 4.0, 5.0]).unwrap_err();
+    assert!(e.to_string().contains("non-decreasing"), "{e}");
+    // wrong knot count
+    let e = BSpline::new(pts.clone(), 2, 2, vec![0.0, 1.0, 2.0]).unwrap_err();
+    assert!(e.to_string().contains("number of knots"), "{e}");
+    // empty valid range
+    let e = BSpline::new(pts.clone(), 2, 2, vec![0.0, 1.0, 1.0, 1.0, 1.0, 5.0]).unwrap_err();
+    assert_eq!(e.kind(), ErrorKind::Parameter);
+    // zero and negative weights
+    let t = KnotVector::open(4, 3).unwrap().as_slice().to_vec();
+    for w in [0.0, -1.0] {
+        let e = Nurbs::new(&pts, &[1.0, w, 1.0, 1.0], 2, 3, t.clone()).unwrap_err();
+        assert!(e.to_string().contains("weight"), "{e}");
+    }
+    // Bezier parameter outside [0, 1]
+    assert_eq!(
+        Bezier::new(pts, 2).unwrap().eval(1.5).unwrap_err().kind(),
+        ErrorKind::Parameter
+    );
+}
+
+#[test]
+fn bspline_derivatives_agree_three_ways() {
+    let mut g = Lcg(9);
+    for _ in 0..50 {
+        let k = g.int(2, 6);
+        let n = g.int(k, k + 6);
+        let t = random_knots(&mut g, n, k);
+        let pts: Vec<f64> = (0..n * 2).map(|_| g.range(-5.0, 5.0)).collect();
+        let c = BSpline::new(pts, 2, k, t).unwrap();
+        let dc = c.derivative_curve().unwrap();
+        let (a, b) = c.range();
+        for _ in 0..10 {
+            let u = g.range(a, b);
+            let d1 = c.derivative(u, 1).unwrap();
+            assert_close(&d1, &dc.eval(u).unwrap(), 1e-10, "derivative curve");
+            if k > 2 {
+                let ddc = dc.derivative_curve().unwrap();
+                assert_close(
+                    &c.derivative(u, 2).unwrap(),
+                    &ddc.eval(u).unwrap(),
+                    1e-9,
+                    "second",
+                );
+            }
+            assert_close(
+                &c.derivative(u, k).unwrap(),
+                &[0.0, 0.0],
+                0.0,
+                "order k derivative",
+            );
+        }
+    }
+    // basis derivatives sum to zero (derivative of the partition of unity)
+    let t = random_knots(&mut g, 9, 4);
+    let mut w = DerivWork::new(4);
+    let mut out = vec![0.0; 3 * 4];
+    let u = 0.5 * (t[3] + t[9]);
+    basis_derivs(&t, span(&t, 9, 4, u), u, 2, &mut w, &mut out);
+    assert!(out[4..8].iter().sum::<f64>().abs() < 1e-10);
+    assert!(out[8..12].iter().sum::<f64>().abs() < 1e-8);
+}
+
+fn fixture(name: &str) -> serde_json::Value {
+    let path = format!("{}/tests/reference/{name}", env!("CARGO_MANIFEST_DIR"));
+    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+}
+
+fn floats(v: &serde_json::Value) -> Vec<f64> {
+    match v {
+        serde_json::Value::Array(a) => a.iter().flat_map(floats).collect(),
+        serde_json::Value::Number(x) => vec![x.as_f64().unwrap()],
+        _ => vec![],
+    }
+}
+
+#[test]
+fn geomdl_reference_curves_agree_to_1e_12() {
+    let f = fixture("geomdl_curves.json");
+    let curves = f["curves"].as_array().unwrap();
+    assert!(curves.len() >= 32);
+    let mut checked = 0;
+    for c in curves {
+        let k = c["order"].as_u64().unwrap() as usize;
+        let dim = c["dim"].as_u64().unwrap() as usize;
+        let pts = floats(&c["points"]);
+        let knots = floats(&c["knots"]);
+        let rational = c["rational"].as_bool().unwrap();
+        let params = floats(&c["params"]);
+        let values = c["values"].as_array().unwrap();
+        let ders = c["derivatives"].as_array().unwrap();
+        let curve: Box<dyn Curve> = if rational {
+            Box::new(Nurbs::new(&pts, &floats(&c["weights"]), dim, k, knots).unwrap())
+        } else {
+            Box::new(BSpline::new(pts, dim, k, knots).unwrap())
+        };
+        for (j, &u) in params.iter().enumerate() {
+            let want = floats(&values[j]);
+            assert_close(
+                &curve.point(u).unwrap(),
+                &want,
+                1e-12,
+                &format!("{} k={k} u={u}", c["kind"]),
+            );
+            let d = ders[j].as_array().unwrap();
+            for (o, dv) in d.iter().enumerate() {
+                let want = floats(dv);
+                let got = curve.derivative(u, o).unwrap();
+                // derivatives scale with 1/knot spacing: relative tolerance
+                let scale = want.iter().fold(1.0f64, |m, x| m.max(x.abs()));
+                let ok = got
+                    .iter()
+                    .zip(&want)
+                    .all(|(a, b)| (a - b).abs() <= 1e-12 * scale);
+                assert!(
+                    ok,
+                    "derivative {o} of {} k={k} rational={rational} at {u}: {got:?} vs {want:?}",
+                    c["kind"]
+                );
+            }
+            checked += 1;
+        }
+    }
+    assert!(checked > 500);
+}
+
+#[test]
+fn nurbs_circle_has_radius_error_below_1e_12_over_10000_samples() {
+    let c = Nurbs::circle([1.5, -2.0], 3.0).unwrap();
+    assert_eq!(
+        c.knots(),
+        &[0.0, 0.0, 0.0, 0.25, 0.25, 0.5, 0.5, 0.75, 0.75, 1.0, 1.0, 1.0]
+    );
+    let w = c.weights();
+    assert!((w[1] - std::f64::consts::FRAC_1_SQRT_2).abs() < 1e-15 && w[2] == 1.0);
+    let params: Vec<f64> = (0..10_000).map(|i| i as f64 / 9_999.0).collect();
+    let mut out = vec![0.0; 20_000];
+    c.eval_many(&params, &mut out).unwrap();
+    let mut worst: f64 = 0.0;
+    for (i, p) in out.chunks(2).enumerate() {
+        let r = (p[0] - 1.5).hypot(p[1] + 2.0);
+        worst = worst.max((r - 3.0).abs());
+        let q = c.eval(params[i]).unwrap();
+        assert_close(&q, p, 1e-14, "eval vs eval_many");
+    }
+    assert!(worst <= 1e-12, "radius error {worst}");
+    // curvature 1/r, and arcs of any sweep lie on the circle
+    assert!((curvature(&c, 0.3).unwrap() - 1.0 / 3.0).abs() < 1e-12);
+    for (a0, a1) in [(0.3, 1.0), (-1.0, 2.5), (0.0, 5.0)] {
+        let a = Nurbs::arc([0.0, 0.0], 2.0, a0, a1).unwrap();
+        let s = a.eval(0.0).unwrap();
+        let e = a.eval(1.0).unwrap();
+        assert_close(
+            &s,
+            &[2.0 * f64::cos(a0), 2.0 * f64::sin(a0)],
+            1e-14,
+            "arc start",
+        );
+        assert_close(
+            &e,
+            &[2.0 * f64::cos(a1), 2.0 * f64::sin(a1)],
+            1e-14,
+            "arc end",
+        );
+        for i in 0..=1000 {
+            let p = a.eval(i as f64 / 1000.0).unwrap();
+            assert!((p[0].hypot(p[1]) - 2.0).abs() < 1e-12);
+        }
+    }
+}
+
+#[test]
+fn nurbs_with_equal_weights_is_the_bspline_and_rational_basis_oracle_agrees() {
+    let mut g = Lcg(10);
+    let pts: Vec<f64> = (0..7 * 3).map(|_| g.range(-5.0, 5.0)).collect();
+    let t = random_knots(&mut g, 7, 4);
+    let b = BSpline::new(pts.clone(), 3, 4, t.clone()).unwrap();
+    let n = Nurbs::new(&pts, &[2.5; 7], 3, 4, t.clone()).unwrap();
+    let ws: Vec<f64> = (0..7).map(|_| g.range(0.2, 4.0)).collect();
+    let r = Nurbs::new(&pts, &ws, 3, 4, t).unwrap();
+    let (a, bb) = b.range();
+    for i in 0..=40 {
+        let u = a + (bb - a) * i as f64 / 40.0;
+        assert_close(
+            &n.eval(u).unwrap(),
+            &b.eval(u).unwrap(),
+            1e-13,
+            "equal weights",
+        );
+        assert_close(
+            &r.eval(u).unwrap(),
+            &r.eval_brute(u).unwrap(),
+            1e-12,
+            "rational oracle",
+        );
+    }
+}
+
+#[test]
+fn boehm_insertion_keeps_the_curve_for_bsplines_and_nurbs() {
+    let mut g = Lcg(11);
+    for _ in 0..50 {
+        let k = g.int(1, 6);
+        let n = g.int(k, k + 6);
+        let t = random_knots(&mut g, n, k);
+        let pts: Vec<f64> = (0..n * 2).map(|_| g.range(-5.0, 5.0)).collect();
+        let ws: Vec<f64> = (0..n).map(|_| g.range(0.2, 4.0)).collect();
+        let c = BSpline::new(pts.clone(), 2, k, t.clone()).unwrap();
+        let r = Nurbs::new(&pts, &ws, 2, k, t).unwrap();
+        let (a, b) = c.range();
+        let ubar = g.range(a, b);
+        let c1 = insert(&c, ubar).unwrap();
+        let r1 = insert_nurbs(&r, ubar).unwrap();
+        assert_eq!(c1.len(), n + 1);
+        let cm = insert_midpoints(&c).unwrap();
+        let rm = insert_midpoints_nurbs(&r).unwrap();
+        for i in 0..=50 {
+            let u = if i == 50 {
+                b
+            } else {
+                a + (b - a) * i as f64 / 50.0
+            };
+            let want = c.eval(u).unwrap();
+            assert_close(&c1.eval(u).unwrap(), &want, 1e-11, "Boehm");
+            assert_close(&cm.eval(u).unwrap(), &want, 1e-11, "midpoints");
+            let want = r.eval(u).unwrap();
+            assert_close(&r1.eval(u).unwrap(), &want, 1e-11, "Boehm NURBS");
+            assert_close(&rm.eval(u).unwrap(), &want, 1e-11, "midpoints NURBS");
+        }
+    }
+    // multiplicity may not exceed the order
+    let c = BSpline::open(vec![0.0, 1.0, 2.0, 3.0], 1, 2).unwrap();
+    let c = insert(&insert(&c, 0.5).unwrap(), 0.5).unwrap();
+    assert_eq!(insert(&c, 0.5).unwrap_err().kind(), ErrorKind::Parameter);
+}
+
+/// The uniform B-spline masks of Table 1 (§7.2.2), orders 1..5.
+fn table1(k: usize) -> Vec<f64> {
+    let row: Vec<f64> = (0..=k)
+        .map(|i| mra::curve::bezier::binomial(k, i))
+        .collect();
+    let s = 2f64.powi(k as i32 - 1);
+    row.iter().map(|x| x / s).collect()
+}
+
+#[test]
+fn midpoint_insertion_on_uniform_knots_is_the_subdivision_mask_of_table_1() {
+    let mut g = Lcg(12);
+    for k in 1..=5 {
+        let n = 9;
+        let pts: Vec<f64> = (0..n * 2).map(|_| g.range(-5.0, 5.0)).collect();
+        let fine = refine_periodic(&pts, 2, k).unwrap();
+        assert_eq!(fine.len(), 2 * n * 2);
+        // F_i = Σ_j a_{i − 2j + s} C_j for one shift s (cyclic indices)
+        let a = table1(k);
+        let apply = |s: isize| -> Vec<f64> {
+            let mut f = vec![0.0; 2 * n * 2];
+            for i in 0..2 * n {
+                for j in 0..n as isize {
+                    for wrap in -2..=2isize {
+                        let jj = j + wrap * n as isize;
+                        let m = i as isize - 2 * jj + s;
+                        if m >= 0 && (m as usize) < a.len() {
+                            for c in 0..2 {
+                                f[i * 2 + c] += a[m as usize] * pts[j as usize * 2 + c];
+                            }
+                        }
+                    }
+                }
+            }
+            f
+        };
+        let found = (-8..8).any(|s| close(&apply(s), &fine, 1e-13));
+        assert!(found, "order {k}: refine_periodic is not the Table 1 mask");
+        // and the closed curve is unchanged: C(u) = F(2u + shift) for one half-integer shift
+        let coarse = BSpline::periodic(&pts, 2, k).unwrap();
+        let finec = BSpline::periodic(&fine, 2, k).unwrap();
+        let (a0, b0) = coarse.range();
+        let (fa, fb) = finec.range();
+        let period = 2.0 * n as f64;
+        let ok = (0..4 * n as i64).any(|sh| {
+            let shift = sh as f64 * 0.5;
+            (0..40).all(|i| {
+                let u = a0 + (b0 - a0) * (i as f64 + 0.37) / 40.0;
+                let mut v = (2.0 * (u - a0) + shift).rem_euclid(period) + fa;
+                if v > fb {
+                    v = fb;
+                }
+                close(&finec.eval(v).unwrap(), &coarse.eval(u).unwrap(), 1e-11)
+            })
+        });
+        assert!(ok, "order {k}: the refined closed curve differs");
+    }
+}
+
+#[test]
+fn midpoint_insertion_on_open_knots_gives_the_end_rules_of_section_7_4() {
+    // quadratic: F0 = C0, F1 = (C0 + C1)/2, F2 = 3/4 C1 + 1/4 C2, …, symmetric at the end
+    let c: Vec<f64> = vec![0.0, 1.0, 4.0, 9.0, 16.0, 25.0];
+    let f = insert_midpoints(&BSpline::open(c.clone(), 1, 3).unwrap()).unwrap();
+    let f = f.points();
+    assert_eq!(f.len(), 2 * c.len() - 2);
+    assert_close(
+        &f[..3],
+        &[c[0], 0.5 * (c[0] + c[1]), 0.75 * c[1] + 0.25 * c[2]],
+        1e-15,
+        "start",
+    );
+    let m = f.len();
+    assert_close(
+        &f[m - 3..],
+        &[0.75 * c[4] + 0.25 * c[3], 0.5 * (c[4] + c[5]), c[5]],
+        1e-15,
+        "end",
+    );
+    // cubic: F3 = 3/16 C1 + 11/16 C2 + 1/8 C3, F4 = (C2 + C3)/2
+    let c: Vec<f64> = vec![0.0, 1.0, 4.0, 9.0, 16.0, 25.0, 36.0, 49.0];
+    let f = insert_midpoints(&BSpline::open(c.clone(), 1, 4).unwrap()).unwrap();
+    let f = f.points();
+    assert_eq!(f.len(), 2 * c.len() - 3);
+    let want = [
+        c[0],
+        0.5 * (c[0] + c[1]),
+        0.75 * c[1] + 0.25 * c[2],
+        3.0 / 16.0 * c[1] + 11.0 / 16.0 * c[2] + 0.125 * c[3],
+        0.5 * (c[2] + c[3]),
+    ];
+    assert_close(&f[..5], &want, 1e-14, "cubic start");
+}
+
+#[test]
+fn eigenvalues_of_known_matrices() {
+    // triangular: the diagonal
+    let a = [2.0, 1.0, 5.0, 0.0, -3.0, 4.0, 0.0, 0.0, 0.5];
+    let ev = eigenvalues(&a, 3).unwrap();
+    let re: Vec<f64> = ev.iter().map(|e| e.re).collect();
+    assert_close(&re, &[-3.0, 2.0, 0.5], 1e-13, "triangular");
+    // companion matrix of (x − 1)(x − 2)(x² + 1): roots 2, 1, ±i
+    // x⁴ − 3x³ + 3x² − 3x + 2
+    let c = [
+        3.0, -3.0, 3.0, -2.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0,
+    ];
+    let ev = eigenvalues(&c, 4).unwrap();
+    assert!((ev[0].re - 2.0).abs() < 1e-12 && ev[0].im.abs() < 1e-12);
+    let mut unit: Vec<_> = ev[1..].to_vec();
+    unit.sort_by(|a, b| a.im.partial_cmp(&b.im).unwrap());
+    assert!(
+        (unit[0].im + 1.0).abs() < 1e-12 && unit[0].re.abs() < 1e-12,
+        "{ev:?}"
+    );
+    assert!(
+        (unit[1].re - 1.0).abs() < 1e-12 && unit[1].im.abs() < 1e-12,
+        "{ev:?}"
+    );
+    assert!((unit[2].im - 1.0).abs() < 1e-12, "{ev:?}");
+    // random matrices: trace and trace of the square are kept
+    let mut g = Lcg(13);
+    for n in 1..=12 {
+        let a: Vec<f64> = (0..n * n).map(|_| g.range(-1.0, 1.0)).collect();
+        let ev = eigenvalues(&a, n).unwrap();
+        let tr: f64 = (0..n).map(|i| a[i * n + i]).sum();
+        let tr2: f64 = (0..n)
+            .map(|i| (0..n).map(|j| a[i * n + j] * a[j * n + i]).sum::<f64>())
+            .sum();
+        let s: f64 = ev.iter().map(|e| e.re).sum();
+        let s2: f64 = ev.iter().map(|e| e.re * e.re - e.im * e.im).sum();
+        let si: f64 = ev.iter().map(|e| e.im).sum();
+        assert!(
+            (s - tr).abs() < 1e-10 && (s2 - tr2).abs() < 1e-10 && si.abs() < 1e-10,
+            "n={n}"
+        );
+    }
+}
+
+fn spectrum(name: &str) -> (Vec<f64>, mra::curve::analysis::Analysis) {
+    let a = analyze(&named_mask(name).unwrap(), None).unwrap();
+    let re = a.eigenvalues.iter().map(|e| e.re).collect();
+    (re, a)
+}
+
+#[test]
+fn chaikin_spectrum_is_1_half_quarter_quarter_and_suggests_c1() {
+    let (re, a) = spectrum("chaikin");
+    assert_close(&re, &[1.0, 0.5, 0.25, 0.25], 1e-12, "Chaikin (Example 7.2)");
+    assert!(a.affine_invariant);
+    assert_eq!(a.smoothness, Some(1));
+}
+
+#[test]
+fn bspline_and_four_point_spectra_match_the_notes() {
+    let (re, a) = spectrum("cubic");
+    assert_close(&re, &[1.0, 0.5, 0.25, 0.125, 0.125], 1e-12, "cubic");
+    assert_eq!(a.smoothness, Some(2));
+    let (re, a) = spectrum("quartic");
+    assert_close(&re[..5], &[1.0, 0.5, 0.25, 0.125, 0.0625], 1e-12, "quartic");
+    assert_eq!(a.smoothness, Some(3));
+    // Dyn–Levin four-point (§7.6.1): leading 1, 1/2, 1/4, 1/4 as in the notes
+    let (re, a) = spectrum("four-point");
+    assert_close(&re[..4], &[1.0, 0.5, 0.25, 0.25], 1e-12, "four-point");
+    assert!(a.affine_invariant);
+    assert_eq!(a.smoothness, Some(1));
+    // linear B-spline: C0; box: no continuous limit suggested
+    assert_eq!(spectrum("linear").1.smoothness, Some(0));
+    assert_eq!(spectrum("box").1.smoothness, None);
+}
+
+#[test]
+fn user_masks_parse_as_fractions_and_non_affine_masks_are_flagged() {
+    let m = parse_mask("-1/16, 0, 9/16, 1, 9/16, 0, -1/16").unwrap();
+    assert_eq!(m, named_mask("four-point").unwrap());
+    let a = analyze(&parse_mask("1/3 2/3 2/3 1/3").unwrap(), None).unwrap();
+    assert!(a.affine_invariant);
+    let a = analyze(&parse_mask("0.3,0.7,0.8,0.3").unwrap(), None).unwrap();
+    assert!(!a.affine_invariant);
+    assert!(parse_mask("1/0,2").is_err());
+    assert!(parse_mask("abc").is_err());
+}
