@@ -5,6 +5,7 @@ use clap::{Parser, Subcommand};
 
 pub mod curve;
 pub mod mesh;
+pub mod scheme;
 pub mod surface;
 
 /// Multiresolution codec, upscaler and terrain synthesis for images, volumes and heightmaps.
@@ -26,6 +27,9 @@ pub enum Command {
     /// Polygon meshes: info, subdivision, smoothing, simplification, rendering.
     #[command(subcommand)]
     Mesh(mesh::Command),
+    /// Curve subdivision schemes: eigen-analysis of a mask.
+    #[command(subcommand)]
+    Scheme(scheme::Command),
 }
 
 /// A failure on the command line: one line on stderr, exit code 2.
@@ -83,6 +87,7 @@ pub fn main() -> i32 {
         Command::Curve(c) => curve::run(c),
         Command::Surface(c) => surface::run(c),
         Command::Mesh(c) => mesh::run(c),
+        Command::Scheme(c) => scheme::run(c),
     };
     match result {
         Ok(()) => 0,

@@ -11,8 +11,10 @@
 //! bspline.rs  B-spline curves, de Boor order reduction (§3.9.4, Algorithm 3.3), derivatives
 //! nurbs.rs    rational curves through homogeneous coordinates (ch. 4), exact circle and arcs (§4.1)
 //! knot.rs     Boehm insertion and midpoint insertion of all knots = subdivision (§7.2–7.4)
+//! plot.rs     SVG / PNG pictures of a curve, its control polygon and knots
 //! eigen.rs    eigenvalues of small real matrices (Hessenberg + shifted QR)
 //! analysis.rs local subdivision matrix S of a mask and its spectrum (§7.5.1, §7.6.1)
+//! csv.rs      control points / nets as CSV text, knot lists
 //! geometry.rs tangents, 2D normals (§1.3), curvature, shared by every representation
 //! ```
 
@@ -20,10 +22,12 @@ pub mod analysis;
 pub mod basis;
 pub mod bezier;
 pub mod bspline;
+pub mod csv;
 pub mod eigen;
 pub mod geometry;
 pub mod knot;
 pub mod nurbs;
+pub mod plot;
 
 pub use basis::KnotVector;
 pub use bezier::Bezier;

@@ -1,1 +1,7 @@
-//! (to be written: see the issue for the surface module)
+//! Surfaces of the course module (notes ch. 5).
+//!
+//! ```text
+//! raster.rs   tiny RGB canvas and PNG encoding for previews
+//! ```
+
+pub mod raster;
