@@ -203,8 +203,18 @@ pub(crate) fn knots_for(spec: &str, n: usize, k: usize) -> std::result::Result<V
 
 /// Build the curve described by the arguments.
 pub fn load(spec: &CurveSpec) -> std::result::Result<Loaded, Failure> {
-    let t = read_table(&spec.input)?;
-    let ctx = |e: Error| Failure::context(spec.input.display(), e);
+    load_path(&spec.input, spec.kind, spec.order, &spec.knots)
+}
+
+/// Build a curve from a CSV file with the given representation, order and knots.
+pub fn load_path(
+    path: &Path,
+    kind: Kind,
+    order: usize,
+    knots: &str,
+) -> std::result::Result<Loaded, Failure> {
+    let t = read_table(path)?;
+    let ctx = |e: Error| Failure::context(path.display(), e);
     if t.rows > 1 {
         return Err(ctx(Error::format(
             format!("{} rows separated by blank lines", t.rows),
@@ -212,7 +222,7 @@ pub fn load(spec: &CurveSpec) -> std::result::Result<Loaded, Failure> {
         )));
     }
     let n = t.cols;
-    Ok(match spec.kind {
+    Ok(match kind {
         Kind::Bezier => {
             if t.weights.is_some() {
                 return Err(ctx(Error::Unsupported {
@@ -229,20 +239,31 @@ pub fn load(spec: &CurveSpec) -> std::result::Result<Loaded, Failure> {
                     value: "use --kind nurbs".into(),
                 }));
             }
-            check_order(n, spec.order).map_err(ctx)?;
-            let knots = knots_for(&spec.knots, n, spec.order)?;
-            Loaded::BSpline(BSpline::new(t.points, t.dim, spec.order, knots).map_err(ctx)?)
+            check_order(n, order).map_err(ctx)?;
+            let knots = knots_for(knots, n, order)?;
+            Loaded::BSpline(BSpline::new(t.points, t.dim, order, knots).map_err(ctx)?)
         }
         Kind::Nurbs => {
-            check_order(n, spec.order).map_err(ctx)?;
-            let knots = knots_for(&spec.knots, n, spec.order)?;
+            check_order(n, order).map_err(ctx)?;
+            let knots = knots_for(knots, n, order)?;
             let w = t.weights.unwrap_or_else(|| vec![1.0; n]);
-            Loaded::Nurbs(Nurbs::new(&t.points, &w, t.dim, spec.order, knots).map_err(ctx)?)
+            Loaded::Nurbs(Nurbs::new(&t.points, &w, t.dim, order, knots).map_err(ctx)?)
         }
     })
 }
 
-fn check_order(n: usize, k: usize) -> Result<()> {
+impl Loaded {
+    /// The curve as an owned trait object.
+    pub fn boxed(self) -> Box<dyn Curve> {
+        match self {
+            Loaded::Bezier(c) => Box::new(c),
+            Loaded::BSpline(c) => Box::new(c),
+            Loaded::Nurbs(c) => Box::new(c),
+        }
+    }
+}
+
+pub(crate) fn check_order(n: usize, k: usize) -> Result<()> {
     if k == 0 {
         return Err(Error::parameter("order", 0, "at least 1"));
     }
