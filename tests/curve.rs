@@ -765,3 +765,240 @@ fn user_masks_parse_as_fractions_and_non_affine_masks_are_flagged() {
     assert!(parse_mask("1/0,2").is_err());
     assert!(parse_mask("abc").is_err());
 }
+
+// ---- command line ----
+
+fn mra_cmd(args: &[&str]) -> (i32, String, String) {
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_mra"))
+        .args(args)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .unwrap();
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+fn scratch(name: &str) -> std::path::PathBuf {
+    let d = std::env::temp_dir().join(format!("mra-curve-tests-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d.join(name)
+}
+
+#[test]
+fn cli_eval_prints_example_2_4_and_samples_with_parameters() {
+    let (code, out, _) = mra_cmd(&[
+        "curve",
+        "eval",
+        "--kind",
+        "bezier",
+        "--at",
+        "0.5",
+        "corpus/curves/example24.csv",
+    ]);
+    assert_eq!(code, 0);
+    assert_eq!(out.trim(), "3.5,1.5");
+    let (code, out, _) = mra_cmd(&[
+        "curve",
+        "eval",
+        "--samples",
+        "5",
+        "--with-u",
+        "corpus/curves/wave.csv",
+    ]);
+    assert_eq!(code, 0);
+    let lines: Vec<&str> = out.lines().collect();
+    assert_eq!(lines.len(), 5);
+    assert_eq!(lines[0], "0,0,0"); // open knots interpolate the first point
+    assert_eq!(lines[4], "1,7,1");
+    // the NURBS circle file of the corpus stays on the unit circle
+    let (code, out, _) = mra_cmd(&[
+        "curve",
+        "eval",
+        "--kind",
+        "nurbs",
+        "--order",
+        "3",
+        "--knots",
+        "corpus/curves/circle_knots.txt",
+        "--samples",
+        "33",
+        "corpus/curves/circle.csv",
+    ]);
+    assert_eq!(code, 0);
+    for l in out.lines() {
+        let v: Vec<f64> = l.split(',').map(|x| x.parse().unwrap()).collect();
+        assert!((v[0].hypot(v[1]) - 1.0).abs() < 1e-12);
+    }
+}
+
+#[test]
+fn cli_bad_input_gives_one_line_exit_2_and_no_output_file() {
+    let knots = scratch("decreasing.txt");
+    std::fs::write(&knots, "0,1,3,2,4,5,6,7,8,9,10,11").unwrap();
+    let weights = scratch("zero_w.csv");
+    std::fs::write(&weights, "x,y,w\n0,0,1\n1,1,0\n2,0,1\n").unwrap();
+    let out = scratch("never.csv");
+    let k = knots.to_str().unwrap();
+    let w = weights.to_str().unwrap();
+    let o = out.to_str().unwrap();
+    let cases: Vec<Vec<&str>> = vec![
+        vec![
+            "curve",
+            "eval",
+            "--order",
+            "9",
+            "corpus/curves/wave.csv",
+            "-o",
+            o,
+        ],
+        vec![
+            "curve",
+            "eval",
+            "--order",
+            "4",
+            "--knots",
+            k,
+            "corpus/curves/wave.csv",
+            "-o",
+            o,
+        ],
+        vec![
+            "curve",
+            "eval",
+            "--order",
+            "3",
+            "--knots",
+            "corpus/curves/circle_knots.txt",
+            "corpus/curves/wave.csv",
+            "-o",
+            o,
+        ],
+        vec![
+            "curve", "eval", "--kind", "nurbs", "--order", "2", w, "-o", o,
+        ],
+        vec![
+            "curve",
+            "eval",
+            "--at",
+            "1.5",
+            "corpus/curves/wave.csv",
+            "-o",
+            o,
+        ],
+        vec!["curve", "plot", "corpus/curves/missing.csv", "-o", o],
+        vec![
+            "curve",
+            "insert-knot",
+            "--u",
+            "7",
+            "corpus/curves/wave.csv",
+            "-o",
+            o,
+        ],
+    ];
+    for c in cases {
+        let (code, stdout, stderr) = mra_cmd(&c);
+        assert_eq!(code, 2, "{c:?}: {stderr}");
+        assert!(stdout.is_empty());
+        assert_eq!(stderr.trim_end().lines().count(), 1, "{c:?}: {stderr}");
+        assert!(stderr.starts_with("mra: "), "{stderr}");
+        assert!(!out.exists(), "{c:?} left an output file");
+    }
+}
+
+#[test]
+fn cli_insert_knot_midpoints_keeps_the_curve() {
+    let fine = scratch("fine.csv");
+    let knots = scratch("fine_knots.txt");
+    let (code, _, err) = mra_cmd(&[
+        "curve",
+        "insert-knot",
+        "--order",
+        "3",
+        "--midpoints",
+        "--knots-out",
+        knots.to_str().unwrap(),
+        "corpus/curves/wave.csv",
+        "-o",
+        fine.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let (c1, a, _) = mra_cmd(&[
+        "curve",
+        "eval",
+        "--order",
+        "3",
+        "--samples",
+        "41",
+        "corpus/curves/wave.csv",
+    ]);
+    let (c2, b, e2) = mra_cmd(&[
+        "curve",
+        "eval",
+        "--order",
+        "3",
+        "--knots",
+        knots.to_str().unwrap(),
+        "--samples",
+        "41",
+        fine.to_str().unwrap(),
+    ]);
+    assert_eq!((c1, c2), (0, 0), "{e2}");
+    for (x, y) in a.lines().zip(b.lines()) {
+        let x: Vec<f64> = x.split(',').map(|t| t.parse().unwrap()).collect();
+        let y: Vec<f64> = y.split(',').map(|t| t.parse().unwrap()).collect();
+        assert!(close(&x, &y, 1e-13), "{x:?} vs {y:?}");
+    }
+}
+
+#[test]
+fn cli_plot_writes_svg_and_png() {
+    let svg = scratch("wave.svg");
+    let png = scratch("wave.png");
+    assert_eq!(
+        mra_cmd(&[
+            "curve",
+            "plot",
+            "corpus/curves/wave.csv",
+            "-o",
+            svg.to_str().unwrap()
+        ])
+        .0,
+        0
+    );
+    let s = std::fs::read_to_string(&svg).unwrap();
+    assert!(s.starts_with("<svg") && s.matches("<circle").count() >= 8 + 6);
+    assert_eq!(
+        mra_cmd(&[
+            "curve",
+            "plot",
+            "corpus/curves/wave.csv",
+            "-o",
+            png.to_str().unwrap()
+        ])
+        .0,
+        0
+    );
+    assert_eq!(&std::fs::read(&png).unwrap()[..8], b"\x89PNG\r\n\x1a\n");
+}
+
+#[test]
+fn cli_scheme_analyze_reports_the_chaikin_spectrum() {
+    let (code, out, _) = mra_cmd(&["scheme", "analyze", "--mask", "1/4,3/4,3/4,1/4"]);
+    assert_eq!(code, 0);
+    let ev: Vec<f64> = out
+        .lines()
+        .skip_while(|l| !l.starts_with("eigenvalues"))
+        .skip(1)
+        .take_while(|l| l.starts_with("  "))
+        .map(|l| l.trim().parse().unwrap())
+        .collect();
+    assert_close(&ev, &[1.0, 0.5, 0.25, 0.25], 1e-12, "cli Chaikin");
+    assert!(out.contains("affine invariant: yes") && out.contains("C1"));
+    let (code, _, err) = mra_cmd(&["scheme", "analyze", "--mask", "1/4,x"]);
+    assert_eq!(code, 2);
+    assert!(err.contains("mask coefficient"));
+}
