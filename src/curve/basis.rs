@@ -15,6 +15,9 @@
 //! the curve is defined, and continuous, on the closed range. Nothing is snapped: a parameter
 //! 1e-12 away from a knot is evaluated on its own span.
 
+// Index loops follow the formulas of the notes (several arrays indexed together).
+#![allow(clippy::needless_range_loop)]
+
 use crate::{Error, Result};
 
 /// A validated non-decreasing knot sequence.

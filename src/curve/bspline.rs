@@ -1,6 +1,9 @@
 //! B-spline curves (notes ch. 3): `Q(u) = Σ_{i=0}^{m} P_i N_{i,k}(u)` on any non-decreasing knot
 //! sequence, evaluated on the valid range `[u_{k−1}, u_{m+1}]` only.
 
+// Index loops follow the formulas of the notes (several arrays indexed together).
+#![allow(clippy::needless_range_loop)]
+
 use super::basis::{self, basis_brute, basis_derivs, basis_funs, span, DerivWork, KnotVector};
 use super::{check_points, check_range, Curve};
 use crate::{Error, Result};

@@ -8,6 +8,9 @@
 //! Written here rather than pulling in `nalgebra`: the matrices are at most a few dozen rows and
 //! this keeps the crate's compile time down.
 
+// Index loops follow the formulas of the notes (several arrays indexed together).
+#![allow(clippy::needless_range_loop)]
+
 use crate::{Error, Result};
 
 /// A (possibly complex) eigenvalue `re + i·im`.

@@ -58,7 +58,7 @@ impl Nurbs {
             .points()
             .chunks(d1)
             .map(|p| p[d1 - 1])
-            .find(|w| !(*w > 0.0))
+            .find(|w| !(w.is_finite() && *w > 0.0))
         {
             return Err(Error::parameter("weight", w, "a positive finite number"));
         }

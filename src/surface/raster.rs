@@ -1,6 +1,9 @@
 //! A tiny RGB canvas for previews: anti-aliased thick lines and discs (curve plots), a z-buffered
 //! triangle fill (surface renders), and PNG encoding through the `png` crate.
 
+// Index loops follow the formulas of the notes (several arrays indexed together).
+#![allow(clippy::needless_range_loop)]
+
 use crate::{Error, Result};
 
 /// An RGB image with 8 bits per channel, row-major from the top-left corner.

@@ -3,6 +3,9 @@
 //! and a fill light plus ambient; back faces in a warmer tint. Rendered at 2× and box-filtered
 //! down for anti-aliasing.
 
+// Index loops follow the formulas of the notes (several arrays indexed together).
+#![allow(clippy::needless_range_loop)]
+
 use super::mesh::Mesh;
 use super::raster::Canvas;
 use super::{cross, dot, normalize, sub};
