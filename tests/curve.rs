@@ -1002,3 +1002,49 @@ fn cli_scheme_analyze_reports_the_chaikin_spectrum() {
     assert_eq!(code, 2);
     assert!(err.contains("mask coefficient"));
 }
+
+#[test]
+fn power_form_evaluation_equals_the_brute_force_sum_at_and_near_knots() {
+    use mra::curve::poly::PiecewisePoly;
+    let mut g = Lcg(14);
+    for _ in 0..200 {
+        let k = g.int(1, 6);
+        let n = g.int(k, k + 8);
+        let dim = g.int(1, 4);
+        let t = random_knots(&mut g, n, k);
+        let pts: Vec<f64> = (0..n * dim).map(|_| g.range(-5.0, 5.0)).collect();
+        let c = BSpline::new(pts, dim, k, t.clone()).unwrap();
+        let (a, b) = c.range();
+        let mut params: Vec<f64> = (0..30).map(|_| g.range(a, b)).collect();
+        params.extend(
+            t[k - 1..=n]
+                .iter()
+                .flat_map(|&x| [x, x + 1e-9, x - 1e-9, x + 1e-12])
+                .filter(|&u| u >= a && u <= b),
+        );
+        let p = PiecewisePoly::from_bspline(&c);
+        // unsorted and sorted orders both work
+        for sorted in [false, true] {
+            if sorted {
+                params.sort_by(|x, y| x.partial_cmp(y).unwrap());
+            }
+            let mut out = vec![0.0; params.len() * dim];
+            p.eval_many(&params, &mut out).unwrap();
+            for (j, &u) in params.iter().enumerate() {
+                let want = c.eval_brute(u).unwrap();
+                assert_close(
+                    &out[j * dim..(j + 1) * dim],
+                    &want,
+                    1e-11,
+                    &format!("power form k={k} at {u}"),
+                );
+            }
+        }
+        assert_eq!(
+            p.eval_many(&[b + 1e-9], &mut vec![0.0; dim])
+                .unwrap_err()
+                .kind(),
+            ErrorKind::Parameter
+        );
+    }
+}

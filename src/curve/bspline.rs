@@ -167,10 +167,20 @@ impl BSpline {
         })
     }
 
-    /// Evaluate at many parameters into `out` (`params.len() · dim` values). The span is found
-    /// incrementally (sorted parameters hit the same or the next span, §3.9.3) and the `k`
-    /// non-zero basis values are computed once per point; no allocation per point.
+    /// Evaluate at many parameters into `out` (`params.len() · dim` values). Large batches go
+    /// through the per-span power form ([`super::poly::PiecewisePoly`], Horner); small ones use
+    /// [`BSpline::eval_many_de_boor`].
     pub fn eval_many(&self, params: &[f64], out: &mut [f64]) -> Result<()> {
+        if params.len() >= 8 * self.len() {
+            return super::poly::PiecewisePoly::from_bspline(self).eval_many(params, out);
+        }
+        self.eval_many_de_boor(params, out)
+    }
+
+    /// Evaluate at many parameters with the basis of §3.9: the span is found incrementally
+    /// (sorted parameters hit the same or the next span, §3.9.3) and the `k` non-zero basis
+    /// values are computed once per point; no allocation per point.
+    pub fn eval_many_de_boor(&self, params: &[f64], out: &mut [f64]) -> Result<()> {
         let (k, dim, n) = (self.order, self.dim, self.len());
         if out.len() != params.len() * dim {
             return Err(Error::parameter(

@@ -10,6 +10,7 @@
 //! bezier.rs   Bernstein / de Casteljau (§2.1, Algorithm 2.2), derivatives, split, degree elevation
 //! bspline.rs  B-spline curves, de Boor order reduction (§3.9.4, Algorithm 3.3), derivatives
 //! nurbs.rs    rational curves through homogeneous coordinates (ch. 4), exact circle and arcs (§4.1)
+//! poly.rs     per-span power form (Horner) for evaluating many points fast
 //! knot.rs     Boehm insertion and midpoint insertion of all knots = subdivision (§7.2–7.4)
 //! plot.rs     SVG / PNG pictures of a curve, its control polygon and knots
 //! eigen.rs    eigenvalues of small real matrices (Hessenberg + shifted QR)
@@ -28,6 +29,7 @@ pub mod geometry;
 pub mod knot;
 pub mod nurbs;
 pub mod plot;
+pub mod poly;
 
 pub use basis::KnotVector;
 pub use bezier::Bezier;

@@ -159,6 +159,10 @@ impl Nurbs {
                 "params.len() × dim",
             ));
         }
+        if params.len() >= 8 * self.len() {
+            return super::poly::PiecewisePoly::from_bspline(&self.hom)
+                .eval_many_projected(params, out);
+        }
         let mut h = vec![0.0; params.len() * d1];
         self.hom.eval_many(params, &mut h)?;
         for (o, p) in out.chunks_mut(self.dim).zip(h.chunks(d1)) {

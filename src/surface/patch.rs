@@ -281,12 +281,14 @@ impl TensorPatch {
     }
 
     /// Evaluate the grid `us × vs` into `out` (`us.len() · vs.len() · dim` values, row `i` for
-    /// `us[i]`). Non-rational patches only use the row-curve factorisation of §5.3.1: for each u,
-    /// the `nv` control points of the u-curve's v-row, `C_j(u) = Σ_i N_i(u) P_{ij}`, are formed once,
-    /// then every v costs `kv · dim` multiply-adds. Parameters must be sorted.
+    /// `us[i]`), using the row-curve factorisation of §5.3.1: for each u the `nv` control points
+    /// `C_j(u) = Σ_i N_i(u) P_{ij}` of the v-curve are formed once; that curve is then written per
+    /// v-span in power form (Taylor coefficients from basis derivatives precomputed once per span,
+    /// see `crate::curve::poly`) and every v costs `kv − 1` multiply-adds per coordinate (Horner).
+    /// Rational patches run the same on homogeneous points and divide.
     pub fn eval_grid(&self, us: &[f64], vs: &[f64], out: &mut [f64]) -> Result<()> {
         let (ru, rv) = self.ranges();
-        let (dim, cd) = (self.dim, self.cdim());
+        let (dim, cd, kv, nv) = (self.dim, self.cdim(), self.kv, self.nv);
         if out.len() != us.len() * vs.len() * dim {
             return Err(Error::parameter(
                 "output length",
@@ -294,28 +296,42 @@ impl TensorPatch {
                 "us.len() × vs.len() × dim",
             ));
         }
-        let k = self.ku.max(self.kv);
-        let (mut l, mut r) = (vec![0.0; k], vec![0.0; k]);
-        // v basis once for all rows: span and kv values per v
-        let kv = self.kv;
-        let mut vspan = Vec::with_capacity(vs.len());
-        let mut vb = vec![0.0; vs.len() * kv];
-        for (j, &v) in vs.iter().enumerate() {
-            check_range(v, rv)?;
-            let s = span(&self.tv, self.nv, kv, v);
-            vspan.push(s + 1 - kv);
-            basis_funs(
-                &self.tv,
-                s,
-                v,
-                kv,
-                &mut vb[j * kv..(j + 1) * kv],
-                &mut l,
-                &mut r,
-            );
+        // per non-empty v-span: start knot index and the k×k Taylor matrix M[j][r] = N_r^{(j)}(t)/j!
+        let mut spans = Vec::new();
+        let mut starts = Vec::new();
+        let mut mats = Vec::new();
+        let mut w = DerivWork::new(kv);
+        let mut d = vec![0.0; kv * kv];
+        for sp in kv - 1..nv {
+            if self.tv[sp] >= self.tv[sp + 1] {
+                continue;
+            }
+            basis_derivs(&self.tv, sp, self.tv[sp], kv - 1, &mut w, &mut d);
+            let mut fact = 1.0;
+            for j in 0..kv {
+                if j > 0 {
+                    fact *= j as f64;
+                }
+                mats.extend(d[j * kv..(j + 1) * kv].iter().map(|x| x / fact));
+            }
+            spans.push(sp);
+            starts.push(self.tv[sp]);
         }
+        // per v: which span (index into `spans`) and the local variable
+        let mut vsig = Vec::with_capacity(vs.len());
+        let mut vx = Vec::with_capacity(vs.len());
+        for &v in vs {
+            check_range(v, rv)?;
+            let sp = span(&self.tv, nv, kv, v);
+            let sig = spans.partition_point(|&x| x < sp);
+            vsig.push(sig);
+            vx.push(v - starts[sig]);
+        }
+        let k = self.ku.max(kv);
+        let (mut l, mut r) = (vec![0.0; k], vec![0.0; k]);
         let mut bu = vec![0.0; self.ku];
-        let mut row = vec![0.0; self.nv * cd];
+        let mut row = vec![0.0; nv * cd];
+        let mut rc = vec![0.0; spans.len() * kv * cd];
         for (i, &u) in us.iter().enumerate() {
             check_range(u, ru)?;
             let s = span(&self.tu, self.nu, self.ku, u);
@@ -323,43 +339,83 @@ impl TensorPatch {
             row.fill(0.0);
             for (a, b) in bu.iter().enumerate() {
                 let ii = s + 1 - self.ku + a;
-                let src = &self.net[ii * self.nv * cd..(ii + 1) * self.nv * cd];
-                for (d, x) in row.iter_mut().zip(src) {
-                    *d += b * x;
+                let src = &self.net[ii * nv * cd..(ii + 1) * nv * cd];
+                for (dst, x) in row.iter_mut().zip(src) {
+                    *dst += b * x;
+                }
+            }
+            // Taylor coefficients of the row curve on every v-span
+            for (sig, &sp) in spans.iter().enumerate() {
+                let m = &mats[sig * kv * kv..(sig + 1) * kv * kv];
+                let first = sp + 1 - kv;
+                for j in 0..kv {
+                    for c in 0..cd {
+                        let mut acc = 0.0;
+                        for rr in 0..kv {
+                            acc += m[j * kv + rr] * row[(first + rr) * cd + c];
+                        }
+                        rc[(sig * kv + j) * cd + c] = acc;
+                    }
                 }
             }
             let orow = &mut out[i * vs.len() * dim..(i + 1) * vs.len() * dim];
-            if !self.rational && dim == 3 && kv == 4 {
-                // the common bicubic case with fixed sizes: the compiler unrolls fully
-                for (j, o) in orow.chunks_exact_mut(3).enumerate() {
-                    let b = &vb[j * 4..j * 4 + 4];
-                    let c = &row[vspan[j] * 3..vspan[j] * 3 + 12];
-                    o[0] = b[0] * c[0] + b[1] * c[3] + b[2] * c[6] + b[3] * c[9];
-                    o[1] = b[0] * c[1] + b[1] * c[4] + b[2] * c[7] + b[3] * c[10];
-                    o[2] = b[0] * c[2] + b[1] * c[5] + b[2] * c[8] + b[3] * c[11];
-                }
-                continue;
-            }
-            let mut h = vec![0.0; cd];
-            for (j, o) in orow.chunks_exact_mut(dim).enumerate() {
-                h.fill(0.0);
-                for (b, nb) in vb[j * kv..(j + 1) * kv].iter().enumerate() {
-                    let p = &row[(vspan[j] + b) * cd..(vspan[j] + b + 1) * cd];
-                    for c in 0..cd {
-                        h[c] += nb * p[c];
+            match (kv, cd, self.rational) {
+                (4, 3, false) => horner_row::<4, 3>(&rc, &vsig, &vx, orow, false),
+                (3, 3, false) => horner_row::<3, 3>(&rc, &vsig, &vx, orow, false),
+                (4, 4, true) => horner_row::<4, 4>(&rc, &vsig, &vx, orow, true),
+                (3, 4, true) => horner_row::<3, 4>(&rc, &vsig, &vx, orow, true),
+                _ => {
+                    let mut h = vec![0.0; cd];
+                    for (j, o) in orow.chunks_exact_mut(dim).enumerate() {
+                        let c = &rc[vsig[j] * kv * cd..(vsig[j] + 1) * kv * cd];
+                        h.copy_from_slice(&c[(kv - 1) * cd..]);
+                        for jj in (0..kv - 1).rev() {
+                            for q in 0..cd {
+                                h[q] = h[q] * vx[j] + c[jj * cd + q];
+                            }
+                        }
+                        if self.rational {
+                            for q in 0..dim {
+                                o[q] = h[q] / h[dim];
+                            }
+                        } else {
+                            o.copy_from_slice(&h);
+                        }
                     }
-                }
-                if self.rational {
-                    let w = h[dim];
-                    for c in 0..dim {
-                        o[c] = h[c] / w;
-                    }
-                } else {
-                    o.copy_from_slice(&h);
                 }
             }
         }
         Ok(())
+    }
+}
+
+/// Horner along one grid row with fixed sizes (order `K`, `D` stored coordinates); `project`
+/// divides by the last (weight) coordinate.
+fn horner_row<const K: usize, const D: usize>(
+    rc: &[f64],
+    sig: &[usize],
+    x: &[f64],
+    out: &mut [f64],
+    project: bool,
+) {
+    let od = if project { D - 1 } else { D };
+    for ((o, &s), &t) in out.chunks_exact_mut(od).zip(sig).zip(x) {
+        let c = &rc[s * K * D..(s + 1) * K * D];
+        let mut h = [0.0; D];
+        h.copy_from_slice(&c[(K - 1) * D..]);
+        for j in (0..K - 1).rev() {
+            for q in 0..D {
+                h[q] = h[q] * t + c[j * D + q];
+            }
+        }
+        if project {
+            let inv = 1.0 / h[D - 1];
+            for q in 0..D - 1 {
+                o[q] = h[q] * inv;
+            }
+        } else {
+            o.copy_from_slice(&h);
+        }
     }
 }
 
