@@ -1048,3 +1048,35 @@ fn power_form_evaluation_equals_the_brute_force_sum_at_and_near_knots() {
         );
     }
 }
+
+#[test]
+fn ellipse_normals_and_curvature_follow_sections_1_2_and_1_3() {
+    use mra::curve::geometry::{normal_2d, unit_tangent};
+    // an exact NURBS ellipse: the circle scaled by (a, b) (affine invariance, §4.4)
+    let (a, b) = (3.0, 2.0);
+    let c = Nurbs::circle([0.0, 0.0], 1.0).unwrap();
+    let pts: Vec<f64> = c
+        .points()
+        .chunks(2)
+        .flat_map(|p| [a * p[0], b * p[1]])
+        .collect();
+    let e = Nurbs::new(&pts, &c.weights(), 2, 3, c.knots().to_vec()).unwrap();
+    for i in 0..=100 {
+        let u = i as f64 / 100.0;
+        let p = e.eval(u).unwrap();
+        assert!(((p[0] / a).powi(2) + (p[1] / b).powi(2) - 1.0).abs() < 1e-12);
+        let t = e.derivative(u, 1).unwrap();
+        let n = normal_2d(&e, u).unwrap();
+        assert!((n[0] * t[0] + n[1] * t[1]).abs() < 1e-12);
+        // the normal of a counter-clockwise ellipse points inward: (−b cos θ, −a sin θ) ∥ N (Example 1.6)
+        assert!(n[0] * p[0] / (a * a) + n[1] * p[1] / (b * b) < 0.0);
+        let ut = unit_tangent(&e, u).unwrap();
+        assert!((ut[0].hypot(ut[1]) - 1.0).abs() < 1e-14);
+    }
+    // curvature at the vertices: a/b² at (±a, 0), b/a² at (0, ±b)
+    assert!((curvature(&e, 0.0).unwrap() - a / (b * b)).abs() < 1e-12);
+    assert!((curvature(&e, 0.25).unwrap() - b / (a * a)).abs() < 1e-12);
+    // a straight line has zero curvature; a 3D helix has 1/(r(1 + (c/r)²)) in any dimension
+    let l = Bezier::new(vec![0.0, 0.0, 0.0, 1.0, 1.0, 1.0, 2.0, 2.0, 2.0], 3).unwrap();
+    assert!(curvature(&l, 0.4).unwrap().abs() < 1e-14);
+}

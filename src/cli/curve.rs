@@ -4,7 +4,7 @@
 use super::{CliResult, Failure};
 use crate::curve::csv::{self, PointTable};
 use crate::curve::plot::{self, PlotData};
-use crate::curve::{knot, BSpline, Bezier, Curve, KnotVector, Nurbs};
+use crate::curve::{geometry, knot, BSpline, Bezier, Curve, KnotVector, Nurbs};
 use crate::{Error, Result};
 use clap::{Args, Subcommand, ValueEnum};
 use std::path::{Path, PathBuf};
@@ -16,7 +16,8 @@ pub enum Command {
         mra curve eval --kind bezier --at 0.5 corpus/curves/example24.csv        # 3.5,1.5 (Example 2.4)\n  \
         mra curve eval --order 4 --knots open --samples 5 --with-u corpus/curves/wave.csv\n  \
         mra curve eval --kind nurbs --order 3 --knots corpus/curves/circle_knots.txt --samples 8 corpus/curves/circle.csv\n  \
-        mra curve eval --order 3 --knots uniform --derivative 1 --at 2.5 corpus/curves/wave.csv")]
+        mra curve eval --order 3 --knots uniform --derivative 1 --at 2.5 corpus/curves/wave.csv\n  \
+        mra curve eval --kind nurbs --order 3 --knots corpus/curves/circle_knots.txt --curvature --at 0.1 corpus/curves/circle.csv   # 1")]
     Eval(EvalArgs),
     /// Split a Bézier curve at u into two control polygons (de Casteljau, §2.6).
     #[command(
@@ -83,6 +84,12 @@ pub struct EvalArgs {
     /// Print the parameter before each point.
     #[arg(long)]
     pub with_u: bool,
+    /// Print the 2D normal (−y′, x′) of §1.3 instead of the point (planar curves).
+    #[arg(long, conflicts_with_all = ["curvature", "derivative"])]
+    pub normal: bool,
+    /// Print the curvature κ (signed for planar curves) instead of the point.
+    #[arg(long, conflicts_with = "derivative")]
+    pub curvature: bool,
     /// Output file (default: standard output).
     #[arg(short, long)]
     pub output: Option<PathBuf>,
@@ -351,7 +358,13 @@ fn eval(a: EvalArgs) -> CliResult {
     let mut out = String::new();
     let mut p = vec![0.0; c.dim()];
     for &u in &params {
-        c.eval_derivative_into(u, a.derivative, &mut p)?;
+        if a.normal {
+            p = geometry::normal_2d(c, u)?.to_vec();
+        } else if a.curvature {
+            p = vec![geometry::curvature(c, u)?];
+        } else {
+            c.eval_derivative_into(u, a.derivative, &mut p)?;
+        }
         let mut line: Vec<String> = Vec::with_capacity(c.dim() + 1);
         if a.with_u {
             line.push(u.to_string());
