@@ -1076,7 +1076,7 @@ fn ellipse_normals_and_curvature_follow_sections_1_2_and_1_3() {
     // curvature at the vertices: a/b² at (±a, 0), b/a² at (0, ±b)
     assert!((curvature(&e, 0.0).unwrap() - a / (b * b)).abs() < 1e-12);
     assert!((curvature(&e, 0.25).unwrap() - b / (a * a)).abs() < 1e-12);
-    // a straight line has zero curvature; a 3D helix has 1/(r(1 + (c/r)²)) in any dimension
+    // a straight line (in 3D) has zero curvature
     let l = Bezier::new(vec![0.0, 0.0, 0.0, 1.0, 1.0, 1.0, 2.0, 2.0, 2.0], 3).unwrap();
     assert!(curvature(&l, 0.4).unwrap().abs() < 1e-14);
 }
