@@ -1080,3 +1080,22 @@ fn ellipse_normals_and_curvature_follow_sections_1_2_and_1_3() {
     let l = Bezier::new(vec![0.0, 0.0, 0.0, 1.0, 1.0, 1.0, 2.0, 2.0, 2.0], 3).unwrap();
     assert!(curvature(&l, 0.4).unwrap().abs() < 1e-14);
 }
+
+#[test]
+fn smaller_invariant_windows_keep_the_leading_eigenvalues() {
+    // Chaikin on 3 points (a dual scheme: the fine window sits half a step aside): 1, 1/2, 1/4
+    let a = analyze(&named_mask("chaikin").unwrap(), Some(3)).unwrap();
+    let re: Vec<f64> = a.eigenvalues.iter().map(|e| e.re).collect();
+    assert_close(&re, &[1.0, 0.5, 0.25], 1e-12, "Chaikin, 3 points");
+    // cubic on 3 points: 1, 1/2, 1/4 (the classic vertex neighbourhood)
+    let a = analyze(&named_mask("cubic").unwrap(), Some(3)).unwrap();
+    let re: Vec<f64> = a.eigenvalues.iter().map(|e| e.re).collect();
+    assert_close(&re, &[1.0, 0.5, 0.25], 1e-12, "cubic, 3 points");
+    // a window too small to be invariant is refused
+    assert_eq!(
+        analyze(&named_mask("cubic").unwrap(), Some(2))
+            .unwrap_err()
+            .kind(),
+        ErrorKind::Parameter
+    );
+}

@@ -9,7 +9,8 @@
 //! S[r][c] = a_{i0 + r − 2c},   i0 = (N + L − 2)/2   (windows centred on the same parameter)
 //! ```
 //!
-//! `N = L` is the notes' choice (4 points for Chaikin, 5 for cubic, Figure 7.4; 7 for the
+//! (for odd `N + L` the fine window sits half a step to either side; the first invariant one is
+//! used). `N = L` is the notes' choice (4 points for Chaikin, 5 for cubic, Figure 7.4; 7 for the
 //! four-point scheme) and always leaves the window invariant. The scheme is affine invariant
 //! when both rules sum to one (then `S·1 = 1`). If the spectrum reads `1 > |λ_1|` and
 //! `λ_j = 2^{−j}` for `j ≤ m` with `|λ_{m+1}| < 2^{−m}`, it is consistent with a `C^m` limit
@@ -93,17 +94,24 @@ fn bad(tok: &str) -> Error {
     Error::parameter("mask coefficient", tok, "a number or a fraction like 9/16")
 }
 
-/// The `n × n` local subdivision matrix of `mask` (row-major), `n + L` even.
-pub fn local_matrix(mask: &[f64], n: usize) -> Result<Vec<f64>> {
-    let l = mask.len();
-    if n == 0 || (n + l) % 2 != 0 || n + 2 < l {
-        return Err(Error::parameter(
-            "window size",
-            n,
-            "n ≥ mask length − 2 with n + mask length even",
-        ));
+/// Candidate offsets `i0` of the fine window: centred, `(n + L − 2)/2`, when `n + L` is even;
+/// otherwise the two half-step neighbours (dual schemes on odd windows, e.g. Chaikin with 3).
+fn offsets(n: usize, l: usize) -> Vec<usize> {
+    if n + l < 2 {
+        return vec![];
     }
-    let i0 = (n + l - 2) / 2;
+    if (n + l) % 2 == 0 {
+        vec![(n + l - 2) / 2]
+    } else if n + l >= 3 {
+        vec![(n + l - 3) / 2, (n + l - 1) / 2]
+    } else {
+        vec![]
+    }
+}
+
+/// The `n × n` local subdivision matrix `S[r][c] = a_{i0 + r − 2c}` (row-major).
+pub fn local_matrix(mask: &[f64], n: usize, i0: usize) -> Vec<f64> {
+    let l = mask.len();
     let mut s = vec![0.0; n * n];
     for r in 0..n {
         for c in 0..n {
@@ -113,19 +121,12 @@ pub fn local_matrix(mask: &[f64], n: usize) -> Result<Vec<f64>> {
             }
         }
     }
-    Ok(s)
+    s
 }
 
-/// True when the window of `n` coarse points is invariant: every fine point of the window
-/// depends only on coarse points of the window.
-pub fn window_is_invariant(mask: &[f64], n: usize) -> bool {
-    let l = mask.len();
-    if (n + l) % 2 != 0 {
-        return false;
-    }
-    let i0 = (n + l - 2) / 2;
+/// True when fine points `i0 … i0 + n − 1` depend only on coarse points `0 … n − 1`.
+pub fn window_is_invariant(mask: &[f64], n: usize, i0: usize) -> bool {
     for r in 0..n {
-        // all j with mask index i0 + r - 2j in [0, l) and a nonzero entry must lie in 0..n
         for (idx, &a) in mask.iter().enumerate() {
             if a == 0.0 {
                 continue;
@@ -146,14 +147,17 @@ pub fn window_is_invariant(mask: &[f64], n: usize) -> bool {
 pub fn analyze(mask: &[f64], n: Option<usize>) -> Result<Analysis> {
     let l = mask.len();
     let n = n.unwrap_or(l);
-    if !window_is_invariant(mask, n) {
-        return Err(Error::parameter(
-            "window size",
-            n,
-            "an invariant window (try the mask length)",
-        ));
-    }
-    let matrix = local_matrix(mask, n)?;
+    let i0 = offsets(n, l)
+        .into_iter()
+        .find(|&i0| n > 0 && window_is_invariant(mask, n, i0))
+        .ok_or_else(|| {
+            Error::parameter(
+                "window size",
+                n,
+                "a window whose fine points depend only on its coarse points (the mask length always is)",
+            )
+        })?;
+    let matrix = local_matrix(mask, n, i0);
     let eigenvalues = eigenvalues(&matrix, n)?;
     let even: f64 = mask.iter().step_by(2).sum();
     let odd: f64 = mask.iter().skip(1).step_by(2).sum();
