@@ -1099,3 +1099,58 @@ fn smaller_invariant_windows_keep_the_leading_eigenvalues() {
         ErrorKind::Parameter
     );
 }
+
+#[test]
+fn splitting_a_bspline_by_knot_insertion_keeps_both_halves() {
+    use mra::curve::knot::{split, split_nurbs};
+    let mut g = Lcg(15);
+    for _ in 0..50 {
+        let k = g.int(1, 5);
+        let n = g.int(k, k + 6);
+        let t = random_knots(&mut g, n, k);
+        let pts: Vec<f64> = (0..n * 2).map(|_| g.range(-5.0, 5.0)).collect();
+        let ws: Vec<f64> = (0..n).map(|_| g.range(0.2, 4.0)).collect();
+        let c = BSpline::new(pts.clone(), 2, k, t.clone()).unwrap();
+        let r = Nurbs::new(&pts, &ws, 2, k, t.clone()).unwrap();
+        let (a, b) = c.range();
+        // split at a random parameter and at an existing interior knot
+        let mut at = vec![g.range(a, b)];
+        at.extend(t[k..n].iter().copied().filter(|&x| x > a && x < b).take(1));
+        for s in at {
+            let (l, rr) = split(&c, s).unwrap();
+            let (nl, nr) = split_nurbs(&r, s).unwrap();
+            assert_eq!(l.range(), (a, s));
+            assert_eq!(rr.range(), (s, b));
+            for i in 0..=20 {
+                // the left half ends with the limit from the left: compare on [a, s) only
+                // (order 1 and full-multiplicity knots are discontinuous)
+                let u = a + (s - a) * i.min(19) as f64 / 20.0;
+                assert_close(&l.eval(u).unwrap(), &c.eval(u).unwrap(), 1e-11, "left half");
+                assert_close(
+                    &nl.eval(u).unwrap(),
+                    &r.eval(u).unwrap(),
+                    1e-11,
+                    "left NURBS half",
+                );
+                let v = if i == 20 {
+                    b
+                } else {
+                    s + (b - s) * i as f64 / 20.0
+                };
+                assert_close(
+                    &rr.eval(v).unwrap(),
+                    &c.eval(v).unwrap(),
+                    1e-11,
+                    "right half",
+                );
+                assert_close(
+                    &nr.eval(v).unwrap(),
+                    &r.eval(v).unwrap(),
+                    1e-11,
+                    "right NURBS half",
+                );
+            }
+        }
+        assert_eq!(split(&c, a).unwrap_err().kind(), ErrorKind::Parameter);
+    }
+}

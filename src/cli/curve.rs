@@ -99,7 +99,7 @@ pub struct EvalArgs {
 pub struct SplitArgs {
     #[command(flatten)]
     pub spec: CurveSpec,
-    /// Split parameter in [0, 1].
+    /// Split parameter (inside the valid range).
     #[arg(long)]
     pub u: f64,
     /// Output file (default: standard output); the two polygons are separated by a blank line.
@@ -388,13 +388,52 @@ fn bezier_only(l: Loaded) -> std::result::Result<Bezier, Failure> {
 }
 
 fn split(a: SplitArgs) -> CliResult {
-    let b = bezier_only(load(&a.spec)?)?;
-    let (l, r) = b.split(a.u)?;
     let mut out = String::new();
-    csv::write_points(&mut out, l.points(), Curve::dim(&l), None);
-    out.push('\n');
-    csv::write_points(&mut out, r.points(), Curve::dim(&r), None);
+    match load(&a.spec)? {
+        Loaded::Bezier(b) => {
+            let (l, r) = b.split(a.u)?;
+            csv::write_points(&mut out, l.points(), Curve::dim(&l), None);
+            out.push('\n');
+            csv::write_points(&mut out, r.points(), Curve::dim(&r), None);
+        }
+        Loaded::BSpline(c) => {
+            let (l, r) = knot::split(&c, a.u)?;
+            for h in [l, r] {
+                out.push_str(&format!("# knots: {}\n", join(h.knots())));
+                csv::write_points(&mut out, h.points(), h.dim(), None);
+                out.push('\n');
+            }
+            out.pop();
+        }
+        Loaded::Nurbs(c) => {
+            let (l, r) = knot::split_nurbs(&c, a.u)?;
+            for h in [l, r] {
+                out.push_str(&format!("# knots: {}\n", join(h.knots())));
+                out.push_str(&header(Curve::dim(&h)));
+                csv::write_points(&mut out, &h.points(), Curve::dim(&h), Some(&h.weights()));
+                out.push('\n');
+            }
+            out.pop();
+        }
+    }
     emit(a.output.as_deref(), &out)
+}
+
+fn join(v: &[f64]) -> String {
+    v.iter()
+        .map(|x| x.to_string())
+        .collect::<Vec<_>>()
+        .join(",")
+}
+
+/// A CSV header naming the coordinates and the weight column.
+fn header(dim: usize) -> String {
+    let names = ["x", "y", "z"];
+    let mut h: Vec<String> = (0..dim)
+        .map(|i| names.get(i).map_or(format!("x{i}"), |s| s.to_string()))
+        .collect();
+    h.push("w".into());
+    h.join(",") + "\n"
 }
 
 fn elevate(a: ElevateArgs) -> CliResult {

@@ -105,3 +105,36 @@ pub fn refine_periodic(points: &[f64], dim: usize, k: usize) -> Result<Vec<f64>>
     let fp = f.points();
     Ok(fp[j0 * dim..(j0 + 2 * n) * dim].to_vec())
 }
+
+/// Split a B-spline at `u` (strictly inside the valid range) into the curves on `[a, u]` and
+/// `[u, b]`: insert `u` until its multiplicity is `k`, then cut the knots and control points
+/// there (both halves interpolate the split point; this is the B-spline form of the de Casteljau
+/// split of §2.6).
+pub fn split(curve: &BSpline, u: f64) -> Result<(BSpline, BSpline)> {
+    let (a, b) = curve.range();
+    if !(u > a && u < b) {
+        return Err(Error::Parameter {
+            name: "split parameter",
+            value: format!("{u} (valid range [{a}, {b}])"),
+            expected: "a parameter strictly inside the valid range",
+        });
+    }
+    let k = curve.order();
+    let mut c = curve.clone();
+    while c.knots().iter().filter(|&&x| x == u).count() < k {
+        c = insert(&c, u)?;
+    }
+    let t = c.knots();
+    let r = t.iter().position(|&x| x == u).expect("inserted knot");
+    let dim = c.dim();
+    let p = c.points();
+    let left = BSpline::new(p[..r * dim].to_vec(), dim, k, t[..r + k].to_vec())?;
+    let right = BSpline::new(p[r * dim..].to_vec(), dim, k, t[r..].to_vec())?;
+    Ok((left, right))
+}
+
+/// Split a NURBS curve at `u` (see [`split`]).
+pub fn split_nurbs(curve: &Nurbs, u: f64) -> Result<(Nurbs, Nurbs)> {
+    let (l, r) = split(curve.homogeneous(), u)?;
+    Ok((Nurbs::from_homogeneous(l)?, Nurbs::from_homogeneous(r)?))
+}
