@@ -1154,3 +1154,34 @@ fn splitting_a_bspline_by_knot_insertion_keeps_both_halves() {
         assert_eq!(split(&c, a).unwrap_err().kind(), ErrorKind::Parameter);
     }
 }
+
+#[test]
+fn delta_index_of_example_3_7_and_continuity_k_minus_1_minus_multiplicity() {
+    // Example 3.7: u = {0,1,2,3,3,4,5,5,5,6}, k = 3, m = 6
+    let t = [0.0, 1.0, 2.0, 3.0, 3.0, 4.0, 5.0, 5.0, 5.0, 6.0];
+    assert_eq!(span(&t, 7, 3, 2.8), 2);
+    assert_eq!(span(&t, 7, 3, 3.0), 4);
+    assert_eq!(span(&t, 7, 3, 3.1), 4);
+    // the notes give δ(5) = 8 by searching all knots; 5 is the right end of the valid range
+    // [u_2, u_7] = [2, 5], where the last non-empty span of the range (δ = 5) is used
+    assert_eq!(span(&t, 7, 3, 5.0), 5);
+    // §3.8.2: a cubic (k = 4) is C^{k−1−µ} at a knot of multiplicity µ
+    let mut g = Lcg(16);
+    for mu in 1..=3 {
+        let mut knots = vec![0.0, 1.0, 2.0, 3.0];
+        knots.extend(std::iter::repeat(4.0).take(mu));
+        knots.extend([5.0, 6.0, 7.0, 8.0]);
+        let n = knots.len() - 4;
+        let pts: Vec<f64> = (0..n).map(|_| g.range(-5.0, 5.0)).collect();
+        let c = BSpline::new(pts, 1, 4, knots).unwrap();
+        let h = 1e-7;
+        for d in 0..3 {
+            let jump = (c.derivative(4.0 + h, d).unwrap()[0] - c.derivative(4.0 - h, d).unwrap()[0]).abs();
+            if d + mu < 4 {
+                assert!(jump < 1e-4, "µ={mu}: derivative {d} jumps by {jump}");
+            } else {
+                assert!(jump > 1e-3, "µ={mu}: derivative {d} should jump ({jump})");
+            }
+        }
+    }
+}
