@@ -63,7 +63,7 @@ pub struct CurveSpec {
     /// Order k = degree + 1 (B-spline, NURBS).
     #[arg(long, default_value_t = 4)]
     pub order: usize,
-    /// Knots: `open` (clamped on [0,1], §3.8.3), `uniform` (0,1,2,…) or a file of numbers.
+    /// Knots: `open` (clamped on 0..1, §3.8.3), `uniform` (0, 1, 2, …) or a file of numbers.
     #[arg(long, default_value = "open")]
     pub knots: String,
 }
