@@ -1176,7 +1176,8 @@ fn delta_index_of_example_3_7_and_continuity_k_minus_1_minus_multiplicity() {
         let c = BSpline::new(pts, 1, 4, knots).unwrap();
         let h = 1e-7;
         for d in 0..3 {
-            let jump = (c.derivative(4.0 + h, d).unwrap()[0] - c.derivative(4.0 - h, d).unwrap()[0]).abs();
+            let jump =
+                (c.derivative(4.0 + h, d).unwrap()[0] - c.derivative(4.0 - h, d).unwrap()[0]).abs();
             if d + mu < 4 {
                 assert!(jump < 1e-4, "µ={mu}: derivative {d} jumps by {jump}");
             } else {

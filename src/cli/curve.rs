@@ -42,6 +42,9 @@ pub enum Command {
     Plot(PlotArgs),
 }
 
+/// Largest number of printed or plotted samples.
+pub const MAX_SAMPLES: usize = 10_000_000;
+
 /// How the control points become a curve.
 #[derive(ValueEnum, Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Kind {
@@ -351,9 +354,18 @@ pub fn run(c: Command) -> CliResult {
 fn eval(a: EvalArgs) -> CliResult {
     let loaded = load(&a.spec)?;
     let c = loaded.curve();
+    let samples = a.samples.unwrap_or(100);
+    if samples > MAX_SAMPLES {
+        return Err(Error::LimitsExceeded {
+            what: "--samples",
+            requested: samples as u64,
+            limit: MAX_SAMPLES as u64,
+        }
+        .into());
+    }
     let params = match &a.at {
         Some(s) => parse_list(s)?,
-        None => sample_params(c.domain(), a.samples.unwrap_or(100)),
+        None => sample_params(c.domain(), samples),
     };
     let mut out = String::new();
     let mut p = vec![0.0; c.dim()];
@@ -521,6 +533,14 @@ pub(crate) fn parse_size(s: &str) -> std::result::Result<(usize, usize), Failure
 }
 
 fn plot_cmd(a: PlotArgs) -> CliResult {
+    if a.samples > MAX_SAMPLES {
+        return Err(Error::LimitsExceeded {
+            what: "--samples",
+            requested: a.samples as u64,
+            limit: MAX_SAMPLES as u64,
+        }
+        .into());
+    }
     let loaded = load(&a.spec)?;
     let c = loaded.curve();
     let (w, h) = parse_size(&a.size)?;

@@ -23,7 +23,7 @@ pub struct Mesh {
 }
 
 /// Largest accepted grid (vertices).
-pub const MAX_VERTICES: usize = 64 << 20;
+pub const MAX_VERTICES: usize = 16 << 20;
 
 /// Sample `s` on `res_u × res_v` vertices (`≥ 2` each) over its parameter ranges.
 pub fn tessellate(s: &dyn Surface, res_u: usize, res_v: usize, kind: FaceKind) -> Result<Mesh> {

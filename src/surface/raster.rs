@@ -15,7 +15,7 @@ pub struct Canvas {
 }
 
 /// Largest accepted side of a preview image.
-pub const MAX_SIDE: usize = 16_384;
+pub const MAX_SIDE: usize = 8_192;
 
 impl Canvas {
     /// A canvas filled with `bg`.

@@ -33,8 +33,32 @@ impl Default for View {
     }
 }
 
+/// Largest picture side for a render (it is drawn at twice this size before filtering).
+pub const MAX_RENDER_SIDE: usize = 2_048;
+
 /// Render `m` to an RGB canvas.
 pub fn render(m: &Mesh, view: View) -> Result<Canvas> {
+    for (what, v) in [("render width", view.width), ("render height", view.height)] {
+        if v == 0 || v > MAX_RENDER_SIDE {
+            return Err(crate::Error::LimitsExceeded {
+                what,
+                requested: v as u64,
+                limit: MAX_RENDER_SIDE as u64,
+            });
+        }
+    }
+    if let Some(bad) = m
+        .faces
+        .iter()
+        .flatten()
+        .find(|&&i| i as usize >= m.positions.len())
+    {
+        return Err(crate::Error::parameter(
+            "face vertex index",
+            bad,
+            "an index below the number of vertices",
+        ));
+    }
     let ss = 2;
     let (w, h) = (view.width * ss, view.height * ss);
     let mut big = Canvas::new(w, h, [255, 255, 255])?;
