@@ -1186,3 +1186,33 @@ fn delta_index_of_example_3_7_and_continuity_k_minus_1_minus_multiplicity() {
         }
     }
 }
+
+#[test]
+fn csv_point_tables_read_headers_weights_and_net_rows() {
+    use mra::curve::csv::{parse, parse_numbers};
+    let t = parse("# a comment\nx, y, w\n1,0,1\n1 1 0.5\n0;1;1  # trailing comment\n").unwrap();
+    assert_eq!((t.dim, t.rows, t.cols), (2, 1, 3));
+    assert_eq!(t.points, vec![1.0, 0.0, 1.0, 1.0, 0.0, 1.0]);
+    assert_eq!(t.weights, Some(vec![1.0, 0.5, 1.0]));
+    // a net: rows separated by blank lines (comment-only lines do not split rows)
+    let n = parse("0,0,0\n0,1,0\n\n1,0,0\n# note\n1,1,1\n\n\n").unwrap();
+    assert_eq!((n.dim, n.rows, n.cols), (3, 2, 2));
+    assert!(n.weights.is_none());
+    for bad in [
+        "",
+        "# only\n",
+        "1,2\n3\n",
+        "1,2\nx,y\n",
+        "1,2\n\n3,4\n5,6\n",
+        "1,nan\n",
+        "w\n1\n",
+    ] {
+        let e = parse(bad).unwrap_err();
+        assert_eq!(e.kind(), ErrorKind::Format, "{bad:?}");
+    }
+    assert_eq!(
+        parse_numbers("0, 0 0\n0.5;1 # knots\n1", "knot").unwrap(),
+        vec![0.0, 0.0, 0.0, 0.5, 1.0, 1.0]
+    );
+    assert!(parse_numbers("0,a", "knot").is_err());
+}

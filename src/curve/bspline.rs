@@ -64,6 +64,10 @@ impl BSpline {
         Self::uniform(pts, dim, k)
     }
 
+    /// Number of coordinates of each control point.
+    pub fn dim(&self) -> usize {
+        self.dim
+    }
     /// Order `k` (degree + 1).
     pub fn order(&self) -> usize {
         self.order

@@ -255,10 +255,3 @@ impl Curve for Nurbs {
         Ok(())
     }
 }
-
-impl BSpline {
-    /// Number of coordinates of each control point.
-    pub fn dim(&self) -> usize {
-        Curve::dim(self)
-    }
-}
