@@ -21,8 +21,11 @@
 
 pub mod cli;
 pub mod curve;
+pub mod demo;
 pub mod error;
+pub mod fsutil;
 pub mod mesh;
+pub mod points;
 pub mod scheme;
 pub mod surface;
 pub mod tensor;

@@ -3,9 +3,14 @@
 
 use clap::{Parser, Subcommand};
 
+pub mod analyze;
+pub mod array;
 pub mod curve;
+pub mod demo;
 pub mod mesh;
+pub mod points;
 pub mod scheme;
+pub mod subdivide;
 pub mod surface;
 
 /// Multiresolution codec, upscaler and terrain synthesis for images, volumes and heightmaps.
@@ -18,6 +23,14 @@ pub struct Cli {
 
 #[derive(Subcommand, Debug)]
 pub enum Command {
+    /// Run the main jobs on generated data and print what ran, sizes, errors and times.
+    Demo(demo::DemoArgs),
+    /// Decompose a point list or an array into coarse points and details (§9).
+    Analyze(analyze::AnalyzeArgs),
+    /// Reconstruct from the output of `analyze`.
+    Synthesize(analyze::SynthesizeArgs),
+    /// Refine a point list by subdivision (§7).
+    Subdivide(subdivide::SubdivideArgs),
     /// Curves: Bézier, B-splines, NURBS (evaluate, split, elevate, insert knots, plot).
     #[command(subcommand)]
     Curve(curve::Command),
@@ -84,6 +97,10 @@ pub fn main() -> i32 {
         }
     };
     let result = match cli.command {
+        Command::Demo(a) => demo::run(a),
+        Command::Analyze(a) => analyze::run_analyze(a),
+        Command::Synthesize(a) => analyze::run_synthesize(a),
+        Command::Subdivide(a) => subdivide::run(a),
         Command::Curve(c) => curve::run(c),
         Command::Surface(c) => surface::run(c),
         Command::Mesh(c) => mesh::run(c),

@@ -1,1 +1,115 @@
-//! One-dimensional multiresolution schemes and subdivision.
+//! One-dimensional multiresolution schemes (§9) and subdivision (§7).
+//!
+//! A [`TwoScale`] level maps a lane of `m` fine elements to `n` coarse elements and
+//! `m − n` details (`C = A F`, `D = B F`) and back (`F = P C + Q D`), for any length
+//! `m ≥ 1` and any element width (scalars, points, whole rows).
+
+pub mod chaikin;
+pub mod cubic;
+pub mod haar;
+pub mod lane;
+pub mod regular;
+pub mod sample;
+pub mod sparse;
+pub mod subdivide;
+mod two_scale;
+
+pub use lane::{analyze_lane, synthesize_lane, LanePyramid};
+pub use sample::Sample;
+pub use two_scale::{max_levels, LevelKind, TwoScale};
+
+use crate::Error;
+use std::fmt;
+use std::str::FromStr;
+
+/// The multiresolution scheme: which B-spline's reverse subdivision.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Scheme {
+    /// Order-1 B-splines: averages and half-differences (§9.2).
+    Haar,
+    /// Quadratic B-spline (Chaikin), width-4 local filters (§9.5.1, §9.6).
+    Chaikin,
+    /// Cubic B-spline, width-7 local filters (§9.5.1).
+    Cubic,
+}
+
+/// What happens at the two ends of a lane.
+///
+/// ```text
+/// interpolating   |F0 F1 F2 …        open ends, C_0 = F_0 and C_last = F_last (multiple knots)
+/// periodic     … F6 F7 |F0 F1 … F7| F0 F1 …   closed curves, tileable data
+/// symmetric    … F1 F0 |F0 F1 … | F7 F6 …     mirror extension of the regular filters
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Boundary {
+    Interpolating,
+    Periodic,
+    Symmetric,
+}
+
+impl Scheme {
+    pub const ALL: [Scheme; 3] = [Scheme::Haar, Scheme::Chaikin, Scheme::Cubic];
+    pub fn name(self) -> &'static str {
+        match self {
+            Scheme::Haar => "haar",
+            Scheme::Chaikin => "chaikin",
+            Scheme::Cubic => "cubic",
+        }
+    }
+}
+
+impl Boundary {
+    pub const ALL: [Boundary; 3] = [
+        Boundary::Interpolating,
+        Boundary::Periodic,
+        Boundary::Symmetric,
+    ];
+    pub fn name(self) -> &'static str {
+        match self {
+            Boundary::Interpolating => "interpolating",
+            Boundary::Periodic => "periodic",
+            Boundary::Symmetric => "symmetric",
+        }
+    }
+}
+
+impl fmt::Display for Scheme {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+impl fmt::Display for Boundary {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl FromStr for Scheme {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<Self, Error> {
+        match s.to_ascii_lowercase().as_str() {
+            "haar" => Ok(Scheme::Haar),
+            "chaikin" | "quadratic" => Ok(Scheme::Chaikin),
+            "cubic" => Ok(Scheme::Cubic),
+            _ => Err(Error::parameter("scheme", s, "haar, chaikin or cubic")),
+        }
+    }
+}
+
+impl FromStr for Boundary {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<Self, Error> {
+        match s.to_ascii_lowercase().as_str() {
+            "interpolating" | "open" => Ok(Boundary::Interpolating),
+            "periodic" | "closed" => Ok(Boundary::Periodic),
+            "symmetric" | "mirror" => Ok(Boundary::Symmetric),
+            _ => Err(Error::parameter(
+                "boundary",
+                s,
+                "interpolating, periodic or symmetric",
+            )),
+        }
+    }
+}

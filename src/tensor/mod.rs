@@ -1,1 +1,11 @@
-//! Tensor-product engine: N-d arrays, transforms along any axis, pyramids.
+//! Tensor-product engine: N-d arrays, one level along any axis, multilevel pyramids in
+//! the standard and the non-standard (Mallat) order. `par.rs` holds the only rayon code.
+
+mod array;
+mod par;
+pub mod pyramid;
+mod transform;
+
+pub use array::{Array, Axis};
+pub use pyramid::{analyze, synthesize, Order, Pyramid, PyramidSpec, Subband};
+pub use transform::transform_axis;

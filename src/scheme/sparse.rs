@@ -1,0 +1,226 @@
+//! Sparse two-scale operators and the one kernel that applies them.
+//!
+//! A level of a scheme is two square operators on a lane of `m` elements:
+//! analysis `[A; B]` (rows `0..n` give the coarse `C = A F`, rows `n..m` the details
+//! `D = B F`) and synthesis `[P | Q]` (fine row `i` is `F_i = Σ P_ij C_j + Σ Q_ij D_j`,
+//! with `D_j` stored at packed position `n + j`). Both are stored row-wise (CSR), so
+//! applying either is one gather pass: `out_r = Σ_k w_rk · in_{c_rk}`, where every
+//! `in_c`/`out_r` is an element of `width` samples and the inner loop runs over the
+//! element (whole rows vectorise).
+
+use super::sample::Sample;
+
+/// Row-compressed sparse matrix with `f64` weights (the filters are dyadic rationals,
+/// exact in any float type except where a derived boundary weight is not).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Csr {
+    rows: usize,
+    cols: usize,
+    offsets: Vec<u32>,
+    index: Vec<u32>,
+    weight: Vec<f64>,
+}
+
+impl Csr {
+    pub fn rows(&self) -> usize {
+        self.rows
+    }
+    pub fn cols(&self) -> usize {
+        self.cols
+    }
+    /// The nonzero entries `(column, weight)` of row `r`, by increasing column.
+    pub fn row(&self, r: usize) -> impl Iterator<Item = (usize, f64)> + '_ {
+        let (a, b) = (self.offsets[r] as usize, self.offsets[r + 1] as usize);
+        self.index[a..b]
+            .iter()
+            .zip(&self.weight[a..b])
+            .map(|(&c, &w)| (c as usize, w))
+    }
+    /// Dense copy, row-major (tests and eigen analysis only).
+    pub fn to_dense(&self) -> Vec<Vec<f64>> {
+        let mut d = vec![vec![0.0; self.cols]; self.rows];
+        for (r, row) in d.iter_mut().enumerate() {
+            for (c, w) in self.row(r) {
+                row[c] += w;
+            }
+        }
+        d
+    }
+
+    /// `dst_r = Σ w · src_c` for every row `r`; element `e` of `src` is
+    /// `src[e*src_stride .. e*src_stride + width]`, likewise for `dst`.
+    ///
+    /// The first tap assigns, the others accumulate, so `dst` needs no clearing.
+    #[inline]
+    pub fn apply<T: Sample>(
+        &self,
+        src: &[T],
+        src_stride: usize,
+        dst: &mut [T],
+        dst_stride: usize,
+        width: usize,
+    ) {
+        for r in 0..self.rows {
+            let (a, b) = (self.offsets[r] as usize, self.offsets[r + 1] as usize);
+            let out = &mut dst[r * dst_stride..r * dst_stride + width];
+            if a == b {
+                out.fill(T::default());
+                continue;
+            }
+            let c0 = self.index[a] as usize * src_stride;
+            let w0 = T::from_f64(self.weight[a]);
+            for (o, &x) in out.iter_mut().zip(&src[c0..c0 + width]) {
+                *o = w0 * x;
+            }
+            for k in a + 1..b {
+                let c = self.index[k] as usize * src_stride;
+                let w = T::from_f64(self.weight[k]);
+                for (o, &x) in out.iter_mut().zip(&src[c..c + width]) {
+                    *o += w * x;
+                }
+            }
+        }
+    }
+}
+
+/// Entries collected in any order (duplicates add up), then compressed.
+#[derive(Default, Debug)]
+pub struct Triplets {
+    rows: usize,
+    cols: usize,
+    entries: Vec<(u32, u32, f64)>,
+}
+
+impl Triplets {
+    pub fn new(rows: usize, cols: usize) -> Self {
+        Triplets {
+            rows,
+            cols,
+            entries: Vec::new(),
+        }
+    }
+    /// Add `w` at `(r, c)`. Panics on out-of-range indices: builders are internal and
+    /// their index arithmetic is covered by the perfect-reconstruction tests.
+    #[inline]
+    pub fn add(&mut self, r: usize, c: usize, w: f64) {
+        assert!(
+            r < self.rows && c < self.cols,
+            "entry ({r},{c}) outside {}x{}",
+            self.rows,
+            self.cols
+        );
+        self.entries.push((r as u32, c as u32, w));
+    }
+    /// Add a run of taps `w[t]` at columns `first + t` of row `r`.
+    pub fn add_run(&mut self, r: usize, first: usize, w: &[f64]) {
+        for (t, &x) in w.iter().enumerate() {
+            self.add(r, first + t, x);
+        }
+    }
+    pub fn into_csr(mut self) -> Csr {
+        self.entries.sort_unstable_by_key(|&(r, c, _)| (r, c));
+        let mut offsets = Vec::with_capacity(self.rows + 1);
+        let mut index = Vec::with_capacity(self.entries.len());
+        let mut weight: Vec<f64> = Vec::with_capacity(self.entries.len());
+        offsets.push(0u32);
+        let mut it = self.entries.into_iter().peekable();
+        for r in 0..self.rows as u32 {
+            while let Some(&(rr, c, w)) = it.peek() {
+                if rr != r {
+                    break;
+                }
+                it.next();
+                if index.len() > *offsets.last().unwrap() as usize && *index.last().unwrap() == c {
+                    *weight.last_mut().unwrap() += w;
+                } else {
+                    index.push(c);
+                    weight.push(w);
+                }
+            }
+            // drop entries that cancelled exactly
+            let start = *offsets.last().unwrap() as usize;
+            let mut k = start;
+            for j in start..index.len() {
+                if weight[j] != 0.0 {
+                    index[k] = index[j];
+                    weight[k] = weight[j];
+                    k += 1;
+                }
+            }
+            index.truncate(k);
+            weight.truncate(k);
+            offsets.push(index.len() as u32);
+        }
+        Csr {
+            rows: self.rows,
+            cols: self.cols,
+            offsets,
+            index,
+            weight,
+        }
+    }
+}
+
+impl Triplets {
+    /// Move every entry through `f(row, col) -> (row, col)` into a `rows × cols` set.
+    pub fn remap(
+        self,
+        rows: usize,
+        cols: usize,
+        f: impl Fn(usize, usize) -> (usize, usize),
+    ) -> Triplets {
+        let mut t = Triplets::new(rows, cols);
+        for (r, c, w) in self.entries {
+            let (r2, c2) = f(r as usize, c as usize);
+            t.add(r2, c2, w);
+        }
+        t
+    }
+}
+
+impl Csr {
+    /// [`Csr::apply`] on raw element pointers, for lanes that live inside a larger
+    /// array other threads are writing elsewhere. Only the elements this call reads
+    /// (`src + c*src_stride .. + width` for the columns it uses) and writes
+    /// (`dst + r*dst_stride .. + width`) are turned into slices.
+    ///
+    /// # Safety
+    /// Every element read must be valid for reads and not written concurrently, every
+    /// element written must be valid for writes and touched by no other thread, and the
+    /// two sets must not overlap.
+    #[inline]
+    pub unsafe fn apply_raw<T: Sample>(
+        &self,
+        src: *const T,
+        src_stride: usize,
+        dst: *mut T,
+        dst_stride: usize,
+        width: usize,
+    ) {
+        for r in 0..self.rows {
+            let (a, b) = (self.offsets[r] as usize, self.offsets[r + 1] as usize);
+            // SAFETY: the caller guarantees this element is ours alone.
+            let out = unsafe { std::slice::from_raw_parts_mut(dst.add(r * dst_stride), width) };
+            if a == b {
+                out.fill(T::default());
+                continue;
+            }
+            let x0 = unsafe {
+                std::slice::from_raw_parts(src.add(self.index[a] as usize * src_stride), width)
+            };
+            let w0 = T::from_f64(self.weight[a]);
+            for (o, &x) in out.iter_mut().zip(x0) {
+                *o = w0 * x;
+            }
+            for k in a + 1..b {
+                let x = unsafe {
+                    std::slice::from_raw_parts(src.add(self.index[k] as usize * src_stride), width)
+                };
+                let w = T::from_f64(self.weight[k]);
+                for (o, &x) in out.iter_mut().zip(x) {
+                    *o += w * x;
+                }
+            }
+        }
+    }
+}

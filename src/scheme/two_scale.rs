@@ -1,0 +1,177 @@
+//! One level of a scheme for a lane of any length, and the rule for lengths the
+//! scheme's filters do not fit.
+//!
+//! **Length rule.** Each scheme × boundary has *native* lengths:
+//!
+//! | scheme  | interpolating        | periodic        | symmetric        |
+//! |---------|----------------------|-----------------|------------------|
+//! | haar    | even ≥ 2             | even ≥ 2        | even ≥ 2         |
+//! | chaikin | even ≥ 8 (n = m/2+1) | even ≥ 4 (m/2)  | any ≥ 3 (⌊m/2⌋+1)|
+//! | cubic   | odd ≥ 13 (n=(m+3)/2) | even ≥ 8 (m/2)  | any ≥ 3 (⌈m/2⌉)  |
+//!
+//! A length of the wrong parity whose predecessor is native is reduced by *carrying*
+//! the last sample: the first `m − 1` samples are transformed, the last one is appended
+//! unchanged to the coarse part (so an interpolated end stays interpolated). A lane
+//! still too short for the scheme falls back to Haar (with the same carry for odd
+//! lengths); a lane of length 1 is its own coarse part. Every length ≥ 1 therefore
+//! reconstructs exactly. [`max_levels`] counts the levels done with the scheme's own
+//! filters: a multilevel decomposition stops there.
+
+use super::regular::{self, LevelTriplets};
+use super::sparse::{Csr, Triplets};
+use super::{chaikin, cubic, haar, Boundary, Sample, Scheme};
+
+/// How a level was built for its length.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LevelKind {
+    /// The scheme's own filters.
+    Native,
+    /// The scheme's filters on `m − 1` samples, the last one carried into the coarse part.
+    Carry,
+    /// The lane was too short for the scheme: Haar (with carry for odd lengths).
+    HaarFallback,
+    /// `m = 1`: nothing to reduce.
+    Identity,
+}
+
+/// One level: `[A; B]` and `[P | Q]` for `fine` elements, `coarse` of which are coarse.
+#[derive(Clone, Debug)]
+pub struct TwoScale {
+    pub fine: usize,
+    pub coarse: usize,
+    pub kind: LevelKind,
+    pub analysis: Csr,
+    pub synthesis: Csr,
+}
+
+/// The coarse length of a lane of `m` if `m` is native for the scheme, else `None`.
+fn native_len(scheme: Scheme, boundary: Boundary, m: usize) -> Option<usize> {
+    use Boundary::*;
+    let even = m % 2 == 0;
+    match (scheme, boundary) {
+        (Scheme::Haar, _) => (m >= 2 && even).then_some(m / 2),
+        (Scheme::Chaikin, Interpolating) => {
+            (m >= chaikin::MIN_INTERPOLATING && even).then_some(m / 2 + 1)
+        }
+        (Scheme::Chaikin, Periodic) => (m >= 4 && even).then_some(m / 2),
+        (Scheme::Chaikin, Symmetric) => (m >= 3).then_some(m / 2 + 1),
+        (Scheme::Cubic, Interpolating) => {
+            (m >= cubic::MIN_INTERPOLATING && !even).then_some((m + 3) / 2)
+        }
+        (Scheme::Cubic, Periodic) => (m >= 8 && even).then_some(m / 2),
+        (Scheme::Cubic, Symmetric) => (m >= 3).then_some(m.div_ceil(2)),
+    }
+}
+
+fn native(scheme: Scheme, boundary: Boundary, m: usize) -> Option<LevelTriplets> {
+    use Boundary::*;
+    native_len(scheme, boundary, m)?;
+    Some(match (scheme, boundary) {
+        (Scheme::Haar, _) => haar::level(m),
+        (Scheme::Chaikin, Interpolating) => chaikin::interpolating(m),
+        (Scheme::Chaikin, Periodic) => regular::periodic(&chaikin::REGULAR, m),
+        (Scheme::Chaikin, Symmetric) => regular::symmetric(&chaikin::REGULAR, m, false),
+        (Scheme::Cubic, Interpolating) => cubic::interpolating(m),
+        (Scheme::Cubic, Periodic) => regular::periodic(&cubic::REGULAR, m),
+        (Scheme::Cubic, Symmetric) => regular::symmetric(&cubic::REGULAR, m, true),
+    })
+}
+
+/// Whether the scheme's own filters reduce a lane of length `m` (natively or by carry).
+pub fn reducible(scheme: Scheme, boundary: Boundary, m: usize) -> bool {
+    m >= 2
+        && (native_len(scheme, boundary, m).is_some()
+            || native_len(scheme, boundary, m - 1).is_some())
+}
+
+/// How many levels the scheme's own filters can take a lane of length `m` down.
+pub fn max_levels(scheme: Scheme, boundary: Boundary, m: usize) -> usize {
+    let mut m = m;
+    let mut levels = 0;
+    while reducible(scheme, boundary, m) {
+        let n = TwoScale::coarse_len(scheme, boundary, m);
+        if n >= m {
+            break;
+        }
+        m = n;
+        levels += 1;
+    }
+    levels
+}
+
+/// Carry the last sample of a lane of `m` past a level built for `m − 1`.
+fn carry(t: LevelTriplets, m: usize) -> (usize, Triplets, Triplets) {
+    let n1 = t.n;
+    let mut an = t
+        .analysis
+        .remap(m, m, |r, c| (if r < n1 { r } else { r + 1 }, c));
+    an.add(n1, m - 1, 1.0);
+    let mut sy = t
+        .synthesis
+        .remap(m, m, |r, c| (r, if c < n1 { c } else { c + 1 }));
+    sy.add(m - 1, n1, 1.0);
+    (n1 + 1, an, sy)
+}
+
+impl TwoScale {
+    /// The level for a lane of `m ≥ 1` elements (see the length rule above).
+    pub fn new(scheme: Scheme, boundary: Boundary, m: usize) -> TwoScale {
+        assert!(m >= 1, "a lane has at least one element");
+        let (kind, n, an, sy) = if m == 1 {
+            let mut an = Triplets::new(1, 1);
+            an.add(0, 0, 1.0);
+            let mut sy = Triplets::new(1, 1);
+            sy.add(0, 0, 1.0);
+            (LevelKind::Identity, 1, an, sy)
+        } else if let Some(t) = native(scheme, boundary, m) {
+            (LevelKind::Native, t.n, t.analysis, t.synthesis)
+        } else if let Some(t) = native(scheme, boundary, m - 1) {
+            let (n, an, sy) = carry(t, m);
+            (LevelKind::Carry, n, an, sy)
+        } else if m % 2 == 0 {
+            let t = haar::level(m);
+            (LevelKind::HaarFallback, t.n, t.analysis, t.synthesis)
+        } else {
+            let (n, an, sy) = carry(haar::level(m - 1), m);
+            (LevelKind::HaarFallback, n, an, sy)
+        };
+        TwoScale {
+            fine: m,
+            coarse: n,
+            kind,
+            analysis: an.into_csr(),
+            synthesis: sy.into_csr(),
+        }
+    }
+
+    /// Coarse length after one level, without building the operators.
+    pub fn coarse_len(scheme: Scheme, boundary: Boundary, m: usize) -> usize {
+        if m <= 1 {
+            m
+        } else if let Some(n) = native_len(scheme, boundary, m) {
+            n
+        } else if let Some(n) = native_len(scheme, boundary, m - 1) {
+            n + 1
+        } else {
+            m.div_ceil(2)
+        }
+    }
+
+    pub fn details(&self) -> usize {
+        self.fine - self.coarse
+    }
+
+    /// `[C; D] = [A; B] F` on a lane of contiguous elements of `width` samples.
+    pub fn decompose<T: Sample>(&self, fine: &[T], width: usize, packed: &mut [T]) {
+        assert_eq!(fine.len(), self.fine * width);
+        assert_eq!(packed.len(), self.fine * width);
+        self.analysis.apply(fine, width, packed, width, width);
+    }
+
+    /// `F = P C + Q D` on a packed lane `[C; D]`.
+    pub fn reconstruct<T: Sample>(&self, packed: &[T], width: usize, fine: &mut [T]) {
+        assert_eq!(fine.len(), self.fine * width);
+        assert_eq!(packed.len(), self.fine * width);
+        self.synthesis.apply(packed, width, fine, width, width);
+    }
+}

@@ -1,0 +1,31 @@
+//! The only place that hands out mutable access to one array from several threads.
+
+use rayon::prelude::*;
+
+/// A raw pointer to an array that tasks write at disjoint places.
+#[derive(Clone, Copy)]
+pub(crate) struct SharedMut<T>(pub *mut T);
+
+// SAFETY: every user of SharedMut writes only elements no other task touches (lanes and
+// strips of one transform are disjoint); see `transform.rs`.
+unsafe impl<T: Send> Send for SharedMut<T> {}
+unsafe impl<T: Send> Sync for SharedMut<T> {}
+
+/// Run `task(i, &mut scratch)` for `i in 0..count` on rayon's pool, one scratch buffer
+/// per worker (allocated once, not per task). Small jobs run on the calling thread.
+pub(crate) fn for_each_task<S: Send, F, I>(count: usize, work_per_task: usize, init: I, task: F)
+where
+    I: Fn() -> S + Sync + Send,
+    F: Fn(usize, &mut S) + Sync + Send,
+{
+    if count <= 1 || count * work_per_task < 1 << 15 {
+        let mut s = init();
+        for i in 0..count {
+            task(i, &mut s);
+        }
+    } else {
+        (0..count)
+            .into_par_iter()
+            .for_each_init(init, |s, i| task(i, s));
+    }
+}

@@ -1,0 +1,231 @@
+//! Multilevel pyramids over chosen axes of an array, stored in place ("Mallat layout"):
+//! after a level along axis `k` the lane `[F_0 … F_{m−1}]` holds `[C | D]`, so the
+//! coarse block sits at the origin and the detail blocks around it.
+//!
+//! - **Standard order**: all levels along the first axis, then all along the next, …
+//! - **Non-standard (Mallat) order**: one level along every axis, then recurse on the
+//!   coarse block. An axis whose lanes can no longer be reduced ([`max_levels`]) stops
+//!   while the others go on.
+
+use super::array::Array;
+use super::transform::transform_axis;
+use crate::scheme::{max_levels, Boundary, Sample, Scheme, TwoScale};
+use crate::{Error, Result};
+
+/// The order in which levels and axes are visited.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Order {
+    Standard,
+    NonStandard,
+}
+
+impl std::str::FromStr for Order {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<Self> {
+        match s.to_ascii_lowercase().as_str() {
+            "standard" => Ok(Order::Standard),
+            "non-standard" | "nonstandard" | "mallat" => Ok(Order::NonStandard),
+            _ => Err(Error::parameter("order", s, "standard or non-standard")),
+        }
+    }
+}
+
+impl std::fmt::Display for Order {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Order::Standard => "standard",
+            Order::NonStandard => "non-standard",
+        })
+    }
+}
+
+/// What to compute.
+#[derive(Clone, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub struct PyramidSpec {
+    pub scheme: Scheme,
+    pub boundary: Boundary,
+    /// Requested levels; each axis does at most what its length allows.
+    pub levels: usize,
+    pub order: Order,
+    /// The axes to transform (e.g. `[0, 1]` for an image `[H, W, C]`: channels untouched).
+    pub axes: Vec<usize>,
+}
+
+/// A planned (or computed) pyramid: the spec, the array shape and every axis' lane
+/// lengths level by level (`lengths[a][0]` = full length).
+#[derive(Clone, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub struct Pyramid {
+    pub spec: PyramidSpec,
+    pub shape: Vec<usize>,
+    pub lengths: Vec<Vec<usize>>,
+}
+
+/// One block of coefficients: `ranges[k]` along every array axis.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Subband {
+    /// 0 for the coarsest block, else the level (1 = finest) the details belong to.
+    pub level: usize,
+    /// For each transformed axis: `true` = high-pass (details) along it.
+    pub high: Vec<bool>,
+    pub ranges: Vec<std::ops::Range<usize>>,
+}
+
+impl Pyramid {
+    /// Plan a pyramid for an array of `shape`.
+    pub fn plan(shape: &[usize], spec: &PyramidSpec) -> Result<Self> {
+        let mut seen = vec![false; shape.len()];
+        for &a in &spec.axes {
+            if a >= shape.len() || seen[a] {
+                return Err(Error::parameter(
+                    "axes",
+                    format!("{:?}", spec.axes),
+                    "distinct axes of the array",
+                ));
+            }
+            seen[a] = true;
+        }
+        let lengths = spec
+            .axes
+            .iter()
+            .map(|&a| {
+                let l = spec
+                    .levels
+                    .min(max_levels(spec.scheme, spec.boundary, shape[a]));
+                let mut v = vec![shape[a]];
+                for _ in 0..l {
+                    v.push(TwoScale::coarse_len(
+                        spec.scheme,
+                        spec.boundary,
+                        *v.last().unwrap(),
+                    ));
+                }
+                v
+            })
+            .collect();
+        Ok(Pyramid {
+            spec: spec.clone(),
+            shape: shape.to_vec(),
+            lengths,
+        })
+    }
+
+    /// Levels actually done along transformed axis number `i` (index into `spec.axes`).
+    pub fn axis_levels(&self, i: usize) -> usize {
+        self.lengths[i].len() - 1
+    }
+    /// The deepest level over all axes.
+    pub fn depth(&self) -> usize {
+        (0..self.lengths.len())
+            .map(|i| self.axis_levels(i))
+            .max()
+            .unwrap_or(0)
+    }
+
+    /// The steps of the forward transform in order: (axis index into spec.axes, level, region).
+    fn steps(&self) -> Vec<(usize, usize, Vec<usize>)> {
+        let mut steps = Vec::new();
+        let mut region = self.shape.clone();
+        match self.spec.order {
+            Order::Standard => {
+                for (i, &a) in self.spec.axes.iter().enumerate() {
+                    for l in 0..self.axis_levels(i) {
+                        region[a] = self.lengths[i][l];
+                        steps.push((i, l, region.clone()));
+                    }
+                    region[a] = self.shape[a];
+                }
+            }
+            Order::NonStandard => {
+                for l in 0..self.depth() {
+                    let before = region.clone();
+                    for (i, &a) in self.spec.axes.iter().enumerate() {
+                        if l < self.axis_levels(i) {
+                            steps.push((i, l, before.clone()));
+                            region[a] = self.lengths[i][l + 1];
+                        }
+                    }
+                }
+            }
+        }
+        steps
+    }
+
+    /// The subbands of a non-standard pyramid, coarsest block first, then level by
+    /// level from the coarsest details to the finest. (For the standard order the
+    /// blocks are the products of every axis' own bands; use [`Pyramid::lengths`].)
+    pub fn subbands(&self) -> Vec<Subband> {
+        let nd = self.shape.len();
+        let depth = self.depth();
+        // region before level l
+        let mut regions = vec![self.shape.clone()];
+        for l in 0..depth {
+            let mut r = regions[l].clone();
+            for (i, &a) in self.spec.axes.iter().enumerate() {
+                if l < self.axis_levels(i) {
+                    r[a] = self.lengths[i][l + 1];
+                }
+            }
+            regions.push(r);
+        }
+        let mut out = vec![Subband {
+            level: 0,
+            high: vec![false; self.spec.axes.len()],
+            ranges: (0..nd).map(|k| 0..regions[depth][k]).collect(),
+        }];
+        for l in (0..depth).rev() {
+            let active: Vec<usize> = (0..self.spec.axes.len())
+                .filter(|&i| l < self.axis_levels(i))
+                .collect();
+            for mask in 1u32..(1 << active.len()) {
+                let mut high = vec![false; self.spec.axes.len()];
+                let mut ranges: Vec<_> = (0..nd).map(|k| 0..regions[l][k]).collect();
+                for (bit, &i) in active.iter().enumerate() {
+                    let a = self.spec.axes[i];
+                    if mask >> bit & 1 == 1 {
+                        high[i] = true;
+                        ranges[a] = regions[l + 1][a]..regions[l][a];
+                    } else {
+                        ranges[a] = 0..regions[l + 1][a];
+                    }
+                }
+                out.push(Subband {
+                    level: l + 1,
+                    high,
+                    ranges,
+                });
+            }
+        }
+        out
+    }
+}
+
+/// Decompose `array` in place; returns the plan needed to invert it.
+pub fn analyze<T: Sample>(array: &mut Array<T>, spec: &PyramidSpec) -> Result<Pyramid> {
+    let pyr = Pyramid::plan(array.shape(), spec)?;
+    let shape = array.shape().to_vec();
+    for (i, l, region) in pyr.steps() {
+        let a = spec.axes[i];
+        let level = TwoScale::new(spec.scheme, spec.boundary, pyr.lengths[i][l]);
+        transform_axis(array.data_mut(), &shape, &region, a, &level.analysis);
+    }
+    Ok(pyr)
+}
+
+/// Invert [`analyze`] in place.
+pub fn synthesize<T: Sample>(array: &mut Array<T>, pyr: &Pyramid) -> Result<()> {
+    if array.shape() != pyr.shape.as_slice() {
+        return Err(Error::parameter(
+            "array shape",
+            format!("{:?}", array.shape()),
+            "the shape the pyramid was computed for",
+        ));
+    }
+    let shape = array.shape().to_vec();
+    for (i, l, region) in pyr.steps().into_iter().rev() {
+        let a = pyr.spec.axes[i];
+        let level = TwoScale::new(pyr.spec.scheme, pyr.spec.boundary, pyr.lengths[i][l]);
+        transform_axis(array.data_mut(), &shape, &region, a, &level.synthesis);
+    }
+    Ok(())
+}

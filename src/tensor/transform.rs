@@ -1,0 +1,176 @@
+//! One level of a two-scale operator along one axis of an N-d array region.
+//!
+//! The region is the box `[0, region[k])` in every axis `k` of an array of `shape`.
+//! Along `axis`, a lane holds `region[axis]` elements. Two ways to feed the kernel:
+//! - **row mode** (axis is not the last one): an element is a contiguous run of the last
+//!   axis, so the kernel's inner loop runs over whole rows in place; the run is cut into
+//!   strips for cache and threads, and the result goes through a strip-sized scratch.
+//! - **gather mode** (axis is the last one, or rows are short): `G` lanes are gathered
+//!   side by side into a scratch lane whose elements are `G·w` wide, transformed, and
+//!   scattered back — the transpose that lets the contiguous axis vectorise too.
+
+use super::array::strides;
+use super::par::{for_each_task, SharedMut};
+use crate::scheme::sparse::Csr;
+use crate::scheme::Sample;
+
+/// Elements narrower than this go through gather mode.
+const ROW_MIN: usize = 32;
+/// Samples per strip in row mode.
+const STRIP: usize = 128;
+/// Target width of a gathered element in gather mode.
+const GATHER: usize = 64;
+
+/// Offsets of the first element of every lane set: all index combinations in the region
+/// over the axes other than `skip` (and other than the last axis when `skip_last`).
+fn lane_bases(shape: &[usize], region: &[usize], skip: usize, skip_last: bool) -> Vec<usize> {
+    let st = strides(shape);
+    let last = shape.len() - 1;
+    let mut bases = vec![0usize];
+    for k in 0..shape.len() {
+        if k == skip || (skip_last && k == last) {
+            continue;
+        }
+        let mut next = Vec::with_capacity(bases.len() * region[k]);
+        for &b in &bases {
+            for i in 0..region[k] {
+                next.push(b + i * st[k]);
+            }
+        }
+        bases = next;
+    }
+    bases
+}
+
+/// Apply `op` (`region[axis]` × `region[axis]`, an analysis `[A;B]` or synthesis `[P|Q]`
+/// level) to every lane along `axis` inside `region`.
+pub fn transform_axis<T: Sample>(
+    data: &mut [T],
+    shape: &[usize],
+    region: &[usize],
+    axis: usize,
+    op: &Csr,
+) {
+    let nd = shape.len();
+    assert!(axis < nd && region.len() == nd);
+    assert!(region.iter().zip(shape).all(|(r, s)| r <= s));
+    assert_eq!(data.len(), shape.iter().product::<usize>());
+    let len = region[axis];
+    assert_eq!(op.rows(), len);
+    if len <= 1 && op.rows() == 1 {
+        // a one-element lane is its own coarse part (identity); nothing to do
+        return;
+    }
+    let st = strides(shape);
+    let last = nd - 1;
+    let ptr = SharedMut(data.as_mut_ptr());
+    let es = st[axis];
+    if axis != last && region[last] >= ROW_MIN {
+        let w = region[last];
+        let bases = lane_bases(shape, region, axis, true);
+        let strips = w.div_ceil(STRIP);
+        let sw_max = w.div_ceil(strips);
+        for_each_task(
+            bases.len() * strips,
+            len * sw_max,
+            || vec![T::default(); len * sw_max],
+            |task, scratch| {
+                let (b, s) = (bases[task / strips], task % strips);
+                let off = s * sw_max;
+                let sw = sw_max.min(w - off);
+                let p = ptr;
+                // SAFETY: this task reads and writes only columns off..off+sw of the
+                // elements of lane set `b`, which no other task touches.
+                unsafe {
+                    let base = p.0.add(b + off);
+                    op.apply_raw(base as *const T, es, scratch.as_mut_ptr(), sw, sw);
+                    for i in 0..len {
+                        std::ptr::copy_nonoverlapping(
+                            scratch.as_ptr().add(i * sw),
+                            base.add(i * es),
+                            sw,
+                        );
+                    }
+                }
+            },
+        );
+    } else {
+        // gather mode: w samples per element (the last axis' run, or 1 along the last axis)
+        let (w, bases) = if axis == last {
+            (1, lane_bases(shape, region, axis, false))
+        } else {
+            (region[last], lane_bases(shape, region, axis, true))
+        };
+        let g = GATHER.div_ceil(w).clamp(1, bases.len().max(1));
+        let groups = bases.len().div_ceil(g);
+        let gw = g * w;
+        for_each_task(
+            groups,
+            len * gw,
+            || (vec![T::default(); len * gw], vec![T::default(); len * gw]),
+            |task, (sin, sout)| {
+                let lanes = &bases[task * g..(task * g + g).min(bases.len())];
+                let p = ptr;
+                // SAFETY: the lanes of this group are disjoint from every other group's.
+                unsafe {
+                    for (gi, &b) in lanes.iter().enumerate() {
+                        gather(p.0.add(b) as *const T, es, w, len, &mut sin[gi * w..], gw);
+                    }
+                }
+                let cw = lanes.len() * w;
+                op.apply(sin, gw, sout, gw, cw);
+                unsafe {
+                    for (gi, &b) in lanes.iter().enumerate() {
+                        scatter(&sout[gi * w..], gw, p.0.add(b), es, w, len);
+                    }
+                }
+            },
+        );
+    }
+}
+
+/// Copy `len` elements of `w` samples at stride `es` from `src` into `dst` at stride `ds`.
+///
+/// # Safety
+/// The `len` source elements must be valid for reads and not written concurrently.
+#[inline]
+unsafe fn gather<T: Sample>(
+    src: *const T,
+    es: usize,
+    w: usize,
+    len: usize,
+    dst: &mut [T],
+    ds: usize,
+) {
+    if w == 1 {
+        // the last axis: a contiguous lane, written into one column of the scratch
+        let lane = unsafe { std::slice::from_raw_parts(src, (len - 1) * es + 1) };
+        for (i, d) in dst.iter_mut().step_by(ds).take(len).enumerate() {
+            *d = lane[i * es];
+        }
+    } else {
+        for i in 0..len {
+            let e = unsafe { std::slice::from_raw_parts(src.add(i * es), w) };
+            dst[i * ds..i * ds + w].copy_from_slice(e);
+        }
+    }
+}
+
+/// The inverse of [`gather`].
+///
+/// # Safety
+/// The `len` destination elements must be valid for writes and touched by no other thread.
+#[inline]
+unsafe fn scatter<T: Sample>(src: &[T], ss: usize, dst: *mut T, es: usize, w: usize, len: usize) {
+    if w == 1 {
+        let lane = unsafe { std::slice::from_raw_parts_mut(dst, (len - 1) * es + 1) };
+        for (i, s) in src.iter().step_by(ss).take(len).enumerate() {
+            lane[i * es] = *s;
+        }
+    } else {
+        for i in 0..len {
+            let e = unsafe { std::slice::from_raw_parts_mut(dst.add(i * es), w) };
+            e.copy_from_slice(&src[i * ss..i * ss + w]);
+        }
+    }
+}

@@ -1,0 +1,299 @@
+//! Exactness of the 1D schemes: perfect reconstruction for every scheme × boundary ×
+//! length, the filter rows as written in the notes, worked examples.
+
+use mra::scheme::{
+    analyze_lane, max_levels, synthesize_lane, Boundary, LevelKind, Scheme, TwoScale,
+};
+use proptest::prelude::*;
+
+fn dense_product(t: &TwoScale) -> Vec<Vec<f64>> {
+    let a = t.analysis.to_dense();
+    let s = t.synthesis.to_dense();
+    let m = t.fine;
+    let mut out = vec![vec![0.0; m]; m];
+    for i in 0..m {
+        for k in 0..m {
+            if a[i][k] == 0.0 {
+                continue;
+            }
+            for j in 0..m {
+                out[i][j] += a[i][k] * s[k][j];
+            }
+        }
+    }
+    out
+}
+
+#[test]
+fn analysis_times_synthesis_is_identity_for_every_length_up_to_96() {
+    for scheme in Scheme::ALL {
+        for boundary in Boundary::ALL {
+            for m in 1..=96 {
+                let t = TwoScale::new(scheme, boundary, m);
+                assert_eq!(
+                    TwoScale::coarse_len(scheme, boundary, m),
+                    t.coarse,
+                    "{scheme} {boundary} m={m}"
+                );
+                let prod = dense_product(&t);
+                for i in 0..m {
+                    for j in 0..m {
+                        let want = if i == j { 1.0 } else { 0.0 };
+                        assert!(
+                            (prod[i][j] - want).abs() < 1e-12,
+                            "{scheme} {boundary} m={m} ({:?}): [A;B][P|Q][{i}][{j}] = {}",
+                            t.kind,
+                            prod[i][j]
+                        );
+                    }
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn native_levels_are_used_from_the_documented_lengths_on() {
+    use Boundary::*;
+    let cases = [
+        (Scheme::Haar, Periodic, 2),
+        (Scheme::Chaikin, Interpolating, 8),
+        (Scheme::Chaikin, Periodic, 4),
+        (Scheme::Chaikin, Symmetric, 3),
+        (Scheme::Cubic, Interpolating, 13),
+        (Scheme::Cubic, Periodic, 8),
+        (Scheme::Cubic, Symmetric, 3),
+    ];
+    for (s, b, m) in cases {
+        assert_eq!(
+            TwoScale::new(s, b, m).kind,
+            LevelKind::Native,
+            "{s} {b} {m}"
+        );
+        assert_ne!(
+            TwoScale::new(s, b, m - 1).kind,
+            LevelKind::Native,
+            "{s} {b} {}",
+            m - 1
+        );
+    }
+}
+
+fn lcg(seed: u64, n: usize) -> Vec<f64> {
+    let mut x = seed
+        .wrapping_mul(6364136223846793005)
+        .wrapping_add(1442695040888963407);
+    (0..n)
+        .map(|_| {
+            x = x
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((x >> 11) as f64 / (1u64 << 53) as f64) * 200.0 - 100.0
+        })
+        .collect()
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(400))]
+    #[test]
+    fn every_lane_reconstructs(len in 1usize..=300, dim in 1usize..=3, s in 0usize..3, b in 0usize..3, seed in any::<u64>(), lv in 0usize..8) {
+        let scheme = Scheme::ALL[s];
+        let boundary = Boundary::ALL[b];
+        let data = lcg(seed, len * dim);
+        let levels = lv.min(max_levels(scheme, boundary, len));
+        let (packed, plan) = analyze_lane(&data, dim, scheme, boundary, levels).unwrap();
+        let back = synthesize_lane(&packed, dim, &plan).unwrap();
+        let scale = data.iter().fold(1.0f64, |a, &x| a.max(x.abs()));
+        for (x, y) in data.iter().zip(&back) {
+            prop_assert!((x - y).abs() <= 1e-12 * scale, "{} {} len {} levels {}: {} vs {}", scheme, boundary, len, levels, x, y);
+        }
+    }
+}
+
+// ---- filter rows exactly as in the notes -------------------------------------------
+
+use mra::scheme::sparse::Csr as MraCsr;
+fn row(t: &MraCsr, r: usize) -> Vec<(usize, f64)> {
+    t.row(r).collect()
+}
+
+#[test]
+fn interior_rows_equal_the_regular_filters_exactly() {
+    // Chaikin, all three boundaries: interior analysis rows a and b, interior synthesis
+    // columns p and q, at the placement documented in scheme::chaikin.
+    let m = 40;
+    for boundary in Boundary::ALL {
+        let t = TwoScale::new(Scheme::Chaikin, boundary, m);
+        let n = t.coarse;
+        let j = n / 2; // well inside
+        let a = row(&t.analysis, j);
+        let first = a[0].0;
+        assert_eq!(
+            a.iter().map(|x| x.1).collect::<Vec<_>>(),
+            vec![-0.25, 0.75, 0.75, -0.25],
+            "{boundary}"
+        );
+        assert!(a.windows(2).all(|w| w[1].0 == w[0].0 + 1));
+        let b = row(&t.analysis, n + j);
+        assert_eq!(
+            b.iter().map(|x| x.1).collect::<Vec<_>>(),
+            vec![0.25, -0.75, 0.75, -0.25],
+            "{boundary}"
+        );
+        assert_eq!(
+            b[0].0,
+            first + 2,
+            "{boundary}: b sits two fine samples right of a"
+        );
+        // columns of P and Q from the synthesis rows
+        let s = t.synthesis.to_dense();
+        let pcol: Vec<f64> = (0..m).map(|i| s[i][j]).filter(|&x| x != 0.0).collect();
+        assert_eq!(pcol, vec![0.25, 0.75, 0.75, 0.25], "{boundary}");
+        let qcol: Vec<f64> = (0..m).map(|i| s[i][n + j]).filter(|&x| x != 0.0).collect();
+        assert_eq!(qcol, vec![-0.25, -0.75, 0.75, 0.25], "{boundary}");
+    }
+    let m = 41; // odd: native for interpolating cubic and symmetric cubic
+    for boundary in Boundary::ALL {
+        let t = TwoScale::new(Scheme::Cubic, boundary, m);
+        let n = t.coarse;
+        let j = n / 2;
+        let a: Vec<f64> = row(&t.analysis, j).iter().map(|x| x.1).collect();
+        assert_eq!(
+            a,
+            vec![0.125, -0.5, 0.375, 1.0, 0.375, -0.5, 0.125],
+            "{boundary}"
+        );
+        let b: Vec<f64> = row(&t.analysis, n + j).iter().map(|x| x.1).collect();
+        assert_eq!(b, vec![-0.125, 0.5, -0.75, 0.5, -0.125], "{boundary}");
+        let s = t.synthesis.to_dense();
+        let pcol: Vec<f64> = (0..m).map(|i| s[i][j]).filter(|&x| x != 0.0).collect();
+        assert_eq!(pcol, vec![0.125, 0.5, 0.75, 0.5, 0.125], "{boundary}");
+        let qcol: Vec<f64> = (0..m).map(|i| s[i][n + j]).filter(|&x| x != 0.0).collect();
+        assert_eq!(
+            qcol,
+            vec![0.125, 0.5, 0.375, -1.0, 0.375, 0.5, 0.125],
+            "{boundary}"
+        );
+    }
+}
+
+#[test]
+fn chaikin_interpolating_blocks_are_those_of_reduce_resolution_and_find_details() {
+    let m = 12;
+    let t = TwoScale::new(Scheme::Chaikin, Boundary::Interpolating, m);
+    assert_eq!((t.coarse, t.details()), (7, 5));
+    assert_eq!(row(&t.analysis, 0), vec![(0, 1.0)]);
+    assert_eq!(
+        row(&t.analysis, 1),
+        vec![(0, -0.5), (1, 1.0), (2, 0.75), (3, -0.25)]
+    );
+    assert_eq!(
+        row(&t.analysis, 5),
+        vec![(8, -0.25), (9, 0.75), (10, 1.0), (11, -0.5)]
+    );
+    assert_eq!(row(&t.analysis, 6), vec![(11, 1.0)]);
+    assert_eq!(
+        row(&t.analysis, 7),
+        vec![(0, -0.5), (1, 1.0), (2, -0.75), (3, 0.25)]
+    );
+    assert_eq!(
+        row(&t.analysis, 8),
+        vec![(2, -0.25), (3, 0.75), (4, -0.75), (5, 0.25)]
+    );
+    assert_eq!(
+        row(&t.analysis, 11),
+        vec![(8, 0.25), (9, -0.75), (10, 1.0), (11, -0.5)]
+    );
+    // RECONSTRUCTION lines 1-2 and 13-14: E_1 = 0·D_1, E_2 = ½D_1, E_{m-1} = ½D_s, E_m = 0·D_s
+    assert_eq!(row(&t.synthesis, 0), vec![(0, 1.0)]);
+    assert_eq!(row(&t.synthesis, 1), vec![(0, 0.5), (1, 0.5), (7, 0.5)]);
+    assert_eq!(row(&t.synthesis, 10), vec![(5, 0.5), (6, 0.5), (11, 0.5)]);
+    assert_eq!(row(&t.synthesis, 11), vec![(6, 1.0)]);
+}
+
+#[test]
+fn interpolating_ends_keep_the_first_and_last_points() {
+    for scheme in Scheme::ALL {
+        for m in [8usize, 9, 13, 14, 40, 41] {
+            let t = TwoScale::new(scheme, Boundary::Interpolating, m);
+            if t.kind == LevelKind::HaarFallback || scheme == Scheme::Haar {
+                continue;
+            }
+            let f: Vec<f64> = lcg(m as u64, m);
+            let mut packed = vec![0.0; m];
+            t.decompose(&f, 1, &mut packed);
+            assert_eq!(packed[0], f[0], "{scheme} m={m}");
+            assert!(
+                (packed[t.coarse - 1] - f[m - 1]).abs() < 1e-12,
+                "{scheme} m={m}"
+            );
+        }
+    }
+}
+
+#[test]
+fn constant_input_has_zero_details_and_linear_input_zero_interior_details() {
+    for scheme in Scheme::ALL {
+        for boundary in Boundary::ALL {
+            for m in [16usize, 17, 33, 64, 65] {
+                let t = TwoScale::new(scheme, boundary, m);
+                let mut packed = vec![0.0f64; m];
+                t.decompose(&vec![3.5f64; m], 1, &mut packed);
+                for (k, d) in packed[t.coarse..].iter().enumerate() {
+                    assert!(
+                        d.abs() < 1e-12,
+                        "{scheme} {boundary} m={m}: constant gives detail {k} = {d}"
+                    );
+                }
+                if scheme == Scheme::Haar {
+                    continue;
+                }
+                let f: Vec<f64> = (0..m).map(|i| 2.0 * i as f64 - 7.0).collect();
+                t.decompose(&f, 1, &mut packed);
+                let s = t.details();
+                // away from the ends (and the carried sample), details of a line vanish
+                for (k, d) in packed[t.coarse..]
+                    .iter()
+                    .enumerate()
+                    .skip(3)
+                    .take(s.saturating_sub(6))
+                {
+                    assert!(
+                        d.abs() < 1e-12,
+                        "{scheme} {boundary} m={m}: linear gives detail {k} = {d}"
+                    );
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn haar_worked_example_of_section_9_2() {
+    let f = [5.0, 7.0, 10.0, 14.0, 13.0, 13.0, 8.0, 6.0];
+    let (packed, plan) = analyze_lane(&f, 1, Scheme::Haar, Boundary::Symmetric, 2).unwrap();
+    assert_eq!(&packed[..2], &[9.0, 10.0], "coarse");
+    assert_eq!(
+        &packed[plan.detail_range(2)],
+        &[-3.0, 3.0],
+        "coarsest details"
+    );
+    assert_eq!(
+        &packed[plan.detail_range(1)],
+        &[-1.0, -2.0, 0.0, 1.0],
+        "finest details"
+    );
+    assert_eq!(synthesize_lane(&packed, 1, &plan).unwrap(), f.to_vec());
+}
+
+#[test]
+fn max_levels_follow_the_coarse_lengths() {
+    assert_eq!(max_levels(Scheme::Haar, Boundary::Periodic, 8), 3);
+    assert_eq!(max_levels(Scheme::Haar, Boundary::Periodic, 1), 0);
+    assert_eq!(max_levels(Scheme::Haar, Boundary::Periodic, 9), 4); // 9 → 5 → 3 → 2 → 1
+                                                                    // Chaikin interpolating: 64 → 33 → 17(carry 16) → 9 (carry 8) → 5: 4 levels
+    assert_eq!(max_levels(Scheme::Chaikin, Boundary::Interpolating, 64), 4);
+    assert_eq!(max_levels(Scheme::Chaikin, Boundary::Interpolating, 7), 0);
+
+    assert_eq!(max_levels(Scheme::Cubic, Boundary::Periodic, 4096), 10); // 4096 → … → 8 → 4
+}
