@@ -1216,3 +1216,108 @@ fn csv_point_tables_read_headers_weights_and_net_rows() {
     );
     assert!(parse_numbers("0,a", "knot").is_err());
 }
+
+// ---- knot insertion = the engine's subdivision (src/scheme/subdivide.rs) ----
+
+use mra::scheme::subdivide::{refine, refine_steps, Ends, Refinement};
+
+const BSPLINE_RULES: [(Refinement, usize); 5] = [
+    (Refinement::Box, 1),
+    (Refinement::Linear, 2),
+    (Refinement::Chaikin, 3),
+    (Refinement::Cubic, 4),
+    (Refinement::Quartic, 5),
+];
+
+#[test]
+fn closed_midpoint_insertion_equals_the_engine_refine_up_to_index_origin() {
+    let mut g = Lcg(17);
+    for (rule, k) in BSPLINE_RULES {
+        for n in rule.min_points(Ends::Closed).max(k)..=13 {
+            let pts: Vec<f64> = (0..n * 2).map(|_| g.range(-5.0, 5.0)).collect();
+            let theirs = refine(&pts, 2, rule, Ends::Closed).unwrap();
+            let ours = refine_periodic(&pts, 2, k).unwrap();
+            assert_eq!(theirs.len(), ours.len(), "{rule:?} n={n}");
+            let m = 2 * n;
+            let shift = (0..m).find(|&s| {
+                (0..m).all(|i| {
+                    let j = (i + s) % m;
+                    close(&theirs[i * 2..i * 2 + 2], &ours[j * 2..j * 2 + 2], 1e-13)
+                })
+            });
+            assert!(
+                shift.is_some(),
+                "{rule:?} n={n}: refine(Closed) is not midpoint knot insertion"
+            );
+            // the closed curve is unchanged: C(u) = F(2u + s) for a fixed half-integer s
+            let coarse = BSpline::periodic(&pts, 2, k).unwrap();
+            let fine = BSpline::periodic(&theirs, 2, k).unwrap();
+            let (a0, b0) = coarse.range();
+            let (fa, fb) = fine.range();
+            let same = (0..4 * n).any(|sh| {
+                (0..60).all(|i| {
+                    let u = a0 + (b0 - a0) * (i as f64 + 0.31) / 60.0;
+                    let v = ((2.0 * (u - a0) + sh as f64 * 0.5).rem_euclid(m as f64) + fa).min(fb);
+                    close(&fine.eval(v).unwrap(), &coarse.eval(u).unwrap(), 1e-11)
+                })
+            });
+            assert!(same, "{rule:?} n={n}: the refined closed curve differs");
+        }
+    }
+}
+
+#[test]
+fn open_midpoint_insertion_on_clamped_knots_equals_the_engine_refine_row_by_row() {
+    let mut g = Lcg(18);
+    let mut differing = Vec::new();
+    for (rule, k) in BSPLINE_RULES {
+        for n in rule.min_points(Ends::Open).max(k)..=14 {
+            let pts: Vec<f64> = (0..n * 2).map(|_| g.range(-5.0, 5.0)).collect();
+            let theirs = refine(&pts, 2, rule, Ends::Open).unwrap();
+            let coarse = BSpline::open(pts.clone(), 2, k).unwrap();
+            let ours = insert_midpoints(&coarse).unwrap();
+            let ours = ours.points();
+            assert_eq!(theirs.len(), ours.len(), "{rule:?} n={n}: lengths");
+            for i in 0..theirs.len() / 2 {
+                if !close(&theirs[i * 2..i * 2 + 2], &ours[i * 2..i * 2 + 2], 1e-13) {
+                    differing.push(format!("{rule:?} n={n} row {i}"));
+                }
+            }
+            // and the refined polygon, on the finer open knots, is the same curve
+            let fine = BSpline::open(theirs.clone(), 2, k).unwrap();
+            for i in 0..=100 {
+                let u = i as f64 / 100.0;
+                assert_close(
+                    &fine.eval(u).unwrap(),
+                    &coarse.eval(u).unwrap(),
+                    1e-12,
+                    &format!("{rule:?} n={n} u={u}"),
+                );
+            }
+        }
+    }
+    assert!(
+        differing.is_empty(),
+        "rows where refine(Open) differs from Boehm insertion: {differing:?}"
+    );
+}
+
+#[test]
+fn engine_refine_steps_equal_repeated_midpoint_insertion_and_four_point_interpolates() {
+    // three steps of the engine = three rounds of midpoint insertion on the open cubic
+    let mut g = Lcg(19);
+    let n = 10;
+    let pts: Vec<f64> = (0..n * 2).map(|_| g.range(-5.0, 5.0)).collect();
+    let coarse = BSpline::open(pts.clone(), 2, 4).unwrap();
+    let mut ours = coarse.clone();
+    for steps in 1..=3 {
+        ours = insert_midpoints(&ours).unwrap();
+        let theirs = refine_steps(&pts, 2, Refinement::Cubic, Ends::Open, steps).unwrap();
+        assert_close(&theirs, ours.points(), 1e-12, &format!("{steps} steps"));
+    }
+    // the 4-point scheme interpolates: every coarse point stays (§7.6.1)
+    let f = refine(&pts, 2, Refinement::FourPoint, Ends::Closed).unwrap();
+    for j in 0..n {
+        assert!((0..2 * n).any(|i| close(&f[i * 2..i * 2 + 2], &pts[j * 2..j * 2 + 2], 0.0)));
+    }
+}
