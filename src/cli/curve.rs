@@ -305,23 +305,10 @@ pub fn sample_params((a, b): (f64, f64), n: usize) -> Vec<f64> {
 }
 
 /// Write `bytes` to `path` through a temporary file in the same folder, then rename (never a
-/// partial output file).
+/// partial output file; `crate::fsutil`).
 pub(crate) fn write_atomic(path: &Path, bytes: &[u8]) -> std::result::Result<(), Failure> {
-    let dir = path
-        .parent()
-        .filter(|p| !p.as_os_str().is_empty())
-        .unwrap_or(Path::new("."));
-    let name = path
-        .file_name()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    let tmp = dir.join(format!(".{name}.tmp{}", std::process::id()));
-    let r = std::fs::write(&tmp, bytes).and_then(|_| std::fs::rename(&tmp, path));
-    if let Err(e) = r {
-        let _ = std::fs::remove_file(&tmp);
-        return Err(Failure::context(path.display(), e));
-    }
-    Ok(())
+    crate::fsutil::write_atomic(path, |w| w.write_all(bytes))
+        .map_err(|e| Failure::context(path.display(), e))
 }
 
 /// Print to standard output or write atomically to `out`.
