@@ -45,6 +45,10 @@ fn main() {
     let s = best_of(15, || c.eval_many(black_box(&params), &mut out).unwrap());
     black_box(&out);
     report("bspline_cubic_20", n, s);
+    // the same through the basis functions of §3.9 (no power form), for reference
+    let s = best_of(5, || c.eval_many_de_boor(black_box(&params), &mut out).unwrap());
+    black_box(&out);
+    report("bspline_cubic_20_basis_path", n, s);
 
     // the exact NURBS circle (§4.1), 10^6 points
     let circle = Nurbs::circle([0.0, 0.0], 1.0).unwrap();
