@@ -46,7 +46,9 @@ fn main() {
     black_box(&out);
     report("bspline_cubic_20", n, s);
     // the same through the basis functions of §3.9 (no power form), for reference
-    let s = best_of(5, || c.eval_many_de_boor(black_box(&params), &mut out).unwrap());
+    let s = best_of(5, || {
+        c.eval_many_de_boor(black_box(&params), &mut out).unwrap()
+    });
     black_box(&out);
     report("bspline_cubic_20_basis_path", n, s);
 

@@ -1321,3 +1321,36 @@ fn engine_refine_steps_equal_repeated_midpoint_insertion_and_four_point_interpol
         assert!((0..2 * n).any(|i| close(&f[i * 2..i * 2 + 2], &pts[j * 2..j * 2 + 2], 0.0)));
     }
 }
+
+#[test]
+fn rational_basis_is_non_negative_sums_to_one_and_reproduces_the_curve() {
+    let mut g = Lcg(20);
+    for _ in 0..50 {
+        let k = g.int(1, 5);
+        let n = g.int(k, k + 6);
+        let t = KnotVector::open(n, k).unwrap().as_slice().to_vec();
+        let pts: Vec<f64> = (0..n * 2).map(|_| g.range(-5.0, 5.0)).collect();
+        let ws: Vec<f64> = (0..n).map(|_| g.range(0.2, 4.0)).collect();
+        let c = Nurbs::new(&pts, &ws, 2, k, t.clone()).unwrap();
+        for i in 0..=20 {
+            let u = i as f64 / 20.0;
+            let r = c.rational_basis(u).unwrap();
+            assert!(r.iter().all(|&x| x >= 0.0));
+            assert!((r.iter().sum::<f64>() - 1.0).abs() < 1e-14);
+            let p: Vec<f64> = (0..2)
+                .map(|d| (0..n).map(|j| r[j] * pts[j * 2 + d]).sum())
+                .collect();
+            assert_close(&p, &c.eval(u).unwrap(), 1e-12, "Σ R_i P_i");
+        }
+        // R_{0,k}(0) = R_{m,k}(1) = 1 on the standard knots (§4.3)
+        assert!((c.rational_basis(0.0).unwrap()[0] - 1.0).abs() < 1e-15);
+        assert!((c.rational_basis(1.0).unwrap()[n - 1] - 1.0).abs() < 1e-15);
+        // equal weights: R = N
+        let e = Nurbs::new(&pts, &vec![3.0; n], 2, k, t.clone()).unwrap();
+        let u = g.next();
+        let r = e.rational_basis(u).unwrap();
+        for (j, rj) in r.iter().enumerate() {
+            assert!((rj - basis_brute(&t, n, j, k, u)).abs() < 1e-14);
+        }
+    }
+}

@@ -149,6 +149,28 @@ impl Nurbs {
         Ok(project(&h))
     }
 
+    /// The rational basis `R_{i,k}(u) = w_i N_{i,k}(u) / Σ_j w_j N_{j,k}(u)` of §4.2, all `n` values
+    /// (zero outside the local support): non-negative, summing to one (§4.3).
+    pub fn rational_basis(&self, u: f64) -> Result<Vec<f64>> {
+        let hom = &self.hom;
+        super::check_range(u, hom.range())?;
+        let (k, n) = (hom.order(), hom.len());
+        let t = hom.knots();
+        let d = super::basis::span(t, n, k, u);
+        let (mut nb, mut l, mut r) = (vec![0.0; k], vec![0.0; k], vec![0.0; k]);
+        super::basis::basis_funs(t, d, u, k, &mut nb, &mut l, &mut r);
+        let w = self.weights();
+        let mut out = vec![0.0; n];
+        let mut den = 0.0;
+        for (j, b) in nb.iter().enumerate() {
+            let i = d + 1 - k + j;
+            out[i] = w[i] * b;
+            den += out[i];
+        }
+        out.iter_mut().for_each(|x| *x /= den);
+        Ok(out)
+    }
+
     /// Evaluate at many parameters (lift–project on [`BSpline::eval_many`]).
     pub fn eval_many(&self, params: &[f64], out: &mut [f64]) -> Result<()> {
         let d1 = self.dim + 1;
