@@ -1354,3 +1354,40 @@ fn rational_basis_is_non_negative_sums_to_one_and_reproduces_the_curve() {
         }
     }
 }
+
+#[test]
+fn geomdl_knot_insertion_agrees_to_1e_12() {
+    let f = fixture("geomdl_curves.json");
+    let cases = f["insertions"].as_array().unwrap();
+    assert!(cases.len() >= 16);
+    for c in cases {
+        let k = c["order"].as_u64().unwrap() as usize;
+        let pts = floats(&c["points"]);
+        let knots = floats(&c["knots"]);
+        let u = c["u"].as_f64().unwrap();
+        let times = c["times"].as_u64().unwrap();
+        let want_knots = floats(&c["new_knots"]);
+        let want_pts = floats(&c["new_points"]);
+        if c["rational"].as_bool().unwrap() {
+            let mut r = Nurbs::new(&pts, &floats(&c["weights"]), 2, k, knots).unwrap();
+            for _ in 0..times {
+                r = insert_nurbs(&r, u).unwrap();
+            }
+            assert_close(r.knots(), &want_knots, 1e-15, "knots");
+            assert_close(&r.points(), &want_pts, 1e-12, "NURBS points");
+            assert_close(&r.weights(), &floats(&c["new_weights"]), 1e-12, "weights");
+        } else {
+            let mut b = BSpline::new(pts, 2, k, knots).unwrap();
+            for _ in 0..times {
+                b = insert(&b, u).unwrap();
+            }
+            assert_close(b.knots(), &want_knots, 1e-15, "knots");
+            assert_close(
+                b.points(),
+                &want_pts,
+                1e-12,
+                &format!("k={k} u={u} x{times}"),
+            );
+        }
+    }
+}

@@ -82,6 +82,36 @@ def curves():
     return out
 
 
+def insertions():
+    """Knot insertion (Boehm) by geomdl: a knot inserted 1..k-1 times into random curves."""
+    from geomdl import operations
+    out = []
+    for k in (2, 3, 4, 5):
+        for kind in ("clamped", "nonuniform"):
+            for rational in (False, True):
+                dim = 2
+                n = rng.randint(k + 1, k + 5)
+                pts = [[round(rng.uniform(-10, 10), 4) for _ in range(dim)] for _ in range(n)]
+                knots = knot_vector(kind, n, k)
+                w = [round(rng.uniform(0.3, 3.0), 4) for _ in range(n)] if rational else None
+                c = NURBS.Curve(normalize_kv=False) if rational else BSpline.Curve(normalize_kv=False)
+                c.degree = k - 1
+                if rational:
+                    c.ctrlptsw = [[p[i] * wi for i in range(dim)] + [wi] for p, wi in zip(pts, w)]
+                else:
+                    c.ctrlpts = pts
+                c.knotvector = knots
+                a, b = knots[k - 1], knots[n]
+                u = rng.uniform(a + 0.1 * (b - a), b - 0.1 * (b - a))
+                times = rng.randint(1, k - 1) if k > 1 else 1
+                operations.insert_knot(c, [u], [times])
+                res = [list(p) for p in c.ctrlpts]
+                out.append(dict(order=k, kind=kind, rational=rational, dim=dim, points=pts, weights=w,
+                                knots=knots, u=u, times=times, new_knots=list(c.knotvector), new_points=res,
+                                new_weights=list(c.weights) if rational else None))
+    return out
+
+
 def surfaces():
     out = []
     for (ku, kv) in ((2, 2), (3, 4), (4, 4), (5, 3), (4, 2)):
@@ -118,7 +148,7 @@ if __name__ == "__main__":
     os.makedirs(OUT, exist_ok=True)
     meta = {"generator": "tests/reference/geomdl_curves.py", "geomdl": geomdl.__version__}
     with open(os.path.join(OUT, "geomdl_curves.json"), "w") as f:
-        json.dump(dict(meta, curves=curves()), f)
+        json.dump(dict(meta, curves=curves(), insertions=insertions()), f)
     with open(os.path.join(OUT, "geomdl_surfaces.json"), "w") as f:
         json.dump(dict(meta, surfaces=surfaces()), f)
     print("wrote", OUT)
