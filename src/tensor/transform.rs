@@ -19,7 +19,7 @@ const ROW_MIN: usize = 32;
 /// Samples per strip in row mode.
 const STRIP: usize = 128;
 /// Target width of a gathered element in gather mode.
-const GATHER: usize = 64;
+const GATHER: usize = 32;
 
 /// Offsets of the first element of every lane set: all index combinations in the region
 /// over the axes other than `skip` (and other than the last axis when `skip_last`).
@@ -112,46 +112,44 @@ pub fn transform_axis<T: Sample>(
                 let lanes = &bases[task * g..(task * g + g).min(bases.len())];
                 let p = ptr;
                 // SAFETY: the lanes of this group are disjoint from every other group's.
-                unsafe {
-                    for (gi, &b) in lanes.iter().enumerate() {
-                        gather(p.0.add(b) as *const T, es, w, len, &mut sin[gi * w..], gw);
-                    }
-                }
+                unsafe { gather(p.0 as *const T, lanes, es, w, len, sin, gw) };
                 let cw = lanes.len() * w;
                 op.apply(sin, gw, sout, gw, cw);
-                unsafe {
-                    for (gi, &b) in lanes.iter().enumerate() {
-                        scatter(&sout[gi * w..], gw, p.0.add(b), es, w, len);
-                    }
-                }
+                unsafe { scatter(sout, gw, p.0, lanes, es, w, len) };
             },
         );
     }
 }
 
-/// Copy `len` elements of `w` samples at stride `es` from `src` into `dst` at stride `ds`.
+/// Elements per tile of the blocked transposes below.
+const TILE: usize = 16;
+
+/// Gather lane `g` (elements of `w` samples at stride `es` from `data + bases[g]`) into
+/// columns `g·w .. g·w + w` of `dst` (element stride `ds`). Blocked by tiles of [`TILE`]
+/// elements: within a tile each source lane is read in order (one cache line for
+/// contiguous lanes) and the few scratch rows it writes stay in L1; a plain
+/// lane-by-lane loop streams the whole scratch once per lane, an element-by-element loop
+/// touches every lane's page for every element.
 ///
 /// # Safety
-/// The `len` source elements must be valid for reads and not written concurrently.
+/// The lanes' elements must be valid for reads and not written concurrently.
 #[inline]
 unsafe fn gather<T: Sample>(
-    src: *const T,
+    data: *const T,
+    bases: &[usize],
     es: usize,
     w: usize,
     len: usize,
     dst: &mut [T],
     ds: usize,
 ) {
-    if w == 1 {
-        // the last axis: a contiguous lane, written into one column of the scratch
-        let lane = unsafe { std::slice::from_raw_parts(src, (len - 1) * es + 1) };
-        for (i, d) in dst.iter_mut().step_by(ds).take(len).enumerate() {
-            *d = lane[i * es];
-        }
-    } else {
-        for i in 0..len {
-            let e = unsafe { std::slice::from_raw_parts(src.add(i * es), w) };
-            dst[i * ds..i * ds + w].copy_from_slice(e);
+    for i0 in (0..len).step_by(TILE) {
+        let i1 = (i0 + TILE).min(len);
+        for (g, &b) in bases.iter().enumerate() {
+            for i in i0..i1 {
+                let src = unsafe { std::slice::from_raw_parts(data.add(b + i * es), w) };
+                dst[i * ds + g * w..i * ds + g * w + w].copy_from_slice(src);
+            }
         }
     }
 }
@@ -159,18 +157,24 @@ unsafe fn gather<T: Sample>(
 /// The inverse of [`gather`].
 ///
 /// # Safety
-/// The `len` destination elements must be valid for writes and touched by no other thread.
+/// The lanes' elements must be valid for writes and touched by no other thread.
 #[inline]
-unsafe fn scatter<T: Sample>(src: &[T], ss: usize, dst: *mut T, es: usize, w: usize, len: usize) {
-    if w == 1 {
-        let lane = unsafe { std::slice::from_raw_parts_mut(dst, (len - 1) * es + 1) };
-        for (i, s) in src.iter().step_by(ss).take(len).enumerate() {
-            lane[i * es] = *s;
-        }
-    } else {
-        for i in 0..len {
-            let e = unsafe { std::slice::from_raw_parts_mut(dst.add(i * es), w) };
-            e.copy_from_slice(&src[i * ss..i * ss + w]);
+unsafe fn scatter<T: Sample>(
+    src: &[T],
+    ss: usize,
+    data: *mut T,
+    bases: &[usize],
+    es: usize,
+    w: usize,
+    len: usize,
+) {
+    for i0 in (0..len).step_by(TILE) {
+        let i1 = (i0 + TILE).min(len);
+        for (g, &b) in bases.iter().enumerate() {
+            for i in i0..i1 {
+                let dst = unsafe { std::slice::from_raw_parts_mut(data.add(b + i * es), w) };
+                dst.copy_from_slice(&src[i * ss + g * w..i * ss + g * w + w]);
+            }
         }
     }
 }
