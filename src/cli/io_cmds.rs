@@ -7,6 +7,7 @@ use clap::{Args, ValueEnum};
 use super::{CliResult, Failure};
 use crate::io::{self, RawSpec, ReadOptions, SampleType};
 use crate::metrics::{self, CompareOptions, Convention};
+use crate::progress::Progress;
 
 /// Layout of headerless input (`.raw`, and non-square `.r16` / `.r32`).
 #[derive(Args, Debug, Clone, Default)]
@@ -169,16 +170,23 @@ pub struct ConvertArgs {
     /// Compress where the format offers a choice (NRRD gzip).
     #[arg(long)]
     pub compress: bool,
+    /// No progress bar (it is drawn only on a terminal anyway).
+    #[arg(long)]
+    pub quiet: bool,
 }
 
 pub fn convert(a: ConvertArgs) -> CliResult {
     let opts = a.raw.options()?;
+    let bar = Progress::new(2, "convert", a.quiet);
     let mut r = read_input(&a.input, &opts)?;
+    bar.inc(1);
     if let Some(t) = &a.dtype_out {
         let ty = SampleType::parse(t)?;
         r.samples = io::Samples::from_f64(&r.to_f64(), ty);
     }
-    write_output(&a.output, &r, a.compress)
+    write_output(&a.output, &r, a.compress)?;
+    bar.finish();
+    Ok(())
 }
 
 #[derive(ValueEnum, Debug, Clone, Copy, PartialEq, Eq)]
@@ -209,12 +217,18 @@ pub struct CompareArgs {
     /// Which library's PSNR definition to follow.
     #[arg(long, value_enum, default_value_t = ConventionArg::Skimage)]
     pub convention: ConventionArg,
+    /// No progress bar (it is drawn only on a terminal anyway).
+    #[arg(long)]
+    pub quiet: bool,
 }
 
 pub fn compare(a: CompareArgs) -> CliResult {
     let opts = a.raw.options()?;
+    let bar = Progress::new(3, "compare", a.quiet);
     let ra = read_input(&a.a, &opts)?;
+    bar.inc(1);
     let rb = read_input(&a.b, &opts)?;
+    bar.inc(1);
     let options = CompareOptions {
         data_range: a.data_range,
         convention: match a.convention {
@@ -223,6 +237,7 @@ pub fn compare(a: CompareArgs) -> CliResult {
         },
     };
     let m = metrics::compare(&ra, &rb, &options)?;
+    bar.finish();
     if a.json {
         println!(
             "{}",
