@@ -19,7 +19,8 @@ fn cubic_subdivision_of_a_square_by_hand() {
     // F_{2j} = ⅛C_{j−1} + ¾C_j + ⅛C_{j+1},  F_{2j+1} = ½(C_j + C_{j+1})
     let f = refine(&SQUARE, 2, Refinement::Cubic, Ends::Closed).unwrap();
     let want = [
-        0.125, 0.125, 0.5, 0.0, 0.875, 0.125, 1.0, 0.5, 0.875, 0.875, 0.5, 1.0, 0.125, 0.875, 0.0, 0.5,
+        0.125, 0.125, 0.5, 0.0, 0.875, 0.125, 1.0, 0.5, 0.875, 0.875, 0.5, 1.0, 0.125, 0.875, 0.0,
+        0.5,
     ];
     assert_eq!(f, want);
 }
@@ -30,7 +31,10 @@ fn open_cubic_rules_by_hand() {
     let c: Vec<f64> = vec![0.0, 16.0, 32.0, 48.0, 64.0, 0.0, 0.0, 0.0];
     let f = refine(&c, 1, Refinement::Cubic, Ends::Open).unwrap();
     assert_eq!(f.len(), 2 * 8 - 3);
-    assert_eq!(&f[..5], &[0.0, 8.0, 0.75 * 16.0 + 0.25 * 32.0, 3.0 + 22.0 + 6.0, 40.0]);
+    assert_eq!(
+        &f[..5],
+        &[0.0, 8.0, 0.75 * 16.0 + 0.25 * 32.0, 3.0 + 22.0 + 6.0, 40.0]
+    );
     assert_eq!(*f.last().unwrap(), 0.0);
 }
 
@@ -42,7 +46,10 @@ fn every_rule_keeps_constants_and_open_rules_keep_end_points() {
                 let s = matrix(rule, ends, n).unwrap();
                 for r in 0..s.rows() {
                     let sum: f64 = s.row(r).map(|x| x.1).sum();
-                    assert!((sum - 1.0).abs() < 1e-15, "{rule:?} {ends:?} n={n} row {r} sums to {sum}");
+                    assert!(
+                        (sum - 1.0).abs() < 1e-15,
+                        "{rule:?} {ends:?} n={n} row {r} sums to {sum}"
+                    );
                 }
                 if ends == Ends::Open && rule != Refinement::Box {
                     let c: Vec<f64> = (0..n).map(|i| (i * i) as f64).collect();
@@ -57,7 +64,9 @@ fn every_rule_keeps_constants_and_open_rules_keep_end_points() {
 
 #[test]
 fn four_point_scheme_interpolates_its_control_points() {
-    let pts: Vec<f64> = (0..9).flat_map(|i| [(i as f64).sin(), (i as f64 * 0.7).cos()]).collect();
+    let pts: Vec<f64> = (0..9)
+        .flat_map(|i| [(i as f64).sin(), (i as f64 * 0.7).cos()])
+        .collect();
     for ends in [Ends::Open, Ends::Closed] {
         let f = refine_steps(&pts, 2, Refinement::FourPoint, ends, 3).unwrap();
         for j in 0..9 {
@@ -83,11 +92,14 @@ fn char_poly(a: &[Vec<f64>]) -> Vec<f64> {
         let mut next = vec![vec![0.0; n]; n];
         for i in 0..n {
             for j in 0..n {
-                next[i][j] = (0..n).map(|l| a[i][l] * m[l][j]).sum::<f64>() + if i == j { c } else { 0.0 };
+                next[i][j] =
+                    (0..n).map(|l| a[i][l] * m[l][j]).sum::<f64>() + if i == j { c } else { 0.0 };
             }
         }
         m = next;
-        let am: f64 = (0..n).map(|i| (0..n).map(|l| a[i][l] * m[l][i]).sum::<f64>()).sum();
+        let am: f64 = (0..n)
+            .map(|i| (0..n).map(|l| a[i][l] * m[l][i]).sum::<f64>())
+            .sum();
         c = -am / k as f64;
         coeffs.push(c);
     }
@@ -108,9 +120,14 @@ fn deflate(p: &[f64], r: f64) -> (Vec<f64>, f64) {
 
 /// The local subdivision matrix: fine rows `rows`, coarse columns `cols` of a closed
 /// refinement matrix of 32 points.
-fn local(rule: Refinement, rows: std::ops::Range<usize>, cols: std::ops::Range<usize>) -> Vec<Vec<f64>> {
+fn local(
+    rule: Refinement,
+    rows: std::ops::Range<usize>,
+    cols: std::ops::Range<usize>,
+) -> Vec<Vec<f64>> {
     let s = matrix(rule, Ends::Closed, 32).unwrap().to_dense();
-    rows.map(|r| cols.clone().map(|c| s[r][c]).collect()).collect()
+    rows.map(|r| cols.clone().map(|c| s[r][c]).collect())
+        .collect()
 }
 
 #[test]
@@ -120,11 +137,17 @@ fn chaikin_and_dyn_levin_local_matrices_have_eigenvalues_1_half_quarter_quarter(
     let s = local(Refinement::Chaikin, 2 * j - 1..2 * j + 3, j - 1..j + 3);
     // Dyn–Levin: fine points at coarse positions j−1.5 … j+1.5 from C_{j−3 … j+3}
     let d = local(Refinement::FourPoint, 2 * j - 3..2 * j + 4, j - 3..j + 4);
-    for (name, m, rest) in [("chaikin", s, vec![1.0]), ("dyn-levin", d, vec![1.0, -0.125 + 0.0, 0.0, 0.0])] {
+    for (name, m, rest) in [
+        ("chaikin", s, vec![1.0]),
+        ("dyn-levin", d, vec![1.0, -0.125 + 0.0, 0.0, 0.0]),
+    ] {
         let mut p = char_poly(&m);
         for root in [1.0, 0.5, 0.25, 0.25] {
             let (q, rem) = deflate(&p, root);
-            assert!(rem.abs() < 1e-12, "{name}: {root} is not an eigenvalue (remainder {rem})");
+            assert!(
+                rem.abs() < 1e-12,
+                "{name}: {root} is not an eigenvalue (remainder {rem})"
+            );
             p = q;
         }
         if name == "chaikin" {
@@ -133,7 +156,10 @@ fn chaikin_and_dyn_levin_local_matrices_have_eigenvalues_1_half_quarter_quarter(
             // the remaining eigenvalues are 1/8, −1/16, −1/16: all below 1/4
             for root in [0.125, -0.0625, -0.0625] {
                 let (q, rem) = deflate(&p, root);
-                assert!(rem.abs() < 1e-12, "{name}: {root} is not an eigenvalue (remainder {rem})");
+                assert!(
+                    rem.abs() < 1e-12,
+                    "{name}: {root} is not an eigenvalue (remainder {rem})"
+                );
                 p = q;
             }
             assert_eq!(p.len(), 1);

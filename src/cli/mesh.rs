@@ -1,14 +1,424 @@
-//! `mra mesh …` (to be written).
+//! `mra mesh …`: information, subdivision, smoothing, simplification, normals, conversion,
+//! orientation, rendering and subdivision-matrix analysis. A thin shell over `crate::mesh`.
 
-use clap::Subcommand;
+use super::{CliResult, Failure};
+use crate::mesh::{self, io, Features, HalfEdgeMesh, Mesh};
+use clap::{Args, Subcommand};
+use std::path::{Path, PathBuf};
 
 #[derive(Subcommand, Debug)]
 pub enum Command {
-    /// Placeholder until the mesh commands land.
-    #[command(hide = true)]
-    Placeholder,
+    /// Counts, face degrees, components, boundary loops, χ, genus, manifold, orientable, bounds.
+    ///
+    /// Example: mra mesh info bunny.ply --json
+    Info {
+        input: PathBuf,
+        /// Print JSON instead of text.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Subdivide with Loop, Catmull-Clark, Doo-Sabin or Butterfly (boundaries follow cubic
+    /// B-spline curve rules; sharp edges from a file or by dihedral angle).
+    ///
+    /// Example: mra mesh subdivide spot.obj -o spot2.obj --scheme catmull-clark --steps 2 --crease-angle 60
+    ///
+    /// Adaptive: mra mesh subdivide spot.obj -o part.obj --scheme loop --steps 3 --box=-1,0,-1,1,1,1
+    Subdivide(SubdivideArgs),
+    /// Laplacian smoothing (uniform or cotangent, explicit or implicit).
+    ///
+    /// Example: mra mesh smooth bunny.ply -o smooth.ply --laplacian cotangent --method implicit --lambda 1
+    Smooth(SmoothArgs),
+    /// Quadric-error simplification by edge collapses to a target face count.
+    ///
+    /// Example: mra mesh simplify bunny.ply -o small.ply --faces 1000
+    Simplify {
+        input: PathBuf,
+        #[arg(short, long)]
+        output: PathBuf,
+        /// Target number of faces.
+        #[arg(long)]
+        faces: usize,
+    },
+    /// Compute vertex normals and write them with the mesh (PLY nx ny nz, OBJ vn).
+    ///
+    /// Example: mra mesh normals bunny.ply -o bunny_n.ply --weighting angle
+    Normals {
+        input: PathBuf,
+        #[arg(short, long)]
+        output: PathBuf,
+        /// uniform, area or angle.
+        #[arg(long, default_value = "angle")]
+        weighting: String,
+    },
+    /// Convert between OBJ, PLY and OFF (by extension).
+    ///
+    /// Example: mra mesh convert bunny.ply -o bunny.obj
+    Convert {
+        input: PathBuf,
+        #[arg(short, long)]
+        output: PathBuf,
+        /// Write PLY as ASCII.
+        #[arg(long)]
+        ascii: bool,
+        /// Write PLY as binary big endian.
+        #[arg(long, conflicts_with = "ascii")]
+        big_endian: bool,
+    },
+    /// Orient all faces consistently (fails on non-orientable meshes).
+    ///
+    /// Example: mra mesh orient soup.obj -o oriented.obj
+    Orient {
+        input: PathBuf,
+        #[arg(short, long)]
+        output: PathBuf,
+    },
+    /// Render a shaded PNG picture (z-buffer, optional wireframe).
+    ///
+    /// Example: mra mesh render bunny.ply -o bunny.png --size 800x600 --view 30,20 --wireframe
+    Render {
+        input: PathBuf,
+        #[arg(short, long)]
+        output: PathBuf,
+        /// Width x height in pixels.
+        #[arg(long, default_value = "800x600")]
+        size: String,
+        /// Azimuth,elevation of the camera in degrees.
+        #[arg(long, default_value = "30,20", allow_hyphen_values = true)]
+        view: String,
+        /// Draw the edges.
+        #[arg(long)]
+        wireframe: bool,
+        /// The model's up axis is +z (default +y).
+        #[arg(long)]
+        z_up: bool,
+    },
+    /// Eigenvalues of the local subdivision matrix of Loop or Catmull-Clark at valence N.
+    ///
+    /// Example: mra mesh analyze --scheme loop --valence 5
+    Analyze {
+        #[arg(long)]
+        scheme: String,
+        #[arg(long)]
+        valence: usize,
+        #[arg(long)]
+        json: bool,
+    },
 }
 
-pub fn run(_c: Command) -> super::CliResult {
-    Err(super::Failure("not implemented yet".into()))
+#[derive(Args, Debug)]
+pub struct SubdivideArgs {
+    input: PathBuf,
+    #[arg(short, long)]
+    output: PathBuf,
+    /// loop, loop-warren, catmull-clark, doo-sabin or butterfly.
+    #[arg(long)]
+    scheme: String,
+    #[arg(long, default_value_t = 1)]
+    steps: usize,
+    /// Sidecar file of sharp edges (`a b` per line) and corners (`corner v`).
+    #[arg(long)]
+    creases: Option<PathBuf>,
+    /// Tag edges whose dihedral angle exceeds DEG degrees as sharp.
+    #[arg(long, value_name = "DEG", conflicts_with = "creases")]
+    crease_angle: Option<f64>,
+    /// Adaptive: refine only these faces (comma-separated indices), growing one ring per level.
+    #[arg(long, value_name = "FACES")]
+    adaptive: Option<String>,
+    /// Adaptive: refine the faces with a vertex in the box x0,y0,z0,x1,y1,z1.
+    #[arg(
+        long,
+        value_name = "BOX",
+        conflicts_with = "adaptive",
+        allow_hyphen_values = true
+    )]
+    r#box: Option<String>,
+    /// Adaptive: refine the faces whose area exceeds A.
+    #[arg(long, value_name = "A", conflicts_with_all = ["adaptive", "box"])]
+    area_above: Option<f64>,
+}
+
+#[derive(Args, Debug)]
+pub struct SmoothArgs {
+    input: PathBuf,
+    #[arg(short, long)]
+    output: PathBuf,
+    /// uniform or cotangent.
+    #[arg(long, default_value = "uniform")]
+    laplacian: String,
+    /// explicit or implicit.
+    #[arg(long, default_value = "explicit")]
+    method: String,
+    #[arg(long, default_value_t = 0.5)]
+    lambda: f64,
+    #[arg(long, default_value_t = 10)]
+    iterations: usize,
+    /// Keep boundary vertices fixed.
+    #[arg(long)]
+    fix_boundary: bool,
+}
+
+fn read(path: &Path) -> Result<Mesh, Failure> {
+    io::read(path).map_err(|e| Failure::context(path.display(), e))
+}
+
+fn write(path: &Path, m: &Mesh) -> CliResult {
+    io::write(path, m).map_err(|e| Failure::context(path.display(), e))
+}
+
+fn floats(s: &str, n: usize, what: &'static str) -> Result<Vec<f64>, Failure> {
+    let v: Vec<f64> = s
+        .split(',')
+        .map(|t| t.trim().parse::<f64>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| {
+            Failure(format!(
+                "invalid {what}: {s:?} (expected {n} comma-separated numbers)"
+            ))
+        })?;
+    if v.len() != n || !v.iter().all(|x| x.is_finite()) {
+        return Err(Failure(format!(
+            "invalid {what}: {s:?} (expected {n} comma-separated numbers)"
+        )));
+    }
+    Ok(v)
+}
+
+pub fn run(c: Command) -> CliResult {
+    match c {
+        Command::Info { input, json } => {
+            let m = read(&input)?;
+            let r = mesh::topology::analyze(&m);
+            if json {
+                println!(
+                    "{}",
+                    serde_json::to_string_pretty(&r).map_err(|e| Failure(e.to_string()))?
+                );
+            } else {
+                print_info(&input, &r);
+            }
+            Ok(())
+        }
+        Command::Subdivide(a) => subdivide(a),
+        Command::Smooth(a) => {
+            let m = read(&a.input)?;
+            let kind = mesh::laplacian::Kind::parse(&a.laplacian)?;
+            let method = match a.method.as_str() {
+                "explicit" => mesh::laplacian::Method::Explicit,
+                "implicit" => mesh::laplacian::Method::Implicit,
+                other => {
+                    return Err(Failure(format!(
+                        "invalid method: {other} (expected explicit or implicit)"
+                    )))
+                }
+            };
+            let out =
+                mesh::laplacian::smooth(&m, kind, method, a.lambda, a.iterations, a.fix_boundary)?;
+            write(&a.output, &out)
+        }
+        Command::Simplify {
+            input,
+            output,
+            faces,
+        } => {
+            let m = read(&input)?;
+            let out = mesh::simplify::simplify(&m, faces)?;
+            write(&output, &out)
+        }
+        Command::Normals {
+            input,
+            output,
+            weighting,
+        } => {
+            let mut m = read(&input)?;
+            let w = mesh::normals::Weighting::parse(&weighting)?;
+            let n = mesh::normals::vertex_normals(&m, w);
+            m.attributes
+                .vertex
+                .retain(|p| !matches!(p.name.as_str(), "nx" | "ny" | "nz"));
+            m.attributes.normals.clear();
+            m.attributes.corner_normal.clear();
+            m.attributes.vertex_normals = Some(n);
+            write(&output, &m)
+        }
+        Command::Convert {
+            input,
+            output,
+            ascii,
+            big_endian,
+        } => {
+            let m = read(&input)?;
+            let mut fmt = io::Format::from_path(&output)
+                .map_err(|e| Failure::context(output.display(), e))?;
+            if let io::Format::Ply(_) = fmt {
+                fmt = io::Format::Ply(if ascii {
+                    io::ply::Encoding::Ascii
+                } else if big_endian {
+                    io::ply::Encoding::BinaryBigEndian
+                } else {
+                    io::ply::Encoding::BinaryLittleEndian
+                });
+            }
+            io::write_as(&output, &m, fmt).map_err(|e| Failure::context(output.display(), e))
+        }
+        Command::Orient { input, output } => {
+            let m = read(&input)?;
+            let out = mesh::topology::orient(&m)?;
+            write(&output, &out)
+        }
+        Command::Render {
+            input,
+            output,
+            size,
+            view,
+            wireframe,
+            z_up,
+        } => {
+            let m = read(&input)?;
+            let (w, h) = size
+                .split_once('x')
+                .and_then(|(w, h)| Some((w.parse::<usize>().ok()?, h.parse::<usize>().ok()?)))
+                .ok_or_else(|| {
+                    Failure(format!("invalid size: {size:?} (expected WIDTHxHEIGHT)"))
+                })?;
+            let v = floats(&view, 2, "view")?;
+            let opts = mesh::render::Options {
+                width: w,
+                height: h,
+                azimuth: v[0],
+                elevation: v[1],
+                wireframe,
+                z_up,
+            };
+            let png = mesh::render::render_png(&m, &opts)?;
+            io::write_atomic(&output, &png).map_err(|e| Failure::context(output.display(), e))
+        }
+        Command::Analyze {
+            scheme,
+            valence,
+            json,
+        } => {
+            let s = mesh::analysis::Surface::parse(&scheme)?;
+            let ev = mesh::analysis::local_eigenvalues(s, valence)?;
+            if json {
+                println!(
+                    "{}",
+                    serde_json::json!({"scheme": scheme, "valence": valence, "eigenvalues": ev})
+                );
+            } else {
+                println!(
+                    "{scheme} valence {valence}: local subdivision matrix eigenvalues (descending)"
+                );
+                for e in ev {
+                    println!("  {e:.12}");
+                }
+            }
+            Ok(())
+        }
+    }
+}
+
+fn subdivide(a: SubdivideArgs) -> CliResult {
+    let m = read(&a.input)?;
+    let scheme = mesh::subdivide::Scheme::parse(&a.scheme)?;
+    let features = if let Some(path) = &a.creases {
+        let text =
+            std::fs::read_to_string(path).map_err(|e| Failure::context(path.display(), e))?;
+        Features::parse(&text).map_err(|e| Failure::context(path.display(), e))?
+    } else if let Some(deg) = a.crease_angle {
+        let he = HalfEdgeMesh::build(&m).map_err(|e| Failure::context(a.input.display(), e))?;
+        Features::from_crease_angle(&m, &he, deg)?
+    } else {
+        Features::default()
+    };
+    let selection = if let Some(list) = &a.adaptive {
+        Some(
+            list.split(',')
+                .map(|t| t.trim().parse::<u32>())
+                .collect::<Result<Vec<_>, _>>()
+                .map_err(|_| {
+                    Failure(format!(
+                        "invalid face list: {list:?} (expected comma-separated face indices)"
+                    ))
+                })?,
+        )
+    } else if let Some(b) = &a.r#box {
+        let v = floats(b, 6, "box")?;
+        Some(mesh::adaptive::faces_in_box(
+            &m,
+            [v[0], v[1], v[2]],
+            [v[3], v[4], v[5]],
+        ))
+    } else if let Some(area) = a.area_above {
+        if !(area.is_finite() && area >= 0.0) {
+            return Err(Failure(format!(
+                "invalid area: {area} (expected a number ≥ 0)"
+            )));
+        }
+        Some(mesh::adaptive::faces_larger_than(&m, area))
+    } else {
+        None
+    };
+    let out = match selection {
+        Some(sel) => mesh::adaptive::subdivide(&m, scheme, a.steps, &sel, &features),
+        None => mesh::subdivide::subdivide(&m, scheme, a.steps, &features),
+    }
+    .map_err(|e| Failure::context(a.input.display(), e))?;
+    write(&a.output, &out)
+}
+
+fn print_info(path: &Path, r: &mesh::topology::Report) {
+    println!("{}", path.display());
+    println!(
+        "  vertices {}  edges {}  faces {}",
+        r.vertices, r.edges, r.faces
+    );
+    let hist: Vec<String> = r
+        .face_degrees
+        .iter()
+        .map(|(d, n)| format!("{d}-gons: {n}"))
+        .collect();
+    println!("  face degrees: {}", hist.join(", "));
+    println!(
+        "  components {}  boundary loops {} ({} edges)  isolated vertices {}",
+        r.components.len(),
+        r.boundary_loops,
+        r.boundary_edges,
+        r.isolated_vertices
+    );
+    println!(
+        "  euler characteristic {}  genus {}",
+        r.euler,
+        r.genus
+            .map(|g| g.to_string())
+            .unwrap_or_else(|| "n/a".into())
+    );
+    println!(
+        "  manifold {}  orientable {}  consistently oriented {}  closed {}",
+        r.manifold, r.orientable, r.oriented, r.closed
+    );
+    if !r.manifold {
+        println!(
+            "  non-manifold edges {:?}  non-manifold vertices {:?}",
+            &r.non_manifold_edges[..r.non_manifold_edges.len().min(10)],
+            &r.non_manifold_vertices[..r.non_manifold_vertices.len().min(10)]
+        );
+    }
+    if r.components.len() > 1 {
+        for (i, c) in r.components.iter().enumerate().take(20) {
+            println!(
+                "  component {i}: V {} E {} F {} χ {} boundary loops {} genus {}",
+                c.vertices,
+                c.edges,
+                c.faces,
+                c.euler,
+                c.boundary_loops,
+                c.genus
+                    .map(|g| g.to_string())
+                    .unwrap_or_else(|| "n/a".into())
+            );
+        }
+    }
+    if let Some((lo, hi)) = r.bounding_box {
+        println!("  bounding box {lo:?} .. {hi:?}");
+    }
 }

@@ -10,6 +10,7 @@ pub mod demo;
 pub mod io_cmds;
 pub mod mesh;
 pub mod points;
+pub mod scheme;
 pub mod subdivide;
 pub mod surface;
 
@@ -48,6 +49,9 @@ pub enum Command {
     InfoFile(io_cmds::InfoFileArgs),
     /// Convert between image / volume / heightmap formats, keeping samples exact.
     Convert(io_cmds::ConvertArgs),
+    /// Curve subdivision schemes: eigen-analysis of a mask.
+    #[command(subcommand)]
+    Scheme(scheme::Command),
 }
 
 /// A failure on the command line: one line on stderr, exit code 2.
@@ -113,6 +117,7 @@ pub fn main() -> i32 {
         Command::Generate(a) => io_cmds::generate(a),
         Command::InfoFile(a) => io_cmds::info_file(a),
         Command::Convert(a) => io_cmds::convert(a),
+        Command::Scheme(c) => scheme::run(c),
     };
     match result {
         Ok(()) => 0,

@@ -1,0 +1,170 @@
+//! Catmull-Clark subdivision (§8.3) on any polygon mesh; after one step every face is a quad.
+//!
+//! ```text
+//!   face point:    f = (1/m) Σ v_k                         (centroid of an m-gon)
+//!   edge point:    e = ¼ (a + b + f_0 + f_1)               (boundary / sharp: ½ (a + b))
+//!   vertex point:  v' = (n−2)/n v + 1/n² Σ v_j + 1/n² Σ f_j   (valence n, §8.3.1)
+//!   boundary / crease vertex:  ¾ v + ⅛ (a + b)   (cubic B-spline curve mask, §8.3.2–8.3.3)
+//!   corner:        v
+//! ```
+//!
+//! Numbering of the result: old vertices keep their index, the point of edge `e` is `V + e`, the
+//! point of face `f` is `V + E + f`. Corner `c` (vertex `v_i` of face `f`) becomes the quad
+//! `(v_i, e(v_i v_{i+1}), f, e(v_{i−1} v_i))`, so the children of face `f` are its corners'
+//! indices `offsets[f] .. offsets[f+1]`.
+
+use super::features::{Features, Tags, VertexRule};
+use super::halfedge::{HalfEdgeMesh, VertexId};
+use super::loop_subdivision::GRAIN;
+use super::{Attributes, Mesh};
+use crate::{Error, Result};
+use rayon::prelude::*;
+
+/// Fail early when the refined mesh would not fit 32-bit indices.
+pub(crate) fn check_size(vertices: usize, indices: usize) -> Result<()> {
+    let n = vertices.max(indices);
+    if n >= u32::MAX as usize {
+        return Err(Error::LimitsExceeded {
+            what: "refined mesh size",
+            requested: n as u64,
+            limit: u32::MAX as u64 - 1,
+        });
+    }
+    Ok(())
+}
+
+/// Face centroids, in parallel.
+pub fn face_points(mesh: &Mesh) -> Vec<[f64; 3]> {
+    let p = &mesh.positions;
+    (0..mesh.face_count())
+        .into_par_iter()
+        .with_min_len(GRAIN)
+        .map(|f| {
+            let face = mesh.face(f);
+            let mut s = [0.0; 3];
+            for &v in face {
+                let q = p[v as usize];
+                s[0] += q[0];
+                s[1] += q[1];
+                s[2] += q[2];
+            }
+            let w = 1.0 / face.len() as f64;
+            [s[0] * w, s[1] * w, s[2] * w]
+        })
+        .collect()
+}
+
+/// One step of Catmull-Clark subdivision. Returns the refined quad mesh and its child tags.
+pub fn step(mesh: &Mesh, he: &HalfEdgeMesh, tags: &Tags) -> Result<(Mesh, Features)> {
+    let nv = mesh.vertex_count();
+    let ne = he.edge_count();
+    let nf = mesh.face_count();
+    let nc = mesh.corner_count();
+    check_size(nv + ne + nf, 4 * nc)?;
+    let p = &mesh.positions;
+    let mut out = vec![[0.0f64; 3]; nv + ne + nf];
+    let (vpart, rest) = out.split_at_mut(nv);
+    let (epart, fpart) = rest.split_at_mut(ne);
+    fpart.copy_from_slice(&face_points(mesh));
+    let fp: &[[f64; 3]] = fpart;
+    epart
+        .par_iter_mut()
+        .with_min_len(GRAIN)
+        .enumerate()
+        .for_each(|(e, o)| {
+            let [a, b] = he.edges.verts[e];
+            let (pa, pb) = (p[a as usize], p[b as usize]);
+            *o = if tags.sharp[e] {
+                std::array::from_fn(|k| 0.5 * (pa[k] + pb[k]))
+            } else {
+                let [c0, c1] = he.edges.corners[e];
+                let f0 = fp[he.face[c0 as usize] as usize];
+                let f1 = fp[he.face[c1 as usize] as usize];
+                std::array::from_fn(|k| 0.25 * (pa[k] + pb[k] + f0[k] + f1[k]))
+            };
+        });
+    vpart
+        .par_iter_mut()
+        .with_min_len(GRAIN)
+        .enumerate()
+        .for_each(|(v, o)| {
+            let pv = p[v];
+            *o = match tags.rule(he, v as u32) {
+                VertexRule::Corner => pv,
+                VertexRule::Crease(a, b) => {
+                    let (a, b) = (p[a as usize], p[b as usize]);
+                    std::array::from_fn(|k| 0.75 * pv[k] + 0.125 * (a[k] + b[k]))
+                }
+                VertexRule::Smooth => {
+                    let mut s = [0.0; 3];
+                    let mut n = 0usize;
+                    for h in he.outgoing(VertexId(v as u32)) {
+                        let q = p[he.from[he.twin[h.idx()] as usize] as usize];
+                        let f = fp[he.face[h.idx()] as usize];
+                        for k in 0..3 {
+                            s[k] += q[k] + f[k];
+                        }
+                        n += 1;
+                    }
+                    if n == 0 {
+                        pv
+                    } else {
+                        let nn = n as f64;
+                        let w = (nn - 2.0) / nn;
+                        let u = 1.0 / (nn * nn);
+                        std::array::from_fn(|k| w * pv[k] + u * s[k])
+                    }
+                }
+            };
+        });
+    let mut indices = vec![0u32; 4 * nc];
+    let ce = &he.edges.corner_edge;
+    let (vb, fb) = (nv as u32, (nv + ne) as u32);
+    // corners are processed face by face so each task writes its faces' quads
+    let fo = &mesh.offsets;
+    let chunks: Vec<(usize, &mut [u32])> = {
+        let mut v = Vec::new();
+        let mut rest: &mut [u32] = &mut indices;
+        let step = GRAIN;
+        let mut f = 0;
+        while f < nf {
+            let g = (f + step).min(nf);
+            let len = 4 * (fo[g] - fo[f]) as usize;
+            let (a, b) = rest.split_at_mut(len);
+            v.push((f, a));
+            rest = b;
+            f = g;
+        }
+        v
+    };
+    chunks.into_par_iter().for_each(|(f0, q)| {
+        let mut w = 0;
+        let mut f = f0;
+        while w < q.len() {
+            let (s, e) = (fo[f] as usize, fo[f + 1] as usize);
+            for c in s..e {
+                let pc = if c == s { e - 1 } else { c - 1 };
+                q[w] = mesh.indices[c];
+                q[w + 1] = vb + ce[c];
+                q[w + 2] = fb + f as u32;
+                q[w + 3] = vb + ce[pc];
+                w += 4;
+            }
+            f += 1;
+        }
+    });
+    let children = if tags.any_interior_sharp || tags.corner.iter().any(|&c| c) {
+        tags.children(he, nv as u32)
+    } else {
+        Features::default()
+    };
+    Ok((
+        Mesh {
+            positions: out,
+            offsets: (0..=nc as u32).map(|i| 4 * i).collect(),
+            indices,
+            attributes: Attributes::default(),
+        },
+        children,
+    ))
+}

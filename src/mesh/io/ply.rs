@@ -1,0 +1,546 @@
+//! Stanford PLY: `ascii`, `binary_little_endian` and `binary_big_endian`. Element `vertex` must
+//! have `x y z`; its other scalar properties are kept (in order, with their types) as
+//! [`crate::mesh::Property`]s. Element `face` must have a list property `vertex_indices` (or
+//! `vertex_index`); its other scalar properties are kept too. Other elements and other list
+//! properties are read past and dropped. Declared counts are checked against the bytes present
+//! before anything is allocated.
+
+use crate::mesh::attributes::ScalarType;
+use crate::mesh::{Attributes, Mesh, Property};
+use crate::{Error, Result};
+use std::fmt::Write as _;
+
+/// PLY body encodings.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Encoding {
+    Ascii,
+    BinaryLittleEndian,
+    BinaryBigEndian,
+}
+
+#[derive(Debug)]
+enum PropKind {
+    Scalar(ScalarType),
+    List(ScalarType, ScalarType),
+}
+
+#[derive(Debug)]
+struct PropDecl {
+    name: String,
+    kind: PropKind,
+}
+
+#[derive(Debug)]
+struct ElementDecl {
+    name: String,
+    count: usize,
+    props: Vec<PropDecl>,
+}
+
+fn bad(what: impl std::fmt::Display) -> Error {
+    Error::format(what, "a valid PLY file")
+}
+
+fn parse_header(bytes: &[u8]) -> Result<(Encoding, Vec<ElementDecl>, usize)> {
+    if !bytes.starts_with(b"ply") {
+        return Err(bad("missing 'ply' magic"));
+    }
+    let end = bytes
+        .windows(10)
+        .position(|w| w == b"end_header")
+        .ok_or_else(|| bad("no end_header"))?;
+    let mut body = end + 10;
+    // the header ends with "end_header" then \n (or \r\n)
+    if bytes.get(body) == Some(&b'\r') {
+        body += 1;
+    }
+    if bytes.get(body) == Some(&b'\n') {
+        body += 1;
+    }
+    let header = std::str::from_utf8(&bytes[..end]).map_err(|_| bad("header is not text"))?;
+    let mut encoding = None;
+    let mut elements: Vec<ElementDecl> = Vec::new();
+    for line in header.lines().skip(1) {
+        let t: Vec<&str> = line.split_whitespace().collect();
+        match t.first().copied() {
+            Some("format") => {
+                encoding = Some(match t.get(1).copied() {
+                    Some("ascii") => Encoding::Ascii,
+                    Some("binary_little_endian") => Encoding::BinaryLittleEndian,
+                    Some("binary_big_endian") => Encoding::BinaryBigEndian,
+                    other => {
+                        return Err(Error::Unsupported {
+                            what: "PLY format",
+                            value: format!("{other:?}"),
+                        })
+                    }
+                })
+            }
+            Some("element") => {
+                let name = t
+                    .get(1)
+                    .ok_or_else(|| bad("element without a name"))?
+                    .to_string();
+                let count = t
+                    .get(2)
+                    .and_then(|c| c.parse::<usize>().ok())
+                    .ok_or_else(|| bad(format!("element {name} has no valid count")))?;
+                elements.push(ElementDecl {
+                    name,
+                    count,
+                    props: Vec::new(),
+                });
+            }
+            Some("property") => {
+                let el = elements
+                    .last_mut()
+                    .ok_or_else(|| bad("property before any element"))?;
+                let ty = |s: Option<&&str>| {
+                    s.and_then(|s| ScalarType::from_ply(s))
+                        .ok_or_else(|| bad(format!("unknown property type in {line:?}")))
+                };
+                let (kind, name) = if t.get(1) == Some(&"list") {
+                    (PropKind::List(ty(t.get(2))?, ty(t.get(3))?), t.get(4))
+                } else {
+                    (PropKind::Scalar(ty(t.get(1))?), t.get(2))
+                };
+                let name = name.ok_or_else(|| bad(format!("property without a name: {line:?}")))?;
+                el.props.push(PropDecl {
+                    name: name.to_string(),
+                    kind,
+                });
+            }
+            Some("comment") | Some("obj_info") | None => {}
+            Some(other) => return Err(bad(format!("unknown header keyword {other:?}"))),
+        }
+    }
+    let encoding = encoding.ok_or_else(|| bad("no format line"))?;
+    Ok((encoding, elements, body))
+}
+
+/// A cursor over the body that yields numbers in either encoding.
+struct Body<'a> {
+    bytes: &'a [u8],
+    pos: usize,
+    enc: Encoding,
+}
+
+impl Body<'_> {
+    #[inline]
+    fn binary(&mut self, ty: ScalarType) -> Result<f64> {
+        let n = ty.size();
+        let b = self.bytes.get(self.pos..self.pos + n).ok_or_else(|| {
+            bad(format!(
+                "file ends at byte {} inside the body",
+                self.bytes.len()
+            ))
+        })?;
+        self.pos += n;
+        let le = self.enc == Encoding::BinaryLittleEndian;
+        macro_rules! rd {
+            ($t:ty) => {{
+                let a = b.try_into().unwrap();
+                (if le {
+                    <$t>::from_le_bytes(a)
+                } else {
+                    <$t>::from_be_bytes(a)
+                }) as f64
+            }};
+        }
+        Ok(match ty {
+            ScalarType::I8 => b[0] as i8 as f64,
+            ScalarType::U8 => b[0] as f64,
+            ScalarType::I16 => rd!(i16),
+            ScalarType::U16 => rd!(u16),
+            ScalarType::I32 => rd!(i32),
+            ScalarType::U32 => rd!(u32),
+            ScalarType::F32 => rd!(f32),
+            ScalarType::F64 => rd!(f64),
+        })
+    }
+
+    #[inline]
+    fn ascii(&mut self) -> Result<f64> {
+        let b = self.bytes;
+        let mut i = self.pos;
+        while i < b.len() && b[i].is_ascii_whitespace() {
+            i += 1;
+        }
+        let s = i;
+        while i < b.len() && !b[i].is_ascii_whitespace() {
+            i += 1;
+        }
+        self.pos = i;
+        if s == i {
+            return Err(bad("the body ends before all elements were read"));
+        }
+        std::str::from_utf8(&b[s..i])
+            .ok()
+            .and_then(|t| t.parse::<f64>().ok())
+            .ok_or_else(|| {
+                bad(format!(
+                    "{:?} is not a number",
+                    String::from_utf8_lossy(&b[s..i])
+                ))
+            })
+    }
+
+    #[inline]
+    fn value(&mut self, ty: ScalarType) -> Result<f64> {
+        if self.enc == Encoding::Ascii {
+            self.ascii()
+        } else {
+            self.binary(ty)
+        }
+    }
+}
+
+/// Parse a PLY file.
+pub fn parse(bytes: &[u8]) -> Result<Mesh> {
+    let (enc, elements, body) = parse_header(bytes)?;
+    let remaining = bytes.len() - body;
+    // every element takes at least one byte (binary) or two (ascii: a digit and a separator)
+    let total: usize = elements
+        .iter()
+        .map(|e| e.count)
+        .fold(0usize, |a, c| a.saturating_add(c));
+    if total > remaining {
+        return Err(Error::LimitsExceeded {
+            what: "PLY element count",
+            requested: total as u64,
+            limit: remaining as u64,
+        });
+    }
+    let mut b = Body {
+        bytes,
+        pos: body,
+        enc,
+    };
+    let mut positions = Vec::new();
+    let mut offsets = vec![0u32];
+    let mut indices = Vec::new();
+    let mut attributes = Attributes::default();
+    let mut seen_vertex = false;
+    let mut seen_face = false;
+    for el in &elements {
+        match el.name.as_str() {
+            "vertex" => {
+                seen_vertex = true;
+                let mut xyz = [usize::MAX; 3];
+                for (i, p) in el.props.iter().enumerate() {
+                    let k = match p.name.as_str() {
+                        "x" => 0,
+                        "y" => 1,
+                        "z" => 2,
+                        _ => {
+                            if let PropKind::Scalar(ty) = p.kind {
+                                attributes.vertex.push(Property {
+                                    name: p.name.clone(),
+                                    ty,
+                                    values: Vec::with_capacity(el.count),
+                                });
+                            }
+                            continue;
+                        }
+                    };
+                    match p.kind {
+                        PropKind::Scalar(ty) => {
+                            xyz[k] = i;
+                            attributes.position_type = Some(ty);
+                        }
+                        PropKind::List(..) => {
+                            return Err(bad("vertex coordinate declared as a list"))
+                        }
+                    }
+                }
+                if xyz.contains(&usize::MAX) {
+                    return Err(bad("vertex element without x, y and z"));
+                }
+                positions.reserve(el.count);
+                // fast path: binary with only x y z of one type
+                for _ in 0..el.count {
+                    let mut p = [0.0; 3];
+                    let mut extra = 0;
+                    for (i, pd) in el.props.iter().enumerate() {
+                        match pd.kind {
+                            PropKind::Scalar(ty) => {
+                                let x = b.value(ty)?;
+                                if let Some(k) = xyz.iter().position(|&j| j == i) {
+                                    p[k] = x;
+                                } else {
+                                    attributes.vertex[extra].values.push(x);
+                                    extra += 1;
+                                }
+                            }
+                            PropKind::List(ct, it) => {
+                                let n = b.value(ct)? as usize;
+                                for _ in 0..n {
+                                    b.value(it)?;
+                                }
+                            }
+                        }
+                    }
+                    positions.push(p);
+                }
+            }
+            "face" => {
+                seen_face = true;
+                let list = el
+                    .props
+                    .iter()
+                    .position(|p| {
+                        matches!(p.kind, PropKind::List(..))
+                            && (p.name == "vertex_indices" || p.name == "vertex_index")
+                    })
+                    .ok_or_else(|| bad("face element without a vertex_indices list"))?;
+                if let PropKind::List(ct, it) = el.props[list].kind {
+                    attributes.face_list_types = Some((ct, it));
+                }
+                attributes.face_list_name = Some(el.props[list].name.clone());
+                for (i, p) in el.props.iter().enumerate() {
+                    if let (PropKind::Scalar(ty), true) = (&p.kind, i != list) {
+                        attributes.face.push(Property {
+                            name: p.name.clone(),
+                            ty: *ty,
+                            values: Vec::with_capacity(el.count),
+                        });
+                    }
+                }
+                offsets.reserve(el.count);
+                indices.reserve(el.count.saturating_mul(3).min(remaining));
+                for f in 0..el.count {
+                    let mut extra = 0;
+                    for (i, pd) in el.props.iter().enumerate() {
+                        match pd.kind {
+                            PropKind::Scalar(ty) => {
+                                let x = b.value(ty)?;
+                                attributes.face[extra].values.push(x);
+                                extra += 1;
+                            }
+                            PropKind::List(ct, it) => {
+                                let n = b.value(ct)?;
+                                if !(0.0..=1e6).contains(&n) || n.fract() != 0.0 {
+                                    return Err(bad(format!("face {f} has a list length of {n}")));
+                                }
+                                for _ in 0..n as usize {
+                                    let x = b.value(it)?;
+                                    if i == list {
+                                        if !(0.0..4294967295.0).contains(&x) || x.fract() != 0.0 {
+                                            return Err(Error::format(
+                                                format!("face {f} refers to vertex {x}"),
+                                                "vertex indices in range",
+                                            ));
+                                        }
+                                        indices.push(x as u32);
+                                    }
+                                }
+                                if i == list {
+                                    offsets.push(indices.len() as u32);
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+            _ => {
+                for _ in 0..el.count {
+                    for pd in &el.props {
+                        match pd.kind {
+                            PropKind::Scalar(ty) => {
+                                b.value(ty)?;
+                            }
+                            PropKind::List(ct, it) => {
+                                let n = b.value(ct)?;
+                                if !(0.0..=1e6).contains(&n) {
+                                    return Err(bad(format!(
+                                        "list length {n} in element {}",
+                                        el.name
+                                    )));
+                                }
+                                for _ in 0..n as usize {
+                                    b.value(it)?;
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+    if !seen_vertex {
+        return Err(bad("no vertex element"));
+    }
+    if !seen_face {
+        attributes.face_list_types = None;
+    }
+    let mesh = Mesh {
+        positions,
+        offsets,
+        indices,
+        attributes,
+    };
+    mesh.validate()?;
+    Ok(mesh)
+}
+
+fn put(out: &mut Vec<u8>, enc: Encoding, ty: ScalarType, x: f64) {
+    macro_rules! wr {
+        ($t:ty) => {{
+            let v = x as $t;
+            if enc == Encoding::BinaryLittleEndian {
+                out.extend_from_slice(&v.to_le_bytes())
+            } else {
+                out.extend_from_slice(&v.to_be_bytes())
+            }
+        }};
+    }
+    match enc {
+        Encoding::Ascii => {
+            let mut s = String::new();
+            let _ = write!(s, "{x}");
+            out.extend_from_slice(s.as_bytes());
+        }
+        _ => match ty {
+            ScalarType::I8 => wr!(i8),
+            ScalarType::U8 => wr!(u8),
+            ScalarType::I16 => wr!(i16),
+            ScalarType::U16 => wr!(u16),
+            ScalarType::I32 => wr!(i32),
+            ScalarType::U32 => wr!(u32),
+            ScalarType::F32 => wr!(f32),
+            ScalarType::F64 => wr!(f64),
+        },
+    }
+}
+
+/// Serialise as PLY with the given encoding. Positions keep the type they were read with
+/// (default `double`), face lists `uchar`/`int` (or as read), extra properties as read.
+pub fn to_bytes(mesh: &Mesh, enc: Encoding) -> Result<Vec<u8>> {
+    let a = &mesh.attributes;
+    let pty = a.position_type.unwrap_or(ScalarType::F64);
+    let (ct, it) = a
+        .face_list_types
+        .unwrap_or((ScalarType::U8, ScalarType::I32));
+    let max_deg = (0..mesh.face_count())
+        .map(|f| mesh.face_degree(f))
+        .max()
+        .unwrap_or(0);
+    let ct = if max_deg > 255 && ct.size() == 1 {
+        ScalarType::I32
+    } else {
+        ct
+    };
+    let mut vprops: Vec<(&str, ScalarType, &[f64])> = a
+        .vertex
+        .iter()
+        .map(|p| (p.name.as_str(), p.ty, &p.values[..]))
+        .collect();
+    let normals_flat: Vec<Vec<f64>>;
+    if let Some(n) = &a.vertex_normals {
+        if !a.vertex.iter().any(|p| p.name == "nx") {
+            normals_flat = (0..3).map(|k| n.iter().map(|v| v[k]).collect()).collect();
+            for (k, name) in ["nx", "ny", "nz"].into_iter().enumerate() {
+                vprops.push((name, ScalarType::F32.max_for(pty), &normals_flat[k]));
+            }
+        }
+    }
+    for (name, _, vals) in &vprops {
+        if vals.len() != mesh.vertex_count() {
+            return Err(Error::parameter(
+                "vertex property length",
+                name,
+                "one value per vertex",
+            ));
+        }
+    }
+    for p in &a.face {
+        if p.values.len() != mesh.face_count() {
+            return Err(Error::parameter(
+                "face property length",
+                &p.name,
+                "one value per face",
+            ));
+        }
+    }
+    let mut out = Vec::with_capacity(mesh.vertex_count() * 24 + mesh.indices.len() * 4 + 256);
+    let mut h = String::new();
+    let fmt = match enc {
+        Encoding::Ascii => "ascii",
+        Encoding::BinaryLittleEndian => "binary_little_endian",
+        Encoding::BinaryBigEndian => "binary_big_endian",
+    };
+    let _ = writeln!(h, "ply\nformat {fmt} 1.0\ncomment written by mra");
+    let _ = writeln!(h, "element vertex {}", mesh.vertex_count());
+    for c in ["x", "y", "z"] {
+        let _ = writeln!(h, "property {} {c}", pty.ply_name());
+    }
+    for (name, ty, _) in &vprops {
+        let _ = writeln!(h, "property {} {name}", ty.ply_name());
+    }
+    let _ = writeln!(h, "element face {}", mesh.face_count());
+    let list_name = a.face_list_name.as_deref().unwrap_or("vertex_indices");
+    let _ = writeln!(
+        h,
+        "property list {} {} {list_name}",
+        ct.ply_name(),
+        it.ply_name()
+    );
+    for p in &a.face {
+        let _ = writeln!(h, "property {} {}", p.ty.ply_name(), p.name);
+    }
+    h.push_str("end_header\n");
+    out.extend_from_slice(h.as_bytes());
+    let ascii = enc == Encoding::Ascii;
+    for (v, p) in mesh.positions.iter().enumerate() {
+        for (k, &x) in p.iter().enumerate() {
+            if ascii && k > 0 {
+                out.push(b' ');
+            }
+            put(&mut out, enc, pty, x);
+        }
+        for (_, ty, vals) in &vprops {
+            if ascii {
+                out.push(b' ');
+            }
+            put(&mut out, enc, *ty, vals[v]);
+        }
+        if ascii {
+            out.push(b'\n');
+        }
+    }
+    for f in 0..mesh.face_count() {
+        let face = mesh.face(f);
+        put(&mut out, enc, ct, face.len() as f64);
+        for &i in face {
+            if ascii {
+                out.push(b' ');
+            }
+            put(&mut out, enc, it, i as f64);
+        }
+        for p in &a.face {
+            if ascii {
+                out.push(b' ');
+            }
+            put(&mut out, enc, p.ty, p.values[f]);
+        }
+        if ascii {
+            out.push(b'\n');
+        }
+    }
+    Ok(out)
+}
+
+trait MaxFor {
+    fn max_for(self, other: ScalarType) -> ScalarType;
+}
+
+impl MaxFor for ScalarType {
+    /// `double` if either is `double`, else `self`.
+    fn max_for(self, other: ScalarType) -> ScalarType {
+        if other == ScalarType::F64 {
+            ScalarType::F64
+        } else {
+            self
+        }
+    }
+}
