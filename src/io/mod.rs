@@ -684,7 +684,7 @@ pub fn write(path: &Path, r: &Raster) -> Result<()> {
     write_with(path, r, &WriteOptions::default())
 }
 
-/// [`write`] with options.
+/// [`write()`] with options.
 pub fn write_with(path: &Path, r: &Raster, opts: &WriteOptions) -> Result<()> {
     let format = Format::from_extension(path).ok_or_else(|| {
         Error::parameter(
