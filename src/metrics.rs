@@ -100,19 +100,18 @@ fn squared_error(a: &Samples, b: &Samples) -> (f64, f64) {
         && matches!(b.sample_type(), SampleType::F16 | SampleType::F32);
     let mut sum = 0.0f64;
     let mut max = 0.0f64;
-    if single {
-        let (va, vb) = (a.to_f32(), b.to_f32());
-        for (&x, &y) in va.iter().zip(&vb) {
-            let d = x - y;
+    for i in 0..a.len() {
+        let d = if single {
+            // both values are exact in f32; difference and square in f32
+            let d = a.get_f64(i) as f32 - b.get_f64(i) as f32;
             sum += (d * d) as f64;
-            max = max.max(d.abs() as f64);
-        }
-    } else {
-        for i in 0..a.len() {
+            d as f64
+        } else {
             let d = a.get_f64(i) - b.get_f64(i);
             sum += d * d;
-            max = max.max(d.abs());
-        }
+            d
+        };
+        max = max.max(d.abs());
     }
     (sum, max)
 }
@@ -223,8 +222,8 @@ fn box_valid(data: &[f64], shape: &[usize], axis: usize, w: usize) -> (Vec<f64>,
     (out, new_shape)
 }
 
-/// Windowed means of `data` (valid region) with a `w`-wide uniform window on every axis.
-fn local_mean(data: &[f64], shape: &[usize], w: usize) -> Vec<f64> {
+/// Window sums (valid region) of a slab over every axis of `shape`.
+fn box_sums(data: &[f64], shape: &[usize], w: usize) -> Vec<f64> {
     let mut cur = data.to_vec();
     let mut sh = shape.to_vec();
     for axis in 0..shape.len() {
@@ -232,13 +231,17 @@ fn local_mean(data: &[f64], shape: &[usize], w: usize) -> Vec<f64> {
         cur = next;
         sh = nsh;
     }
-    let np = (w as f64).powi(shape.len() as i32);
-    cur.iter_mut().for_each(|x| *x /= np);
     cur
 }
 
 /// Mean SSIM over channels (scikit-image `structural_similarity` defaults, see module
 /// doc); `None` when any spatial side is shorter than 7.
+///
+/// Memory stays proportional to one slice: the window sums along the first axis are
+/// kept as running sums over 7 slices (five quantities: a, b, a², b², ab), and each
+/// output slab is then box-summed over the remaining axes.
+// the five running sums are indexed by position together: a range loop reads best
+#[allow(clippy::needless_range_loop)]
 pub fn ssim(a: &Raster, b: &Raster, data_range: f64) -> Option<f64> {
     const W: usize = 7;
     if a.dims.iter().any(|&d| d < W) {
@@ -250,7 +253,6 @@ pub fn ssim(a: &Raster, b: &Raster, data_range: f64) -> Option<f64> {
     let c1 = (0.01 * data_range).powi(2);
     let c2 = (0.03 * data_range).powi(2);
     let ch = a.channels;
-    let positions = a.positions();
     let single = a.sample_type().is_float() && a.sample_type() != SampleType::F64;
     let value = |s: &Samples, i: usize| {
         let v = s.get_f64(i);
@@ -260,32 +262,50 @@ pub fn ssim(a: &Raster, b: &Raster, data_range: f64) -> Option<f64> {
             v
         }
     };
+    let rest = &a.dims[1..];
+    let slice_len: usize = rest.iter().product();
+    let n0 = a.dims[0];
     let mut total = 0.0;
     for c in 0..ch {
-        let x: Vec<f64> = (0..positions)
-            .map(|p| value(&a.samples, p * ch + c))
-            .collect();
-        let y: Vec<f64> = (0..positions)
-            .map(|p| value(&b.samples, p * ch + c))
-            .collect();
-        let xx: Vec<f64> = x.iter().map(|v| v * v).collect();
-        let yy: Vec<f64> = y.iter().map(|v| v * v).collect();
-        let xy: Vec<f64> = x.iter().zip(&y).map(|(p, q)| p * q).collect();
-        let ux = local_mean(&x, &a.dims, W);
-        let uy = local_mean(&y, &a.dims, W);
-        let uxx = local_mean(&xx, &a.dims, W);
-        let uyy = local_mean(&yy, &a.dims, W);
-        let uxy = local_mean(&xy, &a.dims, W);
-        let mut s = 0.0;
-        for i in 0..ux.len() {
-            let vx = cov_norm * (uxx[i] - ux[i] * ux[i]);
-            let vy = cov_norm * (uyy[i] - uy[i] * uy[i]);
-            let vxy = cov_norm * (uxy[i] - ux[i] * uy[i]);
-            let num = (2.0 * ux[i] * uy[i] + c1) * (2.0 * vxy + c2);
-            let den = (ux[i] * ux[i] + uy[i] * uy[i] + c1) * (vx + vy + c2);
-            s += num / den;
+        // running sums over W slices of the five quantities, one slice long each
+        let mut run = vec![vec![0.0f64; slice_len]; 5];
+        let add = |run: &mut Vec<Vec<f64>>, z: usize, sign: f64| {
+            for p in 0..slice_len {
+                let i = (z * slice_len + p) * ch + c;
+                let (x, y) = (value(&a.samples, i), value(&b.samples, i));
+                run[0][p] += sign * x;
+                run[1][p] += sign * y;
+                run[2][p] += sign * x * x;
+                run[3][p] += sign * y * y;
+                run[4][p] += sign * x * y;
+            }
+        };
+        for z in 0..W - 1 {
+            add(&mut run, z, 1.0);
         }
-        total += s / ux.len() as f64;
+        let mut s = 0.0;
+        let mut count = 0usize;
+        for z0 in 0..=n0 - W {
+            add(&mut run, z0 + W - 1, 1.0);
+            let sums: Vec<Vec<f64>> = if rest.is_empty() {
+                run.clone()
+            } else {
+                run.iter().map(|q| box_sums(q, rest, W)).collect()
+            };
+            for i in 0..sums[0].len() {
+                let ux = sums[0][i] / np;
+                let uy = sums[1][i] / np;
+                let vx = cov_norm * (sums[2][i] / np - ux * ux);
+                let vy = cov_norm * (sums[3][i] / np - uy * uy);
+                let vxy = cov_norm * (sums[4][i] / np - ux * uy);
+                let num = (2.0 * ux * uy + c1) * (2.0 * vxy + c2);
+                let den = (ux * ux + uy * uy + c1) * (vx + vy + c2);
+                s += num / den;
+            }
+            count += sums[0].len();
+            add(&mut run, z0, -1.0);
+        }
+        total += s / count as f64;
     }
     Some(total / ch as f64)
 }

@@ -58,3 +58,20 @@ impl Progress {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn hidden_with_quiet_or_off_a_terminal() {
+        let p = Progress::new(10, "job", true);
+        assert!(!p.is_visible());
+        p.inc(3);
+        p.finish();
+        // test runners capture stderr: not a terminal, so hidden even without --quiet
+        if !std::io::stderr().is_terminal() {
+            assert!(!Progress::new(10, "job", false).is_visible());
+        }
+    }
+}

@@ -281,18 +281,13 @@ fn corpus_inputs(c: &Path) -> Vec<(PathBuf, ReadOptions)> {
     out
 }
 
-fn corpus_roundtrip(combos: &[(Scheme, Boundary)], every_file_all: bool) {
+fn corpus_roundtrip(combos: &[(Scheme, Boundary)]) {
     let Some(c) = corpus() else { return };
     let inputs = corpus_inputs(&c);
     assert!(inputs.len() >= 30, "corpus files: {}", inputs.len());
-    for (i, (path, read)) in inputs.iter().enumerate() {
+    for (path, read) in &inputs {
         let src = io::read_with(path, read).unwrap();
-        let chosen: Vec<(Scheme, Boundary)> = if every_file_all {
-            combos.to_vec()
-        } else {
-            vec![combos[i % combos.len()]]
-        };
-        for (scheme, boundary) in chosen {
+        for &(scheme, boundary) in combos {
             let s = spec(scheme, boundary, Order::NonStandard, 4);
             let (container, _) = io::array::analyze_raster(src.clone(), &s).unwrap();
             let info = io::pyramid_file::read_info(&container).unwrap();
@@ -309,15 +304,86 @@ fn all_combos() -> Vec<(Scheme, Boundary)> {
         .collect()
 }
 
-/// Each corpus file with one scheme × boundary (rotating, so all nine are used); the
-/// full sweep is `corpus_all_files_all_schemes_and_boundaries` (run with --ignored).
+/// Every image, volume and terrain file of the corpus, every scheme × boundary
+/// (non-standard order, 4 levels): ~25 s of CPU in release mode.
 #[test]
-fn corpus_files_reconstruct_exactly() {
-    corpus_roundtrip(&all_combos(), false);
+fn corpus_all_files_all_schemes_and_boundaries() {
+    corpus_roundtrip(&all_combos());
+}
+
+// ---------------------------------------------------------------- the binary
+
+fn mra(args: &[&str]) -> (i32, String) {
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_mra"))
+        .args(args)
+        .output()
+        .unwrap();
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
 }
 
 #[test]
-#[ignore = "full sweep, several minutes on 2 cores: cargo test --release -- --ignored"]
-fn corpus_all_files_all_schemes_and_boundaries() {
-    corpus_roundtrip(&all_combos(), true);
+fn cli_analyze_synthesize_roundtrip_and_errors() {
+    let dir = tmp("cli");
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let img = generate(Kind::Strokes, &[40, 52], 1, 2)
+        .unwrap()
+        .to_raster(SampleType::U8)
+        .unwrap();
+    let input = dir.join("in.png");
+    io::write(&input, &img).unwrap();
+    let p = |n: &str| dir.join(n).display().to_string();
+    let (code, err) = mra(&[
+        "analyze",
+        &p("in.png"),
+        "-o",
+        &p("pyr.tif"),
+        "--scheme",
+        "cubic",
+        "--boundary",
+        "periodic",
+        "--levels",
+        "2",
+        "--order",
+        "standard",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let (code, err) = mra(&["synthesize", &p("pyr.tif"), "-o", &p("back.png")]);
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(
+        io::read(&dir.join("back.png")).unwrap().samples,
+        img.samples
+    );
+    let before: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .collect();
+    for args in [
+        vec!["analyze", "/nonexistent/in.png", "-o", "OUT.tif"],
+        vec!["analyze", "IN", "-o", "OUT.nrrd"],
+        vec!["analyze", "IN"],
+        vec!["synthesize", "IN", "-o", "OUT.png"],
+        vec!["synthesize", "/nonexistent/pyr.tif", "-o", "OUT.png"],
+    ] {
+        let args: Vec<String> = args
+            .iter()
+            .map(|a| match *a {
+                "IN" => p("in.png"),
+                "OUT.tif" | "OUT.nrrd" | "OUT.png" => p(a),
+                other => other.to_string(),
+            })
+            .collect();
+        let a: Vec<&str> = args.iter().map(String::as_str).collect();
+        let (code, err) = mra(&a);
+        assert_eq!(code, 2, "{a:?}: {err}");
+        assert_eq!(err.trim_end().lines().count(), 1, "{a:?}: {err}");
+        let after: Vec<_> = std::fs::read_dir(&dir)
+            .unwrap()
+            .map(|e| e.unwrap().path())
+            .collect();
+        assert_eq!(after.len(), before.len(), "{a:?} left a file behind");
+    }
 }

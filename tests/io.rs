@@ -990,3 +990,63 @@ fn pyramid_pictures_stretch_each_block() {
     let (_, b) = slice(&vol, &[2, 4, 4], 1, &blocks3, 1).unwrap();
     assert!(b.is_empty());
 }
+
+#[test]
+fn corrupted_files_give_errors_not_panics() {
+    let img = random(&[12, 10], 3, SampleType::U16, 50);
+    let gray = random(&[12, 10], 1, SampleType::I16, 51);
+    let vol = random(&[3, 6, 5], 1, SampleType::F32, 52);
+    let mut encoded_files: Vec<(&str, Vec<u8>)> = vec![
+        ("png", encoded(&img, "png")),
+        ("tif", encoded(&img, "tif")),
+        (
+            "exr",
+            encoded(&random(&[12, 10], 3, SampleType::F16, 53), "exr"),
+        ),
+        ("ppm", encoded(&img, "ppm")),
+        ("nrrd", encoded(&vol, "nrrd")),
+        ("nii", encoded(&vol, "nii")),
+        ("asc", encoded(&gray, "asc")),
+    ];
+    let p = tmp("gz_src.nrrd");
+    io::write_with(&p, &vol, &io::WriteOptions { compress: true }).unwrap();
+    encoded_files.push(("nrrd", std::fs::read(&p).unwrap()));
+    let mut rng = SplitMix64::new(99);
+    for (ext, bytes) in &encoded_files {
+        let mut variants: Vec<Vec<u8>> = Vec::new();
+        for k in 1..16 {
+            variants.push(bytes[..bytes.len() * k / 16].to_vec());
+        }
+        for _ in 0..40 {
+            let mut b = bytes.clone();
+            for _ in 0..1 + rng.next_u64() % 4 {
+                let i = (rng.next_u64() % b.len() as u64) as usize;
+                b[i] = rng.next_u64() as u8;
+            }
+            variants.push(b);
+        }
+        for (i, v) in variants.iter().enumerate() {
+            let path = write_bytes(&format!("corrupt_{i}.{ext}"), v);
+            // Ok (a flipped sample value) or Err, but never a panic
+            let _ = io::read(&path);
+        }
+    }
+    // zero sizes are errors, not empty rasters
+    for (name, text) in [
+        (
+            "zero.nrrd",
+            &b"NRRD0004\ntype: uint8\ndimension: 2\nsizes: 0 4\nencoding: raw\n\n"[..],
+        ),
+        (
+            "zero.asc",
+            &b"ncols 0\nnrows 3\nxllcorner 0\nyllcorner 0\ncellsize 1\n"[..],
+        ),
+    ] {
+        let p = write_bytes(name, text);
+        assert_eq!(
+            io::read(&p).unwrap_err().kind(),
+            ErrorKind::Format,
+            "{name}"
+        );
+    }
+}

@@ -20,11 +20,14 @@ fn fixture() -> Value {
 fn assert_close(what: &str, got: Option<f64>, want: &Value, tol: f64) {
     match (got, want.as_f64()) {
         (None, None) => {}
-        (Some(g), Some(w)) => assert!(
-            (g - w).abs() <= tol,
-            "{what}: mra {g}, reference {w}, difference {} > {tol}",
-            (g - w).abs()
-        ),
+        (Some(g), Some(w)) => {
+            println!("{what}: |mra − reference| = {:.3e}", (g - w).abs());
+            assert!(
+                (g - w).abs() <= tol,
+                "{what}: mra {g}, reference {w}, difference {} > {tol}",
+                (g - w).abs()
+            )
+        }
         (g, _) => panic!("{what}: mra {g:?}, reference {want}"),
     }
 }

@@ -1,5 +1,6 @@
 //! `mra info-file`, `mra convert`, `mra compare`, `mra generate`: data in and out.
 
+use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use clap::{Args, ValueEnum};
@@ -7,6 +8,7 @@ use clap::{Args, ValueEnum};
 use super::{CliResult, Failure};
 use crate::io::{self, RawSpec, ReadOptions, SampleType};
 use crate::metrics::{self, CompareOptions, Convention};
+use crate::progress::Progress;
 
 /// Layout of headerless input (`.raw`, and non-square `.r16` / `.r32`).
 #[derive(Args, Debug, Clone, Default)]
@@ -67,6 +69,22 @@ impl RawArgs {
     }
 }
 
+/// Print `text` on standard output; a closed pipe (`mra info-file x | head -1`) is not
+/// an error.
+pub fn emit(text: &str) -> CliResult {
+    use std::io::Write as _;
+    let mut stdout = std::io::stdout().lock();
+    match stdout
+        .write_all(text.as_bytes())
+        .and_then(|_| stdout.flush())
+    {
+        Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => {
+            Err(Failure(format!("standard output: {e}")))
+        }
+        _ => Ok(()),
+    }
+}
+
 /// Read a file, naming it in any error.
 pub fn read_input(path: &Path, opts: &ReadOptions) -> Result<io::Raster, Failure> {
     io::read_with(path, opts).map_err(|e| Failure::context(path.display(), e))
@@ -104,6 +122,7 @@ pub fn info_file(a: InfoFileArgs) -> CliResult {
             .filter(|&i| r.samples.get_f64(i) == nd)
             .count()
     });
+    let mut out = String::new();
     if a.json {
         let v = serde_json::json!({
             "file": a.input.display().to_string(),
@@ -122,32 +141,43 @@ pub fn info_file(a: InfoFileArgs) -> CliResult {
             "geotiff_tags": r.meta.geotiff.iter().map(|g| g.tag).collect::<Vec<_>>(),
             "extra": r.meta.extra,
         });
-        println!("{v}");
+        let _ = writeln!(out, "{v}");
     } else {
-        println!("{}: {} {}", a.input.display(), format.name(), r.summary());
-        println!("  dims (slowest first) {:?}, range {lo} … {hi}", r.dims);
+        let _ = writeln!(
+            out,
+            "{}: {} {}",
+            a.input.display(),
+            format.name(),
+            r.summary()
+        );
+        let _ = writeln!(
+            out,
+            "  dims (slowest first) {:?}, range {lo} … {hi}",
+            r.dims
+        );
         if let Some(s) = &r.meta.spacing {
-            println!(
+            let _ = writeln!(
+                out,
                 "  spacing {:?} {}",
                 s,
                 r.meta.units.clone().unwrap_or_default()
             );
         }
         if let Some(o) = &r.meta.origin {
-            println!("  origin {o:?}");
+            let _ = writeln!(out, "  origin {o:?}");
         }
         if let (Some(nd), Some(c)) = (r.meta.nodata, nodata_count) {
-            println!("  nodata {nd}: {c} samples");
+            let _ = writeln!(out, "  nodata {nd}: {c} samples");
         }
         if !r.meta.geotiff.is_empty() {
             let tags: Vec<String> = r.meta.geotiff.iter().map(|g| g.tag.to_string()).collect();
-            println!("  GeoTIFF tags {}", tags.join(" "));
+            let _ = writeln!(out, "  GeoTIFF tags {}", tags.join(" "));
         }
         for (k, v) in &r.meta.extra {
-            println!("  {k} = {v}");
+            let _ = writeln!(out, "  {k} = {v}");
         }
     }
-    Ok(())
+    emit(&out)
 }
 
 /// Convert between formats, keeping samples exact (or converting with --dtype-out).
@@ -169,16 +199,23 @@ pub struct ConvertArgs {
     /// Compress where the format offers a choice (NRRD gzip).
     #[arg(long)]
     pub compress: bool,
+    /// No progress bar (it is drawn only on a terminal anyway).
+    #[arg(long)]
+    pub quiet: bool,
 }
 
 pub fn convert(a: ConvertArgs) -> CliResult {
     let opts = a.raw.options()?;
+    let bar = Progress::new(2, "convert", a.quiet);
     let mut r = read_input(&a.input, &opts)?;
+    bar.inc(1);
     if let Some(t) = &a.dtype_out {
         let ty = SampleType::parse(t)?;
         r.samples = io::Samples::from_f64(&r.to_f64(), ty);
     }
-    write_output(&a.output, &r, a.compress)
+    write_output(&a.output, &r, a.compress)?;
+    bar.finish();
+    Ok(())
 }
 
 #[derive(ValueEnum, Debug, Clone, Copy, PartialEq, Eq)]
@@ -209,12 +246,18 @@ pub struct CompareArgs {
     /// Which library's PSNR definition to follow.
     #[arg(long, value_enum, default_value_t = ConventionArg::Skimage)]
     pub convention: ConventionArg,
+    /// No progress bar (it is drawn only on a terminal anyway).
+    #[arg(long)]
+    pub quiet: bool,
 }
 
 pub fn compare(a: CompareArgs) -> CliResult {
     let opts = a.raw.options()?;
+    let bar = Progress::new(3, "compare", a.quiet);
     let ra = read_input(&a.a, &opts)?;
+    bar.inc(1);
     let rb = read_input(&a.b, &opts)?;
+    bar.inc(1);
     let options = CompareOptions {
         data_range: a.data_range,
         convention: match a.convention {
@@ -223,8 +266,11 @@ pub fn compare(a: CompareArgs) -> CliResult {
         },
     };
     let m = metrics::compare(&ra, &rb, &options)?;
+    bar.finish();
+    let mut out = String::new();
     if a.json {
-        println!(
+        let _ = writeln!(
+            out,
             "{}",
             serde_json::to_string(&m).map_err(|e| Failure(e.to_string()))?
         );
@@ -233,17 +279,17 @@ pub fn compare(a: CompareArgs) -> CliResult {
             .psnr
             .map(|p| format!("{p:.4} dB"))
             .unwrap_or_else(|| "inf (identical)".into());
-        println!("convention  {}", m.convention);
-        println!("data range  {}", m.data_range);
-        println!("MSE         {}", m.mse);
-        println!("PSNR        {psnr}");
-        println!("max |a-b|   {}", m.max_abs_error);
+        let _ = writeln!(out, "convention  {}", m.convention);
+        let _ = writeln!(out, "data range  {}", m.data_range);
+        let _ = writeln!(out, "MSE         {}", m.mse);
+        let _ = writeln!(out, "PSNR        {psnr}");
+        let _ = writeln!(out, "max |a-b|   {}", m.max_abs_error);
         match m.ssim {
-            Some(s) => println!("SSIM        {s:.6}"),
-            None => println!("SSIM        n/a (a side shorter than 7)"),
+            Some(s) => out += &format!("SSIM        {s:.6}\n"),
+            None => out += "SSIM        n/a (a side shorter than 7)\n",
         }
     }
-    Ok(())
+    emit(&out)
 }
 
 #[derive(ValueEnum, Debug, Clone, Copy, PartialEq, Eq)]

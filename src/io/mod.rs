@@ -359,13 +359,20 @@ pub struct Raster {
 }
 
 impl Raster {
-    /// A raster with default metadata; errors when the sample count does not match.
+    /// A raster with default metadata; errors when a size is 0 or the sample count does
+    /// not match.
     pub fn new(
         dims: Vec<usize>,
         channels: usize,
         samples: Samples,
         kind: DataKind,
     ) -> Result<Self> {
+        if dims.is_empty() || dims.contains(&0) || channels == 0 {
+            return Err(Error::format(
+                format!("empty raster: dims {dims:?}, {channels} channels"),
+                "every size and the channel count ≥ 1",
+            ));
+        }
         let n = bytes::sample_count(&dims, channels)?;
         if n != samples.len() {
             return Err(Error::format(
@@ -677,7 +684,7 @@ pub fn write(path: &Path, r: &Raster) -> Result<()> {
     write_with(path, r, &WriteOptions::default())
 }
 
-/// [`write`] with options.
+/// [`write()`] with options.
 pub fn write_with(path: &Path, r: &Raster, opts: &WriteOptions) -> Result<()> {
     let format = Format::from_extension(path).ok_or_else(|| {
         Error::parameter(

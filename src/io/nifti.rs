@@ -1,10 +1,10 @@
 //! NIfTI-1 single-file images (`.nii`, `.nii.gz`): a 348-byte header, then voxels from
 //! `vox_offset`, x fastest. Either byte order (told by `sizeof_hdr` = 348).
 //!
-//! Header fields used (byte offsets): `dim[8]` i16 @40, `datatype` i16 @70, `bitpix` @72,
-//! `pixdim[8]` f32 @76, `vox_offset` f32 @108, `scl_slope`/`scl_inter` f32 @112/116,
+//! Header fields used (byte offsets): `dim` i16×8 @40, `datatype` i16 @70, `bitpix` @72,
+//! `pixdim` f32×8 @76, `vox_offset` f32 @108, `scl_slope`/`scl_inter` f32 @112/116,
 //! `xyzt_units` u8 @123, `qform_code`/`sform_code` i16 @252/254, quaternion b c d and
-//! offsets f32 @256–276, `srow_x/y/z` f32[4] @280/296/312, magic @344.
+//! offsets f32 @256–276, `srow_x/y/z` f32×4 @280/296/312, magic @344.
 //!
 //! Voxel values are kept as stored; `scl_slope`/`scl_inter` go into
 //! `meta.extra["nifti.scl_slope"/"nifti.scl_inter"]` when the slope is set. The affine is

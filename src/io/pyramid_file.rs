@@ -134,13 +134,7 @@ pub fn write(path: &Path, r: &Raster) -> Result<()> {
 /// Read a pyramid file: the f32 coefficients as a raster and the recorded [`PyramidInfo`].
 pub fn read(path: &Path) -> Result<(Raster, PyramidInfo)> {
     let r = super::read(path)?;
-    let info = read_info(&r).map_err(|e| match e {
-        Error::Format { what, expected } => Error::Format {
-            what: format!("{what} in {}", path.display()),
-            expected,
-        },
-        e => e,
-    })?;
+    let info = read_info(&r)?;
     Ok((r, info))
 }
 
