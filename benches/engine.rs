@@ -1,1 +1,92 @@
-fn main() {}
+//! Engine throughput: forward + inverse pyramid, in MB/s of input, next to a plain copy
+//! of the same buffer timed in the same run.
+//!
+//! `cargo bench --bench engine` (set `MRA_BENCH_QUICK=1` for smaller sizes). Prints one
+//! JSON object per line plus a table; `benches/peers/pywavelets_peer.py` runs this and
+//! PyWavelets side by side.
+
+use mra::scheme::{Boundary, Scheme};
+use mra::tensor::{analyze, synthesize, Array, Order, PyramidSpec};
+use std::time::Instant;
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(|a, b| a.partial_cmp(b).unwrap());
+    v[v.len() / 2]
+}
+
+fn time<F: FnMut()>(reps: usize, mut f: F) -> f64 {
+    f(); // warm up
+    median(
+        (0..reps)
+            .map(|_| {
+                let t = Instant::now();
+                f();
+                t.elapsed().as_secs_f64()
+            })
+            .collect(),
+    )
+}
+
+fn main() {
+    let quick = std::env::var("MRA_BENCH_QUICK").is_ok();
+    let reps = if quick { 3 } else { 7 };
+    let threads = rayon::current_num_threads();
+    let cases: Vec<(Vec<usize>, usize)> = if quick {
+        vec![(vec![1024, 1024], 5), (vec![64, 64, 64], 3)]
+    } else {
+        vec![(vec![4096, 4096], 5), (vec![256, 256, 256], 3)]
+    };
+    println!("# threads: {threads}");
+    println!(
+        "{:<14} {:<8} {:<14} {:>10} {:>10} {:>8}",
+        "shape", "scheme", "boundary", "MB/s", "copy MB/s", "% copy"
+    );
+    for (shape, levels) in cases {
+        let n: usize = shape.iter().product();
+        let data: Vec<f32> = (0..n)
+            .map(|i| ((i * 2654435761) % 1000) as f32 * 0.25)
+            .collect();
+        let bytes = (n * 4) as f64;
+        let mut dst = vec![0f32; n];
+        let copy = time(reps, || {
+            dst.copy_from_slice(&data);
+            std::hint::black_box(&mut dst);
+        });
+        let copy_mbs = bytes / copy / 1e6;
+        for scheme in Scheme::ALL {
+            for boundary in Boundary::ALL {
+                let spec = PyramidSpec {
+                    scheme,
+                    boundary,
+                    levels,
+                    order: Order::NonStandard,
+                    axes: (0..shape.len()).collect(),
+                };
+                let mut a = Array::from_shape_vec(&shape, data.clone()).unwrap();
+                let t = time(reps, || {
+                    let pyr = analyze(&mut a, &spec).unwrap();
+                    synthesize(&mut a, &pyr).unwrap();
+                });
+                let mbs = bytes / t / 1e6;
+                let shape_s = shape
+                    .iter()
+                    .map(|d| d.to_string())
+                    .collect::<Vec<_>>()
+                    .join("x");
+                println!(
+                    "{:<14} {:<8} {:<14} {:>10.0} {:>10.0} {:>7.1}%",
+                    shape_s,
+                    scheme.name(),
+                    boundary.name(),
+                    mbs,
+                    copy_mbs,
+                    100.0 * mbs / copy_mbs
+                );
+                println!(
+                    "{{\"bench\":\"engine\",\"shape\":\"{shape_s}\",\"levels\":{levels},\"scheme\":\"{}\",\"boundary\":\"{}\",\"seconds\":{t},\"mb_per_s\":{mbs},\"copy_mb_per_s\":{copy_mbs},\"threads\":{threads}}}",
+                    scheme.name(), boundary.name()
+                );
+            }
+        }
+    }
+}

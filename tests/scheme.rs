@@ -30,6 +30,11 @@ fn analysis_times_synthesis_is_identity_for_every_length_up_to_96() {
         for boundary in Boundary::ALL {
             for m in 1..=96 {
                 let t = TwoScale::new(scheme, boundary, m);
+                assert_eq!(
+                    TwoScale::coarse_len(scheme, boundary, m),
+                    t.coarse,
+                    "{scheme} {boundary} m={m}"
+                );
                 let prod = dense_product(&t);
                 for i in 0..m {
                     for j in 0..m {

@@ -7,8 +7,10 @@ pub mod analyze;
 pub mod array;
 pub mod curve;
 pub mod demo;
+pub mod io_cmds;
 pub mod mesh;
 pub mod points;
+pub mod scheme;
 pub mod subdivide;
 pub mod surface;
 
@@ -39,6 +41,17 @@ pub enum Command {
     /// Polygon meshes: info, subdivision, smoothing, simplification, rendering.
     #[command(subcommand)]
     Mesh(mesh::Command),
+    /// Compare two images / volumes / heightmaps: MSE, PSNR, max error, SSIM.
+    Compare(io_cmds::CompareArgs),
+    /// Generate test data: zone plate, gradient, edges, strokes, noise, phantom, terrain.
+    Generate(io_cmds::GenerateArgs),
+    /// Show format, shape, sample type, range and metadata of a file or folder.
+    InfoFile(io_cmds::InfoFileArgs),
+    /// Convert between image / volume / heightmap formats, keeping samples exact.
+    Convert(io_cmds::ConvertArgs),
+    /// Curve subdivision schemes: eigen-analysis of a mask.
+    #[command(subcommand)]
+    Scheme(scheme::Command),
 }
 
 /// A failure on the command line: one line on stderr, exit code 2.
@@ -100,6 +113,11 @@ pub fn main() -> i32 {
         Command::Curve(c) => curve::run(c),
         Command::Surface(c) => surface::run(c),
         Command::Mesh(c) => mesh::run(c),
+        Command::Compare(a) => io_cmds::compare(a),
+        Command::Generate(a) => io_cmds::generate(a),
+        Command::InfoFile(a) => io_cmds::info_file(a),
+        Command::Convert(a) => io_cmds::convert(a),
+        Command::Scheme(c) => scheme::run(c),
     };
     match result {
         Ok(()) => 0,

@@ -44,34 +44,44 @@ pub struct TwoScale {
     pub synthesis: Csr,
 }
 
+/// The coarse length of a lane of `m` if `m` is native for the scheme, else `None`.
+fn native_len(scheme: Scheme, boundary: Boundary, m: usize) -> Option<usize> {
+    use Boundary::*;
+    let even = m % 2 == 0;
+    match (scheme, boundary) {
+        (Scheme::Haar, _) => (m >= 2 && even).then_some(m / 2),
+        (Scheme::Chaikin, Interpolating) => {
+            (m >= chaikin::MIN_INTERPOLATING && even).then_some(m / 2 + 1)
+        }
+        (Scheme::Chaikin, Periodic) => (m >= 4 && even).then_some(m / 2),
+        (Scheme::Chaikin, Symmetric) => (m >= 3).then_some(m / 2 + 1),
+        (Scheme::Cubic, Interpolating) => {
+            (m >= cubic::MIN_INTERPOLATING && !even).then_some((m + 3) / 2)
+        }
+        (Scheme::Cubic, Periodic) => (m >= 8 && even).then_some(m / 2),
+        (Scheme::Cubic, Symmetric) => (m >= 3).then_some(m.div_ceil(2)),
+    }
+}
+
 fn native(scheme: Scheme, boundary: Boundary, m: usize) -> Option<LevelTriplets> {
     use Boundary::*;
-    match (scheme, boundary) {
-        (Scheme::Haar, _) => (m >= 2 && m % 2 == 0).then(|| haar::level(m)),
-        (Scheme::Chaikin, Interpolating) => {
-            (m >= chaikin::MIN_INTERPOLATING && m % 2 == 0).then(|| chaikin::interpolating(m))
-        }
-        (Scheme::Chaikin, Periodic) => {
-            (m >= 4 && m % 2 == 0).then(|| regular::periodic(&chaikin::REGULAR, m))
-        }
-        (Scheme::Chaikin, Symmetric) => {
-            (m >= 3).then(|| regular::symmetric(&chaikin::REGULAR, m, false))
-        }
-        (Scheme::Cubic, Interpolating) => {
-            (m >= cubic::MIN_INTERPOLATING && m % 2 == 1).then(|| cubic::interpolating(m))
-        }
-        (Scheme::Cubic, Periodic) => {
-            (m >= 8 && m % 2 == 0).then(|| regular::periodic(&cubic::REGULAR, m))
-        }
-        (Scheme::Cubic, Symmetric) => {
-            (m >= 3).then(|| regular::symmetric(&cubic::REGULAR, m, true))
-        }
-    }
+    native_len(scheme, boundary, m)?;
+    Some(match (scheme, boundary) {
+        (Scheme::Haar, _) => haar::level(m),
+        (Scheme::Chaikin, Interpolating) => chaikin::interpolating(m),
+        (Scheme::Chaikin, Periodic) => regular::periodic(&chaikin::REGULAR, m),
+        (Scheme::Chaikin, Symmetric) => regular::symmetric(&chaikin::REGULAR, m, false),
+        (Scheme::Cubic, Interpolating) => cubic::interpolating(m),
+        (Scheme::Cubic, Periodic) => regular::periodic(&cubic::REGULAR, m),
+        (Scheme::Cubic, Symmetric) => regular::symmetric(&cubic::REGULAR, m, true),
+    })
 }
 
 /// Whether the scheme's own filters reduce a lane of length `m` (natively or by carry).
 pub fn reducible(scheme: Scheme, boundary: Boundary, m: usize) -> bool {
-    m >= 2 && (native(scheme, boundary, m).is_some() || native(scheme, boundary, m - 1).is_some())
+    m >= 2
+        && (native_len(scheme, boundary, m).is_some()
+            || native_len(scheme, boundary, m - 1).is_some())
 }
 
 /// How many levels the scheme's own filters can take a lane of length `m` down.
@@ -136,8 +146,15 @@ impl TwoScale {
 
     /// Coarse length after one level, without building the operators.
     pub fn coarse_len(scheme: Scheme, boundary: Boundary, m: usize) -> usize {
-        // cheap enough: the operators are O(m); lengths are computed once per pyramid
-        TwoScale::new(scheme, boundary, m).coarse
+        if m <= 1 {
+            m
+        } else if let Some(n) = native_len(scheme, boundary, m) {
+            n
+        } else if let Some(n) = native_len(scheme, boundary, m - 1) {
+            n + 1
+        } else {
+            m.div_ceil(2)
+        }
     }
 
     pub fn details(&self) -> usize {

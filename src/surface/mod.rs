@@ -1,1 +1,86 @@
-//! (to be written: see the issue for the surface module)
+//! Surfaces of the course module (notes ch. 5), each tessellated to a triangle or quad mesh with
+//! vertex normals `N = ∂Q/∂u × ∂Q/∂v` (§5.1.1).
+//!
+//! ```text
+//! patch.rs    tensor-product Bézier / B-spline / NURBS patches; exact NURBS sphere, torus, cylinder
+//! common.rs   curve-based surfaces (§5.2): loft, Coons, revolution, rotational and cross-sectional blends
+//! sweep.rs    sweep surfaces with a rotation-minimising (parallel transport) frame (§5.2.5, Alg. 5.2)
+//! mesh.rs     sampling a surface on a grid: vertices, normals, triangles or quads
+//! io.rs       a minimal OBJ / PLY writer and OBJ reader (to be swapped for src/mesh's I/O)
+//! render.rs   z-buffered, shaded PNG preview of a mesh
+//! raster.rs   tiny RGB canvas and PNG encoding for previews
+//! ```
+
+pub mod common;
+pub mod io;
+pub mod mesh;
+pub mod patch;
+pub mod raster;
+pub mod render;
+pub mod sweep;
+
+pub use common::{Coons, CrossBlend, Loft, Revolution, RotationalBlend};
+pub use mesh::{tessellate, FaceKind, Mesh};
+pub use patch::TensorPatch;
+pub use sweep::Sweep;
+
+use crate::Result;
+
+/// A parametric surface `Q(u, v)` in 3D.
+pub trait Surface {
+    /// Parameter ranges `([u0, u1], [v0, v1])`.
+    fn ranges(&self) -> ((f64, f64), (f64, f64));
+    /// The point `Q(u, v)`.
+    fn point(&self, u: f64, v: f64) -> Result<[f64; 3]>;
+    /// `[Q, ∂Q/∂u, ∂Q/∂v]`. The default uses central differences (one-sided at the ends of the
+    /// ranges) with a step of 1e-6 of the range; exact forms override it.
+    fn partials(&self, u: f64, v: f64) -> Result<[[f64; 3]; 3]> {
+        let ((u0, u1), (v0, v1)) = self.ranges();
+        let q = self.point(u, v)?;
+        let diff =
+            |a: f64, b: f64, x: f64, f: &dyn Fn(f64) -> Result<[f64; 3]>| -> Result<[f64; 3]> {
+                let h = 1e-6 * (b - a);
+                let (lo, hi) = ((x - h).max(a), (x + h).min(b));
+                let (p, m) = (f(hi)?, f(lo)?);
+                Ok([
+                    (p[0] - m[0]) / (hi - lo),
+                    (p[1] - m[1]) / (hi - lo),
+                    (p[2] - m[2]) / (hi - lo),
+                ])
+            };
+        let qu = diff(u0, u1, u, &|x| self.point(x, v))?;
+        let qv = diff(v0, v1, v, &|y| self.point(u, y))?;
+        Ok([q, qu, qv])
+    }
+}
+
+pub(crate) fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+pub(crate) fn add(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
+}
+pub(crate) fn scale(a: [f64; 3], s: f64) -> [f64; 3] {
+    [a[0] * s, a[1] * s, a[2] * s]
+}
+pub(crate) fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+pub(crate) fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+pub(crate) fn norm(a: [f64; 3]) -> f64 {
+    dot(a, a).sqrt()
+}
+pub(crate) fn normalize(a: [f64; 3]) -> Option<[f64; 3]> {
+    let l = norm(a);
+    if l > 0.0 && l.is_finite() {
+        Some(scale(a, 1.0 / l))
+    } else {
+        None
+    }
+}

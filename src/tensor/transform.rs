@@ -17,9 +17,9 @@ use crate::scheme::Sample;
 /// Elements narrower than this go through gather mode.
 const ROW_MIN: usize = 32;
 /// Samples per strip in row mode.
-const STRIP: usize = 512;
+const STRIP: usize = 128;
 /// Target width of a gathered element in gather mode.
-const GATHER: usize = 64;
+const GATHER: usize = 32;
 
 /// Offsets of the first element of every lane set: all index combinations in the region
 /// over the axes other than `skip` (and other than the last axis when `skip_last`).
@@ -112,31 +112,69 @@ pub fn transform_axis<T: Sample>(
                 let lanes = &bases[task * g..(task * g + g).min(bases.len())];
                 let p = ptr;
                 // SAFETY: the lanes of this group are disjoint from every other group's.
-                unsafe {
-                    for (gi, &b) in lanes.iter().enumerate() {
-                        for i in 0..len {
-                            std::ptr::copy_nonoverlapping(
-                                p.0.add(b + i * es),
-                                sin.as_mut_ptr().add(i * gw + gi * w),
-                                w,
-                            );
-                        }
-                    }
-                }
+                unsafe { gather(p.0 as *const T, lanes, es, w, len, sin, gw) };
                 let cw = lanes.len() * w;
                 op.apply(sin, gw, sout, gw, cw);
-                unsafe {
-                    for (gi, &b) in lanes.iter().enumerate() {
-                        for i in 0..len {
-                            std::ptr::copy_nonoverlapping(
-                                sout.as_ptr().add(i * gw + gi * w),
-                                p.0.add(b + i * es),
-                                w,
-                            );
-                        }
-                    }
-                }
+                unsafe { scatter(sout, gw, p.0, lanes, es, w, len) };
             },
         );
+    }
+}
+
+/// Elements per tile of the blocked transposes below.
+const TILE: usize = 16;
+
+/// Gather lane `g` (elements of `w` samples at stride `es` from `data + bases[g]`) into
+/// columns `g·w .. g·w + w` of `dst` (element stride `ds`). Blocked by tiles of [`TILE`]
+/// elements: within a tile each source lane is read in order (one cache line for
+/// contiguous lanes) and the few scratch rows it writes stay in L1; a plain
+/// lane-by-lane loop streams the whole scratch once per lane, an element-by-element loop
+/// touches every lane's page for every element.
+///
+/// # Safety
+/// The lanes' elements must be valid for reads and not written concurrently.
+#[inline]
+unsafe fn gather<T: Sample>(
+    data: *const T,
+    bases: &[usize],
+    es: usize,
+    w: usize,
+    len: usize,
+    dst: &mut [T],
+    ds: usize,
+) {
+    for i0 in (0..len).step_by(TILE) {
+        let i1 = (i0 + TILE).min(len);
+        for (g, &b) in bases.iter().enumerate() {
+            for i in i0..i1 {
+                let src = unsafe { std::slice::from_raw_parts(data.add(b + i * es), w) };
+                dst[i * ds + g * w..i * ds + g * w + w].copy_from_slice(src);
+            }
+        }
+    }
+}
+
+/// The inverse of [`gather`].
+///
+/// # Safety
+/// The lanes' elements must be valid for writes and touched by no other thread.
+#[inline]
+unsafe fn scatter<T: Sample>(
+    src: &[T],
+    ss: usize,
+    data: *mut T,
+    bases: &[usize],
+    es: usize,
+    w: usize,
+    len: usize,
+) {
+    for i0 in (0..len).step_by(TILE) {
+        let i1 = (i0 + TILE).min(len);
+        for (g, &b) in bases.iter().enumerate() {
+            for i in i0..i1 {
+                let dst = unsafe { std::slice::from_raw_parts_mut(data.add(b + i * es), w) };
+                dst.copy_from_slice(&src[i * ss + g * w..i * ss + g * w + w]);
+            }
+        }
     }
 }

@@ -1,0 +1,52 @@
+#!/usr/bin/env python3
+"""Engine throughput next to PyWavelets, measured in one run.
+
+    pip install pywavelets numpy
+    python3 benches/peers/pywavelets_peer.py [--quick]
+
+Times PyWavelets `wavedec2` + `waverec2` (bior2.2, mode symmetric, 5 levels) on a
+4096x4096 float32 image, then runs `cargo bench --bench engine` (mra forward + inverse,
+5 levels, the same size, plus a plain copy of the buffer) and prints one table.
+"""
+import json, os, subprocess, sys, time
+import numpy as np
+import pywt
+
+quick = "--quick" in sys.argv
+n = 1024 if quick else 4096
+reps = 3 if quick else 5
+img = (np.arange(n * n, dtype=np.float64) * 2654435761 % 1000).astype(np.float32).reshape(n, n) * 0.25
+
+def bench(f):
+    f()
+    ts = []
+    for _ in range(reps):
+        t = time.perf_counter(); f(); ts.append(time.perf_counter() - t)
+    return sorted(ts)[len(ts) // 2]
+
+def pywt_roundtrip():
+    c = pywt.wavedec2(img, "bior2.2", mode="symmetric", level=5)
+    pywt.waverec2(c, "bior2.2", mode="symmetric")
+
+t_pywt = bench(pywt_roundtrip)
+mb = img.nbytes / 1e6
+env = dict(os.environ)
+if quick:
+    env["MRA_BENCH_QUICK"] = "1"
+root = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+out = subprocess.run(["cargo", "bench", "--bench", "engine"], cwd=root, env=env,
+                     capture_output=True, text=True, check=True).stdout
+rows = [json.loads(l) for l in out.splitlines() if l.startswith("{")]
+shape = f"{n}x{n}"
+print(f"PyWavelets {pywt.__version__} bior2.2 symmetric 5 levels {shape} f32: {t_pywt*1e3:.0f} ms = {mb / t_pywt:.0f} MB/s")
+print(f"{'scheme':<8} {'boundary':<14} {'mra MB/s':>9} {'x PyWavelets':>13} {'% of copy':>10}")
+for r in rows:
+    if r["shape"] != shape:
+        continue
+    print(f"{r['scheme']:<8} {r['boundary']:<14} {r['mb_per_s']:>9.0f} {r['mb_per_s'] / (mb / t_pywt):>12.1f}x "
+          f"{100 * r['mb_per_s'] / r['copy_mb_per_s']:>9.1f}%")
+print(f"copy: {rows[0]['copy_mb_per_s']:.0f} MB/s; pywt is {100 * (mb / t_pywt) / rows[0]['copy_mb_per_s']:.1f}% of copy")
+for r in rows:
+    if r["shape"] != shape:
+        print(f"3D {r['shape']} {r['levels']} levels {r['scheme']:<8} {r['boundary']:<14} {r['mb_per_s']:>7.0f} MB/s "
+              f"({100 * r['mb_per_s'] / r['copy_mb_per_s']:.1f}% of copy)")

@@ -1,0 +1,153 @@
+//! ESRI ASCII grid (`.asc`): six header lines (`ncols`, `nrows`, `xllcorner` or
+//! `xllcenter`, `yllcorner` or `yllcenter`, `cellsize`, optional `NODATA_value`), then
+//! `nrows` rows of `ncols` numbers, north row first. All-integer grids read as i32,
+//! others as f64; `NODATA_value` becomes `meta.nodata`, the corner / centre and cell
+//! size go into `meta.extra` (`asc.xllcorner`, …) and `meta.spacing`.
+
+use std::io::Write;
+use std::path::Path;
+
+use super::bytes::{self, sample_count};
+use super::{DataKind, Raster, Samples};
+use crate::{Error, Result};
+
+fn bad(what: impl std::fmt::Display) -> Error {
+    Error::format(what, "a valid ESRI ASCII grid")
+}
+
+/// Read an ESRI ASCII grid.
+pub fn read(path: &Path) -> Result<Raster> {
+    let raw = bytes::read_all(path)?;
+    let text = std::str::from_utf8(&raw).map_err(|_| bad("file is not text"))?;
+    let mut tokens = text.split_ascii_whitespace().peekable();
+    let mut header: Vec<(String, String)> = Vec::new();
+    while let Some(&t) = tokens.peek() {
+        if t.starts_with(|c: char| c.is_ascii_alphabetic()) {
+            let key = tokens.next().unwrap().to_ascii_lowercase();
+            let val = tokens
+                .next()
+                .ok_or_else(|| bad(format!("no value for {key}")))?;
+            header.push((key, val.to_string()));
+        } else {
+            break;
+        }
+    }
+    let get = |k: &str| {
+        header
+            .iter()
+            .find(|(key, _)| key == k)
+            .map(|(_, v)| v.as_str())
+    };
+    let num = |k: &str| -> Result<usize> {
+        get(k)
+            .ok_or_else(|| bad(format!("no {k} in the header")))?
+            .parse::<usize>()
+            .map_err(|_| bad(format!("{k} is not a count")))
+    };
+    let (ncols, nrows) = (num("ncols")?, num("nrows")?);
+    let n = sample_count(&[nrows, ncols], 1)?;
+    // at least two bytes of text per value: check before allocating
+    if n as u64 > raw.len() as u64 / 2 + 1 {
+        return Err(bad(format!(
+            "header declares {nrows}x{ncols} values but the file holds {} bytes",
+            raw.len()
+        )));
+    }
+    let mut ints: Option<Vec<i32>> = Some(Vec::with_capacity(n));
+    let mut floats: Vec<f64> = Vec::with_capacity(n);
+    for t in tokens.by_ref().take(n) {
+        let v: f64 = t
+            .parse()
+            .map_err(|_| bad(format!("value {t:?} is not a number")))?;
+        floats.push(v);
+        if let Some(iv) = ints.as_mut() {
+            match t.parse::<i32>() {
+                Ok(i) => iv.push(i),
+                Err(_) => ints = None,
+            }
+        }
+    }
+    if floats.len() < n {
+        return Err(bad(format!(
+            "{} values for {nrows}x{ncols} cells",
+            floats.len()
+        )));
+    }
+    let samples = match ints {
+        Some(v) => Samples::I32(v),
+        None => Samples::F64(floats),
+    };
+    let mut r = Raster::new(vec![nrows, ncols], 1, samples, DataKind::Heightmap)?;
+    for (k, v) in &header {
+        if k != "ncols" && k != "nrows" {
+            r.meta.extra.insert(format!("asc.{k}"), v.clone());
+        }
+    }
+    if let Some(nd) = get("nodata_value") {
+        r.meta.nodata = nd.parse().ok();
+    }
+    if let Some(cs) = get("cellsize").and_then(|c| c.parse::<f64>().ok()) {
+        r.meta.spacing = Some(vec![cs, cs]);
+    } else if let (Some(dx), Some(dy)) = (
+        get("dx").and_then(|c| c.parse::<f64>().ok()),
+        get("dy").and_then(|c| c.parse::<f64>().ok()),
+    ) {
+        r.meta.spacing = Some(vec![dy, dx]);
+    }
+    Ok(r)
+}
+
+/// Write a single-channel 2-D raster as an ESRI ASCII grid (integers as integers,
+/// floats in shortest round-trip form). Header fields come from `meta.extra["asc.*"]`
+/// when present, else corner 0,0 and the spacing (or 1).
+pub fn write<W: Write>(w: &mut W, r: &Raster) -> Result<()> {
+    if r.dims.len() != 2 || r.channels != 1 {
+        return Err(Error::Unsupported {
+            what: "ASC output",
+            value: format!("{} (expected a single-channel 2-D grid)", r.summary()),
+        });
+    }
+    let mut s = format!("ncols {}\nnrows {}\n", r.width(), r.height());
+    let ex = |k: &str| r.meta.extra.get(&format!("asc.{k}"));
+    let x = ex("xllcorner").map(|v| ("xllcorner", v.clone()));
+    let x = x.or_else(|| ex("xllcenter").map(|v| ("xllcenter", v.clone())));
+    let (xk, xv) = x.unwrap_or(("xllcorner", "0".into()));
+    let y = ex("yllcorner").map(|v| ("yllcorner", v.clone()));
+    let y = y.or_else(|| ex("yllcenter").map(|v| ("yllcenter", v.clone())));
+    let (yk, yv) = y.unwrap_or(("yllcorner", "0".into()));
+    s += &format!("{xk} {xv}\n{yk} {yv}\n");
+    let cs = ex("cellsize").cloned().unwrap_or_else(|| {
+        r.meta
+            .spacing
+            .as_ref()
+            .map(|sp| sp[1].to_string())
+            .unwrap_or_else(|| "1".into())
+    });
+    s += &format!("cellsize {cs}\n");
+    if let Some(nd) = ex("nodata_value") {
+        s += &format!("NODATA_value {nd}\n");
+    } else if let Some(nd) = r.meta.nodata {
+        s += &format!("NODATA_value {nd}\n");
+    }
+    w.write_all(s.as_bytes())?;
+    let wdt = r.width();
+    let mut line = String::new();
+    for row in 0..r.height() {
+        line.clear();
+        for col in 0..wdt {
+            if col > 0 {
+                line.push(' ');
+            }
+            let i = row * wdt + col;
+            match &r.samples {
+                Samples::F64(v) => line += &v[i].to_string(),
+                Samples::F32(v) => line += &v[i].to_string(),
+                Samples::F16(v) => line += &v[i].to_string(),
+                other => line += &(other.get_f64(i) as i64).to_string(),
+            }
+        }
+        line.push('\n');
+        w.write_all(line.as_bytes())?;
+    }
+    Ok(())
+}

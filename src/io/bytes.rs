@@ -1,0 +1,175 @@
+//! Byte-level helpers shared by the readers and writers: sizes checked before any
+//! allocation, endian decoding and encoding of sample arrays, and atomic writes
+//! (temporary file in the same folder, renamed when complete).
+
+use std::fs::File;
+use std::io::{BufWriter, Read, Write};
+use std::path::{Path, PathBuf};
+
+use byteorder::{BigEndian, ByteOrder, LittleEndian};
+
+use super::{SampleType, Samples, MAX_SAMPLES};
+use crate::{Error, Result};
+
+/// Read up to `buf.len()` bytes from the start of `path`; returns how many were read.
+pub fn read_head(path: &Path, buf: &mut [u8]) -> Result<usize> {
+    let mut f = File::open(path)?;
+    let mut n = 0;
+    while n < buf.len() {
+        let k = f.read(&mut buf[n..])?;
+        if k == 0 {
+            break;
+        }
+        n += k;
+    }
+    Ok(n)
+}
+
+/// `dims[0] × dims[1] × … × channels`, or [`Error::LimitsExceeded`] when it overflows or
+/// exceeds [`MAX_SAMPLES`].
+pub fn sample_count(dims: &[usize], channels: usize) -> Result<usize> {
+    let mut n: u64 = channels as u64;
+    for &d in dims {
+        n = n.checked_mul(d as u64).ok_or(Error::LimitsExceeded {
+            what: "sample count",
+            requested: u64::MAX,
+            limit: MAX_SAMPLES,
+        })?;
+    }
+    if n > MAX_SAMPLES {
+        return Err(Error::LimitsExceeded {
+            what: "sample count",
+            requested: n,
+            limit: MAX_SAMPLES,
+        });
+    }
+    Ok(n as usize)
+}
+
+/// Bytes needed for `dims × channels` samples of `ty`, checked against `available`
+/// (what the file holds) before anything is allocated.
+pub fn checked_bytes(
+    dims: &[usize],
+    channels: usize,
+    ty: SampleType,
+    available: u64,
+) -> Result<usize> {
+    let n = sample_count(dims, channels)?;
+    let need = (n as u64)
+        .checked_mul(ty.size() as u64)
+        .ok_or(Error::LimitsExceeded {
+            what: "data size",
+            requested: u64::MAX,
+            limit: MAX_SAMPLES,
+        })?;
+    if need > available {
+        return Err(Error::format(
+            format!(
+                "header declares {need} bytes of data ({} × {} channels × {} bytes) but the file holds {available}",
+                dims.iter().map(|d| d.to_string()).collect::<Vec<_>>().join("×"),
+                channels,
+                ty.size()
+            ),
+            "a data size that fits the file",
+        ));
+    }
+    Ok(need as usize)
+}
+
+/// Decode `bytes` (exactly `n × ty.size()` long) as samples of `ty`.
+pub fn decode(bytes: &[u8], ty: SampleType, big_endian: bool) -> Samples {
+    fn conv<T, F: Fn(&[u8]) -> T>(b: &[u8], size: usize, f: F) -> Vec<T> {
+        b.chunks_exact(size).map(f).collect()
+    }
+    macro_rules! endian {
+        ($read:ident) => {
+            if big_endian {
+                |c: &[u8]| BigEndian::$read(c)
+            } else {
+                |c: &[u8]| LittleEndian::$read(c)
+            }
+        };
+    }
+    match ty {
+        SampleType::U8 => Samples::U8(bytes.to_vec()),
+        SampleType::I8 => Samples::I8(bytes.iter().map(|&b| b as i8).collect()),
+        SampleType::U16 => Samples::U16(conv(bytes, 2, endian!(read_u16))),
+        SampleType::I16 => Samples::I16(conv(bytes, 2, endian!(read_i16))),
+        SampleType::U32 => Samples::U32(conv(bytes, 4, endian!(read_u32))),
+        SampleType::I32 => Samples::I32(conv(bytes, 4, endian!(read_i32))),
+        SampleType::F16 => {
+            let bits: Vec<u16> = conv(bytes, 2, endian!(read_u16));
+            Samples::F16(bits.into_iter().map(half::f16::from_bits).collect())
+        }
+        SampleType::F32 => Samples::F32(conv(bytes, 4, endian!(read_f32))),
+        SampleType::F64 => Samples::F64(conv(bytes, 8, endian!(read_f64))),
+    }
+}
+
+/// Encode samples as bytes in the given byte order.
+pub fn encode(s: &Samples, big_endian: bool) -> Vec<u8> {
+    macro_rules! enc {
+        ($v:expr, $size:expr, $write:ident) => {{
+            let mut out = vec![0u8; $v.len() * $size];
+            for (c, &x) in out.chunks_exact_mut($size).zip($v.iter()) {
+                if big_endian {
+                    BigEndian::$write(c, x);
+                } else {
+                    LittleEndian::$write(c, x);
+                }
+            }
+            out
+        }};
+    }
+    match s {
+        Samples::U8(v) => v.clone(),
+        Samples::I8(v) => v.iter().map(|&x| x as u8).collect(),
+        Samples::U16(v) => enc!(v, 2, write_u16),
+        Samples::I16(v) => enc!(v, 2, write_i16),
+        Samples::U32(v) => enc!(v, 4, write_u32),
+        Samples::I32(v) => enc!(v, 4, write_i32),
+        Samples::F16(v) => {
+            let bits: Vec<u16> = v.iter().map(|x| x.to_bits()).collect();
+            enc!(bits, 2, write_u16)
+        }
+        Samples::F32(v) => enc!(v, 4, write_f32),
+        Samples::F64(v) => enc!(v, 8, write_f64),
+    }
+}
+
+/// The temporary name used while `path` is being written.
+pub fn temp_path(path: &Path) -> PathBuf {
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    path.with_file_name(format!(".{name}.mra-tmp-{}", std::process::id()))
+}
+
+/// Write through `body` into a temporary file beside `path`, then rename it onto
+/// `path`. On any error the temporary file is removed and `path` is untouched.
+pub fn atomic_write<F>(path: &Path, body: F) -> Result<()>
+where
+    F: FnOnce(&mut BufWriter<File>) -> Result<()>,
+{
+    let tmp = temp_path(path);
+    let result = (|| {
+        let mut w = BufWriter::new(File::create(&tmp)?);
+        body(&mut w)?;
+        w.flush()?;
+        let f = w.into_inner().map_err(|e| e.into_error())?;
+        f.sync_all().ok();
+        drop(f);
+        std::fs::rename(&tmp, path)?;
+        Ok(())
+    })();
+    if result.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    result
+}
+
+/// Read a whole file, refusing files larger than `limit` bytes.
+pub fn read_all(path: &Path) -> Result<Vec<u8>> {
+    Ok(std::fs::read(path)?)
+}

@@ -1,0 +1,341 @@
+//! DICOM through `dicom-object`: one file as a 2-D slice, or a folder holding one series
+//! as a volume. Only uncompressed pixel data (implicit / explicit VR little endian) is
+//! read; compressed transfer syntaxes are reported as unsupported.
+//!
+//! Slices are ordered by their position along the slice normal
+//! `n = row cosines × column cosines` (`ImagePositionPatient · n`); the slice step is the
+//! median distance between consecutive positions. Stored values are masked to
+//! `BitsStored` (sign-extended when `PixelRepresentation` = 1), then rescaled
+//! `v = stored × RescaleSlope + RescaleIntercept`: the result is i16 when the slope is 1,
+//! the intercept is an integer and every value fits, the stored type when there is no
+//! rescale, and f32 otherwise. Spacing `[step, PixelSpacing row, PixelSpacing column]`
+//! (mm), origin = `ImagePositionPatient` of the first slice.
+
+use std::path::{Path, PathBuf};
+
+use dicom_object::{open_file, DefaultDicomObject, Tag};
+
+use super::{DataKind, Raster, SampleType, Samples};
+use crate::{Error, Result};
+
+const ROWS: Tag = Tag(0x0028, 0x0010);
+const COLUMNS: Tag = Tag(0x0028, 0x0011);
+const SAMPLES_PER_PIXEL: Tag = Tag(0x0028, 0x0002);
+const BITS_ALLOCATED: Tag = Tag(0x0028, 0x0100);
+const BITS_STORED: Tag = Tag(0x0028, 0x0101);
+const PIXEL_REPRESENTATION: Tag = Tag(0x0028, 0x0103);
+const RESCALE_INTERCEPT: Tag = Tag(0x0028, 0x1052);
+const RESCALE_SLOPE: Tag = Tag(0x0028, 0x1053);
+const PIXEL_SPACING: Tag = Tag(0x0028, 0x0030);
+const SLICE_THICKNESS: Tag = Tag(0x0018, 0x0050);
+const IMAGE_POSITION: Tag = Tag(0x0020, 0x0032);
+const IMAGE_ORIENTATION: Tag = Tag(0x0020, 0x0037);
+const SERIES_UID: Tag = Tag(0x0020, 0x000E);
+const MODALITY: Tag = Tag(0x0008, 0x0060);
+const PIXEL_DATA: Tag = Tag(0x7FE0, 0x0010);
+
+const UNCOMPRESSED: [&str; 3] = [
+    "1.2.840.10008.1.2",
+    "1.2.840.10008.1.2.1",
+    "1.2.840.10008.1.2.1.99",
+];
+
+/// One decoded slice with what ordering and rescaling need.
+struct Slice {
+    rows: usize,
+    cols: usize,
+    stored: Vec<i64>,
+    slope: f64,
+    intercept: f64,
+    position: Option<[f64; 3]>,
+    orientation: Option<[f64; 6]>,
+    pixel_spacing: Option<[f64; 2]>,
+    thickness: Option<f64>,
+    series: String,
+    modality: String,
+    stored_type: SampleType,
+}
+
+fn bad(path: &Path, what: impl std::fmt::Display) -> Error {
+    Error::format(
+        format!("{}: {what}", path.display()),
+        "an uncompressed DICOM image",
+    )
+}
+
+fn int(obj: &DefaultDicomObject, tag: Tag) -> Option<i64> {
+    obj.element_opt(tag).ok().flatten()?.to_int::<i64>().ok()
+}
+
+fn float(obj: &DefaultDicomObject, tag: Tag) -> Option<f64> {
+    obj.element_opt(tag).ok().flatten()?.to_float64().ok()
+}
+
+fn floats(obj: &DefaultDicomObject, tag: Tag) -> Option<Vec<f64>> {
+    obj.element_opt(tag).ok().flatten()?.to_multi_float64().ok()
+}
+
+fn text(obj: &DefaultDicomObject, tag: Tag) -> String {
+    obj.element_opt(tag)
+        .ok()
+        .flatten()
+        .and_then(|e| {
+            e.to_str()
+                .ok()
+                .map(|s| s.trim().trim_end_matches('\0').to_string())
+        })
+        .unwrap_or_default()
+}
+
+fn load_slice(path: &Path) -> Result<Slice> {
+    let obj = open_file(path).map_err(|e| bad(path, format!("cannot parse: {e}")))?;
+    let ts = obj.meta().transfer_syntax().to_string();
+    if !UNCOMPRESSED.contains(&ts.as_str()) {
+        return Err(Error::Unsupported {
+            what: "DICOM transfer syntax",
+            value: format!(
+                "{ts} in {} (only uncompressed little endian)",
+                path.display()
+            ),
+        });
+    }
+    let rows = int(&obj, ROWS).ok_or_else(|| bad(path, "no Rows"))? as usize;
+    let cols = int(&obj, COLUMNS).ok_or_else(|| bad(path, "no Columns"))? as usize;
+    let spp = int(&obj, SAMPLES_PER_PIXEL).unwrap_or(1);
+    if spp != 1 {
+        return Err(Error::Unsupported {
+            what: "DICOM samples per pixel",
+            value: format!("{spp} (expected 1)"),
+        });
+    }
+    let alloc = int(&obj, BITS_ALLOCATED).unwrap_or(16);
+    let bits_stored = int(&obj, BITS_STORED)
+        .unwrap_or(alloc)
+        .clamp(1, alloc.max(1));
+    let signed = int(&obj, PIXEL_REPRESENTATION).unwrap_or(0) == 1;
+    let n = rows
+        .checked_mul(cols)
+        .ok_or_else(|| bad(path, "Rows × Columns overflows"))?;
+    let elem = obj
+        .element(PIXEL_DATA)
+        .map_err(|_| bad(path, "no PixelData"))?;
+    let prim = elem.value().primitive().ok_or_else(|| Error::Unsupported {
+        what: "DICOM pixel data",
+        value: "encapsulated (compressed) fragments".into(),
+    })?;
+    use dicom_core::value::PrimitiveValue as P;
+    let raw: Vec<i64> = match (alloc, prim) {
+        (16, P::U16(v)) => v.iter().map(|&x| x as i64).collect(),
+        (16, P::I16(v)) => v.iter().map(|&x| x as u16 as i64).collect(),
+        (16, P::U8(b)) => b
+            .chunks_exact(2)
+            .map(|c| u16::from_le_bytes([c[0], c[1]]) as i64)
+            .collect(),
+        (8, P::U8(b)) => b.iter().map(|&x| x as i64).collect(),
+        (8, P::U16(v)) => v
+            .iter()
+            .flat_map(|x| x.to_le_bytes())
+            .map(|x| x as i64)
+            .collect(),
+        (a, _) => {
+            return Err(Error::Unsupported {
+                what: "DICOM BitsAllocated",
+                value: format!("{a} (expected 8 or 16)"),
+            })
+        }
+    };
+    if raw.len() < n {
+        return Err(bad(
+            path,
+            format!("PixelData holds {} samples for {rows}x{cols}", raw.len()),
+        ));
+    }
+    let mask = (1i64 << bits_stored) - 1;
+    let stored: Vec<i64> = raw[..n]
+        .iter()
+        .map(|&x| {
+            let v = x & mask;
+            if signed && v >> (bits_stored - 1) & 1 == 1 {
+                v - (1i64 << bits_stored)
+            } else {
+                v
+            }
+        })
+        .collect();
+    let stored_type = match (alloc, signed) {
+        (8, false) => SampleType::U8,
+        (8, true) => SampleType::I8,
+        (_, false) => SampleType::U16,
+        (_, true) => SampleType::I16,
+    };
+    let arr3 = |v: Option<Vec<f64>>| v.filter(|v| v.len() == 3).map(|v| [v[0], v[1], v[2]]);
+    Ok(Slice {
+        rows,
+        cols,
+        stored,
+        slope: float(&obj, RESCALE_SLOPE).unwrap_or(1.0),
+        intercept: float(&obj, RESCALE_INTERCEPT).unwrap_or(0.0),
+        position: arr3(floats(&obj, IMAGE_POSITION)),
+        orientation: floats(&obj, IMAGE_ORIENTATION)
+            .filter(|v| v.len() == 6)
+            .map(|v| [v[0], v[1], v[2], v[3], v[4], v[5]]),
+        pixel_spacing: floats(&obj, PIXEL_SPACING)
+            .filter(|v| v.len() == 2)
+            .map(|v| [v[0], v[1]]),
+        thickness: float(&obj, SLICE_THICKNESS),
+        series: text(&obj, SERIES_UID),
+        modality: text(&obj, MODALITY),
+        stored_type,
+    })
+}
+
+/// Rescale stored values and pick the output type (see the module doc).
+fn rescale(values: Vec<i64>, slope: f64, intercept: f64, stored: SampleType) -> Samples {
+    if slope == 1.0 && intercept == 0.0 {
+        let v: Vec<f64> = values.iter().map(|&x| x as f64).collect();
+        return Samples::from_f64(&v, stored);
+    }
+    if slope == 1.0 && intercept.fract() == 0.0 {
+        let out: Vec<i64> = values.iter().map(|&x| x + intercept as i64).collect();
+        if out
+            .iter()
+            .all(|&x| x >= i16::MIN as i64 && x <= i16::MAX as i64)
+        {
+            return Samples::I16(out.into_iter().map(|x| x as i16).collect());
+        }
+    }
+    Samples::F32(
+        values
+            .iter()
+            .map(|&x| (x as f64 * slope + intercept) as f32)
+            .collect(),
+    )
+}
+
+fn set_meta(r: &mut Raster, s: &Slice, step: Option<f64>) {
+    let ps = s.pixel_spacing.unwrap_or([1.0, 1.0]);
+    r.meta.spacing = Some(match step {
+        Some(dz) => vec![dz, ps[0], ps[1]],
+        None => vec![ps[0], ps[1]],
+    });
+    r.meta.origin = s.position.map(|p| p.to_vec());
+    r.meta.units = Some("mm".into());
+    let ex = &mut r.meta.extra;
+    ex.insert("dicom.modality".into(), s.modality.clone());
+    ex.insert("dicom.series_uid".into(), s.series.clone());
+    ex.insert("dicom.rescale_slope".into(), s.slope.to_string());
+    ex.insert("dicom.rescale_intercept".into(), s.intercept.to_string());
+    ex.insert("dicom.stored_type".into(), s.stored_type.name().into());
+    if let Some(o) = s.orientation {
+        ex.insert(
+            "dicom.orientation".into(),
+            o.iter()
+                .map(|x| x.to_string())
+                .collect::<Vec<_>>()
+                .join(","),
+        );
+    }
+}
+
+/// Read one DICOM file as a 2-D slice.
+pub fn read_file(path: &Path) -> Result<Raster> {
+    let s = load_slice(path)?;
+    let (rows, cols) = (s.rows, s.cols);
+    let samples = rescale(s.stored.clone(), s.slope, s.intercept, s.stored_type);
+    let mut r = Raster::new(vec![rows, cols], 1, samples, DataKind::Image)?;
+    set_meta(&mut r, &s, None);
+    Ok(r)
+}
+
+/// Does the file start with the DICOM preamble + `DICM`?
+pub fn is_dicom(path: &Path) -> bool {
+    let mut head = [0u8; 132];
+    matches!(super::bytes::read_head(path, &mut head), Ok(132)) && &head[128..132] == b"DICM"
+}
+
+/// The DICOM files of a folder, by name.
+pub fn dicom_files(dir: &Path) -> Result<Vec<PathBuf>> {
+    let mut files: Vec<PathBuf> = std::fs::read_dir(dir)?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.is_file() && is_dicom(p))
+        .collect();
+    files.sort();
+    Ok(files)
+}
+
+/// Read a folder holding one DICOM series as a volume `[slices, rows, columns]`.
+pub fn read_series(dir: &Path) -> Result<Raster> {
+    let files = dicom_files(dir)?;
+    if files.is_empty() {
+        return Err(Error::format(
+            format!("no DICOM files in folder {}", dir.display()),
+            "a folder holding one DICOM series",
+        ));
+    }
+    let mut slices = files
+        .iter()
+        .map(|p| load_slice(p))
+        .collect::<Result<Vec<_>>>()?;
+    let series = slices[0].series.clone();
+    if let Some(other) = slices.iter().find(|s| s.series != series) {
+        return Err(Error::Unsupported {
+            what: "DICOM folder",
+            value: format!("more than one series ({series} and {})", other.series),
+        });
+    }
+    let (rows, cols) = (slices[0].rows, slices[0].cols);
+    if slices.iter().any(|s| s.rows != rows || s.cols != cols) {
+        return Err(Error::format(
+            "slices of different sizes in one series",
+            "equal Rows and Columns in every slice",
+        ));
+    }
+    // order along the slice normal
+    let o = slices[0]
+        .orientation
+        .unwrap_or([1.0, 0.0, 0.0, 0.0, 1.0, 0.0]);
+    let normal = [
+        o[1] * o[5] - o[2] * o[4],
+        o[2] * o[3] - o[0] * o[5],
+        o[0] * o[4] - o[1] * o[3],
+    ];
+    let key = |s: &Slice| {
+        s.position
+            .map(|p| p[0] * normal[0] + p[1] * normal[1] + p[2] * normal[2])
+            .unwrap_or(0.0)
+    };
+    slices.sort_by(|a, b| key(a).total_cmp(&key(b)));
+    let mut steps: Vec<f64> = slices.windows(2).map(|w| key(&w[1]) - key(&w[0])).collect();
+    steps.sort_by(f64::total_cmp);
+    let step = if steps.is_empty() || steps[steps.len() / 2] <= 0.0 {
+        slices[0].thickness.unwrap_or(1.0)
+    } else {
+        steps[steps.len() / 2]
+    };
+    let (slope, intercept) = (slices[0].slope, slices[0].intercept);
+    let same_rescale = slices
+        .iter()
+        .all(|s| s.slope == slope && s.intercept == intercept);
+    let stored_type = slices[0].stored_type;
+    let depth = slices.len();
+    let samples = if same_rescale {
+        let mut all = Vec::with_capacity(depth * rows * cols);
+        for s in &slices {
+            all.extend_from_slice(&s.stored);
+        }
+        rescale(all, slope, intercept, stored_type)
+    } else {
+        let mut all = Vec::with_capacity(depth * rows * cols);
+        for s in &slices {
+            all.extend(
+                s.stored
+                    .iter()
+                    .map(|&x| (x as f64 * s.slope + s.intercept) as f32),
+            );
+        }
+        Samples::F32(all)
+    };
+    let mut r = Raster::new(vec![depth, rows, cols], 1, samples, DataKind::Volume)?;
+    set_meta(&mut r, &slices[0], Some(step));
+    Ok(r)
+}

@@ -1,0 +1,291 @@
+//! Comparison of two rasters of the same shape: MSE, PSNR, maximum absolute error and
+//! SSIM, following scikit-image (`skimage.metrics`, checked against 0.26) or
+//! OpenImageIO (`ImageBufAlgo.compare`, 3.x), see [`Convention`].
+//!
+//! Definitions (N = all samples of all channels, a = reference, b = test):
+//!
+//! * `MSE = (1/N) Σ (a − b)²`, in the data's own units. As in scikit-image, f16/f32 data
+//!   is differenced and squared in f32 and summed in f64; integer data in f64.
+//! * `PSNR = 10 log10(R² / MSE)` dB, `None` when MSE = 0 (identical inputs).
+//! * `max_abs_error = max |a − b|`.
+//! * SSIM (Wang et al. 2004, scikit-image defaults): a uniform 7 × 7 (× 7 for volumes)
+//!   window, `K1 = 0.01`, `K2 = 0.03`, `C1 = (K1 R)²`, `C2 = (K2 R)²`, sample covariances
+//!   (`NP/(NP−1)`, `NP = 7^d`), the map
+//!   `S = (2 μa μb + C1)(2 σab + C2) / ((μa² + μb² + C1)(σa² + σb² + C2))`
+//!   averaged over the positions whose window lies inside the data (scikit-image crops
+//!   3 samples at every border), then over channels. `None` when a side is shorter
+//!   than 7.
+
+use serde::Serialize;
+
+use crate::io::{Raster, SampleType, Samples};
+use crate::{Error, Result};
+
+/// Whose definition of the data range R (and so of PSNR) to follow.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Convention {
+    /// `skimage.metrics.peak_signal_noise_ratio`: R = `--data-range`, else from the
+    /// reference's dtype: integer types R = dtype max when the reference has no negative
+    /// value, else dtype max − dtype min (u8 255, u16 65535, i16 32767 or 65535); floats
+    /// R = 1 for data in [0, 1], 2 for data in [−1, 1]. Outside [−1, 1] scikit-image
+    /// raises; mra uses max(a) − min(a) instead and reports it. SSIM uses the same R when
+    /// it was given or the data is float, else dtype max − dtype min (scikit-image's
+    /// `structural_similarity` default).
+    #[default]
+    Skimage,
+    /// `ImageBufAlgo.compare` / `oiiotool --diff`: samples are converted to float the way
+    /// OpenImageIO reads them (u8 /255, u16 /65535, u32 /(2³²−1), i8 /127, i16 /32767,
+    /// i32 /(2³¹−1), floats unchanged), then `PSNR = 20 log10(peak / RMS)` with
+    /// `peak = max(1, largest value of either input)` and RMS over all samples. In the
+    /// data's own units this is R = peak × that divisor (255 for u8, 1 for floats in
+    /// [0, 1], the maximum for HDR floats); `--data-range R` replaces it by
+    /// `10 log10(R² / MSE)`.
+    Oiio,
+}
+
+/// Options for [`compare`].
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct CompareOptions {
+    /// Override the data range R.
+    pub data_range: Option<f64>,
+    pub convention: Convention,
+}
+
+/// The result of [`compare`]; serialises to the `mra compare --json` object.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Comparison {
+    pub mse: f64,
+    /// `None` (JSON null) when the inputs are identical.
+    pub psnr: Option<f64>,
+    pub max_abs_error: f64,
+    pub ssim: Option<f64>,
+    pub data_range: f64,
+    pub convention: &'static str,
+    pub dims: Vec<usize>,
+    pub channels: usize,
+    pub dtype: &'static str,
+}
+
+/// scikit-image's default PSNR data range for reference samples `a` (see [`Convention`]).
+pub fn skimage_data_range(a: &Samples) -> f64 {
+    let t = a.sample_type();
+    let (dmin, dmax) = t.range();
+    let (lo, hi) = a.min_max().unwrap_or((0.0, 0.0));
+    if t.is_float() && (hi > dmax || lo < dmin) {
+        return (hi - lo).max(f64::MIN_POSITIVE);
+    }
+    if lo >= 0.0 {
+        dmax
+    } else {
+        dmax - dmin
+    }
+}
+
+/// OpenImageIO's normalising divisor for a sample type (see [`Convention::Oiio`]).
+pub fn oiio_scale(t: SampleType) -> f64 {
+    match t {
+        SampleType::U8 => 255.0,
+        SampleType::U16 => 65535.0,
+        SampleType::U32 => 4294967295.0,
+        SampleType::I8 => 127.0,
+        SampleType::I16 => 32767.0,
+        SampleType::I32 => 2147483647.0,
+        SampleType::F16 | SampleType::F32 | SampleType::F64 => 1.0,
+    }
+}
+
+/// `Σ (a − b)²` and `max |a − b|`, computed as scikit-image does (see module doc).
+fn squared_error(a: &Samples, b: &Samples) -> (f64, f64) {
+    let single = matches!(a.sample_type(), SampleType::F16 | SampleType::F32)
+        && matches!(b.sample_type(), SampleType::F16 | SampleType::F32);
+    let mut sum = 0.0f64;
+    let mut max = 0.0f64;
+    if single {
+        let (va, vb) = (a.to_f32(), b.to_f32());
+        for (&x, &y) in va.iter().zip(&vb) {
+            let d = x - y;
+            sum += (d * d) as f64;
+            max = max.max(d.abs() as f64);
+        }
+    } else {
+        for i in 0..a.len() {
+            let d = a.get_f64(i) - b.get_f64(i);
+            sum += d * d;
+            max = max.max(d.abs());
+        }
+    }
+    (sum, max)
+}
+
+/// A sample as OpenImageIO's float iterator reads it: integers times the f32 constant
+/// `1 / scale`, floats cast to f32.
+fn oiio_value(s: &Samples, i: usize, inv: f32) -> f32 {
+    match s {
+        Samples::F16(v) => v[i].to_f32(),
+        Samples::F32(v) => v[i],
+        Samples::F64(v) => v[i] as f32,
+        other => other.get_f64(i) as f32 * inv,
+    }
+}
+
+/// `(Σ d², peak)` as `ImageBufAlgo.compare` computes them: `d = a − b` and `d²` in f32,
+/// summed in f64; `peak = max(1, largest value of a or b)`.
+fn oiio_squared_error(a: &Samples, b: &Samples) -> (f64, f64) {
+    let ia = (1.0 / oiio_scale(a.sample_type())) as f32;
+    let ib = (1.0 / oiio_scale(b.sample_type())) as f32;
+    let mut sum = 0.0f64;
+    let mut peak = 1.0f32;
+    for i in 0..a.len() {
+        let x = oiio_value(a, i, ia);
+        let y = oiio_value(b, i, ib);
+        peak = peak.max(x).max(y);
+        let d = x - y;
+        sum += (d * d) as f64;
+    }
+    (sum, peak as f64)
+}
+
+/// Compare reference `a` with test `b` (same dims and channels).
+pub fn compare(a: &Raster, b: &Raster, opts: &CompareOptions) -> Result<Comparison> {
+    if a.dims != b.dims || a.channels != b.channels {
+        return Err(Error::parameter(
+            "shapes",
+            format!("{} vs {}", a.summary(), b.summary()),
+            "two inputs of the same dims and channels",
+        ));
+    }
+    if a.samples.is_empty() {
+        return Err(Error::parameter("input", "empty", "at least one sample"));
+    }
+    let n = a.samples.len() as f64;
+    let (sum, max_abs_error) = squared_error(&a.samples, &b.samples);
+    let mse = sum / n;
+    let (data_range, psnr, name) = match opts.convention {
+        Convention::Skimage => {
+            let r = opts
+                .data_range
+                .unwrap_or_else(|| skimage_data_range(&a.samples));
+            let psnr = (mse > 0.0).then(|| 10.0 * (r * r / mse).log10());
+            (r, psnr, "skimage")
+        }
+        Convention::Oiio => match opts.data_range {
+            Some(r) => (r, (mse > 0.0).then(|| 10.0 * (r * r / mse).log10()), "oiio"),
+            None => {
+                let (sq, peak) = oiio_squared_error(&a.samples, &b.samples);
+                let rms = (sq / n).sqrt();
+                let psnr = (rms > 0.0).then(|| 20.0 * (peak / rms).log10());
+                (peak * oiio_scale(a.sample_type()), psnr, "oiio")
+            }
+        },
+    };
+    let ssim_range = match (opts.data_range, opts.convention, a.sample_type().is_float()) {
+        (Some(r), _, _) => r,
+        (None, Convention::Skimage, false) => {
+            let (lo, hi) = a.sample_type().range();
+            hi - lo
+        }
+        _ => data_range,
+    };
+    let ssim = ssim(a, b, ssim_range);
+    Ok(Comparison {
+        mse,
+        psnr,
+        max_abs_error,
+        ssim,
+        data_range,
+        convention: name,
+        dims: a.dims.clone(),
+        channels: a.channels,
+        dtype: a.sample_type().name(),
+    })
+}
+
+/// Sum over a window of `w` along `axis`, keeping only full windows ("valid").
+fn box_valid(data: &[f64], shape: &[usize], axis: usize, w: usize) -> (Vec<f64>, Vec<usize>) {
+    let n = shape[axis];
+    let m = n + 1 - w;
+    let inner: usize = shape[axis + 1..].iter().product();
+    let outer: usize = shape[..axis].iter().product();
+    let mut out = vec![0.0; outer * m * inner];
+    for o in 0..outer {
+        for i in 0..inner {
+            let at = |k: usize| data[(o * n + k) * inner + i];
+            let mut s: f64 = (0..w).map(at).sum();
+            out[(o * m) * inner + i] = s;
+            for k in 1..m {
+                s += at(k + w - 1) - at(k - 1);
+                out[(o * m + k) * inner + i] = s;
+            }
+        }
+    }
+    let mut new_shape = shape.to_vec();
+    new_shape[axis] = m;
+    (out, new_shape)
+}
+
+/// Windowed means of `data` (valid region) with a `w`-wide uniform window on every axis.
+fn local_mean(data: &[f64], shape: &[usize], w: usize) -> Vec<f64> {
+    let mut cur = data.to_vec();
+    let mut sh = shape.to_vec();
+    for axis in 0..shape.len() {
+        let (next, nsh) = box_valid(&cur, &sh, axis, w);
+        cur = next;
+        sh = nsh;
+    }
+    let np = (w as f64).powi(shape.len() as i32);
+    cur.iter_mut().for_each(|x| *x /= np);
+    cur
+}
+
+/// Mean SSIM over channels (scikit-image `structural_similarity` defaults, see module
+/// doc); `None` when any spatial side is shorter than 7.
+pub fn ssim(a: &Raster, b: &Raster, data_range: f64) -> Option<f64> {
+    const W: usize = 7;
+    if a.dims.iter().any(|&d| d < W) {
+        return None;
+    }
+    let nd = a.dims.len();
+    let np = (W as f64).powi(nd as i32);
+    let cov_norm = np / (np - 1.0);
+    let c1 = (0.01 * data_range).powi(2);
+    let c2 = (0.03 * data_range).powi(2);
+    let ch = a.channels;
+    let positions = a.positions();
+    let single = a.sample_type().is_float() && a.sample_type() != SampleType::F64;
+    let value = |s: &Samples, i: usize| {
+        let v = s.get_f64(i);
+        if single {
+            v as f32 as f64
+        } else {
+            v
+        }
+    };
+    let mut total = 0.0;
+    for c in 0..ch {
+        let x: Vec<f64> = (0..positions)
+            .map(|p| value(&a.samples, p * ch + c))
+            .collect();
+        let y: Vec<f64> = (0..positions)
+            .map(|p| value(&b.samples, p * ch + c))
+            .collect();
+        let xx: Vec<f64> = x.iter().map(|v| v * v).collect();
+        let yy: Vec<f64> = y.iter().map(|v| v * v).collect();
+        let xy: Vec<f64> = x.iter().zip(&y).map(|(p, q)| p * q).collect();
+        let ux = local_mean(&x, &a.dims, W);
+        let uy = local_mean(&y, &a.dims, W);
+        let uxx = local_mean(&xx, &a.dims, W);
+        let uyy = local_mean(&yy, &a.dims, W);
+        let uxy = local_mean(&xy, &a.dims, W);
+        let mut s = 0.0;
+        for i in 0..ux.len() {
+            let vx = cov_norm * (uxx[i] - ux[i] * ux[i]);
+            let vy = cov_norm * (uyy[i] - uy[i] * uy[i]);
+            let vxy = cov_norm * (uxy[i] - ux[i] * uy[i]);
+            let num = (2.0 * ux[i] * uy[i] + c1) * (2.0 * vxy + c2);
+            let den = (ux[i] * ux[i] + uy[i] * uy[i] + c1) * (vx + vy + c2);
+            s += num / den;
+        }
+        total += s / ux.len() as f64;
+    }
+    Some(total / ch as f64)
+}

@@ -1,0 +1,179 @@
+//! The `mra` binary on point lists: outputs, round trips, and one-line errors with exit 2.
+
+use std::io::Write;
+use std::process::{Command, Output, Stdio};
+
+fn mra(args: &[&str], stdin: &str) -> Output {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_mra"))
+        .args(args)
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    child
+        .stdin
+        .take()
+        .unwrap()
+        .write_all(stdin.as_bytes())
+        .unwrap();
+    child.wait_with_output().unwrap()
+}
+
+fn text(b: &[u8]) -> String {
+    String::from_utf8_lossy(b).into_owned()
+}
+
+fn tmpdir(name: &str) -> std::path::PathBuf {
+    let d = std::env::temp_dir().join(format!("mra-cli-test-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+#[test]
+fn analyze_prints_the_haar_example_of_the_notes() {
+    let o = mra(
+        &["analyze", "--scheme", "haar", "--levels", "2", "-"],
+        "5\n7\n10\n14\n13\n13\n8\n6\n",
+    );
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    assert_eq!(
+        text(&o.stdout),
+        "C,9.0\nC,10.0\nD2,-3.0\nD2,3.0\nD1,-1.0\nD1,-2.0\nD1,0.0\nD1,1.0\n"
+    );
+}
+
+#[test]
+fn analyze_then_synthesize_returns_the_points_for_every_scheme_and_boundary() {
+    let pts: String = (0..37)
+        .map(|i| {
+            let t = i as f64 * 0.37;
+            format!("{},{},{}\n", t.sin() * 3.0, (2.0 * t).cos(), t * 0.1)
+        })
+        .collect();
+    for scheme in ["haar", "chaikin", "cubic"] {
+        for boundary in ["interpolating", "periodic", "symmetric"] {
+            let a = mra(
+                &["analyze", "--scheme", scheme, "--boundary", boundary, "-"],
+                &pts,
+            );
+            assert!(
+                a.status.success(),
+                "{scheme} {boundary}: {}",
+                text(&a.stderr)
+            );
+            let s = mra(
+                &[
+                    "synthesize",
+                    "--scheme",
+                    scheme,
+                    "--boundary",
+                    boundary,
+                    "-",
+                ],
+                &text(&a.stdout),
+            );
+            assert!(
+                s.status.success(),
+                "{scheme} {boundary}: {}",
+                text(&s.stderr)
+            );
+            let want = mra::points::parse(&pts).unwrap();
+            let got = mra::points::parse(&text(&s.stdout)).unwrap();
+            assert_eq!(got.dim, 3);
+            for (x, y) in want.data.iter().zip(&got.data) {
+                assert!((x - y).abs() < 1e-12, "{scheme} {boundary}: {x} vs {y}");
+            }
+        }
+    }
+}
+
+#[test]
+fn synthesize_with_the_wrong_scheme_is_an_error() {
+    let pts: String = (0..20).map(|i| format!("{i}\n")).collect();
+    let a = mra(
+        &[
+            "analyze",
+            "--scheme",
+            "cubic",
+            "--boundary",
+            "interpolating",
+            "--levels",
+            "1",
+            "-",
+        ],
+        &pts,
+    );
+    assert!(a.status.success());
+    let s = mra(&["synthesize", "--scheme", "haar", "-"], &text(&a.stdout));
+    assert_eq!(s.status.code(), Some(2));
+    assert_eq!(text(&s.stderr).lines().count(), 1);
+}
+
+#[test]
+fn subdivide_writes_atomically_to_a_file() {
+    let d = tmpdir("subdivide");
+    let out = d.join("out.csv");
+    let o = mra(
+        &[
+            "subdivide",
+            "--scheme",
+            "chaikin",
+            "--closed",
+            "--steps",
+            "2",
+            "-",
+            "-o",
+            out.to_str().unwrap(),
+        ],
+        "0,0\n1,0\n1,1\n0,1\n",
+    );
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let got = mra::points::parse(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    assert_eq!(got.len(), 16);
+    let leftovers: Vec<_> = std::fs::read_dir(&d)
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    assert_eq!(leftovers.len(), 1, "{leftovers:?}");
+}
+
+#[test]
+fn bad_input_gives_one_line_and_exit_2() {
+    let cases: &[(&[&str], &str)] = &[
+        (&["analyze", "-"], "1,2\n3,abc\n"),
+        (&["analyze", "-"], "1,2\n3\n"),
+        (&["analyze", "-"], "# only a comment\n"),
+        (&["analyze", "--levels", "20", "-"], "1\n2\n3\n"),
+        (&["analyze", "--scheme", "wavelet9", "-"], "1\n"),
+        (&["analyze", "--frobnicate", "-"], "1\n"),
+        (&["analyze", "/no/such/file.csv"], ""),
+        (&["subdivide", "--scheme", "cubic", "-"], "0\n1\n"),
+        (&["synthesize", "-"], "X,1\n"),
+        (&["synthesize", "-"], "C,1\nD2,1\n"),
+    ];
+    for (args, input) in cases {
+        let o = mra(args, input);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {}", text(&o.stderr));
+        let err = text(&o.stderr);
+        assert_eq!(err.trim_end().lines().count(), 1, "{args:?}: {err}");
+        assert!(err.starts_with("mra: "), "{args:?}: {err}");
+        assert!(o.stdout.is_empty(), "{args:?}");
+    }
+}
+
+#[test]
+fn demo_runs_and_reports_exact_reconstruction() {
+    let d = tmpdir("demo");
+    let o = mra(&["demo", "--json", "--out", d.to_str().unwrap()], "");
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let rows: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let rows = rows.as_array().unwrap();
+    assert!(rows.len() >= 4);
+    for r in rows {
+        if let Some(p) = r["output"].as_str() {
+            assert!(std::path::Path::new(p).exists(), "{p}");
+        }
+    }
+}
