@@ -296,24 +296,7 @@ pub fn run(c: Command) -> CliResult {
             scheme,
             valence,
             json,
-        } => {
-            let s = mesh::analysis::Surface::parse(&scheme)?;
-            let ev = mesh::analysis::local_eigenvalues(s, valence)?;
-            if json {
-                println!(
-                    "{}",
-                    serde_json::json!({"scheme": scheme, "valence": valence, "eigenvalues": ev})
-                );
-            } else {
-                println!(
-                    "{scheme} valence {valence}: local subdivision matrix eigenvalues (descending)"
-                );
-                for e in ev {
-                    println!("  {e:.12}");
-                }
-            }
-            Ok(())
-        }
+        } => analyze_surface(&scheme, valence, json),
     }
 }
 
@@ -421,4 +404,23 @@ fn print_info(path: &Path, r: &mesh::topology::Report) {
     if let Some((lo, hi)) = r.bounding_box {
         println!("  bounding box {lo:?} .. {hi:?}");
     }
+}
+
+/// Eigenvalues of the local subdivision matrix of a surface scheme at a vertex of the
+/// given valence (`mra mesh analyze` and `mra scheme analyze --surface`).
+pub fn analyze_surface(scheme: &str, valence: usize, json: bool) -> CliResult {
+    let s = mesh::analysis::Surface::parse(scheme)?;
+    let ev = mesh::analysis::local_eigenvalues(s, valence)?;
+    if json {
+        println!(
+            "{}",
+            serde_json::json!({"scheme": scheme, "valence": valence, "eigenvalues": ev})
+        );
+    } else {
+        println!("{scheme} valence {valence}: local subdivision matrix eigenvalues (descending)");
+        for e in ev {
+            println!("  {e:.12}");
+        }
+    }
+    Ok(())
 }

@@ -11,14 +11,15 @@ pub enum Command {
     #[command(after_help = "Examples:\n  \
         mra scheme analyze --mask \"1/4,3/4,3/4,1/4\"                   # Chaikin: 1, 1/2, 1/4, 1/4 -> C1\n  \
         mra scheme analyze --mask \"-1/16,0,9/16,1,9/16,0,-1/16\"       # Dyn-Levin four-point\n  \
-        mra scheme analyze --scheme cubic --matrix")]
+        mra scheme analyze --scheme cubic --matrix\n  \
+        mra scheme analyze --surface loop --valence 5               # Loop at an extraordinary vertex")]
     Analyze(AnalyzeArgs),
 }
 
 #[derive(Args, Debug)]
 pub struct AnalyzeArgs {
     /// Mask a_0,…,a_{L−1} (fractions or decimals): F_i = Σ_j a_{i−2j} C_j.
-    #[arg(long, allow_hyphen_values = true, required_unless_present = "scheme")]
+    #[arg(long, allow_hyphen_values = true, required_unless_present_any = ["scheme", "surface"])]
     pub mask: Option<String>,
     /// A named scheme instead: box, linear, chaikin, cubic, quartic, four-point.
     #[arg(long, conflicts_with = "mask")]
@@ -29,6 +30,15 @@ pub struct AnalyzeArgs {
     /// Also print the matrix S.
     #[arg(long)]
     pub matrix: bool,
+    /// A surface scheme instead: loop, loop-warren or catmull-clark (with --valence).
+    #[arg(long, conflicts_with_all = ["mask", "scheme"], requires = "valence")]
+    pub surface: Option<String>,
+    /// Valence of the vertex for --surface.
+    #[arg(long)]
+    pub valence: Option<usize>,
+    /// JSON output (with --surface).
+    #[arg(long)]
+    pub json: bool,
 }
 
 pub fn run(c: Command) -> CliResult {
@@ -38,6 +48,9 @@ pub fn run(c: Command) -> CliResult {
 }
 
 fn analyze_cmd(a: AnalyzeArgs) -> CliResult {
+    if let (Some(surface), Some(valence)) = (&a.surface, a.valence) {
+        return super::mesh::analyze_surface(surface, valence, a.json);
+    }
     let mask = match (&a.mask, &a.scheme) {
         (Some(m), _) => parse_mask(m)?,
         (None, Some(s)) => named_mask(s).ok_or_else(|| {
@@ -45,7 +58,7 @@ fn analyze_cmd(a: AnalyzeArgs) -> CliResult {
                 "invalid --scheme: {s} (expected box, linear, chaikin, cubic, quartic or four-point)"
             ))
         })?,
-        (None, None) => unreachable!("clap requires one of --mask / --scheme"),
+        (None, None) => unreachable!("clap requires one of --mask / --scheme / --surface"),
     };
     let r = analyze(&mask, a.window)?;
     let mut out = String::new();
