@@ -188,10 +188,11 @@ impl HalfEdgeMesh {
         for &v in &self.from {
             out_count[v as usize] += 1;
         }
-        for v in 0..nv {
+        use rayon::prelude::*;
+        let bad = (0..nv).into_par_iter().with_min_len(4096).find_first(|&v| {
             let start = self.vert_out[v];
             if start == NONE {
-                continue;
+                return false;
             }
             let mut h = start;
             let mut k = 0u32;
@@ -202,12 +203,13 @@ impl HalfEdgeMesh {
                     break;
                 }
             }
-            if k != out_count[v] {
-                return Err(Error::format(
-                    format!("non-manifold vertex {v}: its faces form more than one fan"),
-                    "a manifold mesh (the faces around each vertex form one fan)",
-                ));
-            }
+            k != out_count[v]
+        });
+        if let Some(v) = bad {
+            return Err(Error::format(
+                format!("non-manifold vertex {v}: its faces form more than one fan"),
+                "a manifold mesh (the faces around each vertex form one fan)",
+            ));
         }
         Ok(())
     }

@@ -342,10 +342,20 @@ pub fn simplify(mesh: &Mesh, target_faces: usize) -> Result<Mesh> {
         scale,
     };
     let mut heap = BinQueue::new();
-    for &[a, b] in &edges.verts {
-        let (_, cost) = s.place(a, b);
+    let initial: Vec<f64> = {
+        use rayon::prelude::*;
+        let st = &s;
+        edges
+            .verts
+            .par_iter()
+            .with_min_len(4096)
+            .map(|&[a, b]| st.place(a, b).1)
+            .collect()
+    };
+    for (&[a, b], &cost) in edges.verts.iter().zip(&initial) {
         heap.push(cost, Candidate { a, b, stamp: 0 });
     }
+    drop(initial);
     let mut faces = nf;
     let (mut fa, mut fb) = (Vec::new(), Vec::new());
     while faces > target_faces {
@@ -371,6 +381,7 @@ pub fn simplify(mesh: &Mesh, target_faces: usize) -> Result<Mesh> {
         // (dropping dead corners keeps the lists short: without this, lists grow with the
         // collapse history and the run time becomes quadratic)
         let mut list = NONE;
+        fa.clear(); // collects the faces around the merged vertex
         for start in [s.head[b as usize], s.head[a as usize]] {
             let mut c = start;
             while c != NONE {
@@ -380,6 +391,7 @@ pub fn simplify(mesh: &Mesh, target_faces: usize) -> Result<Mesh> {
                     s.tri[f][(c % 3) as usize] = a;
                     s.next_corner[c as usize] = list;
                     list = c;
+                    fa.push(f as u32);
                 }
                 c = nxt;
             }
@@ -392,8 +404,7 @@ pub fn simplify(mesh: &Mesh, target_faces: usize) -> Result<Mesh> {
         s.boundary[a as usize] |= s.boundary[b as usize];
         s.stamp[a as usize] += 1;
         s.stamp[b as usize] += 1;
-        // new candidates around a
-        s.faces_of(a, &mut fa);
+        // new candidates around a (its live faces were collected above)
         s.mark_id = s.mark_id.wrapping_add(1);
         if s.mark_id == 0 {
             s.mark.iter_mut().for_each(|m| *m = 0);

@@ -60,25 +60,18 @@ impl Csr {
         dst_stride: usize,
         width: usize,
     ) {
-        for r in 0..self.rows {
-            let (a, b) = (self.offsets[r] as usize, self.offsets[r + 1] as usize);
-            let out = &mut dst[r * dst_stride..r * dst_stride + width];
-            if a == b {
-                out.fill(T::default());
-                continue;
-            }
-            let c0 = self.index[a] as usize * src_stride;
-            let w0 = T::from_f64(self.weight[a]);
-            for (o, &x) in out.iter_mut().zip(&src[c0..c0 + width]) {
-                *o = w0 * x;
-            }
-            for k in a + 1..b {
-                let c = self.index[k] as usize * src_stride;
-                let w = T::from_f64(self.weight[k]);
-                for (o, &x) in out.iter_mut().zip(&src[c..c + width]) {
-                    *o += w * x;
-                }
-            }
+        assert!(self.cols == 0 || (self.cols - 1) * src_stride + width <= src.len());
+        assert!(self.rows == 0 || (self.rows - 1) * dst_stride + width <= dst.len());
+        // SAFETY: the asserts bound every element read and written; `src` and `dst` are
+        // distinct borrows.
+        unsafe {
+            self.apply_raw(
+                src.as_ptr(),
+                src_stride,
+                dst.as_mut_ptr(),
+                dst_stride,
+                width,
+            )
         }
     }
 }
@@ -197,6 +190,54 @@ impl Csr {
         dst_stride: usize,
         width: usize,
     ) {
+        #[cfg(target_arch = "x86_64")]
+        if crate::scheme::sparse::cpu_has_avx2() {
+            // SAFETY: AVX2 is present; the caller's guarantees pass through.
+            return unsafe { self.apply_avx2(src, src_stride, dst, dst_stride, width) };
+        }
+        unsafe { self.apply_generic(src, src_stride, dst, dst_stride, width) }
+    }
+
+    /// [`Csr::apply`] with the baseline (non-AVX2) build of the kernel, for tests that
+    /// check every CPU level gives the same bits.
+    pub fn apply_baseline<T: Sample>(
+        &self,
+        src: &[T],
+        ss: usize,
+        dst: &mut [T],
+        ds: usize,
+        width: usize,
+    ) {
+        assert!(self.cols == 0 || (self.cols - 1) * ss + width <= src.len());
+        assert!(self.rows == 0 || (self.rows - 1) * ds + width <= dst.len());
+        // SAFETY: bounds checked above; distinct borrows.
+        unsafe { self.apply_generic(src.as_ptr(), ss, dst.as_mut_ptr(), ds, width) }
+    }
+
+    /// [`Csr::apply_generic`] compiled for AVX2 (no FMA, so results are bit-identical to
+    /// the baseline build).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn apply_avx2<T: Sample>(
+        &self,
+        src: *const T,
+        ss: usize,
+        dst: *mut T,
+        ds: usize,
+        width: usize,
+    ) {
+        unsafe { self.apply_generic(src, ss, dst, ds, width) }
+    }
+
+    #[inline(always)]
+    unsafe fn apply_generic<T: Sample>(
+        &self,
+        src: *const T,
+        src_stride: usize,
+        dst: *mut T,
+        dst_stride: usize,
+        width: usize,
+    ) {
         for r in 0..self.rows {
             let (a, b) = (self.offsets[r] as usize, self.offsets[r + 1] as usize);
             // SAFETY: the caller guarantees this element is ours alone.
@@ -223,4 +264,17 @@ impl Csr {
             }
         }
     }
+}
+
+/// Whether the AVX2 build of the kernel is used: detected once; `MRA_CPU=scalar` in the
+/// environment forces the baseline build (to compare CPU levels).
+#[cfg(target_arch = "x86_64")]
+pub fn cpu_has_avx2() -> bool {
+    static LEVEL: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
+    *LEVEL.get_or_init(|| {
+        std::env::var("MRA_CPU")
+            .map(|v| v != "scalar")
+            .unwrap_or(true)
+            && std::arch::is_x86_feature_detected!("avx2")
+    })
 }

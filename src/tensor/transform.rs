@@ -146,9 +146,19 @@ unsafe fn gather<T: Sample>(
     for i0 in (0..len).step_by(TILE) {
         let i1 = (i0 + TILE).min(len);
         for (g, &b) in bases.iter().enumerate() {
-            for i in i0..i1 {
-                let src = unsafe { std::slice::from_raw_parts(data.add(b + i * es), w) };
-                dst[i * ds + g * w..i * ds + g * w + w].copy_from_slice(src);
+            if w == 1 {
+                // a contiguous run of the lane: plain loads (no memcpy call per sample)
+                let run = unsafe {
+                    std::slice::from_raw_parts(data.add(b + i0 * es), (i1 - i0 - 1) * es + 1)
+                };
+                for (k, i) in (i0..i1).enumerate() {
+                    dst[i * ds + g] = run[k * es];
+                }
+            } else {
+                for i in i0..i1 {
+                    let src = unsafe { std::slice::from_raw_parts(data.add(b + i * es), w) };
+                    dst[i * ds + g * w..i * ds + g * w + w].copy_from_slice(src);
+                }
             }
         }
     }
@@ -171,9 +181,18 @@ unsafe fn scatter<T: Sample>(
     for i0 in (0..len).step_by(TILE) {
         let i1 = (i0 + TILE).min(len);
         for (g, &b) in bases.iter().enumerate() {
-            for i in i0..i1 {
-                let dst = unsafe { std::slice::from_raw_parts_mut(data.add(b + i * es), w) };
-                dst.copy_from_slice(&src[i * ss + g * w..i * ss + g * w + w]);
+            if w == 1 {
+                let run = unsafe {
+                    std::slice::from_raw_parts_mut(data.add(b + i0 * es), (i1 - i0 - 1) * es + 1)
+                };
+                for (k, i) in (i0..i1).enumerate() {
+                    run[k * es] = src[i * ss + g];
+                }
+            } else {
+                for i in i0..i1 {
+                    let dst = unsafe { std::slice::from_raw_parts_mut(data.add(b + i * es), w) };
+                    dst.copy_from_slice(&src[i * ss + g * w..i * ss + g * w + w]);
+                }
             }
         }
     }
