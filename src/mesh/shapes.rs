@@ -8,7 +8,7 @@ fn build(positions: Vec<[f64; 3]>, faces: Vec<Vec<u32>>) -> Mesh {
     Mesh::from_faces(positions, faces).expect("generated meshes are valid")
 }
 
-/// Unit cube [0,1]³ as 6 quads (V 8, E 12, F 6, χ 2).
+/// Unit cube `[0, 1]³` as 6 quads (V 8, E 12, F 6, χ 2).
 pub fn cube() -> Mesh {
     let p = (0..8)
         .map(|i| [(i & 1) as f64, ((i >> 1) & 1) as f64, ((i >> 2) & 1) as f64])

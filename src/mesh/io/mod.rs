@@ -1,5 +1,5 @@
 //! Mesh files, one module per format: OBJ, PLY (ASCII and binary little/big endian), OFF.
-//! [`read`] and [`write`] choose the format by file extension. Readers never trust a count
+//! [`read()`] and [`write()`] choose the format by file extension. Readers never trust a count
 //! declared in a header: sizes are checked against the bytes present before allocating.
 
 pub mod obj;
