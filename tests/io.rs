@@ -118,6 +118,17 @@ fn tiff_roundtrip_every_type_rgb_and_stacks_with_metadata() {
         roundtrip(&random(&[4, 7], 3, ty, 6), &format!("rt_{ty}_rgb.tif"));
         roundtrip(&random(&[4, 7], 4, ty, 7), &format!("rt_{ty}_rgba.tif"));
     }
+    for ty in [
+        SampleType::U16,
+        SampleType::I32,
+        SampleType::F32,
+        SampleType::F64,
+    ] {
+        let r = random(&[3, 40, 37], 1, ty, 10);
+        let p = tmp(&format!("rt_{ty}_deflate.tif"));
+        io::write_with(&p, &r, &io::WriteOptions { compress: true }).unwrap();
+        assert_eq!(io::read(&p).unwrap().samples, r.samples, "{ty} deflate");
+    }
     for ty in [SampleType::U8, SampleType::U16, SampleType::F32] {
         roundtrip(&random(&[4, 7], 2, ty, 8), &format!("rt_{ty}_graya.tif"));
         roundtrip(

@@ -196,7 +196,7 @@ pub struct ConvertArgs {
     /// Convert samples to this type (rounded and clamped for integer types).
     #[arg(long, value_name = "TYPE")]
     pub dtype_out: Option<String>,
-    /// Compress where the format offers a choice (NRRD gzip).
+    /// Compress where the format offers a choice (NRRD gzip, TIFF Deflate).
     #[arg(long)]
     pub compress: bool,
     /// No progress bar (it is drawn only on a terminal anyway).
@@ -342,7 +342,7 @@ pub struct GenerateArgs {
     /// Channels (gradient and noise; others are gray).
     #[arg(long)]
     pub channels: Option<usize>,
-    /// Compress where the format offers a choice (NRRD gzip).
+    /// Compress where the format offers a choice (NRRD gzip, TIFF Deflate).
     #[arg(long)]
     pub compress: bool,
 }

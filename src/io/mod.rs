@@ -639,8 +639,8 @@ pub struct ReadOptions {
 /// Options for [`write_with`].
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct WriteOptions {
-    /// Compress where the format allows a choice (NRRD gzip encoding, NIfTI `.nii.gz` is
-    /// chosen by the name instead).
+    /// Compress where the format allows a choice (NRRD gzip encoding, TIFF Deflate;
+    /// NIfTI `.nii.gz` is chosen by the name instead).
     pub compress: bool,
 }
 
@@ -708,7 +708,7 @@ pub fn write_with(path: &Path, r: &Raster, opts: &WriteOptions) -> Result<()> {
     match format {
         Format::Png => bytes::atomic_write(path, |w| png::write(w, r)),
         Format::Pnm => bytes::atomic_write(path, |w| pnm::write(w, r)),
-        Format::Tiff => bytes::atomic_write(path, |w| tiff::write(w, r)),
+        Format::Tiff => bytes::atomic_write(path, |w| tiff::write(w, r, opts.compress)),
         Format::Exr => bytes::atomic_write(path, |w| exr::write(w, r)),
         Format::Nrrd => nrrd::write_path(path, r, opts.compress),
         Format::Nifti => nifti::write_path(path, r),

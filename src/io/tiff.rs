@@ -363,7 +363,7 @@ gray_alpha!(GrayA16, u16, 16, Uint);
 gray_alpha!(GrayA32Float, f32, 32, IEEEFP);
 
 /// Write one page per `[H, W]` slice, with ImageDescription and GeoTIFF tags on each.
-fn write_pages<W, C>(w: &mut W, r: &Raster, data: &[C::Inner]) -> Result<()>
+fn write_pages<W, C>(w: &mut W, r: &Raster, data: &[C::Inner], compress: bool) -> Result<()>
 where
     W: Write + Seek,
     C: colortype::ColorType,
@@ -373,6 +373,11 @@ where
     let page = r.width() * r.height() * r.channels;
     let desc = description(r);
     let mut enc = TiffEncoder::new(w).map_err(tiff_error)?;
+    if compress {
+        enc = enc.with_compression(tiff::encoder::Compression::Deflate(
+            tiff::encoder::DeflateLevel::Fast,
+        ));
+    }
     for chunk in data.chunks(page.max(1)) {
         let mut img = enc.new_image::<C>(width, height).map_err(tiff_error)?;
         if !desc.is_empty() {
@@ -403,7 +408,8 @@ where
 /// Write a 2-D raster as one TIFF page or a 3-D raster as a page stack. Gray, RGB and
 /// RGBA of u8, i8, u16, i16, u32, i32, f32, f64 (RGB/RGBA unsigned or float only;
 /// gray+alpha u8, u16, f32).
-pub fn write<W: Write + Seek>(w: &mut W, r: &Raster) -> Result<()> {
+/// With `compress`, strips are Deflate-compressed (fast level).
+pub fn write<W: Write + Seek>(w: &mut W, r: &Raster, compress: bool) -> Result<()> {
     if r.dims.len() < 2 || r.dims.len() > 3 {
         return Err(Error::Unsupported {
             what: "TIFF output",
@@ -413,27 +419,27 @@ pub fn write<W: Write + Seek>(w: &mut W, r: &Raster) -> Result<()> {
     use colortype as c;
     use Samples as S;
     match (&r.samples, r.channels) {
-        (S::U8(v), 1) => write_pages::<_, c::Gray8>(w, r, v),
-        (S::I8(v), 1) => write_pages::<_, c::GrayI8>(w, r, v),
-        (S::U16(v), 1) => write_pages::<_, c::Gray16>(w, r, v),
-        (S::I16(v), 1) => write_pages::<_, c::GrayI16>(w, r, v),
-        (S::U32(v), 1) => write_pages::<_, c::Gray32>(w, r, v),
-        (S::I32(v), 1) => write_pages::<_, c::GrayI32>(w, r, v),
-        (S::F32(v), 1) => write_pages::<_, c::Gray32Float>(w, r, v),
-        (S::F64(v), 1) => write_pages::<_, c::Gray64Float>(w, r, v),
-        (S::U8(v), 2) => write_pages::<_, GrayA8>(w, r, v),
-        (S::U16(v), 2) => write_pages::<_, GrayA16>(w, r, v),
-        (S::F32(v), 2) => write_pages::<_, GrayA32Float>(w, r, v),
-        (S::U8(v), 3) => write_pages::<_, c::RGB8>(w, r, v),
-        (S::U16(v), 3) => write_pages::<_, c::RGB16>(w, r, v),
-        (S::U32(v), 3) => write_pages::<_, c::RGB32>(w, r, v),
-        (S::F32(v), 3) => write_pages::<_, c::RGB32Float>(w, r, v),
-        (S::F64(v), 3) => write_pages::<_, c::RGB64Float>(w, r, v),
-        (S::U8(v), 4) => write_pages::<_, c::RGBA8>(w, r, v),
-        (S::U16(v), 4) => write_pages::<_, c::RGBA16>(w, r, v),
-        (S::U32(v), 4) => write_pages::<_, c::RGBA32>(w, r, v),
-        (S::F32(v), 4) => write_pages::<_, c::RGBA32Float>(w, r, v),
-        (S::F64(v), 4) => write_pages::<_, c::RGBA64Float>(w, r, v),
+        (S::U8(v), 1) => write_pages::<_, c::Gray8>(w, r, v, compress),
+        (S::I8(v), 1) => write_pages::<_, c::GrayI8>(w, r, v, compress),
+        (S::U16(v), 1) => write_pages::<_, c::Gray16>(w, r, v, compress),
+        (S::I16(v), 1) => write_pages::<_, c::GrayI16>(w, r, v, compress),
+        (S::U32(v), 1) => write_pages::<_, c::Gray32>(w, r, v, compress),
+        (S::I32(v), 1) => write_pages::<_, c::GrayI32>(w, r, v, compress),
+        (S::F32(v), 1) => write_pages::<_, c::Gray32Float>(w, r, v, compress),
+        (S::F64(v), 1) => write_pages::<_, c::Gray64Float>(w, r, v, compress),
+        (S::U8(v), 2) => write_pages::<_, GrayA8>(w, r, v, compress),
+        (S::U16(v), 2) => write_pages::<_, GrayA16>(w, r, v, compress),
+        (S::F32(v), 2) => write_pages::<_, GrayA32Float>(w, r, v, compress),
+        (S::U8(v), 3) => write_pages::<_, c::RGB8>(w, r, v, compress),
+        (S::U16(v), 3) => write_pages::<_, c::RGB16>(w, r, v, compress),
+        (S::U32(v), 3) => write_pages::<_, c::RGB32>(w, r, v, compress),
+        (S::F32(v), 3) => write_pages::<_, c::RGB32Float>(w, r, v, compress),
+        (S::F64(v), 3) => write_pages::<_, c::RGB64Float>(w, r, v, compress),
+        (S::U8(v), 4) => write_pages::<_, c::RGBA8>(w, r, v, compress),
+        (S::U16(v), 4) => write_pages::<_, c::RGBA16>(w, r, v, compress),
+        (S::U32(v), 4) => write_pages::<_, c::RGBA32>(w, r, v, compress),
+        (S::F32(v), 4) => write_pages::<_, c::RGBA32Float>(w, r, v, compress),
+        (S::F64(v), 4) => write_pages::<_, c::RGBA64Float>(w, r, v, compress),
         _ => Err(Error::Unsupported {
             what: "TIFF output",
             value: format!(
