@@ -655,6 +655,56 @@ fn render_writes_a_png_showing_the_mesh() {
     assert_eq!(&png[16..24], &[0, 0, 0, 64, 0, 0, 0, 48]);
 }
 
+#[test]
+fn render_back_color_tints_faces_seen_from_behind_and_supersampling_smooths_edges() {
+    use mra::mesh::render::{render, Options, BACKGROUND, FRONT_COLOR};
+    use mra::mesh::Mesh;
+    // one counter-clockwise triangle in the xy plane: normal +z, seen along z by azimuth 0 / 180
+    let t = Mesh::from_faces(
+        vec![[-1.0, -1.0, 0.0], [1.0, -1.0, 0.0], [0.0, 1.0, 0.0]],
+        vec![[0u32, 1, 2]],
+    )
+    .unwrap();
+    let red = [200, 0, 0];
+    let centre = |azimuth: f64, back_color: Option<[u8; 3]>, supersample: usize| {
+        let o = Options {
+            width: 64,
+            height: 48,
+            azimuth,
+            elevation: 0.0,
+            back_color,
+            supersample,
+            ..Default::default()
+        };
+        let img = render(&t, &o).unwrap();
+        assert_eq!((img.width, img.height), (64, 48));
+        let i = 3 * (26 * 64 + 32);
+        // pixels halfway between the model (red 150) and the background (red 245)
+        let blends = img
+            .rgb
+            .chunks(3)
+            .filter(|p| p[0] > 155 && p[0] < 240)
+            .count();
+        ([img.rgb[i], img.rgb[i + 1], img.rgb[i + 2]], blends)
+    };
+    // facing the camera: the front colour, with or without a back colour; from behind: the tint
+    assert_eq!(centre(0.0, Some(red), 1).0, FRONT_COLOR);
+    assert_eq!(centre(180.0, None, 1).0, FRONT_COLOR);
+    assert_eq!(centre(180.0, Some(red), 1).0, red);
+    // flat lighting: no blended pixels without anti-aliasing; with 2× supersampling the edge
+    // pixels blend model and background
+    let (c1, n1) = centre(0.0, None, 1);
+    let (c2, n2) = centre(0.0, None, 2);
+    assert_eq!(c1, c2);
+    assert!(n1 == 0 && n2 > 20, "{n1} and {n2} blended pixels");
+    assert_ne!(c1, BACKGROUND);
+    let bad = Options {
+        supersample: 5,
+        ..Default::default()
+    };
+    assert!(render(&t, &bad).is_err());
+}
+
 /// V, F, χ from the corpus README.
 const CORPUS: [(&str, usize, usize, i64); 8] = [
     ("spot_triangulated.obj", 2930, 5856, 2),

@@ -2,8 +2,9 @@
 //! and mesh output (issue 8).
 
 use mra::curve::{BSpline, Bezier, Curve, Nurbs};
-use mra::surface::io::{read_obj, write_obj, write_ply};
-use mra::surface::render::{render, View};
+use mra::mesh::io::{obj, ply};
+use mra::mesh::render::{encode_png, render, Options, BACKGROUND};
+use mra::mesh::Mesh;
 use mra::surface::sweep::transport;
 use mra::surface::{
     tessellate, Coons, CrossBlend, FaceKind, Loft, Revolution, RotationalBlend, Surface, Sweep,
@@ -24,6 +25,11 @@ impl Lcg {
     fn range(&mut self, a: f64, b: f64) -> f64 {
         a + (b - a) * self.next()
     }
+}
+
+/// The per-vertex normals `tessellate` stores in the mesh.
+fn normals(m: &Mesh) -> &[[f64; 3]] {
+    m.attributes.vertex_normals.as_deref().unwrap()
 }
 
 fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
@@ -304,7 +310,7 @@ fn loft_between_two_circles_is_a_cylinder_and_interpolates_both() {
     }
     let m = tessellate(&s, 33, 9, FaceKind::Quads).unwrap();
     // the normal Q_u × Q_v of a counter-clockwise circle lofted upward points outward
-    for (p, n) in m.positions.iter().zip(&m.normals) {
+    for (p, n) in m.positions.iter().zip(normals(&m)) {
         assert!(
             (n[0] * p[0] + n[1] * p[1] - 1.0).abs() < 1e-9 && n[2].abs() < 1e-9,
             "{n:?} at {p:?}"
@@ -517,13 +523,13 @@ fn tessellation_counts_and_outward_unit_normals_on_the_sphere_including_poles() 
     let s = TensorPatch::sphere(1.0).unwrap();
     let m = tessellate(&s, 17, 13, FaceKind::Triangles).unwrap();
     assert_eq!(m.positions.len(), 17 * 13);
-    assert_eq!(m.faces.len(), 2 * 16 * 12);
-    for (p, n) in m.positions.iter().zip(&m.normals) {
+    assert_eq!(m.face_count(), 2 * 16 * 12);
+    for (p, n) in m.positions.iter().zip(normals(&m)) {
         assert!((dot(*n, *n) - 1.0).abs() < 1e-12);
         assert!(dot(*n, *p) > 0.9, "normal {n:?} at {p:?}");
     }
     let q = tessellate(&s, 5, 4, FaceKind::Quads).unwrap();
-    assert!(q.faces.iter().all(|f| f.len() == 4) && q.faces.len() == 4 * 3);
+    assert!(q.faces().all(|f| f.len() == 4) && q.face_count() == 4 * 3);
     assert_eq!(
         tessellate(&s, 1, 4, FaceKind::Quads).unwrap_err().kind(),
         ErrorKind::Parameter
@@ -539,15 +545,24 @@ fn obj_round_trip_and_ply_header() {
         FaceKind::Triangles,
     )
     .unwrap();
-    let back = read_obj(&write_obj(&m)).unwrap();
+    let back = obj::parse(&obj::to_bytes(&m).unwrap()).unwrap();
     assert_eq!(back.positions, m.positions);
-    assert_eq!(back.faces, m.faces);
-    let ply = write_ply(&m);
+    assert_eq!((&back.offsets, &back.indices), (&m.offsets, &m.indices));
+    // the analytic normals go out as `vn` lines, one per vertex
+    assert_eq!(back.attributes.normals, normals(&m));
+    let ply = String::from_utf8(ply::to_bytes(&m, ply::Encoding::Ascii).unwrap()).unwrap();
     assert!(ply.starts_with("ply\nformat ascii 1.0\n"));
     assert!(ply.contains(&format!("element vertex {}\n", m.positions.len())));
-    assert!(ply.contains(&format!("element face {}\n", m.faces.len())));
-    assert_eq!(ply.lines().count(), 13 + m.positions.len() + m.faces.len());
-    assert!(read_obj("v 0 0 0\nf 1 2 3\n").is_err());
+    assert!(ply.contains(&format!("element face {}\n", m.face_count())));
+    assert!(["nx", "ny", "nz"]
+        .iter()
+        .all(|c| ply.contains(&format!("property double {c}\n"))));
+    let header = ply.lines().position(|l| l == "end_header").unwrap() + 1;
+    assert_eq!(
+        ply.lines().count(),
+        header + m.positions.len() + m.face_count()
+    );
+    assert!(obj::parse(b"v 0 0 0\nf 1 2 3\n").is_err());
 }
 
 #[test]
@@ -561,17 +576,23 @@ fn render_draws_the_model_in_the_middle_of_the_picture() {
     .unwrap();
     let img = render(
         &m,
-        View {
+        &Options {
             width: 64,
             height: 48,
-            ..View::default()
+            azimuth: 35.0,
+            elevation: 25.0,
+            z_up: true,
+            back_color: Some([225, 170, 110]),
+            supersample: 2,
+            ..Options::default()
         },
     )
     .unwrap();
+    assert_eq!((img.width, img.height), (64, 48));
     let px = |x: usize, y: usize| &img.rgb[(y * 64 + x) * 3..(y * 64 + x) * 3 + 3];
-    assert_ne!(px(32, 24), &[255, 255, 255]);
-    assert_eq!(px(0, 0), &[255, 255, 255]);
-    let png = img.to_png().unwrap();
+    assert_ne!(px(32, 24), &BACKGROUND);
+    assert_eq!(px(0, 0), &BACKGROUND);
+    let png = encode_png(&img).unwrap();
     assert_eq!(&png[1..4], b"PNG");
 }
 
@@ -616,8 +637,8 @@ fn cli_surface_commands_write_meshes_and_refuse_bad_input() {
         os,
     ]);
     assert_eq!(code, 0, "{err}");
-    let m = read_obj(&std::fs::read_to_string(&o).unwrap()).unwrap();
-    assert_eq!((m.positions.len(), m.faces.len()), (63, 96));
+    let m = mra::mesh::io::read(&o).unwrap();
+    assert_eq!((m.positions.len(), m.face_count()), (63, 96));
     assert!(
         dist(m.positions[0], [0.0, 0.0, 0.0]) < 1e-15
             && dist(m.positions[62], [3.0, 3.0, 0.5]) < 1e-15

@@ -288,6 +288,7 @@ pub fn run(c: Command) -> CliResult {
                 elevation: v[1],
                 wireframe,
                 z_up,
+                ..Default::default()
             };
             let png = mesh::render::render_png(&m, &opts)?;
             io::write_atomic(&output, &png).map_err(|e| Failure::context(output.display(), e))

@@ -1,14 +1,14 @@
 //! `mra surface …`: tensor-product patches, exact NURBS primitives and the curve-based surfaces
-//! of notes ch. 5, tessellated to OBJ / PLY meshes with vertex normals; shaded PNG previews.
+//! of notes ch. 5, tessellated to OBJ / PLY / OFF meshes with vertex normals (written by
+//! `mesh::io`); shaded PNG previews (drawn by `mesh::render`).
 
-use super::curve::{
-    check_order, knots_for, load_path, parse_size, read_table, read_text, write_atomic, Kind,
-};
+use super::curve::{check_order, knots_for, load_path, parse_size, read_table, write_atomic, Kind};
 use super::{CliResult, Failure};
 use crate::curve::csv;
-use crate::surface::render::{render, View};
+use crate::mesh::io::{self as mesh_io, ply::Encoding, Format};
+use crate::mesh::render::{render_png, Options};
 use crate::surface::{
-    io, tessellate, Coons, CrossBlend, FaceKind, Loft, Revolution, RotationalBlend, Surface, Sweep,
+    tessellate, Coons, CrossBlend, FaceKind, Loft, Revolution, RotationalBlend, Surface, Sweep,
     TensorPatch,
 };
 use crate::Error;
@@ -58,7 +58,7 @@ pub enum Command {
         after_help = "Example:\n  mra surface cross-blend --order 4 --left corpus/curves/left.csv --right corpus/curves/right.csv \\\n      --section corpus/curves/section_leaf.csv --mirror -o /tmp/leaf.obj"
     )]
     CrossBlend(CrossArgs),
-    /// Shaded PNG preview of an OBJ mesh.
+    /// Shaded PNG preview of a mesh (OBJ, PLY or OFF), z axis up, back faces in a warm tint.
     #[command(
         after_help = "Example:\n  mra surface primitive --shape torus -o /tmp/torus.obj && mra surface render /tmp/torus.obj -o /tmp/torus.png"
     )]
@@ -68,7 +68,7 @@ pub enum Command {
 /// Output mesh options shared by every surface command.
 #[derive(Args, Debug, Clone)]
 pub struct MeshOut {
-    /// Output mesh: .obj or .ply.
+    /// Output mesh: .obj, .ply (ASCII) or .off (OFF carries no normals).
     #[arg(short, long)]
     pub output: PathBuf,
     /// Samples along u and v, "U,V".
@@ -242,7 +242,7 @@ pub struct CrossArgs {
 
 #[derive(Args, Debug)]
 pub struct RenderArgs {
-    /// Mesh to draw (OBJ).
+    /// Mesh to draw (OBJ, PLY or OFF).
     pub input: PathBuf,
     /// Output PNG.
     #[arg(short, long)]
@@ -321,22 +321,28 @@ pub fn run(c: Command) -> CliResult {
             write_mesh(&s, &a.mesh)
         }
         Command::Render(a) => {
-            let m = io::read_obj(&read_text(&a.input)?)
-                .map_err(|e| Failure::context(a.input.display(), e))?;
+            let m = mesh_io::read(&a.input).map_err(|e| Failure::context(a.input.display(), e))?;
             let (width, height) = parse_size(&a.size)?;
-            let img = render(
+            let png = render_png(
                 &m,
-                View {
+                &Options {
                     width,
                     height,
                     azimuth: a.azimuth,
                     elevation: a.elevation,
+                    z_up: true,
+                    back_color: Some(BACK_COLOR),
+                    supersample: 2,
+                    ..Options::default()
                 },
             )?;
-            write_atomic(&a.output, &img.to_png()?)
+            write_atomic(&a.output, &png)
         }
     }
 }
+
+/// Base colour of the inside (back faces) of an open surface in previews.
+const BACK_COLOR: [u8; 3] = [225, 170, 110];
 
 fn curve(path: &Path, o: &CurveOpts) -> std::result::Result<Box<dyn crate::curve::Curve>, Failure> {
     Ok(load_path(path, o.kind, o.order, &o.knots)?.boxed())
@@ -362,26 +368,13 @@ fn write_mesh(s: &dyn Surface, o: &MeshOut) -> CliResult {
     } else {
         FaceKind::Triangles
     };
-    let ext = o
-        .output
-        .extension()
-        .and_then(|e| e.to_str())
-        .unwrap_or("")
-        .to_ascii_lowercase();
-    if ext != "obj" && ext != "ply" {
-        return Err(Error::Unsupported {
-            what: "mesh format",
-            value: format!("{ext:?} (use .obj or .ply)"),
-        }
-        .into());
-    }
-    let m = tessellate(s, ru, rv, kind)?;
-    let text = if ext == "obj" {
-        io::write_obj(&m)
-    } else {
-        io::write_ply(&m)
+    let format = match Format::from_path(&o.output)? {
+        // ASCII keeps tessellated surfaces readable as text
+        Format::Ply(_) => Format::Ply(Encoding::Ascii),
+        f => f,
     };
-    write_atomic(&o.output, text.as_bytes())
+    let m = tessellate(s, ru, rv, kind)?;
+    mesh_io::write_as(&o.output, &m, format).map_err(|e| Failure::context(o.output.display(), e))
 }
 
 fn patch(a: PatchArgs) -> CliResult {

@@ -1,6 +1,8 @@
 //! A small software rasteriser for looking at meshes: orthographic camera from an azimuth and
 //! elevation (about the +y axis, or +z with `z_up`), z-buffer, Gouraud shading with angle-weighted vertex normals (two-sided
-//! headlight plus ambient), optional wireframe, written as an RGB PNG.
+//! headlight plus ambient), optional wireframe, optional back-face tint and supersampling
+//! (drawn at `k×` the size and box-filtered down), written as an RGB PNG. [`encode_rgb`] is the
+//! crate's one PNG encoder (also used by the 2D canvas of curve pictures).
 
 use super::normals::{vertex_normals, Weighting};
 use super::{vec3, Mesh};
@@ -18,7 +20,18 @@ pub struct Options {
     pub wireframe: bool,
     /// The model's up axis is +z (default: +y, as in most OBJ/PLY files).
     pub z_up: bool,
+    /// Base colour of faces seen from behind (geometric normal away from the camera); `None`
+    /// shades both sides alike.
+    pub back_color: Option<[u8; 3]>,
+    /// Anti-aliasing: draw at `supersample ×` the size and average `supersample²` pixels into
+    /// one (1 to 4; 1 = none).
+    pub supersample: usize,
 }
+
+/// Base colour of the shaded model (front faces).
+pub const FRONT_COLOR: [u8; 3] = [150, 180, 215];
+/// Background colour of the pictures.
+pub const BACKGROUND: [u8; 3] = [245, 245, 248];
 
 impl Default for Options {
     fn default() -> Self {
@@ -29,6 +42,8 @@ impl Default for Options {
             elevation: 20.0,
             wireframe: false,
             z_up: false,
+            back_color: None,
+            supersample: 1,
         }
     }
 }
@@ -56,17 +71,23 @@ pub fn render(mesh: &Mesh, o: &Options) -> Result<Image> {
             "finite angles",
         ));
     }
-    let (w, h) = (o.width, o.height);
+    if !(1..=4).contains(&o.supersample) {
+        return Err(Error::parameter("supersample", o.supersample, "1 to 4"));
+    }
+    let (w, h) = (o.width * o.supersample, o.height * o.supersample);
+    if w > 16384 || h > 16384 {
+        return Err(Error::parameter(
+            "supersampled image size",
+            format!("{w}x{h}"),
+            "at most 16384 pixels per side",
+        ));
+    }
     let mut rgb = vec![0u8; w * h * 3];
     for px in rgb.chunks_mut(3) {
-        px.copy_from_slice(&[245, 245, 248]);
+        px.copy_from_slice(&BACKGROUND);
     }
     let Some((lo, hi)) = mesh.bounding_box() else {
-        return Ok(Image {
-            width: w,
-            height: h,
-            rgb,
-        });
+        return Ok(downsample(w, h, rgb, o.supersample));
     };
     let centre: [f64; 3] = std::array::from_fn(|k| 0.5 * (lo[k] + hi[k]));
     let radius = 0.5 * vec3::norm(vec3::sub(hi, lo)).max(1e-300);
@@ -107,7 +128,9 @@ pub fn render(mesh: &Mesh, o: &Options) -> Result<Image> {
         0.25 + 0.75 * l
     };
     let mut zbuf = vec![f64::NEG_INFINITY; w * h];
-    let base = [150.0, 180.0, 215.0];
+    let rgb_f = |c: [u8; 3]| c.map(|x| x as f64);
+    let front_base = rgb_f(FRONT_COLOR);
+    let back_base = o.back_color.map(rgb_f).unwrap_or(front_base);
     let tri = mesh.triangulated();
     for t in tri.faces() {
         let (a, b, c) = (
@@ -124,6 +147,14 @@ pub fn render(mesh: &Mesh, o: &Options) -> Result<Image> {
         if area.abs() < 1e-12 {
             continue;
         }
+        // facing: is the geometric normal (b − a) × (c − a) towards the eye?
+        let p = |k: usize| mesh.positions[t[k] as usize];
+        let gn = vec3::cross(vec3::sub(p(1), p(0)), vec3::sub(p(2), p(0)));
+        let base = if vec3::dot(gn, eye) >= 0.0 {
+            front_base
+        } else {
+            back_base
+        };
         let x0 = a[0].min(b[0]).min(c[0]).floor().max(0.0) as usize;
         let x1 = (a[0].max(b[0]).max(c[0]).ceil() as usize).min(w - 1);
         let y0 = a[1].min(b[1]).min(c[1]).floor().max(0.0) as usize;
@@ -172,29 +203,80 @@ pub fn render(mesh: &Mesh, o: &Options) -> Result<Image> {
             }
         }
     }
-    Ok(Image {
-        width: w,
-        height: h,
-        rgb,
-    })
+    Ok(downsample(w, h, rgb, o.supersample))
+}
+
+/// Average `k × k` blocks of a `w × h` RGB picture into one pixel (box filter).
+fn downsample(w: usize, h: usize, rgb: Vec<u8>, k: usize) -> Image {
+    if k == 1 {
+        return Image {
+            width: w,
+            height: h,
+            rgb,
+        };
+    }
+    let (ow, oh) = (w / k, h / k);
+    let mut out = vec![0u8; ow * oh * 3];
+    for y in 0..oh {
+        for x in 0..ow {
+            let mut acc = [0u32; 3];
+            for dy in 0..k {
+                let row = (y * k + dy) * w + x * k;
+                for px in rgb[3 * row..3 * (row + k)].chunks(3) {
+                    for c in 0..3 {
+                        acc[c] += px[c] as u32;
+                    }
+                }
+            }
+            let n = (k * k) as u32;
+            for c in 0..3 {
+                out[3 * (y * ow + x) + c] = ((acc[c] + n / 2) / n) as u8;
+            }
+        }
+    }
+    Image {
+        width: ow,
+        height: oh,
+        rgb: out,
+    }
 }
 
 /// Render and encode as PNG.
 pub fn render_png(mesh: &Mesh, o: &Options) -> Result<Vec<u8>> {
-    let img = render(mesh, o)?;
-    Ok(encode_png(&img))
+    encode_png(&render(mesh, o)?)
 }
 
-/// Encode an RGB image as PNG (the `png` crate, default compression).
-pub fn encode_png(img: &Image) -> Vec<u8> {
+/// Encode an RGB image as PNG.
+pub fn encode_png(img: &Image) -> Result<Vec<u8>> {
+    encode_rgb(img.width, img.height, &img.rgb)
+}
+
+/// Encode 8-bit RGB pixels (row-major from the top-left, `3 · width · height` bytes) as PNG
+/// with the `png` crate's default compression. The crate's one PNG encoder.
+pub fn encode_rgb(width: usize, height: usize, rgb: &[u8]) -> Result<Vec<u8>> {
+    let (w, h) = (u32::try_from(width), u32::try_from(height));
+    let (Ok(w), Ok(h)) = (w, h) else {
+        return Err(Error::parameter(
+            "image size",
+            format!("{width}x{height}"),
+            "sides below 2³²",
+        ));
+    };
+    if width.checked_mul(height).and_then(|n| n.checked_mul(3)) != Some(rgb.len()) {
+        return Err(Error::parameter(
+            "RGB bytes",
+            rgb.len(),
+            "3 · width · height bytes",
+        ));
+    }
+    let png_err = |e: png::EncodingError| Error::Io(std::io::Error::other(e.to_string()));
     let mut out = Vec::new();
     {
-        let mut enc = png::Encoder::new(&mut out, img.width as u32, img.height as u32);
+        let mut enc = png::Encoder::new(&mut out, w, h);
         enc.set_color(png::ColorType::Rgb);
         enc.set_depth(png::BitDepth::Eight);
-        // writing to a Vec cannot fail and the sizes match by construction
-        let mut w = enc.write_header().expect("in-memory PNG header");
-        w.write_image_data(&img.rgb).expect("in-memory PNG data");
+        let mut wr = enc.write_header().map_err(png_err)?;
+        wr.write_image_data(rgb).map_err(png_err)?;
     }
-    out
+    Ok(out)
 }

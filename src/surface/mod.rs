@@ -5,24 +5,23 @@
 //! patch.rs    tensor-product Bézier / B-spline / NURBS patches; exact NURBS sphere, torus, cylinder
 //! common.rs   curve-based surfaces (§5.2): loft, Coons, revolution, rotational and cross-sectional blends
 //! sweep.rs    sweep surfaces with a rotation-minimising (parallel transport) frame (§5.2.5, Alg. 5.2)
-//! mesh.rs     sampling a surface on a grid: vertices, normals, triangles or quads
-//! io.rs       a minimal OBJ / PLY writer and OBJ reader (to be swapped for src/mesh's I/O)
-//! render.rs   z-buffered, shaded PNG preview of a mesh
-//! raster.rs   tiny RGB canvas and PNG encoding for previews
+//! tessellate.rs  sampling a surface on a grid into a `crate::mesh::Mesh` with analytic normals
+//! raster.rs   tiny RGB canvas (anti-aliased lines and discs) for curve pictures
 //! ```
+//!
+//! Mesh files and pictures go through `crate::mesh`: `mesh::io::{read, write}` (OBJ / PLY /
+//! OFF) and `mesh::render`.
 
 pub mod common;
-pub mod io;
-pub mod mesh;
 pub mod patch;
 pub mod raster;
-pub mod render;
 pub mod sweep;
+pub mod tessellate;
 
 pub use common::{Coons, CrossBlend, Loft, Revolution, RotationalBlend};
-pub use mesh::{tessellate, FaceKind, Mesh};
 pub use patch::TensorPatch;
 pub use sweep::Sweep;
+pub use tessellate::{tessellate, FaceKind};
 
 use crate::Result;
 

@@ -1,5 +1,5 @@
-//! A tiny RGB canvas for previews: anti-aliased thick lines and discs (curve plots), a z-buffered
-//! triangle fill (surface renders), and PNG encoding through the `png` crate.
+//! A tiny RGB canvas for 2D pictures: anti-aliased thick lines and discs (curve plots), encoded
+//! with the crate's one PNG encoder, [`crate::mesh::render::encode_rgb`].
 
 // Index loops follow the formulas of the notes (several arrays indexed together).
 #![allow(clippy::needless_range_loop)]
@@ -106,17 +106,6 @@ impl Canvas {
 
     /// Encode as an 8-bit RGB PNG.
     pub fn to_png(&self) -> Result<Vec<u8>> {
-        let mut buf = Vec::new();
-        {
-            let mut enc = png::Encoder::new(&mut buf, self.width as u32, self.height as u32);
-            enc.set_color(png::ColorType::Rgb);
-            enc.set_depth(png::BitDepth::Eight);
-            let mut w = enc
-                .write_header()
-                .map_err(|e| Error::Io(std::io::Error::other(e.to_string())))?;
-            w.write_image_data(&self.rgb)
-                .map_err(|e| Error::Io(std::io::Error::other(e.to_string())))?;
-        }
-        Ok(buf)
+        crate::mesh::render::encode_rgb(self.width, self.height, &self.rgb)
     }
 }

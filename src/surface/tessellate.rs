@@ -1,9 +1,13 @@
 //! Tessellation (§5.1, Algorithm 5.1): sample `Q(u, v)` on a regular grid, join neighbours into
-//! quads (or two triangles each), and give every vertex the normal `∂Q/∂u × ∂Q/∂v` (§5.1.1).
-//! Where that cross product vanishes (the poles of a sphere, the apex of a cone) the vertex takes
-//! the average of the normals of the grid faces around it instead.
+//! quads (or two triangles each) of a [`crate::mesh::Mesh`], and store at every vertex the unit
+//! normal `∂Q/∂u × ∂Q/∂v` (§5.1.1) in the mesh's per-vertex normal attribute, so the mesh
+//! writers put it out as OBJ `vn` / PLY `nx ny nz`. Where that cross product vanishes (the poles
+//! of a sphere, the apex of a cone) the vertex takes the area-weighted average of the normals of
+//! the grid faces around it instead ([`crate::mesh::normals::vertex_normals`], §6.6.1).
 
-use super::{add, cross, normalize, sub, Surface};
+use super::{cross, normalize, Surface};
+use crate::mesh::normals::{vertex_normals, Weighting};
+use crate::mesh::Mesh;
 use crate::{Error, Result};
 
 /// Triangles or quads.
@@ -13,19 +17,11 @@ pub enum FaceKind {
     Quads,
 }
 
-/// A polygon mesh with one normal per vertex (face-vertex list, §6.7.1).
-#[derive(Debug, Clone, Default, PartialEq)]
-pub struct Mesh {
-    pub positions: Vec<[f64; 3]>,
-    pub normals: Vec<[f64; 3]>,
-    /// Vertex indices of each face, counter-clockwise seen from the normal side.
-    pub faces: Vec<Vec<u32>>,
-}
-
 /// Largest accepted grid (vertices).
 pub const MAX_VERTICES: usize = 16 << 20;
 
-/// Sample `s` on `res_u × res_v` vertices (`≥ 2` each) over its parameter ranges.
+/// Sample `s` on `res_u × res_v` vertices (`≥ 2` each) over its parameter ranges. Vertex
+/// `(i, j)` has index `i · res_v + j`; the unit normals are in `attributes.vertex_normals`.
 pub fn tessellate(s: &dyn Surface, res_u: usize, res_v: usize, kind: FaceKind) -> Result<Mesh> {
     if res_u < 2 || res_v < 2 {
         return Err(Error::parameter(
@@ -69,46 +65,33 @@ pub fn tessellate(s: &dyn Surface, res_u: usize, res_v: usize, kind: FaceKind) -
         }
     }
     let idx = |i: usize, j: usize| (i * res_v + j) as u32;
-    let mut faces = Vec::with_capacity((res_u - 1) * (res_v - 1) * 2);
+    let mut indices = Vec::with_capacity((res_u - 1) * (res_v - 1) * 6);
     for i in 0..res_u - 1 {
         for j in 0..res_v - 1 {
             let (a, b, c, d) = (idx(i, j), idx(i + 1, j), idx(i + 1, j + 1), idx(i, j + 1));
             match kind {
-                FaceKind::Quads => faces.push(vec![a, b, c, d]),
-                FaceKind::Triangles => {
-                    faces.push(vec![a, b, c]);
-                    faces.push(vec![a, c, d]);
-                }
+                FaceKind::Quads => indices.extend_from_slice(&[a, b, c, d]),
+                FaceKind::Triangles => indices.extend_from_slice(&[a, b, c, a, c, d]),
             }
         }
     }
+    let degree = match kind {
+        FaceKind::Quads => 4,
+        FaceKind::Triangles => 3,
+    };
+    let mut mesh = Mesh::from_faces(positions, crate::mesh::Faces::Uniform { indices, degree })?;
     // fallback normals from the faces around degenerate vertices
-    let missing: Vec<usize> = (0..total).filter(|&k| normals[k] == [0.0; 3]).collect();
-    if !missing.is_empty() {
-        let mut acc = vec![[0.0; 3]; total];
-        for f in &faces {
-            for t in 1..f.len() - 1 {
-                let (p0, p1, p2) = (
-                    positions[f[0] as usize],
-                    positions[f[t] as usize],
-                    positions[f[t + 1] as usize],
-                );
-                let n = cross(sub(p1, p0), sub(p2, p0));
-                for &v in [f[0], f[t], f[t + 1]].iter() {
-                    acc[v as usize] = add(acc[v as usize], n);
-                }
+    if normals.iter().any(|n| *n == [0.0; 3]) {
+        let around = vertex_normals(&mesh, Weighting::Area);
+        for (n, a) in normals.iter_mut().zip(around) {
+            if *n == [0.0; 3] {
+                *n = a;
             }
-        }
-        for k in missing {
-            normals[k] = acc[k];
         }
     }
     for n in normals.iter_mut() {
         *n = normalize(*n).unwrap_or([0.0, 0.0, 1.0]);
     }
-    Ok(Mesh {
-        positions,
-        normals,
-        faces,
-    })
+    mesh.attributes.vertex_normals = Some(normals);
+    Ok(mesh)
 }
