@@ -22,6 +22,7 @@
 pub mod cli;
 pub mod curve;
 pub mod demo;
+pub mod denoise;
 pub mod error;
 pub mod fsutil;
 pub mod generate;
@@ -33,5 +34,6 @@ pub mod progress;
 pub mod scheme;
 pub mod surface;
 pub mod tensor;
+pub mod terrain;
 
 pub use error::{Error, ErrorKind, Result};

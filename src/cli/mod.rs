@@ -12,6 +12,7 @@ pub mod mesh;
 pub mod points;
 pub mod subdivide;
 pub mod surface;
+pub mod terrain;
 
 /// Multiresolution codec, upscaler and terrain synthesis for images, volumes and heightmaps.
 #[derive(Parser, Debug)]
@@ -48,6 +49,13 @@ pub enum Command {
     InfoFile(io_cmds::InfoFileArgs),
     /// Convert between image / volume / heightmap formats, keeping samples exact.
     Convert(io_cmds::ConvertArgs),
+    /// Terrain: synthesis by example (§9.7.4), hillshaded rendering.
+    #[command(subcommand)]
+    Terrain(terrain::TerrainCommand),
+    /// Give an image or heightmap the fine details of an example (detail transfer).
+    Transfer(terrain::TransferArgs),
+    /// Remove noise by thresholded details (§9.7.2): curves, images, volumes, heightmaps.
+    Denoise(terrain::DenoiseArgs),
 }
 
 /// A failure on the command line: one line on stderr, exit code 2.
@@ -113,6 +121,9 @@ pub fn main() -> i32 {
         Command::Generate(a) => io_cmds::generate(a),
         Command::InfoFile(a) => io_cmds::info_file(a),
         Command::Convert(a) => io_cmds::convert(a),
+        Command::Terrain(c) => terrain::run(c),
+        Command::Transfer(a) => terrain::transfer(a),
+        Command::Denoise(a) => terrain::denoise(a),
     };
     match result {
         Ok(()) => 0,
