@@ -139,8 +139,8 @@ pub struct DenoiseArgs {
     pub output: PathBuf,
     #[arg(long, default_value_t = 4)]
     pub levels: usize,
-    /// haar, chaikin or cubic.
-    #[arg(long, default_value = "cubic")]
+    /// haar (best measured), chaikin or cubic.
+    #[arg(long, default_value = "haar")]
     pub scheme: Scheme,
     /// Boundary (default: symmetric for arrays, interpolating for point lists).
     #[arg(long)]

@@ -17,6 +17,7 @@
 //! raster.rs    Raster <-> Grid with units, cell size and nodata checks
 //! ```
 
+pub mod demo;
 pub mod grid;
 pub mod hillshade;
 pub mod raster;
@@ -24,6 +25,7 @@ pub mod resample;
 pub mod synth;
 pub mod voids;
 
+pub use demo::demo_rows;
 pub use grid::Grid;
 pub use hillshade::{hillshade, Shading};
 pub use synth::{reduce, synthesize, transfer, SynthOptions, SynthReport};
