@@ -113,6 +113,9 @@ pub struct SynthReport {
     pub mean_distance: Vec<f64>,
     /// Mean |second difference| across finest patch borders ÷ elsewhere (≈ 1: no seams).
     pub seam_ratio: f64,
+    /// PSNR (peak = the base's range) of the result reduced back to the base's size
+    /// ([`reduce`]) against the base; `None` for [`transfer`].
+    pub fidelity_psnr: Option<f64>,
 }
 
 const BOUNDARY: Boundary = Boundary::Interpolating;
@@ -450,6 +453,7 @@ fn refine(
         patches: Vec::new(),
         mean_distance: Vec::new(),
         seam_ratio: f64::NAN,
+        fidelity_psnr: None,
     };
     for k in (1..=l).rev() {
         let (packed, np, md) = level_details(&t, &pyr.blocks[k - 1], ly[k - 1], lx[k - 1], o, k)?;
@@ -521,7 +525,18 @@ pub fn synthesize(base: &Grid, example: &Grid, o: &SynthOptions) -> Result<(Grid
     let ly = lengths_down(o.scheme, h, l, "output height")?;
     let lx = lengths_down(o.scheme, w, l, "output width")?;
     let coarse = resample(base, ly[l], lx[l]);
-    refine(coarse, &ly, &lx, example, o)
+    let (g, mut report) = refine(coarse, &ly, &lx, example, o)?;
+    let back = reduce(&g, base.h, base.w, o.scheme, l)?;
+    let (lo, hi) = base.range();
+    let mse = back
+        .data
+        .iter()
+        .zip(&base.data)
+        .map(|(a, b)| (a - b).powi(2))
+        .sum::<f64>()
+        / base.data.len() as f64;
+    report.fidelity_psnr = Some(10.0 * ((hi - lo).max(1e-12).powi(2) / mse.max(1e-300)).log10());
+    Ok((g, report))
 }
 
 /// Detail transfer at the base's own size: the base is analysed `L` levels, its details
