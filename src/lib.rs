@@ -32,6 +32,7 @@ pub mod metrics;
 pub mod points;
 pub mod progress;
 pub mod scheme;
+pub mod style;
 pub mod surface;
 pub mod tensor;
 pub mod terrain;

@@ -347,3 +347,51 @@ fn cli_denoise_images_and_point_lists() {
     let back = mra::points::parse(&std::fs::read_to_string(d.join("o.csv")).unwrap()).unwrap();
     assert_eq!((back.len(), back.dim), (64, 2));
 }
+
+#[test]
+fn zigzag_style_on_a_circle_keeps_the_circle_coarse_and_the_zigzag_fine() {
+    use mra::scheme::{analyze_lane, Boundary};
+    // style: a zig-zag of amplitude 0.5 along a straight stroke
+    let m = 258;
+    let amp = 0.5;
+    let style: Vec<f64> = (0..m)
+        .flat_map(|i| [i as f64 * 0.2, if i % 2 == 0 { amp } else { -amp }])
+        .collect();
+    // base: a circle of radius 10 (open: first point repeated at the end)
+    let base: Vec<f64> = (0..=64)
+        .flat_map(|i| {
+            let t = i as f64 / 64.0 * std::f64::consts::TAU;
+            [10.0 * t.cos(), 10.0 * t.sin()]
+        })
+        .collect();
+    let levels = 3;
+    let out = mra::style::transfer_style(&style, &base, Scheme::Chaikin, levels, false).unwrap();
+    assert_eq!(out.len(), style.len());
+    // coarse levels: the circle (the result's coarse curve lies on radius 10)
+    let (packed, plan) =
+        analyze_lane(&out, 2, Scheme::Chaikin, Boundary::Interpolating, levels).unwrap();
+    let n = plan.lengths[levels];
+    for q in packed[..2 * n].chunks(2).skip(1).take(n - 2) {
+        let r = (q[0] * q[0] + q[1] * q[1]).sqrt();
+        assert!((r - 10.0).abs() < 0.6, "coarse radius {r}");
+    }
+    // fine levels: the style's amplitude (finest details as large as the style's)
+    let rms = |p: &[f64], r: std::ops::Range<usize>| {
+        (p[2 * r.start..2 * r.end].iter().map(|v| v * v).sum::<f64>() / r.len() as f64).sqrt()
+    };
+    let (sp, splan) =
+        analyze_lane(&style, 2, Scheme::Chaikin, Boundary::Interpolating, levels).unwrap();
+    let (a, b) = (
+        rms(&packed, plan.detail_range(1)),
+        rms(&sp, splan.detail_range(1)),
+    );
+    assert!((a / b - 1.0).abs() < 0.05, "{a} vs {b}");
+    // and the zig-zag is visible on the result: radial deviations of the style's size
+    let dev = (out
+        .chunks(2)
+        .map(|q| ((q[0] * q[0] + q[1] * q[1]).sqrt() - 10.0).powi(2))
+        .sum::<f64>()
+        / m as f64)
+        .sqrt();
+    assert!(dev > 0.4 * amp && dev < 2.0 * amp, "radial deviation {dev}");
+}

@@ -56,6 +56,8 @@ pub enum Command {
     Transfer(terrain::TransferArgs),
     /// Remove noise by thresholded details (§9.7.2): curves, images, volumes, heightmaps.
     Denoise(terrain::DenoiseArgs),
+    /// Curve style transfer (§9.7.1): a stroke's details on a new base curve.
+    Style(terrain::StyleArgs),
 }
 
 /// A failure on the command line: one line on stderr, exit code 2.
@@ -124,6 +126,7 @@ pub fn main() -> i32 {
         Command::Terrain(c) => terrain::run(c),
         Command::Transfer(a) => terrain::transfer(a),
         Command::Denoise(a) => terrain::denoise(a),
+        Command::Style(a) => terrain::style(a),
     };
     match result {
         Ok(()) => 0,

@@ -411,3 +411,48 @@ pub fn denoise(a: DenoiseArgs) -> CliResult {
     }
     Ok(())
 }
+
+#[derive(Args, Debug)]
+#[command(
+    after_help = "Example (the lead moves this under `mra curve style` at merge):
+  mra style --style zigzag.csv --base circle.csv --levels 3 -o styled.csv"
+)]
+pub struct StyleArgs {
+    /// The style stroke: a 2-D point list whose fine details are the style.
+    #[arg(long)]
+    pub style: PathBuf,
+    /// The new base curve: a 2-D point list (resampled by arc length).
+    #[arg(long)]
+    pub base: PathBuf,
+    #[arg(short, long)]
+    pub output: PathBuf,
+    #[arg(long, default_value_t = 3)]
+    pub levels: usize,
+    /// chaikin (the notes' Figure 9.18) or cubic.
+    #[arg(long, default_value = "chaikin")]
+    pub scheme: Scheme,
+    /// Treat both curves as closed (periodic boundary).
+    #[arg(long)]
+    pub closed: bool,
+}
+
+fn read_points(p: &Path) -> Result<crate::points::Points, Failure> {
+    let text = std::fs::read_to_string(p).map_err(|e| Failure::context(p.display(), e))?;
+    let pts = crate::points::parse(&text).map_err(|e| Failure::context(p.display(), e))?;
+    if pts.dim != 2 {
+        return Err(Failure(format!(
+            "{}: points of dimension {} (expected 2-D points)",
+            p.display(),
+            pts.dim
+        )));
+    }
+    Ok(pts)
+}
+
+pub fn style(a: StyleArgs) -> CliResult {
+    let s = read_points(&a.style)?;
+    let b = read_points(&a.base)?;
+    let out = crate::style::transfer_style(&s.data, &b.data, a.scheme, a.levels, a.closed)?;
+    crate::fsutil::write_atomic(&a.output, |w| crate::points::write(2, &out, w))
+        .map_err(|e| Failure::context(a.output.display(), e))
+}
