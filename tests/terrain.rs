@@ -395,3 +395,27 @@ fn zigzag_style_on_a_circle_keeps_the_circle_coarse_and_the_zigzag_fine() {
         .sqrt();
     assert!(dev > 0.4 * amp && dev < 2.0 * amp, "radial deviation {dev}");
 }
+
+fn corpus() -> Option<PathBuf> {
+    let p = std::env::var_os("MRA_CORPUS")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/corpus")));
+    if p.is_dir() {
+        Some(p)
+    } else {
+        println!("skipped: no corpus at {}", p.display());
+        None
+    }
+}
+
+#[test]
+fn srtm_voids_are_filled_within_the_range_of_their_rims() {
+    let Some(c) = corpus() else { return };
+    let r = mra::io::read(&c.join("terrain/N22W160.hgt")).unwrap();
+    let voids = mra::io::hgt::void_count(&r);
+    assert!(voids > 0);
+    let (g, filled) = mra::terrain::raster::to_grid(&r).unwrap();
+    assert_eq!(filled, voids);
+    let (lo, hi) = g.range();
+    assert!(lo >= -34.0 && hi <= 1579.0, "{lo} … {hi}");
+}
