@@ -22,6 +22,7 @@
 pub mod cli;
 pub mod curve;
 pub mod demo;
+pub mod denoise;
 pub mod error;
 pub mod fsutil;
 pub mod generate;
@@ -31,7 +32,9 @@ pub mod metrics;
 pub mod points;
 pub mod progress;
 pub mod scheme;
+pub mod style;
 pub mod surface;
 pub mod tensor;
+pub mod terrain;
 
 pub use error::{Error, ErrorKind, Result};

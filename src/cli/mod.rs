@@ -13,6 +13,7 @@ pub mod points;
 pub mod scheme;
 pub mod subdivide;
 pub mod surface;
+pub mod terrain;
 
 /// Multiresolution codec, upscaler and terrain synthesis for images, volumes and heightmaps.
 #[derive(Parser, Debug)]
@@ -52,6 +53,15 @@ pub enum Command {
     /// Curve subdivision schemes: eigen-analysis of a mask.
     #[command(subcommand)]
     Scheme(scheme::Command),
+    /// Terrain: synthesis by example (§9.7.4), hillshaded rendering.
+    #[command(subcommand)]
+    Terrain(terrain::TerrainCommand),
+    /// Give an image or heightmap the fine details of an example (detail transfer).
+    Transfer(terrain::TransferArgs),
+    /// Remove noise by thresholded details (§9.7.2): curves, images, volumes, heightmaps.
+    Denoise(terrain::DenoiseArgs),
+    /// Curve style transfer (§9.7.1): a stroke's details on a new base curve.
+    Style(terrain::StyleArgs),
 }
 
 /// A failure on the command line: one line on stderr, exit code 2.
@@ -118,6 +128,10 @@ pub fn main() -> i32 {
         Command::InfoFile(a) => io_cmds::info_file(a),
         Command::Convert(a) => io_cmds::convert(a),
         Command::Scheme(c) => scheme::run(c),
+        Command::Terrain(c) => terrain::run(c),
+        Command::Transfer(a) => terrain::transfer(a),
+        Command::Denoise(a) => terrain::denoise(a),
+        Command::Style(a) => terrain::style(a),
     };
     match result {
         Ok(()) => 0,

@@ -1,0 +1,458 @@
+//! `mra terrain synth|render`, `mra transfer`, `mra denoise` and `mra style`: thin
+//! shells over [`crate::terrain`], [`crate::denoise`] and the curve style transfer.
+
+use std::path::{Path, PathBuf};
+
+use clap::{Args, Subcommand};
+
+use super::io_cmds::{read_input, write_output};
+use super::{CliResult, Failure};
+use crate::denoise::{self, DenoiseOptions, Mode, Rule};
+use crate::io::{self, DataKind, Format, Raster, ReadOptions, SampleType, Samples};
+use crate::scheme::{Boundary, Scheme};
+use crate::tensor::Array;
+use crate::terrain::synth::Details;
+use crate::terrain::{self, raster as tr, Grid, Shading, SynthOptions};
+
+#[derive(Subcommand, Debug)]
+pub enum TerrainCommand {
+    /// Synthesize a detailed terrain from a smooth base and a detailed example (§9.7.4).
+    Synth(SynthArgs),
+    /// Draw a hillshaded relief of a heightmap as a PNG.
+    Render(RenderArgs),
+}
+
+/// Options shared by `terrain synth` and `transfer`.
+#[derive(Args, Debug, Clone)]
+pub struct MatchArgs {
+    /// Levels of refinement L (the output is base × 2^L for `synth`).
+    #[arg(long, default_value_t = 2)]
+    pub levels: usize,
+    /// chaikin (quadratic, the notes' choice) or cubic; boundary is interpolating.
+    #[arg(long, default_value = "chaikin")]
+    pub scheme: Scheme,
+    /// Seed: the same seed gives the same output, byte for byte.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Patch core in coarse cells.
+    #[arg(long, default_value_t = 8)]
+    pub patch: usize,
+    /// Overlap of patches on each side (≤ patch/2).
+    #[arg(long, default_value_t = 2)]
+    pub overlap: usize,
+    /// matched (the method), copy (same place, no matching) or none (subdivision only).
+    #[arg(long, default_value = "matched")]
+    pub details: Details,
+    /// Print what was done as one JSON object.
+    #[arg(long)]
+    pub json: bool,
+}
+
+impl MatchArgs {
+    fn options(&self) -> SynthOptions {
+        SynthOptions {
+            levels: self.levels,
+            scheme: self.scheme,
+            seed: self.seed,
+            patch: self.patch,
+            overlap: self.overlap,
+            details: self.details,
+            ..SynthOptions::default()
+        }
+    }
+}
+
+#[derive(Args, Debug)]
+#[command(after_help = "Example:
+  mra generate terrain --size 64x64 --seed 3 -o base.png
+  mra generate terrain --size 256x256 --seed 9 -o example.png
+  mra terrain synth --base base.png --example example.png --levels 2 --seed 7 -o out.tif --preview out.png")]
+pub struct SynthArgs {
+    /// The smooth or low-resolution heightmap (any format `mra` reads; voids are filled).
+    #[arg(long)]
+    pub base: PathBuf,
+    /// The detailed example heightmap (same height unit).
+    #[arg(long)]
+    pub example: PathBuf,
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Output size WxH (default: base × 2^L).
+    #[arg(long, value_name = "WxH")]
+    pub size: Option<String>,
+    /// Also write base, example and result side by side, hillshaded, as a PNG.
+    #[arg(long)]
+    pub preview: Option<PathBuf>,
+    #[command(flatten)]
+    pub m: MatchArgs,
+}
+
+#[derive(Args, Debug)]
+#[command(after_help = "Example:
+  mra terrain render ../shared/corpus/terrain/mt_st_helens_30m_f32.tif -o helens.png --colour")]
+pub struct RenderArgs {
+    /// A heightmap.
+    pub input: PathBuf,
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Sun azimuth in degrees clockwise from north.
+    #[arg(long, default_value_t = 315.0)]
+    pub azimuth: f64,
+    /// Sun altitude in degrees.
+    #[arg(long, default_value_t = 45.0)]
+    pub altitude: f64,
+    /// Vertical exaggeration.
+    #[arg(long, default_value_t = 1.0)]
+    pub z_factor: f64,
+    /// Cell size in height units (default: from the file, else relief = ¼ of the width).
+    #[arg(long)]
+    pub cell: Option<f64>,
+    /// Hypsometric colour ramp by elevation.
+    #[arg(long, alias = "color")]
+    pub colour: bool,
+}
+
+#[derive(Args, Debug)]
+#[command(after_help = "Example:
+  mra transfer --from ../shared/corpus/images/kodak/kodim13.png --to blurred.png --levels 2 -o out.png")]
+pub struct TransferArgs {
+    /// The example whose fine details are transferred.
+    #[arg(long)]
+    pub from: PathBuf,
+    /// The image or heightmap that receives them (its own details are replaced).
+    #[arg(long)]
+    pub to: PathBuf,
+    #[arg(short, long)]
+    pub output: PathBuf,
+    #[command(flatten)]
+    pub m: MatchArgs,
+}
+
+#[derive(Args, Debug)]
+#[command(after_help = "Examples:
+  mra denoise noisy.png -o clean.png
+  mra denoise ../shared/corpus/volumes/ct_pancreas_256.nrrd --mode hard --levels 3 -o ct.nrrd
+  mra denoise stroke.csv --scheme chaikin -o smooth.csv")]
+pub struct DenoiseArgs {
+    /// An image, volume or heightmap, or a point list (.csv / .txt).
+    pub input: PathBuf,
+    #[arg(short, long)]
+    pub output: PathBuf,
+    #[arg(long, default_value_t = 4)]
+    pub levels: usize,
+    /// haar (best measured), chaikin or cubic.
+    #[arg(long, default_value = "haar")]
+    pub scheme: Scheme,
+    /// Boundary (default: symmetric for arrays, interpolating for point lists).
+    #[arg(long)]
+    pub boundary: Option<Boundary>,
+    /// A fixed threshold in sample units (default: BayesShrink per band).
+    #[arg(long)]
+    pub threshold: Option<f64>,
+    /// Use the universal threshold σ√(2 ln N) instead of BayesShrink.
+    #[arg(long, conflicts_with = "threshold")]
+    pub universal: bool,
+    /// The noise σ in sample units (default: estimated from the finest band's MAD).
+    #[arg(long)]
+    pub sigma: Option<f64>,
+    #[arg(long, default_value = "soft")]
+    pub mode: Mode,
+    /// Print what was done as one JSON object.
+    #[arg(long)]
+    pub json: bool,
+}
+
+fn parse_size(s: &str) -> Result<(usize, usize), Failure> {
+    let v: Vec<usize> = s
+        .split(['x', 'X'])
+        .map(|t| t.trim().parse::<usize>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| Failure(format!("invalid --size: {s} (expected WxH, e.g. 512x512)")))?;
+    match v[..] {
+        [w, h] if w > 0 && h > 0 => Ok((h, w)),
+        _ => Err(Failure(format!(
+            "invalid --size: {s} (expected WxH, e.g. 512x512)"
+        ))),
+    }
+}
+
+/// Sample type of a result written to `path`: formats without float samples keep an
+/// integer type (PNG/PNM u16 unless the template is u8; .hgt i16), the rest f32.
+fn output_type(path: &Path, template: SampleType) -> SampleType {
+    match Format::from_extension(path) {
+        Some(Format::Png) | Some(Format::Pnm) => {
+            if template == SampleType::U8 {
+                SampleType::U8
+            } else {
+                SampleType::U16
+            }
+        }
+        Some(Format::Hgt) => SampleType::I16,
+        Some(Format::R16) => SampleType::U16,
+        _ => SampleType::F32,
+    }
+}
+
+fn load_grid(path: &Path) -> Result<(Raster, Grid), Failure> {
+    let r = read_input(path, &ReadOptions::default())?;
+    let (g, _) = tr::to_grid(&r).map_err(|e| Failure::context(path.display(), e))?;
+    Ok((r, g))
+}
+
+/// Cell size for shading: from the file, else such that the relief spans ¼ of the width.
+fn shading_cell(r: &Raster, g: &Grid, cell: Option<f64>) -> (f64, f64) {
+    if let Some(c) = cell {
+        return (c, c);
+    }
+    if r.meta.spacing.is_some() {
+        return tr::cell_metres(r);
+    }
+    let (lo, hi) = g.range();
+    let c = ((hi - lo) / (0.25 * g.w.max(g.h) as f64)).max(f64::MIN_POSITIVE);
+    (c, c)
+}
+
+fn shade_raster(g: &Grid, s: &Shading) -> Result<Raster, Failure> {
+    let ch = if s.colour { 3 } else { 1 };
+    let px = terrain::hillshade(g, s);
+    Ok(Raster::new(
+        vec![g.h, g.w],
+        ch,
+        Samples::U8(px),
+        DataKind::Image,
+    )?)
+}
+
+/// Nearest-neighbour scaling of an 8-bit picture to `h` rows.
+fn scale_to(px: &Raster, h: usize) -> (usize, Vec<u8>) {
+    let Samples::U8(v) = &px.samples else {
+        return (0, Vec::new());
+    };
+    let (ph, pw, c) = (px.dims[0], px.dims[1], px.channels);
+    let w = (pw * h).div_ceil(ph).max(1);
+    let mut out = Vec::with_capacity(h * w * c);
+    for y in 0..h {
+        let sy = (y * ph / h).min(ph - 1);
+        for x in 0..w {
+            let sx = (x * pw / w).min(pw - 1);
+            out.extend_from_slice(&v[(sy * pw + sx) * c..(sy * pw + sx + 1) * c]);
+        }
+    }
+    (w, out)
+}
+
+/// Base, example and result hillshaded, side by side at the result's height, all lit
+/// with the result's cell size (the base's scaled by the change of lattice), so that
+/// the three share one vertical scale.
+fn preview(base: &Grid, example: &Grid, out_r: &Raster, out: &Grid) -> Result<Raster, Failure> {
+    let h = out.h.max(example.h);
+    let gap = 8;
+    let (cy, cx) = shading_cell(out_r, out, None);
+    let fy = (out.h.max(2) - 1) as f64 / (base.h.max(2) - 1) as f64;
+    let fx = (out.w.max(2) - 1) as f64 / (base.w.max(2) - 1) as f64;
+    let parts = [
+        (base, (cy * fy, cx * fx)),
+        (example, (cy, cx)),
+        (out, (cy, cx)),
+    ];
+    let pics: Vec<(usize, Vec<u8>)> = parts
+        .iter()
+        .map(|(g, cell)| {
+            let s = Shading {
+                cell: *cell,
+                ..Shading::default()
+            };
+            shade_raster(g, &s).map(|p| scale_to(&p, h))
+        })
+        .collect::<Result<_, _>>()?;
+    let w: usize = pics.iter().map(|p| p.0).sum::<usize>() + gap * (pics.len() - 1);
+    let mut img = vec![255u8; h * w];
+    let mut x0 = 0;
+    for (pw, px) in &pics {
+        for y in 0..h {
+            img[y * w + x0..y * w + x0 + pw].copy_from_slice(&px[y * pw..(y + 1) * pw]);
+        }
+        x0 += pw + gap;
+    }
+    Ok(Raster::new(
+        vec![h, w],
+        1,
+        Samples::U8(img),
+        DataKind::Image,
+    )?)
+}
+
+fn print_json(v: &impl serde::Serialize) {
+    println!("{}", serde_json::to_string(v).unwrap_or_default());
+}
+
+pub fn run(c: TerrainCommand) -> CliResult {
+    match c {
+        TerrainCommand::Synth(a) => synth(a),
+        TerrainCommand::Render(a) => render(a),
+    }
+}
+
+fn synth(a: SynthArgs) -> CliResult {
+    let (br, base) = load_grid(&a.base)?;
+    let (er, example) = load_grid(&a.example)?;
+    let mut o = a.m.options();
+    if let Some(s) = &a.size {
+        o.size = Some(parse_size(s)?);
+    }
+    let out_w = o
+        .size
+        .map(|s| s.1)
+        .unwrap_or(base.w.saturating_mul(1 << o.levels.min(16)));
+    tr::check_compatible(&br, &er, out_w).map_err(|e| Failure::context(a.example.display(), e))?;
+    let (g, report) = terrain::synthesize(&base, &example, &o)?;
+    let out = tr::from_grid(&g, &br, output_type(&a.output, br.sample_type()))?;
+    write_output(&a.output, &out, false)?;
+    if let Some(p) = &a.preview {
+        let pic = preview(&base, &example, &out, &g)?;
+        write_output(p, &pic, false)?;
+    }
+    if a.m.json {
+        print_json(&report);
+    } else {
+        eprintln!(
+            "{}: {}x{} from base {}x{} (coarse lattice {}x{}), {} levels, seam ratio {:.3}",
+            a.output.display(),
+            g.w,
+            g.h,
+            base.w,
+            base.h,
+            report.coarse[1],
+            report.coarse[0],
+            report.levels,
+            report.seam_ratio
+        );
+    }
+    Ok(())
+}
+
+fn render(a: RenderArgs) -> CliResult {
+    let (r, g) = load_grid(&a.input)?;
+    let s = Shading {
+        azimuth: a.azimuth,
+        altitude: a.altitude,
+        z_factor: a.z_factor,
+        cell: shading_cell(&r, &g, a.cell),
+        colour: a.colour,
+    };
+    if !(0.0..=90.0).contains(&a.altitude) {
+        return Err(Failure(format!(
+            "invalid --altitude: {} (expected 0 to 90 degrees)",
+            a.altitude
+        )));
+    }
+    write_output(&a.output, &shade_raster(&g, &s)?, false)
+}
+
+pub fn transfer(a: TransferArgs) -> CliResult {
+    let (br, base) = load_grid(&a.to)?;
+    let (er, example) = load_grid(&a.from)?;
+    tr::check_compatible(&br, &er, base.w).map_err(|e| Failure::context(a.from.display(), e))?;
+    let o = a.m.options();
+    let (g, report) = terrain::transfer(&base, &example, &o)?;
+    let out = tr::from_grid(&g, &br, br.sample_type())?;
+    write_output(&a.output, &out, false)?;
+    if a.m.json {
+        print_json(&report);
+    }
+    Ok(())
+}
+
+pub fn denoise(a: DenoiseArgs) -> CliResult {
+    let rule = match (a.threshold, a.universal) {
+        (Some(t), _) => Rule::Fixed(t),
+        (None, true) => Rule::Universal,
+        _ => Rule::Bayes,
+    };
+    let is_points = super::analyze::is_point_list(&a.input);
+    let o = DenoiseOptions {
+        scheme: a.scheme,
+        boundary: a.boundary.unwrap_or(if is_points {
+            Boundary::Interpolating
+        } else {
+            Boundary::Symmetric
+        }),
+        levels: a.levels,
+        mode: a.mode,
+        rule,
+        sigma: a.sigma,
+    };
+    let report = if is_points {
+        let text = std::fs::read_to_string(&a.input)
+            .map_err(|e| Failure::context(a.input.display(), e))?;
+        let pts =
+            crate::points::parse(&text).map_err(|e| Failure::context(a.input.display(), e))?;
+        let (n, d) = (pts.len(), pts.dim);
+        let mut arr = Array::from_shape_vec(&[n, d], pts.data)?;
+        let r = denoise::denoise(&mut arr, &[0], &o)
+            .map_err(|e| Failure::context(a.input.display(), e))?;
+        crate::fsutil::write_atomic(&a.output, |w| crate::points::write(d, arr.data(), w))
+            .map_err(|e| Failure::context(a.output.display(), e))?;
+        r
+    } else {
+        let r = read_input(&a.input, &ReadOptions::default())?;
+        let (shape, axes) = io::array::array_shape(&r.dims, r.channels);
+        let mut arr = Array::from_shape_vec(&shape, r.to_f64())?;
+        let rep = denoise::denoise(&mut arr, &axes, &o)
+            .map_err(|e| Failure::context(a.input.display(), e))?;
+        let out = Raster {
+            samples: Samples::from_f64(arr.data(), r.sample_type()),
+            ..r
+        };
+        write_output(&a.output, &out, false)?;
+        rep
+    };
+    if a.json {
+        print_json(&report);
+    }
+    Ok(())
+}
+
+#[derive(Args, Debug)]
+#[command(
+    after_help = "Example (the lead moves this under `mra curve style` at merge):
+  mra style --style zigzag.csv --base circle.csv --levels 3 -o styled.csv"
+)]
+pub struct StyleArgs {
+    /// The style stroke: a 2-D point list whose fine details are the style.
+    #[arg(long)]
+    pub style: PathBuf,
+    /// The new base curve: a 2-D point list (resampled by arc length).
+    #[arg(long)]
+    pub base: PathBuf,
+    #[arg(short, long)]
+    pub output: PathBuf,
+    #[arg(long, default_value_t = 3)]
+    pub levels: usize,
+    /// chaikin (the notes' Figure 9.18) or cubic.
+    #[arg(long, default_value = "chaikin")]
+    pub scheme: Scheme,
+    /// Treat both curves as closed (periodic boundary).
+    #[arg(long)]
+    pub closed: bool,
+}
+
+fn read_points(p: &Path) -> Result<crate::points::Points, Failure> {
+    let text = std::fs::read_to_string(p).map_err(|e| Failure::context(p.display(), e))?;
+    let pts = crate::points::parse(&text).map_err(|e| Failure::context(p.display(), e))?;
+    if pts.dim != 2 {
+        return Err(Failure(format!(
+            "{}: points of dimension {} (expected 2-D points)",
+            p.display(),
+            pts.dim
+        )));
+    }
+    Ok(pts)
+}
+
+pub fn style(a: StyleArgs) -> CliResult {
+    let s = read_points(&a.style)?;
+    let b = read_points(&a.base)?;
+    let out = crate::style::transfer_style(&s.data, &b.data, a.scheme, a.levels, a.closed)?;
+    crate::fsutil::write_atomic(&a.output, |w| crate::points::write(2, &out, w))
+        .map_err(|e| Failure::context(a.output.display(), e))
+}

@@ -1,0 +1,31 @@
+//! Terrain synthesis by example (notes §9.7.4; Brosz, Samavati & Sousa, "Terrain
+//! synthesis by-example"), detail transfer for images, and hillshaded pictures.
+//!
+//! A heightmap is an open–open tensor-product surface, so the terrain uses the
+//! *interpolating* boundary of the two-scale levels: `C = A F`, `D = B F`,
+//! `F = P C + Q D` along both axes. Because `A Q = 0`, whatever details are added
+//! during reconstruction, analysing the result `L` levels gives back the base exactly:
+//! the base's large-scale shape is kept by construction, and the example only
+//! decides *which* details are added.
+//!
+//! ```text
+//! grid.rs      Grid: h × w × channels of f64, row-major
+//! resample.rs  corner-aligned Catmull–Rom resampling (base to the output lattice)
+//! voids.rs     filling nodata cells (SRTM voids) before synthesis
+//! synth.rs     the example's pyramid, patch matching, blended detail transfer
+//! hillshade.rs Horn slope/aspect shading with an optional hypsometric colour ramp
+//! raster.rs    Raster <-> Grid with units, cell size and nodata checks
+//! ```
+
+pub mod demo;
+pub mod grid;
+pub mod hillshade;
+pub mod raster;
+pub mod resample;
+pub mod synth;
+pub mod voids;
+
+pub use demo::demo_rows;
+pub use grid::Grid;
+pub use hillshade::{hillshade, Shading};
+pub use synth::{reduce, synthesize, transfer, SynthOptions, SynthReport};

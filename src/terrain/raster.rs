@@ -1,0 +1,130 @@
+//! Rasters in and out of the terrain module: heightmaps (and images) as [`Grid`]s with
+//! their voids filled, the checks that a base and an example can be combined (same
+//! height unit, compatible cell size), and the output's metadata (units kept, cell size
+//! scaled by the change of lattice, GeoTIFF pixel scale updated, nodata dropped).
+
+use super::{voids, Grid};
+use crate::io::{GeoValue, Raster, SampleType, Samples};
+use crate::{Error, Result};
+
+/// A 2-D raster as a grid; nodata cells (`meta.nodata`, NaN) are filled first.
+/// Returns the grid and the number of filled cells.
+pub fn to_grid(r: &Raster) -> Result<(Grid, usize)> {
+    if r.dims.len() != 2 {
+        return Err(Error::parameter(
+            "dimensions",
+            format!("{} ({}-D)", r.summary(), r.dims.len()),
+            "a 2-D heightmap or image",
+        ));
+    }
+    let mut g = Grid::new(r.dims[0], r.dims[1], r.channels, r.to_f64())?;
+    let filled = voids::fill(&mut g, r.meta.nodata)?;
+    Ok((g, filled))
+}
+
+/// The unit of the heights: `meta.extra["elevation_units"]` (SRTM), else none.
+fn height_unit(r: &Raster) -> Option<&str> {
+    r.meta.extra.get("elevation_units").map(|s| s.as_str())
+}
+
+/// Cell size along x in the raster's horizontal unit, if known.
+fn cell_x(r: &Raster) -> Option<(f64, &str)> {
+    let sp = r.meta.spacing.as_ref()?;
+    Some((*sp.last()?, r.meta.units.as_deref().unwrap_or("")))
+}
+
+/// Check that the example's heights and cells go with the output's: the same height
+/// unit when both say, and (same horizontal unit) an example cell within a factor of
+/// 4 of the output cell `base cell × (n − 1)/(M − 1)`.
+pub fn check_compatible(base: &Raster, example: &Raster, out_w: usize) -> Result<()> {
+    if let (Some(a), Some(b)) = (height_unit(base), height_unit(example)) {
+        if a != b {
+            return Err(Error::parameter(
+                "example height unit",
+                format!("{b} (base: {a})"),
+                "the base's height unit",
+            ));
+        }
+    }
+    if let (Some((cb, ub)), Some((ce, ue))) = (cell_x(base), cell_x(example)) {
+        if ub != ue {
+            return Err(Error::parameter(
+                "example cell unit",
+                format!("{ue:?} (base: {ub:?})"),
+                "the base's horizontal unit",
+            ));
+        }
+        let n = base.width().max(2) as f64;
+        let out = cb * (n - 1.0) / (out_w.max(2) as f64 - 1.0);
+        let ratio = out / ce;
+        if !(0.25..=4.0).contains(&ratio) {
+            return Err(Error::parameter(
+                "example cell size",
+                format!("{ce} {ue} (output cell {out:.6} {ub})"),
+                "an example cell within a factor 4 of the output cell",
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// The output raster: `g` in `ty`, with `template`'s metadata, spacing scaled from
+/// `from_dims` to `g`'s lattice (corner-aligned: × (n − 1)/(M − 1)).
+pub fn from_grid(g: &Grid, template: &Raster, ty: SampleType) -> Result<Raster> {
+    let mut r = Raster::new(
+        vec![g.h, g.w],
+        g.c,
+        Samples::from_f64(&g.data, ty),
+        template.kind,
+    )?;
+    let mut meta = template.meta.clone();
+    let (n_y, n_x) = (template.dims[0], template.dims[1]);
+    let fy = (n_y.max(2) - 1) as f64 / (g.h.max(2) - 1) as f64;
+    let fx = (n_x.max(2) - 1) as f64 / (g.w.max(2) - 1) as f64;
+    if let Some(sp) = meta.spacing.as_mut() {
+        if sp.len() == 2 {
+            sp[0] *= fy;
+            sp[1] *= fx;
+        }
+    }
+    for key in ["asc.cellsize", "asc.dx", "asc.dy"] {
+        meta.extra.remove(key);
+    }
+    meta.nodata = None;
+    meta.extra.remove("asc.nodata_value");
+    meta.geotiff.retain(|t| t.tag != 42113 && t.tag != 34264);
+    for t in meta.geotiff.iter_mut() {
+        if t.tag == 33550 {
+            if let GeoValue::Doubles(d) = &mut t.value {
+                if d.len() >= 2 {
+                    d[0] *= fx;
+                    d[1] *= fy;
+                }
+            }
+        }
+    }
+    r.meta = meta;
+    Ok(r)
+}
+
+/// Cell size `(dy, dx)` in metres for shading: spacing in metres as stored, degrees
+/// converted at the latitude of `asc.yllcorner` (if known) with 111 320 m per degree;
+/// 1 when unknown.
+pub fn cell_metres(r: &Raster) -> (f64, f64) {
+    let Some(sp) = r.meta.spacing.as_ref().filter(|s| s.len() == 2) else {
+        return (1.0, 1.0);
+    };
+    let unit = r.meta.units.as_deref().unwrap_or("");
+    if unit.starts_with("deg") {
+        let lat = r
+            .meta
+            .extra
+            .get("asc.yllcorner")
+            .and_then(|v| v.parse::<f64>().ok())
+            .unwrap_or(0.0);
+        let m = 111_320.0;
+        (sp[0] * m, sp[1] * m * lat.to_radians().cos())
+    } else {
+        (sp[0], sp[1])
+    }
+}

@@ -1,0 +1,565 @@
+//! Synthesis by example (notes §9.7.4; Brosz, Samavati & Sousa): refine a base level by
+//! level, `F_{k−1} = P C_k + Q D_k`, where the details `D_k` come from the example's
+//! own pyramid at the same level, patch by patch, where the example's coarse
+//! neighbourhood best matches the base's.
+//!
+//! **Lattice.** The output has `M = n·2^L` samples per axis (or `--size`); its lane
+//! lengths `M = m_0 > m_1 > … > m_L` follow the interpolating length rule, and the
+//! base is resampled (corner-aligned Catmull–Rom, [`super::resample`]) to `m_L` — a
+//! change of a few samples — to become the coarse points `C_L`.
+//!
+//! **Patches.** At level `k` the coarse grid is cut into cores of `p × p` cells
+//! (default 8) with windows `p + 2o` (overlap `o`, default 2). A coefficient of the
+//! one-level Mallat block sits in band `(hy, hx)` at band-local index `(iy, ix)`; both
+//! coarse and detail indices are positions on the coarse lattice (detail `j` lies
+//! between coarse `j` and `j + 1`), so a patch is copied by one integer shift of
+//! band-local indices from the example's block to the output's.
+//!
+//! **Matching.** A window's feature is its heights normalised for offset and scale,
+//! `z = (h − mean)/std`, plus its mean slope `g = mean |∇h|` (scale-free shape + steepness):
+//! `dist = Σ (z_t − z_e)²/q² + λ ((g_t − g_e)/(g_t + g_e + ε))²`. Among the candidate
+//! windows of the example (a grid of at most `candidates`, offset by the seed) the best
+//! `choices` are kept and one is picked by a generator seeded with (seed, level, patch):
+//! deterministic and independent of thread scheduling.
+//!
+//! **Blending.** Each patch weighs its copied details by a separable ramp `w` that rises
+//! over `2o` cells across each border, so neighbouring weights sum to 1; the blend
+//! `Σ wᵢ Dᵢ / √(Σ wᵢ²)` keeps the variance of uncorrelated details (no faded seams).
+
+use rayon::prelude::*;
+
+use super::resample::resample;
+use super::Grid;
+use crate::generate::rng::SplitMix64;
+use crate::scheme::{max_levels, Boundary, Scheme, TwoScale};
+use crate::tensor::{self, Order, Pyramid, PyramidSpec};
+use crate::{Error, Result};
+
+/// Where the output's details come from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Details {
+    /// Patches matched by coarse neighbourhood (the method).
+    Matched,
+    /// The example's details copied at the same positions, without matching (a baseline).
+    Copy,
+    /// No details: the base refined by subdivision alone (a baseline).
+    None,
+}
+
+impl std::str::FromStr for Details {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<Self> {
+        match s {
+            "matched" => Ok(Details::Matched),
+            "copy" => Ok(Details::Copy),
+            "none" => Ok(Details::None),
+            _ => Err(Error::parameter("details", s, "matched, copy or none")),
+        }
+    }
+}
+
+/// Parameters of [`synthesize`] and [`transfer`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct SynthOptions {
+    /// Levels of refinement `L`.
+    pub levels: usize,
+    /// Chaikin (quadratic, the notes' choice for terrain) or cubic.
+    pub scheme: Scheme,
+    pub seed: u64,
+    /// Output `(rows, columns)`; default base × 2^L.
+    pub size: Option<(usize, usize)>,
+    /// Patch core in coarse cells.
+    pub patch: usize,
+    /// Overlap on each side of a core, ≤ patch/2.
+    pub overlap: usize,
+    /// At most this many candidate windows per level.
+    pub candidates: usize,
+    /// Pick among this many best matches.
+    pub choices: usize,
+    /// Weight λ of the slope term.
+    pub slope_weight: f64,
+    pub details: Details,
+}
+
+impl Default for SynthOptions {
+    fn default() -> Self {
+        SynthOptions {
+            levels: 2,
+            scheme: Scheme::Chaikin,
+            seed: 1,
+            size: None,
+            patch: 8,
+            overlap: 2,
+            candidates: 4096,
+            choices: 3,
+            slope_weight: 1.0,
+            details: Details::Matched,
+        }
+    }
+}
+
+/// What a synthesis did.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct SynthReport {
+    /// Output `[rows, columns]`.
+    pub dims: [usize; 2],
+    /// The coarse lattice the base was resampled to.
+    pub coarse: [usize; 2],
+    pub levels: usize,
+    /// Patches placed per level, coarsest first.
+    pub patches: Vec<usize>,
+    /// Mean matching distance per level, coarsest first.
+    pub mean_distance: Vec<f64>,
+    /// Mean |second difference| across finest patch borders ÷ elsewhere (≈ 1: no seams).
+    pub seam_ratio: f64,
+    /// PSNR (peak = the base's range) of the result reduced back to the base's size
+    /// ([`reduce`]) against the base; `None` for [`transfer`].
+    pub fidelity_psnr: Option<f64>,
+}
+
+const BOUNDARY: Boundary = Boundary::Interpolating;
+
+fn spec(scheme: Scheme, levels: usize) -> PyramidSpec {
+    PyramidSpec {
+        scheme,
+        boundary: BOUNDARY,
+        levels,
+        order: Order::NonStandard,
+        axes: vec![0, 1],
+    }
+}
+
+/// Lane lengths `m_0 … m_L` of an axis of `m`, or an error naming `what` when the
+/// scheme's filters cannot take it `levels` levels down.
+fn lengths_down(scheme: Scheme, m: usize, levels: usize, what: &'static str) -> Result<Vec<usize>> {
+    if max_levels(scheme, BOUNDARY, m) < levels {
+        return Err(Error::parameter(
+            what,
+            format!("{m} samples for {levels} {scheme} levels"),
+            "a side long enough for the interpolating filters at every level (see the length rule)",
+        ));
+    }
+    let mut v = vec![m];
+    for _ in 0..levels {
+        v.push(TwoScale::coarse_len(scheme, BOUNDARY, *v.last().unwrap()));
+    }
+    Ok(v)
+}
+
+/// One level of analysis of a grid: the Mallat block `[C | D]` and the coarse size.
+fn analyze_one(g: &Grid, scheme: Scheme) -> Result<(Grid, usize, usize)> {
+    let (mut a, _) = g.to_array()?;
+    tensor::analyze(&mut a, &spec(scheme, 1))?;
+    let ny = TwoScale::coarse_len(scheme, BOUNDARY, g.h);
+    let nx = TwoScale::coarse_len(scheme, BOUNDARY, g.w);
+    Ok((Grid::new(g.h, g.w, g.c, a.into_data())?, ny, nx))
+}
+
+/// One level of reconstruction of a Mallat block.
+fn synthesize_one(packed: Grid, scheme: Scheme) -> Result<Grid> {
+    let (h, w, c) = (packed.h, packed.w, packed.c);
+    let (mut a, _) = packed.to_array()?;
+    let pyr = Pyramid::plan(a.shape(), &spec(scheme, 1))?;
+    tensor::synthesize(&mut a, &pyr)?;
+    Grid::new(h, w, c, a.into_data())
+}
+
+/// The example's one-level blocks, finest first (`levels[k-1]` = level k).
+struct ExamplePyramid {
+    blocks: Vec<(Grid, usize, usize)>,
+}
+
+impl ExamplePyramid {
+    fn new(example: &Grid, scheme: Scheme, levels: usize) -> Result<Self> {
+        let mut blocks = Vec::with_capacity(levels);
+        let mut g = example.clone();
+        for _ in 0..levels {
+            let (packed, ny, nx) = analyze_one(&g, scheme)?;
+            g = packed.crop(ny, nx);
+            blocks.push((packed, ny, nx));
+        }
+        Ok(ExamplePyramid { blocks })
+    }
+}
+
+/// Feature of a `q × q` window with top-left `(y0, x0)` (indices clamped into `g`):
+/// normalised heights, then the mean slope.
+fn feature(g: &Grid, y0: i64, x0: i64, q: usize, out: &mut Vec<f32>) {
+    out.clear();
+    let cl = |v: i64, n: usize| v.clamp(0, n as i64 - 1) as usize;
+    let hgt = |y: i64, x: i64| g.mean_at(cl(y, g.h), cl(x, g.w));
+    let mut vals = Vec::with_capacity(q * q);
+    let mut slope = 0.0;
+    for dy in 0..q as i64 {
+        for dx in 0..q as i64 {
+            let (y, x) = (y0 + dy, x0 + dx);
+            vals.push(hgt(y, x));
+            let gy = 0.5 * (hgt(y + 1, x) - hgt(y - 1, x));
+            let gx = 0.5 * (hgt(y, x + 1) - hgt(y, x - 1));
+            slope += (gy * gy + gx * gx).sqrt();
+        }
+    }
+    let n = vals.len() as f64;
+    let mean = vals.iter().sum::<f64>() / n;
+    let var = vals.iter().map(|v| (v - mean) * (v - mean)).sum::<f64>() / n;
+    let sd = var.sqrt();
+    let inv = if sd > 1e-12 * (1.0 + mean.abs()) {
+        1.0 / sd
+    } else {
+        0.0
+    };
+    out.extend(vals.iter().map(|v| ((v - mean) * inv) as f32));
+    out.push((slope / n) as f32);
+}
+
+fn distance(t: &[f32], e: &[f32], lambda: f64) -> f64 {
+    let q2 = t.len() - 1;
+    let mut s = 0.0f32;
+    for i in 0..q2 {
+        let d = t[i] - e[i];
+        s += d * d;
+    }
+    let (gt, ge) = (t[q2] as f64, e[q2] as f64);
+    let r = (gt - ge) / (gt + ge + 1e-9);
+    s as f64 / q2 as f64 + lambda * r * r
+}
+
+/// Ramp weight of band-local index `i` for a core `[t, t + p)` with overlap `o`
+/// (`first`/`last`: no ramp on that side).
+fn ramp(i: usize, t: usize, p: usize, o: usize, first: bool, last: bool) -> f64 {
+    let i = i as f64 + 0.5;
+    let (t, p, o) = (t as f64, p as f64, o as f64);
+    let mut w: f64 = 1.0;
+    if !first && o > 0.0 {
+        w = w.min((i - (t - o)) / (2.0 * o));
+    }
+    if !last && o > 0.0 {
+        w = w.min(((t + p + o) - i) / (2.0 * o));
+    }
+    w.clamp(0.0, 1.0)
+}
+
+/// Patch origins along an axis of `n` coarse cells.
+fn origins(n: usize, p: usize) -> Vec<usize> {
+    (0..n).step_by(p).collect()
+}
+
+fn mix(seed: u64, level: usize, patch: usize) -> SplitMix64 {
+    let mut r = SplitMix64::new(
+        seed ^ (level as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15)
+            ^ (patch as u64).wrapping_mul(0xD1B5_4A32_D192_ED03),
+    );
+    r.next_u64();
+    r
+}
+
+/// Details for one level: the Mallat block of `m_y × m_x` whose coarse part is `t`.
+#[allow(clippy::too_many_arguments)]
+fn level_details(
+    t: &Grid,
+    (e, ne_y, ne_x): &(Grid, usize, usize),
+    m_y: usize,
+    m_x: usize,
+    o: &SynthOptions,
+    level: usize,
+) -> Result<(Grid, usize, f64)> {
+    let (n_y, n_x, c) = (t.h, t.w, t.c);
+    let (p, ov) = (o.patch, o.overlap);
+    let q = p + 2 * ov;
+    let (de_y, de_x) = (e.h - ne_y, e.w - ne_x);
+    let ce = e.crop(*ne_y, *ne_x);
+    // candidate window origins: the window [cy−o, cy+p+o) inside the example's bands
+    let hi_y = (*ne_y).min(de_y) as i64 - (p + ov) as i64;
+    let hi_x = (*ne_x).min(de_x) as i64 - (p + ov) as i64;
+    if hi_y < ov as i64 || hi_x < ov as i64 {
+        return Err(Error::parameter(
+            "example",
+            format!("{}x{} coefficients at level {level}", e.w, e.h),
+            "an example whose coarse grid holds at least one patch window at every level",
+        ));
+    }
+    let count_y = (hi_y - ov as i64 + 1) as usize;
+    let count_x = (hi_x - ov as i64 + 1) as usize;
+    let stride = (((count_y * count_x) as f64 / o.candidates.max(1) as f64)
+        .sqrt()
+        .ceil() as usize)
+        .max(1);
+    let mut rng = mix(o.seed, level, usize::MAX);
+    let (off_y, off_x) = (
+        (rng.next_u64() % stride as u64) as usize,
+        (rng.next_u64() % stride as u64) as usize,
+    );
+    let cands: Vec<(usize, usize)> = (0..count_y)
+        .skip(off_y.min(count_y - 1))
+        .step_by(stride)
+        .flat_map(|y| {
+            (0..count_x)
+                .skip(off_x.min(count_x - 1))
+                .step_by(stride)
+                .map(move |x| (y + ov, x + ov))
+        })
+        .collect();
+    let feats: Vec<Vec<f32>> = if o.details == Details::Matched {
+        cands
+            .par_iter()
+            .map(|&(cy, cx)| {
+                let mut f = Vec::new();
+                feature(&ce, cy as i64 - ov as i64, cx as i64 - ov as i64, q, &mut f);
+                f
+            })
+            .collect()
+    } else {
+        Vec::new()
+    };
+    let (oy, ox) = (origins(n_y, p), origins(n_x, p));
+    let patches: Vec<(usize, usize)> = oy
+        .iter()
+        .flat_map(|&y| ox.iter().map(move |&x| (y, x)))
+        .collect();
+    // choose a source window for every patch
+    let chosen: Vec<((usize, usize), f64)> = patches
+        .par_iter()
+        .enumerate()
+        .map(|(idx, &(ty, tx))| match o.details {
+            Details::Matched => {
+                let mut f = Vec::new();
+                feature(t, ty as i64 - ov as i64, tx as i64 - ov as i64, q, &mut f);
+                let k = o.choices.max(1);
+                let mut best: Vec<(f64, usize)> = Vec::with_capacity(k + 1);
+                for (ci, ef) in feats.iter().enumerate() {
+                    let d = distance(&f, ef, o.slope_weight);
+                    if best.len() < k || d < best[best.len() - 1].0 {
+                        let pos = best.partition_point(|b| b.0 <= d);
+                        best.insert(pos, (d, ci));
+                        best.truncate(k);
+                    }
+                }
+                let mut r = mix(o.seed, level, idx);
+                let pick = best[(r.next_u64() % best.len() as u64) as usize];
+                (cands[pick.1], pick.0)
+            }
+            _ => {
+                // same place in the example (wrapped into the candidate range)
+                ((ov + ty % count_y, ov + tx % count_x), 0.0)
+            }
+        })
+        .collect();
+    let mean_d = chosen.iter().map(|c| c.1).sum::<f64>() / chosen.len().max(1) as f64;
+    // accumulate the blended details
+    let (d_y, d_x) = (m_y - n_y, m_x - n_x);
+    let mut acc = Grid::zeros(m_y, m_x, c);
+    let mut w2 = vec![0.0f64; m_y * m_x];
+    if o.details != Details::None {
+        for (&(ty, tx), &((cy, cx), _)) in patches.iter().zip(&chosen) {
+            let (fy, ly) = (ty == 0, ty + p >= n_y);
+            let (fx, lx) = (tx == 0, tx + p >= n_x);
+            for (hy, hx) in [(true, false), (false, true), (true, true)] {
+                let (len_y, len_x) = (if hy { d_y } else { n_y }, if hx { d_x } else { n_x });
+                let (elen_y, elen_x) =
+                    (if hy { de_y } else { *ne_y }, if hx { de_x } else { *ne_x });
+                let y_end = (ty + p + ov).min(len_y);
+                let x_end = (tx + p + ov).min(len_x);
+                for iy in ty.saturating_sub(ov)..y_end {
+                    let wy = ramp(iy, ty, p, ov, fy, ly);
+                    if wy <= 0.0 {
+                        continue;
+                    }
+                    let jy = ((iy + cy) as i64 - ty as i64).clamp(0, elen_y as i64 - 1) as usize;
+                    let (py, ey) = (
+                        if hy { n_y + iy } else { iy },
+                        if hy { ne_y + jy } else { jy },
+                    );
+                    for ix in tx.saturating_sub(ov)..x_end {
+                        let wx = ramp(ix, tx, p, ov, fx, lx);
+                        let wgt = wy * wx;
+                        if wgt <= 0.0 {
+                            continue;
+                        }
+                        let jx =
+                            ((ix + cx) as i64 - tx as i64).clamp(0, elen_x as i64 - 1) as usize;
+                        let (px, ex) = (
+                            if hx { n_x + ix } else { ix },
+                            if hx { ne_x + jx } else { jx },
+                        );
+                        for k in 0..c {
+                            *acc.at_mut(py, px, k) += wgt * e.at(ey, ex, k);
+                        }
+                        w2[py * m_x + px] += wgt * wgt;
+                    }
+                }
+            }
+        }
+        for (i, &s) in w2.iter().enumerate() {
+            if s > 0.0 {
+                let inv = 1.0 / s.sqrt();
+                acc.data[i * c..(i + 1) * c]
+                    .iter_mut()
+                    .for_each(|v| *v *= inv);
+            }
+        }
+    }
+    acc.paste(t);
+    Ok((acc, patches.len(), mean_d))
+}
+
+fn check(base: &Grid, example: &Grid, o: &SynthOptions) -> Result<()> {
+    if base.c != example.c {
+        return Err(Error::parameter(
+            "example channels",
+            example.c,
+            "the same number of channels as the base",
+        ));
+    }
+    if o.patch < 2 || 2 * o.overlap > o.patch {
+        return Err(Error::parameter(
+            "patch/overlap",
+            format!("{}/{}", o.patch, o.overlap),
+            "patch ≥ 2 and overlap ≤ patch/2",
+        ));
+    }
+    if o.levels == 0 || o.levels > 8 {
+        return Err(Error::parameter("levels", o.levels, "1 to 8"));
+    }
+    Ok(())
+}
+
+/// Refine the coarse points `coarse` (already on the lattice `ly[L] × lx[L]`) up to
+/// `ly[0] × lx[0]` with the example's details.
+fn refine(
+    coarse: Grid,
+    ly: &[usize],
+    lx: &[usize],
+    example: &Grid,
+    o: &SynthOptions,
+) -> Result<(Grid, SynthReport)> {
+    let l = o.levels;
+    let ey = lengths_down(o.scheme, example.h, l, "example height")?;
+    let ex = lengths_down(o.scheme, example.w, l, "example width")?;
+    let q = o.patch + 2 * o.overlap;
+    if ey[l] < q + 4 || ex[l] < q + 4 {
+        return Err(Error::parameter(
+            "example size",
+            format!("{}x{} (coarse {}x{} after {l} levels)", example.w, example.h, ex[l], ey[l]),
+            "an example larger than the filter support: its coarsest grid must hold a patch window plus the detail band",
+        ));
+    }
+    let pyr = ExamplePyramid::new(example, o.scheme, l)?;
+    let mut t = coarse;
+    let mut report = SynthReport {
+        dims: [ly[0], lx[0]],
+        coarse: [ly[l], lx[l]],
+        levels: l,
+        patches: Vec::new(),
+        mean_distance: Vec::new(),
+        seam_ratio: f64::NAN,
+        fidelity_psnr: None,
+    };
+    for k in (1..=l).rev() {
+        let (packed, np, md) = level_details(&t, &pyr.blocks[k - 1], ly[k - 1], lx[k - 1], o, k)?;
+        t = synthesize_one(packed, o.scheme)?;
+        report.patches.push(np);
+        report.mean_distance.push(md);
+    }
+    report.seam_ratio = seam_ratio(&t, 2 * o.patch);
+    Ok((t, report))
+}
+
+/// Mean |second difference| of channel-mean heights across the lines `period·j − 1 + δ`
+/// (`δ ∈ {−1, 0, 1}`: the finest patch borders, which lie near fine index `2t − 1`)
+/// divided by the same over every other line; rows and columns together.
+pub fn seam_ratio(g: &Grid, period: usize) -> f64 {
+    let (mut on, mut non, mut off, mut noff) = (0.0, 0usize, 0.0, 0usize);
+    let is_border = |i: usize| {
+        (1..=1 + i / period.max(1)).any(|j| {
+            let b = (period * j) as i64 - 1;
+            (i as i64 - b).abs() <= 1
+        })
+    };
+    for y in 1..g.h.saturating_sub(1) {
+        for x in 1..g.w.saturating_sub(1) {
+            let h = g.mean_at(y, x);
+            let dxx = (g.mean_at(y, x + 1) - 2.0 * h + g.mean_at(y, x - 1)).abs();
+            let dyy = (g.mean_at(y + 1, x) - 2.0 * h + g.mean_at(y - 1, x)).abs();
+            if is_border(x) {
+                on += dxx;
+                non += 1;
+            } else {
+                off += dxx;
+                noff += 1;
+            }
+            if is_border(y) {
+                on += dyy;
+                non += 1;
+            } else {
+                off += dyy;
+                noff += 1;
+            }
+        }
+    }
+    if non == 0 || noff == 0 || off == 0.0 {
+        return f64::NAN;
+    }
+    (on / non as f64) / (off / noff as f64)
+}
+
+/// Synthesize a terrain of `base × 2^L` (or `o.size`) from a smooth or coarse `base`
+/// and a detailed `example` (same channels, same height units).
+pub fn synthesize(base: &Grid, example: &Grid, o: &SynthOptions) -> Result<(Grid, SynthReport)> {
+    check(base, example, o)?;
+    let l = o.levels;
+    let (h, w) = match o.size {
+        Some(s) => s,
+        None => (
+            base.h.checked_shl(l as u32).unwrap_or(usize::MAX),
+            base.w.checked_shl(l as u32).unwrap_or(usize::MAX),
+        ),
+    };
+    if (h as u64) * (w as u64) > 1 << 30 {
+        return Err(Error::LimitsExceeded {
+            what: "output samples",
+            requested: (h as u64) * (w as u64),
+            limit: 1 << 30,
+        });
+    }
+    let ly = lengths_down(o.scheme, h, l, "output height")?;
+    let lx = lengths_down(o.scheme, w, l, "output width")?;
+    let coarse = resample(base, ly[l], lx[l]);
+    let (g, mut report) = refine(coarse, &ly, &lx, example, o)?;
+    let back = reduce(&g, base.h, base.w, o.scheme, l)?;
+    let (lo, hi) = base.range();
+    let mse = back
+        .data
+        .iter()
+        .zip(&base.data)
+        .map(|(a, b)| (a - b).powi(2))
+        .sum::<f64>()
+        / base.data.len() as f64;
+    report.fidelity_psnr = Some(10.0 * ((hi - lo).max(1e-12).powi(2) / mse.max(1e-300)).log10());
+    Ok((g, report))
+}
+
+/// Detail transfer at the base's own size: the base is analysed `L` levels, its details
+/// are dropped, and the example's matched details take their place (a blurred or
+/// upscaled image gains the example's fine texture).
+pub fn transfer(base: &Grid, example: &Grid, o: &SynthOptions) -> Result<(Grid, SynthReport)> {
+    check(base, example, o)?;
+    let l = o.levels;
+    let ly = lengths_down(o.scheme, base.h, l, "base height")?;
+    let lx = lengths_down(o.scheme, base.w, l, "base width")?;
+    let (mut a, _) = base.to_array()?;
+    tensor::analyze(&mut a, &spec(o.scheme, l))?;
+    let packed = Grid::new(base.h, base.w, base.c, a.into_data())?;
+    refine(packed.crop(ly[l], lx[l]), &ly, &lx, example, o)
+}
+
+/// The result reduced back to `h × w`: `L` levels of analysis (`C_L = A^L F`), then the
+/// corner-aligned resampling from the coarse lattice to `h × w`.
+pub fn reduce(result: &Grid, h: usize, w: usize, scheme: Scheme, levels: usize) -> Result<Grid> {
+    let ly = lengths_down(scheme, result.h, levels, "result height")?;
+    let lx = lengths_down(scheme, result.w, levels, "result width")?;
+    let (mut a, _) = result.to_array()?;
+    tensor::analyze(&mut a, &spec(scheme, levels))?;
+    let packed = Grid::new(result.h, result.w, result.c, a.into_data())?;
+    Ok(resample(&packed.crop(ly[levels], lx[levels]), h, w))
+}

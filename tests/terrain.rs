@@ -1,0 +1,421 @@
+//! Terrain synthesis, detail transfer, hillshading and denoising: determinism, fidelity
+//! to the base, no seams, realism against a subdivision-only result, and one-line
+//! errors with exit code 2 on bad input.
+
+use std::path::PathBuf;
+use std::process::Command;
+
+use mra::denoise::{denoise, DenoiseOptions};
+use mra::generate::terrain::diamond_square;
+use mra::scheme::Scheme;
+use mra::tensor::Array;
+use mra::terrain::synth::Details;
+use mra::terrain::{reduce, synthesize, transfer, Grid, SynthOptions};
+
+fn grid_of(h: usize, w: usize, seed: u64, rough: f64, scale: f64) -> Grid {
+    let f = diamond_square(h, w, seed, rough);
+    Grid::new(h, w, 1, f.data.iter().map(|v| v * scale).collect()).unwrap()
+}
+
+/// A smooth base: a generated terrain box-filtered down by 4.
+fn smooth_base(n: usize, seed: u64) -> Grid {
+    let f = grid_of(4 * n, 4 * n, seed, 0.55, 1000.0);
+    let mut g = Grid::zeros(n, n, 1);
+    for y in 0..n {
+        for x in 0..n {
+            let mut s = 0.0;
+            for dy in 0..4 {
+                for dx in 0..4 {
+                    s += f.at(4 * y + dy, 4 * x + dx, 0);
+                }
+            }
+            *g.at_mut(y, x, 0) = s / 16.0;
+        }
+    }
+    g
+}
+
+fn psnr(a: &Grid, b: &Grid) -> f64 {
+    let (lo, hi) = b.range();
+    let mse = a
+        .data
+        .iter()
+        .zip(&b.data)
+        .map(|(x, y)| (x - y).powi(2))
+        .sum::<f64>()
+        / a.data.len() as f64;
+    10.0 * ((hi - lo).powi(2) / mse).log10()
+}
+
+/// Standard deviation of the 5-point Laplacian (roughness).
+fn roughness(g: &Grid) -> f64 {
+    let mut v = Vec::new();
+    for y in 1..g.h - 1 {
+        for x in 1..g.w - 1 {
+            v.push(
+                g.at(y - 1, x, 0) + g.at(y + 1, x, 0) + g.at(y, x - 1, 0) + g.at(y, x + 1, 0)
+                    - 4.0 * g.at(y, x, 0),
+            );
+        }
+    }
+    let m = v.iter().sum::<f64>() / v.len() as f64;
+    (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / v.len() as f64).sqrt()
+}
+
+fn opts(seed: u64) -> SynthOptions {
+    SynthOptions {
+        levels: 2,
+        seed,
+        ..SynthOptions::default()
+    }
+}
+
+#[test]
+fn same_seed_gives_identical_output_and_another_seed_differs() {
+    let base = smooth_base(40, 3);
+    let ex = grid_of(160, 160, 9, 0.6, 1000.0);
+    let (a, _) = synthesize(&base, &ex, &opts(7)).unwrap();
+    let (b, _) = synthesize(&base, &ex, &opts(7)).unwrap();
+    let (c, _) = synthesize(&base, &ex, &opts(8)).unwrap();
+    assert_eq!(a.data, b.data);
+    assert_ne!(a.data, c.data);
+    assert_eq!((a.h, a.w), (160, 160));
+}
+
+#[test]
+fn result_reduced_to_the_base_resolution_keeps_the_base() {
+    let base = smooth_base(48, 5);
+    let ex = grid_of(192, 192, 11, 0.6, 1000.0);
+    for scheme in [Scheme::Chaikin, Scheme::Cubic] {
+        let o = SynthOptions { scheme, ..opts(1) };
+        let (out, report) = synthesize(&base, &ex, &o).unwrap();
+        let back = reduce(&out, base.h, base.w, scheme, 2).unwrap();
+        let p = psnr(&back, &base);
+        assert!(p >= 40.0, "{scheme}: PSNR {p:.1} dB");
+        // the details are really there: rougher than the base refined alone
+        let plain = synthesize(
+            &base,
+            &ex,
+            &SynthOptions {
+                details: Details::None,
+                ..o.clone()
+            },
+        )
+        .unwrap()
+        .0;
+        assert!(roughness(&out) > 2.0 * roughness(&plain));
+        // no seams: patch borders no rougher than elsewhere (within 15 %)
+        assert!(report.seam_ratio < 1.15, "seam ratio {}", report.seam_ratio);
+    }
+}
+
+#[test]
+fn output_size_can_be_chosen_and_transfer_keeps_the_size() {
+    let base = smooth_base(32, 2);
+    let ex = grid_of(128, 128, 4, 0.6, 1000.0);
+    let o = SynthOptions {
+        size: Some((100, 140)),
+        ..opts(1)
+    };
+    let (out, _) = synthesize(&base, &ex, &o).unwrap();
+    assert_eq!((out.h, out.w), (100, 140));
+    let blurred = reduce(&ex, 128, 128, Scheme::Chaikin, 0).unwrap();
+    let (t, _) = transfer(&blurred, &ex, &opts(1)).unwrap();
+    assert_eq!((t.h, t.w), (128, 128));
+}
+
+#[test]
+fn example_smaller_than_the_filter_support_is_an_error() {
+    let base = smooth_base(32, 2);
+    let small = grid_of(20, 20, 4, 0.6, 1000.0);
+    let e = synthesize(&base, &small, &opts(1)).unwrap_err();
+    assert_eq!(e.kind(), mra::ErrorKind::Parameter);
+    assert!(e.to_string().contains("expected"), "{e}");
+}
+
+#[test]
+fn denoising_a_noisy_circle_brings_it_back_to_the_circle() {
+    let n = 512;
+    let mut rng = mra::generate::rng::SplitMix64::new(5);
+    let mut pts = Vec::new();
+    for i in 0..n {
+        let t = i as f64 / n as f64 * std::f64::consts::TAU;
+        pts.push(10.0 * t.cos() + 0.3 * rng.symmetric());
+        pts.push(10.0 * t.sin() + 0.3 * rng.symmetric());
+    }
+    let err = |p: &[f64]| {
+        p.chunks(2)
+            .map(|q| ((q[0] * q[0] + q[1] * q[1]).sqrt() - 10.0).powi(2))
+            .sum::<f64>()
+            / n as f64
+    };
+    let before = err(&pts);
+    let mut a = Array::from_shape_vec(&[n, 2], pts).unwrap();
+    let o = DenoiseOptions {
+        scheme: Scheme::Chaikin,
+        boundary: mra::scheme::Boundary::Periodic,
+        levels: 2,
+        ..DenoiseOptions::default()
+    };
+    denoise(&mut a, &[0], &o).unwrap();
+    let after = err(a.data());
+    assert!(after < 0.6 * before, "{after} vs {before}");
+}
+
+// --- the binary ---
+
+fn mra(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_mra"))
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+fn tmpdir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("mra-terrain-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn s(p: &std::path::Path) -> &str {
+    p.to_str().unwrap()
+}
+
+fn one_line_error(o: &std::process::Output) -> String {
+    assert_eq!(o.status.code(), Some(2));
+    let e = String::from_utf8_lossy(&o.stderr).into_owned();
+    assert_eq!(e.trim_end().lines().count(), 1, "{e}");
+    e
+}
+
+#[test]
+fn cli_synth_is_byte_identical_for_a_seed_and_renders() {
+    let d = tmpdir("cli");
+    let (base, ex) = (d.join("base.png"), d.join("ex.png"));
+    let gen = |p: &std::path::Path, size: &str, seed: &str| {
+        let o = mra(&[
+            "generate",
+            "terrain",
+            "--size",
+            size,
+            "--seed",
+            seed,
+            "-o",
+            s(p),
+        ]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    };
+    gen(&base, "48x48", "3");
+    gen(&ex, "192x192", "9");
+    let run = |out: &std::path::Path, seed: &str| {
+        let o = mra(&[
+            "terrain",
+            "synth",
+            "--base",
+            s(&base),
+            "--example",
+            s(&ex),
+            "--seed",
+            seed,
+            "-o",
+            s(out),
+            "--preview",
+            s(&d.join("prev.png")),
+        ]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        std::fs::read(out).unwrap()
+    };
+    let a = run(&d.join("a.tif"), "5");
+    let b = run(&d.join("b.tif"), "5");
+    let c = run(&d.join("c.tif"), "6");
+    assert_eq!(a, b);
+    assert_ne!(a, c);
+    let o = mra(&[
+        "terrain",
+        "render",
+        s(&d.join("a.tif")),
+        "-o",
+        s(&d.join("r.png")),
+        "--colour",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let pic = mra::io::read(&d.join("r.png")).unwrap();
+    assert_eq!((pic.dims.clone(), pic.channels), (vec![192, 192], 3));
+    assert!(d.join("prev.png").exists());
+}
+
+#[test]
+fn cli_bad_inputs_fail_with_one_line_and_no_output() {
+    let d = tmpdir("bad");
+    let (base, small) = (d.join("base.png"), d.join("small.png"));
+    for (p, size) in [(&base, "48x48"), (&small, "16x16")] {
+        assert!(mra(&["generate", "terrain", "--size", size, "-o", s(p)])
+            .status
+            .success());
+    }
+    let out = d.join("out.tif");
+    let e = one_line_error(&mra(&[
+        "terrain",
+        "synth",
+        "--base",
+        s(&base),
+        "--example",
+        s(&small),
+        "-o",
+        s(&out),
+    ]));
+    assert!(e.contains("example"), "{e}");
+    assert!(!out.exists());
+    // mismatched cell sizes (ASCII grids in the same unit, cells 10 m and 1000 m)
+    let grid = |p: &std::path::Path, cell: f64, n: usize| {
+        let mut t = format!("ncols {n}\nnrows {n}\nxllcorner 0\nyllcorner 0\ncellsize {cell}\n");
+        for y in 0..n {
+            let row: Vec<String> = (0..n).map(|x| ((x * y) % 17).to_string()).collect();
+            t += &(row.join(" ") + "\n");
+        }
+        std::fs::write(p, t).unwrap();
+    };
+    grid(&d.join("b.asc"), 1000.0, 40);
+    grid(&d.join("e.asc"), 10.0, 200);
+    let e = one_line_error(&mra(&[
+        "terrain",
+        "synth",
+        "--base",
+        s(&d.join("b.asc")),
+        "--example",
+        s(&d.join("e.asc")),
+        "-o",
+        s(&out),
+    ]));
+    assert!(e.contains("cell"), "{e}");
+    assert!(!out.exists());
+    // mismatched channels
+    let rgb = d.join("rgb.png");
+    assert!(mra(&[
+        "generate",
+        "gradient",
+        "--size",
+        "200",
+        "--channels",
+        "3",
+        "-o",
+        s(&rgb)
+    ])
+    .status
+    .success());
+    one_line_error(&mra(&[
+        "transfer",
+        "--from",
+        s(&rgb),
+        "--to",
+        s(&base),
+        "-o",
+        s(&out),
+    ]));
+    assert!(!out.exists());
+}
+
+#[test]
+fn cli_denoise_images_and_point_lists() {
+    let d = tmpdir("denoise");
+    let img = d.join("zone.png");
+    assert!(
+        mra(&["generate", "zone-plate", "--size", "128", "-o", s(&img)])
+            .status
+            .success()
+    );
+    let o = mra(&["denoise", s(&img), "-o", s(&d.join("z.png")), "--json"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let r = mra::io::read(&d.join("z.png")).unwrap();
+    assert_eq!(r.dims, vec![128, 128]);
+    let mut t = String::new();
+    for i in 0..64 {
+        let a = i as f64 / 64.0 * std::f64::consts::TAU;
+        t += &format!("{},{}\n", a.cos() + 0.01 * ((i * 7) % 5) as f64, a.sin());
+    }
+    std::fs::write(d.join("c.csv"), t).unwrap();
+    let o = mra(&[
+        "denoise",
+        s(&d.join("c.csv")),
+        "--scheme",
+        "chaikin",
+        "-o",
+        s(&d.join("o.csv")),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let back = mra::points::parse(&std::fs::read_to_string(d.join("o.csv")).unwrap()).unwrap();
+    assert_eq!((back.len(), back.dim), (64, 2));
+}
+
+#[test]
+fn zigzag_style_on_a_circle_keeps_the_circle_coarse_and_the_zigzag_fine() {
+    use mra::scheme::{analyze_lane, Boundary};
+    // style: a zig-zag of amplitude 0.5 along a straight stroke
+    let m = 258;
+    let amp = 0.5;
+    let style: Vec<f64> = (0..m)
+        .flat_map(|i| [i as f64 * 0.2, if i % 2 == 0 { amp } else { -amp }])
+        .collect();
+    // base: a circle of radius 10 (open: first point repeated at the end)
+    let base: Vec<f64> = (0..=64)
+        .flat_map(|i| {
+            let t = i as f64 / 64.0 * std::f64::consts::TAU;
+            [10.0 * t.cos(), 10.0 * t.sin()]
+        })
+        .collect();
+    let levels = 3;
+    let out = mra::style::transfer_style(&style, &base, Scheme::Chaikin, levels, false).unwrap();
+    assert_eq!(out.len(), style.len());
+    // coarse levels: the circle (the result's coarse curve lies on radius 10)
+    let (packed, plan) =
+        analyze_lane(&out, 2, Scheme::Chaikin, Boundary::Interpolating, levels).unwrap();
+    let n = plan.lengths[levels];
+    for q in packed[..2 * n].chunks(2).skip(1).take(n - 2) {
+        let r = (q[0] * q[0] + q[1] * q[1]).sqrt();
+        assert!((r - 10.0).abs() < 0.6, "coarse radius {r}");
+    }
+    // fine levels: the style's amplitude (finest details as large as the style's)
+    let rms = |p: &[f64], r: std::ops::Range<usize>| {
+        (p[2 * r.start..2 * r.end].iter().map(|v| v * v).sum::<f64>() / r.len() as f64).sqrt()
+    };
+    let (sp, splan) =
+        analyze_lane(&style, 2, Scheme::Chaikin, Boundary::Interpolating, levels).unwrap();
+    let (a, b) = (
+        rms(&packed, plan.detail_range(1)),
+        rms(&sp, splan.detail_range(1)),
+    );
+    assert!((a / b - 1.0).abs() < 0.05, "{a} vs {b}");
+    // and the zig-zag is visible on the result: radial deviations of the style's size
+    let dev = (out
+        .chunks(2)
+        .map(|q| ((q[0] * q[0] + q[1] * q[1]).sqrt() - 10.0).powi(2))
+        .sum::<f64>()
+        / m as f64)
+        .sqrt();
+    assert!(dev > 0.4 * amp && dev < 2.0 * amp, "radial deviation {dev}");
+}
+
+fn corpus() -> Option<PathBuf> {
+    let p = std::env::var_os("MRA_CORPUS")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/corpus")));
+    if p.is_dir() {
+        Some(p)
+    } else {
+        println!("skipped: no corpus at {}", p.display());
+        None
+    }
+}
+
+#[test]
+fn srtm_voids_are_filled_within_the_range_of_their_rims() {
+    let Some(c) = corpus() else { return };
+    let r = mra::io::read(&c.join("terrain/N22W160.hgt")).unwrap();
+    let voids = mra::io::hgt::void_count(&r);
+    assert!(voids > 0);
+    let (g, filled) = mra::terrain::raster::to_grid(&r).unwrap();
+    assert_eq!(filled, voids);
+    let (lo, hi) = g.range();
+    assert!(lo >= -34.0 && hi <= 1579.0, "{lo} … {hi}");
+}
