@@ -33,5 +33,6 @@ pub mod progress;
 pub mod scheme;
 pub mod surface;
 pub mod tensor;
+pub mod upscale;
 
 pub use error::{Error, ErrorKind, Result};

@@ -12,6 +12,7 @@ pub mod mesh;
 pub mod points;
 pub mod subdivide;
 pub mod surface;
+pub mod upscale;
 
 /// Multiresolution codec, upscaler and terrain synthesis for images, volumes and heightmaps.
 #[derive(Parser, Debug)]
@@ -48,6 +49,10 @@ pub enum Command {
     InfoFile(io_cmds::InfoFileArgs),
     /// Convert between image / volume / heightmap formats, keeping samples exact.
     Convert(io_cmds::ConvertArgs),
+    /// Upscale images, volumes, heightmaps by subdivision / B-spline interpolation (§7.7).
+    Upscale(upscale::UpscaleArgs),
+    /// Reduce resolution with the MRA's analysis filter A (REDUCE-RESOLUTION, §9).
+    Downscale(upscale::DownscaleArgs),
 }
 
 /// A failure on the command line: one line on stderr, exit code 2.
@@ -113,6 +118,8 @@ pub fn main() -> i32 {
         Command::Generate(a) => io_cmds::generate(a),
         Command::InfoFile(a) => io_cmds::info_file(a),
         Command::Convert(a) => io_cmds::convert(a),
+        Command::Upscale(a) => upscale::run_upscale(a),
+        Command::Downscale(a) => upscale::run_downscale(a),
     };
     match result {
         Ok(()) => 0,
