@@ -45,6 +45,17 @@ pub struct Method {
     pub rule: Refinement,
     pub mode: Mode,
     pub edge: Edge,
+    /// B-spline order overriding the rule's (orders above 5 have no named rule).
+    pub order: Option<usize>,
+}
+
+impl Method {
+    fn basis(&self) -> Basis {
+        match self.order {
+            Some(k) => Basis::BSpline(k),
+            None => Basis::of(self.rule),
+        }
+    }
 }
 
 impl Default for Method {
@@ -54,6 +65,7 @@ impl Default for Method {
             rule: Refinement::Cubic,
             mode: Mode::Area,
             edge: Edge::Linear,
+            order: None,
         }
     }
 }
@@ -121,7 +133,7 @@ fn check(method: &Method, shape: &[usize], plans: &[AxisPlan]) -> Result<()> {
 
 /// The evaluation operator of one axis (`len × n`).
 pub fn axis_operator(method: &Method, n: usize, plan: &AxisPlan) -> Csr {
-    let basis = Basis::of(method.rule);
+    let basis = method.basis();
     let (xs, w) = lane::positions(n, plan.len, plan.geometry);
     let width = if method.mode == Mode::Area { w } else { 0.0 };
     lane::eval_matrix(&basis, n, &xs, width, method.edge)
@@ -129,7 +141,7 @@ pub fn axis_operator(method: &Method, n: usize, plan: &AxisPlan) -> Csr {
 
 /// Turn samples into control points along every planned axis, in place.
 fn prefilter(data: &mut [f32], shape: &[usize], method: &Method, plans: &[AxisPlan]) -> Result<()> {
-    let basis = Basis::of(method.rule);
+    let basis = method.basis();
     for p in plans {
         if let Some(k) = lane::system(&basis, shape[p.axis], method.mode, method.edge)? {
             map_lanes(data, shape, p.axis, |lane, width| k.solve(lane, width));
