@@ -134,7 +134,7 @@ fn interpolating_modes_pass_through_the_samples() {
 fn area_mode_averages_back_to_the_input() {
     let (h, w) = (12, 10);
     let data = grid(h, w, |y, x| {
-        ((x * 1.7 + y * 0.3).sin() * 50.0 + (x * y) % 7.0)
+        (x * 1.7 + y * 0.3).sin() * 50.0 + (x * y) % 7.0
     });
     for f in [2usize, 4] {
         let shape = [h, w];
