@@ -129,6 +129,13 @@ def pil(low, f):
 # ---------- data -----------------------------------------------------------------------
 
 def datasets(args):
+    only = set(args.only.split(",")) if args.only else {"image", "volume", "heightmap"}
+    for item in _datasets(args):
+        if item[0] in only:
+            yield item
+
+
+def _datasets(args):
     kodak = sorted(os.listdir(os.path.join(CORPUS, "images", "kodak")))[: args.kodak]
     for name in kodak:
         yield "image", name, np.asarray(Image.open(os.path.join(CORPUS, "images", "kodak", name)).convert("RGB")), 2
@@ -136,7 +143,9 @@ def datasets(args):
         return
     v, _ = nrrd.read(os.path.join(CORPUS, "volumes", "ct_pancreas_256.nrrd"), index_order="C")
     yield "volume", "ct_pancreas_256 (HU, int16)", v, 3
-    yield "heightmap", "mt_st_helens_30m_f32", tifffile.imread(os.path.join(CORPUS, "terrain", "mt_st_helens_30m_f32.tif")).astype(np.float32), 2
+    # OpenImageIO decodes the floating-point predictor (tifffile would need imagecodecs)
+    helens = oiio.ImageBuf(os.path.join(CORPUS, "terrain", "mt_st_helens_30m_f32.tif")).get_pixels(oiio.FLOAT)
+    yield "heightmap", "mt_st_helens_30m_f32", helens.reshape(helens.shape[:2]), 2
     hgt = np.fromfile(os.path.join(CORPUS, "terrain", "N44W072.hgt"), dtype=">i2").reshape(1201, 1201).astype(np.int16)
     yield "heightmap", "N44W072.hgt (int16)", hgt, 2
     asc = np.loadtxt(os.path.join(CORPUS, "terrain", "srtmgl3_boulder_co.asc"), skiprows=6).astype(np.float32)
@@ -158,8 +167,20 @@ def main():
     ap.add_argument("--factors", default="2,4")
     ap.add_argument("--json")
     ap.add_argument("--quick", action="store_true", help="Kodak only")
-    ap.add_argument("--modes", default="area,interpolate,control")
+    ap.add_argument("--mra", default="chaikin:area,cubic:area,cubic:interpolate,cubic:control",
+                    help="comma-separated scheme:mode pairs to run with mra")
+    ap.add_argument("--no-peers", action="store_true", help="mra only")
+    ap.add_argument("--only", help="comma-separated kinds: image, volume, heightmap")
+    ap.add_argument("--no-speed", action="store_true", help="skip the 256³ speed case")
+    ap.add_argument("--summarize", nargs="+", help="print the summary of JSON-lines logs of earlier runs")
     args = ap.parse_args()
+    if args.summarize:
+        rows = []
+        for path in args.summarize:
+            with open(path) as fh:
+                rows += [json.loads(l) for l in fh if l.startswith("{")]
+        summarize(rows)
+        return
     reps = 3
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
@@ -168,15 +189,17 @@ def main():
             for f in [int(s) for s in args.factors.split(",")]:
                 ref, low = block_mean(x, f, spatial)
                 methods = {}
-                for mode in args.modes.split(","):
-                    methods[f"mra cubic {mode}"] = ("mra", mode, "cubic")
-                if spatial == 2:
-                    for filt in ["lanczos3", "catmull-rom", "bspline"]:
-                        methods[f"oiio {filt}"] = ("oiio", filt)
-                methods["skimage order 3"] = ("sk",)
-                methods["scipy zoom 3"] = ("zoom",)
-                if spatial == 2:
-                    methods["pillow lanczos"] = ("pil",)
+                for pair in args.mra.split(","):
+                    scheme, mode = pair.split(":")
+                    methods[f"mra {scheme} {mode}"] = ("mra", mode, scheme)
+                if not args.no_peers:
+                    if spatial == 2:
+                        for filt in ["lanczos3", "catmull-rom", "bspline"]:
+                            methods[f"oiio {filt}"] = ("oiio", filt)
+                    methods["skimage order 3"] = ("sk",)
+                    methods["scipy zoom 3"] = ("zoom",)
+                    if spatial == 2:
+                        methods["pillow lanczos"] = ("pil",)
                 for label, m in methods.items():
                     wall = None
                     if m[0] == "mra":
@@ -197,7 +220,7 @@ def main():
                     rows.append(row)
                     print(json.dumps(row), flush=True)
     # speed: a 256³ float32 volume ×2 (mra compute time vs SciPy zoom order 3)
-    if not args.quick:
+    if not args.quick and not args.no_peers and not args.no_speed:
         with tempfile.TemporaryDirectory() as tmp:
             rng = np.random.default_rng(1)
             vol = ndimage.gaussian_filter(rng.standard_normal((256, 256, 256)).astype(np.float32), 2.0)
@@ -207,16 +230,24 @@ def main():
             row = dict(kind="speed", data="256^3 f32", factor=2, method="mra cubic area", seconds=t_mra, wall=min(r[2] for r in runs), scipy_zoom_seconds=t_zoom, speedup=t_zoom / t_mra)
             rows.append(row)
             print(json.dumps(row), flush=True)
-    # summary: mean per kind × factor × method
+    summarize(rows)
+    if args.json:
+        with open(args.json, "w") as fh:
+            json.dump(rows, fh, indent=1)
+
+
+def summarize(rows):
+    """Mean per kind × factor × method, and the speed rows."""
     print("\n| kind | factor | method | mean PSNR dB | mean SSIM | mean time s |")
     print("|---|---|---|---|---|---|")
     keys = sorted({(r["kind"], r["factor"], r["method"]) for r in rows if "psnr" in r})
     for k in keys:
         sel = [r for r in rows if (r["kind"], r["factor"], r["method"]) == k]
         print(f"| {k[0]} | ×{k[1]} | {k[2]} | {np.mean([r['psnr'] for r in sel]):.3f} | {np.mean([r['ssim'] for r in sel]):.4f} | {np.mean([r['seconds'] for r in sel]):.4f} |")
-    if args.json:
-        with open(args.json, "w") as fh:
-            json.dump(rows, fh, indent=1)
+    for r in rows:
+        if r["kind"] == "speed":
+            print(f"\nspeed {r['data']} ×2: mra {r['seconds']:.2f} s (process wall {r['wall']:.2f} s), "
+                  f"SciPy zoom order 3 {r['scipy_zoom_seconds']:.2f} s, ratio {r['speedup']:.1f}×")
 
 
 if __name__ == "__main__":
