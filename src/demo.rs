@@ -180,5 +180,6 @@ pub fn run(out: &Path) -> Result<Vec<DemoRow>> {
         output: None,
     });
     rows.extend(crate::terrain::demo_rows(out)?);
+    rows.extend(crate::upscale::demo_rows(out)?);
     Ok(rows)
 }

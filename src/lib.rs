@@ -36,5 +36,6 @@ pub mod style;
 pub mod surface;
 pub mod tensor;
 pub mod terrain;
+pub mod upscale;
 
 pub use error::{Error, ErrorKind, Result};

@@ -14,6 +14,7 @@ pub mod scheme;
 pub mod subdivide;
 pub mod surface;
 pub mod terrain;
+pub mod upscale;
 
 /// Multiresolution codec, upscaler and terrain synthesis for images, volumes and heightmaps.
 #[derive(Parser, Debug)]
@@ -62,6 +63,10 @@ pub enum Command {
     Denoise(terrain::DenoiseArgs),
     /// Curve style transfer (§9.7.1): a stroke's details on a new base curve.
     Style(terrain::StyleArgs),
+    /// Upscale images, volumes, heightmaps by subdivision / B-spline interpolation (§7.7).
+    Upscale(upscale::UpscaleArgs),
+    /// Reduce resolution with the MRA's analysis filter A (REDUCE-RESOLUTION, §9).
+    Downscale(upscale::DownscaleArgs),
 }
 
 /// A failure on the command line: one line on stderr, exit code 2.
@@ -132,6 +137,8 @@ pub fn main() -> i32 {
         Command::Transfer(a) => terrain::transfer(a),
         Command::Denoise(a) => terrain::denoise(a),
         Command::Style(a) => terrain::style(a),
+        Command::Upscale(a) => upscale::run_upscale(a),
+        Command::Downscale(a) => upscale::run_downscale(a),
     };
     match result {
         Ok(()) => 0,

@@ -4,8 +4,10 @@
 mod array;
 mod par;
 pub mod pyramid;
+mod resample;
 mod transform;
 
 pub use array::{Array, Axis};
 pub use pyramid::{analyze, synthesize, Order, Pyramid, PyramidSpec, Subband};
+pub use resample::{map_lanes, resample_axis};
 pub use transform::transform_axis;

@@ -1,0 +1,169 @@
+//! Rectangular operators along one axis (added for `src/upscale`): a lane of `n`
+//! elements becomes a lane of `m = op.rows()` elements (`op` is `m × n`), written into a
+//! new array; and in-place lane functions (a banded solve per lane).
+//!
+//! The array is seen as `[outer, n, inner]` around `axis`: an element of a lane is a
+//! contiguous run of `inner` samples. Wide elements (`inner ≥ 32`) are cut into strips
+//! and fed to the kernel in place; narrow ones (the last axis, or channels only) are
+//! gathered `G` lanes side by side into a scratch lane whose elements are `G·inner`
+//! wide, so the inner loop always runs over ≥ 32 contiguous samples. Scratch is per
+//! worker, never per lane.
+
+use super::par::{for_each_task, SharedMut};
+use crate::scheme::sparse::Csr;
+use crate::scheme::Sample;
+
+/// Elements at least this wide are processed in place (strip mode).
+const ROW_MIN: usize = 32;
+/// Samples per strip in strip mode.
+const STRIP: usize = 256;
+/// Target width of a gathered element.
+const GATHER: usize = 32;
+
+fn split(shape: &[usize], axis: usize) -> (usize, usize, usize) {
+    let outer = shape[..axis].iter().product();
+    let inner = shape[axis + 1..].iter().product();
+    (outer, shape[axis], inner)
+}
+
+/// `dst = op` applied along `axis` of `src` (row-major, `shape`), each result converted
+/// by `store`. `dst` has `shape` with `shape[axis]` replaced by `op.rows()`; `op.cols()`
+/// must equal `shape[axis]`.
+pub fn resample_axis<T: Sample, U: Copy + Send + Sync>(
+    src: &[T],
+    shape: &[usize],
+    axis: usize,
+    op: &Csr,
+    dst: &mut [U],
+    store: impl Fn(T) -> U + Sync + Send,
+) {
+    assert!(axis < shape.len());
+    assert_eq!(src.len(), shape.iter().product::<usize>());
+    let (outer, n, inner) = split(shape, axis);
+    let m = op.rows();
+    assert_eq!(op.cols(), n);
+    assert_eq!(dst.len(), outer * m * inner);
+    let out = SharedMut(dst.as_mut_ptr());
+    if inner >= ROW_MIN {
+        let strips = inner.div_ceil(STRIP);
+        let sw_max = inner.div_ceil(strips);
+        for_each_task(
+            outer * strips,
+            m * sw_max,
+            || vec![T::default(); m * sw_max],
+            |task, scratch| {
+                let (o, s) = (task / strips, task % strips);
+                let off = s * sw_max;
+                let sw = sw_max.min(inner - off);
+                let base = &src[o * n * inner + off..];
+                op.apply(base, inner, scratch, sw, sw);
+                let p = out;
+                for i in 0..m {
+                    // SAFETY: task (o, s) alone writes columns off..off+sw of lane o.
+                    let d = unsafe {
+                        std::slice::from_raw_parts_mut(p.0.add((o * m + i) * inner + off), sw)
+                    };
+                    for (d, &x) in d.iter_mut().zip(&scratch[i * sw..i * sw + sw]) {
+                        *d = store(x);
+                    }
+                }
+            },
+        );
+    } else {
+        let g = GATHER.div_ceil(inner).clamp(1, outer);
+        let groups = outer.div_ceil(g);
+        let gw = g * inner;
+        for_each_task(
+            groups,
+            (n + m) * gw,
+            || (vec![T::default(); n * gw], vec![T::default(); m * gw]),
+            |task, (sin, sout)| {
+                let first = task * g;
+                let lanes = g.min(outer - first);
+                for l in 0..lanes {
+                    let lane = &src[(first + l) * n * inner..(first + l + 1) * n * inner];
+                    for i in 0..n {
+                        sin[i * gw + l * inner..i * gw + l * inner + inner]
+                            .copy_from_slice(&lane[i * inner..i * inner + inner]);
+                    }
+                }
+                let cw = lanes * inner;
+                op.apply(sin, gw, sout, gw, cw);
+                let p = out;
+                for l in 0..lanes {
+                    // SAFETY: lanes first..first+lanes belong to this task alone.
+                    let d = unsafe {
+                        std::slice::from_raw_parts_mut(p.0.add((first + l) * m * inner), m * inner)
+                    };
+                    for i in 0..m {
+                        let s = &sout[i * gw + l * inner..i * gw + l * inner + inner];
+                        for (d, &x) in d[i * inner..i * inner + inner].iter_mut().zip(s) {
+                            *d = store(x);
+                        }
+                    }
+                }
+            },
+        );
+    }
+}
+
+/// Run `f(lane, width)` on every lane along `axis`, in place. `lane` holds `shape[axis]`
+/// elements of `width` samples each (element `i` at `lane[i*width .. i*width + width]`);
+/// several lanes, or strips of one lane set, may be packed side by side into one call.
+/// `f` must treat the `width` columns independently (as a banded solve does).
+pub fn map_lanes<T: Sample>(
+    data: &mut [T],
+    shape: &[usize],
+    axis: usize,
+    f: impl Fn(&mut [T], usize) + Sync + Send,
+) {
+    assert!(axis < shape.len());
+    assert_eq!(data.len(), shape.iter().product::<usize>());
+    let (outer, n, inner) = split(shape, axis);
+    let ptr = SharedMut(data.as_mut_ptr());
+    // every task gathers a block of `lanes` lanes × columns `off..off+sw` of the element
+    let (g, strips) = if inner >= ROW_MIN {
+        (1, inner.div_ceil(STRIP))
+    } else {
+        (GATHER.div_ceil(inner).clamp(1, outer), 1)
+    };
+    let sw_max = inner.div_ceil(strips);
+    let groups = outer.div_ceil(g);
+    let gw = g * sw_max;
+    for_each_task(
+        groups * strips,
+        n * gw,
+        || vec![T::default(); n * gw],
+        |task, scratch| {
+            let (grp, s) = (task / strips, task % strips);
+            let first = grp * g;
+            let lanes = g.min(outer - first);
+            let off = s * sw_max;
+            let sw = sw_max.min(inner - off);
+            let cw = lanes * sw;
+            let p = ptr;
+            for l in 0..lanes {
+                for i in 0..n {
+                    // SAFETY: this task alone touches columns off..off+sw of these lanes.
+                    let e = unsafe {
+                        std::slice::from_raw_parts(p.0.add(((first + l) * n + i) * inner + off), sw)
+                    };
+                    scratch[i * cw + l * sw..i * cw + l * sw + sw].copy_from_slice(e);
+                }
+            }
+            f(&mut scratch[..n * cw], cw);
+            for l in 0..lanes {
+                for i in 0..n {
+                    // SAFETY: as above.
+                    let e = unsafe {
+                        std::slice::from_raw_parts_mut(
+                            p.0.add(((first + l) * n + i) * inner + off),
+                            sw,
+                        )
+                    };
+                    e.copy_from_slice(&scratch[i * cw + l * sw..i * cw + l * sw + sw]);
+                }
+            }
+        },
+    );
+}

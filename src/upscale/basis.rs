@@ -1,0 +1,196 @@
+//! The one-dimensional functions an upscaled lane is made of: the limit functions of the
+//! subdivision rules of `src/scheme/subdivide.rs` (§7.2.2, §7.6.1), centred on the
+//! control point, with their antiderivatives (for cell averages).
+//!
+//! **Uniform B-spline of order k** (degree k − 1), centred (the lead unifies this with
+//! the curve module's basis once `src/curve` lands; both are the cardinal B-spline of
+//! §7.2, this one shifted by k/2 so that it is symmetric about 0):
+//! ```text
+//! β_k(x) = 1/(k−1)! · Σ_{j=0..k} (−1)^j C(k,j) (x + k/2 − j)_+^(k−1)      support [−k/2, k/2]
+//! ∫_{−∞}^x β_k = 1/k! · Σ_{j=0..k} (−1)^j C(k,j) (x + k/2 − j)_+^k
+//! ```
+//! Order 1 is the box (nearest neighbour), 2 the hat (linear), 3 Chaikin's quadratic,
+//! 4 the cubic, 5 the quartic. The k-fold subdivided control polygon of these rules
+//! converges to `Σ P_i β_k(x − i)` (§7.2), so evaluating β_k at the fine positions is
+//! subdivision carried to its limit.
+//!
+//! **Dyn–Levin 4-point**: the scheme's fundamental function φ (the limit of subdividing
+//! a single 1), support [−3, 3], tabulated at level [`FOUR_POINT_LEVEL`] by running the
+//! closed refinement rule on a delta, and linearly interpolated between the dyadic points
+//! (exact at every dyadic position up to that level, e.g. every pixel centre of a ×2^k
+//! upscale with k < 12).
+
+use crate::scheme::subdivide::{refine_steps, Ends, Refinement};
+
+/// Dyadic level of the tabulated 4-point function (4096 samples per unit).
+pub const FOUR_POINT_LEVEL: u32 = 12;
+
+/// A centred one-dimensional basis function with its antiderivative.
+#[derive(Clone, Debug)]
+pub enum Basis {
+    /// Uniform B-spline of this order (1 ≤ k ≤ 6).
+    BSpline(usize),
+    /// Tabulated 4-point fundamental function: values and running integral on
+    /// `x = −3 + i / 2^L`.
+    FourPoint { value: Vec<f64>, integral: Vec<f64> },
+}
+
+fn binom(k: usize, j: usize) -> f64 {
+    (0..j).fold(1.0, |a, t| a * (k - t) as f64 / (t + 1) as f64)
+}
+
+fn factorial(k: usize) -> f64 {
+    (1..=k).fold(1.0, |a, t| a * t as f64)
+}
+
+/// `Σ_j (−1)^j C(k,j) (x + k/2 − j)_+^p / p!` — β_k for p = k − 1, its integral for p = k.
+fn truncated_sum(k: usize, p: usize, x: f64) -> f64 {
+    let h = k as f64 / 2.0;
+    let mut s = 0.0;
+    for j in 0..=k {
+        let t = x + h - j as f64;
+        if t > 0.0 || (p == 0 && t == 0.0) {
+            let sign = if j % 2 == 0 { 1.0 } else { -1.0 };
+            s += sign * binom(k, j) * t.powi(p as i32);
+        }
+    }
+    s / factorial(p)
+}
+
+impl Basis {
+    /// The basis of a refinement rule.
+    pub fn of(rule: Refinement) -> Basis {
+        match rule.order() {
+            Some(k) => Basis::BSpline(k),
+            None => four_point(),
+        }
+    }
+
+    /// Half-width of the support.
+    pub fn radius(&self) -> f64 {
+        match self {
+            Basis::BSpline(k) => *k as f64 / 2.0,
+            Basis::FourPoint { .. } => 3.0,
+        }
+    }
+
+    /// φ(x).
+    pub fn value(&self, x: f64) -> f64 {
+        match self {
+            Basis::BSpline(k) => {
+                let h = *k as f64 / 2.0;
+                // half-open support [−k/2, k/2) so that the box sums to one everywhere
+                if x < -h || x >= h {
+                    0.0
+                } else {
+                    truncated_sum(*k, k - 1, x)
+                }
+            }
+            Basis::FourPoint { value, .. } => table(value, x, 0.0, 0.0),
+        }
+    }
+
+    /// ∫_{−∞}^x φ.
+    pub fn integral(&self, x: f64) -> f64 {
+        match self {
+            Basis::BSpline(k) => {
+                let h = *k as f64 / 2.0;
+                if x <= -h {
+                    0.0
+                } else if x >= h {
+                    1.0
+                } else {
+                    truncated_sum(*k, *k, x)
+                }
+            }
+            Basis::FourPoint { integral, .. } => table(integral, x, 0.0, 1.0),
+        }
+    }
+
+    /// Mean of φ over the cell `[x − w/2, x + w/2]` (`w = 0`: the value at `x`).
+    pub fn cell_mean(&self, x: f64, w: f64) -> f64 {
+        if w <= 0.0 {
+            self.value(x)
+        } else {
+            (self.integral(x + w / 2.0) - self.integral(x - w / 2.0)) / w
+        }
+    }
+}
+
+/// Linear interpolation in a table on `x = −3 + i/2^L`, `below`/`above` outside.
+fn table(t: &[f64], x: f64, below: f64, above: f64) -> f64 {
+    let s = (x + 3.0) * (1u64 << FOUR_POINT_LEVEL) as f64;
+    if s <= 0.0 {
+        return below;
+    }
+    let i = s.floor() as usize;
+    if i + 1 >= t.len() {
+        return above;
+    }
+    let f = s - i as f64;
+    t[i] * (1.0 - f) + t[i + 1] * f
+}
+
+/// Subdivide a delta on a closed lane of 8 points `L` times: point `j` of level `L`
+/// sits at `j / 2^L` (the 4-point rule keeps the old points at even positions).
+fn four_point() -> Basis {
+    let n = 8usize;
+    let mut delta = vec![0.0; n];
+    delta[4] = 1.0;
+    let fine = refine_steps(
+        &delta,
+        1,
+        Refinement::FourPoint,
+        Ends::Closed,
+        FOUR_POINT_LEVEL as usize,
+    )
+    .expect("8 points refine with the closed 4-point rule");
+    let per = 1usize << FOUR_POINT_LEVEL;
+    // x = −3 … 3  ↔  index (4 − 3)·per … (4 + 3)·per
+    let value: Vec<f64> = fine[per..=7 * per].to_vec();
+    let dx = 1.0 / per as f64;
+    let mut integral = Vec::with_capacity(value.len());
+    let mut acc = 0.0;
+    integral.push(0.0);
+    for w in value.windows(2) {
+        acc += 0.5 * (w[0] + w[1]) * dx;
+        integral.push(acc);
+    }
+    Basis::FourPoint { value, integral }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn partition_of_unity_and_integrals() {
+        for rule in Refinement::ALL {
+            let b = Basis::of(rule);
+            for x in [0.0, 0.1, 0.25, 0.5, 0.77] {
+                let s: f64 = (-6..=6).map(|i| b.value(x - i as f64)).sum();
+                assert!((s - 1.0).abs() < 1e-9, "{rule:?} x={x} sum={s}");
+            }
+            assert!((b.integral(10.0) - 1.0).abs() < 1e-6, "{rule:?}");
+            assert!(b.integral(-10.0).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn known_values() {
+        let c = Basis::BSpline(4);
+        assert!((c.value(0.0) - 4.0 / 6.0).abs() < 1e-12);
+        assert!((c.value(1.0) - 1.0 / 6.0).abs() < 1e-12);
+        let q = Basis::BSpline(3);
+        assert!((q.value(0.0) - 0.75).abs() < 1e-12);
+        assert!((q.value(0.5) - 0.5).abs() < 1e-12);
+        // cell mean of the cubic over a unit cell is the quartic B-spline
+        let q5 = Basis::BSpline(5);
+        for x in [0.0, 1.0, 0.3] {
+            assert!((c.cell_mean(x, 1.0) - q5.value(x)).abs() < 1e-12);
+        }
+        let f = Basis::of(Refinement::FourPoint);
+        assert!((f.value(0.0) - 1.0).abs() < 1e-12 && f.value(1.0).abs() < 1e-12);
+        assert!((f.value(0.5) - 9.0 / 16.0).abs() < 1e-12);
+    }
+}
