@@ -20,9 +20,12 @@
 //! Data flows one way: read → array → transform → (quantize → code → container) → back.
 
 pub mod cli;
+pub mod codec;
 pub mod curve;
 pub mod demo;
+pub mod entropy;
 pub mod error;
+pub mod format;
 pub mod fsutil;
 pub mod generate;
 pub mod io;
@@ -30,6 +33,7 @@ pub mod mesh;
 pub mod metrics;
 pub mod points;
 pub mod progress;
+pub mod quantize;
 pub mod scheme;
 pub mod surface;
 pub mod tensor;

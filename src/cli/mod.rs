@@ -5,6 +5,7 @@ use clap::{Parser, Subcommand};
 
 pub mod analyze;
 pub mod array;
+pub mod codec;
 pub mod curve;
 pub mod demo;
 pub mod io_cmds;
@@ -48,6 +49,12 @@ pub enum Command {
     InfoFile(io_cmds::InfoFileArgs),
     /// Convert between image / volume / heightmap formats, keeping samples exact.
     Convert(io_cmds::ConvertArgs),
+    /// Compress an image / volume / heightmap into an .mra file.
+    Encode(codec::EncodeArgs),
+    /// Decompress an .mra file (optionally at reduced resolution).
+    Decode(codec::DecodeArgs),
+    /// Show an .mra file's header and bytes per level.
+    Info(codec::InfoArgs),
 }
 
 /// A failure on the command line: one line on stderr, exit code 2.
@@ -113,6 +120,9 @@ pub fn main() -> i32 {
         Command::Generate(a) => io_cmds::generate(a),
         Command::InfoFile(a) => io_cmds::info_file(a),
         Command::Convert(a) => io_cmds::convert(a),
+        Command::Encode(a) => codec::encode(a),
+        Command::Decode(a) => codec::decode(a),
+        Command::Info(a) => codec::info(a),
     };
     match result {
         Ok(()) => 0,
