@@ -6,6 +6,7 @@
 
 pub mod crc;
 pub mod header;
+pub mod sha256;
 
 pub use header::{Header, Mode};
 
