@@ -179,5 +179,6 @@ pub fn run(out: &Path) -> Result<Vec<DemoRow>> {
         seconds: secs,
         output: None,
     });
+    rows.extend(crate::codec::demo::rows(out)?);
     Ok(rows)
 }

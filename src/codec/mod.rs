@@ -7,6 +7,7 @@
 //! a spatial residual layer quantized with step `2E`), and lossless (integer
 //! S-transform, integer YCoCg-R).
 
+pub mod demo;
 pub mod layout;
 pub mod lossless;
 pub mod meta;
