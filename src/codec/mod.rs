@@ -429,6 +429,8 @@ pub fn encode(r: &Raster, opts: &EncodeOptions) -> Result<Vec<u8>> {
                         ));
                     }
                     return search(&p, range, false, 0.02, |_, dec| {
+                        let dec =
+                            dec.ok_or_else(|| Error::parameter("psnr", db, "a decoded candidate"))?;
                         let c = crate::metrics::compare(r, dec, &Default::default())?;
                         Ok(c.psnr.unwrap_or(f64::INFINITY) - db)
                     });
@@ -462,16 +464,22 @@ fn search(
     range: f64,
     large_ok: bool,
     tol: f64,
-    f: impl Fn(&[u8], &Raster) -> Result<f64>,
+    f: impl Fn(&[u8], Option<&Raster>) -> Result<f64>,
 ) -> Result<Vec<u8>> {
+    // only the PSNR target needs the decoded picture
+    let need_decode = !large_ok;
     let mut lo = (range * 1e-7).ln();
     let mut hi = (range * 4.0).ln();
     let mut best: Option<(f64, Vec<u8>)> = None;
     for _ in 0..48 {
         let mid = 0.5 * (lo + hi);
         let bytes = p.code(mid.exp());
-        let dec = decode(&bytes, &DecodeOptions::default())?.raster;
-        let v = f(&bytes, &dec)?;
+        let dec = if need_decode {
+            Some(decode(&bytes, &DecodeOptions::default())?.raster)
+        } else {
+            None
+        };
+        let v = f(&bytes, dec.as_ref())?;
         if v >= 0.0 {
             if best.as_ref().map_or(true, |(bv, _)| v < *bv) {
                 best = Some((v, bytes));
