@@ -564,3 +564,84 @@ fn corpus_max_error_and_psnr_targets() {
         assert!(got <= b && got >= b * 0.97, "bpp {got}");
     }
 }
+
+#[test]
+fn cli_encode_decode_info_and_one_line_errors() {
+    let exe = env!("CARGO_BIN_EXE_mra");
+    let dir = std::env::temp_dir().join(format!("mra_codec_cli_{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let src = dir.join("a.pgm");
+    mra::io::write(&src, &field(&[37, 45], 1, SampleType::U8, 4)).unwrap();
+    let mra_file = dir.join("a.mra");
+    let run =
+        |args: &[&std::ffi::OsStr]| std::process::Command::new(exe).args(args).output().unwrap();
+    let o = run(&[
+        "encode".as_ref(),
+        src.as_os_str(),
+        "-o".as_ref(),
+        mra_file.as_os_str(),
+        "--max-error".as_ref(),
+        "2".as_ref(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let out = dir.join("b.pgm");
+    let o = run(&[
+        "decode".as_ref(),
+        mra_file.as_os_str(),
+        "-o".as_ref(),
+        out.as_os_str(),
+    ]);
+    assert!(o.status.success());
+    let a = mra::io::read(&src).unwrap();
+    let b = mra::io::read(&out).unwrap();
+    assert!(max_err(&a, &b) <= 2.0);
+    let small = dir.join("c.pgm");
+    let o = run(&[
+        "decode".as_ref(),
+        mra_file.as_os_str(),
+        "-o".as_ref(),
+        small.as_os_str(),
+        "--level".as_ref(),
+        "2".as_ref(),
+    ]);
+    assert!(o.status.success());
+    assert_eq!(mra::io::read(&small).unwrap().dims, vec![10, 12]);
+    let o = run(&["info".as_ref(), mra_file.as_os_str(), "--json".as_ref()]);
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(j["mode"], "maxerror");
+    // damaged and truncated inputs: one line on stderr, exit 2, no output file
+    let bytes = std::fs::read(&mra_file).unwrap();
+    let bad = dir.join("bad.mra");
+    std::fs::write(&bad, &bytes[..bytes.len() / 2]).unwrap();
+    let never = dir.join("never.pgm");
+    for args in [
+        vec![
+            "decode".as_ref(),
+            bad.as_os_str(),
+            "-o".as_ref(),
+            never.as_os_str(),
+        ],
+        vec![
+            "decode".as_ref(),
+            src.as_os_str(),
+            "-o".as_ref(),
+            never.as_os_str(),
+        ],
+        vec!["info".as_ref(), src.as_os_str()],
+    ] {
+        let o = run(&args);
+        assert_eq!(o.status.code(), Some(2));
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+        assert!(!never.exists());
+    }
+    let o = run(&[
+        "decode".as_ref(),
+        bad.as_os_str(),
+        "-o".as_ref(),
+        never.as_os_str(),
+        "--allow-truncated".as_ref(),
+    ]);
+    assert!(o.status.success());
+    std::fs::remove_dir_all(&dir).ok();
+}
