@@ -181,5 +181,6 @@ pub fn run(out: &Path) -> Result<Vec<DemoRow>> {
     });
     rows.extend(crate::terrain::demo_rows(out)?);
     rows.extend(crate::upscale::demo_rows(out)?);
+    rows.extend(crate::codec::demo::rows(out)?);
     Ok(rows)
 }

@@ -20,10 +20,13 @@
 //! Data flows one way: read → array → transform → (quantize → code → container) → back.
 
 pub mod cli;
+pub mod codec;
 pub mod curve;
 pub mod demo;
 pub mod denoise;
+pub mod entropy;
 pub mod error;
+pub mod format;
 pub mod fsutil;
 pub mod generate;
 pub mod io;
@@ -31,6 +34,7 @@ pub mod mesh;
 pub mod metrics;
 pub mod points;
 pub mod progress;
+pub mod quantize;
 pub mod scheme;
 pub mod style;
 pub mod surface;

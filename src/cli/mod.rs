@@ -5,6 +5,7 @@ use clap::{Parser, Subcommand};
 
 pub mod analyze;
 pub mod array;
+pub mod codec;
 pub mod curve;
 pub mod demo;
 pub mod io_cmds;
@@ -67,6 +68,12 @@ pub enum Command {
     Upscale(upscale::UpscaleArgs),
     /// Reduce resolution with the MRA's analysis filter A (REDUCE-RESOLUTION, §9).
     Downscale(upscale::DownscaleArgs),
+    /// Compress an image / volume / heightmap into an .mra file.
+    Encode(codec::EncodeArgs),
+    /// Decompress an .mra file (optionally at reduced resolution).
+    Decode(codec::DecodeArgs),
+    /// Show an .mra file's header and bytes per level.
+    Info(codec::InfoArgs),
 }
 
 /// A failure on the command line: one line on stderr, exit code 2.
@@ -139,6 +146,9 @@ pub fn main() -> i32 {
         Command::Style(a) => terrain::style(a),
         Command::Upscale(a) => upscale::run_upscale(a),
         Command::Downscale(a) => upscale::run_downscale(a),
+        Command::Encode(a) => codec::encode(a),
+        Command::Decode(a) => codec::decode(a),
+        Command::Info(a) => codec::info(a),
     };
     match result {
         Ok(()) => 0,

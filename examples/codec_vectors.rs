@@ -1,0 +1,121 @@
+//! Regenerate formats/vectors/: small `.mra` files and a manifest with the SHA-256 of
+//! each decoded output (samples as little-endian bytes, interleaved, row-major).
+//! Run: `cargo run --release --example codec_vectors`
+use mra::codec::{self, DecodeOptions, EncodeOptions, Rate};
+use mra::io::{DataKind, Raster, SampleType, Samples};
+use mra::scheme::{Boundary, Scheme};
+
+fn raster(dims: &[usize], channels: usize, ty: SampleType, kind: DataKind) -> Raster {
+    let n: usize = dims.iter().product::<usize>() * channels;
+    let w = *dims.last().unwrap();
+    let v: Vec<f64> = (0..n)
+        .map(|i| {
+            let p = i / channels;
+            let (x, y) = ((p % w) as f64, (p / w) as f64);
+            let c = (i % channels) as f64;
+            100.0 + 60.0 * (x * 0.4 + c).sin() * (y * 0.3).cos() + 3.0 * ((i * 7919) % 13) as f64
+        })
+        .collect();
+    Raster::new(dims.to_vec(), channels, Samples::from_f64(&v, ty), kind).unwrap()
+}
+
+fn main() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("formats/vectors");
+    std::fs::create_dir_all(&dir).unwrap();
+    let cases: Vec<(&str, &str, Raster, Scheme, Boundary, Rate, usize)> = vec![
+        (
+            "gray8_lossless",
+            "13x9 gray u8, lossless",
+            raster(&[9, 13], 1, SampleType::U8, DataKind::Image),
+            Scheme::Haar,
+            Boundary::Symmetric,
+            Rate::Lossless,
+            0,
+        ),
+        (
+            "rgb8_haar_q40",
+            "17x11 RGB u8, haar symmetric, quality 40",
+            raster(&[11, 17], 3, SampleType::U8, DataKind::Image),
+            Scheme::Haar,
+            Boundary::Symmetric,
+            Rate::Quality(40.0),
+            0,
+        ),
+        (
+            "rgb8_haar_q40_level1",
+            "the previous file decoded with --level 1",
+            raster(&[11, 17], 3, SampleType::U8, DataKind::Image),
+            Scheme::Haar,
+            Boundary::Symmetric,
+            Rate::Quality(40.0),
+            1,
+        ),
+        (
+            "vol_i16_maxerr",
+            "8x6x5 volume i16, chaikin, --max-error 2",
+            raster(&[5, 6, 8], 1, SampleType::I16, DataKind::Volume),
+            Scheme::Chaikin,
+            Boundary::Symmetric,
+            Rate::MaxError(2.0),
+            0,
+        ),
+        (
+            "height_f32_cubic",
+            "12x10 heightmap f32, cubic periodic, threshold 1.5",
+            raster(&[10, 12], 1, SampleType::F32, DataKind::Heightmap),
+            Scheme::Cubic,
+            Boundary::Periodic,
+            Rate::Threshold(1.5),
+            0,
+        ),
+        (
+            "rgba16_lossless",
+            "7x5 RGBA u16, lossless (YCoCg-R + alpha)",
+            raster(&[5, 7], 4, SampleType::U16, DataKind::Image),
+            Scheme::Haar,
+            Boundary::Symmetric,
+            Rate::Lossless,
+            0,
+        ),
+    ];
+    let mut manifest = Vec::new();
+    for (name, what, r, scheme, boundary, rate, level) in cases {
+        let bytes = codec::encode(
+            &r,
+            &EncodeOptions {
+                scheme,
+                boundary,
+                levels: 3,
+                rate,
+            },
+        )
+        .unwrap();
+        let file = format!("{}.mra", name.trim_end_matches("_level1"));
+        std::fs::write(dir.join(&file), &bytes).unwrap();
+        let d = codec::decode(
+            &bytes,
+            &DecodeOptions {
+                level,
+                allow_truncated: false,
+            },
+        )
+        .unwrap();
+        let raw = mra::io::bytes::encode(&d.raster.samples, false);
+        manifest.push(serde_json::json!({
+            "name": name,
+            "file": file,
+            "description": what,
+            "level": level,
+            "dims": d.raster.dims,
+            "channels": d.raster.channels,
+            "sample_type": d.raster.sample_type().name(),
+            "sha256": mra::format::sha256::hex(&mra::format::sha256::sha256(&raw)),
+        }));
+    }
+    std::fs::write(
+        dir.join("manifest.json"),
+        serde_json::to_string_pretty(&manifest).unwrap() + "\n",
+    )
+    .unwrap();
+    println!("wrote {} vectors to {}", manifest.len(), dir.display());
+}

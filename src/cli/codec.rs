@@ -1,0 +1,189 @@
+//! `mra encode`, `mra decode`, `mra info`: the `.mra` codec on the command line.
+
+use std::path::PathBuf;
+
+use clap::Args;
+
+use super::io_cmds::{read_input, write_output, RawArgs};
+use super::{CliResult, Failure};
+use crate::codec::{self, DecodeOptions, EncodeOptions, Rate};
+use crate::scheme::{Boundary, Scheme};
+
+/// Compress an image, volume or heightmap into an `.mra` file.
+#[derive(Args, Debug)]
+#[command(
+    after_help = "Rate (pick one; default --quality 50):\n  --keep P        keep the largest P% of details (gain-weighted)\n  --threshold T   zero details whose gain-weighted magnitude is below T\n  --quality Q     1..100, step = (max − min)·2^(−Q/10)\n  --psnr DB       smallest file reaching DB (PSNR as `mra compare`)\n  --bpp B         largest file within B bits per pixel/voxel\n  --max-error E   every sample within E of the source\n  --lossless      bit-exact (integer Haar S-transform, YCoCg-R)\n\nExample:\n  mra generate zone-plate -o z.png --size 256\n  mra encode z.png -o z.mra --psnr 40 && mra decode z.mra -o z2.png && mra compare z.png z2.png"
+)]
+pub struct EncodeArgs {
+    /// Input file or folder (any format `mra info-file` reads).
+    pub input: PathBuf,
+    /// Output `.mra` file.
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Scheme: haar, chaikin, cubic.
+    #[arg(long, default_value = "haar")]
+    pub scheme: Scheme,
+    /// Boundary: interpolating, periodic, symmetric.
+    #[arg(long, default_value = "symmetric")]
+    pub boundary: Boundary,
+    /// Levels (each axis does what its length allows).
+    #[arg(long, default_value_t = 6)]
+    pub levels: usize,
+    #[arg(long, group = "rate")]
+    pub keep: Option<f64>,
+    #[arg(long, group = "rate")]
+    pub threshold: Option<f64>,
+    #[arg(long, group = "rate")]
+    pub quality: Option<f64>,
+    #[arg(long, group = "rate")]
+    pub psnr: Option<f64>,
+    #[arg(long, group = "rate")]
+    pub bpp: Option<f64>,
+    #[arg(long, group = "rate")]
+    pub max_error: Option<f64>,
+    #[arg(long, group = "rate")]
+    pub lossless: bool,
+    #[command(flatten)]
+    pub raw: RawArgs,
+}
+
+/// Decompress an `.mra` file.
+#[derive(Args, Debug)]
+#[command(
+    after_help = "Example:\n  mra generate zone-plate -o z.png --size 256 && mra encode z.png -o z.mra --quality 60\n  mra decode z.mra -o z.png --level 2   # 64x64 preview from the coarse chunks only"
+)]
+pub struct DecodeArgs {
+    /// Input `.mra` file.
+    pub input: PathBuf,
+    /// Output file; the extension picks the format (.png .tif .exr .nrrd .hgt …).
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Reconstruct at 1/2^k resolution from the coarse chunks only.
+    #[arg(long, default_value_t = 0)]
+    pub level: usize,
+    /// Decode what a truncated file holds instead of failing.
+    #[arg(long)]
+    pub allow_truncated: bool,
+}
+
+/// Show an `.mra` file's header and its bytes per level and per chunk.
+#[derive(Args, Debug)]
+#[command(
+    after_help = "Example:\n  mra generate zone-plate -o z.png --size 256 && mra encode z.png -o z.mra && mra info z.mra --json"
+)]
+pub struct InfoArgs {
+    pub input: PathBuf,
+    /// Print one JSON object.
+    #[arg(long)]
+    pub json: bool,
+}
+
+pub fn encode(a: EncodeArgs) -> CliResult {
+    let rate = if let Some(p) = a.keep {
+        Rate::Keep(p)
+    } else if let Some(t) = a.threshold {
+        Rate::Threshold(t)
+    } else if let Some(q) = a.quality {
+        Rate::Quality(q)
+    } else if let Some(d) = a.psnr {
+        Rate::Psnr(d)
+    } else if let Some(b) = a.bpp {
+        Rate::Bpp(b)
+    } else if let Some(e) = a.max_error {
+        Rate::MaxError(e)
+    } else if a.lossless {
+        Rate::Lossless
+    } else {
+        Rate::Quality(50.0)
+    };
+    let r = read_input(&a.input, &a.raw.options()?)?;
+    let opts = EncodeOptions {
+        scheme: a.scheme,
+        boundary: a.boundary,
+        levels: a.levels,
+        rate,
+    };
+    let bytes = codec::encode(&r, &opts).map_err(|e| Failure::context(a.input.display(), e))?;
+    crate::fsutil::write_atomic(&a.output, |w| w.write_all(&bytes))
+        .map_err(|e| Failure::context(a.output.display(), e))?;
+    let pos = r.positions() as f64;
+    println!(
+        "{}: {} bytes, {:.4} bits per position ({})",
+        a.output.display(),
+        bytes.len(),
+        bytes.len() as f64 * 8.0 / pos,
+        r.summary()
+    );
+    Ok(())
+}
+
+pub fn decode(a: DecodeArgs) -> CliResult {
+    let opts = DecodeOptions {
+        level: a.level,
+        allow_truncated: a.allow_truncated,
+    };
+    let d =
+        codec::decode_file(&a.input, &opts).map_err(|e| Failure::context(a.input.display(), e))?;
+    write_output(&a.output, &d.raster, false)?;
+    if !d.complete {
+        eprintln!(
+            "mra: {}: truncated file, decoded what it holds",
+            a.input.display()
+        );
+    }
+    Ok(())
+}
+
+pub fn info(a: InfoArgs) -> CliResult {
+    let bytes = std::fs::read(&a.input).map_err(|e| Failure::context(a.input.display(), e))?;
+    let i = codec::info(&bytes).map_err(|e| Failure::context(a.input.display(), e))?;
+    if a.json {
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&i).map_err(|e| Failure(e.to_string()))?
+        );
+        return Ok(());
+    }
+    let dims: Vec<String> = i.dims.iter().rev().map(|d| d.to_string()).collect();
+    println!("{} (.mra {})", a.input.display(), i.version);
+    println!(
+        "  {} {} x{} channels {} ({} colour)",
+        i.kind,
+        dims.join("x"),
+        i.channels,
+        i.sample_type,
+        i.colour
+    );
+    println!(
+        "  mode {}, {} {} {} levels, step {:.6}, max error {}, range {}..{}",
+        i.mode, i.scheme, i.boundary, i.levels, i.step, i.max_error, i.range[0], i.range[1]
+    );
+    println!(
+        "  {} bytes, {:.4} bits per position{}",
+        i.file_bytes,
+        i.bits_per_position,
+        if i.complete { "" } else { " (truncated)" }
+    );
+    for (l, b, bpp) in &i.levels_bytes {
+        let name = if *l == 0 {
+            "coarse".to_string()
+        } else {
+            format!("level {l}")
+        };
+        println!("  {name:>9}: {b:>10} bytes {bpp:>8.4} bits/position");
+    }
+    for c in &i.chunks {
+        match (c.channel, c.band) {
+            (Some(ch), Some(b)) => println!(
+                "    {} @{} {} bytes: channel {ch} band {b} level {} ({} coefficients)",
+                c.kind,
+                c.offset,
+                c.bytes,
+                c.level.unwrap_or(0),
+                c.coefficients.unwrap_or(0)
+            ),
+            _ => println!("    {} @{} {} bytes", c.kind, c.offset, c.bytes),
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,235 @@
+//! Integer-reversible pieces of `--lossless`: the S-transform (integer Haar, notes §9.2
+//! with the averages floored) on every spatial axis in the non-standard order, the
+//! integer YCoCg-R colour lifting, and the order-preserving map from float bit patterns
+//! to integers. All arithmetic wraps, so every step inverts exactly for any input.
+
+use crate::scheme::{Boundary, Scheme};
+use crate::tensor::{Order, Pyramid, PyramidSpec};
+
+/// Plan of an S-transform pyramid: lane lengths halve (rounding up) while ≥ 2.
+pub fn plan(dims: &[usize], levels: usize) -> Pyramid {
+    let lengths = dims
+        .iter()
+        .map(|&n| {
+            let mut v = vec![n];
+            while v.len() <= levels && *v.last().unwrap() >= 2 {
+                let m = *v.last().unwrap();
+                v.push(m.div_ceil(2));
+            }
+            v
+        })
+        .collect();
+    Pyramid {
+        spec: PyramidSpec {
+            scheme: Scheme::Haar,
+            boundary: Boundary::Interpolating,
+            levels,
+            order: Order::NonStandard,
+            axes: (0..dims.len()).collect(),
+        },
+        shape: dims.to_vec(),
+        lengths,
+    }
+}
+
+/// Apply `f` to every lane along `axis` inside `region` (extents from the origin).
+fn lanes(
+    data: &mut [i64],
+    shape: &[usize],
+    region: &[usize],
+    axis: usize,
+    f: &mut dyn FnMut(&mut [i64]),
+) {
+    let nd = shape.len();
+    let mut strides = vec![1usize; nd];
+    for k in (0..nd.saturating_sub(1)).rev() {
+        strides[k] = strides[k + 1] * shape[k + 1];
+    }
+    let n = region[axis];
+    let mut buf = vec![0i64; n];
+    let mut idx = vec![0usize; nd];
+    let total: usize = region
+        .iter()
+        .enumerate()
+        .filter(|&(k, _)| k != axis)
+        .map(|(_, &r)| r)
+        .product();
+    for _ in 0..total {
+        let base: usize = idx.iter().zip(&strides).map(|(i, s)| i * s).sum();
+        for (j, b) in buf.iter_mut().enumerate() {
+            *b = data[base + j * strides[axis]];
+        }
+        f(&mut buf);
+        for (j, b) in buf.iter().enumerate() {
+            data[base + j * strides[axis]] = *b;
+        }
+        // next index, skipping `axis`
+        for k in (0..nd).rev() {
+            if k == axis {
+                continue;
+            }
+            idx[k] += 1;
+            if idx[k] < region[k] {
+                break;
+            }
+            idx[k] = 0;
+        }
+    }
+}
+
+/// One S-transform level on a lane: pairs `(a, b)` → `h = a − b`, `l = b + ⌊h/2⌋`
+/// (= ⌊(a+b)/2⌋), packed `[l… (odd tail) | h…]`.
+fn s_forward(lane: &mut [i64]) {
+    let n = lane.len();
+    let c = n.div_ceil(2);
+    let mut out = vec![0i64; n];
+    for k in 0..n / 2 {
+        let (a, b) = (lane[2 * k], lane[2 * k + 1]);
+        let h = a.wrapping_sub(b);
+        out[k] = b.wrapping_add(h >> 1);
+        out[c + k] = h;
+    }
+    if n % 2 == 1 {
+        out[c - 1] = lane[n - 1];
+    }
+    lane.copy_from_slice(&out);
+}
+
+fn s_inverse(lane: &mut [i64]) {
+    let n = lane.len();
+    let c = n.div_ceil(2);
+    let mut out = vec![0i64; n];
+    for k in 0..n / 2 {
+        let (l, h) = (lane[k], lane[c + k]);
+        let b = l.wrapping_sub(h >> 1);
+        out[2 * k] = b.wrapping_add(h);
+        out[2 * k + 1] = b;
+    }
+    if n % 2 == 1 {
+        out[n - 1] = lane[c - 1];
+    }
+    lane.copy_from_slice(&out);
+}
+
+/// Forward S-transform pyramid of `plan` in place.
+pub fn forward(data: &mut [i64], pyr: &Pyramid) {
+    let mut region = pyr.shape.clone();
+    for l in 0..pyr.depth() {
+        let before = region.clone();
+        for (i, &a) in pyr.spec.axes.iter().enumerate() {
+            if l < pyr.axis_levels(i) {
+                lanes(data, &pyr.shape, &before, a, &mut s_forward);
+                region[a] = pyr.lengths[i][l + 1];
+            }
+        }
+    }
+}
+
+/// Inverse of [`forward`], stopping `skip` levels early (the result then holds the
+/// coarse block of level `skip` at the origin).
+pub fn inverse(data: &mut [i64], pyr: &Pyramid, skip: usize) {
+    let mut regions = vec![pyr.shape.clone()];
+    for l in 0..pyr.depth() {
+        let mut r = regions[l].clone();
+        for (i, &a) in pyr.spec.axes.iter().enumerate() {
+            if l < pyr.axis_levels(i) {
+                r[a] = pyr.lengths[i][l + 1];
+            }
+        }
+        regions.push(r);
+    }
+    for l in (skip..pyr.depth()).rev() {
+        for (i, &a) in pyr.spec.axes.iter().enumerate().rev() {
+            if l < pyr.axis_levels(i) {
+                lanes(data, &pyr.shape, &regions[l], a, &mut s_inverse);
+            }
+        }
+    }
+}
+
+/// YCoCg-R forward lifting on one pixel: `Co = R − B`, `t = B + ⌊Co/2⌋`, `Cg = G − t`,
+/// `Y = t + ⌊Cg/2⌋`.
+#[inline]
+pub fn ycocg_r(r: i64, g: i64, b: i64) -> (i64, i64, i64) {
+    let co = r.wrapping_sub(b);
+    let t = b.wrapping_add(co >> 1);
+    let cg = g.wrapping_sub(t);
+    (t.wrapping_add(cg >> 1), co, cg)
+}
+
+/// Inverse of [`ycocg_r`].
+#[inline]
+pub fn ycocg_r_inv(y: i64, co: i64, cg: i64) -> (i64, i64, i64) {
+    let t = y.wrapping_sub(cg >> 1);
+    let g = cg.wrapping_add(t);
+    let b = t.wrapping_sub(co >> 1);
+    (b.wrapping_add(co), g, b)
+}
+
+/// Order-preserving map of a float's bit pattern (`bits` wide) to a signed integer.
+#[inline]
+pub fn float_bits_to_int(bits: u64, width: u32) -> i64 {
+    let sign = 1u64 << (width - 1);
+    if bits & sign != 0 {
+        -((bits & !sign) as i64) - 1
+    } else {
+        bits as i64
+    }
+}
+
+/// Inverse of [`float_bits_to_int`].
+#[inline]
+pub fn int_to_float_bits(v: i64, width: u32) -> u64 {
+    let sign = 1u64 << (width - 1);
+    let mask = if width == 64 {
+        u64::MAX
+    } else {
+        (1u64 << width) - 1
+    };
+    if v < 0 {
+        ((-(v + 1)) as u64 | sign) & mask
+    } else {
+        v as u64 & mask
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn s_transform_inverts_on_odd_shapes_and_extremes() {
+        for dims in [vec![1usize], vec![7], vec![5, 3], vec![3, 4, 5]] {
+            let n: usize = dims.iter().product();
+            let orig: Vec<i64> = (0..n as i64).map(|i| (i * 7919) % 601 - 300).collect();
+            let mut v = orig.clone();
+            v[0] = i64::MIN;
+            let orig2 = v.clone();
+            let p = plan(&dims, 5);
+            forward(&mut v, &p);
+            inverse(&mut v, &p, 0);
+            assert_eq!(v, orig2);
+        }
+    }
+
+    #[test]
+    fn ycocg_r_and_float_maps_invert() {
+        for &(r, g, b) in &[
+            (0, 0, 0),
+            (255, 0, 17),
+            (65535, 1, 40000),
+            (-5, 3, i64::MAX),
+        ] {
+            let (y, co, cg) = ycocg_r(r, g, b);
+            assert_eq!(ycocg_r_inv(y, co, cg), (r, g, b));
+        }
+        for x in [-1.5f32, -0.0, 0.0, 1e-30, 3.0, f32::INFINITY] {
+            let v = float_bits_to_int(x.to_bits() as u64, 32);
+            assert_eq!(int_to_float_bits(v, 32) as u32, x.to_bits());
+        }
+        assert!(
+            float_bits_to_int((-1.0f32).to_bits() as u64, 32)
+                < float_bits_to_int(1.0f32.to_bits() as u64, 32)
+        );
+    }
+}

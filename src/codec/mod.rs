@@ -1,0 +1,1231 @@
+//! The codec: raster → colour transform → pyramid (notes §9.3) → per-band dead-zone
+//! quantization weighted by synthesis gain ([`crate::quantize`]) → context-modelled
+//! range coding ([`crate::entropy`]) → `.mra` chunks ([`crate::format`]), and back.
+//!
+//! Rate modes ([`Rate`]): keep P% of details, threshold, quality, target PSNR, target
+//! bits per position (bisection on the step), guaranteed maximum error (lossy base plus
+//! a spatial residual layer quantized with step `2E`), and lossless (integer
+//! S-transform, integer YCoCg-R).
+
+pub mod demo;
+pub mod layout;
+pub mod lossless;
+pub mod meta;
+
+use crate::entropy::{self, BandKind, Parent};
+use crate::format::header::Colour;
+use crate::format::{self, put_chunk, ChunkEnd, ChunkReader, Cursor, Header, Mode};
+use crate::io::{DataKind, Raster, SampleType, Samples};
+use crate::quantize::{self, DELTA, RHO};
+use crate::scheme::{Boundary, Scheme};
+use crate::tensor::{self, Array, Order, Pyramid, PyramidSpec, Subband};
+use crate::{Error, Result};
+use rayon::prelude::*;
+use std::io::Read;
+use std::path::Path;
+
+/// How to spend bits.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Rate {
+    /// Keep the largest P percent of the (gain-weighted) details.
+    Keep(f64),
+    /// Zero the details whose gain-weighted magnitude is below T.
+    Threshold(f64),
+    /// 1..100: step `Δ = (max − min) · 2^(−Q/10)`.
+    Quality(f64),
+    /// Target PSNR in dB (skimage convention of `mra compare`).
+    Psnr(f64),
+    /// Target bits per position (pixel / voxel), all channels together.
+    Bpp(f64),
+    /// Every decoded sample within E of the source.
+    MaxError(f64),
+    /// Bit-exact.
+    Lossless,
+}
+
+/// Encoder settings.
+#[derive(Clone, Debug, PartialEq)]
+pub struct EncodeOptions {
+    pub scheme: Scheme,
+    pub boundary: Boundary,
+    pub levels: usize,
+    pub rate: Rate,
+}
+
+impl Default for EncodeOptions {
+    fn default() -> Self {
+        EncodeOptions {
+            scheme: Scheme::Haar,
+            boundary: Boundary::Symmetric,
+            levels: 6,
+            rate: Rate::Quality(50.0),
+        }
+    }
+}
+
+/// Decoder settings.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct DecodeOptions {
+    /// Reconstruct at 1/2^level resolution, reading only the chunks needed.
+    pub level: usize,
+    /// Decode what a truncated file holds instead of failing.
+    pub allow_truncated: bool,
+}
+
+/// A decoded file.
+#[derive(Clone, Debug)]
+pub struct Decoded {
+    pub raster: Raster,
+    pub header: Header,
+    /// False when the file ended before its `MEND` chunk (only with `allow_truncated`).
+    pub complete: bool,
+}
+
+const BAND: &[u8; 4] = b"BAND";
+const HEAD: &[u8; 4] = b"HEAD";
+const RESI: &[u8; 4] = b"RESI";
+const MEND: &[u8; 4] = b"MEND";
+const META: &[u8; 4] = b"mETA";
+
+/// Pyramid, bands, their parents and extents for a header.
+struct Plan {
+    pyr: Pyramid,
+    bands: Vec<Subband>,
+    parents: Vec<Option<usize>>,
+    dims: Vec<Vec<usize>>,
+}
+
+impl Plan {
+    fn new(h: &Header) -> Result<Plan> {
+        let pyr = if h.mode == Mode::Lossless {
+            lossless::plan(&h.dims, h.levels)
+        } else {
+            let spec = PyramidSpec {
+                scheme: h.scheme,
+                boundary: h.boundary,
+                levels: h.levels,
+                order: Order::NonStandard,
+                axes: (0..h.dims.len()).collect(),
+            };
+            Pyramid::plan(&h.dims, &spec)?
+        };
+        let bands = pyr.subbands();
+        let parents = bands
+            .iter()
+            .map(|b| {
+                if b.level == 0 {
+                    return None;
+                }
+                bands
+                    .iter()
+                    .position(|p| p.level == b.level + 1 && p.high == b.high)
+            })
+            .collect();
+        let dims = bands
+            .iter()
+            .map(|b| b.ranges.iter().map(|r| r.len()).collect())
+            .collect();
+        Ok(Plan {
+            pyr,
+            bands,
+            parents,
+            dims,
+        })
+    }
+
+    /// Extents of the coarse block left after `k` levels (k = 0: full size).
+    fn region(&self, k: usize) -> Vec<usize> {
+        let mut r = self.pyr.shape.clone();
+        for (i, &a) in self.pyr.spec.axes.iter().enumerate() {
+            r[a] = self.pyr.lengths[i][k.min(self.pyr.axis_levels(i))];
+        }
+        r
+    }
+
+    /// The pyramid of the coarse block after `k` levels.
+    fn sub(&self, k: usize) -> Pyramid {
+        let p = &self.pyr;
+        Pyramid {
+            spec: PyramidSpec {
+                levels: p.spec.levels.saturating_sub(k),
+                ..p.spec.clone()
+            },
+            shape: self.region(k),
+            lengths: (0..p.lengths.len())
+                .map(|i| p.lengths[i][k.min(p.axis_levels(i))..].to_vec())
+                .collect(),
+        }
+    }
+}
+
+/// Squared synthesis gain of each channel after the colour transform (inverse YCoCg
+/// columns: Y → (1,1,1), Co → (½,0,−½), Cg → (−½,½,−½)).
+fn channel_weights(colour: Colour, channels: usize) -> Vec<f64> {
+    let mut w = vec![1.0; channels];
+    if colour == Colour::YCoCg {
+        w[0] = 3.0f64.sqrt();
+        w[1] = 0.5f64.sqrt();
+        w[2] = 0.75f64.sqrt();
+    }
+    w
+}
+
+fn finite_range(s: &Samples) -> (f64, f64) {
+    let mut lo = f64::INFINITY;
+    let mut hi = f64::NEG_INFINITY;
+    for i in 0..s.len() {
+        let x = s.get_f64(i);
+        if x.is_finite() {
+            lo = lo.min(x);
+            hi = hi.max(x);
+        }
+    }
+    if lo > hi {
+        (0.0, 0.0)
+    } else {
+        (lo, hi)
+    }
+}
+
+/// Split interleaved samples into per-channel f32 planes, NaN/∞ → 0, colour applied.
+fn planes_f32(r: &Raster, colour: Colour) -> Vec<Vec<f32>> {
+    let c = r.channels;
+    let n = r.positions();
+    let mut planes = vec![vec![0f32; n]; c];
+    for i in 0..n {
+        for (k, p) in planes.iter_mut().enumerate() {
+            let x = r.samples.get_f64(i * c + k);
+            p[i] = if x.is_finite() { x as f32 } else { 0.0 };
+        }
+    }
+    if colour == Colour::YCoCg {
+        for i in 0..n {
+            let (r_, g, b) = (planes[0][i], planes[1][i], planes[2][i]);
+            let co = r_ - b;
+            let t = b + co * 0.5;
+            let cg = g - t;
+            planes[0][i] = t + cg * 0.5;
+            planes[1][i] = co;
+            planes[2][i] = cg;
+        }
+    }
+    planes
+}
+
+/// The transform of a lossy encode, computed once and quantized at any step.
+struct Prepared {
+    header: Header,
+    plan: Plan,
+    gains: Vec<f64>,
+    weights: Vec<f64>,
+    coeffs: Vec<Vec<f32>>,
+    meta: Vec<u8>,
+}
+
+fn header_for(r: &Raster, opts: &EncodeOptions, mode: Mode, colour: Colour) -> Result<Header> {
+    if r.dims.is_empty() || r.dims.len() > format::header::MAX_AXES {
+        return Err(Error::parameter(
+            "dims",
+            format!("{:?}", r.dims),
+            "1 to 4 spatial axes",
+        ));
+    }
+    if r.dims.iter().any(|&d| d == 0 || d > u32::MAX as usize) {
+        return Err(Error::parameter(
+            "dims",
+            format!("{:?}", r.dims),
+            "extents from 1 to 2^32−1",
+        ));
+    }
+    if r.channels == 0 || r.channels > format::header::MAX_CHANNELS {
+        return Err(Error::parameter("channels", r.channels, "1 to 256"));
+    }
+    if opts.levels > format::header::MAX_LEVELS {
+        return Err(Error::parameter("levels", opts.levels, "0 to 32"));
+    }
+    let (min, max) = finite_range(&r.samples);
+    Ok(Header {
+        major: format::MAJOR,
+        minor: format::MINOR,
+        kind: r.kind,
+        sample_type: r.sample_type(),
+        dims: r.dims.clone(),
+        channels: r.channels,
+        colour,
+        mode,
+        scheme: opts.scheme,
+        boundary: opts.boundary,
+        levels: opts.levels,
+        step: 1.0,
+        delta: if mode == Mode::Lossless { 0.0 } else { DELTA },
+        max_error: 0.0,
+        min,
+        max,
+        tile: r.dims.clone(),
+    })
+}
+
+fn prepare(r: &Raster, opts: &EncodeOptions, mode: Mode) -> Result<Prepared> {
+    let colour = if r.channels >= 3 {
+        Colour::YCoCg
+    } else {
+        Colour::None
+    };
+    let header = header_for(r, opts, mode, colour)?;
+    let plan = Plan::new(&header)?;
+    let gains = quantize::band_gains(&plan.pyr, &plan.bands);
+    let weights = channel_weights(colour, r.channels);
+    let spec = plan.pyr.spec.clone();
+    let coeffs = planes_f32(r, colour)
+        .into_par_iter()
+        .map(|p| {
+            let mut a = Array::from_shape_vec(&r.dims, p)?;
+            tensor::analyze(&mut a, &spec)?;
+            Ok(a.into_data())
+        })
+        .collect::<Result<Vec<_>>>()?;
+    Ok(Prepared {
+        header,
+        plan,
+        gains,
+        weights,
+        coeffs,
+        meta: meta::to_bytes(&r.meta),
+    })
+}
+
+fn band_payload(channel: usize, band: usize, step: f64, coded: &[u8]) -> Vec<u8> {
+    let mut p = Vec::with_capacity(12 + coded.len());
+    p.extend_from_slice(&(channel as u16).to_le_bytes());
+    p.extend_from_slice(&(band as u16).to_le_bytes());
+    p.extend_from_slice(&step.to_le_bytes());
+    p.extend_from_slice(coded);
+    p
+}
+
+impl Prepared {
+    fn band_step(&self, step: f64, band: usize, channel: usize) -> f64 {
+        step / (self.gains[band] * self.weights[channel])
+    }
+
+    /// Quantize and code at base step `step`; the whole file.
+    fn code(&self, step: f64) -> Vec<u8> {
+        let plan = &self.plan;
+        let nb = plan.bands.len();
+        let nc = self.coeffs.len();
+        let jobs: Vec<(usize, usize)> =
+            (0..nb).flat_map(|j| (0..nc).map(move |c| (j, c))).collect();
+        let q: Vec<Vec<i64>> = jobs
+            .par_iter()
+            .map(|&(j, c)| {
+                let s = self.band_step(step, j, c);
+                let rho = if plan.bands[j].level == 0 { 0.5 } else { RHO };
+                layout::gather(&self.coeffs[c], &plan.pyr.shape, &plan.bands[j].ranges)
+                    .into_iter()
+                    .map(|x| quantize::quantize(x as f64, s, rho))
+                    .collect()
+            })
+            .collect();
+        let coded: Vec<Vec<u8>> = jobs
+            .par_iter()
+            .enumerate()
+            .map(|(k, &(j, c))| {
+                let kind = if plan.bands[j].level == 0 {
+                    BandKind::Coarse
+                } else {
+                    BandKind::Detail
+                };
+                let parent = plan.parents[j].map(|p| Parent {
+                    data: &q[p * nc + c],
+                    dims: &plan.dims[p],
+                });
+                entropy::encode_band(&q[k], &plan.dims[j], kind, parent)
+            })
+            .collect();
+        let mut h = self.header.clone();
+        h.step = step;
+        let mut out = format::SIGNATURE.to_vec();
+        put_chunk(&mut out, HEAD, &h.to_bytes());
+        if !self.meta.is_empty() {
+            put_chunk(&mut out, META, &self.meta);
+        }
+        for (k, &(j, c)) in jobs.iter().enumerate() {
+            let s = if plan.bands[j].level == 0 || h.mode != Mode::Lossless {
+                self.band_step(step, j, c)
+            } else {
+                1.0
+            };
+            put_chunk(&mut out, BAND, &band_payload(c, j, s, &coded[k]));
+        }
+        put_chunk(&mut out, MEND, &[]);
+        out
+    }
+
+    /// Gain-weighted magnitudes of all detail coefficients.
+    fn weighted_details(&self) -> Vec<f32> {
+        let mut v = Vec::new();
+        for (j, b) in self.plan.bands.iter().enumerate() {
+            if b.level == 0 {
+                continue;
+            }
+            for (c, plane) in self.coeffs.iter().enumerate() {
+                let w = (self.gains[j] * self.weights[c]) as f32;
+                layout::rows(&self.plan.pyr.shape, &b.ranges, |off, run, _| {
+                    v.extend(plane[off..off + run].iter().map(|x| x.abs() * w));
+                });
+            }
+        }
+        v
+    }
+}
+
+/// Encode a raster into the bytes of an `.mra` file.
+pub fn encode(r: &Raster, opts: &EncodeOptions) -> Result<Vec<u8>> {
+    let n = crate::io::bytes::sample_count(&r.dims, r.channels)?;
+    if n != r.samples.len() {
+        return Err(Error::parameter(
+            "samples",
+            r.samples.len(),
+            "dims × channels samples",
+        ));
+    }
+    match opts.rate {
+        Rate::Lossless => encode_lossless(r, opts),
+        Rate::MaxError(e) => encode_max_error(r, opts, e),
+        rate => {
+            let p = prepare(r, opts, Mode::Lossy)?;
+            let range = (p.header.max - p.header.min).max(1e-30);
+            let step = match rate {
+                Rate::Keep(k) => {
+                    if !(0.0..=100.0).contains(&k) {
+                        return Err(Error::parameter("keep", k, "a percentage from 0 to 100"));
+                    }
+                    let mut w = p.weighted_details();
+                    let t = quantize::keep_threshold(&mut w, k);
+                    if t.is_infinite() {
+                        range * 1e6
+                    } else {
+                        (t / (1.0 - RHO)).max(range * 1e-9)
+                    }
+                }
+                Rate::Threshold(t) => {
+                    if !(t > 0.0 && t.is_finite()) {
+                        return Err(Error::parameter("threshold", t, "a positive number"));
+                    }
+                    t / (1.0 - RHO)
+                }
+                Rate::Quality(q) => {
+                    if !(1.0..=100.0).contains(&q) {
+                        return Err(Error::parameter("quality", q, "1 to 100"));
+                    }
+                    range * (2f64).powf(-q / 10.0)
+                }
+                Rate::Psnr(db) => {
+                    if !(db > 0.0 && db < 400.0) {
+                        return Err(Error::parameter(
+                            "psnr",
+                            db,
+                            "a target in dB between 0 and 400",
+                        ));
+                    }
+                    return search(&p, range, false, 0.02, |_, dec| {
+                        let dec =
+                            dec.ok_or_else(|| Error::parameter("psnr", db, "a decoded candidate"))?;
+                        let c = crate::metrics::compare(r, dec, &Default::default())?;
+                        Ok(c.psnr.unwrap_or(f64::INFINITY) - db)
+                    });
+                }
+                Rate::Bpp(b) => {
+                    if !(b > 0.0 && b.is_finite()) {
+                        return Err(Error::parameter(
+                            "bpp",
+                            b,
+                            "a positive number of bits per position",
+                        ));
+                    }
+                    let pos = r.positions() as f64;
+                    return search(&p, range, true, 0.01 * b, |bytes, _| {
+                        Ok(b - bytes.len() as f64 * 8.0 / pos)
+                    });
+                }
+                _ => unreachable!(),
+            };
+            Ok(p.code(step))
+        }
+    }
+}
+
+/// Bisection on log(step) for the file closest to a target: `f(bytes, decoded) ≥ 0`
+/// means the target is met (PSNR reached, or size within budget), which holds for
+/// large steps when `large_ok` (size) and for small steps otherwise (PSNR). Returns
+/// the met file closest to the target (within `tol` stops early).
+fn search(
+    p: &Prepared,
+    range: f64,
+    large_ok: bool,
+    tol: f64,
+    f: impl Fn(&[u8], Option<&Raster>) -> Result<f64>,
+) -> Result<Vec<u8>> {
+    // only the PSNR target needs the decoded picture
+    let need_decode = !large_ok;
+    let mut lo = (range * 1e-7).ln();
+    let mut hi = (range * 4.0).ln();
+    let mut best: Option<(f64, Vec<u8>)> = None;
+    for _ in 0..48 {
+        let mid = 0.5 * (lo + hi);
+        let bytes = p.code(mid.exp());
+        let dec = if need_decode {
+            Some(decode(&bytes, &DecodeOptions::default())?.raster)
+        } else {
+            None
+        };
+        let v = f(&bytes, dec.as_ref())?;
+        if v >= 0.0 {
+            if best.as_ref().map_or(true, |(bv, _)| v < *bv) {
+                best = Some((v, bytes));
+            }
+            if v <= tol {
+                break;
+            }
+            if large_ok {
+                hi = mid;
+            } else {
+                lo = mid;
+            }
+        } else if large_ok {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+        if hi - lo < 1e-5 {
+            break;
+        }
+    }
+    Ok(match best {
+        Some((_, b)) => b,
+        None => p.code(if large_ok { hi.exp() } else { lo.exp() }),
+    })
+}
+
+fn lossless_int(x: f64, t: SampleType) -> i64 {
+    let _ = t;
+    x as i64
+}
+
+fn encode_lossless(r: &Raster, opts: &EncodeOptions) -> Result<Vec<u8>> {
+    let ty = r.sample_type();
+    let colour = if r.channels >= 3 && !ty.is_float() {
+        Colour::YCoCgR
+    } else {
+        Colour::None
+    };
+    let mut o = opts.clone();
+    o.scheme = Scheme::Haar;
+    o.boundary = Boundary::Interpolating;
+    let header = header_for(r, &o, Mode::Lossless, colour)?;
+    let plan = Plan::new(&header)?;
+    let c = r.channels;
+    let n = r.positions();
+    let mut planes = vec![vec![0i64; n]; c];
+    for i in 0..n {
+        for (k, p) in planes.iter_mut().enumerate() {
+            p[i] = match &r.samples {
+                Samples::F16(v) => lossless::float_bits_to_int(v[i * c + k].to_bits() as u64, 16),
+                Samples::F32(v) => lossless::float_bits_to_int(v[i * c + k].to_bits() as u64, 32),
+                Samples::F64(v) => lossless::float_bits_to_int(v[i * c + k].to_bits(), 64),
+                s => lossless_int(s.get_f64(i * c + k), ty),
+            };
+        }
+    }
+    if colour == Colour::YCoCgR {
+        for i in 0..n {
+            let (y, co, cg) = lossless::ycocg_r(planes[0][i], planes[1][i], planes[2][i]);
+            planes[0][i] = y;
+            planes[1][i] = co;
+            planes[2][i] = cg;
+        }
+    }
+    planes
+        .par_iter_mut()
+        .for_each(|p| lossless::forward(p, &plan.pyr));
+    let nb = plan.bands.len();
+    let jobs: Vec<(usize, usize)> = (0..nb).flat_map(|j| (0..c).map(move |k| (j, k))).collect();
+    let q: Vec<Vec<i64>> = jobs
+        .par_iter()
+        .map(|&(j, k)| layout::gather(&planes[k], &plan.pyr.shape, &plan.bands[j].ranges))
+        .collect();
+    drop(planes);
+    let coded: Vec<Vec<u8>> = jobs
+        .par_iter()
+        .enumerate()
+        .map(|(i, &(j, k))| {
+            let kind = if plan.bands[j].level == 0 {
+                BandKind::Coarse
+            } else {
+                BandKind::Detail
+            };
+            let parent = plan.parents[j].map(|p| Parent {
+                data: &q[p * c + k],
+                dims: &plan.dims[p],
+            });
+            entropy::encode_band(&q[i], &plan.dims[j], kind, parent)
+        })
+        .collect();
+    let mut out = format::SIGNATURE.to_vec();
+    put_chunk(&mut out, HEAD, &header.to_bytes());
+    let m = meta::to_bytes(&r.meta);
+    if !m.is_empty() {
+        put_chunk(&mut out, META, &m);
+    }
+    for (i, &(j, k)) in jobs.iter().enumerate() {
+        put_chunk(&mut out, BAND, &band_payload(k, j, 1.0, &coded[i]));
+    }
+    put_chunk(&mut out, MEND, &[]);
+    Ok(out)
+}
+
+/// Step of the residual layer for bound `e` on samples of type `t`.
+fn residual_step(e: f64, t: SampleType) -> f64 {
+    if t.is_float() {
+        2.0 * e * (1.0 - 1e-9)
+    } else {
+        2.0 * e.floor() + 1.0
+    }
+}
+
+fn encode_max_error(r: &Raster, opts: &EncodeOptions, e: f64) -> Result<Vec<u8>> {
+    if !(e >= 0.0 && e.is_finite()) {
+        return Err(Error::parameter("max-error", e, "a finite bound ≥ 0"));
+    }
+    let ty = r.sample_type();
+    if e == 0.0 || (!ty.is_float() && e < 1.0) {
+        return encode_lossless(r, opts);
+    }
+    let mut p = prepare(r, opts, Mode::MaxError)?;
+    p.header.max_error = e;
+    let base = p.code(2.0 * e);
+    let dec = decode(&base, &DecodeOptions::default())?.raster;
+    let s = residual_step(e, ty);
+    let c = r.channels;
+    let n = r.positions();
+    let mut out = base[..base.len() - 12].to_vec(); // drop MEND
+    let chunks: Vec<Vec<u8>> = (0..c)
+        .into_par_iter()
+        .map(|k| {
+            let mut q = vec![0i64; n];
+            let mut fixed = vec![0f64; n];
+            for i in 0..n {
+                let x = r.samples.get_f64(i * c + k);
+                let xh = dec.samples.get_f64(i * c + k);
+                let d = if x.is_finite() { x - xh } else { 0.0 };
+                q[i] = (d / s).round() as i64;
+                fixed[i] = xh + q[i] as f64 * s;
+            }
+            let back = Samples::from_f64(&fixed, ty);
+            let mut exc = Vec::new();
+            for i in 0..n {
+                let x = r.samples.get_f64(i * c + k);
+                let y = back.get_f64(i);
+                if !((x - y).abs() <= e) && !(x.is_nan() && y.is_nan()) {
+                    exc.push((i as u64, x));
+                }
+            }
+            let coded = entropy::encode_band(&q, &r.dims, BandKind::Detail, None);
+            let mut pl = Vec::new();
+            pl.extend_from_slice(&(k as u16).to_le_bytes());
+            pl.extend_from_slice(&s.to_le_bytes());
+            pl.extend_from_slice(&(exc.len() as u32).to_le_bytes());
+            for (i, v) in exc {
+                pl.extend_from_slice(&i.to_le_bytes());
+                pl.extend_from_slice(&v.to_le_bytes());
+            }
+            pl.extend_from_slice(&coded);
+            pl
+        })
+        .collect();
+    for ch in chunks {
+        put_chunk(&mut out, RESI, &ch);
+    }
+    put_chunk(&mut out, MEND, &[]);
+    Ok(out)
+}
+
+/// A BAND chunk's contents.
+struct BandChunk {
+    step: f64,
+    data: Vec<u8>,
+}
+
+/// A RESI chunk's contents.
+struct ResiChunk {
+    step: f64,
+    exceptions: Vec<(u64, f64)>,
+    data: Vec<u8>,
+}
+
+/// One chunk as listed by [`info`].
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct ChunkInfo {
+    pub kind: String,
+    pub offset: u64,
+    pub bytes: u64,
+    pub channel: Option<usize>,
+    pub band: Option<usize>,
+    pub level: Option<usize>,
+    pub coefficients: Option<u64>,
+}
+
+/// Everything read from a file before reconstruction.
+struct Parsed {
+    header: Header,
+    meta: crate::io::Metadata,
+    plan: Plan,
+    bands: Vec<Vec<Option<BandChunk>>>,
+    resi: Vec<Option<ResiChunk>>,
+    complete: bool,
+    chunks: Vec<ChunkInfo>,
+}
+
+fn read_chunks<R: Read>(
+    src: R,
+    len: u64,
+    stop_level: usize,
+    allow_truncated: bool,
+) -> Result<Parsed> {
+    let mut rd = ChunkReader::new(src, len)?;
+    let first = match rd.next_chunk()? {
+        Ok(c) => c,
+        Err(_) => {
+            return Err(Error::format(
+                "file ends before its HEAD chunk",
+                "a HEAD chunk after the signature",
+            ))
+        }
+    };
+    if &first.kind != HEAD {
+        return Err(Error::format(
+            format!("first chunk {}", first.name()),
+            "HEAD first",
+        ));
+    }
+    let header = Header::parse(&first.payload)?;
+    let samples = header.samples()?;
+    let limit = crate::io::MAX_SAMPLES.min(len.saturating_mul(12_000).max(1 << 20));
+    if samples > limit {
+        return Err(Error::LimitsExceeded {
+            what: "declared samples",
+            requested: samples,
+            limit,
+        });
+    }
+    let plan = Plan::new(&header)?;
+    let nb = plan.bands.len();
+    let mut bands: Vec<Vec<Option<BandChunk>>> = (0..header.channels)
+        .map(|_| (0..nb).map(|_| None).collect())
+        .collect();
+    let mut resi: Vec<Option<ResiChunk>> = (0..header.channels).map(|_| None).collect();
+    let mut meta = crate::io::Metadata::default();
+    let mut chunks = vec![ChunkInfo {
+        kind: "HEAD".into(),
+        offset: first.offset,
+        bytes: first.payload.len() as u64 + 12,
+        channel: None,
+        band: None,
+        level: None,
+        coefficients: None,
+    }];
+    let mut complete = false;
+    let mut last = "HEAD".to_string();
+    loop {
+        let ch = match rd.next_chunk()? {
+            Ok(c) => c,
+            Err(end) => {
+                if !allow_truncated {
+                    let at = match end {
+                        ChunkEnd::Eof => len,
+                        ChunkEnd::Truncated { offset } => offset,
+                    };
+                    return Err(Error::format(
+                        format!("file truncated after chunk {last} (byte {at} of {len})"),
+                        "a complete file ending with MEND (or --allow-truncated)",
+                    ));
+                }
+                break;
+            }
+        };
+        let mut info = ChunkInfo {
+            kind: ch.name(),
+            offset: ch.offset,
+            bytes: ch.payload.len() as u64 + 12,
+            channel: None,
+            band: None,
+            level: None,
+            coefficients: None,
+        };
+        last = ch.name();
+        match &ch.kind {
+            b"BAND" => {
+                let mut c = Cursor::new(&ch.payload, "BAND");
+                let channel = c.u16()? as usize;
+                let band = c.u16()? as usize;
+                let step = c.f64()?;
+                if channel >= header.channels || band >= nb {
+                    return Err(Error::format(
+                        format!(
+                            "BAND chunk at byte {} for channel {channel}, band {band}",
+                            ch.offset
+                        ),
+                        "channel < channels and band < number of bands",
+                    ));
+                }
+                if !(step > 0.0 && step.is_finite()) {
+                    return Err(Error::format(
+                        format!("BAND chunk step {step}"),
+                        "a positive finite step",
+                    ));
+                }
+                let level = plan.bands[band].level;
+                if stop_level > 0 && level >= 1 && level <= stop_level {
+                    complete = true;
+                    break;
+                }
+                if let Some(p) = plan.parents[band] {
+                    if bands[channel][p].is_none() {
+                        return Err(Error::format(
+                            format!("BAND {band} of channel {channel} before its parent band {p}"),
+                            "bands in coarse-to-fine order",
+                        ));
+                    }
+                }
+                info.channel = Some(channel);
+                info.band = Some(band);
+                info.level = Some(level);
+                info.coefficients = Some(plan.dims[band].iter().product::<usize>() as u64);
+                bands[channel][band] = Some(BandChunk {
+                    step,
+                    data: c.rest().to_vec(),
+                });
+            }
+            b"RESI" => {
+                let mut c = Cursor::new(&ch.payload, "RESI");
+                let channel = c.u16()? as usize;
+                let step = c.f64()?;
+                let n = c.u32()? as usize;
+                if channel >= header.channels || !(step > 0.0 && step.is_finite()) {
+                    return Err(Error::format(
+                        format!("RESI chunk for channel {channel}, step {step}"),
+                        "a valid channel and step",
+                    ));
+                }
+                if n > (ch.payload.len() - c.pos) / 16 {
+                    return Err(Error::format(
+                        format!("RESI chunk declaring {n} exceptions"),
+                        "exceptions that fit the chunk",
+                    ));
+                }
+                let mut exc = Vec::with_capacity(n);
+                for _ in 0..n {
+                    let i = u64::from_le_bytes(c.take(8)?.try_into().unwrap());
+                    let v = c.f64()?;
+                    exc.push((i, v));
+                }
+                info.channel = Some(channel);
+                resi[channel] = Some(ResiChunk {
+                    step,
+                    exceptions: exc,
+                    data: c.rest().to_vec(),
+                });
+            }
+            b"MEND" => {
+                chunks.push(info);
+                complete = true;
+                break;
+            }
+            b"mETA" => meta = meta::parse(&ch.payload),
+            b"HEAD" => return Err(Error::format("a second HEAD chunk", "one HEAD chunk")),
+            k => {
+                if k[0].is_ascii_uppercase() {
+                    return Err(Error::Unsupported {
+                        what: "critical chunk",
+                        value: ch.name(),
+                    });
+                }
+            }
+        }
+        chunks.push(info);
+    }
+    Ok(Parsed {
+        header,
+        meta,
+        plan,
+        bands,
+        resi,
+        complete,
+        chunks,
+    })
+}
+
+/// Decode one channel's bands into its coefficient indices (None = absent).
+fn decode_channel(p: &Parsed, c: usize, k: usize) -> Result<Vec<Option<Vec<i64>>>> {
+    let plan = &p.plan;
+    let mut q: Vec<Option<Vec<i64>>> = (0..plan.bands.len()).map(|_| None).collect();
+    for j in 0..plan.bands.len() {
+        let level = plan.bands[j].level;
+        if k > 0 && level >= 1 && level <= k {
+            continue;
+        }
+        let Some(bc) = &p.bands[c][j] else { continue };
+        let kind = if level == 0 {
+            BandKind::Coarse
+        } else {
+            BandKind::Detail
+        };
+        let parent = match plan.parents[j] {
+            Some(pj) => match &q[pj] {
+                Some(v) => Some(Parent {
+                    data: v,
+                    dims: &plan.dims[pj],
+                }),
+                None => {
+                    return Err(Error::format(
+                        format!("band {j} of channel {c} without its parent"),
+                        "complete parents",
+                    ))
+                }
+            },
+            None => None,
+        };
+        let v = entropy::decode_band(&bc.data, &plan.dims[j], kind, parent)
+            .map_err(|e| Error::format(format!("BAND {j} of channel {c}: {e}"), "a valid band"))?;
+        q[j] = Some(v);
+    }
+    Ok(q)
+}
+
+fn reconstruct(p: &Parsed, k: usize) -> Result<Raster> {
+    let h = &p.header;
+    let plan = &p.plan;
+    let k = k.min(plan.pyr.depth());
+    let region = plan.region(k);
+    let npos: usize = region.iter().product();
+    let c = h.channels;
+    let ty = h.sample_type;
+    let mut values = vec![0f64; npos * c];
+    if h.mode == Mode::Lossless {
+        let planes = (0..c)
+            .into_par_iter()
+            .map(|ch| {
+                let q = decode_channel(p, ch, k)?;
+                let mut plane = vec![0i64; plan.pyr.shape.iter().product()];
+                for (j, b) in q.iter().enumerate() {
+                    if let Some(b) = b {
+                        layout::scatter(&mut plane, &plan.pyr.shape, &plan.bands[j].ranges, b);
+                    }
+                }
+                lossless::inverse(&mut plane, &plan.pyr, k);
+                let full: Vec<std::ops::Range<usize>> = region.iter().map(|&e| 0..e).collect();
+                Ok(layout::gather(&plane, &plan.pyr.shape, &full))
+            })
+            .collect::<Result<Vec<_>>>()?;
+        let mut planes = planes;
+        if h.colour == Colour::YCoCgR {
+            for i in 0..npos {
+                let (r, g, b) = lossless::ycocg_r_inv(planes[0][i], planes[1][i], planes[2][i]);
+                planes[0][i] = r;
+                planes[1][i] = g;
+                planes[2][i] = b;
+            }
+        }
+        let samples = match ty {
+            SampleType::F16 | SampleType::F32 | SampleType::F64 => {
+                let w = (ty.size() * 8) as u32;
+                let bits: Vec<u64> = (0..npos * c)
+                    .map(|i| lossless::int_to_float_bits(planes[i % c][i / c], w))
+                    .collect();
+                match ty {
+                    SampleType::F16 => Samples::F16(
+                        bits.iter()
+                            .map(|&b| half::f16::from_bits(b as u16))
+                            .collect(),
+                    ),
+                    SampleType::F32 => {
+                        Samples::F32(bits.iter().map(|&b| f32::from_bits(b as u32)).collect())
+                    }
+                    _ => Samples::F64(bits.iter().map(|&b| f64::from_bits(b)).collect()),
+                }
+            }
+            _ => {
+                for i in 0..npos * c {
+                    values[i] = planes[i % c][i / c] as f64;
+                }
+                Samples::from_f64(&values, ty)
+            }
+        };
+        return finish(p, region, samples, k);
+    }
+    let sub = plan.sub(k);
+    let planes = (0..c)
+        .into_par_iter()
+        .map(|ch| {
+            let q = decode_channel(p, ch, k)?;
+            let mut plane = vec![0f32; plan.pyr.shape.iter().product()];
+            for (j, b) in q.iter().enumerate() {
+                if let (Some(b), Some(bc)) = (b, &p.bands[ch][j]) {
+                    let d = if plan.bands[j].level == 0 {
+                        0.0
+                    } else {
+                        h.delta
+                    };
+                    let v: Vec<f32> = b
+                        .iter()
+                        .map(|&x| quantize::dequantize(x, bc.step, d) as f32)
+                        .collect();
+                    layout::scatter(&mut plane, &plan.pyr.shape, &plan.bands[j].ranges, &v);
+                }
+            }
+            let full: Vec<std::ops::Range<usize>> = region.iter().map(|&e| 0..e).collect();
+            let small = if k == 0 {
+                plane
+            } else {
+                layout::gather(&plane, &plan.pyr.shape, &full)
+            };
+            let mut a = Array::from_shape_vec(&region, small)?;
+            tensor::synthesize(&mut a, &sub)?;
+            Ok(a.into_data())
+        })
+        .collect::<Result<Vec<_>>>()?;
+    let mut planes = planes;
+    if h.colour == Colour::YCoCg {
+        for i in 0..npos {
+            let (y, co, cg) = (planes[0][i], planes[1][i], planes[2][i]);
+            let t = y - cg * 0.5;
+            let g = cg + t;
+            let b = t - co * 0.5;
+            planes[0][i] = b + co;
+            planes[1][i] = g;
+            planes[2][i] = b;
+        }
+    }
+    for i in 0..npos * c {
+        values[i] = (planes[i % c][i / c] as f64).clamp(h.min, h.max);
+    }
+    let mut samples = Samples::from_f64(&values, ty);
+    if k == 0 && h.mode == Mode::MaxError {
+        for (ch, r) in p.resi.iter().enumerate() {
+            let Some(r) = r else { continue };
+            let q =
+                entropy::decode_band(&r.data, &h.dims, BandKind::Detail, None).map_err(|e| {
+                    Error::format(format!("RESI of channel {ch}: {e}"), "a valid residual")
+                })?;
+            for i in 0..npos {
+                values[i * c + ch] = samples.get_f64(i * c + ch) + q[i] as f64 * r.step;
+            }
+            let _ = ch;
+        }
+        samples = Samples::from_f64(&values, ty);
+        let mut all: Vec<(usize, f64)> = Vec::new();
+        for (ch, r) in p.resi.iter().enumerate() {
+            if let Some(r) = r {
+                for &(i, v) in &r.exceptions {
+                    if (i as usize) < npos {
+                        all.push((i as usize * c + ch, v));
+                    }
+                }
+            }
+        }
+        if !all.is_empty() {
+            let mut v = samples.to_f64();
+            for (i, x) in all {
+                v[i] = x;
+            }
+            samples = Samples::from_f64(&v, ty);
+        }
+    }
+    finish(p, region, samples, k)
+}
+
+fn finish(p: &Parsed, region: Vec<usize>, samples: Samples, k: usize) -> Result<Raster> {
+    let h = &p.header;
+    let mut r = Raster::new(region.clone(), h.channels, samples, h.kind)?;
+    r.meta = p.meta.clone();
+    if k > 0 {
+        if let Some(s) = &mut r.meta.spacing {
+            for (i, v) in s.iter_mut().enumerate() {
+                if i < region.len() {
+                    *v *= h.dims[i] as f64 / region[i] as f64;
+                }
+            }
+        }
+    }
+    Ok(r)
+}
+
+/// Decode from a stream of `len` bytes.
+pub fn decode_stream<R: Read>(src: R, len: u64, opts: &DecodeOptions) -> Result<Decoded> {
+    let p = read_chunks(src, len, opts.level, opts.allow_truncated)?;
+    let raster = reconstruct(&p, opts.level)?;
+    Ok(Decoded {
+        raster,
+        header: p.header,
+        complete: p.complete,
+    })
+}
+
+/// Decode the bytes of an `.mra` file.
+pub fn decode(bytes: &[u8], opts: &DecodeOptions) -> Result<Decoded> {
+    decode_stream(bytes, bytes.len() as u64, opts)
+}
+
+/// Decode a file, reading only the chunks needed.
+pub fn decode_file(path: &Path, opts: &DecodeOptions) -> Result<Decoded> {
+    let f = std::fs::File::open(path)?;
+    let len = f.metadata()?.len();
+    decode_stream(std::io::BufReader::new(f), len, opts)
+}
+
+/// What `mra info` shows.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct Info {
+    pub version: String,
+    pub kind: String,
+    pub dims: Vec<usize>,
+    pub channels: usize,
+    pub sample_type: String,
+    pub mode: String,
+    pub scheme: String,
+    pub boundary: String,
+    pub levels: usize,
+    pub colour: String,
+    pub step: f64,
+    pub max_error: f64,
+    pub range: [f64; 2],
+    pub file_bytes: u64,
+    pub bits_per_position: f64,
+    pub complete: bool,
+    /// Bytes and bits per position by level (0 = coarse block, then coarsest details first).
+    pub levels_bytes: Vec<(usize, u64, f64)>,
+    pub chunks: Vec<ChunkInfo>,
+}
+
+/// Read a file's header and chunk table (verifying every CRC).
+pub fn info(bytes: &[u8]) -> Result<Info> {
+    let p = read_chunks(bytes, bytes.len() as u64, 0, true)?;
+    let h = &p.header;
+    let pos: f64 = h.dims.iter().map(|&d| d as f64).product();
+    let mut lv: std::collections::BTreeMap<usize, u64> = Default::default();
+    for c in &p.chunks {
+        if let Some(l) = c.level {
+            *lv.entry(l).or_default() += c.bytes;
+        }
+    }
+    let mut levels_bytes: Vec<(usize, u64, f64)> = lv
+        .into_iter()
+        .map(|(l, b)| (l, b, b as f64 * 8.0 / pos))
+        .collect();
+    levels_bytes.sort_by_key(|&(l, _, _)| if l == 0 { 0 } else { usize::MAX - l });
+    Ok(Info {
+        version: format!("{}.{}", h.major, h.minor),
+        kind: format!("{:?}", h.kind).to_lowercase(),
+        dims: h.dims.clone(),
+        channels: h.channels,
+        sample_type: h.sample_type.name().into(),
+        mode: format!("{:?}", h.mode).to_lowercase(),
+        scheme: if h.mode == Mode::Lossless {
+            "integer-haar".into()
+        } else {
+            h.scheme.name().into()
+        },
+        boundary: h.boundary.name().into(),
+        levels: p.plan.pyr.depth(),
+        colour: format!("{:?}", h.colour),
+        step: h.step,
+        max_error: h.max_error,
+        range: [h.min, h.max],
+        file_bytes: bytes.len() as u64,
+        bits_per_position: bytes.len() as f64 * 8.0 / pos,
+        complete: p.complete,
+        levels_bytes,
+        chunks: p.chunks,
+    })
+}
+
+/// PSNR after keeping the largest `keep` percent of details, no quantization (the
+/// notes' Figure 9.19 protocol; details weighted by synthesis gain when `weighted`).
+pub fn keep_psnr(
+    r: &Raster,
+    scheme: Scheme,
+    boundary: Boundary,
+    levels: usize,
+    keep: f64,
+    weighted: bool,
+) -> Result<f64> {
+    let opts = EncodeOptions {
+        scheme,
+        boundary,
+        levels,
+        rate: Rate::Keep(keep),
+    };
+    let mut p = prepare(r, &opts, Mode::Lossy)?;
+    if !weighted {
+        p.gains.iter_mut().for_each(|g| *g = 1.0);
+        p.weights.iter_mut().for_each(|w| *w = 1.0);
+    }
+    let mut w = p.weighted_details();
+    let t = quantize::keep_threshold(&mut w, keep) as f32;
+    let plan = &p.plan;
+    let spec = plan.pyr.spec.clone();
+    let c = r.channels;
+    let mut planes = Vec::new();
+    for (ch, plane) in p.coeffs.iter().enumerate() {
+        let mut plane = plane.clone();
+        for (j, b) in plan.bands.iter().enumerate() {
+            if b.level == 0 {
+                continue;
+            }
+            let wgt = (p.gains[j] * p.weights[ch]) as f32;
+            layout::rows(&plan.pyr.shape, &b.ranges, |off, run, _| {
+                for x in &mut plane[off..off + run] {
+                    if x.abs() * wgt < t {
+                        *x = 0.0;
+                    }
+                }
+            });
+        }
+        let mut a = Array::from_shape_vec(&r.dims, plane)?;
+        tensor::synthesize(&mut a, &plan.pyr)?;
+        planes.push(a.into_data());
+    }
+    let _ = spec;
+    if p.header.colour == Colour::YCoCg {
+        let n = r.positions();
+        for i in 0..n {
+            let (y, co, cg) = (planes[0][i], planes[1][i], planes[2][i]);
+            let t = y - cg * 0.5;
+            let g = cg + t;
+            let b = t - co * 0.5;
+            planes[0][i] = b + co;
+            planes[1][i] = g;
+            planes[2][i] = b;
+        }
+    }
+    let n = r.positions();
+    let v: Vec<f64> = (0..n * c).map(|i| planes[i % c][i / c] as f64).collect();
+    let out = Raster::new(
+        r.dims.clone(),
+        c,
+        Samples::from_f64(&v, r.sample_type()),
+        r.kind,
+    )?;
+    let cmp = crate::metrics::compare(r, &out, &Default::default())?;
+    Ok(cmp.psnr.unwrap_or(f64::INFINITY))
+}
+
+/// Kind names for the CLI.
+pub fn kind_name(k: DataKind) -> &'static str {
+    match k {
+        DataKind::Image => "image",
+        DataKind::Volume => "volume",
+        DataKind::Heightmap => "heightmap",
+        DataKind::Sequence => "sequence",
+    }
+}

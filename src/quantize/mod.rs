@@ -1,0 +1,176 @@
+//! Quantization of pyramid coefficients (notes §9.3.2, §9.7.3).
+//!
+//! The bases are not orthonormal, so a unit of error in a coefficient costs a different
+//! squared error in the picture in every band. The *synthesis gain* of a band is the
+//! mean squared norm of its synthesis basis functions,
+//! `G²_b = (1/|b|) Σ_{k∈b} ‖S e_k‖²`, a product over axes of 1-D gains computed here
+//! numerically from the schemes' own synthesis operators (impulse through `P`, `Q`
+//! level by level). Uniform noise of step `Δ_b` in band `b` adds `G²_b Δ_b²/12` per
+//! coefficient to the squared error, so the steps `Δ_b = Δ / G_b` spend the error
+//! evenly ([`band_steps`]).
+//!
+//! The quantizer is a dead-zone uniform quantizer: `q = sign(c)·⌊|c|/Δ_b + ρ⌋`, and
+//! the decoder returns `sign(q)·(|q| + δ)·Δ_b` (`δ` recorded in the file). The
+//! coarsest block uses plain rounding (`ρ = ½`, `δ = 0`).
+
+use crate::scheme::{Boundary, Scheme, TwoScale};
+use crate::tensor::{Pyramid, Subband};
+
+/// Encoder rounding offset of detail bands (dead zone `|c| < (1 − ρ)Δ`).
+pub const RHO: f64 = 0.34;
+/// Reconstruction offset of detail bands (written into the file).
+pub const DELTA: f64 = 0.12;
+
+/// Mean squared norm of the 1-D synthesis functions of the coefficients that sit at
+/// `start..end` of the packed lane of level `level` (0 = the full-length lane, i.e. a
+/// coefficient of the finest packed lane), synthesized through the levels below.
+/// `lengths` = the axis' lane lengths by level (`lengths[0]` = full length).
+pub fn gain_1d(
+    scheme: Scheme,
+    boundary: Boundary,
+    lengths: &[usize],
+    level: usize,
+    high: bool,
+) -> f64 {
+    // the coefficient lives in the packed lane of length lengths[level-1] (detail, or
+    // coarse block after `level` steps); level 0 means an untransformed axis
+    if level == 0 {
+        return 1.0;
+    }
+    let fine_len = lengths[level - 1];
+    let coarse_len = lengths[level];
+    let (start, end) = if high {
+        (coarse_len, fine_len)
+    } else {
+        (0, coarse_len)
+    };
+    let count = end - start;
+    if count == 0 {
+        return 1.0;
+    }
+    let ops: Vec<TwoScale> = (0..level)
+        .map(|l| TwoScale::new(scheme, boundary, lengths[l]))
+        .collect();
+    // sample at most 64 coefficients evenly
+    let picks = count.min(64);
+    let mut total = 0.0;
+    for t in 0..picks {
+        let k = start + t * count / picks;
+        let mut lane = vec![0.0f64; fine_len];
+        lane[k] = 1.0;
+        for l in (0..level).rev() {
+            let mut fine = vec![0.0f64; lengths[l]];
+            let mut packed = vec![0.0f64; lengths[l]];
+            packed[..lane.len()].copy_from_slice(&lane);
+            ops[l].reconstruct(&packed, 1, &mut fine);
+            lane = fine;
+        }
+        total += lane.iter().map(|v| v * v).sum::<f64>();
+    }
+    total / picks as f64
+}
+
+/// The synthesis gain `G_b` (square root of the mean squared norm) of every band of
+/// `pyr`, in [`Pyramid::subbands`] order.
+pub fn band_gains(pyr: &Pyramid, bands: &[Subband]) -> Vec<f64> {
+    let (scheme, boundary) = (pyr.spec.scheme, pyr.spec.boundary);
+    let mut cache = std::collections::HashMap::new();
+    bands
+        .iter()
+        .map(|b| {
+            let mut g2 = 1.0;
+            for (i, _) in pyr.spec.axes.iter().enumerate() {
+                let al = pyr.axis_levels(i);
+                // level of this coefficient along axis i and whether it is high-pass
+                let (lvl, high) = if b.level == 0 || b.level > al {
+                    (al, false)
+                } else {
+                    (b.level, b.high[i])
+                };
+                // for a low-pass coefficient at level l the packed lane is lengths[l-1]
+                // with the coefficient in the coarse part
+                let key = (i, lvl, high);
+                let g = *cache
+                    .entry(key)
+                    .or_insert_with(|| gain_1d(scheme, boundary, &pyr.lengths[i], lvl, high));
+                g2 *= g;
+            }
+            g2.sqrt()
+        })
+        .collect()
+}
+
+/// Dead-zone quantization of one value.
+#[inline(always)]
+pub fn quantize(c: f64, step: f64, rho: f64) -> i64 {
+    let a = (c.abs() / step + rho).floor();
+    let a = if a.is_finite() { a.min(9.0e15) } else { 0.0 };
+    if c < 0.0 {
+        -(a as i64)
+    } else {
+        a as i64
+    }
+}
+
+/// Reconstruction of one index.
+#[inline(always)]
+pub fn dequantize(q: i64, step: f64, delta: f64) -> f64 {
+    if q == 0 {
+        0.0
+    } else if q < 0 {
+        (q as f64 - delta) * step
+    } else {
+        (q as f64 + delta) * step
+    }
+}
+
+/// The threshold `T` such that `keep` percent of the weighted detail magnitudes
+/// `|c|·G_b` are at least `T` (the notes' keep-P% protocol, Figure 9.19).
+pub fn keep_threshold(weighted: &mut [f32], keep: f64) -> f64 {
+    if weighted.is_empty() {
+        return 1.0;
+    }
+    let n = weighted.len();
+    let k = ((keep / 100.0) * n as f64).round() as usize;
+    if k == 0 {
+        return f64::INFINITY;
+    }
+    if k >= n {
+        return 0.0;
+    }
+    let idx = n - k;
+    let (_, t, _) = weighted.select_nth_unstable_by(idx, |a, b| a.total_cmp(b));
+    (*t as f64).max(f64::MIN_POSITIVE)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn haar_gains_follow_the_averaging_normalisation() {
+        // Haar analysis averages: C = (a+b)/2, D = (a−b)/2; synthesis a = C + D,
+        // b = C − D: every synthesis function has squared norm 2 at one level.
+        let lengths = [8, 4, 2];
+        let g = gain_1d(Scheme::Haar, Boundary::Interpolating, &lengths, 1, true);
+        let g2 = gain_1d(Scheme::Haar, Boundary::Interpolating, &lengths, 2, false);
+        assert!(g > 0.0 && g2 > g, "{g} {g2}");
+    }
+
+    #[test]
+    fn quantizer_inverts_within_a_step() {
+        for &c in &[-10.3, -0.2, 0.0, 0.49, 3.7, 100.0] {
+            let q = quantize(c, 0.5, RHO);
+            let r = dequantize(q, 0.5, DELTA);
+            assert!((r - c).abs() <= 0.5, "{c} {q} {r}");
+        }
+    }
+
+    #[test]
+    fn keep_threshold_keeps_the_requested_share() {
+        let mut v: Vec<f32> = (0..1000).map(|i| i as f32).collect();
+        let t = keep_threshold(&mut v, 10.0);
+        let kept = (0..1000).filter(|&i| i as f64 >= t).count();
+        assert_eq!(kept, 100);
+    }
+}

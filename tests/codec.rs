@@ -1,0 +1,647 @@
+//! The codec end to end: every mode on every sample type and odd shapes, lossless
+//! bit-exactness, the max-error guarantee, progressive and truncated decoding, damaged
+//! files, the test vectors in formats/vectors/, and a few corpus files.
+
+use mra::codec::{self, DecodeOptions, EncodeOptions, Rate};
+use mra::format::sha256::{hex, sha256};
+use mra::io::{DataKind, Raster, SampleType, Samples};
+use mra::scheme::{Boundary, Scheme};
+use mra::ErrorKind;
+use proptest::prelude::*;
+use std::path::PathBuf;
+
+const TYPES: [SampleType; 9] = [
+    SampleType::U8,
+    SampleType::I8,
+    SampleType::U16,
+    SampleType::I16,
+    SampleType::U32,
+    SampleType::I32,
+    SampleType::F16,
+    SampleType::F32,
+    SampleType::F64,
+];
+
+/// Smooth field plus a little texture, scaled into the type's useful range.
+fn field(dims: &[usize], channels: usize, ty: SampleType, seed: u64) -> Raster {
+    let n: usize = dims.iter().product::<usize>() * channels;
+    let w = *dims.last().unwrap();
+    let h = if dims.len() > 1 {
+        dims[dims.len() - 2]
+    } else {
+        1
+    };
+    let (lo, hi) = match ty {
+        SampleType::U8 => (0.0, 255.0),
+        SampleType::I8 => (-128.0, 127.0),
+        SampleType::U16 => (0.0, 4000.0),
+        SampleType::I16 => (-1000.0, 1500.0),
+        SampleType::U32 | SampleType::I32 => (0.0, 1.0e5),
+        _ => (-3.0, 8.0),
+    };
+    let mut x = seed.wrapping_mul(0x9E3779B97F4A7C15) | 1;
+    let v: Vec<f64> = (0..n)
+        .map(|i| {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            let p = i / channels;
+            let (px, py, pz) = ((p % w) as f64, ((p / w) % h) as f64, (p / (w * h)) as f64);
+            let s = 0.5
+                + 0.35 * (px * 0.21 + (i % channels) as f64).sin() * (py * 0.17 + pz * 0.3).cos();
+            let t = s + 0.05 * ((x >> 40) as f64 / (1u64 << 24) as f64 - 0.5);
+            lo + (hi - lo) * t.clamp(0.0, 1.0)
+        })
+        .collect();
+    let kind = if dims.len() == 3 {
+        DataKind::Volume
+    } else {
+        DataKind::Image
+    };
+    Raster::new(dims.to_vec(), channels, Samples::from_f64(&v, ty), kind).unwrap()
+}
+
+fn opts(rate: Rate) -> EncodeOptions {
+    EncodeOptions {
+        rate,
+        ..Default::default()
+    }
+}
+
+fn max_err(a: &Raster, b: &Raster) -> f64 {
+    (0..a.samples.len())
+        .map(|i| (a.samples.get_f64(i) - b.samples.get_f64(i)).abs())
+        .fold(0.0, f64::max)
+}
+
+fn round_trip(r: &Raster, o: &EncodeOptions) -> Raster {
+    let bytes = codec::encode(r, o).unwrap();
+    codec::decode(&bytes, &DecodeOptions::default())
+        .unwrap()
+        .raster
+}
+
+const SHAPES: [(&[usize], usize); 6] = [
+    (&[1, 1], 1),
+    (&[1, 17], 1),
+    (&[13, 1], 2),
+    (&[9, 14], 3),
+    (&[5, 6, 7], 1),
+    (&[23], 4),
+];
+
+#[test]
+fn every_lossy_mode_round_trips_every_type_and_shape() {
+    for (k, &ty) in TYPES.iter().enumerate() {
+        for (s, &(dims, ch)) in SHAPES.iter().enumerate() {
+            let r = field(dims, ch, ty, (k * 10 + s) as u64);
+            let (lo, hi) = r.samples.min_max().unwrap();
+            let range = (hi - lo).max(1e-9);
+            for rate in [
+                Rate::Keep(20.0),
+                Rate::Threshold(range * 0.01),
+                Rate::Quality(60.0),
+            ] {
+                for scheme in Scheme::ALL {
+                    let o = EncodeOptions {
+                        scheme,
+                        boundary: Boundary::Symmetric,
+                        levels: 4,
+                        rate,
+                    };
+                    let d = round_trip(&r, &o);
+                    assert_eq!(d.dims, r.dims);
+                    assert_eq!(d.channels, r.channels);
+                    assert_eq!(d.sample_type(), ty);
+                    assert_eq!(d.kind, r.kind);
+                    let e = max_err(&r, &d);
+                    assert!(
+                        e <= range * 0.6 + 1.0,
+                        "{ty} {dims:?} {rate:?} {scheme}: error {e} of range {range}"
+                    );
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn quality_trades_size_for_error() {
+    let r = field(&[40, 56], 3, SampleType::U8, 3);
+    let mut last = (0usize, f64::INFINITY);
+    for q in [20.0, 50.0, 80.0] {
+        let bytes = codec::encode(&r, &opts(Rate::Quality(q))).unwrap();
+        let d = codec::decode(&bytes, &DecodeOptions::default())
+            .unwrap()
+            .raster;
+        let c = mra::metrics::compare(&r, &d, &Default::default()).unwrap();
+        let mse = c.mse;
+        assert!(
+            bytes.len() > last.0 && mse < last.1,
+            "q {q}: {} bytes, mse {mse}",
+            bytes.len()
+        );
+        last = (bytes.len(), mse);
+    }
+}
+
+#[test]
+fn lossless_is_bit_exact_for_every_type_and_shape_including_nan() {
+    for (k, &ty) in TYPES.iter().enumerate() {
+        for (s, &(dims, ch)) in SHAPES.iter().enumerate() {
+            let mut r = field(dims, ch, ty, (k * 7 + s) as u64);
+            if let Samples::F32(v) = &mut r.samples {
+                v[0] = f32::NAN;
+                if v.len() > 2 {
+                    v[1] = f32::NEG_INFINITY;
+                    v[2] = -0.0;
+                }
+            }
+            let d = round_trip(&r, &opts(Rate::Lossless));
+            let a = mra::io::bytes::encode(&r.samples, false);
+            let b = mra::io::bytes::encode(&d.samples, false);
+            assert_eq!(a, b, "{ty} {dims:?}x{ch}");
+        }
+    }
+}
+
+#[test]
+fn extreme_integer_values_survive_lossless() {
+    let v: Vec<i32> = vec![
+        i32::MIN,
+        i32::MAX,
+        0,
+        -1,
+        1,
+        i32::MAX,
+        i32::MIN,
+        7,
+        9,
+        -3,
+        5,
+        6,
+    ];
+    let r = Raster::new(vec![3, 4], 1, Samples::I32(v.clone()), DataKind::Image).unwrap();
+    let d = round_trip(&r, &opts(Rate::Lossless));
+    assert_eq!(d.samples, Samples::I32(v));
+    let f: Vec<f64> = vec![f64::MAX, f64::MIN, f64::MIN_POSITIVE, 0.0, -0.0, 1e300];
+    let r = Raster::new(vec![6], 1, Samples::F64(f.clone()), DataKind::Image).unwrap();
+    let d = round_trip(&r, &opts(Rate::Lossless));
+    assert_eq!(d.samples, Samples::F64(f));
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(24))]
+    #[test]
+    fn max_error_is_never_exceeded(
+        h in 1usize..20, w in 1usize..20, ch in 1usize..4, t in 0usize..9,
+        e in prop_oneof![Just(0.5f64), Just(1.0), Just(3.0), Just(10.0), Just(0.01)],
+        seed in 0u64..1000, scheme in 0usize..3,
+    ) {
+        let ty = TYPES[t];
+        let r = field(&[h, w], ch, ty, seed);
+        let o = EncodeOptions { scheme: Scheme::ALL[scheme], boundary: Boundary::Symmetric, levels: 4, rate: Rate::MaxError(e) };
+        let d = round_trip(&r, &o);
+        let m = max_err(&r, &d);
+        prop_assert!(m <= e, "{ty} {h}x{w}x{ch} e {e}: {m}");
+    }
+}
+
+#[test]
+fn max_error_holds_on_a_3d_volume() {
+    let r = field(&[9, 11, 13], 1, SampleType::I16, 5);
+    for e in [1.0, 4.0, 25.0] {
+        let d = round_trip(&r, &opts(Rate::MaxError(e)));
+        assert!(max_err(&r, &d) <= e);
+    }
+}
+
+#[test]
+fn psnr_and_bpp_targets_are_met() {
+    let r = field(&[64, 96], 3, SampleType::U8, 11);
+    for target in [30.0, 38.0] {
+        let bytes = codec::encode(&r, &opts(Rate::Psnr(target))).unwrap();
+        let d = codec::decode(&bytes, &DecodeOptions::default())
+            .unwrap()
+            .raster;
+        let p = mra::metrics::compare(&r, &d, &Default::default())
+            .unwrap()
+            .psnr
+            .unwrap();
+        assert!(p >= target && p < target + 0.5, "target {target}: {p}");
+    }
+    let r = field(&[128, 160], 3, SampleType::U8, 12);
+    for b in [1.0, 3.0] {
+        let bytes = codec::encode(&r, &opts(Rate::Bpp(b))).unwrap();
+        let got = bytes.len() as f64 * 8.0 / (128.0 * 160.0);
+        assert!(got <= b && got > b * 0.9, "target {b}: {got}");
+    }
+}
+
+#[test]
+fn progressive_levels_halve_the_size_and_approximate_the_picture() {
+    let r = field(&[33, 50], 1, SampleType::U8, 2);
+    for rate in [Rate::Quality(70.0), Rate::Lossless] {
+        let bytes = codec::encode(&r, &opts(rate)).unwrap();
+        for k in 1..4 {
+            let d = codec::decode(
+                &bytes,
+                &DecodeOptions {
+                    level: k,
+                    allow_truncated: false,
+                },
+            )
+            .unwrap()
+            .raster;
+            let mut want = vec![33usize, 50];
+            for _ in 0..k {
+                want = want.iter().map(|n| n.div_ceil(2)).collect();
+            }
+            assert_eq!(d.dims, want, "{rate:?} level {k}");
+            // the coarse picture is a local mean of the source
+            let (lo, hi) = r.samples.min_max().unwrap();
+            let (a, b) = d.samples.min_max().unwrap();
+            assert!(a >= lo - 1.0 && b <= hi + 1.0);
+        }
+    }
+}
+
+fn sample_file() -> (Raster, Vec<u8>) {
+    let r = field(&[21, 30], 3, SampleType::U8, 8);
+    let bytes = codec::encode(&r, &opts(Rate::Quality(60.0))).unwrap();
+    (r, bytes)
+}
+
+#[test]
+fn truncated_files_fail_without_the_flag_and_decode_with_it() {
+    let (r, bytes) = sample_file();
+    let info = codec::info(&bytes).unwrap();
+    for cut in 0..bytes.len() {
+        let part = &bytes[..cut];
+        let e = codec::decode(part, &DecodeOptions::default()).unwrap_err();
+        assert!(matches!(e.kind(), ErrorKind::Format), "cut {cut}: {e}");
+        let ok = codec::decode(
+            part,
+            &DecodeOptions {
+                level: 0,
+                allow_truncated: true,
+            },
+        );
+        // with the flag every cut after the HEAD chunk decodes to the full shape
+        let head_end = info.chunks[0].offset + info.chunks[0].bytes;
+        if cut as u64 >= head_end {
+            let d = ok.unwrap();
+            assert_eq!(d.raster.dims, r.dims);
+            assert!(!d.complete);
+        }
+    }
+    // quality grows with the chunks kept
+    let ends: Vec<u64> = info.chunks.iter().map(|c| c.offset + c.bytes).collect();
+    let errs: Vec<f64> = ends[1..ends.len() - 1]
+        .iter()
+        .step_by(9)
+        .map(|&e| {
+            let d = codec::decode(
+                &bytes[..e as usize],
+                &DecodeOptions {
+                    level: 0,
+                    allow_truncated: true,
+                },
+            )
+            .unwrap();
+            mra::metrics::compare(&r, &d.raster, &Default::default())
+                .unwrap()
+                .mse
+        })
+        .collect();
+    assert!(errs.first() > errs.last(), "{errs:?}");
+}
+
+#[test]
+fn flipped_bits_are_reported_with_the_chunk_name() {
+    let (_, bytes) = sample_file();
+    let info = codec::info(&bytes).unwrap();
+    for c in &info.chunks {
+        let mut b = bytes.clone();
+        let at = (c.offset + 8) as usize; // first payload byte (or CRC for empty MEND)
+        b[at] ^= 0x10;
+        let e = codec::decode(&b, &DecodeOptions::default())
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains(&c.kind) && e.contains("CRC"), "{e}");
+    }
+}
+
+fn head_of(bytes: &[u8]) -> (usize, usize) {
+    let n = u32::from_le_bytes(bytes[8..12].try_into().unwrap()) as usize;
+    (16, 16 + n)
+}
+
+fn recrc(bytes: &mut [u8]) {
+    let (s, e) = head_of(bytes);
+    let crc = mra::format::crc::crc32c(&bytes[12..e]);
+    bytes[e..e + 4].copy_from_slice(&crc.to_le_bytes());
+    let _ = s;
+}
+
+/// HEAD of a 2-D file: 5 bytes, 2 extents, channels, 5 codes, 5 f64, then the tile.
+fn set_tile(b: &mut [u8], h: u32, w: u32) {
+    let t = 16 + 5 + 8 + 2 + 5 + 40;
+    b[t..t + 4].copy_from_slice(&h.to_le_bytes());
+    b[t + 4..t + 8].copy_from_slice(&w.to_le_bytes());
+}
+
+#[test]
+fn absurd_dimensions_wrong_magic_and_version_are_rejected() {
+    let (_, bytes) = sample_file();
+    // dims: byte 5 of HEAD = ndims, then u32 extents
+    let mut b = bytes.clone();
+    b[16 + 5..16 + 9].copy_from_slice(&u32::MAX.to_le_bytes());
+    b[16 + 9..16 + 13].copy_from_slice(&u32::MAX.to_le_bytes());
+    set_tile(&mut b, u32::MAX, u32::MAX);
+    recrc(&mut b);
+    let e = codec::decode(&b, &DecodeOptions::default()).unwrap_err();
+    assert_eq!(e.kind(), ErrorKind::LimitsExceeded, "{e}");
+    // modest dims, but far more than the file could code
+    let mut b = bytes.clone();
+    b[16 + 5..16 + 9].copy_from_slice(&60000u32.to_le_bytes());
+    b[16 + 9..16 + 13].copy_from_slice(&60000u32.to_le_bytes());
+    set_tile(&mut b, 60000, 60000);
+    recrc(&mut b);
+    let e = codec::decode(&b, &DecodeOptions::default()).unwrap_err();
+    assert_eq!(e.kind(), ErrorKind::LimitsExceeded, "{e}");
+    let mut b = bytes.clone();
+    b[1] = b'X';
+    let e = codec::decode(&b, &DecodeOptions::default()).unwrap_err();
+    assert!(e.to_string().contains("signature"), "{e}");
+    let mut b = bytes.clone();
+    b[16] = 2;
+    recrc(&mut b);
+    let e = codec::decode(&b, &DecodeOptions::default()).unwrap_err();
+    assert_eq!(e.kind(), ErrorKind::Unsupported, "{e}");
+    assert!(e.to_string().contains("version"));
+    // a future minor version still decodes
+    let mut b = bytes.clone();
+    b[17] = 9;
+    recrc(&mut b);
+    assert!(codec::decode(&b, &DecodeOptions::default()).is_ok());
+}
+
+#[test]
+fn unknown_ancillary_chunks_are_skipped_and_critical_ones_rejected() {
+    let (r, bytes) = sample_file();
+    let (_, e) = head_of(&bytes);
+    let at = e + 4;
+    for (kind, ok) in [(b"zzZZ", true), (b"ZZZZ", false)] {
+        let mut b = bytes[..at].to_vec();
+        mra::format::put_chunk(&mut b, kind, b"future");
+        b.extend_from_slice(&bytes[at..]);
+        let d = codec::decode(&b, &DecodeOptions::default());
+        if ok {
+            assert_eq!(d.unwrap().raster.dims, r.dims);
+        } else {
+            assert_eq!(d.unwrap_err().kind(), ErrorKind::Unsupported);
+        }
+    }
+}
+
+#[test]
+fn random_damage_never_panics() {
+    let (_, bytes) = sample_file();
+    let mut x = 0x1234_5678_9abc_def0u64;
+    for _ in 0..300 {
+        x ^= x << 13;
+        x ^= x >> 7;
+        x ^= x << 17;
+        let mut b = bytes.clone();
+        for k in 0..(1 + x % 4) {
+            let i = ((x >> (8 * k)) as usize) % b.len();
+            b[i] = (x >> 32) as u8;
+        }
+        // re-seal every chunk's CRC so that the damage reaches the decoders
+        let mut pos = 8;
+        while pos + 12 <= b.len() {
+            let n = u32::from_le_bytes(b[pos..pos + 4].try_into().unwrap()) as usize;
+            if pos + 12 + n > b.len() {
+                break;
+            }
+            let crc = mra::format::crc::crc32c(&b[pos + 4..pos + 8 + n]);
+            b[pos + 8 + n..pos + 12 + n].copy_from_slice(&crc.to_le_bytes());
+            pos += 12 + n;
+        }
+        let _ = codec::decode(
+            &b,
+            &DecodeOptions {
+                level: (x % 3) as usize,
+                allow_truncated: x % 2 == 0,
+            },
+        );
+        let _ = codec::info(&b);
+    }
+}
+
+#[test]
+fn metadata_survives() {
+    let mut r = field(&[6, 7, 8], 1, SampleType::I16, 1);
+    r.meta.spacing = Some(vec![3.0, 1.5, 1.5]);
+    r.meta.origin = Some(vec![-1.0, 2.0, 3.5]);
+    r.meta.units = Some("mm".into());
+    r.meta.space = Some("left-posterior-superior".into());
+    r.meta.extra.insert("dicom.Modality".into(), "CT".into());
+    let d = round_trip(&r, &opts(Rate::Lossless));
+    assert_eq!(d.meta, r.meta);
+}
+
+#[test]
+fn test_vectors_decode_to_their_digests() {
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("formats/vectors");
+    let manifest: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("manifest.json")).unwrap()).unwrap();
+    let list = manifest.as_array().unwrap();
+    assert!(list.len() >= 5);
+    for v in list {
+        let bytes = std::fs::read(dir.join(v["file"].as_str().unwrap())).unwrap();
+        let level = v["level"].as_u64().unwrap() as usize;
+        let d = codec::decode(
+            &bytes,
+            &DecodeOptions {
+                level,
+                allow_truncated: false,
+            },
+        )
+        .unwrap()
+        .raster;
+        let dims: Vec<usize> = v["dims"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|x| x.as_u64().unwrap() as usize)
+            .collect();
+        assert_eq!(d.dims, dims);
+        assert_eq!(d.sample_type().name(), v["sample_type"].as_str().unwrap());
+        let raw = mra::io::bytes::encode(&d.samples, false);
+        assert_eq!(
+            hex(&sha256(&raw)),
+            v["sha256"].as_str().unwrap(),
+            "{}",
+            v["name"]
+        );
+    }
+}
+
+fn corpus() -> Option<PathBuf> {
+    let p = std::env::var("MRA_CORPUS")
+        .map(PathBuf::from)
+        .unwrap_or_else(|_| {
+            PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/corpus"))
+        });
+    if p.is_dir() {
+        Some(p)
+    } else {
+        eprintln!("skipping: corpus not found at {}", p.display());
+        None
+    }
+}
+
+#[test]
+fn corpus_lossless_is_bit_exact_on_images_volumes_and_heightmaps() {
+    let Some(c) = corpus() else { return };
+    for f in [
+        "images/kodak/kodim01.png",
+        "images/highbit/artificial_gray16.png",
+        "volumes/ct_pancreas_256.nrrd",
+        "terrain/N44W072.hgt",
+        "terrain/mt_st_helens_30m_f32.tif",
+    ] {
+        let path = c.join(f);
+        if !path.exists() {
+            eprintln!("skipping {f}: not in corpus");
+            continue;
+        }
+        let r = mra::io::read(&path).unwrap();
+        let bytes = codec::encode(&r, &opts(Rate::Lossless)).unwrap();
+        let d = codec::decode(&bytes, &DecodeOptions::default())
+            .unwrap()
+            .raster;
+        assert!(d.samples == r.samples, "{f} not bit-exact");
+        let raw = r.samples.len() * r.sample_type().size();
+        eprintln!(
+            "{f}: lossless {} bytes = {:.3} of raw",
+            bytes.len(),
+            bytes.len() as f64 / raw as f64
+        );
+    }
+}
+
+#[test]
+fn corpus_max_error_and_psnr_targets() {
+    let Some(c) = corpus() else { return };
+    let path = c.join("terrain/N44W072.hgt");
+    if path.exists() {
+        let r = mra::io::read(&path).unwrap();
+        for e in [1.0, 5.0] {
+            let d = round_trip(&r, &opts(Rate::MaxError(e)));
+            assert!(max_err(&r, &d) <= e);
+        }
+    }
+    let path = c.join("images/kodak/kodim23.png");
+    if path.exists() {
+        let r = mra::io::read(&path).unwrap();
+        for target in [32.0, 40.0] {
+            let bytes = codec::encode(&r, &opts(Rate::Psnr(target))).unwrap();
+            let d = codec::decode(&bytes, &DecodeOptions::default())
+                .unwrap()
+                .raster;
+            let p = mra::metrics::compare(&r, &d, &Default::default())
+                .unwrap()
+                .psnr
+                .unwrap();
+            assert!(p >= target && p <= target + 0.1, "target {target}: {p}");
+        }
+        let b = 1.0;
+        let bytes = codec::encode(&r, &opts(Rate::Bpp(b))).unwrap();
+        let got = bytes.len() as f64 * 8.0 / r.positions() as f64;
+        assert!(got <= b && got >= b * 0.97, "bpp {got}");
+    }
+}
+
+#[test]
+fn cli_encode_decode_info_and_one_line_errors() {
+    let exe = env!("CARGO_BIN_EXE_mra");
+    let dir = std::env::temp_dir().join(format!("mra_codec_cli_{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let src = dir.join("a.pgm");
+    mra::io::write(&src, &field(&[37, 45], 1, SampleType::U8, 4)).unwrap();
+    let mra_file = dir.join("a.mra");
+    let run =
+        |args: &[&std::ffi::OsStr]| std::process::Command::new(exe).args(args).output().unwrap();
+    let o = run(&[
+        "encode".as_ref(),
+        src.as_os_str(),
+        "-o".as_ref(),
+        mra_file.as_os_str(),
+        "--max-error".as_ref(),
+        "2".as_ref(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let out = dir.join("b.pgm");
+    let o = run(&[
+        "decode".as_ref(),
+        mra_file.as_os_str(),
+        "-o".as_ref(),
+        out.as_os_str(),
+    ]);
+    assert!(o.status.success());
+    let a = mra::io::read(&src).unwrap();
+    let b = mra::io::read(&out).unwrap();
+    assert!(max_err(&a, &b) <= 2.0);
+    let small = dir.join("c.pgm");
+    let o = run(&[
+        "decode".as_ref(),
+        mra_file.as_os_str(),
+        "-o".as_ref(),
+        small.as_os_str(),
+        "--level".as_ref(),
+        "2".as_ref(),
+    ]);
+    assert!(o.status.success());
+    assert_eq!(mra::io::read(&small).unwrap().dims, vec![10, 12]);
+    let o = run(&["info".as_ref(), mra_file.as_os_str(), "--json".as_ref()]);
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(j["mode"], "maxerror");
+    // damaged and truncated inputs: one line on stderr, exit 2, no output file
+    let bytes = std::fs::read(&mra_file).unwrap();
+    let bad = dir.join("bad.mra");
+    std::fs::write(&bad, &bytes[..bytes.len() / 2]).unwrap();
+    let never = dir.join("never.pgm");
+    for args in [
+        vec![
+            "decode".as_ref(),
+            bad.as_os_str(),
+            "-o".as_ref(),
+            never.as_os_str(),
+        ],
+        vec![
+            "decode".as_ref(),
+            src.as_os_str(),
+            "-o".as_ref(),
+            never.as_os_str(),
+        ],
+        vec!["info".as_ref(), src.as_os_str()],
+    ] {
+        let o = run(&args);
+        assert_eq!(o.status.code(), Some(2));
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+        assert!(!never.exists());
+    }
+    let o = run(&[
+        "decode".as_ref(),
+        bad.as_os_str(),
+        "-o".as_ref(),
+        never.as_os_str(),
+        "--allow-truncated".as_ref(),
+    ]);
+    assert!(o.status.success());
+    std::fs::remove_dir_all(&dir).ok();
+}
