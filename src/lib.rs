@@ -31,6 +31,7 @@ pub mod metrics;
 pub mod points;
 pub mod progress;
 pub mod scheme;
+pub mod solid;
 pub mod surface;
 pub mod tensor;
 

@@ -11,6 +11,7 @@ pub mod io_cmds;
 pub mod mesh;
 pub mod points;
 pub mod scheme;
+pub mod solid;
 pub mod subdivide;
 pub mod surface;
 
@@ -52,6 +53,12 @@ pub enum Command {
     /// Curve subdivision schemes: eigen-analysis of a mask.
     #[command(subcommand)]
     Scheme(scheme::Command),
+    /// Solid modelling: implicit models, CSG, ray casting, polygonisation, voxelisation.
+    #[command(subcommand)]
+    Solid(solid::Command),
+    /// Volumes: isosurfaces of CT/MR data.
+    #[command(subcommand)]
+    Volume(solid::VolumeCommand),
 }
 
 /// A failure on the command line: one line on stderr, exit code 2.
@@ -118,6 +125,8 @@ pub fn main() -> i32 {
         Command::InfoFile(a) => io_cmds::info_file(a),
         Command::Convert(a) => io_cmds::convert(a),
         Command::Scheme(c) => scheme::run(c),
+        Command::Solid(c) => solid::run(c),
+        Command::Volume(c) => solid::run_volume(c),
     };
     match result {
         Ok(()) => 0,
