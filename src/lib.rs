@@ -37,6 +37,7 @@ pub mod progress;
 pub mod quantize;
 pub mod scheme;
 pub mod style;
+pub mod solid;
 pub mod surface;
 pub mod tensor;
 pub mod terrain;

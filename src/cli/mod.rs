@@ -12,6 +12,7 @@ pub mod io_cmds;
 pub mod mesh;
 pub mod points;
 pub mod scheme;
+pub mod solid;
 pub mod subdivide;
 pub mod surface;
 pub mod terrain;
@@ -74,6 +75,12 @@ pub enum Command {
     Decode(codec::DecodeArgs),
     /// Show an .mra file's header and bytes per level.
     Info(codec::InfoArgs),
+    /// Solid modelling: implicit models, CSG, ray casting, polygonisation, voxelisation.
+    #[command(subcommand)]
+    Solid(solid::Command),
+    /// Volumes: isosurfaces of CT/MR data.
+    #[command(subcommand)]
+    Volume(solid::VolumeCommand),
 }
 
 /// A failure on the command line: one line on stderr, exit code 2.
@@ -149,6 +156,8 @@ pub fn main() -> i32 {
         Command::Encode(a) => codec::encode(a),
         Command::Decode(a) => codec::decode(a),
         Command::Info(a) => codec::info(a),
+        Command::Solid(c) => solid::run(c),
+        Command::Volume(c) => solid::run_volume(c),
     };
     match result {
         Ok(()) => 0,
