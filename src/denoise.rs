@@ -165,7 +165,7 @@ pub fn denoise(a: &mut Array<f64>, axes: &[usize], o: &DenoiseOptions) -> Result
     let bands = pyr.subbands();
     let shape = a.shape().to_vec();
     // noise gains per band
-    let mut noise = Array::from_shape_vec(&shape, white_noise(a.len(), 0x6E6F_6973_65))?;
+    let mut noise = Array::from_shape_vec(&shape, white_noise(a.len(), 0x006E_6F69_7365))?;
     tensor::analyze(&mut noise, &spec)?;
     let offsets: Vec<Vec<usize>> = bands
         .iter()

@@ -113,7 +113,9 @@ pub struct RenderArgs {
 
 #[derive(Args, Debug)]
 #[command(after_help = "Example:
-  mra transfer --from ../shared/corpus/images/kodak/kodim13.png --to blurred.png --levels 2 -o out.png")]
+  mra generate terrain --size 257 --seed 3 -o smooth.png
+  mra generate terrain --size 257 --seed 9 -o rough.png
+  mra transfer --from rough.png --to smooth.png --levels 2 -o out.png")]
 pub struct TransferArgs {
     /// The example whose fine details are transferred.
     #[arg(long)]
