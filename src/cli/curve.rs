@@ -11,6 +11,9 @@ use std::path::{Path, PathBuf};
 
 #[derive(Subcommand, Debug)]
 pub enum Command {
+    /// Curve style transfer (§9.7.1): a stroke's details, in its local tangent/normal
+    /// frame, added to a new base curve.
+    Style(super::terrain::StyleArgs),
     /// Evaluate points or derivatives: one point per line (parameter first with --with-u).
     #[command(after_help = "Examples:\n  \
         mra curve eval --kind bezier --at 0.5 corpus/curves/example24.csv        # 3.5,1.5 (Example 2.4)\n  \
@@ -335,6 +338,7 @@ pub fn run(c: Command) -> CliResult {
         Command::Elevate(a) => elevate(a),
         Command::InsertKnot(a) => insert_knot(a),
         Command::Plot(a) => plot_cmd(a),
+        Command::Style(a) => super::terrain::style(a),
     }
 }
 

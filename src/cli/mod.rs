@@ -63,8 +63,7 @@ pub enum Command {
     Transfer(terrain::TransferArgs),
     /// Remove noise by thresholded details (§9.7.2): curves, images, volumes, heightmaps.
     Denoise(terrain::DenoiseArgs),
-    /// Curve style transfer (§9.7.1): a stroke's details on a new base curve.
-    Style(terrain::StyleArgs),
+
     /// Upscale images, volumes, heightmaps by subdivision / B-spline interpolation (§7.7).
     Upscale(upscale::UpscaleArgs),
     /// Reduce resolution with the MRA's analysis filter A (REDUCE-RESOLUTION, §9).
@@ -150,7 +149,6 @@ pub fn main() -> i32 {
         Command::Terrain(c) => terrain::run(c),
         Command::Transfer(a) => terrain::transfer(a),
         Command::Denoise(a) => terrain::denoise(a),
-        Command::Style(a) => terrain::style(a),
         Command::Upscale(a) => upscale::run_upscale(a),
         Command::Downscale(a) => upscale::run_downscale(a),
         Command::Encode(a) => codec::encode(a),

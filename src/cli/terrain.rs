@@ -1,4 +1,4 @@
-//! `mra terrain synth|render`, `mra transfer`, `mra denoise` and `mra style`: thin
+//! `mra terrain synth|render`, `mra transfer`, `mra denoise` and `mra curve style`: thin
 //! shells over [`crate::terrain`], [`crate::denoise`] and the curve style transfer.
 
 use std::path::{Path, PathBuf};
@@ -416,8 +416,8 @@ pub fn denoise(a: DenoiseArgs) -> CliResult {
 
 #[derive(Args, Debug)]
 #[command(
-    after_help = "Example (the lead moves this under `mra curve style` at merge):
-  mra style --style zigzag.csv --base circle.csv --levels 3 -o styled.csv"
+    after_help = "Example:
+  mra curve style --style zigzag.csv --base circle.csv --levels 3 -o styled.csv"
 )]
 pub struct StyleArgs {
     /// The style stroke: a 2-D point list whose fine details are the style.
