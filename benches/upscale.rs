@@ -1,4 +1,4 @@
-//! Upscaler throughput: ×2 of an RGB u8 image (Kodak size) and of a 256³ f32 volume in
+//! Upscaler throughput (cubic rule): ×2 of an RGB u8 image (Kodak size) and of a 256³ f32 volume in
 //! every mode, in output MB/s, next to a plain copy of the output buffer.
 //!
 //! `cargo bench --bench upscale` (`MRA_BENCH_QUICK=1` for a 128³ volume).

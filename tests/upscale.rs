@@ -517,3 +517,40 @@ fn corpus_ct_volume_upscales_along_z() {
         "spline {se_spline} vs linear {se_linear}"
     );
 }
+
+#[test]
+fn wide_and_narrow_lanes_give_the_same_result() {
+    // [40, 300]: axis 0 runs in strip mode (rows ≥ 32 wide), the transposed array
+    // [300, 40] along axis 1 in gather mode; the two results must be transposes.
+    let (h, w) = (40usize, 300usize);
+    let a = grid(h, w, |y, x| ((x * 0.37).sin() + (y * 0.21).cos()) * 100.0);
+    let mut t = vec![0f32; h * w];
+    for y in 0..h {
+        for x in 0..w {
+            t[x * h + y] = a[y * w + x];
+        }
+    }
+    for mode in MODES {
+        let m = method(Refinement::Cubic, mode);
+        let p0 = [AxisPlan {
+            axis: 0,
+            len: 3 * h,
+            geometry: Geometry::Centre,
+        }];
+        let p1 = [AxisPlan {
+            axis: 1,
+            len: 3 * h,
+            geometry: Geometry::Centre,
+        }];
+        let (ua, sa) = upscale_array(a.clone(), &[h, w], &m, &p0).unwrap();
+        let (ut, st) = upscale_array(t.clone(), &[w, h], &m, &p1).unwrap();
+        assert_eq!((sa.clone(), st), (vec![3 * h, w], vec![w, 3 * h]));
+        let mut worst = 0.0f32;
+        for y in 0..3 * h {
+            for x in 0..w {
+                worst = worst.max((ua[y * w + x] - ut[x * 3 * h + y]).abs());
+            }
+        }
+        assert!(worst < 1e-3, "{mode:?}: {worst}");
+    }
+}

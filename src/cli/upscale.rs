@@ -14,7 +14,7 @@ use std::path::PathBuf;
 #[derive(Args, Debug, Clone)]
 #[command(after_help = "Examples:
   mra generate zone-plate -o zp.png && mra upscale zp.png -o zp4.png --factor 4
-  mra upscale zp.png -o zp_smooth.png --factor 2 --scheme chaikin --mode control
+  mra upscale zp.png -o zp_smooth.png --factor 2 --scheme cubic --mode control
   mra upscale zp.png -o zp_1000.png --size 1000x700
   mra upscale ../shared/corpus/volumes/ct_pancreas_256.nrrd -o ct_z.nrrd --factor 2 --axes z")]
 pub struct UpscaleArgs {
@@ -29,8 +29,8 @@ pub struct UpscaleArgs {
     /// Output size, fastest axis first: WxH for images, WxHxD for volumes.
     #[arg(long)]
     pub size: Option<String>,
-    /// box, linear, chaikin, cubic, quartic or four-point.
-    #[arg(long, default_value = "cubic")]
+    /// box, linear, chaikin (default, best measured), cubic, quartic or four-point.
+    #[arg(long, default_value = "chaikin")]
     pub scheme: Refinement,
     /// area (cell means kept; default, best measured), interpolate (through the samples)
     /// or control (plain subdivision, smooth).
