@@ -29,41 +29,23 @@ pub fn zigzag_circle(n: usize) -> Vec<f64> {
         .collect()
 }
 
-/// A zone plate `½ + ½ cos(k r²)` of size `h × w`.
+/// The generated zone plate (`mra generate zone-plate`) on the 8-bit scale, as f32.
 pub fn zone_plate(h: usize, w: usize) -> Vec<f32> {
-    let k = std::f64::consts::PI / (2.0 * w.max(h) as f64);
-    let (cy, cx) = (h as f64 / 2.0, w as f64 / 2.0);
-    let mut v = Vec::with_capacity(h * w);
-    for y in 0..h {
-        for x in 0..w {
-            let r2 = (y as f64 - cy).powi(2) + (x as f64 - cx).powi(2);
-            v.push((0.5 + 0.5 * (k * r2).cos()) as f32 * 255.0);
-        }
-    }
-    v
+    crate::generate::images::zone_plate(h, w)
+        .data
+        .iter()
+        .map(|&v| (v * 255.0) as f32)
+        .collect()
 }
 
-/// A blob phantom: nested ellipsoids of different densities in an `n³` volume.
+/// The generated Shepp–Logan-style phantom (`mra generate phantom`) of `n³` voxels,
+/// mapped to a CT-like range (−1000 … 1000) as f32.
 pub fn blob_volume(n: usize) -> Vec<f32> {
-    let c = n as f64 / 2.0;
-    let mut v = Vec::with_capacity(n * n * n);
-    for z in 0..n {
-        for y in 0..n {
-            for x in 0..n {
-                let (dx, dy, dz) = ((x as f64 - c) / c, (y as f64 - c) / c, (z as f64 - c) / c);
-                let outer = dx * dx / 0.8 + dy * dy / 0.6 + dz * dz / 0.9 < 0.8;
-                let inner = (dx - 0.2).powi(2) + dy * dy + (dz + 0.1).powi(2) < 0.05;
-                v.push(if inner {
-                    1000.0
-                } else if outer {
-                    300.0
-                } else {
-                    -1000.0
-                });
-            }
-        }
-    }
-    v
+    crate::generate::phantom::shepp_logan(n, n, n)
+        .data
+        .iter()
+        .map(|&v| (v * 2000.0 - 1000.0) as f32)
+        .collect()
 }
 
 fn max_abs_diff<T: Copy + Into<f64>>(a: &[T], b: &[T]) -> f64 {
@@ -171,7 +153,7 @@ pub fn run(out: &Path) -> Result<Vec<DemoRow>> {
     let secs = t.elapsed().as_secs_f64();
     rows.push(DemoRow {
         job: "volume pyramid forward+inverse".into(),
-        data: format!("blob phantom {n}^3 f32, cubic interpolating, 3 levels"),
+        data: format!("Shepp-Logan phantom {n}^3 f32, cubic interpolating, 3 levels"),
         result: format!(
             "coarse block {coarse}, max error {:.1e}",
             max_abs_diff(&vol, a.data())

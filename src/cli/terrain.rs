@@ -415,10 +415,8 @@ pub fn denoise(a: DenoiseArgs) -> CliResult {
 }
 
 #[derive(Args, Debug)]
-#[command(
-    after_help = "Example:
-  mra curve style --style zigzag.csv --base circle.csv --levels 3 -o styled.csv"
-)]
+#[command(after_help = "Example:
+  mra curve style --style zigzag.csv --base circle.csv --levels 3 -o styled.csv")]
 pub struct StyleArgs {
     /// The style stroke: a 2-D point list whose fine details are the style.
     #[arg(long)]

@@ -2,12 +2,12 @@
 //! subdivision rules of `src/scheme/subdivide.rs` (§7.2.2, §7.6.1), centred on the
 //! control point, with their antiderivatives (for cell averages).
 //!
-//! **Uniform B-spline of order k** (degree k − 1), centred (the lead unifies this with
-//! the curve module's basis once `src/curve` lands; both are the cardinal B-spline of
-//! §7.2, this one shifted by k/2 so that it is symmetric about 0):
+//! **Uniform B-spline of order k** (degree k − 1), centred: the curve module's basis
+//! function `N_{0,k}` on the integer knots (`crate::curve::basis`, §3.4), shifted by k/2
+//! so that it is symmetric about 0:
 //! ```text
-//! β_k(x) = 1/(k−1)! · Σ_{j=0..k} (−1)^j C(k,j) (x + k/2 − j)_+^(k−1)      support [−k/2, k/2]
-//! ∫_{−∞}^x β_k = 1/k! · Σ_{j=0..k} (−1)^j C(k,j) (x + k/2 − j)_+^k
+//! β_k(x) = N_{0,k}(x + k/2)                              support [−k/2, k/2]
+//! ∫_{−∞}^x β_k = Σ_{i≥0} N_{i,k+1}(x + k/2)              (d/dt N_{i,k+1} = N_{i,k} − N_{i+1,k})
 //! ```
 //! Order 1 is the box (nearest neighbour), 2 the hat (linear), 3 Chaikin's quadratic,
 //! 4 the cubic, 5 the quartic. The k-fold subdivided control polygon of these rules
@@ -20,6 +20,7 @@
 //! (exact at every dyadic position up to that level, e.g. every pixel centre of a ×2^k
 //! upscale with k < 12).
 
+use crate::curve::basis::basis_brute;
 use crate::scheme::subdivide::{refine_steps, Ends, Refinement};
 
 /// Dyadic level of the tabulated 4-point function (4096 samples per unit).
@@ -35,26 +36,15 @@ pub enum Basis {
     FourPoint { value: Vec<f64>, integral: Vec<f64> },
 }
 
-fn binom(k: usize, j: usize) -> f64 {
-    (0..j).fold(1.0, |a, t| a * (k - t) as f64 / (t + 1) as f64)
-}
+/// Integer knots `0, 1, …` enough for the cardinal B-splines used here (order ≤ 7).
+const KNOTS: [f64; 16] = [
+    0., 1., 2., 3., 4., 5., 6., 7., 8., 9., 10., 11., 12., 13., 14., 15.,
+];
 
-fn factorial(k: usize) -> f64 {
-    (1..=k).fold(1.0, |a, t| a * t as f64)
-}
-
-/// `Σ_j (−1)^j C(k,j) (x + k/2 − j)_+^p / p!` — β_k for p = k − 1, its integral for p = k.
-fn truncated_sum(k: usize, p: usize, x: f64) -> f64 {
-    let h = k as f64 / 2.0;
-    let mut s = 0.0;
-    for j in 0..=k {
-        let t = x + h - j as f64;
-        if t > 0.0 || (p == 0 && t == 0.0) {
-            let sign = if j % 2 == 0 { 1.0 } else { -1.0 };
-            s += sign * binom(k, j) * t.powi(p as i32);
-        }
-    }
-    s / factorial(p)
+/// `N_{i,k}(t)` on the integer knots, by the curve module's Cox–de Boor recursion.
+fn cardinal(i: usize, k: usize, t: f64) -> f64 {
+    // n = 15 keeps the valid range's right end (knots[15]) away from every t used here
+    basis_brute(&KNOTS, KNOTS.len() - 1, i, k, t)
 }
 
 impl Basis {
@@ -83,7 +73,7 @@ impl Basis {
                 if x < -h || x >= h {
                     0.0
                 } else {
-                    truncated_sum(*k, k - 1, x)
+                    cardinal(0, *k, x + h)
                 }
             }
             Basis::FourPoint { value, .. } => table(value, x, 0.0, 0.0),
@@ -100,7 +90,9 @@ impl Basis {
                 } else if x >= h {
                     1.0
                 } else {
-                    truncated_sum(*k, *k, x)
+                    // d/dt N_{i,k+1} = N_{i,k} − N_{i+1,k} on unit knots, so the running
+                    // integral of N_{0,k} is Σ_{i≥0} N_{i,k+1}
+                    (0..=*k).map(|i| cardinal(i, k + 1, x + h)).sum()
                 }
             }
             Basis::FourPoint { integral, .. } => table(integral, x, 0.0, 1.0),
