@@ -81,7 +81,7 @@ pub fn tessellate(s: &dyn Surface, res_u: usize, res_v: usize, kind: FaceKind) -
     };
     let mut mesh = Mesh::from_faces(positions, crate::mesh::Faces::Uniform { indices, degree })?;
     // fallback normals from the faces around degenerate vertices
-    if normals.iter().any(|n| *n == [0.0; 3]) {
+    if normals.contains(&[0.0; 3]) {
         let around = vertex_normals(&mesh, Weighting::Area);
         for (n, a) in normals.iter_mut().zip(around) {
             if *n == [0.0; 3] {
