@@ -645,3 +645,20 @@ fn cli_encode_decode_info_and_one_line_errors() {
     assert!(o.status.success());
     std::fs::remove_dir_all(&dir).ok();
 }
+
+#[test]
+fn sequences_code_along_time_and_decode_a_frame_range() {
+    let mut r = field(&[8, 12, 10], 3, SampleType::U8, 6);
+    r.kind = DataKind::Sequence;
+    let d = round_trip(&r, &opts(Rate::Lossless));
+    assert_eq!(d.samples, r.samples);
+    assert_eq!(d.kind, DataKind::Sequence);
+    let part = codec::frames(d, 2, 5).unwrap();
+    assert_eq!(part.dims, vec![3, 12, 10]);
+    let per = 12 * 10 * 3;
+    assert_eq!(
+        mra::io::bytes::encode(&part.samples, false),
+        mra::io::bytes::encode(&r.samples, false)[2 * per..5 * per].to_vec()
+    );
+    assert!(codec::frames(r, 5, 9).is_err());
+}

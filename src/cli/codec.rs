@@ -64,6 +64,9 @@ pub struct DecodeArgs {
     /// Decode what a truncated file holds instead of failing.
     #[arg(long)]
     pub allow_truncated: bool,
+    /// Keep frames a..b (end excluded) of a sequence (or slices of a volume).
+    #[arg(long, value_name = "A..B")]
+    pub frames: Option<String>,
 }
 
 /// Show an `.mra` file's header and its bytes per level and per chunk.
