@@ -100,6 +100,28 @@ const FACE_EDGES: [[u8; 4]; 6] = {
     t
 };
 
+/// For each cell edge, the bit set of cell edges lying on a common cube face with it.
+const SHARE: [u16; 12] = {
+    let mut t = [0u16; 12];
+    let mut f = 0;
+    while f < 6 {
+        let mut a = 0;
+        while a < 4 {
+            let mut b = 0;
+            while b < 4 {
+                t[FACE_EDGES[f][a] as usize] |= 1 << FACE_EDGES[f][b];
+                b += 1;
+            }
+            a += 1;
+        }
+        f += 1;
+    }
+    t
+};
+
+/// Index flag of a loop-centre vertex (local to a chunk until the merge).
+const EXTRA: u32 = 1 << 31;
+
 impl Grid<'_> {
     fn check(&self) -> Result<()> {
         let n: usize = self.dims.iter().product();
@@ -117,11 +139,11 @@ impl Grid<'_> {
                 "at least 2 samples per axis",
             ));
         }
-        if n > u32::MAX as usize / 4 {
+        if n > u32::MAX as usize / 8 {
             return Err(Error::LimitsExceeded {
                 what: "grid samples",
                 requested: n as u64,
-                limit: u32::MAX as u64 / 4,
+                limit: u32::MAX as u64 / 8,
             });
         }
         if self.spacing.iter().any(|s| !(s.is_finite() && *s > 0.0)) {
@@ -195,35 +217,54 @@ fn map_plane(
                 *m = id;
                 id += 1;
                 if let Some((pos, nrm)) = out.as_mut() {
-                    let t = (level - va) / (vb - va);
-                    let mut idx = [i as f64, j as f64, k as f64];
-                    idx[axis] += t;
-                    pos.push([
-                        g.origin[0] + g.spacing[0] * idx[0],
-                        g.origin[1] + g.spacing[1] * idx[1],
-                        g.origin[2] + g.spacing[2] * idx[2],
-                    ]);
+                    let (p, n) = edge_vertex(g, level, [i, j, k], axis, nrm.is_some());
+                    pos.push(p);
                     if let Some(nrm) = nrm.as_mut() {
-                        let mut p1 = [i, j, k];
-                        p1[axis] += 1;
-                        let ga = grad_at(g, [i, j, k]);
-                        let gb = grad_at(g, p1);
-                        let gr = [
-                            ga[0] + t * (gb[0] - ga[0]),
-                            ga[1] + t * (gb[1] - ga[1]),
-                            ga[2] + t * (gb[2] - ga[2]),
-                        ];
-                        let l = (gr[0] * gr[0] + gr[1] * gr[1] + gr[2] * gr[2]).sqrt();
-                        nrm.push(if l > 0.0 {
-                            [-gr[0] / l, -gr[1] / l, -gr[2] / l]
-                        } else {
-                            [0.0; 3]
-                        });
+                        nrm.push(n);
                     }
                 }
             }
         }
     }
+}
+
+/// Position (and outward unit normal when `with_normal`) of the crossing on the grid edge from
+/// point `p` along `axis`.
+fn edge_vertex(
+    g: &Grid,
+    level: f64,
+    p: [usize; 3],
+    axis: usize,
+    with_normal: bool,
+) -> ([f64; 3], [f64; 3]) {
+    let [nx, ny, _] = g.dims;
+    let at = |q: [usize; 3]| g.values[(q[2] * ny + q[1]) * nx + q[0]] as f64;
+    let mut p1 = p;
+    p1[axis] += 1;
+    let (va, vb) = (at(p), at(p1));
+    let t = (level - va) / (vb - va);
+    let mut idx = [p[0] as f64, p[1] as f64, p[2] as f64];
+    idx[axis] += t;
+    let pos = [
+        g.origin[0] + g.spacing[0] * idx[0],
+        g.origin[1] + g.spacing[1] * idx[1],
+        g.origin[2] + g.spacing[2] * idx[2],
+    ];
+    let mut n = [0.0; 3];
+    if with_normal {
+        let ga = grad_at(g, p);
+        let gb = grad_at(g, p1);
+        let gr = [
+            ga[0] + t * (gb[0] - ga[0]),
+            ga[1] + t * (gb[1] - ga[1]),
+            ga[2] + t * (gb[2] - ga[2]),
+        ];
+        let l = (gr[0] * gr[0] + gr[1] * gr[1] + gr[2] * gr[2]).sqrt();
+        if l > 0.0 {
+            n = [-gr[0] / l, -gr[1] / l, -gr[2] / l];
+        }
+    }
+    (pos, n)
 }
 
 /// Gradient of the samples at a grid point (central differences, one-sided at the border).
@@ -244,7 +285,16 @@ fn grad_at(g: &Grid, p: [usize; 3]) -> [f64; 3] {
 }
 
 /// Triangles of the cells in slab `k` (between planes `k` and `k+1`).
-fn slab(g: &Grid, level: f64, k: usize, m0: &[u32], m1: &[u32], tris: &mut Vec<u32>) {
+#[allow(clippy::too_many_arguments)]
+fn slab(
+    g: &Grid,
+    level: f64,
+    k: usize,
+    m0: &[u32],
+    m1: &[u32],
+    tris: &mut Vec<u32>,
+    extra: &mut (Vec<[f64; 3]>, Option<Vec<[f64; 3]>>),
+) {
     let [nx, ny, _] = g.dims;
     let v = g.values;
     let plane = nx * ny;
@@ -331,16 +381,66 @@ fn slab(g: &Grid, level: f64, k: usize, m0: &[u32], m1: &[u32], tris: &mut Vec<u
                 if next[start as usize] == 255 || seen >> start & 1 == 1 {
                     continue;
                 }
-                let v0 = id(start);
-                seen |= 1 << start;
-                let mut prev = next[start as usize];
-                seen |= 1 << prev;
-                let mut cur = next[prev as usize];
-                while cur != start {
+                let mut lp = [0u8; 12];
+                let mut n = 0;
+                let mut cur = start;
+                loop {
                     seen |= 1 << cur;
-                    tris.extend_from_slice(&[v0, id(prev), id(cur)]);
-                    prev = cur;
+                    lp[n] = cur;
+                    n += 1;
                     cur = next[cur as usize];
+                    if cur == start || n == 12 {
+                        break;
+                    }
+                }
+                // a fan from lp[s] is safe when none of its diagonals joins two vertices of one
+                // cube face (a neighbour could draw the same diagonal: non-manifold edge)
+                let safe = (0..n).find(|&s| {
+                    (2..n - 1).all(|o| SHARE[lp[s] as usize] >> lp[(s + o) % n] & 1 == 0)
+                });
+                match safe {
+                    Some(s) => {
+                        let v0 = id(lp[s]);
+                        for o in 1..n - 1 {
+                            tris.extend_from_slice(&[
+                                v0,
+                                id(lp[(s + o) % n]),
+                                id(lp[(s + o + 1) % n]),
+                            ]);
+                        }
+                    }
+                    None => {
+                        // centre vertex: every new edge is private to this cell
+                        let mut c = [0.0; 3];
+                        let mut cn = [0.0; 3];
+                        for &e in &lp[..n] {
+                            let (cc, axis) = EDGES[e as usize];
+                            let p = [
+                                i + (cc & 1) as usize,
+                                j + (cc >> 1 & 1) as usize,
+                                k + (cc >> 2 & 1) as usize,
+                            ];
+                            let (q, nn) =
+                                edge_vertex(g, level, p, axis as usize, extra.1.is_some());
+                            for a in 0..3 {
+                                c[a] += q[a] / n as f64;
+                                cn[a] += nn[a];
+                            }
+                        }
+                        let vc = EXTRA | extra.0.len() as u32;
+                        extra.0.push(c);
+                        if let Some(en) = extra.1.as_mut() {
+                            let l = (cn[0] * cn[0] + cn[1] * cn[1] + cn[2] * cn[2]).sqrt();
+                            en.push(if l > 0.0 {
+                                [cn[0] / l, cn[1] / l, cn[2] / l]
+                            } else {
+                                cn
+                            });
+                        }
+                        for o in 0..n {
+                            tris.extend_from_slice(&[vc, id(lp[o]), id(lp[(o + 1) % n])]);
+                        }
+                    }
                 }
             }
         }
@@ -368,12 +468,19 @@ pub fn polygonize(grid: &Grid, level: f64, normals: bool) -> Result<Isosurface> 
         .step_by(chunk)
         .map(|s| (s, (s + chunk).min(nz)))
         .collect();
-    let parts: Vec<(Vec<[f64; 3]>, Vec<[f64; 3]>, Vec<u32>)> = chunks
+    type Part = (
+        Vec<[f64; 3]>,
+        Vec<[f64; 3]>,
+        Vec<u32>,
+        (Vec<[f64; 3]>, Option<Vec<[f64; 3]>>),
+    );
+    let parts: Vec<Part> = chunks
         .par_iter()
         .map(|&(p0, p1)| {
             let mut pos = Vec::with_capacity((base[p1] - base[p0]) as usize);
             let mut nrm = Vec::new();
             let mut tris = Vec::new();
+            let mut extra = (Vec::new(), normals.then(Vec::new));
             let mut m0 = vec![NONE; nx * ny * 3];
             let mut m1 = vec![NONE; nx * ny * 3];
             map_plane(
@@ -394,20 +501,34 @@ pub fn polygonize(grid: &Grid, level: f64, normals: bool) -> Result<Isosurface> 
                     &mut m1,
                     owned.then_some((&mut pos, normals.then_some(&mut nrm))),
                 );
-                slab(grid, level, k, &m0, &m1, &mut tris);
+                slab(grid, level, k, &m0, &m1, &mut tris, &mut extra);
                 std::mem::swap(&mut m0, &mut m1);
             }
-            (pos, nrm, tris)
+            (pos, nrm, tris, extra)
         })
         .collect();
     let nv = base[nz] as usize;
-    let mut positions = Vec::with_capacity(nv);
-    let mut nrm_all = Vec::with_capacity(if normals { nv } else { 0 });
-    let mut indices = Vec::new();
-    for (p, n, t) in parts {
-        positions.extend_from_slice(&p);
-        nrm_all.extend_from_slice(&n);
-        indices.extend_from_slice(&t);
+    let n_extra: usize = parts.iter().map(|p| p.3 .0.len()).sum();
+    let mut positions = Vec::with_capacity(nv + n_extra);
+    let mut nrm_all = Vec::with_capacity(if normals { nv + n_extra } else { 0 });
+    for p in &parts {
+        positions.extend_from_slice(&p.0);
+        nrm_all.extend_from_slice(&p.1);
+    }
+    let mut indices = Vec::with_capacity(parts.iter().map(|p| p.2.len()).sum());
+    for (_, _, t, (ex, exn)) in parts {
+        let off = positions.len() as u32;
+        indices.extend(t.iter().map(|&v| {
+            if v & EXTRA != 0 {
+                off + (v & !EXTRA)
+            } else {
+                v
+            }
+        }));
+        positions.extend_from_slice(&ex);
+        if let Some(exn) = exn {
+            nrm_all.extend_from_slice(&exn);
+        }
     }
     let nf = indices.len() / 3;
     let mesh = Mesh {

@@ -10,6 +10,7 @@ use crate::{Error, Result};
 use rayon::prelude::*;
 
 /// An 8-bit RGB image, rows top to bottom.
+#[derive(Clone, Debug)]
 pub struct Image {
     pub width: usize,
     pub height: usize,

@@ -167,34 +167,65 @@ fn ray_cylinder(o: V3, d: V3, a: V3, b: V3, r: f64) -> Option<(f64, f64)> {
     (t0 < t1).then_some((t0, t1))
 }
 
-/// Intervals where `F > 0` on `[ta, tb]` by sampling `steps` points and bisecting each sign
-/// change to machine precision (§10.6.2).
-fn ray_roots(node: &Node, o: V3, d: V3, ta: f64, tb: f64, steps: usize) -> TList {
+/// Bisect the sign change of `at` on `[lo, hi]` to machine precision.
+fn bisect(at: &dyn Fn(f64) -> f64, mut lo: f64, mut hi: f64, inside_lo: bool) -> f64 {
+    for _ in 0..64 {
+        let mid = 0.5 * (lo + hi);
+        if mid <= lo || mid >= hi {
+            break;
+        }
+        if (at(mid) > 0.0) == inside_lo {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    0.5 * (lo + hi)
+}
+
+/// Intervals where `F > 0` on `[ta, tb]` (§10.6.2). With `distance_bound` (`|F|` never exceeds
+/// the distance to the surface: torus, cone) the walk is sphere tracing, stepping `|F|/|d|`,
+/// which cannot jump over the surface; otherwise `steps` uniform samples. Each sign change is
+/// bisected to machine precision.
+fn ray_roots(
+    node: &Node,
+    o: V3,
+    d: V3,
+    ta: f64,
+    tb: f64,
+    steps: usize,
+    distance_bound: bool,
+) -> TList {
     let at = |t: f64| node.eval([o[0] + t * d[0], o[1] + t * d[1], o[2] + t * d[2]]);
     let mut out = Vec::new();
     let n = steps.max(2);
     let dt = (tb - ta) / n as f64;
+    let dl = norm(d).max(1e-300);
+    let min_step = (tb - ta) * 1e-5;
     let mut t_prev = ta;
     let mut f_prev = at(ta);
     let mut start = (f_prev > 0.0).then_some(ta);
-    for s in 1..=n {
-        let t = if s == n { tb } else { ta + s as f64 * dt };
+    let mut s = 0usize;
+    let mut iters = 0usize;
+    while t_prev < tb {
+        let t = if distance_bound && iters < 100_000 {
+            iters += 1;
+            (t_prev + (f_prev.abs() / dl).max(min_step)).min(tb)
+        } else {
+            s += 1;
+            let u = ta + s as f64 * dt;
+            if s >= n || u >= tb {
+                tb
+            } else if u <= t_prev {
+                continue;
+            } else {
+                u
+            }
+        };
         let f = at(t);
         if (f > 0.0) != (f_prev > 0.0) {
-            let (mut lo, mut hi) = (t_prev, t);
             let inside_lo = f_prev > 0.0;
-            for _ in 0..64 {
-                let mid = 0.5 * (lo + hi);
-                if mid <= lo || mid >= hi {
-                    break;
-                }
-                if (at(mid) > 0.0) == inside_lo {
-                    lo = mid;
-                } else {
-                    hi = mid;
-                }
-            }
-            let root = 0.5 * (lo + hi);
+            let root = bisect(&at, t_prev, t, inside_lo);
             if inside_lo {
                 if let Some(s0) = start.take() {
                     if root > s0 {
@@ -263,7 +294,7 @@ pub fn tlist(node: &Node, o: V3, d: V3, t0: f64, t1: f64, steps: usize) -> TList
                 Some((a, b)) => {
                     let (a, b) = (a.max(t0), b.min(t1));
                     if a < b {
-                        ray_roots(node, o, d, a, b, steps)
+                        ray_roots(node, o, d, a, b, steps, !matches!(node, Node::Blend { .. }))
                     } else {
                         Vec::new()
                     }
