@@ -184,12 +184,12 @@ pub fn run(c: Command) -> CliResult {
     }
 }
 
+/// Samples (x fastest), dims `[nx, ny, nz]`, spacing and origin (x, y, z) of a volume grid.
+pub type VolumeGrid = (Vec<f32>, [usize; 3], [f64; 3], [f64; 3]);
+
 /// The volume as a grid (x fastest, physical spacing), optionally padded by one sample of
 /// `−∞`-like value on every side so the isosurface closes at the border.
-pub fn volume_grid(
-    r: &crate::io::Raster,
-    cap: bool,
-) -> Result<(Vec<f32>, [usize; 3], [f64; 3], [f64; 3]), Failure> {
+pub fn volume_grid(r: &crate::io::Raster, cap: bool) -> Result<VolumeGrid, Failure> {
     if r.channels != 1 || r.dims.len() != 3 {
         return Err(Failure(format!(
             "volume with dims {:?} and {} channels (expected a single-channel 3-D volume)",

@@ -159,6 +159,9 @@ impl Grid<'_> {
 
 const NONE: u32 = u32::MAX;
 
+/// Where [`map_plane`] appends vertex positions and (optionally) normals.
+type VertexSink<'a> = Option<(&'a mut Vec<[f64; 3]>, Option<&'a mut Vec<[f64; 3]>>)>;
+
 /// Crossings owned by plane `k`: x and y edges in the plane, z edges to plane `k+1`.
 fn count_plane(g: &Grid, level: f64, k: usize) -> usize {
     let [nx, ny, nz] = g.dims;
@@ -185,14 +188,7 @@ fn count_plane(g: &Grid, level: f64, k: usize) -> usize {
 
 /// Fill `map` (3 entries per grid point of plane `k`) with vertex indices from `first`;
 /// append positions (and normals) when `out` is given.
-fn map_plane(
-    g: &Grid,
-    level: f64,
-    k: usize,
-    first: u32,
-    map: &mut [u32],
-    mut out: Option<(&mut Vec<[f64; 3]>, Option<&mut Vec<[f64; 3]>>)>,
-) {
+fn map_plane(g: &Grid, level: f64, k: usize, first: u32, map: &mut [u32], mut out: VertexSink<'_>) {
     let [nx, ny, nz] = g.dims;
     let v = g.values;
     let base = k * nx * ny;

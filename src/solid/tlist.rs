@@ -352,7 +352,7 @@ pub fn volume(node: &Node, rays: usize, steps: usize) -> Result<f64> {
             "a bounded solid (planes only inside an intersection with a bounded solid)",
         )
     })?;
-    if (0..3).any(|i| !(hi[i] > lo[i])) {
+    if (0..3).any(|i| hi[i].partial_cmp(&lo[i]) != Some(std::cmp::Ordering::Greater)) {
         return Ok(0.0);
     }
     let dx = (hi[0] - lo[0]) / rays as f64;

@@ -40,7 +40,7 @@ pub fn sample(node: &Node, n: usize) -> Result<Sampled> {
         .bounds()
         .ok_or_else(|| Error::format("the solid is unbounded", "a bounded solid to sample"))?;
     let ext = (0..3).map(|i| hi[i] - lo[i]).fold(0.0, f64::max);
-    if !(ext > 0.0) {
+    if ext.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
         return Err(Error::format(
             "the solid's bounds are empty",
             "a non-empty solid",
