@@ -35,6 +35,3 @@ fn main() {
         );
     }
 }
-
-#[allow(dead_code)]
-fn per_axis() {}
