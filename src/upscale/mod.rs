@@ -549,11 +549,16 @@ pub fn is_sequence(r: &Raster) -> bool {
     r.kind == DataKind::Sequence
 }
 
-/// `mra demo` rows: a 512² zone plate halved by 2×2 block means, upscaled back ×2 in
-/// each mode; PSNR against the original (8-bit peak). Writes the area-mode result.
+/// `mra demo` rows: a generated 512² fractal terrain (8-bit scale) halved by 2×2 block
+/// means, upscaled back ×2 in each mode; PSNR against the original (8-bit peak). Writes
+/// the area-mode result.
 pub fn demo_rows(out: &std::path::Path) -> Result<Vec<crate::demo::DemoRow>> {
     let n = 512;
-    let img = crate::demo::zone_plate(n, n);
+    let img: Vec<f32> = crate::generate::terrain::diamond_square(n, n, 7, 0.6)
+        .data
+        .iter()
+        .map(|&v| (v * 255.0) as f32)
+        .collect();
     let (low, ls) = downscale_array(
         img.clone(),
         &[n, n],
@@ -589,7 +594,7 @@ pub fn demo_rows(out: &std::path::Path) -> Result<Vec<crate::demo::DemoRow>> {
             .sum::<f64>()
             / img.len() as f64;
         let output = if mode == Mode::Area {
-            let p = out.join("upscale_zone_plate.png");
+            let p = out.join("upscale_terrain.png");
             let r = Raster::from_f32(
                 vec![n, n],
                 1,
@@ -604,7 +609,7 @@ pub fn demo_rows(out: &std::path::Path) -> Result<Vec<crate::demo::DemoRow>> {
         };
         rows.push(crate::demo::DemoRow {
             job: format!("upscale x2 ({name})"),
-            data: "zone plate 512^2 halved by 2x2 block means, cubic B-spline".into(),
+            data: "fractal terrain 512^2 (8-bit) halved by 2x2 block means, Chaikin (quadratic B-spline)".into(),
             result: format!(
                 "PSNR {:.2} dB vs original",
                 10.0 * (255.0f64 * 255.0 / mse).log10()
