@@ -81,17 +81,7 @@ pub fn write_as(path: &Path, mesh: &Mesh, format: Format) -> Result<()> {
 
 /// Write bytes to `path` through a temporary file in the same folder and a rename.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
-    let dir = path
-        .parent()
-        .filter(|p| !p.as_os_str().is_empty())
-        .unwrap_or(Path::new("."));
-    let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("out");
-    let tmp = dir.join(format!(".{name}.tmp{}", std::process::id()));
-    let r = std::fs::write(&tmp, bytes).and_then(|_| std::fs::rename(&tmp, path));
-    if r.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    }
-    Ok(r?)
+    Ok(crate::fsutil::write_atomic(path, |w| w.write_all(bytes))?)
 }
 
 /// Byte-level tokenising helpers shared by the text readers.
