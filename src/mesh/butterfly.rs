@@ -20,8 +20,8 @@
 
 use super::features::{Features, Tags, VertexRule};
 use super::halfedge::{HalfEdgeMesh, VertexId};
-use super::loop_subdivision::GRAIN;
-use super::{Attributes, Mesh};
+use super::loop_subdivision::{quadrisect, GRAIN};
+use super::Mesh;
 use crate::{Error, Result};
 use rayon::prelude::*;
 use std::f64::consts::PI;
@@ -170,31 +170,5 @@ pub fn step(mesh: &Mesh, he: &HalfEdgeMesh, tags: &Tags) -> Result<(Mesh, Featur
             }
             *o = acc;
         });
-    let mut indices = vec![0u32; 12 * nf];
-    let ce = &he.edges.corner_edge;
-    indices
-        .par_chunks_mut(12)
-        .with_min_len(GRAIN)
-        .enumerate()
-        .for_each(|(f, t)| {
-            let c = 3 * f;
-            let (a, b, cc) = (mesh.indices[c], mesh.indices[c + 1], mesh.indices[c + 2]);
-            let base = nv as u32;
-            let (ab, bc, ca) = (base + ce[c], base + ce[c + 1], base + ce[c + 2]);
-            t.copy_from_slice(&[a, ab, ca, b, bc, ab, cc, ca, bc, ab, bc, ca]);
-        });
-    let children = if tags.any_interior_sharp || tags.corner.iter().any(|&c| c) {
-        tags.children(he, nv as u32)
-    } else {
-        Features::default()
-    };
-    Ok((
-        Mesh {
-            positions: out,
-            offsets: (0..=4 * nf as u32).map(|i| 3 * i).collect(),
-            indices,
-            attributes: Attributes::default(),
-        },
-        children,
-    ))
+    quadrisect(mesh, he, tags, out)
 }

@@ -135,8 +135,24 @@ pub fn step(
                 std::array::from_fn(|k| 0.375 * (pa[k] + pb[k]) + 0.125 * (pc[k] + pd[k]))
             };
         });
+    quadrisect(mesh, he, tags, out)
+}
+
+/// The 1-to-4 split of every triangle shared by Loop and Butterfly: vertex `i` keeps index
+/// `i`, the new point of edge `e` is `nv + e`, and each triangle `(a, b, c)` becomes
+/// `(a, ab, ca) (b, bc, ab) (c, ca, bc) (ab, bc, ca)`. `out` holds the refined positions;
+/// the sharp tags are inherited by the child edges.
+pub(crate) fn quadrisect(
+    mesh: &Mesh,
+    he: &HalfEdgeMesh,
+    tags: &Tags,
+    out: Vec<[f64; 3]>,
+) -> Result<(Mesh, Features)> {
+    let nv = mesh.vertex_count();
+    let nf = mesh.face_count();
     let mut indices = vec![0u32; 12 * nf];
     let ce = &he.edges.corner_edge;
+
     indices
         .par_chunks_mut(12)
         .with_min_len(GRAIN)
