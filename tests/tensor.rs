@@ -2,7 +2,9 @@
 //! orders, for every scheme × boundary and random sizes; subbands tile the array.
 
 use mra::scheme::{Boundary, Scheme};
-use mra::tensor::{analyze, synthesize, Array, Order, Pyramid, PyramidSpec};
+use mra::tensor::{
+    analyze, analyze_with, synthesize, synthesize_with, Array, Engine, Order, Pyramid, PyramidSpec,
+};
 use proptest::prelude::*;
 
 fn noise(seed: u64, n: usize) -> Vec<f64> {
@@ -45,8 +47,90 @@ fn round_trip(
     }
 }
 
+/// The fused engine and the axis-by-axis engine give the same bits, forward and back
+/// (f32 and f64), including shapes where some levels cannot fuse.
+fn engines_agree(shape: &[usize], axes: Vec<usize>, s: usize, b: usize, levels: usize, seed: u64) {
+    let data = noise(seed, shape.iter().product());
+    let spec = PyramidSpec {
+        scheme: Scheme::ALL[s],
+        boundary: Boundary::ALL[b],
+        levels,
+        order: Order::NonStandard,
+        axes,
+    };
+    let mut fused = Array::from_shape_vec(shape, data.clone()).unwrap();
+    let mut axis = fused.clone();
+    let p1 = analyze_with(&mut fused, &spec, Engine::Fused).unwrap();
+    let p2 = analyze_with(&mut axis, &spec, Engine::AxisByAxis).unwrap();
+    assert_eq!(p1, p2);
+    assert!(
+        fused
+            .data()
+            .iter()
+            .zip(axis.data())
+            .all(|(x, y)| x.to_bits() == y.to_bits()),
+        "analysis {spec:?} {shape:?}"
+    );
+    // synthesize the same coefficients both ways
+    let mut back = fused.clone();
+    synthesize_with(&mut fused, &p1, Engine::Fused).unwrap();
+    synthesize_with(&mut back, &p1, Engine::AxisByAxis).unwrap();
+    assert!(
+        fused
+            .data()
+            .iter()
+            .zip(back.data())
+            .all(|(x, y)| x.to_bits() == y.to_bits()),
+        "synthesis {spec:?} {shape:?}"
+    );
+    // and in f32
+    let d32: Vec<f32> = data.iter().map(|&v| v as f32).collect();
+    let mut f = Array::from_shape_vec(shape, d32.clone()).unwrap();
+    let mut a = Array::from_shape_vec(shape, d32).unwrap();
+    let p = analyze_with(&mut f, &spec, Engine::Fused).unwrap();
+    analyze_with(&mut a, &spec, Engine::AxisByAxis).unwrap();
+    assert!(
+        f.data()
+            .iter()
+            .zip(a.data())
+            .all(|(x, y)| x.to_bits() == y.to_bits()),
+        "f32 analysis {spec:?} {shape:?}"
+    );
+    synthesize_with(&mut f, &p, Engine::Fused).unwrap();
+    synthesize_with(&mut a, &p, Engine::AxisByAxis).unwrap();
+    assert!(
+        f.data()
+            .iter()
+            .zip(a.data())
+            .all(|(x, y)| x.to_bits() == y.to_bits()),
+        "f32 synthesis {spec:?} {shape:?}"
+    );
+}
+
+#[test]
+fn engines_agree_on_large_images_and_volumes() {
+    // big enough for the parallel path and long regular runs
+    for s in 0..3 {
+        for b in 0..3 {
+            engines_agree(&[300, 257], vec![0, 1], s, b, 4, 7);
+            engines_agree(&[64, 96, 3], vec![0, 1], s, b, 3, 8);
+            engines_agree(&[40, 33, 70], vec![0, 1, 2], s, b, 3, 9);
+        }
+    }
+}
+
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(120))]
+    #[test]
+    fn fused_and_axis_engines_give_the_same_bits(d in 1usize..20, h in 1usize..50, w in 1usize..70, c in 1usize..4, s in 0usize..3, b in 0usize..3, levels in 0usize..6, kind in 0usize..4, seed in any::<u64>()) {
+        match kind {
+            0 => engines_agree(&[h, w], vec![0, 1], s, b, levels, seed),
+            1 => engines_agree(&[h, w, c], vec![0, 1], s, b, levels, seed),
+            2 => engines_agree(&[d, h, w], vec![0, 1, 2], s, b, levels, seed),
+            _ => engines_agree(&[h, w], vec![1, 0], s, b, levels, seed),
+        }
+    }
+    #[test]
     #[test]
     fn every_2d_array_reconstructs(h in 1usize..80, w in 1usize..80, s in 0usize..3, b in 0usize..3, std in any::<bool>(), levels in 0usize..7, seed in any::<u64>()) {
         let order = if std { Order::Standard } else { Order::NonStandard };

@@ -69,6 +69,12 @@ impl<T> Array<T> {
     pub fn into_data(self) -> Vec<T> {
         self.data
     }
+    /// Exchange the samples with `other` (same length): how an out-of-place level hands
+    /// its result over without a copy.
+    pub(crate) fn swap_data(&mut self, other: &mut Vec<T>) {
+        assert_eq!(other.len(), self.data.len());
+        std::mem::swap(&mut self.data, other);
+    }
     /// Row-major strides in elements.
     pub fn strides(&self) -> Vec<usize> {
         strides(&self.shape)

@@ -2,12 +2,17 @@
 //! the standard and the non-standard (Mallat) order. `par.rs` holds the only rayon code.
 
 mod array;
+mod fused;
 mod par;
 pub mod pyramid;
 mod resample;
 mod transform;
+pub mod workspace;
 
 pub use array::{Array, Axis};
-pub use pyramid::{analyze, synthesize, Order, Pyramid, PyramidSpec, Subband};
+pub use pyramid::{
+    analyze, analyze_with, synthesize, synthesize_with, Engine, Order, Pyramid, PyramidSpec,
+    Subband,
+};
 pub use resample::{map_lanes, resample_axis};
 pub use transform::transform_axis;

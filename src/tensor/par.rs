@@ -29,3 +29,25 @@ where
             .for_each_init(init, |s, i| task(i, s));
     }
 }
+
+/// Run `task(part, &mut scratch)` over consecutive parts of `items` (`per_task` items
+/// each) on rayon's pool, one scratch per worker; on the calling thread when `serial`.
+pub(crate) fn for_each_part<S: Send, F, I>(
+    items: &[usize],
+    per_task: usize,
+    serial: bool,
+    init: I,
+    task: F,
+) where
+    I: Fn() -> S + Sync + Send,
+    F: Fn(&[usize], &mut S) + Sync + Send,
+{
+    if serial || items.len() <= per_task {
+        let mut s = init();
+        task(items, &mut s);
+    } else {
+        items
+            .par_chunks(per_task)
+            .for_each_init(init, |s, part| task(part, s));
+    }
+}

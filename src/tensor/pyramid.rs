@@ -8,7 +8,9 @@
 //!   while the others go on.
 
 use super::array::Array;
+use super::fused::{fused_level, AxisOp};
 use super::transform::transform_axis;
+use super::workspace;
 use crate::scheme::{max_levels, Boundary, Sample, Scheme, TwoScale};
 use crate::{Error, Result};
 
@@ -151,6 +153,19 @@ impl Pyramid {
         steps
     }
 
+    /// The region a non-standard level `l` starts from (the coarse block of level `l−1`).
+    pub fn region_before(&self, l: usize) -> Vec<usize> {
+        let mut r = self.shape.clone();
+        for m in 0..l {
+            for (i, &a) in self.spec.axes.iter().enumerate() {
+                if m < self.axis_levels(i) {
+                    r[a] = self.lengths[i][m + 1];
+                }
+            }
+        }
+        r
+    }
+
     /// The subbands of a non-standard pyramid, coarsest block first, then level by
     /// level from the coarsest details to the finest. (For the standard order the
     /// blocks are the products of every axis' own bands; use [`Pyramid::lengths`].)
@@ -202,18 +217,56 @@ impl Pyramid {
 
 /// Decompose `array` in place; returns the plan needed to invert it.
 pub fn analyze<T: Sample>(array: &mut Array<T>, spec: &PyramidSpec) -> Result<Pyramid> {
-    let pyr = Pyramid::plan(array.shape(), spec)?;
-    let shape = array.shape().to_vec();
-    for (i, l, region) in pyr.steps() {
-        let a = spec.axes[i];
-        let level = TwoScale::new(spec.scheme, spec.boundary, pyr.lengths[i][l]);
-        transform_axis(array.data_mut(), &shape, &region, a, &level.analysis);
-    }
-    Ok(pyr)
+    analyze_with(array, spec, Engine::default())
 }
 
 /// Invert [`analyze`] in place.
 pub fn synthesize<T: Sample>(array: &mut Array<T>, pyr: &Pyramid) -> Result<()> {
+    synthesize_with(array, pyr, Engine::default())
+}
+
+/// How the levels of a pyramid are computed. Both give the same bits: every output
+/// sample is the same sums in the same order (axes in increasing order within a level,
+/// in both directions; the operators of different axes commute).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Engine {
+    /// Non-standard levels over the leading axes run fused and out of place (one read
+    /// and one write of every sample per level, the array plus one scratch array of
+    /// memory); other levels go axis by axis. The default, unless `MRA_ENGINE=axis` is
+    /// set in the environment.
+    Fused,
+    /// Every level axis by axis, in place.
+    AxisByAxis,
+}
+
+impl Default for Engine {
+    fn default() -> Self {
+        static ON: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
+        if *ON.get_or_init(|| std::env::var("MRA_ENGINE").map_or(true, |v| v != "axis")) {
+            Engine::Fused
+        } else {
+            Engine::AxisByAxis
+        }
+    }
+}
+
+/// [`analyze`] with a chosen [`Engine`].
+pub fn analyze_with<T: Sample>(
+    array: &mut Array<T>,
+    spec: &PyramidSpec,
+    engine: Engine,
+) -> Result<Pyramid> {
+    let pyr = Pyramid::plan(array.shape(), spec)?;
+    run(array, &pyr, Direction::Analysis, engine);
+    Ok(pyr)
+}
+
+/// [`synthesize`] with a chosen [`Engine`].
+pub fn synthesize_with<T: Sample>(
+    array: &mut Array<T>,
+    pyr: &Pyramid,
+    engine: Engine,
+) -> Result<()> {
     if array.shape() != pyr.shape.as_slice() {
         return Err(Error::parameter(
             "array shape",
@@ -221,11 +274,114 @@ pub fn synthesize<T: Sample>(array: &mut Array<T>, pyr: &Pyramid) -> Result<()> 
             "the shape the pyramid was computed for",
         ));
     }
-    let shape = array.shape().to_vec();
-    for (i, l, region) in pyr.steps().into_iter().rev() {
-        let a = pyr.spec.axes[i];
-        let level = TwoScale::new(pyr.spec.scheme, pyr.spec.boundary, pyr.lengths[i][l]);
-        transform_axis(array.data_mut(), &shape, &region, a, &level.synthesis);
-    }
+    run(array, pyr, Direction::Synthesis, engine);
     Ok(())
+}
+
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Direction {
+    Analysis,
+    Synthesis,
+}
+
+/// The levels of `pyr` in the direction asked. With [`Engine::Fused`], a non-standard
+/// level whose axes are the leading axes of the array (an image `[H, W, C]`, a volume `[D, H, W]`) runs fused and
+/// out of place ([`fused_level`]); any other step goes axis by axis in place.
+fn run<T: Sample>(array: &mut Array<T>, pyr: &Pyramid, dir: Direction, engine: Engine) {
+    let shape = array.shape().to_vec();
+    let spec = &pyr.spec;
+    let ops =
+        |i: usize, l: usize| workspace::level_ops(spec.scheme, spec.boundary, pyr.lengths[i][l]);
+    let step = |data: &mut [T], i: usize, l: usize, region: &[usize]| {
+        let o = ops(i, l);
+        let op = match dir {
+            Direction::Analysis => &o.two_scale.analysis,
+            Direction::Synthesis => &o.two_scale.synthesis,
+        };
+        transform_axis(data, &shape, region, spec.axes[i], op);
+    };
+    if spec.order == Order::Standard {
+        let mut steps = pyr.steps();
+        if dir == Direction::Synthesis {
+            steps.reverse();
+        }
+        for (i, l, region) in steps {
+            step(array.data_mut(), i, l, &region);
+        }
+        return;
+    }
+    let mut levels: Vec<usize> = (0..pyr.depth()).collect();
+    if dir == Direction::Synthesis {
+        levels.reverse();
+    }
+    let mut scratch: Option<Vec<T>> = None;
+    for l in levels {
+        let region = pyr.region_before(l);
+        let active: Vec<usize> = (0..spec.axes.len())
+            .filter(|&i| l < pyr.axis_levels(i))
+            .collect();
+        let k = active.len();
+        // fused when the active axes are exactly 0..k and the rest of the array is whole
+        let mut by_axis = vec![usize::MAX; shape.len()];
+        for &i in &active {
+            by_axis[spec.axes[i]] = i;
+        }
+        let fusable = engine == Engine::Fused
+            && k > 0
+            && (0..k).all(|d| by_axis[d] != usize::MAX)
+            && (k..shape.len()).all(|d| region[d] == shape[d]);
+        if !fusable {
+            // increasing axis order in both directions (as the fused path computes)
+            let mut order = active.clone();
+            order.sort_by_key(|&i| spec.axes[i]);
+            for i in order {
+                // every axis of a level sees the whole region (coarse and detail blocks)
+                step(array.data_mut(), i, l, &region);
+            }
+            continue;
+        }
+        let level_ops: Vec<_> = (0..k).map(|d| ops(by_axis[d], l)).collect();
+        let axis_ops: Vec<AxisOp> = level_ops
+            .iter()
+            .map(|o| match dir {
+                Direction::Analysis => AxisOp {
+                    op: &o.two_scale.analysis,
+                    plan: &o.analysis,
+                    order: &o.analysis_order,
+                },
+                Direction::Synthesis => AxisOp {
+                    op: &o.two_scale.synthesis,
+                    plan: &o.synthesis,
+                    order: &o.synthesis_order,
+                },
+            })
+            .collect();
+        let strides = array.strides();
+        let e: usize = shape[k..].iter().product();
+        let buf = scratch.get_or_insert_with(|| workspace::take_scratch(array.len()));
+        fused_level(array.data(), buf, &strides[..k], &region[..k], e, &axis_ops);
+        if region == shape {
+            array.swap_data(buf);
+        } else {
+            copy_region(buf, array.data_mut(), &strides[..k], &region[..k], e);
+        }
+    }
+    if let Some(s) = scratch {
+        workspace::give_scratch(s);
+    }
+}
+
+/// Copy the box `[0, region)` (leading axes; elements of `e` samples) from `src` to `dst`.
+fn copy_region<T: Copy>(src: &[T], dst: &mut [T], strides: &[usize], region: &[usize], e: usize) {
+    let k = region.len();
+    let run = region[k - 1] * e;
+    let lines: usize = region[..k - 1].iter().product();
+    for line in 0..lines {
+        let (mut at, mut rem) = (0, line);
+        for j in (0..k - 1).rev() {
+            at += (rem % region[j]) * strides[j];
+            rem /= region[j];
+        }
+        dst[at..at + run].copy_from_slice(&src[at..at + run]);
+    }
 }

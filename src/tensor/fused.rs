@@ -1,0 +1,200 @@
+//! One level along the leading axes `0..k` of an array region at once, out of place.
+//!
+//! The two-scale operators of different axes commute (tensor product), so a level along
+//! axes `0, 1, …, k−1` can be computed slab by slab: output slab `r` along axis 0 is
+//! `Σ_c W_rc · (input slab c)` — whole slabs combined with the weights of row `r` of
+//! axis 0's operator (the notes' `E1 = 0·D1`: the elements of a lane are whole rows) —
+//! and that slab, still in cache, goes through the same level along the remaining axes,
+//! ending in one contiguous lane per row ([`Polyphase::apply_lane`]). Every input sample
+//! is read from memory once per level and every output sample written once, which is
+//! what a level costs at best; analysis `[A; B]` and synthesis `[P | Q]` run the same code.
+//!
+//! The axes after `k−1` must be whole (not part of this level's region): together they
+//! form the elements (`e` samples, e.g. the channels of an image).
+
+use super::par::{for_each_part, SharedMut};
+use crate::scheme::kernel::combine;
+use crate::scheme::polyphase::Polyphase;
+use crate::scheme::sparse::Csr;
+use crate::scheme::Sample;
+
+/// One axis' operator for this level.
+pub struct AxisOp<'a> {
+    pub op: &'a Csr,
+    pub plan: &'a Polyphase,
+    /// Rows in the order to compute them (by first column, so analysis visits the coarse
+    /// and detail rows of one neighbourhood together and reads its input once).
+    pub order: &'a [usize],
+}
+
+/// Rows of [`AxisOp::order`] handed to one task.
+const ROWS_PER_TASK: usize = 16;
+
+/// Apply one level along axes `0..ops.len()` to the box `[0, region[d])` of `src`,
+/// writing the same box of `dst`. Both buffers have the array's `strides` (the first
+/// `ops.len()` strides; the last of them must equal `e`, the element width).
+pub fn fused_level<T: Sample>(
+    src: &[T],
+    dst: &mut [T],
+    strides: &[usize],
+    region: &[usize],
+    e: usize,
+    ops: &[AxisOp],
+) {
+    let k = ops.len();
+    assert!(k >= 1 && region.len() == k && strides.len() == k);
+    assert_eq!(strides[k - 1], e);
+    assert_eq!(src.len(), dst.len());
+    for d in 0..k {
+        assert_eq!(ops[d].op.rows(), region[d]);
+        assert_eq!(ops[d].plan.rows, region[d]);
+        assert!(d == 0 || strides[d - 1] >= strides[d] * region[d]);
+    }
+    let extent = (0..k).map(|d| (region[d] - 1) * strides[d]).sum::<usize>() + e;
+    assert!(extent <= src.len());
+    // compact strides of the slabs held in scratch
+    let mut cs = vec![e; k];
+    for d in (0..k - 1).rev() {
+        cs[d] = cs[d + 1] * region[d + 1];
+    }
+    let slab_len = |d: usize| cs[d]; // samples in a slab below axis d
+    let make_scratch = || -> Vec<Vec<T>> {
+        let mut v: Vec<Vec<T>> = (0..k - 1)
+            .map(|d| vec![T::default(); slab_len(d)])
+            .collect();
+        v.push(vec![T::default(); region[k - 1] * e]);
+        v
+    };
+    let ctx = Ctx {
+        region,
+        e,
+        ops,
+        cs: &cs,
+    };
+    let dst_len = dst.len();
+    let dptr = SharedMut(dst.as_mut_ptr());
+    let order = ops[0].order;
+    let work = region.iter().product::<usize>() * e;
+    if k == 1 {
+        let n = region[0] * e;
+        let mut lane_tmp = vec![T::default(); n];
+        ops[0]
+            .plan
+            .apply_lane(ops[0].op, &src[..n], &mut dst[..n], e, &mut lane_tmp);
+        return;
+    }
+    let task = |rows: &[usize], scratch: &mut Vec<Vec<T>>| {
+        let p = dptr;
+        for &r in rows {
+            let at = r * strides[0];
+            let len = strides[0].min(dst_len - at);
+            // SAFETY: output row r of axis 0 owns dst[r·s0, r·s0 + s0) (strides are
+            // nested, checked above); each row index appears once in `order`, and tasks
+            // get disjoint parts of `order`.
+            let out = unsafe { std::slice::from_raw_parts_mut(p.0.add(at), len) };
+            ctx.row(0, r, src, strides, out, strides, scratch);
+        }
+    };
+    for_each_part(order, ROWS_PER_TASK, work < 1 << 16, make_scratch, task);
+}
+
+struct Ctx<'a> {
+    region: &'a [usize],
+    e: usize,
+    ops: &'a [AxisOp<'a>],
+    cs: &'a [usize],
+}
+
+impl Ctx<'_> {
+    /// Output row `r` along axis `d`: `out` starts at that row's slab in the destination
+    /// (`dst_st` its strides), `src` at the input's origin for axes `d..` (`src_st`).
+    #[allow(clippy::too_many_arguments)]
+    fn row<T: Sample>(
+        &self,
+        d: usize,
+        r: usize,
+        src: &[T],
+        src_st: &[usize],
+        out: &mut [T],
+        dst_st: &[usize],
+        scratch: &mut [Vec<T>],
+    ) {
+        let k = self.ops.len();
+        let e = self.e;
+        if d == k - 1 {
+            unreachable!("the last axis is applied lane by lane in `slab`");
+        }
+        // combine the input slabs of row r into scratch[0] (compact, strides cs[d+1..])
+        let (slab, rest) = scratch.split_first_mut().expect("scratch per axis");
+        let run = self.region[k - 1] * e;
+        let lines: usize = self.region[d + 1..k - 1].iter().product();
+        let mut taps: [&[T]; 16] = [&[]; 16];
+        let mut w = [T::default(); 16];
+        let mut buf = [(0usize, 0f64); 16];
+        let mut n = 0;
+        let mut long = Vec::new();
+        for (c, wc) in self.ops[d].op.row(r) {
+            if n < buf.len() {
+                buf[n] = (c, wc);
+            }
+            n += 1;
+        }
+        if n > buf.len() {
+            long = self.ops[d].op.row(r).collect();
+        }
+        let entries: &[(usize, f64)] = if n > buf.len() { &long } else { &buf[..n] };
+        for line in 0..lines {
+            // offsets of this line in the source and in the compact slab
+            let (mut so, mut co, mut rem) = (0usize, 0usize, line);
+            for j in (d + 1..k - 1).rev() {
+                let i = rem % self.region[j];
+                rem /= self.region[j];
+                so += i * src_st[j];
+                co += i * self.cs[j];
+            }
+            let out_line = &mut slab[co..co + run];
+            if entries.len() <= taps.len() {
+                for (t, &(c, wc)) in entries.iter().enumerate() {
+                    let at = c * src_st[d] + so;
+                    taps[t] = &src[at..at + run];
+                    w[t] = T::from_f64(wc);
+                }
+                combine(out_line, &taps[..entries.len()], &w[..entries.len()]);
+            } else {
+                let t: Vec<&[T]> = entries
+                    .iter()
+                    .map(|&(c, _)| &src[c * src_st[d] + so..c * src_st[d] + so + run])
+                    .collect();
+                let ws: Vec<T> = entries.iter().map(|&(_, x)| T::from_f64(x)).collect();
+                combine(out_line, &t, &ws);
+            }
+        }
+        self.slab(d + 1, slab, out, dst_st, rest);
+    }
+
+    /// The level along axes `d..` of a compact slab, into `out` (strides `dst_st`).
+    fn slab<T: Sample>(
+        &self,
+        d: usize,
+        slab: &[T],
+        out: &mut [T],
+        dst_st: &[usize],
+        scratch: &mut [Vec<T>],
+    ) {
+        let k = self.ops.len();
+        let e = self.e;
+        if d == k - 1 {
+            let a = &self.ops[d];
+            let n = self.region[d] * e;
+            let lane_tmp = scratch.last_mut().expect("lane scratch");
+            a.plan
+                .apply_lane(a.op, &slab[..n], &mut out[..n], e, lane_tmp);
+            return;
+        }
+        for &r in self.ops[d].order {
+            let at = r * dst_st[d];
+            let o = &mut out[at..];
+            self.row(d, r, slab, self.cs, o, dst_st, scratch);
+        }
+    }
+}
