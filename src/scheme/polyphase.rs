@@ -14,7 +14,7 @@
 //! `col_step = 2` the lane is first split into its even and odd elements, so tap `k` reads
 //! the contiguous slice starting at element `cols[k] / 2` of one half.
 
-use super::kernel::{combine, deinterleave, scatter_every};
+use super::kernel::{combine, deinterleave, interleave};
 use super::sample::Sample;
 use super::sparse::Csr;
 
@@ -121,63 +121,57 @@ impl Polyphase {
         if self.col_step == 2 && !self.runs.is_empty() {
             deinterleave(x, e, scratch);
         }
-        let mut src: [&[T]; 16] = [&[]; 16];
-        let mut w = [T::default(); 16];
-        for run in &self.runs {
-            let taps = run.cols.len();
-            let len = run.count * e;
-            if taps > src.len() {
-                // never for the schemes here; stay correct anyway
-                op_rows_run(op, run, x, y, e);
+        // Row-strided runs (synthesis, `col_step` 1 so `scratch` is free): the even and
+        // the odd rows are computed over the stretch where both phases are regular, into
+        // the two halves of `scratch`, then interleaved.
+        let mut paired = [usize::MAX; 2];
+        let even = self
+            .runs
+            .iter()
+            .position(|r| r.row_step == 2 && r.row0 % 2 == 0);
+        let odd = self
+            .runs
+            .iter()
+            .position(|r| r.row_step == 2 && r.row0 % 2 == 1);
+        if let (Some(ei), Some(oi), 1) = (even, odd, self.col_step) {
+            let (ev, od) = (&self.runs[ei], &self.runs[oi]);
+            let (a, b) = (ev.row0 / 2, od.row0 / 2);
+            let (p0, p1) = (a.max(b), (a + ev.count).min(b + od.count));
+            if p1 > p0 && ev.cols.len() <= 16 && od.cols.len() <= 16 {
+                paired = [ei, oi];
+                let n = (p1 - p0) * e;
+                let (t0, t1) = scratch[..2 * n].split_at_mut(n);
+                run_part(1, ne, ev, p0 - a, p1 - p0, x, &[], e, t0);
+                run_part(1, ne, od, p0 - b, p1 - p0, x, &[], e, t1);
+                interleave(t0, t1, e, &mut y[2 * p0 * e..2 * p1 * e]);
+                // rows of either run outside the common stretch
+                for (run, base) in [(ev, a), (od, b)] {
+                    let inside = (p0 - base)..(p1 - base);
+                    for i in (0..inside.start).chain(inside.end..run.count) {
+                        op_row(op, run.row0 + 2 * i, x, y, e);
+                    }
+                }
+            }
+        }
+        for (ri, run) in self.runs.iter().enumerate() {
+            if paired.contains(&ri) {
                 continue;
             }
-            for (k, (&c, &wk)) in run.cols.iter().zip(&run.weights).enumerate() {
-                let start = if self.col_step == 2 {
-                    (c % 2) * ne * e + (c / 2) * e
-                } else {
-                    c * e
-                };
-                src[k] = if self.col_step == 2 {
-                    &scratch[start..start + len]
-                } else {
-                    &x[start..start + len]
-                };
-                w[k] = T::from_f64(wk);
-            }
-            if run.row_step == 1 {
-                combine(
+            if run.row_step == 1 && run.cols.len() <= 16 {
+                let len = run.count * e;
+                run_part(
+                    self.col_step,
+                    ne,
+                    run,
+                    0,
+                    run.count,
+                    x,
+                    scratch,
+                    e,
                     &mut y[run.row0 * e..run.row0 * e + len],
-                    &src[..taps],
-                    &w[..taps],
                 );
             } else {
-                // a row-strided run: compute it contiguously, then put it in place
-                let mut tmp = [T::default(); 256];
-                let mut done = 0;
-                let chunk = (tmp.len() / e).max(1);
-                if e > tmp.len() {
-                    op_rows_run(op, run, x, y, e);
-                    continue;
-                }
-                while done < run.count {
-                    let c = chunk.min(run.count - done);
-                    let part: [&[T]; 16] = std::array::from_fn(|k| {
-                        if k < taps {
-                            &src[k][done * e..]
-                        } else {
-                            &[][..]
-                        }
-                    });
-                    combine(&mut tmp[..c * e], &part[..taps], &w[..taps]);
-                    scatter_every(
-                        &tmp[..c * e],
-                        e,
-                        y,
-                        run.row0 + run.row_step * done,
-                        run.row_step,
-                    );
-                    done += c;
-                }
+                op_rows_run(op, run, x, y, e);
             }
         }
         for &r in &self.boundary_rows {
@@ -186,27 +180,35 @@ impl Polyphase {
     }
 }
 
-/// One row of `op` on element-wide samples: `y_r = Σ w x_c`.
+/// One row of `op` on element-wide samples: `y_r = Σ w x_c` (first tap assigns).
 #[inline]
 fn op_row<T: Sample>(op: &Csr, r: usize, x: &[T], y: &mut [T], e: usize) {
+    let (cols, ws) = op.row_slices(r);
+    if e == 1 {
+        let mut acc = T::default();
+        for (k, (&c, &w)) in cols.iter().zip(ws).enumerate() {
+            let v = T::from_f64(w) * x[c as usize];
+            acc = if k == 0 { v } else { acc + v };
+        }
+        y[r] = acc;
+        return;
+    }
     let out = &mut y[r * e..r * e + e];
-    let mut first = true;
-    for (c, w) in op.row(r) {
+    if cols.is_empty() {
+        out.fill(T::default());
+    }
+    for (k, (&c, &w)) in cols.iter().zip(ws).enumerate() {
         let w = T::from_f64(w);
-        let xs = &x[c * e..c * e + e];
-        if first {
+        let xs = &x[c as usize * e..c as usize * e + e];
+        if k == 0 {
             for (o, &v) in out.iter_mut().zip(xs) {
                 *o = w * v;
             }
-            first = false;
         } else {
             for (o, &v) in out.iter_mut().zip(xs) {
                 *o += w * v;
             }
         }
-    }
-    if first {
-        out.fill(T::default());
     }
 }
 
@@ -214,4 +216,37 @@ fn op_rows_run<T: Sample>(op: &Csr, run: &Run, x: &[T], y: &mut [T], e: usize) {
     for i in 0..run.count {
         op_row(op, run.row0 + run.row_step * i, x, y, e);
     }
+}
+
+/// Rows `i0 .. i0 + count` of `run` into `out` (contiguous): every tap is one slice of
+/// the lane (`col_step` 1) or of its even/odd halves in `halves` (`col_step` 2, even
+/// half `ne` elements long).
+#[allow(clippy::too_many_arguments)]
+#[inline]
+fn run_part<T: Sample>(
+    col_step: usize,
+    ne: usize,
+    run: &Run,
+    i0: usize,
+    count: usize,
+    x: &[T],
+    halves: &[T],
+    e: usize,
+    out: &mut [T],
+) {
+    let mut src: [&[T]; 16] = [&[]; 16];
+    let mut w = [T::default(); 16];
+    let taps = run.cols.len();
+    let len = count * e;
+    for (k, (&c, &wk)) in run.cols.iter().zip(&run.weights).enumerate() {
+        src[k] = if col_step == 2 {
+            let start = (c % 2) * ne * e + (c / 2 + i0) * e;
+            &halves[start..start + len]
+        } else {
+            let start = (c + i0) * e;
+            &x[start..start + len]
+        };
+        w[k] = T::from_f64(wk);
+    }
+    combine(&mut out[..len], &src[..taps], &w[..taps]);
 }

@@ -36,6 +36,12 @@ impl Csr {
             .zip(&self.weight[a..b])
             .map(|(&c, &w)| (c as usize, w))
     }
+    /// Row `r` as its column and weight slices (the hot-loop form of [`Csr::row`]).
+    #[inline]
+    pub fn row_slices(&self, r: usize) -> (&[u32], &[f64]) {
+        let (a, b) = (self.offsets[r] as usize, self.offsets[r + 1] as usize);
+        (&self.index[a..b], &self.weight[a..b])
+    }
     /// Dense copy, row-major (tests and eigen analysis only).
     pub fn to_dense(&self) -> Vec<Vec<f64>> {
         let mut d = vec![vec![0.0; self.cols]; self.rows];

@@ -130,19 +130,7 @@ impl Ctx<'_> {
         let lines: usize = self.region[d + 1..k - 1].iter().product();
         let mut taps: [&[T]; 16] = [&[]; 16];
         let mut w = [T::default(); 16];
-        let mut buf = [(0usize, 0f64); 16];
-        let mut n = 0;
-        let mut long = Vec::new();
-        for (c, wc) in self.ops[d].op.row(r) {
-            if n < buf.len() {
-                buf[n] = (c, wc);
-            }
-            n += 1;
-        }
-        if n > buf.len() {
-            long = self.ops[d].op.row(r).collect();
-        }
-        let entries: &[(usize, f64)] = if n > buf.len() { &long } else { &buf[..n] };
+        let (cols, ws) = self.ops[d].op.row_slices(r);
         for line in 0..lines {
             // offsets of this line in the source and in the compact slab
             let (mut so, mut co, mut rem) = (0usize, 0usize, line);
@@ -153,20 +141,17 @@ impl Ctx<'_> {
                 co += i * self.cs[j];
             }
             let out_line = &mut slab[co..co + run];
-            if entries.len() <= taps.len() {
-                for (t, &(c, wc)) in entries.iter().enumerate() {
-                    let at = c * src_st[d] + so;
-                    taps[t] = &src[at..at + run];
+            let at = |c: u32| c as usize * src_st[d] + so;
+            if cols.len() <= taps.len() {
+                for (t, (&c, &wc)) in cols.iter().zip(ws).enumerate() {
+                    taps[t] = &src[at(c)..at(c) + run];
                     w[t] = T::from_f64(wc);
                 }
-                combine(out_line, &taps[..entries.len()], &w[..entries.len()]);
+                combine(out_line, &taps[..cols.len()], &w[..cols.len()]);
             } else {
-                let t: Vec<&[T]> = entries
-                    .iter()
-                    .map(|&(c, _)| &src[c * src_st[d] + so..c * src_st[d] + so + run])
-                    .collect();
-                let ws: Vec<T> = entries.iter().map(|&(_, x)| T::from_f64(x)).collect();
-                combine(out_line, &t, &ws);
+                let t: Vec<&[T]> = cols.iter().map(|&c| &src[at(c)..at(c) + run]).collect();
+                let wv: Vec<T> = ws.iter().map(|&x| T::from_f64(x)).collect();
+                combine(out_line, &t, &wv);
             }
         }
         self.slab(d + 1, slab, out, dst_st, rest);
