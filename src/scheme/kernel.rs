@@ -34,7 +34,23 @@ pub fn combine_baseline<T: Sample>(out: &mut [T], src: &[&[T]], w: &[T]) {
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 unsafe fn combine_avx2<T: Sample>(out: &mut [T], src: &[&[T]], w: &[T]) {
-    combine_generic(out, src, w)
+    let n = src.len();
+    if n == 0 || n > MAX_FUSED {
+        return combine_generic(out, src, w);
+    }
+    // SAFETY (all arms): AVX2 is present (this function's contract).
+    unsafe {
+        match n {
+            1 => taps_avx2::<T, 1>(out, src, w),
+            2 => taps_avx2::<T, 2>(out, src, w),
+            3 => taps_avx2::<T, 3>(out, src, w),
+            4 => taps_avx2::<T, 4>(out, src, w),
+            5 => taps_avx2::<T, 5>(out, src, w),
+            6 => taps_avx2::<T, 6>(out, src, w),
+            7 => taps_avx2::<T, 7>(out, src, w),
+            _ => taps_avx2::<T, 8>(out, src, w),
+        }
+    }
 }
 
 #[inline(always)]
@@ -78,6 +94,78 @@ fn taps<T: Sample, const N: usize>(out: &mut [T], src: &[&[T]], w: &[T]) {
     }
 }
 
+/// [`taps`] with AVX2 intrinsics for `f32`/`f64`: blocks of four vectors keep four
+/// independent sums in flight (each output's sum is a chain of dependent adds in a fixed
+/// order, for the bits, so one vector at a time would wait on add latency). Separate
+/// multiply and add, no FMA: the same bits as the scalar loop.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn taps_avx2<T: Sample, const N: usize>(out: &mut [T], src: &[&[T]], w: &[T]) {
+    use std::any::TypeId;
+    use std::arch::x86_64::*;
+    let len = out.len();
+    let s: [&[T]; N] = std::array::from_fn(|k| &src[k][..len]);
+    let done = if TypeId::of::<T>() == TypeId::of::<f32>() {
+        let wv: [__m256; N] = std::array::from_fn(|k| _mm256_set1_ps(w[k].to_f64() as f32));
+        let p: [*const f32; N] = std::array::from_fn(|k| s[k].as_ptr() as *const f32);
+        let o = out.as_mut_ptr() as *mut f32;
+        let full = len / 32 * 32;
+        let mut i = 0;
+        while i < full {
+            // SAFETY: i + 32 <= len for every slice; T is f32.
+            unsafe {
+                let mut a0 = _mm256_mul_ps(wv[0], _mm256_loadu_ps(p[0].add(i)));
+                let mut a1 = _mm256_mul_ps(wv[0], _mm256_loadu_ps(p[0].add(i + 8)));
+                let mut a2 = _mm256_mul_ps(wv[0], _mm256_loadu_ps(p[0].add(i + 16)));
+                let mut a3 = _mm256_mul_ps(wv[0], _mm256_loadu_ps(p[0].add(i + 24)));
+                for k in 1..N {
+                    a0 = _mm256_add_ps(a0, _mm256_mul_ps(wv[k], _mm256_loadu_ps(p[k].add(i))));
+                    a1 = _mm256_add_ps(a1, _mm256_mul_ps(wv[k], _mm256_loadu_ps(p[k].add(i + 8))));
+                    a2 = _mm256_add_ps(a2, _mm256_mul_ps(wv[k], _mm256_loadu_ps(p[k].add(i + 16))));
+                    a3 = _mm256_add_ps(a3, _mm256_mul_ps(wv[k], _mm256_loadu_ps(p[k].add(i + 24))));
+                }
+                _mm256_storeu_ps(o.add(i), a0);
+                _mm256_storeu_ps(o.add(i + 8), a1);
+                _mm256_storeu_ps(o.add(i + 16), a2);
+                _mm256_storeu_ps(o.add(i + 24), a3);
+            }
+            i += 32;
+        }
+        full
+    } else if TypeId::of::<T>() == TypeId::of::<f64>() {
+        let wv: [__m256d; N] = std::array::from_fn(|k| _mm256_set1_pd(w[k].to_f64()));
+        let p: [*const f64; N] = std::array::from_fn(|k| s[k].as_ptr() as *const f64);
+        let o = out.as_mut_ptr() as *mut f64;
+        let full = len / 16 * 16;
+        let mut i = 0;
+        while i < full {
+            // SAFETY: i + 16 <= len for every slice; T is f64.
+            unsafe {
+                let mut a0 = _mm256_mul_pd(wv[0], _mm256_loadu_pd(p[0].add(i)));
+                let mut a1 = _mm256_mul_pd(wv[0], _mm256_loadu_pd(p[0].add(i + 4)));
+                let mut a2 = _mm256_mul_pd(wv[0], _mm256_loadu_pd(p[0].add(i + 8)));
+                let mut a3 = _mm256_mul_pd(wv[0], _mm256_loadu_pd(p[0].add(i + 12)));
+                for k in 1..N {
+                    a0 = _mm256_add_pd(a0, _mm256_mul_pd(wv[k], _mm256_loadu_pd(p[k].add(i))));
+                    a1 = _mm256_add_pd(a1, _mm256_mul_pd(wv[k], _mm256_loadu_pd(p[k].add(i + 4))));
+                    a2 = _mm256_add_pd(a2, _mm256_mul_pd(wv[k], _mm256_loadu_pd(p[k].add(i + 8))));
+                    a3 = _mm256_add_pd(a3, _mm256_mul_pd(wv[k], _mm256_loadu_pd(p[k].add(i + 12))));
+                }
+                _mm256_storeu_pd(o.add(i), a0);
+                _mm256_storeu_pd(o.add(i + 4), a1);
+                _mm256_storeu_pd(o.add(i + 8), a2);
+                _mm256_storeu_pd(o.add(i + 12), a3);
+            }
+            i += 16;
+        }
+        full
+    } else {
+        0
+    };
+    let rest: [&[T]; N] = std::array::from_fn(|k| &s[k][done..]);
+    taps::<T, N>(&mut out[done..], &rest, w);
+}
+
 /// Split `x` (elements of `e` samples) into its even elements, then its odd elements:
 /// `dst = [x_0, x_2, x_4, … | x_1, x_3, …]`.
 #[inline]
@@ -117,9 +205,9 @@ unsafe fn deinterleave_avx2<T: Sample>(x: &[T], e: usize, dst: &mut [T]) {
             }
             i += 8;
         }
-        for j in 2 * pairs..m {
+        for (j, &v) in x.iter().enumerate().skip(2 * pairs) {
             let at = if j % 2 == 0 { j / 2 } else { ne + j / 2 };
-            dst[at] = x[j];
+            dst[at] = v;
         }
         return;
     }
@@ -228,4 +316,50 @@ fn interleave_generic<T: Sample>(a: &[T], b: &[T], e: usize, dst: &mut [T]) {
             d[e..].copy_from_slice(y);
         }
     }
+}
+
+/// `dst.copy_from_slice(src)` with non-temporal stores where the CPU has AVX2: the
+/// destination lines go to memory without being read first (a level's output that does
+/// not fit in cache is written once and read back only by the next level).
+#[inline]
+pub fn stream_copy<T: Sample>(src: &[T], dst: &mut [T]) {
+    assert_eq!(src.len(), dst.len());
+    #[cfg(target_arch = "x86_64")]
+    if super::sparse::cpu_has_avx2() {
+        // SAFETY: AVX2 is present.
+        return unsafe { stream_copy_avx2(src, dst) };
+    }
+    dst.copy_from_slice(src)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn stream_copy_avx2<T: Sample>(src: &[T], dst: &mut [T]) {
+    use std::arch::x86_64::*;
+    let size = std::mem::size_of::<T>();
+    let n = src.len();
+    // scalar stores up to the first 32-byte boundary of dst
+    let mis = (dst.as_ptr() as usize) % 32;
+    let head = if mis == 0 {
+        0
+    } else {
+        ((32 - mis) / size).min(n)
+    };
+    if (dst.as_ptr() as usize) % size != 0 || (32 - mis) % size != 0 {
+        return dst.copy_from_slice(src);
+    }
+    dst[..head].copy_from_slice(&src[..head]);
+    let per = 32 / size;
+    let body = (n - head) / per * per;
+    let (ps, pd) = (
+        unsafe { src.as_ptr().add(head) } as *const __m256i,
+        unsafe { dst.as_mut_ptr().add(head) } as *mut __m256i,
+    );
+    for v in 0..body / per {
+        // SAFETY: v·32 + 32 bytes lie within src[head..head + body] and dst likewise;
+        // dst + head is 32-byte aligned.
+        unsafe { _mm256_stream_si256(pd.add(v), _mm256_loadu_si256(ps.add(v))) };
+    }
+    _mm_sfence();
+    dst[head + body..].copy_from_slice(&src[head + body..]);
 }

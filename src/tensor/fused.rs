@@ -13,7 +13,7 @@
 //! form the elements (`e` samples, e.g. the channels of an image).
 
 use super::par::{for_each_part, SharedMut};
-use crate::scheme::kernel::combine;
+use crate::scheme::kernel::{combine, stream_copy};
 use crate::scheme::polyphase::Polyphase;
 use crate::scheme::sparse::Csr;
 use crate::scheme::Sample;
@@ -26,6 +26,9 @@ pub struct AxisOp<'a> {
     /// and detail rows of one neighbourhood together and reads its input once).
     pub order: &'a [usize],
 }
+
+/// Levels whose region is at least this large write their output past the caches.
+const STREAM_BYTES: usize = 16 << 20;
 
 /// Rows of [`AxisOp::order`] handed to one task.
 const ROWS_PER_TASK: usize = 16;
@@ -62,14 +65,17 @@ pub fn fused_level<T: Sample>(
         let mut v: Vec<Vec<T>> = (0..k - 1)
             .map(|d| vec![T::default(); slab_len(d)])
             .collect();
-        v.push(vec![T::default(); region[k - 1] * e]);
+        v.push(vec![T::default(); region[k - 1] * e]); // lane output when streaming
+        v.push(vec![T::default(); region[k - 1] * e]); // lane scratch
         v
     };
+    let work_bytes = region.iter().product::<usize>() * e * std::mem::size_of::<T>();
     let ctx = Ctx {
         region,
         e,
         ops,
         cs: &cs,
+        stream: work_bytes >= STREAM_BYTES && std::env::var("MRA_STREAM").is_err(),
     };
     let dst_len = dst.len();
     let dptr = SharedMut(dst.as_mut_ptr());
@@ -99,6 +105,8 @@ pub fn fused_level<T: Sample>(
 }
 
 struct Ctx<'a> {
+    /// Write lanes with non-temporal stores (output larger than the caches).
+    stream: bool,
     region: &'a [usize],
     e: usize,
     ops: &'a [AxisOp<'a>],
@@ -171,9 +179,17 @@ impl Ctx<'_> {
         if d == k - 1 {
             let a = &self.ops[d];
             let n = self.region[d] * e;
-            let lane_tmp = scratch.last_mut().expect("lane scratch");
-            a.plan
-                .apply_lane(a.op, &slab[..n], &mut out[..n], e, lane_tmp);
+            let [.., lane_out, lane_tmp] = scratch else {
+                unreachable!("two lane buffers")
+            };
+            if self.stream {
+                a.plan
+                    .apply_lane(a.op, &slab[..n], &mut lane_out[..n], e, lane_tmp);
+                stream_copy(&lane_out[..n], &mut out[..n]);
+            } else {
+                a.plan
+                    .apply_lane(a.op, &slab[..n], &mut out[..n], e, lane_tmp);
+            }
             return;
         }
         for &r in self.ops[d].order {
