@@ -1,5 +1,24 @@
 //! The `mra` command line: a thin shell over the library (see `src/cli/`).
 
 fn main() {
+    restore_sigpipe();
     std::process::exit(mra::cli::main());
 }
+
+/// Die quietly when standard output is a closed pipe (`mra … | head`), as other Unix
+/// tools do: Rust ignores SIGPIPE, which turns every later `println!` into a panic.
+#[cfg(unix)]
+fn restore_sigpipe() {
+    extern "C" {
+        fn signal(signum: i32, handler: usize) -> usize;
+    }
+    const SIGPIPE: i32 = 13; // Linux, macOS and the BSDs
+    const SIG_DFL: usize = 0;
+    // SAFETY: resetting a signal to its default action before any thread starts.
+    unsafe {
+        signal(SIGPIPE, SIG_DFL);
+    }
+}
+
+#[cfg(not(unix))]
+fn restore_sigpipe() {}

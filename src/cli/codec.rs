@@ -1,5 +1,6 @@
 //! `mra encode`, `mra decode`, `mra info`: the `.mra` codec on the command line.
 
+use std::io::Write;
 use std::path::PathBuf;
 
 use clap::Args;

@@ -7,6 +7,7 @@ use crate::curve::plot::{self, PlotData};
 use crate::curve::{geometry, knot, BSpline, Bezier, Curve, KnotVector, Nurbs};
 use crate::{Error, Result};
 use clap::{Args, Subcommand, ValueEnum};
+use std::io::Write;
 use std::path::{Path, PathBuf};
 
 #[derive(Subcommand, Debug)]

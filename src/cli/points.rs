@@ -28,9 +28,8 @@ pub fn emit(
     fill: impl FnOnce(&mut dyn std::io::Write) -> std::io::Result<()>,
 ) -> CliResult {
     match out {
-        Some(p) if p.as_os_str() != "-" => {
-            crate::fsutil::write_atomic(p, fill).map_err(|e| Failure::context(p.display(), e))
-        }
+        Some(p) if p.as_os_str() != "-" => crate::fsutil::write_atomic(p, |w| fill(w))
+            .map_err(|e| Failure::context(p.display(), e)),
         _ => {
             let stdout = std::io::stdout();
             let mut lock = stdout.lock();

@@ -4,6 +4,7 @@
 use super::{CliResult, Failure};
 use crate::solid::{mc, render, scene::Scene, tlist, voxel};
 use clap::{Args, Subcommand};
+use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 

@@ -5,6 +5,7 @@ use super::{decode, encode, DecodeOptions, EncodeOptions, Rate};
 use crate::demo::{blob_volume, zone_plate, DemoRow};
 use crate::io::{DataKind, Raster, SampleType, Samples};
 use crate::Result;
+use std::io::Write;
 use std::path::Path;
 use std::time::Instant;
 

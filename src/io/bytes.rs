@@ -3,8 +3,8 @@
 //! (temporary file in the same folder, renamed when complete).
 
 use std::fs::File;
-use std::io::{BufWriter, Read, Write};
-use std::path::{Path, PathBuf};
+use std::io::{BufWriter, Read};
+use std::path::Path;
 
 use byteorder::{BigEndian, ByteOrder, LittleEndian};
 
@@ -137,36 +137,13 @@ pub fn encode(s: &Samples, big_endian: bool) -> Vec<u8> {
     }
 }
 
-/// The temporary name used while `path` is being written.
-pub fn temp_path(path: &Path) -> PathBuf {
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    path.with_file_name(format!(".{name}.mra-tmp-{}", std::process::id()))
-}
-
 /// Write through `body` into a temporary file beside `path`, then rename it onto
-/// `path`. On any error the temporary file is removed and `path` is untouched.
+/// `path` ([`crate::fsutil::write_atomic`]).
 pub fn atomic_write<F>(path: &Path, body: F) -> Result<()>
 where
     F: FnOnce(&mut BufWriter<File>) -> Result<()>,
 {
-    let tmp = temp_path(path);
-    let result = (|| {
-        let mut w = BufWriter::new(File::create(&tmp)?);
-        body(&mut w)?;
-        w.flush()?;
-        let f = w.into_inner().map_err(|e| e.into_error())?;
-        f.sync_all().ok();
-        drop(f);
-        std::fs::rename(&tmp, path)?;
-        Ok(())
-    })();
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    }
-    result
+    crate::fsutil::write_atomic(path, body)
 }
 
 /// Read a whole file, refusing files larger than `limit` bytes.

@@ -8,6 +8,7 @@ pub mod ply;
 
 use super::Mesh;
 use crate::{Error, Result};
+use std::io::Write;
 use std::path::Path;
 
 /// The mesh file formats.
