@@ -8,7 +8,7 @@
 use mra::io::{DataKind, Raster, SampleType};
 use mra::progress::Progress;
 use mra::scheme::subdivide::Refinement;
-use mra::upscale::{upscale_raster, AxisPlan, Edge, Geometry, Method, Mode};
+use mra::upscale::{upscale_raster, AxisPlan, Clamp, Edge, Geometry, Method, Mode};
 use std::time::Instant;
 
 fn median(mut v: Vec<f64>) -> f64 {
@@ -72,6 +72,7 @@ fn main() {
                 mode,
                 edge: Edge::Linear,
                 order: None,
+                clamp: Clamp::Off,
             };
             let p = plans(&r.dims, 2);
             let secs = median(

@@ -7,7 +7,7 @@ use crate::io::ReadOptions;
 use crate::progress::Progress;
 use crate::scheme::subdivide::Refinement;
 use crate::scheme::{Boundary, Scheme};
-use crate::upscale::{self, Edge, Method, Mode};
+use crate::upscale::{self, Clamp, Edge, Method, Mode};
 use clap::Args;
 use std::path::PathBuf;
 
@@ -43,6 +43,10 @@ pub struct UpscaleArgs {
     /// Control points beyond the ends: linear (continue lines) or mirror.
     #[arg(long, default_value = "linear")]
     pub edge: Edge,
+    /// Area mode: clamp overshoot to the nearest input cells' range and restore the cell
+    /// means; auto (default) blends by a weight learned from the input's coarser level.
+    #[arg(long, default_value = "auto")]
+    pub clamp: Clamp,
     /// B-spline order overriding the scheme's (1–12; e.g. 6 for quintic).
     #[arg(long, value_parser = clap::value_parser!(u8).range(1..=12))]
     pub order: Option<u8>,
@@ -107,6 +111,7 @@ pub fn run_upscale(a: UpscaleArgs) -> CliResult {
         mode: a.mode,
         edge: a.edge,
         order: a.order.map(usize::from),
+        clamp: a.clamp,
     };
     let big = r.samples.len() > 1 << 24;
     let bar = Progress::new(plans.len() as u64 + 1, "upscale", a.quiet || !big);
