@@ -158,7 +158,7 @@ fn pair_gather(
     shape: &[usize],
     axis: usize,
     edge: Edge,
-    op: fn(f32, f32) -> f32,
+    op: impl Fn(f32, f32) -> f32 + Sync + Send,
 ) -> Vec<f32> {
     let outer: usize = shape[..axis].iter().product();
     let n = shape[axis];
@@ -169,28 +169,36 @@ fn pair_gather(
         .enumerate()
         .for_each(|(o, dst)| {
             let lane = &src[o * n * inner..(o + 1) * n * inner];
-            let at = |i: isize, k: usize| -> f32 {
-                let last = n as isize - 1;
-                let v = |i: usize| lane[i * inner + k];
-                if (0..=last).contains(&i) {
-                    v(i as usize)
-                } else if n == 1 {
-                    v(0)
+            let row = |i: usize| &lane[i * inner..(i + 1) * inner];
+            // the cells beyond the ends, by the edge rule
+            let beyond = |e: usize, next: usize| -> Vec<f32> {
+                match edge {
+                    Edge::Linear if n > 1 => row(e)
+                        .iter()
+                        .zip(row(next))
+                        .map(|(a, b)| 2.0 * a - b)
+                        .collect(),
+                    _ => row(e).to_vec(),
+                }
+            };
+            let before = beyond(0, 1.min(n - 1));
+            let after = beyond(n - 1, n.saturating_sub(2));
+            let cell = |i: isize| -> &[f32] {
+                if i < 0 {
+                    &before
+                } else if i as usize >= n {
+                    &after
                 } else {
-                    match (edge, i < 0) {
-                        (Edge::Linear, true) => 2.0 * v(0) - v(1),
-                        (Edge::Linear, false) => 2.0 * v(n - 1) - v(n - 2),
-                        (Edge::Mirror, true) => v(0),
-                        (Edge::Mirror, false) => v(n - 1),
-                    }
+                    row(i as usize)
                 }
             };
             for j in 0..m {
                 // ×2: j = 2i → cells i − 1, i;  j = 2i + 1 → cells i, i + 1
                 let i = (j / 2) as isize;
                 let (a, b) = if j % 2 == 0 { (i - 1, i) } else { (i, i + 1) };
-                for k in 0..inner {
-                    dst[j * inner + k] = op(at(a, k), at(b, k));
+                let d = &mut dst[j * inner..(j + 1) * inner];
+                for ((d, &x), &y) in d.iter_mut().zip(cell(a)).zip(cell(b)) {
+                    *d = op(x, y);
                 }
             }
         });
@@ -209,8 +217,8 @@ fn stage(
     let (mut lo, mut hi) = (low.to_vec(), low.to_vec());
     let mut s = shape.to_vec();
     for &a in axes {
-        lo = pair_gather(&lo, &s, a, method.edge, f32::min);
-        hi = pair_gather(&hi, &s, a, method.edge, f32::max);
+        lo = pair_gather(&lo, &s, a, method.edge, |x: f32, y: f32| x.min(y));
+        hi = pair_gather(&hi, &s, a, method.edge, |x: f32, y: f32| x.max(y));
         s[a] *= 2;
     }
     for _ in 0..ITERATIONS {
