@@ -276,3 +276,94 @@ fn nan_voids_stay_nan_and_do_not_spread() {
         .collect();
     assert_eq!(nan, want);
 }
+
+#[test]
+fn corpus_srtm_tile_keeps_its_voids() {
+    let path = std::env::var("MRA_CORPUS")
+        .map(std::path::PathBuf::from)
+        .unwrap_or_else(|_| {
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/corpus")
+        })
+        .join("terrain/N22W160.hgt");
+    if !path.exists() {
+        println!("skipped: {} absent", path.display());
+        return;
+    }
+    let r = mra::io::read(&path).unwrap();
+    let nd = r.meta.nodata.expect("SRTM nodata");
+    let n = r.dims.clone();
+    let voids: Vec<bool> = (0..r.samples.len())
+        .map(|i| r.samples.get_f64(i) == nd)
+        .collect();
+    let count = voids.iter().filter(|&&v| v).count();
+    assert!(count > 0, "the tile has voids");
+    let valid_min = (0..r.samples.len())
+        .filter(|&i| !voids[i])
+        .map(|i| r.samples.get_f64(i))
+        .fold(f64::MAX, f64::min);
+    let out = upscale_raster(
+        r,
+        &Method::default(),
+        &plans(&n, &[2, 2]),
+        &Progress::hidden(),
+    )
+    .unwrap();
+    let w2 = n[1] * 2;
+    let mut out_min = f64::MAX;
+    for i in 0..out.samples.len() {
+        let v = out.samples.get_f64(i);
+        let (y, x) = (i / w2, i % w2);
+        assert_eq!(v == nd, voids[(y / 2) * n[1] + x / 2], "({y}, {x}) = {v}");
+        if v != nd {
+            out_min = out_min.min(v);
+        }
+    }
+    // a void read as −32768 m would drag its neighbours down by hundreds of metres
+    assert!(out_min > valid_min - 100.0, "{out_min} vs {valid_min}");
+}
+
+#[test]
+fn cli_clamp_choices_and_a_bad_one() {
+    let dir = std::env::temp_dir().join(format!("mra_upscale_clamp_{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let src = dir.join("in.tif");
+    let (h, w) = (24, 32);
+    let data = scene(h, w);
+    let r = Raster::from_f32(vec![h, w], 1, &data, SampleType::F32, DataKind::Image).unwrap();
+    mra::io::write(&src, &r).unwrap();
+    let run = |clamp: &str, out: &std::path::Path| {
+        std::process::Command::new(env!("CARGO_BIN_EXE_mra"))
+            .args([
+                "upscale",
+                src.to_str().unwrap(),
+                "-o",
+                out.to_str().unwrap(),
+            ])
+            .args(["--factor", "2", "--clamp", clamp])
+            .output()
+            .unwrap()
+    };
+    let mut outs = Vec::new();
+    for c in ["off", "on", "auto"] {
+        let p = dir.join(format!("up_{c}.tif"));
+        assert!(run(c, &p).status.success(), "--clamp {c}");
+        let o = mra::io::read(&p).unwrap();
+        assert_eq!(o.dims, vec![2 * h, 2 * w]);
+        outs.push(o.to_f32());
+    }
+    // the library's result, and clamping changes it
+    let lib = upscale_array(
+        data.clone(),
+        &[h, w],
+        &method(Refinement::Chaikin, Clamp::On),
+        &plans(&[h, w], &[2, 2]),
+    )
+    .unwrap()
+    .0;
+    assert_eq!(outs[1], lib);
+    assert_ne!(outs[0], outs[1]);
+    let bad = run("sometimes", &dir.join("bad.tif"));
+    assert_eq!(bad.status.code(), Some(2));
+    assert!(!dir.join("bad.tif").exists());
+    std::fs::remove_dir_all(&dir).ok();
+}

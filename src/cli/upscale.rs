@@ -16,7 +16,9 @@ use std::path::PathBuf;
   mra generate zone-plate -o zp.png && mra upscale zp.png -o zp4.png --factor 4
   mra upscale zp.png -o zp_smooth.png --factor 2 --scheme cubic --mode control
   mra upscale zp.png -o zp_1000.png --size 1000x700
-  mra upscale ../shared/corpus/volumes/ct_pancreas_256.nrrd -o ct_z.nrrd --factor 2 --axes z")]
+  mra upscale ../shared/corpus/volumes/ct_pancreas_256.nrrd -o ct_z.nrrd --factor 2 --axes z
+  mra upscale ../shared/corpus/terrain/N22W160.hgt -o n22_x2.tif --factor 2
+  mra upscale zp.png -o zp_plain.png --factor 2 --clamp off")]
 pub struct UpscaleArgs {
     /// Image, volume, heightmap or folder of slices.
     pub input: PathBuf,

@@ -148,15 +148,77 @@ pub fn axis_operator(method: &Method, n: usize, plan: &AxisPlan) -> Csr {
     lane::eval_matrix(&basis, n, &xs, width, method.edge)
 }
 
-/// Turn samples into control points along every planned axis, in place.
-fn prefilter(data: &mut [f32], shape: &[usize], method: &Method, plans: &[AxisPlan]) -> Result<()> {
-    let basis = method.basis();
-    for p in plans {
-        if let Some(k) = lane::system(&basis, shape[p.axis], method.mode, method.edge)? {
-            map_lanes(data, shape, p.axis, |lane, width| k.solve(lane, width));
-        }
+/// The banded systems and evaluation operators of one upscale of arrays of one shape,
+/// built once (a refined upscale applies the same stage several times).
+pub(crate) struct Prepared {
+    shape: Vec<usize>,
+    /// Per planned axis: the system turning samples into control points (none for
+    /// [`Mode::Control`]).
+    systems: Vec<(usize, Option<lane::Banded>)>,
+    /// Evaluation operators, fastest axis first (its gathers run on the smallest array).
+    ops: Vec<(usize, Csr)>,
+}
+
+impl Prepared {
+    pub(crate) fn new(method: &Method, shape: &[usize], plans: &[AxisPlan]) -> Result<Prepared> {
+        check(method, shape, plans)?;
+        let basis = method.basis();
+        let systems = plans
+            .iter()
+            .map(|p| {
+                Ok((
+                    p.axis,
+                    lane::system(&basis, shape[p.axis], method.mode, method.edge)?,
+                ))
+            })
+            .collect::<Result<Vec<_>>>()?;
+        let mut order = plans.to_vec();
+        order.sort_by_key(|p| std::cmp::Reverse(p.axis));
+        let ops = order
+            .iter()
+            .map(|p| (p.axis, axis_operator(method, shape[p.axis], p)))
+            .collect();
+        Ok(Prepared {
+            shape: shape.to_vec(),
+            systems,
+            ops,
+        })
     }
-    Ok(())
+
+    /// Prefilter then evaluate along every axis; the last axis' results go through
+    /// `store`.
+    pub(crate) fn run<U: Copy + Default + Send + Sync>(
+        &self,
+        mut data: Vec<f32>,
+        bar: &Progress,
+        store: impl Fn(f32) -> U + Sync + Send,
+    ) -> (Vec<U>, Vec<usize>) {
+        let mut shape = self.shape.clone();
+        for (axis, k) in &self.systems {
+            if let Some(k) = k {
+                map_lanes(&mut data, &shape, *axis, |lane, width| k.solve(lane, width));
+            }
+        }
+        bar.inc(1);
+        let last = self.ops.len() - 1;
+        for (k, (axis, op)) in self.ops.iter().enumerate() {
+            let mut next_shape = shape.clone();
+            next_shape[*axis] = op.rows();
+            let len: usize = next_shape.iter().product();
+            if k == last {
+                let mut out = vec![U::default(); len];
+                resample_axis(&data, &shape, *axis, op, &mut out, &store);
+                bar.inc(1);
+                return (out, next_shape);
+            }
+            let mut out = vec![0f32; len];
+            resample_axis(&data, &shape, *axis, op, &mut out, |x| x);
+            data = out;
+            shape = next_shape;
+            bar.inc(1);
+        }
+        unreachable!("at least one axis is planned (checked in Prepared::new)")
+    }
 }
 
 /// Upscale (or resample) an f32 array; returns the new data and shape.
@@ -171,7 +233,7 @@ pub fn upscale_array(
 
 /// The whole pipeline, the last axis' results stored through `store`.
 fn upscale_into<U: Copy + Default + Send + Sync>(
-    mut data: Vec<f32>,
+    data: Vec<f32>,
     shape: &[usize],
     method: &Method,
     plans: &[AxisPlan],
@@ -195,31 +257,7 @@ fn upscale_into<U: Copy + Default + Send + Sync>(
         bar.inc(plans.len() as u64 + 1);
         return Ok((out, s));
     }
-    prefilter(&mut data, shape, method, plans)?;
-    bar.inc(1);
-    // fastest axis first: its gathers run on the smallest array
-    let mut order = plans.to_vec();
-    order.sort_by_key(|p| std::cmp::Reverse(p.axis));
-    let mut shape = shape.to_vec();
-    let last = order.len() - 1;
-    for (k, p) in order.iter().enumerate() {
-        let op = axis_operator(method, shape[p.axis], p);
-        let mut next_shape = shape.clone();
-        next_shape[p.axis] = p.len;
-        let len: usize = next_shape.iter().product();
-        if k == last {
-            let mut out = vec![U::default(); len];
-            resample_axis(&data, &shape, p.axis, &op, &mut out, &store);
-            bar.inc(1);
-            return Ok((out, next_shape));
-        }
-        let mut out = vec![0f32; len];
-        resample_axis(&data, &shape, p.axis, &op, &mut out, |x| x);
-        data = out;
-        shape = next_shape;
-        bar.inc(1);
-    }
-    unreachable!("at least one axis is planned")
+    Ok(Prepared::new(method, shape, plans)?.run(data, bar, store))
 }
 
 /// Plans for a raster: `factor` along `axes` (indices into `dims`), or explicit `size`

@@ -26,7 +26,8 @@
 //! (ridges: the spline's overshoot is real) learn a smaller `t`. Measured in
 //! `docs/upscale.md`.
 
-use super::{upscale_array, AxisPlan, Edge, Geometry, Method, Mode};
+use super::{upscale_array, AxisPlan, Edge, Geometry, Method, Mode, Prepared};
+use crate::progress::Progress;
 use crate::scheme::sparse::{Csr, Triplets};
 use crate::tensor::resample_axis;
 use crate::{Error, Result};
@@ -205,15 +206,20 @@ fn pair_gather(
     out
 }
 
-/// One ×2 clamp-and-project stage along `axes`.
+/// One ×2 clamp-and-project stage along `axes`; with `keep`, also the plain upscale
+/// it starts from.
 fn stage(
     low: &[f32],
     shape: &[usize],
     method: &Method,
     axes: &[usize],
-) -> Result<(Vec<f32>, Vec<usize>)> {
+    keep: bool,
+) -> Result<(Vec<f32>, Vec<usize>, Option<Vec<f32>>)> {
     let f: Vec<(usize, usize)> = axes.iter().map(|&a| (a, 2)).collect();
-    let (mut u, fine) = plain(low.to_vec(), shape, method, &f)?;
+    let up = Prepared::new(&area(method), shape, &plans_for(shape, &f))?;
+    let hidden = Progress::hidden();
+    let (mut u, fine) = up.run(low.to_vec(), &hidden, |x| x);
+    let plain = keep.then(|| u.clone());
     let (mut lo, mut hi) = (low.to_vec(), low.to_vec());
     let mut s = shape.to_vec();
     for &a in axes {
@@ -227,21 +233,23 @@ fn stage(
             .for_each(|(x, (&a, &b))| *x = x.max(a).min(b));
         let (d, _) = block_mean(&u, &fine, &f);
         let r: Vec<f32> = low.iter().zip(&d).map(|(s, d)| s - d).collect();
-        let (c, _) = plain(r, shape, method, &f)?;
+        let (c, _) = up.run(r, &hidden, |x| x);
         u.par_iter_mut()
             .zip(c.par_iter())
             .for_each(|(x, c)| *x += c);
     }
-    Ok((u, fine))
+    Ok((u, fine, plain))
 }
 
-/// The fully clamped upscale `R(s)`: an odd plain stage, then ×2 clamp stages.
+/// The fully clamped upscale `R(s)`: an odd plain stage, then ×2 clamp stages. With
+/// `keep` and a single ×2 stage, also the plain upscale `B(s)` (its starting point).
 fn refined(
     data: Vec<f32>,
     shape: &[usize],
     method: &Method,
     f: &[(usize, usize)],
-) -> Result<(Vec<f32>, Vec<usize>)> {
+    keep: bool,
+) -> Result<(Vec<f32>, Vec<usize>, Option<Vec<f32>>)> {
     let odd: Vec<(usize, usize)> = f
         .iter()
         .map(|&(a, g)| (a, g >> g.trailing_zeros()))
@@ -253,15 +261,17 @@ fn refined(
         .map(|&(_, g)| g.trailing_zeros())
         .max()
         .unwrap_or(0);
+    let keep = keep && k == 1 && odd.is_empty();
+    let mut b = None;
     for level in 0..k {
         let axes: Vec<usize> = f
             .iter()
             .filter(|&&(_, g)| g.trailing_zeros() > level)
             .map(|&(a, _)| a)
             .collect();
-        (u, s) = stage(&u, &s, method, &axes)?;
+        (u, s, b) = stage(&u, &s, method, &axes, keep)?;
     }
-    Ok((u, s))
+    Ok((u, s, b))
 }
 
 /// The first `len[a]` samples along every axis.
@@ -306,7 +316,7 @@ pub fn learn_weight(
     let sc = crop(data, shape, &len);
     let (coarse, cs) = block_mean(&sc, &len, f);
     let (b, _) = plain(coarse.clone(), &cs, method, f)?;
-    let (r, _) = refined(coarse, &cs, method, f)?;
+    let (r, _, _) = refined(coarse, &cs, method, f, false)?;
     let (mut num, mut den) = (0f64, 0f64);
     for ((s, b), r) in sc.iter().zip(&b).zip(&r) {
         let d = (*r - *b) as f64;
@@ -335,10 +345,13 @@ pub fn upscale_refined(
         return plain(data, shape, method, f);
     }
     if t >= 1.0 {
-        return refined(data, shape, method, f);
+        return refined(data, shape, method, f, false).map(|(r, s, _)| (r, s));
     }
-    let (r, s) = refined(data.clone(), shape, method, f)?;
-    let (mut b, _) = plain(data, shape, method, f)?;
+    let (r, s, b) = refined(data.clone(), shape, method, f, true)?;
+    let mut b = match b {
+        Some(b) => b,
+        None => plain(data, shape, method, f)?.0,
+    };
     let t = t as f32;
     b.par_iter_mut()
         .zip(r.par_iter())
