@@ -315,8 +315,11 @@ pub fn learn_weight(
     }
     let sc = crop(data, shape, &len);
     let (coarse, cs) = block_mean(&sc, &len, f);
-    let (b, _) = plain(coarse.clone(), &cs, method, f)?;
-    let (r, _, _) = refined(coarse, &cs, method, f, false)?;
+    let (r, _, b) = refined(coarse.clone(), &cs, method, f, true)?;
+    let b = match b {
+        Some(b) => b,
+        None => plain(coarse, &cs, method, f)?.0,
+    };
     let (mut num, mut den) = (0f64, 0f64);
     for ((s, b), r) in sc.iter().zip(&b).zip(&r) {
         let d = (*r - *b) as f64;
