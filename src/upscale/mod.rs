@@ -295,7 +295,7 @@ pub fn plan_raster(
                 .collect())
         }
         (Some(f), None) => {
-            if f < 2 || f > MAX_FACTOR {
+            if !(2..=MAX_FACTOR).contains(&f) {
                 return Err(Error::parameter("factor", f, "an integer from 2 to 1024"));
             }
             axes.iter()

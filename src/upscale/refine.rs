@@ -206,6 +206,9 @@ fn pair_gather(
     out
 }
 
+/// An upscaled array, its shape, and optionally the plain upscale it started from.
+type Staged = (Vec<f32>, Vec<usize>, Option<Vec<f32>>);
+
 /// One ×2 clamp-and-project stage along `axes`; with `keep`, also the plain upscale
 /// it starts from.
 fn stage(
@@ -214,7 +217,7 @@ fn stage(
     method: &Method,
     axes: &[usize],
     keep: bool,
-) -> Result<(Vec<f32>, Vec<usize>, Option<Vec<f32>>)> {
+) -> Result<Staged> {
     let f: Vec<(usize, usize)> = axes.iter().map(|&a| (a, 2)).collect();
     let up = Prepared::new(&area(method), shape, &plans_for(shape, &f))?;
     let hidden = Progress::hidden();
@@ -249,7 +252,7 @@ fn refined(
     method: &Method,
     f: &[(usize, usize)],
     keep: bool,
-) -> Result<(Vec<f32>, Vec<usize>, Option<Vec<f32>>)> {
+) -> Result<Staged> {
     let odd: Vec<(usize, usize)> = f
         .iter()
         .map(|&(a, g)| (a, g >> g.trailing_zeros()))
