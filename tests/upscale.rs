@@ -6,8 +6,8 @@ use mra::progress::Progress;
 use mra::scheme::subdivide::Refinement;
 use mra::scheme::{Boundary, Scheme};
 use mra::upscale::{
-    self, downscale_array, plan_raster, upscale_array, upscale_raster, AxisPlan, Edge, Geometry,
-    Method, Mode,
+    self, downscale_array, plan_raster, upscale_array, upscale_raster, AxisPlan, Clamp, Edge,
+    Geometry, Method, Mode,
 };
 use mra::ErrorKind;
 
@@ -19,6 +19,7 @@ fn method(rule: Refinement, mode: Mode) -> Method {
         mode,
         edge: Edge::Linear,
         order: None,
+        clamp: Clamp::Off,
     }
 }
 

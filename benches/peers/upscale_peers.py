@@ -5,7 +5,7 @@ For every data set: crop to a multiple of F, downscale by exact block mean (F = 
 upscale back with every method, round/clip to the original sample type, and report
 PSNR and SSIM against the original plus the time of the upscale alone.
 
-  - mra: `mra upscale LOW -o OUT --factor F --mode M --report` (the compute time it
+  - mra: `mra upscale LOW -o OUT --factor F --mode M [--clamp C] --report` (the compute time it
     prints excludes file I/O; the wall time of the whole process is listed too)
   - OpenImageIO ImageBufAlgo.resize: lanczos3, catmull-rom, bspline (images, DEMs)
   - scikit-image transform.resize(order=3) (mode 'reflect', no anti-aliasing)
@@ -167,11 +167,12 @@ def main():
     ap.add_argument("--factors", default="2,4")
     ap.add_argument("--json")
     ap.add_argument("--quick", action="store_true", help="Kodak only")
-    ap.add_argument("--mra", default="chaikin:area,cubic:area,cubic:interpolate,cubic:control",
-                    help="comma-separated scheme:mode pairs to run with mra")
+    ap.add_argument("--mra", default="chaikin:area,chaikin:area:off,cubic:area:off,cubic:interpolate,cubic:control",
+                    help="comma-separated scheme:mode[:clamp] to run with mra (clamp: auto, the default, on, off)")
     ap.add_argument("--no-peers", action="store_true", help="mra only")
     ap.add_argument("--only", help="comma-separated kinds: image, volume, heightmap")
     ap.add_argument("--no-speed", action="store_true", help="skip the 256³ speed case")
+    ap.add_argument("--speed-only", action="store_true", help="only the 256³ speed case")
     ap.add_argument("--summarize", nargs="+", help="print the summary of JSON-lines logs of earlier runs")
     args = ap.parse_args()
     if args.summarize:
@@ -184,14 +185,15 @@ def main():
     reps = 3
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
-        for kind, name, x, spatial in datasets(args):
+        for kind, name, x, spatial in ([] if args.speed_only else datasets(args)):
             channel = x.ndim > spatial
             for f in [int(s) for s in args.factors.split(",")]:
                 ref, low = block_mean(x, f, spatial)
                 methods = {}
                 for pair in args.mra.split(","):
-                    scheme, mode = pair.split(":")
-                    methods[f"mra {scheme} {mode}"] = ("mra", mode, scheme)
+                    scheme, mode, *clamp = pair.split(":")
+                    label = f"mra {scheme} {mode}" + (f" clamp={clamp[0]}" if clamp else "")
+                    methods[label] = ("mra", mode, scheme, ("--clamp", clamp[0]) if clamp else ())
                 if not args.no_peers:
                     if spatial == 2:
                         for filt in ["lanczos3", "catmull-rom", "bspline"]:
@@ -203,7 +205,7 @@ def main():
                 for label, m in methods.items():
                     wall = None
                     if m[0] == "mra":
-                        runs = [mra_upscale(low, f, m[1], m[2], tmp, spatial) for _ in range(reps)]
+                        runs = [mra_upscale(low, f, m[1], m[2], tmp, spatial, m[3]) for _ in range(reps)]
                         out = runs[0][0]
                         secs = min(r[1] for r in runs)
                         wall = min(r[2] for r in runs)

@@ -25,6 +25,8 @@
 
 pub mod basis;
 pub mod lane;
+pub mod refine;
+pub mod voids;
 
 use crate::io::{DataKind, Raster, Samples};
 use crate::progress::Progress;
@@ -35,6 +37,8 @@ use crate::tensor::{map_lanes, resample_axis};
 use crate::{Error, Result};
 use basis::Basis;
 pub use lane::{Edge, Geometry, Mode};
+use rayon::prelude::*;
+pub use refine::Clamp;
 
 /// Largest factor accepted along one axis.
 pub const MAX_FACTOR: usize = 1 << 10;
@@ -47,6 +51,8 @@ pub struct Method {
     pub edge: Edge,
     /// B-spline order overriding the rule's (orders above 5 have no named rule).
     pub order: Option<usize>,
+    /// Area mode only: clamp overshoot and restore the cell means ([`refine`]).
+    pub clamp: Clamp,
 }
 
 impl Method {
@@ -60,13 +66,15 @@ impl Method {
 
 impl Default for Method {
     /// The best measured combination (`docs/upscale.md`): Chaikin's quadratic B-spline
-    /// (the dual rule, whose refined points sit at the new pixel centres), area mode.
+    /// (the dual rule, whose refined points sit at the new pixel centres), area mode,
+    /// overshoot clamping blended by the weight learned one level up.
     fn default() -> Self {
         Method {
             rule: Refinement::Chaikin,
             mode: Mode::Area,
             edge: Edge::Linear,
             order: None,
+            clamp: Clamp::Auto,
         }
     }
 }
@@ -140,15 +148,77 @@ pub fn axis_operator(method: &Method, n: usize, plan: &AxisPlan) -> Csr {
     lane::eval_matrix(&basis, n, &xs, width, method.edge)
 }
 
-/// Turn samples into control points along every planned axis, in place.
-fn prefilter(data: &mut [f32], shape: &[usize], method: &Method, plans: &[AxisPlan]) -> Result<()> {
-    let basis = method.basis();
-    for p in plans {
-        if let Some(k) = lane::system(&basis, shape[p.axis], method.mode, method.edge)? {
-            map_lanes(data, shape, p.axis, |lane, width| k.solve(lane, width));
-        }
+/// The banded systems and evaluation operators of one upscale of arrays of one shape,
+/// built once (a refined upscale applies the same stage several times).
+pub(crate) struct Prepared {
+    shape: Vec<usize>,
+    /// Per planned axis: the system turning samples into control points (none for
+    /// [`Mode::Control`]).
+    systems: Vec<(usize, Option<lane::Banded>)>,
+    /// Evaluation operators, fastest axis first (its gathers run on the smallest array).
+    ops: Vec<(usize, Csr)>,
+}
+
+impl Prepared {
+    pub(crate) fn new(method: &Method, shape: &[usize], plans: &[AxisPlan]) -> Result<Prepared> {
+        check(method, shape, plans)?;
+        let basis = method.basis();
+        let systems = plans
+            .iter()
+            .map(|p| {
+                Ok((
+                    p.axis,
+                    lane::system(&basis, shape[p.axis], method.mode, method.edge)?,
+                ))
+            })
+            .collect::<Result<Vec<_>>>()?;
+        let mut order = plans.to_vec();
+        order.sort_by_key(|p| std::cmp::Reverse(p.axis));
+        let ops = order
+            .iter()
+            .map(|p| (p.axis, axis_operator(method, shape[p.axis], p)))
+            .collect();
+        Ok(Prepared {
+            shape: shape.to_vec(),
+            systems,
+            ops,
+        })
     }
-    Ok(())
+
+    /// Prefilter then evaluate along every axis; the last axis' results go through
+    /// `store`.
+    pub(crate) fn run<U: Copy + Default + Send + Sync>(
+        &self,
+        mut data: Vec<f32>,
+        bar: &Progress,
+        store: impl Fn(f32) -> U + Sync + Send,
+    ) -> (Vec<U>, Vec<usize>) {
+        let mut shape = self.shape.clone();
+        for (axis, k) in &self.systems {
+            if let Some(k) = k {
+                map_lanes(&mut data, &shape, *axis, |lane, width| k.solve(lane, width));
+            }
+        }
+        bar.inc(1);
+        let last = self.ops.len() - 1;
+        for (k, (axis, op)) in self.ops.iter().enumerate() {
+            let mut next_shape = shape.clone();
+            next_shape[*axis] = op.rows();
+            let len: usize = next_shape.iter().product();
+            if k == last {
+                let mut out = vec![U::default(); len];
+                resample_axis(&data, &shape, *axis, op, &mut out, &store);
+                bar.inc(1);
+                return (out, next_shape);
+            }
+            let mut out = vec![0f32; len];
+            resample_axis(&data, &shape, *axis, op, &mut out, |x| x);
+            data = out;
+            shape = next_shape;
+            bar.inc(1);
+        }
+        unreachable!("at least one axis is planned (checked in Prepared::new)")
+    }
 }
 
 /// Upscale (or resample) an f32 array; returns the new data and shape.
@@ -163,7 +233,7 @@ pub fn upscale_array(
 
 /// The whole pipeline, the last axis' results stored through `store`.
 fn upscale_into<U: Copy + Default + Send + Sync>(
-    mut data: Vec<f32>,
+    data: Vec<f32>,
     shape: &[usize],
     method: &Method,
     plans: &[AxisPlan],
@@ -178,31 +248,16 @@ fn upscale_into<U: Copy + Default + Send + Sync>(
             "the product of the shape",
         ));
     }
-    prefilter(&mut data, shape, method, plans)?;
-    bar.inc(1);
-    // fastest axis first: its gathers run on the smallest array
-    let mut order = plans.to_vec();
-    order.sort_by_key(|p| std::cmp::Reverse(p.axis));
-    let mut shape = shape.to_vec();
-    let last = order.len() - 1;
-    for (k, p) in order.iter().enumerate() {
-        let op = axis_operator(method, shape[p.axis], p);
-        let mut next_shape = shape.clone();
-        next_shape[p.axis] = p.len;
-        let len: usize = next_shape.iter().product();
-        if k == last {
-            let mut out = vec![U::default(); len];
-            resample_axis(&data, &shape, p.axis, &op, &mut out, &store);
-            bar.inc(1);
-            return Ok((out, next_shape));
-        }
-        let mut out = vec![0f32; len];
-        resample_axis(&data, &shape, p.axis, &op, &mut out, |x| x);
-        data = out;
-        shape = next_shape;
-        bar.inc(1);
+    if let Some(f) = refine::factors(method, shape, plans) {
+        let (u, s) = refine::upscale_refined(data, shape, method, &f)?;
+        let mut out = vec![U::default(); u.len()];
+        out.par_iter_mut()
+            .zip(u.par_iter())
+            .for_each(|(o, &x)| *o = store(x));
+        bar.inc(plans.len() as u64 + 1);
+        return Ok((out, s));
     }
-    unreachable!("at least one axis is planned")
+    Ok(Prepared::new(method, shape, plans)?.run(data, bar, store))
 }
 
 /// Plans for a raster: `factor` along `axes` (indices into `dims`), or explicit `size`
@@ -240,7 +295,7 @@ pub fn plan_raster(
                 .collect())
         }
         (Some(f), None) => {
-            if f < 2 || f > MAX_FACTOR {
+            if !(2..=MAX_FACTOR).contains(&f) {
                 return Err(Error::parameter("factor", f, "an integer from 2 to 1024"));
             }
             axes.iter()
@@ -276,7 +331,9 @@ macro_rules! store_int {
 }
 
 /// Upscale a raster (consumed: its samples are freed once converted to f32). Channels
-/// are never resampled; the result has the input's sample type.
+/// are never resampled; the result has the input's sample type. Void samples
+/// (`meta.nodata`, NaN) are filled by pull-push for the computation and written back
+/// at the nearest-cell positions of the output ([`voids`]).
 pub fn upscale_raster(
     r: Raster,
     method: &Method,
@@ -291,50 +348,45 @@ pub fn upscale_raster(
         mut meta,
     } = r;
     let ty = samples.sample_type();
-    let data = samples.to_f32();
+    let mut data = samples.to_f32();
     drop(samples);
     let mut shape = dims.clone();
     if channels > 1 {
         shape.push(channels);
     }
+    // voids: filled for the computation, written back at the nearest-cell positions
+    let void = voids::mask(&data, meta.nodata);
+    if let Some(v) = &void {
+        check(method, &shape, plans)?;
+        voids::fill(&mut data, v, &shape, dims.len())?;
+    }
+    let out_void = void.map(|v| voids::output_mask(&v, &shape, plans));
+    let void_value = meta.nodata.map_or(f32::NAN, |v| v as f32);
     let p = plans;
+    macro_rules! arm {
+        ($variant:ident, $store:expr) => {{
+            let store = $store;
+            let (mut v, s) = upscale_into(data, &shape, method, p, bar, store)?;
+            if let Some(m) = &out_void {
+                let nd = store(void_value);
+                v.par_iter_mut()
+                    .zip(m.par_iter())
+                    .filter(|(_, &b)| b)
+                    .for_each(|(x, _)| *x = nd);
+            }
+            (Samples::$variant(v), s)
+        }};
+    }
     let (samples, new_shape) = match ty {
-        crate::io::SampleType::U8 => {
-            let (v, s) = upscale_into(data, &shape, method, p, bar, store_int!(u8))?;
-            (Samples::U8(v), s)
-        }
-        crate::io::SampleType::I8 => {
-            let (v, s) = upscale_into(data, &shape, method, p, bar, store_int!(i8))?;
-            (Samples::I8(v), s)
-        }
-        crate::io::SampleType::U16 => {
-            let (v, s) = upscale_into(data, &shape, method, p, bar, store_int!(u16))?;
-            (Samples::U16(v), s)
-        }
-        crate::io::SampleType::I16 => {
-            let (v, s) = upscale_into(data, &shape, method, p, bar, store_int!(i16))?;
-            (Samples::I16(v), s)
-        }
-        crate::io::SampleType::U32 => {
-            let (v, s) = upscale_into(data, &shape, method, p, bar, store_int!(u32))?;
-            (Samples::U32(v), s)
-        }
-        crate::io::SampleType::I32 => {
-            let (v, s) = upscale_into(data, &shape, method, p, bar, store_int!(i32))?;
-            (Samples::I32(v), s)
-        }
-        crate::io::SampleType::F16 => {
-            let (v, s) = upscale_into(data, &shape, method, p, bar, half::f16::from_f32)?;
-            (Samples::F16(v), s)
-        }
-        crate::io::SampleType::F32 => {
-            let (v, s) = upscale_into(data, &shape, method, p, bar, |x| x)?;
-            (Samples::F32(v), s)
-        }
-        crate::io::SampleType::F64 => {
-            let (v, s) = upscale_into(data, &shape, method, p, bar, |x| x as f64)?;
-            (Samples::F64(v), s)
-        }
+        crate::io::SampleType::U8 => arm!(U8, store_int!(u8)),
+        crate::io::SampleType::I8 => arm!(I8, store_int!(i8)),
+        crate::io::SampleType::U16 => arm!(U16, store_int!(u16)),
+        crate::io::SampleType::I16 => arm!(I16, store_int!(i16)),
+        crate::io::SampleType::U32 => arm!(U32, store_int!(u32)),
+        crate::io::SampleType::I32 => arm!(I32, store_int!(i32)),
+        crate::io::SampleType::F16 => arm!(F16, half::f16::from_f32),
+        crate::io::SampleType::F32 => arm!(F32, |x: f32| x),
+        crate::io::SampleType::F64 => arm!(F64, |x: f32| x as f64),
     };
     let new_dims = new_shape[..dims.len()].to_vec();
     rescale_meta(&mut meta, &dims, &new_dims, plans);
