@@ -10,7 +10,7 @@ use mra::generate::terrain::diamond_square;
 use mra::scheme::Scheme;
 use mra::tensor::Array;
 use mra::terrain::synth::Details;
-use mra::terrain::{reduce, synthesize, transfer, Grid, SynthOptions};
+use mra::terrain::{highpass, reduce, synthesize, transfer, Grid, SynthOptions};
 
 fn grid_of(h: usize, w: usize, seed: u64, rough: f64, scale: f64) -> Grid {
     let f = diamond_square(h, w, seed, rough);
@@ -107,6 +107,42 @@ fn result_reduced_to_the_base_resolution_keeps_the_base() {
         // no seams: patch borders no rougher than elsewhere (within 15 %)
         assert!(report.seam_ratio < 1.15, "seam ratio {}", report.seam_ratio);
     }
+}
+
+/// The realism figures of benches/terrain_quality.py on the finest levels (F − P^L A^L F):
+/// subdivision alone adds nothing there, and the matched details have the example's
+/// roughness (per-level band RMS), closer than copying without matching.
+#[test]
+fn finest_levels_of_matched_details_have_the_examples_roughness() {
+    let base = smooth_base(48, 5);
+    let ex = grid_of(192, 192, 11, 0.6, 1000.0);
+    let ehp = highpass(&ex, Scheme::Chaikin, 2).unwrap();
+    let run = |d: Details| {
+        let o = SynthOptions {
+            details: d,
+            ..opts(3)
+        };
+        let (g, rep) = synthesize(&base, &ex, &o).unwrap();
+        assert!(rep.fidelity_psnr.unwrap() > 40.0, "{d:?}: {rep:?}");
+        highpass(&g, Scheme::Chaikin, 2).unwrap()
+    };
+    let none = run(Details::None);
+    let (lo, hi) = ex.range();
+    let biggest = none.data.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    assert!(
+        biggest < 1e-9 * (hi - lo),
+        "subdivision alone has finest levels {biggest}"
+    );
+    let r_matched = roughness(&run(Details::Matched)) / roughness(&ehp);
+    let r_copy = roughness(&run(Details::Copy)) / roughness(&ehp);
+    assert!(
+        (r_matched - 1.0).abs() < 0.1,
+        "matched roughness ratio {r_matched}"
+    );
+    assert!(
+        (r_matched - 1.0).abs() < (r_copy - 1.0).abs(),
+        "matched {r_matched} vs copy {r_copy}"
+    );
 }
 
 #[test]

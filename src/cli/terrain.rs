@@ -20,6 +20,24 @@ pub enum TerrainCommand {
     Synth(SynthArgs),
     /// Draw a hillshaded relief of a heightmap as a PNG.
     Render(RenderArgs),
+    /// Keep only the finest L levels of a heightmap's MRA: F − P^L A^L F (what synthesis adds).
+    Highpass(HighpassArgs),
+}
+
+#[derive(Args, Debug)]
+#[command(after_help = "Example:
+  mra generate terrain --size 256x256 --seed 9 -o t.tif
+  mra terrain highpass t.tif --levels 2 -o fine.tif")]
+pub struct HighpassArgs {
+    /// A heightmap or image.
+    pub input: PathBuf,
+    #[arg(short, long)]
+    pub output: PathBuf,
+    #[arg(long, default_value_t = 2)]
+    pub levels: usize,
+    /// chaikin or cubic (interpolating boundary, as `synth`).
+    #[arg(long, default_value = "chaikin")]
+    pub scheme: Scheme,
 }
 
 /// Options shared by `terrain synth` and `transfer`.
@@ -291,7 +309,16 @@ pub fn run(c: TerrainCommand) -> CliResult {
     match c {
         TerrainCommand::Synth(a) => synth(a),
         TerrainCommand::Render(a) => render(a),
+        TerrainCommand::Highpass(a) => highpass(a),
     }
+}
+
+fn highpass(a: HighpassArgs) -> CliResult {
+    let (r, g) = load_grid(&a.input)?;
+    let h = terrain::highpass(&g, a.scheme, a.levels)
+        .map_err(|e| Failure::context(a.input.display(), e))?;
+    let out = tr::from_grid(&h, &r, SampleType::F32)?;
+    write_output(&a.output, &out, false)
 }
 
 fn synth(a: SynthArgs) -> CliResult {

@@ -28,4 +28,4 @@ pub mod voids;
 pub use demo::demo_rows;
 pub use grid::Grid;
 pub use hillshade::{hillshade, Shading};
-pub use synth::{reduce, synthesize, transfer, SynthOptions, SynthReport};
+pub use synth::{highpass, reduce, synthesize, transfer, SynthOptions, SynthReport};

@@ -398,9 +398,60 @@ fn level_details(
                     .for_each(|v| *v *= inv);
             }
         }
+        if o.details == Details::Matched {
+            match_band_rms(&mut acc, (n_y, n_x), e, (*ne_y, *ne_x));
+        }
     }
     acc.paste(t);
     Ok((acc, patches.len(), mean_d))
+}
+
+/// Root mean square of the channel values of `g` over rows `ry` × columns `rx`.
+fn rms(g: &Grid, ry: std::ops::Range<usize>, rx: std::ops::Range<usize>) -> f64 {
+    let (mut s, mut n) = (0.0, 0usize);
+    for y in ry {
+        for x in rx.clone() {
+            for k in 0..g.c {
+                s += g.at(y, x, k).powi(2);
+                n += 1;
+            }
+        }
+    }
+    (s / n.max(1) as f64).sqrt()
+}
+
+/// Scale each of the three detail bands of the Mallat block `acc` (coarse part
+/// `n_y × n_x`) so that its RMS equals the same band's RMS in the example's block
+/// (coarse part `ne_y × ne_x`): `D_b ← D_b · rms(E_b)/rms(D_b)`. Matching picks *which*
+/// details go where; this keeps each level's amplitude that of the example, so the
+/// blend and the choice of quieter windows do not change the spectrum's slope.
+fn match_band_rms(
+    acc: &mut Grid,
+    (n_y, n_x): (usize, usize),
+    e: &Grid,
+    (ne_y, ne_x): (usize, usize),
+) {
+    for (hy, hx) in [(true, false), (false, true), (true, true)] {
+        let (ry, rx) = (
+            if hy { n_y..acc.h } else { 0..n_y },
+            if hx { n_x..acc.w } else { 0..n_x },
+        );
+        let (ey, ex) = (
+            if hy { ne_y..e.h } else { 0..ne_y },
+            if hx { ne_x..e.w } else { 0..ne_x },
+        );
+        let (have, want) = (rms(acc, ry.clone(), rx.clone()), rms(e, ey, ex));
+        if have > 0.0 {
+            let f = want / have;
+            for y in ry {
+                for x in rx.clone() {
+                    for k in 0..acc.c {
+                        *acc.at_mut(y, x, k) *= f;
+                    }
+                }
+            }
+        }
+    }
 }
 
 fn check(base: &Grid, example: &Grid, o: &SynthOptions) -> Result<()> {
@@ -562,4 +613,22 @@ pub fn reduce(result: &Grid, h: usize, w: usize, scheme: Scheme, levels: usize) 
     tensor::analyze(&mut a, &spec(scheme, levels))?;
     let packed = Grid::new(result.h, result.w, result.c, a.into_data())?;
     Ok(resample(&packed.crop(ly[levels], lx[levels]), h, w))
+}
+
+/// The finest `levels` levels of a grid's MRA: `F − P^L A^L F` (the grid minus its own
+/// reduction-then-reconstruction; the part that synthesis adds). The realism metrics of
+/// `benches/terrain_quality.py` are taken on this part of the result and of the example.
+pub fn highpass(g: &Grid, scheme: Scheme, levels: usize) -> Result<Grid> {
+    let ly = lengths_down(scheme, g.h, levels, "height")?;
+    let lx = lengths_down(scheme, g.w, levels, "width")?;
+    let (mut a, _) = g.to_array()?;
+    let sp = spec(scheme, levels);
+    let pyr = tensor::analyze(&mut a, &sp)?;
+    let packed = Grid::new(g.h, g.w, g.c, a.into_data())?;
+    let mut low = Grid::zeros(g.h, g.w, g.c);
+    low.paste(&packed.crop(ly[levels], lx[levels]));
+    let (mut a, _) = low.to_array()?;
+    tensor::synthesize(&mut a, &pyr)?;
+    let data = g.data.iter().zip(a.data()).map(|(f, l)| f - l).collect();
+    Grid::new(g.h, g.w, g.c, data)
 }
