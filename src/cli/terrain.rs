@@ -133,12 +133,13 @@ pub struct RenderArgs {
 #[command(after_help = "Example:
   mra generate terrain --size 257 --seed 3 -o smooth.png
   mra generate terrain --size 257 --seed 9 -o rough.png
-  mra transfer --from rough.png --to smooth.png --levels 2 -o out.png")]
+  mra transfer --from rough.png --to smooth.png --levels 2 -o out.png
+  mra transfer --from ../shared/corpus/volumes/ct_pancreas_256.nrrd --to blurred.nrrd -o ct.nrrd")]
 pub struct TransferArgs {
     /// The example whose fine details are transferred.
     #[arg(long)]
     pub from: PathBuf,
-    /// The image or heightmap that receives them (its own details are replaced).
+    /// The image, heightmap or volume that receives them (its own details are replaced).
     #[arg(long)]
     pub to: PathBuf,
     #[arg(short, long)]
@@ -377,7 +378,40 @@ fn render(a: RenderArgs) -> CliResult {
     write_output(&a.output, &shade_raster(&g, &s)?, false)
 }
 
+/// A volume transfer: both inputs 3-D (NRRD, NIfTI, raw, slice folders…), output with
+/// the base's size, metadata and sample type.
+fn transfer_volume(a: &TransferArgs, br: Raster, er: Raster) -> CliResult {
+    if er.dims.len() != 3 {
+        return Err(Failure(format!(
+            "{}: {}-D data (expected a volume, like --to)",
+            a.from.display(),
+            er.dims.len()
+        )));
+    }
+    let vol = |r: &Raster, p: &Path| {
+        terrain::Volume::new([r.dims[0], r.dims[1], r.dims[2]], r.channels, r.to_f64())
+            .map_err(|e| Failure::context(p.display(), e))
+    };
+    let (base, example) = (vol(&br, &a.to)?, vol(&er, &a.from)?);
+    let (v, report) = terrain::transfer_volume(&base, &example, &a.m.options())?;
+    let ty = br.sample_type();
+    let out = Raster {
+        samples: Samples::from_f64(&v.data, ty),
+        ..br
+    };
+    write_output(&a.output, &out, false)?;
+    if a.m.json {
+        print_json(&report);
+    }
+    Ok(())
+}
+
 pub fn transfer(a: TransferArgs) -> CliResult {
+    let br = read_input(&a.to, &ReadOptions::default())?;
+    if br.dims.len() == 3 {
+        let er = read_input(&a.from, &ReadOptions::default())?;
+        return transfer_volume(&a, br, er);
+    }
     let (br, base) = load_grid(&a.to)?;
     let (er, example) = load_grid(&a.from)?;
     tr::check_compatible(&br, &er, base.w).map_err(|e| Failure::context(a.from.display(), e))?;

@@ -118,7 +118,7 @@ pub struct SynthReport {
     pub fidelity_psnr: Option<f64>,
 }
 
-const BOUNDARY: Boundary = Boundary::Interpolating;
+pub(super) const BOUNDARY: Boundary = Boundary::Interpolating;
 
 fn spec(scheme: Scheme, levels: usize) -> PyramidSpec {
     PyramidSpec {
@@ -132,7 +132,12 @@ fn spec(scheme: Scheme, levels: usize) -> PyramidSpec {
 
 /// Lane lengths `m_0 … m_L` of an axis of `m`, or an error naming `what` when the
 /// scheme's filters cannot take it `levels` levels down.
-fn lengths_down(scheme: Scheme, m: usize, levels: usize, what: &'static str) -> Result<Vec<usize>> {
+pub(super) fn lengths_down(
+    scheme: Scheme,
+    m: usize,
+    levels: usize,
+    what: &'static str,
+) -> Result<Vec<usize>> {
     if max_levels(scheme, BOUNDARY, m) < levels {
         return Err(Error::parameter(
             what,
@@ -213,7 +218,7 @@ fn feature(g: &Grid, y0: i64, x0: i64, q: usize, out: &mut Vec<f32>) {
     out.push((slope / n) as f32);
 }
 
-fn distance(t: &[f32], e: &[f32], lambda: f64) -> f64 {
+pub(super) fn distance(t: &[f32], e: &[f32], lambda: f64) -> f64 {
     let q2 = t.len() - 1;
     let mut s = 0.0f32;
     for i in 0..q2 {
@@ -227,7 +232,7 @@ fn distance(t: &[f32], e: &[f32], lambda: f64) -> f64 {
 
 /// Ramp weight of band-local index `i` for a core `[t, t + p)` with overlap `o`
 /// (`first`/`last`: no ramp on that side).
-fn ramp(i: usize, t: usize, p: usize, o: usize, first: bool, last: bool) -> f64 {
+pub(super) fn ramp(i: usize, t: usize, p: usize, o: usize, first: bool, last: bool) -> f64 {
     let i = i as f64 + 0.5;
     let (t, p, o) = (t as f64, p as f64, o as f64);
     let mut w: f64 = 1.0;
@@ -241,11 +246,11 @@ fn ramp(i: usize, t: usize, p: usize, o: usize, first: bool, last: bool) -> f64 
 }
 
 /// Patch origins along an axis of `n` coarse cells.
-fn origins(n: usize, p: usize) -> Vec<usize> {
+pub(super) fn origins(n: usize, p: usize) -> Vec<usize> {
     (0..n).step_by(p).collect()
 }
 
-fn mix(seed: u64, level: usize, patch: usize) -> SplitMix64 {
+pub(super) fn mix(seed: u64, level: usize, patch: usize) -> SplitMix64 {
     let mut r = SplitMix64::new(
         seed ^ (level as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15)
             ^ (patch as u64).wrapping_mul(0xD1B5_4A32_D192_ED03),
@@ -455,10 +460,15 @@ fn match_band_rms(
 }
 
 fn check(base: &Grid, example: &Grid, o: &SynthOptions) -> Result<()> {
-    if base.c != example.c {
+    check_options(base.c, example.c, o)
+}
+
+/// Same channels; patch ≥ 2, overlap ≤ patch/2; 1 to 8 levels.
+pub(super) fn check_options(base_c: usize, example_c: usize, o: &SynthOptions) -> Result<()> {
+    if base_c != example_c {
         return Err(Error::parameter(
             "example channels",
-            example.c,
+            example_c,
             "the same number of channels as the base",
         ));
     }
