@@ -158,8 +158,14 @@ pub struct DenoiseArgs {
     pub input: PathBuf,
     #[arg(short, long)]
     pub output: PathBuf,
-    #[arg(long, default_value_t = 4)]
-    pub levels: usize,
+    /// Levels (default: 4 for haar; for chaikin/cubic chosen among 1–4 by the smallest
+    /// SURE risk; 0 = that choice for any scheme).
+    #[arg(long)]
+    pub levels: Option<usize>,
+    /// Cycle spinning: average over shifts 0..N along every axis (N^d transforms;
+    /// default 2; 1 = one decimated transform).
+    #[arg(long, default_value_t = 2)]
+    pub shifts: usize,
     /// haar (best measured), chaikin or cubic.
     #[arg(long, default_value = "haar")]
     pub scheme: Scheme,
@@ -439,10 +445,13 @@ pub fn denoise(a: DenoiseArgs) -> CliResult {
         } else {
             Boundary::Symmetric
         }),
-        levels: a.levels,
+        levels: a
+            .levels
+            .unwrap_or(if a.scheme == Scheme::Haar { 4 } else { 0 }),
         mode: a.mode,
         rule,
         sigma: a.sigma,
+        shifts: a.shifts,
     };
     let report = if is_points {
         let text = std::fs::read_to_string(&a.input)
