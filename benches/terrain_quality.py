@@ -17,7 +17,7 @@ Metrics (result vs example B unless noted):
   beta      radially averaged power-spectrum slope over the finest octave
             (k in [N/4, N/2]), next to the example's,
   seam      mean |second difference| across the finest patch borders / elsewhere (1 = no seams).
-Run from the repository root:  cargo build --release && python3 benches/terrain_quality.py
+Run from the repository root:  cargo build --release && python3 benches/terrain_quality.py [--seed N]
 """
 import json, os, subprocess, sys, tempfile
 import numpy as np
@@ -28,6 +28,8 @@ from scipy.stats import wasserstein_distance
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 CORPUS = os.environ.get("MRA_CORPUS", os.path.join(ROOT, "..", "shared", "corpus"))
 MRA = os.path.join(ROOT, "target", "release", "mra")
+EXTRA = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []  # more mra options
+SEED = int(sys.argv[sys.argv.index("--seed") + 1]) if "--seed" in sys.argv else 1
 
 
 def hgt(name):
@@ -104,7 +106,7 @@ def main():
             for det in ["matched", "copy", "none"]:
                 op = os.path.join(tmp, det + ".tif")
                 r = subprocess.run([MRA, "terrain", "synth", "--base", bp, "--example", ep, "-o", op,
-                                    "--levels", "2", "--seed", "1", "--details", det, "--json"],
+                                    "--levels", "2", "--seed", str(SEED), "--details", det, "--json"] + EXTRA,
                                    check=True, capture_output=True, text=True)
                 rep = json.loads(r.stdout)
                 g = tifffile.imread(op).astype(np.float64)

@@ -105,7 +105,8 @@ pub struct DenoiseReport {
     pub zeroed: f64,
     /// Shifts per axis (cycle spinning).
     pub shifts: usize,
-    /// SURE risk per sample of each level count tried (`levels` = 0), 1 level first.
+    /// SURE risk per sample of each level count tried (`levels` = 0), 1 level first;
+    /// the search stops at the first level count whose risk is not lower.
     pub sure: Vec<f64>,
 }
 
@@ -390,7 +391,7 @@ fn spun(
 /// boundary). Cost: `shifts^d` transforms.
 ///
 /// **Level choice** (`levels` = 0): Stein's unbiased risk estimate of each level count
-/// `L`, `SURE = ‖x̂_L − y‖² − Nσ² + 2σ² div x̂_L`, with `div = #coarse + #kept details`
+/// `L = 1, 2, …` (until it grows), `SURE = ‖x̂_L − y‖² − Nσ² + 2σ² div x̂_L`, with `div = #coarse + #kept details`
 /// (exact for soft/hard shrinkage with fixed thresholds: `B Q = I` gives each kept
 /// coefficient `b_iᵀ q_i = 1`); the smallest wins. It matters for the B-spline schemes:
 /// their analysis filter `A` amplifies white noise (`Σ a_k² = 1.25` per axis for Chaikin
@@ -433,6 +434,8 @@ pub fn denoise(a: &mut Array<f64>, axes: &[usize], o: &DenoiseOptions) -> Result
         }
         if best.as_ref().is_none_or(|b| r < b.0) {
             best = Some((r, x, zeroed, depth));
+        } else {
+            break; // the risk grew with one more level: deeper ones are not tried
         }
     }
     let (_, x, zeroed, depth) = best.expect("at least one level count tried");

@@ -58,6 +58,12 @@ pub struct MatchArgs {
     /// Overlap of patches on each side (≤ patch/2).
     #[arg(long, default_value_t = 2)]
     pub overlap: usize,
+    /// At most this many example windows are compared per level (a grid offset by the seed).
+    #[arg(long, default_value_t = 16384)]
+    pub candidates: usize,
+    /// Pick each patch at random (seeded) among this many best-matching example windows.
+    #[arg(long, default_value_t = 2)]
+    pub choices: usize,
     /// matched (the method), copy (same place, no matching) or none (subdivision only).
     #[arg(long, default_value = "matched")]
     pub details: Details,
@@ -74,6 +80,8 @@ impl MatchArgs {
             seed: self.seed,
             patch: self.patch,
             overlap: self.overlap,
+            choices: self.choices,
+            candidates: self.candidates,
             details: self.details,
             ..SynthOptions::default()
         }

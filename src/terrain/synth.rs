@@ -25,6 +25,12 @@
 //! **Blending.** Each patch weighs its copied details by a separable ramp `w` that rises
 //! over `2o` cells across each border, so neighbouring weights sum to 1; the blend
 //! `Σ wᵢ Dᵢ / √(Σ wᵢ²)` keeps the variance of uncorrelated details (no faded seams).
+//! Matched details are then scaled band by band, `D_b ← D_b · rms(E_b)/rms(D_b)`, to the
+//! RMS of the example's band `E_b` at the same level (the per-level amplitude, hence the
+//! spectrum's slope and the roughness of the finest levels, are the example's).
+//!
+//! **Defaults** (`benches/terrain_quality.py`, docs/terrain.md): 8-cell cores, 2-cell
+//! overlaps, at most 16 384 candidates, a pick among the 2 best.
 
 use rayon::prelude::*;
 
@@ -91,8 +97,8 @@ impl Default for SynthOptions {
             size: None,
             patch: 8,
             overlap: 2,
-            candidates: 4096,
-            choices: 3,
+            candidates: 16384,
+            choices: 2,
             slope_weight: 1.0,
             details: Details::Matched,
         }
