@@ -58,9 +58,10 @@ pub struct MatchArgs {
     /// Overlap of patches on each side (≤ patch/2).
     #[arg(long, default_value_t = 2)]
     pub overlap: usize,
-    /// At most this many example windows are compared per level (a grid offset by the seed).
-    #[arg(long, default_value_t = 16384)]
-    pub candidates: usize,
+    /// At most this many example windows are compared per level (a grid offset by the
+    /// seed; default 16384 for heightmaps and images, 4096 for volumes).
+    #[arg(long)]
+    pub candidates: Option<usize>,
     /// Pick each patch at random (seeded) among this many best-matching example windows.
     #[arg(long, default_value_t = 2)]
     pub choices: usize,
@@ -81,7 +82,9 @@ impl MatchArgs {
             patch: self.patch,
             overlap: self.overlap,
             choices: self.choices,
-            candidates: self.candidates,
+            candidates: self
+                .candidates
+                .unwrap_or(SynthOptions::default().candidates),
             details: self.details,
             ..SynthOptions::default()
         }
@@ -407,7 +410,11 @@ fn transfer_volume(a: &TransferArgs, br: Raster, er: Raster) -> CliResult {
             .map_err(|e| Failure::context(p.display(), e))
     };
     let (base, example) = (vol(&br, &a.to)?, vol(&er, &a.from)?);
-    let (v, report) = terrain::transfer_volume(&base, &example, &a.m.options())?;
+    let o = SynthOptions {
+        candidates: a.m.candidates.unwrap_or(4096),
+        ..a.m.options()
+    };
+    let (v, report) = terrain::transfer_volume(&base, &example, &o)?;
     let ty = br.sample_type();
     let out = Raster {
         samples: Samples::from_f64(&v.data, ty),
