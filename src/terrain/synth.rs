@@ -224,12 +224,22 @@ fn feature(g: &Grid, y0: i64, x0: i64, q: usize, out: &mut Vec<f32>) {
     out.push((slope / n) as f32);
 }
 
-pub(super) fn distance(t: &[f32], e: &[f32], lambda: f64) -> f64 {
+/// The matching distance `Σ (z_t − z_e)²/q² + λ ((g_t − g_e)/(g_t + g_e + ε))²`, or
+/// any value ≥ `bound` as soon as the partial sum of the height term reaches `bound`
+/// (the sum only grows, and rounding is monotone, so a candidate rejected early would
+/// have been rejected anyway: the choice is unchanged).
+pub(super) fn distance_below(t: &[f32], e: &[f32], lambda: f64, bound: f64) -> f64 {
     let q2 = t.len() - 1;
+    let limit = bound * q2 as f64;
     let mut s = 0.0f32;
-    for i in 0..q2 {
-        let d = t[i] - e[i];
-        s += d * d;
+    for (tc, ec) in t[..q2].chunks(16).zip(e[..q2].chunks(16)) {
+        for (a, b) in tc.iter().zip(ec) {
+            let d = a - b;
+            s += d * d;
+        }
+        if s as f64 >= limit {
+            return bound;
+        }
     }
     let (gt, ge) = (t[q2] as f64, e[q2] as f64);
     let r = (gt - ge) / (gt + ge + 1e-9);
@@ -339,7 +349,12 @@ fn level_details(
                 let k = o.choices.max(1);
                 let mut best: Vec<(f64, usize)> = Vec::with_capacity(k + 1);
                 for (ci, ef) in feats.iter().enumerate() {
-                    let d = distance(&f, ef, o.slope_weight);
+                    let bound = if best.len() < k {
+                        f64::INFINITY
+                    } else {
+                        best[k - 1].0
+                    };
+                    let d = distance_below(&f, ef, o.slope_weight, bound);
                     if best.len() < k || d < best[best.len() - 1].0 {
                         let pos = best.partition_point(|b| b.0 <= d);
                         best.insert(pos, (d, ci));

@@ -9,7 +9,7 @@
 //!   so a patch is copied by one integer shift of band-local indices;
 //! * feature of a `q³` window (`q = p + 2o`), sampled every other voxel: heights
 //!   normalised for offset and scale, plus the mean gradient magnitude; distance
-//!   [`super::synth::distance`]; the best `choices` of at most `candidates` windows,
+//!   [`super::synth::distance_below`] (cut short once it exceeds the k-th best); the best `choices` of at most `candidates` windows,
 //!   one picked by a generator seeded with (seed, level, patch);
 //! * separable ramps over `2o` voxels, blend `Σ wᵢDᵢ / √Σwᵢ²`, then each band scaled to
 //!   the example's band RMS at that level (matched details only);
@@ -19,7 +19,8 @@
 use rayon::prelude::*;
 
 use super::synth::{
-    check_options, distance, lengths_down, mix, origins, ramp, Details, SynthOptions, BOUNDARY,
+    check_options, distance_below, lengths_down, mix, origins, ramp, Details, SynthOptions,
+    BOUNDARY,
 };
 use crate::scheme::{Scheme, TwoScale};
 use crate::tensor::{self, Array, Order, Pyramid, PyramidSpec};
@@ -248,7 +249,12 @@ fn level_details(
                 let k = o.choices.max(1);
                 let mut best: Vec<(f64, usize)> = Vec::with_capacity(k + 1);
                 for (ci, ef) in feats.iter().enumerate() {
-                    let d = distance(&f, ef, o.slope_weight);
+                    let bound = if best.len() < k {
+                        f64::INFINITY
+                    } else {
+                        best[k - 1].0
+                    };
+                    let d = distance_below(&f, ef, o.slope_weight, bound);
                     if best.len() < k || d < best[best.len() - 1].0 {
                         let pos = best.partition_point(|b| b.0 <= d);
                         best.insert(pos, (d, ci));
