@@ -10,7 +10,10 @@ use mra::generate::terrain::diamond_square;
 use mra::scheme::Scheme;
 use mra::tensor::Array;
 use mra::terrain::synth::Details;
-use mra::terrain::{reduce, synthesize, transfer, Grid, SynthOptions};
+use mra::terrain::volume::coarse_points;
+use mra::terrain::{
+    highpass, reduce, synthesize, transfer, transfer_volume, Grid, SynthOptions, Volume,
+};
 
 fn grid_of(h: usize, w: usize, seed: u64, rough: f64, scale: f64) -> Grid {
     let f = diamond_square(h, w, seed, rough);
@@ -107,6 +110,42 @@ fn result_reduced_to_the_base_resolution_keeps_the_base() {
         // no seams: patch borders no rougher than elsewhere (within 15 %)
         assert!(report.seam_ratio < 1.15, "seam ratio {}", report.seam_ratio);
     }
+}
+
+/// The realism figures of benches/terrain_quality.py on the finest levels (F − P^L A^L F):
+/// subdivision alone adds nothing there, and the matched details have the example's
+/// roughness (per-level band RMS), closer than copying without matching.
+#[test]
+fn finest_levels_of_matched_details_have_the_examples_roughness() {
+    let base = smooth_base(48, 5);
+    let ex = grid_of(192, 192, 11, 0.6, 1000.0);
+    let ehp = highpass(&ex, Scheme::Chaikin, 2).unwrap();
+    let run = |d: Details| {
+        let o = SynthOptions {
+            details: d,
+            ..opts(3)
+        };
+        let (g, rep) = synthesize(&base, &ex, &o).unwrap();
+        assert!(rep.fidelity_psnr.unwrap() > 40.0, "{d:?}: {rep:?}");
+        highpass(&g, Scheme::Chaikin, 2).unwrap()
+    };
+    let none = run(Details::None);
+    let (lo, hi) = ex.range();
+    let biggest = none.data.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    assert!(
+        biggest < 1e-9 * (hi - lo),
+        "subdivision alone has finest levels {biggest}"
+    );
+    let r_matched = roughness(&run(Details::Matched)) / roughness(&ehp);
+    let r_copy = roughness(&run(Details::Copy)) / roughness(&ehp);
+    assert!(
+        (r_matched - 1.0).abs() < 0.1,
+        "matched roughness ratio {r_matched}"
+    );
+    assert!(
+        (r_matched - 1.0).abs() < (r_copy - 1.0).abs(),
+        "matched {r_matched} vs copy {r_copy}"
+    );
 }
 
 #[test]
@@ -418,4 +457,159 @@ fn srtm_voids_are_filled_within_the_range_of_their_rims() {
     assert_eq!(filled, voids);
     let (lo, hi) = g.range();
     assert!(lo >= -34.0 && hi <= 1579.0, "{lo} … {hi}");
+}
+
+/// A generated volume: a smooth field plus `rough` × (a sum of short-wavelength waves
+/// and deterministic white noise).
+fn volume_of(n: usize, seed: u64, rough: f64) -> Volume {
+    let mut rng = mra::generate::rng::SplitMix64::new(seed);
+    let waves: Vec<[f64; 4]> = (0..12)
+        .map(|_| {
+            [
+                0.3 + 1.2 * rng.next_f64(),
+                rng.next_f64(),
+                rng.next_f64(),
+                6.3 * rng.next_f64(),
+            ]
+        })
+        .collect();
+    let mut data = Vec::with_capacity(n * n * n);
+    for z in 0..n {
+        for y in 0..n {
+            for x in 0..n {
+                let (zf, yf, xf) = (z as f64, y as f64, x as f64);
+                let smooth = 100.0 * (xf / 9.0).sin() * (yf / 11.0).cos() + 60.0 * (zf / 8.0).sin();
+                let fine: f64 = waves
+                    .iter()
+                    .map(|w| (w[0] * (xf + w[1] * yf + w[2] * zf) + w[3]).sin())
+                    .sum::<f64>()
+                    + 3.0 * (rng.next_f64() - 0.5);
+                data.push(smooth + rough * fine);
+            }
+        }
+    }
+    Volume::new([n, n, n], 1, data).unwrap()
+}
+
+/// Standard deviation of the 7-point Laplacian of a volume (interior).
+fn roughness3(v: &Volume) -> f64 {
+    let [d, h, w] = v.dims;
+    let at = |z: usize, y: usize, x: usize| v.data[(z * h + y) * w + x];
+    let mut s = Vec::new();
+    for z in 1..d - 1 {
+        for y in 1..h - 1 {
+            for x in 1..w - 1 {
+                s.push(
+                    at(z - 1, y, x)
+                        + at(z + 1, y, x)
+                        + at(z, y - 1, x)
+                        + at(z, y + 1, x)
+                        + at(z, y, x - 1)
+                        + at(z, y, x + 1)
+                        - 6.0 * at(z, y, x),
+                );
+            }
+        }
+    }
+    let m = s.iter().sum::<f64>() / s.len() as f64;
+    (s.iter().map(|x| (x - m).powi(2)).sum::<f64>() / s.len() as f64).sqrt()
+}
+
+fn minus(a: &Volume, b: &Volume) -> Volume {
+    let d = a.data.iter().zip(&b.data).map(|(x, y)| x - y).collect();
+    Volume::new(a.dims, a.c, d).unwrap()
+}
+
+#[test]
+fn volume_transfer_keeps_the_base_coarse_and_takes_the_examples_fine_texture() {
+    let base = volume_of(40, 1, 0.0);
+    let ex = volume_of(48, 2, 4.0);
+    let o = |details: Details, seed: u64| SynthOptions {
+        levels: 2,
+        patch: 6,
+        seed,
+        details,
+        ..SynthOptions::default()
+    };
+    let (v, rep) = transfer_volume(&base, &ex, &o(Details::Matched, 5)).unwrap();
+    assert_eq!(v.dims, [40, 40, 40]);
+    assert_eq!(rep.patches.len(), 2);
+    // A Q = 0: the base's coarse points come back exactly
+    let (cb, cv) = (
+        coarse_points(&base, Scheme::Chaikin, 2).unwrap(),
+        coarse_points(&v, Scheme::Chaikin, 2).unwrap(),
+    );
+    let err = cb
+        .data
+        .iter()
+        .zip(&cv.data)
+        .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+    assert!(err < 1e-9, "coarse points moved by {err}");
+    // fine texture: the finest levels (result minus subdivision alone) are as rough as
+    // the example's finest levels; the base had none
+    let (none, _) = transfer_volume(&base, &ex, &o(Details::None, 5)).unwrap();
+    let (ex_low, _) = transfer_volume(&ex, &ex, &o(Details::None, 5)).unwrap();
+    let ratio = roughness3(&minus(&v, &none)) / roughness3(&minus(&ex, &ex_low));
+    assert!(
+        (ratio - 1.0).abs() < 0.15,
+        "finest-level roughness ratio {ratio}"
+    );
+    assert!(roughness3(&v) > 5.0 * roughness3(&base));
+    assert!(
+        (0.8..1.25).contains(&rep.seam_ratio),
+        "seam ratio {}",
+        rep.seam_ratio
+    );
+    // determinism
+    let (again, _) = transfer_volume(&base, &ex, &o(Details::Matched, 5)).unwrap();
+    let (other, _) = transfer_volume(&base, &ex, &o(Details::Matched, 6)).unwrap();
+    assert!(again.data == v.data);
+    assert!(other.data != v.data);
+    // an example too small for the patch window at the coarsest level
+    let small = volume_of(16, 3, 4.0);
+    let e = transfer_volume(&base, &small, &o(Details::Matched, 5)).unwrap_err();
+    assert!(e.to_string().contains("example"), "{e}");
+}
+
+#[test]
+fn cli_transfer_on_nrrd_volumes() {
+    let d = tmpdir("vol");
+    let write = |v: &Volume, p: &std::path::Path| {
+        let samples = mra::io::Samples::F32(v.data.iter().map(|&x| x as f32).collect());
+        let r =
+            mra::io::Raster::new(v.dims.to_vec(), 1, samples, mra::io::DataKind::Volume).unwrap();
+        mra::io::write(p, &r).unwrap();
+    };
+    let (b, e, out) = (d.join("base.nrrd"), d.join("ex.nrrd"), d.join("out.nrrd"));
+    write(&volume_of(36, 1, 0.0), &b);
+    write(&volume_of(48, 2, 4.0), &e);
+    let o = mra(&[
+        "transfer",
+        "--from",
+        s(&e),
+        "--to",
+        s(&b),
+        "-o",
+        s(&out),
+        "--patch",
+        "6",
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let rep: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(rep["dims"], serde_json::json!([36, 36, 36]));
+    let r = mra::io::read(&out).unwrap();
+    assert_eq!(r.dims, vec![36, 36, 36]);
+    // a 2-D example for a volume base: one line, exit 2, no output
+    let img = d.join("img.png");
+    assert!(
+        mra(&["generate", "zone-plate", "--size", "64", "-o", s(&img)])
+            .status
+            .success()
+    );
+    let bad = d.join("bad.nrrd");
+    let o = mra(&["transfer", "--from", s(&img), "--to", s(&b), "-o", s(&bad)]);
+    assert_eq!(o.status.code(), Some(2));
+    assert_eq!(String::from_utf8_lossy(&o.stderr).trim().lines().count(), 1);
+    assert!(!bad.exists());
 }

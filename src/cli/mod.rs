@@ -59,7 +59,7 @@ pub enum Command {
     /// Terrain: synthesis by example (§9.7.4), hillshaded rendering.
     #[command(subcommand)]
     Terrain(terrain::TerrainCommand),
-    /// Give an image or heightmap the fine details of an example (detail transfer).
+    /// Give an image, heightmap or volume the fine details of an example (detail transfer).
     Transfer(terrain::TransferArgs),
     /// Remove noise by thresholded details (§9.7.2): curves, images, volumes, heightmaps.
     Denoise(terrain::DenoiseArgs),

@@ -20,6 +20,24 @@ pub enum TerrainCommand {
     Synth(SynthArgs),
     /// Draw a hillshaded relief of a heightmap as a PNG.
     Render(RenderArgs),
+    /// Keep only the finest L levels of a heightmap's MRA: F − P^L A^L F (what synthesis adds).
+    Highpass(HighpassArgs),
+}
+
+#[derive(Args, Debug)]
+#[command(after_help = "Example:
+  mra generate terrain --size 256x256 --seed 9 -o t.tif
+  mra terrain highpass t.tif --levels 2 -o fine.tif")]
+pub struct HighpassArgs {
+    /// A heightmap or image.
+    pub input: PathBuf,
+    #[arg(short, long)]
+    pub output: PathBuf,
+    #[arg(long, default_value_t = 2)]
+    pub levels: usize,
+    /// chaikin or cubic (interpolating boundary, as `synth`).
+    #[arg(long, default_value = "chaikin")]
+    pub scheme: Scheme,
 }
 
 /// Options shared by `terrain synth` and `transfer`.
@@ -40,6 +58,13 @@ pub struct MatchArgs {
     /// Overlap of patches on each side (≤ patch/2).
     #[arg(long, default_value_t = 2)]
     pub overlap: usize,
+    /// At most this many example windows are compared per level (a grid offset by the
+    /// seed; default 16384 for heightmaps and images, 4096 for volumes).
+    #[arg(long)]
+    pub candidates: Option<usize>,
+    /// Pick each patch at random (seeded) among this many best-matching example windows.
+    #[arg(long, default_value_t = 2)]
+    pub choices: usize,
     /// matched (the method), copy (same place, no matching) or none (subdivision only).
     #[arg(long, default_value = "matched")]
     pub details: Details,
@@ -56,6 +81,10 @@ impl MatchArgs {
             seed: self.seed,
             patch: self.patch,
             overlap: self.overlap,
+            choices: self.choices,
+            candidates: self
+                .candidates
+                .unwrap_or(SynthOptions::default().candidates),
             details: self.details,
             ..SynthOptions::default()
         }
@@ -115,12 +144,13 @@ pub struct RenderArgs {
 #[command(after_help = "Example:
   mra generate terrain --size 257 --seed 3 -o smooth.png
   mra generate terrain --size 257 --seed 9 -o rough.png
-  mra transfer --from rough.png --to smooth.png --levels 2 -o out.png")]
+  mra transfer --from rough.png --to smooth.png --levels 2 -o out.png
+  mra transfer --from ../shared/corpus/volumes/ct_pancreas_256.nrrd --to blurred.nrrd -o ct.nrrd")]
 pub struct TransferArgs {
     /// The example whose fine details are transferred.
     #[arg(long)]
     pub from: PathBuf,
-    /// The image or heightmap that receives them (its own details are replaced).
+    /// The image, heightmap or volume that receives them (its own details are replaced).
     #[arg(long)]
     pub to: PathBuf,
     #[arg(short, long)]
@@ -139,8 +169,14 @@ pub struct DenoiseArgs {
     pub input: PathBuf,
     #[arg(short, long)]
     pub output: PathBuf,
-    #[arg(long, default_value_t = 4)]
-    pub levels: usize,
+    /// Levels (default: 4 for haar; for chaikin/cubic chosen among 1–4 by the smallest
+    /// SURE risk; 0 = that choice for any scheme).
+    #[arg(long)]
+    pub levels: Option<usize>,
+    /// Cycle spinning: average over shifts 0..N along every axis (N^d transforms;
+    /// default 2; 1 = one decimated transform).
+    #[arg(long, default_value_t = 2)]
+    pub shifts: usize,
     /// haar (best measured), chaikin or cubic.
     #[arg(long, default_value = "haar")]
     pub scheme: Scheme,
@@ -291,7 +327,16 @@ pub fn run(c: TerrainCommand) -> CliResult {
     match c {
         TerrainCommand::Synth(a) => synth(a),
         TerrainCommand::Render(a) => render(a),
+        TerrainCommand::Highpass(a) => highpass(a),
     }
+}
+
+fn highpass(a: HighpassArgs) -> CliResult {
+    let (r, g) = load_grid(&a.input)?;
+    let h = terrain::highpass(&g, a.scheme, a.levels)
+        .map_err(|e| Failure::context(a.input.display(), e))?;
+    let out = tr::from_grid(&h, &r, SampleType::F32)?;
+    write_output(&a.output, &out, false)
 }
 
 fn synth(a: SynthArgs) -> CliResult {
@@ -350,7 +395,44 @@ fn render(a: RenderArgs) -> CliResult {
     write_output(&a.output, &shade_raster(&g, &s)?, false)
 }
 
+/// A volume transfer: both inputs 3-D (NRRD, NIfTI, raw, slice folders…), output with
+/// the base's size, metadata and sample type.
+fn transfer_volume(a: &TransferArgs, br: Raster, er: Raster) -> CliResult {
+    if er.dims.len() != 3 {
+        return Err(Failure(format!(
+            "{}: {}-D data (expected a volume, like --to)",
+            a.from.display(),
+            er.dims.len()
+        )));
+    }
+    let vol = |r: &Raster, p: &Path| {
+        terrain::Volume::new([r.dims[0], r.dims[1], r.dims[2]], r.channels, r.to_f64())
+            .map_err(|e| Failure::context(p.display(), e))
+    };
+    let (base, example) = (vol(&br, &a.to)?, vol(&er, &a.from)?);
+    let o = SynthOptions {
+        candidates: a.m.candidates.unwrap_or(4096),
+        ..a.m.options()
+    };
+    let (v, report) = terrain::transfer_volume(&base, &example, &o)?;
+    let ty = br.sample_type();
+    let out = Raster {
+        samples: Samples::from_f64(&v.data, ty),
+        ..br
+    };
+    write_output(&a.output, &out, false)?;
+    if a.m.json {
+        print_json(&report);
+    }
+    Ok(())
+}
+
 pub fn transfer(a: TransferArgs) -> CliResult {
+    let br = read_input(&a.to, &ReadOptions::default())?;
+    if br.dims.len() == 3 {
+        let er = read_input(&a.from, &ReadOptions::default())?;
+        return transfer_volume(&a, br, er);
+    }
     let (br, base) = load_grid(&a.to)?;
     let (er, example) = load_grid(&a.from)?;
     tr::check_compatible(&br, &er, base.w).map_err(|e| Failure::context(a.from.display(), e))?;
@@ -378,10 +460,13 @@ pub fn denoise(a: DenoiseArgs) -> CliResult {
         } else {
             Boundary::Symmetric
         }),
-        levels: a.levels,
+        levels: a
+            .levels
+            .unwrap_or(if a.scheme == Scheme::Haar { 4 } else { 0 }),
         mode: a.mode,
         rule,
         sigma: a.sigma,
+        shifts: a.shifts,
     };
     let report = if is_points {
         let text = std::fs::read_to_string(&a.input)

@@ -1,5 +1,5 @@
 //! Terrain synthesis by example (notes §9.7.4; Brosz, Samavati & Sousa, "Terrain
-//! synthesis by-example"), detail transfer for images, and hillshaded pictures.
+//! synthesis by-example"), detail transfer for images and volumes, and hillshaded pictures.
 //!
 //! A heightmap is an open–open tensor-product surface, so the terrain uses the
 //! *interpolating* boundary of the two-scale levels: `C = A F`, `D = B F`,
@@ -13,6 +13,7 @@
 //! resample.rs  corner-aligned Catmull–Rom resampling (base to the output lattice)
 //! voids.rs     filling nodata cells (SRTM voids) before synthesis
 //! synth.rs     the example's pyramid, patch matching, blended detail transfer
+//! volume.rs    the same detail transfer for 3-D volumes (cube patches, seven bands)
 //! hillshade.rs Horn slope/aspect shading with an optional hypsometric colour ramp
 //! raster.rs    Raster <-> Grid with units, cell size and nodata checks
 //! ```
@@ -24,8 +25,10 @@ pub mod raster;
 pub mod resample;
 pub mod synth;
 pub mod voids;
+pub mod volume;
 
 pub use demo::demo_rows;
 pub use grid::Grid;
 pub use hillshade::{hillshade, Shading};
-pub use synth::{reduce, synthesize, transfer, SynthOptions, SynthReport};
+pub use synth::{highpass, reduce, synthesize, transfer, SynthOptions, SynthReport};
+pub use volume::{transfer_volume, Volume, VolumeReport};

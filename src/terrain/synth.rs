@@ -25,6 +25,12 @@
 //! **Blending.** Each patch weighs its copied details by a separable ramp `w` that rises
 //! over `2o` cells across each border, so neighbouring weights sum to 1; the blend
 //! `Σ wᵢ Dᵢ / √(Σ wᵢ²)` keeps the variance of uncorrelated details (no faded seams).
+//! Matched details are then scaled band by band, `D_b ← D_b · rms(E_b)/rms(D_b)`, to the
+//! RMS of the example's band `E_b` at the same level (the per-level amplitude, hence the
+//! spectrum's slope and the roughness of the finest levels, are the example's).
+//!
+//! **Defaults** (`benches/terrain_quality.py`, docs/terrain.md): 8-cell cores, 2-cell
+//! overlaps, at most 16 384 candidates, a pick among the 2 best.
 
 use rayon::prelude::*;
 
@@ -91,8 +97,8 @@ impl Default for SynthOptions {
             size: None,
             patch: 8,
             overlap: 2,
-            candidates: 4096,
-            choices: 3,
+            candidates: 16384,
+            choices: 2,
             slope_weight: 1.0,
             details: Details::Matched,
         }
@@ -118,7 +124,7 @@ pub struct SynthReport {
     pub fidelity_psnr: Option<f64>,
 }
 
-const BOUNDARY: Boundary = Boundary::Interpolating;
+pub(super) const BOUNDARY: Boundary = Boundary::Interpolating;
 
 fn spec(scheme: Scheme, levels: usize) -> PyramidSpec {
     PyramidSpec {
@@ -132,7 +138,12 @@ fn spec(scheme: Scheme, levels: usize) -> PyramidSpec {
 
 /// Lane lengths `m_0 … m_L` of an axis of `m`, or an error naming `what` when the
 /// scheme's filters cannot take it `levels` levels down.
-fn lengths_down(scheme: Scheme, m: usize, levels: usize, what: &'static str) -> Result<Vec<usize>> {
+pub(super) fn lengths_down(
+    scheme: Scheme,
+    m: usize,
+    levels: usize,
+    what: &'static str,
+) -> Result<Vec<usize>> {
     if max_levels(scheme, BOUNDARY, m) < levels {
         return Err(Error::parameter(
             what,
@@ -213,12 +224,22 @@ fn feature(g: &Grid, y0: i64, x0: i64, q: usize, out: &mut Vec<f32>) {
     out.push((slope / n) as f32);
 }
 
-fn distance(t: &[f32], e: &[f32], lambda: f64) -> f64 {
+/// The matching distance `Σ (z_t − z_e)²/q² + λ ((g_t − g_e)/(g_t + g_e + ε))²`, or
+/// any value ≥ `bound` as soon as the partial sum of the height term reaches `bound`
+/// (the sum only grows, and rounding is monotone, so a candidate rejected early would
+/// have been rejected anyway: the choice is unchanged).
+pub(super) fn distance_below(t: &[f32], e: &[f32], lambda: f64, bound: f64) -> f64 {
     let q2 = t.len() - 1;
+    let limit = bound * q2 as f64;
     let mut s = 0.0f32;
-    for i in 0..q2 {
-        let d = t[i] - e[i];
-        s += d * d;
+    for (tc, ec) in t[..q2].chunks(16).zip(e[..q2].chunks(16)) {
+        for (a, b) in tc.iter().zip(ec) {
+            let d = a - b;
+            s += d * d;
+        }
+        if s as f64 >= limit {
+            return bound;
+        }
     }
     let (gt, ge) = (t[q2] as f64, e[q2] as f64);
     let r = (gt - ge) / (gt + ge + 1e-9);
@@ -227,7 +248,7 @@ fn distance(t: &[f32], e: &[f32], lambda: f64) -> f64 {
 
 /// Ramp weight of band-local index `i` for a core `[t, t + p)` with overlap `o`
 /// (`first`/`last`: no ramp on that side).
-fn ramp(i: usize, t: usize, p: usize, o: usize, first: bool, last: bool) -> f64 {
+pub(super) fn ramp(i: usize, t: usize, p: usize, o: usize, first: bool, last: bool) -> f64 {
     let i = i as f64 + 0.5;
     let (t, p, o) = (t as f64, p as f64, o as f64);
     let mut w: f64 = 1.0;
@@ -241,11 +262,11 @@ fn ramp(i: usize, t: usize, p: usize, o: usize, first: bool, last: bool) -> f64 
 }
 
 /// Patch origins along an axis of `n` coarse cells.
-fn origins(n: usize, p: usize) -> Vec<usize> {
+pub(super) fn origins(n: usize, p: usize) -> Vec<usize> {
     (0..n).step_by(p).collect()
 }
 
-fn mix(seed: u64, level: usize, patch: usize) -> SplitMix64 {
+pub(super) fn mix(seed: u64, level: usize, patch: usize) -> SplitMix64 {
     let mut r = SplitMix64::new(
         seed ^ (level as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15)
             ^ (patch as u64).wrapping_mul(0xD1B5_4A32_D192_ED03),
@@ -328,7 +349,12 @@ fn level_details(
                 let k = o.choices.max(1);
                 let mut best: Vec<(f64, usize)> = Vec::with_capacity(k + 1);
                 for (ci, ef) in feats.iter().enumerate() {
-                    let d = distance(&f, ef, o.slope_weight);
+                    let bound = if best.len() < k {
+                        f64::INFINITY
+                    } else {
+                        best[k - 1].0
+                    };
+                    let d = distance_below(&f, ef, o.slope_weight, bound);
                     if best.len() < k || d < best[best.len() - 1].0 {
                         let pos = best.partition_point(|b| b.0 <= d);
                         best.insert(pos, (d, ci));
@@ -398,16 +424,72 @@ fn level_details(
                     .for_each(|v| *v *= inv);
             }
         }
+        if o.details == Details::Matched {
+            match_band_rms(&mut acc, (n_y, n_x), e, (*ne_y, *ne_x));
+        }
     }
     acc.paste(t);
     Ok((acc, patches.len(), mean_d))
 }
 
+/// Root mean square of the channel values of `g` over rows `ry` × columns `rx`.
+fn rms(g: &Grid, ry: std::ops::Range<usize>, rx: std::ops::Range<usize>) -> f64 {
+    let (mut s, mut n) = (0.0, 0usize);
+    for y in ry {
+        for x in rx.clone() {
+            for k in 0..g.c {
+                s += g.at(y, x, k).powi(2);
+                n += 1;
+            }
+        }
+    }
+    (s / n.max(1) as f64).sqrt()
+}
+
+/// Scale each of the three detail bands of the Mallat block `acc` (coarse part
+/// `n_y × n_x`) so that its RMS equals the same band's RMS in the example's block
+/// (coarse part `ne_y × ne_x`): `D_b ← D_b · rms(E_b)/rms(D_b)`. Matching picks *which*
+/// details go where; this keeps each level's amplitude that of the example, so the
+/// blend and the choice of quieter windows do not change the spectrum's slope.
+fn match_band_rms(
+    acc: &mut Grid,
+    (n_y, n_x): (usize, usize),
+    e: &Grid,
+    (ne_y, ne_x): (usize, usize),
+) {
+    for (hy, hx) in [(true, false), (false, true), (true, true)] {
+        let (ry, rx) = (
+            if hy { n_y..acc.h } else { 0..n_y },
+            if hx { n_x..acc.w } else { 0..n_x },
+        );
+        let (ey, ex) = (
+            if hy { ne_y..e.h } else { 0..ne_y },
+            if hx { ne_x..e.w } else { 0..ne_x },
+        );
+        let (have, want) = (rms(acc, ry.clone(), rx.clone()), rms(e, ey, ex));
+        if have > 0.0 {
+            let f = want / have;
+            for y in ry {
+                for x in rx.clone() {
+                    for k in 0..acc.c {
+                        *acc.at_mut(y, x, k) *= f;
+                    }
+                }
+            }
+        }
+    }
+}
+
 fn check(base: &Grid, example: &Grid, o: &SynthOptions) -> Result<()> {
-    if base.c != example.c {
+    check_options(base.c, example.c, o)
+}
+
+/// Same channels; patch ≥ 2, overlap ≤ patch/2; 1 to 8 levels.
+pub(super) fn check_options(base_c: usize, example_c: usize, o: &SynthOptions) -> Result<()> {
+    if base_c != example_c {
         return Err(Error::parameter(
             "example channels",
-            example.c,
+            example_c,
             "the same number of channels as the base",
         ));
     }
@@ -562,4 +644,22 @@ pub fn reduce(result: &Grid, h: usize, w: usize, scheme: Scheme, levels: usize) 
     tensor::analyze(&mut a, &spec(scheme, levels))?;
     let packed = Grid::new(result.h, result.w, result.c, a.into_data())?;
     Ok(resample(&packed.crop(ly[levels], lx[levels]), h, w))
+}
+
+/// The finest `levels` levels of a grid's MRA: `F − P^L A^L F` (the grid minus its own
+/// reduction-then-reconstruction; the part that synthesis adds). The realism metrics of
+/// `benches/terrain_quality.py` are taken on this part of the result and of the example.
+pub fn highpass(g: &Grid, scheme: Scheme, levels: usize) -> Result<Grid> {
+    let ly = lengths_down(scheme, g.h, levels, "height")?;
+    let lx = lengths_down(scheme, g.w, levels, "width")?;
+    let (mut a, _) = g.to_array()?;
+    let sp = spec(scheme, levels);
+    let pyr = tensor::analyze(&mut a, &sp)?;
+    let packed = Grid::new(g.h, g.w, g.c, a.into_data())?;
+    let mut low = Grid::zeros(g.h, g.w, g.c);
+    low.paste(&packed.crop(ly[levels], lx[levels]));
+    let (mut a, _) = low.to_array()?;
+    tensor::synthesize(&mut a, &pyr)?;
+    let data = g.data.iter().zip(a.data()).map(|(f, l)| f - l).collect();
+    Grid::new(g.h, g.w, g.c, data)
 }
