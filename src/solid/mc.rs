@@ -679,18 +679,29 @@ fn emit_plane(g: &Grid, level: f64, bits: &Bits, k: usize, out: Out<'_>) {
         tris,
     } = out;
     let mut at = 0;
+    let nx = g.dims[0];
+    let strides = [1, nx, nx * ny];
     for j in 0..ny {
         let r = k * ny + j;
+        let row = &g.values[r * nx..];
         for axis in 0..3 {
+            let stride = strides[axis];
             for wi in 0..w {
                 let mut word = bits.cross(axis, r, wi);
                 while word != 0 {
                     let i = wi * 64 + word.trailing_zeros() as usize;
                     word &= word - 1;
-                    let (p, n) = edge_vertex(g, level, [i, j, k], axis, nrm.is_some());
-                    pos[at] = p;
                     if let Some(nrm) = nrm.as_mut() {
+                        let (p, n) = edge_vertex(g, level, [i, j, k], axis, true);
+                        pos[at] = p;
                         nrm[at] = n;
+                    } else {
+                        // edge_vertex without normals, with the row's offsets hoisted
+                        let (va, vb) = (row[i] as f64, row[i + stride] as f64);
+                        let t = (level - va) / (vb - va);
+                        let mut idx = [i as f64, j as f64, k as f64];
+                        idx[axis] += t;
+                        pos[at] = [0, 1, 2].map(|a| g.origin[a] + g.spacing[a] * idx[a]);
                     }
                     at += 1;
                 }
