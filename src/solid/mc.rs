@@ -552,15 +552,8 @@ fn inside_plane(g: &Grid, t: f32, k: usize, w: usize, out: &mut [u64]) {
         let row = &g.values[(k * ny + j) * nx..(k * ny + j + 1) * nx];
         for (wi, chunk) in row.chunks(64).enumerate() {
             let mut word = 0u64;
-            if chunk.len() == 64 {
-                // eight lanes at a time: the comparisons vectorise
-                for (b, c8) in chunk.chunks_exact(8).enumerate() {
-                    let mut byte = 0u64;
-                    for (l, &v) in c8.iter().enumerate() {
-                        byte |= ((v > t) as u64) << l;
-                    }
-                    word |= byte << (8 * b);
-                }
+            if let Ok(full) = <&[f32; 64]>::try_from(chunk) {
+                word = inside_word(full, t);
             } else {
                 for (b, &v) in chunk.iter().enumerate() {
                     word |= ((v > t) as u64) << b;
@@ -569,6 +562,36 @@ fn inside_plane(g: &Grid, t: f32, k: usize, w: usize, out: &mut [u64]) {
             out[j * w + wi] = word;
         }
     }
+}
+
+/// Bit `b` set where `chunk[b] > t` (NaN is outside): four lanes per SSE compare and
+/// `movemask` (SSE is part of the x86-64 baseline).
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+fn inside_word(chunk: &[f32; 64], t: f32) -> u64 {
+    use std::arch::x86_64::{_mm_cmpgt_ps, _mm_loadu_ps, _mm_movemask_ps, _mm_set1_ps};
+    // SAFETY: SSE is part of every x86-64 target (the intrinsics' feature is always enabled);
+    // lanes 4q .. 4q + 4 lie inside the 64-lane array and loadu needs no alignment.
+    unsafe {
+        let tv = _mm_set1_ps(t);
+        let mut word = 0u64;
+        for q in 0..16 {
+            let v = _mm_loadu_ps(chunk.as_ptr().add(4 * q));
+            word |= (_mm_movemask_ps(_mm_cmpgt_ps(v, tv)) as u32 as u64) << (4 * q);
+        }
+        word
+    }
+}
+
+/// Bit `b` set where `chunk[b] > t` (portable version).
+#[cfg(not(target_arch = "x86_64"))]
+#[inline(always)]
+fn inside_word(chunk: &[f32; 64], t: f32) -> u64 {
+    let mut word = 0u64;
+    for (b, &v) in chunk.iter().enumerate() {
+        word |= ((v > t) as u64) << b;
+    }
+    word
 }
 
 /// The corner values minus `level` of cell `(i, j, k)`.
