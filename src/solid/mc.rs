@@ -391,17 +391,18 @@ struct Bits {
 }
 
 impl Bits {
-    /// Crossing word `wi` of the `axis` edges of row `r`: x edges `(i, j, k)–(i+1, j, k)`,
+    /// Crossing word `wi` of the `axis` edges of row `(j, k)`: x edges `(i, j, k)–(i+1, j, k)`,
     /// y edges to row `j + 1`, z edges to plane `k + 1` (XOR of the inside bits).
     #[inline(always)]
-    fn cross(&self, axis: usize, r: usize, wi: usize) -> u64 {
+    fn cross(&self, axis: usize, j: usize, k: usize, wi: usize) -> u64 {
         let [nx, ny, nz] = self.dims;
         let w = self.w;
+        let r = k * ny + j;
         let a = &self.inside[r * w..(r + 1) * w];
         match axis {
             0 => (a[wi] ^ shr1(a, wi)) & valid(nx - 1, wi),
-            1 if r % ny + 1 < ny => a[wi] ^ self.inside[(r + 1) * w + wi],
-            2 if r / ny + 1 < nz => a[wi] ^ self.inside[(r + ny) * w + wi],
+            1 if j + 1 < ny => a[wi] ^ self.inside[(r + 1) * w + wi],
+            2 if k + 1 < nz => a[wi] ^ self.inside[(r + ny) * w + wi],
             _ => 0,
         }
     }
@@ -512,22 +513,23 @@ impl RowRanks {
     #[inline(always)]
     fn load(&mut self, bits: &Bits, k: usize, j: usize) {
         let ny = bits.dims[1];
-        let r = k * ny + j;
+        // (axis, dj, dk) of each slot, as EDGE_RANK numbers them
         let rows = [
-            (0, r),
-            (0, r + 1),
-            (0, r + ny),
-            (0, r + ny + 1),
-            (1, r),
-            (1, r + ny),
-            (2, r),
-            (2, r + 1),
+            (0, 0, 0),
+            (0, 1, 0),
+            (0, 0, 1),
+            (0, 1, 1),
+            (1, 0, 0),
+            (1, 0, 1),
+            (2, 0, 0),
+            (2, 1, 0),
         ];
         let w = self.w;
-        for (slot, &(axis, row)) in rows.iter().enumerate() {
-            let mut acc = bits.first[3 * row + axis];
+        for (slot, &(axis, dj, dk)) in rows.iter().enumerate() {
+            let (jj, kk) = (j + dj, k + dk);
+            let mut acc = bits.first[3 * (kk * ny + jj) + axis];
             for wi in 0..w {
-                let cw = bits.cross(axis, row, wi);
+                let cw = bits.cross(axis, jj, kk, wi);
                 self.words[slot * w + wi] = cw;
                 self.pre[slot * w + wi] = acc;
                 acc += cw.count_ones();
@@ -641,11 +643,10 @@ fn count_plane(
 ) -> (usize, usize) {
     let [_, ny, nz] = g.dims;
     for (j, c) in counts.iter_mut().enumerate() {
-        let r = k * ny + j;
         for axis in 0..3 {
             let mut n = 0;
             for wi in 0..bits.w {
-                n += bits.cross(axis, r, wi).count_ones();
+                n += bits.cross(axis, j, k, wi).count_ones();
             }
             c[axis] = n;
         }
@@ -710,7 +711,7 @@ fn emit_plane(g: &Grid, level: f64, bits: &Bits, k: usize, out: Out<'_>) {
         for axis in 0..3 {
             let stride = strides[axis];
             for wi in 0..w {
-                let mut word = bits.cross(axis, r, wi);
+                let mut word = bits.cross(axis, j, k, wi);
                 while word != 0 {
                     let i = wi * 64 + word.trailing_zeros() as usize;
                     word &= word - 1;
