@@ -320,12 +320,9 @@ fn bad_scenes_fail_with_one_line_naming_the_place_and_no_output() {
         ] {
             let args: Vec<String> = args
                 .iter()
-                .map(|a| {
-                    if a.starts_with("OUT") {
-                        format!("{}{}", s(&out), &a[3..])
-                    } else {
-                        a.to_string()
-                    }
+                .map(|a| match a.strip_prefix("OUT") {
+                    Some(ext) => format!("{}{ext}", s(&out)),
+                    None => a.to_string(),
                 })
                 .collect();
             let a: Vec<&str> = args.iter().map(|x| x.as_str()).collect();

@@ -22,6 +22,8 @@
 //! (default: the mesh's bounding box); either `moves` (offsets added to the identity lattice)
 //! or `points` (the full list of `nx·ny·nz` control points, x index fastest), not both.
 
+// Index loops over the three axes follow the formulas (several arrays indexed together).
+#![allow(clippy::needless_range_loop)]
 use super::hyperpatch::{greville, HyperPatch, MAX_POINTS};
 use crate::curve::KnotVector;
 use crate::mesh::Mesh;

@@ -10,6 +10,8 @@
 //! (`i` fastest). Because the basis sums to one on the valid range (§3.5) the patch is affine
 //! invariant: moving every control point by an affine map moves every point of `Q` by that map.
 
+// Index loops over the three axes follow the formulas (several arrays indexed together).
+#![allow(clippy::needless_range_loop)]
 use crate::curve::basis::{basis_derivs, basis_funs, span, DerivWork, KnotVector};
 use crate::curve::check_range;
 use crate::{Error, Result};

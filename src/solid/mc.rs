@@ -25,6 +25,9 @@
 //! cases without an ambiguous face take their triangles from a table built once by the same
 //! linking, the others are linked from their values. No hash maps, no per-cell allocation.
 
+// Index loops over corners, axes and cases follow the formulas (several arrays indexed together).
+#![allow(clippy::needless_range_loop)]
+
 use crate::mesh::Mesh;
 use crate::{Error, Result};
 use rayon::prelude::*;
@@ -299,10 +302,19 @@ fn safe_fan(lp: &[u8]) -> Option<usize> {
 fn f32_threshold(level: f64) -> f32 {
     let t = level as f32;
     if (t as f64) > level {
-        t.next_down()
+        next_below(t)
     } else {
         t
     }
+}
+
+/// The next `f32` below `t` (`t` neither NaN nor −∞); `f32::next_down` needs Rust 1.86.
+fn next_below(t: f32) -> f32 {
+    if t == 0.0 {
+        return -f32::from_bits(1);
+    }
+    let b = t.to_bits();
+    f32::from_bits(if t > 0.0 { b - 1 } else { b + 1 })
 }
 
 /// Row `x` shifted down by one bit (bit `i` ← bit `i + 1`), across word boundaries.
@@ -820,13 +832,23 @@ fn emit_plane(g: &Grid, level: f64, bits: &Bits, k: usize, out: Out<'_>) {
 mod popcnt {
     use super::*;
 
+    /// # Safety
+    /// The CPU must support popcnt.
     #[target_feature(enable = "popcnt")]
-    fn count(g: &Grid, level: f64, bits: &Bits, k: usize, c: &mut [[u32; 3]]) -> (usize, usize) {
+    unsafe fn count(
+        g: &Grid,
+        level: f64,
+        bits: &Bits,
+        k: usize,
+        c: &mut [[u32; 3]],
+    ) -> (usize, usize) {
         count_plane(g, level, bits, k, c)
     }
 
+    /// # Safety
+    /// The CPU must support popcnt.
     #[target_feature(enable = "popcnt")]
-    fn emit(g: &Grid, level: f64, bits: &Bits, k: usize, out: Out<'_>) {
+    unsafe fn emit(g: &Grid, level: f64, bits: &Bits, k: usize, out: Out<'_>) {
         emit_plane(g, level, bits, k, out)
     }
 
@@ -858,7 +880,7 @@ use popcnt::{count_fast, emit_fast};
 use {count_plane as count_fast, emit_plane as emit_fast};
 
 /// Split `v` into consecutive mutable pieces of the given lengths.
-fn split_lengths<'a, T>(mut v: &'a mut [T], lens: impl Iterator<Item = usize>) -> Vec<&'a mut [T]> {
+fn split_lengths<T>(mut v: &mut [T], lens: impl Iterator<Item = usize>) -> Vec<&mut [T]> {
     let mut out = Vec::new();
     for n in lens {
         let (head, tail) = std::mem::take(&mut v).split_at_mut(n);
@@ -1093,8 +1115,12 @@ mod tests {
             let t = f32_threshold(level);
             for v in [
                 t,
-                t.next_up(),
-                t.next_down(),
+                -next_below(-t),
+                if t == f32::NEG_INFINITY {
+                    t
+                } else {
+                    next_below(t)
+                },
                 level as f32,
                 0.0,
                 f32::MAX,
