@@ -50,12 +50,19 @@ fn main() {
             spacing: [1.0; 3],
             origin: [0.0; 3],
         };
-        let (s, faces) = best_of(5, || polygonize(&g, 0.0, false).unwrap().mesh.face_count());
-        println!(
-            "marching cubes {name} {n}^3: {:.1} ms, {faces} triangles, {:.1} Mvoxel/s",
-            s * 1e3,
-            (n * n * n) as f64 / s / 1e6
-        );
+        for threads in [1, 2] {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            let (s, faces) = pool
+                .install(|| best_of(7, || polygonize(&g, 0.0, false).unwrap().mesh.face_count()));
+            println!(
+                "marching cubes {name} {n}^3, {threads} thread(s): {:.1} ms, {faces} triangles, {:.1} Mvoxel/s",
+                s * 1e3,
+                (n * n * n) as f64 / s / 1e6
+            );
+        }
     }
     let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/corpus/scenes");
     let sc = Scene::read(std::path::Path::new(&format!("{dir}/csg20.json"))).unwrap();

@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """Peers for benches/solid.rs: scikit-image marching_cubes and (if installed) VTK's
-vtkFlyingEdges3D on the same 256³ fields, then runs `cargo bench --bench solid` in the same
-session so both are timed together.
+vtkFlyingEdges3D on the same 256³ fields, on 1 and 2 threads, then runs `cargo bench --bench
+solid` (which times mra on 1 and 2 threads) in the same session so both are timed together.
+Best of 7 runs each; on a shared machine compare the ratios, not the absolute times.
 
     pip install scikit-image vtk
     python3 benches/peers/solid_peers.py
@@ -23,7 +24,7 @@ def field(name, n=256):
     return v.astype(np.float32)
 
 
-def best(f, reps=3):
+def best(f, reps=7):
     b, out = float("inf"), None
     for _ in range(reps):
         t = time.perf_counter()
