@@ -75,7 +75,7 @@ pub fn fused_level<T: Sample>(
         e,
         ops,
         cs: &cs,
-        stream: work_bytes >= STREAM_BYTES && std::env::var("MRA_STREAM").is_err(),
+        stream: work_bytes >= STREAM_BYTES,
     };
     let dst_len = dst.len();
     let dptr = SharedMut(dst.as_mut_ptr());
