@@ -218,6 +218,19 @@ fn stage(
     axes: &[usize],
     keep: bool,
 ) -> Result<Staged> {
+    stage_with(low, shape, method, axes, keep, true)
+}
+
+/// [`stage`]; `fused` lets axes 0 and 1 take the one-pass rounds
+/// ([`clamp_residual_2d`]), otherwise the general clamp / block mean / residual passes.
+fn stage_with(
+    low: &[f32],
+    shape: &[usize],
+    method: &Method,
+    axes: &[usize],
+    keep: bool,
+    fused: bool,
+) -> Result<Staged> {
     let f: Vec<(usize, usize)> = axes.iter().map(|&a| (a, 2)).collect();
     let up = Prepared::new(&area(method), shape, &plans_for(shape, &f))?;
     let hidden = Progress::hidden();
@@ -229,6 +242,23 @@ fn stage(
         lo = pair_gather(&lo, &s, a, method.edge, |x: f32, y: f32| x.min(y));
         hi = pair_gather(&hi, &s, a, method.edge, |x: f32, y: f32| x.max(y));
         s[a] *= 2;
+    }
+    let mut sorted = axes.to_vec();
+    sorted.sort_unstable();
+    if fused && sorted == [0, 1] {
+        // images (and the first two axes of anything): one fused pass per round
+        let rows_first = axes[0] == 0;
+        let mut c: Option<Vec<f32>> = None;
+        for _ in 0..ITERATIONS {
+            let r = clamp_residual_2d(&mut u, c.as_deref(), &lo, &hi, low, shape, rows_first);
+            c = Some(up.run(r, &hidden, |x| x).0);
+        }
+        if let Some(c) = c {
+            u.par_iter_mut()
+                .zip(c.par_iter())
+                .for_each(|(x, c)| *x += c);
+        }
+        return Ok((u, fine, plain));
     }
     for _ in 0..ITERATIONS {
         u.par_iter_mut()
@@ -242,6 +272,65 @@ fn stage(
             .for_each(|(x, c)| *x += c);
     }
     Ok((u, fine, plain))
+}
+
+/// One round of a ×2 stage along axes 0 and 1 in a single pass (same arithmetic as
+/// the general path): `u ← clamp(u + c, lo, hi)` (no `c` in the first round), then
+/// the residual `s − D u`, the 2×2 block mean `D` taken along the first stage axis
+/// first (`rows_first`: axis 0) as [`block_mean`] does. `shape` is the coarse shape.
+fn clamp_residual_2d(
+    u: &mut [f32],
+    c: Option<&[f32]>,
+    lo: &[f32],
+    hi: &[f32],
+    low: &[f32],
+    shape: &[usize],
+    rows_first: bool,
+) -> Vec<f32> {
+    let n1 = shape[1];
+    let inner: usize = shape[2..].iter().product();
+    let row = n1 * inner; // one coarse row
+    let fine_row = 2 * row; // one fine row
+    let mut r = vec![0f32; low.len()];
+    if row == 0 {
+        return r;
+    }
+    u.par_chunks_mut(2 * fine_row)
+        .zip(r.par_chunks_mut(row))
+        .enumerate()
+        .for_each(|(i, (uc, rc))| {
+            let off = i * 2 * fine_row;
+            let (l, h) = (&lo[off..off + 2 * fine_row], &hi[off..off + 2 * fine_row]);
+            match c {
+                Some(c) => {
+                    let c = &c[off..off + 2 * fine_row];
+                    for (((x, &c), &a), &b) in uc.iter_mut().zip(c).zip(l).zip(h) {
+                        *x = (*x + c).max(a).min(b);
+                    }
+                }
+                None => {
+                    for ((x, &a), &b) in uc.iter_mut().zip(l).zip(h) {
+                        *x = x.max(a).min(b);
+                    }
+                }
+            }
+            let (top, bottom) = uc.split_at(fine_row);
+            let s = &low[i * row..(i + 1) * row];
+            for j in 0..n1 {
+                let (e, o) = (2 * j * inner, (2 * j + 1) * inner);
+                for k in 0..inner {
+                    let (a, b) = (top[e + k], top[o + k]);
+                    let (p, q) = (bottom[e + k], bottom[o + k]);
+                    let d = if rows_first {
+                        0.5 * (0.5 * a + 0.5 * p) + 0.5 * (0.5 * b + 0.5 * q)
+                    } else {
+                        0.5 * (0.5 * a + 0.5 * b) + 0.5 * (0.5 * p + 0.5 * q)
+                    };
+                    rc[j * inner + k] = s[j * inner + k] - d;
+                }
+            }
+        });
+    r
 }
 
 /// The fully clamped upscale `R(s)`: an odd plain stage, then ×2 clamp stages. With
@@ -373,6 +462,29 @@ mod tests {
     fn crop_takes_the_leading_block() {
         let d: Vec<f32> = (0..24).map(|i| i as f32).collect();
         assert_eq!(crop(&d, &[2, 3, 4], &[1, 2, 2]), vec![0., 1., 4., 5.]);
+    }
+
+    #[test]
+    fn fused_rounds_match_the_general_passes_exactly() {
+        for (shape, axes) in [
+            (vec![5usize, 7, 3], vec![0usize, 1]),
+            (vec![6, 4], vec![1, 0]),
+            (vec![4, 5, 2], vec![0, 1]),
+        ] {
+            let n: usize = shape.iter().product();
+            let low: Vec<f32> = (0..n)
+                .map(|i| ((i * 7919 % 97) as f32 * 0.37).sin() * 100.0 + (i % 5) as f32)
+                .collect();
+            let m = Method::default();
+            let a = stage_with(&low, &shape, &m, &axes, true, true).unwrap();
+            let b = stage_with(&low, &shape, &m, &axes, true, false).unwrap();
+            assert_eq!(a.1, b.1);
+            assert_eq!(a.0.len(), b.0.len());
+            for (x, y) in a.0.iter().zip(&b.0) {
+                assert_eq!(x.to_bits(), y.to_bits(), "{shape:?} {axes:?}");
+            }
+            assert_eq!(a.2, b.2);
+        }
     }
 
     #[test]
