@@ -154,6 +154,10 @@ pub fn block_mean(data: &[f32], shape: &[usize], f: &[(usize, usize)]) -> (Vec<f
 
 /// Along `axis`, new sample `j` of `2n` takes `op` of the cells `⌊x_j⌋`, `⌈x_j⌉`
 /// (`x_j = j/2 − ¼`), cells beyond the ends extended by `edge`.
+///
+/// With the lane extended to `e = [before, cells…, after]` (`n + 2` cells), sample `2i`
+/// is `op(e_i, e_{i+1})` and `2i + 1` is `op(e_{i+1}, e_{i+2})`: each adjacent pair is
+/// combined once. Long rows (`inner` large) go row by row instead, in parallel.
 fn pair_gather(
     src: &[f32],
     shape: &[usize],
@@ -166,41 +170,67 @@ fn pair_gather(
     let inner: usize = shape[axis + 1..].iter().product();
     let m = 2 * n;
     let mut out = vec![0f32; outer * m * inner];
+    if n == 0 || inner == 0 {
+        return out;
+    }
+    // the cell beyond the ends of lane `o`, by the edge rule, into `dst`
+    let beyond = |o: usize, e: usize, next: usize, dst: &mut [f32]| {
+        let lane = &src[o * n * inner..(o + 1) * n * inner];
+        let row = |i: usize| &lane[i * inner..(i + 1) * inner];
+        match edge {
+            Edge::Linear if n > 1 => {
+                for ((d, a), b) in dst.iter_mut().zip(row(e)).zip(row(next)) {
+                    *d = 2.0 * a - b;
+                }
+            }
+            _ => dst.copy_from_slice(row(e)),
+        }
+    };
+    if inner >= 64 {
+        out.par_chunks_mut(inner).enumerate().for_each(|(t, d)| {
+            let (o, j) = (t / m, t % m);
+            let lane = &src[o * n * inner..(o + 1) * n * inner];
+            let i = (j / 2) as isize;
+            let (a, b) = if j % 2 == 0 { (i - 1, i) } else { (i, i + 1) };
+            let (mut ea, mut eb) = (Vec::new(), Vec::new());
+            if a < 0 {
+                ea.resize(inner, 0.0);
+                beyond(o, 0, 1.min(n - 1), &mut ea);
+            }
+            if b as usize >= n {
+                eb.resize(inner, 0.0);
+                beyond(o, n - 1, n.saturating_sub(2), &mut eb);
+            }
+            let row = |c: usize| &lane[c * inner..(c + 1) * inner];
+            let xa = if a < 0 { &ea[..] } else { row(a as usize) };
+            let xb = if b as usize >= n {
+                &eb[..]
+            } else {
+                row(b as usize)
+            };
+            for ((d, &x), &y) in d.iter_mut().zip(xa).zip(xb) {
+                *d = op(x, y);
+            }
+        });
+        return out;
+    }
     out.par_chunks_mut(m * inner)
         .enumerate()
         .for_each(|(o, dst)| {
             let lane = &src[o * n * inner..(o + 1) * n * inner];
-            let row = |i: usize| &lane[i * inner..(i + 1) * inner];
-            // the cells beyond the ends, by the edge rule
-            let beyond = |e: usize, next: usize| -> Vec<f32> {
-                match edge {
-                    Edge::Linear if n > 1 => row(e)
-                        .iter()
-                        .zip(row(next))
-                        .map(|(a, b)| 2.0 * a - b)
-                        .collect(),
-                    _ => row(e).to_vec(),
-                }
-            };
-            let before = beyond(0, 1.min(n - 1));
-            let after = beyond(n - 1, n.saturating_sub(2));
-            let cell = |i: isize| -> &[f32] {
-                if i < 0 {
-                    &before
-                } else if i as usize >= n {
-                    &after
-                } else {
-                    row(i as usize)
-                }
-            };
-            for j in 0..m {
-                // ×2: j = 2i → cells i − 1, i;  j = 2i + 1 → cells i, i + 1
-                let i = (j / 2) as isize;
-                let (a, b) = if j % 2 == 0 { (i - 1, i) } else { (i, i + 1) };
-                let d = &mut dst[j * inner..(j + 1) * inner];
-                for ((d, &x), &y) in d.iter_mut().zip(cell(a)).zip(cell(b)) {
-                    *d = op(x, y);
-                }
+            let mut ext = vec![0f32; (n + 2) * inner];
+            beyond(o, 0, 1.min(n - 1), &mut ext[..inner]);
+            ext[inner..(n + 1) * inner].copy_from_slice(lane);
+            beyond(o, n - 1, n.saturating_sub(2), &mut ext[(n + 1) * inner..]);
+            // pair[p] = op(e_p, e_{p+1}), p = 0..=n
+            let pair: Vec<f32> = ext[..(n + 1) * inner]
+                .iter()
+                .zip(&ext[inner..])
+                .map(|(&x, &y)| op(x, y))
+                .collect();
+            for i in 0..n {
+                dst[2 * i * inner..(2 * i + 2) * inner]
+                    .copy_from_slice(&pair[i * inner..(i + 2) * inner]);
             }
         });
     out
@@ -484,6 +514,45 @@ mod tests {
                 assert_eq!(x.to_bits(), y.to_bits(), "{shape:?} {axes:?}");
             }
             assert_eq!(a.2, b.2);
+        }
+    }
+
+    #[test]
+    fn pair_gather_matches_the_definition_on_both_paths() {
+        for (shape, axis) in [
+            (vec![4usize, 5, 70], 1usize),
+            (vec![3, 6, 2], 1),
+            (vec![5, 4], 0),
+        ] {
+            for edge in [Edge::Linear, Edge::Mirror] {
+                let src: Vec<f32> = (0..shape.iter().product::<usize>())
+                    .map(|i| ((i * 37 % 23) as f32).sqrt())
+                    .collect();
+                let got = pair_gather(&src, &shape, axis, edge, f32::min);
+                let (outer, n) = (shape[..axis].iter().product::<usize>(), shape[axis]);
+                let inner: usize = shape[axis + 1..].iter().product();
+                let at = |o: usize, i: usize, k: usize| src[(o * n + i) * inner + k];
+                let cell = |o: usize, c: isize, k: usize| -> f32 {
+                    let (e, next) = if c < 0 { (0, 1) } else { (n - 1, n - 2) };
+                    if (0..n as isize).contains(&c) {
+                        at(o, c as usize, k)
+                    } else if edge == Edge::Linear {
+                        2.0 * at(o, e, k) - at(o, next, k)
+                    } else {
+                        at(o, e, k)
+                    }
+                };
+                for o in 0..outer {
+                    for j in 0..2 * n {
+                        let i = (j / 2) as isize;
+                        let (a, b) = if j % 2 == 0 { (i - 1, i) } else { (i, i + 1) };
+                        for k in 0..inner {
+                            let want = cell(o, a, k).min(cell(o, b, k));
+                            assert_eq!(got[(o * 2 * n + j) * inner + k], want);
+                        }
+                    }
+                }
+            }
         }
     }
 
