@@ -266,13 +266,19 @@ fn stage_with(
     let hidden = Progress::hidden();
     let (mut u, fine) = up.run(low.to_vec(), &hidden, |x| x);
     let plain = keep.then(|| u.clone());
-    let (mut lo, mut hi) = (low.to_vec(), low.to_vec());
+    let (mut lo, mut hi): (Option<Vec<f32>>, Option<Vec<f32>>) = (None, None);
     let mut s = shape.to_vec();
     for &a in axes {
-        lo = pair_gather(&lo, &s, a, method.edge, |x: f32, y: f32| x.min(y));
-        hi = pair_gather(&hi, &s, a, method.edge, |x: f32, y: f32| x.max(y));
+        let (l, h) = (lo.as_deref().unwrap_or(low), hi.as_deref().unwrap_or(low));
+        let l = pair_gather(l, &s, a, method.edge, |x: f32, y: f32| x.min(y));
+        let h = pair_gather(h, &s, a, method.edge, |x: f32, y: f32| x.max(y));
+        (lo, hi) = (Some(l), Some(h));
         s[a] *= 2;
     }
+    let (lo, hi) = (
+        lo.unwrap_or_else(|| low.to_vec()),
+        hi.unwrap_or_else(|| low.to_vec()),
+    );
     let mut sorted = axes.to_vec();
     sorted.sort_unstable();
     if fused && sorted == [0, 1] {
@@ -397,9 +403,9 @@ fn refined(
 }
 
 /// The first `len[a]` samples along every axis.
-fn crop(data: &[f32], shape: &[usize], len: &[usize]) -> Vec<f32> {
+fn crop<'a>(data: &'a [f32], shape: &[usize], len: &[usize]) -> std::borrow::Cow<'a, [f32]> {
     if len == shape {
-        return data.to_vec();
+        return std::borrow::Cow::Borrowed(data);
     }
     let mut out = Vec::with_capacity(len.iter().product());
     let nd = shape.len();
@@ -418,7 +424,7 @@ fn crop(data: &[f32], shape: &[usize], len: &[usize]) -> Vec<f32> {
             idx[a] = 0;
         }
     }
-    out
+    std::borrow::Cow::Owned(out)
 }
 
 /// The blend weight `t` learned one level up (`None`: too small to learn from).
@@ -437,11 +443,15 @@ pub fn learn_weight(
     }
     let sc = crop(data, shape, &len);
     let (coarse, cs) = block_mean(&sc, &len, f);
-    let (r, _, b) = refined(coarse.clone(), &cs, method, f, true)?;
-    let b = match b {
-        Some(b) => b,
-        None => plain(coarse, &cs, method, f)?.0,
+    // the plain upscale comes with the refined one for a single ×2 stage (no copy then)
+    let single = f.iter().all(|&(_, g)| g == 2);
+    let (r, _, b) = if single {
+        refined(coarse, &cs, method, f, true)?
+    } else {
+        let (r, s, _) = refined(coarse.clone(), &cs, method, f, false)?;
+        (r, s, Some(plain(coarse, &cs, method, f)?.0))
     };
+    let b = b.expect("a single ×2 stage keeps its plain upscale");
     let (mut num, mut den) = (0f64, 0f64);
     for ((s, b), r) in sc.iter().zip(&b).zip(&r) {
         let d = (*r - *b) as f64;
@@ -491,7 +501,10 @@ mod tests {
     #[test]
     fn crop_takes_the_leading_block() {
         let d: Vec<f32> = (0..24).map(|i| i as f32).collect();
-        assert_eq!(crop(&d, &[2, 3, 4], &[1, 2, 2]), vec![0., 1., 4., 5.]);
+        assert_eq!(
+            crop(&d, &[2, 3, 4], &[1, 2, 2]).to_vec(),
+            vec![0., 1., 4., 5.]
+        );
     }
 
     #[test]
