@@ -24,7 +24,7 @@
 
 // Index loops over the three axes follow the formulas (several arrays indexed together).
 #![allow(clippy::needless_range_loop)]
-use super::hyperpatch::{greville, HyperPatch, MAX_POINTS};
+use super::hyperpatch::{checked_count, greville, HyperPatch};
 use crate::curve::KnotVector;
 use crate::mesh::Mesh;
 use crate::{Error, Result};
@@ -75,17 +75,7 @@ impl Lattice {
             }
         }
         let (min, size) = widen(min, max);
-        let total = dims
-            .iter()
-            .try_fold(1usize, |a, &n| a.checked_mul(n))
-            .unwrap_or(usize::MAX);
-        if total > MAX_POINTS {
-            return Err(Error::LimitsExceeded {
-                what: "lattice control points",
-                requested: total as u64,
-                limit: MAX_POINTS as u64,
-            });
-        }
+        let total = checked_count(dims, "lattice control points")?;
         let xi = (0..3)
             .map(|d| {
                 let t = KnotVector::open(dims[d], degrees[d] + 1)?;

@@ -37,6 +37,22 @@ pub struct Scratch {
     right: Vec<f64>,
 }
 
+/// `nu · nv · nw`, refused above [`MAX_POINTS`] (before anything is allocated).
+pub(crate) fn checked_count(dims: [usize; 3], what: &'static str) -> Result<usize> {
+    let total = dims
+        .iter()
+        .try_fold(1usize, |a, &n| a.checked_mul(n))
+        .unwrap_or(usize::MAX);
+    if total > MAX_POINTS {
+        return Err(Error::LimitsExceeded {
+            what,
+            requested: total as u64,
+            limit: MAX_POINTS as u64,
+        });
+    }
+    Ok(total)
+}
+
 impl HyperPatch {
     /// A patch from control points (`i` fastest), `dims = [nu, nv, nw]`, orders `k = degree + 1`
     /// and knot sequences of `n + k` values each.
@@ -46,17 +62,7 @@ impl HyperPatch {
         orders: [usize; 3],
         knots: [KnotVector; 3],
     ) -> Result<Self> {
-        let total = dims
-            .iter()
-            .try_fold(1usize, |a, &n| a.checked_mul(n))
-            .unwrap_or(usize::MAX);
-        if total > MAX_POINTS {
-            return Err(Error::LimitsExceeded {
-                what: "hyper-patch control points",
-                requested: total as u64,
-                limit: MAX_POINTS as u64,
-            });
-        }
+        let total = checked_count(dims, "hyper-patch control points")?;
         if points.len() != total {
             return Err(Error::Parameter {
                 name: "number of control points",

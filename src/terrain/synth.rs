@@ -266,6 +266,36 @@ pub(super) fn origins(n: usize, p: usize) -> Vec<usize> {
     (0..n).step_by(p).collect()
 }
 
+/// The candidate for a target feature `f`: one of the `o.choices` nearest example features
+/// (distance of [`distance_below`], comparisons cut off past the current k-th best),
+/// picked by the patch's own seeded generator. Returns (candidate index, distance).
+pub(super) fn pick_match(
+    f: &[f32],
+    feats: &[Vec<f32>],
+    o: &SynthOptions,
+    level: usize,
+    idx: usize,
+) -> (usize, f64) {
+    let k = o.choices.max(1);
+    let mut best: Vec<(f64, usize)> = Vec::with_capacity(k + 1);
+    for (ci, ef) in feats.iter().enumerate() {
+        let bound = if best.len() < k {
+            f64::INFINITY
+        } else {
+            best[k - 1].0
+        };
+        let d = distance_below(f, ef, o.slope_weight, bound);
+        if best.len() < k || d < best[best.len() - 1].0 {
+            let pos = best.partition_point(|b| b.0 <= d);
+            best.insert(pos, (d, ci));
+            best.truncate(k);
+        }
+    }
+    let mut r = mix(o.seed, level, idx);
+    let pick = best[(r.next_u64() % best.len() as u64) as usize];
+    (pick.1, pick.0)
+}
+
 pub(super) fn mix(seed: u64, level: usize, patch: usize) -> SplitMix64 {
     let mut r = SplitMix64::new(
         seed ^ (level as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15)
@@ -346,24 +376,8 @@ fn level_details(
             Details::Matched => {
                 let mut f = Vec::new();
                 feature(t, ty as i64 - ov as i64, tx as i64 - ov as i64, q, &mut f);
-                let k = o.choices.max(1);
-                let mut best: Vec<(f64, usize)> = Vec::with_capacity(k + 1);
-                for (ci, ef) in feats.iter().enumerate() {
-                    let bound = if best.len() < k {
-                        f64::INFINITY
-                    } else {
-                        best[k - 1].0
-                    };
-                    let d = distance_below(&f, ef, o.slope_weight, bound);
-                    if best.len() < k || d < best[best.len() - 1].0 {
-                        let pos = best.partition_point(|b| b.0 <= d);
-                        best.insert(pos, (d, ci));
-                        best.truncate(k);
-                    }
-                }
-                let mut r = mix(o.seed, level, idx);
-                let pick = best[(r.next_u64() % best.len() as u64) as usize];
-                (cands[pick.1], pick.0)
+                let (ci, d) = pick_match(&f, &feats, o, level, idx);
+                (cands[ci], d)
             }
             _ => {
                 // same place in the example (wrapped into the candidate range)

@@ -19,8 +19,7 @@
 use rayon::prelude::*;
 
 use super::synth::{
-    check_options, distance_below, lengths_down, mix, origins, ramp, Details, SynthOptions,
-    BOUNDARY,
+    check_options, lengths_down, mix, origins, pick_match, ramp, Details, SynthOptions, BOUNDARY,
 };
 use crate::scheme::{Scheme, TwoScale};
 use crate::tensor::{self, Array, Order, Pyramid, PyramidSpec};
@@ -246,24 +245,8 @@ fn level_details(
             Details::Matched => {
                 let mut f = Vec::new();
                 feature(t, back(tp), q, &mut f);
-                let k = o.choices.max(1);
-                let mut best: Vec<(f64, usize)> = Vec::with_capacity(k + 1);
-                for (ci, ef) in feats.iter().enumerate() {
-                    let bound = if best.len() < k {
-                        f64::INFINITY
-                    } else {
-                        best[k - 1].0
-                    };
-                    let d = distance_below(&f, ef, o.slope_weight, bound);
-                    if best.len() < k || d < best[best.len() - 1].0 {
-                        let pos = best.partition_point(|b| b.0 <= d);
-                        best.insert(pos, (d, ci));
-                        best.truncate(k);
-                    }
-                }
-                let mut r = mix(o.seed, level, idx);
-                let pick = best[(r.next_u64() % best.len() as u64) as usize];
-                (cands[pick.1], pick.0)
+                let (ci, d) = pick_match(&f, &feats, o, level, idx);
+                (cands[ci], d)
             }
             _ => ([0, 1, 2].map(|a| ov + tp[a] % count[a]), 0.0),
         })
