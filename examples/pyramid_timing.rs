@@ -1,4 +1,5 @@
-//! Time forward+inverse pyramids: `cargo run --release --example pyramid_timing -- 4096 cubic symmetric [reps]`.
+//! Time forward+inverse pyramids of an image (5 levels) or a volume (3 levels):
+//! `cargo run --release --example pyramid_timing -- 4096 cubic symmetric [reps] [dims 2|3]`.
 //! For CPU time on a busy machine: `perf stat -e task-clock` with reps 1 and 11, difference / 10.
 use mra::tensor::{analyze, synthesize, Array, Order, PyramidSpec};
 use std::time::Instant;
@@ -13,16 +14,19 @@ fn main() {
         .get(3)
         .map(|s| s.parse().unwrap())
         .unwrap_or(mra::scheme::Boundary::Symmetric);
-    let data: Vec<f32> = (0..n * n).map(|i| (i % 251) as f32).collect();
-    let mut a = Array::from_shape_vec(&[n, n], data).unwrap();
+    let reps: usize = args.get(4).and_then(|s| s.parse().ok()).unwrap_or(3);
+    let dims: usize = args.get(5).and_then(|s| s.parse().ok()).unwrap_or(2);
+    let shape = vec![n; dims];
+    let len: usize = shape.iter().product();
+    let data: Vec<f32> = (0..len).map(|i| (i % 251) as f32).collect();
+    let mut a = Array::from_shape_vec(&shape, data).unwrap();
     let spec = PyramidSpec {
         scheme,
         boundary,
-        levels: 5,
+        levels: if dims == 3 { 3 } else { 5 },
         order: Order::NonStandard,
-        axes: vec![0, 1],
+        axes: (0..dims).collect(),
     };
-    let reps: usize = args.get(4).and_then(|s| s.parse().ok()).unwrap_or(3);
     for _ in 0..reps {
         let t = Instant::now();
         let pyr = analyze(&mut a, &spec).unwrap();
@@ -33,7 +37,7 @@ fn main() {
             "forward {:.1} ms, inverse {:.1} ms, {:.0} MB/s",
             t1 * 1e3,
             (t2 - t1) * 1e3,
-            (n * n * 4) as f64 / t2 / 1e6
+            (len * 4) as f64 / t2 / 1e6
         );
     }
 }
