@@ -236,24 +236,6 @@ fn deinterleave_generic<T: Sample>(x: &[T], e: usize, dst: &mut [T]) {
     }
 }
 
-/// `dst[(first + step·i)·e ..][..e] = src[i·e ..][..e]` for `i < src.len() / e`: put a
-/// computed run back at every `step`-th element.
-#[inline]
-pub fn scatter_every<T: Sample>(src: &[T], e: usize, dst: &mut [T], first: usize, step: usize) {
-    if step == 1 {
-        dst[first * e..first * e + src.len()].copy_from_slice(src);
-    } else if e == 1 {
-        for (i, &v) in src.iter().enumerate() {
-            dst[first + step * i] = v;
-        }
-    } else {
-        for (i, el) in src.chunks_exact(e).enumerate() {
-            let at = (first + step * i) * e;
-            dst[at..at + e].copy_from_slice(el);
-        }
-    }
-}
-
 /// `dst = [a_0, b_0, a_1, b_1, …]` for elements of `e` samples (`a`, `b` of equal length).
 #[inline]
 pub fn interleave<T: Sample>(a: &[T], b: &[T], e: usize, dst: &mut [T]) {
