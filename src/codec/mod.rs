@@ -96,6 +96,26 @@ struct Plan {
 }
 
 impl Plan {
+    /// Range-code every `(band, channel)` job's quantized indices `q[job]` (jobs band-major,
+    /// `channels` per band), each band with its parent band of the same channel (§9).
+    fn code_bands(&self, jobs: &[(usize, usize)], q: &[Vec<i64>], channels: usize) -> Vec<Vec<u8>> {
+        jobs.par_iter()
+            .enumerate()
+            .map(|(i, &(j, c))| {
+                let kind = if self.bands[j].level == 0 {
+                    BandKind::Coarse
+                } else {
+                    BandKind::Detail
+                };
+                let parent = self.parents[j].map(|p| Parent {
+                    data: &q[p * channels + c],
+                    dims: &self.dims[p],
+                });
+                entropy::encode_band(&q[i], &self.dims[j], kind, parent)
+            })
+            .collect()
+    }
+
     fn new(h: &Header) -> Result<Plan> {
         let pyr = if h.mode == Mode::Lossless {
             lossless::plan(&h.dims, h.levels)
@@ -326,22 +346,7 @@ impl Prepared {
                     .collect()
             })
             .collect();
-        let coded: Vec<Vec<u8>> = jobs
-            .par_iter()
-            .enumerate()
-            .map(|(k, &(j, c))| {
-                let kind = if plan.bands[j].level == 0 {
-                    BandKind::Coarse
-                } else {
-                    BandKind::Detail
-                };
-                let parent = plan.parents[j].map(|p| Parent {
-                    data: &q[p * nc + c],
-                    dims: &plan.dims[p],
-                });
-                entropy::encode_band(&q[k], &plan.dims[j], kind, parent)
-            })
-            .collect();
+        let coded = plan.code_bands(&jobs, &q, nc);
         let mut h = self.header.clone();
         h.step = step;
         let mut out = format::SIGNATURE.to_vec();
@@ -555,22 +560,7 @@ fn encode_lossless(r: &Raster, opts: &EncodeOptions) -> Result<Vec<u8>> {
         .map(|&(j, k)| layout::gather(&planes[k], &plan.pyr.shape, &plan.bands[j].ranges))
         .collect();
     drop(planes);
-    let coded: Vec<Vec<u8>> = jobs
-        .par_iter()
-        .enumerate()
-        .map(|(i, &(j, k))| {
-            let kind = if plan.bands[j].level == 0 {
-                BandKind::Coarse
-            } else {
-                BandKind::Detail
-            };
-            let parent = plan.parents[j].map(|p| Parent {
-                data: &q[p * c + k],
-                dims: &plan.dims[p],
-            });
-            entropy::encode_band(&q[i], &plan.dims[j], kind, parent)
-        })
-        .collect();
+    let coded = plan.code_bands(&jobs, &q, c);
     let mut out = format::SIGNATURE.to_vec();
     put_chunk(&mut out, HEAD, &header.to_bytes());
     let m = meta::to_bytes(&r.meta);
