@@ -1,5 +1,5 @@
 //! Time forward+inverse pyramids of an image (5 levels) or a volume (3 levels):
-//! `cargo run --release --example pyramid_timing -- 4096 cubic symmetric [reps] [dims 2|3]`.
+//! `cargo run --release --example pyramid_timing -- 4096 cubic symmetric [reps] [dims 2|3] [levels]`.
 //! For CPU time on a busy machine: `perf stat -e task-clock` with reps 1 and 11, difference / 10.
 use mra::tensor::{analyze, synthesize, Array, Order, PyramidSpec};
 use std::time::Instant;
@@ -16,6 +16,10 @@ fn main() {
         .unwrap_or(mra::scheme::Boundary::Symmetric);
     let reps: usize = args.get(4).and_then(|s| s.parse().ok()).unwrap_or(3);
     let dims: usize = args.get(5).and_then(|s| s.parse().ok()).unwrap_or(2);
+    let levels: usize = args
+        .get(6)
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(if dims == 3 { 3 } else { 5 });
     let shape = vec![n; dims];
     let len: usize = shape.iter().product();
     let data: Vec<f32> = (0..len).map(|i| (i % 251) as f32).collect();
@@ -23,7 +27,7 @@ fn main() {
     let spec = PyramidSpec {
         scheme,
         boundary,
-        levels: if dims == 3 { 3 } else { 5 },
+        levels,
         order: Order::NonStandard,
         axes: (0..dims).collect(),
     };

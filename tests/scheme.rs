@@ -423,3 +423,50 @@ fn vector_kernels_match_plain_loops() {
         }
     }
 }
+
+#[test]
+fn f32_combine_and_transpose_match_plain_loops() {
+    use mra::scheme::kernel::{combine, combine_baseline, transpose};
+    // f32 runs of every length around the vector widths (blocks of 32, then 8, then single)
+    let x: Vec<f32> = lcg(5, 120).iter().map(|&v| v as f32).collect();
+    for len in 0..100usize {
+        for taps in 1..=9usize {
+            let src: Vec<&[f32]> = (0..taps).map(|k| &x[k..k + len]).collect();
+            let w: Vec<f32> = (0..taps).map(|k| 0.375 * k as f32 - 0.7).collect();
+            let (mut a, mut b) = (vec![1.0f32; len], vec![2.0f32; len]);
+            combine(&mut a, &src, &w);
+            combine_baseline(&mut b, &src, &w);
+            for i in 0..len {
+                let mut acc = w[0] * src[0][i];
+                for k in 1..taps {
+                    acc += w[k] * src[k][i];
+                }
+                assert_eq!(a[i].to_bits(), acc.to_bits(), "f32 taps {taps} len {len}");
+                assert_eq!(b[i].to_bits(), acc.to_bits());
+            }
+        }
+    }
+    // transposes of every shape up to 20 × 20, into a wider destination
+    for rows in 0..20usize {
+        for cols in 0..20usize {
+            let stride = rows + 3;
+            let src32: Vec<f32> = (0..rows * cols).map(|i| i as f32 + 0.5).collect();
+            let src64: Vec<f64> = src32.iter().map(|&v| v as f64 * 3.0).collect();
+            let mut d32 = vec![-1f32; cols * stride];
+            let mut d64 = vec![-1f64; cols * stride];
+            transpose(&src32, rows, cols, &mut d32, stride);
+            transpose(&src64, rows, cols, &mut d64, stride);
+            for c in 0..cols {
+                for r in 0..stride {
+                    let (want32, want64) = if r < rows {
+                        (src32[r * cols + c], src64[r * cols + c])
+                    } else {
+                        (-1.0, -1.0)
+                    };
+                    assert_eq!(d32[c * stride + r], want32, "{rows}x{cols} at {r},{c}");
+                    assert_eq!(d64[c * stride + r], want64);
+                }
+            }
+        }
+    }
+}

@@ -119,6 +119,8 @@ fn engines_agree_on_large_images_and_volumes() {
     }
     // large enough (> 16 MiB) for levels that stream their output past the caches
     engines_agree(&[1500, 1501], vec![0, 1], 2, 2, 2, 10);
+    // a volume whose lanes go through the transposed plane path, streaming
+    engines_agree(&[66, 130, 260], vec![0, 1, 2], 1, 0, 2, 11);
 }
 
 proptest! {

@@ -96,74 +96,150 @@ fn taps<T: Sample, const N: usize>(out: &mut [T], src: &[&[T]], w: &[T]) {
 
 /// [`taps`] with AVX2 intrinsics for `f32`/`f64`: blocks of four vectors keep four
 /// independent sums in flight (each output's sum is a chain of dependent adds in a fixed
-/// order, for the bits, so one vector at a time would wait on add latency). Separate
-/// multiply and add, no FMA: the same bits as the scalar loop.
+/// order, for the bits, so one vector at a time would wait on add latency), then single
+/// vectors, then scalars. Separate multiply and add, no FMA: the same bits as the scalar
+/// loop. Short runs (lanes of a few hundred samples) are common, so the set-up is kept to
+/// plain loops.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 unsafe fn taps_avx2<T: Sample, const N: usize>(out: &mut [T], src: &[&[T]], w: &[T]) {
     use std::any::TypeId;
-    use std::arch::x86_64::*;
     let len = out.len();
-    let s: [&[T]; N] = std::array::from_fn(|k| &src[k][..len]);
-    let done = if TypeId::of::<T>() == TypeId::of::<f32>() {
-        let wv: [__m256; N] = std::array::from_fn(|k| _mm256_set1_ps(w[k].to_f64() as f32));
-        let p: [*const f32; N] = std::array::from_fn(|k| s[k].as_ptr() as *const f32);
-        let o = out.as_mut_ptr() as *mut f32;
-        let full = len / 32 * 32;
-        let mut i = 0;
-        while i < full {
-            // SAFETY: i + 32 <= len for every slice; T is f32.
-            unsafe {
-                let mut a0 = _mm256_mul_ps(wv[0], _mm256_loadu_ps(p[0].add(i)));
-                let mut a1 = _mm256_mul_ps(wv[0], _mm256_loadu_ps(p[0].add(i + 8)));
-                let mut a2 = _mm256_mul_ps(wv[0], _mm256_loadu_ps(p[0].add(i + 16)));
-                let mut a3 = _mm256_mul_ps(wv[0], _mm256_loadu_ps(p[0].add(i + 24)));
-                for k in 1..N {
-                    a0 = _mm256_add_ps(a0, _mm256_mul_ps(wv[k], _mm256_loadu_ps(p[k].add(i))));
-                    a1 = _mm256_add_ps(a1, _mm256_mul_ps(wv[k], _mm256_loadu_ps(p[k].add(i + 8))));
-                    a2 = _mm256_add_ps(a2, _mm256_mul_ps(wv[k], _mm256_loadu_ps(p[k].add(i + 16))));
-                    a3 = _mm256_add_ps(a3, _mm256_mul_ps(wv[k], _mm256_loadu_ps(p[k].add(i + 24))));
-                }
-                _mm256_storeu_ps(o.add(i), a0);
-                _mm256_storeu_ps(o.add(i + 8), a1);
-                _mm256_storeu_ps(o.add(i + 16), a2);
-                _mm256_storeu_ps(o.add(i + 24), a3);
+    debug_assert!(src.len() == N && src.iter().all(|s| s.len() >= len));
+    if TypeId::of::<T>() == TypeId::of::<f32>() {
+        let mut p = [std::ptr::null::<f32>(); N];
+        let mut ws = [0f32; N];
+        for k in 0..N {
+            p[k] = src[k].as_ptr() as *const f32;
+            ws[k] = w[k].to_f64() as f32;
+        }
+        // SAFETY: AVX2 is present; every source holds `len` samples (checked by
+        // `combine`); T is f32.
+        unsafe { taps_avx2_f32::<N>(out.as_mut_ptr() as *mut f32, len, &p, &ws) }
+    } else if TypeId::of::<T>() == TypeId::of::<f64>() {
+        let mut p = [std::ptr::null::<f64>(); N];
+        let mut ws = [0f64; N];
+        for k in 0..N {
+            p[k] = src[k].as_ptr() as *const f64;
+            ws[k] = w[k].to_f64();
+        }
+        // SAFETY: as above; T is f64.
+        unsafe { taps_avx2_f64::<N>(out.as_mut_ptr() as *mut f64, len, &p, &ws) }
+    } else {
+        taps::<T, N>(out, src, w)
+    }
+}
+
+/// `o[i] = Σ_k ws[k]·p[k][i]`, `i < len` (first tap assigns), f32.
+///
+/// # Safety
+/// AVX2 present; `o` and every `p[k]` valid for `len` samples.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn taps_avx2_f32<const N: usize>(
+    o: *mut f32,
+    len: usize,
+    p: &[*const f32; N],
+    ws: &[f32; N],
+) {
+    use std::arch::x86_64::*;
+    let mut wv = [_mm256_setzero_ps(); N];
+    for k in 0..N {
+        wv[k] = _mm256_set1_ps(ws[k]);
+    }
+    let mut i = 0;
+    // SAFETY (all blocks): i + width <= len, so every access is inside the runs.
+    unsafe {
+        while i + 32 <= len {
+            let mut a0 = _mm256_mul_ps(wv[0], _mm256_loadu_ps(p[0].add(i)));
+            let mut a1 = _mm256_mul_ps(wv[0], _mm256_loadu_ps(p[0].add(i + 8)));
+            let mut a2 = _mm256_mul_ps(wv[0], _mm256_loadu_ps(p[0].add(i + 16)));
+            let mut a3 = _mm256_mul_ps(wv[0], _mm256_loadu_ps(p[0].add(i + 24)));
+            for k in 1..N {
+                a0 = _mm256_add_ps(a0, _mm256_mul_ps(wv[k], _mm256_loadu_ps(p[k].add(i))));
+                a1 = _mm256_add_ps(a1, _mm256_mul_ps(wv[k], _mm256_loadu_ps(p[k].add(i + 8))));
+                a2 = _mm256_add_ps(a2, _mm256_mul_ps(wv[k], _mm256_loadu_ps(p[k].add(i + 16))));
+                a3 = _mm256_add_ps(a3, _mm256_mul_ps(wv[k], _mm256_loadu_ps(p[k].add(i + 24))));
             }
+            _mm256_storeu_ps(o.add(i), a0);
+            _mm256_storeu_ps(o.add(i + 8), a1);
+            _mm256_storeu_ps(o.add(i + 16), a2);
+            _mm256_storeu_ps(o.add(i + 24), a3);
             i += 32;
         }
-        full
-    } else if TypeId::of::<T>() == TypeId::of::<f64>() {
-        let wv: [__m256d; N] = std::array::from_fn(|k| _mm256_set1_pd(w[k].to_f64()));
-        let p: [*const f64; N] = std::array::from_fn(|k| s[k].as_ptr() as *const f64);
-        let o = out.as_mut_ptr() as *mut f64;
-        let full = len / 16 * 16;
-        let mut i = 0;
-        while i < full {
-            // SAFETY: i + 16 <= len for every slice; T is f64.
-            unsafe {
-                let mut a0 = _mm256_mul_pd(wv[0], _mm256_loadu_pd(p[0].add(i)));
-                let mut a1 = _mm256_mul_pd(wv[0], _mm256_loadu_pd(p[0].add(i + 4)));
-                let mut a2 = _mm256_mul_pd(wv[0], _mm256_loadu_pd(p[0].add(i + 8)));
-                let mut a3 = _mm256_mul_pd(wv[0], _mm256_loadu_pd(p[0].add(i + 12)));
-                for k in 1..N {
-                    a0 = _mm256_add_pd(a0, _mm256_mul_pd(wv[k], _mm256_loadu_pd(p[k].add(i))));
-                    a1 = _mm256_add_pd(a1, _mm256_mul_pd(wv[k], _mm256_loadu_pd(p[k].add(i + 4))));
-                    a2 = _mm256_add_pd(a2, _mm256_mul_pd(wv[k], _mm256_loadu_pd(p[k].add(i + 8))));
-                    a3 = _mm256_add_pd(a3, _mm256_mul_pd(wv[k], _mm256_loadu_pd(p[k].add(i + 12))));
-                }
-                _mm256_storeu_pd(o.add(i), a0);
-                _mm256_storeu_pd(o.add(i + 4), a1);
-                _mm256_storeu_pd(o.add(i + 8), a2);
-                _mm256_storeu_pd(o.add(i + 12), a3);
+        while i + 8 <= len {
+            let mut a = _mm256_mul_ps(wv[0], _mm256_loadu_ps(p[0].add(i)));
+            for k in 1..N {
+                a = _mm256_add_ps(a, _mm256_mul_ps(wv[k], _mm256_loadu_ps(p[k].add(i))));
             }
+            _mm256_storeu_ps(o.add(i), a);
+            i += 8;
+        }
+        while i < len {
+            let mut a = ws[0] * *p[0].add(i);
+            for k in 1..N {
+                a += ws[k] * *p[k].add(i);
+            }
+            *o.add(i) = a;
+            i += 1;
+        }
+    }
+}
+
+/// [`taps_avx2_f32`] for f64.
+///
+/// # Safety
+/// AVX2 present; `o` and every `p[k]` valid for `len` samples.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn taps_avx2_f64<const N: usize>(
+    o: *mut f64,
+    len: usize,
+    p: &[*const f64; N],
+    ws: &[f64; N],
+) {
+    use std::arch::x86_64::*;
+    let mut wv = [_mm256_setzero_pd(); N];
+    for k in 0..N {
+        wv[k] = _mm256_set1_pd(ws[k]);
+    }
+    let mut i = 0;
+    // SAFETY (all blocks): i + width <= len, so every access is inside the runs.
+    unsafe {
+        while i + 16 <= len {
+            let mut a0 = _mm256_mul_pd(wv[0], _mm256_loadu_pd(p[0].add(i)));
+            let mut a1 = _mm256_mul_pd(wv[0], _mm256_loadu_pd(p[0].add(i + 4)));
+            let mut a2 = _mm256_mul_pd(wv[0], _mm256_loadu_pd(p[0].add(i + 8)));
+            let mut a3 = _mm256_mul_pd(wv[0], _mm256_loadu_pd(p[0].add(i + 12)));
+            for k in 1..N {
+                a0 = _mm256_add_pd(a0, _mm256_mul_pd(wv[k], _mm256_loadu_pd(p[k].add(i))));
+                a1 = _mm256_add_pd(a1, _mm256_mul_pd(wv[k], _mm256_loadu_pd(p[k].add(i + 4))));
+                a2 = _mm256_add_pd(a2, _mm256_mul_pd(wv[k], _mm256_loadu_pd(p[k].add(i + 8))));
+                a3 = _mm256_add_pd(a3, _mm256_mul_pd(wv[k], _mm256_loadu_pd(p[k].add(i + 12))));
+            }
+            _mm256_storeu_pd(o.add(i), a0);
+            _mm256_storeu_pd(o.add(i + 4), a1);
+            _mm256_storeu_pd(o.add(i + 8), a2);
+            _mm256_storeu_pd(o.add(i + 12), a3);
             i += 16;
         }
-        full
-    } else {
-        0
-    };
-    let rest: [&[T]; N] = std::array::from_fn(|k| &s[k][done..]);
-    taps::<T, N>(&mut out[done..], &rest, w);
+        while i + 4 <= len {
+            let mut a = _mm256_mul_pd(wv[0], _mm256_loadu_pd(p[0].add(i)));
+            for k in 1..N {
+                a = _mm256_add_pd(a, _mm256_mul_pd(wv[k], _mm256_loadu_pd(p[k].add(i))));
+            }
+            _mm256_storeu_pd(o.add(i), a);
+            i += 4;
+        }
+        while i < len {
+            let mut a = ws[0] * *p[0].add(i);
+            for k in 1..N {
+                a += ws[k] * *p[k].add(i);
+            }
+            *o.add(i) = a;
+            i += 1;
+        }
+    }
 }
 
 /// Split `x` (elements of `e` samples) into its even elements, then its odd elements:
@@ -344,4 +420,96 @@ unsafe fn stream_copy_avx2<T: Sample>(src: &[T], dst: &mut [T]) {
     }
     _mm_sfence();
     dst[head + body..].copy_from_slice(&src[head + body..]);
+}
+
+/// `dst[c·stride + r] = src[r·cols + c]` for a `rows × cols` block `src`: the lanes of one
+/// axis become rows of another. 8 × 8 tiles in registers for 4-byte samples with AVX2.
+pub fn transpose<T: Sample>(src: &[T], rows: usize, cols: usize, dst: &mut [T], stride: usize) {
+    assert!(src.len() >= rows * cols);
+    assert!(cols == 0 || rows == 0 || (stride >= rows && dst.len() >= (cols - 1) * stride + rows));
+    #[cfg(target_arch = "x86_64")]
+    if std::mem::size_of::<T>() == 4 && super::sparse::cpu_has_avx2() {
+        // SAFETY: AVX2 is present; T is a 4-byte float, moved as bits; bounds above.
+        return unsafe { transpose_avx2_32(src, rows, cols, dst, stride) };
+    }
+    transpose_generic(src, rows, cols, dst, stride, 0, 0)
+}
+
+/// The tiles of [`transpose`] from row `r0` and column `c0` on (the rest of the block is
+/// done), plain loops.
+fn transpose_generic<T: Sample>(
+    src: &[T],
+    rows: usize,
+    cols: usize,
+    dst: &mut [T],
+    stride: usize,
+    r0: usize,
+    c0: usize,
+) {
+    const B: usize = 16;
+    // columns c0.. of every row, then rows r0.. of columns ..c0
+    for (rs, cs) in [((0, rows), (c0, cols)), ((r0, rows), (0, c0))] {
+        for rb in (rs.0..rs.1).step_by(B) {
+            for cb in (cs.0..cs.1).step_by(B) {
+                for r in rb..(rb + B).min(rs.1) {
+                    let line = &src[r * cols + cb..r * cols + (cb + B).min(cs.1)];
+                    for (i, &v) in line.iter().enumerate() {
+                        dst[(cb + i) * stride + r] = v;
+                    }
+                }
+            }
+        }
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn transpose_avx2_32<T: Sample>(
+    src: &[T],
+    rows: usize,
+    cols: usize,
+    dst: &mut [T],
+    stride: usize,
+) {
+    use std::arch::x86_64::*;
+    let (r8, c8) = (rows / 8 * 8, cols / 8 * 8);
+    let ps = src.as_ptr() as *const f32;
+    let pd = dst.as_mut_ptr() as *mut f32;
+    for rb in (0..r8).step_by(8) {
+        for cb in (0..c8).step_by(8) {
+            // SAFETY: rows rb..rb+8 < rows, columns cb..cb+8 <= cols of src; dst rows
+            // cb..cb+8 at stride, columns rb..rb+8 <= rows <= stride (checked by the caller).
+            unsafe {
+                let l = |i: usize| _mm256_loadu_ps(ps.add((rb + i) * cols + cb));
+                let (a0, a1, a2, a3, a4, a5, a6, a7) =
+                    (l(0), l(1), l(2), l(3), l(4), l(5), l(6), l(7));
+                let t0 = _mm256_unpacklo_ps(a0, a1);
+                let t1 = _mm256_unpackhi_ps(a0, a1);
+                let t2 = _mm256_unpacklo_ps(a2, a3);
+                let t3 = _mm256_unpackhi_ps(a2, a3);
+                let t4 = _mm256_unpacklo_ps(a4, a5);
+                let t5 = _mm256_unpackhi_ps(a4, a5);
+                let t6 = _mm256_unpacklo_ps(a6, a7);
+                let t7 = _mm256_unpackhi_ps(a6, a7);
+                let u0 = _mm256_shuffle_ps(t0, t2, 0x44);
+                let u1 = _mm256_shuffle_ps(t0, t2, 0xEE);
+                let u2 = _mm256_shuffle_ps(t1, t3, 0x44);
+                let u3 = _mm256_shuffle_ps(t1, t3, 0xEE);
+                let u4 = _mm256_shuffle_ps(t4, t6, 0x44);
+                let u5 = _mm256_shuffle_ps(t4, t6, 0xEE);
+                let u6 = _mm256_shuffle_ps(t5, t7, 0x44);
+                let u7 = _mm256_shuffle_ps(t5, t7, 0xEE);
+                let s = |i: usize, v: __m256| _mm256_storeu_ps(pd.add((cb + i) * stride + rb), v);
+                s(0, _mm256_permute2f128_ps(u0, u4, 0x20));
+                s(1, _mm256_permute2f128_ps(u1, u5, 0x20));
+                s(2, _mm256_permute2f128_ps(u2, u6, 0x20));
+                s(3, _mm256_permute2f128_ps(u3, u7, 0x20));
+                s(4, _mm256_permute2f128_ps(u0, u4, 0x31));
+                s(5, _mm256_permute2f128_ps(u1, u5, 0x31));
+                s(6, _mm256_permute2f128_ps(u2, u6, 0x31));
+                s(7, _mm256_permute2f128_ps(u3, u7, 0x31));
+            }
+        }
+    }
+    transpose_generic(src, rows, cols, dst, stride, r8, c8)
 }

@@ -13,7 +13,7 @@
 //! form the elements (`e` samples, e.g. the channels of an image).
 
 use super::par::{for_each_part, SharedMut};
-use crate::scheme::kernel::{combine, stream_copy};
+use crate::scheme::kernel::{combine, stream_copy, transpose};
 use crate::scheme::polyphase::Polyphase;
 use crate::scheme::sparse::Csr;
 use crate::scheme::Sample;
@@ -67,6 +67,13 @@ pub fn fused_level<T: Sample>(
             .collect();
         v.push(vec![T::default(); region[k - 1] * e]); // lane output when streaming
         v.push(vec![T::default(); region[k - 1] * e]); // lane scratch
+        let planes = if plane_path(k, region, e) {
+            region[k - 2] * region[k - 1]
+        } else {
+            0
+        };
+        v.push(vec![T::default(); planes]); // the last two axes of a slab, transposed
+        v.push(vec![T::default(); planes]);
         v
     };
     let work_bytes = region.iter().product::<usize>() * e * std::mem::size_of::<T>();
@@ -134,8 +141,17 @@ impl Ctx<'_> {
         }
         // combine the input slabs of row r into scratch[0] (compact, strides cs[d+1..])
         let (slab, rest) = scratch.split_first_mut().expect("scratch per axis");
-        let run = self.region[k - 1] * e;
-        let lines: usize = self.region[d + 1..k - 1].iter().product();
+        // lines that follow one another in the source as in the slab (the region spans
+        // the array there) are one run
+        let whole = (d + 1..k - 1).all(|j| src_st[j] == self.cs[j]);
+        let (run, lines) = if whole {
+            (self.cs[d], 1)
+        } else {
+            (
+                self.region[k - 1] * e,
+                self.region[d + 1..k - 1].iter().product(),
+            )
+        };
         let mut taps: [&[T]; 16] = [&[]; 16];
         let mut w = [T::default(); 16];
         let (cols, ws) = self.ops[d].op.row_slices(r);
@@ -176,10 +192,13 @@ impl Ctx<'_> {
     ) {
         let k = self.ops.len();
         let e = self.e;
+        if d + 2 == k && plane_path(k, self.region, e) {
+            return self.plane(d, slab, out, dst_st[d], scratch);
+        }
         if d == k - 1 {
             let a = &self.ops[d];
             let n = self.region[d] * e;
-            let [.., lane_out, lane_tmp] = scratch else {
+            let [.., lane_out, lane_tmp, _, _] = scratch else {
                 unreachable!("two lane buffers")
             };
             if self.stream {
@@ -196,6 +215,77 @@ impl Ctx<'_> {
             let at = r * dst_st[d];
             let o = &mut out[at..];
             self.row(d, r, slab, self.cs, o, dst_st, scratch);
+        }
+    }
+
+    /// The last two axes of a compact slab `[h, w]` (single samples) at once, for short
+    /// lanes: axis `d` combines whole rows (`Σ_c W_rc · row_c`), the slab is transposed so
+    /// that the last axis' lanes become rows, combined the same way, and transposed back
+    /// into `out` (rows `out_stride` apart). Every output sums the same taps in the same
+    /// order as the lane-by-lane path (the same bits), without per-lane set-up or scalar
+    /// boundary rows.
+    fn plane<T: Sample>(
+        &self,
+        d: usize,
+        slab: &[T],
+        out: &mut [T],
+        out_stride: usize,
+        scratch: &mut [Vec<T>],
+    ) {
+        let (h, w) = (self.region[d], self.region[d + 1]);
+        let [.., pa, pb] = scratch else {
+            unreachable!("two plane buffers")
+        };
+        let (pa, pb) = (&mut pa[..h * w], &mut pb[..h * w]);
+        combine_rows(self.ops[d].op, &slab[..h * w], w, pa);
+        transpose(pa, h, w, pb, h);
+        combine_rows(self.ops[d + 1].op, pb, h, pa);
+        if self.stream {
+            transpose(pa, w, h, pb, w);
+            if out_stride == w {
+                return stream_copy(pb, &mut out[..h * w]);
+            }
+            for r in 0..h {
+                stream_copy(
+                    &pb[r * w..r * w + w],
+                    &mut out[r * out_stride..r * out_stride + w],
+                );
+            }
+        } else {
+            transpose(pa, w, h, out, out_stride);
+        }
+    }
+}
+
+/// Lanes at most this long go through [`Ctx::plane`] (volumes of a few hundred samples a
+/// side), longer ones lane by lane.
+const PLANE_MAX_LANE: usize = 1024;
+
+/// Whether the last two axes of a level run transposed ([`Ctx::plane`]).
+fn plane_path(k: usize, region: &[usize], e: usize) -> bool {
+    k >= 3 && e == 1 && region[k - 1] <= PLANE_MAX_LANE
+}
+
+/// `dst[r] = Σ_c W_rc · src[c]` for every row `r` of `op`, rows of `len` samples.
+fn combine_rows<T: Sample>(op: &Csr, src: &[T], len: usize, dst: &mut [T]) {
+    let mut taps: [&[T]; 16] = [&[]; 16];
+    let mut w = [T::default(); 16];
+    for r in 0..op.rows() {
+        let (cols, ws) = op.row_slices(r);
+        let o = &mut dst[r * len..r * len + len];
+        if cols.len() <= taps.len() {
+            for (t, (&c, &wc)) in cols.iter().zip(ws).enumerate() {
+                taps[t] = &src[c as usize * len..c as usize * len + len];
+                w[t] = T::from_f64(wc);
+            }
+            combine(o, &taps[..cols.len()], &w[..cols.len()]);
+        } else {
+            let t: Vec<&[T]> = cols
+                .iter()
+                .map(|&c| &src[c as usize * len..c as usize * len + len])
+                .collect();
+            let wv: Vec<T> = ws.iter().map(|&x| T::from_f64(x)).collect();
+            combine(o, &t, &wv);
         }
     }
 }

@@ -9,6 +9,7 @@
 
 use super::array::Array;
 use super::fused::{fused_level, AxisOp};
+use super::par::{for_each_task, SharedMut};
 use super::transform::transform_axis;
 use super::workspace;
 use crate::scheme::{max_levels, Boundary, Sample, Scheme, TwoScale};
@@ -371,17 +372,41 @@ fn run<T: Sample>(array: &mut Array<T>, pyr: &Pyramid, dir: Direction, engine: E
     }
 }
 
-/// Copy the box `[0, region)` (leading axes; elements of `e` samples) from `src` to `dst`.
-fn copy_region<T: Copy>(src: &[T], dst: &mut [T], strides: &[usize], region: &[usize], e: usize) {
+/// Copy the box `[0, region)` (leading axes; elements of `e` samples) from `src` to `dst`,
+/// lines shared among the pool's threads.
+fn copy_region<T: Sample>(src: &[T], dst: &mut [T], strides: &[usize], region: &[usize], e: usize) {
     let k = region.len();
     let run = region[k - 1] * e;
     let lines: usize = region[..k - 1].iter().product();
-    for line in 0..lines {
+    let start = |line: usize| {
         let (mut at, mut rem) = (0, line);
         for j in (0..k - 1).rev() {
             at += (rem % region[j]) * strides[j];
             rem /= region[j];
         }
-        dst[at..at + run].copy_from_slice(&src[at..at + run]);
-    }
+        at
+    };
+    assert!(lines == 0 || start(lines - 1) + run <= src.len().min(dst.len()));
+    let per = (COPY_TASK / run.max(1)).max(1);
+    let dptr = SharedMut(dst.as_mut_ptr());
+    for_each_task(
+        lines.div_ceil(per),
+        per * run,
+        || (),
+        |t, _| {
+            let p = dptr;
+            for line in t * per..((t + 1) * per).min(lines) {
+                let at = start(line);
+                // SAFETY: lines of the box are disjoint runs inside `dst` (nested strides,
+                // checked by the caller's level plan and the bound above); each task owns
+                // its lines.
+                unsafe {
+                    std::ptr::copy_nonoverlapping(src.as_ptr().add(at), p.0.add(at), run);
+                }
+            }
+        },
+    );
 }
+
+/// Samples copied per task by [`copy_region`].
+const COPY_TASK: usize = 1 << 16;
