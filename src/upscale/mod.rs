@@ -185,14 +185,37 @@ impl Prepared {
         })
     }
 
+    /// The output's shape.
+    pub(crate) fn out_shape(&self) -> Vec<usize> {
+        let mut shape = self.shape.clone();
+        for (axis, op) in &self.ops {
+            shape[*axis] = op.rows();
+        }
+        shape
+    }
+
     /// Prefilter then evaluate along every axis; the last axis' results go through
     /// `store`.
     pub(crate) fn run<U: Copy + Default + Send + Sync>(
         &self,
-        mut data: Vec<f32>,
+        data: Vec<f32>,
         bar: &Progress,
         store: impl Fn(f32) -> U + Sync + Send,
     ) -> (Vec<U>, Vec<usize>) {
+        let shape = self.out_shape();
+        let mut out = vec![U::default(); shape.iter().product()];
+        self.run_into(data, bar, &mut out, store);
+        (out, shape)
+    }
+
+    /// [`Prepared::run`] into `out` (of the output's size, every sample overwritten).
+    pub(crate) fn run_into<U: Copy + Default + Send + Sync>(
+        &self,
+        mut data: Vec<f32>,
+        bar: &Progress,
+        out: &mut [U],
+        store: impl Fn(f32) -> U + Sync + Send,
+    ) {
         let mut shape = self.shape.clone();
         for (axis, k) in &self.systems {
             if let Some(k) = k {
@@ -204,20 +227,17 @@ impl Prepared {
         for (k, (axis, op)) in self.ops.iter().enumerate() {
             let mut next_shape = shape.clone();
             next_shape[*axis] = op.rows();
-            let len: usize = next_shape.iter().product();
             if k == last {
-                let mut out = vec![U::default(); len];
-                resample_axis(&data, &shape, *axis, op, &mut out, &store);
+                resample_axis(&data, &shape, *axis, op, out, &store);
                 bar.inc(1);
-                return (out, next_shape);
+                return;
             }
-            let mut out = vec![0f32; len];
-            resample_axis(&data, &shape, *axis, op, &mut out, |x| x);
-            data = out;
+            let mut next = vec![0f32; next_shape.iter().product()];
+            resample_axis(&data, &shape, *axis, op, &mut next, |x| x);
+            data = next;
             shape = next_shape;
             bar.inc(1);
         }
-        unreachable!("at least one axis is planned (checked in Prepared::new)")
     }
 }
 
@@ -232,7 +252,7 @@ pub fn upscale_array(
 }
 
 /// The whole pipeline, the last axis' results stored through `store`.
-fn upscale_into<U: Copy + Default + Send + Sync>(
+fn upscale_into<U: Copy + Default + Send + Sync + 'static>(
     data: Vec<f32>,
     shape: &[usize],
     method: &Method,
@@ -249,13 +269,9 @@ fn upscale_into<U: Copy + Default + Send + Sync>(
         ));
     }
     if let Some(f) = refine::factors(method, shape, plans) {
-        let (u, s) = refine::upscale_refined(data, shape, method, &f)?;
-        let mut out = vec![U::default(); u.len()];
-        out.par_iter_mut()
-            .zip(u.par_iter())
-            .for_each(|(o, &x)| *o = store(x));
+        let out = refine::upscale_refined_into(data, shape, method, &f, store)?;
         bar.inc(plans.len() as u64 + 1);
-        return Ok((out, s));
+        return Ok(out);
     }
     Ok(Prepared::new(method, shape, plans)?.run(data, bar, store))
 }
@@ -348,8 +364,10 @@ pub fn upscale_raster(
         mut meta,
     } = r;
     let ty = samples.sample_type();
-    let mut data = samples.to_f32();
-    drop(samples);
+    let mut data = match samples {
+        Samples::F32(v) => v,
+        s => s.to_f32(),
+    };
     let mut shape = dims.clone();
     if channels > 1 {
         shape.push(channels);

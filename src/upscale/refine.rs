@@ -236,8 +236,27 @@ fn pair_gather(
     out
 }
 
-/// An upscaled array, its shape, and optionally the plain upscale it started from.
-type Staged = (Vec<f32>, Vec<usize>, Option<Vec<f32>>);
+/// A refined upscale `u + c` whose last correction `c` is not added yet (the final pass
+/// adds it together with the blend and the store: one pass instead of three), its
+/// shape, and optionally the plain upscale it started from.
+struct Staged {
+    u: Vec<f32>,
+    c: Option<Vec<f32>>,
+    shape: Vec<usize>,
+    plain: Option<Vec<f32>>,
+}
+
+impl Staged {
+    /// `u + c` as one array.
+    fn settle(&mut self) {
+        if let Some(c) = self.c.take() {
+            self.u
+                .par_iter_mut()
+                .zip(c.par_iter())
+                .for_each(|(x, c)| *x += c);
+        }
+    }
+}
 
 /// One ×2 clamp-and-project stage along `axes`; with `keep`, also the plain upscale
 /// it starts from.
@@ -252,7 +271,8 @@ fn stage(
 }
 
 /// [`stage`]; `fused` lets axes 0 and 1 take the one-pass rounds
-/// ([`clamp_residual_2d`]), otherwise the general clamp / block mean / residual passes.
+/// ([`clamp_residual_2d`]: the clamp bounds computed per row from the input, no
+/// full-size bound arrays), otherwise the general clamp / block mean / residual passes.
 fn stage_with(
     low: &[f32],
     shape: &[usize],
@@ -265,6 +285,42 @@ fn stage_with(
     let up = Prepared::new(&area(method), shape, &plans_for(shape, &f))?;
     let hidden = Progress::hidden();
     let (mut u, fine) = up.run(low.to_vec(), &hidden, |x| x);
+    let mut sorted = axes.to_vec();
+    sorted.sort_unstable();
+    if fused && sorted == [0, 1] {
+        // images (and the first two axes of anything): one fused pass per round; with
+        // `keep` the first round reads the plain upscale and writes a new array
+        let rows_first = axes[0] == 0;
+        let mut plain = None;
+        let mut c: Option<Vec<f32>> = None;
+        for round in 0..ITERATIONS {
+            let r = match &c {
+                Some(c) => {
+                    clamp_residual_2d(&mut u, Prev::Add(c), low, shape, rows_first, method.edge)
+                }
+                None if round == 0 && keep => {
+                    let mut v = vec![0f32; u.len()];
+                    let prev = Prev::From(&u);
+                    let r = clamp_residual_2d(&mut v, prev, low, shape, rows_first, method.edge);
+                    plain = Some(std::mem::replace(&mut u, v));
+                    r
+                }
+                None => {
+                    clamp_residual_2d(&mut u, Prev::InPlace, low, shape, rows_first, method.edge)
+                }
+            };
+            match c.as_mut() {
+                Some(c) => up.run_into(r, &hidden, c, |x| x),
+                None => c = Some(up.run(r, &hidden, |x| x).0),
+            }
+        }
+        return Ok(Staged {
+            u,
+            c,
+            shape: fine,
+            plain,
+        });
+    }
     let plain = keep.then(|| u.clone());
     let (mut lo, mut hi): (Option<Vec<f32>>, Option<Vec<f32>>) = (None, None);
     let mut s = shape.to_vec();
@@ -279,51 +335,252 @@ fn stage_with(
         lo.unwrap_or_else(|| low.to_vec()),
         hi.unwrap_or_else(|| low.to_vec()),
     );
-    let mut sorted = axes.to_vec();
-    sorted.sort_unstable();
-    if fused && sorted == [0, 1] {
-        // images (and the first two axes of anything): one fused pass per round
-        let rows_first = axes[0] == 0;
-        let mut c: Option<Vec<f32>> = None;
-        for _ in 0..ITERATIONS {
-            let r = clamp_residual_2d(&mut u, c.as_deref(), &lo, &hi, low, shape, rows_first);
-            c = Some(up.run(r, &hidden, |x| x).0);
-        }
-        if let Some(c) = c {
-            u.par_iter_mut()
-                .zip(c.par_iter())
-                .for_each(|(x, c)| *x += c);
-        }
-        return Ok((u, fine, plain));
-    }
+    let mut c: Option<Vec<f32>> = None;
     for _ in 0..ITERATIONS {
+        let mut st = Staged {
+            u,
+            c: c.take(),
+            shape: Vec::new(),
+            plain: None,
+        };
+        st.settle();
+        u = st.u;
         u.par_iter_mut()
             .zip(lo.par_iter().zip(hi.par_iter()))
             .for_each(|(x, (&a, &b))| *x = x.max(a).min(b));
         let (d, _) = block_mean(&u, &fine, &f);
         let r: Vec<f32> = low.iter().zip(&d).map(|(s, d)| s - d).collect();
-        let (c, _) = up.run(r, &hidden, |x| x);
-        u.par_iter_mut()
-            .zip(c.par_iter())
-            .for_each(|(x, c)| *x += c);
+        c = Some(up.run(r, &hidden, |x| x).0);
     }
-    Ok((u, fine, plain))
+    Ok(Staged {
+        u,
+        c,
+        shape: fine,
+        plain,
+    })
+}
+
+/// What a fused round clamps: `u` itself, another array (the plain upscale, kept), or
+/// `u + c` (`c` the previous round's correction).
+#[derive(Clone, Copy)]
+enum Prev<'a> {
+    InPlace,
+    From(&'a [f32]),
+    Add(&'a [f32]),
+}
+
+/// The extension of a lane beyond its end `e` by the edge rule (`next` the sample
+/// inside): `2 a − b` (linear, lanes of two or more) or `a`.
+fn beyond(a: &[f32], b: &[f32], edge: Edge, long: bool, dst: &mut [f32]) {
+    match edge {
+        Edge::Linear if long => {
+            for ((d, a), b) in dst.iter_mut().zip(a).zip(b) {
+                *d = 2.0 * a - b;
+            }
+        }
+        _ => dst.copy_from_slice(a),
+    }
+}
+
+/// One lane of [`pair_gather`]: `n` elements of `w` samples become `2n`, new element
+/// `2i` = `op(e_{i−1}, e_i)`, `2i + 1` = `op(e_i, e_{i+1})` (`e` the lane extended by
+/// `edge`; same arithmetic). `ends` is scratch of `2w`.
+fn pair_lane(
+    src: &[f32],
+    n: usize,
+    w: usize,
+    edge: Edge,
+    op: impl Fn(f32, f32) -> f32 + Copy,
+    ends: &mut [f32],
+    dst: &mut [f32],
+) {
+    let (b0, b1) = ends.split_at_mut(w);
+    let row = |i: usize| &src[i * w..(i + 1) * w];
+    beyond(row(0), row(1.min(n - 1)), edge, n > 1, b0);
+    beyond(row(n - 1), row(n.saturating_sub(2)), edge, n > 1, b1);
+    for i in 0..n {
+        let mid = row(i);
+        let prev = if i == 0 { &b0[..] } else { row(i - 1) };
+        let next = if i + 1 == n { &b1[..] } else { row(i + 1) };
+        let (d0, d1) = dst[2 * i * w..(2 * i + 2) * w].split_at_mut(w);
+        for (((d0, d1), (&p, &m)), &q) in d0.iter_mut().zip(d1).zip(prev.iter().zip(mid)).zip(next)
+        {
+            *d0 = op(p, m);
+            *d1 = op(m, q);
+        }
+    }
+}
+
+/// Scratch of one worker of [`clamp_residual_2d`]: the bounds of two fine rows and
+/// the rows they are made of.
+struct Bounds {
+    lo: [Vec<f32>; 2],
+    hi: [Vec<f32>; 2],
+    rows: [Vec<f32>; 3],
+    pair: Vec<f32>,
+    ends: Vec<f32>,
+}
+
+impl Bounds {
+    fn new(row: usize, inner: usize) -> Bounds {
+        let fine = vec![0f32; 2 * row];
+        Bounds {
+            lo: [fine.clone(), fine.clone()],
+            hi: [fine.clone(), fine.clone()],
+            rows: [fine.clone(), fine.clone(), fine.clone()],
+            pair: vec![0f32; 2 * row],
+            ends: vec![0f32; 2 * inner],
+        }
+    }
+
+    /// The bounds (min into `lo`, max into `hi`) of fine rows `2i`, `2i + 1` of a ×2
+    /// stage along axes 0 and 1 of `low` (`h` rows of `w` elements of `inner`), as
+    /// [`pair_gather`] along the first stage axis then the second would give them.
+    #[allow(clippy::too_many_arguments)]
+    fn fill(
+        &mut self,
+        low: &[f32],
+        h: usize,
+        w: usize,
+        inner: usize,
+        i: usize,
+        edge: Edge,
+        rows_first: bool,
+    ) {
+        let g = Geom {
+            low,
+            h,
+            w,
+            inner,
+            i,
+            edge,
+        };
+        let (rows, pair, ends) = (&mut self.rows, &mut self.pair, &mut self.ends);
+        if rows_first {
+            g.rows_first(|x: f32, y: f32| x.min(y), rows, pair, ends, &mut self.lo);
+            g.rows_first(|x: f32, y: f32| x.max(y), rows, pair, ends, &mut self.hi);
+        } else {
+            g.cols_first(|x: f32, y: f32| x.min(y), rows, pair, ends, &mut self.lo);
+            g.cols_first(|x: f32, y: f32| x.max(y), rows, pair, ends, &mut self.hi);
+        }
+    }
+}
+
+/// The input of [`Bounds::fill`] and the coarse row `i` being worked on.
+struct Geom<'a> {
+    low: &'a [f32],
+    h: usize,
+    w: usize,
+    inner: usize,
+    i: usize,
+    edge: Edge,
+}
+
+impl Geom<'_> {
+    fn coarse(&self, r: usize) -> &[f32] {
+        let row = self.w * self.inner;
+        &self.low[r * row..(r + 1) * row]
+    }
+
+    /// Along axis 0 first (on the input rows), then along axis 1.
+    fn rows_first(
+        &self,
+        op: impl Fn(f32, f32) -> f32 + Copy,
+        rows: &mut [Vec<f32>; 3],
+        pair: &mut [f32],
+        ends: &mut [f32],
+        out: &mut [Vec<f32>; 2],
+    ) {
+        let (h, row) = (self.h, self.w * self.inner);
+        for (k, dst) in rows.iter_mut().enumerate() {
+            // input row i − 1 + k, beyond the ends by the edge rule
+            let q = (self.i + k) as isize - 1;
+            let dst = &mut dst[..row];
+            if q < 0 {
+                beyond(
+                    self.coarse(0),
+                    self.coarse(1.min(h - 1)),
+                    self.edge,
+                    h > 1,
+                    dst,
+                );
+            } else if q as usize >= h {
+                let (e, next) = (self.coarse(h - 1), self.coarse(h.saturating_sub(2)));
+                beyond(e, next, self.edge, h > 1, dst);
+            } else {
+                dst.copy_from_slice(self.coarse(q as usize));
+            }
+        }
+        for (t, out) in out.iter_mut().enumerate() {
+            for ((p, &x), &y) in pair[..row]
+                .iter_mut()
+                .zip(&rows[t][..row])
+                .zip(&rows[t + 1][..row])
+            {
+                *p = op(x, y);
+            }
+            pair_lane(&pair[..row], self.w, self.inner, self.edge, op, ends, out);
+        }
+    }
+
+    /// Along axis 1 first (every input row), then along axis 0.
+    fn cols_first(
+        &self,
+        op: impl Fn(f32, f32) -> f32 + Copy,
+        rows: &mut [Vec<f32>; 3],
+        pair: &mut [f32],
+        ends: &mut [f32],
+        out: &mut [Vec<f32>; 2],
+    ) {
+        let (h, i, edge) = (self.h, self.i, self.edge);
+        let mut g = |r: usize, dst: &mut [f32]| {
+            pair_lane(self.coarse(r), self.w, self.inner, edge, op, ends, dst)
+        };
+        let [r0, r1, r2] = rows;
+        g(i, r1);
+        if i == 0 {
+            // beyond the first row: 2 G(0) − G(1) (linear), G(0) (mirror)
+            if h > 1 {
+                g(1, r2);
+                beyond(r1, r2, edge, true, r0);
+            } else {
+                r0.copy_from_slice(r1);
+            }
+        } else {
+            g(i - 1, r0);
+        }
+        if i + 1 == h {
+            if h > 1 {
+                g(h - 2, pair);
+                beyond(r1, pair, edge, true, r2);
+            } else {
+                r2.copy_from_slice(r1);
+            }
+        } else {
+            g(i + 1, r2);
+        }
+        for (t, out) in out.iter_mut().enumerate() {
+            for ((d, &x), &y) in out.iter_mut().zip(&rows[t]).zip(&rows[t + 1]) {
+                *d = op(x, y);
+            }
+        }
+    }
 }
 
 /// One round of a ×2 stage along axes 0 and 1 in a single pass (same arithmetic as
-/// the general path): `u ← clamp(u + c, lo, hi)` (no `c` in the first round), then
-/// the residual `s − D u`, the 2×2 block mean `D` taken along the first stage axis
-/// first (`rows_first`: axis 0) as [`block_mean`] does. `shape` is the coarse shape.
+/// the general path): `u ← clamp(prev, lo, hi)` with the bounds of the nearest input
+/// cells computed row by row ([`Bounds::fill`]), then the residual `s − D u`, the 2×2
+/// block mean `D` taken along the first stage axis first (`rows_first`: axis 0) as
+/// [`block_mean`] does. `shape` is the coarse shape.
 fn clamp_residual_2d(
     u: &mut [f32],
-    c: Option<&[f32]>,
-    lo: &[f32],
-    hi: &[f32],
+    prev: Prev,
     low: &[f32],
     shape: &[usize],
     rows_first: bool,
+    edge: Edge,
 ) -> Vec<f32> {
-    let n1 = shape[1];
+    let (h, n1) = (shape[0], shape[1]);
     let inner: usize = shape[2..].iter().product();
     let row = n1 * inner; // one coarse row
     let fine_row = 2 * row; // one fine row
@@ -331,46 +588,61 @@ fn clamp_residual_2d(
     if row == 0 {
         return r;
     }
-    u.par_chunks_mut(2 * fine_row)
-        .zip(r.par_chunks_mut(row))
-        .enumerate()
-        .for_each(|(i, (uc, rc))| {
-            let off = i * 2 * fine_row;
-            let (l, h) = (&lo[off..off + 2 * fine_row], &hi[off..off + 2 * fine_row]);
-            match c {
-                Some(c) => {
-                    let c = &c[off..off + 2 * fine_row];
-                    for (((x, &c), &a), &b) in uc.iter_mut().zip(c).zip(l).zip(h) {
+    let body = |i: usize, uc: &mut [f32], rc: &mut [f32], b: &mut Bounds| {
+        b.fill(low, h, n1, inner, i, edge, rows_first);
+        let off = i * 2 * fine_row;
+        for (t, uc) in uc.chunks_mut(fine_row).enumerate() {
+            let (l, hh) = (&b.lo[t][..], &b.hi[t][..]);
+            let at = off + t * fine_row;
+            match prev {
+                Prev::Add(c) => {
+                    let c = &c[at..at + fine_row];
+                    for (((x, &c), &a), &b) in uc.iter_mut().zip(c).zip(l).zip(hh) {
                         *x = (*x + c).max(a).min(b);
                     }
                 }
-                None => {
-                    for ((x, &a), &b) in uc.iter_mut().zip(l).zip(h) {
+                Prev::From(p) => {
+                    let p = &p[at..at + fine_row];
+                    for (((x, &p), &a), &b) in uc.iter_mut().zip(p).zip(l).zip(hh) {
+                        *x = p.max(a).min(b);
+                    }
+                }
+                Prev::InPlace => {
+                    for ((x, &a), &b) in uc.iter_mut().zip(l).zip(hh) {
                         *x = x.max(a).min(b);
                     }
                 }
             }
-            let (top, bottom) = uc.split_at(fine_row);
-            let s = &low[i * row..(i + 1) * row];
-            for j in 0..n1 {
-                let (e, o) = (2 * j * inner, (2 * j + 1) * inner);
-                for k in 0..inner {
-                    let (a, b) = (top[e + k], top[o + k]);
-                    let (p, q) = (bottom[e + k], bottom[o + k]);
-                    let d = if rows_first {
-                        0.5 * (0.5 * a + 0.5 * p) + 0.5 * (0.5 * b + 0.5 * q)
-                    } else {
-                        0.5 * (0.5 * a + 0.5 * b) + 0.5 * (0.5 * p + 0.5 * q)
-                    };
-                    rc[j * inner + k] = s[j * inner + k] - d;
-                }
+        }
+        let (top, bottom) = uc.split_at(fine_row);
+        let s = &low[i * row..(i + 1) * row];
+        for j in 0..n1 {
+            let (e, o) = (2 * j * inner, (2 * j + 1) * inner);
+            for k in 0..inner {
+                let (a, b) = (top[e + k], top[o + k]);
+                let (p, q) = (bottom[e + k], bottom[o + k]);
+                let d = if rows_first {
+                    0.5 * (0.5 * a + 0.5 * p) + 0.5 * (0.5 * b + 0.5 * q)
+                } else {
+                    0.5 * (0.5 * a + 0.5 * b) + 0.5 * (0.5 * p + 0.5 * q)
+                };
+                rc[j * inner + k] = s[j * inner + k] - d;
             }
-        });
+        }
+    };
+    u.par_chunks_mut(2 * fine_row)
+        .zip(r.par_chunks_mut(row))
+        .enumerate()
+        .for_each_init(
+            || Bounds::new(row, inner),
+            |b, (i, (uc, rc))| body(i, uc, rc, b),
+        );
     r
 }
 
-/// The fully clamped upscale `R(s)`: an odd plain stage, then ×2 clamp stages. With
-/// `keep` and a single ×2 stage, also the plain upscale `B(s)` (its starting point).
+/// The fully clamped upscale `R(s)`: an odd plain stage, then ×2 clamp stages, the
+/// last correction left pending. With `keep` and a single ×2 stage, also the plain
+/// upscale `B(s)` (its starting point).
 fn refined(
     data: Vec<f32>,
     shape: &[usize],
@@ -383,23 +655,29 @@ fn refined(
         .map(|&(a, g)| (a, g >> g.trailing_zeros()))
         .filter(|&(_, r)| r > 1)
         .collect();
-    let (mut u, mut s) = plain(data, shape, method, &odd)?;
+    let (u, s) = plain(data, shape, method, &odd)?;
     let k = f
         .iter()
         .map(|&(_, g)| g.trailing_zeros())
         .max()
         .unwrap_or(0);
     let keep = keep && k == 1 && odd.is_empty();
-    let mut b = None;
+    let mut st = Staged {
+        u,
+        c: None,
+        shape: s,
+        plain: None,
+    };
     for level in 0..k {
         let axes: Vec<usize> = f
             .iter()
             .filter(|&&(_, g)| g.trailing_zeros() > level)
             .map(|&(a, _)| a)
             .collect();
-        (u, s, b) = stage(&u, &s, method, &axes, keep)?;
+        st.settle();
+        st = stage(&st.u, &st.shape, method, &axes, keep)?;
     }
-    Ok((u, s, b))
+    Ok(st)
 }
 
 /// The first `len[a]` samples along every axis.
@@ -444,24 +722,41 @@ pub fn learn_weight(
     let sc = crop(data, shape, &len);
     let (coarse, cs) = block_mean(&sc, &len, f);
     // the plain upscale comes with the refined one for a single ×2 stage (no copy then)
-    let single = f.iter().all(|&(_, g)| g == 2);
-    let (r, _, b) = if single {
-        refined(coarse, &cs, method, f, true)?
-    } else {
-        let (r, s, _) = refined(coarse.clone(), &cs, method, f, false)?;
-        (r, s, Some(plain(coarse, &cs, method, f)?.0))
+    let b = (!single_stage(f))
+        .then(|| plain(coarse.clone(), &cs, method, f))
+        .transpose()?
+        .map(|p| p.0);
+    let st = refined(coarse, &cs, method, f, true)?;
+    let Some(b) = b.or(st.plain) else {
+        unreachable!("a single ×2 stage keeps its plain upscale")
     };
-    let b = b.expect("a single ×2 stage keeps its plain upscale");
     let (mut num, mut den) = (0f64, 0f64);
-    for ((s, b), r) in sc.iter().zip(&b).zip(&r) {
-        let d = (*r - *b) as f64;
-        num += (*s - *b) as f64 * d;
+    let mut acc = |s: f32, b: f32, r: f32| {
+        let d = (r - b) as f64;
+        num += (s - b) as f64 * d;
         den += d * d;
+    };
+    match &st.c {
+        Some(c) => {
+            for (((s, b), u), c) in sc.iter().zip(&b).zip(&st.u).zip(c) {
+                acc(*s, *b, *u + *c);
+            }
+        }
+        None => {
+            for ((s, b), r) in sc.iter().zip(&b).zip(&st.u) {
+                acc(*s, *b, *r);
+            }
+        }
     }
     if den <= 0.0 || !num.is_finite() {
         return Ok(Some(0.0));
     }
     Ok(Some((num / den).clamp(0.0, 1.0)))
+}
+
+/// Whether the factors are one ×2 stage (whose plain upscale [`refined`] keeps).
+fn single_stage(f: &[(usize, usize)]) -> bool {
+    f.iter().all(|&(_, g)| g == 2)
 }
 
 /// Refined area upscale by integer factors `f` (from [`factors`]).
@@ -471,27 +766,119 @@ pub fn upscale_refined(
     method: &Method,
     f: &[(usize, usize)],
 ) -> Result<(Vec<f32>, Vec<usize>)> {
+    upscale_refined_into(data, shape, method, f, |x| x)
+}
+
+/// [`upscale_refined`] with every output sample stored through `store` in the same
+/// pass that adds the last correction and blends (`B + t (R − B)`).
+pub(crate) fn upscale_refined_into<U: Copy + Default + Send + Sync + 'static>(
+    data: Vec<f32>,
+    shape: &[usize],
+    method: &Method,
+    f: &[(usize, usize)],
+    store: impl Fn(f32) -> U + Sync + Send,
+) -> Result<(Vec<U>, Vec<usize>)> {
     let t = match method.clamp {
         Clamp::Off => 0.0,
         Clamp::On => 1.0,
         Clamp::Auto => learn_weight(&data, shape, method, f)?.unwrap_or(0.0),
     };
     if t <= 0.0 {
-        return plain(data, shape, method, f);
+        let up = Prepared::new(&area(method), shape, &plans_for(shape, f))?;
+        return Ok(up.run(data, &Progress::hidden(), store));
+    }
+    fn add(c: &[f32]) -> impl Fn(usize, &mut [f32]) + Sync + Send + '_ {
+        move |off, ch| {
+            let n = ch.len();
+            for (x, c) in ch.iter_mut().zip(&c[off..off + n]) {
+                *x += c;
+            }
+        }
     }
     if t >= 1.0 {
-        return refined(data, shape, method, f, false).map(|(r, s, _)| (r, s));
+        let st = refined(data, shape, method, f, false)?;
+        let out = match &st.c {
+            Some(c) => finish(st.u, add(c), store),
+            None => finish(st.u, |_, _| {}, store),
+        };
+        return Ok((out, st.shape));
     }
-    let (r, s, b) = refined(data.clone(), shape, method, f, true)?;
-    let mut b = match b {
-        Some(b) => b,
-        None => plain(data, shape, method, f)?.0,
+    // the plain upscale: kept by a single ×2 stage, else computed first (no copy of data)
+    let b = (!single_stage(f))
+        .then(|| plain(data.clone(), shape, method, f))
+        .transpose()?
+        .map(|p| p.0);
+    let st = refined(data, shape, method, f, true)?;
+    let Some(b) = b.or(st.plain) else {
+        unreachable!("a single ×2 stage keeps its plain upscale")
     };
     let t = t as f32;
-    b.par_iter_mut()
-        .zip(r.par_iter())
-        .for_each(|(b, r)| *b += t * (r - *b));
-    Ok((b, s))
+    let u = &st.u;
+    let out = match &st.c {
+        Some(c) => finish(
+            b,
+            |off, ch: &mut [f32]| {
+                let n = ch.len();
+                for ((b, &u), &c) in ch.iter_mut().zip(&u[off..off + n]).zip(&c[off..off + n]) {
+                    let r = u + c;
+                    *b += t * (r - *b);
+                }
+            },
+            store,
+        ),
+        None => finish(
+            b,
+            |off, ch: &mut [f32]| {
+                let n = ch.len();
+                for (b, &r) in ch.iter_mut().zip(&u[off..off + n]) {
+                    *b += t * (r - *b);
+                }
+            },
+            store,
+        ),
+    };
+    Ok((out, st.shape))
+}
+
+/// Samples per chunk of the final pass.
+const CHUNK: usize = 1 << 12;
+
+/// The final pass: `fill(offset, chunk)` turns a chunk of `buf` into output values, then
+/// `store` converts them; f32 outputs are written over `buf` (no new array).
+fn finish<U: Copy + Default + Send + Sync + 'static>(
+    mut buf: Vec<f32>,
+    fill: impl Fn(usize, &mut [f32]) + Sync + Send,
+    store: impl Fn(f32) -> U + Sync + Send,
+) -> Vec<U> {
+    use std::any::{Any, TypeId};
+    if TypeId::of::<U>() == TypeId::of::<f32>() {
+        buf.par_chunks_mut(CHUNK).enumerate().for_each(|(k, ch)| {
+            fill(k * CHUNK, ch);
+            for x in ch.iter_mut() {
+                let y = store(*x);
+                *x = (&y as &dyn Any)
+                    .downcast_ref::<f32>()
+                    .copied()
+                    .unwrap_or(f32::NAN);
+            }
+        });
+        let any: Box<dyn Any> = Box::new(buf);
+        return match any.downcast::<Vec<U>>() {
+            Ok(v) => *v,
+            Err(_) => unreachable!("U is f32 (checked above)"),
+        };
+    }
+    let mut out = vec![U::default(); buf.len()];
+    buf.par_chunks_mut(CHUNK)
+        .zip(out.par_chunks_mut(CHUNK))
+        .enumerate()
+        .for_each(|(k, (ch, o))| {
+            fill(k * CHUNK, ch);
+            for (o, &x) in o.iter_mut().zip(ch.iter()) {
+                *o = store(x);
+            }
+        });
+    out
 }
 
 #[cfg(test)]
@@ -519,14 +906,18 @@ mod tests {
                 .map(|i| ((i * 7919 % 97) as f32 * 0.37).sin() * 100.0 + (i % 5) as f32)
                 .collect();
             let m = Method::default();
-            let a = stage_with(&low, &shape, &m, &axes, true, true).unwrap();
-            let b = stage_with(&low, &shape, &m, &axes, true, false).unwrap();
-            assert_eq!(a.1, b.1);
-            assert_eq!(a.0.len(), b.0.len());
-            for (x, y) in a.0.iter().zip(&b.0) {
-                assert_eq!(x.to_bits(), y.to_bits(), "{shape:?} {axes:?}");
+            for keep in [true, false] {
+                let mut a = stage_with(&low, &shape, &m, &axes, keep, true).unwrap();
+                let mut b = stage_with(&low, &shape, &m, &axes, keep, false).unwrap();
+                a.settle();
+                b.settle();
+                assert_eq!(a.shape, b.shape);
+                assert_eq!(a.u.len(), b.u.len());
+                for (x, y) in a.u.iter().zip(&b.u) {
+                    assert_eq!(x.to_bits(), y.to_bits(), "{shape:?} {axes:?}");
+                }
+                assert_eq!(a.plain, b.plain);
             }
-            assert_eq!(a.2, b.2);
         }
     }
 
