@@ -384,30 +384,44 @@ fn beyond(a: &[f32], b: &[f32], edge: Edge, long: bool, dst: &mut [f32]) {
 
 /// One lane of [`pair_gather`]: `n` elements of `w` samples become `2n`, new element
 /// `2i` = `op(e_{i−1}, e_i)`, `2i + 1` = `op(e_i, e_{i+1})` (`e` the lane extended by
-/// `edge`; same arithmetic). `ends` is scratch of `2w`.
+/// `edge`; same arithmetic). `ext` (`(n + 2) w`) and `pair` (`(n + 1) w`) are scratch.
+#[allow(clippy::too_many_arguments)]
 fn pair_lane(
     src: &[f32],
     n: usize,
     w: usize,
     edge: Edge,
     op: impl Fn(f32, f32) -> f32 + Copy,
-    ends: &mut [f32],
+    ext: &mut [f32],
+    pair: &mut [f32],
     dst: &mut [f32],
 ) {
-    let (b0, b1) = ends.split_at_mut(w);
+    let ext = &mut ext[..(n + 2) * w];
     let row = |i: usize| &src[i * w..(i + 1) * w];
-    beyond(row(0), row(1.min(n - 1)), edge, n > 1, b0);
-    beyond(row(n - 1), row(n.saturating_sub(2)), edge, n > 1, b1);
-    for i in 0..n {
-        let mid = row(i);
-        let prev = if i == 0 { &b0[..] } else { row(i - 1) };
-        let next = if i + 1 == n { &b1[..] } else { row(i + 1) };
-        let (d0, d1) = dst[2 * i * w..(2 * i + 2) * w].split_at_mut(w);
-        for (((d0, d1), (&p, &m)), &q) in d0.iter_mut().zip(d1).zip(prev.iter().zip(mid)).zip(next)
-        {
-            *d0 = op(p, m);
-            *d1 = op(m, q);
-        }
+    let (head, rest) = ext.split_at_mut(w);
+    let (mid, tail) = rest.split_at_mut(n * w);
+    beyond(row(0), row(1.min(n - 1)), edge, n > 1, head);
+    mid.copy_from_slice(src);
+    beyond(row(n - 1), row(n.saturating_sub(2)), edge, n > 1, tail);
+    // pair[p] = op(e_p, e_{p+1}) over the whole lane at once
+    let pair = &mut pair[..(n + 1) * w];
+    for ((p, &x), &y) in pair.iter_mut().zip(&ext[..(n + 1) * w]).zip(&ext[w..]) {
+        *p = op(x, y);
+    }
+    match w {
+        1 => expand::<1>(pair, w, dst),
+        3 => expand::<3>(pair, w, dst),
+        4 => expand::<4>(pair, w, dst),
+        _ => expand::<0>(pair, w, dst),
+    }
+}
+
+/// `dst[2i], dst[2i + 1] = pair[i], pair[i + 1]` (elements of `w` samples; `C` = `w`
+/// known at compile time, or 0).
+fn expand<const C: usize>(pair: &[f32], w: usize, dst: &mut [f32]) {
+    let w = if C == 0 { w } else { C };
+    for (i, d) in dst.chunks_exact_mut(2 * w).enumerate() {
+        d.copy_from_slice(&pair[i * w..i * w + 2 * w]);
     }
 }
 
@@ -418,7 +432,10 @@ struct Bounds {
     hi: [Vec<f32>; 2],
     rows: [Vec<f32>; 3],
     pair: Vec<f32>,
-    ends: Vec<f32>,
+    ext: Vec<f32>,
+    pw: Vec<f32>,
+    /// Vertical (or horizontal) pair means of the block mean.
+    half: Vec<f32>,
 }
 
 impl Bounds {
@@ -429,7 +446,9 @@ impl Bounds {
             hi: [fine.clone(), fine.clone()],
             rows: [fine.clone(), fine.clone(), fine.clone()],
             pair: vec![0f32; 2 * row],
-            ends: vec![0f32; 2 * inner],
+            ext: vec![0f32; row + 2 * inner],
+            pw: vec![0f32; row + inner],
+            half: vec![0f32; 2 * row],
         }
     }
 
@@ -455,12 +474,15 @@ impl Bounds {
             i,
             edge,
         };
-        let (rows, pair, ends) = (&mut self.rows, &mut self.pair, &mut self.ends);
+        let (rows, pair) = (&mut self.rows, &mut self.pair);
+        let ends = (&mut self.ext[..], &mut self.pw[..]);
         if rows_first {
             g.rows_first(|x: f32, y: f32| x.min(y), rows, pair, ends, &mut self.lo);
+            let ends = (&mut self.ext[..], &mut self.pw[..]);
             g.rows_first(|x: f32, y: f32| x.max(y), rows, pair, ends, &mut self.hi);
         } else {
             g.cols_first(|x: f32, y: f32| x.min(y), rows, pair, ends, &mut self.lo);
+            let ends = (&mut self.ext[..], &mut self.pw[..]);
             g.cols_first(|x: f32, y: f32| x.max(y), rows, pair, ends, &mut self.hi);
         }
     }
@@ -488,7 +510,7 @@ impl Geom<'_> {
         op: impl Fn(f32, f32) -> f32 + Copy,
         rows: &mut [Vec<f32>; 3],
         pair: &mut [f32],
-        ends: &mut [f32],
+        ends: (&mut [f32], &mut [f32]),
         out: &mut [Vec<f32>; 2],
     ) {
         let (h, row) = (self.h, self.w * self.inner);
@@ -519,7 +541,16 @@ impl Geom<'_> {
             {
                 *p = op(x, y);
             }
-            pair_lane(&pair[..row], self.w, self.inner, self.edge, op, ends, out);
+            pair_lane(
+                &pair[..row],
+                self.w,
+                self.inner,
+                self.edge,
+                op,
+                ends.0,
+                ends.1,
+                out,
+            );
         }
     }
 
@@ -529,12 +560,21 @@ impl Geom<'_> {
         op: impl Fn(f32, f32) -> f32 + Copy,
         rows: &mut [Vec<f32>; 3],
         pair: &mut [f32],
-        ends: &mut [f32],
+        ends: (&mut [f32], &mut [f32]),
         out: &mut [Vec<f32>; 2],
     ) {
         let (h, i, edge) = (self.h, self.i, self.edge);
         let mut g = |r: usize, dst: &mut [f32]| {
-            pair_lane(self.coarse(r), self.w, self.inner, edge, op, ends, dst)
+            pair_lane(
+                self.coarse(r),
+                self.w,
+                self.inner,
+                edge,
+                op,
+                ends.0,
+                ends.1,
+                dst,
+            )
         };
         let [r0, r1, r2] = rows;
         g(i, r1);
@@ -616,18 +656,11 @@ fn clamp_residual_2d(
         }
         let (top, bottom) = uc.split_at(fine_row);
         let s = &low[i * row..(i + 1) * row];
-        for j in 0..n1 {
-            let (e, o) = (2 * j * inner, (2 * j + 1) * inner);
-            for k in 0..inner {
-                let (a, b) = (top[e + k], top[o + k]);
-                let (p, q) = (bottom[e + k], bottom[o + k]);
-                let d = if rows_first {
-                    0.5 * (0.5 * a + 0.5 * p) + 0.5 * (0.5 * b + 0.5 * q)
-                } else {
-                    0.5 * (0.5 * a + 0.5 * b) + 0.5 * (0.5 * p + 0.5 * q)
-                };
-                rc[j * inner + k] = s[j * inner + k] - d;
-            }
+        match inner {
+            1 => block_residual::<1>(top, bottom, s, rc, inner, rows_first, &mut b.half),
+            3 => block_residual::<3>(top, bottom, s, rc, inner, rows_first, &mut b.half),
+            4 => block_residual::<4>(top, bottom, s, rc, inner, rows_first, &mut b.half),
+            _ => block_residual::<0>(top, bottom, s, rc, inner, rows_first, &mut b.half),
         }
     };
     u.par_chunks_mut(2 * fine_row)
@@ -638,6 +671,51 @@ fn clamp_residual_2d(
             |b, (i, (uc, rc))| body(i, uc, rc, b),
         );
     r
+}
+
+/// `r = s − D u` for one coarse row: `top`, `bottom` the two fine rows, elements of
+/// `w` samples (`C` = `w` known at compile time, or 0); `D` along axis 0 first when
+/// `rows_first` (`½(½a + ½p) + ½(½b + ½q)`, `a b` / `p q` the top / bottom pairs),
+/// else along axis 1 first (`½(½a + ½b) + ½(½p + ½q)`), as [`block_mean`] computes it.
+fn block_residual<const C: usize>(
+    top: &[f32],
+    bottom: &[f32],
+    s: &[f32],
+    r: &mut [f32],
+    w: usize,
+    rows_first: bool,
+    half: &mut [f32],
+) {
+    let w = if C == 0 { w } else { C };
+    if rows_first {
+        let half = &mut half[..top.len()];
+        for ((v, &a), &p) in half.iter_mut().zip(top).zip(bottom) {
+            *v = 0.5 * a + 0.5 * p;
+        }
+        for ((r, s), v) in r
+            .chunks_exact_mut(w)
+            .zip(s.chunks_exact(w))
+            .zip(half.chunks_exact(2 * w))
+        {
+            let (e, o) = v.split_at(w);
+            for k in 0..w {
+                r[k] = s[k] - (0.5 * e[k] + 0.5 * o[k]);
+            }
+        }
+    } else {
+        for (((r, s), t), b) in r
+            .chunks_exact_mut(w)
+            .zip(s.chunks_exact(w))
+            .zip(top.chunks_exact(2 * w))
+            .zip(bottom.chunks_exact(2 * w))
+        {
+            let ((te, to), (be, bo)) = (t.split_at(w), b.split_at(w));
+            for k in 0..w {
+                let (ht, hb) = (0.5 * te[k] + 0.5 * to[k], 0.5 * be[k] + 0.5 * bo[k]);
+                r[k] = s[k] - (0.5 * ht + 0.5 * hb);
+            }
+        }
+    }
 }
 
 /// The fully clamped upscale `R(s)`: an odd plain stage, then ×2 clamp stages, the
