@@ -33,7 +33,7 @@ use crate::progress::Progress;
 use crate::scheme::sparse::{Csr, Triplets};
 use crate::scheme::subdivide::Refinement;
 use crate::scheme::{Boundary, Scheme, TwoScale};
-use crate::tensor::{map_lanes, resample_axis};
+use crate::tensor::{map_lanes, resample_axis, resample_axis_with};
 use crate::{Error, Result};
 use basis::Basis;
 pub use lane::{Edge, Geometry, Mode};
@@ -211,10 +211,22 @@ impl Prepared {
     /// [`Prepared::run`] into `out` (of the output's size, every sample overwritten).
     pub(crate) fn run_into<U: Copy + Default + Send + Sync>(
         &self,
-        mut data: Vec<f32>,
+        data: Vec<f32>,
         bar: &Progress,
         out: &mut [U],
         store: impl Fn(f32) -> U + Sync + Send,
+    ) {
+        self.run_put(data, bar, out, |d: &mut U, x| *d = store(x))
+    }
+
+    /// [`Prepared::run`], every output value `x` put into its sample `d` of `out` by
+    /// `put(d, x)` (`*d += x`: add the upscale to what `out` holds).
+    pub(crate) fn run_put<U: Copy + Default + Send + Sync>(
+        &self,
+        mut data: Vec<f32>,
+        bar: &Progress,
+        out: &mut [U],
+        put: impl Fn(&mut U, f32) + Sync + Send,
     ) {
         let mut shape = self.shape.clone();
         for (axis, k) in &self.systems {
@@ -228,7 +240,7 @@ impl Prepared {
             let mut next_shape = shape.clone();
             next_shape[*axis] = op.rows();
             if k == last {
-                resample_axis(&data, &shape, *axis, op, out, &store);
+                resample_axis_with(&data, &shape, *axis, op, out, &put);
                 bar.inc(1);
                 return;
             }

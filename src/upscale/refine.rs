@@ -289,34 +289,25 @@ fn stage_with(
     sorted.sort_unstable();
     if fused && sorted == [0, 1] {
         // images (and the first two axes of anything): one fused pass per round; with
-        // `keep` the first round reads the plain upscale and writes a new array
+        // `keep` the first round reads the plain upscale and writes a new array; the
+        // correction `U r` is added straight into `u` by the last axis' resampling
         let rows_first = axes[0] == 0;
         let mut plain = None;
-        let mut c: Option<Vec<f32>> = None;
         for round in 0..ITERATIONS {
-            let r = match &c {
-                Some(c) => {
-                    clamp_residual_2d(&mut u, Prev::Add(c), low, shape, rows_first, method.edge)
-                }
-                None if round == 0 && keep => {
-                    let mut v = vec![0f32; u.len()];
-                    let prev = Prev::From(&u);
-                    let r = clamp_residual_2d(&mut v, prev, low, shape, rows_first, method.edge);
-                    plain = Some(std::mem::replace(&mut u, v));
-                    r
-                }
-                None => {
-                    clamp_residual_2d(&mut u, Prev::InPlace, low, shape, rows_first, method.edge)
-                }
+            let r = if round == 0 && keep {
+                let mut v = vec![0f32; u.len()];
+                let prev = Prev::From(&u);
+                let r = clamp_residual_2d(&mut v, prev, low, shape, rows_first, method.edge);
+                plain = Some(std::mem::replace(&mut u, v));
+                r
+            } else {
+                clamp_residual_2d(&mut u, Prev::InPlace, low, shape, rows_first, method.edge)
             };
-            match c.as_mut() {
-                Some(c) => up.run_into(r, &hidden, c, |x| x),
-                None => c = Some(up.run(r, &hidden, |x| x).0),
-            }
+            up.run_put(r, &hidden, &mut u, |d, x| *d += x);
         }
         return Ok(Staged {
             u,
-            c,
+            c: None,
             shape: fine,
             plain,
         });
@@ -360,13 +351,11 @@ fn stage_with(
     })
 }
 
-/// What a fused round clamps: `u` itself, another array (the plain upscale, kept), or
-/// `u + c` (`c` the previous round's correction).
+/// What a fused round clamps: `u` itself or another array (the plain upscale, kept).
 #[derive(Clone, Copy)]
 enum Prev<'a> {
     InPlace,
     From(&'a [f32]),
-    Add(&'a [f32]),
 }
 
 /// The extension of a lane beyond its end `e` by the edge rule (`next` the sample
@@ -635,12 +624,6 @@ fn clamp_residual_2d(
             let (l, hh) = (&b.lo[t][..], &b.hi[t][..]);
             let at = off + t * fine_row;
             match prev {
-                Prev::Add(c) => {
-                    let c = &c[at..at + fine_row];
-                    for (((x, &c), &a), &b) in uc.iter_mut().zip(c).zip(l).zip(hh) {
-                        *x = (*x + c).max(a).min(b);
-                    }
-                }
                 Prev::From(p) => {
                     let p = &p[at..at + fine_row];
                     for (((x, &p), &a), &b) in uc.iter_mut().zip(p).zip(l).zip(hh) {
