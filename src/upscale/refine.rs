@@ -961,13 +961,24 @@ mod tests {
             (vec![5usize, 7, 3], vec![0usize, 1]),
             (vec![6, 4], vec![1, 0]),
             (vec![4, 5, 2], vec![0, 1]),
+            (vec![3, 4, 4], vec![1, 0]),
+            (vec![1, 5, 4], vec![0, 1]),
+            (vec![4, 1, 3], vec![1, 0]),
+            (vec![2, 3, 5], vec![0, 1]),
         ] {
             let n: usize = shape.iter().product();
             let low: Vec<f32> = (0..n)
                 .map(|i| ((i * 7919 % 97) as f32 * 0.37).sin() * 100.0 + (i % 5) as f32)
                 .collect();
-            let m = Method::default();
-            for keep in [true, false] {
+            for (edge, keep) in [
+                (Edge::Linear, true),
+                (Edge::Linear, false),
+                (Edge::Mirror, true),
+            ] {
+                let m = Method {
+                    edge,
+                    ..Method::default()
+                };
                 let mut a = stage_with(&low, &shape, &m, &axes, keep, true).unwrap();
                 let mut b = stage_with(&low, &shape, &m, &axes, keep, false).unwrap();
                 a.settle();
@@ -975,9 +986,41 @@ mod tests {
                 assert_eq!(a.shape, b.shape);
                 assert_eq!(a.u.len(), b.u.len());
                 for (x, y) in a.u.iter().zip(&b.u) {
-                    assert_eq!(x.to_bits(), y.to_bits(), "{shape:?} {axes:?}");
+                    assert_eq!(
+                        x.to_bits(),
+                        y.to_bits(),
+                        "{shape:?} {axes:?} {edge:?} {keep}"
+                    );
                 }
                 assert_eq!(a.plain, b.plain);
+            }
+        }
+    }
+
+    /// The final pass (last correction, blend, store) gives the same samples whether
+    /// it writes f32 over its buffer or converts into a new array.
+    #[test]
+    fn typed_output_is_the_stored_f32_output() {
+        let shape = [8usize, 12, 3];
+        let data: Vec<f32> = (0..shape.iter().product::<usize>())
+            .map(|i| (((i * 7919) % 251) as f32 * 0.9).min(255.0))
+            .collect();
+        let store = |x: f32| x.round() as u8;
+        for f in [
+            vec![(0usize, 2usize), (1, 2)],
+            vec![(0, 4), (1, 4)],
+            vec![(1, 2)],
+        ] {
+            for clamp in [Clamp::Auto, Clamp::On, Clamp::Off] {
+                let m = Method {
+                    clamp,
+                    ..Method::default()
+                };
+                let (a, sa) = upscale_refined(data.clone(), &shape, &m, &f).unwrap();
+                let (b, sb) = upscale_refined_into(data.clone(), &shape, &m, &f, store).unwrap();
+                assert_eq!(sa, sb);
+                let want: Vec<u8> = a.iter().map(|&x| store(x)).collect();
+                assert_eq!(b, want, "{f:?} {clamp:?}");
             }
         }
     }
