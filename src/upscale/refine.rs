@@ -371,9 +371,10 @@ fn beyond(a: &[f32], b: &[f32], edge: Edge, long: bool, dst: &mut [f32]) {
     }
 }
 
-/// One lane of [`pair_gather`]: `n` elements of `w` samples become `2n`, new element
-/// `2i` = `op(e_{i−1}, e_i)`, `2i + 1` = `op(e_i, e_{i+1})` (`e` the lane extended by
-/// `edge`; same arithmetic). `ext` (`(n + 2) w`) and `pair` (`(n + 1) w`) are scratch.
+/// The pairs of one lane of [`pair_gather`], compact: `pair[p] = op(e_p, e_{p+1})`,
+/// `p = 0..=n` (`e` the lane of `n` elements of `w` samples extended by `edge`, `e_0`
+/// beyond the first element; same arithmetic). New element `2i` of the gathered lane is
+/// `pair[i]`, `2i + 1` is `pair[i + 1]`. `ext` (`(n + 2) w`) is scratch.
 #[allow(clippy::too_many_arguments)]
 fn pair_lane(
     src: &[f32],
@@ -383,7 +384,6 @@ fn pair_lane(
     op: impl Fn(f32, f32) -> f32 + Copy,
     ext: &mut [f32],
     pair: &mut [f32],
-    dst: &mut [f32],
 ) {
     let ext = &mut ext[..(n + 2) * w];
     let row = |i: usize| &src[i * w..(i + 1) * w];
@@ -392,58 +392,42 @@ fn pair_lane(
     beyond(row(0), row(1.min(n - 1)), edge, n > 1, head);
     mid.copy_from_slice(src);
     beyond(row(n - 1), row(n.saturating_sub(2)), edge, n > 1, tail);
-    // pair[p] = op(e_p, e_{p+1}) over the whole lane at once
     let pair = &mut pair[..(n + 1) * w];
     for ((p, &x), &y) in pair.iter_mut().zip(&ext[..(n + 1) * w]).zip(&ext[w..]) {
         *p = op(x, y);
     }
-    match w {
-        1 => expand::<1>(pair, w, dst),
-        3 => expand::<3>(pair, w, dst),
-        4 => expand::<4>(pair, w, dst),
-        _ => expand::<0>(pair, w, dst),
-    }
 }
 
-/// `dst[2i], dst[2i + 1] = pair[i], pair[i + 1]` (elements of `w` samples; `C` = `w`
-/// known at compile time, or 0).
-fn expand<const C: usize>(pair: &[f32], w: usize, dst: &mut [f32]) {
-    let w = if C == 0 { w } else { C };
-    for (i, d) in dst.chunks_exact_mut(2 * w).enumerate() {
-        d.copy_from_slice(&pair[i * w..i * w + 2 * w]);
-    }
-}
-
-/// Scratch of one worker of [`clamp_residual_2d`]: the bounds of two fine rows and
-/// the rows they are made of.
+/// Scratch of one worker of [`clamp_residual_2d`]: the bounds of two fine rows in the
+/// compact pair form of [`pair_lane`] (`(w + 1) · inner` each) and the rows they are
+/// made of.
 struct Bounds {
     lo: [Vec<f32>; 2],
     hi: [Vec<f32>; 2],
     rows: [Vec<f32>; 3],
     pair: Vec<f32>,
     ext: Vec<f32>,
-    pw: Vec<f32>,
     /// Vertical (or horizontal) pair means of the block mean.
     half: Vec<f32>,
 }
 
 impl Bounds {
     fn new(row: usize, inner: usize) -> Bounds {
-        let fine = vec![0f32; 2 * row];
+        let compact = vec![0f32; row + inner];
         Bounds {
-            lo: [fine.clone(), fine.clone()],
-            hi: [fine.clone(), fine.clone()],
-            rows: [fine.clone(), fine.clone(), fine.clone()],
-            pair: vec![0f32; 2 * row],
+            lo: [compact.clone(), compact.clone()],
+            hi: [compact.clone(), compact.clone()],
+            rows: [compact.clone(), compact.clone(), compact.clone()],
+            pair: compact,
             ext: vec![0f32; row + 2 * inner],
-            pw: vec![0f32; row + inner],
             half: vec![0f32; 2 * row],
         }
     }
 
     /// The bounds (min into `lo`, max into `hi`) of fine rows `2i`, `2i + 1` of a ×2
     /// stage along axes 0 and 1 of `low` (`h` rows of `w` elements of `inner`), as
-    /// [`pair_gather`] along the first stage axis then the second would give them.
+    /// [`pair_gather`] along the first stage axis then the second would give them
+    /// (compact along axis 1: the gather's copies commute with the elementwise steps).
     #[allow(clippy::too_many_arguments)]
     fn fill(
         &mut self,
@@ -463,16 +447,13 @@ impl Bounds {
             i,
             edge,
         };
-        let (rows, pair) = (&mut self.rows, &mut self.pair);
-        let ends = (&mut self.ext[..], &mut self.pw[..]);
+        let (rows, pair, ext) = (&mut self.rows, &mut self.pair, &mut self.ext);
         if rows_first {
-            g.rows_first(|x: f32, y: f32| x.min(y), rows, pair, ends, &mut self.lo);
-            let ends = (&mut self.ext[..], &mut self.pw[..]);
-            g.rows_first(|x: f32, y: f32| x.max(y), rows, pair, ends, &mut self.hi);
+            g.rows_first(|x: f32, y: f32| x.min(y), rows, pair, ext, &mut self.lo);
+            g.rows_first(|x: f32, y: f32| x.max(y), rows, pair, ext, &mut self.hi);
         } else {
-            g.cols_first(|x: f32, y: f32| x.min(y), rows, pair, ends, &mut self.lo);
-            let ends = (&mut self.ext[..], &mut self.pw[..]);
-            g.cols_first(|x: f32, y: f32| x.max(y), rows, pair, ends, &mut self.hi);
+            g.cols_first(|x: f32, y: f32| x.min(y), rows, pair, ext, &mut self.lo);
+            g.cols_first(|x: f32, y: f32| x.max(y), rows, pair, ext, &mut self.hi);
         }
     }
 }
@@ -499,7 +480,7 @@ impl Geom<'_> {
         op: impl Fn(f32, f32) -> f32 + Copy,
         rows: &mut [Vec<f32>; 3],
         pair: &mut [f32],
-        ends: (&mut [f32], &mut [f32]),
+        ext: &mut [f32],
         out: &mut [Vec<f32>; 2],
     ) {
         let (h, row) = (self.h, self.w * self.inner);
@@ -530,40 +511,22 @@ impl Geom<'_> {
             {
                 *p = op(x, y);
             }
-            pair_lane(
-                &pair[..row],
-                self.w,
-                self.inner,
-                self.edge,
-                op,
-                ends.0,
-                ends.1,
-                out,
-            );
+            pair_lane(&pair[..row], self.w, self.inner, self.edge, op, ext, out);
         }
     }
 
-    /// Along axis 1 first (every input row), then along axis 0.
+    /// Along axis 1 first (every input row, compact), then along axis 0.
     fn cols_first(
         &self,
         op: impl Fn(f32, f32) -> f32 + Copy,
         rows: &mut [Vec<f32>; 3],
         pair: &mut [f32],
-        ends: (&mut [f32], &mut [f32]),
+        ext: &mut [f32],
         out: &mut [Vec<f32>; 2],
     ) {
         let (h, i, edge) = (self.h, self.i, self.edge);
         let mut g = |r: usize, dst: &mut [f32]| {
-            pair_lane(
-                self.coarse(r),
-                self.w,
-                self.inner,
-                edge,
-                op,
-                ends.0,
-                ends.1,
-                dst,
-            )
+            pair_lane(self.coarse(r), self.w, self.inner, edge, op, ext, dst)
         };
         let [r0, r1, r2] = rows;
         g(i, r1);
@@ -596,6 +559,41 @@ impl Geom<'_> {
     }
 }
 
+/// `x ← clamp(prev, lo, hi)` along one fine row, the bounds compact ([`pair_lane`]):
+/// fine element `2j + t` (`w` samples, `C` = `w` known at compile time, or 0) takes
+/// bound element `j + t`, so element pair `j` reads the window `lo[j w .. (j + 2) w]`.
+fn clamp_row<const C: usize>(
+    x: &mut [f32],
+    prev: Option<&[f32]>,
+    lo: &[f32],
+    hi: &[f32],
+    w: usize,
+) {
+    let w = if C == 0 { w } else { C };
+    match prev {
+        Some(p) => {
+            for (j, (xc, pc)) in x
+                .chunks_exact_mut(2 * w)
+                .zip(p.chunks_exact(2 * w))
+                .enumerate()
+            {
+                let (l, h) = (&lo[j * w..j * w + 2 * w], &hi[j * w..j * w + 2 * w]);
+                for t in 0..2 * w {
+                    xc[t] = pc[t].max(l[t]).min(h[t]);
+                }
+            }
+        }
+        None => {
+            for (j, xc) in x.chunks_exact_mut(2 * w).enumerate() {
+                let (l, h) = (&lo[j * w..j * w + 2 * w], &hi[j * w..j * w + 2 * w]);
+                for t in 0..2 * w {
+                    xc[t] = xc[t].max(l[t]).min(h[t]);
+                }
+            }
+        }
+    }
+}
+
 /// One round of a ×2 stage along axes 0 and 1 in a single pass (same arithmetic as
 /// the general path): `u ← clamp(prev, lo, hi)` with the bounds of the nearest input
 /// cells computed row by row ([`Bounds::fill`]), then the residual `s − D u`, the 2×2
@@ -623,18 +621,15 @@ fn clamp_residual_2d(
         for (t, uc) in uc.chunks_mut(fine_row).enumerate() {
             let (l, hh) = (&b.lo[t][..], &b.hi[t][..]);
             let at = off + t * fine_row;
-            match prev {
-                Prev::From(p) => {
-                    let p = &p[at..at + fine_row];
-                    for (((x, &p), &a), &b) in uc.iter_mut().zip(p).zip(l).zip(hh) {
-                        *x = p.max(a).min(b);
-                    }
-                }
-                Prev::InPlace => {
-                    for ((x, &a), &b) in uc.iter_mut().zip(l).zip(hh) {
-                        *x = x.max(a).min(b);
-                    }
-                }
+            let p = match prev {
+                Prev::From(p) => Some(&p[at..at + fine_row]),
+                Prev::InPlace => None,
+            };
+            match inner {
+                1 => clamp_row::<1>(uc, p, l, hh, inner),
+                3 => clamp_row::<3>(uc, p, l, hh, inner),
+                4 => clamp_row::<4>(uc, p, l, hh, inner),
+                _ => clamp_row::<0>(uc, p, l, hh, inner),
             }
         }
         let (top, bottom) = uc.split_at(fine_row);
