@@ -157,6 +157,9 @@ pub(crate) struct Prepared {
     systems: Vec<(usize, Option<lane::Banded>)>,
     /// Evaluation operators, fastest axis first (its gathers run on the smallest array).
     ops: Vec<(usize, Csr)>,
+    /// The last intermediate array of a run, reused by the next run (a refined stage
+    /// runs the same upscale three times): no fresh pages, no zeroing.
+    spare: std::sync::Mutex<Vec<f32>>,
 }
 
 impl Prepared {
@@ -182,6 +185,7 @@ impl Prepared {
             shape: shape.to_vec(),
             systems,
             ops,
+            spare: std::sync::Mutex::new(Vec::new()),
         })
     }
 
@@ -242,9 +246,23 @@ impl Prepared {
             if k == last {
                 resample_axis_with(&data, &shape, *axis, op, out, &put);
                 bar.inc(1);
+                if k > 0 {
+                    if let Ok(mut spare) = self.spare.lock() {
+                        *spare = data;
+                    }
+                }
                 return;
             }
-            let mut next = vec![0f32; next_shape.iter().product()];
+            let len = next_shape.iter().product();
+            let mut next = match self.spare.lock() {
+                Ok(mut spare) => std::mem::take(&mut *spare),
+                Err(_) => Vec::new(),
+            };
+            if next.len() != len {
+                // (every sample is written below; zeros only to size it)
+                next.clear();
+                next.resize(len, 0.0);
+            }
             resample_axis(&data, &shape, *axis, op, &mut next, |x| x);
             data = next;
             shape = next_shape;
