@@ -14,5 +14,5 @@ pub use pyramid::{
     analyze, analyze_with, synthesize, synthesize_with, Engine, Order, Pyramid, PyramidSpec,
     Subband,
 };
-pub use resample::{map_lanes, resample_axis};
+pub use resample::{map_lanes, resample_axis, resample_axis_with};
 pub use transform::transform_axis;

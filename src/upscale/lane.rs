@@ -117,16 +117,36 @@ fn add_extended(t: &mut Triplets, r: usize, i: isize, n: usize, w: f64, edge: Ed
     }
 }
 
+/// Most distinct offsets memoised per evaluation matrix.
+const MEMO: usize = 4096;
+
 /// `E[j][i]` = basis (or its mean over a cell of `width`) at `x_j − i`, ends folded in:
 /// new samples from `n` control points.
+///
+/// The weights are memoised on the exact offset `x_j − i`: for an integer factor the
+/// offsets repeat with the factor's period (×2: `±¼ + k`), so only one period is
+/// evaluated (the recursion of [`Basis::cell_mean`] dominated building the operators);
+/// the matrix is bit-identical to evaluating every entry.
 pub fn eval_matrix(basis: &Basis, n: usize, xs: &[f64], width: f64, edge: Edge) -> Csr {
     let r = basis.radius() + width / 2.0;
     let mut t = Triplets::new(xs.len(), n);
+    let mut memo: std::collections::HashMap<u64, f64> = std::collections::HashMap::new();
     for (j, &x) in xs.iter().enumerate() {
         let lo = (x - r).floor() as isize;
         let hi = (x + r).ceil() as isize;
         for i in lo..=hi {
-            let w = basis.cell_mean(x - i as f64, width);
+            let d = x - i as f64;
+            let w = match memo.get(&d.to_bits()) {
+                Some(&w) => w,
+                None => {
+                    let w = basis.cell_mean(d, width);
+                    // bounded: a non-integer ratio has (almost) no repeats
+                    if memo.len() < MEMO {
+                        memo.insert(d.to_bits(), w);
+                    }
+                    w
+                }
+            };
             if w.abs() > 1e-13 {
                 add_extended(&mut t, j, i, n, w, edge);
             }

@@ -33,7 +33,7 @@ use crate::progress::Progress;
 use crate::scheme::sparse::{Csr, Triplets};
 use crate::scheme::subdivide::Refinement;
 use crate::scheme::{Boundary, Scheme, TwoScale};
-use crate::tensor::{map_lanes, resample_axis};
+use crate::tensor::{map_lanes, resample_axis, resample_axis_with};
 use crate::{Error, Result};
 use basis::Basis;
 pub use lane::{Edge, Geometry, Mode};
@@ -157,6 +157,9 @@ pub(crate) struct Prepared {
     systems: Vec<(usize, Option<lane::Banded>)>,
     /// Evaluation operators, fastest axis first (its gathers run on the smallest array).
     ops: Vec<(usize, Csr)>,
+    /// The last intermediate array of a run, reused by the next run (a refined stage
+    /// runs the same upscale three times): no fresh pages, no zeroing.
+    spare: std::sync::Mutex<Vec<f32>>,
 }
 
 impl Prepared {
@@ -182,17 +185,53 @@ impl Prepared {
             shape: shape.to_vec(),
             systems,
             ops,
+            spare: std::sync::Mutex::new(Vec::new()),
         })
+    }
+
+    /// The output's shape.
+    pub(crate) fn out_shape(&self) -> Vec<usize> {
+        let mut shape = self.shape.clone();
+        for (axis, op) in &self.ops {
+            shape[*axis] = op.rows();
+        }
+        shape
     }
 
     /// Prefilter then evaluate along every axis; the last axis' results go through
     /// `store`.
     pub(crate) fn run<U: Copy + Default + Send + Sync>(
         &self,
-        mut data: Vec<f32>,
+        data: Vec<f32>,
         bar: &Progress,
         store: impl Fn(f32) -> U + Sync + Send,
     ) -> (Vec<U>, Vec<usize>) {
+        let shape = self.out_shape();
+        let mut out = vec![U::default(); shape.iter().product()];
+        self.run_into(data, bar, &mut out, store);
+        (out, shape)
+    }
+
+    /// [`Prepared::run`] into `out` (of the output's size, every sample overwritten).
+    pub(crate) fn run_into<U: Copy + Default + Send + Sync>(
+        &self,
+        data: Vec<f32>,
+        bar: &Progress,
+        out: &mut [U],
+        store: impl Fn(f32) -> U + Sync + Send,
+    ) {
+        self.run_put(data, bar, out, |d: &mut U, x| *d = store(x))
+    }
+
+    /// [`Prepared::run`], every output value `x` put into its sample `d` of `out` by
+    /// `put(d, x)` (`*d += x`: add the upscale to what `out` holds).
+    pub(crate) fn run_put<U: Copy + Default + Send + Sync>(
+        &self,
+        mut data: Vec<f32>,
+        bar: &Progress,
+        out: &mut [U],
+        put: impl Fn(&mut U, f32) + Sync + Send,
+    ) {
         let mut shape = self.shape.clone();
         for (axis, k) in &self.systems {
             if let Some(k) = k {
@@ -204,20 +243,31 @@ impl Prepared {
         for (k, (axis, op)) in self.ops.iter().enumerate() {
             let mut next_shape = shape.clone();
             next_shape[*axis] = op.rows();
-            let len: usize = next_shape.iter().product();
             if k == last {
-                let mut out = vec![U::default(); len];
-                resample_axis(&data, &shape, *axis, op, &mut out, &store);
+                resample_axis_with(&data, &shape, *axis, op, out, &put);
                 bar.inc(1);
-                return (out, next_shape);
+                if k > 0 {
+                    if let Ok(mut spare) = self.spare.lock() {
+                        *spare = data;
+                    }
+                }
+                return;
             }
-            let mut out = vec![0f32; len];
-            resample_axis(&data, &shape, *axis, op, &mut out, |x| x);
-            data = out;
+            let len = next_shape.iter().product();
+            let mut next = match self.spare.lock() {
+                Ok(mut spare) => std::mem::take(&mut *spare),
+                Err(_) => Vec::new(),
+            };
+            if next.len() != len {
+                // (every sample is written below; zeros only to size it)
+                next.clear();
+                next.resize(len, 0.0);
+            }
+            resample_axis(&data, &shape, *axis, op, &mut next, |x| x);
+            data = next;
             shape = next_shape;
             bar.inc(1);
         }
-        unreachable!("at least one axis is planned (checked in Prepared::new)")
     }
 }
 
@@ -232,7 +282,7 @@ pub fn upscale_array(
 }
 
 /// The whole pipeline, the last axis' results stored through `store`.
-fn upscale_into<U: Copy + Default + Send + Sync>(
+fn upscale_into<U: Copy + Default + Send + Sync + 'static>(
     data: Vec<f32>,
     shape: &[usize],
     method: &Method,
@@ -249,13 +299,9 @@ fn upscale_into<U: Copy + Default + Send + Sync>(
         ));
     }
     if let Some(f) = refine::factors(method, shape, plans) {
-        let (u, s) = refine::upscale_refined(data, shape, method, &f)?;
-        let mut out = vec![U::default(); u.len()];
-        out.par_iter_mut()
-            .zip(u.par_iter())
-            .for_each(|(o, &x)| *o = store(x));
+        let out = refine::upscale_refined_into(data, shape, method, &f, store)?;
         bar.inc(plans.len() as u64 + 1);
-        return Ok((out, s));
+        return Ok(out);
     }
     Ok(Prepared::new(method, shape, plans)?.run(data, bar, store))
 }
@@ -348,8 +394,10 @@ pub fn upscale_raster(
         mut meta,
     } = r;
     let ty = samples.sample_type();
-    let mut data = samples.to_f32();
-    drop(samples);
+    let mut data = match samples {
+        Samples::F32(v) => v,
+        s => s.to_f32(),
+    };
     let mut shape = dims.clone();
     if channels > 1 {
         shape.push(channels);

@@ -236,8 +236,27 @@ fn pair_gather(
     out
 }
 
-/// An upscaled array, its shape, and optionally the plain upscale it started from.
-type Staged = (Vec<f32>, Vec<usize>, Option<Vec<f32>>);
+/// A refined upscale `u + c` whose last correction `c` is not added yet (the final pass
+/// adds it together with the blend and the store: one pass instead of three), its
+/// shape, and optionally the plain upscale it started from.
+struct Staged {
+    u: Vec<f32>,
+    c: Option<Vec<f32>>,
+    shape: Vec<usize>,
+    plain: Option<Vec<f32>>,
+}
+
+impl Staged {
+    /// `u + c` as one array.
+    fn settle(&mut self) {
+        if let Some(c) = self.c.take() {
+            self.u
+                .par_iter_mut()
+                .zip(c.par_iter())
+                .for_each(|(x, c)| *x += c);
+        }
+    }
+}
 
 /// One ×2 clamp-and-project stage along `axes`; with `keep`, also the plain upscale
 /// it starts from.
@@ -252,7 +271,8 @@ fn stage(
 }
 
 /// [`stage`]; `fused` lets axes 0 and 1 take the one-pass rounds
-/// ([`clamp_residual_2d`]), otherwise the general clamp / block mean / residual passes.
+/// ([`clamp_residual_2d`]: the clamp bounds computed per row from the input, no
+/// full-size bound arrays), otherwise the general clamp / block mean / residual passes.
 fn stage_with(
     low: &[f32],
     shape: &[usize],
@@ -265,6 +285,33 @@ fn stage_with(
     let up = Prepared::new(&area(method), shape, &plans_for(shape, &f))?;
     let hidden = Progress::hidden();
     let (mut u, fine) = up.run(low.to_vec(), &hidden, |x| x);
+    let mut sorted = axes.to_vec();
+    sorted.sort_unstable();
+    if fused && sorted == [0, 1] {
+        // images (and the first two axes of anything): one fused pass per round; with
+        // `keep` the first round reads the plain upscale and writes a new array; the
+        // correction `U r` is added straight into `u` by the last axis' resampling
+        let rows_first = axes[0] == 0;
+        let mut plain = None;
+        for round in 0..ITERATIONS {
+            let r = if round == 0 && keep {
+                let mut v = vec![0f32; u.len()];
+                let prev = Prev::From(&u);
+                let r = clamp_residual_2d(&mut v, prev, low, shape, rows_first, method.edge);
+                plain = Some(std::mem::replace(&mut u, v));
+                r
+            } else {
+                clamp_residual_2d(&mut u, Prev::InPlace, low, shape, rows_first, method.edge)
+            };
+            up.run_put(r, &hidden, &mut u, |d, x| *d += x);
+        }
+        return Ok(Staged {
+            u,
+            c: None,
+            shape: fine,
+            plain,
+        });
+    }
     let plain = keep.then(|| u.clone());
     let (mut lo, mut hi): (Option<Vec<f32>>, Option<Vec<f32>>) = (None, None);
     let mut s = shape.to_vec();
@@ -279,51 +326,288 @@ fn stage_with(
         lo.unwrap_or_else(|| low.to_vec()),
         hi.unwrap_or_else(|| low.to_vec()),
     );
-    let mut sorted = axes.to_vec();
-    sorted.sort_unstable();
-    if fused && sorted == [0, 1] {
-        // images (and the first two axes of anything): one fused pass per round
-        let rows_first = axes[0] == 0;
-        let mut c: Option<Vec<f32>> = None;
-        for _ in 0..ITERATIONS {
-            let r = clamp_residual_2d(&mut u, c.as_deref(), &lo, &hi, low, shape, rows_first);
-            c = Some(up.run(r, &hidden, |x| x).0);
-        }
-        if let Some(c) = c {
-            u.par_iter_mut()
-                .zip(c.par_iter())
-                .for_each(|(x, c)| *x += c);
-        }
-        return Ok((u, fine, plain));
-    }
+    let mut c: Option<Vec<f32>> = None;
     for _ in 0..ITERATIONS {
+        let mut st = Staged {
+            u,
+            c: c.take(),
+            shape: Vec::new(),
+            plain: None,
+        };
+        st.settle();
+        u = st.u;
         u.par_iter_mut()
             .zip(lo.par_iter().zip(hi.par_iter()))
             .for_each(|(x, (&a, &b))| *x = x.max(a).min(b));
         let (d, _) = block_mean(&u, &fine, &f);
         let r: Vec<f32> = low.iter().zip(&d).map(|(s, d)| s - d).collect();
-        let (c, _) = up.run(r, &hidden, |x| x);
-        u.par_iter_mut()
-            .zip(c.par_iter())
-            .for_each(|(x, c)| *x += c);
+        c = Some(up.run(r, &hidden, |x| x).0);
     }
-    Ok((u, fine, plain))
+    Ok(Staged {
+        u,
+        c,
+        shape: fine,
+        plain,
+    })
+}
+
+/// What a fused round clamps: `u` itself or another array (the plain upscale, kept).
+#[derive(Clone, Copy)]
+enum Prev<'a> {
+    InPlace,
+    From(&'a [f32]),
+}
+
+/// The extension of a lane beyond its end `e` by the edge rule (`next` the sample
+/// inside): `2 a − b` (linear, lanes of two or more) or `a`.
+fn beyond(a: &[f32], b: &[f32], edge: Edge, long: bool, dst: &mut [f32]) {
+    match edge {
+        Edge::Linear if long => {
+            for ((d, a), b) in dst.iter_mut().zip(a).zip(b) {
+                *d = 2.0 * a - b;
+            }
+        }
+        _ => dst.copy_from_slice(a),
+    }
+}
+
+/// The pairs of one lane of [`pair_gather`], compact: `pair[p] = op(e_p, e_{p+1})`,
+/// `p = 0..=n` (`e` the lane of `n` elements of `w` samples extended by `edge`, `e_0`
+/// beyond the first element; same arithmetic). New element `2i` of the gathered lane is
+/// `pair[i]`, `2i + 1` is `pair[i + 1]`. `ext` (`(n + 2) w`) is scratch.
+#[allow(clippy::too_many_arguments)]
+fn pair_lane(
+    src: &[f32],
+    n: usize,
+    w: usize,
+    edge: Edge,
+    op: impl Fn(f32, f32) -> f32 + Copy,
+    ext: &mut [f32],
+    pair: &mut [f32],
+) {
+    let ext = &mut ext[..(n + 2) * w];
+    let row = |i: usize| &src[i * w..(i + 1) * w];
+    let (head, rest) = ext.split_at_mut(w);
+    let (mid, tail) = rest.split_at_mut(n * w);
+    beyond(row(0), row(1.min(n - 1)), edge, n > 1, head);
+    mid.copy_from_slice(src);
+    beyond(row(n - 1), row(n.saturating_sub(2)), edge, n > 1, tail);
+    let pair = &mut pair[..(n + 1) * w];
+    for ((p, &x), &y) in pair.iter_mut().zip(&ext[..(n + 1) * w]).zip(&ext[w..]) {
+        *p = op(x, y);
+    }
+}
+
+/// Scratch of one worker of [`clamp_residual_2d`]: the bounds of two fine rows in the
+/// compact pair form of [`pair_lane`] (`(w + 1) · inner` each) and the rows they are
+/// made of.
+struct Bounds {
+    lo: [Vec<f32>; 2],
+    hi: [Vec<f32>; 2],
+    rows: [Vec<f32>; 3],
+    pair: Vec<f32>,
+    ext: Vec<f32>,
+    /// Vertical (or horizontal) pair means of the block mean.
+    half: Vec<f32>,
+}
+
+impl Bounds {
+    fn new(row: usize, inner: usize) -> Bounds {
+        let compact = vec![0f32; row + inner];
+        Bounds {
+            lo: [compact.clone(), compact.clone()],
+            hi: [compact.clone(), compact.clone()],
+            rows: [compact.clone(), compact.clone(), compact.clone()],
+            pair: compact,
+            ext: vec![0f32; row + 2 * inner],
+            half: vec![0f32; 2 * row],
+        }
+    }
+
+    /// The bounds (min into `lo`, max into `hi`) of fine rows `2i`, `2i + 1` of a ×2
+    /// stage along axes 0 and 1 of `low` (`h` rows of `w` elements of `inner`), as
+    /// [`pair_gather`] along the first stage axis then the second would give them
+    /// (compact along axis 1: the gather's copies commute with the elementwise steps).
+    #[allow(clippy::too_many_arguments)]
+    fn fill(
+        &mut self,
+        low: &[f32],
+        h: usize,
+        w: usize,
+        inner: usize,
+        i: usize,
+        edge: Edge,
+        rows_first: bool,
+    ) {
+        let g = Geom {
+            low,
+            h,
+            w,
+            inner,
+            i,
+            edge,
+        };
+        let (rows, pair, ext) = (&mut self.rows, &mut self.pair, &mut self.ext);
+        if rows_first {
+            g.rows_first(|x: f32, y: f32| x.min(y), rows, pair, ext, &mut self.lo);
+            g.rows_first(|x: f32, y: f32| x.max(y), rows, pair, ext, &mut self.hi);
+        } else {
+            g.cols_first(|x: f32, y: f32| x.min(y), rows, pair, ext, &mut self.lo);
+            g.cols_first(|x: f32, y: f32| x.max(y), rows, pair, ext, &mut self.hi);
+        }
+    }
+}
+
+/// The input of [`Bounds::fill`] and the coarse row `i` being worked on.
+struct Geom<'a> {
+    low: &'a [f32],
+    h: usize,
+    w: usize,
+    inner: usize,
+    i: usize,
+    edge: Edge,
+}
+
+impl Geom<'_> {
+    fn coarse(&self, r: usize) -> &[f32] {
+        let row = self.w * self.inner;
+        &self.low[r * row..(r + 1) * row]
+    }
+
+    /// Along axis 0 first (on the input rows), then along axis 1.
+    fn rows_first(
+        &self,
+        op: impl Fn(f32, f32) -> f32 + Copy,
+        rows: &mut [Vec<f32>; 3],
+        pair: &mut [f32],
+        ext: &mut [f32],
+        out: &mut [Vec<f32>; 2],
+    ) {
+        let (h, row) = (self.h, self.w * self.inner);
+        for (k, dst) in rows.iter_mut().enumerate() {
+            // input row i − 1 + k, beyond the ends by the edge rule
+            let q = (self.i + k) as isize - 1;
+            let dst = &mut dst[..row];
+            if q < 0 {
+                beyond(
+                    self.coarse(0),
+                    self.coarse(1.min(h - 1)),
+                    self.edge,
+                    h > 1,
+                    dst,
+                );
+            } else if q as usize >= h {
+                let (e, next) = (self.coarse(h - 1), self.coarse(h.saturating_sub(2)));
+                beyond(e, next, self.edge, h > 1, dst);
+            } else {
+                dst.copy_from_slice(self.coarse(q as usize));
+            }
+        }
+        for (t, out) in out.iter_mut().enumerate() {
+            for ((p, &x), &y) in pair[..row]
+                .iter_mut()
+                .zip(&rows[t][..row])
+                .zip(&rows[t + 1][..row])
+            {
+                *p = op(x, y);
+            }
+            pair_lane(&pair[..row], self.w, self.inner, self.edge, op, ext, out);
+        }
+    }
+
+    /// Along axis 1 first (every input row, compact), then along axis 0.
+    fn cols_first(
+        &self,
+        op: impl Fn(f32, f32) -> f32 + Copy,
+        rows: &mut [Vec<f32>; 3],
+        pair: &mut [f32],
+        ext: &mut [f32],
+        out: &mut [Vec<f32>; 2],
+    ) {
+        let (h, i, edge) = (self.h, self.i, self.edge);
+        let mut g = |r: usize, dst: &mut [f32]| {
+            pair_lane(self.coarse(r), self.w, self.inner, edge, op, ext, dst)
+        };
+        let [r0, r1, r2] = rows;
+        g(i, r1);
+        if i == 0 {
+            // beyond the first row: 2 G(0) − G(1) (linear), G(0) (mirror)
+            if h > 1 {
+                g(1, r2);
+                beyond(r1, r2, edge, true, r0);
+            } else {
+                r0.copy_from_slice(r1);
+            }
+        } else {
+            g(i - 1, r0);
+        }
+        if i + 1 == h {
+            if h > 1 {
+                g(h - 2, pair);
+                beyond(r1, pair, edge, true, r2);
+            } else {
+                r2.copy_from_slice(r1);
+            }
+        } else {
+            g(i + 1, r2);
+        }
+        for (t, out) in out.iter_mut().enumerate() {
+            for ((d, &x), &y) in out.iter_mut().zip(&rows[t]).zip(&rows[t + 1]) {
+                *d = op(x, y);
+            }
+        }
+    }
+}
+
+/// `x ← clamp(prev, lo, hi)` along one fine row, the bounds compact ([`pair_lane`]):
+/// fine element `2j + t` (`w` samples, `C` = `w` known at compile time, or 0) takes
+/// bound element `j + t`, so element pair `j` reads the window `lo[j w .. (j + 2) w]`.
+fn clamp_row<const C: usize>(
+    x: &mut [f32],
+    prev: Option<&[f32]>,
+    lo: &[f32],
+    hi: &[f32],
+    w: usize,
+) {
+    let w = if C == 0 { w } else { C };
+    match prev {
+        Some(p) => {
+            for (j, (xc, pc)) in x
+                .chunks_exact_mut(2 * w)
+                .zip(p.chunks_exact(2 * w))
+                .enumerate()
+            {
+                let (l, h) = (&lo[j * w..j * w + 2 * w], &hi[j * w..j * w + 2 * w]);
+                for t in 0..2 * w {
+                    xc[t] = pc[t].max(l[t]).min(h[t]);
+                }
+            }
+        }
+        None => {
+            for (j, xc) in x.chunks_exact_mut(2 * w).enumerate() {
+                let (l, h) = (&lo[j * w..j * w + 2 * w], &hi[j * w..j * w + 2 * w]);
+                for t in 0..2 * w {
+                    xc[t] = xc[t].max(l[t]).min(h[t]);
+                }
+            }
+        }
+    }
 }
 
 /// One round of a ×2 stage along axes 0 and 1 in a single pass (same arithmetic as
-/// the general path): `u ← clamp(u + c, lo, hi)` (no `c` in the first round), then
-/// the residual `s − D u`, the 2×2 block mean `D` taken along the first stage axis
-/// first (`rows_first`: axis 0) as [`block_mean`] does. `shape` is the coarse shape.
+/// the general path): `u ← clamp(prev, lo, hi)` with the bounds of the nearest input
+/// cells computed row by row ([`Bounds::fill`]), then the residual `s − D u`, the 2×2
+/// block mean `D` taken along the first stage axis first (`rows_first`: axis 0) as
+/// [`block_mean`] does. `shape` is the coarse shape.
 fn clamp_residual_2d(
     u: &mut [f32],
-    c: Option<&[f32]>,
-    lo: &[f32],
-    hi: &[f32],
+    prev: Prev,
     low: &[f32],
     shape: &[usize],
     rows_first: bool,
+    edge: Edge,
 ) -> Vec<f32> {
-    let n1 = shape[1];
+    let (h, n1) = (shape[0], shape[1]);
     let inner: usize = shape[2..].iter().product();
     let row = n1 * inner; // one coarse row
     let fine_row = 2 * row; // one fine row
@@ -331,46 +615,90 @@ fn clamp_residual_2d(
     if row == 0 {
         return r;
     }
+    let body = |i: usize, uc: &mut [f32], rc: &mut [f32], b: &mut Bounds| {
+        b.fill(low, h, n1, inner, i, edge, rows_first);
+        let off = i * 2 * fine_row;
+        for (t, uc) in uc.chunks_mut(fine_row).enumerate() {
+            let (l, hh) = (&b.lo[t][..], &b.hi[t][..]);
+            let at = off + t * fine_row;
+            let p = match prev {
+                Prev::From(p) => Some(&p[at..at + fine_row]),
+                Prev::InPlace => None,
+            };
+            match inner {
+                1 => clamp_row::<1>(uc, p, l, hh, inner),
+                3 => clamp_row::<3>(uc, p, l, hh, inner),
+                4 => clamp_row::<4>(uc, p, l, hh, inner),
+                _ => clamp_row::<0>(uc, p, l, hh, inner),
+            }
+        }
+        let (top, bottom) = uc.split_at(fine_row);
+        let s = &low[i * row..(i + 1) * row];
+        match inner {
+            1 => block_residual::<1>(top, bottom, s, rc, inner, rows_first, &mut b.half),
+            3 => block_residual::<3>(top, bottom, s, rc, inner, rows_first, &mut b.half),
+            4 => block_residual::<4>(top, bottom, s, rc, inner, rows_first, &mut b.half),
+            _ => block_residual::<0>(top, bottom, s, rc, inner, rows_first, &mut b.half),
+        }
+    };
     u.par_chunks_mut(2 * fine_row)
         .zip(r.par_chunks_mut(row))
         .enumerate()
-        .for_each(|(i, (uc, rc))| {
-            let off = i * 2 * fine_row;
-            let (l, h) = (&lo[off..off + 2 * fine_row], &hi[off..off + 2 * fine_row]);
-            match c {
-                Some(c) => {
-                    let c = &c[off..off + 2 * fine_row];
-                    for (((x, &c), &a), &b) in uc.iter_mut().zip(c).zip(l).zip(h) {
-                        *x = (*x + c).max(a).min(b);
-                    }
-                }
-                None => {
-                    for ((x, &a), &b) in uc.iter_mut().zip(l).zip(h) {
-                        *x = x.max(a).min(b);
-                    }
-                }
-            }
-            let (top, bottom) = uc.split_at(fine_row);
-            let s = &low[i * row..(i + 1) * row];
-            for j in 0..n1 {
-                let (e, o) = (2 * j * inner, (2 * j + 1) * inner);
-                for k in 0..inner {
-                    let (a, b) = (top[e + k], top[o + k]);
-                    let (p, q) = (bottom[e + k], bottom[o + k]);
-                    let d = if rows_first {
-                        0.5 * (0.5 * a + 0.5 * p) + 0.5 * (0.5 * b + 0.5 * q)
-                    } else {
-                        0.5 * (0.5 * a + 0.5 * b) + 0.5 * (0.5 * p + 0.5 * q)
-                    };
-                    rc[j * inner + k] = s[j * inner + k] - d;
-                }
-            }
-        });
+        .for_each_init(
+            || Bounds::new(row, inner),
+            |b, (i, (uc, rc))| body(i, uc, rc, b),
+        );
     r
 }
 
-/// The fully clamped upscale `R(s)`: an odd plain stage, then ×2 clamp stages. With
-/// `keep` and a single ×2 stage, also the plain upscale `B(s)` (its starting point).
+/// `r = s − D u` for one coarse row: `top`, `bottom` the two fine rows, elements of
+/// `w` samples (`C` = `w` known at compile time, or 0); `D` along axis 0 first when
+/// `rows_first` (`½(½a + ½p) + ½(½b + ½q)`, `a b` / `p q` the top / bottom pairs),
+/// else along axis 1 first (`½(½a + ½b) + ½(½p + ½q)`), as [`block_mean`] computes it.
+fn block_residual<const C: usize>(
+    top: &[f32],
+    bottom: &[f32],
+    s: &[f32],
+    r: &mut [f32],
+    w: usize,
+    rows_first: bool,
+    half: &mut [f32],
+) {
+    let w = if C == 0 { w } else { C };
+    if rows_first {
+        let half = &mut half[..top.len()];
+        for ((v, &a), &p) in half.iter_mut().zip(top).zip(bottom) {
+            *v = 0.5 * a + 0.5 * p;
+        }
+        for ((r, s), v) in r
+            .chunks_exact_mut(w)
+            .zip(s.chunks_exact(w))
+            .zip(half.chunks_exact(2 * w))
+        {
+            let (e, o) = v.split_at(w);
+            for k in 0..w {
+                r[k] = s[k] - (0.5 * e[k] + 0.5 * o[k]);
+            }
+        }
+    } else {
+        for (((r, s), t), b) in r
+            .chunks_exact_mut(w)
+            .zip(s.chunks_exact(w))
+            .zip(top.chunks_exact(2 * w))
+            .zip(bottom.chunks_exact(2 * w))
+        {
+            let ((te, to), (be, bo)) = (t.split_at(w), b.split_at(w));
+            for k in 0..w {
+                let (ht, hb) = (0.5 * te[k] + 0.5 * to[k], 0.5 * be[k] + 0.5 * bo[k]);
+                r[k] = s[k] - (0.5 * ht + 0.5 * hb);
+            }
+        }
+    }
+}
+
+/// The fully clamped upscale `R(s)`: an odd plain stage, then ×2 clamp stages, the
+/// last correction left pending. With `keep` and a single ×2 stage, also the plain
+/// upscale `B(s)` (its starting point).
 fn refined(
     data: Vec<f32>,
     shape: &[usize],
@@ -383,23 +711,29 @@ fn refined(
         .map(|&(a, g)| (a, g >> g.trailing_zeros()))
         .filter(|&(_, r)| r > 1)
         .collect();
-    let (mut u, mut s) = plain(data, shape, method, &odd)?;
+    let (u, s) = plain(data, shape, method, &odd)?;
     let k = f
         .iter()
         .map(|&(_, g)| g.trailing_zeros())
         .max()
         .unwrap_or(0);
     let keep = keep && k == 1 && odd.is_empty();
-    let mut b = None;
+    let mut st = Staged {
+        u,
+        c: None,
+        shape: s,
+        plain: None,
+    };
     for level in 0..k {
         let axes: Vec<usize> = f
             .iter()
             .filter(|&&(_, g)| g.trailing_zeros() > level)
             .map(|&(a, _)| a)
             .collect();
-        (u, s, b) = stage(&u, &s, method, &axes, keep)?;
+        st.settle();
+        st = stage(&st.u, &st.shape, method, &axes, keep)?;
     }
-    Ok((u, s, b))
+    Ok(st)
 }
 
 /// The first `len[a]` samples along every axis.
@@ -444,24 +778,41 @@ pub fn learn_weight(
     let sc = crop(data, shape, &len);
     let (coarse, cs) = block_mean(&sc, &len, f);
     // the plain upscale comes with the refined one for a single ×2 stage (no copy then)
-    let single = f.iter().all(|&(_, g)| g == 2);
-    let (r, _, b) = if single {
-        refined(coarse, &cs, method, f, true)?
-    } else {
-        let (r, s, _) = refined(coarse.clone(), &cs, method, f, false)?;
-        (r, s, Some(plain(coarse, &cs, method, f)?.0))
+    let b = (!single_stage(f))
+        .then(|| plain(coarse.clone(), &cs, method, f))
+        .transpose()?
+        .map(|p| p.0);
+    let st = refined(coarse, &cs, method, f, true)?;
+    let Some(b) = b.or(st.plain) else {
+        unreachable!("a single ×2 stage keeps its plain upscale")
     };
-    let b = b.expect("a single ×2 stage keeps its plain upscale");
     let (mut num, mut den) = (0f64, 0f64);
-    for ((s, b), r) in sc.iter().zip(&b).zip(&r) {
-        let d = (*r - *b) as f64;
-        num += (*s - *b) as f64 * d;
+    let mut acc = |s: f32, b: f32, r: f32| {
+        let d = (r - b) as f64;
+        num += (s - b) as f64 * d;
         den += d * d;
+    };
+    match &st.c {
+        Some(c) => {
+            for (((s, b), u), c) in sc.iter().zip(&b).zip(&st.u).zip(c) {
+                acc(*s, *b, *u + *c);
+            }
+        }
+        None => {
+            for ((s, b), r) in sc.iter().zip(&b).zip(&st.u) {
+                acc(*s, *b, *r);
+            }
+        }
     }
     if den <= 0.0 || !num.is_finite() {
         return Ok(Some(0.0));
     }
     Ok(Some((num / den).clamp(0.0, 1.0)))
+}
+
+/// Whether the factors are one ×2 stage (whose plain upscale [`refined`] keeps).
+fn single_stage(f: &[(usize, usize)]) -> bool {
+    f.iter().all(|&(_, g)| g == 2)
 }
 
 /// Refined area upscale by integer factors `f` (from [`factors`]).
@@ -471,27 +822,119 @@ pub fn upscale_refined(
     method: &Method,
     f: &[(usize, usize)],
 ) -> Result<(Vec<f32>, Vec<usize>)> {
+    upscale_refined_into(data, shape, method, f, |x| x)
+}
+
+/// [`upscale_refined`] with every output sample stored through `store` in the same
+/// pass that adds the last correction and blends (`B + t (R − B)`).
+pub(crate) fn upscale_refined_into<U: Copy + Default + Send + Sync + 'static>(
+    data: Vec<f32>,
+    shape: &[usize],
+    method: &Method,
+    f: &[(usize, usize)],
+    store: impl Fn(f32) -> U + Sync + Send,
+) -> Result<(Vec<U>, Vec<usize>)> {
     let t = match method.clamp {
         Clamp::Off => 0.0,
         Clamp::On => 1.0,
         Clamp::Auto => learn_weight(&data, shape, method, f)?.unwrap_or(0.0),
     };
     if t <= 0.0 {
-        return plain(data, shape, method, f);
+        let up = Prepared::new(&area(method), shape, &plans_for(shape, f))?;
+        return Ok(up.run(data, &Progress::hidden(), store));
+    }
+    fn add(c: &[f32]) -> impl Fn(usize, &mut [f32]) + Sync + Send + '_ {
+        move |off, ch| {
+            let n = ch.len();
+            for (x, c) in ch.iter_mut().zip(&c[off..off + n]) {
+                *x += c;
+            }
+        }
     }
     if t >= 1.0 {
-        return refined(data, shape, method, f, false).map(|(r, s, _)| (r, s));
+        let st = refined(data, shape, method, f, false)?;
+        let out = match &st.c {
+            Some(c) => finish(st.u, add(c), store),
+            None => finish(st.u, |_, _| {}, store),
+        };
+        return Ok((out, st.shape));
     }
-    let (r, s, b) = refined(data.clone(), shape, method, f, true)?;
-    let mut b = match b {
-        Some(b) => b,
-        None => plain(data, shape, method, f)?.0,
+    // the plain upscale: kept by a single ×2 stage, else computed first (no copy of data)
+    let b = (!single_stage(f))
+        .then(|| plain(data.clone(), shape, method, f))
+        .transpose()?
+        .map(|p| p.0);
+    let st = refined(data, shape, method, f, true)?;
+    let Some(b) = b.or(st.plain) else {
+        unreachable!("a single ×2 stage keeps its plain upscale")
     };
     let t = t as f32;
-    b.par_iter_mut()
-        .zip(r.par_iter())
-        .for_each(|(b, r)| *b += t * (r - *b));
-    Ok((b, s))
+    let u = &st.u;
+    let out = match &st.c {
+        Some(c) => finish(
+            b,
+            |off, ch: &mut [f32]| {
+                let n = ch.len();
+                for ((b, &u), &c) in ch.iter_mut().zip(&u[off..off + n]).zip(&c[off..off + n]) {
+                    let r = u + c;
+                    *b += t * (r - *b);
+                }
+            },
+            store,
+        ),
+        None => finish(
+            b,
+            |off, ch: &mut [f32]| {
+                let n = ch.len();
+                for (b, &r) in ch.iter_mut().zip(&u[off..off + n]) {
+                    *b += t * (r - *b);
+                }
+            },
+            store,
+        ),
+    };
+    Ok((out, st.shape))
+}
+
+/// Samples per chunk of the final pass.
+const CHUNK: usize = 1 << 12;
+
+/// The final pass: `fill(offset, chunk)` turns a chunk of `buf` into output values, then
+/// `store` converts them; f32 outputs are written over `buf` (no new array).
+fn finish<U: Copy + Default + Send + Sync + 'static>(
+    mut buf: Vec<f32>,
+    fill: impl Fn(usize, &mut [f32]) + Sync + Send,
+    store: impl Fn(f32) -> U + Sync + Send,
+) -> Vec<U> {
+    use std::any::{Any, TypeId};
+    if TypeId::of::<U>() == TypeId::of::<f32>() {
+        buf.par_chunks_mut(CHUNK).enumerate().for_each(|(k, ch)| {
+            fill(k * CHUNK, ch);
+            for x in ch.iter_mut() {
+                let y = store(*x);
+                *x = (&y as &dyn Any)
+                    .downcast_ref::<f32>()
+                    .copied()
+                    .unwrap_or(f32::NAN);
+            }
+        });
+        let any: Box<dyn Any> = Box::new(buf);
+        return match any.downcast::<Vec<U>>() {
+            Ok(v) => *v,
+            Err(_) => unreachable!("U is f32 (checked above)"),
+        };
+    }
+    let mut out = vec![U::default(); buf.len()];
+    buf.par_chunks_mut(CHUNK)
+        .zip(out.par_chunks_mut(CHUNK))
+        .enumerate()
+        .for_each(|(k, (ch, o))| {
+            fill(k * CHUNK, ch);
+            for (o, &x) in o.iter_mut().zip(ch.iter()) {
+                *o = store(x);
+            }
+        });
+    out
 }
 
 #[cfg(test)]
@@ -513,20 +956,67 @@ mod tests {
             (vec![5usize, 7, 3], vec![0usize, 1]),
             (vec![6, 4], vec![1, 0]),
             (vec![4, 5, 2], vec![0, 1]),
+            (vec![3, 4, 4], vec![1, 0]),
+            (vec![1, 5, 4], vec![0, 1]),
+            (vec![4, 1, 3], vec![1, 0]),
+            (vec![2, 3, 5], vec![0, 1]),
         ] {
             let n: usize = shape.iter().product();
             let low: Vec<f32> = (0..n)
                 .map(|i| ((i * 7919 % 97) as f32 * 0.37).sin() * 100.0 + (i % 5) as f32)
                 .collect();
-            let m = Method::default();
-            let a = stage_with(&low, &shape, &m, &axes, true, true).unwrap();
-            let b = stage_with(&low, &shape, &m, &axes, true, false).unwrap();
-            assert_eq!(a.1, b.1);
-            assert_eq!(a.0.len(), b.0.len());
-            for (x, y) in a.0.iter().zip(&b.0) {
-                assert_eq!(x.to_bits(), y.to_bits(), "{shape:?} {axes:?}");
+            for (edge, keep) in [
+                (Edge::Linear, true),
+                (Edge::Linear, false),
+                (Edge::Mirror, true),
+            ] {
+                let m = Method {
+                    edge,
+                    ..Method::default()
+                };
+                let mut a = stage_with(&low, &shape, &m, &axes, keep, true).unwrap();
+                let mut b = stage_with(&low, &shape, &m, &axes, keep, false).unwrap();
+                a.settle();
+                b.settle();
+                assert_eq!(a.shape, b.shape);
+                assert_eq!(a.u.len(), b.u.len());
+                for (x, y) in a.u.iter().zip(&b.u) {
+                    assert_eq!(
+                        x.to_bits(),
+                        y.to_bits(),
+                        "{shape:?} {axes:?} {edge:?} {keep}"
+                    );
+                }
+                assert_eq!(a.plain, b.plain);
             }
-            assert_eq!(a.2, b.2);
+        }
+    }
+
+    /// The final pass (last correction, blend, store) gives the same samples whether
+    /// it writes f32 over its buffer or converts into a new array.
+    #[test]
+    fn typed_output_is_the_stored_f32_output() {
+        let shape = [8usize, 12, 3];
+        let data: Vec<f32> = (0..shape.iter().product::<usize>())
+            .map(|i| (((i * 7919) % 251) as f32 * 0.9).min(255.0))
+            .collect();
+        let store = |x: f32| x.round() as u8;
+        for f in [
+            vec![(0usize, 2usize), (1, 2)],
+            vec![(0, 4), (1, 4)],
+            vec![(1, 2)],
+        ] {
+            for clamp in [Clamp::Auto, Clamp::On, Clamp::Off] {
+                let m = Method {
+                    clamp,
+                    ..Method::default()
+                };
+                let (a, sa) = upscale_refined(data.clone(), &shape, &m, &f).unwrap();
+                let (b, sb) = upscale_refined_into(data.clone(), &shape, &m, &f, store).unwrap();
+                assert_eq!(sa, sb);
+                let want: Vec<u8> = a.iter().map(|&x| store(x)).collect();
+                assert_eq!(b, want, "{f:?} {clamp:?}");
+            }
         }
     }
 
