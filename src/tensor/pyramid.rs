@@ -315,31 +315,44 @@ fn run<T: Sample>(array: &mut Array<T>, pyr: &Pyramid, dir: Direction, engine: E
     if dir == Direction::Synthesis {
         levels.reverse();
     }
+    // how each level runs: fused over its `k` leading axes, or axis by axis
+    let fused_k: Vec<Option<usize>> = (0..pyr.depth())
+        .map(|l| {
+            let region = pyr.region_before(l);
+            let active: Vec<usize> = (0..spec.axes.len())
+                .filter(|&i| l < pyr.axis_levels(i))
+                .collect();
+            let k = active.len();
+            // fused when the active axes are exactly 0..k and the rest of the array is whole
+            let fusable = engine == Engine::Fused
+                && k > 0
+                && (0..k).all(|d| active.iter().any(|&i| spec.axes[i] == d))
+                && (k..shape.len()).all(|d| region[d] == shape[d]);
+            fusable.then_some(k)
+        })
+        .collect();
+    // Every level fused over the same axes: levels 1.. alternate between the array and
+    // the scratch array (ping-pong), so only the detail blocks left in the scratch are
+    // copied, once, instead of every level's whole box.
+    let ping_pong = fused_k.len() >= 2 && fused_k.iter().all(|&k| k.is_some() && k == fused_k[0]);
     let mut scratch: Option<Vec<T>> = None;
     for l in levels {
         let region = pyr.region_before(l);
-        let active: Vec<usize> = (0..spec.axes.len())
-            .filter(|&i| l < pyr.axis_levels(i))
-            .collect();
-        let k = active.len();
-        // fused when the active axes are exactly 0..k and the rest of the array is whole
-        let mut by_axis = vec![usize::MAX; shape.len()];
-        for &i in &active {
-            by_axis[spec.axes[i]] = i;
-        }
-        let fusable = engine == Engine::Fused
-            && k > 0
-            && (0..k).all(|d| by_axis[d] != usize::MAX)
-            && (k..shape.len()).all(|d| region[d] == shape[d]);
-        if !fusable {
+        let Some(k) = fused_k[l] else {
+            let mut order: Vec<usize> = (0..spec.axes.len())
+                .filter(|&i| l < pyr.axis_levels(i))
+                .collect();
             // increasing axis order in both directions (as the fused path computes)
-            let mut order = active.clone();
             order.sort_by_key(|&i| spec.axes[i]);
             for i in order {
                 // every axis of a level sees the whole region (coarse and detail blocks)
                 step(array.data_mut(), i, l, &region);
             }
             continue;
+        };
+        let mut by_axis = vec![usize::MAX; shape.len()];
+        for i in (0..spec.axes.len()).filter(|&i| l < pyr.axis_levels(i)) {
+            by_axis[spec.axes[i]] = i;
         }
         let level_ops: Vec<_> = (0..k).map(|d| ops(by_axis[d], l)).collect();
         let axis_ops: Vec<AxisOp> = level_ops
@@ -358,13 +371,43 @@ fn run<T: Sample>(array: &mut Array<T>, pyr: &Pyramid, dir: Direction, engine: E
             })
             .collect();
         let strides = array.strides();
+        let st = &strides[..k];
         let e: usize = shape[k..].iter().product();
         let buf = scratch.get_or_insert_with(|| workspace::take_scratch(array.len()));
-        fused_level(array.data(), buf, &strides[..k], &region[..k], e, &axis_ops);
+        let box_ = &region[..k];
         if region == shape {
+            fused_level(array.data(), buf, st, box_, e, &axis_ops);
             array.swap_data(buf);
-        } else {
-            copy_region(buf, array.data_mut(), &strides[..k], &region[..k], e);
+            continue;
+        }
+        if !ping_pong {
+            fused_level(array.data(), buf, st, box_, e, &axis_ops);
+            copy_region(buf, array.data_mut(), st, box_, None, e);
+            continue;
+        }
+        // Ping-pong: level l writes the scratch when l is odd (analysis) or even
+        // (synthesis; level 1 then writes the array, which level 0 reads whole), and reads
+        // the other buffer.
+        let inner = (l + 1 < pyr.depth()).then(|| pyr.region_before(l + 1));
+        let hole = inner.as_ref().map(|r| &r[..k]);
+        match (dir, l % 2 == 1) {
+            (Direction::Analysis, true) => {
+                fused_level(array.data(), buf, st, box_, e, &axis_ops);
+                // the detail blocks of this level are final: back to the array
+                copy_region(buf, array.data_mut(), st, box_, hole, e);
+            }
+            (Direction::Analysis, false) => {
+                fused_level(buf, array.data_mut(), st, box_, e, &axis_ops);
+            }
+            (Direction::Synthesis, true) => {
+                // the input's detail blocks (or, at the deepest level, all of it) are
+                // still only in the array
+                copy_region(array.data(), buf, st, box_, hole, e);
+                fused_level(buf, array.data_mut(), st, box_, e, &axis_ops);
+            }
+            (Direction::Synthesis, false) => {
+                fused_level(array.data(), buf, st, box_, e, &axis_ops);
+            }
         }
     }
     if let Some(s) = scratch {
@@ -373,11 +416,30 @@ fn run<T: Sample>(array: &mut Array<T>, pyr: &Pyramid, dir: Direction, engine: E
 }
 
 /// Copy the box `[0, region)` (leading axes; elements of `e` samples) from `src` to `dst`,
-/// lines shared among the pool's threads.
-fn copy_region<T: Sample>(src: &[T], dst: &mut [T], strides: &[usize], region: &[usize], e: usize) {
+/// without the box `[0, hole)` if given, lines shared among the pool's threads.
+fn copy_region<T: Sample>(
+    src: &[T],
+    dst: &mut [T],
+    strides: &[usize],
+    region: &[usize],
+    hole: Option<&[usize]>,
+    e: usize,
+) {
     let k = region.len();
     let run = region[k - 1] * e;
     let lines: usize = region[..k - 1].iter().product();
+    // where a line inside the hole's leading box starts copying
+    let skip = |line: usize| -> usize {
+        let Some(h) = hole else { return 0 };
+        let mut rem = line;
+        for j in (0..k - 1).rev() {
+            if rem % region[j] >= h[j] {
+                return 0;
+            }
+            rem /= region[j];
+        }
+        h[k - 1] * e
+    };
     let start = |line: usize| {
         let (mut at, mut rem) = (0, line);
         for j in (0..k - 1).rev() {
@@ -396,7 +458,9 @@ fn copy_region<T: Sample>(src: &[T], dst: &mut [T], strides: &[usize], region: &
         |t, _| {
             let p = dptr;
             for line in t * per..((t + 1) * per).min(lines) {
-                let at = start(line);
+                let from = skip(line);
+                let at = start(line) + from;
+                let run = run - from;
                 // SAFETY: lines of the box are disjoint runs inside `dst` (nested strides,
                 // checked by the caller's level plan and the bound above); each task owns
                 // its lines.
