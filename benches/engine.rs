@@ -1,5 +1,7 @@
 //! Engine throughput: forward + inverse pyramid, in MB/s of input, next to a plain copy
-//! of the same buffer timed in the same run.
+//! of the same buffer timed in the same run. Each figure is given for the best and the
+//! median of the repetitions (on a shared machine the median also measures the other
+//! jobs; the best is the least disturbed run).
 //!
 //! `cargo bench --bench engine` (set `MRA_BENCH_QUICK=1` for smaller sizes). Prints one
 //! JSON object per line plus a table; `benches/peers/pywavelets_peer.py` runs this and
@@ -14,22 +16,23 @@ fn median(mut v: Vec<f64>) -> f64 {
     v[v.len() / 2]
 }
 
-fn time<F: FnMut()>(reps: usize, mut f: F) -> f64 {
+/// (best, median) seconds of `reps` runs after one warm-up run.
+fn time<F: FnMut()>(reps: usize, mut f: F) -> (f64, f64) {
     f(); // warm up
-    median(
-        (0..reps)
-            .map(|_| {
-                let t = Instant::now();
-                f();
-                t.elapsed().as_secs_f64()
-            })
-            .collect(),
-    )
+    let v: Vec<f64> = (0..reps)
+        .map(|_| {
+            let t = Instant::now();
+            f();
+            t.elapsed().as_secs_f64()
+        })
+        .collect();
+    let best = v.iter().cloned().fold(f64::INFINITY, f64::min);
+    (best, median(v))
 }
 
 fn main() {
     let quick = std::env::var("MRA_BENCH_QUICK").is_ok();
-    let reps = if quick { 3 } else { 7 };
+    let reps = if quick { 3 } else { 9 };
     let threads = rayon::current_num_threads();
     let cases: Vec<(Vec<usize>, usize)> = if quick {
         vec![(vec![1024, 1024], 5), (vec![64, 64, 64], 3)]
@@ -38,8 +41,8 @@ fn main() {
     };
     println!("# threads: {threads}");
     println!(
-        "{:<14} {:<8} {:<14} {:>10} {:>10} {:>8}",
-        "shape", "scheme", "boundary", "MB/s", "copy MB/s", "% copy"
+        "{:<14} {:<8} {:<14} {:>17} {:>17} {:>15}",
+        "shape", "scheme", "boundary", "MB/s best/median", "copy best/median", "% copy b/m"
     );
     for (shape, levels) in cases {
         let n: usize = shape.iter().product();
@@ -52,7 +55,7 @@ fn main() {
             dst.copy_from_slice(&data);
             std::hint::black_box(&mut dst);
         });
-        let copy_mbs = bytes / copy / 1e6;
+        let (copy_best, copy_med) = (bytes / copy.0 / 1e6, bytes / copy.1 / 1e6);
         for scheme in Scheme::ALL {
             for boundary in Boundary::ALL {
                 let spec = PyramidSpec {
@@ -67,24 +70,27 @@ fn main() {
                     let pyr = analyze(&mut a, &spec).unwrap();
                     synthesize(&mut a, &pyr).unwrap();
                 });
-                let mbs = bytes / t / 1e6;
+                let (best, med) = (bytes / t.0 / 1e6, bytes / t.1 / 1e6);
                 let shape_s = shape
                     .iter()
                     .map(|d| d.to_string())
                     .collect::<Vec<_>>()
                     .join("x");
                 println!(
-                    "{:<14} {:<8} {:<14} {:>10.0} {:>10.0} {:>7.1}%",
+                    "{:<14} {:<8} {:<14} {:>8.0}/{:<8.0} {:>8.0}/{:<8.0} {:>6.1}%/{:.1}%",
                     shape_s,
                     scheme.name(),
                     boundary.name(),
-                    mbs,
-                    copy_mbs,
-                    100.0 * mbs / copy_mbs
+                    best,
+                    med,
+                    copy_best,
+                    copy_med,
+                    100.0 * best / copy_best,
+                    100.0 * med / copy_med
                 );
                 println!(
-                    "{{\"bench\":\"engine\",\"shape\":\"{shape_s}\",\"levels\":{levels},\"scheme\":\"{}\",\"boundary\":\"{}\",\"seconds\":{t},\"mb_per_s\":{mbs},\"copy_mb_per_s\":{copy_mbs},\"threads\":{threads}}}",
-                    scheme.name(), boundary.name()
+                    "{{\"bench\":\"engine\",\"shape\":\"{shape_s}\",\"levels\":{levels},\"scheme\":\"{}\",\"boundary\":\"{}\",\"seconds\":{},\"seconds_best\":{},\"mb_per_s\":{med},\"mb_per_s_best\":{best},\"copy_mb_per_s\":{copy_med},\"copy_mb_per_s_best\":{copy_best},\"threads\":{threads}}}",
+                    scheme.name(), boundary.name(), t.1, t.0
                 );
             }
         }
