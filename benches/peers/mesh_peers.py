@@ -14,6 +14,9 @@
 
 Rerun:  apt-get install libosd-dev g++; pip install vtk libigl trimesh fast-simplification
         python3 benches/peers/mesh_peers.py
+
+Only the simplification (mra, fast-simplification, mra again; best of 3 each, Hausdorff of both):
+        python3 benches/peers/mesh_peers.py --only simplify [--before PATH_TO_OLDER_BENCH_BINARY]
 """
 import json
 import os
@@ -36,7 +39,65 @@ def best(f, n=3):
     return t, out
 
 
+def read_obj(path):
+    """Vertices and triangles of an OBJ file written by mra (`v x y z`, `f a b c`)."""
+    import numpy as np
+    with open(path) as fh:
+        lines = fh.read().split("\n")
+    v = np.array(" ".join(l[2:] for l in lines if l.startswith("v ")).split(), float).reshape(-1, 3)
+    f = np.array(" ".join(l[2:] for l in lines if l.startswith("f ")).split(), np.int64).reshape(-1, 3) - 1
+    return v, f
+
+
+def write_obj(path, pts, fcs):
+    with open(path, "w") as fh:
+        fh.write("".join("v %r %r %r\n" % tuple(p) for p in pts.tolist()))
+        fh.write("".join("f %d %d %d\n" % (a + 1, b + 1, c + 1) for a, b, c in fcs.tolist()))
+
+
+def hausdorff(a, b):
+    out = subprocess.run(["cargo", "bench", "--bench", "mesh", "--", "--hausdorff", a, b], cwd=ROOT,
+                         capture_output=True, text=True, check=True).stdout
+    return float(out.strip().splitlines()[-1])
+
+
+def only_simplify():
+    """mra (current build), optionally an older mra bench binary, fast-simplification, then mra
+    again; best of 3 for each; prints times, speed-ups and Hausdorff distances."""
+    import fast_simplification
+    args = ["cargo", "bench", "--bench", "mesh", "--", "--json", "--only", "simplify"]
+    before = sys.argv[sys.argv.index("--before") + 1] if "--before" in sys.argv else None
+
+    def run(cmd):
+        out = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True, check=True).stdout
+        return json.loads(out.strip().splitlines()[-1])["simplify_10pct"]
+
+    print("load average", os.getloadavg())
+    mra = run(args)
+    old = run([before, "--json", "--only", "simplify"]) if before else None
+    tri = os.path.join(DIR, "tri.obj")
+    V, F = read_obj(tri)
+    t, (pts, fcs) = best(lambda: fast_simplification.simplify(V, F, target_reduction=0.9), 3)
+    path = os.path.join(DIR, "tri_simplified_fast.obj")
+    write_obj(path, pts, fcs)
+    h_fast = hausdorff(tri, path)
+    again = run(args)
+    if again["seconds"] < mra["seconds"]:
+        mra = again
+    h_mra = hausdorff(tri, os.path.join(DIR, "tri_simplified_mra.obj"))
+    print("load average", os.getloadavg())
+    print(f"{'simplify to 10 %':<28} {'seconds':>8} {'vs fast-simpl.':>14}  {'faces':>7}  Hausdorff")
+    if old:
+        print(f"{'mra before':<28} {old['seconds']:8.3f} {t / old['seconds']:13.2f}x  {old['note']}")
+    print(f"{'mra':<28} {mra['seconds']:8.3f} {t / mra['seconds']:13.2f}x  {mra['note']}  (recomputed {h_mra:.3e})")
+    print(f"{'fast-simplification':<28} {t:8.3f} {1.0:13.2f}x  {len(fcs)} triangles, Hausdorff (vertex) {h_fast:.3e}")
+
+
 def main():
+    if "--only" in sys.argv:
+        if sys.argv[sys.argv.index("--only") + 1] != "simplify":
+            sys.exit("--only: expected 'simplify'")
+        return only_simplify()
     quick = "--quick" in sys.argv
     args = ["cargo", "bench", "--bench", "mesh", "--", "--json"] + (["--quick"] if quick else [])
 
