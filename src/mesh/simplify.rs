@@ -7,18 +7,24 @@
 //!                      or the best of a, b, (a + b)/2 when the system is singular
 //! ```
 //!
-//! Edges are collapsed cheapest first (a logarithmically binned queue, see `BinQueue`; stale
-//! entries are skipped by per-vertex stamps). A collapse is allowed only when it keeps the mesh a 2-manifold: the *link
+//! Edges are collapsed cheapest first (a binned queue, 16 bins per octave of cost, see
+//! `BinQueue`; stale entries are skipped by per-vertex stamps). A collapse is allowed only when
+//! it keeps the mesh a 2-manifold: the *link
 //! condition* Lk(a) ∩ Lk(b) = Lk(ab) (common neighbours are exactly the vertices opposite ab,
 //! and those are not joined to both through a face), an interior edge may not join two boundary
 //! vertices, and no remaining face may flip its normal.
 //!
-//! Storage is flat: faces as triples, and for each vertex a singly linked list of its corners
-//! (`head[v]`, `next_corner[c]`), spliced in O(length) on a collapse.
+//! Storage is flat and laid out for the collapse loop, which visits the mesh in cost order
+//! (effectively at random, so cache misses dominate): per vertex one 128-byte record (quadric,
+//! position, head of its corner list, mark, boundary flag: two cache lines), per face one
+//! record (its vertices and, per corner, the next corner of the same vertex), and the stamps
+//! apart in a small array. Each vertex's corners form a singly linked list, rebuilt from the
+//! live corners on a collapse. Setup (quadrics, boundary detection, edge costs) runs per vertex
+//! over these lists, in parallel; the collapse loop is sequential and deterministic.
 
-use super::edges::Edges;
 use super::{vec3, Attributes, Mesh, NONE};
 use crate::{Error, Result};
+use rayon::prelude::*;
 
 /// Symmetric 4 × 4 matrix stored as its upper triangle.
 #[derive(Clone, Copy, Default, Debug)]
@@ -93,17 +99,18 @@ impl Quadric {
     }
 }
 
-/// A collapse candidate: 16 bytes. `stamp` is the sum of both vertices' stamps when queued;
+/// A collapse candidate: 12 bytes. `stamp` is the sum of both vertices' stamps when queued;
 /// a changed sum marks the entry stale (a collision only means a needless re-check).
 #[derive(Clone, Copy)]
 struct Candidate {
     a: u32,
     b: u32,
-    stamp: u32,
+    stamp: u16,
 }
 
-/// An approximate min-priority queue: costs are binned on a logarithmic scale, 16 bins per
-/// factor of two (costs within 4.4 % of each other share a bin and leave in any order).
+/// An approximate min-priority queue: costs are binned by their f64 exponent and top four
+/// mantissa bits, 16 bins per factor of two (costs within 3–6 % of each other share a bin and
+/// leave in any order, last in first out, which keeps successive collapses close together).
 /// Push and pop are O(1); a binary heap spent most of the run time in `pop` (cache misses
 /// over millions of entries).
 struct BinQueue {
@@ -112,7 +119,6 @@ struct BinQueue {
 }
 
 impl BinQueue {
-    const PER_OCTAVE: f64 = 16.0;
     const BINS: usize = 16 * 240 + 2;
 
     fn new() -> Self {
@@ -122,14 +128,16 @@ impl BinQueue {
         }
     }
 
+    /// Bin of a cost: the exponent and the top 4 mantissa bits of the f64 (16 bins per
+    /// octave, linear within the octave; monotone in the cost), octaves 2⁻²⁰⁰ … 2⁴⁰.
     #[inline]
     fn bin(cost: f64) -> usize {
-        if cost <= 0.0 || cost.is_nan() {
+        if cost.is_nan() || cost <= 0.0 {
             return 0;
         }
-        // log2 from −200 to +40 maps to bins 1 ..= BINS−1
-        let x = (cost.log2() + 200.0) * Self::PER_OCTAVE;
-        (x.max(0.0) as usize + 1).min(Self::BINS - 1)
+        const LOW: i64 = (1023 - 200) << 4;
+        let key = (cost.to_bits() >> 48) as i64 - LOW;
+        (key.max(0) as usize + 1).min(Self::BINS - 1)
     }
 
     #[inline]
@@ -151,16 +159,43 @@ impl BinQueue {
     }
 }
 
+/// Everything the collapse loop reads about a vertex, in two cache lines: the loop visits
+/// vertices in cost order (all over the mesh), so one miss per line matters more than layout
+/// elegance. Split arrays cost five or six misses per visited vertex.
+#[derive(Clone, Copy, Default)]
+#[repr(C, align(64))]
+struct Vertex {
+    quadric: Quadric,
+    pos: [f64; 3],
+    /// first corner of the vertex's corner list (`NONE` when empty)
+    head: u32,
+    /// scratch mark for neighbourhood tests (compared with `State::mark_id`)
+    mark: u32,
+    boundary: bool,
+}
+
+/// A triangle and, for each of its corners, the next corner of the same vertex (one cache
+/// access per face while walking a vertex's corner list). Dead faces have `v[0] == NONE`.
+#[derive(Clone, Copy)]
+struct Face {
+    v: [u32; 3],
+    next: [u32; 3],
+}
+
+impl Face {
+    #[inline]
+    fn alive(&self) -> bool {
+        self.v[0] != NONE
+    }
+}
+
 struct State {
-    pos: Vec<[f64; 3]>,
-    tri: Vec<[u32; 3]>,
-    alive: Vec<bool>,
-    head: Vec<u32>,
-    next_corner: Vec<u32>,
-    quadric: Vec<Quadric>,
-    stamp: Vec<u32>,
-    boundary: Vec<bool>,
-    mark: Vec<u32>,
+    vert: Vec<Vertex>,
+    face: Vec<Face>,
+    /// per vertex, bumped on every collapse touching it: a queue entry whose stamp sum differs
+    /// is stale. Kept apart from `vert` (and 16-bit) so the check, done for every popped entry
+    /// (most of them stale), stays in cache.
+    stamp: Vec<u16>,
     mark_id: u32,
     scale: f64,
 }
@@ -169,22 +204,23 @@ impl State {
     /// Live faces of `v` (by corner lists).
     fn faces_of(&self, v: u32, out: &mut Vec<u32>) {
         out.clear();
-        let mut c = self.head[v as usize];
+        let mut c = self.vert[v as usize].head;
         while c != NONE {
-            let f = c / 3;
-            if self.alive[f as usize] {
-                out.push(f);
+            let f = &self.face[(c / 3) as usize];
+            if f.alive() {
+                out.push(c / 3);
             }
-            c = self.next_corner[c as usize];
+            c = f.next[(c % 3) as usize];
         }
     }
 
     fn place(&self, a: u32, b: u32) -> ([f64; 3], f64) {
-        let q = Quadric::sum(&self.quadric[a as usize], &self.quadric[b as usize]);
+        let (va, vb) = (&self.vert[a as usize], &self.vert[b as usize]);
+        let q = Quadric::sum(&va.quadric, &vb.quadric);
         if let Some(x) = q.minimiser(self.scale) {
             return (x, q.eval(x).max(0.0));
         }
-        let (pa, pb) = (self.pos[a as usize], self.pos[b as usize]);
+        let (pa, pb) = (va.pos, vb.pos);
         let mid = vec3::scale(vec3::add(pa, pb), 0.5);
         [pa, pb, mid]
             .into_iter()
@@ -193,14 +229,22 @@ impl State {
             .unwrap()
     }
 
+    /// A fresh mark id (all marks reset when the counter wraps).
+    fn next_mark(&mut self) -> u32 {
+        self.mark_id = self.mark_id.wrapping_add(1);
+        if self.mark_id == 0 {
+            self.vert.iter_mut().for_each(|v| v.mark = 0);
+            self.mark_id = 1;
+        }
+        self.mark_id
+    }
+
     /// Link condition and normal-flip test for collapsing a, b into x.
     fn can_collapse(&mut self, a: u32, b: u32, x: [f64; 3], fa: &[u32], fb: &[u32]) -> bool {
-        if self.boundary[a as usize] && self.boundary[b as usize] {
+        let tri = |f: u32| self.face[f as usize].v;
+        if self.vert[a as usize].boundary && self.vert[b as usize].boundary {
             // only along a boundary edge: ab must have exactly one face
-            let shared = fa
-                .iter()
-                .filter(|&&f| self.tri[f as usize].contains(&b))
-                .count();
+            let shared = fa.iter().filter(|&&f| tri(f).contains(&b)).count();
             if shared != 1 {
                 return false;
             }
@@ -209,7 +253,7 @@ impl State {
         let mut opposite = [NONE; 2];
         let mut k = 0;
         for &f in fa {
-            let t = self.tri[f as usize];
+            let t = tri(f);
             if t.contains(&b) {
                 if k == 2 {
                     return false;
@@ -222,29 +266,29 @@ impl State {
             return false;
         }
         // vertex link: neighbours of a marked, common neighbours of b must be the opposites
-        self.mark_id = self.mark_id.wrapping_add(1);
-        if self.mark_id == 0 {
-            self.mark.iter_mut().for_each(|m| *m = 0);
-            self.mark_id = 1;
-        }
-        let id = self.mark_id;
+        let id = self.next_mark();
         for &f in fa {
-            for v in self.tri[f as usize] {
-                self.mark[v as usize] = id;
+            for v in self.face[f as usize].v {
+                self.vert[v as usize].mark = id;
             }
         }
         for &f in fb {
-            for v in self.tri[f as usize] {
-                if v != a && v != b && self.mark[v as usize] == id && !opposite[..k].contains(&v) {
+            for v in self.face[f as usize].v {
+                if v != a
+                    && v != b
+                    && self.vert[v as usize].mark == id
+                    && !opposite[..k].contains(&v)
+                {
                     return false;
                 }
             }
         }
+        let tri = |f: u32| self.face[f as usize].v;
         // edge link: a face (a, c, d) and a face (b, c, d) with c, d the opposites
         if k == 2 {
             let has = |fs: &[u32], w: u32| {
                 fs.iter().any(|&f| {
-                    let t = self.tri[f as usize];
+                    let t = tri(f);
                     t.contains(&w) && t.contains(&opposite[0]) && t.contains(&opposite[1])
                 })
             };
@@ -254,11 +298,11 @@ impl State {
         }
         // normal flips
         for (&f, moved) in fa.iter().map(|f| (f, a)).chain(fb.iter().map(|f| (f, b))) {
-            let t = self.tri[f as usize];
+            let t = tri(f);
             if t.contains(&a) && t.contains(&b) {
                 continue;
             }
-            let p: [[f64; 3]; 3] = std::array::from_fn(|i| self.pos[t[i] as usize]);
+            let p: [[f64; 3]; 3] = std::array::from_fn(|i| self.vert[t[i] as usize].pos);
             let before = vec3::cross(vec3::sub(p[1], p[0]), vec3::sub(p[2], p[0]));
             let q: [[f64; 3]; 3] = std::array::from_fn(|i| if t[i] == moved { x } else { p[i] });
             let after = vec3::cross(vec3::sub(q[1], q[0]), vec3::sub(q[2], q[0]));
@@ -270,89 +314,145 @@ impl State {
     }
 }
 
+/// The distinct neighbours `w` of vertex `v` (head of its corner list `head`) as
+/// `(w, faces on the edge vw, one such face)`, in corner-list order.
+fn neighbours(face: &[Face], head: u32, v: u32, ring: &mut Vec<(u32, u32, u32)>) {
+    ring.clear();
+    let mut c = head;
+    while c != NONE {
+        let f = &face[(c / 3) as usize];
+        let i = (c % 3) as usize;
+        for w in [f.v[(i + 1) % 3], f.v[(i + 2) % 3]] {
+            if w == v {
+                continue;
+            }
+            match ring.iter_mut().find(|e| e.0 == w) {
+                Some(e) => e.1 += 1,
+                None => ring.push((w, 1, c / 3)),
+            }
+        }
+        c = f.next[i];
+    }
+}
+
 /// Simplify a manifold mesh (polygons are triangulated first) to at most `target_faces`
 /// triangles, or as few as the link condition allows.
 pub fn simplify(mesh: &Mesh, target_faces: usize) -> Result<Mesh> {
     let m = if mesh.is_triangle_mesh() {
-        mesh.clone()
+        std::borrow::Cow::Borrowed(mesh)
     } else {
-        mesh.triangulated()
+        std::borrow::Cow::Owned(mesh.triangulated())
     };
-    let edges = Edges::build(&m);
-    if let Some(e) = (0..edges.len()).find(|&e| edges.uses[e] > 2) {
-        let [a, b] = edges.verts[e];
+    let nv = m.vertex_count();
+    let nf = m.face_count();
+    let mut vert: Vec<Vertex> = m
+        .positions
+        .par_iter()
+        .with_min_len(4096)
+        .map(|&pos| Vertex {
+            pos,
+            head: NONE,
+            ..Default::default()
+        })
+        .collect();
+    let mut face: Vec<Face> = m
+        .indices
+        .par_chunks(3)
+        .with_min_len(4096)
+        .map(|c| Face {
+            v: [c[0], c[1], c[2]],
+            next: [NONE; 3],
+        })
+        .collect();
+    for c in (0..3 * nf).rev() {
+        let v = m.indices[c] as usize;
+        face[c / 3].next[c % 3] = vert[v].head;
+        vert[v].head = c as u32;
+    }
+    // per vertex, in parallel: quadric of its faces' planes, its edges' face counts (boundary
+    // edges add a plane ⟂ the face through the edge, weight 100)
+    let positions = &m.positions;
+    let plane_of = |t: [u32; 3]| {
+        let p = t.map(|v| positions[v as usize]);
+        let n = vec3::normalized(vec3::cross(vec3::sub(p[1], p[0]), vec3::sub(p[2], p[0])));
+        (n, -vec3::dot(n, p[0]))
+    };
+    let faces_ref = &face;
+    let non_manifold = vert
+        .par_iter_mut()
+        .enumerate()
+        .with_min_len(1024)
+        .map_init(Vec::new, |ring, (v, vx)| {
+            let v = v as u32;
+            neighbours(faces_ref, vx.head, v, ring);
+            let mut q = Quadric::default();
+            let mut c = vx.head;
+            while c != NONE {
+                let f = &faces_ref[(c / 3) as usize];
+                let (n, d) = plane_of(f.v);
+                q.add(&Quadric::plane(n, d, 1.0));
+                c = f.next[(c % 3) as usize];
+            }
+            let mut bad: Option<(u32, u32, u32)> = None;
+            for &(w, uses, f) in ring.iter() {
+                if uses == 1 {
+                    vx.boundary = true;
+                    let (n, _) = plane_of(faces_ref[f as usize].v);
+                    let pw = positions[w as usize];
+                    let p = vec3::normalized(vec3::cross(vec3::sub(pw, vx.pos), n));
+                    q.add(&Quadric::plane(p, -vec3::dot(p, vx.pos), 100.0));
+                } else if uses > 2 {
+                    let e = (v.min(w), v.max(w), uses);
+                    bad = Some(bad.map_or(e, |b| b.min(e)));
+                }
+            }
+            vx.quadric = q;
+            bad
+        })
+        .reduce(
+            || None,
+            |x, y| match (x, y) {
+                (Some(a), Some(b)) => Some(a.min(b)),
+                (a, b) => a.or(b),
+            },
+        );
+    if let Some((a, b, uses)) = non_manifold {
         return Err(Error::format(
-            format!(
-                "non-manifold edge ({a}, {b}): used by {} faces",
-                edges.uses[e]
-            ),
+            format!("non-manifold edge ({a}, {b}): used by {uses} faces"),
             "a manifold mesh (each edge in one or two faces)",
         ));
     }
-    let nv = m.vertex_count();
-    let nf = m.face_count();
-    let tri: Vec<[u32; 3]> = m.indices.chunks(3).map(|c| [c[0], c[1], c[2]]).collect();
-    let mut head = vec![NONE; nv];
-    let mut next_corner = vec![NONE; 3 * nf];
-    for c in (0..3 * nf).rev() {
-        let v = m.indices[c] as usize;
-        next_corner[c] = head[v];
-        head[v] = c as u32;
-    }
     let (lo, hi) = m.bounding_box().unwrap_or(([0.0; 3], [1.0; 3]));
     let scale = vec3::norm(vec3::sub(hi, lo)).max(1e-300);
-    let mut quadric = vec![Quadric::default(); nv];
-    let mut boundary = vec![false; nv];
-    for (f, t) in tri.iter().enumerate() {
-        let av = super::normals::face_area_vector(&m, f);
-        let n = vec3::normalized(av);
-        let d = -vec3::dot(n, m.positions[t[0] as usize]);
-        let k = Quadric::plane(n, d, 1.0);
-        for &v in t {
-            quadric[v as usize].add(&k);
-        }
-    }
-    for e in 0..edges.len() {
-        if edges.uses[e] != 1 {
-            continue;
-        }
-        let [a, b] = edges.verts[e];
-        boundary[a as usize] = true;
-        boundary[b as usize] = true;
-        let f = edges.corner_face[edges.corners[e][0] as usize] as usize;
-        let n = vec3::normalized(super::normals::face_area_vector(&m, f));
-        let dir = vec3::sub(m.positions[b as usize], m.positions[a as usize]);
-        let p = vec3::normalized(vec3::cross(dir, n));
-        let d = -vec3::dot(p, m.positions[a as usize]);
-        let k = Quadric::plane(p, d, 100.0);
-        quadric[a as usize].add(&k);
-        quadric[b as usize].add(&k);
-    }
     let mut s = State {
-        pos: m.positions.clone(),
-        tri,
-        alive: vec![true; nf],
-        head,
-        next_corner,
-        quadric,
+        vert,
+        face,
         stamp: vec![0; nv],
-        boundary,
-        mark: vec![0; nv],
         mark_id: 0,
         scale,
     };
-    let mut heap = BinQueue::new();
-    let initial: Vec<f64> = {
-        use rayon::prelude::*;
+    // every edge once (from its smaller vertex) with its cost, in vertex order
+    let initial: Vec<Vec<(f64, u32, u32)>> = {
         let st = &s;
-        edges
-            .verts
-            .par_iter()
-            .with_min_len(4096)
-            .map(|&[a, b]| st.place(a, b).1)
+        (0..nv as u32)
+            .into_par_iter()
+            .chunks(16384)
+            .map_init(Vec::new, |ring, vs| {
+                let mut out = Vec::with_capacity(3 * vs.len());
+                for v in vs {
+                    neighbours(&st.face, st.vert[v as usize].head, v, ring);
+                    for &(w, _, _) in ring.iter() {
+                        if w > v {
+                            out.push((st.place(v, w).1, v, w));
+                        }
+                    }
+                }
+                out
+            })
             .collect()
     };
-    for (&[a, b], &cost) in edges.verts.iter().zip(&initial) {
+    let mut heap = BinQueue::new();
+    for &(cost, a, b) in initial.iter().flatten() {
         heap.push(cost, Candidate { a, b, stamp: 0 });
     }
     drop(initial);
@@ -372,8 +472,9 @@ pub fn simplify(mesh: &Mesh, target_faces: usize) -> Result<Mesh> {
         }
         // collapse b into a
         for &f in &fa {
-            if s.tri[f as usize].contains(&b) {
-                s.alive[f as usize] = false;
+            let t = &mut s.face[f as usize];
+            if t.v.contains(&b) {
+                t.v = [NONE; 3];
                 faces -= 1;
             }
         }
@@ -382,46 +483,44 @@ pub fn simplify(mesh: &Mesh, target_faces: usize) -> Result<Mesh> {
         // collapse history and the run time becomes quadratic)
         let mut list = NONE;
         fa.clear(); // collects the faces around the merged vertex
-        for start in [s.head[b as usize], s.head[a as usize]] {
+        for start in [s.vert[b as usize].head, s.vert[a as usize].head] {
             let mut c = start;
             while c != NONE {
-                let nxt = s.next_corner[c as usize];
-                let f = (c / 3) as usize;
-                if s.alive[f] {
-                    s.tri[f][(c % 3) as usize] = a;
-                    s.next_corner[c as usize] = list;
+                let t = &mut s.face[(c / 3) as usize];
+                let i = (c % 3) as usize;
+                let nxt = t.next[i];
+                if t.alive() {
+                    t.v[i] = a;
+                    t.next[i] = list;
                     list = c;
-                    fa.push(f as u32);
+                    fa.push(c / 3);
                 }
                 c = nxt;
             }
         }
-        s.head[a as usize] = list;
-        s.head[b as usize] = NONE;
-        s.pos[a as usize] = x;
-        let qb = s.quadric[b as usize];
-        s.quadric[a as usize].add(&qb);
-        s.boundary[a as usize] |= s.boundary[b as usize];
-        s.stamp[a as usize] += 1;
-        s.stamp[b as usize] += 1;
+        let vb = s.vert[b as usize];
+        let va = &mut s.vert[a as usize];
+        va.head = list;
+        va.pos = x;
+        va.quadric.add(&vb.quadric);
+        va.boundary |= vb.boundary;
+        s.vert[b as usize].head = NONE;
+        s.stamp[a as usize] = s.stamp[a as usize].wrapping_add(1);
+        s.stamp[b as usize] = s.stamp[b as usize].wrapping_add(1);
         // new candidates around a (its live faces were collected above)
-        s.mark_id = s.mark_id.wrapping_add(1);
-        if s.mark_id == 0 {
-            s.mark.iter_mut().for_each(|m| *m = 0);
-            s.mark_id = 1;
-        }
-        let id = s.mark_id;
+        let id = s.next_mark();
+        let sa = s.stamp[a as usize];
         for &f in &fa {
-            for v in s.tri[f as usize] {
-                if v != a && s.mark[v as usize] != id {
-                    s.mark[v as usize] = id;
+            for v in s.face[f as usize].v {
+                if v != a && s.vert[v as usize].mark != id {
+                    s.vert[v as usize].mark = id;
                     let (_, cost) = s.place(a, v);
                     heap.push(
                         cost,
                         Candidate {
                             a,
                             b: v,
-                            stamp: s.stamp[a as usize].wrapping_add(s.stamp[v as usize]),
+                            stamp: sa.wrapping_add(s.stamp[v as usize]),
                         },
                     );
                 }
@@ -429,17 +528,18 @@ pub fn simplify(mesh: &Mesh, target_faces: usize) -> Result<Mesh> {
         }
     }
     // compact
+    let nv = m.vertex_count();
     let mut remap = vec![NONE; nv];
     let mut positions = Vec::new();
     let mut indices = Vec::with_capacity(3 * faces);
-    for (f, t) in s.tri.iter().enumerate() {
-        if !s.alive[f] {
+    for t in &s.face {
+        if !t.alive() {
             continue;
         }
-        for &v in t {
+        for &v in &t.v {
             if remap[v as usize] == NONE {
                 remap[v as usize] = positions.len() as u32;
-                positions.push(s.pos[v as usize]);
+                positions.push(s.vert[v as usize].pos);
             }
             indices.push(remap[v as usize]);
         }
