@@ -17,7 +17,7 @@ Rerun:  apt-get install libosd-dev g++; pip install vtk libigl trimesh fast-simp
 
 Only the simplification (mra and fast-simplification alternated twice, best of 6 each, with the
 Hausdorff distances of both results and the load average):
-        python3 benches/peers/mesh_peers.py --only simplify [--before PATH_TO_OLDER_BENCH_BINARY]
+        python3 benches/peers/mesh_peers.py --only simplify [--rounds N] [--before OLDER_BENCH_BINARY]
 """
 import json
 import os
@@ -63,8 +63,8 @@ def hausdorff(a, b):
 
 
 def only_simplify():
-    """Alternates mra's bench (best of 3 inside) and fast-simplification (best of 3), twice, and
-    keeps each one's best of 6; optionally also an older mra bench binary (`--before PATH`);
+    """Alternates mra's bench (best of 3 inside) and fast-simplification (best of 3), twice (or
+    `--rounds N` times), and keeps each one's best; optionally also an older mra bench binary (`--before PATH`);
     prints times, speed-ups, Hausdorff distances and the load average before and after."""
     import fast_simplification
     args = ["cargo", "bench", "--bench", "mesh", "--", "--json", "--only", "simplify"]
@@ -79,7 +79,8 @@ def only_simplify():
     mra = old = None
     t = float("inf")
     V, F = read_obj(tri) if os.path.exists(tri) else (None, None)
-    for _ in range(2):
+    rounds = int(sys.argv[sys.argv.index("--rounds") + 1]) if "--rounds" in sys.argv else 2
+    for _ in range(rounds):
         if before:  # first, so that the result file left is the current build's
             o = run([before, "--json", "--only", "simplify"])
             if old is None or o["seconds"] < old["seconds"]:

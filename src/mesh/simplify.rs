@@ -72,9 +72,17 @@ impl Quadric {
             + q[9]
     }
     /// argmin x of the quadric and its value there, if the 3 × 3 system A x = −b is well
-    /// conditioned: x = −adj(A) b / det A, and Q(x) = xᵀA x + 2 bᵀx + c = bᵀx + c.
+    /// conditioned and x is within `lim` of the origin: x = −adj(A) b / det A, Q(x) evaluated
+    /// as a whole (the shortcut Q(x) = bᵀx + c loses small costs to cancellation).
     #[inline]
-    fn minimum(&self, scale: f64) -> Option<([f64; 3], f64)> {
+    fn minimum(&self, lim: f64) -> Option<([f64; 3], f64)> {
+        let (x, cost, ok) = self.minimum_unchecked(lim);
+        ok.then_some((x, cost))
+    }
+
+    /// `minimum` without branches: the flag says whether the result is usable.
+    #[inline(always)]
+    fn minimum_unchecked(&self, lim: f64) -> ([f64; 3], f64, bool) {
         let q = &self.0;
         let (a00, a01, a02, a11, a12, a22) = (q[0], q[1], q[2], q[4], q[5], q[7]);
         let b = [q[3], q[6], q[8]];
@@ -93,20 +101,17 @@ impl Quadric {
             .max(a11.abs())
             .max(a12.abs())
             .max(a22.abs());
-        if !(det.abs() > 1e-10 * norm * norm * norm) {
-            return None;
-        }
         let r = -1.0 / det;
         let x = [
             r * (c00 * b[0] + c01 * b[1] + c02 * b[2]),
             r * (c01 * b[0] + c11 * b[1] + c12 * b[2]),
             r * (c02 * b[0] + c12 * b[1] + c22 * b[2]),
         ];
-        let lim = 1e3 * scale.max(1.0);
-        if !x.iter().all(|v| v.abs() < lim) {
-            return None;
-        }
-        Some((x, self.eval(x).max(0.0)))
+        let ok = det.abs() > 1e-10 * norm * norm * norm
+            && x[0].abs() < lim
+            && x[1].abs() < lim
+            && x[2].abs() < lim;
+        (x, self.eval(x).max(0.0), ok)
     }
 }
 
@@ -258,7 +263,9 @@ struct State {
     /// (most of them stale), stays in cache.
     stamp: Vec<u16>,
     mark_id: u32,
-    scale: f64,
+    /// optimal positions farther than this from the origin are rejected (1000 × the
+    /// bounding-box diagonal, at least 1000)
+    lim: f64,
 }
 
 impl State {
@@ -307,7 +314,7 @@ impl State {
     fn place(&self, a: u32, b: u32) -> ([f64; 3], f64) {
         let (va, vb) = (&self.vert[a as usize], &self.vert[b as usize]);
         let q = Quadric::sum(&va.quadric, &vb.quadric);
-        if let Some(m) = q.minimum(self.scale) {
+        if let Some(m) = q.minimum(self.lim) {
             return m;
         }
         let (pa, pb) = (va.pos, vb.pos);
@@ -317,6 +324,22 @@ impl State {
             .map(|x| (x, q.eval(x).max(0.0)))
             .min_by(|u, v| u.1.total_cmp(&v.1))
             .unwrap()
+    }
+
+    /// Costs of collapsing `a` with each of `vs` (as `place`), four at a time: the four
+    /// solves are independent and overlap in the processor.
+    fn costs(&self, a: u32, vs: &[u32], out: &mut Vec<f64>) {
+        out.clear();
+        let qa = &self.vert[a as usize].quadric;
+        for chunk in vs.chunks(4) {
+            let m: [_; 4] = std::array::from_fn(|l| {
+                let v = chunk[l.min(chunk.len() - 1)];
+                Quadric::sum(qa, &self.vert[v as usize].quadric).minimum_unchecked(self.lim)
+            });
+            for (&v, (_, cost, ok)) in chunk.iter().zip(m) {
+                out.push(if ok { cost } else { self.place(a, v).1 });
+            }
+        }
     }
 
     /// A fresh mark id (all marks reset when the counter wraps).
@@ -552,7 +575,7 @@ fn simplify_with_room(mesh: &Mesh, target_faces: usize, room: usize) -> Result<M
         run,
         stamp: vec![0; nv],
         mark_id: 0,
-        scale,
+        lim: 1e3 * scale.max(1.0),
     };
     // every edge once (from its smaller vertex) with its cost, in vertex order
     let initial: Vec<Vec<(u32, Candidate)>> = {
@@ -560,13 +583,17 @@ fn simplify_with_room(mesh: &Mesh, target_faces: usize, room: usize) -> Result<M
         (0..nv as u32)
             .into_par_iter()
             .chunks(16384)
-            .map_init(Vec::new, |ring, vs| {
-                let mut out = Vec::with_capacity(3 * vs.len());
-                for v in vs {
-                    neighbours(&st.face, st.refs_of(v), v, ring);
-                    for &(w, _, _) in ring.iter() {
-                        if w > v {
-                            let b = BinQueue::bin(st.place(v, w).1) as u32;
+            .map_init(
+                || (Vec::new(), Vec::new(), Vec::new()),
+                |(ring, ws, cost), vs| {
+                    let mut out = Vec::with_capacity(3 * vs.len());
+                    for v in vs {
+                        neighbours(&st.face, st.refs_of(v), v, ring);
+                        ws.clear();
+                        ws.extend(ring.iter().map(|e| e.0).filter(|&w| w > v));
+                        st.costs(v, ws, cost);
+                        for (&w, &c) in ws.iter().zip(cost.iter()) {
+                            let b = BinQueue::bin(c) as u32;
                             out.push((
                                 b,
                                 Candidate {
@@ -577,9 +604,9 @@ fn simplify_with_room(mesh: &Mesh, target_faces: usize, room: usize) -> Result<M
                             ));
                         }
                     }
-                }
-                out
-            })
+                    out
+                },
+            )
             .collect()
     };
     let mut heap = BinQueue::new();
@@ -587,6 +614,7 @@ fn simplify_with_room(mesh: &Mesh, target_faces: usize, room: usize) -> Result<M
     drop(initial);
     let mut faces = nf;
     let (mut fa, mut fb) = (Vec::new(), Vec::new());
+    let (mut ring, mut ring_cost) = (Vec::new(), Vec::new());
     while faces > target_faces {
         let Some(c) = heap.pop() else { break };
         let (a, b) = (c.a, c.b);
@@ -648,21 +676,25 @@ fn simplify_with_room(mesh: &Mesh, target_faces: usize, room: usize) -> Result<M
         // new candidates around a (its live faces were collected above)
         let id = s.next_mark();
         let sa = s.stamp[a as usize];
+        ring.clear();
         for &f in &fa {
             for v in s.face[f as usize].v {
                 if v != a && s.vert[v as usize].mark != id {
                     s.vert[v as usize].mark = id;
-                    let (_, cost) = s.place(a, v);
-                    heap.push(
-                        cost,
-                        Candidate {
-                            a,
-                            b: v,
-                            stamp: sa.wrapping_add(s.stamp[v as usize]),
-                        },
-                    );
+                    ring.push(v);
                 }
             }
+        }
+        s.costs(a, &ring, &mut ring_cost);
+        for (&v, &cost) in ring.iter().zip(&ring_cost) {
+            heap.push(
+                cost,
+                Candidate {
+                    a,
+                    b: v,
+                    stamp: sa.wrapping_add(s.stamp[v as usize]),
+                },
+            );
         }
     }
     // compact
