@@ -436,6 +436,8 @@ fn prefetch<T>(p: *const T) {
         use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
         _mm_prefetch(p as *const i8, _MM_HINT_T0);
     }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = p;
 }
 
 /// The distinct neighbours `w` of vertex `v` (with face list `faces`) as
