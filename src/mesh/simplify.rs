@@ -58,34 +58,53 @@ impl Quadric {
         q
     }
     fn eval(&self, p: [f64; 3]) -> f64 {
-        let q = &self.0;
-        let (x, y, z) = (p[0], p[1], p[2]);
-        q[0] * x * x
-            + 2.0 * q[1] * x * y
-            + 2.0 * q[2] * x * z
-            + 2.0 * q[3] * x
-            + q[4] * y * y
-            + 2.0 * q[5] * y * z
-            + 2.0 * q[6] * y
-            + q[7] * z * z
-            + 2.0 * q[8] * z
-            + q[9]
-    }
-    /// argmin x of the quadric and its value there, if the 3 × 3 system A x = −b is well
-    /// conditioned and x is within `lim` of the origin: x = −adj(A) b / det A, Q(x) evaluated
-    /// as a whole (the shortcut Q(x) = bᵀx + c loses small costs to cancellation).
-    #[inline]
-    fn minimum(&self, lim: f64) -> Option<([f64; 3], f64)> {
-        let (x, cost, ok) = self.minimum_unchecked(lim);
-        ok.then_some((x, cost))
+        eval_lanes(&self.0.map(|v| [v]), &[p])[0]
     }
 
-    /// `minimum` without branches: the flag says whether the result is usable.
-    #[inline(always)]
-    fn minimum_unchecked(&self, lim: f64) -> ([f64; 3], f64, bool) {
-        let q = &self.0;
-        let (a00, a01, a02, a11, a12, a22) = (q[0], q[1], q[2], q[4], q[5], q[7]);
-        let b = [q[3], q[6], q[8]];
+    /// argmin x of the quadric and its value there, if the 3 × 3 system is well conditioned
+    /// and x lies within `lim` of the origin (see [`minimum_lanes`]).
+    fn minimum(&self, lim: f64) -> Option<([f64; 3], f64)> {
+        let (x, cost, ok) = minimum_lanes(&self.0.map(|v| [v]), lim);
+        ok[0].then_some((x[0], cost[0]))
+    }
+}
+
+/// The quadratic form x̄ᵀ Q x̄, x̄ = (p, 1), of `L` quadrics at once (lane `l`: coefficients
+/// `q[k][l]`, point `p[l]`); the lanes are independent, so they vectorise.
+#[inline(always)]
+fn eval_lanes<const L: usize>(q: &[[f64; L]; 10], p: &[[f64; 3]; L]) -> [f64; L] {
+    let mut e = [0.0; L];
+    for l in 0..L {
+        let [x, y, z] = p[l];
+        e[l] = q[0][l] * x * x
+            + 2.0 * q[1][l] * x * y
+            + 2.0 * q[2][l] * x * z
+            + 2.0 * q[3][l] * x
+            + q[4][l] * y * y
+            + 2.0 * q[5][l] * y * z
+            + 2.0 * q[6][l] * y
+            + q[7][l] * z * z
+            + 2.0 * q[8][l] * z
+            + q[9][l];
+    }
+    e
+}
+
+/// The minimisers of `L` quadrics at once (lanes as in [`eval_lanes`]): with A the upper-left
+/// 3 × 3 block and b the last column, x = −adj(A) b / det A; the cost Q(x) is evaluated as a
+/// whole (the shortcut Q(x) = bᵀx + c loses small costs to cancellation) and clamped at 0.
+/// The flag of a lane is false when A is near singular (|det| ≤ 10⁻¹⁰ ‖A‖³) or x is not
+/// within `lim` of the origin.
+#[inline(always)]
+fn minimum_lanes<const L: usize>(
+    q: &[[f64; L]; 10],
+    lim: f64,
+) -> ([[f64; 3]; L], [f64; L], [bool; L]) {
+    let mut x = [[0.0; 3]; L];
+    let mut ok = [false; L];
+    for l in 0..L {
+        let (a00, a01, a02, a11, a12, a22) = (q[0][l], q[1][l], q[2][l], q[4][l], q[5][l], q[7][l]);
+        let b = [q[3][l], q[6][l], q[8][l]];
         // cofactors of the symmetric matrix (adj(A) is symmetric too)
         let c00 = a11 * a22 - a12 * a12;
         let c01 = a02 * a12 - a01 * a22;
@@ -102,17 +121,21 @@ impl Quadric {
             .max(a12.abs())
             .max(a22.abs());
         let r = -1.0 / det;
-        let x = [
+        x[l] = [
             r * (c00 * b[0] + c01 * b[1] + c02 * b[2]),
             r * (c01 * b[0] + c11 * b[1] + c12 * b[2]),
             r * (c02 * b[0] + c12 * b[1] + c22 * b[2]),
         ];
-        let ok = det.abs() > 1e-10 * norm * norm * norm
-            && x[0].abs() < lim
-            && x[1].abs() < lim
-            && x[2].abs() < lim;
-        (x, self.eval(x).max(0.0), ok)
+        ok[l] = det.abs() > 1e-10 * norm * norm * norm
+            && x[l][0].abs() < lim
+            && x[l][1].abs() < lim
+            && x[l][2].abs() < lim;
     }
+    let mut cost = eval_lanes(q, &x);
+    for c in cost.iter_mut() {
+        *c = c.max(0.0);
+    }
+    (x, cost, ok)
 }
 
 /// A collapse candidate: 12 bytes. `stamp` is the sum of both vertices' stamps when queued;
@@ -326,18 +349,22 @@ impl State {
             .unwrap()
     }
 
-    /// Costs of collapsing `a` with each of `vs` (as `place`), four at a time: the four
-    /// solves are independent and overlap in the processor.
+    /// Costs of collapsing `a` with each of `vs` (as `place`), four at a time (the four
+    /// solves are independent and share vector instructions).
     fn costs(&self, a: u32, vs: &[u32], out: &mut Vec<f64>) {
         out.clear();
-        let qa = &self.vert[a as usize].quadric;
+        let qa = &self.vert[a as usize].quadric.0;
         for chunk in vs.chunks(4) {
-            let m: [_; 4] = std::array::from_fn(|l| {
-                let v = chunk[l.min(chunk.len() - 1)];
-                Quadric::sum(qa, &self.vert[v as usize].quadric).minimum_unchecked(self.lim)
-            });
-            for (&v, (_, cost, ok)) in chunk.iter().zip(m) {
-                out.push(if ok { cost } else { self.place(a, v).1 });
+            let mut q = [[0.0f64; 4]; 10];
+            for l in 0..4 {
+                let qv = &self.vert[chunk[l.min(chunk.len() - 1)] as usize].quadric.0;
+                for k in 0..10 {
+                    q[k][l] = qa[k] + qv[k];
+                }
+            }
+            let (_, cost, ok) = minimum_lanes(&q, self.lim);
+            for (l, &v) in chunk.iter().enumerate() {
+                out.push(if ok[l] { cost[l] } else { self.place(a, v).1 });
             }
         }
     }
