@@ -1063,12 +1063,44 @@ fn quadric_simplification_keeps_a_manifold_of_the_same_topology_close_to_the_inp
     for p in &g.positions {
         assert!(p[2].abs() < 1e-9 && p[0] > -1e-9 && p[0] < 6.0 + 1e-9);
     }
+    // a non-manifold edge is reported, not simplified through
+    let nm = Mesh::from_faces(
+        vec![
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, -1.0, 0.0],
+            [0.0, 0.0, 1.0],
+        ],
+        vec![[0u32, 1, 2], [1, 0, 3], [0, 1, 4]],
+    )
+    .unwrap();
+    let e = simplify(&nm, 1).unwrap_err();
+    assert_eq!(e.kind(), ErrorKind::Format);
+    assert!(
+        e.to_string()
+            .contains("non-manifold edge (0, 1): used by 3 faces"),
+        "{e}"
+    );
     if let Some(dir) = corpus() {
         let bunny = io::read(dir.join("bunny.ply")).unwrap();
         let s = simplify(&bunny, 660).unwrap();
         assert_eq!(s.face_count(), 660);
         let r = topology::analyze(&s);
         assert!(r.manifold && r.closed && r.genus == Some(0));
+        // an open mesh keeps its boundary loops and stays near the input
+        let hand = io::read(dir.join("hand_lowres.obj"))
+            .unwrap()
+            .triangulated();
+        let r0 = topology::analyze(&hand);
+        let s = simplify(&hand, hand.face_count() / 4).unwrap();
+        let r = topology::analyze(&s);
+        assert!(r.manifold && r.oriented);
+        assert_eq!((r.boundary_loops, r.genus), (r0.boundary_loops, r0.genus));
+        let d = vertex_to_surface_distance(&hand, &s).max(vertex_to_surface_distance(&s, &hand));
+        let (lo, hi) = r0.bounding_box.unwrap();
+        let diag = (0..3).map(|k| (hi[k] - lo[k]).powi(2)).sum::<f64>().sqrt();
+        assert!(d < 0.05 * diag, "Hausdorff {d} vs diagonal {diag}");
     }
 }
 

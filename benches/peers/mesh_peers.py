@@ -14,6 +14,10 @@
 
 Rerun:  apt-get install libosd-dev g++; pip install vtk libigl trimesh fast-simplification
         python3 benches/peers/mesh_peers.py
+
+Only the simplification (mra and fast-simplification alternated twice, best of 6 each, with the
+Hausdorff distances of both results and the load average):
+        python3 benches/peers/mesh_peers.py --only simplify [--rounds N] [--before OLDER_BENCH_BINARY]
 """
 import json
 import os
@@ -36,7 +40,76 @@ def best(f, n=3):
     return t, out
 
 
+def read_obj(path):
+    """Vertices and triangles of an OBJ file written by mra (`v x y z`, `f a b c`)."""
+    import numpy as np
+    with open(path) as fh:
+        lines = fh.read().split("\n")
+    v = np.array(" ".join(l[2:] for l in lines if l.startswith("v ")).split(), float).reshape(-1, 3)
+    f = np.array(" ".join(l[2:] for l in lines if l.startswith("f ")).split(), np.int64).reshape(-1, 3) - 1
+    return v, f
+
+
+def write_obj(path, pts, fcs):
+    with open(path, "w") as fh:
+        fh.write("".join("v %r %r %r\n" % tuple(p) for p in pts.tolist()))
+        fh.write("".join("f %d %d %d\n" % (a + 1, b + 1, c + 1) for a, b, c in fcs.tolist()))
+
+
+def hausdorff(a, b):
+    out = subprocess.run(["cargo", "bench", "--bench", "mesh", "--", "--hausdorff", a, b], cwd=ROOT,
+                         capture_output=True, text=True, check=True).stdout
+    return float(out.strip().splitlines()[-1])
+
+
+def only_simplify():
+    """Alternates mra's bench (best of 3 inside) and fast-simplification (best of 3), twice (or
+    `--rounds N` times), and keeps each one's best; optionally also an older mra bench binary (`--before PATH`);
+    prints times, speed-ups, Hausdorff distances and the load average before and after."""
+    import fast_simplification
+    args = ["cargo", "bench", "--bench", "mesh", "--", "--json", "--only", "simplify"]
+    before = sys.argv[sys.argv.index("--before") + 1] if "--before" in sys.argv else None
+
+    def run(cmd):
+        out = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True, check=True).stdout
+        return json.loads(out.strip().splitlines()[-1])["simplify_10pct"]
+
+    load0 = os.getloadavg()
+    tri = os.path.join(DIR, "tri.obj")
+    mra = old = None
+    t = float("inf")
+    V, F = read_obj(tri) if os.path.exists(tri) else (None, None)
+    rounds = int(sys.argv[sys.argv.index("--rounds") + 1]) if "--rounds" in sys.argv else 2
+    for _ in range(rounds):
+        if before:  # first, so that the result file left is the current build's
+            o = run([before, "--json", "--only", "simplify"])
+            if old is None or o["seconds"] < old["seconds"]:
+                old = o
+        m = run(args)
+        if mra is None or m["seconds"] < mra["seconds"]:
+            mra = m
+        if V is None:  # the first bench run wrote tri.obj
+            V, F = read_obj(tri)
+        tf, (pts, fcs) = best(lambda: fast_simplification.simplify(V, F, target_reduction=0.9), 3)
+        t = min(t, tf)
+    path = os.path.join(DIR, "tri_simplified_fast.obj")
+    write_obj(path, pts, fcs)
+    h_fast = hausdorff(tri, path)
+    h_mra = hausdorff(tri, os.path.join(DIR, "tri_simplified_mra.obj"))
+    load1 = os.getloadavg()
+    print("load average (1, 5, 15 min) before %.2f %.2f %.2f, after %.2f %.2f %.2f" % (load0 + load1))
+    print(f"{'simplify to 10 %':<22} {'seconds':>8} {'fast-s. / this':>14}  result")
+    if old:
+        print(f"{'mra before':<22} {old['seconds']:8.3f} {t / old['seconds']:13.2f}x  {old['note']}")
+    print(f"{'mra':<22} {mra['seconds']:8.3f} {t / mra['seconds']:13.2f}x  {mra['note']} (recomputed {h_mra:.3e})")
+    print(f"{'fast-simplification':<22} {t:8.3f} {1.0:13.2f}x  {len(fcs)} triangles, Hausdorff (vertex) {h_fast:.3e}")
+
+
 def main():
+    if "--only" in sys.argv:
+        if sys.argv[sys.argv.index("--only") + 1] != "simplify":
+            sys.exit("--only: expected 'simplify'")
+        return only_simplify()
     quick = "--quick" in sys.argv
     args = ["cargo", "bench", "--bench", "mesh", "--", "--json"] + (["--quick"] if quick else [])
 

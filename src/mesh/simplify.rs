@@ -7,18 +7,25 @@
 //!                      or the best of a, b, (a + b)/2 when the system is singular
 //! ```
 //!
-//! Edges are collapsed cheapest first (a logarithmically binned queue, see `BinQueue`; stale
-//! entries are skipped by per-vertex stamps). A collapse is allowed only when it keeps the mesh a 2-manifold: the *link
+//! Edges are collapsed cheapest first (a binned queue, 16 bins per octave of cost, see
+//! `BinQueue`; stale entries are skipped by per-vertex stamps). A collapse is allowed only when
+//! it keeps the mesh a 2-manifold: the *link
 //! condition* Lk(a) ∩ Lk(b) = Lk(ab) (common neighbours are exactly the vertices opposite ab,
 //! and those are not joined to both through a face), an interior edge may not join two boundary
 //! vertices, and no remaining face may flip its normal.
 //!
-//! Storage is flat: faces as triples, and for each vertex a singly linked list of its corners
-//! (`head[v]`, `next_corner[c]`), spliced in O(length) on a collapse.
+//! Storage is flat and laid out for the collapse loop, which visits the mesh in cost order
+//! (jumping around, so cache misses count): per vertex one 128-byte record (quadric, position,
+//! mark, flags: two cache lines), faces as triples, the stamps and the face-list places apart
+//! in small arrays, and the face lists of all vertices in one array `refs` (one contiguous run
+//! per vertex; a collapse appends the merged vertex's new run, compaction when full). While a
+//! collapse is processed, the data of the next live queue entry is prefetched. Setup
+//! (quadrics, boundary detection, edge costs) runs per vertex over these lists, in parallel;
+//! the collapse loop is sequential and deterministic.
 
-use super::edges::Edges;
 use super::{vec3, Attributes, Mesh, NONE};
 use crate::{Error, Result};
+use rayon::prelude::*;
 
 /// Symmetric 4 × 4 matrix stored as its upper triangle.
 #[derive(Clone, Copy, Default, Debug)]
@@ -51,99 +58,175 @@ impl Quadric {
         q
     }
     fn eval(&self, p: [f64; 3]) -> f64 {
-        let q = &self.0;
-        let (x, y, z) = (p[0], p[1], p[2]);
-        q[0] * x * x
-            + 2.0 * q[1] * x * y
-            + 2.0 * q[2] * x * z
-            + 2.0 * q[3] * x
-            + q[4] * y * y
-            + 2.0 * q[5] * y * z
-            + 2.0 * q[6] * y
-            + q[7] * z * z
-            + 2.0 * q[8] * z
-            + q[9]
+        eval_lanes(&self.0.map(|v| [v]), &[p])[0]
     }
-    /// argmin of the quadric, if the 3 × 3 system is well conditioned.
-    fn minimiser(&self, scale: f64) -> Option<[f64; 3]> {
-        let q = &self.0;
-        let m = [[q[0], q[1], q[2]], [q[1], q[4], q[5]], [q[2], q[5], q[7]]];
-        let b = [-q[3], -q[6], -q[8]];
-        let det = m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
-            - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
-            + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
-        let norm = m.iter().flatten().fold(0.0f64, |a, &x| a.max(x.abs()));
-        if det.abs() <= 1e-10 * norm * norm * norm || norm == 0.0 {
-            return None;
-        }
-        let solve = |k: usize| {
-            let mut mm = m;
-            for r in 0..3 {
-                mm[r][k] = b[r];
-            }
-            (mm[0][0] * (mm[1][1] * mm[2][2] - mm[1][2] * mm[2][1])
-                - mm[0][1] * (mm[1][0] * mm[2][2] - mm[1][2] * mm[2][0])
-                + mm[0][2] * (mm[1][0] * mm[2][1] - mm[1][1] * mm[2][0]))
-                / det
-        };
-        let x = [solve(0), solve(1), solve(2)];
-        x.iter()
-            .all(|v| v.is_finite() && v.abs() < 1e3 * scale.max(1.0))
-            .then_some(x)
+
+    /// argmin x of the quadric and its value there, if the 3 × 3 system is well conditioned
+    /// and x lies within `lim` of the origin (see [`minimum_lanes`]).
+    fn minimum(&self, lim: f64) -> Option<([f64; 3], f64)> {
+        let (x, cost, ok) = minimum_lanes(&self.0.map(|v| [v]), lim);
+        ok[0].then_some((x[0], cost[0]))
     }
 }
 
-/// A collapse candidate: 16 bytes. `stamp` is the sum of both vertices' stamps when queued;
+/// The quadratic form x̄ᵀ Q x̄, x̄ = (p, 1), of `L` quadrics at once (lane `l`: coefficients
+/// `q[k][l]`, point `p[l]`); the lanes are independent, so they vectorise.
+#[inline(always)]
+fn eval_lanes<const L: usize>(q: &[[f64; L]; 10], p: &[[f64; 3]; L]) -> [f64; L] {
+    let mut e = [0.0; L];
+    for l in 0..L {
+        let [x, y, z] = p[l];
+        e[l] = q[0][l] * x * x
+            + 2.0 * q[1][l] * x * y
+            + 2.0 * q[2][l] * x * z
+            + 2.0 * q[3][l] * x
+            + q[4][l] * y * y
+            + 2.0 * q[5][l] * y * z
+            + 2.0 * q[6][l] * y
+            + q[7][l] * z * z
+            + 2.0 * q[8][l] * z
+            + q[9][l];
+    }
+    e
+}
+
+/// The minimisers of `L` quadrics at once (lanes as in [`eval_lanes`]): with A the upper-left
+/// 3 × 3 block and b the last column, x = −adj(A) b / det A; the cost Q(x) is evaluated as a
+/// whole (the shortcut Q(x) = bᵀx + c loses small costs to cancellation) and clamped at 0.
+/// The flag of a lane is false when A is near singular (|det| ≤ 10⁻¹⁰ ‖A‖³) or x is not
+/// within `lim` of the origin.
+#[inline(always)]
+fn minimum_lanes<const L: usize>(
+    q: &[[f64; L]; 10],
+    lim: f64,
+) -> ([[f64; 3]; L], [f64; L], [bool; L]) {
+    let mut x = [[0.0; 3]; L];
+    let mut ok = [false; L];
+    for l in 0..L {
+        let (a00, a01, a02, a11, a12, a22) = (q[0][l], q[1][l], q[2][l], q[4][l], q[5][l], q[7][l]);
+        let b = [q[3][l], q[6][l], q[8][l]];
+        // cofactors of the symmetric matrix (adj(A) is symmetric too)
+        let c00 = a11 * a22 - a12 * a12;
+        let c01 = a02 * a12 - a01 * a22;
+        let c02 = a01 * a12 - a02 * a11;
+        let c11 = a00 * a22 - a02 * a02;
+        let c12 = a01 * a02 - a00 * a12;
+        let c22 = a00 * a11 - a01 * a01;
+        let det = a00 * c00 + a01 * c01 + a02 * c02;
+        let norm = a00
+            .abs()
+            .max(a01.abs())
+            .max(a02.abs())
+            .max(a11.abs())
+            .max(a12.abs())
+            .max(a22.abs());
+        let r = -1.0 / det;
+        x[l] = [
+            r * (c00 * b[0] + c01 * b[1] + c02 * b[2]),
+            r * (c01 * b[0] + c11 * b[1] + c12 * b[2]),
+            r * (c02 * b[0] + c12 * b[1] + c22 * b[2]),
+        ];
+        ok[l] = det.abs() > 1e-10 * norm * norm * norm
+            && x[l][0].abs() < lim
+            && x[l][1].abs() < lim
+            && x[l][2].abs() < lim;
+    }
+    let mut cost = eval_lanes(q, &x);
+    for c in cost.iter_mut() {
+        *c = c.max(0.0);
+    }
+    (x, cost, ok)
+}
+
+/// A collapse candidate: 12 bytes. `stamp` is the sum of both vertices' stamps when queued;
 /// a changed sum marks the entry stale (a collision only means a needless re-check).
 #[derive(Clone, Copy)]
 struct Candidate {
     a: u32,
     b: u32,
-    stamp: u32,
+    stamp: u16,
 }
 
-/// An approximate min-priority queue: costs are binned on a logarithmic scale, 16 bins per
-/// factor of two (costs within 4.4 % of each other share a bin and leave in any order).
+/// An approximate min-priority queue: costs are binned by their f64 exponent and top four
+/// mantissa bits, 16 bins per factor of two (costs within 3–6 % of each other share a bin and
+/// leave in any order: last in first out, which keeps successive collapses close together).
 /// Push and pop are O(1); a binary heap spent most of the run time in `pop` (cache misses
 /// over millions of entries).
 struct BinQueue {
     bins: Vec<Vec<Candidate>>,
     lowest: usize,
+    /// buffers of emptied bins, reused by bins that get their first entry (most entries are
+    /// popped soon after being pushed: recycling keeps the memory touched small)
+    spare: Vec<Vec<Candidate>>,
 }
 
 impl BinQueue {
-    const PER_OCTAVE: f64 = 16.0;
     const BINS: usize = 16 * 240 + 2;
 
     fn new() -> Self {
         BinQueue {
             bins: (0..Self::BINS).map(|_| Vec::new()).collect(),
             lowest: 0,
+            spare: Vec::new(),
         }
     }
 
+    /// Fill the queue with `(bin, candidate)` pairs, each bin allocated once at its size.
+    fn fill(&mut self, items: &[Vec<(u32, Candidate)>]) {
+        let mut count = vec![0usize; Self::BINS];
+        for &(b, _) in items.iter().flatten() {
+            count[b as usize] += 1;
+        }
+        for (bin, &n) in self.bins.iter_mut().zip(&count) {
+            bin.reserve_exact(n);
+        }
+        for &(b, c) in items.iter().flatten() {
+            self.bins[b as usize].push(c);
+            self.lowest = self.lowest.min(b as usize);
+        }
+    }
+
+    /// Bin of a cost: the exponent and the top 4 mantissa bits of the f64 (16 bins per
+    /// octave, linear within the octave; monotone in the cost), octaves 2⁻²⁰⁰ … 2⁴⁰.
     #[inline]
     fn bin(cost: f64) -> usize {
-        if cost <= 0.0 || cost.is_nan() {
+        if cost.is_nan() || cost <= 0.0 {
             return 0;
         }
-        // log2 from −200 to +40 maps to bins 1 ..= BINS−1
-        let x = (cost.log2() + 200.0) * Self::PER_OCTAVE;
-        (x.max(0.0) as usize + 1).min(Self::BINS - 1)
+        const LOW: i64 = (1023 - 200) << 4;
+        let key = (cost.to_bits() >> 48) as i64 - LOW;
+        (key.max(0) as usize + 1).min(Self::BINS - 1)
     }
 
     #[inline]
     fn push(&mut self, cost: f64, c: Candidate) {
         let b = Self::bin(cost);
-        self.bins[b].push(c);
+        let bin = &mut self.bins[b];
+        if bin.capacity() == 0 {
+            if let Some(buf) = self.spare.pop() {
+                *bin = buf;
+            }
+        }
+        bin.push(c);
         self.lowest = self.lowest.min(b);
+    }
+
+    /// The next entries `pop` would return from the current bin (at most `k`).
+    #[inline]
+    fn peek(&self, k: usize) -> impl Iterator<Item = &Candidate> {
+        let bin = self.bins.get(self.lowest).map_or(&[][..], |b| &b[..]);
+        bin.iter().rev().take(k)
     }
 
     #[inline]
     fn pop(&mut self) -> Option<Candidate> {
         while self.lowest < Self::BINS {
-            if let Some(c) = self.bins[self.lowest].pop() {
+            let bin = &mut self.bins[self.lowest];
+            if let Some(c) = bin.pop() {
                 return Some(c);
+            }
+            if bin.capacity() > 0 {
+                self.spare.push(std::mem::take(bin));
             }
             self.lowest += 1;
         }
@@ -151,40 +234,113 @@ impl BinQueue {
     }
 }
 
+/// Everything the collapse loop reads about a vertex, in two cache lines: the loop visits
+/// vertices in cost order (all over the mesh), so one miss per line matters more than layout
+/// elegance. Split arrays cost five or six misses per visited vertex.
+#[derive(Clone, Copy, Default)]
+#[repr(C, align(64))]
+struct Vertex {
+    quadric: Quadric,
+    pos: [f64; 3],
+    /// scratch mark for neighbourhood tests (compared with `State::mark_id`)
+    mark: u32,
+    /// `BOUNDARY`, `NON_MANIFOLD` (only during setup)
+    flags: u32,
+}
+
+const BOUNDARY: u32 = 1;
+const NON_MANIFOLD: u32 = 2;
+
+/// A vertex's face list: `refs[start .. start + count]`.
+#[derive(Clone, Copy, Default)]
+struct Run {
+    start: u32,
+    count: u32,
+}
+
+/// A triangle; dead faces have `v[0] == NONE`.
+#[derive(Clone, Copy)]
+struct Face {
+    v: [u32; 3],
+}
+
+impl Face {
+    #[inline]
+    fn alive(&self) -> bool {
+        self.v[0] != NONE
+    }
+}
+
 struct State {
-    pos: Vec<[f64; 3]>,
-    tri: Vec<[u32; 3]>,
-    alive: Vec<bool>,
-    head: Vec<u32>,
-    next_corner: Vec<u32>,
-    quadric: Vec<Quadric>,
-    stamp: Vec<u32>,
-    boundary: Vec<bool>,
-    mark: Vec<u32>,
+    vert: Vec<Vertex>,
+    face: Vec<Face>,
+    /// the face lists of the vertices, one contiguous run each: a collapse appends the merged
+    /// vertex's new list at the end (reading a run lets the face loads overlap, where a linked
+    /// list would wait for each miss); compacted when it has grown to `3 ×` its initial size
+    refs: Vec<u32>,
+    /// per vertex, its run in `refs` (some of the faces there dead): apart from `vert` so
+    /// that reaching the faces of a popped edge costs one miss less
+    run: Vec<Run>,
+    /// per vertex, bumped on every collapse touching it: a queue entry whose stamp sum differs
+    /// is stale. Kept apart from `vert` (and 16-bit) so the check, done for every popped entry
+    /// (most of them stale), stays in cache.
+    stamp: Vec<u16>,
     mark_id: u32,
-    scale: f64,
+    /// optimal positions farther than this from the origin are rejected (1000 × the
+    /// bounding-box diagonal, at least 1000)
+    lim: f64,
 }
 
 impl State {
-    /// Live faces of `v` (by corner lists).
+    /// The face list of `v`, dead faces included.
+    #[inline]
+    fn refs_of(&self, v: u32) -> &[u32] {
+        let x = self.run[v as usize];
+        &self.refs[x.start as usize..(x.start + x.count) as usize]
+    }
+
+    /// Live faces of `v`.
     fn faces_of(&self, v: u32, out: &mut Vec<u32>) {
         out.clear();
-        let mut c = self.head[v as usize];
-        while c != NONE {
-            let f = c / 3;
-            if self.alive[f as usize] {
-                out.push(f);
-            }
-            c = self.next_corner[c as usize];
+        out.extend(
+            self.refs_of(v)
+                .iter()
+                .copied()
+                .filter(|&f| self.face[f as usize].alive()),
+        );
+    }
+
+    /// Replace `v`'s face list by `list` (appended to `refs`).
+    fn set_faces(&mut self, v: u32, list: &[u32]) {
+        let x = &mut self.run[v as usize];
+        x.start = self.refs.len() as u32;
+        x.count = list.len() as u32;
+        self.refs.extend_from_slice(list);
+    }
+
+    /// Rebuild `refs` with the live faces of each vertex only (same order).
+    fn compact_refs(&mut self) {
+        let mut refs = Vec::with_capacity(self.refs.capacity());
+        for x in self.run.iter_mut() {
+            let run = &self.refs[x.start as usize..(x.start + x.count) as usize];
+            x.start = refs.len() as u32;
+            refs.extend(
+                run.iter()
+                    .copied()
+                    .filter(|&f| self.face[f as usize].v[0] != NONE),
+            );
+            x.count = refs.len() as u32 - x.start;
         }
+        self.refs = refs;
     }
 
     fn place(&self, a: u32, b: u32) -> ([f64; 3], f64) {
-        let q = Quadric::sum(&self.quadric[a as usize], &self.quadric[b as usize]);
-        if let Some(x) = q.minimiser(self.scale) {
-            return (x, q.eval(x).max(0.0));
+        let (va, vb) = (&self.vert[a as usize], &self.vert[b as usize]);
+        let q = Quadric::sum(&va.quadric, &vb.quadric);
+        if let Some(m) = q.minimum(self.lim) {
+            return m;
         }
-        let (pa, pb) = (self.pos[a as usize], self.pos[b as usize]);
+        let (pa, pb) = (va.pos, vb.pos);
         let mid = vec3::scale(vec3::add(pa, pb), 0.5);
         [pa, pb, mid]
             .into_iter()
@@ -193,14 +349,42 @@ impl State {
             .unwrap()
     }
 
+    /// Costs of collapsing `a` with each of `vs` (as `place`), four at a time (the four
+    /// solves are independent and share vector instructions).
+    fn costs(&self, a: u32, vs: &[u32], out: &mut Vec<f64>) {
+        out.clear();
+        let qa = &self.vert[a as usize].quadric.0;
+        for chunk in vs.chunks(4) {
+            let mut q = [[0.0f64; 4]; 10];
+            for l in 0..4 {
+                let qv = &self.vert[chunk[l.min(chunk.len() - 1)] as usize].quadric.0;
+                for k in 0..10 {
+                    q[k][l] = qa[k] + qv[k];
+                }
+            }
+            let (_, cost, ok) = minimum_lanes(&q, self.lim);
+            for (l, &v) in chunk.iter().enumerate() {
+                out.push(if ok[l] { cost[l] } else { self.place(a, v).1 });
+            }
+        }
+    }
+
+    /// A fresh mark id (all marks reset when the counter wraps).
+    fn next_mark(&mut self) -> u32 {
+        self.mark_id = self.mark_id.wrapping_add(1);
+        if self.mark_id == 0 {
+            self.vert.iter_mut().for_each(|v| v.mark = 0);
+            self.mark_id = 1;
+        }
+        self.mark_id
+    }
+
     /// Link condition and normal-flip test for collapsing a, b into x.
     fn can_collapse(&mut self, a: u32, b: u32, x: [f64; 3], fa: &[u32], fb: &[u32]) -> bool {
-        if self.boundary[a as usize] && self.boundary[b as usize] {
+        let tri = |f: u32| self.face[f as usize].v;
+        if self.vert[a as usize].flags & self.vert[b as usize].flags & BOUNDARY != 0 {
             // only along a boundary edge: ab must have exactly one face
-            let shared = fa
-                .iter()
-                .filter(|&&f| self.tri[f as usize].contains(&b))
-                .count();
+            let shared = fa.iter().filter(|&&f| tri(f).contains(&b)).count();
             if shared != 1 {
                 return false;
             }
@@ -209,7 +393,7 @@ impl State {
         let mut opposite = [NONE; 2];
         let mut k = 0;
         for &f in fa {
-            let t = self.tri[f as usize];
+            let t = tri(f);
             if t.contains(&b) {
                 if k == 2 {
                     return false;
@@ -222,29 +406,29 @@ impl State {
             return false;
         }
         // vertex link: neighbours of a marked, common neighbours of b must be the opposites
-        self.mark_id = self.mark_id.wrapping_add(1);
-        if self.mark_id == 0 {
-            self.mark.iter_mut().for_each(|m| *m = 0);
-            self.mark_id = 1;
-        }
-        let id = self.mark_id;
+        let id = self.next_mark();
         for &f in fa {
-            for v in self.tri[f as usize] {
-                self.mark[v as usize] = id;
+            for v in self.face[f as usize].v {
+                self.vert[v as usize].mark = id;
             }
         }
         for &f in fb {
-            for v in self.tri[f as usize] {
-                if v != a && v != b && self.mark[v as usize] == id && !opposite[..k].contains(&v) {
+            for v in self.face[f as usize].v {
+                if v != a
+                    && v != b
+                    && self.vert[v as usize].mark == id
+                    && !opposite[..k].contains(&v)
+                {
                     return false;
                 }
             }
         }
+        let tri = |f: u32| self.face[f as usize].v;
         // edge link: a face (a, c, d) and a face (b, c, d) with c, d the opposites
         if k == 2 {
             let has = |fs: &[u32], w: u32| {
                 fs.iter().any(|&f| {
-                    let t = self.tri[f as usize];
+                    let t = tri(f);
                     t.contains(&w) && t.contains(&opposite[0]) && t.contains(&opposite[1])
                 })
             };
@@ -254,11 +438,11 @@ impl State {
         }
         // normal flips
         for (&f, moved) in fa.iter().map(|f| (f, a)).chain(fb.iter().map(|f| (f, b))) {
-            let t = self.tri[f as usize];
+            let t = tri(f);
             if t.contains(&a) && t.contains(&b) {
                 continue;
             }
-            let p: [[f64; 3]; 3] = std::array::from_fn(|i| self.pos[t[i] as usize]);
+            let p: [[f64; 3]; 3] = std::array::from_fn(|i| self.vert[t[i] as usize].pos);
             let before = vec3::cross(vec3::sub(p[1], p[0]), vec3::sub(p[2], p[0]));
             let q: [[f64; 3]; 3] = std::array::from_fn(|i| if t[i] == moved { x } else { p[i] });
             let after = vec3::cross(vec3::sub(q[1], q[0]), vec3::sub(q[2], q[0]));
@@ -270,99 +454,214 @@ impl State {
     }
 }
 
+/// Hint the cache to load the line at `p` (no effect on results; a no-op off x86-64).
+#[inline(always)]
+fn prefetch<T>(p: *const T) {
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: prefetching never faults, whatever the address.
+    unsafe {
+        use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
+        _mm_prefetch(p as *const i8, _MM_HINT_T0);
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = p;
+}
+
+/// The distinct neighbours `w` of vertex `v` (with face list `faces`) as
+/// `(w, faces on the edge vw, one such face)`, in face-list order.
+fn neighbours(face: &[Face], faces: &[u32], v: u32, ring: &mut Vec<(u32, u32, u32)>) {
+    ring.clear();
+    for &f in faces {
+        for w in face[f as usize].v {
+            if w == v {
+                continue;
+            }
+            match ring.iter_mut().find(|e| e.0 == w) {
+                Some(e) => e.1 += 1,
+                None => ring.push((w, 1, f)),
+            }
+        }
+    }
+}
+
 /// Simplify a manifold mesh (polygons are triangulated first) to at most `target_faces`
 /// triangles, or as few as the link condition allows.
 pub fn simplify(mesh: &Mesh, target_faces: usize) -> Result<Mesh> {
+    simplify_with_room(mesh, target_faces, 3)
+}
+
+/// [`simplify`] with room for `room ×` the initial face lists in `refs` before a compaction.
+fn simplify_with_room(mesh: &Mesh, target_faces: usize, room: usize) -> Result<Mesh> {
     let m = if mesh.is_triangle_mesh() {
-        mesh.clone()
+        std::borrow::Cow::Borrowed(mesh)
     } else {
-        mesh.triangulated()
+        std::borrow::Cow::Owned(mesh.triangulated())
     };
-    let edges = Edges::build(&m);
-    if let Some(e) = (0..edges.len()).find(|&e| edges.uses[e] > 2) {
-        let [a, b] = edges.verts[e];
+    let nv = m.vertex_count();
+    let nf = m.face_count();
+    let face: Vec<Face> = m
+        .indices
+        .par_chunks(3)
+        .with_min_len(4096)
+        .map(|c| Face {
+            v: [c[0], c[1], c[2]],
+        })
+        .collect();
+    // face lists by counting sort: counts, prefix sums, fill
+    let mut start = vec![0u32; nv + 1];
+    for &v in &m.indices {
+        start[v as usize + 1] += 1;
+    }
+    for v in 0..nv {
+        start[v + 1] += start[v];
+    }
+    let total = start[nv] as usize;
+    // room for the lists appended by collapses (compacted when full)
+    let refs_limit = (room * total + 64).min(u32::MAX as usize);
+    let mut refs = Vec::with_capacity(refs_limit);
+    refs.resize(total, 0u32);
+    {
+        let mut fill = start.clone();
+        for (c, &v) in m.indices.iter().enumerate() {
+            refs[fill[v as usize] as usize] = (c / 3) as u32;
+            fill[v as usize] += 1;
+        }
+    }
+    // per vertex, in parallel: quadric of its faces' planes, its edges' face counts (boundary
+    // edges add a plane ⟂ the face through the edge, weight 100; edges in three or more faces
+    // are flagged)
+    let positions = &m.positions;
+    let plane_of = |t: [u32; 3]| {
+        let p = t.map(|v| positions[v as usize]);
+        let n = vec3::normalized(vec3::cross(vec3::sub(p[1], p[0]), vec3::sub(p[2], p[0])));
+        (n, -vec3::dot(n, p[0]))
+    };
+    let (faces_ref, refs_ref, start_ref) = (&face, &refs, &start);
+    let vert: Vec<Vertex> = (0..nv)
+        .into_par_iter()
+        .with_min_len(1024)
+        .map_init(Vec::new, |ring, v| {
+            let (s0, s1) = (start_ref[v], start_ref[v + 1]);
+            let run = &refs_ref[s0 as usize..s1 as usize];
+            neighbours(faces_ref, run, v as u32, ring);
+            let pos = positions[v];
+            let mut q = Quadric::default();
+            for &f in run {
+                let (n, d) = plane_of(faces_ref[f as usize].v);
+                q.add(&Quadric::plane(n, d, 1.0));
+            }
+            let mut flags = 0;
+            for &(w, uses, f) in ring.iter() {
+                if uses == 1 {
+                    flags |= BOUNDARY;
+                    let (n, _) = plane_of(faces_ref[f as usize].v);
+                    let pw = positions[w as usize];
+                    let p = vec3::normalized(vec3::cross(vec3::sub(pw, pos), n));
+                    q.add(&Quadric::plane(p, -vec3::dot(p, pos), 100.0));
+                } else if uses > 2 {
+                    flags |= NON_MANIFOLD;
+                }
+            }
+            Vertex {
+                quadric: q,
+                pos,
+                mark: 0,
+                flags,
+            }
+        })
+        .collect();
+    let run: Vec<Run> = start
+        .windows(2)
+        .map(|w| Run {
+            start: w[0],
+            count: w[1] - w[0],
+        })
+        .collect();
+    drop(start);
+    if let Some(v) = vert.iter().position(|x| x.flags & NON_MANIFOLD != 0) {
+        // the first such edge from its smaller vertex
+        let mut ring = Vec::new();
+        let r = run[v];
+        neighbours(
+            &face,
+            &refs[r.start as usize..][..r.count as usize],
+            v as u32,
+            &mut ring,
+        );
+        let &(w, uses, _) = ring.iter().filter(|e| e.1 > 2).min().unwrap();
+        let (a, b) = (v.min(w as usize), v.max(w as usize));
         return Err(Error::format(
-            format!(
-                "non-manifold edge ({a}, {b}): used by {} faces",
-                edges.uses[e]
-            ),
+            format!("non-manifold edge ({a}, {b}): used by {uses} faces"),
             "a manifold mesh (each edge in one or two faces)",
         ));
     }
-    let nv = m.vertex_count();
-    let nf = m.face_count();
-    let tri: Vec<[u32; 3]> = m.indices.chunks(3).map(|c| [c[0], c[1], c[2]]).collect();
-    let mut head = vec![NONE; nv];
-    let mut next_corner = vec![NONE; 3 * nf];
-    for c in (0..3 * nf).rev() {
-        let v = m.indices[c] as usize;
-        next_corner[c] = head[v];
-        head[v] = c as u32;
-    }
     let (lo, hi) = m.bounding_box().unwrap_or(([0.0; 3], [1.0; 3]));
     let scale = vec3::norm(vec3::sub(hi, lo)).max(1e-300);
-    let mut quadric = vec![Quadric::default(); nv];
-    let mut boundary = vec![false; nv];
-    for (f, t) in tri.iter().enumerate() {
-        let av = super::normals::face_area_vector(&m, f);
-        let n = vec3::normalized(av);
-        let d = -vec3::dot(n, m.positions[t[0] as usize]);
-        let k = Quadric::plane(n, d, 1.0);
-        for &v in t {
-            quadric[v as usize].add(&k);
-        }
-    }
-    for e in 0..edges.len() {
-        if edges.uses[e] != 1 {
-            continue;
-        }
-        let [a, b] = edges.verts[e];
-        boundary[a as usize] = true;
-        boundary[b as usize] = true;
-        let f = edges.corner_face[edges.corners[e][0] as usize] as usize;
-        let n = vec3::normalized(super::normals::face_area_vector(&m, f));
-        let dir = vec3::sub(m.positions[b as usize], m.positions[a as usize]);
-        let p = vec3::normalized(vec3::cross(dir, n));
-        let d = -vec3::dot(p, m.positions[a as usize]);
-        let k = Quadric::plane(p, d, 100.0);
-        quadric[a as usize].add(&k);
-        quadric[b as usize].add(&k);
-    }
     let mut s = State {
-        pos: m.positions.clone(),
-        tri,
-        alive: vec![true; nf],
-        head,
-        next_corner,
-        quadric,
+        vert,
+        face,
+        refs,
+        run,
         stamp: vec![0; nv],
-        boundary,
-        mark: vec![0; nv],
         mark_id: 0,
-        scale,
+        lim: 1e3 * scale.max(1.0),
     };
-    let mut heap = BinQueue::new();
-    let initial: Vec<f64> = {
-        use rayon::prelude::*;
+    // every edge once (from its smaller vertex) with its cost, in vertex order
+    let initial: Vec<Vec<(u32, Candidate)>> = {
         let st = &s;
-        edges
-            .verts
-            .par_iter()
-            .with_min_len(4096)
-            .map(|&[a, b]| st.place(a, b).1)
+        (0..nv as u32)
+            .into_par_iter()
+            .chunks(16384)
+            .map_init(
+                || (Vec::new(), Vec::new(), Vec::new()),
+                |(ring, ws, cost), vs| {
+                    let mut out = Vec::with_capacity(3 * vs.len());
+                    for v in vs {
+                        neighbours(&st.face, st.refs_of(v), v, ring);
+                        ws.clear();
+                        ws.extend(ring.iter().map(|e| e.0).filter(|&w| w > v));
+                        st.costs(v, ws, cost);
+                        for (&w, &c) in ws.iter().zip(cost.iter()) {
+                            let b = BinQueue::bin(c) as u32;
+                            out.push((
+                                b,
+                                Candidate {
+                                    a: v,
+                                    b: w,
+                                    stamp: 0,
+                                },
+                            ));
+                        }
+                    }
+                    out
+                },
+            )
             .collect()
     };
-    for (&[a, b], &cost) in edges.verts.iter().zip(&initial) {
-        heap.push(cost, Candidate { a, b, stamp: 0 });
-    }
+    let mut heap = BinQueue::new();
+    heap.fill(&initial);
     drop(initial);
     let mut faces = nf;
     let (mut fa, mut fb) = (Vec::new(), Vec::new());
+    let (mut ring, mut ring_cost) = (Vec::new(), Vec::new());
     while faces > target_faces {
         let Some(c) = heap.pop() else { break };
         let (a, b) = (c.a, c.b);
         if s.stamp[a as usize].wrapping_add(s.stamp[b as usize]) != c.stamp {
             continue;
+        }
+        // start loading the next live candidate's data while this one is processed
+        if let Some(n) = heap
+            .peek(8)
+            .find(|n| s.stamp[n.a as usize].wrapping_add(s.stamp[n.b as usize]) == n.stamp)
+        {
+            for v in [n.a, n.b] {
+                let r = s.run[v as usize];
+                prefetch(s.refs.as_ptr().wrapping_add(r.start as usize));
+                let p = &s.vert[v as usize] as *const Vertex as *const u8;
+                prefetch(p);
+                prefetch(p.wrapping_add(64));
+            }
         }
         s.faces_of(a, &mut fa);
         s.faces_of(b, &mut fb);
@@ -370,76 +669,76 @@ pub fn simplify(mesh: &Mesh, target_faces: usize) -> Result<Mesh> {
         if !s.can_collapse(a, b, x, &fa, &fb) {
             continue;
         }
-        // collapse b into a
+        // collapse b into a: its faces on ab die, the others move to a; a's new face list
+        // is a's live faces then b's
         for &f in &fa {
-            if s.tri[f as usize].contains(&b) {
-                s.alive[f as usize] = false;
+            let t = &mut s.face[f as usize];
+            if t.v.contains(&b) {
+                t.v = [NONE; 3];
                 faces -= 1;
             }
         }
-        // relabel b's corners as a and rebuild a's corner list from the live corners of both
-        // (dropping dead corners keeps the lists short: without this, lists grow with the
-        // collapse history and the run time becomes quadratic)
-        let mut list = NONE;
-        fa.clear(); // collects the faces around the merged vertex
-        for start in [s.head[b as usize], s.head[a as usize]] {
-            let mut c = start;
-            while c != NONE {
-                let nxt = s.next_corner[c as usize];
-                let f = (c / 3) as usize;
-                if s.alive[f] {
-                    s.tri[f][(c % 3) as usize] = a;
-                    s.next_corner[c as usize] = list;
-                    list = c;
-                    fa.push(f as u32);
+        fa.retain(|&f| s.face[f as usize].alive());
+        for &f in &fb {
+            let t = &mut s.face[f as usize];
+            if t.alive() {
+                for w in t.v.iter_mut() {
+                    if *w == b {
+                        *w = a;
+                    }
                 }
-                c = nxt;
+                fa.push(f);
             }
         }
-        s.head[a as usize] = list;
-        s.head[b as usize] = NONE;
-        s.pos[a as usize] = x;
-        let qb = s.quadric[b as usize];
-        s.quadric[a as usize].add(&qb);
-        s.boundary[a as usize] |= s.boundary[b as usize];
-        s.stamp[a as usize] += 1;
-        s.stamp[b as usize] += 1;
+        if s.refs.len() + fa.len() > refs_limit {
+            s.compact_refs();
+        }
+        s.set_faces(a, &fa);
+        let vb = s.vert[b as usize];
+        let va = &mut s.vert[a as usize];
+        va.pos = x;
+        va.quadric.add(&vb.quadric);
+        va.flags |= vb.flags;
+        s.run[b as usize].count = 0;
+        s.stamp[a as usize] = s.stamp[a as usize].wrapping_add(1);
+        s.stamp[b as usize] = s.stamp[b as usize].wrapping_add(1);
         // new candidates around a (its live faces were collected above)
-        s.mark_id = s.mark_id.wrapping_add(1);
-        if s.mark_id == 0 {
-            s.mark.iter_mut().for_each(|m| *m = 0);
-            s.mark_id = 1;
-        }
-        let id = s.mark_id;
+        let id = s.next_mark();
+        let sa = s.stamp[a as usize];
+        ring.clear();
         for &f in &fa {
-            for v in s.tri[f as usize] {
-                if v != a && s.mark[v as usize] != id {
-                    s.mark[v as usize] = id;
-                    let (_, cost) = s.place(a, v);
-                    heap.push(
-                        cost,
-                        Candidate {
-                            a,
-                            b: v,
-                            stamp: s.stamp[a as usize].wrapping_add(s.stamp[v as usize]),
-                        },
-                    );
+            for v in s.face[f as usize].v {
+                if v != a && s.vert[v as usize].mark != id {
+                    s.vert[v as usize].mark = id;
+                    ring.push(v);
                 }
             }
+        }
+        s.costs(a, &ring, &mut ring_cost);
+        for (&v, &cost) in ring.iter().zip(&ring_cost) {
+            heap.push(
+                cost,
+                Candidate {
+                    a,
+                    b: v,
+                    stamp: sa.wrapping_add(s.stamp[v as usize]),
+                },
+            );
         }
     }
     // compact
+    let nv = m.vertex_count();
     let mut remap = vec![NONE; nv];
     let mut positions = Vec::new();
     let mut indices = Vec::with_capacity(3 * faces);
-    for (f, t) in s.tri.iter().enumerate() {
-        if !s.alive[f] {
+    for t in &s.face {
+        if !t.alive() {
             continue;
         }
-        for &v in t {
+        for &v in &t.v {
             if remap[v as usize] == NONE {
                 remap[v as usize] = positions.len() as u32;
-                positions.push(s.pos[v as usize]);
+                positions.push(s.vert[v as usize].pos);
             }
             indices.push(remap[v as usize]);
         }
@@ -738,4 +1037,18 @@ pub fn remove_vertex(mesh: &Mesh, v: u32) -> Result<Mesh> {
         indices,
         attributes: Attributes::default(),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn compacting_the_face_lists_often_changes_nothing() {
+        let torus = super::super::shapes::torus_triangles(30, 20, 3.0, 1.0);
+        let roomy = simplify_with_room(&torus, 300, 3).unwrap();
+        let tight = simplify_with_room(&torus, 300, 1).unwrap();
+        assert_eq!(roomy.face_count(), 300);
+        assert_eq!(roomy, tight);
+    }
 }
