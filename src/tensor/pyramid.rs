@@ -334,7 +334,9 @@ fn run<T: Sample>(array: &mut Array<T>, pyr: &Pyramid, dir: Direction, engine: E
     // Every level fused over the same axes: levels 1.. alternate between the array and
     // the scratch array (ping-pong), so only the detail blocks left in the scratch are
     // copied, once, instead of every level's whole box.
-    let ping_pong = fused_k.len() >= 2 && fused_k.iter().all(|&k| k.is_some() && k == fused_k[0]);
+    let ping_pong = fused_k.len() >= 2
+        && fused_k.iter().all(|&k| k.is_some() && k == fused_k[0])
+        && (1..pyr.depth()).all(|l| pyr.region_before(l) != shape);
     let mut scratch: Option<Vec<T>> = None;
     for l in levels {
         let region = pyr.region_before(l);
