@@ -130,117 +130,86 @@ unsafe fn taps_avx2<T: Sample, const N: usize>(out: &mut [T], src: &[&[T]], w: &
     }
 }
 
-/// `o[i] = Σ_k ws[k]·p[k][i]`, `i < len` (first tap assigns), f32.
-///
-/// # Safety
-/// AVX2 present; `o` and every `p[k]` valid for `len` samples.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-unsafe fn taps_avx2_f32<const N: usize>(
-    o: *mut f32,
-    len: usize,
-    p: &[*const f32; N],
-    ws: &[f32; N],
-) {
-    use std::arch::x86_64::*;
-    let mut wv = [_mm256_setzero_ps(); N];
-    for k in 0..N {
-        wv[k] = _mm256_set1_ps(ws[k]);
-    }
-    let mut i = 0;
-    // SAFETY (all blocks): i + width <= len, so every access is inside the runs.
-    unsafe {
-        while i + 32 <= len {
-            let mut a0 = _mm256_mul_ps(wv[0], _mm256_loadu_ps(p[0].add(i)));
-            let mut a1 = _mm256_mul_ps(wv[0], _mm256_loadu_ps(p[0].add(i + 8)));
-            let mut a2 = _mm256_mul_ps(wv[0], _mm256_loadu_ps(p[0].add(i + 16)));
-            let mut a3 = _mm256_mul_ps(wv[0], _mm256_loadu_ps(p[0].add(i + 24)));
-            for k in 1..N {
-                a0 = _mm256_add_ps(a0, _mm256_mul_ps(wv[k], _mm256_loadu_ps(p[k].add(i))));
-                a1 = _mm256_add_ps(a1, _mm256_mul_ps(wv[k], _mm256_loadu_ps(p[k].add(i + 8))));
-                a2 = _mm256_add_ps(a2, _mm256_mul_ps(wv[k], _mm256_loadu_ps(p[k].add(i + 16))));
-                a3 = _mm256_add_ps(a3, _mm256_mul_ps(wv[k], _mm256_loadu_ps(p[k].add(i + 24))));
+/// `o[i] = Σ_k ws[k]·p[k][i]`, `i < len` (first tap assigns): blocks of four vectors, then
+/// single vectors, then scalars. One body for `f32` and `f64` (their intrinsics differ).
+macro_rules! taps_avx2_body {
+    ($name:ident, $t:ty, $lanes:expr, $set1:ident, $zero:ident, $mul:ident, $add:ident, $load:ident, $store:ident) => {
+        /// See [`taps_avx2_body`].
+        ///
+        /// # Safety
+        /// AVX2 present; `o` and every `p[k]` valid for `len` samples.
+        #[cfg(target_arch = "x86_64")]
+        #[target_feature(enable = "avx2")]
+        unsafe fn $name<const N: usize>(o: *mut $t, len: usize, p: &[*const $t; N], ws: &[$t; N]) {
+            use std::arch::x86_64::*;
+            const L: usize = $lanes;
+            let mut wv = [$zero(); N];
+            for k in 0..N {
+                wv[k] = $set1(ws[k]);
             }
-            _mm256_storeu_ps(o.add(i), a0);
-            _mm256_storeu_ps(o.add(i + 8), a1);
-            _mm256_storeu_ps(o.add(i + 16), a2);
-            _mm256_storeu_ps(o.add(i + 24), a3);
-            i += 32;
-        }
-        while i + 8 <= len {
-            let mut a = _mm256_mul_ps(wv[0], _mm256_loadu_ps(p[0].add(i)));
-            for k in 1..N {
-                a = _mm256_add_ps(a, _mm256_mul_ps(wv[k], _mm256_loadu_ps(p[k].add(i))));
+            let mut i = 0;
+            // SAFETY (all blocks): i + width <= len, so every access is inside the runs.
+            unsafe {
+                while i + 4 * L <= len {
+                    let mut a0 = $mul(wv[0], $load(p[0].add(i)));
+                    let mut a1 = $mul(wv[0], $load(p[0].add(i + L)));
+                    let mut a2 = $mul(wv[0], $load(p[0].add(i + 2 * L)));
+                    let mut a3 = $mul(wv[0], $load(p[0].add(i + 3 * L)));
+                    for k in 1..N {
+                        a0 = $add(a0, $mul(wv[k], $load(p[k].add(i))));
+                        a1 = $add(a1, $mul(wv[k], $load(p[k].add(i + L))));
+                        a2 = $add(a2, $mul(wv[k], $load(p[k].add(i + 2 * L))));
+                        a3 = $add(a3, $mul(wv[k], $load(p[k].add(i + 3 * L))));
+                    }
+                    $store(o.add(i), a0);
+                    $store(o.add(i + L), a1);
+                    $store(o.add(i + 2 * L), a2);
+                    $store(o.add(i + 3 * L), a3);
+                    i += 4 * L;
+                }
+                while i + L <= len {
+                    let mut a = $mul(wv[0], $load(p[0].add(i)));
+                    for k in 1..N {
+                        a = $add(a, $mul(wv[k], $load(p[k].add(i))));
+                    }
+                    $store(o.add(i), a);
+                    i += L;
+                }
+                while i < len {
+                    let mut a = ws[0] * *p[0].add(i);
+                    for k in 1..N {
+                        a += ws[k] * *p[k].add(i);
+                    }
+                    *o.add(i) = a;
+                    i += 1;
+                }
             }
-            _mm256_storeu_ps(o.add(i), a);
-            i += 8;
         }
-        while i < len {
-            let mut a = ws[0] * *p[0].add(i);
-            for k in 1..N {
-                a += ws[k] * *p[k].add(i);
-            }
-            *o.add(i) = a;
-            i += 1;
-        }
-    }
+    };
 }
 
-/// [`taps_avx2_f32`] for f64.
-///
-/// # Safety
-/// AVX2 present; `o` and every `p[k]` valid for `len` samples.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-unsafe fn taps_avx2_f64<const N: usize>(
-    o: *mut f64,
-    len: usize,
-    p: &[*const f64; N],
-    ws: &[f64; N],
-) {
-    use std::arch::x86_64::*;
-    let mut wv = [_mm256_setzero_pd(); N];
-    for k in 0..N {
-        wv[k] = _mm256_set1_pd(ws[k]);
-    }
-    let mut i = 0;
-    // SAFETY (all blocks): i + width <= len, so every access is inside the runs.
-    unsafe {
-        while i + 16 <= len {
-            let mut a0 = _mm256_mul_pd(wv[0], _mm256_loadu_pd(p[0].add(i)));
-            let mut a1 = _mm256_mul_pd(wv[0], _mm256_loadu_pd(p[0].add(i + 4)));
-            let mut a2 = _mm256_mul_pd(wv[0], _mm256_loadu_pd(p[0].add(i + 8)));
-            let mut a3 = _mm256_mul_pd(wv[0], _mm256_loadu_pd(p[0].add(i + 12)));
-            for k in 1..N {
-                a0 = _mm256_add_pd(a0, _mm256_mul_pd(wv[k], _mm256_loadu_pd(p[k].add(i))));
-                a1 = _mm256_add_pd(a1, _mm256_mul_pd(wv[k], _mm256_loadu_pd(p[k].add(i + 4))));
-                a2 = _mm256_add_pd(a2, _mm256_mul_pd(wv[k], _mm256_loadu_pd(p[k].add(i + 8))));
-                a3 = _mm256_add_pd(a3, _mm256_mul_pd(wv[k], _mm256_loadu_pd(p[k].add(i + 12))));
-            }
-            _mm256_storeu_pd(o.add(i), a0);
-            _mm256_storeu_pd(o.add(i + 4), a1);
-            _mm256_storeu_pd(o.add(i + 8), a2);
-            _mm256_storeu_pd(o.add(i + 12), a3);
-            i += 16;
-        }
-        while i + 4 <= len {
-            let mut a = _mm256_mul_pd(wv[0], _mm256_loadu_pd(p[0].add(i)));
-            for k in 1..N {
-                a = _mm256_add_pd(a, _mm256_mul_pd(wv[k], _mm256_loadu_pd(p[k].add(i))));
-            }
-            _mm256_storeu_pd(o.add(i), a);
-            i += 4;
-        }
-        while i < len {
-            let mut a = ws[0] * *p[0].add(i);
-            for k in 1..N {
-                a += ws[k] * *p[k].add(i);
-            }
-            *o.add(i) = a;
-            i += 1;
-        }
-    }
-}
+taps_avx2_body!(
+    taps_avx2_f32,
+    f32,
+    8,
+    _mm256_set1_ps,
+    _mm256_setzero_ps,
+    _mm256_mul_ps,
+    _mm256_add_ps,
+    _mm256_loadu_ps,
+    _mm256_storeu_ps
+);
+taps_avx2_body!(
+    taps_avx2_f64,
+    f64,
+    4,
+    _mm256_set1_pd,
+    _mm256_setzero_pd,
+    _mm256_mul_pd,
+    _mm256_add_pd,
+    _mm256_loadu_pd,
+    _mm256_storeu_pd
+);
 
 /// Split `x` (elements of `e` samples) into its even elements, then its odd elements:
 /// `dst = [x_0, x_2, x_4, … | x_1, x_3, …]`.
