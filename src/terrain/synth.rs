@@ -565,38 +565,58 @@ fn refine(
 /// (`δ ∈ {−1, 0, 1}`: the finest patch borders, which lie near fine index `2t − 1`)
 /// divided by the same over every other line; rows and columns together.
 pub fn seam_ratio(g: &Grid, period: usize) -> f64 {
-    let (mut on, mut non, mut off, mut noff) = (0.0, 0usize, 0.0, 0usize);
-    let is_border = |i: usize| {
-        (1..=1 + i / period.max(1)).any(|j| {
-            let b = (period * j) as i64 - 1;
-            (i as i64 - b).abs() <= 1
-        })
-    };
+    let mut seams = SeamTally::new(period);
     for y in 1..g.h.saturating_sub(1) {
         for x in 1..g.w.saturating_sub(1) {
             let h = g.mean_at(y, x);
-            let dxx = (g.mean_at(y, x + 1) - 2.0 * h + g.mean_at(y, x - 1)).abs();
-            let dyy = (g.mean_at(y + 1, x) - 2.0 * h + g.mean_at(y - 1, x)).abs();
-            if is_border(x) {
-                on += dxx;
-                non += 1;
-            } else {
-                off += dxx;
-                noff += 1;
-            }
-            if is_border(y) {
-                on += dyy;
-                non += 1;
-            } else {
-                off += dyy;
-                noff += 1;
-            }
+            seams.add(
+                x,
+                (g.mean_at(y, x + 1) - 2.0 * h + g.mean_at(y, x - 1)).abs(),
+            );
+            seams.add(
+                y,
+                (g.mean_at(y + 1, x) - 2.0 * h + g.mean_at(y - 1, x)).abs(),
+            );
         }
     }
-    if non == 0 || noff == 0 || off == 0.0 {
-        return f64::NAN;
+    seams.ratio()
+}
+
+/// Second differences split by whether their line is a patch border (`period·j − 1 ± 1`),
+/// for the seam ratios of images and volumes.
+pub(crate) struct SeamTally {
+    period: usize,
+    on: (f64, usize),
+    off: (f64, usize),
+}
+
+impl SeamTally {
+    pub(crate) fn new(period: usize) -> SeamTally {
+        SeamTally {
+            period: period.max(1),
+            on: (0.0, 0),
+            off: (0.0, 0),
+        }
     }
-    (on / non as f64) / (off / noff as f64)
+
+    /// Count `s`, the second difference across line `i` of its axis.
+    pub(crate) fn add(&mut self, i: usize, s: f64) {
+        let border = (1..=1 + i / self.period).any(|j| {
+            let b = (self.period * j) as i64 - 1;
+            (i as i64 - b).abs() <= 1
+        });
+        let t = if border { &mut self.on } else { &mut self.off };
+        t.0 += s;
+        t.1 += 1;
+    }
+
+    /// Mean on the borders ÷ mean elsewhere (NaN when either is undefined).
+    pub(crate) fn ratio(&self) -> f64 {
+        if self.on.1 == 0 || self.off.1 == 0 || self.off.0 == 0.0 {
+            return f64::NAN;
+        }
+        (self.on.0 / self.on.1 as f64) / (self.off.0 / self.off.1 as f64)
+    }
 }
 
 /// Synthesize a terrain of `base × 2^L` (or `o.size`) from a smooth or coarse `base`

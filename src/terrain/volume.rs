@@ -344,10 +344,7 @@ fn match_band_rms(acc: &mut Volume, n: [usize; 3], e: &Volume, ne: [usize; 3]) {
 /// Mean |second difference| of channel means across the lines `period·j − 1 ± 1` of
 /// every axis ÷ the same elsewhere (the volume form of [`super::synth::seam_ratio`]).
 pub fn seam_ratio(v: &Volume, period: usize) -> f64 {
-    let is_border = |i: usize| {
-        (1..=1 + i / period.max(1)).any(|j| ((i as i64) - (period * j) as i64 + 1).abs() <= 1)
-    };
-    let (mut on, mut non, mut off, mut noff) = (0.0, 0usize, 0.0, 0usize);
+    let mut seams = super::synth::SeamTally::new(period);
     let [dz, dy, dx] = v.dims;
     for z in 1..dz.saturating_sub(1) {
         for y in 1..dy.saturating_sub(1) {
@@ -359,21 +356,12 @@ pub fn seam_ratio(v: &Volume, period: usize) -> f64 {
                     lo[a] -= 1;
                     hi[a] += 1;
                     let s = (v.mean_clamped(hi) - 2.0 * h + v.mean_clamped(lo)).abs();
-                    if is_border(p[a] as usize) {
-                        on += s;
-                        non += 1;
-                    } else {
-                        off += s;
-                        noff += 1;
-                    }
+                    seams.add(p[a] as usize, s);
                 }
             }
         }
     }
-    if non == 0 || noff == 0 || off == 0.0 {
-        return f64::NAN;
-    }
-    (on / non as f64) / (off / noff as f64)
+    seams.ratio()
 }
 
 /// Detail transfer for a volume: `base` keeps its size and its coarse points `A^L F`;
