@@ -47,9 +47,29 @@ fn round_trip(
     }
 }
 
-/// The fused engine and the axis-by-axis engine give the same bits, forward and back
-/// (f32 and f64), including shapes where some levels cannot fuse.
+/// Every engine gives the bits of the axis-by-axis engine, forward and back (f64 and
+/// f32), including shapes where some levels cannot fuse: the cascade (default, and
+/// forced into 1–4 parts with volumes included), and the fused levels.
 fn engines_agree(shape: &[usize], axes: Vec<usize>, s: usize, b: usize, levels: usize, seed: u64) {
+    let engines = [
+        Engine::Fused,
+        Engine::FusedLevels,
+        Engine::CascadeParts(1 + (seed % 4) as usize),
+    ];
+    for engine in engines {
+        engine_agrees(engine, shape, axes.clone(), s, b, levels, seed);
+    }
+}
+
+fn engine_agrees(
+    engine: Engine,
+    shape: &[usize],
+    axes: Vec<usize>,
+    s: usize,
+    b: usize,
+    levels: usize,
+    seed: u64,
+) {
     let data = noise(seed, shape.iter().product());
     let spec = PyramidSpec {
         scheme: Scheme::ALL[s],
@@ -58,52 +78,40 @@ fn engines_agree(shape: &[usize], axes: Vec<usize>, s: usize, b: usize, levels: 
         order: Order::NonStandard,
         axes,
     };
+    let same = |x: &[f64], y: &[f64]| x.iter().zip(y).all(|(x, y)| x.to_bits() == y.to_bits());
     let mut fused = Array::from_shape_vec(shape, data.clone()).unwrap();
     let mut axis = fused.clone();
-    let p1 = analyze_with(&mut fused, &spec, Engine::Fused).unwrap();
+    let p1 = analyze_with(&mut fused, &spec, engine).unwrap();
     let p2 = analyze_with(&mut axis, &spec, Engine::AxisByAxis).unwrap();
     assert_eq!(p1, p2);
     assert!(
-        fused
-            .data()
-            .iter()
-            .zip(axis.data())
-            .all(|(x, y)| x.to_bits() == y.to_bits()),
-        "analysis {spec:?} {shape:?}"
+        same(fused.data(), axis.data()),
+        "{engine:?} analysis {spec:?} {shape:?}"
     );
     // synthesize the same coefficients both ways
     let mut back = fused.clone();
-    synthesize_with(&mut fused, &p1, Engine::Fused).unwrap();
+    synthesize_with(&mut fused, &p1, engine).unwrap();
     synthesize_with(&mut back, &p1, Engine::AxisByAxis).unwrap();
     assert!(
-        fused
-            .data()
-            .iter()
-            .zip(back.data())
-            .all(|(x, y)| x.to_bits() == y.to_bits()),
-        "synthesis {spec:?} {shape:?}"
+        same(fused.data(), back.data()),
+        "{engine:?} synthesis {spec:?} {shape:?}"
     );
     // and in f32
     let d32: Vec<f32> = data.iter().map(|&v| v as f32).collect();
+    let same32 = |x: &[f32], y: &[f32]| x.iter().zip(y).all(|(x, y)| x.to_bits() == y.to_bits());
     let mut f = Array::from_shape_vec(shape, d32.clone()).unwrap();
     let mut a = Array::from_shape_vec(shape, d32).unwrap();
-    let p = analyze_with(&mut f, &spec, Engine::Fused).unwrap();
+    let p = analyze_with(&mut f, &spec, engine).unwrap();
     analyze_with(&mut a, &spec, Engine::AxisByAxis).unwrap();
     assert!(
-        f.data()
-            .iter()
-            .zip(a.data())
-            .all(|(x, y)| x.to_bits() == y.to_bits()),
-        "f32 analysis {spec:?} {shape:?}"
+        same32(f.data(), a.data()),
+        "{engine:?} f32 analysis {spec:?} {shape:?}"
     );
-    synthesize_with(&mut f, &p, Engine::Fused).unwrap();
+    synthesize_with(&mut f, &p, engine).unwrap();
     synthesize_with(&mut a, &p, Engine::AxisByAxis).unwrap();
     assert!(
-        f.data()
-            .iter()
-            .zip(a.data())
-            .all(|(x, y)| x.to_bits() == y.to_bits()),
-        "f32 synthesis {spec:?} {shape:?}"
+        same32(f.data(), a.data()),
+        "{engine:?} f32 synthesis {spec:?} {shape:?}"
     );
 }
 
@@ -121,6 +129,53 @@ fn engines_agree_on_large_images_and_volumes() {
     engines_agree(&[1500, 1501], vec![0, 1], 2, 2, 2, 10);
     // a volume whose lanes go through the transposed plane path, streaming
     engines_agree(&[66, 130, 260], vec![0, 1, 2], 1, 0, 2, 11);
+    // an image large enough for the cascade to split into parts by itself, odd sizes
+    for s in 0..3 {
+        for b in 0..3 {
+            engine_agrees(Engine::Fused, &[1031, 517], vec![0, 1], s, b, 5, 12);
+            engine_agrees(Engine::Fused, &[300, 899, 2], vec![0, 1], s, b, 4, 13);
+        }
+    }
+}
+
+/// The cascade writes every sample of the output whatever the number of parts (a sample
+/// no part writes keeps what the scratch array held before, and differs), with parts of
+/// a few rows each and halos crossing several parts.
+#[test]
+fn cascade_parts_cover_every_row() {
+    for parts in 1..=7 {
+        for s in 0..3 {
+            for b in 0..3 {
+                engine_agrees(
+                    Engine::CascadeParts(parts),
+                    &[45, 38],
+                    vec![0, 1],
+                    s,
+                    b,
+                    4,
+                    20 + parts as u64,
+                );
+                engine_agrees(
+                    Engine::CascadeParts(parts),
+                    &[21, 14, 19],
+                    vec![0, 1, 2],
+                    s,
+                    b,
+                    3,
+                    30 + parts as u64,
+                );
+                engine_agrees(
+                    Engine::CascadeParts(parts),
+                    &[33, 20, 3],
+                    vec![0, 1],
+                    s,
+                    b,
+                    3,
+                    40 + parts as u64,
+                );
+            }
+        }
+    }
 }
 
 proptest! {

@@ -28,7 +28,7 @@ pub struct AxisOp<'a> {
 }
 
 /// Levels whose region is at least this large write their output past the caches.
-const STREAM_BYTES: usize = 16 << 20;
+pub(super) const STREAM_BYTES: usize = 16 << 20;
 
 /// Rows of [`AxisOp::order`] handed to one task.
 const ROWS_PER_TASK: usize = 16;
@@ -48,42 +48,14 @@ pub fn fused_level<T: Sample>(
     assert!(k >= 1 && region.len() == k && strides.len() == k);
     assert_eq!(strides[k - 1], e);
     assert_eq!(src.len(), dst.len());
-    for d in 0..k {
-        assert_eq!(ops[d].op.rows(), region[d]);
-        assert_eq!(ops[d].plan.rows, region[d]);
-        assert!(d == 0 || strides[d - 1] >= strides[d] * region[d]);
+    for d in 1..k {
+        assert!(strides[d - 1] >= strides[d] * region[d]);
     }
     let extent = (0..k).map(|d| (region[d] - 1) * strides[d]).sum::<usize>() + e;
     assert!(extent <= src.len());
-    // compact strides of the slabs held in scratch
-    let mut cs = vec![e; k];
-    for d in (0..k - 1).rev() {
-        cs[d] = cs[d + 1] * region[d + 1];
-    }
-    let slab_len = |d: usize| cs[d]; // samples in a slab below axis d
-    let make_scratch = || -> Vec<Vec<T>> {
-        let mut v: Vec<Vec<T>> = (0..k - 1)
-            .map(|d| vec![T::default(); slab_len(d)])
-            .collect();
-        v.push(vec![T::default(); region[k - 1] * e]); // lane output when streaming
-        v.push(vec![T::default(); region[k - 1] * e]); // lane scratch
-        let planes = if plane_path(k, region, e) {
-            region[k - 2] * region[k - 1]
-        } else {
-            0
-        };
-        v.push(vec![T::default(); planes]); // the last two axes of a slab, transposed
-        v.push(vec![T::default(); planes]);
-        v
-    };
     let work_bytes = region.iter().product::<usize>() * e * std::mem::size_of::<T>();
-    let ctx = Ctx {
-        region,
-        e,
-        ops,
-        cs: &cs,
-        stream: work_bytes >= STREAM_BYTES,
-    };
+    let ctx = Ctx::new(region, e, ops, work_bytes >= STREAM_BYTES);
+    let make_scratch = || ctx.scratch::<T>();
     let dst_len = dst.len();
     let dptr = SharedMut(dst.as_mut_ptr());
     let order = ops[0].order;
@@ -111,16 +83,75 @@ pub fn fused_level<T: Sample>(
     for_each_part(order, ROWS_PER_TASK, work < 1 << 16, make_scratch, task);
 }
 
-struct Ctx<'a> {
+/// One level of a region, ready to apply row by row along axis 0 (shared by
+/// [`fused_level`] and the cascade of [`super::cascade`]).
+pub(super) struct Ctx<'a> {
     /// Write lanes with non-temporal stores (output larger than the caches).
-    stream: bool,
+    pub stream: bool,
     region: &'a [usize],
     e: usize,
     ops: &'a [AxisOp<'a>],
-    cs: &'a [usize],
+    /// Compact strides of a slab of the region (`cs[0]` = samples of one row along axis 0).
+    cs: Vec<usize>,
 }
 
-impl Ctx<'_> {
+impl<'a> Ctx<'a> {
+    /// The level `ops` (axes `0..k`) over the box `region` of elements of `e` samples.
+    pub fn new(region: &'a [usize], e: usize, ops: &'a [AxisOp<'a>], stream: bool) -> Self {
+        let k = ops.len();
+        assert!(k >= 1 && region.len() == k);
+        for d in 0..k {
+            assert_eq!(ops[d].op.rows(), region[d]);
+            assert_eq!(ops[d].plan.rows, region[d]);
+        }
+        let mut cs = vec![e; k];
+        for d in (0..k - 1).rev() {
+            cs[d] = cs[d + 1] * region[d + 1];
+        }
+        Ctx {
+            stream,
+            region,
+            e,
+            ops,
+            cs,
+        }
+    }
+
+    /// Compact strides of the region (a row along axis 0 is `cs()[0]` samples).
+    pub fn cs(&self) -> &[usize] {
+        &self.cs
+    }
+
+    /// The scratch one worker needs: a slab per axis but the last, the lane output and
+    /// scratch, and two planes for [`Ctx::plane`].
+    pub fn scratch<T: Sample>(&self) -> Vec<Vec<T>> {
+        let (k, region, e) = (self.ops.len(), self.region, self.e);
+        let mut v: Vec<Vec<T>> = (0..k - 1).map(|d| vec![T::default(); self.cs[d]]).collect();
+        v.push(vec![T::default(); region[k - 1] * e]); // lane output when streaming
+        v.push(vec![T::default(); region[k - 1] * e]); // lane scratch
+        let planes = if plane_path(k, region, e) {
+            region[k - 2] * region[k - 1]
+        } else {
+            0
+        };
+        v.push(vec![T::default(); planes]); // the last two axes of a slab, transposed
+        v.push(vec![T::default(); planes]);
+        v
+    }
+
+    /// The rest of the level for one row along axis 0 already combined along axis 0
+    /// (`slab`, compact): axes `1..k` into `out` (strides `dst_st`, of which `dst_st[0]`
+    /// is unused). `scratch` is [`Ctx::scratch`] without its first buffer.
+    pub fn finish_row<T: Sample>(
+        &self,
+        slab: &[T],
+        out: &mut [T],
+        dst_st: &[usize],
+        scratch: &mut [Vec<T>],
+    ) {
+        self.slab(1, slab, out, dst_st, scratch);
+    }
+
     /// Output row `r` along axis `d`: `out` starts at that row's slab in the destination
     /// (`dst_st` its strides), `src` at the input's origin for axes `d..` (`src_st`).
     #[allow(clippy::too_many_arguments)]
@@ -214,7 +245,7 @@ impl Ctx<'_> {
         for &r in self.ops[d].order {
             let at = r * dst_st[d];
             let o = &mut out[at..];
-            self.row(d, r, slab, self.cs, o, dst_st, scratch);
+            self.row(d, r, slab, &self.cs, o, dst_st, scratch);
         }
     }
 

@@ -2,6 +2,7 @@
 //! the standard and the non-standard (Mallat) order. `par.rs` holds the only rayon code.
 
 mod array;
+mod cascade;
 mod fused;
 mod par;
 pub mod pyramid;

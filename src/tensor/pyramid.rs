@@ -8,6 +8,7 @@
 //!   while the others go on.
 
 use super::array::Array;
+use super::cascade;
 use super::fused::{fused_level, AxisOp};
 use super::par::{for_each_task, SharedMut};
 use super::transform::transform_axis;
@@ -231,23 +232,31 @@ pub fn synthesize<T: Sample>(array: &mut Array<T>, pyr: &Pyramid) -> Result<()> 
 /// in both directions; the operators of different axes commute).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Engine {
-    /// Non-standard levels over the leading axes run fused and out of place (one read
-    /// and one write of every sample per level, the array plus one scratch array of
-    /// memory); other levels go axis by axis. The default, unless `MRA_ENGINE=axis` is
-    /// set in the environment.
+    /// Non-standard pyramids over the leading axes run as one cascade over all levels
+    /// (every sample read and written once for the whole pyramid, see `cascade.rs`);
+    /// where that does not apply, [`Engine::FusedLevels`]. The default, unless
+    /// `MRA_ENGINE` is set to `levels` or `axis` in the environment.
     Fused,
+    /// Non-standard levels over the leading axes run fused and out of place, level by
+    /// level (one read and one write of every sample per level, the array plus one
+    /// scratch array of memory); other levels go axis by axis.
+    FusedLevels,
     /// Every level axis by axis, in place.
     AxisByAxis,
+    /// [`Engine::Fused`] with the cascade split into this many parts, volumes included
+    /// (tests).
+    #[doc(hidden)]
+    CascadeParts(usize),
 }
 
 impl Default for Engine {
     fn default() -> Self {
-        static ON: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
-        if *ON.get_or_init(|| std::env::var("MRA_ENGINE").map_or(true, |v| v != "axis")) {
-            Engine::Fused
-        } else {
-            Engine::AxisByAxis
-        }
+        static ON: std::sync::OnceLock<Engine> = std::sync::OnceLock::new();
+        *ON.get_or_init(|| match std::env::var("MRA_ENGINE").as_deref() {
+            Ok("axis") => Engine::AxisByAxis,
+            Ok("levels") => Engine::FusedLevels,
+            _ => Engine::Fused,
+        })
     }
 }
 
@@ -324,7 +333,7 @@ fn run<T: Sample>(array: &mut Array<T>, pyr: &Pyramid, dir: Direction, engine: E
                 .collect();
             let k = active.len();
             // fused when the active axes are exactly 0..k and the rest of the array is whole
-            let fusable = engine == Engine::Fused
+            let fusable = engine != Engine::AxisByAxis
                 && k > 0
                 && (0..k).all(|d| active.iter().any(|&i| spec.axes[i] == d))
                 && (k..shape.len()).all(|d| region[d] == shape[d]);
@@ -337,6 +346,16 @@ fn run<T: Sample>(array: &mut Array<T>, pyr: &Pyramid, dir: Direction, engine: E
     let ping_pong = fused_k.len() >= 2
         && fused_k.iter().all(|&k| k.is_some() && k == fused_k[0])
         && (1..pyr.depth()).all(|l| pyr.region_before(l) != shape);
+    let parts = match engine {
+        Engine::Fused => Some((rayon::current_num_threads(), false)),
+        Engine::CascadeParts(p) => Some((p, true)),
+        _ => None,
+    };
+    if let (true, Some((parts, forced))) = (ping_pong, parts) {
+        if cascade(array, pyr, dir, fused_k[0].unwrap_or(0), parts, forced) {
+            return;
+        }
+    }
     let mut scratch: Option<Vec<T>> = None;
     for l in levels {
         let region = pyr.region_before(l);
@@ -415,6 +434,81 @@ fn run<T: Sample>(array: &mut Array<T>, pyr: &Pyramid, dir: Direction, engine: E
     if let Some(s) = scratch {
         workspace::give_scratch(s);
     }
+}
+
+/// All levels of a non-standard pyramid fused over the leading `k` axes as one cascade
+/// ([`cascade::Plan`]), into the scratch array which then becomes the array's data;
+/// `false` (nothing done) when the cascade does not apply.
+fn cascade<T: Sample>(
+    array: &mut Array<T>,
+    pyr: &Pyramid,
+    dir: Direction,
+    k: usize,
+    parts: usize,
+    forced: bool,
+) -> bool {
+    let shape = array.shape().to_vec();
+    let spec = &pyr.spec;
+    let depth = pyr.depth();
+    if k < 2 || depth < 2 {
+        return false;
+    }
+    let mut by_axis = vec![usize::MAX; shape.len()];
+    for (i, &a) in spec.axes.iter().enumerate() {
+        by_axis[a] = i;
+    }
+    let level_ops: Vec<Vec<_>> = (0..depth)
+        .map(|l| {
+            (0..k)
+                .map(|d| {
+                    let m = pyr.lengths[by_axis[d]][l];
+                    workspace::level_ops(spec.scheme, spec.boundary, m)
+                })
+                .collect()
+        })
+        .collect();
+    let ops: Vec<Vec<AxisOp>> = level_ops
+        .iter()
+        .map(|lv| {
+            lv.iter()
+                .map(|o| match dir {
+                    Direction::Analysis => AxisOp {
+                        op: &o.two_scale.analysis,
+                        plan: &o.analysis,
+                        order: &o.analysis_order,
+                    },
+                    Direction::Synthesis => AxisOp {
+                        op: &o.two_scale.synthesis,
+                        plan: &o.synthesis,
+                        order: &o.synthesis_order,
+                    },
+                })
+                .collect()
+        })
+        .collect();
+    let regions: Vec<Vec<usize>> = (0..=depth)
+        .map(|l| {
+            if l < depth {
+                pyr.region_before(l)[..k].to_vec()
+            } else {
+                (0..k).map(|d| pyr.lengths[by_axis[d]][depth]).collect()
+            }
+        })
+        .collect();
+    let e: usize = shape[k..].iter().product();
+    let way = match dir {
+        Direction::Analysis => cascade::Way::Analysis,
+        Direction::Synthesis => cascade::Way::Synthesis,
+    };
+    let Some(plan) = cascade::Plan::new(way, regions, &ops, e, parts, forced) else {
+        return false;
+    };
+    let strides = array.strides();
+    let mut buf = workspace::take_scratch(array.len());
+    plan.run(array.data(), &mut buf, &strides[..k]);
+    array.swap_data(&mut buf);
+    workspace::give_scratch(buf);
+    true
 }
 
 /// Copy the box `[0, region)` (leading axes; elements of `e` samples) from `src` to `dst`,

@@ -1,0 +1,822 @@
+//! All levels of a non-standard pyramid in one sweep over the array ("cascade").
+//!
+//! Level by level, every level reads its box and writes it back: the levels after the
+//! first cost one more pass over a quarter (images) or an eighth (forced) of the array,
+//! and the detail blocks written to the scratch array have to be copied back. Here the
+//! levels are chained row by row along axis 0 instead: a row of level `l` is computed as
+//! soon as the rows of level `l − 1` it needs exist, and those are kept in a small ring
+//! (a few rows, in the caches) rather than in the array:
+//!
+//! - **analysis**: output row `r` of level `l` is `Σ_c A_rc · (input row c)` followed by
+//!   the level along the other axes ([`Ctx::finish_row`]); its coarse part (the box of
+//!   level `l + 1`) goes to level `l + 1`'s ring, the rest (details) straight to the
+//!   output array. Level 0 reads the array.
+//! - **synthesis**: input row `c` of level `l` is a row of level `l + 1`'s output (its
+//!   coarse box) completed with the details of the array, or a detail row of the array;
+//!   output rows of level 0 go to the output array.
+//!
+//! Every sample is read once and written once for the whole pyramid, and every output
+//! is the same sums in the same order as level by level ([`super::fused`]): the same bits.
+//!
+//! Threads take consecutive parts of the rows of each level. A part computes what its
+//! rows need, so rows near a seam between parts are computed by both (a "halo", written
+//! by its owner only); [`Plan::new`] declines when the halos would cost more than
+//! [`MAX_HALO`] of the work.
+
+use super::fused::{AxisOp, Ctx, STREAM_BYTES};
+use super::par::SharedMut;
+use crate::scheme::kernel::{combine, stream_copy};
+use crate::scheme::sparse::Csr;
+use crate::scheme::Sample;
+use rayon::prelude::*;
+
+/// Largest extra work (rows computed twice at seams between parts) the cascade accepts.
+const MAX_HALO: f64 = 0.15;
+
+/// Most rows a level's ring may hold.
+const MAX_RING: usize = 24;
+
+/// Fewest samples per part: below this a pyramid runs in one part.
+const MIN_PART: usize = 1 << 18;
+
+/// Which way the levels go.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+pub(super) enum Way {
+    Analysis,
+    Synthesis,
+}
+
+/// Positions (in a level's row order) one part computes: `start..end`, of which it owns
+/// (writes) `own`.
+#[derive(Clone, Debug)]
+struct Span {
+    start: usize,
+    end: usize,
+    own: std::ops::Range<usize>,
+}
+
+/// How a pyramid runs as a cascade: the levels' regions, row orders, ring sizes and
+/// the parts.
+pub(super) struct Plan<'a> {
+    way: Way,
+    /// `regions[l]` = box before level `l` (leading `k` axes); `regions[levels]` = the
+    /// coarsest block.
+    regions: Vec<Vec<usize>>,
+    /// Per level, the axes' operators.
+    ops: &'a [Vec<AxisOp<'a>>],
+    /// Per level, the order in which its output rows along axis 0 are computed.
+    order: Vec<Vec<usize>>,
+    /// Per level, slots of its input ring: (coarse rows, detail rows).
+    caps: Vec<(usize, usize)>,
+    /// `spans[p][l]`.
+    spans: Vec<Vec<Span>>,
+    e: usize,
+    /// Rows along axis 0 are single lines (images): the box of a level is a prefix of
+    /// the row, so rings hold whole rows and the array's rows are read in place.
+    lines: bool,
+}
+
+/// Input rows of `op` (columns in `cols`) alive at once when its rows are computed in
+/// `order` and every input is made just before its first use and dropped after its last:
+/// `max_p (max col of rows ≤ p) − (min col of rows ≥ p) + 1`.
+fn live_span(op: &Csr, order: &[usize], cols: std::ops::Range<usize>) -> usize {
+    let n = order.len();
+    let range = |r: usize| {
+        let (c, _) = op.row_slices(r);
+        let inside = c.iter().map(|&c| c as usize).filter(|c| cols.contains(c));
+        inside.fold(None, |acc: Option<(usize, usize)>, c| {
+            Some(acc.map_or((c, c), |(lo, hi)| (lo.min(c), hi.max(c))))
+        })
+    };
+    let mut suffix_min = vec![usize::MAX; n + 1];
+    for p in (0..n).rev() {
+        suffix_min[p] = suffix_min[p + 1].min(range(order[p]).map_or(usize::MAX, |r| r.0));
+    }
+    let (mut hi, mut span) = (None::<usize>, 1);
+    for p in 0..n {
+        if let Some((_, h)) = range(order[p]) {
+            hi = Some(hi.map_or(h, |x: usize| x.max(h)));
+        }
+        if let (Some(h), lo) = (hi, suffix_min[p]) {
+            if lo <= h {
+                span = span.max(h - lo + 1);
+            }
+        }
+    }
+    span
+}
+
+/// The least and the greatest column (within `cols`) of the rows at `positions` of `order`.
+fn col_range(
+    op: &Csr,
+    order: &[usize],
+    positions: std::ops::Range<usize>,
+    cols: std::ops::Range<usize>,
+) -> Option<(usize, usize)> {
+    let mut out: Option<(usize, usize)> = None;
+    for &r in &order[positions] {
+        for &c in op.row_slices(r).0 {
+            let c = c as usize;
+            if cols.contains(&c) {
+                out = Some(out.map_or((c, c), |(lo, hi)| (lo.min(c), hi.max(c))));
+            }
+        }
+    }
+    out
+}
+
+impl<'a> Plan<'a> {
+    /// Plan `ops.len()` levels (at least 2) whose regions are `regions` (one more than
+    /// levels), with up to `parts` parts; `None` when the cascade does not apply (row
+    /// orders it cannot follow, or halos too costly for that many parts). When `forced`
+    /// (tests), exactly `parts` parts whatever the halos, and boxes of more than two axes
+    /// too; otherwise those stay level by level (measured slower for now: a ring of planes
+    /// does not fit the caches; 256³ Chaikin took 91 ms of CPU time forward and back
+    /// against 74 level by level).
+    pub fn new(
+        way: Way,
+        regions: Vec<Vec<usize>>,
+        ops: &'a [Vec<AxisOp<'a>>],
+        e: usize,
+        parts: usize,
+        forced: bool,
+    ) -> Option<Self> {
+        let levels = ops.len();
+        if levels < 2
+            || regions.len() != levels + 1
+            || regions[0].len() < 2
+            || (regions[0].len() > 2 && !forced)
+        {
+            return None;
+        }
+        let n = |l: usize| regions[l][0];
+        let row_len = |l: usize| regions[l][1..].iter().product::<usize>() * e;
+        // row orders: analysis by first column (coarse rows must come in increasing
+        // order, as the next level asks for them); synthesis in index order
+        let order: Vec<Vec<usize>> = (0..levels)
+            .map(|l| match way {
+                Way::Analysis => ops[l][0].order.to_vec(),
+                Way::Synthesis => (0..n(l)).collect(),
+            })
+            .collect();
+        if way == Way::Analysis {
+            for l in 0..levels - 1 {
+                let coarse: Vec<usize> =
+                    order[l].iter().copied().filter(|&r| r < n(l + 1)).collect();
+                if coarse.len() != n(l + 1) || coarse.windows(2).any(|w| w[0] >= w[1]) {
+                    return None;
+                }
+            }
+        }
+        let lines = regions[0].len() == 2;
+        // ring slots per level's inputs
+        let caps: Vec<(usize, usize)> = (0..levels)
+            .map(|l| {
+                let op = ops[l][0].op;
+                match way {
+                    Way::Analysis if l == 0 => (0, 0),
+                    Way::Analysis => (live_span(op, &order[l], 0..n(l)), 0),
+                    // images: the coarsest level reads the array, details come from it
+                    Way::Synthesis if lines && l + 1 == levels => (0, 0),
+                    Way::Synthesis if lines => (live_span(op, &order[l], 0..n(l + 1)), 0),
+                    Way::Synthesis => {
+                        let nc = n(l + 1);
+                        let detail = if l == 0 {
+                            0
+                        } else {
+                            live_span(op, &order[l], nc..n(l))
+                        };
+                        (live_span(op, &order[l], 0..nc), detail)
+                    }
+                }
+            })
+            .collect();
+        // rows that reach across the lane (periodic ends) would hold a whole level
+        if caps.iter().any(|&(c, d)| c + d > MAX_RING) {
+            return None;
+        }
+        let total: usize = (0..levels).map(|l| n(l) * row_len(l)).sum();
+        let parts = if forced {
+            parts.max(1)
+        } else {
+            parts
+                .clamp(1, (total / MIN_PART).max(1))
+                .min(n(levels - 1).max(1))
+        };
+        let spans: Vec<Vec<Span>> = (0..parts)
+            .map(|p| Self::part_spans(way, &regions, ops, &order, p, parts))
+            .collect::<Option<_>>()?;
+        let work: usize = spans
+            .iter()
+            .flat_map(|s| s.iter().enumerate())
+            .map(|(l, s)| (s.end - s.start) * row_len(l))
+            .sum();
+        if std::env::var("MRA_DEBUG_CASCADE").is_ok() {
+            eprintln!(
+                "cascade {way:?} parts {} work {:.3} caps {caps:?}",
+                spans.len(),
+                work as f64 / total as f64
+            );
+        }
+        if !forced && work as f64 > total as f64 * (1.0 + MAX_HALO) {
+            return None;
+        }
+        Some(Plan {
+            way,
+            regions,
+            ops,
+            order,
+            caps,
+            spans,
+            e,
+            lines,
+        })
+    }
+
+    /// What part `p` of `parts` computes at every level.
+    fn part_spans(
+        way: Way,
+        regions: &[Vec<usize>],
+        ops: &[Vec<AxisOp>],
+        order: &[Vec<usize>],
+        p: usize,
+        parts: usize,
+    ) -> Option<Vec<Span>> {
+        let levels = ops.len();
+        let n = |l: usize| regions[l][0];
+        let own = |l: usize| n(l) * p / parts..n(l) * (p + 1) / parts;
+        let mut spans: Vec<Span> = (0..levels)
+            .map(|_| Span {
+                start: 0,
+                end: 0,
+                own: 0..0,
+            })
+            .collect();
+        match way {
+            Way::Analysis => {
+                // every level writes the rows it owns; deeper levels pull what they need
+                for l in (0..levels).rev() {
+                    let o = own(l);
+                    let (mut start, mut end) = (o.start, o.end);
+                    if l + 1 < levels {
+                        let up = &spans[l + 1];
+                        if up.end > up.start {
+                            let (lo, hi) = col_range(
+                                ops[l + 1][0].op,
+                                &order[l + 1],
+                                up.start..up.end,
+                                0..n(l + 1),
+                            )?;
+                            // positions of coarse rows lo and hi in this level's order
+                            let at = |c: usize| order[l].iter().position(|&r| r == c);
+                            start = start.min(at(lo)?);
+                            end = end.max(at(hi)? + 1);
+                        }
+                    }
+                    spans[l] = Span { start, end, own: o };
+                }
+            }
+            Way::Synthesis => {
+                // level 0 writes the rows it owns; the others feed it
+                spans[0] = Span {
+                    start: own(0).start,
+                    end: own(0).end,
+                    own: own(0),
+                };
+                for l in 1..levels {
+                    let down = &spans[l - 1];
+                    let (start, end) = if down.end > down.start {
+                        match col_range(
+                            ops[l - 1][0].op,
+                            &order[l - 1],
+                            down.start..down.end,
+                            0..n(l),
+                        ) {
+                            Some((lo, hi)) => (lo, hi + 1),
+                            None => (0, 0),
+                        }
+                    } else {
+                        (0, 0)
+                    };
+                    spans[l] = Span {
+                        start,
+                        end,
+                        own: 0..0,
+                    };
+                }
+            }
+        }
+        Some(spans)
+    }
+
+    /// Run the cascade: `src` (strides `strides`, leading `k`) into `dst`, every level.
+    pub fn run<T: Sample>(&self, src: &[T], dst: &mut [T], strides: &[usize]) {
+        let levels = self.ops.len();
+        let k = self.regions[0].len();
+        assert_eq!(strides.len(), k);
+        assert_eq!(strides[k - 1], self.e);
+        assert!(src.len() == dst.len() && strides[0] * self.regions[0][0] <= src.len());
+        let bytes = self.regions[0].iter().product::<usize>() * self.e * std::mem::size_of::<T>();
+        // the output goes past the caches (it is not read again in this sweep)
+        let stream = bytes >= STREAM_BYTES;
+        let ctxs: Vec<Ctx> = (0..levels)
+            .map(|l| Ctx::new(&self.regions[l], self.e, &self.ops[l], stream))
+            .collect();
+        let local: Vec<Ctx> = (0..levels)
+            .map(|l| Ctx::new(&self.regions[l], self.e, &self.ops[l], false))
+            .collect();
+        let dptr = SharedMut(dst.as_mut_ptr());
+        let dst_len = dst.len();
+        let run_part = |p: usize| {
+            let d = dptr;
+            let mut part = Part::new(self, &ctxs, &local, src, d, dst_len, strides, p);
+            part.run();
+        };
+        if self.spans.len() == 1 {
+            run_part(0);
+        } else {
+            (0..self.spans.len()).into_par_iter().for_each(run_part);
+        }
+    }
+}
+
+/// A ring of rows: slots `0..coarse` for rows `< split`, the others for rows `≥ split`.
+struct Ring<T> {
+    data: Vec<T>,
+    row: usize,
+    coarse: usize,
+    detail: usize,
+    split: usize,
+    tags: Vec<usize>,
+}
+
+impl<T: Sample> Ring<T> {
+    fn new(row: usize, coarse: usize, detail: usize, split: usize) -> Self {
+        Ring {
+            data: vec![T::default(); row * (coarse + detail)],
+            row,
+            coarse,
+            detail,
+            split,
+            tags: vec![usize::MAX; coarse + detail],
+        }
+    }
+    fn slot_of(&self, c: usize) -> usize {
+        if c < self.split {
+            c % self.coarse
+        } else {
+            self.coarse + (c - self.split) % self.detail
+        }
+    }
+    fn has(&self, c: usize) -> bool {
+        self.tags[self.slot_of(c)] == c
+    }
+    fn get(&self, c: usize) -> &[T] {
+        let s = self.slot_of(c);
+        assert_eq!(self.tags[s], c, "cascade ring: row {c} is not held");
+        &self.data[s * self.row..(s + 1) * self.row]
+    }
+    /// The slot for row `c` (now holding it).
+    fn put(&mut self, c: usize) -> &mut [T] {
+        let s = self.slot_of(c);
+        self.tags[s] = c;
+        &mut self.data[s * self.row..(s + 1) * self.row]
+    }
+}
+
+/// Per level state of one part.
+struct LevelState<T> {
+    /// Next position in the level's order.
+    cursor: usize,
+    /// Analysis: the last coarse row made (rows come in increasing order).
+    made: Option<usize>,
+    /// The level's input rows (analysis: level ≥ 1; synthesis: every level).
+    ring: Ring<T>,
+    /// The level's scratch ([`Ctx::scratch`]); its first buffer takes the row combined
+    /// along axis 0.
+    scratch: Vec<Vec<T>>,
+    /// A whole output row, compact (analysis rows that feed the next level).
+    out: Vec<T>,
+}
+
+struct Part<'p, 'a, T> {
+    plan: &'p Plan<'a>,
+    ctxs: &'p [Ctx<'p>],
+    local: &'p [Ctx<'p>],
+    src: &'p [T],
+    dst: SharedMut<T>,
+    dst_len: usize,
+    strides: &'p [usize],
+    spans: &'p [Span],
+    levels: Vec<LevelState<T>>,
+}
+
+impl<'p, 'a, T: Sample> Part<'p, 'a, T> {
+    #[allow(clippy::too_many_arguments)]
+    fn new(
+        plan: &'p Plan<'a>,
+        ctxs: &'p [Ctx<'p>],
+        local: &'p [Ctx<'p>],
+        src: &'p [T],
+        dst: SharedMut<T>,
+        dst_len: usize,
+        strides: &'p [usize],
+        p: usize,
+    ) -> Self {
+        let spans = &plan.spans[p];
+        let levels = (0..plan.ops.len())
+            .map(|l| {
+                // images: analysis rings hold the previous level's whole rows
+                let row = if plan.lines && plan.way == Way::Analysis && l > 0 {
+                    ctxs[l - 1].cs()[0]
+                } else {
+                    ctxs[l].cs()[0]
+                };
+                let (c, d) = plan.caps[l];
+                let split = match plan.way {
+                    Way::Analysis => usize::MAX,
+                    Way::Synthesis => plan.regions[l + 1][0],
+                };
+                let needs_out = plan.way == Way::Analysis && l + 1 < plan.ops.len() && !plan.lines;
+                LevelState {
+                    cursor: spans[l].start,
+                    made: None,
+                    ring: Ring::new(row, c, d, split),
+                    scratch: ctxs[l].scratch(),
+                    out: vec![T::default(); if needs_out { row } else { 0 }],
+                }
+            })
+            .collect();
+        Part {
+            plan,
+            ctxs,
+            local,
+            src,
+            dst,
+            dst_len,
+            strides,
+            spans,
+            levels,
+        }
+    }
+
+    fn run(&mut self) {
+        let levels = self.plan.ops.len();
+        match self.plan.way {
+            Way::Analysis => {
+                for l in (0..levels).rev() {
+                    while self.levels[l].cursor < self.spans[l].own.end {
+                        self.analysis_row(l);
+                    }
+                }
+            }
+            Way::Synthesis => {
+                while self.levels[0].cursor < self.spans[0].own.end {
+                    self.synthesis_row(0);
+                }
+            }
+        }
+    }
+
+    /// The output array from the start of row `r` along axis 0.
+    fn dst_row(&self, r: usize) -> &'p mut [T] {
+        let at = r * self.strides[0];
+        assert!(at <= self.dst_len);
+        // SAFETY: parts own disjoint rows of every level (`Span::own`) and write only
+        // those; the parts of one row that different levels write are disjoint (the
+        // details of level `l` lie outside the box of level `l + 1`). No part reads `dst`.
+        unsafe { std::slice::from_raw_parts_mut(self.dst.0.add(at), self.dst_len - at) }
+    }
+
+    /// The next row of level `l` in its order.
+    fn next_row(&self, l: usize) -> Step<'a> {
+        let pos = self.levels[l].cursor;
+        let r = self.plan.order[l][pos];
+        Step {
+            pos,
+            r,
+            taps: self.plan.ops[l][0].op.row_slices(r),
+        }
+    }
+
+    /// Compute the next row of level `l` in its order (analysis).
+    fn analysis_row(&mut self, l: usize) {
+        let plan = self.plan;
+        let levels = plan.ops.len();
+        let step = self.next_row(l);
+        self.levels[l].cursor += 1;
+        if l > 0 {
+            for &c in step.taps.0 {
+                let c = c as usize;
+                while self.levels[l - 1].made.is_none_or(|m| m < c) {
+                    assert!(
+                        self.levels[l - 1].cursor < plan.order[l - 1].len(),
+                        "cascade: level {} never makes row {c}",
+                        l - 1
+                    );
+                    self.analysis_row(l - 1);
+                }
+            }
+        }
+        let (src, strides) = (self.src, self.strides);
+        let row_len = self.ctxs[l].cs()[0];
+        {
+            let st = &mut self.levels[l];
+            let ring = &st.ring;
+            let s0 = strides[0];
+            step.combine(&mut st.scratch[0], 0..row_len, |c| {
+                if l == 0 {
+                    &src[c as usize * s0..c as usize * s0 + row_len]
+                } else {
+                    &ring.get(c as usize)[..row_len]
+                }
+            });
+        }
+        {
+            let (pos, r) = (step.pos, step.r);
+            let owned = self.spans[l].own.contains(&pos);
+            let feeds = l + 1 < levels && r < plan.regions[l + 1][0];
+            let out_row = owned.then(|| self.dst_row(r));
+            let (ctx, local) = (&self.ctxs[l], &self.local[l]);
+            let (here, up) = self.levels[l..].split_at_mut(1);
+            let st = &mut here[0];
+            let (slab, rest) = st.scratch.split_first_mut().expect("slab");
+            let slab = &slab[..row_len];
+            if !feeds {
+                if let Some(out) = out_row {
+                    ctx.finish_row(slab, out, strides, rest);
+                }
+                return;
+            }
+            let cs = ctx.cs();
+            st.made = Some(r);
+            let next = &plan.regions[l + 1];
+            let slot = up[0].ring.put(r);
+            let whole: &[T] = if plan.lines {
+                // the whole row into the next level's ring (which reads its prefix)
+                local.finish_row(slab, slot, cs, rest);
+                slot
+            } else {
+                // the coarse box to the next level's ring
+                local.finish_row(slab, &mut st.out, cs, rest);
+                copy_box(
+                    &st.out,
+                    &cs[1..],
+                    slot,
+                    &self.ctxs[l + 1].cs()[1..],
+                    &next[1..],
+                    plan.e,
+                );
+                &st.out
+            };
+            // the rest (details) to the array
+            if let Some(out) = out_row {
+                copy_box_outside(
+                    whole,
+                    &cs[1..],
+                    out,
+                    &strides[1..],
+                    &plan.regions[l][1..],
+                    &next[1..],
+                    plan.e,
+                    ctx.stream,
+                );
+            }
+        }
+    }
+
+    /// Make input row `c` of level `l` available (synthesis).
+    fn synthesis_input(&mut self, l: usize, c: usize) {
+        let plan = self.plan;
+        let levels = plan.ops.len();
+        let nc = plan.regions[l + 1][0];
+        let direct = if plan.lines {
+            c >= nc || l + 1 == levels
+        } else {
+            l == 0 && c >= nc
+        };
+        if direct || self.levels[l].ring.has(c) {
+            return;
+        }
+        if c < nc && l + 1 < levels {
+            while self.levels[l + 1].cursor <= c {
+                self.synthesis_row(l + 1);
+            }
+            return;
+        }
+        // a row of the array (details, or the coarsest block)
+        let from = &self.src[c * self.strides[0]..];
+        let cs = &self.ctxs[l].cs()[1..];
+        let slot = self.levels[l].ring.put(c);
+        copy_box(
+            from,
+            &self.strides[1..],
+            slot,
+            cs,
+            &plan.regions[l][1..],
+            plan.e,
+        );
+    }
+
+    /// Compute the next row of level `l` (synthesis): into the array (level 0) or into
+    /// the ring of level `l − 1`, completed with that row's details from the array.
+    fn synthesis_row(&mut self, l: usize) {
+        let plan = self.plan;
+        let step = self.next_row(l);
+        self.levels[l].cursor += 1;
+        for &c in step.taps.0 {
+            self.synthesis_input(l, c as usize);
+        }
+        let (src, strides) = (self.src, self.strides);
+        let row_len = self.ctxs[l].cs()[0];
+        let nc = plan.regions[l + 1][0];
+        let s0 = strides[0];
+        {
+            let st = &mut self.levels[l];
+            let ring = &st.ring;
+            if plan.lines {
+                // rows of the array in place; the coarse rows' first `w1` samples are the
+                // coarser level's output (when there is one)
+                let w1 = if l + 1 < plan.ops.len() {
+                    self.ctxs[l + 1].cs()[0]
+                } else {
+                    0
+                };
+                if w1 > 0 {
+                    step.combine(&mut st.scratch[0], 0..w1, |c| {
+                        let c = c as usize;
+                        if c < nc {
+                            &ring.get(c)[..w1]
+                        } else {
+                            &src[c * s0..c * s0 + w1]
+                        }
+                    });
+                }
+                step.combine(&mut st.scratch[0], w1..row_len, |c| {
+                    let c = c as usize;
+                    &src[c * s0..c * s0 + row_len]
+                });
+            } else {
+                step.combine(&mut st.scratch[0], 0..row_len, |c| {
+                    let c = c as usize;
+                    if l == 0 && c >= nc {
+                        &src[c * s0..c * s0 + row_len]
+                    } else {
+                        ring.get(c)
+                    }
+                });
+            }
+        }
+        {
+            let r = step.r;
+            let (ctx, local) = (&self.ctxs[l], &self.local[l]);
+            if l == 0 {
+                debug_assert!(self.spans[0].own.contains(&r));
+                let out = self.dst_row(r);
+                let st = &mut self.levels[0];
+                let (slab, rest) = st.scratch.split_first_mut().expect("slab");
+                ctx.finish_row(&slab[..row_len], out, strides, rest);
+                return;
+            }
+            // into the finer level's ring: this level's box, then the rest of that row
+            let fcs = self.ctxs[l - 1].cs();
+            let (below, here) = self.levels.split_at_mut(l);
+            let st = &mut here[0];
+            let (slab, rest) = st.scratch.split_first_mut().expect("slab");
+            let slab = &slab[..row_len];
+            let slot = below[l - 1].ring.put(r);
+            if plan.lines {
+                // the finer level reads the rest of the row from the array
+                local.finish_row(slab, slot, ctx.cs(), rest);
+                return;
+            }
+            local.finish_row(slab, slot, fcs, rest);
+            copy_box_outside(
+                &src[r * s0..],
+                &strides[1..],
+                slot,
+                &fcs[1..],
+                &plan.regions[l - 1][1..],
+                &plan.regions[l][1..],
+                plan.e,
+                false,
+            );
+        }
+    }
+}
+
+/// One row of a level's operator along axis 0: its position in the level's order, its
+/// index and its taps.
+struct Step<'o> {
+    pos: usize,
+    r: usize,
+    taps: (&'o [u32], &'o [f64]),
+}
+
+impl Step<'_> {
+    /// The row over samples `range` of the input rows (`tap(c)`: row `c` from its
+    /// start) into `slab`.
+    fn combine<'t, T: Sample + 't>(
+        &self,
+        slab: &mut [T],
+        range: std::ops::Range<usize>,
+        tap: impl Fn(u32) -> &'t [T],
+    ) {
+        let (cols, ws) = self.taps;
+        combine_taps(&mut slab[range.clone()], cols, ws, |c| {
+            &tap(c)[range.clone()]
+        });
+    }
+}
+
+/// `out = Σ_t w_t · tap(c_t)`.
+fn combine_taps<'t, T: Sample + 't>(
+    out: &mut [T],
+    cols: &[u32],
+    ws: &[f64],
+    tap: impl Fn(u32) -> &'t [T],
+) {
+    let mut taps: [&[T]; 16] = [&[]; 16];
+    let mut w = [T::default(); 16];
+    if cols.len() <= taps.len() {
+        for (t, (&c, &wc)) in cols.iter().zip(ws).enumerate() {
+            taps[t] = tap(c);
+            w[t] = T::from_f64(wc);
+        }
+        combine(out, &taps[..cols.len()], &w[..cols.len()]);
+    } else {
+        let t: Vec<&[T]> = cols.iter().map(|&c| tap(c)).collect();
+        let wv: Vec<T> = ws.iter().map(|&x| T::from_f64(x)).collect();
+        combine(out, &t, &wv);
+    }
+}
+
+/// Lines of a box `bx` (axes `1..k`, the last of `e`-sample elements): calls
+/// `f(line offset in a, line offset in b, line index)` for every line.
+fn for_lines(
+    a_st: &[usize],
+    b_st: &[usize],
+    bx: &[usize],
+    mut f: impl FnMut(usize, usize, &[usize]),
+) {
+    let m = bx.len();
+    let lines: usize = bx[..m - 1].iter().product();
+    let mut idx = vec![0usize; m - 1];
+    for _ in 0..lines {
+        let (mut ao, mut bo) = (0, 0);
+        for j in 0..m - 1 {
+            ao += idx[j] * a_st[j];
+            bo += idx[j] * b_st[j];
+        }
+        f(ao, bo, &idx);
+        for j in (0..m - 1).rev() {
+            idx[j] += 1;
+            if idx[j] < bx[j] {
+                break;
+            }
+            idx[j] = 0;
+        }
+    }
+}
+
+/// Copy the box `bx` from `a` (strides `a_st`) to `b` (strides `b_st`).
+fn copy_box<T: Sample>(
+    a: &[T],
+    a_st: &[usize],
+    b: &mut [T],
+    b_st: &[usize],
+    bx: &[usize],
+    e: usize,
+) {
+    let run = bx[bx.len() - 1] * e;
+    for_lines(a_st, b_st, bx, |ao, bo, _| {
+        b[bo..bo + run].copy_from_slice(&a[ao..ao + run]);
+    });
+}
+
+/// Copy the box `bx` without the box `inner` from `a` (strides `a_st`) to `b` (strides
+/// `b_st`), with non-temporal stores when `stream`.
+#[allow(clippy::too_many_arguments)]
+fn copy_box_outside<T: Sample>(
+    a: &[T],
+    a_st: &[usize],
+    b: &mut [T],
+    b_st: &[usize],
+    bx: &[usize],
+    inner: &[usize],
+    e: usize,
+    stream: bool,
+) {
+    let m = bx.len();
+    let run = bx[m - 1] * e;
+    for_lines(a_st, b_st, bx, |ao, bo, idx| {
+        let inside = idx.iter().zip(inner).all(|(&i, &n)| i < n);
+        let from = if inside { inner[m - 1] * e } else { 0 };
+        let (s, d) = (&a[ao + from..ao + run], &mut b[bo + from..bo + run]);
+        if stream {
+            stream_copy(s, d);
+        } else {
+            d.copy_from_slice(s);
+        }
+    });
+}
