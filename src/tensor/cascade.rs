@@ -23,7 +23,7 @@
 //! by its owner only); [`Plan::new`] declines when the halos would cost more than
 //! [`MAX_HALO`] of the work.
 
-use super::fused::{AxisOp, Ctx, STREAM_BYTES};
+use super::fused::{prefetch, AxisOp, Ctx, PREFETCH_MAX, STREAM_BYTES};
 use super::par::SharedMut;
 use crate::scheme::kernel::{combine, stream_copy};
 use crate::scheme::sparse::Csr;
@@ -520,6 +520,14 @@ impl<'p, 'a, T: Sample> Part<'p, 'a, T> {
         }
         let (src, strides) = (self.src, self.strides);
         let row_len = self.ctxs[l].cs()[0];
+        if l == 0 && row_len * std::mem::size_of::<T>() <= PREFETCH_MAX {
+            // the array rows the next rows will read first
+            if let Some(&last) = step.taps.0.last() {
+                for c in last as usize + 1..last as usize + 3 {
+                    prefetch(src, c * strides[0], row_len);
+                }
+            }
+        }
         {
             let st = &mut self.levels[l];
             let ring = &st.ring;
@@ -631,6 +639,18 @@ impl<'p, 'a, T: Sample> Part<'p, 'a, T> {
         let row_len = self.ctxs[l].cs()[0];
         let nc = plan.regions[l + 1][0];
         let s0 = strides[0];
+        if row_len * std::mem::size_of::<T>() <= PREFETCH_MAX {
+            // the array rows (details) the next rows will read first
+            for &c in step.taps.0.iter().rev() {
+                let c = c as usize;
+                if c >= nc {
+                    if c + 1 < plan.regions[l][0] {
+                        prefetch(src, (c + 1) * s0, row_len);
+                    }
+                    break;
+                }
+            }
+        }
         {
             let st = &mut self.levels[l];
             let ring = &st.ring;

