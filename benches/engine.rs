@@ -1,7 +1,9 @@
 //! Engine throughput: forward + inverse pyramid, in MB/s of input, next to a plain copy
-//! of the same buffer timed in the same run. Each figure is given for the best and the
-//! median of the repetitions (on a shared machine the median also measures the other
-//! jobs; the best is the least disturbed run).
+//! (`copy_from_slice`, one thread) of the same buffer timed in the same run: each
+//! repetition times the copy and then the pyramid, so both see the same moment of a
+//! shared machine (its memory bandwidth moves by a third from one minute to the next).
+//! Each figure is given for the best and the median of the repetitions (the median also
+//! measures the other jobs; the best is the least disturbed run).
 //!
 //! `cargo bench --bench engine` (set `MRA_BENCH_QUICK=1` for smaller sizes). Prints one
 //! JSON object per line plus a table; `benches/peers/pywavelets_peer.py` runs this and
@@ -16,18 +18,22 @@ fn median(mut v: Vec<f64>) -> f64 {
     v[v.len() / 2]
 }
 
-/// (best, median) seconds of `reps` runs after one warm-up run.
-fn time<F: FnMut()>(reps: usize, mut f: F) -> (f64, f64) {
+/// (best, median) seconds of `reps` runs of `f` and of `g`, alternating, after one
+/// warm-up run of each.
+fn time_pair<F: FnMut(), G: FnMut()>(reps: usize, mut f: F, mut g: G) -> [(f64, f64); 2] {
     f(); // warm up
-    let v: Vec<f64> = (0..reps)
-        .map(|_| {
-            let t = Instant::now();
-            f();
-            t.elapsed().as_secs_f64()
-        })
-        .collect();
-    let best = v.iter().cloned().fold(f64::INFINITY, f64::min);
-    (best, median(v))
+    g();
+    let (mut a, mut b) = (Vec::new(), Vec::new());
+    for _ in 0..reps {
+        let t = Instant::now();
+        f();
+        a.push(t.elapsed().as_secs_f64());
+        let t = Instant::now();
+        g();
+        b.push(t.elapsed().as_secs_f64());
+    }
+    let stats = |v: Vec<f64>| (v.iter().cloned().fold(f64::INFINITY, f64::min), median(v));
+    [stats(a), stats(b)]
 }
 
 fn main() {
@@ -51,11 +57,6 @@ fn main() {
             .collect();
         let bytes = (n * 4) as f64;
         let mut dst = vec![0f32; n];
-        let copy = time(reps, || {
-            dst.copy_from_slice(&data);
-            std::hint::black_box(&mut dst);
-        });
-        let (copy_best, copy_med) = (bytes / copy.0 / 1e6, bytes / copy.1 / 1e6);
         for scheme in Scheme::ALL {
             for boundary in Boundary::ALL {
                 let spec = PyramidSpec {
@@ -66,10 +67,18 @@ fn main() {
                     axes: (0..shape.len()).collect(),
                 };
                 let mut a = Array::from_shape_vec(&shape, data.clone()).unwrap();
-                let t = time(reps, || {
-                    let pyr = analyze(&mut a, &spec).unwrap();
-                    synthesize(&mut a, &pyr).unwrap();
-                });
+                let [copy, t] = time_pair(
+                    reps,
+                    || {
+                        dst.copy_from_slice(&data);
+                        std::hint::black_box(&mut dst);
+                    },
+                    || {
+                        let pyr = analyze(&mut a, &spec).unwrap();
+                        synthesize(&mut a, &pyr).unwrap();
+                    },
+                );
+                let (copy_best, copy_med) = (bytes / copy.0 / 1e6, bytes / copy.1 / 1e6);
                 let (best, med) = (bytes / t.0 / 1e6, bytes / t.1 / 1e6);
                 let shape_s = shape
                     .iter()

@@ -160,9 +160,8 @@ impl<'a> Plan<'a> {
             })
             .collect();
         if way == Way::Analysis {
-            for l in 0..levels - 1 {
-                let coarse: Vec<usize> =
-                    order[l].iter().copied().filter(|&r| r < n(l + 1)).collect();
+            for (l, ord) in order.iter().enumerate().take(levels - 1) {
+                let coarse: Vec<usize> = ord.iter().copied().filter(|&r| r < n(l + 1)).collect();
                 if coarse.len() != n(l + 1) || coarse.windows(2).any(|w| w[0] >= w[1]) {
                     return None;
                 }
@@ -508,7 +507,7 @@ impl<'p, 'a, T: Sample> Part<'p, 'a, T> {
         if l > 0 {
             for &c in step.taps.0 {
                 let c = c as usize;
-                while self.levels[l - 1].made.is_none_or(|m| m < c) {
+                while !matches!(self.levels[l - 1].made, Some(m) if m >= c) {
                     assert!(
                         self.levels[l - 1].cursor < plan.order[l - 1].len(),
                         "cascade: level {} never makes row {c}",
@@ -540,56 +539,54 @@ impl<'p, 'a, T: Sample> Part<'p, 'a, T> {
                 }
             });
         }
-        {
-            let (pos, r) = (step.pos, step.r);
-            let owned = self.spans[l].own.contains(&pos);
-            let feeds = l + 1 < levels && r < plan.regions[l + 1][0];
-            let out_row = owned.then(|| self.dst_row(r));
-            let (ctx, local) = (&self.ctxs[l], &self.local[l]);
-            let (here, up) = self.levels[l..].split_at_mut(1);
-            let st = &mut here[0];
-            let (slab, rest) = st.scratch.split_first_mut().expect("slab");
-            let slab = &slab[..row_len];
-            if !feeds {
-                if let Some(out) = out_row {
-                    ctx.finish_row(slab, out, strides, rest);
-                }
-                return;
-            }
-            let cs = ctx.cs();
-            st.made = Some(r);
-            let next = &plan.regions[l + 1];
-            let slot = up[0].ring.put(r);
-            let whole: &[T] = if plan.lines {
-                // the whole row into the next level's ring (which reads its prefix)
-                local.finish_row(slab, slot, cs, rest);
-                slot
-            } else {
-                // the coarse box to the next level's ring
-                local.finish_row(slab, &mut st.out, cs, rest);
-                copy_box(
-                    &st.out,
-                    &cs[1..],
-                    slot,
-                    &self.ctxs[l + 1].cs()[1..],
-                    &next[1..],
-                    plan.e,
-                );
-                &st.out
-            };
-            // the rest (details) to the array
+        let (pos, r) = (step.pos, step.r);
+        let owned = self.spans[l].own.contains(&pos);
+        let feeds = l + 1 < levels && r < plan.regions[l + 1][0];
+        let out_row = owned.then(|| self.dst_row(r));
+        let (ctx, local) = (&self.ctxs[l], &self.local[l]);
+        let (here, up) = self.levels[l..].split_at_mut(1);
+        let st = &mut here[0];
+        let (slab, rest) = st.scratch.split_first_mut().expect("slab");
+        let slab = &slab[..row_len];
+        if !feeds {
             if let Some(out) = out_row {
-                copy_box_outside(
-                    whole,
-                    &cs[1..],
-                    out,
-                    &strides[1..],
-                    &plan.regions[l][1..],
-                    &next[1..],
-                    plan.e,
-                    ctx.stream,
-                );
+                ctx.finish_row(slab, out, strides, rest);
             }
+            return;
+        }
+        let cs = ctx.cs();
+        st.made = Some(r);
+        let next = &plan.regions[l + 1];
+        let slot = up[0].ring.put(r);
+        let whole: &[T] = if plan.lines {
+            // the whole row into the next level's ring (which reads its prefix)
+            local.finish_row(slab, slot, cs, rest);
+            slot
+        } else {
+            // the coarse box to the next level's ring
+            local.finish_row(slab, &mut st.out, cs, rest);
+            copy_box(
+                &st.out,
+                &cs[1..],
+                slot,
+                &self.ctxs[l + 1].cs()[1..],
+                &next[1..],
+                plan.e,
+            );
+            &st.out
+        };
+        // the rest (details) to the array
+        if let Some(out) = out_row {
+            copy_box_outside(
+                whole,
+                &cs[1..],
+                out,
+                &strides[1..],
+                &plan.regions[l][1..],
+                &next[1..],
+                plan.e,
+                ctx.stream,
+            );
         }
     }
 
@@ -687,41 +684,39 @@ impl<'p, 'a, T: Sample> Part<'p, 'a, T> {
                 });
             }
         }
-        {
-            let r = step.r;
-            let (ctx, local) = (&self.ctxs[l], &self.local[l]);
-            if l == 0 {
-                debug_assert!(self.spans[0].own.contains(&r));
-                let out = self.dst_row(r);
-                let st = &mut self.levels[0];
-                let (slab, rest) = st.scratch.split_first_mut().expect("slab");
-                ctx.finish_row(&slab[..row_len], out, strides, rest);
-                return;
-            }
-            // into the finer level's ring: this level's box, then the rest of that row
-            let fcs = self.ctxs[l - 1].cs();
-            let (below, here) = self.levels.split_at_mut(l);
-            let st = &mut here[0];
+        let r = step.r;
+        let (ctx, local) = (&self.ctxs[l], &self.local[l]);
+        if l == 0 {
+            debug_assert!(self.spans[0].own.contains(&r));
+            let out = self.dst_row(r);
+            let st = &mut self.levels[0];
             let (slab, rest) = st.scratch.split_first_mut().expect("slab");
-            let slab = &slab[..row_len];
-            let slot = below[l - 1].ring.put(r);
-            if plan.lines {
-                // the finer level reads the rest of the row from the array
-                local.finish_row(slab, slot, ctx.cs(), rest);
-                return;
-            }
-            local.finish_row(slab, slot, fcs, rest);
-            copy_box_outside(
-                &src[r * s0..],
-                &strides[1..],
-                slot,
-                &fcs[1..],
-                &plan.regions[l - 1][1..],
-                &plan.regions[l][1..],
-                plan.e,
-                false,
-            );
+            ctx.finish_row(&slab[..row_len], out, strides, rest);
+            return;
         }
+        // into the finer level's ring: this level's box, then the rest of that row
+        let fcs = self.ctxs[l - 1].cs();
+        let (below, here) = self.levels.split_at_mut(l);
+        let st = &mut here[0];
+        let (slab, rest) = st.scratch.split_first_mut().expect("slab");
+        let slab = &slab[..row_len];
+        let slot = below[l - 1].ring.put(r);
+        if plan.lines {
+            // the finer level reads the rest of the row from the array
+            local.finish_row(slab, slot, ctx.cs(), rest);
+            return;
+        }
+        local.finish_row(slab, slot, fcs, rest);
+        copy_box_outside(
+            &src[r * s0..],
+            &strides[1..],
+            slot,
+            &fcs[1..],
+            &plan.regions[l - 1][1..],
+            &plan.regions[l][1..],
+            plan.e,
+            false,
+        );
     }
 }
 
