@@ -33,6 +33,10 @@ use rayon::prelude::*;
 /// Largest extra work (rows computed twice at seams between parts) the cascade accepts.
 const MAX_HALO: f64 = 0.15;
 
+/// The parts' rings and scratch may hold at most this fraction (1 / `MAX_HELD`) of the
+/// array (the engine's memory stays within the array and one scratch array, plus this).
+const MAX_HELD: usize = 16;
+
 /// Most rows a level's ring may hold.
 const MAX_RING: usize = 24;
 
@@ -210,12 +214,17 @@ impl<'a> Plan<'a> {
             .flat_map(|s| s.iter().enumerate())
             .map(|(l, s)| (s.end - s.start) * row_len(l))
             .sum();
-        if std::env::var("MRA_DEBUG_CASCADE").is_ok() {
-            eprintln!(
-                "cascade {way:?} parts {} work {:.3} caps {caps:?}",
-                spans.len(),
-                work as f64 / total as f64
-            );
+        // memory of the parts (rings, a few rows of scratch per level) next to the array:
+        // a short image with very long rows would need rings as large as the image
+        let held: usize = (0..levels)
+            .map(|l| {
+                let row = row_len(l) + if l > 0 { row_len(l - 1) } else { 0 };
+                (caps[l].0 + caps[l].1 + 8) * row
+            })
+            .sum::<usize>()
+            * spans.len();
+        if !forced && held * MAX_HELD > n(0) * row_len(0) {
+            return None;
         }
         if !forced && work as f64 > total as f64 * (1.0 + MAX_HALO) {
             return None;
