@@ -33,6 +33,9 @@ use rayon::prelude::*;
 /// Largest extra work (rows computed twice at seams between parts) the cascade accepts.
 const MAX_HALO: f64 = 0.15;
 
+/// Most axes a cascade runs over.
+const MAX_AXES: usize = 8;
+
 /// The parts' rings and scratch may hold at most this fraction (1 / `MAX_HELD`) of the
 /// array (the engine's memory stays within the array and one scratch array, plus this).
 const MAX_HELD: usize = 16;
@@ -149,6 +152,7 @@ impl<'a> Plan<'a> {
         if levels < 2
             || regions.len() != levels + 1
             || regions[0].len() < 2
+            || regions[0].len() > MAX_AXES
             || (regions[0].len() > 2 && !forced)
         {
             return None;
@@ -337,7 +341,18 @@ impl<'a> Plan<'a> {
         let dst_len = dst.len();
         let run_part = |p: usize| {
             let d = dptr;
-            let mut part = Part::new(self, &ctxs, &local, src, d, dst_len, strides, p);
+            let spans = &self.spans[p];
+            let mut part = Part {
+                plan: self,
+                ctxs: &ctxs,
+                local: &local,
+                src,
+                dst: d,
+                dst_len,
+                strides,
+                spans,
+                levels: level_states(self, &ctxs, spans),
+            };
             part.run();
         };
         if self.spans.len() == 1 {
@@ -419,55 +434,34 @@ struct Part<'p, 'a, T> {
     levels: Vec<LevelState<T>>,
 }
 
-impl<'p, 'a, T: Sample> Part<'p, 'a, T> {
-    #[allow(clippy::too_many_arguments)]
-    fn new(
-        plan: &'p Plan<'a>,
-        ctxs: &'p [Ctx<'p>],
-        local: &'p [Ctx<'p>],
-        src: &'p [T],
-        dst: SharedMut<T>,
-        dst_len: usize,
-        strides: &'p [usize],
-        p: usize,
-    ) -> Self {
-        let spans = &plan.spans[p];
-        let levels = (0..plan.ops.len())
-            .map(|l| {
-                // images: analysis rings hold the previous level's whole rows
-                let row = if plan.lines && plan.way == Way::Analysis && l > 0 {
-                    ctxs[l - 1].cs()[0]
-                } else {
-                    ctxs[l].cs()[0]
-                };
-                let (c, d) = plan.caps[l];
-                let split = match plan.way {
-                    Way::Analysis => usize::MAX,
-                    Way::Synthesis => plan.regions[l + 1][0],
-                };
-                let needs_out = plan.way == Way::Analysis && l + 1 < plan.ops.len() && !plan.lines;
-                LevelState {
-                    cursor: spans[l].start,
-                    made: None,
-                    ring: Ring::new(row, c, d, split),
-                    scratch: ctxs[l].scratch(),
-                    out: vec![T::default(); if needs_out { row } else { 0 }],
-                }
-            })
-            .collect();
-        Part {
-            plan,
-            ctxs,
-            local,
-            src,
-            dst,
-            dst_len,
-            strides,
-            spans,
-            levels,
-        }
-    }
+/// Every level's state for the part computing `spans`.
+fn level_states<T: Sample>(plan: &Plan, ctxs: &[Ctx], spans: &[Span]) -> Vec<LevelState<T>> {
+    (0..plan.ops.len())
+        .map(|l| {
+            // images: analysis rings hold the previous level's whole rows
+            let row = if plan.lines && plan.way == Way::Analysis && l > 0 {
+                ctxs[l - 1].cs()[0]
+            } else {
+                ctxs[l].cs()[0]
+            };
+            let (c, d) = plan.caps[l];
+            let split = match plan.way {
+                Way::Analysis => usize::MAX,
+                Way::Synthesis => plan.regions[l + 1][0],
+            };
+            let needs_out = plan.way == Way::Analysis && l + 1 < plan.ops.len() && !plan.lines;
+            LevelState {
+                cursor: spans[l].start,
+                made: None,
+                ring: Ring::new(row, c, d, split),
+                scratch: ctxs[l].scratch(),
+                out: vec![T::default(); if needs_out { row } else { 0 }],
+            }
+        })
+        .collect()
+}
 
+impl<'p, 'a, T: Sample> Part<'p, 'a, T> {
     fn run(&mut self) {
         let levels = self.plan.ops.len();
         match self.plan.way {
@@ -574,13 +568,15 @@ impl<'p, 'a, T: Sample> Part<'p, 'a, T> {
         } else {
             // the coarse box to the next level's ring
             local.finish_row(slab, &mut st.out, cs, rest);
-            copy_box(
+            copy_box_outside(
                 &st.out,
                 &cs[1..],
                 slot,
                 &self.ctxs[l + 1].cs()[1..],
                 &next[1..],
+                whole(next.len() - 1),
                 plan.e,
+                false,
             );
             &st.out
         };
@@ -622,13 +618,15 @@ impl<'p, 'a, T: Sample> Part<'p, 'a, T> {
         let from = &self.src[c * self.strides[0]..];
         let cs = &self.ctxs[l].cs()[1..];
         let slot = self.levels[l].ring.put(c);
-        copy_box(
+        copy_box_outside(
             from,
             &self.strides[1..],
             slot,
             cs,
             &plan.regions[l][1..],
+            whole(plan.regions[l].len() - 1),
             plan.e,
+            false,
         );
     }
 
@@ -803,19 +801,10 @@ fn for_lines(
     }
 }
 
-/// Copy the box `bx` from `a` (strides `a_st`) to `b` (strides `b_st`).
-fn copy_box<T: Sample>(
-    a: &[T],
-    a_st: &[usize],
-    b: &mut [T],
-    b_st: &[usize],
-    bx: &[usize],
-    e: usize,
-) {
-    let run = bx[bx.len() - 1] * e;
-    for_lines(a_st, b_st, bx, |ao, bo, _| {
-        b[bo..bo + run].copy_from_slice(&a[ao..ao + run]);
-    });
+/// No hole: for [`copy_box_outside`] over a whole box of `m` axes.
+fn whole(m: usize) -> &'static [usize] {
+    const NONE: [usize; MAX_AXES] = [0; MAX_AXES];
+    &NONE[..m]
 }
 
 /// Copy the box `bx` without the box `inner` from `a` (strides `a_st`) to `b` (strides

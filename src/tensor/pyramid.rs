@@ -376,21 +376,7 @@ fn run<T: Sample>(array: &mut Array<T>, pyr: &Pyramid, dir: Direction, engine: E
             by_axis[spec.axes[i]] = i;
         }
         let level_ops: Vec<_> = (0..k).map(|d| ops(by_axis[d], l)).collect();
-        let axis_ops: Vec<AxisOp> = level_ops
-            .iter()
-            .map(|o| match dir {
-                Direction::Analysis => AxisOp {
-                    op: &o.two_scale.analysis,
-                    plan: &o.analysis,
-                    order: &o.analysis_order,
-                },
-                Direction::Synthesis => AxisOp {
-                    op: &o.two_scale.synthesis,
-                    plan: &o.synthesis,
-                    order: &o.synthesis_order,
-                },
-            })
-            .collect();
+        let axis_ops: Vec<AxisOp> = level_ops.iter().map(|o| axis_op(o, dir)).collect();
         let strides = array.strides();
         let st = &strides[..k];
         let e: usize = shape[k..].iter().product();
@@ -436,6 +422,22 @@ fn run<T: Sample>(array: &mut Array<T>, pyr: &Pyramid, dir: Direction, engine: E
     }
 }
 
+/// One axis' operator of a level in the direction asked.
+fn axis_op(o: &workspace::LevelOps, dir: Direction) -> AxisOp<'_> {
+    match dir {
+        Direction::Analysis => AxisOp {
+            op: &o.two_scale.analysis,
+            plan: &o.analysis,
+            order: &o.analysis_order,
+        },
+        Direction::Synthesis => AxisOp {
+            op: &o.two_scale.synthesis,
+            plan: &o.synthesis,
+            order: &o.synthesis_order,
+        },
+    }
+}
+
 /// All levels of a non-standard pyramid fused over the leading `k` axes as one cascade
 /// ([`cascade::Plan`]), into the scratch array which then becomes the array's data;
 /// `false` (nothing done) when the cascade does not apply.
@@ -469,22 +471,7 @@ fn cascade<T: Sample>(
         .collect();
     let ops: Vec<Vec<AxisOp>> = level_ops
         .iter()
-        .map(|lv| {
-            lv.iter()
-                .map(|o| match dir {
-                    Direction::Analysis => AxisOp {
-                        op: &o.two_scale.analysis,
-                        plan: &o.analysis,
-                        order: &o.analysis_order,
-                    },
-                    Direction::Synthesis => AxisOp {
-                        op: &o.two_scale.synthesis,
-                        plan: &o.synthesis,
-                        order: &o.synthesis_order,
-                    },
-                })
-                .collect()
-        })
+        .map(|lv| lv.iter().map(|o| axis_op(o, dir)).collect())
         .collect();
     let regions: Vec<Vec<usize>> = (0..=depth)
         .map(|l| {
