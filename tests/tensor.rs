@@ -129,11 +129,12 @@ fn engines_agree_on_large_images_and_volumes() {
     engines_agree(&[1500, 1501], vec![0, 1], 2, 2, 2, 10);
     // a volume whose lanes go through the transposed plane path, streaming
     engines_agree(&[66, 130, 260], vec![0, 1, 2], 1, 0, 2, 11);
-    // an image large enough for the cascade to split into parts by itself, odd sizes
+    // images tall enough for the cascade to split into parts by itself (with two or more
+    // threads; its rings stay below 1/16 of the image), odd sizes
     for s in 0..3 {
         for b in 0..3 {
-            engine_agrees(Engine::Fused, &[1031, 517], vec![0, 1], s, b, 5, 12);
-            engine_agrees(Engine::Fused, &[300, 899, 2], vec![0, 1], s, b, 4, 13);
+            engine_agrees(Engine::Fused, &[2001, 301], vec![0, 1], s, b, 5, 12);
+            engine_agrees(Engine::Fused, &[1803, 151, 3], vec![0, 1], s, b, 4, 13);
         }
     }
 }
