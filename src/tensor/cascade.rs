@@ -1,7 +1,7 @@
 //! All levels of a non-standard pyramid in one sweep over the array ("cascade").
 //!
 //! Level by level, every level reads its box and writes it back: the levels after the
-//! first cost one more pass over a quarter (images) or an eighth (forced) of the array,
+//! first cost one more pass over a quarter (images) or an eighth (volumes) of the array,
 //! and the detail blocks written to the scratch array have to be copied back. Here the
 //! levels are chained row by row along axis 0 instead: a row of level `l` is computed as
 //! soon as the rows of level `l − 1` it needs exist, and those are kept in a small ring
@@ -135,9 +135,10 @@ fn col_range(
 impl<'a> Plan<'a> {
     /// Plan `ops.len()` levels (at least 2) whose regions are `regions` (one more than
     /// levels), with up to `parts` parts; `None` when the cascade does not apply (row
-    /// orders it cannot follow, or halos too costly for that many parts). When `forced`
-    /// (tests), exactly `parts` parts whatever the halos, and boxes of more than two axes
-    /// too; otherwise those stay level by level (measured slower for now: a ring of planes
+    /// orders it cannot follow, rows reaching across the lane, halos too costly for that
+    /// many parts, rings above 1/[`MAX_HELD`] of the array). When `forced` (tests),
+    /// exactly `parts` parts whatever the halos and the rings' size, and boxes of more
+    /// than two axes too; otherwise those stay level by level (measured slower for now: a ring of planes
     /// does not fit the caches; 256³ Chaikin took 91 ms of CPU time forward and back
     /// against 74 level by level).
     pub fn new(
