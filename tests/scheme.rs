@@ -446,9 +446,11 @@ fn f32_combine_and_transpose_match_plain_loops() {
             }
         }
     }
-    // transposes of every shape up to 20 × 20, into a wider destination
-    for rows in 0..20usize {
-        for cols in 0..20usize {
+    // transposes of every shape up to 20 × 20 and of shapes that leave 8-wide strips
+    // beside the 16 × 16 blocks, into a wider destination
+    let sides: Vec<usize> = (0..20).chain([23, 24, 31, 32, 33, 40, 47]).collect();
+    for &rows in &sides {
+        for &cols in &sides {
             let stride = rows + 3;
             let src32: Vec<f32> = (0..rows * cols).map(|i| i as f32 + 0.5).collect();
             let src64: Vec<f64> = src32.iter().map(|&v| v as f64 * 3.0).collect();
