@@ -364,10 +364,17 @@ impl<'a> Plan<'a> {
     }
 }
 
+/// Samples between the slots of a ring: rows of a power-of-two length one after another
+/// would put the same column of every slot in one L1 cache set (eight ways), and a combine
+/// reads up to eight slots at once.
+const RING_PAD: usize = 16;
+
 /// A ring of rows: slots `0..coarse` for rows `< split`, the others for rows `≥ split`.
 struct Ring<T> {
     data: Vec<T>,
     row: usize,
+    /// Samples from one slot to the next: a row and [`RING_PAD`].
+    stride: usize,
     coarse: usize,
     detail: usize,
     split: usize,
@@ -376,9 +383,11 @@ struct Ring<T> {
 
 impl<T: Sample> Ring<T> {
     fn new(row: usize, coarse: usize, detail: usize, split: usize) -> Self {
+        let stride = row + RING_PAD;
         Ring {
-            data: vec![T::default(); row * (coarse + detail)],
+            data: vec![T::default(); stride * (coarse + detail)],
             row,
+            stride,
             coarse,
             detail,
             split,
@@ -398,13 +407,13 @@ impl<T: Sample> Ring<T> {
     fn get(&self, c: usize) -> &[T] {
         let s = self.slot_of(c);
         assert_eq!(self.tags[s], c, "cascade ring: row {c} is not held");
-        &self.data[s * self.row..(s + 1) * self.row]
+        &self.data[s * self.stride..s * self.stride + self.row]
     }
     /// The slot for row `c` (now holding it).
     fn put(&mut self, c: usize) -> &mut [T] {
         let s = self.slot_of(c);
         self.tags[s] = c;
-        &mut self.data[s * self.row..(s + 1) * self.row]
+        &mut self.data[s * self.stride..s * self.stride + self.row]
     }
 }
 
