@@ -472,3 +472,48 @@ fn f32_combine_and_transpose_match_plain_loops() {
         }
     }
 }
+
+#[test]
+fn combine_rows_matches_combine_row_by_row() {
+    use mra::scheme::kernel::{combine, combine_rows};
+    // every scheme × boundary, operators of short lanes (as in a volume's planes), f32 and
+    // f64, rows of lengths around the vector widths, a range of rows from the middle
+    for scheme in Scheme::ALL {
+        for boundary in Boundary::ALL {
+            for m in [1usize, 2, 3, 7, 16, 33] {
+                let t = TwoScale::new(scheme, boundary, m);
+                for op in [&t.analysis, &t.synthesis] {
+                    for len in [1usize, 8, 37] {
+                        let x: Vec<f64> = lcg(m as u64 * 31 + len as u64, m * len);
+                        let x32: Vec<f32> = x.iter().map(|&v| v as f32).collect();
+                        let rows = m / 3..m;
+                        let mut a = vec![0.5f32; rows.len() * len];
+                        combine_rows(op, &x32, len, rows.clone(), &mut a);
+                        let mut a64 = vec![0.5f64; rows.len() * len];
+                        combine_rows(op, &x, len, rows.clone(), &mut a64);
+                        for (i, r) in rows.enumerate() {
+                            let (cols, ws) = op.row_slices(r);
+                            let src: Vec<&[f32]> = cols
+                                .iter()
+                                .map(|&c| &x32[c as usize * len..][..len])
+                                .collect();
+                            let w: Vec<f32> = ws.iter().map(|&v| v as f32).collect();
+                            let mut b = vec![0f32; len];
+                            combine(&mut b, &src, &w);
+                            let got = &a[i * len..][..len];
+                            assert!(got.iter().zip(&b).all(|(p, q)| p.to_bits() == q.to_bits()));
+                            let src: Vec<&[f64]> = cols
+                                .iter()
+                                .map(|&c| &x[c as usize * len..][..len])
+                                .collect();
+                            let mut b = vec![0f64; len];
+                            combine(&mut b, &src, ws);
+                            let got = &a64[i * len..][..len];
+                            assert!(got.iter().zip(&b).all(|(p, q)| p.to_bits() == q.to_bits()));
+                        }
+                    }
+                }
+            }
+        }
+    }
+}

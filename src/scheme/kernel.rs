@@ -504,3 +504,96 @@ unsafe fn transpose_avx2_32<T: Sample>(
     }
     transpose_generic(src, rows, cols, dst, stride, r8, c8)
 }
+
+/// `dst[i·len ..][..len] = Σ_k w_rk · src[c_rk·len ..][..len]` for the rows `r` of `op`
+/// in `rows` (`i = r − rows.start`): [`combine`] for every row of an operator whose
+/// elements are rows of `len` samples, in one call (short rows, e.g. the lanes of a
+/// volume's plane, spend as long in a call's set-up as in its loop). The same sums in
+/// the same order as [`combine`]: the same bits.
+pub fn combine_rows<T: Sample>(
+    op: &super::sparse::Csr,
+    src: &[T],
+    len: usize,
+    rows: std::ops::Range<usize>,
+    dst: &mut [T],
+) {
+    assert!(rows.end <= op.rows() && op.cols() * len <= src.len());
+    assert!(rows.len() * len <= dst.len());
+    #[cfg(target_arch = "x86_64")]
+    if std::any::TypeId::of::<T>() == std::any::TypeId::of::<f32>() && super::sparse::cpu_has_avx2()
+    {
+        let (ps, pd) = (src.as_ptr() as *const f32, dst.as_mut_ptr() as *mut f32);
+        // SAFETY: AVX2 is present; T is f32; every column of `op` is below `op.cols()`,
+        // so each source row is inside `src`, and each output row inside `dst` (asserted).
+        return unsafe { combine_rows_avx2_f32(op, ps, len, rows, pd) };
+    }
+    let mut taps: [&[T]; MAX_FUSED] = [&[]; MAX_FUSED];
+    let mut w = [T::default(); MAX_FUSED];
+    for (i, r) in rows.enumerate() {
+        let (cols, ws) = op.row_slices(r);
+        let o = &mut dst[i * len..i * len + len];
+        let at = |c: u32| c as usize * len;
+        if cols.len() <= MAX_FUSED {
+            for (t, (&c, &wc)) in cols.iter().zip(ws).enumerate() {
+                taps[t] = &src[at(c)..at(c) + len];
+                w[t] = T::from_f64(wc);
+            }
+            combine(o, &taps[..cols.len()], &w[..cols.len()]);
+        } else {
+            let t: Vec<&[T]> = cols.iter().map(|&c| &src[at(c)..at(c) + len]).collect();
+            let wv: Vec<T> = ws.iter().map(|&x| T::from_f64(x)).collect();
+            combine(o, &t, &wv);
+        }
+    }
+}
+
+/// [`combine_rows`] for `f32` with AVX2: the rows' tap loops ([`taps_avx2_f32`]) called
+/// from one function, without a call's checks and dispatch per row.
+///
+/// # Safety
+/// AVX2 present; every column of `op` times `len` plus `len` within `src`; the output rows
+/// `0..rows.len()` of `len` samples within `dst`.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn combine_rows_avx2_f32(
+    op: &super::sparse::Csr,
+    src: *const f32,
+    len: usize,
+    rows: std::ops::Range<usize>,
+    dst: *mut f32,
+) {
+    for (i, r) in rows.enumerate() {
+        let (cols, ws) = op.row_slices(r);
+        // SAFETY (all): the caller's bounds; columns below op.cols().
+        let o = unsafe { dst.add(i * len) };
+        macro_rules! arm {
+            ($n:literal) => {{
+                let p: [*const f32; $n] =
+                    std::array::from_fn(|k| unsafe { src.add(cols[k] as usize * len) });
+                let w: [f32; $n] = std::array::from_fn(|k| ws[k] as f32);
+                unsafe { taps_avx2_f32::<$n>(o, len, &p, &w) }
+            }};
+        }
+        match cols.len() {
+            0 => unsafe { std::ptr::write_bytes(o, 0, len) },
+            1 => arm!(1),
+            2 => arm!(2),
+            3 => arm!(3),
+            4 => arm!(4),
+            5 => arm!(5),
+            6 => arm!(6),
+            7 => arm!(7),
+            8 => arm!(8),
+            _ => {
+                // SAFETY: as above, as slices.
+                let out = unsafe { std::slice::from_raw_parts_mut(o, len) };
+                let t: Vec<&[f32]> = cols
+                    .iter()
+                    .map(|&c| unsafe { std::slice::from_raw_parts(src.add(c as usize * len), len) })
+                    .collect();
+                let wv: Vec<f32> = ws.iter().map(|&x| x as f32).collect();
+                combine_generic(out, &t, &wv);
+            }
+        }
+    }
+}

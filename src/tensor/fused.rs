@@ -13,7 +13,7 @@
 //! form the elements (`e` samples, e.g. the channels of an image).
 
 use super::par::{for_each_part, SharedMut};
-use crate::scheme::kernel::{combine, stream_copy, transpose};
+use crate::scheme::kernel::{self, combine, stream_copy, transpose};
 use crate::scheme::polyphase::Polyphase;
 use crate::scheme::sparse::Csr;
 use crate::scheme::Sample;
@@ -334,24 +334,5 @@ fn plane_path(k: usize, region: &[usize], e: usize) -> bool {
 
 /// `dst[r] = Σ_c W_rc · src[c]` for every row `r` of `op`, rows of `len` samples.
 fn combine_rows<T: Sample>(op: &Csr, src: &[T], len: usize, dst: &mut [T]) {
-    let mut taps: [&[T]; 16] = [&[]; 16];
-    let mut w = [T::default(); 16];
-    for r in 0..op.rows() {
-        let (cols, ws) = op.row_slices(r);
-        let o = &mut dst[r * len..r * len + len];
-        if cols.len() <= taps.len() {
-            for (t, (&c, &wc)) in cols.iter().zip(ws).enumerate() {
-                taps[t] = &src[c as usize * len..c as usize * len + len];
-                w[t] = T::from_f64(wc);
-            }
-            combine(o, &taps[..cols.len()], &w[..cols.len()]);
-        } else {
-            let t: Vec<&[T]> = cols
-                .iter()
-                .map(|&c| &src[c as usize * len..c as usize * len + len])
-                .collect();
-            let wv: Vec<T> = ws.iter().map(|&x| T::from_f64(x)).collect();
-            combine(o, &t, &wv);
-        }
-    }
+    kernel::combine_rows(op, src, len, 0..op.rows(), dst)
 }
