@@ -23,6 +23,7 @@
 //! by its owner only); [`Plan::new`] declines when the halos would cost more than
 //! [`MAX_HALO`] of the work.
 
+use super::aligned::Aligned;
 use super::fused::{prefetch, AxisOp, Ctx, PREFETCH_MAX, STREAM_BYTES};
 use super::par::SharedMut;
 use crate::scheme::kernel::{combine, stream_copy};
@@ -427,7 +428,7 @@ struct LevelState<T> {
     ring: Ring<T>,
     /// The level's scratch ([`Ctx::scratch`]); its first buffer takes the row combined
     /// along axis 0.
-    scratch: Vec<Vec<T>>,
+    scratch: Vec<Aligned<T>>,
     /// A whole output row, compact (analysis rows that feed the next level).
     out: Vec<T>,
 }

@@ -12,6 +12,7 @@
 //! The axes after `k−1` must be whole (not part of this level's region): together they
 //! form the elements (`e` samples, e.g. the channels of an image).
 
+use super::aligned::Aligned;
 use super::par::{for_each_part, SharedMut};
 use crate::scheme::kernel::{self, combine, stream_copy, transpose};
 use crate::scheme::polyphase::Polyphase;
@@ -68,7 +69,7 @@ pub fn fused_level<T: Sample>(
             .apply_lane(ops[0].op, &src[..n], &mut dst[..n], e, &mut lane_tmp);
         return;
     }
-    let task = |rows: &[usize], scratch: &mut Vec<Vec<T>>| {
+    let task = |rows: &[usize], scratch: &mut Vec<Aligned<T>>| {
         let p = dptr;
         for &r in rows {
             let at = r * strides[0];
@@ -124,18 +125,19 @@ impl<'a> Ctx<'a> {
 
     /// The scratch one worker needs: a slab per axis but the last, the lane output and
     /// scratch, and two planes for [`Ctx::plane`].
-    pub fn scratch<T: Sample>(&self) -> Vec<Vec<T>> {
+    pub fn scratch<T: Sample>(&self) -> Vec<Aligned<T>> {
         let (k, region, e) = (self.ops.len(), self.region, self.e);
-        let mut v: Vec<Vec<T>> = (0..k - 1).map(|d| vec![T::default(); self.cs[d]]).collect();
-        v.push(vec![T::default(); region[k - 1] * e]); // lane output when streaming
-        v.push(vec![T::default(); region[k - 1] * e]); // lane scratch
+        let mut v: Vec<Aligned<T>> = (0..k - 1).map(|d| Aligned::heap(self.cs[d])).collect();
+        v.push(Aligned::heap(region[k - 1] * e)); // lane output when streaming
+        v.push(Aligned::heap(region[k - 1] * e)); // lane scratch
         let planes = if plane_path(k, region, e) {
             region[k - 2] * region[k - 1]
         } else {
             0
         };
-        v.push(vec![T::default(); planes]); // the last two axes of a slab, transposed
-        v.push(vec![T::default(); planes]);
+        // the planes on page boundaries (see `aligned`)
+        v.push(Aligned::zeroed(planes)); // the last two axes of a slab, transposed
+        v.push(Aligned::zeroed(planes));
         v
     }
 
@@ -147,7 +149,7 @@ impl<'a> Ctx<'a> {
         slab: &[T],
         out: &mut [T],
         dst_st: &[usize],
-        scratch: &mut [Vec<T>],
+        scratch: &mut [Aligned<T>],
     ) {
         self.slab(1, slab, out, dst_st, scratch);
     }
@@ -163,7 +165,7 @@ impl<'a> Ctx<'a> {
         src_st: &[usize],
         out: &mut [T],
         dst_st: &[usize],
-        scratch: &mut [Vec<T>],
+        scratch: &mut [Aligned<T>],
     ) {
         let k = self.ops.len();
         let e = self.e;
@@ -229,7 +231,7 @@ impl<'a> Ctx<'a> {
         slab: &[T],
         out: &mut [T],
         dst_st: &[usize],
-        scratch: &mut [Vec<T>],
+        scratch: &mut [Aligned<T>],
     ) {
         let k = self.ops.len();
         let e = self.e;
@@ -271,7 +273,7 @@ impl<'a> Ctx<'a> {
         slab: &[T],
         out: &mut [T],
         out_stride: usize,
-        scratch: &mut [Vec<T>],
+        scratch: &mut [Aligned<T>],
     ) {
         let (h, w) = (self.region[d], self.region[d + 1]);
         let [.., pa, pb] = scratch else {

@@ -1,6 +1,7 @@
 //! Tensor-product engine: N-d arrays, one level along any axis, multilevel pyramids in
 //! the standard and the non-standard (Mallat) order. `par.rs` holds the only rayon code.
 
+mod aligned;
 mod array;
 mod cascade;
 mod fused;
