@@ -527,23 +527,36 @@ pub fn combine_rows<T: Sample>(
         // so each source row is inside `src`, and each output row inside `dst` (asserted).
         return unsafe { combine_rows_avx2_f32(op, ps, len, rows, pd) };
     }
-    let mut taps: [&[T]; MAX_FUSED] = [&[]; MAX_FUSED];
-    let mut w = [T::default(); MAX_FUSED];
     for (i, r) in rows.enumerate() {
         let (cols, ws) = op.row_slices(r);
-        let o = &mut dst[i * len..i * len + len];
         let at = |c: u32| c as usize * len;
-        if cols.len() <= MAX_FUSED {
-            for (t, (&c, &wc)) in cols.iter().zip(ws).enumerate() {
-                taps[t] = &src[at(c)..at(c) + len];
-                w[t] = T::from_f64(wc);
-            }
-            combine(o, &taps[..cols.len()], &w[..cols.len()]);
-        } else {
-            let t: Vec<&[T]> = cols.iter().map(|&c| &src[at(c)..at(c) + len]).collect();
-            let wv: Vec<T> = ws.iter().map(|&x| T::from_f64(x)).collect();
-            combine(o, &t, &wv);
+        combine_taps(&mut dst[i * len..i * len + len], cols, ws, |c| {
+            &src[at(c)..at(c) + len]
+        });
+    }
+}
+
+/// `out = Σ_t w_t · tap(c_t)`: [`combine`] over the inputs `tap(c)` of a sparse row's
+/// columns `cols` and weights `ws` (each input at least `out.len()` samples).
+pub fn combine_taps<'t, T: Sample + 't>(
+    out: &mut [T],
+    cols: &[u32],
+    ws: &[f64],
+    tap: impl Fn(u32) -> &'t [T],
+) {
+    const MOST: usize = 16;
+    let mut taps: [&[T]; MOST] = [&[]; MOST];
+    let mut w = [T::default(); MOST];
+    if cols.len() <= MOST {
+        for (t, (&c, &wc)) in cols.iter().zip(ws).enumerate() {
+            taps[t] = tap(c);
+            w[t] = T::from_f64(wc);
         }
+        combine(out, &taps[..cols.len()], &w[..cols.len()]);
+    } else {
+        let t: Vec<&[T]> = cols.iter().map(|&c| tap(c)).collect();
+        let wv: Vec<T> = ws.iter().map(|&x| T::from_f64(x)).collect();
+        combine(out, &t, &wv);
     }
 }
 

@@ -26,7 +26,7 @@
 use super::aligned::Aligned;
 use super::fused::{prefetch, AxisOp, Ctx, PREFETCH_MAX, STREAM_BYTES};
 use super::par::SharedMut;
-use crate::scheme::kernel::{combine, stream_copy};
+use crate::scheme::kernel::{combine_taps, stream_copy};
 use crate::scheme::sparse::Csr;
 use crate::scheme::Sample;
 use rayon::prelude::*;
@@ -759,28 +759,6 @@ impl Step<'_> {
         combine_taps(&mut slab[range.clone()], cols, ws, |c| {
             &tap(c)[range.clone()]
         });
-    }
-}
-
-/// `out = Σ_t w_t · tap(c_t)`.
-fn combine_taps<'t, T: Sample + 't>(
-    out: &mut [T],
-    cols: &[u32],
-    ws: &[f64],
-    tap: impl Fn(u32) -> &'t [T],
-) {
-    let mut taps: [&[T]; 16] = [&[]; 16];
-    let mut w = [T::default(); 16];
-    if cols.len() <= taps.len() {
-        for (t, (&c, &wc)) in cols.iter().zip(ws).enumerate() {
-            taps[t] = tap(c);
-            w[t] = T::from_f64(wc);
-        }
-        combine(out, &taps[..cols.len()], &w[..cols.len()]);
-    } else {
-        let t: Vec<&[T]> = cols.iter().map(|&c| tap(c)).collect();
-        let wv: Vec<T> = ws.iter().map(|&x| T::from_f64(x)).collect();
-        combine(out, &t, &wv);
     }
 }
 

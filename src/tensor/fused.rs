@@ -14,7 +14,7 @@
 
 use super::aligned::Aligned;
 use super::par::{for_each_part, SharedMut};
-use crate::scheme::kernel::{self, combine, stream_copy, transpose};
+use crate::scheme::kernel::{self, combine_taps, stream_copy, transpose};
 use crate::scheme::polyphase::Polyphase;
 use crate::scheme::sparse::Csr;
 use crate::scheme::Sample;
@@ -185,8 +185,6 @@ impl<'a> Ctx<'a> {
                 self.region[d + 1..k - 1].iter().product(),
             )
         };
-        let mut taps: [&[T]; 16] = [&[]; 16];
-        let mut w = [T::default(); 16];
         let (cols, ws) = self.ops[d].op.row_slices(r);
         if d == 0 && self.stream && whole && run * std::mem::size_of::<T>() <= PREFETCH_MAX {
             // from memory: ask early for the slab the next rows will read first (rows of
@@ -207,19 +205,10 @@ impl<'a> Ctx<'a> {
                 so += i * src_st[j];
                 co += i * self.cs[j];
             }
-            let out_line = &mut slab[co..co + run];
             let at = |c: u32| c as usize * src_st[d] + so;
-            if cols.len() <= taps.len() {
-                for (t, (&c, &wc)) in cols.iter().zip(ws).enumerate() {
-                    taps[t] = &src[at(c)..at(c) + run];
-                    w[t] = T::from_f64(wc);
-                }
-                combine(out_line, &taps[..cols.len()], &w[..cols.len()]);
-            } else {
-                let t: Vec<&[T]> = cols.iter().map(|&c| &src[at(c)..at(c) + run]).collect();
-                let wv: Vec<T> = ws.iter().map(|&x| T::from_f64(x)).collect();
-                combine(out_line, &t, &wv);
-            }
+            combine_taps(&mut slab[co..co + run], cols, ws, |c| {
+                &src[at(c)..at(c) + run]
+            });
         }
         self.slab(d + 1, slab, out, dst_st, rest);
     }
