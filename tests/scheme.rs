@@ -424,6 +424,63 @@ fn vector_kernels_match_plain_loops() {
     }
 }
 
+/// `combine_pair` (two outputs over one set of inputs, AVX2 for the schemes' patterns)
+/// gives the bits of one `combine` per output over its own taps, for the patterns the
+/// engine uses and others, f32 and f64, with an infinity in an input that only one
+/// output reads (the other must not see 0·∞).
+#[test]
+fn combine_pair_gives_the_bits_of_two_combines() {
+    use mra::scheme::kernel::{combine, combine_pair, combine_pair_baseline};
+    fn check<T: mra::scheme::Sample + Into<f64>>(x: &[T], u: usize, m1: u32, m2: u32, len: usize) {
+        let src: Vec<&[T]> = (0..u).map(|k| &x[k..k + len]).collect();
+        let w1: Vec<T> = (0..u).map(|k| T::from_f64(0.375 * k as f64 - 1.1)).collect();
+        let w2: Vec<T> = (0..u).map(|k| T::from_f64(0.7 - 0.25 * k as f64)).collect();
+        let (mut a1, mut a2) = (vec![T::default(); len], vec![T::default(); len]);
+        combine_pair(&mut a1, &mut a2, &src, &w1, m1, &w2, m2);
+        let (mut b1, mut b2) = (vec![T::default(); len], vec![T::default(); len]);
+        combine_pair_baseline(&mut b1, &mut b2, &src, &w1, m1, &w2, m2);
+        for (m, w, a, b) in [(m1, &w1, &a1, &b1), (m2, &w2, &a2, &b2)] {
+            let ks: Vec<usize> = (0..u).filter(|&k| m >> k & 1 == 1).collect();
+            let s: Vec<&[T]> = ks.iter().map(|&k| src[k]).collect();
+            let wk: Vec<T> = ks.iter().map(|&k| w[k]).collect();
+            let mut want = vec![T::default(); len];
+            combine(&mut want, &s, &wk);
+            for i in 0..len {
+                let (p, q, r): (f64, f64, f64) = (a[i].into(), b[i].into(), want[i].into());
+                assert!(
+                    p.to_bits() == r.to_bits() && q.to_bits() == r.to_bits(),
+                    "pattern ({u}, {m1:#b}, {m2:#b}) len {len} sample {i}: {p} {q} {r}"
+                );
+            }
+        }
+    }
+    let patterns = [
+        (2, 0b11, 0b11),
+        (4, 0b1111, 0b1111),
+        (7, 0b0111011, 0b1111111),
+        (7, 0b1111111, 0b1111100),
+        (7, 0b1111111, 0b1110110),
+        (7, 0b1111111, 0b0011111),
+        (6, 0b001111, 0b111100),
+        (3, 0b101, 0b010),
+        (1, 1, 1),
+    ];
+    for (u, m1, m2) in patterns {
+        for len in [0usize, 1, 3, 7, 8, 9, 31, 33, 100] {
+            let mut x = lcg(len as u64 + u as u64, len + u);
+            // an infinity that only the inputs outside one output's mask reach
+            if let Some(k) = (0..u).find(|&k| (m1 ^ m2) >> k & 1 == 1) {
+                if len > 0 {
+                    x[k] = f64::INFINITY;
+                }
+            }
+            let x32: Vec<f32> = x.iter().map(|&v| v as f32).collect();
+            check(&x, u, m1, m2, len);
+            check(&x32, u, m1, m2, len);
+        }
+    }
+}
+
 #[test]
 fn f32_combine_and_transpose_match_plain_loops() {
     use mra::scheme::kernel::{combine, combine_baseline, transpose};

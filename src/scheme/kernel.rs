@@ -610,3 +610,284 @@ unsafe fn combine_rows_avx2_f32(
         }
     }
 }
+
+/// Two [`combine`]s over one set of inputs: `o1[i] = Σ_{k ∈ m1} w1[k]·src[k][i]` and
+/// `o2[i] = Σ_{k ∈ m2} w2[k]·src[k][i]`, where bit `k` of a mask says that input `k` is
+/// one of that output's taps. Each output sums its taps in increasing `k`, the first
+/// assigning, so the bits are those of one [`combine`] per output over its own taps;
+/// each input is loaded once for both outputs (e.g. a coarse and a detail row, or an even
+/// and an odd fine row, which read the same stretch of their lane: the loads, not the
+/// multiplies, bound the single combines).
+///
+/// Every `src[k]` must hold at least `o1.len()` samples; `o2` as long as `o1`; both masks
+/// non-empty and within `src`.
+pub fn combine_pair<T: Sample>(
+    o1: &mut [T],
+    o2: &mut [T],
+    src: &[&[T]],
+    w1: &[T],
+    m1: u32,
+    w2: &[T],
+    m2: u32,
+) {
+    let u = src.len();
+    assert!(u <= 32 && w1.len() == u && w2.len() == u && o1.len() == o2.len());
+    let all = if u == 32 { u32::MAX } else { (1u32 << u) - 1 };
+    assert!(m1 != 0 && m2 != 0 && m1 & !all == 0 && m2 & !all == 0);
+    assert!(src.iter().all(|s| s.len() >= o1.len()));
+    #[cfg(target_arch = "x86_64")]
+    if super::sparse::cpu_has_avx2() {
+        // SAFETY: AVX2 is present; lengths and masks checked above.
+        if unsafe { pair_avx2(o1, o2, src, w1, m1, w2, m2) } {
+            return;
+        }
+    }
+    pair_by_parts(o1, o2, src, w1, m1, w2, m2, combine)
+}
+
+/// [`combine_pair`] over two sparse rows (`(columns, weights)`, columns increasing) and
+/// the inputs `tap(c)` of their columns: `o1` the first row, `o2` the second, each input
+/// they share read once. `false` (nothing written) when the rows share no column or read
+/// more than [`PAIR_INPUTS`] inputs together (then two [`combine_taps`] do the same).
+pub fn combine_pair_taps<'t, T: Sample + 't>(
+    o1: &mut [T],
+    o2: &mut [T],
+    row1: (&[u32], &[f64]),
+    row2: (&[u32], &[f64]),
+    tap: impl Fn(u32) -> &'t [T],
+) -> bool {
+    let ((c1, w1), (c2, w2)) = (row1, row2);
+    if c1.is_empty() || c2.is_empty() {
+        return false;
+    }
+    // merge the two increasing column lists
+    let mut cols = [0u32; PAIR_INPUTS];
+    let (mut a, mut b) = ([T::default(); PAIR_INPUTS], [T::default(); PAIR_INPUTS]);
+    let (mut m1, mut m2) = (0u32, 0u32);
+    let (mut i, mut j, mut n) = (0, 0, 0);
+    while i < c1.len() || j < c2.len() {
+        if n == PAIR_INPUTS {
+            return false;
+        }
+        let c = match (c1.get(i), c2.get(j)) {
+            (Some(&x), Some(&y)) => x.min(y),
+            (Some(&x), None) => x,
+            (None, Some(&y)) => y,
+            (None, None) => unreachable!("one list goes on"),
+        };
+        cols[n] = c;
+        if c1.get(i) == Some(&c) {
+            (a[n], m1) = (T::from_f64(w1[i]), m1 | 1 << n);
+            i += 1;
+        }
+        if c2.get(j) == Some(&c) {
+            (b[n], m2) = (T::from_f64(w2[j]), m2 | 1 << n);
+            j += 1;
+        }
+        n += 1;
+    }
+    if m1 & m2 == 0 {
+        return false; // nothing shared
+    }
+    let mut src: [&[T]; PAIR_INPUTS] = [&[]; PAIR_INPUTS];
+    for k in 0..n {
+        src[k] = tap(cols[k]);
+    }
+    combine_pair(o1, o2, &src[..n], &a[..n], m1, &b[..n], m2);
+    true
+}
+
+/// Most inputs two rows combined together by [`combine_pair_taps`] may read.
+pub const PAIR_INPUTS: usize = 8;
+
+/// [`combine_pair`] as one [`combine`] per output (the patterns without an AVX2 build,
+/// and the reference the tests compare with).
+#[allow(clippy::too_many_arguments)]
+fn pair_by_parts<T: Sample>(
+    o1: &mut [T],
+    o2: &mut [T],
+    src: &[&[T]],
+    w1: &[T],
+    m1: u32,
+    w2: &[T],
+    m2: u32,
+    one: fn(&mut [T], &[&[T]], &[T]),
+) {
+    for (o, w, m) in [(o1, w1, m1), (o2, w2, m2)] {
+        let mut s: [&[T]; 32] = [&[]; 32];
+        let mut wk = [T::default(); 32];
+        let mut n = 0;
+        for k in (0..src.len()).filter(|&k| m >> k & 1 == 1) {
+            (s[n], wk[n]) = (src[k], w[k]);
+            n += 1;
+        }
+        one(o, &s[..n], &wk[..n]);
+    }
+}
+
+/// [`combine_pair`] always with the baseline build (tests compare the two).
+pub fn combine_pair_baseline<T: Sample>(
+    o1: &mut [T],
+    o2: &mut [T],
+    src: &[&[T]],
+    w1: &[T],
+    m1: u32,
+    w2: &[T],
+    m2: u32,
+) {
+    pair_by_parts(o1, o2, src, w1, m1, w2, m2, combine_baseline)
+}
+
+/// The tap patterns `(inputs, m1, m2)` with an AVX2 build: the regular rows of the three
+/// schemes, analysis (coarse, detail) and synthesis (even, odd fine rows), as
+/// [`super::polyphase`] pairs them.
+#[cfg(target_arch = "x86_64")]
+macro_rules! pair_patterns {
+    ($m:ident) => {
+        $m!(
+            (2, 0b11, 0b11),
+            (4, 0b1111, 0b1111),
+            (6, 0b001111, 0b111100),
+            (7, 0b0111011, 0b1111111),
+            (7, 0b1111111, 0b1111100),
+            (7, 0b1111111, 0b1110110),
+            (7, 0b1111111, 0b0011111)
+        )
+    };
+}
+
+/// Dispatch of [`combine_pair`] to [`pair_avx2_f32`] / [`pair_avx2_f64`]; `false` when the
+/// pattern or the type has no AVX2 build.
+///
+/// # Safety
+/// AVX2 present; the checks of [`combine_pair`] hold.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn pair_avx2<T: Sample>(
+    o1: &mut [T],
+    o2: &mut [T],
+    src: &[&[T]],
+    w1: &[T],
+    m1: u32,
+    w2: &[T],
+    m2: u32,
+) -> bool {
+    use std::any::TypeId;
+    let len = o1.len();
+    let u = src.len();
+    macro_rules! go {
+        ($t:ty, $f:ident, $U:literal, $M1:literal, $M2:literal) => {{
+            let p: [*const $t; $U] = std::array::from_fn(|k| src[k].as_ptr() as *const $t);
+            let a: [$t; $U] = std::array::from_fn(|k| w1[k].to_f64() as $t);
+            let b: [$t; $U] = std::array::from_fn(|k| w2[k].to_f64() as $t);
+            let (q1, q2) = (o1.as_mut_ptr() as *mut $t, o2.as_mut_ptr() as *mut $t);
+            // SAFETY: AVX2 present; every input holds `len` samples; T is $t.
+            unsafe { $f::<$U, $M1, $M2>(q1, q2, len, &p, &a, &b) };
+            return true;
+        }};
+    }
+    macro_rules! table {
+        ($(($U:literal, $M1:literal, $M2:literal)),*) => {
+            if TypeId::of::<T>() == TypeId::of::<f32>() {
+                $( if (u, m1, m2) == ($U, $M1, $M2) { go!(f32, pair_avx2_f32, $U, $M1, $M2) } )*
+            } else if TypeId::of::<T>() == TypeId::of::<f64>() {
+                $( if (u, m1, m2) == ($U, $M1, $M2) { go!(f64, pair_avx2_f64, $U, $M1, $M2) } )*
+            }
+        };
+    }
+    pair_patterns!(table);
+    false
+}
+
+/// The body of [`combine_pair`] for one pattern: a vector of each output per step, every
+/// input loaded once; then scalars.
+macro_rules! pair_avx2_body {
+    ($name:ident, $t:ty, $lanes:expr, $set1:ident, $zero:ident, $mul:ident, $add:ident, $load:ident, $store:ident) => {
+        /// See [`pair_avx2_body`].
+        ///
+        /// # Safety
+        /// AVX2 present; `o1`, `o2` and every `p[k]` valid for `len` samples; `M1`, `M2`
+        /// non-empty within `U` bits.
+        #[cfg(target_arch = "x86_64")]
+        #[target_feature(enable = "avx2")]
+        unsafe fn $name<const U: usize, const M1: u32, const M2: u32>(
+            o1: *mut $t,
+            o2: *mut $t,
+            len: usize,
+            p: &[*const $t; U],
+            w1: &[$t; U],
+            w2: &[$t; U],
+        ) {
+            use std::arch::x86_64::*;
+            const L: usize = $lanes;
+            let (f1, f2) = (M1.trailing_zeros() as usize, M2.trailing_zeros() as usize);
+            let mut v1 = [$zero(); U];
+            let mut v2 = [$zero(); U];
+            for k in 0..U {
+                v1[k] = $set1(w1[k]);
+                v2[k] = $set1(w2[k]);
+            }
+            let mut i = 0;
+            // SAFETY (all blocks): i + width <= len, so every access is inside the runs.
+            unsafe {
+                while i + L <= len {
+                    let (mut a1, mut a2) = ($zero(), $zero());
+                    for k in 0..U {
+                        let x = $load(p[k].add(i));
+                        if M1 >> k & 1 == 1 {
+                            let m = $mul(v1[k], x);
+                            a1 = if k == f1 { m } else { $add(a1, m) };
+                        }
+                        if M2 >> k & 1 == 1 {
+                            let m = $mul(v2[k], x);
+                            a2 = if k == f2 { m } else { $add(a2, m) };
+                        }
+                    }
+                    $store(o1.add(i), a1);
+                    $store(o2.add(i), a2);
+                    i += L;
+                }
+                while i < len {
+                    let (mut a1, mut a2) = (0.0 as $t, 0.0 as $t);
+                    for k in 0..U {
+                        let x = *p[k].add(i);
+                        if M1 >> k & 1 == 1 {
+                            let m = w1[k] * x;
+                            a1 = if k == f1 { m } else { a1 + m };
+                        }
+                        if M2 >> k & 1 == 1 {
+                            let m = w2[k] * x;
+                            a2 = if k == f2 { m } else { a2 + m };
+                        }
+                    }
+                    *o1.add(i) = a1;
+                    *o2.add(i) = a2;
+                    i += 1;
+                }
+            }
+        }
+    };
+}
+
+pair_avx2_body!(
+    pair_avx2_f32,
+    f32,
+    8,
+    _mm256_set1_ps,
+    _mm256_setzero_ps,
+    _mm256_mul_ps,
+    _mm256_add_ps,
+    _mm256_loadu_ps,
+    _mm256_storeu_ps
+);
+pair_avx2_body!(
+    pair_avx2_f64,
+    f64,
+    4,
+    _mm256_set1_pd,
+    _mm256_setzero_pd,
+    _mm256_mul_pd,
+    _mm256_add_pd,
+    _mm256_loadu_pd,
+    _mm256_storeu_pd
+);

@@ -14,7 +14,7 @@
 //! `col_step = 2` the lane is first split into its even and odd elements, so tap `k` reads
 //! the contiguous slice starting at element `cols[k] / 2` of one half.
 
-use super::kernel::{combine, deinterleave, interleave};
+use super::kernel::{combine, combine_pair, deinterleave, interleave};
 use super::sample::Sample;
 use super::sparse::Csr;
 
@@ -41,6 +41,100 @@ pub struct Polyphase {
     pub runs: Vec<Run>,
     /// Rows in no run, increasing.
     pub boundary_rows: Vec<usize>,
+    /// Two runs computed together, reading their inputs once (see [`Pair`]).
+    pub pair: Option<Pair>,
+}
+
+/// Two regular runs whose rows read the same stretch of the lane: a coarse and a detail
+/// run (analysis), or the even and the odd fine rows (synthesis). Row `first[j] + t` of
+/// `runs[j]`, `t < count`, reads the inputs `cols[k] + col_step·t` for the `k` in mask
+/// `masks[j]`, with weights `weights[j][k]`; each row sums its own taps in column order
+/// (the bits of one row at a time), but each input is loaded once for both rows
+/// ([`combine_pair`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Pair {
+    pub runs: [usize; 2],
+    pub first: [usize; 2],
+    pub count: usize,
+    /// Union of the two rows' columns at `t = 0`, increasing.
+    pub cols: Vec<usize>,
+    pub weights: [Vec<f64>; 2],
+    pub masks: [u32; 2],
+}
+
+/// Most inputs a [`Pair`] reads.
+const PAIR_MOST: usize = 16;
+
+impl Pair {
+    /// Row `first[0] + t` of `r0` with row `first[1] + t` of `r1`, `t < count`.
+    fn new(runs: [usize; 2], rs: [&Run; 2], first: [usize; 2], count: usize) -> Option<Pair> {
+        let col_step = rs[0].col_step;
+        let mut cols: Vec<usize> = (0..2)
+            .flat_map(|j| rs[j].cols.iter().map(move |&c| c + col_step * first[j]))
+            .collect();
+        cols.sort_unstable();
+        cols.dedup();
+        if count == 0 || cols.len() > PAIR_MOST {
+            return None;
+        }
+        let mut weights = [vec![0.0; cols.len()], vec![0.0; cols.len()]];
+        let mut masks = [0u32; 2];
+        for j in 0..2 {
+            for (&c, &w) in rs[j].cols.iter().zip(&rs[j].weights) {
+                let k = cols.binary_search(&(c + col_step * first[j])).ok()?;
+                weights[j][k] = w;
+                masks[j] |= 1 << k;
+            }
+        }
+        // rows that share no input gain nothing from going together
+        (masks[0] & masks[1] != 0).then_some(Pair {
+            runs,
+            first,
+            count,
+            cols,
+            weights,
+            masks,
+        })
+    }
+
+    /// The pairing of an analysis split: its two element-strided runs, a coarse row with
+    /// the detail row that reads the fewest other inputs.
+    fn analysis(runs: &[Run]) -> Option<Pair> {
+        let [r0, r1] = runs else { return None };
+        if r0.row_step != 1 || r1.row_step != 1 || r0.col_step != 2 {
+            return None;
+        }
+        // row i of r0 with row i + d of r1
+        let union = |d: isize| {
+            let mut c: Vec<isize> = r0.cols.iter().map(|&c| c as isize).collect();
+            c.extend(r1.cols.iter().map(|&c| c as isize - 2 * d));
+            c.sort_unstable();
+            c.dedup();
+            c.len()
+        };
+        let d = (-4isize..=4).min_by_key(|&d| (union(d), d.abs()))?;
+        let s0 = (-d).max(0) as usize;
+        let s1 = (s0 as isize + d) as usize;
+        let count = r0.count.saturating_sub(s0).min(r1.count.saturating_sub(s1));
+        Pair::new([0, 1], [r0, r1], [s0, s1], count)
+    }
+
+    /// The pairing of a synthesis split: the even and the odd fine rows over the
+    /// stretch where both are regular.
+    fn synthesis(runs: &[Run]) -> Option<Pair> {
+        let ei = runs.iter().position(|r| r.row_step == 2 && r.row0 % 2 == 0)?;
+        let oi = runs.iter().position(|r| r.row_step == 2 && r.row0 % 2 == 1)?;
+        let (ev, od) = (&runs[ei], &runs[oi]);
+        if ev.col_step != 1 {
+            return None;
+        }
+        let (a, b) = (ev.row0 / 2, od.row0 / 2);
+        let (p0, p1) = (a.max(b), (a + ev.count).min(b + od.count));
+        if p1 <= p0 {
+            return None;
+        }
+        Pair::new([ei, oi], [ev, od], [p0 - a, p0 - b], p1 - p0)
+    }
 }
 
 impl Polyphase {
@@ -90,11 +184,17 @@ impl Polyphase {
                 r += count * row_step;
             }
         }
+        let pair = if row_step == 1 {
+            Pair::analysis(&runs)
+        } else {
+            Pair::synthesis(&runs)
+        };
         Polyphase {
             rows,
             col_step,
             runs,
             boundary_rows: (0..rows).filter(|&r| !covered[r]).collect(),
+            pair,
         }
     }
 
@@ -121,35 +221,29 @@ impl Polyphase {
         if self.col_step == 2 && !self.runs.is_empty() {
             deinterleave(x, e, scratch);
         }
-        // Row-strided runs (synthesis, `col_step` 1 so `scratch` is free): the even and
-        // the odd rows are computed over the stretch where both phases are regular, into
-        // the two halves of `scratch`, then interleaved.
         let mut paired = [usize::MAX; 2];
-        let even = self
-            .runs
-            .iter()
-            .position(|r| r.row_step == 2 && r.row0 % 2 == 0);
-        let odd = self
-            .runs
-            .iter()
-            .position(|r| r.row_step == 2 && r.row0 % 2 == 1);
-        if let (Some(ei), Some(oi), 1) = (even, odd, self.col_step) {
-            let (ev, od) = (&self.runs[ei], &self.runs[oi]);
-            let (a, b) = (ev.row0 / 2, od.row0 / 2);
-            let (p0, p1) = (a.max(b), (a + ev.count).min(b + od.count));
-            if p1 > p0 && ev.cols.len() <= 16 && od.cols.len() <= 16 {
-                paired = [ei, oi];
-                let n = (p1 - p0) * e;
-                let (t0, t1) = scratch[..2 * n].split_at_mut(n);
-                run_part(1, ne, ev, p0 - a, p1 - p0, x, &[], e, t0);
-                run_part(1, ne, od, p0 - b, p1 - p0, x, &[], e, t1);
-                interleave(t0, t1, e, &mut y[2 * p0 * e..2 * p1 * e]);
-                // rows of either run outside the common stretch
-                for (run, base) in [(ev, a), (od, b)] {
-                    let inside = (p0 - base)..(p1 - base);
-                    for i in (0..inside.start).chain(inside.end..run.count) {
-                        op_row(op, run.row0 + 2 * i, x, y, e);
-                    }
+        if let Some(pair) = &self.pair {
+            paired = pair.runs;
+            let (r0, r1) = (&self.runs[pair.runs[0]], &self.runs[pair.runs[1]]);
+            let (f, n) = (pair.first, pair.count);
+            if self.col_step == 1 {
+                // Synthesis (`scratch` is free): the even and the odd rows into its two
+                // halves, then interleaved.
+                let (t0, t1) = scratch[..2 * n * e].split_at_mut(n * e);
+                pair_part(pair, 1, ne, x, &[], e, t0, t1);
+                let p0 = r0.row0 / 2 + f[0];
+                interleave(t0, t1, e, &mut y[2 * p0 * e..2 * (p0 + n) * e]);
+            } else {
+                // Analysis: the coarse and the detail rows straight into `y`.
+                let (lo, hi) = y.split_at_mut(r1.row0 * e);
+                let o0 = &mut lo[(r0.row0 + f[0]) * e..(r0.row0 + f[0] + n) * e];
+                let o1 = &mut hi[f[1] * e..(f[1] + n) * e];
+                pair_part(pair, 2, ne, x, scratch, e, o0, o1);
+            }
+            // rows of either run outside the common stretch
+            for (run, s) in [(r0, f[0]), (r1, f[1])] {
+                for i in (0..s).chain(s + n..run.count) {
+                    op_row(op, run.row0 + run.row_step * i, x, y, e);
                 }
             }
         }
@@ -249,4 +343,36 @@ fn run_part<T: Sample>(
         w[k] = T::from_f64(wk);
     }
     combine(&mut out[..len], &src[..taps], &w[..taps]);
+}
+
+/// The rows of `pair` into `o0` and `o1` (contiguous) with [`combine_pair`]: every input is
+/// one slice of the lane (`col_step` 1) or of its even/odd halves (`col_step` 2).
+#[allow(clippy::too_many_arguments)]
+#[inline]
+fn pair_part<T: Sample>(
+    pair: &Pair,
+    col_step: usize,
+    ne: usize,
+    x: &[T],
+    halves: &[T],
+    e: usize,
+    o0: &mut [T],
+    o1: &mut [T],
+) {
+    let mut src: [&[T]; PAIR_MOST] = [&[]; PAIR_MOST];
+    let (mut w0, mut w1) = ([T::default(); PAIR_MOST], [T::default(); PAIR_MOST]);
+    let len = pair.count * e;
+    let u = pair.cols.len();
+    for (k, &c) in pair.cols.iter().enumerate() {
+        src[k] = if col_step == 2 {
+            let start = (c % 2) * ne * e + (c / 2) * e;
+            &halves[start..start + len]
+        } else {
+            &x[c * e..c * e + len]
+        };
+        w0[k] = T::from_f64(pair.weights[0][k]);
+        w1[k] = T::from_f64(pair.weights[1][k]);
+    }
+    let [m0, m1] = pair.masks;
+    combine_pair(&mut o0[..len], &mut o1[..len], &src[..u], &w0[..u], m0, &w1[..u], m1);
 }

@@ -26,7 +26,7 @@
 use super::aligned::Aligned;
 use super::fused::{prefetch, AxisOp, Ctx, PREFETCH_MAX, STREAM_BYTES};
 use super::par::SharedMut;
-use crate::scheme::kernel::{combine_taps, stream_copy};
+use crate::scheme::kernel::{combine_pair_taps, combine_taps, stream_copy};
 use crate::scheme::sparse::Csr;
 use crate::scheme::Sample;
 use rayon::prelude::*;
@@ -429,6 +429,10 @@ struct LevelState<T> {
     /// The level's scratch ([`Ctx::scratch`]); its first buffer takes the row combined
     /// along axis 0.
     scratch: Vec<Aligned<T>>,
+    /// The next row combined along axis 0 together with the current one, for position
+    /// `pending` ([`Step::combine_pair`]).
+    next_slab: Aligned<T>,
+    pending: Option<usize>,
     /// A whole output row, compact (analysis rows that feed the next level).
     out: Vec<T>,
 }
@@ -466,6 +470,8 @@ fn level_states<T: Sample>(plan: &Plan, ctxs: &[Ctx], spans: &[Span]) -> Vec<Lev
                 made: None,
                 ring: Ring::new(row, c, d, split),
                 scratch: ctxs[l].scratch(),
+                next_slab: Aligned::heap(ctxs[l].cs()[0]),
+                pending: None,
                 out: vec![T::default(); if needs_out { row } else { 0 }],
             }
         })
@@ -503,7 +509,11 @@ impl<'p, 'a, T: Sample> Part<'p, 'a, T> {
 
     /// The next row of level `l` in its order.
     fn next_row(&self, l: usize) -> Step<'a> {
-        let pos = self.levels[l].cursor;
+        self.step_at(l, self.levels[l].cursor)
+    }
+
+    /// The row at position `pos` of level `l`'s order.
+    fn step_at(&self, l: usize, pos: usize) -> Step<'a> {
         let r = self.plan.order[l][pos];
         Step {
             pos,
@@ -541,17 +551,36 @@ impl<'p, 'a, T: Sample> Part<'p, 'a, T> {
                 }
             }
         }
+        let next = (step.pos + 1 < self.spans[l].end).then(|| self.step_at(l, step.pos + 1));
         {
             let st = &mut self.levels[l];
-            let ring = &st.ring;
             let s0 = strides[0];
-            step.combine(&mut st.scratch[0], 0..row_len, |c| {
-                if l == 0 {
-                    &src[c as usize * s0..c as usize * s0 + row_len]
+            if st.pending == Some(step.pos) {
+                // made with the row before (`combine_pair`)
+                std::mem::swap(&mut st.scratch[0], &mut st.next_slab);
+                st.pending = None;
+            } else {
+                let ring = &st.ring;
+                let tap = |c: u32| -> &[T] {
+                    if l == 0 {
+                        &src[c as usize * s0..c as usize * s0 + row_len]
+                    } else {
+                        &ring.get(c as usize)[..row_len]
+                    }
+                };
+                // the next row too when its inputs are at hand (level 0 reads the array;
+                // a ring holds what the level below has made)
+                let with = next.filter(|n| l == 0 || n.taps.0.iter().all(|&c| ring.has(c as usize)));
+                let paired = with.is_some_and(|n| {
+                    let (a, b) = (&mut st.scratch[0], &mut st.next_slab);
+                    step.combine_pair(&n, &mut a[..row_len], &mut b[..row_len], 0..row_len, tap)
+                });
+                if paired {
+                    st.pending = Some(step.pos + 1);
                 } else {
-                    &ring.get(c as usize)[..row_len]
+                    step.combine(&mut st.scratch[0], 0..row_len, tap);
                 }
-            });
+            }
         }
         let (pos, r) = (step.pos, step.r);
         let owned = self.spans[l].own.contains(&pos);
@@ -647,8 +676,12 @@ impl<'p, 'a, T: Sample> Part<'p, 'a, T> {
         let plan = self.plan;
         let step = self.next_row(l);
         self.levels[l].cursor += 1;
-        for &c in step.taps.0 {
-            self.synthesis_input(l, c as usize);
+        // made with the row before (`combine_pair`)
+        let made = self.levels[l].pending == Some(step.pos);
+        if !made {
+            for &c in step.taps.0 {
+                self.synthesis_input(l, c as usize);
+            }
         }
         let (src, strides) = (self.src, self.strides);
         let row_len = self.ctxs[l].cs()[0];
@@ -666,40 +699,70 @@ impl<'p, 'a, T: Sample> Part<'p, 'a, T> {
                 }
             }
         }
+        let next = (!made && step.pos + 1 < self.spans[l].end)
+            .then(|| self.step_at(l, step.pos + 1));
+        // rows of the array in place (images); the coarse rows' first `w1` samples are
+        // the coarser level's output (when there is one)
+        let w1 = if plan.lines && l + 1 < plan.ops.len() {
+            self.ctxs[l + 1].cs()[0]
+        } else {
+            0
+        };
         {
             let st = &mut self.levels[l];
-            let ring = &st.ring;
-            if plan.lines {
-                // rows of the array in place; the coarse rows' first `w1` samples are the
-                // coarser level's output (when there is one)
-                let w1 = if l + 1 < plan.ops.len() {
-                    self.ctxs[l + 1].cs()[0]
-                } else {
-                    0
+            if made {
+                std::mem::swap(&mut st.scratch[0], &mut st.next_slab);
+                st.pending = None;
+            } else {
+                let ring = &st.ring;
+                let coarse = |c: u32| -> &[T] {
+                    let c = c as usize;
+                    if c < nc {
+                        &ring.get(c)[..w1]
+                    } else {
+                        &src[c * s0..c * s0 + w1]
+                    }
                 };
-                if w1 > 0 {
-                    step.combine(&mut st.scratch[0], 0..w1, |c| {
-                        let c = c as usize;
-                        if c < nc {
-                            &ring.get(c)[..w1]
-                        } else {
-                            &src[c * s0..c * s0 + w1]
-                        }
-                    });
-                }
-                step.combine(&mut st.scratch[0], w1..row_len, |c| {
+                let array = |c: u32| -> &[T] {
                     let c = c as usize;
                     &src[c * s0..c * s0 + row_len]
-                });
-            } else {
-                step.combine(&mut st.scratch[0], 0..row_len, |c| {
+                };
+                let held = |c: u32| -> &[T] {
                     let c = c as usize;
                     if l == 0 && c >= nc {
                         &src[c * s0..c * s0 + row_len]
                     } else {
                         ring.get(c)
                     }
+                };
+                // the next row too when its inputs are at hand
+                let at_hand = |c: usize| {
+                    if plan.lines {
+                        w1 == 0 || c >= nc || ring.has(c)
+                    } else {
+                        (l == 0 && c >= nc) || ring.has(c)
+                    }
+                };
+                let with = next.filter(|n| n.taps.0.iter().all(|&c| at_hand(c as usize)));
+                let (a, b) = (&mut st.scratch[0], &mut st.next_slab);
+                let paired = with.is_some_and(|n| {
+                    if plan.lines {
+                        (w1 == 0 || step.combine_pair(&n, a, b, 0..w1, coarse))
+                            && step.combine_pair(&n, a, b, w1..row_len, array)
+                    } else {
+                        step.combine_pair(&n, a, b, 0..row_len, held)
+                    }
                 });
+                if paired {
+                    st.pending = Some(step.pos + 1);
+                } else if plan.lines {
+                    if w1 > 0 {
+                        step.combine(a, 0..w1, coarse);
+                    }
+                    step.combine(a, w1..row_len, array);
+                } else {
+                    step.combine(a, 0..row_len, held);
+                }
             }
         }
         let r = step.r;
@@ -759,6 +822,23 @@ impl Step<'_> {
         combine_taps(&mut slab[range.clone()], cols, ws, |c| {
             &tap(c)[range.clone()]
         });
+    }
+}
+
+impl Step<'_> {
+    /// This row into `slab` and `other` into `slab2` over samples `range`, the inputs the
+    /// two rows share read once ([`combine_pair_taps`]); `false` (nothing written) when
+    /// they do not pair.
+    fn combine_pair<'t, T: Sample + 't>(
+        &self,
+        other: &Step,
+        slab: &mut [T],
+        slab2: &mut [T],
+        range: std::ops::Range<usize>,
+        tap: impl Fn(u32) -> &'t [T],
+    ) -> bool {
+        let (a, b) = (&mut slab[range.clone()], &mut slab2[range.clone()]);
+        combine_pair_taps(a, b, self.taps, other.taps, |c| &tap(c)[range.clone()])
     }
 }
 

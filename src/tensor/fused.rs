@@ -14,7 +14,7 @@
 
 use super::aligned::Aligned;
 use super::par::{for_each_part, SharedMut};
-use crate::scheme::kernel::{self, combine_taps, stream_copy, transpose};
+use crate::scheme::kernel::{self, combine_pair_taps, combine_taps, stream_copy, transpose};
 use crate::scheme::polyphase::Polyphase;
 use crate::scheme::sparse::Csr;
 use crate::scheme::Sample;
@@ -56,7 +56,14 @@ pub fn fused_level<T: Sample>(
     assert!(extent <= src.len());
     let work_bytes = region.iter().product::<usize>() * e * std::mem::size_of::<T>();
     let ctx = Ctx::new(region, e, ops, work_bytes >= STREAM_BYTES);
-    let make_scratch = || ctx.scratch::<T>();
+    // a second slab for rows combined in pairs along axis 0 (`Ctx::row_pair`); none
+    // where they do not pair (an extra plane of a volume costs time even unused, as the
+    // placement of buffers does, see `aligned`)
+    let pairs = ctx.cs()[0] * std::mem::size_of::<T>() <= PAIR_SLAB_MAX;
+    let make_scratch = || {
+        let slab2 = Aligned::<T>::heap(if pairs { ctx.cs()[0] } else { 0 });
+        (ctx.scratch::<T>(), slab2)
+    };
     let dst_len = dst.len();
     let dptr = SharedMut(dst.as_mut_ptr());
     let order = ops[0].order;
@@ -69,16 +76,27 @@ pub fn fused_level<T: Sample>(
             .apply_lane(ops[0].op, &src[..n], &mut dst[..n], e, &mut lane_tmp);
         return;
     }
-    let task = |rows: &[usize], scratch: &mut Vec<Aligned<T>>| {
+    let task = |rows: &[usize], (scratch, slab2): &mut (Vec<Aligned<T>>, Aligned<T>)| {
         let p = dptr;
-        for &r in rows {
+        let out_row = |r: usize| {
             let at = r * strides[0];
             let len = strides[0].min(dst_len - at);
             // SAFETY: output row r of axis 0 owns dst[r·s0, r·s0 + s0) (strides are
             // nested, checked above); each row index appears once in `order`, and tasks
-            // get disjoint parts of `order`.
-            let out = unsafe { std::slice::from_raw_parts_mut(p.0.add(at), len) };
-            ctx.row(0, r, src, strides, out, strides, scratch);
+            // get disjoint parts of `order`, of which each row is taken once here.
+            unsafe { std::slice::from_raw_parts_mut(p.0.add(at), len) }
+        };
+        let mut i = 0;
+        while i < rows.len() {
+            if let [r1, r2, ..] = rows[i..] {
+                let outs = [out_row(r1), out_row(r2)];
+                if ctx.row_pair([r1, r2], src, strides, outs, strides, scratch, slab2) {
+                    i += 2;
+                    continue;
+                }
+            }
+            ctx.row(0, rows[i], src, strides, out_row(rows[i]), strides, scratch);
+            i += 1;
         }
     };
     for_each_part(order, ROWS_PER_TASK, work < 1 << 16, make_scratch, task);
@@ -197,20 +215,82 @@ impl<'a> Ctx<'a> {
             }
         }
         for line in 0..lines {
-            // offsets of this line in the source and in the compact slab
-            let (mut so, mut co, mut rem) = (0usize, 0usize, line);
-            for j in (d + 1..k - 1).rev() {
-                let i = rem % self.region[j];
-                rem /= self.region[j];
-                so += i * src_st[j];
-                co += i * self.cs[j];
-            }
+            let (so, co) = self.line_at(d, line, src_st);
             let at = |c: u32| c as usize * src_st[d] + so;
             combine_taps(&mut slab[co..co + run], cols, ws, |c| {
                 &src[at(c)..at(c) + run]
             });
         }
         self.slab(d + 1, slab, out, dst_st, rest);
+    }
+
+    /// Offsets of line `line` of a slab along axis `d` in the source (strides `src_st`)
+    /// and in the compact slab.
+    fn line_at(&self, d: usize, line: usize, src_st: &[usize]) -> (usize, usize) {
+        let k = self.ops.len();
+        let (mut so, mut co, mut rem) = (0usize, 0usize, line);
+        for j in (d + 1..k - 1).rev() {
+            let i = rem % self.region[j];
+            rem /= self.region[j];
+            so += i * src_st[j];
+            co += i * self.cs[j];
+        }
+        (so, co)
+    }
+
+    /// Output rows `r[0]` and `r[1]` along axis 0, as [`Ctx::row`] makes each, with their
+    /// slabs combined together ([`combine_pair_taps`]: the input slabs the two rows share
+    /// are read once; the second slab goes to `slab2`). `false` (nothing written) when
+    /// the two rows do not pair.
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn row_pair<T: Sample>(
+        &self,
+        r: [usize; 2],
+        src: &[T],
+        src_st: &[usize],
+        outs: [&mut [T]; 2],
+        dst_st: &[usize],
+        scratch: &mut [Aligned<T>],
+        slab2: &mut [T],
+    ) -> bool {
+        let k = self.ops.len();
+        if k < 2 {
+            return false;
+        }
+        let (slab, rest) = scratch.split_first_mut().expect("scratch per axis");
+        let whole = (1..k - 1).all(|j| src_st[j] == self.cs[j]);
+        let (run, lines) = if whole {
+            (self.cs[0], 1)
+        } else {
+            (self.region[k - 1] * self.e, self.region[1..k - 1].iter().product())
+        };
+        if self.cs[0] * std::mem::size_of::<T>() > PAIR_SLAB_MAX || slab2.len() < self.cs[0] {
+            return false;
+        }
+        let op = self.ops[0].op;
+        let rows = [op.row_slices(r[0]), op.row_slices(r[1])];
+        if self.stream && whole && run * std::mem::size_of::<T>() <= PREFETCH_MAX {
+            // as in `row`
+            if let Some(&last) = rows[1].0.last() {
+                let next = last as usize + 1;
+                if next < self.region[0] {
+                    prefetch(src, next * src_st[0], run);
+                }
+            }
+        }
+        for line in 0..lines {
+            let (so, co) = self.line_at(0, line, src_st);
+            let at = |c: u32| c as usize * src_st[0] + so;
+            let (a, b) = (&mut slab[co..co + run], &mut slab2[co..co + run]);
+            if !combine_pair_taps(a, b, rows[0], rows[1], |c| &src[at(c)..at(c) + run]) {
+                debug_assert_eq!(line, 0, "the same rows pair on every line");
+                return false;
+            }
+        }
+        let [o1, o2] = outs;
+        self.slab(1, slab, o1, dst_st, rest);
+        self.slab(1, &slab2[..], o2, dst_st, rest);
+        true
     }
 
     /// The level along axes `d..` of a compact slab, into `out` (strides `dst_st`).
@@ -313,6 +393,11 @@ pub(super) fn prefetch<T>(src: &[T], at: usize, len: usize) {
 /// Largest slab (bytes) worth a [`prefetch`]: 3D Chaikin took 69 → 82 ms of CPU time
 /// forward and back when its 256 KB planes were prefetched.
 pub(super) const PREFETCH_MAX: usize = 64 << 10;
+
+/// Largest slab (bytes) combined in pairs ([`Ctx::row_pair`]): rows of images. A
+/// volume's planes (256 KB at 256³) do not pair: the second plane pushes the plane path's
+/// buffers out of L2 (256³ cubic forward and back 33.5 → 41.1 ms, two threads).
+const PAIR_SLAB_MAX: usize = 64 << 10;
 
 /// Lanes at most this long go through [`Ctx::plane`] (volumes of a few hundred samples a
 /// side), longer ones lane by lane.
