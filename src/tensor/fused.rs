@@ -395,8 +395,9 @@ pub(super) fn prefetch<T>(src: &[T], at: usize, len: usize) {
 pub(super) const PREFETCH_MAX: usize = 64 << 10;
 
 /// Largest slab (bytes) combined in pairs ([`Ctx::row_pair`]): rows of images. A
-/// volume's planes (256 KB at 256³) do not pair: the second plane pushes the plane path's
-/// buffers out of L2 (256³ cubic forward and back 33.5 → 41.1 ms, two threads).
+/// volume's planes (256 KB at 256³) do not pair: a second plane per worker made 256³
+/// cubic forward and back slower even left unused (35.3 → 42.2 ms, two threads), and
+/// pairing the planes did not win that back (41.1 ms).
 const PAIR_SLAB_MAX: usize = 64 << 10;
 
 /// Lanes at most this long go through [`Ctx::plane`] (volumes of a few hundred samples a
