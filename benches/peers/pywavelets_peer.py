@@ -56,6 +56,10 @@ for r in rows:
 copies = [r["copy_mb_per_s_best"] for r in rows if r["shape"] == shape]
 print(f"copy (best, per case): {min(copies):.0f}-{max(copies):.0f} MB/s; "
       f"PyWavelets is {100 * p_best / max(copies):.1f}-{100 * p_best / min(copies):.1f}% of copy (best)")
+# context only (the target is against the plain copy): the same copy split over all threads
+par = [r["copy_all_threads_mb_per_s_best"] for r in rows if "copy_all_threads_mb_per_s_best" in r]
+if par:
+    print(f"the copy split over {rows[0]['threads']} threads (best, per case): {min(par):.0f}-{max(par):.0f} MB/s")
 for r in rows:
     if r["shape"] != shape:
         print(f"3D {r['shape']} {r['levels']} levels {r['scheme']:<8} {r['boundary']:<14} "
