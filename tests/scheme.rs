@@ -433,7 +433,9 @@ fn combine_pair_gives_the_bits_of_two_combines() {
     use mra::scheme::kernel::{combine, combine_pair, combine_pair_baseline};
     fn check<T: mra::scheme::Sample + Into<f64>>(x: &[T], u: usize, m1: u32, m2: u32, len: usize) {
         let src: Vec<&[T]> = (0..u).map(|k| &x[k..k + len]).collect();
-        let w1: Vec<T> = (0..u).map(|k| T::from_f64(0.375 * k as f64 - 1.1)).collect();
+        let w1: Vec<T> = (0..u)
+            .map(|k| T::from_f64(0.375 * k as f64 - 1.1))
+            .collect();
         let w2: Vec<T> = (0..u).map(|k| T::from_f64(0.7 - 0.25 * k as f64)).collect();
         let (mut a1, mut a2) = (vec![T::default(); len], vec![T::default(); len]);
         combine_pair(&mut a1, &mut a2, &src, &w1, m1, &w2, m2);
@@ -477,6 +479,63 @@ fn combine_pair_gives_the_bits_of_two_combines() {
             let x32: Vec<f32> = x.iter().map(|&v| v as f32).collect();
             check(&x, u, m1, m2, len);
             check(&x32, u, m1, m2, len);
+        }
+    }
+}
+
+/// `combine_pair_rows` (pairs of rows of `len` samples, stepping through an operator)
+/// gives the bits of `combine_pair` pair by pair: analysis-like steps (rows side by side)
+/// and synthesis-like ones (even and odd rows), f32, a pattern with and one without an
+/// AVX2 build.
+#[test]
+fn combine_pair_rows_gives_the_bits_of_combine_pair() {
+    use mra::scheme::kernel::{combine_pair, combine_pair_rows};
+    for (u, m1, m2) in [(7usize, 0b1111111u32, 0b1111100u32), (3, 0b011, 0b110)] {
+        for (len, count, in_step, rows, steps) in [
+            (5usize, 9usize, 2usize, [0usize, 9usize], [1usize, 1usize]),
+            (16, 6, 1, [1, 2], [2, 2]),
+            (33, 4, 2, [10, 0], [1, 1]),
+        ] {
+            let cols: Vec<usize> = (0..u).map(|k| k + 1).collect();
+            let n_in = cols[u - 1] + in_step * count + 1;
+            let src: Vec<f32> = lcg(len as u64 + u as u64, n_in * len)
+                .iter()
+                .map(|&v| v as f32)
+                .collect();
+            let w1: Vec<f32> = (0..u).map(|k| 0.375 * k as f32 - 1.1).collect();
+            let w2: Vec<f32> = (0..u).map(|k| 0.7 - 0.25 * k as f32).collect();
+            let n_out = (0..2).map(|j| rows[j] + steps[j] * count).max().unwrap();
+            let mut got = vec![0f32; n_out * len];
+            combine_pair_rows(
+                &src,
+                len,
+                &cols,
+                in_step,
+                (&w1, m1),
+                (&w2, m2),
+                &mut got,
+                rows,
+                steps,
+                count,
+            );
+            for t in 0..count {
+                let inputs: Vec<&[f32]> = cols
+                    .iter()
+                    .map(|&c| &src[(c + in_step * t) * len..][..len])
+                    .collect();
+                let (mut a, mut b) = (vec![0f32; len], vec![0f32; len]);
+                combine_pair(&mut a, &mut b, &inputs, &w1, m1, &w2, m2);
+                for (j, want) in [(0, &a), (1, &b)] {
+                    let r = rows[j] + steps[j] * t;
+                    let row = &got[r * len..][..len];
+                    assert!(
+                        row.iter()
+                            .zip(want.iter())
+                            .all(|(x, y)| x.to_bits() == y.to_bits()),
+                        "pattern ({u}, {m1:#b}, {m2:#b}) len {len} pair {t} output {j}"
+                    );
+                }
+            }
         }
     }
 }

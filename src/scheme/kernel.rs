@@ -637,8 +637,11 @@ pub fn combine_pair<T: Sample>(
     assert!(src.iter().all(|s| s.len() >= o1.len()));
     #[cfg(target_arch = "x86_64")]
     if super::sparse::cpu_has_avx2() {
-        // SAFETY: AVX2 is present; lengths and masks checked above.
-        if unsafe { pair_avx2(o1, o2, src, w1, m1, w2, m2) } {
+        let p: [*const T; 32] =
+            std::array::from_fn(|k| src.get(k).map_or(std::ptr::null(), |s| s.as_ptr()));
+        let o = [o1.as_mut_ptr(), o2.as_mut_ptr()];
+        // SAFETY: AVX2 is present; lengths and masks checked above; one step.
+        if unsafe { pair_avx2(o, o1.len(), &p[..u], w1, m1, w2, m2, 1, 0, [0, 0]) } {
             return;
         }
     }
@@ -756,33 +759,45 @@ macro_rules! pair_patterns {
     };
 }
 
-/// Dispatch of [`combine_pair`] to [`pair_avx2_f32`] / [`pair_avx2_f64`]; `false` when the
-/// pattern or the type has no AVX2 build.
+/// Dispatch of [`combine_pair`] to [`pair_avx2_f32`] / [`pair_avx2_f64`], for `count`
+/// steps: step `t` reads `src[k] + t·in_step` and writes `o1 + t·out_step[0]`,
+/// `o2 + t·out_step[1]` (`len` samples each). `false` (nothing written) when the pattern or
+/// the type has no AVX2 build.
 ///
 /// # Safety
-/// AVX2 present; the checks of [`combine_pair`] hold.
+/// AVX2 present; every access inside its allocation, outputs distinct from each other
+/// and from the inputs; the masks as [`combine_pair`] checks them.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
+#[allow(clippy::too_many_arguments)]
 unsafe fn pair_avx2<T: Sample>(
-    o1: &mut [T],
-    o2: &mut [T],
-    src: &[&[T]],
+    o: [*mut T; 2],
+    len: usize,
+    src: &[*const T],
     w1: &[T],
     m1: u32,
     w2: &[T],
     m2: u32,
+    count: usize,
+    in_step: usize,
+    out_step: [usize; 2],
 ) -> bool {
     use std::any::TypeId;
-    let len = o1.len();
     let u = src.len();
     macro_rules! go {
         ($t:ty, $f:ident, $U:literal, $M1:literal, $M2:literal) => {{
-            let p: [*const $t; $U] = std::array::from_fn(|k| src[k].as_ptr() as *const $t);
             let a: [$t; $U] = std::array::from_fn(|k| w1[k].to_f64() as $t);
             let b: [$t; $U] = std::array::from_fn(|k| w2[k].to_f64() as $t);
-            let (q1, q2) = (o1.as_mut_ptr() as *mut $t, o2.as_mut_ptr() as *mut $t);
-            // SAFETY: AVX2 present; every input holds `len` samples; T is $t.
-            unsafe { $f::<$U, $M1, $M2>(q1, q2, len, &p, &a, &b) };
+            for t in 0..count {
+                // SAFETY: the caller's bounds; T is $t.
+                unsafe {
+                    let p: [*const $t; $U] =
+                        std::array::from_fn(|k| src[k].add(t * in_step) as *const $t);
+                    let q1 = o[0].add(t * out_step[0]) as *mut $t;
+                    let q2 = o[1].add(t * out_step[1]) as *mut $t;
+                    $f::<$U, $M1, $M2>(q1, q2, len, &p, &a, &b);
+                }
+            }
             return true;
         }};
     }
@@ -797,6 +812,87 @@ unsafe fn pair_avx2<T: Sample>(
     }
     pair_patterns!(table);
     false
+}
+
+/// [`combine_pair`] for `count` pairs of rows of `len` samples (the elements of a lane are
+/// whole rows, e.g. the lanes of a volume's plane): pair `t` reads the rows
+/// `cols[k] + in_step·t` of `src` and writes the rows `rows[j] + out_step[j]·t` of `dst`
+/// (`j` = 0 for the first output, 1 for the second). The same bits as [`combine_pair`] pair
+/// by pair; one dispatch for all of them.
+#[allow(clippy::too_many_arguments)]
+pub fn combine_pair_rows<T: Sample>(
+    src: &[T],
+    len: usize,
+    cols: &[usize],
+    in_step: usize,
+    (w1, m1): (&[T], u32),
+    (w2, m2): (&[T], u32),
+    dst: &mut [T],
+    rows: [usize; 2],
+    out_step: [usize; 2],
+    count: usize,
+) {
+    let u = cols.len();
+    assert!(u <= 32 && w1.len() == u && w2.len() == u);
+    let all = if u == 32 { u32::MAX } else { (1u32 << u) - 1 };
+    assert!(m1 != 0 && m2 != 0 && m1 & !all == 0 && m2 & !all == 0);
+    if count == 0 || len == 0 {
+        return;
+    }
+    let last = count - 1;
+    assert!(cols
+        .iter()
+        .all(|&c| (c + in_step * last + 1) * len <= src.len()));
+    for j in 0..2 {
+        assert!((rows[j] + out_step[j] * last + 1) * len <= dst.len());
+    }
+    // the two outputs' rows never meet (a pair's rows are different rows of an operator)
+    let row = |j: usize, t: usize| rows[j] + out_step[j] * t;
+    let apart = rows[0].abs_diff(rows[1]);
+    let disjoint = if out_step[0] == out_step[1] && out_step[0] > 0 {
+        apart % out_step[0] != 0 || apart >= out_step[0] * count
+    } else {
+        row(0, last).max(rows[0]) < rows[1].min(row(1, last))
+            || row(1, last).max(rows[1]) < rows[0].min(row(0, last))
+    };
+    assert!(disjoint, "combine_pair_rows: the two outputs share a row");
+    let mut p: [*const T; 32] = [std::ptr::null(); 32];
+    for (k, &c) in cols.iter().enumerate() {
+        p[k] = src[c * len..].as_ptr();
+    }
+    #[cfg(target_arch = "x86_64")]
+    if super::sparse::cpu_has_avx2() {
+        let d = dst.as_mut_ptr();
+        // SAFETY: AVX2 is present; every input and output row is inside its slice
+        // (asserted), the output rows are distinct, and `src` and `dst` are distinct
+        // slices (borrowed shared and exclusive).
+        let done = unsafe {
+            let o = [d.add(rows[0] * len), d.add(rows[1] * len)];
+            let step = [out_step[0] * len, out_step[1] * len];
+            pair_avx2(o, len, &p[..u], w1, m1, w2, m2, count, in_step * len, step)
+        };
+        if done {
+            return;
+        }
+    }
+    let _ = p;
+    for t in 0..count {
+        let mut s: [&[T]; 32] = [&[]; 32];
+        for (k, &c) in cols.iter().enumerate() {
+            s[k] = &src[(c + in_step * t) * len..][..len];
+        }
+        let s = &s[..u];
+        let (a, b) = (row(0, t), row(1, t));
+        let (lo, hi, swap) = if a < b { (a, b, false) } else { (b, a, true) };
+        let (x, y) = dst.split_at_mut(hi * len);
+        let (first, second) = (&mut x[lo * len..lo * len + len], &mut y[..len]);
+        let (o1, o2) = if swap {
+            (second, first)
+        } else {
+            (first, second)
+        };
+        pair_by_parts(o1, o2, s, w1, m1, w2, m2, combine);
+    }
 }
 
 /// The body of [`combine_pair`] for one pattern: a vector of each output per step, every

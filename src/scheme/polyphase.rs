@@ -122,8 +122,12 @@ impl Pair {
     /// The pairing of a synthesis split: the even and the odd fine rows over the
     /// stretch where both are regular.
     fn synthesis(runs: &[Run]) -> Option<Pair> {
-        let ei = runs.iter().position(|r| r.row_step == 2 && r.row0 % 2 == 0)?;
-        let oi = runs.iter().position(|r| r.row_step == 2 && r.row0 % 2 == 1)?;
+        let ei = runs
+            .iter()
+            .position(|r| r.row_step == 2 && r.row0 % 2 == 0)?;
+        let oi = runs
+            .iter()
+            .position(|r| r.row_step == 2 && r.row0 % 2 == 1)?;
         let (ev, od) = (&runs[ei], &runs[oi]);
         if ev.col_step != 1 {
             return None;
@@ -374,5 +378,13 @@ fn pair_part<T: Sample>(
         w1[k] = T::from_f64(pair.weights[1][k]);
     }
     let [m0, m1] = pair.masks;
-    combine_pair(&mut o0[..len], &mut o1[..len], &src[..u], &w0[..u], m0, &w1[..u], m1);
+    combine_pair(
+        &mut o0[..len],
+        &mut o1[..len],
+        &src[..u],
+        &w0[..u],
+        m0,
+        &w1[..u],
+        m1,
+    );
 }

@@ -570,7 +570,8 @@ impl<'p, 'a, T: Sample> Part<'p, 'a, T> {
                 };
                 // the next row too when its inputs are at hand (level 0 reads the array;
                 // a ring holds what the level below has made)
-                let with = next.filter(|n| l == 0 || n.taps.0.iter().all(|&c| ring.has(c as usize)));
+                let with =
+                    next.filter(|n| l == 0 || n.taps.0.iter().all(|&c| ring.has(c as usize)));
                 let paired = with.is_some_and(|n| {
                     let (a, b) = (&mut st.scratch[0], &mut st.next_slab);
                     step.combine_pair(&n, &mut a[..row_len], &mut b[..row_len], 0..row_len, tap)
@@ -699,8 +700,8 @@ impl<'p, 'a, T: Sample> Part<'p, 'a, T> {
                 }
             }
         }
-        let next = (!made && step.pos + 1 < self.spans[l].end)
-            .then(|| self.step_at(l, step.pos + 1));
+        let next =
+            (!made && step.pos + 1 < self.spans[l].end).then(|| self.step_at(l, step.pos + 1));
         // rows of the array in place (images); the coarse rows' first `w1` samples are
         // the coarser level's output (when there is one)
         let w1 = if plan.lines && l + 1 < plan.ops.len() {

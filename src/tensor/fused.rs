@@ -262,7 +262,10 @@ impl<'a> Ctx<'a> {
         let (run, lines) = if whole {
             (self.cs[0], 1)
         } else {
-            (self.region[k - 1] * self.e, self.region[1..k - 1].iter().product())
+            (
+                self.region[k - 1] * self.e,
+                self.region[1..k - 1].iter().product(),
+            )
         };
         if self.cs[0] * std::mem::size_of::<T>() > PAIR_SLAB_MAX || slab2.len() < self.cs[0] {
             return false;
@@ -349,9 +352,9 @@ impl<'a> Ctx<'a> {
             unreachable!("two plane buffers")
         };
         let (pa, pb) = (&mut pa[..h * w], &mut pb[..h * w]);
-        combine_rows(self.ops[d].op, &slab[..h * w], w, pa);
+        combine_rows(&self.ops[d], &slab[..h * w], w, pa);
         transpose(pa, h, w, pb, h);
-        combine_rows(self.ops[d + 1].op, pb, h, pa);
+        combine_rows(&self.ops[d + 1], pb, h, pa);
         if self.stream {
             transpose(pa, w, h, pb, w);
             if out_stride == w {
@@ -409,7 +412,55 @@ fn plane_path(k: usize, region: &[usize], e: usize) -> bool {
     k >= 3 && e == 1 && region[k - 1] <= PLANE_MAX_LANE
 }
 
-/// `dst[r] = Σ_c W_rc · src[c]` for every row `r` of `op`, rows of `len` samples.
-fn combine_rows<T: Sample>(op: &Csr, src: &[T], len: usize, dst: &mut [T]) {
-    kernel::combine_rows(op, src, len, 0..op.rows(), dst)
+/// `dst[r] = Σ_c W_rc · src[c]` for every row `r` of `a.op`, rows of `len` samples: the
+/// rows of the operator's pair ([`crate::scheme::polyphase::Pair`]) two at a time ([`kernel::combine_pair_rows`]: the input
+/// rows they share read once), the others one by one ([`kernel::combine_rows`]).
+fn combine_rows<T: Sample>(a: &AxisOp, src: &[T], len: usize, dst: &mut [T]) {
+    let (op, plan) = (a.op, a.plan);
+    let Some(pair) = &plan.pair else {
+        return kernel::combine_rows(op, src, len, 0..op.rows(), dst);
+    };
+    let runs = [&plan.runs[pair.runs[0]], &plan.runs[pair.runs[1]]];
+    let first = [0, 1].map(|j| runs[j].row0 + runs[j].row_step * pair.first[j]);
+    let steps = [runs[0].row_step, runs[1].row_step];
+    let u = pair.cols.len();
+    let mut w = [[T::default(); 16]; 2];
+    for j in 0..2 {
+        for k in 0..u {
+            w[j][k] = T::from_f64(pair.weights[j][k]);
+        }
+    }
+    let [m0, m1] = pair.masks;
+    kernel::combine_pair_rows(
+        src,
+        len,
+        &pair.cols,
+        runs[0].col_step,
+        (&w[0][..u], m0),
+        (&w[1][..u], m1),
+        dst,
+        first,
+        steps,
+        pair.count,
+    );
+    // the other rows, in stretches
+    let paired = |r: usize| {
+        (0..2).any(|j| {
+            r >= first[j]
+                && (r - first[j]) % steps[j] == 0
+                && (r - first[j]) / steps[j] < pair.count
+        })
+    };
+    let mut r = 0;
+    while r < op.rows() {
+        if paired(r) {
+            r += 1;
+            continue;
+        }
+        let start = r;
+        while r < op.rows() && !paired(r) {
+            r += 1;
+        }
+        kernel::combine_rows(op, src, len, start..r, &mut dst[start * len..]);
+    }
 }
