@@ -425,9 +425,9 @@ fn combine_rows<T: Sample>(a: &AxisOp, src: &[T], len: usize, dst: &mut [T]) {
     let steps = [runs[0].row_step, runs[1].row_step];
     let u = pair.cols.len();
     let mut w = [[T::default(); 16]; 2];
-    for j in 0..2 {
-        for k in 0..u {
-            w[j][k] = T::from_f64(pair.weights[j][k]);
+    for (wj, pj) in w.iter_mut().zip(&pair.weights) {
+        for (x, &v) in wj.iter_mut().zip(pj) {
+            *x = T::from_f64(v);
         }
     }
     let [m0, m1] = pair.masks;
