@@ -18,6 +18,12 @@
 //! Every sample is read once and written once for the whole pyramid, and every output
 //! is the same sums in the same order as level by level ([`super::fused`]): the same bits.
 //!
+//! Periodic ends: the first rows of a level read its last rows and the other way round,
+//! so a ring would have to hold the whole level. For images, those rows ("wrapping"
+//! rows) read "ghosts" instead: the few rows near the ends that they need, computed by
+//! each part before its sweep with the same sums (a cone a few rows wide per level,
+//! doubling away from the wrapping level), so the rings only ever see regular rows.
+//!
 //! Threads take consecutive parts of the rows of each level. A part computes what its
 //! rows need, so rows near a seam between parts are computed by both (a "halo", written
 //! by its owner only); [`Plan::new`] declines when the halos would cost more than
@@ -82,14 +88,25 @@ pub(super) struct Plan<'a> {
     /// Rows along axis 0 are single lines (images): the box of a level is a prefix of
     /// the row, so rings hold whole rows and the array's rows are read in place.
     lines: bool,
+    /// Per level (analysis of images with periodic ends, else empty): the rows that reach
+    /// across the lane. From level 1 on they read their inputs from the ghosts, never
+    /// from the ring.
+    wrap: Vec<Vec<bool>>,
+    /// Per part and level, increasing: the output rows the part computes first, as
+    /// ghosts (the inputs of the wrapping rows it computes at the next level, and of the
+    /// ghosts of that level).
+    need: Vec<Vec<Vec<usize>>>,
 }
 
 /// Input rows of `op` (columns in `cols`) alive at once when its rows are computed in
 /// `order` and every input is made just before its first use and dropped after its last:
 /// `max_p (max col of rows ≤ p) − (min col of rows ≥ p) + 1`.
-fn live_span(op: &Csr, order: &[usize], cols: std::ops::Range<usize>) -> usize {
+fn live_span(op: &Csr, order: &[usize], cols: std::ops::Range<usize>, skip: &[bool]) -> usize {
     let n = order.len();
     let range = |r: usize| {
+        if skip.get(r) == Some(&true) {
+            return None;
+        }
         let (c, _) = op.row_slices(r);
         let inside = c.iter().map(|&c| c as usize).filter(|c| cols.contains(c));
         inside.fold(None, |acc: Option<(usize, usize)>, c| {
@@ -120,9 +137,13 @@ fn col_range(
     order: &[usize],
     positions: std::ops::Range<usize>,
     cols: std::ops::Range<usize>,
+    skip: &[bool],
 ) -> Option<(usize, usize)> {
     let mut out: Option<(usize, usize)> = None;
     for &r in &order[positions] {
+        if skip.get(r) == Some(&true) {
+            continue;
+        }
         for &c in op.row_slices(r).0 {
             let c = c as usize;
             if cols.contains(&c) {
@@ -136,7 +157,8 @@ fn col_range(
 impl<'a> Plan<'a> {
     /// Plan `ops.len()` levels (at least 2) whose regions are `regions` (one more than
     /// levels), with up to `parts` parts; `None` when the cascade does not apply (row
-    /// orders it cannot follow, rows reaching across the lane, halos too costly for that
+    /// orders it cannot follow, rows reaching across the lane of a volume (images read
+    /// ghosts for them), halos too costly for that
     /// many parts, rings above 1/[`MAX_HELD`] of the array). When `forced` (tests),
     /// exactly `parts` parts whatever the halos and the rings' size, and boxes of more
     /// than two axes too; otherwise those stay level by level (measured slower for now: a ring of planes
@@ -149,6 +171,24 @@ impl<'a> Plan<'a> {
         e: usize,
         parts: usize,
         forced: bool,
+    ) -> Option<Self> {
+        Self::build(way, regions.clone(), ops, e, parts, forced, false).or_else(|| {
+            // images with periodic ends: the rows that reach across the lane read ghosts
+            (regions[0].len() == 2)
+                .then(|| Self::build(way, regions, ops, e, parts, forced, true))
+                .flatten()
+        })
+    }
+
+    /// [`Plan::new`], with ghosts for the rows that reach across the lane when `ghosts`.
+    fn build(
+        way: Way,
+        regions: Vec<Vec<usize>>,
+        ops: &'a [Vec<AxisOp<'a>>],
+        e: usize,
+        parts: usize,
+        forced: bool,
+        ghosts: bool,
     ) -> Option<Self> {
         let levels = ops.len();
         if levels < 2
@@ -163,12 +203,63 @@ impl<'a> Plan<'a> {
         let row_len = |l: usize| regions[l][1..].iter().product::<usize>() * e;
         // row orders: analysis by first column (coarse rows must come in increasing
         // order, as the next level asks for them); synthesis in index order
-        let order: Vec<Vec<usize>> = (0..levels)
+        let mut order: Vec<Vec<usize>> = (0..levels)
             .map(|l| match way {
                 Way::Analysis => ops[l][0].order.to_vec(),
                 Way::Synthesis => (0..n(l)).collect(),
             })
             .collect();
+        // rows that reach across the lane (periodic ends): inputs more than half of it
+        // apart (synthesis: coarse inputs more than half of the coarse rows apart; the
+        // details come from the array)
+        let wrap: Vec<Vec<bool>> = if ghosts {
+            (0..levels)
+                .map(|l| {
+                    let op = ops[l][0].op;
+                    let (lim, within) = match way {
+                        Way::Analysis => (n(l), n(l)),
+                        Way::Synthesis => (n(l + 1), n(l + 1)),
+                    };
+                    (0..n(l))
+                        .map(|r| {
+                            let cs = op.row_slices(r).0.iter().map(|&c| c as usize);
+                            let mut inside = cs.filter(|&c| c < within);
+                            let first = inside.next();
+                            let last = inside.next_back().or(first);
+                            matches!((first, last), (Some(a), Some(b)) if b - a > lim / 2)
+                        })
+                        .collect()
+                })
+                .collect()
+        } else {
+            vec![Vec::new(); levels]
+        };
+        if ghosts && !wrap.iter().flatten().any(|&w| w) {
+            return None;
+        }
+        if ghosts && way == Way::Analysis {
+            // rows by first column; a wrapping row by its first column on its own side of
+            // the lane (the half around where its index puts it)
+            for l in 0..levels {
+                let (nc, nd) = (n(l + 1), n(l) - n(l + 1));
+                let key = |r: usize| -> usize {
+                    let cols = ops[l][0].op.row_slices(r).0.iter().map(|&c| c as usize);
+                    if wrap[l][r] {
+                        let at = if r < nc {
+                            r * n(l) / nc.max(1)
+                        } else {
+                            (r - nc) * n(l) / nd.max(1)
+                        };
+                        cols.filter(|&c| c.abs_diff(at) <= n(l) / 2)
+                            .min()
+                            .unwrap_or(at)
+                    } else {
+                        cols.min().unwrap_or(0)
+                    }
+                };
+                order[l].sort_by_key(|&r| (key(r), r));
+            }
+        }
         if way == Way::Analysis {
             for (l, ord) in order.iter().enumerate().take(levels - 1) {
                 let coarse: Vec<usize> = ord.iter().copied().filter(|&r| r < n(l + 1)).collect();
@@ -184,18 +275,18 @@ impl<'a> Plan<'a> {
                 let op = ops[l][0].op;
                 match way {
                     Way::Analysis if l == 0 => (0, 0),
-                    Way::Analysis => (live_span(op, &order[l], 0..n(l)), 0),
+                    Way::Analysis => (live_span(op, &order[l], 0..n(l), &wrap[l]), 0),
                     // images: the coarsest level reads the array, details come from it
                     Way::Synthesis if lines && l + 1 == levels => (0, 0),
-                    Way::Synthesis if lines => (live_span(op, &order[l], 0..n(l + 1)), 0),
+                    Way::Synthesis if lines => (live_span(op, &order[l], 0..n(l + 1), &wrap[l]), 0),
                     Way::Synthesis => {
                         let nc = n(l + 1);
                         let detail = if l == 0 {
                             0
                         } else {
-                            live_span(op, &order[l], nc..n(l))
+                            live_span(op, &order[l], nc..n(l), &[])
                         };
-                        (live_span(op, &order[l], 0..nc), detail)
+                        (live_span(op, &order[l], 0..nc, &[]), detail)
                     }
                 }
             })
@@ -213,8 +304,66 @@ impl<'a> Plan<'a> {
                 .min(n(levels - 1).max(1))
         };
         let spans: Vec<Vec<Span>> = (0..parts)
-            .map(|p| Self::part_spans(way, &regions, ops, &order, p, parts))
+            .map(|p| Self::part_spans(way, &regions, ops, &order, &wrap, p, parts))
             .collect::<Option<_>>()?;
+        // ghosts: level l's wrapping rows read rows that level l − 1 (analysis) or l + 1
+        // (synthesis, its coarse inputs) makes, computed first, and so do those rows
+        // themselves (a few rows at one end or both, doubling away from the wrapping
+        // level); each part for the wrapping rows it computes
+        let pos: Vec<Vec<usize>> = if ghosts {
+            order
+                .iter()
+                .map(|ord| {
+                    let mut at = vec![0; ord.len()];
+                    for (i, &r) in ord.iter().enumerate() {
+                        at[r] = i;
+                    }
+                    at
+                })
+                .collect()
+        } else {
+            Vec::new()
+        };
+        let need: Vec<Vec<Vec<usize>>> = spans
+            .iter()
+            .map(|sp| {
+                let mine = |l: usize, r: usize| {
+                    wrap[l].get(r) == Some(&true) && (sp[l].start..sp[l].end).contains(&pos[l][r])
+                };
+                let mut need: Vec<Vec<usize>> = vec![Vec::new(); levels];
+                let inputs = |l: usize, need_l: &[usize], within: usize| {
+                    let op = ops[l][0].op;
+                    let mut rows = std::collections::BTreeSet::new();
+                    for r in 0..n(l) {
+                        if mine(l, r) || need_l.binary_search(&r).is_ok() {
+                            let cs = op.row_slices(r).0.iter().map(|&c| c as usize);
+                            rows.extend(cs.filter(|&c| c < within));
+                        }
+                    }
+                    rows.into_iter().collect::<Vec<usize>>()
+                };
+                match way {
+                    Way::Analysis => {
+                        for l in (1..levels).rev() {
+                            need[l - 1] = inputs(l, &need[l], n(l));
+                        }
+                    }
+                    Way::Synthesis => {
+                        // the coarsest level's inputs are the array's
+                        for l in 0..levels.saturating_sub(1) {
+                            need[l + 1] = inputs(l, &need[l], n(l + 1));
+                        }
+                    }
+                }
+                need
+            })
+            .collect();
+        // samples of a ghost row of level l: what its reader takes (analysis: the box of
+        // level l + 1, a prefix of the row)
+        let ghost_len = |l: usize| match way {
+            Way::Analysis => row_len((l + 1).min(levels)),
+            Way::Synthesis => row_len(l),
+        };
         let work: usize = spans
             .iter()
             .flat_map(|s| s.iter().enumerate())
@@ -228,7 +377,12 @@ impl<'a> Plan<'a> {
                 (caps[l].0 + caps[l].1 + 8) * row
             })
             .sum::<usize>()
-            * spans.len();
+            * spans.len()
+            + need
+                .iter()
+                .flat_map(|nd| nd.iter().enumerate())
+                .map(|(l, rows)| rows.len() * ghost_len(l))
+                .sum::<usize>();
         if !forced && held * MAX_HELD > n(0) * row_len(0) {
             return None;
         }
@@ -244,7 +398,19 @@ impl<'a> Plan<'a> {
             spans,
             e,
             lines,
+            wrap,
+            need,
         })
+    }
+
+    /// Samples of a ghost row of level `l`: what its reader takes (analysis: the box of
+    /// level `l + 1`, a prefix of the row; synthesis: the row, the box of level `l`).
+    fn ghost_len(&self, l: usize) -> usize {
+        let row_len = |l: usize| self.regions[l][1..].iter().product::<usize>() * self.e;
+        match self.way {
+            Way::Analysis => row_len((l + 1).min(self.ops.len())),
+            Way::Synthesis => row_len(l),
+        }
     }
 
     /// What part `p` of `parts` computes at every level.
@@ -253,6 +419,7 @@ impl<'a> Plan<'a> {
         regions: &[Vec<usize>],
         ops: &[Vec<AxisOp>],
         order: &[Vec<usize>],
+        wrap: &[Vec<bool>],
         p: usize,
         parts: usize,
     ) -> Option<Vec<Span>> {
@@ -280,6 +447,7 @@ impl<'a> Plan<'a> {
                                 &order[l + 1],
                                 up.start..up.end,
                                 0..n(l + 1),
+                                &wrap[l + 1],
                             )?;
                             // positions of coarse rows lo and hi in this level's order
                             let at = |c: usize| order[l].iter().position(|&r| r == c);
@@ -305,6 +473,7 @@ impl<'a> Plan<'a> {
                             &order[l - 1],
                             down.start..down.end,
                             0..n(l),
+                            &wrap[l - 1],
                         ) {
                             Some((lo, hi)) => (lo, hi + 1),
                             None => (0, 0),
@@ -354,6 +523,10 @@ impl<'a> Plan<'a> {
                 strides,
                 spans,
                 levels: level_states(self, &ctxs, spans),
+                need: &self.need[p],
+                ghosts: (0..levels)
+                    .map(|l| vec![T::default(); self.need[p][l].len() * self.ghost_len(l)])
+                    .collect(),
             };
             part.run();
         };
@@ -447,6 +620,10 @@ struct Part<'p, 'a, T> {
     strides: &'p [usize],
     spans: &'p [Span],
     levels: Vec<LevelState<T>>,
+    /// This part's [`Plan::need`].
+    need: &'p [Vec<usize>],
+    /// Per level, the rows of `need` ([`Plan::ghost_len`] samples each).
+    ghosts: Vec<Vec<T>>,
 }
 
 /// Every level's state for the part computing `spans`.
@@ -483,6 +660,11 @@ impl<'p, 'a, T: Sample> Part<'p, 'a, T> {
         let levels = self.plan.ops.len();
         match self.plan.way {
             Way::Analysis => {
+                for l in 0..levels {
+                    for i in 0..self.need[l].len() {
+                        self.ghost_row(l, i);
+                    }
+                }
                 for l in (0..levels).rev() {
                     while self.levels[l].cursor < self.spans[l].own.end {
                         self.analysis_row(l);
@@ -490,6 +672,11 @@ impl<'p, 'a, T: Sample> Part<'p, 'a, T> {
                 }
             }
             Way::Synthesis => {
+                for l in (1..levels).rev() {
+                    for i in 0..self.need[l].len() {
+                        self.ghost_row(l, i);
+                    }
+                }
                 while self.levels[0].cursor < self.spans[0].own.end {
                     self.synthesis_row(0);
                 }
@@ -522,13 +709,81 @@ impl<'p, 'a, T: Sample> Part<'p, 'a, T> {
         }
     }
 
+    /// Row `need[l][i]` of level `l` into the ghosts: as [`Part::analysis_row`] makes it
+    /// for the next level's ring, its inputs read from the array (level 0) or from the
+    /// ghosts of level `l − 1`.
+    fn ghost_row(&mut self, l: usize, i: usize) {
+        let plan = self.plan;
+        let need = self.need;
+        let r = need[l][i];
+        let step = Step {
+            pos: usize::MAX,
+            r,
+            taps: plan.ops[l][0].op.row_slices(r),
+        };
+        let (src, s0) = (self.src, self.strides[0]);
+        let row_len = self.ctxs[l].cs()[0];
+        if plan.way == Way::Synthesis {
+            // as `synthesis_row`: the coarse inputs from the ghosts of level l + 1 (or the
+            // array, below the coarsest level), the rest of the rows from the array
+            let levels = plan.ops.len();
+            let nc = plan.regions[l + 1][0];
+            let w1 = if l + 1 < levels {
+                self.ctxs[l + 1].cs()[0]
+            } else {
+                0
+            };
+            let (here, above) = self.ghosts.split_at_mut(l + 1);
+            let st = &mut self.levels[l];
+            if w1 > 0 {
+                step.combine(&mut st.scratch[0], 0..w1, |c| {
+                    let c = c as usize;
+                    if c < nc {
+                        &ghost(&need[l + 1], &above[0], c, w1)[..w1]
+                    } else {
+                        &src[c * s0..c * s0 + w1]
+                    }
+                });
+            }
+            step.combine(&mut st.scratch[0], w1..row_len, |c| {
+                let c = c as usize;
+                &src[c * s0..c * s0 + row_len]
+            });
+            let (slab, rest) = st.scratch.split_first_mut().expect("slab");
+            let out = &mut here[l][i * row_len..(i + 1) * row_len];
+            self.local[l].finish_row(&slab[..row_len], out, self.ctxs[l].cs(), rest);
+            return;
+        }
+        let below_len = if l > 0 { plan.ghost_len(l - 1) } else { 0 };
+        let keep = plan.ghost_len(l);
+        let (below, here) = self.ghosts.split_at_mut(l);
+        let st = &mut self.levels[l];
+        step.combine(&mut st.scratch[0], 0..row_len, |c| {
+            let c = c as usize;
+            if l == 0 {
+                &src[c * s0..c * s0 + row_len]
+            } else {
+                &ghost(&need[l - 1], &below[l - 1], c, below_len)[..row_len]
+            }
+        });
+        // the whole row as the next level's ring takes it, of which the ghost keeps the
+        // part that level reads
+        let (slab, rest) = st.scratch.split_first_mut().expect("slab");
+        let mut whole = vec![T::default(); row_len];
+        self.local[l].finish_row(&slab[..row_len], &mut whole, self.ctxs[l].cs(), rest);
+        here[0][i * keep..(i + 1) * keep].copy_from_slice(&whole[..keep]);
+    }
+
     /// Compute the next row of level `l` in its order (analysis).
     fn analysis_row(&mut self, l: usize) {
         let plan = self.plan;
         let levels = plan.ops.len();
         let step = self.next_row(l);
         self.levels[l].cursor += 1;
-        if l > 0 {
+        // a row reaching across the lane reads ghosts (level ≥ 1)
+        let wraps = |st: &Step| l > 0 && plan.wrap[l].get(st.r) == Some(&true);
+        let wrapping = wraps(&step);
+        if l > 0 && !wrapping {
             for &c in step.taps.0 {
                 let c = c as usize;
                 while !matches!(self.levels[l - 1].made, Some(m) if m >= c) {
@@ -561,17 +816,23 @@ impl<'p, 'a, T: Sample> Part<'p, 'a, T> {
                 st.pending = None;
             } else {
                 let ring = &st.ring;
+                let ghosts = (l > 0).then(|| (&self.need[l - 1], &self.ghosts[l - 1]));
+                let below = if l > 0 { plan.ghost_len(l - 1) } else { 0 };
                 let tap = |c: u32| -> &[T] {
-                    if l == 0 {
-                        &src[c as usize * s0..c as usize * s0 + row_len]
-                    } else {
-                        &ring.get(c as usize)[..row_len]
+                    let c = c as usize;
+                    match ghosts {
+                        None => &src[c * s0..c * s0 + row_len],
+                        Some((rows, data)) if wrapping => &ghost(rows, data, c, below)[..row_len],
+                        Some(_) => &ring.get(c)[..row_len],
                     }
                 };
                 // the next row too when its inputs are at hand (level 0 reads the array;
-                // a ring holds what the level below has made)
-                let with =
-                    next.filter(|n| l == 0 || n.taps.0.iter().all(|&c| ring.has(c as usize)));
+                // a ring holds what the level below has made), neither reaching across
+                let with = next.filter(|n| {
+                    !wrapping
+                        && !wraps(n)
+                        && (l == 0 || n.taps.0.iter().all(|&c| ring.has(c as usize)))
+                });
                 let paired = with.is_some_and(|n| {
                     let (a, b) = (&mut st.scratch[0], &mut st.next_slab);
                     step.combine_pair(&n, &mut a[..row_len], &mut b[..row_len], 0..row_len, tap)
@@ -679,7 +940,10 @@ impl<'p, 'a, T: Sample> Part<'p, 'a, T> {
         self.levels[l].cursor += 1;
         // made with the row before (`combine_pair`)
         let made = self.levels[l].pending == Some(step.pos);
-        if !made {
+        // a row reaching across the lane reads its coarse inputs from the ghosts
+        let wraps = |st: &Step| plan.wrap[l].get(st.r) == Some(&true);
+        let wrapping = wraps(&step);
+        if !made && !wrapping {
             for &c in step.taps.0 {
                 self.synthesis_input(l, c as usize);
             }
@@ -716,12 +980,13 @@ impl<'p, 'a, T: Sample> Part<'p, 'a, T> {
                 st.pending = None;
             } else {
                 let ring = &st.ring;
+                let ghosts = self.need.get(l + 1).zip(self.ghosts.get(l + 1));
                 let coarse = |c: u32| -> &[T] {
                     let c = c as usize;
-                    if c < nc {
-                        &ring.get(c)[..w1]
-                    } else {
-                        &src[c * s0..c * s0 + w1]
+                    match ghosts {
+                        _ if c >= nc => &src[c * s0..c * s0 + w1],
+                        Some((rows, data)) if wrapping => &ghost(rows, data, c, w1)[..w1],
+                        _ => &ring.get(c)[..w1],
                     }
                 };
                 let array = |c: u32| -> &[T] {
@@ -744,7 +1009,9 @@ impl<'p, 'a, T: Sample> Part<'p, 'a, T> {
                         (l == 0 && c >= nc) || ring.has(c)
                     }
                 };
-                let with = next.filter(|n| n.taps.0.iter().all(|&c| at_hand(c as usize)));
+                let with = next.filter(|n| {
+                    !wrapping && !wraps(n) && n.taps.0.iter().all(|&c| at_hand(c as usize))
+                });
                 let (a, b) = (&mut st.scratch[0], &mut st.next_slab);
                 let paired = with.is_some_and(|n| {
                     if plan.lines {
@@ -800,6 +1067,14 @@ impl<'p, 'a, T: Sample> Part<'p, 'a, T> {
             false,
         );
     }
+}
+
+/// Ghost row `c` (one of `rows`, increasing; `data` holds them, `len` samples each).
+fn ghost<'g, T>(rows: &[usize], data: &'g [T], c: usize, len: usize) -> &'g [T] {
+    let i = rows
+        .binary_search(&c)
+        .unwrap_or_else(|_| panic!("cascade: row {c} is not a ghost"));
+    &data[i * len..(i + 1) * len]
 }
 
 /// One row of a level's operator along axis 0: its position in the level's order, its
