@@ -631,10 +631,8 @@ pub fn combine_pair<T: Sample>(
     m2: u32,
 ) {
     let u = src.len();
-    assert!(u <= 32 && w1.len() == u && w2.len() == u && o1.len() == o2.len());
-    let all = if u == 32 { u32::MAX } else { (1u32 << u) - 1 };
-    assert!(m1 != 0 && m2 != 0 && m1 & !all == 0 && m2 & !all == 0);
-    assert!(src.iter().all(|s| s.len() >= o1.len()));
+    check_pair(u, w1, m1, w2, m2);
+    assert!(o1.len() == o2.len() && src.iter().all(|s| s.len() >= o1.len()));
     #[cfg(target_arch = "x86_64")]
     if super::sparse::cpu_has_avx2() {
         let p: [*const T; 32] =
@@ -702,6 +700,14 @@ pub fn combine_pair_taps<'t, T: Sample + 't>(
 
 /// Most inputs two rows combined together by [`combine_pair_taps`] may read.
 pub const PAIR_INPUTS: usize = 8;
+
+/// The weights and masks of a pair over `u` inputs: at most 32 inputs, a weight per input
+/// and output, each mask non-empty and within the inputs.
+fn check_pair<T>(u: usize, w1: &[T], m1: u32, w2: &[T], m2: u32) {
+    assert!(u <= 32 && w1.len() == u && w2.len() == u);
+    let all = if u == 32 { u32::MAX } else { (1u32 << u) - 1 };
+    assert!(m1 != 0 && m2 != 0 && m1 & !all == 0 && m2 & !all == 0);
+}
 
 /// [`combine_pair`] as one [`combine`] per output (the patterns without an AVX2 build,
 /// and the reference the tests compare with).
@@ -833,9 +839,7 @@ pub fn combine_pair_rows<T: Sample>(
     count: usize,
 ) {
     let u = cols.len();
-    assert!(u <= 32 && w1.len() == u && w2.len() == u);
-    let all = if u == 32 { u32::MAX } else { (1u32 << u) - 1 };
-    assert!(m1 != 0 && m2 != 0 && m1 & !all == 0 && m2 & !all == 0);
+    check_pair(u, w1, m1, w2, m2);
     if count == 0 || len == 0 {
         return;
     }
