@@ -483,6 +483,51 @@ fn combine_pair_gives_the_bits_of_two_combines() {
     }
 }
 
+/// `combine_pair_merged` (the two outputs interleaved, as synthesis writes even and odd
+/// samples) gives the bits of `combine_pair` where it has a build, and writes nothing
+/// where it has none.
+#[test]
+fn combine_pair_merged_interleaves_the_bits_of_combine_pair() {
+    use mra::scheme::kernel::{combine_pair, combine_pair_merged};
+    fn check<T: mra::scheme::Sample + Into<f64>>(x: &[T], u: usize, m1: u32, m2: u32, len: usize) {
+        let src: Vec<&[T]> = (0..u).map(|k| &x[k..k + len]).collect();
+        let w1: Vec<T> = (0..u)
+            .map(|k| T::from_f64(0.375 * k as f64 - 1.1))
+            .collect();
+        let w2: Vec<T> = (0..u).map(|k| T::from_f64(0.7 - 0.25 * k as f64)).collect();
+        let (mut a, mut b) = (vec![T::default(); len], vec![T::default(); len]);
+        combine_pair(&mut a, &mut b, &src, &w1, m1, &w2, m2);
+        let sentinel = T::from_f64(12345.0);
+        let mut out = vec![sentinel; 2 * len];
+        if combine_pair_merged(&mut out, &src, &w1, m1, &w2, m2) {
+            for i in 0..len {
+                let (p, q): (f64, f64) = (out[2 * i].into(), out[2 * i + 1].into());
+                let (r, t): (f64, f64) = (a[i].into(), b[i].into());
+                assert!(
+                    p.to_bits() == r.to_bits() && q.to_bits() == t.to_bits(),
+                    "pattern ({u}, {m1:#b}, {m2:#b}) len {len} sample {i}"
+                );
+            }
+        } else {
+            assert!(out
+                .iter()
+                .all(|&v| v.into().to_bits() == sentinel.into().to_bits()));
+        }
+    }
+    for (u, m1, m2) in [
+        (7usize, 0b1111111u32, 0b1110110u32),
+        (4, 0b1111, 0b1111),
+        (3, 0b101, 0b010),
+    ] {
+        for len in [0usize, 1, 7, 8, 9, 17, 40] {
+            let x = lcg(len as u64 * 3 + u as u64, len + u);
+            let x32: Vec<f32> = x.iter().map(|&v| v as f32).collect();
+            check(&x, u, m1, m2, len);
+            check(&x32, u, m1, m2, len);
+        }
+    }
+}
+
 /// `combine_pair_rows` (pairs of rows of `len` samples, stepping through an operator)
 /// gives the bits of `combine_pair` pair by pair: analysis-like steps (rows side by side)
 /// and synthesis-like ones (even and odd rows), f32, a pattern with and one without an

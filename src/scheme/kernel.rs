@@ -639,7 +639,7 @@ pub fn combine_pair<T: Sample>(
             std::array::from_fn(|k| src.get(k).map_or(std::ptr::null(), |s| s.as_ptr()));
         let o = [o1.as_mut_ptr(), o2.as_mut_ptr()];
         // SAFETY: AVX2 is present; lengths and masks checked above; one step.
-        if unsafe { pair_avx2(o, o1.len(), &p[..u], w1, m1, w2, m2, 1, 0, [0, 0]) } {
+        if unsafe { pair_avx2(o, o1.len(), &p[..u], w1, m1, w2, m2, 1, 0, [0, 0], false) } {
             return;
         }
     }
@@ -787,6 +787,7 @@ unsafe fn pair_avx2<T: Sample>(
     count: usize,
     in_step: usize,
     out_step: [usize; 2],
+    merge: bool,
 ) -> bool {
     use std::any::TypeId;
     let u = src.len();
@@ -801,7 +802,11 @@ unsafe fn pair_avx2<T: Sample>(
                         std::array::from_fn(|k| src[k].add(t * in_step) as *const $t);
                     let q1 = o[0].add(t * out_step[0]) as *mut $t;
                     let q2 = o[1].add(t * out_step[1]) as *mut $t;
-                    $f::<$U, $M1, $M2>(q1, q2, len, &p, &a, &b);
+                    if merge {
+                        $f::<$U, $M1, $M2, true>(q1, q2, len, &p, &a, &b);
+                    } else {
+                        $f::<$U, $M1, $M2, false>(q1, q2, len, &p, &a, &b);
+                    }
                 }
             }
             return true;
@@ -817,6 +822,35 @@ unsafe fn pair_avx2<T: Sample>(
         };
     }
     pair_patterns!(table);
+    false
+}
+
+/// [`combine_pair`] with its two outputs interleaved into `out`: `out[2i]` the first,
+/// `out[2i + 1]` the second (the even and the odd fine samples of synthesis, without a
+/// pass through two buffers and [`interleave`]). The same bits; `false` (nothing written)
+/// where there is no AVX2 build for the pattern or the type.
+pub fn combine_pair_merged<T: Sample>(
+    out: &mut [T],
+    src: &[&[T]],
+    w1: &[T],
+    m1: u32,
+    w2: &[T],
+    m2: u32,
+) -> bool {
+    let u = src.len();
+    check_pair(u, w1, m1, w2, m2);
+    assert!(out.len() % 2 == 0);
+    let len = out.len() / 2;
+    assert!(src.iter().all(|s| s.len() >= len));
+    #[cfg(target_arch = "x86_64")]
+    if super::sparse::cpu_has_avx2() {
+        let p: [*const T; 32] =
+            std::array::from_fn(|k| src.get(k).map_or(std::ptr::null(), |s| s.as_ptr()));
+        let o = [out.as_mut_ptr(), out.as_mut_ptr()];
+        // SAFETY: AVX2 is present; `out` holds 2·len samples, every input len; one
+        // step, the merged output written through the first pointer only.
+        return unsafe { pair_avx2(o, len, &p[..u], w1, m1, w2, m2, 1, 0, [0, 0], true) };
+    }
     false
 }
 
@@ -873,7 +907,19 @@ pub fn combine_pair_rows<T: Sample>(
         let done = unsafe {
             let o = [d.add(rows[0] * len), d.add(rows[1] * len)];
             let step = [out_step[0] * len, out_step[1] * len];
-            pair_avx2(o, len, &p[..u], w1, m1, w2, m2, count, in_step * len, step)
+            pair_avx2(
+                o,
+                len,
+                &p[..u],
+                w1,
+                m1,
+                w2,
+                m2,
+                count,
+                in_step * len,
+                step,
+                false,
+            )
         };
         if done {
             return;
@@ -902,7 +948,7 @@ pub fn combine_pair_rows<T: Sample>(
 /// The body of [`combine_pair`] for one pattern: a vector of each output per step, every
 /// input loaded once; then scalars.
 macro_rules! pair_avx2_body {
-    ($name:ident, $t:ty, $lanes:expr, $set1:ident, $zero:ident, $mul:ident, $add:ident, $load:ident, $store:ident) => {
+    ($name:ident, $t:ty, $lanes:expr, $set1:ident, $zero:ident, $mul:ident, $add:ident, $load:ident, $store:ident, $lo:ident, $hi:ident, $perm:ident) => {
         /// See [`pair_avx2_body`].
         ///
         /// # Safety
@@ -910,7 +956,7 @@ macro_rules! pair_avx2_body {
         /// non-empty within `U` bits.
         #[cfg(target_arch = "x86_64")]
         #[target_feature(enable = "avx2")]
-        unsafe fn $name<const U: usize, const M1: u32, const M2: u32>(
+        unsafe fn $name<const U: usize, const M1: u32, const M2: u32, const MERGE: bool>(
             o1: *mut $t,
             o2: *mut $t,
             len: usize,
@@ -943,8 +989,15 @@ macro_rules! pair_avx2_body {
                             a2 = if k == f2 { m } else { $add(a2, m) };
                         }
                     }
-                    $store(o1.add(i), a1);
-                    $store(o2.add(i), a2);
+                    if MERGE {
+                        // o1[2i] = a1[i], o1[2i + 1] = a2[i]
+                        let (lo, hi) = ($lo(a1, a2), $hi(a1, a2));
+                        $store(o1.add(2 * i), $perm::<0x20>(lo, hi));
+                        $store(o1.add(2 * i + L), $perm::<0x31>(lo, hi));
+                    } else {
+                        $store(o1.add(i), a1);
+                        $store(o2.add(i), a2);
+                    }
                     i += L;
                 }
                 while i < len {
@@ -960,8 +1013,13 @@ macro_rules! pair_avx2_body {
                             a2 = if k == f2 { m } else { a2 + m };
                         }
                     }
-                    *o1.add(i) = a1;
-                    *o2.add(i) = a2;
+                    if MERGE {
+                        *o1.add(2 * i) = a1;
+                        *o1.add(2 * i + 1) = a2;
+                    } else {
+                        *o1.add(i) = a1;
+                        *o2.add(i) = a2;
+                    }
                     i += 1;
                 }
             }
@@ -978,7 +1036,10 @@ pair_avx2_body!(
     _mm256_mul_ps,
     _mm256_add_ps,
     _mm256_loadu_ps,
-    _mm256_storeu_ps
+    _mm256_storeu_ps,
+    _mm256_unpacklo_ps,
+    _mm256_unpackhi_ps,
+    _mm256_permute2f128_ps
 );
 pair_avx2_body!(
     pair_avx2_f64,
@@ -989,5 +1050,8 @@ pair_avx2_body!(
     _mm256_mul_pd,
     _mm256_add_pd,
     _mm256_loadu_pd,
-    _mm256_storeu_pd
+    _mm256_storeu_pd,
+    _mm256_unpacklo_pd,
+    _mm256_unpackhi_pd,
+    _mm256_permute2f128_pd
 );

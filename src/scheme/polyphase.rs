@@ -14,7 +14,7 @@
 //! `col_step = 2` the lane is first split into its even and odd elements, so tap `k` reads
 //! the contiguous slice starting at element `cols[k] / 2` of one half.
 
-use super::kernel::{combine, combine_pair, deinterleave, interleave};
+use super::kernel::{combine, combine_pair, combine_pair_merged, deinterleave, interleave};
 use super::sample::Sample;
 use super::sparse::Csr;
 
@@ -233,10 +233,14 @@ impl Polyphase {
             if self.col_step == 1 {
                 // Synthesis (`scratch` is free): the even and the odd rows into its two
                 // halves, then interleaved.
-                let (t0, t1) = scratch[..2 * n * e].split_at_mut(n * e);
-                pair_part(pair, 1, ne, x, &[], e, t0, t1);
                 let p0 = r0.row0 / 2 + f[0];
-                interleave(t0, t1, e, &mut y[2 * p0 * e..2 * (p0 + n) * e]);
+                let out = &mut y[2 * p0 * e..2 * (p0 + n) * e];
+                // samples (not wider elements) straight into place where there is a build
+                if e > 1 || !pair_merged(pair, x, out) {
+                    let (t0, t1) = scratch[..2 * n * e].split_at_mut(n * e);
+                    pair_part(pair, 1, ne, x, &[], e, t0, t1);
+                    interleave(t0, t1, e, out);
+                }
             } else {
                 // Analysis: the coarse and the detail rows straight into `y`.
                 let (lo, hi) = y.split_at_mut(r1.row0 * e);
@@ -387,4 +391,21 @@ fn pair_part<T: Sample>(
         &w1[..u],
         m1,
     );
+}
+
+/// The rows of a synthesis `pair` (even and odd fine samples) straight into `out`,
+/// interleaved ([`combine_pair_merged`]); `false` (nothing written) where that has no
+/// build.
+fn pair_merged<T: Sample>(pair: &Pair, x: &[T], out: &mut [T]) -> bool {
+    let mut src: [&[T]; PAIR_MOST] = [&[]; PAIR_MOST];
+    let (mut w0, mut w1) = ([T::default(); PAIR_MOST], [T::default(); PAIR_MOST]);
+    let n = pair.count;
+    let u = pair.cols.len();
+    for (k, &c) in pair.cols.iter().enumerate() {
+        src[k] = &x[c..c + n];
+        w0[k] = T::from_f64(pair.weights[0][k]);
+        w1[k] = T::from_f64(pair.weights[1][k]);
+    }
+    let [m0, m1] = pair.masks;
+    combine_pair_merged(&mut out[..2 * n], &src[..u], &w0[..u], m0, &w1[..u], m1)
 }
