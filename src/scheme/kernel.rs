@@ -635,8 +635,7 @@ pub fn combine_pair<T: Sample>(
     assert!(o1.len() == o2.len() && src.iter().all(|s| s.len() >= o1.len()));
     #[cfg(target_arch = "x86_64")]
     if super::sparse::cpu_has_avx2() {
-        let p: [*const T; 32] =
-            std::array::from_fn(|k| src.get(k).map_or(std::ptr::null(), |s| s.as_ptr()));
+        let p = input_ptrs(src);
         let o = [o1.as_mut_ptr(), o2.as_mut_ptr()];
         // SAFETY: AVX2 is present; lengths and masks checked above; one step.
         if unsafe { pair_avx2(o, o1.len(), &p[..u], w1, m1, w2, m2, 1, 0, [0, 0], false) } {
@@ -707,6 +706,11 @@ fn check_pair<T>(u: usize, w1: &[T], m1: u32, w2: &[T], m2: u32) {
     assert!(u <= 32 && w1.len() == u && w2.len() == u);
     let all = if u == 32 { u32::MAX } else { (1u32 << u) - 1 };
     assert!(m1 != 0 && m2 != 0 && m1 & !all == 0 && m2 & !all == 0);
+}
+
+/// The start of every input (at most 32), null past them.
+fn input_ptrs<T>(src: &[&[T]]) -> [*const T; 32] {
+    std::array::from_fn(|k| src.get(k).map_or(std::ptr::null(), |s| s.as_ptr()))
 }
 
 /// [`combine_pair`] as one [`combine`] per output (the patterns without an AVX2 build,
@@ -844,8 +848,7 @@ pub fn combine_pair_merged<T: Sample>(
     assert!(src.iter().all(|s| s.len() >= len));
     #[cfg(target_arch = "x86_64")]
     if super::sparse::cpu_has_avx2() {
-        let p: [*const T; 32] =
-            std::array::from_fn(|k| src.get(k).map_or(std::ptr::null(), |s| s.as_ptr()));
+        let p = input_ptrs(src);
         let o = [out.as_mut_ptr(), out.as_mut_ptr()];
         // SAFETY: AVX2 is present; `out` holds 2·len samples, every input len; one
         // step, the merged output written through the first pointer only.

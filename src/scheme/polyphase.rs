@@ -63,9 +63,20 @@ pub struct Pair {
 }
 
 /// Most inputs a [`Pair`] reads.
-const PAIR_MOST: usize = 16;
+pub const PAIR_MOST: usize = 16;
 
 impl Pair {
+    /// The two rows' weights as samples (inputs past `cols.len()` weigh 0).
+    pub fn sample_weights<T: Sample>(&self) -> [[T; PAIR_MOST]; 2] {
+        let mut w = [[T::default(); PAIR_MOST]; 2];
+        for (wj, pj) in w.iter_mut().zip(&self.weights) {
+            for (x, &v) in wj.iter_mut().zip(pj) {
+                *x = T::from_f64(v);
+            }
+        }
+        w
+    }
+
     /// Row `first[0] + t` of `r0` with row `first[1] + t` of `r1`, `t < count`.
     fn new(runs: [usize; 2], rs: [&Run; 2], first: [usize; 2], count: usize) -> Option<Pair> {
         let col_step = rs[0].col_step;
@@ -368,7 +379,7 @@ fn pair_part<T: Sample>(
     o1: &mut [T],
 ) {
     let mut src: [&[T]; PAIR_MOST] = [&[]; PAIR_MOST];
-    let (mut w0, mut w1) = ([T::default(); PAIR_MOST], [T::default(); PAIR_MOST]);
+    let [w0, w1] = pair.sample_weights::<T>();
     let len = pair.count * e;
     let u = pair.cols.len();
     for (k, &c) in pair.cols.iter().enumerate() {
@@ -378,8 +389,6 @@ fn pair_part<T: Sample>(
         } else {
             &x[c * e..c * e + len]
         };
-        w0[k] = T::from_f64(pair.weights[0][k]);
-        w1[k] = T::from_f64(pair.weights[1][k]);
     }
     let [m0, m1] = pair.masks;
     combine_pair(
@@ -398,13 +407,11 @@ fn pair_part<T: Sample>(
 /// build.
 fn pair_merged<T: Sample>(pair: &Pair, x: &[T], out: &mut [T]) -> bool {
     let mut src: [&[T]; PAIR_MOST] = [&[]; PAIR_MOST];
-    let (mut w0, mut w1) = ([T::default(); PAIR_MOST], [T::default(); PAIR_MOST]);
+    let [w0, w1] = pair.sample_weights::<T>();
     let n = pair.count;
     let u = pair.cols.len();
     for (k, &c) in pair.cols.iter().enumerate() {
         src[k] = &x[c..c + n];
-        w0[k] = T::from_f64(pair.weights[0][k]);
-        w1[k] = T::from_f64(pair.weights[1][k]);
     }
     let [m0, m1] = pair.masks;
     combine_pair_merged(&mut out[..2 * n], &src[..u], &w0[..u], m0, &w1[..u], m1)

@@ -204,15 +204,8 @@ impl<'a> Ctx<'a> {
             )
         };
         let (cols, ws) = self.ops[d].op.row_slices(r);
-        if d == 0 && self.stream && whole && run * std::mem::size_of::<T>() <= PREFETCH_MAX {
-            // from memory: ask early for the slab the next rows will read first (rows of
-            // images; planes of volumes would push the planes in use out of the cache)
-            if let Some(&last) = cols.last() {
-                let next = last as usize + 1;
-                if next < self.region[0] {
-                    prefetch(src, next * src_st[0], run);
-                }
-            }
+        if d == 0 && whole {
+            self.prefetch_after(cols.last(), src, src_st, run);
         }
         for line in 0..lines {
             let (so, co) = self.line_at(d, line, src_st);
@@ -222,6 +215,21 @@ impl<'a> Ctx<'a> {
             });
         }
         self.slab(d + 1, slab, out, dst_st, rest);
+    }
+
+    /// From memory: ask early for the slab of axis 0 after input slab `last` (the one the
+    /// next rows read first), when the output streams and the slab is small (rows of
+    /// images; planes of volumes would push the planes in use out of the cache).
+    fn prefetch_after<T>(&self, last: Option<&u32>, src: &[T], src_st: &[usize], run: usize) {
+        if !self.stream || run * std::mem::size_of::<T>() > PREFETCH_MAX {
+            return;
+        }
+        if let Some(&last) = last {
+            let next = last as usize + 1;
+            if next < self.region[0] {
+                prefetch(src, next * src_st[0], run);
+            }
+        }
     }
 
     /// Offsets of line `line` of a slab along axis `d` in the source (strides `src_st`)
@@ -272,14 +280,8 @@ impl<'a> Ctx<'a> {
         }
         let op = self.ops[0].op;
         let rows = [op.row_slices(r[0]), op.row_slices(r[1])];
-        if self.stream && whole && run * std::mem::size_of::<T>() <= PREFETCH_MAX {
-            // as in `row`
-            if let Some(&last) = rows[1].0.last() {
-                let next = last as usize + 1;
-                if next < self.region[0] {
-                    prefetch(src, next * src_st[0], run);
-                }
-            }
+        if whole {
+            self.prefetch_after(rows[1].0.last(), src, src_st, run);
         }
         for line in 0..lines {
             let (so, co) = self.line_at(0, line, src_st);
@@ -424,12 +426,7 @@ fn combine_rows<T: Sample>(a: &AxisOp, src: &[T], len: usize, dst: &mut [T]) {
     let first = [0, 1].map(|j| runs[j].row0 + runs[j].row_step * pair.first[j]);
     let steps = [runs[0].row_step, runs[1].row_step];
     let u = pair.cols.len();
-    let mut w = [[T::default(); 16]; 2];
-    for (wj, pj) in w.iter_mut().zip(&pair.weights) {
-        for (x, &v) in wj.iter_mut().zip(pj) {
-            *x = T::from_f64(v);
-        }
-    }
+    let w = pair.sample_weights::<T>();
     let [m0, m1] = pair.masks;
     kernel::combine_pair_rows(
         src,
