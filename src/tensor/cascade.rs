@@ -660,9 +660,11 @@ impl<'p, 'a, T: Sample> Part<'p, 'a, T> {
         let levels = self.plan.ops.len();
         match self.plan.way {
             Way::Analysis => {
+                // one buffer for the ghosts' whole rows (level 0's, the longest, first)
+                let mut whole = Vec::new();
                 for l in 0..levels {
                     for i in 0..self.need[l].len() {
-                        self.ghost_row(l, i);
+                        self.ghost_row(l, i, &mut whole);
                     }
                 }
                 for l in (0..levels).rev() {
@@ -674,7 +676,7 @@ impl<'p, 'a, T: Sample> Part<'p, 'a, T> {
             Way::Synthesis => {
                 for l in (1..levels).rev() {
                     for i in 0..self.need[l].len() {
-                        self.ghost_row(l, i);
+                        self.ghost_row(l, i, &mut Vec::new());
                     }
                 }
                 while self.levels[0].cursor < self.spans[0].own.end {
@@ -712,7 +714,9 @@ impl<'p, 'a, T: Sample> Part<'p, 'a, T> {
     /// Row `need[l][i]` of level `l` into the ghosts: as [`Part::analysis_row`] makes it
     /// for the next level's ring, its inputs read from the array (level 0) or from the
     /// ghosts of level `l − 1`.
-    fn ghost_row(&mut self, l: usize, i: usize) {
+    ///
+    /// `whole` (analysis): room for the whole row before the ghost keeps its prefix.
+    fn ghost_row(&mut self, l: usize, i: usize, whole: &mut Vec<T>) {
         let plan = self.plan;
         let need = self.need;
         let r = need[l][i];
@@ -769,8 +773,13 @@ impl<'p, 'a, T: Sample> Part<'p, 'a, T> {
         // the whole row as the next level's ring takes it, of which the ghost keeps the
         // part that level reads
         let (slab, rest) = st.scratch.split_first_mut().expect("slab");
-        let mut whole = vec![T::default(); row_len];
-        self.local[l].finish_row(&slab[..row_len], &mut whole, self.ctxs[l].cs(), rest);
+        whole.resize(row_len, T::default());
+        self.local[l].finish_row(
+            &slab[..row_len],
+            &mut whole[..row_len],
+            self.ctxs[l].cs(),
+            rest,
+        );
         here[0][i * keep..(i + 1) * keep].copy_from_slice(&whole[..keep]);
     }
 
