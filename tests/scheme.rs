@@ -367,6 +367,39 @@ fn polyphase_lanes_give_the_bits_of_the_matrix() {
     }
 }
 
+/// A plan's pair and its `unpaired` stretches cover every row of the operator once, the
+/// stretches increasing and apart (the plane path computes each row once from them).
+#[test]
+fn pair_and_unpaired_stretches_cover_every_row_once() {
+    use mra::scheme::polyphase::Polyphase;
+    for s in Scheme::ALL {
+        for b in Boundary::ALL {
+            for m in (1..=70).chain([255, 256]) {
+                let t = TwoScale::new(s, b, m);
+                for op in [&t.analysis, &t.synthesis] {
+                    let plan = Polyphase::new(op);
+                    let mut seen = vec![0u32; m];
+                    if let Some(p) = &plan.pair {
+                        for j in 0..2 {
+                            let run = &plan.runs[p.runs[j]];
+                            for i in 0..p.count {
+                                seen[run.row0 + run.row_step * (p.first[j] + i)] += 1;
+                            }
+                        }
+                    }
+                    for w in plan.unpaired.windows(2) {
+                        assert!(w[0].end < w[1].start, "{s} {b} m={m}: {:?}", plan.unpaired);
+                    }
+                    for r in plan.unpaired.iter().flat_map(|r| r.clone()) {
+                        seen[r] += 1;
+                    }
+                    assert!(seen.iter().all(|&c| c == 1), "{s} {b} m={m}: {seen:?}");
+                }
+            }
+        }
+    }
+}
+
 /// The vector kernels (AVX2 where the CPU has it) against plain loops.
 #[test]
 fn vector_kernels_match_plain_loops() {

@@ -43,6 +43,8 @@ pub struct Polyphase {
     pub boundary_rows: Vec<usize>,
     /// Two runs computed together, reading their inputs once (see [`Pair`]).
     pub pair: Option<Pair>,
+    /// The stretches of rows outside the pair (all rows when there is none), increasing.
+    pub unpaired: Vec<std::ops::Range<usize>>,
 }
 
 /// Two regular runs whose rows read the same stretch of the lane: a coarse and a detail
@@ -204,12 +206,29 @@ impl Polyphase {
         } else {
             Pair::synthesis(&runs)
         };
+        let mut in_pair = vec![false; rows];
+        if let Some(p) = &pair {
+            for j in 0..2 {
+                let run = &runs[p.runs[j]];
+                for t in 0..p.count {
+                    in_pair[run.row0 + run.row_step * (p.first[j] + t)] = true;
+                }
+            }
+        }
+        let mut unpaired: Vec<std::ops::Range<usize>> = Vec::new();
+        for r in (0..rows).filter(|&r| !in_pair[r]) {
+            match unpaired.last_mut() {
+                Some(last) if last.end == r => last.end += 1,
+                _ => unpaired.push(r..r + 1),
+            }
+        }
         Polyphase {
             rows,
             col_step,
             runs,
             boundary_rows: (0..rows).filter(|&r| !covered[r]).collect(),
             pair,
+            unpaired,
         }
     }
 

@@ -440,24 +440,7 @@ fn combine_rows<T: Sample>(a: &AxisOp, src: &[T], len: usize, dst: &mut [T]) {
         steps,
         pair.count,
     );
-    // the other rows, in stretches
-    let paired = |r: usize| {
-        (0..2).any(|j| {
-            r >= first[j]
-                && (r - first[j]) % steps[j] == 0
-                && (r - first[j]) / steps[j] < pair.count
-        })
-    };
-    let mut r = 0;
-    while r < op.rows() {
-        if paired(r) {
-            r += 1;
-            continue;
-        }
-        let start = r;
-        while r < op.rows() && !paired(r) {
-            r += 1;
-        }
-        kernel::combine_rows(op, src, len, start..r, &mut dst[start * len..]);
+    for r in &plan.unpaired {
+        kernel::combine_rows(op, src, len, r.clone(), &mut dst[r.start * len..]);
     }
 }
