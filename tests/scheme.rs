@@ -619,8 +619,8 @@ fn combine_pair_rows_gives_the_bits_of_combine_pair() {
 }
 
 #[test]
-fn f32_combine_and_transpose_match_plain_loops() {
-    use mra::scheme::kernel::{combine, combine_baseline, transpose};
+fn f32_combine_matches_plain_loops() {
+    use mra::scheme::kernel::{combine, combine_baseline};
     // f32 runs of every length around the vector widths (blocks of 32, then 8, then single)
     let x: Vec<f32> = lcg(5, 120).iter().map(|&v| v as f32).collect();
     for len in 0..100usize {
@@ -640,31 +640,75 @@ fn f32_combine_and_transpose_match_plain_loops() {
             }
         }
     }
-    // transposes of every shape up to 20 × 20 and of shapes that leave 8-wide strips
-    // beside the 16 × 16 blocks, into a wider destination
-    let sides: Vec<usize> = (0..20).chain([23, 24, 31, 32, 33, 40, 47]).collect();
-    for &rows in &sides {
-        for &cols in &sides {
-            let stride = rows + 3;
-            let src32: Vec<f32> = (0..rows * cols).map(|i| i as f32 + 0.5).collect();
-            let src64: Vec<f64> = src32.iter().map(|&v| v as f64 * 3.0).collect();
-            let mut d32 = vec![-1f32; cols * stride];
-            let mut d64 = vec![-1f64; cols * stride];
-            transpose(&src32, rows, cols, &mut d32, stride);
-            transpose(&src64, rows, cols, &mut d64, stride);
-            for c in 0..cols {
-                for r in 0..stride {
-                    let (want32, want64) = if r < rows {
-                        (src32[r * cols + c], src64[r * cols + c])
-                    } else {
-                        (-1.0, -1.0)
-                    };
-                    assert_eq!(d32[c * stride + r], want32, "{rows}x{cols} at {r},{c}");
-                    assert_eq!(d64[c * stride + r], want64);
+}
+
+/// `combine_pair_lanes` gives, lane by lane, the bits of `combine_pair` (and, merged, of
+/// its two outputs interleaved): the regular patterns and one without a vector build,
+/// lengths around the vector widths, lanes a stride apart, f32 and f64.
+#[test]
+fn combine_pair_lanes_gives_the_bits_of_combine_pair_per_lane() {
+    use mra::scheme::kernel::{combine_pair, combine_pair_lanes};
+    fn check<T: mra::scheme::Sample + Into<f64>>(x: &[T]) {
+        // (inputs, mask 1, mask 2): patterns with a build, and one without
+        for (u, m1, m2) in [
+            (4usize, 0b1111u32, 0b1111u32),
+            (7, 0b0111011, 0b1111111),
+            (5, 0b10101, 0b01110),
+        ] {
+            let w1: Vec<T> = (0..u).map(|k| T::from_f64(0.3 * k as f64 - 0.55)).collect();
+            let w2: Vec<T> = (0..u).map(|k| T::from_f64(0.7 - 0.25 * k as f64)).collect();
+            for len in [1usize, 7, 8, 9, 15, 17, 33] {
+                let (count, stride) = (5usize, 2 * len + 11);
+                let off: Vec<usize> = (0..u).map(|k| 3 * k + 1).collect();
+                for merge in [false, true] {
+                    let out = if merge { [4, 4] } else { [len + 6, 2] };
+                    let mut got = vec![T::default(); stride * count];
+                    combine_pair_lanes(
+                        x,
+                        &off,
+                        stride,
+                        (&w1[..], m1),
+                        (&w2[..], m2),
+                        &mut got,
+                        out,
+                        stride,
+                        len,
+                        count,
+                        merge,
+                    );
+                    for t in 0..count {
+                        let src: Vec<&[T]> =
+                            off.iter().map(|&o| &x[o + stride * t..][..len]).collect();
+                        let (mut a, mut b) = (vec![T::default(); len], vec![T::default(); len]);
+                        combine_pair(&mut a, &mut b, &src, &w1, m1, &w2, m2);
+                        let row = &got[stride * t..];
+                        for i in 0..len {
+                            let (ga, gb): (f64, f64) = if merge {
+                                (row[out[0] + 2 * i].into(), row[out[0] + 2 * i + 1].into())
+                            } else {
+                                (row[out[0] + i].into(), row[out[1] + i].into())
+                            };
+                            let (wa, wb): (f64, f64) = (a[i].into(), b[i].into());
+                            assert_eq!(
+                                ga.to_bits(),
+                                wa.to_bits(),
+                                "u {u} len {len} merge {merge} lane {t} at {i}"
+                            );
+                            assert_eq!(
+                                gb.to_bits(),
+                                wb.to_bits(),
+                                "u {u} len {len} merge {merge} lane {t} at {i}"
+                            );
+                        }
+                    }
                 }
             }
         }
     }
+    let x = lcg(17, 1000);
+    check(&x);
+    let x32: Vec<f32> = x.iter().map(|&v| v as f32).collect();
+    check(&x32);
 }
 
 #[test]

@@ -175,6 +175,17 @@ macro_rules! taps_avx2_body {
                     $store(o.add(i), a);
                     i += L;
                 }
+                if i < len && len >= L {
+                    // the last vector again, ending at `len` (its first samples recomputed:
+                    // the same sums, the same bits; the output is apart from the inputs)
+                    let j = len - L;
+                    let mut a = $mul(wv[0], $load(p[0].add(j)));
+                    for k in 1..N {
+                        a = $add(a, $mul(wv[k], $load(p[k].add(j))));
+                    }
+                    $store(o.add(j), a);
+                    i = len;
+                }
                 while i < len {
                     let mut a = ws[0] * *p[0].add(i);
                     for k in 1..N {
@@ -389,120 +400,6 @@ unsafe fn stream_copy_avx2<T: Sample>(src: &[T], dst: &mut [T]) {
     }
     _mm_sfence();
     dst[head + body..].copy_from_slice(&src[head + body..]);
-}
-
-/// `dst[c·stride + r] = src[r·cols + c]` for a `rows × cols` block `src`: the lanes of one
-/// axis become rows of another. 8 × 8 tiles in registers for 4-byte samples with AVX2.
-pub fn transpose<T: Sample>(src: &[T], rows: usize, cols: usize, dst: &mut [T], stride: usize) {
-    assert!(src.len() >= rows * cols);
-    assert!(cols == 0 || rows == 0 || (stride >= rows && dst.len() >= (cols - 1) * stride + rows));
-    #[cfg(target_arch = "x86_64")]
-    if std::mem::size_of::<T>() == 4 && super::sparse::cpu_has_avx2() {
-        // SAFETY: AVX2 is present; T is a 4-byte float, moved as bits; bounds above.
-        return unsafe { transpose_avx2_32(src, rows, cols, dst, stride) };
-    }
-    transpose_generic(src, rows, cols, dst, stride, 0, 0)
-}
-
-/// The tiles of [`transpose`] from row `r0` and column `c0` on (the rest of the block is
-/// done), plain loops.
-fn transpose_generic<T: Sample>(
-    src: &[T],
-    rows: usize,
-    cols: usize,
-    dst: &mut [T],
-    stride: usize,
-    r0: usize,
-    c0: usize,
-) {
-    const B: usize = 16;
-    // columns c0.. of every row, then rows r0.. of columns ..c0
-    for (rs, cs) in [((0, rows), (c0, cols)), ((r0, rows), (0, c0))] {
-        for rb in (rs.0..rs.1).step_by(B) {
-            for cb in (cs.0..cs.1).step_by(B) {
-                for r in rb..(rb + B).min(rs.1) {
-                    let line = &src[r * cols + cb..r * cols + (cb + B).min(cs.1)];
-                    for (i, &v) in line.iter().enumerate() {
-                        dst[(cb + i) * stride + r] = v;
-                    }
-                }
-            }
-        }
-    }
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-unsafe fn transpose_avx2_32<T: Sample>(
-    src: &[T],
-    rows: usize,
-    cols: usize,
-    dst: &mut [T],
-    stride: usize,
-) {
-    use std::arch::x86_64::*;
-    let (r8, c8) = (rows / 8 * 8, cols / 8 * 8);
-    let (r16, c16) = (rows / 16 * 16, cols / 16 * 16);
-    let ps = src.as_ptr() as *const f32;
-    let pd = dst.as_mut_ptr() as *mut f32;
-    // the 8 × 8 tile at row rb, column cb of src
-    let tile = |rb: usize, cb: usize| {
-        // SAFETY: rows rb..rb+8 < rows, columns cb..cb+8 <= cols of src; dst rows
-        // cb..cb+8 at stride, columns rb..rb+8 <= rows <= stride (checked by the caller).
-        unsafe {
-            let l = |i: usize| _mm256_loadu_ps(ps.add((rb + i) * cols + cb));
-            let (a0, a1, a2, a3, a4, a5, a6, a7) = (l(0), l(1), l(2), l(3), l(4), l(5), l(6), l(7));
-            let t0 = _mm256_unpacklo_ps(a0, a1);
-            let t1 = _mm256_unpackhi_ps(a0, a1);
-            let t2 = _mm256_unpacklo_ps(a2, a3);
-            let t3 = _mm256_unpackhi_ps(a2, a3);
-            let t4 = _mm256_unpacklo_ps(a4, a5);
-            let t5 = _mm256_unpackhi_ps(a4, a5);
-            let t6 = _mm256_unpacklo_ps(a6, a7);
-            let t7 = _mm256_unpackhi_ps(a6, a7);
-            let u0 = _mm256_shuffle_ps(t0, t2, 0x44);
-            let u1 = _mm256_shuffle_ps(t0, t2, 0xEE);
-            let u2 = _mm256_shuffle_ps(t1, t3, 0x44);
-            let u3 = _mm256_shuffle_ps(t1, t3, 0xEE);
-            let u4 = _mm256_shuffle_ps(t4, t6, 0x44);
-            let u5 = _mm256_shuffle_ps(t4, t6, 0xEE);
-            let u6 = _mm256_shuffle_ps(t5, t7, 0x44);
-            let u7 = _mm256_shuffle_ps(t5, t7, 0xEE);
-            let s = |i: usize, v: __m256| _mm256_storeu_ps(pd.add((cb + i) * stride + rb), v);
-            s(0, _mm256_permute2f128_ps(u0, u4, 0x20));
-            s(1, _mm256_permute2f128_ps(u1, u5, 0x20));
-            s(2, _mm256_permute2f128_ps(u2, u6, 0x20));
-            s(3, _mm256_permute2f128_ps(u3, u7, 0x20));
-            s(4, _mm256_permute2f128_ps(u0, u4, 0x31));
-            s(5, _mm256_permute2f128_ps(u1, u5, 0x31));
-            s(6, _mm256_permute2f128_ps(u2, u6, 0x31));
-            s(7, _mm256_permute2f128_ps(u3, u7, 0x31));
-        }
-    };
-    // 16 × 16 blocks: 64 bytes of every source row and of every destination row, whole
-    // cache lines written at once (tile by tile across a row of 8 × 8 tiles, the
-    // destination's rows at a power-of-two stride share a few cache sets and their
-    // half-written lines were evicted before the next tile completed them)
-    for rb in (0..r16).step_by(16) {
-        for cb in (0..c16).step_by(16) {
-            tile(rb, cb);
-            tile(rb + 8, cb);
-            tile(rb, cb + 8);
-            tile(rb + 8, cb + 8);
-        }
-    }
-    // the 8-wide rest: rows r16..r8 of every column, columns c16..c8 of rows ..r16
-    for rb in (r16..r8).step_by(8) {
-        for cb in (0..c8).step_by(8) {
-            tile(rb, cb);
-        }
-    }
-    for rb in (0..r16).step_by(8) {
-        for cb in (c16..c8).step_by(8) {
-            tile(rb, cb);
-        }
-    }
-    transpose_generic(src, rows, cols, dst, stride, r8, c8)
 }
 
 /// `dst[i·len ..][..len] = Σ_k w_rk · src[c_rk·len ..][..len]` for the rows `r` of `op`
@@ -948,6 +845,100 @@ pub fn combine_pair_rows<T: Sample>(
     }
 }
 
+/// [`combine_pair`] on `count` lanes at once, `len` samples of each output per lane: lane
+/// `t` reads input `k` at `src[off[k] + in_step·t ..][..len]` and writes its first output
+/// at `dst[out[0] + out_step·t ..][..len]`, its second at `dst[out[1] + out_step·t ..]`
+/// — or, when `merge`, both interleaved at `dst[out[0] + out_step·t ..][..2·len]` (the
+/// even and the odd fine samples). Each lane's two outputs must lie within its `out_step`
+/// samples and apart. One dispatch for all the lanes (e.g. every row of a volume's plane
+/// along its last axis, the weights kept in registers); the same bits as
+/// [`combine_pair`] lane by lane.
+#[allow(clippy::too_many_arguments)]
+pub fn combine_pair_lanes<T: Sample>(
+    src: &[T],
+    off: &[usize],
+    in_step: usize,
+    (w1, m1): (&[T], u32),
+    (w2, m2): (&[T], u32),
+    dst: &mut [T],
+    out: [usize; 2],
+    out_step: usize,
+    len: usize,
+    count: usize,
+    merge: bool,
+) {
+    let u = off.len();
+    check_pair(u, w1, m1, w2, m2);
+    if count == 0 || len == 0 {
+        return;
+    }
+    let last = count - 1;
+    assert!(off.iter().all(|&o| o + in_step * last + len <= src.len()));
+    // each lane's outputs inside its own stretch of `out_step` samples, apart
+    let (lo, hi) = (out[0].min(out[1]), out[0].max(out[1]));
+    let reach = if merge { out[0] + 2 * len } else { hi + len };
+    assert!(
+        merge || hi >= lo + len,
+        "combine_pair_lanes: the two outputs overlap"
+    );
+    assert!(reach - if merge { out[0] } else { lo } <= out_step);
+    assert!(reach + out_step * last <= dst.len());
+    let p = input_ptrs_at(src, off);
+    #[cfg(target_arch = "x86_64")]
+    if super::sparse::cpu_has_avx2() {
+        let d = dst.as_mut_ptr();
+        // SAFETY: AVX2 is present; every input and output stretch lies inside its slice
+        // (asserted), the outputs of all lanes are disjoint (asserted: each lane within
+        // its own `out_step` samples), and `src`, `dst` are distinct slices.
+        let done = unsafe {
+            // (merged: both through the first pointer)
+            let o = [d.add(out[0]), d.add(if merge { out[0] } else { out[1] })];
+            pair_avx2(
+                o,
+                len,
+                &p[..u],
+                w1,
+                m1,
+                w2,
+                m2,
+                count,
+                in_step,
+                [out_step, out_step],
+                merge,
+            )
+        };
+        if done {
+            return;
+        }
+    }
+    let _ = p;
+    let mut a = vec![T::default(); len];
+    let mut b = vec![T::default(); len];
+    for t in 0..count {
+        let mut s: [&[T]; 32] = [&[]; 32];
+        for (k, &o) in off.iter().enumerate() {
+            s[k] = &src[o + in_step * t..][..len];
+        }
+        pair_by_parts(&mut a, &mut b, &s[..u], w1, m1, w2, m2, combine);
+        let base = out_step * t;
+        if merge {
+            let o = &mut dst[base + out[0]..][..2 * len];
+            for i in 0..len {
+                (o[2 * i], o[2 * i + 1]) = (a[i], b[i]);
+            }
+        } else {
+            dst[base + out[0]..][..len].copy_from_slice(&a);
+            dst[base + out[1]..][..len].copy_from_slice(&b);
+        }
+    }
+}
+
+/// The inputs at `off[k]` of `src` (at most 32), null past them.
+fn input_ptrs_at<T>(src: &[T], off: &[usize]) -> [*const T; 32] {
+    assert!(off.len() <= 32);
+    std::array::from_fn(|k| off.get(k).map_or(std::ptr::null(), |&o| src[o..].as_ptr()))
+}
+
 /// The body of [`combine_pair`] for one pattern: a vector of each output per step, every
 /// input loaded once; then scalars.
 macro_rules! pair_avx2_body {
@@ -1002,6 +993,12 @@ macro_rules! pair_avx2_body {
                         $store(o2.add(i), a2);
                     }
                     i += L;
+                    if i < len && i + L > len && len >= L {
+                        // the last vector again, ending at `len` (its first samples
+                        // recomputed: the same sums, the same bits, no aliasing as
+                        // the outputs and inputs are apart) instead of scalars
+                        i = len - L;
+                    }
                 }
                 while i < len {
                     let (mut a1, mut a2) = (0.0 as $t, 0.0 as $t);

@@ -14,8 +14,8 @@
 
 use super::aligned::Aligned;
 use super::par::{for_each_part, SharedMut};
-use crate::scheme::kernel::{self, combine_pair_taps, combine_taps, stream_copy, transpose};
-use crate::scheme::polyphase::Polyphase;
+use crate::scheme::kernel::{self, combine_pair_taps, combine_taps, stream_copy};
+use crate::scheme::polyphase::{Polyphase, PAIR_MOST};
 use crate::scheme::sparse::Csr;
 use crate::scheme::Sample;
 
@@ -153,8 +153,9 @@ impl<'a> Ctx<'a> {
         } else {
             0
         };
-        // the planes on page boundaries (see `aligned`)
-        v.push(Aligned::zeroed(planes)); // the last two axes of a slab, transposed
+        // the planes on page boundaries (see `aligned`): a slab combined along axis
+        // k − 2, its lanes split into even and odd samples or their output
+        v.push(Aligned::zeroed(planes));
         v.push(Aligned::zeroed(planes));
         v
     }
@@ -336,11 +337,11 @@ impl<'a> Ctx<'a> {
     }
 
     /// The last two axes of a compact slab `[h, w]` (single samples) at once, for short
-    /// lanes: axis `d` combines whole rows (`Σ_c W_rc · row_c`), the slab is transposed so
-    /// that the last axis' lanes become rows, combined the same way, and transposed back
-    /// into `out` (rows `out_stride` apart). Every output sums the same taps in the same
-    /// order as the lane-by-lane path (the same bits), without per-lane set-up or scalar
-    /// boundary rows.
+    /// lanes: axis `d` combines whole rows (`Σ_c W_rc · row_c`), then the last axis runs
+    /// on every lane of the plane at once ([`lanes`]: the regular rows of its operator
+    /// in one dispatch for all lanes, the weights in registers; analysis first splits
+    /// each lane into its even and odd samples). Every output sums the same taps in the
+    /// same order as the lane-by-lane path (the same bits).
     fn plane<T: Sample>(
         &self,
         d: usize,
@@ -355,21 +356,101 @@ impl<'a> Ctx<'a> {
         };
         let (pa, pb) = (&mut pa[..h * w], &mut pb[..h * w]);
         combine_rows(&self.ops[d], &slab[..h * w], w, pa);
-        transpose(pa, h, w, pb, h);
-        combine_rows(&self.ops[d + 1], pb, h, pa);
-        if self.stream {
-            transpose(pa, w, h, pb, w);
-            if out_stride == w {
-                return stream_copy(pb, &mut out[..h * w]);
+        let a = &self.ops[d + 1];
+        let split = a.plan.col_step == 2;
+        if split {
+            for (x, y) in pa.chunks_exact(w).zip(pb.chunks_exact_mut(w)) {
+                kernel::deinterleave(x, 1, y);
             }
-            for r in 0..h {
-                stream_copy(
-                    &pb[r * w..r * w + w],
-                    &mut out[r * out_stride..r * out_stride + w],
-                );
-            }
+        }
+        // the lanes' input, and the plane free for their output
+        let (x, free) = if split { (pb, pa) } else { (pa, pb) };
+        if !self.stream {
+            return lanes(a, x, split, h, w, out, out_stride);
+        }
+        lanes(a, x, split, h, w, free, w);
+        if out_stride == w {
+            return stream_copy(free, &mut out[..h * w]);
+        }
+        for r in 0..h {
+            stream_copy(
+                &free[r * w..r * w + w],
+                &mut out[r * out_stride..r * out_stride + w],
+            );
+        }
+    }
+}
+
+/// The operator of `a` on the `h` lanes of `w` samples of `x` (lane `t` at `x[t·w..]`),
+/// into `y` (lane `t` at `y[t·ys..]`): the rows of its pair with
+/// [`kernel::combine_pair_lanes`], the others sample by sample. `split`: each lane of `x`
+/// holds its even samples, then its odd ones ([`kernel::deinterleave`]).
+fn lanes<T: Sample>(a: &AxisOp, x: &[T], split: bool, h: usize, w: usize, y: &mut [T], ys: usize) {
+    let (op, plan) = (a.op, a.plan);
+    let ne = w.div_ceil(2);
+    // where sample `c` of a lane is in its row of `x`
+    let at = |c: usize| if split { (c % 2) * ne + c / 2 } else { c };
+    if let Some(pair) = &plan.pair {
+        let (r0, r1) = (&plan.runs[pair.runs[0]], &plan.runs[pair.runs[1]]);
+        let (f, n) = (pair.first, pair.count);
+        let u = pair.cols.len();
+        let mut off = [0usize; PAIR_MOST];
+        for (o, &c) in off.iter_mut().zip(&pair.cols) {
+            *o = at(c);
+        }
+        let [w0, w1] = pair.sample_weights::<T>();
+        let [m0, m1] = pair.masks;
+        // analysis: the coarse and the detail rows; synthesis: the even and the odd fine
+        // samples, interleaved (as `Polyphase::apply_lane` places them)
+        let (out, merge) = if split {
+            ([r0.row0 + f[0], r1.row0 + f[1]], false)
         } else {
-            transpose(pa, w, h, out, out_stride);
+            let p0 = r0.row0 / 2 + f[0];
+            ([2 * p0, 2 * p0], true)
+        };
+        kernel::combine_pair_lanes(
+            x,
+            &off[..u],
+            w,
+            (&w0[..u], m0),
+            (&w1[..u], m1),
+            y,
+            out,
+            ys,
+            n,
+            h,
+            merge,
+        );
+    }
+    // the other rows (near the ends of the lanes): lane by lane, each tap's place and
+    // weight worked out once per row
+    const MOST: usize = 16;
+    for r in plan.unpaired.iter().flat_map(|r| r.clone()) {
+        let (cols, ws) = op.row_slices(r);
+        let n = cols.len();
+        if n == 0 || n > MOST {
+            for t in 0..h {
+                let lane = &x[t * w..t * w + w];
+                let mut acc = T::default();
+                for (k, (&c, &wk)) in cols.iter().zip(ws).enumerate() {
+                    let v = T::from_f64(wk) * lane[at(c as usize)];
+                    acc = if k == 0 { v } else { acc + v };
+                }
+                y[t * ys + r] = acc;
+            }
+            continue;
+        }
+        let (mut pos, mut wt) = ([0usize; MOST], [T::default(); MOST]);
+        for k in 0..n {
+            (pos[k], wt[k]) = (at(cols[k] as usize), T::from_f64(ws[k]));
+        }
+        for t in 0..h {
+            let lane = &x[t * w..t * w + w];
+            let mut acc = wt[0] * lane[pos[0]];
+            for k in 1..n {
+                acc += wt[k] * lane[pos[k]];
+            }
+            y[t * ys + r] = acc;
         }
     }
 }
@@ -409,7 +490,7 @@ const PAIR_SLAB_MAX: usize = 64 << 10;
 /// side), longer ones lane by lane.
 const PLANE_MAX_LANE: usize = 1024;
 
-/// Whether the last two axes of a level run transposed ([`Ctx::plane`]).
+/// Whether the last two axes of a level run as planes ([`Ctx::plane`]).
 fn plane_path(k: usize, region: &[usize], e: usize) -> bool {
     k >= 3 && e == 1 && region[k - 1] <= PLANE_MAX_LANE
 }
