@@ -619,8 +619,8 @@ fn combine_pair_rows_gives_the_bits_of_combine_pair() {
 }
 
 #[test]
-fn f32_combine_matches_plain_loops() {
-    use mra::scheme::kernel::{combine, combine_baseline};
+fn f32_combine_and_transpose_match_plain_loops() {
+    use mra::scheme::kernel::{combine, combine_baseline, transpose};
     // f32 runs of every length around the vector widths (blocks of 32, then 8, then single)
     let x: Vec<f32> = lcg(5, 120).iter().map(|&v| v as f32).collect();
     for len in 0..100usize {
@@ -637,6 +637,32 @@ fn f32_combine_matches_plain_loops() {
                 }
                 assert_eq!(a[i].to_bits(), acc.to_bits(), "f32 taps {taps} len {len}");
                 assert_eq!(b[i].to_bits(), acc.to_bits());
+            }
+        }
+    }
+
+    // transposes of every shape up to 20 × 20 and of shapes that leave 8-wide strips
+    // beside the 16 × 16 blocks, into a wider destination
+    let sides: Vec<usize> = (0..20).chain([23, 24, 31, 32, 33, 40, 47]).collect();
+    for &rows in &sides {
+        for &cols in &sides {
+            let stride = rows + 3;
+            let src32: Vec<f32> = (0..rows * cols).map(|i| i as f32 + 0.5).collect();
+            let src64: Vec<f64> = src32.iter().map(|&v| v as f64 * 3.0).collect();
+            let mut d32 = vec![-1f32; cols * stride];
+            let mut d64 = vec![-1f64; cols * stride];
+            transpose(&src32, rows, cols, &mut d32, stride);
+            transpose(&src64, rows, cols, &mut d64, stride);
+            for c in 0..cols {
+                for r in 0..stride {
+                    let (want32, want64) = if r < rows {
+                        (src32[r * cols + c], src64[r * cols + c])
+                    } else {
+                        (-1.0, -1.0)
+                    };
+                    assert_eq!(d32[c * stride + r], want32, "{rows}x{cols} at {r},{c}");
+                    assert_eq!(d64[c * stride + r], want64);
+                }
             }
         }
     }

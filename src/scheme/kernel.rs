@@ -402,6 +402,120 @@ unsafe fn stream_copy_avx2<T: Sample>(src: &[T], dst: &mut [T]) {
     dst[head + body..].copy_from_slice(&src[head + body..]);
 }
 
+/// `dst[c·stride + r] = src[r·cols + c]` for a `rows × cols` block `src`: the lanes of one
+/// axis become rows of another. 8 × 8 tiles in registers for 4-byte samples with AVX2.
+pub fn transpose<T: Sample>(src: &[T], rows: usize, cols: usize, dst: &mut [T], stride: usize) {
+    assert!(src.len() >= rows * cols);
+    assert!(cols == 0 || rows == 0 || (stride >= rows && dst.len() >= (cols - 1) * stride + rows));
+    #[cfg(target_arch = "x86_64")]
+    if std::mem::size_of::<T>() == 4 && super::sparse::cpu_has_avx2() {
+        // SAFETY: AVX2 is present; T is a 4-byte float, moved as bits; bounds above.
+        return unsafe { transpose_avx2_32(src, rows, cols, dst, stride) };
+    }
+    transpose_generic(src, rows, cols, dst, stride, 0, 0)
+}
+
+/// The tiles of [`transpose`] from row `r0` and column `c0` on (the rest of the block is
+/// done), plain loops.
+fn transpose_generic<T: Sample>(
+    src: &[T],
+    rows: usize,
+    cols: usize,
+    dst: &mut [T],
+    stride: usize,
+    r0: usize,
+    c0: usize,
+) {
+    const B: usize = 16;
+    // columns c0.. of every row, then rows r0.. of columns ..c0
+    for (rs, cs) in [((0, rows), (c0, cols)), ((r0, rows), (0, c0))] {
+        for rb in (rs.0..rs.1).step_by(B) {
+            for cb in (cs.0..cs.1).step_by(B) {
+                for r in rb..(rb + B).min(rs.1) {
+                    let line = &src[r * cols + cb..r * cols + (cb + B).min(cs.1)];
+                    for (i, &v) in line.iter().enumerate() {
+                        dst[(cb + i) * stride + r] = v;
+                    }
+                }
+            }
+        }
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn transpose_avx2_32<T: Sample>(
+    src: &[T],
+    rows: usize,
+    cols: usize,
+    dst: &mut [T],
+    stride: usize,
+) {
+    use std::arch::x86_64::*;
+    let (r8, c8) = (rows / 8 * 8, cols / 8 * 8);
+    let (r16, c16) = (rows / 16 * 16, cols / 16 * 16);
+    let ps = src.as_ptr() as *const f32;
+    let pd = dst.as_mut_ptr() as *mut f32;
+    // the 8 × 8 tile at row rb, column cb of src
+    let tile = |rb: usize, cb: usize| {
+        // SAFETY: rows rb..rb+8 < rows, columns cb..cb+8 <= cols of src; dst rows
+        // cb..cb+8 at stride, columns rb..rb+8 <= rows <= stride (checked by the caller).
+        unsafe {
+            let l = |i: usize| _mm256_loadu_ps(ps.add((rb + i) * cols + cb));
+            let (a0, a1, a2, a3, a4, a5, a6, a7) = (l(0), l(1), l(2), l(3), l(4), l(5), l(6), l(7));
+            let t0 = _mm256_unpacklo_ps(a0, a1);
+            let t1 = _mm256_unpackhi_ps(a0, a1);
+            let t2 = _mm256_unpacklo_ps(a2, a3);
+            let t3 = _mm256_unpackhi_ps(a2, a3);
+            let t4 = _mm256_unpacklo_ps(a4, a5);
+            let t5 = _mm256_unpackhi_ps(a4, a5);
+            let t6 = _mm256_unpacklo_ps(a6, a7);
+            let t7 = _mm256_unpackhi_ps(a6, a7);
+            let u0 = _mm256_shuffle_ps(t0, t2, 0x44);
+            let u1 = _mm256_shuffle_ps(t0, t2, 0xEE);
+            let u2 = _mm256_shuffle_ps(t1, t3, 0x44);
+            let u3 = _mm256_shuffle_ps(t1, t3, 0xEE);
+            let u4 = _mm256_shuffle_ps(t4, t6, 0x44);
+            let u5 = _mm256_shuffle_ps(t4, t6, 0xEE);
+            let u6 = _mm256_shuffle_ps(t5, t7, 0x44);
+            let u7 = _mm256_shuffle_ps(t5, t7, 0xEE);
+            let s = |i: usize, v: __m256| _mm256_storeu_ps(pd.add((cb + i) * stride + rb), v);
+            s(0, _mm256_permute2f128_ps(u0, u4, 0x20));
+            s(1, _mm256_permute2f128_ps(u1, u5, 0x20));
+            s(2, _mm256_permute2f128_ps(u2, u6, 0x20));
+            s(3, _mm256_permute2f128_ps(u3, u7, 0x20));
+            s(4, _mm256_permute2f128_ps(u0, u4, 0x31));
+            s(5, _mm256_permute2f128_ps(u1, u5, 0x31));
+            s(6, _mm256_permute2f128_ps(u2, u6, 0x31));
+            s(7, _mm256_permute2f128_ps(u3, u7, 0x31));
+        }
+    };
+    // 16 × 16 blocks: 64 bytes of every source row and of every destination row, whole
+    // cache lines written at once (tile by tile across a row of 8 × 8 tiles, the
+    // destination's rows at a power-of-two stride share a few cache sets and their
+    // half-written lines were evicted before the next tile completed them)
+    for rb in (0..r16).step_by(16) {
+        for cb in (0..c16).step_by(16) {
+            tile(rb, cb);
+            tile(rb + 8, cb);
+            tile(rb, cb + 8);
+            tile(rb + 8, cb + 8);
+        }
+    }
+    // the 8-wide rest: rows r16..r8 of every column, columns c16..c8 of rows ..r16
+    for rb in (r16..r8).step_by(8) {
+        for cb in (0..c8).step_by(8) {
+            tile(rb, cb);
+        }
+    }
+    for rb in (0..r16).step_by(8) {
+        for cb in (c16..c8).step_by(8) {
+            tile(rb, cb);
+        }
+    }
+    transpose_generic(src, rows, cols, dst, stride, r8, c8)
+}
+
 /// `dst[i·len ..][..len] = Σ_k w_rk · src[c_rk·len ..][..len]` for the rows `r` of `op`
 /// in `rows` (`i = r − rows.start`): [`combine`] for every row of an operator whose
 /// elements are rows of `len` samples, in one call (short rows, e.g. the lanes of a

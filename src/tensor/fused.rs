@@ -14,7 +14,7 @@
 
 use super::aligned::Aligned;
 use super::par::{for_each_part, SharedMut};
-use crate::scheme::kernel::{self, combine_pair_taps, combine_taps, stream_copy};
+use crate::scheme::kernel::{self, combine_pair_taps, combine_taps, stream_copy, transpose};
 use crate::scheme::polyphase::{Polyphase, PAIR_MOST};
 use crate::scheme::sparse::Csr;
 use crate::scheme::Sample;
@@ -357,6 +357,20 @@ impl<'a> Ctx<'a> {
         let (pa, pb) = (&mut pa[..h * w], &mut pb[..h * w]);
         combine_rows(&self.ops[d], &slab[..h * w], w, pa);
         let a = &self.ops[d + 1];
+        let unpaired: usize = a.plan.unpaired.iter().map(|r| r.len()).sum();
+        if unpaired > LANES_MOST_UNPAIRED {
+            // many rows outside the pair (interpolating ends; the interpolating Chaikin
+            // analysis has no pair, its detail rows read other places than its coarse
+            // rows): the plane transposed so that the lanes become rows, combined as
+            // rows, and transposed back
+            transpose(pa, h, w, pb, h);
+            combine_rows(a, pb, h, pa);
+            if !self.stream {
+                return transpose(pa, w, h, out, out_stride);
+            }
+            transpose(pa, w, h, pb, w);
+            return stream_rows(pb, w, h, out, out_stride);
+        }
         let split = a.plan.col_step == 2;
         if split {
             for (x, y) in pa.chunks_exact(w).zip(pb.chunks_exact_mut(w)) {
@@ -369,17 +383,24 @@ impl<'a> Ctx<'a> {
             return lanes(a, x, split, h, w, out, out_stride);
         }
         lanes(a, x, split, h, w, free, w);
-        if out_stride == w {
-            return stream_copy(free, &mut out[..h * w]);
-        }
-        for r in 0..h {
-            stream_copy(
-                &free[r * w..r * w + w],
-                &mut out[r * out_stride..r * out_stride + w],
-            );
-        }
+        stream_rows(free, w, h, out, out_stride);
     }
 }
+
+/// The `h` rows of `w` samples of `src` (compact) into `dst`, rows `stride` apart, with
+/// non-temporal stores.
+fn stream_rows<T: Sample>(src: &[T], w: usize, h: usize, dst: &mut [T], stride: usize) {
+    if stride == w {
+        return stream_copy(&src[..h * w], &mut dst[..h * w]);
+    }
+    for r in 0..h {
+        stream_copy(&src[r * w..r * w + w], &mut dst[r * stride..r * stride + w]);
+    }
+}
+
+/// Most rows of a lane's operator outside its pair for [`lanes`] (computed sample by
+/// sample there); with more, [`Ctx::plane`] transposes the plane.
+const LANES_MOST_UNPAIRED: usize = 8;
 
 /// The operator of `a` on the `h` lanes of `w` samples of `x` (lane `t` at `x[t·w..]`),
 /// into `y` (lane `t` at `y[t·ys..]`): the rows of its pair with
