@@ -908,54 +908,29 @@ pub fn combine_pair_rows<T: Sample>(
             || row(1, last).max(rows[1]) < rows[0].min(row(0, last))
     };
     assert!(disjoint, "combine_pair_rows: the two outputs share a row");
-    let mut p: [*const T; 32] = [std::ptr::null(); 32];
-    for (k, &c) in cols.iter().enumerate() {
-        p[k] = src[c * len..].as_ptr();
+    let mut off = [0usize; 32];
+    for (o, &c) in off.iter_mut().zip(cols) {
+        *o = c * len;
     }
-    #[cfg(target_arch = "x86_64")]
-    if super::sparse::cpu_has_avx2() {
-        let d = dst.as_mut_ptr();
-        // SAFETY: AVX2 is present; every input and output row is inside its slice
-        // (asserted), the output rows are distinct, and `src` and `dst` are distinct
-        // slices (borrowed shared and exclusive).
-        let done = unsafe {
-            let o = [d.add(rows[0] * len), d.add(rows[1] * len)];
-            let step = [out_step[0] * len, out_step[1] * len];
-            pair_avx2(
-                o,
-                len,
-                &p[..u],
-                w1,
-                m1,
-                w2,
-                m2,
-                count,
-                in_step * len,
-                step,
-                false,
-            )
-        };
-        if done {
-            return;
-        }
-    }
-    let _ = p;
-    for t in 0..count {
-        let mut s: [&[T]; 32] = [&[]; 32];
-        for (k, &c) in cols.iter().enumerate() {
-            s[k] = &src[(c + in_step * t) * len..][..len];
-        }
-        let s = &s[..u];
-        let (a, b) = (row(0, t), row(1, t));
-        let (lo, hi, swap) = if a < b { (a, b, false) } else { (b, a, true) };
-        let (x, y) = dst.split_at_mut(hi * len);
-        let (first, second) = (&mut x[lo * len..lo * len + len], &mut y[..len]);
-        let (o1, o2) = if swap {
-            (second, first)
-        } else {
-            (first, second)
-        };
-        pair_by_parts(o1, o2, s, w1, m1, w2, m2, combine);
+    let out = [rows[0] * len, rows[1] * len];
+    let steps = [out_step[0] * len, out_step[1] * len];
+    let (w1, w2) = ((w1, m1), (w2, m2));
+    // SAFETY: every input and output row is inside its slice and the output rows are
+    // distinct (asserted above).
+    unsafe {
+        pair_steps(
+            src,
+            &off[..u],
+            in_step * len,
+            w1,
+            w2,
+            dst,
+            out,
+            steps,
+            len,
+            count,
+            false,
+        )
     }
 }
 
@@ -997,13 +972,47 @@ pub fn combine_pair_lanes<T: Sample>(
     );
     assert!(reach - if merge { out[0] } else { lo } <= out_step);
     assert!(reach + out_step * last <= dst.len());
+    let steps = [out_step, out_step];
+    let (w1, w2) = ((w1, m1), (w2, m2));
+    // SAFETY: every input and output stretch is inside its slice, and each lane's outputs
+    // lie apart within its own `out_step` samples (asserted above).
+    unsafe {
+        pair_steps(
+            src, off, in_step, w1, w2, dst, out, steps, len, count, merge,
+        )
+    }
+}
+
+/// The steps of [`combine_pair_rows`] and [`combine_pair_lanes`]: step `t` reads input
+/// `k` at `src[off[k] + in_step·t ..][..len]` and writes output `j` at
+/// `dst[out[j] + out_step[j]·t ..][..len]` (`merge`: both interleaved at `out[0]`, twice
+/// as long).
+///
+/// # Safety
+/// Every input and output stretch of every step inside its slice, and no two outputs of
+/// any steps overlapping; weights and masks as [`check_pair`] checks them.
+#[allow(clippy::too_many_arguments)]
+unsafe fn pair_steps<T: Sample>(
+    src: &[T],
+    off: &[usize],
+    in_step: usize,
+    (w1, m1): (&[T], u32),
+    (w2, m2): (&[T], u32),
+    dst: &mut [T],
+    out: [usize; 2],
+    out_step: [usize; 2],
+    len: usize,
+    count: usize,
+    merge: bool,
+) {
+    let u = off.len();
     let p = input_ptrs_at(src, off);
     #[cfg(target_arch = "x86_64")]
     if super::sparse::cpu_has_avx2() {
         let d = dst.as_mut_ptr();
         // SAFETY: AVX2 is present; every input and output stretch lies inside its slice
-        // (asserted), the outputs of all lanes are disjoint (asserted: each lane within
-        // its own `out_step` samples), and `src`, `dst` are distinct slices.
+        // and the outputs of all steps are disjoint (the caller's contract), and `src`,
+        // `dst` are distinct slices (borrowed shared and exclusive).
         let done = unsafe {
             // (merged: both through the first pointer)
             let o = [d.add(out[0]), d.add(if merge { out[0] } else { out[1] })];
@@ -1017,7 +1026,7 @@ pub fn combine_pair_lanes<T: Sample>(
                 m2,
                 count,
                 in_step,
-                [out_step, out_step],
+                out_step,
                 merge,
             )
         };
@@ -1026,23 +1035,22 @@ pub fn combine_pair_lanes<T: Sample>(
         }
     }
     let _ = p;
-    let mut a = vec![T::default(); len];
-    let mut b = vec![T::default(); len];
+    let (mut a, mut b) = (vec![T::default(); len], vec![T::default(); len]);
     for t in 0..count {
         let mut s: [&[T]; 32] = [&[]; 32];
         for (k, &o) in off.iter().enumerate() {
             s[k] = &src[o + in_step * t..][..len];
         }
         pair_by_parts(&mut a, &mut b, &s[..u], w1, m1, w2, m2, combine);
-        let base = out_step * t;
+        let at = [out[0] + out_step[0] * t, out[1] + out_step[1] * t];
         if merge {
-            let o = &mut dst[base + out[0]..][..2 * len];
+            let o = &mut dst[at[0]..][..2 * len];
             for i in 0..len {
                 (o[2 * i], o[2 * i + 1]) = (a[i], b[i]);
             }
         } else {
-            dst[base + out[0]..][..len].copy_from_slice(&a);
-            dst[base + out[1]..][..len].copy_from_slice(&b);
+            dst[at[0]..][..len].copy_from_slice(&a);
+            dst[at[1]..][..len].copy_from_slice(&b);
         }
     }
 }
