@@ -444,32 +444,20 @@ fn lanes<T: Sample>(a: &AxisOp, x: &[T], split: bool, h: usize, w: usize, y: &mu
         );
     }
     // the other rows (near the ends of the lanes): lane by lane, each tap's place and
-    // weight worked out once per row
-    const MOST: usize = 16;
+    // weight worked out once per row (first tap assigning, as `Csr::apply` sums)
     for r in plan.unpaired.iter().flat_map(|r| r.clone()) {
         let (cols, ws) = op.row_slices(r);
-        let n = cols.len();
-        if n == 0 || n > MOST {
-            for t in 0..h {
-                let lane = &x[t * w..t * w + w];
-                let mut acc = T::default();
-                for (k, (&c, &wk)) in cols.iter().zip(ws).enumerate() {
-                    let v = T::from_f64(wk) * lane[at(c as usize)];
-                    acc = if k == 0 { v } else { acc + v };
-                }
-                y[t * ys + r] = acc;
-            }
-            continue;
-        }
-        let (mut pos, mut wt) = ([0usize; MOST], [T::default(); MOST]);
-        for k in 0..n {
-            (pos[k], wt[k]) = (at(cols[k] as usize), T::from_f64(ws[k]));
-        }
+        let taps: Vec<(usize, T)> = cols
+            .iter()
+            .zip(ws)
+            .map(|(&c, &wk)| (at(c as usize), T::from_f64(wk)))
+            .collect();
         for t in 0..h {
             let lane = &x[t * w..t * w + w];
-            let mut acc = wt[0] * lane[pos[0]];
-            for k in 1..n {
-                acc += wt[k] * lane[pos[k]];
+            let mut acc = T::default();
+            for (k, &(c, wk)) in taps.iter().enumerate() {
+                let v = wk * lane[c];
+                acc = if k == 0 { v } else { acc + v };
             }
             y[t * ys + r] = acc;
         }
