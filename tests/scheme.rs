@@ -457,6 +457,17 @@ fn vector_kernels_match_plain_loops() {
     }
 }
 
+/// The inputs of a pair test: `u` overlapping runs of `len` samples of `x`, and two
+/// weight rows.
+fn pair_case<T: mra::scheme::Sample>(x: &[T], u: usize, len: usize) -> (Vec<&[T]>, Vec<T>, Vec<T>) {
+    let src: Vec<&[T]> = (0..u).map(|k| &x[k..k + len]).collect();
+    let w1: Vec<T> = (0..u)
+        .map(|k| T::from_f64(0.375 * k as f64 - 1.1))
+        .collect();
+    let w2: Vec<T> = (0..u).map(|k| T::from_f64(0.7 - 0.25 * k as f64)).collect();
+    (src, w1, w2)
+}
+
 /// `combine_pair` (two outputs over one set of inputs, AVX2 for the schemes' patterns)
 /// gives the bits of one `combine` per output over its own taps, for the patterns the
 /// engine uses and others, f32 and f64, with an infinity in an input that only one
@@ -465,11 +476,7 @@ fn vector_kernels_match_plain_loops() {
 fn combine_pair_gives_the_bits_of_two_combines() {
     use mra::scheme::kernel::{combine, combine_pair, combine_pair_baseline};
     fn check<T: mra::scheme::Sample + Into<f64>>(x: &[T], u: usize, m1: u32, m2: u32, len: usize) {
-        let src: Vec<&[T]> = (0..u).map(|k| &x[k..k + len]).collect();
-        let w1: Vec<T> = (0..u)
-            .map(|k| T::from_f64(0.375 * k as f64 - 1.1))
-            .collect();
-        let w2: Vec<T> = (0..u).map(|k| T::from_f64(0.7 - 0.25 * k as f64)).collect();
+        let (src, w1, w2) = pair_case(x, u, len);
         let (mut a1, mut a2) = (vec![T::default(); len], vec![T::default(); len]);
         combine_pair(&mut a1, &mut a2, &src, &w1, m1, &w2, m2);
         let (mut b1, mut b2) = (vec![T::default(); len], vec![T::default(); len]);
@@ -523,11 +530,7 @@ fn combine_pair_gives_the_bits_of_two_combines() {
 fn combine_pair_merged_interleaves_the_bits_of_combine_pair() {
     use mra::scheme::kernel::{combine_pair, combine_pair_merged};
     fn check<T: mra::scheme::Sample + Into<f64>>(x: &[T], u: usize, m1: u32, m2: u32, len: usize) {
-        let src: Vec<&[T]> = (0..u).map(|k| &x[k..k + len]).collect();
-        let w1: Vec<T> = (0..u)
-            .map(|k| T::from_f64(0.375 * k as f64 - 1.1))
-            .collect();
-        let w2: Vec<T> = (0..u).map(|k| T::from_f64(0.7 - 0.25 * k as f64)).collect();
+        let (src, w1, w2) = pair_case(x, u, len);
         let (mut a, mut b) = (vec![T::default(); len], vec![T::default(); len]);
         combine_pair(&mut a, &mut b, &src, &w1, m1, &w2, m2);
         let sentinel = T::from_f64(12345.0);
