@@ -433,7 +433,7 @@ pub fn denoise(a: &mut Array<f64>, axes: &[usize], o: &DenoiseOptions) -> Result
         if o.levels == 0 {
             sure.push(r / n);
         }
-        if best.as_ref().map_or(true, |b| r < b.0) {
+        if best.as_ref().is_none_or(|b| r < b.0) {
             best = Some((r, x, zeroed, depth));
         } else {
             break; // the risk grew with one more level: deeper ones are not tried

@@ -88,7 +88,7 @@ pub fn transfer_style(
         Boundary::Interpolating
     };
     let m = style.len() / 2;
-    if style.len() % 2 != 0 || base.len() % 2 != 0 || base.len() < 4 {
+    if !style.len().is_multiple_of(2) || !base.len().is_multiple_of(2) || base.len() < 4 {
         return Err(Error::parameter(
             "points",
             format!("{} style and {} base coordinates", style.len(), base.len()),

@@ -1169,7 +1169,7 @@ fn delta_index_of_example_3_7_and_continuity_k_minus_1_minus_multiplicity() {
     let mut g = Lcg(16);
     for mu in 1..=3 {
         let mut knots = vec![0.0, 1.0, 2.0, 3.0];
-        knots.extend(std::iter::repeat(4.0).take(mu));
+        knots.extend(std::iter::repeat_n(4.0, mu));
         knots.extend([5.0, 6.0, 7.0, 8.0]);
         let n = knots.len() - 4;
         let pts: Vec<f64> = (0..n).map(|_| g.range(-5.0, 5.0)).collect();

@@ -486,7 +486,7 @@ fn search(
         };
         let v = f(&bytes, dec.as_ref())?;
         if v >= 0.0 {
-            if best.as_ref().map_or(true, |(bv, _)| v < *bv) {
+            if best.as_ref().is_none_or(|(bv, _)| v < *bv) {
                 best = Some((v, bytes));
             }
             if v <= tol {

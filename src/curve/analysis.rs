@@ -100,7 +100,7 @@ fn offsets(n: usize, l: usize) -> Vec<usize> {
     if n + l < 2 {
         return vec![];
     }
-    if (n + l) % 2 == 0 {
+    if (n + l).is_multiple_of(2) {
         vec![(n + l - 2) / 2]
     } else if n + l >= 3 {
         vec![(n + l - 3) / 2, (n + l - 1) / 2]
@@ -188,7 +188,7 @@ pub fn suggested_smoothness(ev: &[Eigenvalue]) -> Option<usize> {
     let mut m = 0;
     while let Some(e) = ev.get(m + 1) {
         let target = 0.5f64.powi(m as i32 + 1);
-        let rest_smaller = ev.get(m + 2).map_or(true, |f| f.modulus() < target - TOL);
+        let rest_smaller = ev.get(m + 2).is_none_or(|f| f.modulus() < target - TOL);
         if close(e, target) && rest_smaller {
             m += 1;
         } else {

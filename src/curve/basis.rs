@@ -62,7 +62,7 @@ impl KnotVector {
         let segments = n - k + 1;
         let mut knots = vec![0.0; k];
         knots.extend((1..segments).map(|i| i as f64 / segments as f64));
-        knots.extend(std::iter::repeat(1.0).take(k));
+        knots.extend(std::iter::repeat_n(1.0, k));
         Ok(KnotVector { knots })
     }
 

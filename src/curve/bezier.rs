@@ -124,7 +124,7 @@ impl Bezier {
     pub fn to_bspline(&self) -> super::BSpline {
         let k = self.degree() + 1;
         let mut knots = vec![0.0; k];
-        knots.extend(std::iter::repeat(1.0).take(k));
+        knots.extend(std::iter::repeat_n(1.0, k));
         super::BSpline::new(self.points.clone(), self.dim, k, knots)
             .expect("a Bézier curve is a valid B-spline")
     }

@@ -37,7 +37,7 @@ pub fn parse(text: &str) -> Result<PointTable> {
         let line = raw.split('#').next().unwrap_or("").trim();
         if line.is_empty() {
             // a blank line (not a comment-only line) ends a row
-            if raw.trim().is_empty() && !rows.last().map_or(true, |r| r.is_empty()) {
+            if raw.trim().is_empty() && !rows.last().is_none_or(|r| r.is_empty()) {
                 rows.push(Vec::new());
             }
             continue;

@@ -67,7 +67,7 @@ pub(crate) fn check_points(points: &[f64], dim: usize, min: usize) -> Result<usi
     if dim == 0 {
         return Err(Error::parameter("dimension", 0, "at least 1"));
     }
-    if points.len() % dim != 0 {
+    if !points.len().is_multiple_of(dim) {
         return Err(Error::parameter(
             "number of coordinates",
             points.len(),

@@ -175,7 +175,7 @@ impl<'a> Ctx<'a> {
         } else {
             0
         };
-        let z = if self.walk.zdim > 0 && p % self.walk.zdim > 0 {
+        let z = if self.walk.zdim > 0 && !p.is_multiple_of(self.walk.zdim) {
             v[i - plane]
         } else {
             0

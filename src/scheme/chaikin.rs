@@ -44,7 +44,7 @@ pub const MIN_INTERPOLATING: usize = 8;
 /// Qe: E_{m−2} = ½D_{s−1}, E_{m−1} = 0
 /// ```
 pub fn interpolating(m: usize) -> LevelTriplets {
-    assert!(m % 2 == 0 && m >= MIN_INTERPOLATING);
+    assert!(m.is_multiple_of(2) && m >= MIN_INTERPOLATING);
     let n = m / 2 + 1;
     let s = m / 2 - 1;
     let mut an = Triplets::new(m, m);

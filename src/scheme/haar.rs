@@ -11,7 +11,7 @@ use super::sparse::Triplets;
 
 /// Even `m ≥ 2`: `n = s = m/2`.
 pub fn level(m: usize) -> LevelTriplets {
-    assert!(m % 2 == 0 && m >= 2);
+    assert!(m.is_multiple_of(2) && m >= 2);
     let n = m / 2;
     let mut an = Triplets::new(m, m);
     let mut sy = Triplets::new(m, m);

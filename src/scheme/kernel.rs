@@ -1,8 +1,9 @@
 //! The inner loops every transform ends in, written over whole runs of samples so they
-//! vectorise, with an AVX2 build picked at run time (no FMA: the AVX2 and baseline builds
-//! give the same bits, see [`crate::scheme::sparse::cpu_has_avx2`]).
+//! vectorise, with AVX2 and AVX-512 builds picked at run time (no FMA: every build gives
+//! the same bits, see [`Simd`]).
 
 use super::sample::Sample;
+use super::sparse::Simd;
 
 /// Most taps fused into one pass; longer rows accumulate in further passes.
 const MAX_FUSED: usize = 8;
@@ -14,41 +15,44 @@ const MAX_FUSED: usize = 8;
 /// Every `src[k]` must hold at least `out.len()` samples.
 #[inline]
 pub fn combine<T: Sample>(out: &mut [T], src: &[&[T]], w: &[T]) {
+    combine_with(Simd::detected(), out, src, w)
+}
+
+/// [`combine`] with the build `simd` (at most [`Simd::detected`]; tests compare the
+/// builds).
+#[inline]
+pub fn combine_with<T: Sample>(simd: Simd, out: &mut [T], src: &[&[T]], w: &[T]) {
     assert_eq!(src.len(), w.len());
     assert!(src.iter().all(|s| s.len() >= out.len()));
+    assert!(simd <= Simd::detected(), "{simd:?} is not available");
     #[cfg(target_arch = "x86_64")]
-    if super::sparse::cpu_has_avx2() {
-        // SAFETY: AVX2 is present.
-        return unsafe { combine_avx2(out, src, w) };
+    if simd >= Simd::Avx2 {
+        // SAFETY: AVX2 is present (and AVX-512 when asked for, checked above).
+        return unsafe { combine_avx2(out, src, w, simd == Simd::Avx512) };
     }
     combine_generic(out, src, w)
 }
 
-/// [`combine`] always with the baseline build (tests compare the two).
-pub fn combine_baseline<T: Sample>(out: &mut [T], src: &[&[T]], w: &[T]) {
-    assert_eq!(src.len(), w.len());
-    assert!(src.iter().all(|s| s.len() >= out.len()));
-    combine_generic(out, src, w)
-}
-
+/// [`combine`]'s AVX2 build (`wide`: AVX-512F present too, see [`taps_avx2`]).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-unsafe fn combine_avx2<T: Sample>(out: &mut [T], src: &[&[T]], w: &[T]) {
+unsafe fn combine_avx2<T: Sample>(out: &mut [T], src: &[&[T]], w: &[T], wide: bool) {
     let n = src.len();
     if n == 0 || n > MAX_FUSED {
         return combine_generic(out, src, w);
     }
-    // SAFETY (all arms): AVX2 is present (this function's contract).
+    // SAFETY (all arms): AVX2 is present, AVX-512F too when `wide` (this function's
+    // contract).
     unsafe {
         match n {
-            1 => taps_avx2::<T, 1>(out, src, w),
-            2 => taps_avx2::<T, 2>(out, src, w),
-            3 => taps_avx2::<T, 3>(out, src, w),
-            4 => taps_avx2::<T, 4>(out, src, w),
-            5 => taps_avx2::<T, 5>(out, src, w),
-            6 => taps_avx2::<T, 6>(out, src, w),
-            7 => taps_avx2::<T, 7>(out, src, w),
-            _ => taps_avx2::<T, 8>(out, src, w),
+            1 => taps_avx2::<T, 1>(out, src, w, wide),
+            2 => taps_avx2::<T, 2>(out, src, w, wide),
+            3 => taps_avx2::<T, 3>(out, src, w, wide),
+            4 => taps_avx2::<T, 4>(out, src, w, wide),
+            5 => taps_avx2::<T, 5>(out, src, w, wide),
+            6 => taps_avx2::<T, 6>(out, src, w, wide),
+            7 => taps_avx2::<T, 7>(out, src, w, wide),
+            _ => taps_avx2::<T, 8>(out, src, w, wide),
         }
     }
 }
@@ -99,10 +103,11 @@ fn taps<T: Sample, const N: usize>(out: &mut [T], src: &[&[T]], w: &[T]) {
 /// order, for the bits, so one vector at a time would wait on add latency), then single
 /// vectors, then scalars. Separate multiply and add, no FMA: the same bits as the scalar
 /// loop. Short runs (lanes of a few hundred samples) are common, so the set-up is kept to
-/// plain loops.
+/// plain loops. `wide`: 512-bit vectors (AVX-512F, which the caller has checked) on runs
+/// of at least one such vector.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-unsafe fn taps_avx2<T: Sample, const N: usize>(out: &mut [T], src: &[&[T]], w: &[T]) {
+unsafe fn taps_avx2<T: Sample, const N: usize>(out: &mut [T], src: &[&[T]], w: &[T], wide: bool) {
     use std::any::TypeId;
     let len = out.len();
     debug_assert!(src.len() == N && src.iter().all(|s| s.len() >= len));
@@ -113,9 +118,15 @@ unsafe fn taps_avx2<T: Sample, const N: usize>(out: &mut [T], src: &[&[T]], w: &
             p[k] = src[k].as_ptr() as *const f32;
             ws[k] = w[k].to_f64() as f32;
         }
-        // SAFETY: AVX2 is present; every source holds `len` samples (checked by
+        // SAFETY: AVX2 is present, AVX-512F when `wide`; every source holds `len` samples (checked by
         // `combine`); T is f32.
-        unsafe { taps_avx2_f32::<N>(out.as_mut_ptr() as *mut f32, len, &p, &ws) }
+        unsafe {
+            if wide && len >= 16 {
+                taps_avx512_f32::<N>(out.as_mut_ptr() as *mut f32, len, &p, &ws)
+            } else {
+                taps_avx2_f32::<N>(out.as_mut_ptr() as *mut f32, len, &p, &ws)
+            }
+        }
     } else if TypeId::of::<T>() == TypeId::of::<f64>() {
         let mut p = [std::ptr::null::<f64>(); N];
         let mut ws = [0f64; N];
@@ -124,7 +135,13 @@ unsafe fn taps_avx2<T: Sample, const N: usize>(out: &mut [T], src: &[&[T]], w: &
             ws[k] = w[k].to_f64();
         }
         // SAFETY: as above; T is f64.
-        unsafe { taps_avx2_f64::<N>(out.as_mut_ptr() as *mut f64, len, &p, &ws) }
+        unsafe {
+            if wide && len >= 8 {
+                taps_avx512_f64::<N>(out.as_mut_ptr() as *mut f64, len, &p, &ws)
+            } else {
+                taps_avx2_f64::<N>(out.as_mut_ptr() as *mut f64, len, &p, &ws)
+            }
+        }
     } else {
         taps::<T, N>(out, src, w)
     }
@@ -133,13 +150,13 @@ unsafe fn taps_avx2<T: Sample, const N: usize>(out: &mut [T], src: &[&[T]], w: &
 /// `o[i] = Σ_k ws[k]·p[k][i]`, `i < len` (first tap assigns): blocks of four vectors, then
 /// single vectors, then scalars. One body for `f32` and `f64` (their intrinsics differ).
 macro_rules! taps_avx2_body {
-    ($name:ident, $t:ty, $lanes:expr, $set1:ident, $zero:ident, $mul:ident, $add:ident, $load:ident, $store:ident) => {
+    ($name:ident, $feat:literal, $t:ty, $lanes:expr, $set1:ident, $zero:ident, $mul:ident, $add:ident, $load:ident, $store:ident) => {
         /// See [`taps_avx2_body`].
         ///
         /// # Safety
-        /// AVX2 present; `o` and every `p[k]` valid for `len` samples.
+        /// The target feature present; `o` and every `p[k]` valid for `len` samples.
         #[cfg(target_arch = "x86_64")]
-        #[target_feature(enable = "avx2")]
+        #[target_feature(enable = $feat)]
         unsafe fn $name<const N: usize>(o: *mut $t, len: usize, p: &[*const $t; N], ws: &[$t; N]) {
             use std::arch::x86_64::*;
             const L: usize = $lanes;
@@ -201,6 +218,7 @@ macro_rules! taps_avx2_body {
 
 taps_avx2_body!(
     taps_avx2_f32,
+    "avx2",
     f32,
     8,
     _mm256_set1_ps,
@@ -212,6 +230,7 @@ taps_avx2_body!(
 );
 taps_avx2_body!(
     taps_avx2_f64,
+    "avx2",
     f64,
     4,
     _mm256_set1_pd,
@@ -220,6 +239,30 @@ taps_avx2_body!(
     _mm256_add_pd,
     _mm256_loadu_pd,
     _mm256_storeu_pd
+);
+taps_avx2_body!(
+    taps_avx512_f32,
+    "avx512f",
+    f32,
+    16,
+    _mm512_set1_ps,
+    _mm512_setzero_ps,
+    _mm512_mul_ps,
+    _mm512_add_ps,
+    _mm512_loadu_ps,
+    _mm512_storeu_ps
+);
+taps_avx2_body!(
+    taps_avx512_f64,
+    "avx512f",
+    f64,
+    8,
+    _mm512_set1_pd,
+    _mm512_setzero_pd,
+    _mm512_mul_pd,
+    _mm512_add_pd,
+    _mm512_loadu_pd,
+    _mm512_storeu_pd
 );
 
 /// Split `x` (elements of `e` samples) into its even elements, then its odd elements:
@@ -383,7 +426,7 @@ unsafe fn stream_copy_avx2<T: Sample>(src: &[T], dst: &mut [T]) {
     } else {
         ((32 - mis) / size).min(n)
     };
-    if (dst.as_ptr() as usize) % size != 0 || (32 - mis) % size != 0 {
+    if !(dst.as_ptr() as usize).is_multiple_of(size) || !(32 - mis).is_multiple_of(size) {
         return dst.copy_from_slice(src);
     }
     dst[..head].copy_from_slice(&src[..head]);
@@ -641,19 +684,53 @@ pub fn combine_pair<T: Sample>(
     w2: &[T],
     m2: u32,
 ) {
+    combine_pair_with(Simd::detected(), o1, o2, src, w1, m1, w2, m2)
+}
+
+/// [`combine_pair`] with the build `simd` (at most [`Simd::detected`]; tests compare the
+/// builds).
+#[allow(clippy::too_many_arguments)]
+pub fn combine_pair_with<T: Sample>(
+    simd: Simd,
+    o1: &mut [T],
+    o2: &mut [T],
+    src: &[&[T]],
+    w1: &[T],
+    m1: u32,
+    w2: &[T],
+    m2: u32,
+) {
     let u = src.len();
     check_pair(u, w1, m1, w2, m2);
     assert!(o1.len() == o2.len() && src.iter().all(|s| s.len() >= o1.len()));
+    assert!(simd <= Simd::detected(), "{simd:?} is not available");
     #[cfg(target_arch = "x86_64")]
-    if super::sparse::cpu_has_avx2() {
+    if simd >= Simd::Avx2 {
         let p = input_ptrs(src);
         let o = [o1.as_mut_ptr(), o2.as_mut_ptr()];
-        // SAFETY: AVX2 is present; lengths and masks checked above; one step.
-        if unsafe { pair_avx2(o, o1.len(), &p[..u], w1, m1, w2, m2, 1, 0, [0, 0], false) } {
+        let wide = simd == Simd::Avx512;
+        // SAFETY: AVX2 (and AVX-512 when `wide`) present; lengths and masks checked
+        // above; one step.
+        if unsafe {
+            pair_avx2(
+                o,
+                o1.len(),
+                &p[..u],
+                w1,
+                m1,
+                w2,
+                m2,
+                1,
+                0,
+                [0, 0],
+                false,
+                wide,
+            )
+        } {
             return;
         }
     }
-    pair_by_parts(o1, o2, src, w1, m1, w2, m2, combine)
+    pair_by_parts(o1, o2, src, w1, m1, w2, m2, simd)
 }
 
 /// [`combine_pair`] over two sparse rows (`(columns, weights)`, columns increasing) and
@@ -735,7 +812,7 @@ fn pair_by_parts<T: Sample>(
     m1: u32,
     w2: &[T],
     m2: u32,
-    one: fn(&mut [T], &[&[T]], &[T]),
+    simd: Simd,
 ) {
     for (o, w, m) in [(o1, w1, m1), (o2, w2, m2)] {
         let mut s: [&[T]; 32] = [&[]; 32];
@@ -745,21 +822,8 @@ fn pair_by_parts<T: Sample>(
             (s[n], wk[n]) = (src[k], w[k]);
             n += 1;
         }
-        one(o, &s[..n], &wk[..n]);
+        combine_with(simd, o, &s[..n], &wk[..n]);
     }
-}
-
-/// [`combine_pair`] always with the baseline build (tests compare the two).
-pub fn combine_pair_baseline<T: Sample>(
-    o1: &mut [T],
-    o2: &mut [T],
-    src: &[&[T]],
-    w1: &[T],
-    m1: u32,
-    w2: &[T],
-    m2: u32,
-) {
-    pair_by_parts(o1, o2, src, w1, m1, w2, m2, combine_baseline)
 }
 
 /// The tap patterns `(inputs, m1, m2)` with an AVX2 build: the regular rows of the three
@@ -786,7 +850,8 @@ macro_rules! pair_patterns {
 /// the type has no AVX2 build.
 ///
 /// # Safety
-/// AVX2 present; every access inside its allocation, outputs distinct from each other
+/// AVX2 present, AVX-512F too when `wide` (then the steps of at least one 512-bit vector
+/// use it); every access inside its allocation, outputs distinct from each other
 /// and from the inputs; the masks as [`combine_pair`] checks them.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
@@ -803,11 +868,13 @@ unsafe fn pair_avx2<T: Sample>(
     in_step: usize,
     out_step: [usize; 2],
     merge: bool,
+    wide: bool,
 ) -> bool {
     use std::any::TypeId;
     let u = src.len();
     macro_rules! go {
-        ($t:ty, $f:ident, $U:literal, $M1:literal, $M2:literal) => {{
+        ($t:ty, $f:ident, $g:ident, $U:literal, $M1:literal, $M2:literal) => {{
+            let wide = wide && len >= 64 / std::mem::size_of::<$t>();
             let a: [$t; $U] = std::array::from_fn(|k| w1[k].to_f64() as $t);
             let b: [$t; $U] = std::array::from_fn(|k| w2[k].to_f64() as $t);
             for t in 0..count {
@@ -817,7 +884,13 @@ unsafe fn pair_avx2<T: Sample>(
                         std::array::from_fn(|k| src[k].add(t * in_step) as *const $t);
                     let q1 = o[0].add(t * out_step[0]) as *mut $t;
                     let q2 = o[1].add(t * out_step[1]) as *mut $t;
-                    if merge {
+                    if wide {
+                        if merge {
+                            $g::<$U, $M1, $M2, true>(q1, q2, len, &p, &a, &b);
+                        } else {
+                            $g::<$U, $M1, $M2, false>(q1, q2, len, &p, &a, &b);
+                        }
+                    } else if merge {
                         $f::<$U, $M1, $M2, true>(q1, q2, len, &p, &a, &b);
                     } else {
                         $f::<$U, $M1, $M2, false>(q1, q2, len, &p, &a, &b);
@@ -830,9 +903,9 @@ unsafe fn pair_avx2<T: Sample>(
     macro_rules! table {
         ($(($U:literal, $M1:literal, $M2:literal)),*) => {
             if TypeId::of::<T>() == TypeId::of::<f32>() {
-                $( if (u, m1, m2) == ($U, $M1, $M2) { go!(f32, pair_avx2_f32, $U, $M1, $M2) } )*
+                $( if (u, m1, m2) == ($U, $M1, $M2) { go!(f32, pair_avx2_f32, pair_avx512_f32, $U, $M1, $M2) } )*
             } else if TypeId::of::<T>() == TypeId::of::<f64>() {
-                $( if (u, m1, m2) == ($U, $M1, $M2) { go!(f64, pair_avx2_f64, $U, $M1, $M2) } )*
+                $( if (u, m1, m2) == ($U, $M1, $M2) { go!(f64, pair_avx2_f64, pair_avx512_f64, $U, $M1, $M2) } )*
             }
         };
     }
@@ -854,7 +927,7 @@ pub fn combine_pair_merged<T: Sample>(
 ) -> bool {
     let u = src.len();
     check_pair(u, w1, m1, w2, m2);
-    assert!(out.len() % 2 == 0);
+    assert!(out.len().is_multiple_of(2));
     let len = out.len() / 2;
     assert!(src.iter().all(|s| s.len() >= len));
     #[cfg(target_arch = "x86_64")]
@@ -863,7 +936,8 @@ pub fn combine_pair_merged<T: Sample>(
         let o = [out.as_mut_ptr(), out.as_mut_ptr()];
         // SAFETY: AVX2 is present; `out` holds 2·len samples, every input len; one
         // step, the merged output written through the first pointer only.
-        return unsafe { pair_avx2(o, len, &p[..u], w1, m1, w2, m2, 1, 0, [0, 0], true) };
+        let wide = Simd::detected() == Simd::Avx512;
+        return unsafe { pair_avx2(o, len, &p[..u], w1, m1, w2, m2, 1, 0, [0, 0], true, wide) };
     }
     false
 }
@@ -902,7 +976,7 @@ pub fn combine_pair_rows<T: Sample>(
     let row = |j: usize, t: usize| rows[j] + out_step[j] * t;
     let apart = rows[0].abs_diff(rows[1]);
     let disjoint = if out_step[0] == out_step[1] && out_step[0] > 0 {
-        apart % out_step[0] != 0 || apart >= out_step[0] * count
+        !apart.is_multiple_of(out_step[0]) || apart >= out_step[0] * count
     } else {
         row(0, last).max(rows[0]) < rows[1].min(row(1, last))
             || row(1, last).max(rows[1]) < rows[0].min(row(0, last))
@@ -1028,6 +1102,7 @@ unsafe fn pair_steps<T: Sample>(
                 in_step,
                 out_step,
                 merge,
+                Simd::detected() == Simd::Avx512,
             )
         };
         if done {
@@ -1041,7 +1116,7 @@ unsafe fn pair_steps<T: Sample>(
         for (k, &o) in off.iter().enumerate() {
             s[k] = &src[o + in_step * t..][..len];
         }
-        pair_by_parts(&mut a, &mut b, &s[..u], w1, m1, w2, m2, combine);
+        pair_by_parts(&mut a, &mut b, &s[..u], w1, m1, w2, m2, Simd::detected());
         let at = [out[0] + out_step[0] * t, out[1] + out_step[1] * t];
         if merge {
             let o = &mut dst[at[0]..][..2 * len];
@@ -1064,14 +1139,14 @@ fn input_ptrs_at<T>(src: &[T], off: &[usize]) -> [*const T; 32] {
 /// The body of [`combine_pair`] for one pattern: a vector of each output per step, every
 /// input loaded once; then scalars.
 macro_rules! pair_avx2_body {
-    ($name:ident, $t:ty, $lanes:expr, $set1:ident, $zero:ident, $mul:ident, $add:ident, $load:ident, $store:ident, $lo:ident, $hi:ident, $perm:ident) => {
+    ($name:ident, $feat:literal, $t:ty, $lanes:expr, $set1:ident, $zero:ident, $mul:ident, $add:ident, $load:ident, $store:ident, $merge:ident) => {
         /// See [`pair_avx2_body`].
         ///
         /// # Safety
-        /// AVX2 present; `o1`, `o2` and every `p[k]` valid for `len` samples; `M1`, `M2`
+        /// The target feature present; `o1`, `o2` and every `p[k]` valid for `len` samples; `M1`, `M2`
         /// non-empty within `U` bits.
         #[cfg(target_arch = "x86_64")]
-        #[target_feature(enable = "avx2")]
+        #[target_feature(enable = $feat)]
         unsafe fn $name<const U: usize, const M1: u32, const M2: u32, const MERGE: bool>(
             o1: *mut $t,
             o2: *mut $t,
@@ -1107,9 +1182,9 @@ macro_rules! pair_avx2_body {
                     }
                     if MERGE {
                         // o1[2i] = a1[i], o1[2i + 1] = a2[i]
-                        let (lo, hi) = ($lo(a1, a2), $hi(a1, a2));
-                        $store(o1.add(2 * i), $perm::<0x20>(lo, hi));
-                        $store(o1.add(2 * i + L), $perm::<0x31>(lo, hi));
+                        let (lo, hi) = $merge!(a1, a2);
+                        $store(o1.add(2 * i), lo);
+                        $store(o1.add(2 * i + L), hi);
                     } else {
                         $store(o1.add(i), a1);
                         $store(o2.add(i), a2);
@@ -1149,8 +1224,49 @@ macro_rules! pair_avx2_body {
     };
 }
 
+/// The two vectors `a`, `b` interleaved, `(a0 b0 a1 b1 …)`, as two vectors (macros, so
+/// that they inline into the kernels).
+macro_rules! merge_ps256 {
+    ($a:expr, $b:expr) => {{
+        let (lo, hi) = (_mm256_unpacklo_ps($a, $b), _mm256_unpackhi_ps($a, $b));
+        (
+            _mm256_permute2f128_ps::<0x20>(lo, hi),
+            _mm256_permute2f128_ps::<0x31>(lo, hi),
+        )
+    }};
+}
+macro_rules! merge_pd256 {
+    ($a:expr, $b:expr) => {{
+        let (lo, hi) = (_mm256_unpacklo_pd($a, $b), _mm256_unpackhi_pd($a, $b));
+        (
+            _mm256_permute2f128_pd::<0x20>(lo, hi),
+            _mm256_permute2f128_pd::<0x31>(lo, hi),
+        )
+    }};
+}
+macro_rules! merge_ps512 {
+    ($a:expr, $b:expr) => {{
+        let lo = _mm512_setr_epi32(0, 16, 1, 17, 2, 18, 3, 19, 4, 20, 5, 21, 6, 22, 7, 23);
+        let hi = _mm512_setr_epi32(8, 24, 9, 25, 10, 26, 11, 27, 12, 28, 13, 29, 14, 30, 15, 31);
+        (
+            _mm512_permutex2var_ps($a, lo, $b),
+            _mm512_permutex2var_ps($a, hi, $b),
+        )
+    }};
+}
+macro_rules! merge_pd512 {
+    ($a:expr, $b:expr) => {{
+        let lo = _mm512_setr_epi64(0, 8, 1, 9, 2, 10, 3, 11);
+        let hi = _mm512_setr_epi64(4, 12, 5, 13, 6, 14, 7, 15);
+        (
+            _mm512_permutex2var_pd($a, lo, $b),
+            _mm512_permutex2var_pd($a, hi, $b),
+        )
+    }};
+}
 pair_avx2_body!(
     pair_avx2_f32,
+    "avx2",
     f32,
     8,
     _mm256_set1_ps,
@@ -1159,12 +1275,11 @@ pair_avx2_body!(
     _mm256_add_ps,
     _mm256_loadu_ps,
     _mm256_storeu_ps,
-    _mm256_unpacklo_ps,
-    _mm256_unpackhi_ps,
-    _mm256_permute2f128_ps
+    merge_ps256
 );
 pair_avx2_body!(
     pair_avx2_f64,
+    "avx2",
     f64,
     4,
     _mm256_set1_pd,
@@ -1173,7 +1288,31 @@ pair_avx2_body!(
     _mm256_add_pd,
     _mm256_loadu_pd,
     _mm256_storeu_pd,
-    _mm256_unpacklo_pd,
-    _mm256_unpackhi_pd,
-    _mm256_permute2f128_pd
+    merge_pd256
+);
+pair_avx2_body!(
+    pair_avx512_f32,
+    "avx512f",
+    f32,
+    16,
+    _mm512_set1_ps,
+    _mm512_setzero_ps,
+    _mm512_mul_ps,
+    _mm512_add_ps,
+    _mm512_loadu_ps,
+    _mm512_storeu_ps,
+    merge_ps512
+);
+pair_avx2_body!(
+    pair_avx512_f64,
+    "avx512f",
+    f64,
+    8,
+    _mm512_set1_pd,
+    _mm512_setzero_pd,
+    _mm512_mul_pd,
+    _mm512_add_pd,
+    _mm512_loadu_pd,
+    _mm512_storeu_pd,
+    merge_pd512
 );

@@ -56,7 +56,7 @@ pub fn analyze_lane<T: Sample>(
     boundary: Boundary,
     levels: usize,
 ) -> Result<(Vec<T>, LanePyramid)> {
-    if width == 0 || data.len() % width != 0 {
+    if width == 0 || !data.len().is_multiple_of(width) {
         return Err(Error::parameter(
             "lane data length",
             data.len(),

@@ -51,7 +51,7 @@ pub struct LevelTriplets {
 
 /// Periodic extension: `F_{k+m} = F_k`; needs even `m` (`n = s = m/2`).
 pub fn periodic(f: &RegularFilters, m: usize) -> LevelTriplets {
-    debug_assert!(m % 2 == 0 && m >= 2);
+    debug_assert!(m.is_multiple_of(2) && m >= 2);
     let n = m / 2;
     let s = m / 2;
     let (mi, ni, si) = (m as isize, n as isize, s as isize);

@@ -272,15 +272,54 @@ impl Csr {
     }
 }
 
-/// Whether the AVX2 build of the kernel is used: detected once; `MRA_CPU=scalar` in the
-/// environment forces the baseline build (to compare CPU levels).
+/// The builds of the kernels, narrowest first. All give the same bits: separate
+/// multiplies and adds (no FMA), each output's taps summed in the same order.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub enum Simd {
+    /// Plain loops (whatever the compiler makes of them for the baseline target).
+    Baseline,
+    /// 256-bit vectors.
+    Avx2,
+    /// 512-bit vectors for the combines (the rest as [`Simd::Avx2`]).
+    Avx512,
+}
+
+impl Simd {
+    /// The widest build this CPU runs, detected once. `MRA_CPU=scalar` or `MRA_CPU=avx2`
+    /// in the environment caps it (to compare builds).
+    pub fn detected() -> Simd {
+        static LEVEL: std::sync::OnceLock<Simd> = std::sync::OnceLock::new();
+        *LEVEL.get_or_init(|| {
+            let cap = match std::env::var("MRA_CPU").as_deref() {
+                Ok("scalar") => Simd::Baseline,
+                Ok("avx2") => Simd::Avx2,
+                _ => Simd::Avx512,
+            };
+            #[cfg(target_arch = "x86_64")]
+            let found = if std::arch::is_x86_feature_detected!("avx512f") {
+                Simd::Avx512
+            } else if std::arch::is_x86_feature_detected!("avx2") {
+                Simd::Avx2
+            } else {
+                Simd::Baseline
+            };
+            #[cfg(not(target_arch = "x86_64"))]
+            let found = Simd::Baseline;
+            found.min(cap)
+        })
+    }
+
+    /// Every build this CPU runs, up to [`Simd::detected`] (tests compare them).
+    pub fn available() -> Vec<Simd> {
+        [Simd::Baseline, Simd::Avx2, Simd::Avx512]
+            .into_iter()
+            .filter(|&s| s <= Simd::detected())
+            .collect()
+    }
+}
+
+/// Whether the AVX2 build (or a wider one) of the kernels is used ([`Simd::detected`]).
 #[cfg(target_arch = "x86_64")]
 pub fn cpu_has_avx2() -> bool {
-    static LEVEL: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
-    *LEVEL.get_or_init(|| {
-        std::env::var("MRA_CPU")
-            .map(|v| v != "scalar")
-            .unwrap_or(true)
-            && std::arch::is_x86_feature_detected!("avx2")
-    })
+    Simd::detected() >= Simd::Avx2
 }

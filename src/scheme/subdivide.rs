@@ -293,7 +293,7 @@ fn open(rule: Refinement, n: usize, m: usize, t: &mut Triplets) {
 
 /// One refinement step of `points` (`n` elements of `dim` values, row-major).
 pub fn refine(points: &[f64], dim: usize, rule: Refinement, ends: Ends) -> Result<Vec<f64>> {
-    if dim == 0 || points.len() % dim != 0 {
+    if dim == 0 || !points.len().is_multiple_of(dim) {
         return Err(Error::parameter(
             "point data length",
             points.len(),

@@ -47,7 +47,7 @@ pub struct TwoScale {
 /// The coarse length of a lane of `m` if `m` is native for the scheme, else `None`.
 fn native_len(scheme: Scheme, boundary: Boundary, m: usize) -> Option<usize> {
     use Boundary::*;
-    let even = m % 2 == 0;
+    let even = m.is_multiple_of(2);
     match (scheme, boundary) {
         (Scheme::Haar, _) => (m >= 2 && even).then_some(m / 2),
         (Scheme::Chaikin, Interpolating) => {
@@ -128,7 +128,7 @@ impl TwoScale {
         } else if let Some(t) = native(scheme, boundary, m - 1) {
             let (n, an, sy) = carry(t, m);
             (LevelKind::Carry, n, an, sy)
-        } else if m % 2 == 0 {
+        } else if m.is_multiple_of(2) {
             let t = haar::level(m);
             (LevelKind::HaarFallback, t.n, t.analysis, t.synthesis)
         } else {

@@ -95,7 +95,7 @@ impl TensorPatch {
         }
         let clamp = |n: usize| {
             let mut t = vec![0.0; n];
-            t.extend(std::iter::repeat(1.0).take(n));
+            t.extend(std::iter::repeat_n(1.0, n));
             t
         };
         Self::bspline(net, dim, (nu, nv), (nu, nv), clamp(nu), clamp(nv))

@@ -36,7 +36,7 @@ impl<T: Sample> Aligned<T> {
     /// `len` zeroed samples starting at a multiple of [`ALIGN`] bytes.
     pub fn zeroed(len: usize) -> Self {
         let size = std::mem::size_of::<T>();
-        debug_assert!(size > 0 && ALIGN % size == 0);
+        debug_assert!(size > 0 && ALIGN.is_multiple_of(size));
         if len == 0 {
             return Self::heap(0);
         }
