@@ -401,10 +401,41 @@ fn pair_and_unpaired_stretches_cover_every_row_once() {
     }
 }
 
+/// `combine` in every build the CPU has gives the bits of a plain loop (first tap
+/// assigns, the others accumulate in order).
+fn combine_matches_plain_loop<T: mra::scheme::Sample + Into<f64>>(
+    src: &[&[T]],
+    w: &[T],
+    len: usize,
+) {
+    let taps = src.len();
+    for simd in Simd::available() {
+        let mut a = vec![T::from_f64(1.0); len];
+        mra::scheme::kernel::combine_with(simd, &mut a, src, w);
+        for i in 0..len {
+            let mut acc = if taps == 0 {
+                T::default()
+            } else {
+                w[0] * src[0][i]
+            };
+            for k in 1..taps {
+                acc += w[k] * src[k][i];
+            }
+            let (got, want): (f64, f64) = (a[i].into(), acc.into());
+            assert_eq!(
+                got.to_bits(),
+                want.to_bits(),
+                "combine {simd:?} {} taps {taps} len {len}",
+                std::any::type_name::<T>()
+            );
+        }
+    }
+}
+
 /// The vector kernels (AVX2 where the CPU has it) against plain loops.
 #[test]
 fn vector_kernels_match_plain_loops() {
-    use mra::scheme::kernel::{combine_with, deinterleave, interleave};
+    use mra::scheme::kernel::{deinterleave, interleave};
     for len in 0..70usize {
         for e in 1..=2usize {
             let x: Vec<f32> = (0..len * e).map(|i| i as f32 * 0.5 - 3.0).collect();
@@ -439,21 +470,7 @@ fn vector_kernels_match_plain_loops() {
         for taps in 0..=11usize {
             let src: Vec<&[f64]> = (0..taps).map(|k| &x64[k..k + len]).collect();
             let w: Vec<f64> = (0..taps).map(|k| 0.125 * k as f64 - 0.3).collect();
-            for simd in Simd::available() {
-                let mut a = vec![1.0; len];
-                combine_with(simd, &mut a, &src, &w);
-                for i in 0..len {
-                    let mut acc = if taps == 0 { 0.0 } else { w[0] * src[0][i] };
-                    for k in 1..taps {
-                        acc += w[k] * src[k][i];
-                    }
-                    assert_eq!(
-                        a[i].to_bits(),
-                        acc.to_bits(),
-                        "combine {simd:?} taps {taps} len {len}"
-                    );
-                }
-            }
+            combine_matches_plain_loop(&src, &w, len);
         }
     }
 }
@@ -628,28 +645,14 @@ fn combine_pair_rows_gives_the_bits_of_combine_pair() {
 
 #[test]
 fn f32_combine_and_transpose_match_plain_loops() {
-    use mra::scheme::kernel::{combine_with, transpose};
+    use mra::scheme::kernel::transpose;
     // f32 runs of every length around the vector widths (blocks of 32, then 8, then single)
     let x: Vec<f32> = lcg(5, 120).iter().map(|&v| v as f32).collect();
     for len in 0..100usize {
         for taps in 1..=9usize {
             let src: Vec<&[f32]> = (0..taps).map(|k| &x[k..k + len]).collect();
             let w: Vec<f32> = (0..taps).map(|k| 0.375 * k as f32 - 0.7).collect();
-            for simd in Simd::available() {
-                let mut a = vec![1.0f32; len];
-                combine_with(simd, &mut a, &src, &w);
-                for i in 0..len {
-                    let mut acc = w[0] * src[0][i];
-                    for k in 1..taps {
-                        acc += w[k] * src[k][i];
-                    }
-                    assert_eq!(
-                        a[i].to_bits(),
-                        acc.to_bits(),
-                        "f32 {simd:?} taps {taps} len {len}"
-                    );
-                }
-            }
+            combine_matches_plain_loop(&src, &w, len);
         }
     }
 

@@ -216,55 +216,6 @@ macro_rules! taps_avx2_body {
     };
 }
 
-taps_avx2_body!(
-    taps_avx2_f32,
-    "avx2",
-    f32,
-    8,
-    _mm256_set1_ps,
-    _mm256_setzero_ps,
-    _mm256_mul_ps,
-    _mm256_add_ps,
-    _mm256_loadu_ps,
-    _mm256_storeu_ps
-);
-taps_avx2_body!(
-    taps_avx2_f64,
-    "avx2",
-    f64,
-    4,
-    _mm256_set1_pd,
-    _mm256_setzero_pd,
-    _mm256_mul_pd,
-    _mm256_add_pd,
-    _mm256_loadu_pd,
-    _mm256_storeu_pd
-);
-taps_avx2_body!(
-    taps_avx512_f32,
-    "avx512f",
-    f32,
-    16,
-    _mm512_set1_ps,
-    _mm512_setzero_ps,
-    _mm512_mul_ps,
-    _mm512_add_ps,
-    _mm512_loadu_ps,
-    _mm512_storeu_ps
-);
-taps_avx2_body!(
-    taps_avx512_f64,
-    "avx512f",
-    f64,
-    8,
-    _mm512_set1_pd,
-    _mm512_setzero_pd,
-    _mm512_mul_pd,
-    _mm512_add_pd,
-    _mm512_loadu_pd,
-    _mm512_storeu_pd
-);
-
 /// Split `x` (elements of `e` samples) into its even elements, then its odd elements:
 /// `dst = [x_0, x_2, x_4, … | x_1, x_3, …]`.
 #[inline]
@@ -1264,55 +1215,21 @@ macro_rules! merge_pd512 {
         )
     }};
 }
-pair_avx2_body!(
-    pair_avx2_f32,
-    "avx2",
-    f32,
-    8,
-    _mm256_set1_ps,
-    _mm256_setzero_ps,
-    _mm256_mul_ps,
-    _mm256_add_ps,
-    _mm256_loadu_ps,
-    _mm256_storeu_ps,
-    merge_ps256
-);
-pair_avx2_body!(
-    pair_avx2_f64,
-    "avx2",
-    f64,
-    4,
-    _mm256_set1_pd,
-    _mm256_setzero_pd,
-    _mm256_mul_pd,
-    _mm256_add_pd,
-    _mm256_loadu_pd,
-    _mm256_storeu_pd,
-    merge_pd256
-);
-pair_avx2_body!(
-    pair_avx512_f32,
-    "avx512f",
-    f32,
-    16,
-    _mm512_set1_ps,
-    _mm512_setzero_ps,
-    _mm512_mul_ps,
-    _mm512_add_ps,
-    _mm512_loadu_ps,
-    _mm512_storeu_ps,
-    merge_ps512
-);
-pair_avx2_body!(
-    pair_avx512_f64,
-    "avx512f",
-    f64,
-    8,
-    _mm512_set1_pd,
-    _mm512_setzero_pd,
-    _mm512_mul_pd,
-    _mm512_add_pd,
-    _mm512_loadu_pd,
-    _mm512_storeu_pd,
-    merge_pd512
-);
+/// The four builds of the tap loops ([`taps_avx2_body`]) and of the pair loops
+/// ([`pair_avx2_body`]): one line each, its names, target feature, type, lanes and
+/// intrinsics.
+macro_rules! builds {
+    ($($taps:ident, $pair:ident, $feat:literal, $t:ty, $lanes:expr, $set1:ident, $zero:ident, $mul:ident, $add:ident, $load:ident, $store:ident, $merge:ident;)*) => {
+        $(
+            taps_avx2_body!($taps, $feat, $t, $lanes, $set1, $zero, $mul, $add, $load, $store);
+            pair_avx2_body!($pair, $feat, $t, $lanes, $set1, $zero, $mul, $add, $load, $store, $merge);
+        )*
+    };
+}
+
+builds! {
+    taps_avx2_f32, pair_avx2_f32, "avx2", f32, 8, _mm256_set1_ps, _mm256_setzero_ps, _mm256_mul_ps, _mm256_add_ps, _mm256_loadu_ps, _mm256_storeu_ps, merge_ps256;
+    taps_avx2_f64, pair_avx2_f64, "avx2", f64, 4, _mm256_set1_pd, _mm256_setzero_pd, _mm256_mul_pd, _mm256_add_pd, _mm256_loadu_pd, _mm256_storeu_pd, merge_pd256;
+    taps_avx512_f32, pair_avx512_f32, "avx512f", f32, 16, _mm512_set1_ps, _mm512_setzero_ps, _mm512_mul_ps, _mm512_add_ps, _mm512_loadu_ps, _mm512_storeu_ps, merge_ps512;
+    taps_avx512_f64, pair_avx512_f64, "avx512f", f64, 8, _mm512_set1_pd, _mm512_setzero_pd, _mm512_mul_pd, _mm512_add_pd, _mm512_loadu_pd, _mm512_storeu_pd, merge_pd512;
+}
