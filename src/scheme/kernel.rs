@@ -885,9 +885,10 @@ pub fn combine_pair_merged<T: Sample>(
     if super::sparse::cpu_has_avx2() {
         let p = input_ptrs(src);
         let o = [out.as_mut_ptr(), out.as_mut_ptr()];
-        // SAFETY: AVX2 is present; `out` holds 2·len samples, every input len; one
-        // step, the merged output written through the first pointer only.
         let wide = Simd::detected() == Simd::Avx512;
+        // SAFETY: AVX2 is present, AVX-512F when `wide` (detected); `out` holds 2·len
+        // samples, every input len; one step, the merged output written through the
+        // first pointer only.
         return unsafe { pair_avx2(o, len, &p[..u], w1, m1, w2, m2, 1, 0, [0, 0], true, wide) };
     }
     false
@@ -1035,9 +1036,10 @@ unsafe fn pair_steps<T: Sample>(
     #[cfg(target_arch = "x86_64")]
     if super::sparse::cpu_has_avx2() {
         let d = dst.as_mut_ptr();
-        // SAFETY: AVX2 is present; every input and output stretch lies inside its slice
-        // and the outputs of all steps are disjoint (the caller's contract), and `src`,
-        // `dst` are distinct slices (borrowed shared and exclusive).
+        // SAFETY: AVX2 is present (AVX-512F too when detected, the last argument); every
+        // input and output stretch lies inside its slice and the outputs of all steps are
+        // disjoint (the caller's contract), and `src`, `dst` are distinct slices
+        // (borrowed shared and exclusive).
         let done = unsafe {
             // (merged: both through the first pointer)
             let o = [d.add(out[0]), d.add(if merge { out[0] } else { out[1] })];
