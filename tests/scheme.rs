@@ -432,7 +432,7 @@ fn combine_matches_plain_loop<T: mra::scheme::Sample + Into<f64>>(
     }
 }
 
-/// The vector kernels (AVX2 where the CPU has it) against plain loops.
+/// The vector kernels (every build the CPU has) against plain loops.
 #[test]
 fn vector_kernels_match_plain_loops() {
     use mra::scheme::kernel::{deinterleave, interleave};

@@ -777,7 +777,7 @@ fn pair_by_parts<T: Sample>(
     }
 }
 
-/// The tap patterns `(inputs, m1, m2)` with an AVX2 build: the regular rows of the three
+/// The tap patterns `(inputs, m1, m2)` with vector builds (AVX2 and AVX-512): the regular rows of the three
 /// schemes, analysis (coarse, detail) and synthesis (even, odd fine rows), as
 /// [`super::polyphase`] pairs them.
 #[cfg(target_arch = "x86_64")]
