@@ -65,6 +65,7 @@ macro_rules! built {
         #[cfg(target_arch = "x86_64")]
         #[target_feature(enable = "avx512f,avx2,fma")]
         #[inline(never)]
+        #[allow(clippy::too_many_arguments)]
         unsafe fn $avx512($($a: $t),*) {
             $body($($a),*)
         }

@@ -13,7 +13,7 @@ use crate::scheme::{Boundary, Scheme};
 /// Compress an image, volume or heightmap into an `.mra` file.
 #[derive(Args, Debug)]
 #[command(
-    after_help = "Rate (pick one; default --quality 50):\n  --keep P        keep the largest P% of details (gain-weighted)\n  --threshold T   zero details whose gain-weighted magnitude is below T\n  --quality Q     1..100, step = (max − min)·2^(−Q/10)\n  --psnr DB       smallest file reaching DB (PSNR as `mra compare`)\n  --bpp B         largest file within B bits per pixel/voxel\n  --max-error E   every sample within E of the source\n  --lossless      bit-exact (integer Haar S-transform, YCoCg-R)\n\nExample:\n  mra generate zone-plate -o z.png --size 256\n  mra encode z.png -o z.mra --psnr 40 && mra decode z.mra -o z2.png && mra compare z.png z2.png"
+    after_help = "Rate: pick one of --keep, --threshold, --quality, --psnr, --bpp, --max-error and --lossless (default --quality 50).\n\nExample:\n  mra generate zone-plate -o z.png --size 256\n  mra encode z.png -o z.mra --psnr 40 && mra decode z.mra -o z2.png && mra compare z.png z2.png"
 )]
 pub struct EncodeArgs {
     /// Input file or folder (any format `mra info-file` reads).
@@ -30,18 +30,25 @@ pub struct EncodeArgs {
     /// Levels (each axis does what its length allows).
     #[arg(long, default_value_t = 6)]
     pub levels: usize,
-    #[arg(long, group = "rate")]
+    /// Keep the largest P% of details (gain-weighted).
+    #[arg(long, group = "rate", value_name = "P")]
     pub keep: Option<f64>,
-    #[arg(long, group = "rate")]
+    /// Zero details whose gain-weighted magnitude is below T.
+    #[arg(long, group = "rate", value_name = "T")]
     pub threshold: Option<f64>,
-    #[arg(long, group = "rate")]
+    /// Quality 1..100: quantizer step (max − min)·2^(−Q/10) (the default, 50).
+    #[arg(long, group = "rate", value_name = "Q")]
     pub quality: Option<f64>,
-    #[arg(long, group = "rate")]
+    /// Smallest file reaching this PSNR in dB (as `mra compare` measures it).
+    #[arg(long, group = "rate", value_name = "DB")]
     pub psnr: Option<f64>,
-    #[arg(long, group = "rate")]
+    /// Largest file within B bits per pixel / voxel.
+    #[arg(long, group = "rate", value_name = "B")]
     pub bpp: Option<f64>,
-    #[arg(long, group = "rate")]
+    /// Every decoded sample within E of the source.
+    #[arg(long, group = "rate", value_name = "E")]
     pub max_error: Option<f64>,
+    /// Bit-exact (integer Haar S-transform, YCoCg-R colour).
     #[arg(long, group = "rate")]
     pub lossless: bool,
     #[command(flatten)]
@@ -150,17 +157,27 @@ pub fn info(a: InfoArgs) -> CliResult {
     }
     let dims: Vec<String> = i.dims.iter().rev().map(|d| d.to_string()).collect();
     println!("{} (.mra {})", a.input.display(), i.version);
+    let colour = if i.colour == "None" {
+        String::new()
+    } else {
+        format!(", colour transform {}", i.colour)
+    };
     println!(
-        "  {} {} x{} channels {} ({} colour)",
+        "  {} {} x{} channels {}{colour}",
         i.kind,
         dims.join("x"),
         i.channels,
         i.sample_type,
-        i.colour
     );
+    // the bound is stored only by `--max-error` (0 otherwise)
+    let bound = if i.max_error > 0.0 {
+        format!(", max error {}", i.max_error)
+    } else {
+        String::new()
+    };
     println!(
-        "  mode {}, {} {} {} levels, step {:.6}, max error {}, range {}..{}",
-        i.mode, i.scheme, i.boundary, i.levels, i.step, i.max_error, i.range[0], i.range[1]
+        "  mode {}, {} {} {} levels, step {:.6}{bound}, range {}..{}",
+        i.mode, i.scheme, i.boundary, i.levels, i.step, i.range[0], i.range[1]
     );
     println!(
         "  {} bytes, {:.4} bits per position{}",
