@@ -146,6 +146,45 @@ fn oiio_squared_error(a: &Samples, b: &Samples) -> (f64, f64) {
 
 /// Compare reference `a` with test `b` (same dims and channels).
 pub fn compare(a: &Raster, b: &Raster, opts: &CompareOptions) -> Result<Comparison> {
+    let e = errors(a, b, opts)?;
+    let ssim_range = match (opts.data_range, opts.convention, a.sample_type().is_float()) {
+        (Some(r), _, _) => r,
+        (None, Convention::Skimage, false) => {
+            let (lo, hi) = a.sample_type().range();
+            hi - lo
+        }
+        _ => e.data_range,
+    };
+    let ssim = ssim(a, b, ssim_range);
+    Ok(Comparison {
+        mse: e.mse,
+        psnr: e.psnr,
+        max_abs_error: e.max_abs_error,
+        ssim,
+        data_range: e.data_range,
+        convention: e.convention,
+        dims: a.dims.clone(),
+        channels: a.channels,
+        dtype: a.sample_type().name(),
+    })
+}
+
+/// The PSNR of `b` against the reference `a`, exactly as [`compare`] reports it (`None`
+/// when identical), without the SSIM: what the encoder's `--psnr` search measures.
+pub fn psnr(a: &Raster, b: &Raster, opts: &CompareOptions) -> Result<Option<f64>> {
+    Ok(errors(a, b, opts)?.psnr)
+}
+
+/// What [`compare`] reports besides the SSIM.
+struct Errors {
+    mse: f64,
+    psnr: Option<f64>,
+    max_abs_error: f64,
+    data_range: f64,
+    convention: &'static str,
+}
+
+fn errors(a: &Raster, b: &Raster, opts: &CompareOptions) -> Result<Errors> {
     if a.dims != b.dims || a.channels != b.channels {
         return Err(Error::parameter(
             "shapes",
@@ -177,25 +216,12 @@ pub fn compare(a: &Raster, b: &Raster, opts: &CompareOptions) -> Result<Comparis
             }
         },
     };
-    let ssim_range = match (opts.data_range, opts.convention, a.sample_type().is_float()) {
-        (Some(r), _, _) => r,
-        (None, Convention::Skimage, false) => {
-            let (lo, hi) = a.sample_type().range();
-            hi - lo
-        }
-        _ => data_range,
-    };
-    let ssim = ssim(a, b, ssim_range);
-    Ok(Comparison {
+    Ok(Errors {
         mse,
         psnr,
         max_abs_error,
-        ssim,
         data_range,
         convention: name,
-        dims: a.dims.clone(),
-        channels: a.channels,
-        dtype: a.sample_type().name(),
     })
 }
 

@@ -328,6 +328,45 @@ impl Prepared {
         step / (self.gains[band] * self.weights[channel])
     }
 
+    /// Band `j` of channel `c` quantized at base step `step`: its indices.
+    fn quantized(&self, step: f64, j: usize, c: usize) -> Vec<i64> {
+        let plan = &self.plan;
+        let (s, rho) = (self.band_step(step, j, c), band_rho(plan, j));
+        layout::gather(&self.coeffs[c], &plan.pyr.shape, &plan.bands[j].ranges)
+            .into_iter()
+            .map(|x| quantize::quantize(x as f64, s, rho))
+            .collect()
+    }
+
+    /// What a decoder makes of [`Prepared::code`]`(step)`, at full size, computed from the
+    /// quantized bands without coding them (the coding is lossless): the same samples.
+    fn decoded(&self, step: f64) -> Result<Raster> {
+        let (h, plan) = (&self.header, &self.plan);
+        let values = lossy_values(h, plan, 0, |c| {
+            Ok((0..plan.bands.len())
+                .into_par_iter()
+                .map(|j| {
+                    // `quantized` then `dequantized`, without the indices in between
+                    let (s, rho) = (self.band_step(step, j, c), band_rho(plan, j));
+                    let d = band_delta(h, plan, j);
+                    let v = layout::gather(&self.coeffs[c], &plan.pyr.shape, &plan.bands[j].ranges)
+                        .into_iter()
+                        .map(|x| {
+                            quantize::dequantize(quantize::quantize(x as f64, s, rho), s, d) as f32
+                        })
+                        .collect();
+                    Some(v)
+                })
+                .collect())
+        })?;
+        Raster::new(
+            h.dims.clone(),
+            h.channels,
+            Samples::from_f64(&values, h.sample_type),
+            h.kind,
+        )
+    }
+
     /// Quantize and code at base step `step`; the whole file.
     fn code(&self, step: f64) -> Vec<u8> {
         let plan = &self.plan;
@@ -337,14 +376,7 @@ impl Prepared {
             (0..nb).flat_map(|j| (0..nc).map(move |c| (j, c))).collect();
         let q: Vec<Vec<i64>> = jobs
             .par_iter()
-            .map(|&(j, c)| {
-                let s = self.band_step(step, j, c);
-                let rho = if plan.bands[j].level == 0 { 0.5 } else { RHO };
-                layout::gather(&self.coeffs[c], &plan.pyr.shape, &plan.bands[j].ranges)
-                    .into_iter()
-                    .map(|x| quantize::quantize(x as f64, s, rho))
-                    .collect()
-            })
+            .map(|&(j, c)| self.quantized(step, j, c))
             .collect();
         let coded = plan.code_bands(&jobs, &q, nc);
         let mut h = self.header.clone();
@@ -433,11 +465,16 @@ pub fn encode(r: &Raster, opts: &EncodeOptions) -> Result<Vec<u8>> {
                             "a target in dB between 0 and 400",
                         ));
                     }
-                    return search(&p, range, false, 0.02, |_, dec| {
-                        let dec =
-                            dec.ok_or_else(|| Error::parameter("psnr", db, "a decoded candidate"))?;
-                        let c = crate::metrics::compare(r, dec, &Default::default())?;
-                        Ok(c.psnr.unwrap_or(f64::INFINITY) - db)
+                    // each candidate decoded from its quantized bands, coded only once chosen;
+                    // the data range `mra compare` would use, found once
+                    let cmp = crate::metrics::CompareOptions {
+                        data_range: Some(crate::metrics::skimage_data_range(&r.samples)),
+                        ..Default::default()
+                    };
+                    return search(&p, range, false, 0.02, |step| {
+                        let dec = p.decoded(step)?;
+                        let psnr = crate::metrics::psnr(r, &dec, &cmp)?;
+                        Ok((psnr.unwrap_or(f64::INFINITY) - db, None))
                     });
                 }
                 Rate::Bpp(b) => {
@@ -449,8 +486,9 @@ pub fn encode(r: &Raster, opts: &EncodeOptions) -> Result<Vec<u8>> {
                         ));
                     }
                     let pos = r.positions() as f64;
-                    return search(&p, range, true, 0.01 * b, |bytes, _| {
-                        Ok(b - bytes.len() as f64 * 8.0 / pos)
+                    return search(&p, range, true, 0.01 * b, |step| {
+                        let bytes = p.code(step);
+                        Ok((b - bytes.len() as f64 * 8.0 / pos, Some(bytes)))
                     });
                 }
                 _ => unreachable!(),
@@ -460,34 +498,27 @@ pub fn encode(r: &Raster, opts: &EncodeOptions) -> Result<Vec<u8>> {
     }
 }
 
-/// Bisection on log(step) for the file closest to a target: `f(bytes, decoded) ≥ 0`
-/// means the target is met (PSNR reached, or size within budget), which holds for
-/// large steps when `large_ok` (size) and for small steps otherwise (PSNR). Returns
-/// the met file closest to the target (within `tol` stops early).
+/// Bisection on log(step) for the file closest to a target: `f(step)` gives `v ≥ 0`
+/// when the target is met (PSNR reached, or size within budget), which holds for large
+/// steps when `large_ok` (size) and for small steps otherwise (PSNR), and the coded file
+/// if it made it. Returns the met file closest to the target (within `tol` stops early).
 fn search(
     p: &Prepared,
     range: f64,
     large_ok: bool,
     tol: f64,
-    f: impl Fn(&[u8], Option<&Raster>) -> Result<f64>,
+    f: impl Fn(f64) -> Result<(f64, Option<Vec<u8>>)>,
 ) -> Result<Vec<u8>> {
-    // only the PSNR target needs the decoded picture
-    let need_decode = !large_ok;
     let mut lo = (range * 1e-7).ln();
     let mut hi = (range * 4.0).ln();
-    let mut best: Option<(f64, Vec<u8>)> = None;
+    // (v, step, file if coded)
+    let mut best: Option<(f64, f64, Option<Vec<u8>>)> = None;
     for _ in 0..48 {
         let mid = 0.5 * (lo + hi);
-        let bytes = p.code(mid.exp());
-        let dec = if need_decode {
-            Some(decode(&bytes, &DecodeOptions::default())?.raster)
-        } else {
-            None
-        };
-        let v = f(&bytes, dec.as_ref())?;
+        let (v, bytes) = f(mid.exp())?;
         if v >= 0.0 {
-            if best.as_ref().is_none_or(|(bv, _)| v < *bv) {
-                best = Some((v, bytes));
+            if best.as_ref().is_none_or(|(bv, _, _)| v < *bv) {
+                best = Some((v, mid.exp(), bytes));
             }
             if v <= tol {
                 break;
@@ -507,7 +538,8 @@ fn search(
         }
     }
     Ok(match best {
-        Some((_, b)) => b,
+        Some((_, _, Some(b))) => b,
+        Some((_, step, None)) => p.code(step),
         None => p.code(if large_ok { hi.exp() } else { lo.exp() }),
     })
 }
@@ -953,52 +985,16 @@ fn reconstruct(p: &Parsed, k: usize) -> Result<Raster> {
         };
         return finish(p, region, samples, k);
     }
-    let sub = plan.sub(k);
-    let planes = (0..c)
-        .into_par_iter()
-        .map(|ch| {
-            let q = decode_channel(p, ch, k)?;
-            let mut plane = vec![0f32; plan.pyr.shape.iter().product()];
-            for (j, b) in q.iter().enumerate() {
-                if let (Some(b), Some(bc)) = (b, &p.bands[ch][j]) {
-                    let d = if plan.bands[j].level == 0 {
-                        0.0
-                    } else {
-                        h.delta
-                    };
-                    let v: Vec<f32> = b
-                        .iter()
-                        .map(|&x| quantize::dequantize(x, bc.step, d) as f32)
-                        .collect();
-                    layout::scatter(&mut plane, &plan.pyr.shape, &plan.bands[j].ranges, &v);
-                }
-            }
-            let full: Vec<std::ops::Range<usize>> = region.iter().map(|&e| 0..e).collect();
-            let small = if k == 0 {
-                plane
-            } else {
-                layout::gather(&plane, &plan.pyr.shape, &full)
-            };
-            let mut a = Array::from_shape_vec(&region, small)?;
-            tensor::synthesize(&mut a, &sub)?;
-            Ok(a.into_data())
-        })
-        .collect::<Result<Vec<_>>>()?;
-    let mut planes = planes;
-    if h.colour == Colour::YCoCg {
-        for i in 0..npos {
-            let (y, co, cg) = (planes[0][i], planes[1][i], planes[2][i]);
-            let t = y - cg * 0.5;
-            let g = cg + t;
-            let b = t - co * 0.5;
-            planes[0][i] = b + co;
-            planes[1][i] = g;
-            planes[2][i] = b;
-        }
-    }
-    for i in 0..npos * c {
-        values[i] = (planes[i % c][i / c] as f64).clamp(h.min, h.max);
-    }
+    let mut values = lossy_values(h, plan, k, |ch| {
+        let q = decode_channel(p, ch, k)?;
+        Ok(q.into_iter()
+            .enumerate()
+            .map(|(j, b)| match (b, &p.bands[ch][j]) {
+                (Some(b), Some(bc)) => Some(dequantized(h, plan, j, &b, bc.step)),
+                _ => None,
+            })
+            .collect())
+    })?;
     let mut samples = Samples::from_f64(&values, ty);
     if k == 0 && h.mode == Mode::MaxError {
         for (ch, r) in p.resi.iter().enumerate() {
@@ -1032,6 +1028,90 @@ fn reconstruct(p: &Parsed, k: usize) -> Result<Raster> {
         }
     }
     finish(p, region, samples, k)
+}
+
+/// Quantization dead zone of band `j` (plain rounding for the coarse block).
+fn band_rho(plan: &Plan, j: usize) -> f64 {
+    if plan.bands[j].level == 0 {
+        0.5
+    } else {
+        RHO
+    }
+}
+
+/// Dequantization offset of band `j` (none for the coarse block).
+fn band_delta(h: &Header, plan: &Plan, j: usize) -> f64 {
+    if plan.bands[j].level == 0 {
+        0.0
+    } else {
+        h.delta
+    }
+}
+
+/// Band `j`'s values from its indices `q` and its step.
+fn dequantized(h: &Header, plan: &Plan, j: usize, q: &[i64], step: f64) -> Vec<f32> {
+    let d = band_delta(h, plan, j);
+    q.iter()
+        .map(|&x| quantize::dequantize(x, step, d) as f32)
+        .collect()
+}
+
+/// A lossy file's samples (interleaved, clamped to the source's range, before the
+/// `--max-error` residuals) of the coarse block after `k` levels (k = 0: full size):
+/// per channel, its bands' dequantized values (`bands(channel)[band]`, None = absent,
+/// as [`dequantized`] makes them) synthesized and taken back from YCoCg. The decoder's
+/// way, and the encoder's `--psnr` search's.
+fn lossy_values(
+    h: &Header,
+    plan: &Plan,
+    k: usize,
+    bands: impl Fn(usize) -> Result<Vec<Option<Vec<f32>>>> + Sync,
+) -> Result<Vec<f64>> {
+    let region = plan.region(k);
+    let npos: usize = region.iter().product();
+    let c = h.channels;
+    let sub = plan.sub(k);
+    let mut planes = (0..c)
+        .into_par_iter()
+        .map(|ch| {
+            let q = bands(ch)?;
+            let mut plane = vec![0f32; plan.pyr.shape.iter().product()];
+            for (j, v) in q.iter().enumerate() {
+                if let Some(v) = v {
+                    layout::scatter(&mut plane, &plan.pyr.shape, &plan.bands[j].ranges, v);
+                }
+            }
+            let full: Vec<std::ops::Range<usize>> = region.iter().map(|&e| 0..e).collect();
+            let small = if k == 0 {
+                plane
+            } else {
+                layout::gather(&plane, &plan.pyr.shape, &full)
+            };
+            let mut a = Array::from_shape_vec(&region, small)?;
+            tensor::synthesize(&mut a, &sub)?;
+            Ok(a.into_data())
+        })
+        .collect::<Result<Vec<_>>>()?;
+    if h.colour == Colour::YCoCg {
+        for i in 0..npos {
+            let (y, co, cg) = (planes[0][i], planes[1][i], planes[2][i]);
+            let t = y - cg * 0.5;
+            let g = cg + t;
+            let b = t - co * 0.5;
+            planes[0][i] = b + co;
+            planes[1][i] = g;
+            planes[2][i] = b;
+        }
+    }
+    let mut values = Vec::with_capacity(npos * c);
+    if c == 1 {
+        values.extend(planes[0].iter().map(|&x| (x as f64).clamp(h.min, h.max)));
+    } else {
+        for i in 0..npos {
+            values.extend(planes.iter().map(|p| (p[i] as f64).clamp(h.min, h.max)));
+        }
+    }
+    Ok(values)
 }
 
 fn finish(p: &Parsed, region: Vec<usize>, samples: Samples, k: usize) -> Result<Raster> {
@@ -1242,5 +1322,54 @@ pub fn kind_name(k: DataKind) -> &'static str {
         DataKind::Volume => "volume",
         DataKind::Heightmap => "heightmap",
         DataKind::Sequence => "sequence",
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::generate::{images, phantom};
+    use crate::io::SampleType;
+
+    /// The `--psnr` search measures [`Prepared::decoded`] instead of decoding each
+    /// candidate file: it must be exactly what the decoder makes of that file.
+    #[test]
+    fn decoded_is_what_the_decoder_makes() {
+        let rasters = [
+            images::zone_plate(37, 50)
+                .to_raster(SampleType::U8)
+                .unwrap(),
+            images::gradient(20, 33, 3)
+                .to_raster(SampleType::U16)
+                .unwrap(),
+            images::noise(17, 24, 1, 5)
+                .to_raster(SampleType::F32)
+                .unwrap(),
+            phantom::shepp_logan(12, 10, 14)
+                .to_raster(SampleType::I16)
+                .unwrap(),
+        ];
+        for r in &rasters {
+            for scheme in Scheme::ALL {
+                let opts = EncodeOptions {
+                    scheme,
+                    boundary: Boundary::Symmetric,
+                    levels: 4,
+                    rate: Rate::Quality(50.0),
+                };
+                let p = prepare(r, &opts, Mode::Lossy).unwrap();
+                let range = p.header.max - p.header.min;
+                for step in [range * 1e-4, range * 0.01, range * 0.3] {
+                    let file = decode(&p.code(step), &DecodeOptions::default()).unwrap();
+                    let ours = p.decoded(step).unwrap();
+                    assert_eq!(
+                        ours.samples,
+                        file.raster.samples,
+                        "{} {scheme:?} step {step}",
+                        r.summary()
+                    );
+                }
+            }
+        }
     }
 }
