@@ -45,6 +45,7 @@ pub struct AnalyzeArgs {
 pub struct SynthesizeArgs {
     /// A tagged point list written by `mra analyze`, or a pyramid file written by it.
     pub input: PathBuf,
+    /// Where to write (standard output for point lists when absent).
     #[arg(short, long)]
     pub output: Option<PathBuf>,
     /// The scheme used by `analyze` (point lists; arrays record it in the file).

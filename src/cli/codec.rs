@@ -83,6 +83,7 @@ pub struct DecodeArgs {
     after_help = "Example:\n  mra generate zone-plate -o z.png --size 256 && mra encode z.png -o z.mra && mra info z.mra --json"
 )]
 pub struct InfoArgs {
+    /// An `.mra` file.
     pub input: PathBuf,
     /// Print one JSON object.
     #[arg(long)]

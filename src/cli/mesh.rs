@@ -12,6 +12,7 @@ pub enum Command {
     ///
     /// Example: mra mesh info bunny.ply --json
     Info {
+        /// Input mesh: OBJ, PLY or OFF.
         input: PathBuf,
         /// Print JSON instead of text.
         #[arg(long)]
@@ -32,7 +33,9 @@ pub enum Command {
     ///
     /// Example: mra mesh simplify bunny.ply -o small.ply --faces 1000
     Simplify {
+        /// Input mesh: OBJ, PLY or OFF.
         input: PathBuf,
+        /// Output mesh: OBJ, PLY or OFF, by extension.
         #[arg(short, long)]
         output: PathBuf,
         /// Target number of faces.
@@ -43,7 +46,9 @@ pub enum Command {
     ///
     /// Example: mra mesh normals bunny.ply -o bunny_n.ply --weighting angle
     Normals {
+        /// Input mesh: OBJ, PLY or OFF.
         input: PathBuf,
+        /// Output mesh: OBJ, PLY or OFF, by extension.
         #[arg(short, long)]
         output: PathBuf,
         /// uniform, area or angle.
@@ -54,7 +59,9 @@ pub enum Command {
     ///
     /// Example: mra mesh convert bunny.ply -o bunny.obj
     Convert {
+        /// Input mesh: OBJ, PLY or OFF.
         input: PathBuf,
+        /// Output mesh: OBJ, PLY or OFF, by extension.
         #[arg(short, long)]
         output: PathBuf,
         /// Write PLY as ASCII.
@@ -68,7 +75,9 @@ pub enum Command {
     ///
     /// Example: mra mesh orient soup.obj -o oriented.obj
     Orient {
+        /// Input mesh: OBJ, PLY or OFF.
         input: PathBuf,
+        /// Output mesh: OBJ, PLY or OFF, by extension.
         #[arg(short, long)]
         output: PathBuf,
     },
@@ -76,7 +85,9 @@ pub enum Command {
     ///
     /// Example: mra mesh render bunny.ply -o bunny.png --size 800x600 --view 30,20 --wireframe
     Render {
+        /// Input mesh: OBJ, PLY or OFF.
         input: PathBuf,
+        /// Output PNG.
         #[arg(short, long)]
         output: PathBuf,
         /// Width x height in pixels.
@@ -101,7 +112,9 @@ pub enum Command {
     /// Example: mra solid polygonize corpus/scenes/sphere.json -o ball.obj --resolution 48 &&
     /// mra mesh deform ball.obj -o bulged.obj --lattice corpus/lattices/bulge.json
     Deform {
+        /// Input mesh: OBJ, PLY or OFF.
         input: PathBuf,
+        /// Output mesh: OBJ, PLY or OFF, by extension.
         #[arg(short, long)]
         output: PathBuf,
         /// Lattice file (JSON).
@@ -112,6 +125,7 @@ pub enum Command {
     ///
     /// Example: mra mesh analyze --scheme loop --valence 5
     Analyze {
+        /// loop or catmull-clark.
         #[arg(long)]
         scheme: String,
         #[arg(long)]
@@ -123,7 +137,9 @@ pub enum Command {
 
 #[derive(Args, Debug)]
 pub struct SubdivideArgs {
+    /// Input mesh: OBJ, PLY or OFF.
     input: PathBuf,
+    /// Output mesh: OBJ, PLY or OFF, by extension.
     #[arg(short, long)]
     output: PathBuf,
     /// loop, loop-warren, catmull-clark, doo-sabin or butterfly.
@@ -155,7 +171,9 @@ pub struct SubdivideArgs {
 
 #[derive(Args, Debug)]
 pub struct SmoothArgs {
+    /// Input mesh: OBJ, PLY or OFF.
     input: PathBuf,
+    /// Output mesh: OBJ, PLY or OFF, by extension.
     #[arg(short, long)]
     output: PathBuf,
     /// uniform or cotangent.

@@ -14,7 +14,9 @@ pub enum Command {
     ///
     /// Example: mra solid render corpus/scenes/csg20.json -o csg.png --size 512
     Render {
+        /// Scene file (JSON: primitives, CSG operations, blends; examples in corpus/scenes).
         scene: PathBuf,
+        /// Output PNG.
         #[arg(short, long)]
         output: PathBuf,
         /// Image width and height in pixels.
@@ -25,7 +27,9 @@ pub enum Command {
     ///
     /// Example: mra solid polygonize corpus/scenes/blend.json -o blend.obj --resolution 128 --normals
     Polygonize {
+        /// Scene file (JSON: primitives, CSG operations, blends; examples in corpus/scenes).
         scene: PathBuf,
+        /// Output mesh: OBJ, PLY or OFF, by extension.
         #[arg(short, long)]
         output: PathBuf,
         /// Cells along the longest side of the model.
@@ -40,7 +44,9 @@ pub enum Command {
     ///
     /// Example: mra solid voxelize corpus/scenes/box_minus_cylinder.json -o part.nrrd --size 128 --occupancy
     Voxelize {
+        /// Scene file (JSON: primitives, CSG operations, blends; examples in corpus/scenes).
         scene: PathBuf,
+        /// Output volume: NRRD, NIfTI, raw or TIFF, by extension.
         #[arg(short, long)]
         output: PathBuf,
         /// Cells along the longest side of the model.
@@ -54,6 +60,7 @@ pub enum Command {
     ///
     /// Example: mra solid volume corpus/scenes/sphere_and_box.json --rays 512
     Volume {
+        /// Scene file (JSON: primitives, CSG operations, blends; examples in corpus/scenes).
         scene: PathBuf,
         /// Rays per side of the grid of parallel rays.
         #[arg(long, default_value_t = tlist::DEFAULT_RAYS)]
@@ -74,7 +81,9 @@ pub enum VolumeCommand {
 
 #[derive(Args, Debug)]
 pub struct IsoArgs {
+    /// A volume (any format `mra info-file` reads: NRRD, NIfTI, DICOM folder, TIFF stack, raw).
     pub input: PathBuf,
+    /// Output mesh: OBJ, PLY or OFF, by extension.
     #[arg(short, long)]
     pub output: PathBuf,
     /// Iso value (inside is above it).

@@ -12,6 +12,7 @@ use std::path::PathBuf;
 pub struct SubdivideArgs {
     /// A point list (CSV, one point per line; `-` for standard input).
     pub input: PathBuf,
+    /// Where to write (standard output when absent).
     #[arg(short, long)]
     pub output: Option<PathBuf>,
     /// box, linear, chaikin, cubic, quartic or four-point.

@@ -104,6 +104,7 @@ pub enum PatchKind {
 pub struct PatchArgs {
     /// Control net: CSV, one point per line, rows (along u) separated by blank lines.
     pub input: PathBuf,
+    /// Patch representation.
     #[arg(long, value_enum, default_value = "bspline")]
     pub kind: PatchKind,
     /// Orders "KU,KV" (B-spline, NURBS).
@@ -128,6 +129,7 @@ pub enum Shape {
 
 #[derive(Args, Debug)]
 pub struct PrimitiveArgs {
+    /// Which primitive.
     #[arg(long, value_enum)]
     pub shape: Shape,
     /// Sphere / cylinder radius, or the torus' major radius.
@@ -224,8 +226,10 @@ pub struct BlendArgs {
 
 #[derive(Args, Debug)]
 pub struct CrossArgs {
+    /// Left constructive stroke q_l(u).
     #[arg(long)]
     pub left: PathBuf,
+    /// Right constructive stroke q_r(u).
     #[arg(long)]
     pub right: PathBuf,
     /// Planar cross-section stroke, drawn from its left end to its right end.

@@ -31,8 +31,10 @@ pub enum TerrainCommand {
 pub struct HighpassArgs {
     /// A heightmap or image.
     pub input: PathBuf,
+    /// Output heightmap (the fine details); the extension picks the format.
     #[arg(short, long)]
     pub output: PathBuf,
+    /// Levels removed (the coarse part left out).
     #[arg(long, default_value_t = 2)]
     pub levels: usize,
     /// chaikin or cubic (interpolating boundary, as `synth`).
@@ -103,6 +105,7 @@ pub struct SynthArgs {
     /// The detailed example heightmap (same height unit).
     #[arg(long)]
     pub example: PathBuf,
+    /// Output heightmap; the extension picks the format.
     #[arg(short, long)]
     pub output: PathBuf,
     /// Output size WxH (default: base × 2^L).
@@ -121,6 +124,7 @@ pub struct SynthArgs {
 pub struct RenderArgs {
     /// A heightmap.
     pub input: PathBuf,
+    /// Output PNG.
     #[arg(short, long)]
     pub output: PathBuf,
     /// Sun azimuth in degrees clockwise from north.
@@ -153,6 +157,7 @@ pub struct TransferArgs {
     /// The image, heightmap or volume that receives them (its own details are replaced).
     #[arg(long)]
     pub to: PathBuf,
+    /// Output file; the extension picks the format.
     #[arg(short, long)]
     pub output: PathBuf,
     #[command(flatten)]
@@ -167,6 +172,7 @@ pub struct TransferArgs {
 pub struct DenoiseArgs {
     /// An image, volume or heightmap, or a point list (.csv / .txt).
     pub input: PathBuf,
+    /// Output file; the extension picks the format (a point list for point-list input).
     #[arg(short, long)]
     pub output: PathBuf,
     /// Levels (default: 4 for haar; for chaikin/cubic chosen among 1–4 by the smallest
@@ -192,6 +198,7 @@ pub struct DenoiseArgs {
     /// The noise σ in sample units (default: estimated from the finest band's MAD).
     #[arg(long)]
     pub sigma: Option<f64>,
+    /// Thresholding: soft (shrink toward zero) or hard (keep or zero).
     #[arg(long, default_value = "soft")]
     pub mode: Mode,
     /// Print what was done as one JSON object.
@@ -509,8 +516,10 @@ pub struct StyleArgs {
     /// The new base curve: a 2-D point list (resampled by arc length).
     #[arg(long)]
     pub base: PathBuf,
+    /// Output point list (CSV).
     #[arg(short, long)]
     pub output: PathBuf,
+    /// Levels of detail carried over from the style curve.
     #[arg(long, default_value_t = 3)]
     pub levels: usize,
     /// chaikin (the notes' Figure 9.18) or cubic.
