@@ -25,6 +25,7 @@
 //!    `q`) in the null space of `A` that the regular rows of `B` annihilate, normalised to
 //!    −1 at their detail's own position; further columns are regular.
 //! 3. `B`: rows 0 and 1 are the shortest rows with `B P = 0` and `B Q = I`.
+//!
 //! The end blocks are the mirror images. `[A;B][P|Q] = I` exactly (rationally) and is
 //! checked in f64 by the tests.
 
