@@ -956,39 +956,58 @@ fn read_chunks<R: Read>(
     })
 }
 
-/// Decode one channel's bands into its coefficient indices (None = absent).
+/// Decode one channel's bands into its coefficient indices (None = absent). A band's
+/// context is its parent band (one level coarser), so the bands of one level decode
+/// in parallel, level after level from the coarse block down.
 fn decode_channel(p: &Parsed, c: usize, k: usize) -> Result<Vec<Option<Vec<i64>>>> {
     let plan = &p.plan;
-    let mut q: Vec<Option<Vec<i64>>> = (0..plan.bands.len()).map(|_| None).collect();
-    for j in 0..plan.bands.len() {
-        let level = plan.bands[j].level;
+    let nb = plan.bands.len();
+    let mut q: Vec<Option<Vec<i64>>> = (0..nb).map(|_| None).collect();
+    let mut levels: Vec<usize> = plan.bands.iter().map(|b| b.level).collect();
+    levels.sort_unstable_by_key(|&l| (l != 0, std::cmp::Reverse(l)));
+    levels.dedup();
+    for level in levels {
         if k > 0 && level >= 1 && level <= k {
             continue;
         }
-        let Some(bc) = &p.bands[c][j] else { continue };
-        let kind = if level == 0 {
-            BandKind::Coarse
-        } else {
-            BandKind::Detail
-        };
-        let parent = match plan.parents[j] {
-            Some(pj) => match &q[pj] {
-                Some(v) => Some(Parent {
-                    data: v,
-                    dims: &plan.dims[pj],
-                }),
-                None => {
-                    return Err(Error::format(
-                        format!("band {j} of channel {c} without its parent"),
-                        "complete parents",
-                    ))
-                }
-            },
-            None => None,
-        };
-        let v = entropy::decode_band(&bc.data, &plan.dims[j], kind, parent)
-            .map_err(|e| Error::format(format!("BAND {j} of channel {c}: {e}"), "a valid band"))?;
-        q[j] = Some(v);
+        let bands: Vec<usize> = (0..nb).filter(|&j| plan.bands[j].level == level).collect();
+        let decoded: Vec<Result<Option<Vec<i64>>>> = bands
+            .par_iter()
+            .map(|&j| {
+                let Some(bc) = &p.bands[c][j] else {
+                    return Ok(None);
+                };
+                let kind = if level == 0 {
+                    BandKind::Coarse
+                } else {
+                    BandKind::Detail
+                };
+                let parent = match plan.parents[j] {
+                    Some(pj) => match &q[pj] {
+                        Some(v) => Some(Parent {
+                            data: v,
+                            dims: &plan.dims[pj],
+                        }),
+                        None => {
+                            return Err(Error::format(
+                                format!("band {j} of channel {c} without its parent"),
+                                "complete parents",
+                            ))
+                        }
+                    },
+                    None => None,
+                };
+                entropy::decode_band(&bc.data, &plan.dims[j], kind, parent)
+                    .map(Some)
+                    .map_err(|e| {
+                        Error::format(format!("BAND {j} of channel {c}: {e}"), "a valid band")
+                    })
+            })
+            .collect();
+        // the first failing band in file order, as one at a time would report it
+        for (&j, v) in bands.iter().zip(decoded) {
+            q[j] = v?;
+        }
     }
     Ok(q)
 }
