@@ -16,6 +16,7 @@
 //!   3 samples at every border), then over channels. `None` when a side is shorter
 //!   than 7.
 
+use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::io::{Raster, SampleType, Samples};
@@ -291,10 +292,12 @@ pub fn ssim(a: &Raster, b: &Raster, data_range: f64) -> Option<f64> {
     let rest = &a.dims[1..];
     let slice_len: usize = rest.iter().product();
     let n0 = a.dims[0];
+    // output slices in fixed runs, each with its own running sums (the same figures on
+    // any number of threads), summed in order
+    const RUN: usize = 32;
+    let outputs = n0 - W + 1;
     let mut total = 0.0;
     for c in 0..ch {
-        // running sums over W slices of the five quantities, one slice long each
-        let mut run = vec![vec![0.0f64; slice_len]; 5];
         let add = |run: &mut Vec<Vec<f64>>, z: usize, sign: f64| {
             for p in 0..slice_len {
                 let i = (z * slice_len + p) * ch + c;
@@ -306,31 +309,43 @@ pub fn ssim(a: &Raster, b: &Raster, data_range: f64) -> Option<f64> {
                 run[4][p] += sign * x * y;
             }
         };
-        for z in 0..W - 1 {
-            add(&mut run, z, 1.0);
-        }
-        let mut s = 0.0;
-        let mut count = 0usize;
-        for z0 in 0..=n0 - W {
-            add(&mut run, z0 + W - 1, 1.0);
-            let sums: Vec<Vec<f64>> = if rest.is_empty() {
-                run.clone()
-            } else {
-                run.iter().map(|q| box_sums(q, rest, W)).collect()
-            };
-            for i in 0..sums[0].len() {
-                let ux = sums[0][i] / np;
-                let uy = sums[1][i] / np;
-                let vx = cov_norm * (sums[2][i] / np - ux * ux);
-                let vy = cov_norm * (sums[3][i] / np - uy * uy);
-                let vxy = cov_norm * (sums[4][i] / np - ux * uy);
-                let num = (2.0 * ux * uy + c1) * (2.0 * vxy + c2);
-                let den = (ux * ux + uy * uy + c1) * (vx + vy + c2);
-                s += num / den;
-            }
-            count += sums[0].len();
-            add(&mut run, z0, -1.0);
-        }
+        let parts: Vec<(f64, usize)> = (0..outputs.div_ceil(RUN))
+            .into_par_iter()
+            .map(|part| {
+                let first = part * RUN;
+                // running sums over W slices of the five quantities, one slice long each
+                let mut run = vec![vec![0.0f64; slice_len]; 5];
+                for z in first..first + W - 1 {
+                    add(&mut run, z, 1.0);
+                }
+                let mut s = 0.0;
+                let mut count = 0usize;
+                for z0 in first..(first + RUN).min(outputs) {
+                    add(&mut run, z0 + W - 1, 1.0);
+                    let sums: Vec<Vec<f64>> = if rest.is_empty() {
+                        run.clone()
+                    } else {
+                        run.iter().map(|q| box_sums(q, rest, W)).collect()
+                    };
+                    for i in 0..sums[0].len() {
+                        let ux = sums[0][i] / np;
+                        let uy = sums[1][i] / np;
+                        let vx = cov_norm * (sums[2][i] / np - ux * ux);
+                        let vy = cov_norm * (sums[3][i] / np - uy * uy);
+                        let vxy = cov_norm * (sums[4][i] / np - ux * uy);
+                        let num = (2.0 * ux * uy + c1) * (2.0 * vxy + c2);
+                        let den = (ux * ux + uy * uy + c1) * (vx + vy + c2);
+                        s += num / den;
+                    }
+                    count += sums[0].len();
+                    add(&mut run, z0, -1.0);
+                }
+                (s, count)
+            })
+            .collect();
+        let (s, count) = parts
+            .iter()
+            .fold((0.0, 0usize), |(s, n), &(ps, pn)| (s + ps, n + pn));
         total += s / count as f64;
     }
     Some(total / ch as f64)
