@@ -105,7 +105,6 @@ pub fn run(out: &Path) -> Result<Vec<DemoRow>> {
     let (h, w) = (1024, 1024);
     let img = zone_plate(h, w);
     for scheme in Scheme::ALL {
-        let mut a = Array::from_shape_vec(&[h, w], img.clone())?;
         let spec = PyramidSpec {
             scheme,
             boundary: Boundary::Symmetric,
@@ -113,16 +112,23 @@ pub fn run(out: &Path) -> Result<Vec<DemoRow>> {
             order: Order::NonStandard,
             axes: vec![0, 1],
         };
-        let t = Instant::now();
-        let pyr = analyze(&mut a, &spec)?;
-        synthesize(&mut a, &pyr)?;
-        let secs = t.elapsed().as_secs_f64();
+        // best of 5 round trips from the same image (the first also pays for the
+        // scratch array's fresh pages and the thread pool's start)
+        let mut secs = f64::INFINITY;
+        let mut err = 0.0;
+        for _ in 0..5 {
+            let mut a = Array::from_shape_vec(&[h, w], img.clone())?;
+            let t = Instant::now();
+            let pyr = analyze(&mut a, &spec)?;
+            synthesize(&mut a, &pyr)?;
+            secs = secs.min(t.elapsed().as_secs_f64());
+            err = max_abs_diff(&img, a.data());
+        }
         rows.push(DemoRow {
             job: "image pyramid forward+inverse".into(),
             data: format!("zone plate {h}x{w} f32, {scheme} symmetric, 5 levels"),
             result: format!(
-                "max error {:.1e}, {:.0} MB/s",
-                max_abs_diff(&img, a.data()),
+                "max error {err:.1e}, {:.0} MB/s (best of 5)",
                 (h * w * 4) as f64 / secs / 1e6
             ),
             seconds: secs,
