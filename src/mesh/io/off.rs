@@ -42,7 +42,7 @@ pub fn parse(bytes: &[u8]) -> Result<Mesh> {
     let (nv, nf) = (counts[0] as usize, counts[1] as usize);
     if nv.saturating_add(nf) > bytes.len() {
         return Err(Error::LimitsExceeded {
-            what: "OFF element count",
+            what: "OFF element count (bounded by the file's size in bytes)",
             requested: (nv as u64).saturating_add(nf as u64),
             limit: bytes.len() as u64,
         });

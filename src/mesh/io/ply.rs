@@ -206,7 +206,7 @@ pub fn parse(bytes: &[u8]) -> Result<Mesh> {
         .fold(0usize, |a, c| a.saturating_add(c));
     if total > remaining {
         return Err(Error::LimitsExceeded {
-            what: "PLY element count",
+            what: "PLY element count (bounded by the bytes after the header)",
             requested: total as u64,
             limit: remaining as u64,
         });
