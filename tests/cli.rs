@@ -173,3 +173,59 @@ fn demo_runs_and_reports_exact_reconstruction() {
         }
     }
 }
+
+#[test]
+fn encode_and_decode_report_json_and_decode_keeps_frames() {
+    let d = tmpdir("frames");
+    let (vol, mra_file, part) = (d.join("v.nrrd"), d.join("v.mra"), d.join("part.nrrd"));
+    let s = |p: &std::path::Path| p.to_str().unwrap().to_string();
+    let o = mra(&["generate", "phantom", "-o", &s(&vol), "--size", "16"], "");
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let o = mra(&["encode", &s(&vol), "-o", &s(&mra_file), "--json"], "");
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let e: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(e["dims"], serde_json::json!([16, 16, 16]));
+    assert_eq!(
+        e["bytes"].as_u64().unwrap(),
+        std::fs::metadata(&mra_file).unwrap().len()
+    );
+    // slices 4..9 of the volume, as the whole decoded volume has them
+    let o = mra(
+        &[
+            "decode",
+            &s(&mra_file),
+            "-o",
+            &s(&part),
+            "--frames",
+            "4..9",
+            "--json",
+        ],
+        "",
+    );
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(j["dims"], serde_json::json!([5, 16, 16]));
+    assert_eq!(j["complete"], serde_json::json!(true));
+    let whole = mra::io::read(&vol).unwrap();
+    let cut = mra::io::read(&part).unwrap();
+    let full = mra::codec::decode_file(&mra_file, &Default::default()).unwrap();
+    assert_eq!(cut.dims, vec![5, 16, 16]);
+    let per = 16 * 16;
+    assert_eq!(
+        cut.samples.to_f64(),
+        full.raster.samples.to_f64()[4 * per..9 * per].to_vec()
+    );
+    assert_eq!(whole.dims, vec![16, 16, 16]);
+    // a bad range: one line, exit 2, no output
+    let bad = d.join("bad.nrrd");
+    for r in ["9..4", "4..99", "x..3"] {
+        let o = mra(
+            &["decode", &s(&mra_file), "-o", &s(&bad), "--frames", r],
+            "",
+        );
+        assert_eq!(o.status.code(), Some(2), "{r}");
+        assert_eq!(text(&o.stderr).lines().count(), 1, "{r}");
+        assert!(!bad.exists(), "{r}");
+    }
+    let _ = std::fs::remove_dir_all(&d);
+}

@@ -53,6 +53,9 @@ pub struct EncodeArgs {
     pub lossless: bool,
     #[command(flatten)]
     pub raw: RawArgs,
+    /// Print one JSON object (output, bytes, bits per position, shape, seconds).
+    #[arg(long)]
+    pub json: bool,
 }
 
 /// Decompress an `.mra` file.
@@ -75,6 +78,9 @@ pub struct DecodeArgs {
     /// Keep frames a..b (end excluded) of a sequence (or slices of a volume).
     #[arg(long, value_name = "A..B")]
     pub frames: Option<String>,
+    /// Print one JSON object (output, shape, complete, seconds).
+    #[arg(long)]
+    pub json: bool,
 }
 
 /// Show an `.mra` file's header and its bytes per level and per chunk.
@@ -115,18 +121,56 @@ pub fn encode(a: EncodeArgs) -> CliResult {
         levels: a.levels,
         rate,
     };
+    let t = std::time::Instant::now();
     let bytes = codec::encode(&r, &opts).map_err(|e| Failure::context(a.input.display(), e))?;
+    let seconds = t.elapsed().as_secs_f64();
     crate::fsutil::write_atomic(&a.output, |w| w.write_all(&bytes))
         .map_err(|e| Failure::context(a.output.display(), e))?;
-    let pos = r.positions() as f64;
+    let bpp = bytes.len() as f64 * 8.0 / r.positions() as f64;
+    if a.json {
+        let raw = r.samples.len() * r.sample_type().size();
+        let v = serde_json::json!({
+            "input": a.input.display().to_string(),
+            "output": a.output.display().to_string(),
+            "bytes": bytes.len(),
+            "bits_per_position": bpp,
+            "ratio": raw as f64 / bytes.len() as f64,
+            "dims": r.dims,
+            "channels": r.channels,
+            "dtype": r.sample_type().name(),
+            "scheme": a.scheme.name(),
+            "boundary": a.boundary.name(),
+            "seconds": seconds,
+        });
+        println!("{v}");
+        return Ok(());
+    }
     println!(
         "{}: {} bytes, {:.4} bits per position ({})",
         a.output.display(),
         bytes.len(),
-        bytes.len() as f64 * 8.0 / pos,
+        bpp,
         r.summary()
     );
     Ok(())
+}
+
+/// `A..B` (end excluded) as a pair.
+fn frame_range(s: &str) -> Result<(usize, usize), Failure> {
+    let bad = || {
+        Failure(format!(
+            "--frames {s}: expected A..B, two whole numbers with A < B"
+        ))
+    };
+    let (a, b) = s.split_once("..").ok_or_else(bad)?;
+    let (a, b): (usize, usize) = (
+        a.trim().parse().map_err(|_| bad())?,
+        b.trim().parse().map_err(|_| bad())?,
+    );
+    if a >= b {
+        return Err(bad());
+    }
+    Ok((a, b))
 }
 
 pub fn decode(a: DecodeArgs) -> CliResult {
@@ -134,14 +178,36 @@ pub fn decode(a: DecodeArgs) -> CliResult {
         level: a.level,
         allow_truncated: a.allow_truncated,
     };
+    let range = a.frames.as_deref().map(frame_range).transpose()?;
+    let t = std::time::Instant::now();
     let d =
         codec::decode_file(&a.input, &opts).map_err(|e| Failure::context(a.input.display(), e))?;
-    write_output(&a.output, &d.raster, false)?;
+    let raster = match range {
+        Some((f0, f1)) => {
+            codec::frames(d.raster, f0, f1).map_err(|e| Failure::context(a.input.display(), e))?
+        }
+        None => d.raster,
+    };
+    let seconds = t.elapsed().as_secs_f64();
+    write_output(&a.output, &raster, false)?;
     if !d.complete {
         eprintln!(
             "mra: {}: truncated file, decoded what it holds",
             a.input.display()
         );
+    }
+    if a.json {
+        let v = serde_json::json!({
+            "input": a.input.display().to_string(),
+            "output": a.output.display().to_string(),
+            "dims": raster.dims,
+            "channels": raster.channels,
+            "dtype": raster.sample_type().name(),
+            "level": a.level,
+            "complete": d.complete,
+            "seconds": seconds,
+        });
+        println!("{v}");
     }
     Ok(())
 }
