@@ -508,7 +508,7 @@ pub fn denoise(a: DenoiseArgs) -> CliResult {
 
 #[derive(Args, Debug)]
 #[command(after_help = "Example:
-  mra curve style --style zigzag.csv --base circle.csv --levels 3 -o styled.csv")]
+  mra curve style --style corpus/curves/zigzag.csv --base corpus/curves/arc.csv --levels 3 -o styled.csv")]
 pub struct StyleArgs {
     /// The style stroke: a 2-D point list whose fine details are the style.
     #[arg(long)]
