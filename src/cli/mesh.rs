@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 pub enum Command {
     /// Counts, face degrees, components, boundary loops, χ, genus, manifold, orientable, bounds.
     ///
-    /// Example: mra mesh info bunny.ply --json
+    /// Example: mra mesh info ../shared/corpus/meshes/bunny.ply --json
     Info {
         /// Input mesh: OBJ, PLY or OFF.
         input: PathBuf,
@@ -21,17 +21,17 @@ pub enum Command {
     /// Subdivide with Loop, Catmull-Clark, Doo-Sabin or Butterfly (boundaries follow cubic
     /// B-spline curve rules; sharp edges from a file or by dihedral angle).
     ///
-    /// Example: mra mesh subdivide spot.obj -o spot2.obj --scheme catmull-clark --steps 2 --crease-angle 60
+    /// Example: mra mesh subdivide ../shared/corpus/meshes/spot_quadrangulated.obj -o spot2.obj --scheme catmull-clark --steps 2 --crease-angle 60
     ///
-    /// Adaptive: mra mesh subdivide spot.obj -o part.obj --scheme loop --steps 3 --box=-1,0,-1,1,1,1
+    /// Adaptive: mra mesh subdivide ../shared/corpus/meshes/spot_triangulated.obj -o part.obj --scheme loop --steps 3 --box=-1,0,-1,1,1,1
     Subdivide(SubdivideArgs),
     /// Laplacian smoothing (uniform or cotangent, explicit or implicit).
     ///
-    /// Example: mra mesh smooth bunny.ply -o smooth.ply --laplacian cotangent --method implicit --lambda 1
+    /// Example: mra mesh smooth ../shared/corpus/meshes/bunny.ply -o smooth.ply --laplacian cotangent --method implicit --lambda 1
     Smooth(SmoothArgs),
     /// Quadric-error simplification by edge collapses to a target face count.
     ///
-    /// Example: mra mesh simplify bunny.ply -o small.ply --faces 1000
+    /// Example: mra mesh simplify ../shared/corpus/meshes/bunny.ply -o small.ply --faces 1000
     Simplify {
         /// Input mesh: OBJ, PLY or OFF.
         input: PathBuf,
@@ -44,7 +44,7 @@ pub enum Command {
     },
     /// Compute vertex normals and write them with the mesh (PLY nx ny nz, OBJ vn).
     ///
-    /// Example: mra mesh normals bunny.ply -o bunny_n.ply --weighting angle
+    /// Example: mra mesh normals ../shared/corpus/meshes/bunny.ply -o bunny_n.ply --weighting angle
     Normals {
         /// Input mesh: OBJ, PLY or OFF.
         input: PathBuf,
@@ -57,7 +57,7 @@ pub enum Command {
     },
     /// Convert between OBJ, PLY and OFF (by extension).
     ///
-    /// Example: mra mesh convert bunny.ply -o bunny.obj
+    /// Example: mra mesh convert ../shared/corpus/meshes/bunny.ply -o bunny.obj
     Convert {
         /// Input mesh: OBJ, PLY or OFF.
         input: PathBuf,
@@ -73,7 +73,7 @@ pub enum Command {
     },
     /// Orient all faces consistently (fails on non-orientable meshes).
     ///
-    /// Example: mra mesh orient soup.obj -o oriented.obj
+    /// Example: mra mesh orient ../shared/corpus/meshes/penguin.off -o oriented.obj
     Orient {
         /// Input mesh: OBJ, PLY or OFF.
         input: PathBuf,
@@ -83,7 +83,7 @@ pub enum Command {
     },
     /// Render a shaded PNG picture (z-buffer, optional wireframe).
     ///
-    /// Example: mra mesh render bunny.ply -o bunny.png --size 800x600 --view 30,20 --wireframe
+    /// Example: mra mesh render ../shared/corpus/meshes/bunny.ply -o bunny.png --size 800x600 --view 30,20 --wireframe
     Render {
         /// Input mesh: OBJ, PLY or OFF.
         input: PathBuf,

@@ -8,6 +8,12 @@
 //!   implicit smoothing:  (M − λ L) u' = M u       (M = I for uniform, lumped areas for cotangent)
 //! ```
 //!
+//! Implicit cotangent smoothing keeps the Laplacian `L` of the input mesh and updates only
+//! the mass matrix `M` each iteration (the "conformalized" flow of Kazhdan, Solomon and
+//! Ben-Chen, SGP 2012): recomputing `L` on the smoothed mesh degenerates it, thin parts
+//! collapse into needle triangles whose cotangents blow up, and the system stops being
+//! solvable (the Stanford bunny after 9 iterations at λ = 1).
+//!
 //! Boundary vertices are kept fixed by `smooth` when `fix_boundary` is set.
 
 use super::edges::Edges;
@@ -124,10 +130,16 @@ pub fn smooth(
     }
     let mut out = mesh.clone();
     out.attributes.vertex_normals = None;
+    // the input's Laplacian, kept by implicit smoothing (see the module doc)
+    let kept = match (method, kind) {
+        (Method::Implicit, Kind::Cotangent) => Some(cotangent(mesh)?),
+        _ => None,
+    };
     for _ in 0..iterations {
-        let l = match kind {
-            Kind::Uniform => uniform(&out),
-            Kind::Cotangent => cotangent(&out)?,
+        let l = match (&kept, kind) {
+            (Some(l), _) => l.clone(),
+            (None, Kind::Uniform) => uniform(&out),
+            (None, Kind::Cotangent) => cotangent(&out)?,
         };
         let x = out.positions.clone();
         let new = match method {
