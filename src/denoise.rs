@@ -111,25 +111,6 @@ pub struct DenoiseReport {
     pub sure: Vec<f64>,
 }
 
-/// Offsets of every element of the box `ranges` in a row-major array of `shape`.
-fn box_offsets(shape: &[usize], ranges: &[std::ops::Range<usize>]) -> Vec<usize> {
-    let mut strides = vec![1usize; shape.len()];
-    for k in (0..shape.len().saturating_sub(1)).rev() {
-        strides[k] = strides[k + 1] * shape[k + 1];
-    }
-    let mut offs = vec![0usize];
-    for (k, r) in ranges.iter().enumerate() {
-        let mut next = Vec::with_capacity(offs.len() * r.len());
-        for &o in &offs {
-            for i in r.clone() {
-                next.push(o + i * strides[k]);
-            }
-        }
-        offs = next;
-    }
-    offs
-}
-
 /// Standard normal samples by Box–Muller from SplitMix64.
 fn white_noise(n: usize, seed: u64) -> Vec<f64> {
     let mut r = SplitMix64::new(seed);
@@ -155,13 +136,14 @@ fn median(mut v: Vec<f64>) -> f64 {
     *m
 }
 
-/// The subbands of a pyramid over an array of one shape, with their element offsets
-/// and noise gains `g_b` (RMS of the band when unit white noise is transformed).
+/// The subbands of a pyramid over an array of one shape, with their noise gains `g_b`
+/// (RMS of the band when unit white noise is transformed).
 struct Bands {
     spec: PyramidSpec,
     depth: usize,
     bands: Vec<crate::tensor::Subband>,
-    offsets: Vec<Vec<usize>>,
+    /// The array's shape (the bands' boxes are in it).
+    shape: Vec<usize>,
     gains: Vec<f64>,
     /// Index of the finest all-high band (the σ estimate's).
     finest: usize,
@@ -187,15 +169,12 @@ impl Bands {
             ));
         }
         let bands = pyr.subbands();
-        let offsets: Vec<Vec<usize>> = bands
+        let gains = bands
             .iter()
-            .map(|b| box_offsets(shape, &b.ranges))
-            .collect();
-        let gains = offsets
-            .iter()
-            .map(|offs| {
-                let s: f64 = offs.iter().map(|&i| noise.data()[i].powi(2)).sum();
-                (s / offs.len().max(1) as f64).sqrt()
+            .map(|b| {
+                let mut s = 0.0;
+                each(shape, &b.ranges, |i| s += noise.data()[i].powi(2));
+                (s / box_len(&b.ranges).max(1) as f64).sqrt()
             })
             .collect();
         let finest = bands
@@ -209,11 +188,30 @@ impl Bands {
             spec,
             depth: pyr.depth(),
             bands,
-            offsets,
+            shape: shape.to_vec(),
             gains,
             finest,
         })
     }
+
+    /// `f(i)` for the offset `i` of every element of band `bi`, in row-major order.
+    fn each(&self, bi: usize, f: impl FnMut(usize)) {
+        each(&self.shape, &self.bands[bi].ranges, f);
+    }
+}
+
+/// `f(i)` for the offset `i` of every element of the box `ranges` in a row-major array
+/// of `shape`, in row-major order (the elements are not listed: a band of a large
+/// volume would take 8 bytes per element).
+fn each(shape: &[usize], ranges: &[std::ops::Range<usize>], mut f: impl FnMut(usize)) {
+    crate::codec::layout::rows(shape, ranges, |off, run, _| {
+        (off..off + run).for_each(&mut f)
+    });
+}
+
+/// Elements in the box `ranges`.
+fn box_len(ranges: &[std::ops::Range<usize>]) -> usize {
+    ranges.iter().map(|r| r.len()).product()
 }
 
 /// σ from the finest all-high band: `median|D| / (0.6745 g_D)`.
@@ -221,10 +219,8 @@ fn estimate_sigma(a: &Array<f64>, axes: &[usize], o: &DenoiseOptions) -> Result<
     let b = Bands::new(a.shape(), axes, o, 1)?;
     let mut c = a.clone();
     tensor::analyze(&mut c, &b.spec)?;
-    let d: Vec<f64> = b.offsets[b.finest]
-        .iter()
-        .map(|&i| c.data()[i].abs())
-        .collect();
+    let mut d = Vec::with_capacity(box_len(&b.bands[b.finest].ranges));
+    b.each(b.finest, |i| d.push(c.data()[i].abs()));
     Ok(median(d) / 0.6745 / b.gains[b.finest].max(1e-300))
 }
 
@@ -237,9 +233,10 @@ fn shrink(a: &mut Array<f64>, b: &Bands, sigma: f64, o: &DenoiseOptions) -> Resu
     let n_total = a.len() as f64;
     let (mut zeroed, mut total, mut coarse) = (0usize, 0usize, 0usize);
     let data = a.data_mut();
-    for (bi, (band, offs)) in b.bands.iter().zip(&b.offsets).enumerate() {
+    for (bi, band) in b.bands.iter().enumerate() {
+        let len = box_len(&band.ranges);
         if band.level == 0 {
-            coarse += offs.len();
+            coarse += len;
             continue;
         }
         let g = b.gains[bi];
@@ -248,7 +245,9 @@ fn shrink(a: &mut Array<f64>, b: &Bands, sigma: f64, o: &DenoiseOptions) -> Resu
             Rule::Fixed(t) => t * g,
             Rule::Universal => sb * (2.0 * n_total.ln()).sqrt(),
             Rule::Bayes => {
-                let var = offs.iter().map(|&i| data[i] * data[i]).sum::<f64>() / offs.len() as f64;
+                let mut sum = 0.0;
+                b.each(bi, |i| sum += data[i] * data[i]);
+                let var = sum / len as f64;
                 let sx = (var - sb * sb).max(0.0).sqrt();
                 if sx > 0.0 {
                     sb * sb / sx
@@ -257,7 +256,7 @@ fn shrink(a: &mut Array<f64>, b: &Bands, sigma: f64, o: &DenoiseOptions) -> Resu
                 }
             }
         };
-        for &i in offs {
+        b.each(bi, |i| {
             let d = data[i];
             let v = match o.mode {
                 Mode::Hard => {
@@ -273,8 +272,8 @@ fn shrink(a: &mut Array<f64>, b: &Bands, sigma: f64, o: &DenoiseOptions) -> Resu
                 zeroed += 1;
             }
             data[i] = v;
-        }
-        total += offs.len();
+        });
+        total += len;
     }
     tensor::synthesize(a, &pyr)?;
     Ok((zeroed, total, coarse, total - zeroed))
