@@ -103,7 +103,15 @@ fn main() {
     let (mut e1prev, mut e1k) = (zero.clone(), zero.clone());
     let (mut o1pp, mut o1prev) = (zero.clone(), zero.clone());
     let (mut c, mut d) = (zero.clone(), zero.clone());
+    // largest difference of `ours` from the direct coarse (or detail) row over F_first…
     let (mut cd, mut dd) = (zero.clone(), zero.clone());
+    let mut against_direct = |first: usize, ours: &[f32], detail: bool| -> f32 {
+        direct(std::array::from_fn(|t| row(first + t)), &mut cd, &mut dd);
+        let theirs = if detail { &dd } else { &cd };
+        ours.iter()
+            .zip(theirs)
+            .fold(0f32, |m, (a, b)| m.max((a - b).abs()))
+    };
 
     // the same rows both ways (pairs whose seven inputs exist)
     let mut worst = 0f32;
@@ -122,25 +130,9 @@ fn main() {
         // e¹_0 comes from k = 0, which reads o_{−1}: the first checked coarse row is C_2
         let j = k - 1;
         if j >= 2 && 2 * j + 3 < n {
-            direct(
-                std::array::from_fn(|t| row(2 * j - 3 + t)),
-                &mut cd,
-                &mut dd,
-            );
-            worst = c
-                .iter()
-                .zip(&cd)
-                .fold(worst, |m, (a, b)| m.max((a - b).abs()));
+            worst = worst.max(against_direct(2 * j - 3, &c, false));
             if j >= 3 {
-                direct(
-                    std::array::from_fn(|t| row(2 * j - 5 + t)),
-                    &mut cd,
-                    &mut dd,
-                );
-                worst = d
-                    .iter()
-                    .zip(&dd)
-                    .fold(worst, |m, (a, b)| m.max((a - b).abs()));
+                worst = worst.max(against_direct(2 * j - 5, &d, true));
             }
         }
         std::mem::swap(&mut e1prev, &mut e1k);
