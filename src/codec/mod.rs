@@ -362,16 +362,8 @@ impl Prepared {
             Ok((0..plan.bands.len())
                 .into_par_iter()
                 .map(|j| {
-                    // `quantized` then `dequantized`, without the indices in between
-                    let (s, rho) = (self.band_step(step, j, c), band_rho(plan, j));
-                    let d = band_delta(h, plan, j);
-                    let v = layout::gather(&self.coeffs[c], &plan.pyr.shape, &plan.bands[j].ranges)
-                        .into_iter()
-                        .map(|x| {
-                            quantize::dequantize(quantize::quantize(x as f64, s, rho), s, d) as f32
-                        })
-                        .collect();
-                    Some(v)
+                    let q = self.quantized(step, j, c);
+                    Some(dequantized(h, plan, j, &q, self.band_step(step, j, c)))
                 })
                 .collect())
         })?;
