@@ -1012,7 +1012,6 @@ fn reconstruct(p: &Parsed, k: usize) -> Result<Raster> {
     let npos: usize = region.iter().product();
     let c = h.channels;
     let ty = h.sample_type;
-    let mut values = vec![0f64; npos * c];
     if h.mode == Mode::Lossless {
         let planes = (0..c)
             .into_par_iter()
@@ -1052,9 +1051,7 @@ fn reconstruct(p: &Parsed, k: usize) -> Result<Raster> {
                 }
             }
             _ => {
-                for i in 0..npos * c {
-                    values[i] = planes[i % c][i / c] as f64;
-                }
+                let values: Vec<f64> = (0..npos * c).map(|i| planes[i % c][i / c] as f64).collect();
                 Samples::from_f64(&values, ty)
             }
         };
