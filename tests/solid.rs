@@ -80,7 +80,7 @@ fn notes_example_blend_of_two_points() {
 
 #[test]
 fn primitive_fields_have_the_right_sign_and_normals() {
-    let prims = vec![
+    let prims = [
         unit_sphere(),
         Node::Box {
             min: [-1.0, -0.5, -0.25],
@@ -644,8 +644,8 @@ fn voxelized_scene_round_trips_through_nrrd() {
     let (values, dims, spacing, origin) = mra::cli::solid::volume_grid(&back, false).unwrap();
     assert_eq!(dims, s.dims);
     assert_eq!(values, s.values);
-    for i in 0..3 {
-        assert!((spacing[i] - s.spacing[i]).abs() < 1e-12);
+    for (got, want) in spacing.iter().zip(&s.spacing) {
+        assert!((got - want).abs() < 1e-12);
     }
     let g = Grid {
         values: &values,

@@ -164,7 +164,7 @@ pub fn interpolating(m: usize) -> LevelTriplets {
         let j = i / 2;
         if i % 2 == 1 {
             // vertex point of C_{(i+1)/2}
-            let v = (i + 1) / 2;
+            let v = i.div_ceil(2);
             sy.add(i, v - 1, 0.125);
             sy.add(i, v, 0.75);
             sy.add(i, v + 1, 0.125);

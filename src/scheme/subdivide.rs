@@ -232,7 +232,7 @@ fn open(rule: Refinement, n: usize, m: usize, t: &mut Triplets) {
                     t.add(i, i / 2, 0.5);
                     t.add(i, i / 2 + 1, 0.5);
                 } else {
-                    let v = (i + 1) / 2;
+                    let v = i.div_ceil(2);
                     t.add(i, v - 1, 0.125);
                     t.add(i, v, 0.75);
                     t.add(i, v + 1, 0.125);

@@ -381,9 +381,9 @@ pub fn transfer_volume(
     let q = o.patch + 2 * o.overlap;
     let mut lb = Vec::new();
     let mut le = Vec::new();
-    for a in 0..3 {
-        lb.push(lengths_down(o.scheme, base.dims[a], l, NAMES[a].0)?);
-        let e = lengths_down(o.scheme, example.dims[a], l, NAMES[a].1)?;
+    for (a, names) in NAMES.iter().enumerate() {
+        lb.push(lengths_down(o.scheme, base.dims[a], l, names.0)?);
+        let e = lengths_down(o.scheme, example.dims[a], l, names.1)?;
         if e[l] < q + 4 {
             return Err(Error::parameter(
                 "example size",
