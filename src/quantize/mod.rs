@@ -103,12 +103,21 @@ pub fn band_gains(pyr: &Pyramid, bands: &[Subband]) -> Vec<f64> {
 /// Dead-zone quantization of one value.
 #[inline(always)]
 pub fn quantize(c: f64, step: f64, rho: f64) -> i64 {
-    let a = (c.abs() / step + rho).floor();
-    let a = if a.is_finite() { a.min(9.0e15) } else { 0.0 };
-    if c < 0.0 {
-        -(a as i64)
+    // ⌊|c|/Δ + ρ⌋ capped at 9·10^15 (exact in f64), 0 when not finite; for the
+    // non-negative values it is always given (ρ ≥ 0), the floor is a truncating
+    // conversion, not a libm call (the call took 9% of an encode)
+    let x = c.abs() / step + rho;
+    let a = if !x.is_finite() {
+        0
+    } else if x >= 0.0 {
+        x.min(9.0e15) as i64
     } else {
-        a as i64
+        x.floor() as i64
+    };
+    if c < 0.0 {
+        -a
+    } else {
+        a
     }
 }
 
@@ -155,6 +164,53 @@ mod tests {
         let g = gain_1d(Scheme::Haar, Boundary::Interpolating, &lengths, 1, true);
         let g2 = gain_1d(Scheme::Haar, Boundary::Interpolating, &lengths, 2, false);
         assert!(g > 0.0 && g2 > g, "{g} {g2}");
+    }
+
+    /// The conversion in [`quantize`] is the floor it replaces, on values around every
+    /// integer, huge, tiny, infinite and NaN inputs, and either sign.
+    #[test]
+    fn quantize_is_the_floor_of_the_scaled_magnitude() {
+        fn by_floor(c: f64, step: f64, rho: f64) -> i64 {
+            let a = (c.abs() / step + rho).floor();
+            let a = if a.is_finite() { a.min(9.0e15) } else { 0.0 };
+            if c < 0.0 {
+                -(a as i64)
+            } else {
+                a as i64
+            }
+        }
+        let mut cs = vec![
+            0.0,
+            -0.0,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NAN,
+            f64::MIN_POSITIVE,
+            1e300,
+            -1e300,
+            8.9e15,
+            9.1e15,
+        ];
+        let mut x = 0x9E37_79B9_7F4A_7C15u64;
+        for k in 0..20000 {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            let u = (x >> 11) as f64 / (1u64 << 53) as f64;
+            let near = (k % 200) as f64 + (u - 0.5) * 1e-12;
+            cs.push(if k % 2 == 0 { near } else { -(u * 1e6) });
+        }
+        for &c in &cs {
+            for step in [1.0, 0.37, 3.0, 1e-9] {
+                for rho in [0.0, 0.34, 0.5] {
+                    assert_eq!(
+                        quantize(c, step, rho),
+                        by_floor(c, step, rho),
+                        "{c} {step} {rho}"
+                    );
+                }
+            }
+        }
     }
 
     #[test]
