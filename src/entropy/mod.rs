@@ -66,16 +66,28 @@ fn mag(v: i64) -> u64 {
     v.unsigned_abs().min(1 << 30)
 }
 
+/// Neighbour class of an activity `s`: 0, 1–2, 3–4, 5–8, 9–16, 17–40, more.
 #[inline(always)]
 fn ncls(s: u64) -> usize {
-    match s {
-        0 => 0,
-        1..=2 => 1,
-        3..=4 => 2,
-        5..=8 => 3,
-        9..=16 => 4,
-        17..=40 => 5,
-        _ => 6,
+    const CLS: [u8; 41] = {
+        let mut t = [0u8; 41];
+        let mut s = 1;
+        while s <= 40 {
+            t[s] = match s {
+                1..=2 => 1,
+                3..=4 => 2,
+                5..=8 => 3,
+                9..=16 => 4,
+                _ => 5,
+            };
+            s += 1;
+        }
+        t
+    };
+    if s <= 40 {
+        CLS[s as usize] as usize
+    } else {
+        6
     }
 }
 
@@ -133,7 +145,6 @@ fn parent_plane(p: usize, dims: &[usize], pdims: &[usize]) -> usize {
 }
 
 struct Ctx<'a> {
-    dims: &'a [usize],
     walk: Walk,
     parent: Option<(Parent<'a>, Walk)>,
 }
@@ -146,60 +157,91 @@ impl<'a> Ctx<'a> {
                 && p.data.len() == p.dims.iter().product::<usize>()
         });
         Ctx {
-            dims,
             walk: Walk::new(dims),
             parent: parent.map(|p| (p, Walk::new(p.dims))),
         }
     }
 
-    /// Walk every coefficient in raster order, giving (index, zero ctx, one ctx,
-    /// prefix group, sign ctx) computed from the already known values `v` (for the
-    /// coarse band `v` holds residuals).
-    #[inline(always)]
-    fn contexts(
-        &self,
-        v: &[i64],
-        i: usize,
-        p: usize,
-        y: usize,
-        x: usize,
-        pbase: usize,
-    ) -> (usize, usize, usize, usize) {
+    /// The contexts of row `y` of plane `p` (it starts at `v[at]`; everything before is
+    /// known) that do not depend on the row itself, into `r` ([`Row::context`] adds the
+    /// previous sample of the row, W). For the coarse band `v` holds residuals.
+    fn prepare(&self, r: &mut Row, v: &[i64], at: usize, p: usize, y: usize, pbase: usize) {
         let cols = self.walk.cols;
         let plane = self.walk.rows * cols;
-        let w = if x > 0 { v[i - 1] } else { 0 };
-        let n = if y > 0 { v[i - cols] } else { 0 };
-        let nw = if x > 0 && y > 0 { v[i - cols - 1] } else { 0 };
-        let ne = if y > 0 && x + 1 < cols {
-            v[i - cols + 1]
-        } else {
-            0
-        };
-        let z = if self.walk.zdim > 0 && !p.is_multiple_of(self.walk.zdim) {
-            v[i - plane]
-        } else {
-            0
-        };
-        let s = 2 * (mag(w) + mag(n) + mag(z)) + mag(nw) + mag(ne);
-        let c = ncls(s);
-        let pc = match &self.parent {
-            Some((par, pw)) => {
-                let py = (y / 2).min(pw.rows - 1);
-                let px = (x / 2).min(pw.cols - 1);
-                match mag(par.data[pbase + py * pw.cols + px]) {
-                    0 => 0,
-                    1 => 1,
-                    _ => 2,
+        // N (the row above; zeros in row 0), padded with a zero on both sides so that
+        // NW and NE need no test at the ends
+        let above = (y > 0).then(|| &v[at - cols..at]);
+        let z = (self.walk.zdim > 0 && !p.is_multiple_of(self.walk.zdim))
+            .then(|| &v[at - plane..at - plane + cols]);
+        r.nm[0] = 0;
+        r.nm[cols + 1] = 0;
+        match above {
+            Some(n) => {
+                for (x, &val) in n.iter().enumerate() {
+                    r.nm[x + 1] = mag(val);
+                    r.ns[x] = sgn(val) as u8;
                 }
             }
-            None => 0,
-        };
-        let _ = self.dims;
+            None => {
+                r.nm[1..=cols].fill(0);
+                r.ns.fill(1);
+            }
+        }
+        // base[x] = 2(|N| + |Z|) + |NW| + |NE|
+        for x in 0..cols {
+            let zm = z.map_or(0, |z| mag(z[x]));
+            r.base[x] = 2 * (r.nm[x + 1] + zm) + r.nm[x] + r.nm[x + 2];
+        }
+        match &self.parent {
+            Some((par, pw)) => {
+                let py = (y / 2).min(pw.rows - 1);
+                let prow = &par.data[pbase + py * pw.cols..pbase + (py + 1) * pw.cols];
+                for x in 0..cols {
+                    r.pc[x] = match mag(prow[(x / 2).min(pw.cols - 1)]) {
+                        0 => 0,
+                        1 => 1,
+                        _ => 2,
+                    };
+                }
+            }
+            None => r.pc.fill(0),
+        }
+    }
+}
+
+/// What [`Ctx::prepare`] works out once per row: the magnitudes of the row above
+/// (padded), its signs, the neighbour sum without W, and the parent class.
+struct Row {
+    nm: Vec<u64>,
+    ns: Vec<u8>,
+    base: Vec<u64>,
+    pc: Vec<u8>,
+}
+
+impl Row {
+    fn new(cols: usize) -> Self {
+        Row {
+            nm: vec![0; cols + 2],
+            ns: vec![1; cols],
+            base: vec![0; cols],
+            pc: vec![0; cols],
+        }
+    }
+
+    /// (zero ctx, one ctx, prefix group, sign ctx) of sample `x` of the row, `w` the
+    /// sample before it in the row (0 at its start): the zero context from the neighbour
+    /// activity `s = 2(|W| + |N| + |Z|) + |NW| + |NE|` and the parent class, the sign
+    /// context from the signs of W and N.
+    #[inline(always)]
+    fn context(&self, x: usize, w: i64) -> (usize, usize, usize, usize) {
+        let s = self.base[x] + 2 * mag(w);
+        let c = ncls(s);
+        let pc = self.pc[x] as usize;
         (
             c * PCLS + pc,
             c * 2 + (pc > 0) as usize,
             (c / 2).min(3),
-            sgn(w) * 3 + sgn(n),
+            sgn(w) * 3 + self.ns[x] as usize,
         )
     }
 }
@@ -298,6 +340,7 @@ pub fn encode_band(q: &[i64], dims: &[usize], kind: BandKind, parent: Option<Par
     let mut m = Models::new();
     let mut e = Encoder::new();
     let (planes, rows, cols) = (ctx.walk.planes, ctx.walk.rows, ctx.walk.cols);
+    let mut row = Row::new(cols);
     let res: Vec<i64>;
     let v: &[i64] = if kind == BandKind::Coarse {
         let mut r = vec![0i64; q.len()];
@@ -320,10 +363,12 @@ pub fn encode_band(q: &[i64], dims: &[usize], kind: BandKind, parent: Option<Par
             None => 0,
         };
         for y in 0..rows {
-            for x in 0..cols {
-                let i = (p * rows + y) * cols + x;
-                let c = ctx.contexts(v, i, p, y, x, pbase);
-                encode_value(&mut e, &mut m, v[i], c);
+            let at = (p * rows + y) * cols;
+            ctx.prepare(&mut row, v, at, p, y, pbase);
+            let mut w = 0;
+            for (x, &q) in v[at..at + cols].iter().enumerate() {
+                encode_value(&mut e, &mut m, q, row.context(x, w));
+                w = q;
             }
         }
     }
@@ -351,16 +396,19 @@ pub fn decode_band(
     let mut m = Models::new();
     let mut d = Decoder::new(bytes);
     let (planes, rows, cols) = (ctx.walk.planes, ctx.walk.rows, ctx.walk.cols);
+    let mut row = Row::new(cols);
     for p in 0..planes {
         let pbase = match &ctx.parent {
             Some((par, pw)) => parent_plane(p, dims, par.dims) * pw.rows * pw.cols,
             None => 0,
         };
         for y in 0..rows {
-            for x in 0..cols {
-                let i = (p * rows + y) * cols + x;
-                let c = ctx.contexts(&v, i, p, y, x, pbase);
-                v[i] = decode_value(&mut d, &mut m, c)?;
+            let at = (p * rows + y) * cols;
+            ctx.prepare(&mut row, &v, at, p, y, pbase);
+            let mut w = 0;
+            for (x, out) in v[at..at + cols].iter_mut().enumerate() {
+                w = decode_value(&mut d, &mut m, row.context(x, w))?;
+                *out = w;
             }
             if d.overrun() > 8 {
                 return Err(Error::format("band data ends early", "a complete band"));
