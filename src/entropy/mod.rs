@@ -173,38 +173,55 @@ impl<'a> Ctx<'a> {
         let above = (y > 0).then(|| &v[at - cols..at]);
         let z = (self.walk.zdim > 0 && !p.is_multiple_of(self.walk.zdim))
             .then(|| &v[at - plane..at - plane + cols]);
-        r.nm[0] = 0;
-        r.nm[cols + 1] = 0;
+        let nm = &mut r.nm[..cols + 2];
+        let ns = &mut r.ns[..cols];
+        nm[0] = 0;
+        nm[cols + 1] = 0;
         match above {
             Some(n) => {
-                for (x, &val) in n.iter().enumerate() {
-                    r.nm[x + 1] = mag(val);
-                    r.ns[x] = sgn(val) as u8;
+                for ((m, sg), &val) in nm[1..=cols].iter_mut().zip(ns.iter_mut()).zip(n) {
+                    *m = mag(val);
+                    *sg = sgn(val) as u8;
                 }
             }
             None => {
-                r.nm[1..=cols].fill(0);
-                r.ns.fill(1);
+                nm[1..=cols].fill(0);
+                ns.fill(1);
             }
         }
         // base[x] = 2(|N| + |Z|) + |NW| + |NE|
-        for x in 0..cols {
-            let zm = z.map_or(0, |z| mag(z[x]));
-            r.base[x] = 2 * (r.nm[x + 1] + zm) + r.nm[x] + r.nm[x + 2];
+        let base = &mut r.base[..cols];
+        let around = base.iter_mut().zip(nm.windows(3));
+        match z {
+            Some(z) => {
+                for ((b, w), &zv) in around.zip(z) {
+                    *b = 2 * (w[1] + mag(zv)) + w[0] + w[2];
+                }
+            }
+            None => {
+                for (b, w) in around {
+                    *b = 2 * w[1] + w[0] + w[2];
+                }
+            }
         }
+        let pc = &mut r.pc[..cols];
         match &self.parent {
             Some((par, pw)) => {
                 let py = (y / 2).min(pw.rows - 1);
                 let prow = &par.data[pbase + py * pw.cols..pbase + (py + 1) * pw.cols];
-                for x in 0..cols {
-                    r.pc[x] = match mag(prow[(x / 2).min(pw.cols - 1)]) {
-                        0 => 0,
-                        1 => 1,
-                        _ => 2,
-                    };
+                let cls = |v: i64| match mag(v) {
+                    0 => 0,
+                    1 => 1,
+                    _ => 2,
+                };
+                // sample x reads parent x/2 (the last one past the parent's end)
+                for (two, &pv) in pc.chunks_mut(2).zip(prow) {
+                    two.fill(cls(pv));
                 }
+                let done = (2 * pw.cols).min(cols);
+                pc[done..].fill(cls(prow[pw.cols - 1]));
             }
-            None => r.pc.fill(0),
+            None => pc.fill(0),
         }
     }
 }
