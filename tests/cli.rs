@@ -229,3 +229,48 @@ fn encode_and_decode_report_json_and_decode_keeps_frames() {
     }
     let _ = std::fs::remove_dir_all(&d);
 }
+
+/// `mra info --json`: the colour transform and the error bound are `null` where the file
+/// has none, named or given where it has one.
+#[test]
+fn info_json_names_the_colour_transform_and_bound_or_gives_null() {
+    let d = tmpdir("info");
+    let s = |p: &std::path::Path| p.to_str().unwrap().to_string();
+    let (gray, rgb) = (d.join("g.png"), d.join("c.png"));
+    for (out, ch) in [(&gray, "1"), (&rgb, "3")] {
+        let args = [
+            "generate",
+            "noise",
+            "-o",
+            &s(out),
+            "--size",
+            "32",
+            "--channels",
+            ch,
+        ];
+        let o = mra(&args, "");
+        assert!(o.status.success(), "{}", text(&o.stderr));
+    }
+    let info = |input: &std::path::Path, opts: &[&str]| -> serde_json::Value {
+        let f = d.join("x.mra");
+        let mut args = vec!["encode".to_string(), s(input), "-o".into(), s(&f)];
+        args.extend(opts.iter().map(|a| a.to_string()));
+        let args: Vec<&str> = args.iter().map(|a| a.as_str()).collect();
+        let o = mra(&args, "");
+        assert!(o.status.success(), "{}", text(&o.stderr));
+        let o = mra(&["info", &s(&f), "--json"], "");
+        assert!(o.status.success(), "{}", text(&o.stderr));
+        serde_json::from_slice(&o.stdout).unwrap()
+    };
+    let j = info(&gray, &["--quality", "50"]);
+    assert_eq!(j["colour"], serde_json::Value::Null);
+    assert_eq!(j["max_error"], serde_json::Value::Null);
+    let j = info(&gray, &["--max-error", "2"]);
+    assert_eq!(j["max_error"], serde_json::json!(2.0));
+    let j = info(&rgb, &["--quality", "50"]);
+    assert_eq!(j["colour"], serde_json::json!("YCoCg"));
+    let j = info(&rgb, &["--lossless"]);
+    assert_eq!(j["colour"], serde_json::json!("YCoCg-R"));
+    assert_eq!(j["max_error"], serde_json::Value::Null);
+    let _ = std::fs::remove_dir_all(&d);
+}

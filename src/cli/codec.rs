@@ -224,10 +224,9 @@ pub fn info(a: InfoArgs) -> CliResult {
     }
     let dims: Vec<String> = i.dims.iter().rev().map(|d| d.to_string()).collect();
     println!("{} (.mra {})", a.input.display(), i.version);
-    let colour = if i.colour == "None" {
-        String::new()
-    } else {
-        format!(", colour transform {}", i.colour)
+    let colour = match &i.colour {
+        Some(c) => format!(", colour transform {c}"),
+        None => String::new(),
     };
     println!(
         "  {} {} x{} channels {}{colour}",
@@ -236,11 +235,9 @@ pub fn info(a: InfoArgs) -> CliResult {
         i.channels,
         i.sample_type,
     );
-    // the bound is stored only by `--max-error` (0 otherwise)
-    let bound = if i.max_error > 0.0 {
-        format!(", max error {}", i.max_error)
-    } else {
-        String::new()
+    let bound = match i.max_error {
+        Some(e) => format!(", max error {e}"),
+        None => String::new(),
     };
     println!(
         "  mode {}, {} {} {} levels, step {:.6}{bound}, range {}..{}",

@@ -1229,9 +1229,11 @@ pub struct Info {
     pub scheme: String,
     pub boundary: String,
     pub levels: usize,
-    pub colour: String,
+    /// The colour transform, if any (`YCoCg`, or `YCoCg-R` in integers).
+    pub colour: Option<String>,
     pub step: f64,
-    pub max_error: f64,
+    /// The bound a `--max-error` file guarantees (none in other files).
+    pub max_error: Option<f64>,
     pub range: [f64; 2],
     pub file_bytes: u64,
     pub bits_per_position: f64,
@@ -1271,9 +1273,14 @@ pub fn info(bytes: &[u8]) -> Result<Info> {
         },
         boundary: h.boundary.name().into(),
         levels: p.plan.pyr.depth(),
-        colour: format!("{:?}", h.colour),
+        colour: match h.colour {
+            Colour::None => None,
+            Colour::YCoCg => Some("YCoCg".into()),
+            Colour::YCoCgR => Some("YCoCg-R".into()),
+        },
         step: h.step,
-        max_error: h.max_error,
+        // stored only by `--max-error` (0 otherwise)
+        max_error: (h.max_error > 0.0).then_some(h.max_error),
         range: [h.min, h.max],
         file_bytes: bytes.len() as u64,
         bits_per_position: bytes.len() as f64 * 8.0 / pos,
