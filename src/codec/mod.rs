@@ -560,9 +560,6 @@ fn search(
     }
     for _ in 0..48 {
         let (v, bytes) = f(x.exp())?;
-        if std::env::var("MRA_SEARCH").is_ok() {
-            eprintln!("candidate step {:.4} v {:.4}", x.exp(), v);
-        }
         if v >= 0.0 {
             if best.as_ref().is_none_or(|(bv, _, _)| v < *bv) {
                 best = Some((v, x.exp(), bytes));
@@ -673,7 +670,7 @@ impl SizeModel {
 
     /// Estimated bits at base step `step`.
     fn bits(&self, step: f64) -> f64 {
-        let edge = (1.0 - RHO).log2();
+        let (edge, s) = ((1.0 - RHO).log2(), step.log2());
         let zb = Self::ZERO_BITS;
         let mut bits = self.zeros * zb;
         for (k, &n) in self.bins.iter().enumerate() {
@@ -681,7 +678,7 @@ impl SizeModel {
                 continue;
             }
             let y = Self::LOW + (k as f64 + 0.5) / Self::BINS_PER_OCTAVE;
-            let d = y - step.log2(); // log2 t
+            let d = y - s; // log2 t
             bits += n * if d < edge { zb } else { d + 2.0 };
         }
         bits.max(1.0)
