@@ -479,7 +479,13 @@ pub fn encode(r: &Raster, opts: &EncodeOptions) -> Result<Vec<u8>> {
                         data_range: Some(crate::metrics::skimage_data_range(&r.samples)),
                         ..Default::default()
                     };
-                    return search(&p, range, false, 0.02, None, |step| {
+                    let (errors, peak) = (p.rate_model(), cmp.data_range.unwrap_or(range));
+                    let n = (r.positions() * r.channels) as f64;
+                    let model = |x: f64| {
+                        let mse = (errors.squared_error(x.exp()) / n).max(1e-300);
+                        10.0 * (peak * peak / mse).log10() - db
+                    };
+                    return search(&p, range, false, 0.02, Some(&model), |step| {
                         let dec = p.decoded(step)?;
                         let psnr = crate::metrics::psnr(r, &dec, &cmp)?;
                         Ok((psnr.unwrap_or(f64::INFINITY) - db, None))
@@ -498,7 +504,7 @@ pub fn encode(r: &Raster, opts: &EncodeOptions) -> Result<Vec<u8>> {
                     // 1% under it at −ln 0.99; the log of the size is close to a line in
                     // ln(step), where the size itself bends (10 candidates at 1 bpp on
                     // kodim01 against 5)
-                    let sizes = p.size_model();
+                    let sizes = p.rate_model();
                     let model = |x: f64| b.ln() - (sizes.bits(x.exp()) / pos).ln();
                     return search(&p, range, true, -(0.99f64.ln()), Some(&model), |step| {
                         let bytes = p.code(step);
@@ -652,17 +658,18 @@ fn model_root(m: &dyn Fn(f64) -> f64, off: f64, aim: f64, sign: f64, x: f64) -> 
     0.5 * (lo + hi)
 }
 
-/// A rough size of the coded file at any base step, for [`search`]: a histogram of the
-/// coefficients' `log2(|c|·G_b·w_c)` (a coefficient quantizes to `|c|·G_b·w_c / Δ`),
-/// each costing about `log2 t + 2` bits once `t = |c|·G_b·w_c / Δ` reaches the
-/// dead zone's edge `1 − ρ`, and [`SizeModel::ZERO_BITS`] below it.
-struct SizeModel {
+/// A rough size and error of the coded file at any base step, for [`search`], from a
+/// histogram of the coefficients' `log2(|c|·G_b·w_c)` (a coefficient quantizes to
+/// `t = |c|·G_b·w_c / Δ`; its error times `G_b·w_c` is about its error in the samples):
+/// below the dead zone's edge `1 − ρ` a coefficient costs [`RateModel::ZERO_BITS`] and
+/// its whole value in error, past it about `log2 t + 2` bits and `Δ²/12`.
+struct RateModel {
     /// Coefficients per bin of `BINS_PER_OCTAVE`-th octaves from `2^LOW`.
     bins: Vec<f64>,
     zeros: f64,
 }
 
-impl SizeModel {
+impl RateModel {
     const BINS_PER_OCTAVE: f64 = 8.0;
     const LOW: f64 = -64.0;
     /// (Zeros in zero neighbourhoods cost next to nothing; 0.02–0.1 measured alike.)
@@ -683,12 +690,30 @@ impl SizeModel {
         }
         bits.max(1.0)
     }
+
+    /// Estimated sum of squared errors (samples × channels) at base step `step`.
+    fn squared_error(&self, step: f64) -> f64 {
+        let (edge, s) = ((1.0 - RHO).log2(), step.log2());
+        let mut e = 0.0;
+        for (k, &n) in self.bins.iter().enumerate() {
+            if n == 0.0 {
+                continue;
+            }
+            let y = Self::LOW + (k as f64 + 0.5) / Self::BINS_PER_OCTAVE;
+            e += n * if y - s < edge {
+                (2.0 * y).exp2()
+            } else {
+                step * step / 12.0
+            };
+        }
+        e
+    }
 }
 
 impl Prepared {
-    /// The [`SizeModel`] of these coefficients.
-    fn size_model(&self) -> SizeModel {
-        let nbins = (2.0 * -SizeModel::LOW * SizeModel::BINS_PER_OCTAVE) as usize;
+    /// The [`RateModel`] of these coefficients.
+    fn rate_model(&self) -> RateModel {
+        let nbins = (2.0 * -RateModel::LOW * RateModel::BINS_PER_OCTAVE) as usize;
         let plan = &self.plan;
         let jobs: Vec<(usize, usize)> = (0..plan.bands.len())
             .flat_map(|j| (0..self.coeffs.len()).map(move |c| (j, c)))
@@ -710,7 +735,7 @@ impl Prepared {
                     // by under 0.09 octave, about a bin)
                     let b = a.to_bits();
                     let y = ((b >> 23) as i32 - 127) as f32 + (b & 0x7F_FFFF) as f32 / 8_388_608.0;
-                    let k = ((y as f64 - SizeModel::LOW) * SizeModel::BINS_PER_OCTAVE) as isize;
+                    let k = ((y as f64 - RateModel::LOW) * RateModel::BINS_PER_OCTAVE) as isize;
                     bins[k.clamp(0, nbins as isize - 1) as usize] += 1.0;
                 }
                 (bins, zeros)
@@ -724,7 +749,7 @@ impl Prepared {
                     (a, za + zb)
                 },
             );
-        SizeModel { bins, zeros }
+        RateModel { bins, zeros }
     }
 }
 
@@ -1577,8 +1602,8 @@ mod tests {
     /// A model of the right shape but the wrong level takes the search to the target in
     /// two candidates (the first where the model meets it, the second where the model,
     /// shifted through the first, does); a model of the wrong shape still ends within
-    /// the tolerance, and a size model of a real image meets the shape of the real
-    /// sizes within a factor of 2 in level.
+    /// the tolerance, and the rate model of an image gives its coded sizes and squared
+    /// errors within a factor of 2.5.
     #[test]
     fn search_with_a_model() {
         let v = |x: f64| 1.3 * x - 2.0;
@@ -1600,13 +1625,22 @@ mod tests {
             .to_raster(SampleType::U8)
             .unwrap();
         let p = prepare(&r, &EncodeOptions::default(), Mode::Lossy).unwrap();
-        let m = p.size_model();
+        let m = p.rate_model();
+        let src = r.samples.to_f64();
         for step in [2.0, 8.0, 32.0] {
             let real = p.code(step).len() as f64 * 8.0;
             let est = m.bits(step);
             assert!(
                 est > real / 2.5 && est < real * 2.5,
                 "step {step}: {est} vs {real}"
+            );
+            // and the squared error against the decoder's samples
+            let dec = p.decoded(step).unwrap().samples.to_f64();
+            let real: f64 = src.iter().zip(&dec).map(|(a, b)| (a - b) * (a - b)).sum();
+            let est = m.squared_error(step);
+            assert!(
+                est > real / 2.5 && est < real * 2.5,
+                "step {step}: squared error {est} vs {real}"
             );
         }
     }
