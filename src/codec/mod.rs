@@ -675,38 +675,36 @@ impl RateModel {
     /// (Zeros in zero neighbourhoods cost next to nothing; 0.02–0.1 measured alike.)
     const ZERO_BITS: f64 = 0.05;
 
-    /// Estimated bits at base step `step`.
-    fn bits(&self, step: f64) -> f64 {
+    /// Over the coefficients that are not zero, by bin: `(count, d)` with `d = log2 t` at
+    /// base step `step` and `t = |c|·G_b·w_c / Δ`, and whether `t` is past the dead zone.
+    fn at(&self, step: f64) -> impl Iterator<Item = (f64, f64, bool)> + '_ {
         let (edge, s) = ((1.0 - RHO).log2(), step.log2());
-        let zb = Self::ZERO_BITS;
-        let mut bits = self.zeros * zb;
-        for (k, &n) in self.bins.iter().enumerate() {
-            if n == 0.0 {
-                continue;
-            }
-            let y = Self::LOW + (k as f64 + 0.5) / Self::BINS_PER_OCTAVE;
-            let d = y - s; // log2 t
-            bits += n * if d < edge { zb } else { d + 2.0 };
-        }
-        bits.max(1.0)
+        self.bins
+            .iter()
+            .enumerate()
+            .filter(|(_, &n)| n > 0.0)
+            .map(move |(k, &n)| {
+                let d = Self::LOW + (k as f64 + 0.5) / Self::BINS_PER_OCTAVE - s;
+                (n, d, d >= edge)
+            })
     }
 
-    /// Estimated sum of squared errors (samples × channels) at base step `step`.
+    /// Estimated bits at base step `step`.
+    fn bits(&self, step: f64) -> f64 {
+        let zb = Self::ZERO_BITS;
+        let coded: f64 = self
+            .at(step)
+            .map(|(n, d, past)| n * if past { d + 2.0 } else { zb })
+            .sum();
+        (self.zeros * zb + coded).max(1.0)
+    }
+
+    /// Estimated sum of squared errors (samples × channels) at base step `step`: a
+    /// coefficient in the dead zone loses `|c|·G_b·w_c = t·Δ`.
     fn squared_error(&self, step: f64) -> f64 {
-        let (edge, s) = ((1.0 - RHO).log2(), step.log2());
-        let mut e = 0.0;
-        for (k, &n) in self.bins.iter().enumerate() {
-            if n == 0.0 {
-                continue;
-            }
-            let y = Self::LOW + (k as f64 + 0.5) / Self::BINS_PER_OCTAVE;
-            e += n * if y - s < edge {
-                (2.0 * y).exp2()
-            } else {
-                step * step / 12.0
-            };
-        }
-        e
+        self.at(step)
+            .map(|(n, d, past)| n * step * step * if past { 1.0 / 12.0 } else { (2.0 * d).exp2() })
+            .sum()
     }
 }
 
