@@ -375,13 +375,19 @@ impl Prepared {
         )
     }
 
+    /// Every (band, channel) in file order: bands in order, the channels of each.
+    fn band_channels(&self) -> Vec<(usize, usize)> {
+        let nc = self.coeffs.len();
+        (0..self.plan.bands.len())
+            .flat_map(|j| (0..nc).map(move |c| (j, c)))
+            .collect()
+    }
+
     /// Quantize and code at base step `step`; the whole file.
     fn code(&self, step: f64) -> Vec<u8> {
         let plan = &self.plan;
-        let nb = plan.bands.len();
         let nc = self.coeffs.len();
-        let jobs: Vec<(usize, usize)> =
-            (0..nb).flat_map(|j| (0..nc).map(move |c| (j, c))).collect();
+        let jobs = self.band_channels();
         let q: Vec<Vec<i64>> = jobs
             .par_iter()
             .map(|&(j, c)| self.quantized(step, j, c))
@@ -713,10 +719,8 @@ impl Prepared {
     fn rate_model(&self) -> RateModel {
         let nbins = (2.0 * -RateModel::LOW * RateModel::BINS_PER_OCTAVE) as usize;
         let plan = &self.plan;
-        let jobs: Vec<(usize, usize)> = (0..plan.bands.len())
-            .flat_map(|j| (0..self.coeffs.len()).map(move |c| (j, c)))
-            .collect();
-        let (bins, zeros) = jobs
+        let (bins, zeros) = self
+            .band_channels()
             .par_iter()
             .map(|&(j, c)| {
                 let mut bins = vec![0.0f64; nbins];
