@@ -235,7 +235,8 @@ pub enum Engine {
     /// Non-standard pyramids over the leading axes run as one cascade over all levels
     /// (every sample read and written once for the whole pyramid, see `cascade.rs`);
     /// where that does not apply, [`Engine::FusedLevels`]. The default, unless
-    /// `MRA_ENGINE` is set to `levels` or `axis` in the environment.
+    /// `MRA_ENGINE` is set to `levels` or `axis` in the environment (or to `cascade`:
+    /// [`Engine::CascadeParts`] with a part per thread, volumes included, for timing).
     Fused,
     /// Non-standard levels over the leading axes run fused and out of place, level by
     /// level (one read and one write of every sample per level, the array plus one
@@ -255,6 +256,7 @@ impl Default for Engine {
         *ON.get_or_init(|| match std::env::var("MRA_ENGINE").as_deref() {
             Ok("axis") => Engine::AxisByAxis,
             Ok("levels") => Engine::FusedLevels,
+            Ok("cascade") => Engine::CascadeParts(rayon::current_num_threads()),
             _ => Engine::Fused,
         })
     }
