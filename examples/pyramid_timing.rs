@@ -30,7 +30,7 @@ fn main() {
     };
     let len: usize = shape.iter().product();
     let data: Vec<f32> = (0..len).map(|i| (i % 251) as f32).collect();
-    let mut a = Array::from_shape_vec(&shape, data).unwrap();
+    let mut a = Array::from_shape_vec(&shape, data.clone()).unwrap();
     let spec = PyramidSpec {
         scheme,
         boundary,
@@ -51,4 +51,11 @@ fn main() {
             (len * 4) as f64 / t2 / 1e6
         );
     }
+    let err = a
+        .data()
+        .iter()
+        .zip(&data)
+        .map(|(x, y)| (x - y).abs())
+        .fold(0f32, f32::max);
+    println!("max reconstruction error {err:e}");
 }

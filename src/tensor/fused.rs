@@ -57,11 +57,10 @@ pub fn fused_level<T: Sample>(
     let work_bytes = region.iter().product::<usize>() * e * std::mem::size_of::<T>();
     let ctx = Ctx::new(region, e, ops, work_bytes >= STREAM_BYTES);
     // a second slab for rows combined in pairs along axis 0 (`Ctx::row_pair`); none
-    // where they do not pair (an extra plane of a volume costs time even unused, as the
-    // placement of buffers does, see `aligned`)
+    // where they do not pair (slabs larger than `PAIR_SLAB_MAX`)
     let pairs = ctx.cs()[0] * std::mem::size_of::<T>() <= PAIR_SLAB_MAX;
     let make_scratch = || {
-        let slab2 = Aligned::<T>::heap(if pairs { ctx.cs()[0] } else { 0 });
+        let slab2 = Aligned::<T>::zeroed(if pairs { ctx.cs()[0] } else { 0 });
         (ctx.scratch::<T>(), slab2)
     };
     let dst_len = dst.len();
@@ -489,11 +488,15 @@ pub(super) fn prefetch<T>(src: &[T], at: usize, len: usize) {
 /// forward and back when its 256 KB planes were prefetched.
 pub(super) const PREFETCH_MAX: usize = 64 << 10;
 
-/// Largest slab (bytes) combined in pairs ([`Ctx::row_pair`]): rows of images. A
-/// volume's planes (256 KB at 256³) do not pair: a second plane per worker made 256³
-/// cubic forward and back slower even left unused (35.3 → 42.2 ms, two threads), and
-/// pairing the planes did not win that back (41.1 ms).
-const PAIR_SLAB_MAX: usize = 64 << 10;
+/// Largest slab (bytes) combined in pairs ([`Ctx::row_pair`]): rows of images and the
+/// planes of volumes up to 256² (256 KB), whose coarse and detail planes along axis 0
+/// then read their input planes from L3 once instead of twice. In session 7 a second
+/// plane per worker made 256³ cubic slower (35.3 → 42.2 ms wall, two threads); on the
+/// machine of session 13 (AMD Zen 3: 512 KB of L2 per core, which the plane path's three
+/// planes overflow anyway; no AVX-512) pairing the planes is faster:
+/// 256³ forward + inverse, best of 7 warm runs, four interleaved rounds, Chaikin
+/// 24.3–25.1 against 25.4–27.1 ms, cubic 31.5–32.0 against 32.3–33.6 ms.
+const PAIR_SLAB_MAX: usize = 256 << 10;
 
 /// Lanes at most this long go through [`Ctx::plane`] (volumes of a few hundred samples a
 /// side), longer ones lane by lane.
