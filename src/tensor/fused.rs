@@ -296,7 +296,7 @@ impl<'a> Ctx<'a> {
         // the planes of a volume: each slab, once combined along axis 1, is the free
         // plane of its last axis (a worker's planes in use are then the two slabs and
         // one buffer: 256³ forward + inverse, best of 7 warm runs, four interleaved
-        // rounds, Chaikin 24.8–25.0 → 24.1–24.7 ms, cubic 31.4–31.8 → 30.6–31.5 ms)
+        // rounds, Chaikin 24.8–24.9 → 24.1–24.7 ms, cubic 31.4–32.0 → 30.6–31.5 ms)
         if k == 3 && plane_path(k, self.region, self.e) {
             self.plane_spent(1, slab, o1, dst_st[1], rest);
             self.plane_spent(1, slab2, o2, dst_st[1], rest);
@@ -537,7 +537,7 @@ pub(super) const PREFETCH_MAX: usize = 64 << 10;
 /// machine of session 13 (AMD Zen 3: 512 KB of L2 per core, which the plane path's three
 /// planes overflow anyway; no AVX-512) pairing the planes is faster:
 /// 256³ forward + inverse, best of 7 warm runs, four interleaved rounds, Chaikin
-/// 24.3–25.1 against 25.4–27.1 ms, cubic 31.5–32.0 against 32.3–33.6 ms.
+/// 24.3–25.1 against 25.4–27.1 ms, cubic 31.5–32.0 against 32.8–33.7 ms.
 const PAIR_SLAB_MAX: usize = 256 << 10;
 
 /// Lanes at most this long go through [`Ctx::plane`] (volumes of a few hundred samples a
