@@ -117,10 +117,13 @@ impl Pair {
         if r0.row_step != 1 || r1.row_step != 1 || r0.col_step != 2 {
             return None;
         }
-        // row i of r0 with row i + d of r1
+        // row i of r0 with row i + d of r1, whose columns are those of r1's first row
+        // moved on by 2·d relative to row i of r0 (this read `− 2·d` until session 13,
+        // so that a pair with d ≠ 0 — the interpolating Chaikin analysis, d = −1 — went
+        // unfound: the offset chosen made the two rows share no column)
         let union = |d: isize| {
             let mut c: Vec<isize> = r0.cols.iter().map(|&c| c as isize).collect();
-            c.extend(r1.cols.iter().map(|&c| c as isize - 2 * d));
+            c.extend(r1.cols.iter().map(|&c| c as isize + 2 * d));
             c.sort_unstable();
             c.dedup();
             c.len()
