@@ -438,3 +438,37 @@ fn pair_merged<T: Sample>(pair: &Pair, x: &[T], out: &mut [T]) -> bool {
     let [m0, m1] = pair.masks;
     combine_pair_merged(&mut out[..2 * n], &src[..u], &w0[..u], m0, &w1[..u], m1)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scheme::{two_scale::TwoScale, Boundary, Scheme};
+
+    /// Every scheme and boundary pairs its regular rows in both directions, leaving a few
+    /// rows near the ends (and, in analysis, where the coarse rows meet the details):
+    /// the interpolating Chaikin analysis, whose detail row `i` reads the columns of
+    /// coarse row `i + 1`, went unpaired until session 13.
+    #[test]
+    fn every_operator_pairs_its_regular_rows() {
+        for scheme in Scheme::ALL {
+            for boundary in Boundary::ALL {
+                for n in [64usize, 256, 257] {
+                    let t = TwoScale::new(scheme, boundary, n);
+                    for (name, op) in [("analysis", &t.analysis), ("synthesis", &t.synthesis)] {
+                        let p = Polyphase::new(op);
+                        let pair = p.pair.as_ref().unwrap_or_else(|| {
+                            panic!("{scheme:?} {boundary:?} {n} {name}: no pair")
+                        });
+                        let unpaired: usize = p.unpaired.iter().map(|r| r.len()).sum();
+                        assert!(
+                            unpaired <= 20,
+                            "{scheme:?} {boundary:?} {n} {name}: {unpaired} rows unpaired"
+                        );
+                        assert_eq!(2 * pair.count + unpaired, n, "{scheme:?} {boundary:?} {n}");
+                        assert!(pair.masks[0] & pair.masks[1] != 0);
+                    }
+                }
+            }
+        }
+    }
+}
