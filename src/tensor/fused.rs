@@ -358,12 +358,8 @@ impl<'a> Ctx<'a> {
         out_stride: usize,
         scratch: &mut [Aligned<T>],
     ) {
-        let (h, w) = (self.region[d], self.region[d + 1]);
-        let [.., pa, pb] = scratch else {
-            unreachable!("two plane buffers")
-        };
-        let (pa, pb) = (&mut pa[..h * w], &mut pb[..h * w]);
-        combine_rows(&self.ops[d], &slab[..h * w], w, pa);
+        let (pa, pb) = self.plane_buffers(d, scratch);
+        combine_rows(&self.ops[d], &slab[..pa.len()], self.region[d + 1], pa);
         self.plane_lanes(d, pa, pb, out, out_stride)
     }
 
@@ -377,13 +373,23 @@ impl<'a> Ctx<'a> {
         out_stride: usize,
         scratch: &mut [Aligned<T>],
     ) {
-        let (h, w) = (self.region[d], self.region[d + 1]);
-        let [.., pa, _] = scratch else {
+        let (pa, _) = self.plane_buffers(d, scratch);
+        let n = pa.len();
+        combine_rows(&self.ops[d], &slab[..n], self.region[d + 1], pa);
+        self.plane_lanes(d, pa, &mut slab[..n], out, out_stride)
+    }
+
+    /// The two plane buffers of [`Ctx::scratch`], a plane of axes `d, d + 1` each.
+    fn plane_buffers<'s, T: Sample>(
+        &self,
+        d: usize,
+        scratch: &'s mut [Aligned<T>],
+    ) -> (&'s mut [T], &'s mut [T]) {
+        let n = self.region[d] * self.region[d + 1];
+        let [.., pa, pb] = scratch else {
             unreachable!("two plane buffers")
         };
-        let (pa, pb) = (&mut pa[..h * w], &mut slab[..h * w]);
-        combine_rows(&self.ops[d], pb, w, pa);
-        self.plane_lanes(d, pa, pb, out, out_stride)
+        (&mut pa[..n], &mut pb[..n])
     }
 
     /// The last axis of [`Ctx::plane`]: `pa` holds the plane combined along axis `d`,
