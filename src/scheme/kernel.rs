@@ -1117,10 +1117,10 @@ macro_rules! pair_avx2_body {
                 v1[k] = $set1(w1[k]);
                 v2[k] = $set1(w2[k]);
             }
-            let mut i = 0;
-            // SAFETY (all blocks): i + width <= len, so every access is inside the runs.
-            unsafe {
-                while i + L <= len {
+            // one vector of each output at `i`
+            macro_rules! step {
+                ($i:expr) => {{
+                    let i = $i;
                     let (mut a1, mut a2) = ($zero(), $zero());
                     for k in 0..U {
                         let x = $load(p[k].add(i));
@@ -1142,13 +1142,22 @@ macro_rules! pair_avx2_body {
                         $store(o1.add(i), a1);
                         $store(o2.add(i), a2);
                     }
+                }};
+            }
+            let mut i = 0;
+            // SAFETY (all blocks): i + width <= len, so every access is inside the runs.
+            unsafe {
+                while i + L <= len {
+                    step!(i);
                     i += L;
-                    if i < len && i + L > len && len >= L {
-                        // the last vector again, ending at `len` (its first samples
-                        // recomputed: the same sums, the same bits, no aliasing as
-                        // the outputs and inputs are apart) instead of scalars
-                        i = len - L;
-                    }
+                }
+                if i < len && len >= L {
+                    // the last vector again, ending at `len` (its first samples
+                    // recomputed: the same sums, the same bits, no aliasing as the
+                    // outputs and inputs are apart) instead of scalars; outside the
+                    // loop, whose control it would otherwise lengthen by a third
+                    step!(len - L);
+                    i = len;
                 }
                 while i < len {
                     let (mut a1, mut a2) = (0.0 as $t, 0.0 as $t);
