@@ -45,15 +45,30 @@ pub fn fused_level<T: Sample>(
     e: usize,
     ops: &[AxisOp],
 ) {
+    fused_level_strided(src, strides, dst, strides, region, e, ops)
+}
+
+/// [`fused_level`] with the source and the destination laid out differently: `src_st`
+/// and `dst_st` their strides (both nested, the last equal to `e`).
+pub fn fused_level_strided<T: Sample>(
+    src: &[T],
+    src_st: &[usize],
+    dst: &mut [T],
+    dst_st: &[usize],
+    region: &[usize],
+    e: usize,
+    ops: &[AxisOp],
+) {
     let k = ops.len();
-    assert!(k >= 1 && region.len() == k && strides.len() == k);
-    assert_eq!(strides[k - 1], e);
-    assert_eq!(src.len(), dst.len());
-    for d in 1..k {
-        assert!(strides[d - 1] >= strides[d] * region[d]);
+    assert!(k >= 1 && region.len() == k && src_st.len() == k && dst_st.len() == k);
+    for st in [src_st, dst_st] {
+        assert_eq!(st[k - 1], e);
+        for d in 1..k {
+            assert!(st[d - 1] >= st[d] * region[d]);
+        }
     }
-    let extent = (0..k).map(|d| (region[d] - 1) * strides[d]).sum::<usize>() + e;
-    assert!(extent <= src.len());
+    let extent = |st: &[usize]| (0..k).map(|d| (region[d] - 1) * st[d]).sum::<usize>() + e;
+    assert!(extent(src_st) <= src.len() && extent(dst_st) <= dst.len());
     let work_bytes = region.iter().product::<usize>() * e * std::mem::size_of::<T>();
     let ctx = Ctx::new(region, e, ops, work_bytes >= STREAM_BYTES);
     // a second slab for rows combined in pairs along axis 0 (`Ctx::row_pair`); none
@@ -78,8 +93,8 @@ pub fn fused_level<T: Sample>(
     let task = |rows: &[usize], (scratch, slab2): &mut (Vec<Aligned<T>>, Aligned<T>)| {
         let p = dptr;
         let out_row = |r: usize| {
-            let at = r * strides[0];
-            let len = strides[0].min(dst_len - at);
+            let at = r * dst_st[0];
+            let len = dst_st[0].min(dst_len - at);
             // SAFETY: output row r of axis 0 owns dst[r·s0, r·s0 + s0) (strides are
             // nested, checked above); each row index appears once in `order`, and tasks
             // get disjoint parts of `order`, of which each row is taken once here.
@@ -89,12 +104,12 @@ pub fn fused_level<T: Sample>(
         while i < rows.len() {
             if let [r1, r2, ..] = rows[i..] {
                 let outs = [out_row(r1), out_row(r2)];
-                if ctx.row_pair([r1, r2], src, strides, outs, strides, scratch, slab2) {
+                if ctx.row_pair([r1, r2], src, src_st, outs, dst_st, scratch, slab2) {
                     i += 2;
                     continue;
                 }
             }
-            ctx.row(0, rows[i], src, strides, out_row(rows[i]), strides, scratch);
+            ctx.row(0, rows[i], src, src_st, out_row(rows[i]), dst_st, scratch);
             i += 1;
         }
     };

@@ -9,7 +9,7 @@
 
 use super::array::Array;
 use super::cascade;
-use super::fused::{fused_level, AxisOp};
+use super::fused::{fused_level, fused_level_strided, AxisOp};
 use super::par::{for_each_task, SharedMut};
 use super::transform::transform_axis;
 use super::workspace;
@@ -342,10 +342,9 @@ fn run<T: Sample>(array: &mut Array<T>, pyr: &Pyramid, dir: Direction, engine: E
             fusable.then_some(k)
         })
         .collect();
-    // Every level fused over the same axes: levels 1.. alternate between the array and
-    // the scratch array (ping-pong), so only the detail blocks left in the scratch are
-    // copied, once, instead of every level's whole box.
-    let ping_pong = fused_k.len() >= 2
+    // every level fused over the same axes and inside the array: the cascade may run
+    // them all in one sweep
+    let cascadable = fused_k.len() >= 2
         && fused_k.iter().all(|&k| k.is_some() && k == fused_k[0])
         && (1..pyr.depth()).all(|l| pyr.region_before(l) != shape);
     let parts = match engine {
@@ -353,7 +352,7 @@ fn run<T: Sample>(array: &mut Array<T>, pyr: &Pyramid, dir: Direction, engine: E
         Engine::CascadeParts(p) => Some((p, true)),
         _ => None,
     };
-    if let (true, Some((parts, forced))) = (ping_pong, parts) {
+    if let (true, Some((parts, forced))) = (cascadable, parts) {
         if cascade(array, pyr, dir, fused_k[0].unwrap_or(0), parts, forced) {
             return;
         }
@@ -389,35 +388,20 @@ fn run<T: Sample>(array: &mut Array<T>, pyr: &Pyramid, dir: Direction, engine: E
             array.swap_data(buf);
             continue;
         }
-        if !ping_pong {
-            fused_level(array.data(), buf, st, box_, e, &axis_ops);
-            copy_region(buf, array.data_mut(), st, box_, None, e);
-            continue;
+        // A level inside the array: its box copied compactly to the end of the scratch
+        // (the level's one read of the box from memory), then the level from that copy,
+        // in the caches, back into the box. The box's lines come back to the caches
+        // with the copy, so the level's stores find them there. 256³ cubic, three
+        // levels, forward + inverse (best of 7 warm runs, three interleaved rounds):
+        // 30.4–30.8 → 28.4–29.0 ms against levels that alternated between the array
+        // and the scratch, reading each box from memory and copying its details back.
+        let mut cst = vec![e; k];
+        for d in (0..k - 1).rev() {
+            cst[d] = cst[d + 1] * box_[d + 1];
         }
-        // Ping-pong: level l writes the scratch when l is odd (analysis) or even
-        // (synthesis; level 1 then writes the array, which level 0 reads whole), and reads
-        // the other buffer.
-        let inner = (l + 1 < pyr.depth()).then(|| pyr.region_before(l + 1));
-        let hole = inner.as_ref().map(|r| &r[..k]);
-        match (dir, l % 2 == 1) {
-            (Direction::Analysis, true) => {
-                fused_level(array.data(), buf, st, box_, e, &axis_ops);
-                // the detail blocks of this level are final: back to the array
-                copy_region(buf, array.data_mut(), st, box_, hole, e);
-            }
-            (Direction::Analysis, false) => {
-                fused_level(buf, array.data_mut(), st, box_, e, &axis_ops);
-            }
-            (Direction::Synthesis, true) => {
-                // the input's detail blocks (or, at the deepest level, all of it) are
-                // still only in the array
-                copy_region(array.data(), buf, st, box_, hole, e);
-                fused_level(buf, array.data_mut(), st, box_, e, &axis_ops);
-            }
-            (Direction::Synthesis, false) => {
-                fused_level(array.data(), buf, st, box_, e, &axis_ops);
-            }
-        }
+        let at = compact_at(buf, cst[0] * box_[0]);
+        copy_region(array.data(), st, &mut buf[at..], &cst, box_, e);
+        fused_level_strided(&buf[at..], &cst, array.data_mut(), st, box_, e, &axis_ops);
     }
     if let Some(s) = scratch {
         workspace::give_scratch(s);
@@ -500,32 +484,20 @@ fn cascade<T: Sample>(
     true
 }
 
-/// Copy the box `[0, region)` (leading axes; elements of `e` samples) from `src` to `dst`,
-/// without the box `[0, hole)` if given, lines shared among the pool's threads.
+/// Copy the box `[0, region)` (leading axes; elements of `e` samples) from `src`
+/// (strides `src_st`) to `dst` (strides `dst_st`), lines shared among the pool's threads.
 fn copy_region<T: Sample>(
     src: &[T],
+    src_st: &[usize],
     dst: &mut [T],
-    strides: &[usize],
+    dst_st: &[usize],
     region: &[usize],
-    hole: Option<&[usize]>,
     e: usize,
 ) {
     let k = region.len();
     let run = region[k - 1] * e;
     let lines: usize = region[..k - 1].iter().product();
-    // where a line inside the hole's leading box starts copying
-    let skip = |line: usize| -> usize {
-        let Some(h) = hole else { return 0 };
-        let mut rem = line;
-        for j in (0..k - 1).rev() {
-            if rem % region[j] >= h[j] {
-                return 0;
-            }
-            rem /= region[j];
-        }
-        h[k - 1] * e
-    };
-    let start = |line: usize| {
+    let start = |line: usize, strides: &[usize]| {
         let (mut at, mut rem) = (0, line);
         for j in (0..k - 1).rev() {
             at += (rem % region[j]) * strides[j];
@@ -533,7 +505,8 @@ fn copy_region<T: Sample>(
         }
         at
     };
-    assert!(lines == 0 || start(lines - 1) + run <= src.len().min(dst.len()));
+    assert!(lines == 0 || start(lines - 1, src_st) + run <= src.len());
+    assert!(lines == 0 || start(lines - 1, dst_st) + run <= dst.len());
     let per = (COPY_TASK / run.max(1)).max(1);
     let dptr = SharedMut(dst.as_mut_ptr());
     for_each_task(
@@ -543,18 +516,29 @@ fn copy_region<T: Sample>(
         |t, _| {
             let p = dptr;
             for line in t * per..((t + 1) * per).min(lines) {
-                let from = skip(line);
-                let at = start(line) + from;
-                let run = run - from;
+                let (at, to) = (start(line, src_st), start(line, dst_st));
                 // SAFETY: lines of the box are disjoint runs inside `dst` (nested strides,
                 // checked by the caller's level plan and the bound above); each task owns
                 // its lines.
                 unsafe {
-                    std::ptr::copy_nonoverlapping(src.as_ptr().add(at), p.0.add(at), run);
+                    std::ptr::copy_nonoverlapping(src.as_ptr().add(at), p.0.add(to), run);
                 }
             }
         },
     );
+}
+
+/// Where a compact box of `n` samples starts in `buf`: at its end, on a cache line
+/// (256³ cubic, 1–2% faster than 16 bytes past one).
+fn compact_at<T>(buf: &[T], n: usize) -> usize {
+    let size = std::mem::size_of::<T>().max(1);
+    let at = buf.len() - n;
+    let mis = (buf.as_ptr() as usize + at * size) % 64;
+    if mis.is_multiple_of(size) && at >= mis / size {
+        at - mis / size
+    } else {
+        at
+    }
 }
 
 /// Samples copied per task by [`copy_region`].
