@@ -753,6 +753,72 @@ fn combine_pair_lanes_gives_the_bits_of_combine_pair_per_lane() {
     check(&x32);
 }
 
+/// `combine_lane_taps` gives the bits of plain loops (first tap assigning, the others
+/// added in order): lane counts around the 8 lanes of the vector build, lanes as short as
+/// 8 samples (windows clamped to the lane's end) and too many windows for registers,
+/// outputs a stride apart, f32 and f64.
+#[test]
+fn combine_lane_taps_gives_the_bits_of_plain_loops() {
+    use mra::scheme::kernel::combine_lane_taps;
+    fn check<T: mra::scheme::Sample + Into<f64>>(x: &[T]) {
+        for w in [8usize, 9, 31, 64, 256] {
+            for h in [1usize, 7, 8, 9, 17, 24] {
+                // rows near both ends, one tapless row, and (w = 256) taps spread over
+                // more windows than the registers hold
+                let mut rows: Vec<(usize, Vec<(usize, T)>)> = vec![
+                    (
+                        0,
+                        vec![
+                            (0, T::from_f64(0.125)),
+                            (1, T::from_f64(-0.5)),
+                            (w / 2, T::from_f64(0.75)),
+                        ],
+                    ),
+                    (
+                        1,
+                        vec![(w - 1, T::from_f64(0.3)), (2.min(w - 1), T::from_f64(-1.1))],
+                    ),
+                    (2, vec![]),
+                    (
+                        3,
+                        vec![
+                            (w - 3, T::from_f64(1.0)),
+                            (w - 2, T::from_f64(0.375)),
+                            (w - 1, T::from_f64(-0.25)),
+                        ],
+                    ),
+                ];
+                if w == 256 {
+                    rows.push((
+                        4,
+                        (0..10)
+                            .map(|k| (25 * k + 3, T::from_f64(0.1 * k as f64 - 0.3)))
+                            .collect(),
+                    ));
+                }
+                let ys = 7;
+                let mut got = vec![T::from_f64(9.0); h * ys];
+                combine_lane_taps(&x[..h * w], w, h, &rows, &mut got, ys);
+                for t in 0..h {
+                    for (r, taps) in &rows {
+                        let mut want = T::default();
+                        for (k, &(c, wk)) in taps.iter().enumerate() {
+                            let v = wk * x[t * w + c];
+                            want = if k == 0 { v } else { want + v };
+                        }
+                        let (g, e): (f64, f64) = (got[t * ys + r].into(), want.into());
+                        assert_eq!(g.to_bits(), e.to_bits(), "w {w} h {h} lane {t} row {r}");
+                    }
+                }
+            }
+        }
+    }
+    let x = lcg(23, 256 * 24);
+    check(&x);
+    let x32: Vec<f32> = x.iter().map(|&v| v as f32).collect();
+    check(&x32);
+}
+
 #[test]
 fn combine_rows_matches_combine_row_by_row() {
     use mra::scheme::kernel::{combine, combine_rows};

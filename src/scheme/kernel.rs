@@ -1244,3 +1244,165 @@ builds! {
     taps_avx512_f32, pair_avx512_f32, "avx512f", f32, 16, _mm512_set1_ps, _mm512_setzero_ps, _mm512_mul_ps, _mm512_add_ps, _mm512_loadu_ps, _mm512_storeu_ps, merge_ps512;
     taps_avx512_f64, pair_avx512_f64, "avx512f", f64, 8, _mm512_set1_pd, _mm512_setzero_pd, _mm512_mul_pd, _mm512_add_pd, _mm512_loadu_pd, _mm512_storeu_pd, merge_pd512;
 }
+
+/// Most samples of a lane [`combine_lane_taps`] reads in registers (8 windows of 8).
+const LANE_TAPS_SLOTS: usize = 64;
+
+/// `y[t·ys + r] = Σ_k w_k · x[t·w + c_k]` for every lane `t < h` of `x` (lane `t` at
+/// `x[t·w ..][..w]`) and every row `(r, taps)` of `rows` (`taps` the `(c_k, w_k)`, the
+/// first tap assigning, the others added in order: the bits of [`super::sparse::Csr`]'s
+/// row kernel). For the few rows near the ends of a volume's lanes, which read a handful
+/// of samples at either end of every lane: with AVX2 and 4-byte samples, 8 lanes at a
+/// time, the windows of 8 samples the rows read transposed in registers (one load per
+/// lane and window instead of one per tap and row).
+pub fn combine_lane_taps<T: Sample>(
+    x: &[T],
+    w: usize,
+    h: usize,
+    rows: &[(usize, Vec<(usize, T)>)],
+    y: &mut [T],
+    ys: usize,
+) {
+    if h == 0 || rows.is_empty() {
+        return;
+    }
+    assert!(x.len() >= h * w);
+    for (r, taps) in rows {
+        assert!(taps.iter().all(|&(c, _)| c < w));
+        assert!((h - 1) * ys + r < y.len());
+    }
+    let mut done = 0;
+    #[cfg(target_arch = "x86_64")]
+    if std::mem::size_of::<T>() == 4 && w >= 8 && super::sparse::cpu_has_avx2() {
+        // SAFETY: AVX2 is present; T is a 4-byte float (f32), bounds checked above.
+        done = unsafe { lane_taps_avx2_f32(x, w, h, rows, y, ys) };
+    }
+    for t in done..h {
+        let lane = &x[t * w..t * w + w];
+        for (r, taps) in rows {
+            let mut acc = T::default();
+            for (k, &(c, wk)) in taps.iter().enumerate() {
+                let v = wk * lane[c];
+                acc = if k == 0 { v } else { acc + v };
+            }
+            y[t * ys + r] = acc;
+        }
+    }
+}
+
+/// The lanes `..h / 8 · 8` of [`combine_lane_taps`] (returned), 8 at a time; none when
+/// the rows read more than [`LANE_TAPS_SLOTS`] samples' windows.
+///
+/// # Safety
+/// AVX2 present, `T` is `f32`, `w >= 8`, and the bounds of [`combine_lane_taps`].
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn lane_taps_avx2_f32<T: Sample>(
+    x: &[T],
+    w: usize,
+    h: usize,
+    rows: &[(usize, Vec<(usize, T)>)],
+    y: &mut [T],
+    ys: usize,
+) -> usize {
+    use std::arch::x86_64::*;
+    // windows of 8 samples covering every tap's column
+    let mut cols: Vec<usize> = rows
+        .iter()
+        .flat_map(|(_, t)| t.iter().map(|p| p.0))
+        .collect();
+    cols.sort_unstable();
+    cols.dedup();
+    let mut bases: Vec<usize> = Vec::new();
+    for &c in &cols {
+        if bases.last().is_none_or(|&b| c >= b + 8) {
+            bases.push(c.min(w - 8));
+        }
+    }
+    if bases.len() * 8 > LANE_TAPS_SLOTS {
+        return 0;
+    }
+    let slot = |c: usize| {
+        let i = bases
+            .iter()
+            .position(|&b| b <= c && c < b + 8)
+            .expect("covered");
+        i * 8 + c - bases[i]
+    };
+    // each row's taps as (slot, weight), weights as f32 bits
+    let taps: Vec<(usize, Vec<(usize, __m256)>)> = rows
+        .iter()
+        .map(|(r, t)| {
+            let t = t
+                .iter()
+                .map(|&(c, wk)| {
+                    // SAFETY: T is f32 (the caller's check).
+                    let wk: f32 = unsafe { std::mem::transmute_copy(&wk) };
+                    (slot(c), _mm256_set1_ps(wk))
+                })
+                .collect();
+            (*r, t)
+        })
+        .collect();
+    let px = x.as_ptr() as *const f32;
+    let py = y.as_mut_ptr() as *mut f32;
+    let mut reg = [_mm256_setzero_ps(); LANE_TAPS_SLOTS];
+    let mut out = [0f32; 8];
+    let h8 = h / 8 * 8;
+    for t0 in (0..h8).step_by(8) {
+        for (i, &b) in bases.iter().enumerate() {
+            // SAFETY: lanes t0..t0+8 < h, samples b..b+8 <= w of each.
+            let l = |j: usize| unsafe { _mm256_loadu_ps(px.add((t0 + j) * w + b)) };
+            let a = [l(0), l(1), l(2), l(3), l(4), l(5), l(6), l(7)];
+            let t = transpose8_ps(a);
+            reg[i * 8..i * 8 + 8].copy_from_slice(&t);
+        }
+        for (r, tk) in &taps {
+            let mut acc = _mm256_setzero_ps();
+            for (k, &(s, wk)) in tk.iter().enumerate() {
+                let v = _mm256_mul_ps(wk, reg[s]);
+                acc = if k == 0 { v } else { _mm256_add_ps(acc, v) };
+            }
+            _mm256_storeu_ps(out.as_mut_ptr(), acc);
+            for (j, &v) in out.iter().enumerate() {
+                // SAFETY: (t0 + j)·ys + r < y.len() (checked by the caller for the last lane).
+                unsafe { *py.add((t0 + j) * ys + r) = v };
+            }
+        }
+    }
+    h8
+}
+
+/// An 8 × 8 block of `f32` transposed in registers: `out[c]` lane `r` = `a[r]` lane `c`.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+unsafe fn transpose8_ps(a: [std::arch::x86_64::__m256; 8]) -> [std::arch::x86_64::__m256; 8] {
+    use std::arch::x86_64::*;
+    let t0 = _mm256_unpacklo_ps(a[0], a[1]);
+    let t1 = _mm256_unpackhi_ps(a[0], a[1]);
+    let t2 = _mm256_unpacklo_ps(a[2], a[3]);
+    let t3 = _mm256_unpackhi_ps(a[2], a[3]);
+    let t4 = _mm256_unpacklo_ps(a[4], a[5]);
+    let t5 = _mm256_unpackhi_ps(a[4], a[5]);
+    let t6 = _mm256_unpacklo_ps(a[6], a[7]);
+    let t7 = _mm256_unpackhi_ps(a[6], a[7]);
+    let u0 = _mm256_shuffle_ps(t0, t2, 0x44);
+    let u1 = _mm256_shuffle_ps(t0, t2, 0xEE);
+    let u2 = _mm256_shuffle_ps(t1, t3, 0x44);
+    let u3 = _mm256_shuffle_ps(t1, t3, 0xEE);
+    let u4 = _mm256_shuffle_ps(t4, t6, 0x44);
+    let u5 = _mm256_shuffle_ps(t4, t6, 0xEE);
+    let u6 = _mm256_shuffle_ps(t5, t7, 0x44);
+    let u7 = _mm256_shuffle_ps(t5, t7, 0xEE);
+    [
+        _mm256_permute2f128_ps(u0, u4, 0x20),
+        _mm256_permute2f128_ps(u1, u5, 0x20),
+        _mm256_permute2f128_ps(u2, u6, 0x20),
+        _mm256_permute2f128_ps(u3, u7, 0x20),
+        _mm256_permute2f128_ps(u0, u4, 0x31),
+        _mm256_permute2f128_ps(u1, u5, 0x31),
+        _mm256_permute2f128_ps(u2, u6, 0x31),
+        _mm256_permute2f128_ps(u3, u7, 0x31),
+    ]
+}

@@ -505,25 +505,23 @@ fn lanes<T: Sample>(a: &AxisOp, x: &[T], split: bool, h: usize, w: usize, y: &mu
             merge,
         );
     }
-    // the other rows (near the ends of the lanes): lane by lane, each tap's place and
-    // weight worked out once per row (first tap assigning, as `Csr::apply` sums)
-    for r in plan.unpaired.iter().flat_map(|r| r.clone()) {
-        let (cols, ws) = op.row_slices(r);
-        let taps: Vec<(usize, T)> = cols
-            .iter()
-            .zip(ws)
-            .map(|(&c, &wk)| (at(c as usize), T::from_f64(wk)))
-            .collect();
-        for t in 0..h {
-            let lane = &x[t * w..t * w + w];
-            let mut acc = T::default();
-            for (k, &(c, wk)) in taps.iter().enumerate() {
-                let v = wk * lane[c];
-                acc = if k == 0 { v } else { acc + v };
-            }
-            y[t * ys + r] = acc;
-        }
-    }
+    // the other rows (near the ends of the lanes), each tap's place and weight worked
+    // out once per row
+    let rows: Vec<(usize, Vec<(usize, T)>)> = plan
+        .unpaired
+        .iter()
+        .flat_map(|r| r.clone())
+        .map(|r| {
+            let (cols, ws) = op.row_slices(r);
+            let taps = cols
+                .iter()
+                .zip(ws)
+                .map(|(&c, &wk)| (at(c as usize), T::from_f64(wk)))
+                .collect();
+            (r, taps)
+        })
+        .collect();
+    kernel::combine_lane_taps(x, w, h, &rows, y, ys);
 }
 
 /// Ask for `len` samples of `src` from `at` on to be brought into the caches (L2), a
