@@ -441,8 +441,20 @@ impl<'a> Ctx<'a> {
         }
         // the lanes' input, and the plane free for their output
         let (x, free) = if split { (pb, pa) } else { (pa, pb) };
-        if !self.stream {
+        if !self.stream && out_stride == w {
             return lanes(a, x, split, h, w, out, out_stride);
+        }
+        if !self.stream {
+            // the plane's rows apart in the output (a level inside a larger array): the
+            // lanes into the free plane, then copied, rather than stored there one lane
+            // at a time (level 1 of 256³ cubic, forward / inverse: 2.0–2.1 / 1.8 →
+            // 1.7 / 1.4 ms; a whole 128³ array, whose rows follow one another, is
+            // 0.1–0.2 ms slower that way)
+            lanes(a, x, split, h, w, free, w);
+            for (o, f) in out.chunks_mut(out_stride).zip(free.chunks_exact(w)).take(h) {
+                o[..w].copy_from_slice(f);
+            }
+            return;
         }
         lanes(a, x, split, h, w, free, w);
         stream_rows(free, w, h, out, out_stride);
