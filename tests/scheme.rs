@@ -753,6 +753,71 @@ fn combine_pair_lanes_gives_the_bits_of_combine_pair_per_lane() {
     check(&x32);
 }
 
+/// `combine_pair_rows_split` gives the bits of `combine_pair_rows` with every output row
+/// then split by `deinterleave`: the regular patterns and one without a vector build, row
+/// lengths around two vectors (odd ones too), f32 and f64.
+#[test]
+fn combine_pair_rows_split_gives_the_bits_of_a_split_after() {
+    use mra::scheme::kernel::{combine_pair_rows, combine_pair_rows_split, deinterleave};
+    fn check<T: mra::scheme::Sample + Into<f64>>(x: &[T]) {
+        for (u, m1, m2) in [
+            (4usize, 0b1111u32, 0b1111u32),
+            (7, 0b0111011, 0b1111111),
+            (7, 0b1111111, 0b1111100),
+            (5, 0b10101, 0b01110),
+        ] {
+            let w1: Vec<T> = (0..u).map(|k| T::from_f64(0.3 * k as f64 - 0.55)).collect();
+            let w2: Vec<T> = (0..u).map(|k| T::from_f64(0.7 - 0.25 * k as f64)).collect();
+            for len in [1usize, 2, 15, 16, 17, 31, 32, 33, 47, 64, 256] {
+                let count = 5;
+                let cols: Vec<usize> = (0..u).collect();
+                let rows = [0, count];
+                let (mut plain, mut split) = (
+                    vec![T::default(); 2 * count * len],
+                    vec![T::default(); 2 * count * len],
+                );
+                let src = &x[..(u + 2 * count) * len];
+                combine_pair_rows(
+                    src,
+                    len,
+                    &cols,
+                    2,
+                    (&w1[..], m1),
+                    (&w2[..], m2),
+                    &mut plain,
+                    rows,
+                    [1, 1],
+                    count,
+                );
+                combine_pair_rows_split(
+                    src,
+                    len,
+                    &cols,
+                    2,
+                    (&w1[..], m1),
+                    (&w2[..], m2),
+                    &mut split,
+                    rows,
+                    [1, 1],
+                    count,
+                );
+                for r in 0..2 * count {
+                    let mut want = vec![T::default(); len];
+                    deinterleave(&plain[r * len..r * len + len], 1, &mut want);
+                    for i in 0..len {
+                        let (g, e): (f64, f64) = (split[r * len + i].into(), want[i].into());
+                        assert_eq!(g.to_bits(), e.to_bits(), "u {u} len {len} row {r} at {i}");
+                    }
+                }
+            }
+        }
+    }
+    let x = lcg(29, 30 * 256);
+    check(&x);
+    let x32: Vec<f32> = x.iter().map(|&v| v as f32).collect();
+    check(&x32);
+}
+
 /// `combine_lane_taps` gives the bits of plain loops (first tap assigning, the others
 /// added in order): lane counts around the 8 lanes of the vector build, lanes as short as
 /// 8 samples (windows clamped to the lane's end) and too many windows for registers,

@@ -675,6 +675,7 @@ pub fn combine_pair_with<T: Sample>(
                 0,
                 [0, 0],
                 false,
+                false,
                 wide,
             )
         } {
@@ -819,6 +820,7 @@ unsafe fn pair_avx2<T: Sample>(
     in_step: usize,
     out_step: [usize; 2],
     merge: bool,
+    split: bool,
     wide: bool,
 ) -> bool {
     use std::any::TypeId;
@@ -835,16 +837,23 @@ unsafe fn pair_avx2<T: Sample>(
                         std::array::from_fn(|k| src[k].add(t * in_step) as *const $t);
                     let q1 = o[0].add(t * out_step[0]) as *mut $t;
                     let q2 = o[1].add(t * out_step[1]) as *mut $t;
-                    if wide {
-                        if merge {
-                            $g::<$U, $M1, $M2, true>(q1, q2, len, &p, &a, &b);
-                        } else {
-                            $g::<$U, $M1, $M2, false>(q1, q2, len, &p, &a, &b);
+                    match (wide, merge, split) {
+                        (true, true, _) => $g::<$U, $M1, $M2, true, false>(q1, q2, len, &p, &a, &b),
+                        (true, false, true) => {
+                            $g::<$U, $M1, $M2, false, true>(q1, q2, len, &p, &a, &b)
                         }
-                    } else if merge {
-                        $f::<$U, $M1, $M2, true>(q1, q2, len, &p, &a, &b);
-                    } else {
-                        $f::<$U, $M1, $M2, false>(q1, q2, len, &p, &a, &b);
+                        (true, false, false) => {
+                            $g::<$U, $M1, $M2, false, false>(q1, q2, len, &p, &a, &b)
+                        }
+                        (false, true, _) => {
+                            $f::<$U, $M1, $M2, true, false>(q1, q2, len, &p, &a, &b)
+                        }
+                        (false, false, true) => {
+                            $f::<$U, $M1, $M2, false, true>(q1, q2, len, &p, &a, &b)
+                        }
+                        (false, false, false) => {
+                            $f::<$U, $M1, $M2, false, false>(q1, q2, len, &p, &a, &b)
+                        }
                     }
                 }
             }
@@ -889,7 +898,23 @@ pub fn combine_pair_merged<T: Sample>(
         // SAFETY: AVX2 is present, AVX-512F when `wide` (detected); `out` holds 2·len
         // samples, every input len; one step, the merged output written through the
         // first pointer only.
-        return unsafe { pair_avx2(o, len, &p[..u], w1, m1, w2, m2, 1, 0, [0, 0], true, wide) };
+        return unsafe {
+            pair_avx2(
+                o,
+                len,
+                &p[..u],
+                w1,
+                m1,
+                w2,
+                m2,
+                1,
+                0,
+                [0, 0],
+                true,
+                false,
+                wide,
+            )
+        };
     }
     false
 }
@@ -905,12 +930,52 @@ pub fn combine_pair_rows<T: Sample>(
     len: usize,
     cols: &[usize],
     in_step: usize,
+    w1: (&[T], u32),
+    w2: (&[T], u32),
+    dst: &mut [T],
+    rows: [usize; 2],
+    out_step: [usize; 2],
+    count: usize,
+) {
+    pair_rows(
+        src, len, cols, in_step, w1, w2, dst, rows, out_step, count, false,
+    )
+}
+
+/// [`combine_pair_rows`] with every output row split into its even samples, then its
+/// odd ones (as [`deinterleave`] makes them, for a next axis that reads them so): the
+/// same bits, placed as `deinterleave` places them, without a pass of its own.
+#[allow(clippy::too_many_arguments)]
+pub fn combine_pair_rows_split<T: Sample>(
+    src: &[T],
+    len: usize,
+    cols: &[usize],
+    in_step: usize,
+    w1: (&[T], u32),
+    w2: (&[T], u32),
+    dst: &mut [T],
+    rows: [usize; 2],
+    out_step: [usize; 2],
+    count: usize,
+) {
+    pair_rows(
+        src, len, cols, in_step, w1, w2, dst, rows, out_step, count, true,
+    )
+}
+
+#[allow(clippy::too_many_arguments)]
+fn pair_rows<T: Sample>(
+    src: &[T],
+    len: usize,
+    cols: &[usize],
+    in_step: usize,
     (w1, m1): (&[T], u32),
     (w2, m2): (&[T], u32),
     dst: &mut [T],
     rows: [usize; 2],
     out_step: [usize; 2],
     count: usize,
+    split: bool,
 ) {
     let u = cols.len();
     check_pair(u, w1, m1, w2, m2);
@@ -956,6 +1021,7 @@ pub fn combine_pair_rows<T: Sample>(
             len,
             count,
             false,
+            split,
         )
     }
 }
@@ -1004,7 +1070,7 @@ pub fn combine_pair_lanes<T: Sample>(
     // lie apart within its own `out_step` samples (asserted above).
     unsafe {
         pair_steps(
-            src, off, in_step, w1, w2, dst, out, steps, len, count, merge,
+            src, off, in_step, w1, w2, dst, out, steps, len, count, merge, false,
         )
     }
 }
@@ -1030,6 +1096,7 @@ unsafe fn pair_steps<T: Sample>(
     len: usize,
     count: usize,
     merge: bool,
+    split: bool,
 ) {
     let u = off.len();
     let p = input_ptrs_at(src, off);
@@ -1055,6 +1122,7 @@ unsafe fn pair_steps<T: Sample>(
                 in_step,
                 out_step,
                 merge,
+                split,
                 Simd::detected() == Simd::Avx512,
             )
         };
@@ -1076,6 +1144,9 @@ unsafe fn pair_steps<T: Sample>(
             for i in 0..len {
                 (o[2 * i], o[2 * i + 1]) = (a[i], b[i]);
             }
+        } else if split {
+            deinterleave(&a, 1, &mut dst[at[0]..][..len]);
+            deinterleave(&b, 1, &mut dst[at[1]..][..len]);
         } else {
             dst[at[0]..][..len].copy_from_slice(&a);
             dst[at[1]..][..len].copy_from_slice(&b);
@@ -1092,7 +1163,7 @@ fn input_ptrs_at<T>(src: &[T], off: &[usize]) -> [*const T; 32] {
 /// The body of [`combine_pair`] for one pattern: a vector of each output per step, every
 /// input loaded once; then scalars.
 macro_rules! pair_avx2_body {
-    ($name:ident, $feat:literal, $t:ty, $lanes:expr, $set1:ident, $zero:ident, $mul:ident, $add:ident, $load:ident, $store:ident, $merge:ident) => {
+    ($name:ident, $feat:literal, $t:ty, $lanes:expr, $set1:ident, $zero:ident, $mul:ident, $add:ident, $load:ident, $store:ident, $merge:ident, $split:ident) => {
         /// See [`pair_avx2_body`].
         ///
         /// # Safety
@@ -1100,7 +1171,13 @@ macro_rules! pair_avx2_body {
         /// non-empty within `U` bits.
         #[cfg(target_arch = "x86_64")]
         #[target_feature(enable = $feat)]
-        unsafe fn $name<const U: usize, const M1: u32, const M2: u32, const MERGE: bool>(
+        unsafe fn $name<
+            const U: usize,
+            const M1: u32,
+            const M2: u32,
+            const MERGE: bool,
+            const SPLIT: bool,
+        >(
             o1: *mut $t,
             o2: *mut $t,
             len: usize,
@@ -1118,7 +1195,7 @@ macro_rules! pair_avx2_body {
                 v2[k] = $set1(w2[k]);
             }
             // one vector of each output at `i`
-            macro_rules! step {
+            macro_rules! calc {
                 ($i:expr) => {{
                     let i = $i;
                     let (mut a1, mut a2) = ($zero(), $zero());
@@ -1133,6 +1210,61 @@ macro_rules! pair_avx2_body {
                             a2 = if k == f2 { m } else { $add(a2, m) };
                         }
                     }
+                    (a1, a2)
+                }};
+            }
+            // scalars at `i`
+            macro_rules! calc1 {
+                ($i:expr) => {{
+                    let i = $i;
+                    let (mut a1, mut a2) = (0.0 as $t, 0.0 as $t);
+                    for k in 0..U {
+                        let x = *p[k].add(i);
+                        if M1 >> k & 1 == 1 {
+                            let m = w1[k] * x;
+                            a1 = if k == f1 { m } else { a1 + m };
+                        }
+                        if M2 >> k & 1 == 1 {
+                            let m = w2[k] * x;
+                            a2 = if k == f2 { m } else { a2 + m };
+                        }
+                    }
+                    (a1, a2)
+                }};
+            }
+            if SPLIT {
+                // each output split into its even samples, then its odd ones (as
+                // `deinterleave` does), two vectors at a time
+                let ne = len.div_ceil(2);
+                let mut i = 0;
+                // SAFETY: i + 2L <= len; the even outputs i/2.. < ne, the odd ones
+                // ne + i/2 + L <= ne + len/2 <= len.
+                unsafe {
+                    while i + 2 * L <= len {
+                        let (a1, a2) = calc!(i);
+                        let (b1, b2) = calc!(i + L);
+                        let (e1, d1) = $split!(a1, b1);
+                        let (e2, d2) = $split!(a2, b2);
+                        $store(o1.add(i / 2), e1);
+                        $store(o1.add(ne + i / 2), d1);
+                        $store(o2.add(i / 2), e2);
+                        $store(o2.add(ne + i / 2), d2);
+                        i += 2 * L;
+                    }
+                    while i < len {
+                        let (a1, a2) = calc1!(i);
+                        let at = if i % 2 == 0 { i / 2 } else { ne + i / 2 };
+                        *o1.add(at) = a1;
+                        *o2.add(at) = a2;
+                        i += 1;
+                    }
+                }
+                return;
+            }
+            macro_rules! step {
+                ($i:expr) => {{
+                    let i = $i;
+                    let (a1, a2) = calc!(i);
                     if MERGE {
                         // o1[2i] = a1[i], o1[2i + 1] = a2[i]
                         let (lo, hi) = $merge!(a1, a2);
@@ -1160,18 +1292,7 @@ macro_rules! pair_avx2_body {
                     i = len;
                 }
                 while i < len {
-                    let (mut a1, mut a2) = (0.0 as $t, 0.0 as $t);
-                    for k in 0..U {
-                        let x = *p[k].add(i);
-                        if M1 >> k & 1 == 1 {
-                            let m = w1[k] * x;
-                            a1 = if k == f1 { m } else { a1 + m };
-                        }
-                        if M2 >> k & 1 == 1 {
-                            let m = w2[k] * x;
-                            a2 = if k == f2 { m } else { a2 + m };
-                        }
-                    }
+                    let (a1, a2) = calc1!(i);
                     if MERGE {
                         *o1.add(2 * i) = a1;
                         *o1.add(2 * i + 1) = a2;
@@ -1226,23 +1347,64 @@ macro_rules! merge_pd512 {
         )
     }};
 }
+/// Two vectors `a`, `b` of consecutive samples `(x0 x1 … )` split into their even samples
+/// `(x0 x2 …)` and their odd ones `(x1 x3 …)` (the inverse of the `merge_*` macros).
+macro_rules! split_ps256 {
+    ($a:expr, $b:expr) => {{
+        let ev = _mm256_shuffle_ps::<0x88>($a, $b); // x0 x2 x8 x10 | x4 x6 x12 x14
+        let od = _mm256_shuffle_ps::<0xDD>($a, $b); // x1 x3 x9 x11 | x5 x7 x13 x15
+        (
+            _mm256_castpd_ps(_mm256_permute4x64_pd::<0xD8>(_mm256_castps_pd(ev))),
+            _mm256_castpd_ps(_mm256_permute4x64_pd::<0xD8>(_mm256_castps_pd(od))),
+        )
+    }};
+}
+macro_rules! split_pd256 {
+    ($a:expr, $b:expr) => {{
+        let (ev, od) = (_mm256_unpacklo_pd($a, $b), _mm256_unpackhi_pd($a, $b));
+        (
+            _mm256_permute4x64_pd::<0xD8>(ev),
+            _mm256_permute4x64_pd::<0xD8>(od),
+        )
+    }};
+}
+macro_rules! split_ps512 {
+    ($a:expr, $b:expr) => {{
+        let ev = _mm512_setr_epi32(0, 2, 4, 6, 8, 10, 12, 14, 16, 18, 20, 22, 24, 26, 28, 30);
+        let od = _mm512_setr_epi32(1, 3, 5, 7, 9, 11, 13, 15, 17, 19, 21, 23, 25, 27, 29, 31);
+        (
+            _mm512_permutex2var_ps($a, ev, $b),
+            _mm512_permutex2var_ps($a, od, $b),
+        )
+    }};
+}
+macro_rules! split_pd512 {
+    ($a:expr, $b:expr) => {{
+        let ev = _mm512_setr_epi64(0, 2, 4, 6, 8, 10, 12, 14);
+        let od = _mm512_setr_epi64(1, 3, 5, 7, 9, 11, 13, 15);
+        (
+            _mm512_permutex2var_pd($a, ev, $b),
+            _mm512_permutex2var_pd($a, od, $b),
+        )
+    }};
+}
 /// The four builds of the tap loops ([`taps_avx2_body`]) and of the pair loops
 /// ([`pair_avx2_body`]): one line each, its names, target feature, type, lanes and
 /// intrinsics.
 macro_rules! builds {
-    ($($taps:ident, $pair:ident, $feat:literal, $t:ty, $lanes:expr, $set1:ident, $zero:ident, $mul:ident, $add:ident, $load:ident, $store:ident, $merge:ident;)*) => {
+    ($($taps:ident, $pair:ident, $feat:literal, $t:ty, $lanes:expr, $set1:ident, $zero:ident, $mul:ident, $add:ident, $load:ident, $store:ident, $merge:ident, $split:ident;)*) => {
         $(
             taps_avx2_body!($taps, $feat, $t, $lanes, $set1, $zero, $mul, $add, $load, $store);
-            pair_avx2_body!($pair, $feat, $t, $lanes, $set1, $zero, $mul, $add, $load, $store, $merge);
+            pair_avx2_body!($pair, $feat, $t, $lanes, $set1, $zero, $mul, $add, $load, $store, $merge, $split);
         )*
     };
 }
 
 builds! {
-    taps_avx2_f32, pair_avx2_f32, "avx2", f32, 8, _mm256_set1_ps, _mm256_setzero_ps, _mm256_mul_ps, _mm256_add_ps, _mm256_loadu_ps, _mm256_storeu_ps, merge_ps256;
-    taps_avx2_f64, pair_avx2_f64, "avx2", f64, 4, _mm256_set1_pd, _mm256_setzero_pd, _mm256_mul_pd, _mm256_add_pd, _mm256_loadu_pd, _mm256_storeu_pd, merge_pd256;
-    taps_avx512_f32, pair_avx512_f32, "avx512f", f32, 16, _mm512_set1_ps, _mm512_setzero_ps, _mm512_mul_ps, _mm512_add_ps, _mm512_loadu_ps, _mm512_storeu_ps, merge_ps512;
-    taps_avx512_f64, pair_avx512_f64, "avx512f", f64, 8, _mm512_set1_pd, _mm512_setzero_pd, _mm512_mul_pd, _mm512_add_pd, _mm512_loadu_pd, _mm512_storeu_pd, merge_pd512;
+    taps_avx2_f32, pair_avx2_f32, "avx2", f32, 8, _mm256_set1_ps, _mm256_setzero_ps, _mm256_mul_ps, _mm256_add_ps, _mm256_loadu_ps, _mm256_storeu_ps, merge_ps256, split_ps256;
+    taps_avx2_f64, pair_avx2_f64, "avx2", f64, 4, _mm256_set1_pd, _mm256_setzero_pd, _mm256_mul_pd, _mm256_add_pd, _mm256_loadu_pd, _mm256_storeu_pd, merge_pd256, split_pd256;
+    taps_avx512_f32, pair_avx512_f32, "avx512f", f32, 16, _mm512_set1_ps, _mm512_setzero_ps, _mm512_mul_ps, _mm512_add_ps, _mm512_loadu_ps, _mm512_storeu_ps, merge_ps512, split_ps512;
+    taps_avx512_f64, pair_avx512_f64, "avx512f", f64, 8, _mm512_set1_pd, _mm512_setzero_pd, _mm512_mul_pd, _mm512_add_pd, _mm512_loadu_pd, _mm512_storeu_pd, merge_pd512, split_pd512;
 }
 
 /// Most samples of a lane [`combine_lane_taps`] reads in registers (8 windows of 8).

@@ -373,9 +373,16 @@ impl<'a> Ctx<'a> {
         out_stride: usize,
         scratch: &mut [Aligned<T>],
     ) {
-        let (pa, pb) = self.plane_buffers(d, scratch);
-        combine_rows(&self.ops[d], &slab[..pa.len()], self.region[d + 1], pa);
-        self.plane_lanes(d, pa, pb, out, out_stride)
+        let split = self.lanes_split(d);
+        let (row, pa, pb) = self.plane_buffers_row(d, scratch);
+        combine_rows(
+            &self.ops[d],
+            &slab[..pa.len()],
+            self.region[d + 1],
+            pa,
+            split.then_some(row),
+        );
+        self.plane_lanes(d, pa, pb, out, out_stride, split)
     }
 
     /// [`Ctx::plane`] on a slab this call may overwrite: it serves as the second plane
@@ -388,27 +395,45 @@ impl<'a> Ctx<'a> {
         out_stride: usize,
         scratch: &mut [Aligned<T>],
     ) {
-        let (pa, _) = self.plane_buffers(d, scratch);
+        let split = self.lanes_split(d);
+        let (row, pa, _) = self.plane_buffers_row(d, scratch);
         let n = pa.len();
-        combine_rows(&self.ops[d], &slab[..n], self.region[d + 1], pa);
-        self.plane_lanes(d, pa, &mut slab[..n], out, out_stride)
+        combine_rows(
+            &self.ops[d],
+            &slab[..n],
+            self.region[d + 1],
+            pa,
+            split.then_some(row),
+        );
+        self.plane_lanes(d, pa, &mut slab[..n], out, out_stride, split)
     }
 
-    /// The two plane buffers of [`Ctx::scratch`], a plane of axes `d, d + 1` each.
-    fn plane_buffers<'s, T: Sample>(
+    /// The lane scratch and the two plane buffers of [`Ctx::scratch`] (a lane of the
+    /// last axis; a plane of axes `d, d + 1` each).
+    fn plane_buffers_row<'s, T: Sample>(
         &self,
         d: usize,
         scratch: &'s mut [Aligned<T>],
-    ) -> (&'s mut [T], &'s mut [T]) {
+    ) -> (&'s mut [T], &'s mut [T], &'s mut [T]) {
         let n = self.region[d] * self.region[d + 1];
-        let [.., pa, pb] = scratch else {
+        let [.., row, pa, pb] = scratch else {
             unreachable!("two plane buffers")
         };
-        (&mut pa[..n], &mut pb[..n])
+        (&mut row[..], &mut pa[..n], &mut pb[..n])
     }
 
-    /// The last axis of [`Ctx::plane`]: `pa` holds the plane combined along axis `d`,
-    /// `pb` is free.
+    /// Whether [`Ctx::plane_lanes`] runs the last axis (after axis `d`) on lanes split
+    /// into their even and odd samples: then axis `d` writes its rows split
+    /// ([`kernel::combine_pair_rows_split`]), which saves the split's pass over the plane.
+    fn lanes_split(&self, d: usize) -> bool {
+        let plan = self.ops[d + 1].plan;
+        let unpaired: usize = plan.unpaired.iter().map(|r| r.len()).sum();
+        plan.col_step == 2 && unpaired <= LANES_MOST_UNPAIRED
+    }
+
+    /// The last axis of [`Ctx::plane`]: `pa` holds the plane combined along axis `d`
+    /// (its rows already split into even and odd samples when `presplit`, see
+    /// [`Ctx::lanes_split`]), `pb` is free.
     fn plane_lanes<T: Sample>(
         &self,
         d: usize,
@@ -416,6 +441,7 @@ impl<'a> Ctx<'a> {
         pb: &mut [T],
         out: &mut [T],
         out_stride: usize,
+        presplit: bool,
     ) {
         let (h, w) = (self.region[d], self.region[d + 1]);
         let a = &self.ops[d + 1];
@@ -426,7 +452,7 @@ impl<'a> Ctx<'a> {
             // rows): the plane transposed so that the lanes become rows, combined as
             // rows, and transposed back
             transpose(pa, h, w, pb, h);
-            combine_rows(a, pb, h, pa);
+            combine_rows(a, pb, h, pa, None);
             if !self.stream {
                 return transpose(pa, w, h, out, out_stride);
             }
@@ -434,13 +460,17 @@ impl<'a> Ctx<'a> {
             return stream_rows(pb, w, h, out, out_stride);
         }
         let split = a.plan.col_step == 2;
-        if split {
+        if split && !presplit {
             for (x, y) in pa.chunks_exact(w).zip(pb.chunks_exact_mut(w)) {
                 kernel::deinterleave(x, 1, y);
             }
         }
         // the lanes' input, and the plane free for their output
-        let (x, free) = if split { (pb, pa) } else { (pa, pb) };
+        let (x, free) = if split && !presplit {
+            (pb, pa)
+        } else {
+            (pa, pb)
+        };
         if !self.stream && out_stride == w {
             return lanes(a, x, split, h, w, out, out_stride);
         }
@@ -583,10 +613,28 @@ fn plane_path(k: usize, region: &[usize], e: usize) -> bool {
 /// `dst[r] = Σ_c W_rc · src[c]` for every row `r` of `a.op`, rows of `len` samples: the
 /// rows of the operator's pair ([`crate::scheme::polyphase::Pair`]) two at a time ([`kernel::combine_pair_rows`]: the input
 /// rows they share read once), the others one by one ([`kernel::combine_rows`]).
-fn combine_rows<T: Sample>(a: &AxisOp, src: &[T], len: usize, dst: &mut [T]) {
+///
+/// With `split` (a lane's room), every output row is written split into its even
+/// samples, then its odd ones ([`kernel::deinterleave`]).
+fn combine_rows<T: Sample>(
+    a: &AxisOp,
+    src: &[T],
+    len: usize,
+    dst: &mut [T],
+    split: Option<&mut [T]>,
+) {
     let (op, plan) = (a.op, a.plan);
+    let rows_split = |rows: std::ops::Range<usize>, dst: &mut [T], row: &mut [T]| {
+        for r in rows {
+            kernel::combine_rows(op, src, len, r..r + 1, &mut row[..len]);
+            kernel::deinterleave(&row[..len], 1, &mut dst[r * len..r * len + len]);
+        }
+    };
     let Some(pair) = &plan.pair else {
-        return kernel::combine_rows(op, src, len, 0..op.rows(), dst);
+        return match split {
+            Some(row) => rows_split(0..op.rows(), dst, row),
+            None => kernel::combine_rows(op, src, len, 0..op.rows(), dst),
+        };
     };
     let runs = [&plan.runs[pair.runs[0]], &plan.runs[pair.runs[1]]];
     let first = [0, 1].map(|j| runs[j].row0 + runs[j].row_step * pair.first[j]);
@@ -594,7 +642,12 @@ fn combine_rows<T: Sample>(a: &AxisOp, src: &[T], len: usize, dst: &mut [T]) {
     let u = pair.cols.len();
     let w = pair.sample_weights::<T>();
     let [m0, m1] = pair.masks;
-    kernel::combine_pair_rows(
+    let pair_rows = if split.is_some() {
+        kernel::combine_pair_rows_split
+    } else {
+        kernel::combine_pair_rows
+    };
+    pair_rows(
         src,
         len,
         &pair.cols,
@@ -606,7 +659,16 @@ fn combine_rows<T: Sample>(a: &AxisOp, src: &[T], len: usize, dst: &mut [T]) {
         steps,
         pair.count,
     );
-    for r in &plan.unpaired {
-        kernel::combine_rows(op, src, len, r.clone(), &mut dst[r.start * len..]);
+    match split {
+        Some(row) => {
+            for r in &plan.unpaired {
+                rows_split(r.clone(), dst, row);
+            }
+        }
+        None => {
+            for r in &plan.unpaired {
+                kernel::combine_rows(op, src, len, r.clone(), &mut dst[r.start * len..]);
+            }
+        }
     }
 }
