@@ -502,9 +502,13 @@ fn stream_rows<T: Sample>(src: &[T], w: usize, h: usize, dst: &mut [T], stride: 
     }
 }
 
-/// Most rows of a lane's operator outside its pair for [`lanes`] (computed sample by
-/// sample there); with more, [`Ctx::plane`] transposes the plane.
-const LANES_MOST_UNPAIRED: usize = 8;
+/// Most rows of a lane's operator outside its pair for [`lanes`] (computed 8 lanes at a
+/// time there, [`kernel::combine_lane_taps`]); with more, [`Ctx::plane`] transposes the
+/// plane. 20 takes the interpolating cubic operators (12 such rows in analysis, 18 in
+/// synthesis) through the lanes: 256³ forward + inverse 30.9–31.4 → 28.7–30.0 ms, CPU
+/// time of 11 repetitions 854–861 → 809–820 ms (three interleaved rounds); with 8 they
+/// were transposed twice per plane.
+const LANES_MOST_UNPAIRED: usize = 20;
 
 /// The operator of `a` on the `h` lanes of `w` samples of `x` (lane `t` at `x[t·w..]`),
 /// into `y` (lane `t` at `y[t·ys..]`): the rows of its pair with
