@@ -240,7 +240,8 @@ pub enum Engine {
     Fused,
     /// Non-standard levels over the leading axes run fused and out of place, level by
     /// level (one read and one write of every sample per level, the array plus one
-    /// scratch array of memory); other levels go axis by axis.
+    /// scratch array of memory; a level inside the array first copies its box compactly
+    /// into the scratch); other levels go axis by axis.
     FusedLevels,
     /// Every level axis by axis, in place.
     AxisByAxis,
