@@ -426,9 +426,15 @@ impl<'a> Ctx<'a> {
     /// into their even and odd samples: then axis `d` writes its rows split
     /// ([`kernel::combine_pair_rows_split`]), which saves the split's pass over the plane.
     fn lanes_split(&self, d: usize) -> bool {
-        let plan = self.ops[d + 1].plan;
-        let unpaired: usize = plan.unpaired.iter().map(|r| r.len()).sum();
-        plan.col_step == 2 && unpaired <= LANES_MOST_UNPAIRED
+        self.ops[d + 1].plan.col_step == 2 && self.by_lanes(d)
+    }
+
+    /// Whether [`Ctx::plane_lanes`] runs the last axis (after axis `d`) lane by lane
+    /// ([`lanes`]) rather than on the transposed plane: at most
+    /// [`LANES_MOST_UNPAIRED`] rows of its operator outside the pair.
+    fn by_lanes(&self, d: usize) -> bool {
+        let unpaired: usize = self.ops[d + 1].plan.unpaired.iter().map(|r| r.len()).sum();
+        unpaired <= LANES_MOST_UNPAIRED
     }
 
     /// The last axis of [`Ctx::plane`]: `pa` holds the plane combined along axis `d`
@@ -445,8 +451,7 @@ impl<'a> Ctx<'a> {
     ) {
         let (h, w) = (self.region[d], self.region[d + 1]);
         let a = &self.ops[d + 1];
-        let unpaired: usize = a.plan.unpaired.iter().map(|r| r.len()).sum();
-        if unpaired > LANES_MOST_UNPAIRED {
+        if !self.by_lanes(d) {
             // many rows outside the pair (interpolating ends; the interpolating Chaikin
             // analysis has no pair, its detail rows read other places than its coarse
             // rows): the plane transposed so that the lanes become rows, combined as
