@@ -821,7 +821,8 @@ fn combine_pair_rows_split_gives_the_bits_of_a_split_after() {
 /// `combine_lane_taps` gives the bits of plain loops (first tap assigning, the others
 /// added in order): lane counts around the 8 lanes of the vector build, lanes as short as
 /// 8 samples (windows clamped to the lane's end) and too many windows for registers,
-/// outputs a stride apart, f32 and f64.
+/// outputs a stride apart, stretches of rows shorter and longer than the 8 stored
+/// together, f32 and f64.
 #[test]
 fn combine_lane_taps_gives_the_bits_of_plain_loops() {
     use mra::scheme::kernel::combine_lane_taps;
@@ -861,7 +862,16 @@ fn combine_lane_taps_gives_the_bits_of_plain_loops() {
                             .collect(),
                     ));
                 }
-                let ys = 7;
+                // rows 0..=16 (with w = 256) or 5..=16 following one another: stored 8 at
+                // a time, the last 8 overlapping the 8 before
+                for r in 5..=16 {
+                    let taps = vec![
+                        (r % w, T::from_f64(0.5 + r as f64)),
+                        (w - 1 - r % w, T::from_f64(-0.25)),
+                    ];
+                    rows.push((r, taps));
+                }
+                let ys = 19;
                 let mut got = vec![T::from_f64(9.0); h * ys];
                 combine_lane_taps(&x[..h * w], w, h, &rows, &mut got, ys);
                 for t in 0..h {

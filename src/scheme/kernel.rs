@@ -1416,7 +1416,9 @@ const LANE_TAPS_SLOTS: usize = 64;
 /// row kernel). For the few rows near the ends of a volume's lanes, which read a handful
 /// of samples at either end of every lane: with AVX2 and 4-byte samples, 8 lanes at a
 /// time, the windows of 8 samples the rows read transposed in registers (one load per
-/// lane and window instead of one per tap and row).
+/// lane and window instead of one per tap and row), and the sums of 8 rows that follow
+/// one another transposed back (one store per lane instead of one per row and lane).
+/// [`LaneTaps`] prepares the rows once for many calls ([`combine_lane_taps_with`]).
 pub fn combine_lane_taps<T: Sample>(
     x: &[T],
     w: usize,
@@ -1425,26 +1427,129 @@ pub fn combine_lane_taps<T: Sample>(
     y: &mut [T],
     ys: usize,
 ) {
+    let rows = rows
+        .iter()
+        .map(|(r, t)| (*r, t.iter().map(|&(c, wk)| (c, wk.to_f64())).collect()))
+        .collect();
+    combine_lane_taps_with(&LaneTaps::new(rows, w), x, h, y, ys)
+}
+
+/// The rows of [`combine_lane_taps`] (weights as `f64`, each used as `T::from_f64` of
+/// it) for lanes of `w` samples, with what the vector build needs worked out once: the
+/// windows of 8 samples that cover the taps and the groups of rows stored together.
+#[derive(Clone, Debug)]
+pub struct LaneTaps {
+    w: usize,
+    rows: Vec<(usize, Vec<(usize, f64)>)>,
+    /// The windows' first samples (a tap at sample `c` of window `i` reads slot
+    /// `8·i + c − bases[i]`); empty when they take more than [`LANE_TAPS_SLOTS`] slots or
+    /// `w < 8`, and then no vector build runs.
+    bases: Vec<usize>,
+    /// Every row's taps as `(slot, weight)`, row `i`'s at `slots[ends[i]..ends[i + 1]]`.
+    slots: Vec<(usize, f32)>,
+    ends: Vec<usize>,
+    /// Rows summed and stored together: `(first row index, count ≤ 8)`, their outputs
+    /// `r` following one another. A stretch of 8 or more such rows is covered by groups
+    /// of 8 (the last overlapping the one before; its rows written twice, the same
+    /// values), shorter ones by one group.
+    groups: Vec<(usize, usize)>,
+}
+
+impl LaneTaps {
+    /// `rows` as [`combine_lane_taps`] takes them, for lanes of `w` samples.
+    pub fn new(rows: Vec<(usize, Vec<(usize, f64)>)>, w: usize) -> Self {
+        for (_, taps) in &rows {
+            assert!(taps.iter().all(|&(c, _)| c < w));
+        }
+        let mut cols: Vec<usize> = rows
+            .iter()
+            .flat_map(|(_, t)| t.iter().map(|p| p.0))
+            .collect();
+        cols.sort_unstable();
+        cols.dedup();
+        let mut bases: Vec<usize> = Vec::new();
+        if w >= 8 {
+            for &c in &cols {
+                if bases.last().is_none_or(|&b| c >= b + 8) {
+                    bases.push(c.min(w - 8));
+                }
+            }
+        }
+        if bases.len() * 8 > LANE_TAPS_SLOTS {
+            bases.clear();
+        }
+        let slot = |c: usize| {
+            let i = bases
+                .iter()
+                .position(|&b| b <= c && c < b + 8)
+                .expect("covered");
+            i * 8 + c - bases[i]
+        };
+        let (mut slots, mut ends) = (Vec::new(), vec![0]);
+        if !bases.is_empty() {
+            for (_, t) in &rows {
+                slots.extend(t.iter().map(|&(c, wk)| (slot(c), wk as f32)));
+                ends.push(slots.len());
+            }
+        }
+        // stretches of rows whose outputs follow one another
+        let mut groups = Vec::new();
+        let mut i = 0;
+        while i < rows.len() {
+            let mut n = 1;
+            while i + n < rows.len() && rows[i + n].0 == rows[i].0 + n {
+                n += 1;
+            }
+            if n < 8 {
+                groups.push((i, n));
+            } else {
+                groups.extend((0..n / 8).map(|g| (i + 8 * g, 8)));
+                if n % 8 != 0 {
+                    groups.push((i + n - 8, 8));
+                }
+            }
+            i += n;
+        }
+        LaneTaps {
+            w,
+            rows,
+            bases,
+            slots,
+            ends,
+            groups,
+        }
+    }
+}
+
+/// [`combine_lane_taps`] with its rows prepared (`taps`, for lanes of `taps.w` samples).
+pub fn combine_lane_taps_with<T: Sample>(
+    taps: &LaneTaps,
+    x: &[T],
+    h: usize,
+    y: &mut [T],
+    ys: usize,
+) {
+    let (w, rows) = (taps.w, &taps.rows);
     if h == 0 || rows.is_empty() {
         return;
     }
     assert!(x.len() >= h * w);
-    for (r, taps) in rows {
-        assert!(taps.iter().all(|&(c, _)| c < w));
+    for (r, _) in rows {
         assert!((h - 1) * ys + r < y.len());
     }
     let mut done = 0;
     #[cfg(target_arch = "x86_64")]
-    if std::mem::size_of::<T>() == 4 && w >= 8 && super::sparse::cpu_has_avx2() {
-        // SAFETY: AVX2 is present; T is a 4-byte float (f32), bounds checked above.
-        done = unsafe { lane_taps_avx2_f32(x, w, h, rows, y, ys) };
+    if std::mem::size_of::<T>() == 4 && !taps.bases.is_empty() && super::sparse::cpu_has_avx2() {
+        // SAFETY: AVX2 is present; T is a 4-byte float (f32), bounds checked above and
+        // in `LaneTaps::new`.
+        done = unsafe { lane_taps_avx2_f32(taps, x, h, y, ys) };
     }
     for t in done..h {
         let lane = &x[t * w..t * w + w];
         for (r, taps) in rows {
             let mut acc = T::default();
             for (k, &(c, wk)) in taps.iter().enumerate() {
-                let v = wk * lane[c];
+                let v = T::from_f64(wk) * lane[c];
                 acc = if k == 0 { v } else { acc + v };
             }
             y[t * ys + r] = acc;
@@ -1452,64 +1557,26 @@ pub fn combine_lane_taps<T: Sample>(
     }
 }
 
-/// The lanes `..h / 8 · 8` of [`combine_lane_taps`] (returned), 8 at a time; none when
-/// the rows read more than [`LANE_TAPS_SLOTS`] samples' windows.
+/// The lanes `..h / 8 · 8` of [`combine_lane_taps_with`] (returned), 8 at a time.
 ///
 /// # Safety
-/// AVX2 present, `T` is `f32`, `w >= 8`, and the bounds of [`combine_lane_taps`].
+/// AVX2 present, `T` is `f32`, `taps.bases` not empty, and the bounds of
+/// [`combine_lane_taps_with`].
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 unsafe fn lane_taps_avx2_f32<T: Sample>(
+    taps: &LaneTaps,
     x: &[T],
-    w: usize,
     h: usize,
-    rows: &[(usize, Vec<(usize, T)>)],
     y: &mut [T],
     ys: usize,
 ) -> usize {
     use std::arch::x86_64::*;
-    // windows of 8 samples covering every tap's column
-    let mut cols: Vec<usize> = rows
-        .iter()
-        .flat_map(|(_, t)| t.iter().map(|p| p.0))
-        .collect();
-    cols.sort_unstable();
-    cols.dedup();
-    let mut bases: Vec<usize> = Vec::new();
-    for &c in &cols {
-        if bases.last().is_none_or(|&b| c >= b + 8) {
-            bases.push(c.min(w - 8));
-        }
-    }
-    if bases.len() * 8 > LANE_TAPS_SLOTS {
-        return 0;
-    }
-    let slot = |c: usize| {
-        let i = bases
-            .iter()
-            .position(|&b| b <= c && c < b + 8)
-            .expect("covered");
-        i * 8 + c - bases[i]
-    };
-    // each row's taps as (slot, weight), weights as f32 bits
-    let taps: Vec<(usize, Vec<(usize, __m256)>)> = rows
-        .iter()
-        .map(|(r, t)| {
-            let t = t
-                .iter()
-                .map(|&(c, wk)| {
-                    // SAFETY: T is f32 (the caller's check).
-                    let wk: f32 = unsafe { std::mem::transmute_copy(&wk) };
-                    (slot(c), _mm256_set1_ps(wk))
-                })
-                .collect();
-            (*r, t)
-        })
-        .collect();
+    let (w, bases) = (taps.w, &taps.bases);
     let px = x.as_ptr() as *const f32;
     let py = y.as_mut_ptr() as *mut f32;
     let mut reg = [_mm256_setzero_ps(); LANE_TAPS_SLOTS];
-    let mut out = [0f32; 8];
+    let mut part = [0f32; 8];
     let h8 = h / 8 * 8;
     for t0 in (0..h8).step_by(8) {
         for (i, &b) in bases.iter().enumerate() {
@@ -1519,16 +1586,33 @@ unsafe fn lane_taps_avx2_f32<T: Sample>(
             let t = transpose8_ps(a);
             reg[i * 8..i * 8 + 8].copy_from_slice(&t);
         }
-        for (r, tk) in &taps {
-            let mut acc = _mm256_setzero_ps();
-            for (k, &(s, wk)) in tk.iter().enumerate() {
-                let v = _mm256_mul_ps(wk, reg[s]);
-                acc = if k == 0 { v } else { _mm256_add_ps(acc, v) };
+        for &(i0, n) in &taps.groups {
+            // the sums of rows i0.. for the 8 lanes, one register per row
+            let mut acc = [_mm256_setzero_ps(); 8];
+            for (q, a) in acc.iter_mut().enumerate().take(n) {
+                let i = i0 + q;
+                let row = &taps.slots[taps.ends[i]..taps.ends[i + 1]];
+                for (k, &(s, wk)) in row.iter().enumerate() {
+                    let v = _mm256_mul_ps(_mm256_set1_ps(wk), reg[s]);
+                    *a = if k == 0 { v } else { _mm256_add_ps(*a, v) };
+                }
             }
-            _mm256_storeu_ps(out.as_mut_ptr(), acc);
-            for (j, &v) in out.iter().enumerate() {
-                // SAFETY: (t0 + j)·ys + r < y.len() (checked by the caller for the last lane).
-                unsafe { *py.add((t0 + j) * ys + r) = v };
+            // one register per lane: its outputs r0..r0 + n
+            let out = transpose8_ps(acc);
+            let r0 = taps.rows[i0].0;
+            for (j, &o) in out.iter().enumerate() {
+                // SAFETY: (t0 + j)·ys + r0 + n − 1 < y.len(): the rows r0..r0 + n are
+                // rows of `taps`, checked by the caller for the last lane.
+                let at = unsafe { py.add((t0 + j) * ys + r0) };
+                if n == 8 {
+                    unsafe { _mm256_storeu_ps(at, o) };
+                } else {
+                    _mm256_storeu_ps(part.as_mut_ptr(), o);
+                    for (q, &v) in part.iter().enumerate().take(n) {
+                        // SAFETY: as above.
+                        unsafe { *at.add(q) = v };
+                    }
+                }
             }
         }
     }

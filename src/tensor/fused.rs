@@ -14,7 +14,9 @@
 
 use super::aligned::Aligned;
 use super::par::{for_each_part, SharedMut};
-use crate::scheme::kernel::{self, combine_pair_taps, combine_taps, stream_copy, transpose};
+use crate::scheme::kernel::{
+    self, combine_pair_taps, combine_taps, stream_copy, transpose, LaneTaps,
+};
 use crate::scheme::polyphase::{Polyphase, PAIR_MOST};
 use crate::scheme::sparse::Csr;
 use crate::scheme::Sample;
@@ -126,6 +128,9 @@ pub(super) struct Ctx<'a> {
     ops: &'a [AxisOp<'a>],
     /// Compact strides of a slab of the region (`cs[0]` = samples of one row along axis 0).
     cs: Vec<usize>,
+    /// The rows of the last axis' operator outside its pair, for [`lanes`] (planes
+    /// whose last axis runs by lanes; worked out once per level, not per plane).
+    lane_taps: Option<LaneTaps>,
 }
 
 impl<'a> Ctx<'a> {
@@ -141,13 +146,19 @@ impl<'a> Ctx<'a> {
         for d in (0..k - 1).rev() {
             cs[d] = cs[d + 1] * region[d + 1];
         }
-        Ctx {
+        let mut ctx = Ctx {
             stream,
             region,
             e,
             ops,
             cs,
+            lane_taps: None,
+        };
+        if plane_path(k, region, e) && ctx.by_lanes(k - 2) {
+            let a = &ops[k - 1];
+            ctx.lane_taps = Some(lane_taps(a, a.plan.col_step == 2, region[k - 1]));
         }
+        ctx
     }
 
     /// Compact strides of the region (a row along axis 0 is `cs()[0]` samples).
@@ -465,6 +476,8 @@ impl<'a> Ctx<'a> {
             return stream_rows(pb, w, h, out, out_stride);
         }
         let split = a.plan.col_step == 2;
+        let taps = self.lane_taps.as_ref().expect("made for planes by lanes");
+        let lanes = |x: &[T], y: &mut [T], ys: usize| lanes(a, taps, x, split, h, w, y, ys);
         if split && !presplit {
             for (x, y) in pa.chunks_exact(w).zip(pb.chunks_exact_mut(w)) {
                 kernel::deinterleave(x, 1, y);
@@ -477,7 +490,7 @@ impl<'a> Ctx<'a> {
             (pa, pb)
         };
         if !self.stream && out_stride == w {
-            return lanes(a, x, split, h, w, out, out_stride);
+            return lanes(x, out, out_stride);
         }
         if !self.stream {
             // the plane's rows apart in the output (a level inside a larger array): the
@@ -485,13 +498,13 @@ impl<'a> Ctx<'a> {
             // at a time (level 1 of 256³ cubic, forward / inverse: 2.0–2.1 / 1.8 →
             // 1.7 / 1.4 ms; a whole 128³ array, whose rows follow one another, is
             // 0.1–0.2 ms slower that way)
-            lanes(a, x, split, h, w, free, w);
+            lanes(x, free, w);
             for (o, f) in out.chunks_mut(out_stride).zip(free.chunks_exact(w)).take(h) {
                 o[..w].copy_from_slice(f);
             }
             return;
         }
-        lanes(a, x, split, h, w, free, w);
+        lanes(x, free, w);
         stream_rows(free, w, h, out, out_stride);
     }
 }
@@ -519,11 +532,19 @@ const LANES_MOST_UNPAIRED: usize = 20;
 /// into `y` (lane `t` at `y[t·ys..]`): the rows of its pair with
 /// [`kernel::combine_pair_lanes`], the others sample by sample. `split`: each lane of `x`
 /// holds its even samples, then its odd ones ([`kernel::deinterleave`]).
-fn lanes<T: Sample>(a: &AxisOp, x: &[T], split: bool, h: usize, w: usize, y: &mut [T], ys: usize) {
-    let (op, plan) = (a.op, a.plan);
-    let ne = w.div_ceil(2);
-    // where sample `c` of a lane is in its row of `x`
-    let at = |c: usize| if split { (c % 2) * ne + c / 2 } else { c };
+#[allow(clippy::too_many_arguments)]
+fn lanes<T: Sample>(
+    a: &AxisOp,
+    taps: &LaneTaps,
+    x: &[T],
+    split: bool,
+    h: usize,
+    w: usize,
+    y: &mut [T],
+    ys: usize,
+) {
+    let plan = a.plan;
+    let at = |c: usize| lane_at(split, w, c);
     if let Some(pair) = &plan.pair {
         let (r0, r1) = (&plan.runs[pair.runs[0]], &plan.runs[pair.runs[1]]);
         let (f, n) = (pair.first, pair.count);
@@ -556,23 +577,39 @@ fn lanes<T: Sample>(a: &AxisOp, x: &[T], split: bool, h: usize, w: usize, y: &mu
             merge,
         );
     }
-    // the other rows (near the ends of the lanes), each tap's place and weight worked
-    // out once per row
-    let rows: Vec<(usize, Vec<(usize, T)>)> = plan
+    // the other rows (near the ends of the lanes)
+    kernel::combine_lane_taps_with(taps, x, h, y, ys);
+}
+
+/// Where sample `c` of a lane of `w` samples is in its row (`split`: the even samples,
+/// then the odd ones).
+fn lane_at(split: bool, w: usize, c: usize) -> usize {
+    if split {
+        (c % 2) * w.div_ceil(2) + c / 2
+    } else {
+        c
+    }
+}
+
+/// The rows of `a`'s operator outside its pair, each with its taps' places in a lane of
+/// `w` samples (split or not) and weights, for [`kernel::combine_lane_taps_with`].
+fn lane_taps(a: &AxisOp, split: bool, w: usize) -> LaneTaps {
+    let rows = a
+        .plan
         .unpaired
         .iter()
         .flat_map(|r| r.clone())
         .map(|r| {
-            let (cols, ws) = op.row_slices(r);
+            let (cols, ws) = a.op.row_slices(r);
             let taps = cols
                 .iter()
                 .zip(ws)
-                .map(|(&c, &wk)| (at(c as usize), T::from_f64(wk)))
+                .map(|(&c, &wk)| (lane_at(split, w, c as usize), wk))
                 .collect();
             (r, taps)
         })
         .collect();
-    kernel::combine_lane_taps(x, w, h, &rows, y, ys);
+    LaneTaps::new(rows, w)
 }
 
 /// Ask for `len` samples of `src` from `at` on to be brought into the caches (L2), a
