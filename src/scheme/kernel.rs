@@ -1619,6 +1619,126 @@ unsafe fn lane_taps_avx2_f32<T: Sample>(
     h8
 }
 
+/// Most samples one [`EdgeGroup`] reads.
+pub const EDGE_SPAN: usize = 32;
+
+/// Up to 8 rows `r0..r0 + n` of a sparse operator, one output sample each on a lane of
+/// single samples, that read few samples together (the rows near the ends of a long
+/// lane): per sample `cols[j]` they read, the rows' weights (0 where a row does not read
+/// it) and which rows start their sum there or add to it. Computed 8 rows at once
+/// ([`edge_rows`]), each row's sum still its taps in column order, the first assigning:
+/// the bits of one row at a time.
+#[derive(Clone, Debug, PartialEq)]
+pub struct EdgeGroup {
+    pub r0: usize,
+    pub n: usize,
+    /// The samples the rows read, increasing.
+    pub cols: Vec<usize>,
+    /// Per sample: the 8 rows' weights as `f32`.
+    pub weights: Vec<[f32; 8]>,
+    /// Per sample: all bits set in the rows whose first tap it is.
+    pub first: Vec<[u32; 8]>,
+    /// Per sample: all bits set in the rows that add it to their sum.
+    pub add: Vec<[u32; 8]>,
+}
+
+impl EdgeGroup {
+    /// The rows `r0..r0 + rows.len()` (at most 8), `rows[i]` the `(columns, weights)` of
+    /// row `r0 + i`; `None` when they read more than [`EDGE_SPAN`] samples or a row's
+    /// columns do not increase.
+    pub fn new(r0: usize, rows: &[(&[u32], &[f64])]) -> Option<EdgeGroup> {
+        let n = rows.len();
+        assert!((1..=8).contains(&n));
+        if rows.iter().any(|(c, _)| c.windows(2).any(|p| p[0] >= p[1])) {
+            return None;
+        }
+        let mut cols: Vec<usize> = rows
+            .iter()
+            .flat_map(|(c, _)| c.iter().map(|&c| c as usize))
+            .collect();
+        cols.sort_unstable();
+        cols.dedup();
+        if cols.len() > EDGE_SPAN {
+            return None;
+        }
+        let u = cols.len();
+        let mut g = EdgeGroup {
+            r0,
+            n,
+            cols,
+            weights: vec![[0.0; 8]; u],
+            first: vec![[0; 8]; u],
+            add: vec![[0; 8]; u],
+        };
+        for (i, (cs, ws)) in rows.iter().enumerate() {
+            for (k, (&c, &w)) in cs.iter().zip(ws.iter()).enumerate() {
+                let j = g.cols.binary_search(&(c as usize)).expect("in the union");
+                g.weights[j][i] = w as f32;
+                if k == 0 {
+                    g.first[j][i] = u32::MAX;
+                } else {
+                    g.add[j][i] = u32::MAX;
+                }
+            }
+        }
+        Some(g)
+    }
+}
+
+/// `y[r] = Σ_k w_rk · x[c_rk]` for the rows of every group (`y` and `x` one lane of
+/// single samples), 8 rows at a time, when the build has it (AVX2, `f32`); `false`
+/// (nothing written) otherwise.
+pub fn edge_rows<T: Sample>(groups: &[EdgeGroup], x: &[T], y: &mut [T]) -> bool {
+    #[cfg(target_arch = "x86_64")]
+    if std::any::TypeId::of::<T>() == std::any::TypeId::of::<f32>() && super::sparse::cpu_has_avx2()
+    {
+        for g in groups {
+            assert!(g.cols.last().is_none_or(|&c| c < x.len()) && g.r0 + g.n <= y.len());
+        }
+        let (px, py) = (x.as_ptr() as *const f32, y.as_mut_ptr() as *mut f32);
+        // SAFETY: AVX2 is present; T is f32; every group's samples and outputs lie inside
+        // `x` and `y` (asserted).
+        unsafe { edge_rows_avx2_f32(groups, px, py) };
+        return true;
+    }
+    let _ = (groups, x, y);
+    false
+}
+
+/// [`edge_rows`] with AVX2 on `f32`.
+///
+/// # Safety
+/// AVX2 present; `x` valid past the last of `cols` and `y` for `r0 + n` of every group.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn edge_rows_avx2_f32(groups: &[EdgeGroup], x: *const f32, y: *mut f32) {
+    use std::arch::x86_64::*;
+    let mut part = [0f32; 8];
+    for g in groups {
+        let mut acc = _mm256_setzero_ps();
+        for (j, &c) in g.cols.iter().enumerate() {
+            // SAFETY: c is inside `x`; the arrays are 8 lanes wide.
+            unsafe {
+                let xv = _mm256_set1_ps(*x.add(c));
+                let v = _mm256_mul_ps(_mm256_loadu_ps(g.weights[j].as_ptr()), xv);
+                let fm = _mm256_loadu_ps(g.first[j].as_ptr() as *const f32);
+                let am = _mm256_loadu_ps(g.add[j].as_ptr() as *const f32);
+                acc = _mm256_blendv_ps(acc, v, fm);
+                acc = _mm256_blendv_ps(acc, _mm256_add_ps(acc, v), am);
+            }
+        }
+        // SAFETY: r0 + n <= y.len().
+        unsafe {
+            if g.n == 8 {
+                _mm256_storeu_ps(y.add(g.r0), acc);
+            } else {
+                _mm256_storeu_ps(part.as_mut_ptr(), acc);
+                std::ptr::copy_nonoverlapping(part.as_ptr(), y.add(g.r0), g.n);
+            }
+        }
+    }
+}
+
 /// An 8 × 8 block of `f32` transposed in registers: `out[c]` lane `r` = `a[r]` lane `c`.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]

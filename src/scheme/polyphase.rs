@@ -14,7 +14,9 @@
 //! `col_step = 2` the lane is first split into its even and odd elements, so tap `k` reads
 //! the contiguous slice starting at element `cols[k] / 2` of one half.
 
-use super::kernel::{combine, combine_pair, combine_pair_merged, deinterleave, interleave};
+use super::kernel::{
+    combine, combine_pair, combine_pair_merged, deinterleave, edge_rows, interleave, EdgeGroup,
+};
 use super::sample::Sample;
 use super::sparse::Csr;
 
@@ -45,6 +47,13 @@ pub struct Polyphase {
     pub pair: Option<Pair>,
     /// The stretches of rows outside the pair (all rows when there is none), increasing.
     pub unpaired: Vec<std::ops::Range<usize>>,
+    /// The rows [`Polyphase::apply_lane`] computes one by one (no run, or a paired run's
+    /// rows outside the pair), increasing.
+    pub edge_rows: Vec<usize>,
+    /// The same rows in groups of up to 8 for lanes of single samples
+    /// ([`kernel::edge_rows`](super::kernel::edge_rows)), and the rows no group takes.
+    pub edges: Vec<EdgeGroup>,
+    pub edge_rest: Vec<usize>,
 }
 
 /// Two regular runs whose rows read the same stretch of the lane: a coarse and a detail
@@ -225,13 +234,32 @@ impl Polyphase {
                 _ => unpaired.push(r..r + 1),
             }
         }
+        let boundary_rows: Vec<usize> = (0..rows).filter(|&r| !covered[r]).collect();
+        // the rows computed one by one: no run, or a paired run's rows outside the pair
+        let mut edge_rows = boundary_rows.clone();
+        if let Some(p) = &pair {
+            for j in 0..2 {
+                let run = &runs[p.runs[j]];
+                let (s, n) = (p.first[j], p.count);
+                edge_rows.extend(
+                    (0..s)
+                        .chain(s + n..run.count)
+                        .map(|i| run.row0 + run.row_step * i),
+                );
+            }
+        }
+        edge_rows.sort_unstable();
+        let (edges, edge_rest) = edge_groups(op, &edge_rows);
         Polyphase {
             rows,
             col_step,
             runs,
-            boundary_rows: (0..rows).filter(|&r| !covered[r]).collect(),
+            boundary_rows,
             pair,
             unpaired,
+            edge_rows,
+            edges,
+            edge_rest,
         }
     }
 
@@ -260,6 +288,7 @@ impl Polyphase {
         }
         let mut paired = [usize::MAX; 2];
         if let Some(pair) = &self.pair {
+            // its runs' rows outside the pair are edge rows, below
             paired = pair.runs;
             let (r0, r1) = (&self.runs[pair.runs[0]], &self.runs[pair.runs[1]]);
             let (f, n) = (pair.first, pair.count);
@@ -280,12 +309,6 @@ impl Polyphase {
                 let o0 = &mut lo[(r0.row0 + f[0]) * e..(r0.row0 + f[0] + n) * e];
                 let o1 = &mut hi[f[1] * e..(f[1] + n) * e];
                 pair_part(pair, 2, ne, x, scratch, e, o0, o1);
-            }
-            // rows of either run outside the common stretch
-            for (run, s) in [(r0, f[0]), (r1, f[1])] {
-                for i in (0..s).chain(s + n..run.count) {
-                    op_row(op, run.row0 + run.row_step * i, x, y, e);
-                }
             }
         }
         for (ri, run) in self.runs.iter().enumerate() {
@@ -309,10 +332,48 @@ impl Polyphase {
                 op_rows_run(op, run, x, y, e);
             }
         }
-        for &r in &self.boundary_rows {
+        // the rows near the ends: 8 at a time where the build has it
+        let rest = if e == 1 && edge_rows(&self.edges, x, y) {
+            &self.edge_rest
+        } else {
+            &self.edge_rows
+        };
+        for &r in rest {
             op_row(op, r, x, y, e);
         }
     }
+}
+
+/// `rows` (increasing) in groups of up to 8 that follow one another and read at most
+/// [`EDGE_SPAN`](super::kernel::EDGE_SPAN) samples together, and the rows left over.
+fn edge_groups(op: &Csr, rows: &[usize]) -> (Vec<EdgeGroup>, Vec<usize>) {
+    let (mut groups, mut rest) = (Vec::new(), Vec::new());
+    let mut i = 0;
+    while i < rows.len() {
+        // the longest group from rows[i] that still reads a short stretch
+        let mut best = None;
+        let mut n = 1;
+        while n <= 8 && i + n <= rows.len() && rows[i + n - 1] == rows[i] + n - 1 {
+            let slices: Vec<(&[u32], &[f64])> =
+                (0..n).map(|q| op.row_slices(rows[i + q])).collect();
+            match EdgeGroup::new(rows[i], &slices) {
+                Some(g) => best = Some(g),
+                None => break,
+            }
+            n += 1;
+        }
+        match best {
+            Some(g) => {
+                i += g.n;
+                groups.push(g);
+            }
+            None => {
+                rest.push(rows[i]);
+                i += 1;
+            }
+        }
+    }
+    (groups, rest)
 }
 
 /// One row of `op` on element-wide samples: `y_r = Σ w x_c` (first tap assigns).
