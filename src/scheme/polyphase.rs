@@ -350,7 +350,7 @@ fn edge_groups(op: &Csr, rows: &[usize]) -> (Vec<EdgeGroup>, Vec<usize>) {
     let (mut groups, mut rest) = (Vec::new(), Vec::new());
     let mut i = 0;
     while i < rows.len() {
-        // the longest group from rows[i] that still reads a short stretch
+        // the longest group from rows[i] that still reads few enough samples
         let mut best = None;
         let mut n = 1;
         while n <= 8 && i + n <= rows.len() && rows[i + n - 1] == rows[i] + n - 1 {
