@@ -494,8 +494,27 @@ fn pair_case<T: mra::scheme::Sample>(x: &[T], u: usize, len: usize) -> (Vec<&[T]
 #[test]
 fn combine_pair_gives_the_bits_of_two_combines() {
     use mra::scheme::kernel::{combine_pair, combine_pair_with, combine_with};
-    fn check<T: mra::scheme::Sample + Into<f64>>(x: &[T], u: usize, m1: u32, m2: u32, len: usize) {
-        let (src, w1, w2) = pair_case(x, u, len);
+    // `units`: the taps of weight +1 and −1 of each output (P1, N1, P2, N2), which the
+    // kernels add or subtract instead of multiplying
+    fn check<T: mra::scheme::Sample + Into<f64>>(
+        x: &[T],
+        u: usize,
+        m1: u32,
+        m2: u32,
+        len: usize,
+        units: [u32; 4],
+    ) {
+        let (src, mut w1, mut w2) = pair_case(x, u, len);
+        for k in 0..u {
+            for (w, p, n) in [(&mut w1, units[0], units[1]), (&mut w2, units[2], units[3])] {
+                if p >> k & 1 == 1 {
+                    w[k] = T::from_f64(1.0);
+                }
+                if n >> k & 1 == 1 {
+                    w[k] = T::from_f64(-1.0);
+                }
+            }
+        }
         for simd in Simd::available() {
             let (mut a1, mut a2) = (vec![T::default(); len], vec![T::default(); len]);
             if simd == Simd::detected() {
@@ -519,18 +538,34 @@ fn combine_pair_gives_the_bits_of_two_combines() {
             }
         }
     }
+    let none = [0; 4];
     let patterns = [
-        (2, 0b11, 0b11),
-        (4, 0b1111, 0b1111),
-        (7, 0b0111011, 0b1111111),
-        (7, 0b1111111, 0b1111100),
-        (7, 0b1111111, 0b1110110),
-        (7, 0b1111111, 0b0011111),
-        (6, 0b001111, 0b111100),
-        (3, 0b101, 0b010),
-        (1, 1, 1),
+        (2, 0b11, 0b11, none),
+        (4, 0b1111, 0b1111, none),
+        (7, 0b0111011, 0b1111111, none),
+        (7, 0b1111111, 0b1111100, none),
+        (7, 0b1111111, 0b1110110, none),
+        (7, 0b1111111, 0b0011111, none),
+        (6, 0b001111, 0b111100, none),
+        (3, 0b101, 0b010, none),
+        (1, 1, 1, none),
+        // the unit taps of the schemes' rows (Haar's synthesis, cubic's centres)
+        (2, 0b11, 0b11, [0b11, 0, 0b01, 0b10]),
+        (7, 0b1111111, 0b1111100, [0b0001000, 0, 0, 0]),
+        (7, 0b1111111, 0b0011111, [0b0001000, 0, 0, 0]),
+        (7, 0b0111011, 0b1111111, [0, 0b0010000, 0, 0]),
+        (7, 0b1111111, 0b1110110, [0, 0, 0, 0b0100000]),
+        // others: a first tap of −1, and units without a build of their own
+        (2, 0b11, 0b11, [0b10, 0b01, 0b01, 0b10]),
+        (
+            7,
+            0b1111111,
+            0b1111100,
+            [0b1000001, 0b0000010, 0b0000100, 0],
+        ),
+        (4, 0b1111, 0b1111, [0b0001, 0, 0, 0b1000]),
     ];
-    for (u, m1, m2) in patterns {
+    for (u, m1, m2, units) in patterns {
         for len in [0usize, 1, 3, 7, 8, 9, 15, 16, 17, 31, 33, 100] {
             let mut x = lcg(len as u64 + u as u64, len + u);
             // an infinity that only the inputs outside one output's mask reach
@@ -540,8 +575,8 @@ fn combine_pair_gives_the_bits_of_two_combines() {
                 }
             }
             let x32: Vec<f32> = x.iter().map(|&v| v as f32).collect();
-            check(&x, u, m1, m2, len);
-            check(&x32, u, m1, m2, len);
+            check(&x, u, m1, m2, len, units);
+            check(&x32, u, m1, m2, len, units);
         }
     }
 }

@@ -785,15 +785,34 @@ fn pair_by_parts<T: Sample>(
 macro_rules! pair_patterns {
     ($m:ident) => {
         $m!(
-            (2, 0b11, 0b11),
-            (4, 0b1111, 0b1111),
-            (6, 0b001111, 0b111100),
-            (7, 0b0111011, 0b1111111),
-            (7, 0b1111111, 0b1111100),
-            (7, 0b1111111, 0b1110110),
-            (7, 0b1111111, 0b0011111)
+            // (U, M1, M2, P1, N1, P2, N2): inputs, the masks of the two outputs, then the
+            // taps of weight +1 and −1 of each (added or subtracted, not multiplied)
+            (2, 0b11, 0b11, 0, 0, 0, 0),
+            (4, 0b1111, 0b1111, 0, 0, 0, 0),
+            (6, 0b001111, 0b111100, 0, 0, 0, 0),
+            (7, 0b0111011, 0b1111111, 0, 0, 0, 0),
+            (7, 0b1111111, 0b1111100, 0, 0, 0, 0),
+            (7, 0b1111111, 0b1110110, 0, 0, 0, 0),
+            (7, 0b1111111, 0b0011111, 0, 0, 0, 0),
+            // Haar's synthesis: sums and differences
+            (2, 0b11, 0b11, 0b11, 0, 0b01, 0b10),
+            // cubic analysis: the centre of `a`
+            (7, 0b1111111, 0b1111100, 0b0001000, 0, 0, 0),
+            (7, 0b1111111, 0b0011111, 0b0001000, 0, 0, 0),
+            // cubic synthesis: the centre of `q`
+            (7, 0b0111011, 0b1111111, 0, 0b0010000, 0, 0),
+            (7, 0b1111111, 0b1110110, 0, 0, 0, 0b0100000)
         )
     };
+}
+
+/// The taps of `mask` whose weight in `w` is exactly `v` (±1: the pair kernels add or
+/// subtract those inputs instead of multiplying them, the same bits).
+fn unit_taps<T: Sample>(w: &[T], mask: u32, v: f64) -> u32 {
+    w.iter()
+        .enumerate()
+        .filter(|&(k, x)| mask >> k & 1 == 1 && x.to_f64() == v)
+        .fold(0, |m, (k, _)| m | 1 << k)
 }
 
 /// Dispatch of [`combine_pair`] to [`pair_avx2_f32`] / [`pair_avx2_f64`], for `count`
@@ -825,8 +844,14 @@ unsafe fn pair_avx2<T: Sample>(
 ) -> bool {
     use std::any::TypeId;
     let u = src.len();
+    let units = (
+        unit_taps(w1, m1, 1.0),
+        unit_taps(w1, m1, -1.0),
+        unit_taps(w2, m2, 1.0),
+        unit_taps(w2, m2, -1.0),
+    );
     macro_rules! go {
-        ($t:ty, $f:ident, $g:ident, $U:literal, $M1:literal, $M2:literal) => {{
+        ($t:ty, $f:ident, $g:ident, $U:literal, $M1:literal, $M2:literal, $P1:literal, $N1:literal, $P2:literal, $N2:literal) => {{
             let wide = wide && len >= 64 / std::mem::size_of::<$t>();
             let a: [$t; $U] = std::array::from_fn(|k| w1[k].to_f64() as $t);
             let b: [$t; $U] = std::array::from_fn(|k| w2[k].to_f64() as $t);
@@ -838,21 +863,29 @@ unsafe fn pair_avx2<T: Sample>(
                     let q1 = o[0].add(t * out_step[0]) as *mut $t;
                     let q2 = o[1].add(t * out_step[1]) as *mut $t;
                     match (wide, merge, split) {
-                        (true, true, _) => $g::<$U, $M1, $M2, true, false>(q1, q2, len, &p, &a, &b),
-                        (true, false, true) => {
-                            $g::<$U, $M1, $M2, false, true>(q1, q2, len, &p, &a, &b)
-                        }
+                        (true, true, _) => $g::<$U, $M1, $M2, $P1, $N1, $P2, $N2, true, false>(
+                            q1, q2, len, &p, &a, &b,
+                        ),
+                        (true, false, true) => $g::<$U, $M1, $M2, $P1, $N1, $P2, $N2, false, true>(
+                            q1, q2, len, &p, &a, &b,
+                        ),
                         (true, false, false) => {
-                            $g::<$U, $M1, $M2, false, false>(q1, q2, len, &p, &a, &b)
+                            $g::<$U, $M1, $M2, $P1, $N1, $P2, $N2, false, false>(
+                                q1, q2, len, &p, &a, &b,
+                            )
                         }
-                        (false, true, _) => {
-                            $f::<$U, $M1, $M2, true, false>(q1, q2, len, &p, &a, &b)
-                        }
+                        (false, true, _) => $f::<$U, $M1, $M2, $P1, $N1, $P2, $N2, true, false>(
+                            q1, q2, len, &p, &a, &b,
+                        ),
                         (false, false, true) => {
-                            $f::<$U, $M1, $M2, false, true>(q1, q2, len, &p, &a, &b)
+                            $f::<$U, $M1, $M2, $P1, $N1, $P2, $N2, false, true>(
+                                q1, q2, len, &p, &a, &b,
+                            )
                         }
                         (false, false, false) => {
-                            $f::<$U, $M1, $M2, false, false>(q1, q2, len, &p, &a, &b)
+                            $f::<$U, $M1, $M2, $P1, $N1, $P2, $N2, false, false>(
+                                q1, q2, len, &p, &a, &b,
+                            )
                         }
                     }
                 }
@@ -860,12 +893,20 @@ unsafe fn pair_avx2<T: Sample>(
             return true;
         }};
     }
+    // the entry with the pattern's unit taps first, else the one without any
     macro_rules! table {
-        ($(($U:literal, $M1:literal, $M2:literal)),*) => {
-            if TypeId::of::<T>() == TypeId::of::<f32>() {
-                $( if (u, m1, m2) == ($U, $M1, $M2) { go!(f32, pair_avx2_f32, pair_avx512_f32, $U, $M1, $M2) } )*
-            } else if TypeId::of::<T>() == TypeId::of::<f64>() {
-                $( if (u, m1, m2) == ($U, $M1, $M2) { go!(f64, pair_avx2_f64, pair_avx512_f64, $U, $M1, $M2) } )*
+        ($(($U:literal, $M1:literal, $M2:literal, $P1:literal, $N1:literal, $P2:literal, $N2:literal)),*) => {
+            for plain in [false, true] {
+                let want = if plain { (0, 0, 0, 0) } else { units };
+                if TypeId::of::<T>() == TypeId::of::<f32>() {
+                    $( if (u, m1, m2) == ($U, $M1, $M2) && want == ($P1, $N1, $P2, $N2) {
+                        go!(f32, pair_avx2_f32, pair_avx512_f32, $U, $M1, $M2, $P1, $N1, $P2, $N2)
+                    } )*
+                } else if TypeId::of::<T>() == TypeId::of::<f64>() {
+                    $( if (u, m1, m2) == ($U, $M1, $M2) && want == ($P1, $N1, $P2, $N2) {
+                        go!(f64, pair_avx2_f64, pair_avx512_f64, $U, $M1, $M2, $P1, $N1, $P2, $N2)
+                    } )*
+                }
             }
         };
     }
@@ -1163,7 +1204,7 @@ fn input_ptrs_at<T>(src: &[T], off: &[usize]) -> [*const T; 32] {
 /// The body of [`combine_pair`] for one pattern: a vector of each output per step, every
 /// input loaded once; then scalars.
 macro_rules! pair_avx2_body {
-    ($name:ident, $feat:literal, $t:ty, $lanes:expr, $set1:ident, $zero:ident, $mul:ident, $add:ident, $load:ident, $store:ident, $merge:ident, $split:ident) => {
+    ($name:ident, $feat:literal, $t:ty, $lanes:expr, $set1:ident, $zero:ident, $mul:ident, $add:ident, $sub:ident, $load:ident, $store:ident, $merge:ident, $split:ident) => {
         /// See [`pair_avx2_body`].
         ///
         /// # Safety
@@ -1175,6 +1216,10 @@ macro_rules! pair_avx2_body {
             const U: usize,
             const M1: u32,
             const M2: u32,
+            const P1: u32,
+            const N1: u32,
+            const P2: u32,
+            const N2: u32,
             const MERGE: bool,
             const SPLIT: bool,
         >(
@@ -1201,14 +1246,28 @@ macro_rules! pair_avx2_body {
                     let (mut a1, mut a2) = ($zero(), $zero());
                     for k in 0..U {
                         let x = $load(p[k].add(i));
-                        if M1 >> k & 1 == 1 {
-                            let m = $mul(v1[k], x);
-                            a1 = if k == f1 { m } else { $add(a1, m) };
+                        // a tap of weight ±1 adds or subtracts its input: `w·x` is
+                        // then `±x` exactly, so the sum has the same bits
+                        macro_rules! tap {
+                            ($acc:ident, $v:ident, $m:ident, $f:ident, $p:ident, $n:ident) => {
+                                if $m >> k & 1 == 1 {
+                                    if $p >> k & 1 == 1 {
+                                        $acc = if k == $f { x } else { $add($acc, x) };
+                                    } else if $n >> k & 1 == 1 {
+                                        $acc = if k == $f {
+                                            $mul($set1(-1.0), x)
+                                        } else {
+                                            $sub($acc, x)
+                                        };
+                                    } else {
+                                        let m = $mul($v[k], x);
+                                        $acc = if k == $f { m } else { $add($acc, m) };
+                                    }
+                                }
+                            };
                         }
-                        if M2 >> k & 1 == 1 {
-                            let m = $mul(v2[k], x);
-                            a2 = if k == f2 { m } else { $add(a2, m) };
-                        }
+                        tap!(a1, v1, M1, f1, P1, N1);
+                        tap!(a2, v2, M2, f2, P2, N2);
                     }
                     (a1, a2)
                 }};
@@ -1220,14 +1279,22 @@ macro_rules! pair_avx2_body {
                     let (mut a1, mut a2) = (0.0 as $t, 0.0 as $t);
                     for k in 0..U {
                         let x = *p[k].add(i);
-                        if M1 >> k & 1 == 1 {
-                            let m = w1[k] * x;
-                            a1 = if k == f1 { m } else { a1 + m };
+                        macro_rules! tap {
+                            ($acc:ident, $w:ident, $m:ident, $f:ident, $p:ident, $n:ident) => {
+                                if $m >> k & 1 == 1 {
+                                    if $p >> k & 1 == 1 {
+                                        $acc = if k == $f { x } else { $acc + x };
+                                    } else if $n >> k & 1 == 1 {
+                                        $acc = if k == $f { -x } else { $acc - x };
+                                    } else {
+                                        let m = $w[k] * x;
+                                        $acc = if k == $f { m } else { $acc + m };
+                                    }
+                                }
+                            };
                         }
-                        if M2 >> k & 1 == 1 {
-                            let m = w2[k] * x;
-                            a2 = if k == f2 { m } else { a2 + m };
-                        }
+                        tap!(a1, w1, M1, f1, P1, N1);
+                        tap!(a2, w2, M2, f2, P2, N2);
                     }
                     (a1, a2)
                 }};
@@ -1392,19 +1459,19 @@ macro_rules! split_pd512 {
 /// ([`pair_avx2_body`]): one line each, its names, target feature, type, lanes and
 /// intrinsics.
 macro_rules! builds {
-    ($($taps:ident, $pair:ident, $feat:literal, $t:ty, $lanes:expr, $set1:ident, $zero:ident, $mul:ident, $add:ident, $load:ident, $store:ident, $merge:ident, $split:ident;)*) => {
+    ($($taps:ident, $pair:ident, $feat:literal, $t:ty, $lanes:expr, $set1:ident, $zero:ident, $mul:ident, $add:ident, $sub:ident, $load:ident, $store:ident, $merge:ident, $split:ident;)*) => {
         $(
             taps_avx2_body!($taps, $feat, $t, $lanes, $set1, $zero, $mul, $add, $load, $store);
-            pair_avx2_body!($pair, $feat, $t, $lanes, $set1, $zero, $mul, $add, $load, $store, $merge, $split);
+            pair_avx2_body!($pair, $feat, $t, $lanes, $set1, $zero, $mul, $add, $sub, $load, $store, $merge, $split);
         )*
     };
 }
 
 builds! {
-    taps_avx2_f32, pair_avx2_f32, "avx2", f32, 8, _mm256_set1_ps, _mm256_setzero_ps, _mm256_mul_ps, _mm256_add_ps, _mm256_loadu_ps, _mm256_storeu_ps, merge_ps256, split_ps256;
-    taps_avx2_f64, pair_avx2_f64, "avx2", f64, 4, _mm256_set1_pd, _mm256_setzero_pd, _mm256_mul_pd, _mm256_add_pd, _mm256_loadu_pd, _mm256_storeu_pd, merge_pd256, split_pd256;
-    taps_avx512_f32, pair_avx512_f32, "avx512f", f32, 16, _mm512_set1_ps, _mm512_setzero_ps, _mm512_mul_ps, _mm512_add_ps, _mm512_loadu_ps, _mm512_storeu_ps, merge_ps512, split_ps512;
-    taps_avx512_f64, pair_avx512_f64, "avx512f", f64, 8, _mm512_set1_pd, _mm512_setzero_pd, _mm512_mul_pd, _mm512_add_pd, _mm512_loadu_pd, _mm512_storeu_pd, merge_pd512, split_pd512;
+    taps_avx2_f32, pair_avx2_f32, "avx2", f32, 8, _mm256_set1_ps, _mm256_setzero_ps, _mm256_mul_ps, _mm256_add_ps, _mm256_sub_ps, _mm256_loadu_ps, _mm256_storeu_ps, merge_ps256, split_ps256;
+    taps_avx2_f64, pair_avx2_f64, "avx2", f64, 4, _mm256_set1_pd, _mm256_setzero_pd, _mm256_mul_pd, _mm256_add_pd, _mm256_sub_pd, _mm256_loadu_pd, _mm256_storeu_pd, merge_pd256, split_pd256;
+    taps_avx512_f32, pair_avx512_f32, "avx512f", f32, 16, _mm512_set1_ps, _mm512_setzero_ps, _mm512_mul_ps, _mm512_add_ps, _mm512_sub_ps, _mm512_loadu_ps, _mm512_storeu_ps, merge_ps512, split_ps512;
+    taps_avx512_f64, pair_avx512_f64, "avx512f", f64, 8, _mm512_set1_pd, _mm512_setzero_pd, _mm512_mul_pd, _mm512_add_pd, _mm512_sub_pd, _mm512_loadu_pd, _mm512_storeu_pd, merge_pd512, split_pd512;
 }
 
 /// Most samples of a lane [`combine_lane_taps`] reads in registers (8 windows of 8).
