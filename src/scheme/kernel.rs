@@ -1,16 +1,87 @@
 //! The inner loops every transform ends in, written over whole runs of samples so they
-//! vectorise, with AVX2 and AVX-512 builds picked at run time (no FMA: every build gives
-//! the same bits, see [`Simd`]).
+//! vectorise, with AVX2 (with FMA) and AVX-512 builds picked at run time. Every build and
+//! every path gives the same bits: each output sums its row's taps as [`pair_taps`] and
+//! [`sum_terms`] say.
+//!
+//! **How a row's sum is taken.** The taps in increasing column order; scanning them so, a
+//! tap not yet paired pairs with the next tap of the same weight not yet paired, if any
+//! (the symmetric taps of the regular filters: cubic's `a` sums `(x₀ + x₆)`, `(x₁ + x₅)`,
+//! `(x₂ + x₄)` and takes `x₃` alone). The terms — single taps, and pairs at their first
+//! tap — in column order: the first is `w·x` (a pair's `x` the sum of its two inputs, the
+//! earlier first), each next single tap adds the rounded product `w·x`, each next pair is
+//! `fma(x_a + x_b, w, acc)`, rounded once. A row without equal weights is the plain
+//! sum `((w₀x₀ + w₁x₁) + w₂x₂) + …`. Pairs halve the multiplies of the regular rows and
+//! move half of the rest into FMAs: the arithmetic of cubic's pair of rows goes from 12
+//! multiplies and 10 adds per pair of outputs to 6 FMAs or multiplies and 5–7 adds.
 
 use super::sample::Sample;
 use super::sparse::Simd;
 
+/// [`pair_taps`]' mark of the second tap of a pair.
+pub const SECOND: usize = usize::MAX;
+
+/// The pairs of a row whose weights are `w` (in column order): `partner[k]` is `k` for a
+/// single tap, `j > k` for the first tap of a pair whose second is `j`, and [`SECOND`] for
+/// a pair's second tap. Scanning in order, a tap not yet paired pairs with the next tap
+/// of the same weight not yet paired. `true` when some taps pair.
+#[inline]
+pub fn pair_taps<T: Sample>(w: &[T], partner: &mut [usize]) -> bool {
+    let n = w.len();
+    assert!(partner.len() >= n);
+    for (k, p) in partner.iter_mut().enumerate().take(n) {
+        *p = k;
+    }
+    let mut any = false;
+    for k in 0..n {
+        if partner[k] != k {
+            continue;
+        }
+        if let Some(j) = (k + 1..n).find(|&j| partner[j] == j && w[j] == w[k]) {
+            (partner[k], partner[j]) = (j, SECOND);
+            any = true;
+        }
+    }
+    any
+}
+
+/// One output of a row, `x(k)` the input of tap `k`: the sum [`pair_taps`] plans (see the
+/// module's documentation; the reference every build and path gives the bits of).
+#[inline(always)]
+pub fn sum_terms<T: Sample>(w: &[T], partner: &[usize], x: impl Fn(usize) -> T) -> T {
+    let mut acc = T::default();
+    let mut first = true;
+    for k in 0..w.len() {
+        let p = partner[k];
+        if p == SECOND {
+            continue;
+        }
+        let v = if p == k { x(k) } else { x(k) + x(p) };
+        acc = if first {
+            w[k] * v
+        } else if p == k {
+            acc + w[k] * v
+        } else {
+            v.fused_mul_add(w[k], acc)
+        };
+        first = false;
+    }
+    acc
+}
+
+/// [`sum_terms`] of a row given as weights alone (pairs worked out here).
+pub fn row_sum<T: Sample>(w: &[T], x: impl Fn(usize) -> T) -> T {
+    let mut partner = vec![0; w.len()];
+    pair_taps(w, &mut partner);
+    sum_terms(w, &partner, x)
+}
+
 /// Most taps fused into one pass; longer rows accumulate in further passes.
 const MAX_FUSED: usize = 8;
 
-/// `out[i] = Σ_k w[k] · src[k][i]` for every `i < out.len()`, summed in the order of `k`
-/// (the first tap assigns, the others accumulate: the rounding of [`super::sparse::Csr`]'s
-/// row kernel, so both paths give the same bits).
+/// `out[i] = Σ_k w[k] · src[k][i]` for every `i < out.len()`, `k` in column order, summed
+/// as [`sum_terms`] says (the rounding of [`super::sparse::Csr`]'s row kernel, so both
+/// paths give the same bits): rows without equal weights by [`taps`] / [`taps_avx2`]
+/// (the first tap assigns, the others accumulate), rows with pairs by the terms' loop.
 ///
 /// Every `src[k]` must hold at least `out.len()` samples.
 #[inline]
@@ -25,6 +96,18 @@ pub fn combine_with<T: Sample>(simd: Simd, out: &mut [T], src: &[&[T]], w: &[T])
     assert_eq!(src.len(), w.len());
     assert!(src.iter().all(|s| s.len() >= out.len()));
     assert!(simd <= Simd::detected(), "{simd:?} is not available");
+    let n = w.len();
+    let mut stack = [0usize; 32];
+    let mut heap = Vec::new();
+    let partner = if n <= 32 {
+        &mut stack[..n]
+    } else {
+        heap.resize(n, 0);
+        &mut heap[..]
+    };
+    if pair_taps(w, partner) {
+        return combine_terms(simd, out, src, w, partner);
+    }
     #[cfg(target_arch = "x86_64")]
     if simd >= Simd::Avx2 {
         // SAFETY: AVX2 is present (and AVX-512 when asked for, checked above).
@@ -54,6 +137,60 @@ unsafe fn combine_avx2<T: Sample>(out: &mut [T], src: &[&[T]], w: &[T], wide: bo
             7 => taps_avx2::<T, 7>(out, src, w, wide),
             _ => taps_avx2::<T, 8>(out, src, w, wide),
         }
+    }
+}
+
+/// [`combine`] of a row whose taps pair (`partner` from [`pair_taps`]).
+fn combine_terms<T: Sample>(simd: Simd, out: &mut [T], src: &[&[T]], w: &[T], partner: &[usize]) {
+    let len = out.len();
+    #[cfg(target_arch = "x86_64")]
+    if simd >= Simd::Avx2 && src.len() <= 32 {
+        use std::any::TypeId;
+        let p: [*const T; 32] =
+            std::array::from_fn(|k| src.get(k).map_or(std::ptr::null(), |s| s.as_ptr()));
+        let wide = simd == Simd::Avx512;
+        // SAFETY (both arms): AVX2 with FMA is present, AVX-512F when `wide`; every
+        // source holds `len` samples (checked by `combine_with`); T is the type named.
+        unsafe {
+            if TypeId::of::<T>() == TypeId::of::<f32>() {
+                let (o, p, w) = (
+                    out.as_mut_ptr() as *mut f32,
+                    p.as_ptr() as *const *const f32,
+                    w.as_ptr() as *const f32,
+                );
+                let (p, w) = (
+                    std::slice::from_raw_parts(p, src.len()),
+                    std::slice::from_raw_parts(w, src.len()),
+                );
+                if wide && len >= 16 {
+                    terms_avx512_f32(o, len, p, w, partner);
+                } else {
+                    terms_avx2_f32(o, len, p, w, partner);
+                }
+                return;
+            }
+            if TypeId::of::<T>() == TypeId::of::<f64>() {
+                let (o, p, w) = (
+                    out.as_mut_ptr() as *mut f64,
+                    p.as_ptr() as *const *const f64,
+                    w.as_ptr() as *const f64,
+                );
+                let (p, w) = (
+                    std::slice::from_raw_parts(p, src.len()),
+                    std::slice::from_raw_parts(w, src.len()),
+                );
+                if wide && len >= 8 {
+                    terms_avx512_f64(o, len, p, w, partner);
+                } else {
+                    terms_avx2_f64(o, len, p, w, partner);
+                }
+                return;
+            }
+        }
+    }
+    let _ = simd;
+    for (i, o) in out.iter_mut().enumerate() {
+        *o = sum_terms(w, partner, |k| src[k][i]);
     }
 }
 
@@ -101,7 +238,7 @@ fn taps<T: Sample, const N: usize>(out: &mut [T], src: &[&[T]], w: &[T]) {
 /// [`taps`] with AVX2 intrinsics for `f32`/`f64`: blocks of four vectors keep four
 /// independent sums in flight (each output's sum is a chain of dependent adds in a fixed
 /// order, for the bits, so one vector at a time would wait on add latency), then single
-/// vectors, then scalars. Separate multiply and add, no FMA: the same bits as the scalar
+/// vectors, then scalars. Separate multiply and add (no pairs, so no FMA): the same bits as the scalar
 /// loop. Short runs (lanes of a few hundred samples) are common, so the set-up is kept to
 /// plain loops. `wide`: 512-bit vectors (AVX-512F, which the caller has checked) on runs
 /// of at least one such vector.
@@ -147,7 +284,7 @@ unsafe fn taps_avx2<T: Sample, const N: usize>(out: &mut [T], src: &[&[T]], w: &
     }
 }
 
-/// `o[i] = Σ_k ws[k]·p[k][i]`, `i < len` (first tap assigns): blocks of four vectors, then
+/// `o[i] = Σ_k ws[k]·p[k][i]`, `i < len` (first tap assigns; rows without pairs): blocks of four vectors, then
 /// single vectors, then scalars. One body for `f32` and `f64` (their intrinsics differ).
 macro_rules! taps_avx2_body {
     ($name:ident, $feat:literal, $t:ty, $lanes:expr, $set1:ident, $zero:ident, $mul:ident, $add:ident, $load:ident, $store:ident) => {
@@ -215,6 +352,122 @@ macro_rules! taps_avx2_body {
         }
     };
 }
+
+/// `o[i] = ` [`sum_terms`] of the row `w` (pairs `partner`) over `p[k][i]`, `i < len`: the
+/// rows whose taps pair outside [`combine_pair`]'s patterns (terms looked up per vector).
+macro_rules! terms_avx2_body {
+    ($name:ident, $feat:literal, $t:ty, $lanes:expr, $set1:ident, $mul:ident, $add:ident, $fma:ident, $load:ident, $store:ident) => {
+        /// See [`terms_avx2_body`].
+        ///
+        /// # Safety
+        /// The target feature present; `o` and every `p[k]` valid for `len` samples;
+        /// `partner` from [`pair_taps`] of `w`, as long as `p`.
+        #[cfg(target_arch = "x86_64")]
+        #[target_feature(enable = $feat)]
+        unsafe fn $name(o: *mut $t, len: usize, p: &[*const $t], w: &[$t], partner: &[usize]) {
+            use std::arch::x86_64::*;
+            const L: usize = $lanes;
+            // the terms: (first input, second input or usize::MAX, weight)
+            let mut terms = [(0usize, usize::MAX, 0.0 as $t); 32];
+            let mut n = 0;
+            for k in 0..w.len() {
+                let q = partner[k];
+                if q != SECOND {
+                    terms[n] = (k, if q == k { usize::MAX } else { q }, w[k]);
+                    n += 1;
+                }
+            }
+            let terms = &terms[..n];
+            macro_rules! at {
+                ($i:expr) => {{
+                    let i = $i;
+                    let mut acc = $set1(0.0);
+                    for (t, &(a, b, wk)) in terms.iter().enumerate() {
+                        let x = $load(p[a].add(i));
+                        let wv = $set1(wk);
+                        if b == usize::MAX {
+                            let m = $mul(wv, x);
+                            acc = if t == 0 { m } else { $add(acc, m) };
+                        } else {
+                            let v = $add(x, $load(p[b].add(i)));
+                            acc = if t == 0 {
+                                $mul(wv, v)
+                            } else {
+                                $fma(v, wv, acc)
+                            };
+                        }
+                    }
+                    $store(o.add(i), acc);
+                }};
+            }
+            let mut i = 0;
+            // SAFETY (all blocks): i + width <= len, so every access is inside the runs.
+            unsafe {
+                while i + L <= len {
+                    at!(i);
+                    i += L;
+                }
+                if i < len && len >= L {
+                    // the last vector again, ending at `len` (the same sums, the same bits)
+                    at!(len - L);
+                    i = len;
+                }
+                while i < len {
+                    *o.add(i) = sum_terms(w, partner, |k| *p[k].add(i));
+                    i += 1;
+                }
+            }
+        }
+    };
+}
+terms_avx2_body!(
+    terms_avx2_f32,
+    "avx2,fma",
+    f32,
+    8,
+    _mm256_set1_ps,
+    _mm256_mul_ps,
+    _mm256_add_ps,
+    _mm256_fmadd_ps,
+    _mm256_loadu_ps,
+    _mm256_storeu_ps
+);
+terms_avx2_body!(
+    terms_avx2_f64,
+    "avx2,fma",
+    f64,
+    4,
+    _mm256_set1_pd,
+    _mm256_mul_pd,
+    _mm256_add_pd,
+    _mm256_fmadd_pd,
+    _mm256_loadu_pd,
+    _mm256_storeu_pd
+);
+terms_avx2_body!(
+    terms_avx512_f32,
+    "avx512f,fma",
+    f32,
+    16,
+    _mm512_set1_ps,
+    _mm512_mul_ps,
+    _mm512_add_ps,
+    _mm512_fmadd_ps,
+    _mm512_loadu_ps,
+    _mm512_storeu_ps
+);
+terms_avx2_body!(
+    terms_avx512_f64,
+    "avx512f,fma",
+    f64,
+    8,
+    _mm512_set1_pd,
+    _mm512_mul_pd,
+    _mm512_add_pd,
+    _mm512_fmadd_pd,
+    _mm512_loadu_pd,
+    _mm512_storeu_pd
+);
 
 /// Split `x` (elements of `e` samples) into its even elements, then its odd elements:
 /// `dst = [x_0, x_2, x_4, … | x_1, x_3, …]`.
@@ -572,7 +825,7 @@ pub fn combine_taps<'t, T: Sample + 't>(
 /// AVX2 present; every column of `op` times `len` plus `len` within `src`; the output rows
 /// `0..rows.len()` of `len` samples within `dst`.
 #[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
+#[target_feature(enable = "avx2,fma")]
 unsafe fn combine_rows_avx2_f32(
     op: &super::sparse::Csr,
     src: *const f32,
@@ -580,10 +833,24 @@ unsafe fn combine_rows_avx2_f32(
     rows: std::ops::Range<usize>,
     dst: *mut f32,
 ) {
+    let mut partner = [0usize; 32];
+    let mut wf = [0f32; 32];
+    let mut pf = [std::ptr::null::<f32>(); 32];
     for (i, r) in rows.enumerate() {
         let (cols, ws) = op.row_slices(r);
         // SAFETY (all): the caller's bounds; columns below op.cols().
         let o = unsafe { dst.add(i * len) };
+        let n = cols.len();
+        if n <= 32 {
+            for k in 0..n {
+                wf[k] = ws[k] as f32;
+                pf[k] = unsafe { src.add(cols[k] as usize * len) };
+            }
+            if pair_taps(&wf[..n], &mut partner[..n]) {
+                unsafe { terms_avx2_f32(o, len, &pf[..n], &wf[..n], &partner[..n]) };
+                continue;
+            }
+        }
         macro_rules! arm {
             ($n:literal) => {{
                 let p: [*const f32; $n] =
@@ -610,7 +877,7 @@ unsafe fn combine_rows_avx2_f32(
                     .map(|&c| unsafe { std::slice::from_raw_parts(src.add(c as usize * len), len) })
                     .collect();
                 let wv: Vec<f32> = ws.iter().map(|&x| x as f32).collect();
-                combine_generic(out, &t, &wv);
+                combine_with(Simd::detected(), out, &t, &wv);
             }
         }
     }
@@ -785,34 +1052,83 @@ fn pair_by_parts<T: Sample>(
 macro_rules! pair_patterns {
     ($m:ident) => {
         $m!(
-            // (U, M1, M2, P1, N1, P2, N2): inputs, the masks of the two outputs, then the
-            // taps of weight +1 and −1 of each (added or subtracted, not multiplied)
-            (2, 0b11, 0b11, 0, 0, 0, 0),
-            (4, 0b1111, 0b1111, 0, 0, 0, 0),
-            (6, 0b001111, 0b111100, 0, 0, 0, 0),
-            (7, 0b0111011, 0b1111111, 0, 0, 0, 0),
-            (7, 0b1111111, 0b1111100, 0, 0, 0, 0),
-            (7, 0b1111111, 0b1110110, 0, 0, 0, 0),
-            (7, 0b1111111, 0b0011111, 0, 0, 0, 0),
-            // Haar's synthesis: sums and differences
-            (2, 0b11, 0b11, 0b11, 0, 0b01, 0b10),
-            // cubic analysis: the centre of `a`
-            (7, 0b1111111, 0b1111100, 0b0001000, 0, 0, 0),
-            (7, 0b1111111, 0b0011111, 0b0001000, 0, 0, 0),
-            // cubic synthesis: the centre of `q`
-            (7, 0b0111011, 0b1111111, 0, 0b0010000, 0, 0),
-            (7, 0b1111111, 0b1110110, 0, 0, 0, 0b0100000)
+            // (U, M1, M2, P1, N1, P2, N2, R1, R2): inputs, the masks of the two outputs,
+            // the terms of weight +1 and −1 of each (added or subtracted, not
+            // multiplied), and the pairs of each (see `pattern_of`)
+            (2, 0b11, 0b11, 0, 0, 0, 0, 0, 0),
+            (4, 0b1111, 0b1111, 0, 0, 0, 0, 0, 0),
+            (6, 0b001111, 0b111100, 0, 0, 0, 0, 0, 0),
+            (7, 0b0111011, 0b1111111, 0, 0, 0, 0, 0, 0),
+            (7, 0b1111111, 0b1111100, 0, 0, 0, 0, 0, 0),
+            (7, 0b1111111, 0b1110110, 0, 0, 0, 0, 0, 0),
+            (7, 0b1111111, 0b0011111, 0, 0, 0, 0, 0, 0),
+            // the regular rows of the schemes, their symmetric taps paired: Haar's
+            // analysis and synthesis
+            (2, 0b11, 0b11, 0, 0, 0, 0, 0x2, 0),
+            (2, 0b11, 0b11, 0b1, 0, 0b1, 0b10, 0x2, 0),
+            // Chaikin's analysis and synthesis
+            (4, 0b1111, 0b1111, 0, 0, 0, 0, 0x34, 0),
+            (6, 0b001111, 0b111100, 0, 0, 0, 0, 0, 0x5600),
+            (4, 0b1111, 0b1111, 0, 0, 0, 0, 0x3, 0x3),
+            // cubic's analysis (`a`'s centre of weight 1) and synthesis (`q`'s of −1)
+            (7, 0b1111111, 0b0011111, 0b0001000, 0, 0, 0, 0x567, 0x45),
+            (7, 0b1111111, 0b1111100, 0b0001000, 0, 0, 0, 0x567, 0x6700),
+            (7, 0b1111111, 0b1110110, 0, 0, 0, 0b0100000, 0x67003, 0x70030),
+            (7, 0b0111011, 0b1111111, 0, 0b0010000, 0, 0, 0x6002, 0x67003)
         )
     };
 }
 
-/// The taps of `mask` whose weight in `w` is exactly `v` (±1: the pair kernels add or
-/// subtract those inputs instead of multiplying them, the same bits).
-fn unit_taps<T: Sample>(w: &[T], mask: u32, v: f64) -> u32 {
-    w.iter()
-        .enumerate()
-        .filter(|&(k, x)| mask >> k & 1 == 1 && x.to_f64() == v)
-        .fold(0, |m, (k, _)| m | 1 << k)
+/// The pairs and the unit weights of one output of a pair over the inputs `w` (its taps
+/// those of `mask`, in increasing `k`): `(p, n, r)` with `p` / `n` the terms (single taps
+/// and pairs' first taps) of weight +1 / −1, which the kernels add or subtract instead of
+/// multiplying (the same bits), and `r` the pairs of [`pair_taps`], nibble `k` of it
+/// `j + 1` for a pair `(k, j)`.
+fn pattern_of<T: Sample>(w: &[T], mask: u32) -> (u32, u32, u64) {
+    let (mut p, mut n, mut r) = (0u32, 0u32, 0u64);
+    let mut left = mask & ((1u64 << w.len().min(32)) - 1) as u32;
+    while left != 0 {
+        let k = left.trailing_zeros() as usize;
+        left &= left - 1;
+        let wk = w[k];
+        // the next tap of the same weight not yet paired
+        let mut later = left;
+        while later != 0 {
+            let j = later.trailing_zeros() as usize;
+            later &= later - 1;
+            if w[j] == wk {
+                r |= ((j + 1) as u64) << (4 * k);
+                left &= !(1 << j);
+                break;
+            }
+        }
+        if wk == T::from_f64(1.0) {
+            p |= 1 << k;
+        } else if wk == T::from_f64(-1.0) {
+            n |= 1 << k;
+        }
+    }
+    (p, n, r)
+}
+
+/// [`seconds`] of a pattern's pairs, as a constant of the kernel built for it.
+struct Seconds<const R: u64>;
+impl<const R: u64> Seconds<R> {
+    const MASK: u32 = seconds(R);
+}
+
+/// The second taps of the pairs `r` (as [`pattern_of`] gives them).
+const fn seconds(r: u64) -> u32 {
+    let mut m = 0u32;
+    let mut k = 0;
+    while k < 16 {
+        let j = (r >> (4 * k)) & 15;
+        if j > 0 {
+            m |= 1 << (j - 1);
+        }
+        k += 1;
+    }
+    m
 }
 
 /// Dispatch of [`combine_pair`] to [`pair_avx2_f32`] / [`pair_avx2_f64`], for `count`
@@ -844,14 +1160,13 @@ unsafe fn pair_avx2<T: Sample>(
 ) -> bool {
     use std::any::TypeId;
     let u = src.len();
-    let units = (
-        unit_taps(w1, m1, 1.0),
-        unit_taps(w1, m1, -1.0),
-        unit_taps(w2, m2, 1.0),
-        unit_taps(w2, m2, -1.0),
-    );
+    if u > 16 {
+        return false;
+    }
+    let ((p1, n1, r1), (p2, n2, r2)) = (pattern_of(w1, m1), pattern_of(w2, m2));
+    let want = (p1, n1, p2, n2, r1, r2);
     macro_rules! go {
-        ($t:ty, $f:ident, $g:ident, $U:literal, $M1:literal, $M2:literal, $P1:literal, $N1:literal, $P2:literal, $N2:literal) => {{
+        ($t:ty, $f:ident, $g:ident, $U:literal, $M1:literal, $M2:literal, $P1:literal, $N1:literal, $P2:literal, $N2:literal, $R1:literal, $R2:literal) => {{
             let wide = wide && len >= 64 / std::mem::size_of::<$t>();
             let a: [$t; $U] = std::array::from_fn(|k| w1[k].to_f64() as $t);
             let b: [$t; $U] = std::array::from_fn(|k| w2[k].to_f64() as $t);
@@ -863,27 +1178,33 @@ unsafe fn pair_avx2<T: Sample>(
                     let q1 = o[0].add(t * out_step[0]) as *mut $t;
                     let q2 = o[1].add(t * out_step[1]) as *mut $t;
                     match (wide, merge, split) {
-                        (true, true, _) => $g::<$U, $M1, $M2, $P1, $N1, $P2, $N2, true, false>(
-                            q1, q2, len, &p, &a, &b,
-                        ),
-                        (true, false, true) => $g::<$U, $M1, $M2, $P1, $N1, $P2, $N2, false, true>(
-                            q1, q2, len, &p, &a, &b,
-                        ),
-                        (true, false, false) => {
-                            $g::<$U, $M1, $M2, $P1, $N1, $P2, $N2, false, false>(
+                        (true, true, _) => {
+                            $g::<$U, $M1, $M2, $P1, $N1, $P2, $N2, $R1, $R2, true, false>(
                                 q1, q2, len, &p, &a, &b,
                             )
                         }
-                        (false, true, _) => $f::<$U, $M1, $M2, $P1, $N1, $P2, $N2, true, false>(
-                            q1, q2, len, &p, &a, &b,
-                        ),
+                        (true, false, true) => {
+                            $g::<$U, $M1, $M2, $P1, $N1, $P2, $N2, $R1, $R2, false, true>(
+                                q1, q2, len, &p, &a, &b,
+                            )
+                        }
+                        (true, false, false) => {
+                            $g::<$U, $M1, $M2, $P1, $N1, $P2, $N2, $R1, $R2, false, false>(
+                                q1, q2, len, &p, &a, &b,
+                            )
+                        }
+                        (false, true, _) => {
+                            $f::<$U, $M1, $M2, $P1, $N1, $P2, $N2, $R1, $R2, true, false>(
+                                q1, q2, len, &p, &a, &b,
+                            )
+                        }
                         (false, false, true) => {
-                            $f::<$U, $M1, $M2, $P1, $N1, $P2, $N2, false, true>(
+                            $f::<$U, $M1, $M2, $P1, $N1, $P2, $N2, $R1, $R2, false, true>(
                                 q1, q2, len, &p, &a, &b,
                             )
                         }
                         (false, false, false) => {
-                            $f::<$U, $M1, $M2, $P1, $N1, $P2, $N2, false, false>(
+                            $f::<$U, $M1, $M2, $P1, $N1, $P2, $N2, $R1, $R2, false, false>(
                                 q1, q2, len, &p, &a, &b,
                             )
                         }
@@ -893,24 +1214,53 @@ unsafe fn pair_avx2<T: Sample>(
             return true;
         }};
     }
-    // the entry with the pattern's unit taps first, else the one without any
+    // the entry with the pattern's unit taps and pairs; without pairs, the plain entry
+    // also serves (every tap multiplied: the same bits)
     macro_rules! table {
-        ($(($U:literal, $M1:literal, $M2:literal, $P1:literal, $N1:literal, $P2:literal, $N2:literal)),*) => {
+        ($(($U:literal, $M1:literal, $M2:literal, $P1:literal, $N1:literal, $P2:literal, $N2:literal, $R1:literal, $R2:literal)),*) => {
             for plain in [false, true] {
-                let want = if plain { (0, 0, 0, 0) } else { units };
+                if plain && (r1, r2) != (0, 0) {
+                    break;
+                }
+                let want = if plain { (0, 0, 0, 0, 0, 0) } else { want };
                 if TypeId::of::<T>() == TypeId::of::<f32>() {
-                    $( if (u, m1, m2) == ($U, $M1, $M2) && want == ($P1, $N1, $P2, $N2) {
-                        go!(f32, pair_avx2_f32, pair_avx512_f32, $U, $M1, $M2, $P1, $N1, $P2, $N2)
+                    $( if (u, m1, m2) == ($U, $M1, $M2) && want == ($P1, $N1, $P2, $N2, $R1, $R2) {
+                        go!(f32, pair_avx2_f32, pair_avx512_f32, $U, $M1, $M2, $P1, $N1, $P2, $N2, $R1, $R2)
                     } )*
                 } else if TypeId::of::<T>() == TypeId::of::<f64>() {
-                    $( if (u, m1, m2) == ($U, $M1, $M2) && want == ($P1, $N1, $P2, $N2) {
-                        go!(f64, pair_avx2_f64, pair_avx512_f64, $U, $M1, $M2, $P1, $N1, $P2, $N2)
+                    $( if (u, m1, m2) == ($U, $M1, $M2) && want == ($P1, $N1, $P2, $N2, $R1, $R2) {
+                        go!(f64, pair_avx2_f64, pair_avx512_f64, $U, $M1, $M2, $P1, $N1, $P2, $N2, $R1, $R2)
                     } )*
                 }
             }
         };
     }
     pair_patterns!(table);
+    false
+}
+
+/// Whether [`combine_pair`] has a vector build for the pair `(w1, m1)`, `(w2, m2)` (its
+/// inputs' count, masks, unit weights and pairs one of the built patterns): the regular
+/// rows of every scheme have one (tested), other pairs go one output at a time.
+pub fn combine_pair_has_build<T: Sample>(w1: &[T], m1: u32, w2: &[T], m2: u32) -> bool {
+    let u = w1.len();
+    if u > 16 || w2.len() != u {
+        return false;
+    }
+    let ((p1, n1, r1), (p2, n2, r2)) = (pattern_of(w1, m1), pattern_of(w2, m2));
+    macro_rules! has {
+        ($(($U:literal, $M1:literal, $M2:literal, $P1:literal, $N1:literal, $P2:literal, $N2:literal, $R1:literal, $R2:literal)),*) => {
+            $(
+                if (u, m1, m2) == ($U, $M1, $M2)
+                    && ((p1, n1, p2, n2, r1, r2) == ($P1, $N1, $P2, $N2, $R1, $R2)
+                        || ((r1, r2) == (0, 0) && ($P1, $N1, $P2, $N2, $R1, $R2) == (0, 0, 0, 0, 0, 0)))
+                {
+                    return true;
+                }
+            )*
+        };
+    }
+    pair_patterns!(has);
     false
 }
 
@@ -1201,10 +1551,21 @@ fn input_ptrs_at<T>(src: &[T], off: &[usize]) -> [*const T; 32] {
     std::array::from_fn(|k| off.get(k).map_or(std::ptr::null(), |&o| src[o..].as_ptr()))
 }
 
+/// `$body` for `$k` = 0, 1, … 15, each copy with its `$k` a constant (the pair kernels'
+/// tap loops, which the compiler must see whole to fold their masks).
+macro_rules! unroll16 {
+    ($k:ident, $body:block) => {
+        unroll16!(@ $k, $body, 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15)
+    };
+    (@ $k:ident, $body:block, $($n:literal),*) => {
+        $( { let $k: usize = $n; $body } )*
+    };
+}
+
 /// The body of [`combine_pair`] for one pattern: a vector of each output per step, every
 /// input loaded once; then scalars.
 macro_rules! pair_avx2_body {
-    ($name:ident, $feat:literal, $t:ty, $lanes:expr, $set1:ident, $zero:ident, $mul:ident, $add:ident, $sub:ident, $load:ident, $store:ident, $merge:ident, $split:ident) => {
+    ($name:ident, $feat:literal, $t:ty, $lanes:expr, $set1:ident, $zero:ident, $mul:ident, $add:ident, $sub:ident, $fma:ident, $load:ident, $store:ident, $merge:ident, $split:ident) => {
         /// See [`pair_avx2_body`].
         ///
         /// # Safety
@@ -1220,6 +1581,8 @@ macro_rules! pair_avx2_body {
             const N1: u32,
             const P2: u32,
             const N2: u32,
+            const R1: u64,
+            const R2: u64,
             const MERGE: bool,
             const SPLIT: bool,
         >(
@@ -1239,64 +1602,99 @@ macro_rules! pair_avx2_body {
                 v1[k] = $set1(w1[k]);
                 v2[k] = $set1(w2[k]);
             }
-            // one vector of each output at `i`
+            let (s1, s2) = (Seconds::<R1>::MASK, Seconds::<R2>::MASK);
+            let minus = $set1(-1.0);
+            // one vector of each output at `i`: the terms of `pair_taps` in order, a tap of
+            // weight ±1 added or subtracted (`w·x` is `±x` exactly: the same bits)
             macro_rules! calc {
                 ($i:expr) => {{
                     let i = $i;
-                    let (mut a1, mut a2) = ($zero(), $zero());
-                    for k in 0..U {
-                        let x = $load(p[k].add(i));
-                        // a tap of weight ±1 adds or subtracts its input: `w·x` is
-                        // then `±x` exactly, so the sum has the same bits
-                        macro_rules! tap {
-                            ($acc:ident, $v:ident, $m:ident, $f:ident, $p:ident, $n:ident) => {
-                                if $m >> k & 1 == 1 {
-                                    if $p >> k & 1 == 1 {
-                                        $acc = if k == $f { x } else { $add($acc, x) };
-                                    } else if $n >> k & 1 == 1 {
-                                        $acc = if k == $f {
-                                            $mul($set1(-1.0), x)
-                                        } else {
-                                            $sub($acc, x)
-                                        };
-                                    } else {
-                                        let m = $mul($v[k], x);
-                                        $acc = if k == $f { m } else { $add($acc, m) };
-                                    }
-                                }
-                            };
+                    let x: [_; U] = std::array::from_fn(|k| {
+                        if (M1 | M2) >> k & 1 == 1 {
+                            $load(p[k].add(i))
+                        } else {
+                            $zero()
                         }
-                        tap!(a1, v1, M1, f1, P1, N1);
-                        tap!(a2, v2, M2, f2, P2, N2);
+                    });
+                    macro_rules! out {
+                        ($v:ident, $m:ident, $f:ident, $p:ident, $n:ident, $r:ident, $s:ident) => {{
+                            let mut acc = $zero();
+                            unroll16!(k, {
+                                if k < U && $m >> k & 1 == 1 && $s >> k & 1 == 0 {
+                                    let j = ($r >> (4 * k) & 15) as usize;
+                                    let v = if j > 0 { $add(x[k], x[j - 1]) } else { x[k] };
+                                    acc = if k == $f {
+                                        if $p >> k & 1 == 1 {
+                                            v
+                                        } else if $n >> k & 1 == 1 {
+                                            $mul(minus, v)
+                                        } else {
+                                            $mul($v[k], v)
+                                        }
+                                    } else if $p >> k & 1 == 1 {
+                                        $add(acc, v)
+                                    } else if $n >> k & 1 == 1 {
+                                        $sub(acc, v)
+                                    } else if j > 0 {
+                                        $fma(v, $v[k], acc)
+                                    } else {
+                                        $add(acc, $mul($v[k], v))
+                                    };
+                                }
+                            });
+                            acc
+                        }};
                     }
-                    (a1, a2)
+                    (
+                        out!(v1, M1, f1, P1, N1, R1, s1),
+                        out!(v2, M2, f2, P2, N2, R2, s2),
+                    )
                 }};
             }
             // scalars at `i`
             macro_rules! calc1 {
                 ($i:expr) => {{
                     let i = $i;
-                    let (mut a1, mut a2) = (0.0 as $t, 0.0 as $t);
-                    for k in 0..U {
-                        let x = *p[k].add(i);
-                        macro_rules! tap {
-                            ($acc:ident, $w:ident, $m:ident, $f:ident, $p:ident, $n:ident) => {
-                                if $m >> k & 1 == 1 {
-                                    if $p >> k & 1 == 1 {
-                                        $acc = if k == $f { x } else { $acc + x };
-                                    } else if $n >> k & 1 == 1 {
-                                        $acc = if k == $f { -x } else { $acc - x };
-                                    } else {
-                                        let m = $w[k] * x;
-                                        $acc = if k == $f { m } else { $acc + m };
-                                    }
-                                }
-                            };
+                    let x: [$t; U] = std::array::from_fn(|k| {
+                        if (M1 | M2) >> k & 1 == 1 {
+                            *p[k].add(i)
+                        } else {
+                            0.0
                         }
-                        tap!(a1, w1, M1, f1, P1, N1);
-                        tap!(a2, w2, M2, f2, P2, N2);
+                    });
+                    macro_rules! out {
+                        ($w:ident, $m:ident, $f:ident, $p:ident, $n:ident, $r:ident, $s:ident) => {{
+                            let mut acc: $t = 0.0;
+                            unroll16!(k, {
+                                if k < U && $m >> k & 1 == 1 && $s >> k & 1 == 0 {
+                                    let j = ($r >> (4 * k) & 15) as usize;
+                                    let v = if j > 0 { x[k] + x[j - 1] } else { x[k] };
+                                    acc = if k == $f {
+                                        if $p >> k & 1 == 1 {
+                                            v
+                                        } else if $n >> k & 1 == 1 {
+                                            -v
+                                        } else {
+                                            $w[k] * v
+                                        }
+                                    } else if $p >> k & 1 == 1 {
+                                        acc + v
+                                    } else if $n >> k & 1 == 1 {
+                                        acc - v
+                                    } else if j > 0 {
+                                        v.mul_add($w[k], acc)
+                                    } else {
+                                        acc + $w[k] * v
+                                    };
+                                }
+                            });
+                            acc
+                        }};
                     }
-                    (a1, a2)
+                    (
+                        out!(w1, M1, f1, P1, N1, R1, s1),
+                        out!(w2, M2, f2, P2, N2, R2, s2),
+                    )
                 }};
             }
             if SPLIT {
@@ -1459,28 +1857,27 @@ macro_rules! split_pd512 {
 /// ([`pair_avx2_body`]): one line each, its names, target feature, type, lanes and
 /// intrinsics.
 macro_rules! builds {
-    ($($taps:ident, $pair:ident, $feat:literal, $t:ty, $lanes:expr, $set1:ident, $zero:ident, $mul:ident, $add:ident, $sub:ident, $load:ident, $store:ident, $merge:ident, $split:ident;)*) => {
+    ($($taps:ident, $pair:ident, $feat:literal, $t:ty, $lanes:expr, $set1:ident, $zero:ident, $mul:ident, $add:ident, $sub:ident, $fma:ident, $load:ident, $store:ident, $merge:ident, $split:ident;)*) => {
         $(
             taps_avx2_body!($taps, $feat, $t, $lanes, $set1, $zero, $mul, $add, $load, $store);
-            pair_avx2_body!($pair, $feat, $t, $lanes, $set1, $zero, $mul, $add, $sub, $load, $store, $merge, $split);
+            pair_avx2_body!($pair, $feat, $t, $lanes, $set1, $zero, $mul, $add, $sub, $fma, $load, $store, $merge, $split);
         )*
     };
 }
 
 builds! {
-    taps_avx2_f32, pair_avx2_f32, "avx2", f32, 8, _mm256_set1_ps, _mm256_setzero_ps, _mm256_mul_ps, _mm256_add_ps, _mm256_sub_ps, _mm256_loadu_ps, _mm256_storeu_ps, merge_ps256, split_ps256;
-    taps_avx2_f64, pair_avx2_f64, "avx2", f64, 4, _mm256_set1_pd, _mm256_setzero_pd, _mm256_mul_pd, _mm256_add_pd, _mm256_sub_pd, _mm256_loadu_pd, _mm256_storeu_pd, merge_pd256, split_pd256;
-    taps_avx512_f32, pair_avx512_f32, "avx512f", f32, 16, _mm512_set1_ps, _mm512_setzero_ps, _mm512_mul_ps, _mm512_add_ps, _mm512_sub_ps, _mm512_loadu_ps, _mm512_storeu_ps, merge_ps512, split_ps512;
-    taps_avx512_f64, pair_avx512_f64, "avx512f", f64, 8, _mm512_set1_pd, _mm512_setzero_pd, _mm512_mul_pd, _mm512_add_pd, _mm512_sub_pd, _mm512_loadu_pd, _mm512_storeu_pd, merge_pd512, split_pd512;
+    taps_avx2_f32, pair_avx2_f32, "avx2,fma", f32, 8, _mm256_set1_ps, _mm256_setzero_ps, _mm256_mul_ps, _mm256_add_ps, _mm256_sub_ps, _mm256_fmadd_ps, _mm256_loadu_ps, _mm256_storeu_ps, merge_ps256, split_ps256;
+    taps_avx2_f64, pair_avx2_f64, "avx2,fma", f64, 4, _mm256_set1_pd, _mm256_setzero_pd, _mm256_mul_pd, _mm256_add_pd, _mm256_sub_pd, _mm256_fmadd_pd, _mm256_loadu_pd, _mm256_storeu_pd, merge_pd256, split_pd256;
+    taps_avx512_f32, pair_avx512_f32, "avx512f,fma", f32, 16, _mm512_set1_ps, _mm512_setzero_ps, _mm512_mul_ps, _mm512_add_ps, _mm512_sub_ps, _mm512_fmadd_ps, _mm512_loadu_ps, _mm512_storeu_ps, merge_ps512, split_ps512;
+    taps_avx512_f64, pair_avx512_f64, "avx512f,fma", f64, 8, _mm512_set1_pd, _mm512_setzero_pd, _mm512_mul_pd, _mm512_add_pd, _mm512_sub_pd, _mm512_fmadd_pd, _mm512_loadu_pd, _mm512_storeu_pd, merge_pd512, split_pd512;
 }
 
 /// Most samples of a lane [`combine_lane_taps`] reads in registers (8 windows of 8).
 const LANE_TAPS_SLOTS: usize = 64;
 
 /// `y[t·ys + r] = Σ_k w_k · x[t·w + c_k]` for every lane `t < h` of `x` (lane `t` at
-/// `x[t·w ..][..w]`) and every row `(r, taps)` of `rows` (`taps` the `(c_k, w_k)`, the
-/// first tap assigning, the others added in order: the bits of [`super::sparse::Csr`]'s
-/// row kernel). For the few rows near the ends of a volume's lanes, which read a handful
+/// `x[t·w ..][..w]`) and every row `(r, taps)` of `rows` (`taps` the `(c_k, w_k)`, summed
+/// as [`sum_terms`] says: the bits of [`super::sparse::Csr`]'s row kernel). For the few rows near the ends of a volume's lanes, which read a handful
 /// of samples at either end of every lane: with AVX2 and 4-byte samples, 8 lanes at a
 /// time, the windows of 8 samples the rows read transposed in registers (one load per
 /// lane and window instead of one per tap and row), and the sums of 8 rows that follow
@@ -1512,8 +1909,10 @@ pub struct LaneTaps {
     /// `8·i + c − bases[i]`); empty when they take more than [`LANE_TAPS_SLOTS`] slots or
     /// `w < 8`, and then no vector build runs.
     bases: Vec<usize>,
-    /// Every row's taps as `(slot, weight)`, row `i`'s at `slots[ends[i]..ends[i + 1]]`.
-    slots: Vec<(usize, f32)>,
+    /// Every row's terms ([`sum_terms`] of its `f32` weights) as `(slot, slot of the
+    /// pair's second tap or usize::MAX, weight)`, row `i`'s at
+    /// `slots[ends[i]..ends[i + 1]]`.
+    slots: Vec<(usize, usize, f32)>,
     ends: Vec<usize>,
     /// Rows summed and stored together: `(first row index, count ≤ 8)`, their outputs
     /// `r` following one another. A stretch of 8 or more such rows is covered by groups
@@ -1555,7 +1954,16 @@ impl LaneTaps {
         let (mut slots, mut ends) = (Vec::new(), vec![0]);
         if !bases.is_empty() {
             for (_, t) in &rows {
-                slots.extend(t.iter().map(|&(c, wk)| (slot(c), wk as f32)));
+                let wf: Vec<f32> = t.iter().map(|&(_, wk)| wk as f32).collect();
+                let mut partner = vec![0; t.len()];
+                pair_taps(&wf, &mut partner);
+                for (k, &(c, _)) in t.iter().enumerate() {
+                    match partner[k] {
+                        SECOND => {}
+                        q if q == k => slots.push((slot(c), usize::MAX, wf[k])),
+                        q => slots.push((slot(c), slot(t[q].0), wf[k])),
+                    }
+                }
                 ends.push(slots.len());
             }
         }
@@ -1611,15 +2019,22 @@ pub fn combine_lane_taps_with<T: Sample>(
         // in `LaneTaps::new`.
         done = unsafe { lane_taps_avx2_f32(taps, x, h, y, ys) };
     }
+    if done == h {
+        return;
+    }
+    let plans: Vec<(Vec<T>, Vec<usize>)> = rows
+        .iter()
+        .map(|(_, taps)| {
+            let ws: Vec<T> = taps.iter().map(|&(_, wk)| T::from_f64(wk)).collect();
+            let mut partner = vec![0; ws.len()];
+            pair_taps(&ws, &mut partner);
+            (ws, partner)
+        })
+        .collect();
     for t in done..h {
         let lane = &x[t * w..t * w + w];
-        for (r, taps) in rows {
-            let mut acc = T::default();
-            for (k, &(c, wk)) in taps.iter().enumerate() {
-                let v = T::from_f64(wk) * lane[c];
-                acc = if k == 0 { v } else { acc + v };
-            }
-            y[t * ys + r] = acc;
+        for ((r, taps), (ws, partner)) in rows.iter().zip(&plans) {
+            y[t * ys + r] = sum_terms(ws, partner, |k| lane[taps[k].0]);
         }
     }
 }
@@ -1630,7 +2045,7 @@ pub fn combine_lane_taps_with<T: Sample>(
 /// AVX2 present, `T` is `f32`, `taps.bases` not empty, and the bounds of
 /// [`combine_lane_taps_with`].
 #[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
+#[target_feature(enable = "avx2,fma")]
 unsafe fn lane_taps_avx2_f32<T: Sample>(
     taps: &LaneTaps,
     x: &[T],
@@ -1659,9 +2074,23 @@ unsafe fn lane_taps_avx2_f32<T: Sample>(
             for (q, a) in acc.iter_mut().enumerate().take(n) {
                 let i = i0 + q;
                 let row = &taps.slots[taps.ends[i]..taps.ends[i + 1]];
-                for (k, &(s, wk)) in row.iter().enumerate() {
-                    let v = _mm256_mul_ps(_mm256_set1_ps(wk), reg[s]);
-                    *a = if k == 0 { v } else { _mm256_add_ps(*a, v) };
+                for (k, &(s, s2, wk)) in row.iter().enumerate() {
+                    let wv = _mm256_set1_ps(wk);
+                    *a = if s2 == usize::MAX {
+                        let v = _mm256_mul_ps(wv, reg[s]);
+                        if k == 0 {
+                            v
+                        } else {
+                            _mm256_add_ps(*a, v)
+                        }
+                    } else {
+                        let v = _mm256_add_ps(reg[s], reg[s2]);
+                        if k == 0 {
+                            _mm256_mul_ps(wv, v)
+                        } else {
+                            _mm256_fmadd_ps(v, wv, *a)
+                        }
+                    };
                 }
             }
             // one register per lane: its outputs r0..r0 + n
@@ -1686,66 +2115,141 @@ unsafe fn lane_taps_avx2_f32<T: Sample>(
     h8
 }
 
-/// Most samples one [`EdgeGroup`] reads.
+/// Most taps of a row in an [`EdgeGroup`].
 pub const EDGE_SPAN: usize = 32;
 
 /// Up to 8 rows `r0..r0 + n` of a sparse operator, one output sample each on a lane of
-/// single samples, that read few samples together (the rows near the ends of a long
-/// lane): per sample `cols[j]` they read, the rows' weights (0 where a row does not read
-/// it) and which rows start their sum there or add to it. Computed 8 rows at once
-/// ([`edge_rows`]), each row's sum still its taps in column order, the first assigning:
-/// the bits of one row at a time.
+/// single samples (the rows near the ends of a long lane), computed 8 at once
+/// ([`edge_rows`]) with the bits of one row at a time. Rows without pairs go sample by
+/// sample: per sample read, the rows' weights and which rows start their sum there or
+/// add to it. When some row pairs, step `s` takes instead the `s`-th term of every row's
+/// [`sum_terms`] (its one or two inputs gathered, per row).
 #[derive(Clone, Debug, PartialEq)]
 pub struct EdgeGroup {
     pub r0: usize,
     pub n: usize,
-    /// The samples the rows read, increasing.
-    pub cols: Vec<usize>,
-    /// Per sample: the 8 rows' weights as `f32`.
-    pub weights: Vec<[f32; 8]>,
-    /// Per sample: all bits set in the rows whose first tap it is.
-    pub first: Vec<[u32; 8]>,
-    /// Per sample: all bits set in the rows that add it to their sum.
-    pub add: Vec<[u32; 8]>,
+    /// The largest sample the rows read.
+    last: usize,
+    /// Rows without pairs: per sample they read (`cols`, increasing), the rows' weights
+    /// and which rows start their sum there or add to it (one broadcast per sample).
+    cols: Vec<usize>,
+    weights: Vec<[f32; 8]>,
+    first: Vec<[u32; 8]>,
+    add: Vec<[u32; 8]>,
+    /// Rows with pairs: their terms, step by step (empty when no row pairs).
+    steps: Vec<EdgeStep>,
+}
+
+/// One term of each of the 8 rows of an [`EdgeGroup`] (masks: all bits set where true).
+#[derive(Clone, Debug, PartialEq)]
+struct EdgeStep {
+    /// The term's input, and its pair's second input (the first again for a single tap).
+    a: [i32; 8],
+    b: [i32; 8],
+    /// The term's weight (as `f32`).
+    w: [f32; 8],
+    /// The term is a pair (its input the sum of the two).
+    paired: [u32; 8],
+    /// The row's first term (assigns), a next single tap (adds `w·x`), a next pair (FMA).
+    first: [u32; 8],
+    single: [u32; 8],
+    fused: [u32; 8],
 }
 
 impl EdgeGroup {
     /// The rows `r0..r0 + rows.len()` (at most 8), `rows[i]` the `(columns, weights)` of
-    /// row `r0 + i`; `None` when they read more than [`EDGE_SPAN`] samples or a row's
-    /// columns do not increase.
+    /// row `r0 + i`; `None` when a row has more than [`EDGE_SPAN`] taps or its columns do
+    /// not increase, or when no row reads any.
     pub fn new(r0: usize, rows: &[(&[u32], &[f64])]) -> Option<EdgeGroup> {
         let n = rows.len();
         assert!((1..=8).contains(&n));
         if rows.iter().any(|(c, _)| c.windows(2).any(|p| p[0] >= p[1])) {
             return None;
         }
-        let mut cols: Vec<usize> = rows
-            .iter()
-            .flat_map(|(c, _)| c.iter().map(|&c| c as usize))
-            .collect();
-        cols.sort_unstable();
-        cols.dedup();
-        if cols.len() > EDGE_SPAN {
+        let lo = rows.iter().filter_map(|(c, _)| c.first()).min();
+        let hi = rows.iter().filter_map(|(c, _)| c.last()).max();
+        let (lo, hi) = match (lo, hi) {
+            (Some(&lo), Some(&hi)) => (lo as usize, hi as usize),
+            _ => return None,
+        };
+        if rows.iter().any(|(c, _)| c.len() > EDGE_SPAN) || hi > i32::MAX as usize {
             return None;
         }
-        let u = cols.len();
         let mut g = EdgeGroup {
             r0,
             n,
-            cols,
-            weights: vec![[0.0; 8]; u],
-            first: vec![[0; 8]; u],
-            add: vec![[0; 8]; u],
+            last: hi,
+            cols: Vec::new(),
+            weights: Vec::new(),
+            first: Vec::new(),
+            add: Vec::new(),
+            steps: Vec::new(),
+        };
+        let paired = rows.iter().any(|(_, ws)| {
+            let wf: Vec<f32> = ws.iter().map(|&v| v as f32).collect();
+            pair_taps(&wf, &mut vec![0; wf.len()])
+        });
+        if !paired {
+            let mut cols: Vec<usize> = rows
+                .iter()
+                .flat_map(|(c, _)| c.iter().map(|&c| c as usize))
+                .collect();
+            cols.sort_unstable();
+            cols.dedup();
+            let u = cols.len();
+            (g.weights, g.first, g.add) = (vec![[0.0; 8]; u], vec![[0; 8]; u], vec![[0; 8]; u]);
+            for (i, (cs, ws)) in rows.iter().enumerate() {
+                for (k, (&c, &w)) in cs.iter().zip(ws.iter()).enumerate() {
+                    let j = cols.binary_search(&(c as usize)).expect("in the union");
+                    g.weights[j][i] = w as f32;
+                    if k == 0 {
+                        g.first[j][i] = u32::MAX;
+                    } else {
+                        g.add[j][i] = u32::MAX;
+                    }
+                }
+            }
+            g.cols = cols;
+            return Some(g);
+        }
+        let empty = EdgeStep {
+            a: [lo as i32; 8],
+            b: [lo as i32; 8],
+            w: [0.0; 8],
+            paired: [0; 8],
+            first: [0; 8],
+            single: [0; 8],
+            fused: [0; 8],
         };
         for (i, (cs, ws)) in rows.iter().enumerate() {
-            for (k, (&c, &w)) in cs.iter().zip(ws.iter()).enumerate() {
-                let j = g.cols.binary_search(&(c as usize)).expect("in the union");
-                g.weights[j][i] = w as f32;
-                if k == 0 {
-                    g.first[j][i] = u32::MAX;
-                } else {
-                    g.add[j][i] = u32::MAX;
+            let wf: Vec<f32> = ws.iter().map(|&v| v as f32).collect();
+            let mut partner = vec![0; wf.len()];
+            pair_taps(&wf, &mut partner);
+            let mut s = 0;
+            for k in 0..wf.len() {
+                let q = partner[k];
+                if q == SECOND {
+                    continue;
                 }
+                if g.steps.len() == s {
+                    g.steps.push(empty.clone());
+                }
+                let st = &mut g.steps[s];
+                st.a[i] = cs[k] as i32;
+                st.b[i] = cs[k] as i32;
+                if q != k {
+                    st.b[i] = cs[q] as i32;
+                    st.paired[i] = u32::MAX;
+                }
+                st.w[i] = wf[k];
+                if s == 0 {
+                    st.first[i] = u32::MAX;
+                } else if q == k {
+                    st.single[i] = u32::MAX;
+                } else {
+                    st.fused[i] = u32::MAX;
+                }
+                s += 1;
             }
         }
         Some(g)
@@ -1760,7 +2264,7 @@ pub fn edge_rows<T: Sample>(groups: &[EdgeGroup], x: &[T], y: &mut [T]) -> bool 
     if std::any::TypeId::of::<T>() == std::any::TypeId::of::<f32>() && super::sparse::cpu_has_avx2()
     {
         for g in groups {
-            assert!(g.cols.last().is_none_or(|&c| c < x.len()) && g.r0 + g.n <= y.len());
+            assert!(g.last < x.len() && g.r0 + g.n <= y.len());
         }
         let (px, py) = (x.as_ptr() as *const f32, y.as_mut_ptr() as *mut f32);
         // SAFETY: AVX2 is present; T is f32; every group's samples and outputs lie inside
@@ -1775,9 +2279,10 @@ pub fn edge_rows<T: Sample>(groups: &[EdgeGroup], x: &[T], y: &mut [T]) -> bool 
 /// [`edge_rows`] with AVX2 on `f32`.
 ///
 /// # Safety
-/// AVX2 present; `x` valid past the last of `cols` and `y` for `r0 + n` of every group.
+/// AVX2 with FMA present; `x` valid up to the `last` sample of every group and `y` for
+/// `r0 + n`.
 #[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
+#[target_feature(enable = "avx2,fma")]
 unsafe fn edge_rows_avx2_f32(groups: &[EdgeGroup], x: *const f32, y: *mut f32) {
     use std::arch::x86_64::*;
     let mut part = [0f32; 8];
@@ -1792,6 +2297,23 @@ unsafe fn edge_rows_avx2_f32(groups: &[EdgeGroup], x: *const f32, y: *mut f32) {
                 let am = _mm256_loadu_ps(g.add[j].as_ptr() as *const f32);
                 acc = _mm256_blendv_ps(acc, v, fm);
                 acc = _mm256_blendv_ps(acc, _mm256_add_ps(acc, v), am);
+            }
+        }
+        for st in &g.steps {
+            // SAFETY: every index is a sample the group reads, inside `x`; the arrays are
+            // 8 lanes wide.
+            unsafe {
+                let ia = _mm256_loadu_si256(st.a.as_ptr() as *const __m256i);
+                let ib = _mm256_loadu_si256(st.b.as_ptr() as *const __m256i);
+                let xa = _mm256_i32gather_ps::<4>(x, ia);
+                let xb = _mm256_i32gather_ps::<4>(x, ib);
+                let mask = |m: &[u32; 8]| _mm256_loadu_ps(m.as_ptr() as *const f32);
+                let v = _mm256_blendv_ps(xa, _mm256_add_ps(xa, xb), mask(&st.paired));
+                let w = _mm256_loadu_ps(st.w.as_ptr());
+                let m = _mm256_mul_ps(w, v);
+                acc = _mm256_blendv_ps(acc, m, mask(&st.first));
+                acc = _mm256_blendv_ps(acc, _mm256_add_ps(acc, m), mask(&st.single));
+                acc = _mm256_blendv_ps(acc, _mm256_fmadd_ps(v, w, acc), mask(&st.fused));
             }
         }
         // SAFETY: r0 + n <= y.len().

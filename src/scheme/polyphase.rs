@@ -344,8 +344,8 @@ impl Polyphase {
     }
 }
 
-/// `rows` (increasing) in groups of up to 8 that follow one another and read at most
-/// [`EDGE_SPAN`](super::kernel::EDGE_SPAN) samples together, and the rows left over.
+/// `rows` (increasing) in groups of up to 8 that follow one another, each row of at most
+/// [`EDGE_SPAN`](super::kernel::EDGE_SPAN) taps, and the rows left over.
 fn edge_groups(op: &Csr, rows: &[usize]) -> (Vec<EdgeGroup>, Vec<usize>) {
     let (mut groups, mut rest) = (Vec::new(), Vec::new());
     let mut i = 0;
@@ -376,35 +376,33 @@ fn edge_groups(op: &Csr, rows: &[usize]) -> (Vec<EdgeGroup>, Vec<usize>) {
     (groups, rest)
 }
 
-/// One row of `op` on element-wide samples: `y_r = Σ w x_c` (first tap assigns).
+/// One row of `op` on element-wide samples: `y_r = Σ w x_c`, summed as
+/// [`kernel::sum_terms`](super::kernel::sum_terms) says.
 #[inline]
 fn op_row<T: Sample>(op: &Csr, r: usize, x: &[T], y: &mut [T], e: usize) {
     let (cols, ws) = op.row_slices(r);
-    if e == 1 {
-        let mut acc = T::default();
-        for (k, (&c, &w)) in cols.iter().zip(ws).enumerate() {
-            let v = T::from_f64(w) * x[c as usize];
-            acc = if k == 0 { v } else { acc + v };
-        }
-        y[r] = acc;
+    if e > 1 {
+        let out = &mut y[r * e..r * e + e];
+        super::kernel::combine_taps(out, cols, ws, |c| &x[c as usize * e..c as usize * e + e]);
         return;
     }
-    let out = &mut y[r * e..r * e + e];
-    if cols.is_empty() {
-        out.fill(T::default());
-    }
-    for (k, (&c, &w)) in cols.iter().zip(ws).enumerate() {
-        let w = T::from_f64(w);
-        let xs = &x[c as usize * e..c as usize * e + e];
-        if k == 0 {
-            for (o, &v) in out.iter_mut().zip(xs) {
-                *o = w * v;
-            }
-        } else {
-            for (o, &v) in out.iter_mut().zip(xs) {
-                *o += w * v;
-            }
+    let n = cols.len();
+    let mut w = [T::default(); 32];
+    let mut partner = [0usize; 32];
+    if n > 32 {
+        let w: Vec<T> = ws.iter().map(|&v| T::from_f64(v)).collect();
+        for i in 0..e {
+            y[r * e + i] = super::kernel::row_sum(&w, |k| x[cols[k] as usize * e + i]);
         }
+        return;
+    }
+    for k in 0..n {
+        w[k] = T::from_f64(ws[k]);
+    }
+    super::kernel::pair_taps(&w[..n], &mut partner[..n]);
+    for i in 0..e {
+        y[r * e + i] =
+            super::kernel::sum_terms(&w[..n], &partner[..n], |k| x[cols[k] as usize * e + i]);
     }
 }
 

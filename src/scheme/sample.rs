@@ -20,6 +20,9 @@ pub trait Sample:
 {
     fn from_f64(v: f64) -> Self;
     fn to_f64(self) -> f64;
+    /// `self · a + b` rounded once (IEEE 754 fusedMultiplyAdd: the FMA instruction
+    /// where the build has it, a correctly rounded software routine otherwise).
+    fn fused_mul_add(self, a: Self, b: Self) -> Self;
 }
 
 impl Sample for f32 {
@@ -31,6 +34,10 @@ impl Sample for f32 {
     fn to_f64(self) -> f64 {
         self as f64
     }
+    #[inline(always)]
+    fn fused_mul_add(self, a: Self, b: Self) -> Self {
+        self.mul_add(a, b)
+    }
 }
 
 impl Sample for f64 {
@@ -41,5 +48,9 @@ impl Sample for f64 {
     #[inline(always)]
     fn to_f64(self) -> f64 {
         self
+    }
+    #[inline(always)]
+    fn fused_mul_add(self, a: Self, b: Self) -> Self {
+        self.mul_add(a, b)
     }
 }

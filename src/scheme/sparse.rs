@@ -56,7 +56,8 @@ impl Csr {
     /// `dst_r = Σ w · src_c` for every row `r`; element `e` of `src` is
     /// `src[e*src_stride .. e*src_stride + width]`, likewise for `dst`.
     ///
-    /// The first tap assigns, the others accumulate, so `dst` needs no clearing.
+    /// Each row summed as [`super::kernel::sum_terms`] says (its first term assigns, so
+    /// `dst` needs no clearing).
     #[inline]
     pub fn apply<T: Sample>(
         &self,
@@ -220,10 +221,10 @@ impl Csr {
         unsafe { self.apply_generic(src.as_ptr(), ss, dst.as_mut_ptr(), ds, width) }
     }
 
-    /// [`Csr::apply_generic`] compiled for AVX2 (no FMA, so results are bit-identical to
-    /// the baseline build).
+    /// [`Csr::apply_generic`] compiled for AVX2 and FMA (bit-identical to the baseline
+    /// build, whose FMAs are a software routine).
     #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
+    #[target_feature(enable = "avx2,fma")]
     unsafe fn apply_avx2<T: Sample>(
         &self,
         src: *const T,
@@ -244,6 +245,8 @@ impl Csr {
         dst_stride: usize,
         width: usize,
     ) {
+        let mut partner = Vec::new();
+        let mut ws: Vec<T> = Vec::new();
         for r in 0..self.rows {
             let (a, b) = (self.offsets[r] as usize, self.offsets[r + 1] as usize);
             // SAFETY: the caller guarantees this element is ours alone.
@@ -252,33 +255,57 @@ impl Csr {
                 out.fill(T::default());
                 continue;
             }
-            let x0 = unsafe {
-                std::slice::from_raw_parts(src.add(self.index[a] as usize * src_stride), width)
+            // the row's sum as `kernel::sum_terms` takes it (pairs of equal weights)
+            ws.clear();
+            ws.extend(self.weight[a..b].iter().map(|&w| T::from_f64(w)));
+            partner.resize(b - a, 0);
+            crate::scheme::kernel::pair_taps(&ws, &mut partner);
+            let input = |k: usize| unsafe {
+                std::slice::from_raw_parts(src.add(self.index[a + k] as usize * src_stride), width)
             };
-            let w0 = T::from_f64(self.weight[a]);
-            for (o, &x) in out.iter_mut().zip(x0) {
-                *o = w0 * x;
-            }
-            for k in a + 1..b {
-                let x = unsafe {
-                    std::slice::from_raw_parts(src.add(self.index[k] as usize * src_stride), width)
-                };
-                let w = T::from_f64(self.weight[k]);
-                for (o, &x) in out.iter_mut().zip(x) {
-                    *o += w * x;
+            let mut first = true;
+            for k in 0..b - a {
+                let q = partner[k];
+                if q == crate::scheme::kernel::SECOND {
+                    continue;
                 }
+                let (x, w) = (input(k), ws[k]);
+                if q == k {
+                    if first {
+                        for (o, &x) in out.iter_mut().zip(x) {
+                            *o = w * x;
+                        }
+                    } else {
+                        for (o, &x) in out.iter_mut().zip(x) {
+                            *o += w * x;
+                        }
+                    }
+                } else {
+                    let y = input(q);
+                    if first {
+                        for ((o, &x), &y) in out.iter_mut().zip(x).zip(y) {
+                            *o = w * (x + y);
+                        }
+                    } else {
+                        for ((o, &x), &y) in out.iter_mut().zip(x).zip(y) {
+                            *o = (x + y).fused_mul_add(w, *o);
+                        }
+                    }
+                }
+                first = false;
             }
         }
     }
 }
 
-/// The builds of the kernels, narrowest first. All give the same bits: separate
-/// multiplies and adds (no FMA), each output's taps summed in the same order.
+/// The builds of the kernels, narrowest first. All give the same bits: each output's
+/// taps summed as [`super::kernel::sum_terms`] says (its FMAs in software in the
+/// baseline build).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
 pub enum Simd {
     /// Plain loops (whatever the compiler makes of them for the baseline target).
     Baseline,
-    /// 256-bit vectors.
+    /// 256-bit vectors (AVX2 with FMA).
     Avx2,
     /// 512-bit vectors for the combines (the rest as [`Simd::Avx2`]).
     Avx512,
@@ -296,9 +323,10 @@ impl Simd {
                 _ => Simd::Avx512,
             };
             #[cfg(target_arch = "x86_64")]
-            let found = if std::arch::is_x86_feature_detected!("avx512f") {
+            let fma = std::arch::is_x86_feature_detected!("fma");
+            let found = if fma && std::arch::is_x86_feature_detected!("avx512f") {
                 Simd::Avx512
-            } else if std::arch::is_x86_feature_detected!("avx2") {
+            } else if fma && std::arch::is_x86_feature_detected!("avx2") {
                 Simd::Avx2
             } else {
                 Simd::Baseline
