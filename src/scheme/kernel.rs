@@ -400,9 +400,44 @@ macro_rules! terms_avx2_body {
                     $store(o.add(i), acc);
                 }};
             }
+            // four vectors at once: four independent sums in flight
+            macro_rules! at4 {
+                ($i:expr) => {{
+                    let i = $i;
+                    let mut acc = [$set1(0.0); 4];
+                    for (t, &(a, b, wk)) in terms.iter().enumerate() {
+                        let wv = $set1(wk);
+                        for (j, acc) in acc.iter_mut().enumerate() {
+                            let x = $load(p[a].add(i + j * L));
+                            *acc = if b == usize::MAX {
+                                let m = $mul(wv, x);
+                                if t == 0 {
+                                    m
+                                } else {
+                                    $add(*acc, m)
+                                }
+                            } else {
+                                let v = $add(x, $load(p[b].add(i + j * L)));
+                                if t == 0 {
+                                    $mul(wv, v)
+                                } else {
+                                    $fma(v, wv, *acc)
+                                }
+                            };
+                        }
+                    }
+                    for (j, &acc) in acc.iter().enumerate() {
+                        $store(o.add(i + j * L), acc);
+                    }
+                }};
+            }
             let mut i = 0;
             // SAFETY (all blocks): i + width <= len, so every access is inside the runs.
             unsafe {
+                while i + 4 * L <= len {
+                    at4!(i);
+                    i += 4 * L;
+                }
                 while i + L <= len {
                     at!(i);
                     i += L;
