@@ -387,23 +387,19 @@ fn op_row<T: Sample>(op: &Csr, r: usize, x: &[T], y: &mut [T], e: usize) {
         return;
     }
     let n = cols.len();
-    let mut w = [T::default(); 32];
-    let mut partner = [0usize; 32];
+    let x = |k: usize| x[cols[k] as usize];
     if n > 32 {
         let w: Vec<T> = ws.iter().map(|&v| T::from_f64(v)).collect();
-        for i in 0..e {
-            y[r * e + i] = super::kernel::row_sum(&w, |k| x[cols[k] as usize * e + i]);
-        }
+        y[r] = super::kernel::row_sum(&w, x);
         return;
     }
+    let mut w = [T::default(); 32];
+    let mut partner = [0usize; 32];
     for k in 0..n {
         w[k] = T::from_f64(ws[k]);
     }
     super::kernel::pair_taps(&w[..n], &mut partner[..n]);
-    for i in 0..e {
-        y[r * e + i] =
-            super::kernel::sum_terms(&w[..n], &partner[..n], |k| x[cols[k] as usize * e + i]);
-    }
+    y[r] = super::kernel::sum_terms(&w[..n], &partner[..n], x);
 }
 
 fn op_rows_run<T: Sample>(op: &Csr, run: &Run, x: &[T], y: &mut [T], e: usize) {

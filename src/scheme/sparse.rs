@@ -245,8 +245,9 @@ impl Csr {
         dst_stride: usize,
         width: usize,
     ) {
-        let mut partner = Vec::new();
-        let mut ws: Vec<T> = Vec::new();
+        // the rows' weights and pairs (on the stack up to 32 taps, the schemes' rows)
+        let (mut ws_stack, mut partner_stack) = ([T::default(); 32], [0usize; 32]);
+        let (mut ws_heap, mut partner_heap): (Vec<T>, Vec<usize>) = (Vec::new(), Vec::new());
         for r in 0..self.rows {
             let (a, b) = (self.offsets[r] as usize, self.offsets[r + 1] as usize);
             // SAFETY: the caller guarantees this element is ours alone.
@@ -256,10 +257,17 @@ impl Csr {
                 continue;
             }
             // the row's sum as `kernel::sum_terms` takes it (pairs of equal weights)
-            ws.clear();
-            ws.extend(self.weight[a..b].iter().map(|&w| T::from_f64(w)));
-            partner.resize(b - a, 0);
-            crate::scheme::kernel::pair_taps(&ws, &mut partner);
+            let (ws, partner) = if b - a <= 32 {
+                (&mut ws_stack[..b - a], &mut partner_stack[..b - a])
+            } else {
+                ws_heap.resize(b - a, T::default());
+                partner_heap.resize(b - a, 0);
+                (&mut ws_heap[..], &mut partner_heap[..])
+            };
+            for (w, &v) in ws.iter_mut().zip(&self.weight[a..b]) {
+                *w = T::from_f64(v);
+            }
+            crate::scheme::kernel::pair_taps(ws, partner);
             let input = |k: usize| unsafe {
                 std::slice::from_raw_parts(src.add(self.index[a + k] as usize * src_stride), width)
             };
