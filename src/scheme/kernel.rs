@@ -1949,6 +1949,9 @@ pub struct LaneTaps {
     /// `slots[ends[i]..ends[i + 1]]`.
     slots: Vec<(usize, usize, f32)>,
     ends: Vec<usize>,
+    /// Every row's pairs ([`pair_taps`]) with its weights as `f32`, and as `f64`.
+    pairs32: Vec<Vec<usize>>,
+    pairs64: Vec<Vec<usize>>,
     /// Rows summed and stored together: `(first row index, count ≤ 8)`, their outputs
     /// `r` following one another. A stretch of 8 or more such rows is covered by groups
     /// of 8 (the last overlapping the one before; its rows written twice, the same
@@ -2020,12 +2023,26 @@ impl LaneTaps {
             }
             i += n;
         }
+        let pairs = |to: &dyn Fn(f64) -> f64| -> Vec<Vec<usize>> {
+            rows.iter()
+                .map(|(_, t)| {
+                    let ws: Vec<f64> = t.iter().map(|&(_, wk)| to(wk)).collect();
+                    let mut partner = vec![0; ws.len()];
+                    pair_taps(&ws, &mut partner);
+                    partner
+                })
+                .collect()
+        };
+        // (an f32 weight widened to f64 compares as the f32 did)
+        let (pairs32, pairs64) = (pairs(&|v| v as f32 as f64), pairs(&|v| v));
         LaneTaps {
             w,
             rows,
             bases,
             slots,
             ends,
+            pairs32,
+            pairs64,
             groups,
         }
     }
@@ -2057,19 +2074,27 @@ pub fn combine_lane_taps_with<T: Sample>(
     if done == h {
         return;
     }
-    let plans: Vec<(Vec<T>, Vec<usize>)> = rows
-        .iter()
-        .map(|(_, taps)| {
-            let ws: Vec<T> = taps.iter().map(|&(_, wk)| T::from_f64(wk)).collect();
-            let mut partner = vec![0; ws.len()];
-            pair_taps(&ws, &mut partner);
-            (ws, partner)
-        })
-        .collect();
-    for t in done..h {
-        let lane = &x[t * w..t * w + w];
-        for ((r, taps), (ws, partner)) in rows.iter().zip(&plans) {
-            y[t * ys + r] = sum_terms(ws, partner, |k| lane[taps[k].0]);
+    // the rows' pairs as `T` compares their weights (worked out once, in `LaneTaps::new`)
+    let pairs = if std::mem::size_of::<T>() == 4 {
+        &taps.pairs32
+    } else {
+        &taps.pairs64
+    };
+    for ((r, row), partner) in rows.iter().zip(pairs) {
+        let mut ws = [T::default(); 32];
+        let heap: Vec<T>;
+        let ws: &[T] = if row.len() <= 32 {
+            for (w, &(_, v)) in ws.iter_mut().zip(row) {
+                *w = T::from_f64(v);
+            }
+            &ws[..row.len()]
+        } else {
+            heap = row.iter().map(|&(_, v)| T::from_f64(v)).collect();
+            &heap
+        };
+        for t in done..h {
+            let lane = &x[t * w..t * w + w];
+            y[t * ys + r] = sum_terms(ws, partner, |k| lane[row[k].0]);
         }
     }
 }
