@@ -1203,13 +1203,18 @@ unsafe fn pair_avx2<T: Sample>(
     macro_rules! go {
         ($t:ty, $f:ident, $g:ident, $U:literal, $M1:literal, $M2:literal, $P1:literal, $N1:literal, $P2:literal, $N2:literal, $R1:literal, $R2:literal) => {{
             let wide = wide && len >= 64 / std::mem::size_of::<$t>();
-            let a: [$t; $U] = std::array::from_fn(|k| w1[k].to_f64() as $t);
-            let b: [$t; $U] = std::array::from_fn(|k| w2[k].to_f64() as $t);
+            // (plain loops: the closures of `array::from_fn` were not inlined here)
+            let (mut a, mut b) = ([0.0 as $t; $U], [0.0 as $t; $U]);
+            for k in 0..$U {
+                (a[k], b[k]) = (w1[k].to_f64() as $t, w2[k].to_f64() as $t);
+            }
             for t in 0..count {
                 // SAFETY: the caller's bounds; T is $t.
                 unsafe {
-                    let p: [*const $t; $U] =
-                        std::array::from_fn(|k| src[k].add(t * in_step) as *const $t);
+                    let mut p = [std::ptr::null::<$t>(); $U];
+                    for k in 0..$U {
+                        p[k] = src[k].add(t * in_step) as *const $t;
+                    }
                     let q1 = o[0].add(t * out_step[0]) as *mut $t;
                     let q2 = o[1].add(t * out_step[1]) as *mut $t;
                     match (wide, merge, split) {
