@@ -149,43 +149,29 @@ fn combine_terms<T: Sample>(simd: Simd, out: &mut [T], src: &[&[T]], w: &[T], pa
         let p: [*const T; 32] =
             std::array::from_fn(|k| src.get(k).map_or(std::ptr::null(), |s| s.as_ptr()));
         let wide = simd == Simd::Avx512;
+        macro_rules! arm {
+            ($t:ty, $wide_from:expr, $narrow:ident, $wide:ident) => {
+                if TypeId::of::<T>() == TypeId::of::<$t>() {
+                    let n = src.len();
+                    let o = out.as_mut_ptr() as *mut $t;
+                    let (p, w) = (
+                        std::slice::from_raw_parts(p.as_ptr() as *const *const $t, n),
+                        std::slice::from_raw_parts(w.as_ptr() as *const $t, n),
+                    );
+                    if wide && len >= $wide_from {
+                        $wide(o, len, p, w, partner);
+                    } else {
+                        $narrow(o, len, p, w, partner);
+                    }
+                    return;
+                }
+            };
+        }
         // SAFETY (both arms): AVX2 with FMA is present, AVX-512F when `wide`; every
         // source holds `len` samples (checked by `combine_with`); T is the type named.
         unsafe {
-            if TypeId::of::<T>() == TypeId::of::<f32>() {
-                let (o, p, w) = (
-                    out.as_mut_ptr() as *mut f32,
-                    p.as_ptr() as *const *const f32,
-                    w.as_ptr() as *const f32,
-                );
-                let (p, w) = (
-                    std::slice::from_raw_parts(p, src.len()),
-                    std::slice::from_raw_parts(w, src.len()),
-                );
-                if wide && len >= 16 {
-                    terms_avx512_f32(o, len, p, w, partner);
-                } else {
-                    terms_avx2_f32(o, len, p, w, partner);
-                }
-                return;
-            }
-            if TypeId::of::<T>() == TypeId::of::<f64>() {
-                let (o, p, w) = (
-                    out.as_mut_ptr() as *mut f64,
-                    p.as_ptr() as *const *const f64,
-                    w.as_ptr() as *const f64,
-                );
-                let (p, w) = (
-                    std::slice::from_raw_parts(p, src.len()),
-                    std::slice::from_raw_parts(w, src.len()),
-                );
-                if wide && len >= 8 {
-                    terms_avx512_f64(o, len, p, w, partner);
-                } else {
-                    terms_avx2_f64(o, len, p, w, partner);
-                }
-                return;
-            }
+            arm!(f32, 16, terms_avx2_f32, terms_avx512_f32);
+            arm!(f64, 8, terms_avx2_f64, terms_avx512_f64);
         }
     }
     let _ = simd;
@@ -238,8 +224,8 @@ fn taps<T: Sample, const N: usize>(out: &mut [T], src: &[&[T]], w: &[T]) {
 /// [`taps`] with AVX2 intrinsics for `f32`/`f64`: blocks of four vectors keep four
 /// independent sums in flight (each output's sum is a chain of dependent adds in a fixed
 /// order, for the bits, so one vector at a time would wait on add latency), then single
-/// vectors, then scalars. Separate multiply and add (no pairs, so no FMA): the same bits as the scalar
-/// loop. Short runs (lanes of a few hundred samples) are common, so the set-up is kept to
+/// vectors, then scalars. Separate multiply and add (rows without pairs, so no FMA): the
+/// same bits as the scalar loop. Short runs (lanes of a few hundred samples) are common, so the set-up is kept to
 /// plain loops. `wide`: 512-bit vectors (AVX-512F, which the caller has checked) on runs
 /// of at least one such vector.
 #[cfg(target_arch = "x86_64")]
@@ -284,8 +270,8 @@ unsafe fn taps_avx2<T: Sample, const N: usize>(out: &mut [T], src: &[&[T]], w: &
     }
 }
 
-/// `o[i] = Σ_k ws[k]·p[k][i]`, `i < len` (first tap assigns; rows without pairs): blocks of four vectors, then
-/// single vectors, then scalars. One body for `f32` and `f64` (their intrinsics differ).
+/// `o[i] = Σ_k ws[k]·p[k][i]`, `i < len` (first tap assigns; rows without pairs): blocks
+/// of four vectors, then single vectors, then scalars. One body for `f32` and `f64` (their intrinsics differ).
 macro_rules! taps_avx2_body {
     ($name:ident, $feat:literal, $t:ty, $lanes:expr, $set1:ident, $zero:ident, $mul:ident, $add:ident, $load:ident, $store:ident) => {
         /// See [`taps_avx2_body`].
@@ -378,33 +364,11 @@ macro_rules! terms_avx2_body {
                 }
             }
             let terms = &terms[..n];
+            // `$n` vectors from `i` (four at once keep four independent sums in flight)
             macro_rules! at {
-                ($i:expr) => {{
+                ($i:expr, $n:literal) => {{
                     let i = $i;
-                    let mut acc = $set1(0.0);
-                    for (t, &(a, b, wk)) in terms.iter().enumerate() {
-                        let x = $load(p[a].add(i));
-                        let wv = $set1(wk);
-                        if b == usize::MAX {
-                            let m = $mul(wv, x);
-                            acc = if t == 0 { m } else { $add(acc, m) };
-                        } else {
-                            let v = $add(x, $load(p[b].add(i)));
-                            acc = if t == 0 {
-                                $mul(wv, v)
-                            } else {
-                                $fma(v, wv, acc)
-                            };
-                        }
-                    }
-                    $store(o.add(i), acc);
-                }};
-            }
-            // four vectors at once: four independent sums in flight
-            macro_rules! at4 {
-                ($i:expr) => {{
-                    let i = $i;
-                    let mut acc = [$set1(0.0); 4];
+                    let mut acc = [$set1(0.0); $n];
                     for (t, &(a, b, wk)) in terms.iter().enumerate() {
                         let wv = $set1(wk);
                         for (j, acc) in acc.iter_mut().enumerate() {
@@ -435,16 +399,16 @@ macro_rules! terms_avx2_body {
             // SAFETY (all blocks): i + width <= len, so every access is inside the runs.
             unsafe {
                 while i + 4 * L <= len {
-                    at4!(i);
+                    at!(i, 4);
                     i += 4 * L;
                 }
                 while i + L <= len {
-                    at!(i);
+                    at!(i, 1);
                     i += L;
                 }
                 if i < len && len >= L {
                     // the last vector again, ending at `len` (the same sums, the same bits)
-                    at!(len - L);
+                    at!(len - L, 1);
                     i = len;
                 }
                 while i < len {
@@ -1146,6 +1110,23 @@ fn pattern_of<T: Sample>(w: &[T], mask: u32) -> (u32, u32, u64) {
     (p, n, r)
 }
 
+/// The patterns `(P1, N1, P2, N2, R1, R2)` of the table entries that serve the pair
+/// `(w1, m1)`, `(w2, m2)`, best first: the entry with its unit taps and pairs; then,
+/// when no taps pair, the plain entry (every tap multiplied: the same bits).
+#[allow(clippy::type_complexity)]
+fn pair_wants<T: Sample>(
+    w1: &[T],
+    m1: u32,
+    w2: &[T],
+    m2: u32,
+) -> [Option<(u32, u32, u32, u32, u64, u64)>; 2] {
+    let ((p1, n1, r1), (p2, n2, r2)) = (pattern_of(w1, m1), pattern_of(w2, m2));
+    let exact = (p1, n1, p2, n2, r1, r2);
+    let plain = (0, 0, 0, 0, 0, 0);
+    let also = ((r1, r2) == (0, 0) && exact != plain).then_some(plain);
+    [Some(exact), also]
+}
+
 /// [`seconds`] of a pattern's pairs, as a constant of the kernel built for it.
 struct Seconds<const R: u64>;
 impl<const R: u64> Seconds<R> {
@@ -1198,8 +1179,7 @@ unsafe fn pair_avx2<T: Sample>(
     if u > 16 {
         return false;
     }
-    let ((p1, n1, r1), (p2, n2, r2)) = (pattern_of(w1, m1), pattern_of(w2, m2));
-    let want = (p1, n1, p2, n2, r1, r2);
+    let wants = pair_wants(w1, m1, w2, m2);
     macro_rules! go {
         ($t:ty, $f:ident, $g:ident, $U:literal, $M1:literal, $M2:literal, $P1:literal, $N1:literal, $P2:literal, $N2:literal, $R1:literal, $R2:literal) => {{
             let wide = wide && len >= 64 / std::mem::size_of::<$t>();
@@ -1254,15 +1234,10 @@ unsafe fn pair_avx2<T: Sample>(
             return true;
         }};
     }
-    // the entry with the pattern's unit taps and pairs; without pairs, the plain entry
-    // also serves (every tap multiplied: the same bits)
+    // the entries that serve the pair, in order (see `pair_wants`)
     macro_rules! table {
         ($(($U:literal, $M1:literal, $M2:literal, $P1:literal, $N1:literal, $P2:literal, $N2:literal, $R1:literal, $R2:literal)),*) => {
-            for plain in [false, true] {
-                if plain && (r1, r2) != (0, 0) {
-                    break;
-                }
-                let want = if plain { (0, 0, 0, 0, 0, 0) } else { want };
+            for want in wants.into_iter().flatten() {
                 if TypeId::of::<T>() == TypeId::of::<f32>() {
                     $( if (u, m1, m2) == ($U, $M1, $M2) && want == ($P1, $N1, $P2, $N2, $R1, $R2) {
                         go!(f32, pair_avx2_f32, pair_avx512_f32, $U, $M1, $M2, $P1, $N1, $P2, $N2, $R1, $R2)
@@ -1287,13 +1262,12 @@ pub fn combine_pair_has_build<T: Sample>(w1: &[T], m1: u32, w2: &[T], m2: u32) -
     if u > 16 || w2.len() != u {
         return false;
     }
-    let ((p1, n1, r1), (p2, n2, r2)) = (pattern_of(w1, m1), pattern_of(w2, m2));
+    let wants = pair_wants(w1, m1, w2, m2);
     macro_rules! has {
         ($(($U:literal, $M1:literal, $M2:literal, $P1:literal, $N1:literal, $P2:literal, $N2:literal, $R1:literal, $R2:literal)),*) => {
             $(
                 if (u, m1, m2) == ($U, $M1, $M2)
-                    && ((p1, n1, p2, n2, r1, r2) == ($P1, $N1, $P2, $N2, $R1, $R2)
-                        || ((r1, r2) == (0, 0) && ($P1, $N1, $P2, $N2, $R1, $R2) == (0, 0, 0, 0, 0, 0)))
+                    && wants.contains(&Some(($P1, $N1, $P2, $N2, $R1, $R2)))
                 {
                     return true;
                 }
