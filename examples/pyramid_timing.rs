@@ -45,7 +45,7 @@ fn main() {
         synthesize(&mut a, &pyr).unwrap();
         let t2 = t.elapsed().as_secs_f64();
         println!(
-            "forward {:.1} ms, inverse {:.1} ms, {:.0} MB/s",
+            "forward {:.2} ms, inverse {:.2} ms, {:.0} MB/s",
             t1 * 1e3,
             (t2 - t1) * 1e3,
             (len * 4) as f64 / t2 / 1e6

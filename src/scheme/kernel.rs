@@ -917,19 +917,42 @@ pub fn combine_pair_with<T: Sample>(
     w2: &[T],
     m2: u32,
 ) {
+    let entry = if simd >= Simd::Avx2 {
+        pair_entry(w1, m1, w2, m2)
+    } else {
+        None
+    };
+    combine_pair_at(simd, entry, o1, o2, src, w1, m1, w2, m2)
+}
+
+/// [`combine_pair`] with the pair's [`pair_entry`] looked up before (`entry` must be it,
+/// or `None` for one output at a time).
+#[allow(clippy::too_many_arguments)]
+pub fn combine_pair_at<T: Sample>(
+    simd: Simd,
+    entry: Option<u8>,
+    o1: &mut [T],
+    o2: &mut [T],
+    src: &[&[T]],
+    w1: &[T],
+    m1: u32,
+    w2: &[T],
+    m2: u32,
+) {
     let u = src.len();
     check_pair(u, w1, m1, w2, m2);
     assert!(o1.len() == o2.len() && src.iter().all(|s| s.len() >= o1.len()));
     assert!(simd <= Simd::detected(), "{simd:?} is not available");
     #[cfg(target_arch = "x86_64")]
-    if simd >= Simd::Avx2 {
+    if let (true, Some(entry)) = (simd >= Simd::Avx2, entry) {
         let p = input_ptrs(src);
         let o = [o1.as_mut_ptr(), o2.as_mut_ptr()];
         let wide = simd == Simd::Avx512;
         // SAFETY: AVX2 (and AVX-512 when `wide`) present; lengths and masks checked
         // above; one step.
         if unsafe {
-            pair_avx2(
+            pair_avx2_at(
+                entry,
                 o,
                 o1.len(),
                 &p[..u],
@@ -948,6 +971,7 @@ pub fn combine_pair_with<T: Sample>(
             return;
         }
     }
+    let _ = entry;
     pair_by_parts(o1, o2, src, w1, m1, w2, m2, simd)
 }
 
@@ -956,6 +980,18 @@ pub fn combine_pair_with<T: Sample>(
 /// they share read once. `false` (nothing written) when the rows share no column or read
 /// more than [`PAIR_INPUTS`] inputs together (then two [`combine_taps`] do the same).
 pub fn combine_pair_taps<'t, T: Sample + 't>(
+    o1: &mut [T],
+    o2: &mut [T],
+    row1: (&[u32], &[f64]),
+    row2: (&[u32], &[f64]),
+    tap: impl Fn(u32) -> &'t [T],
+) -> bool {
+    combine_pair_taps_memo(&mut PairMemo::default(), o1, o2, row1, row2, tap)
+}
+
+/// [`combine_pair_taps`] looking the pair's pattern up in `memo` first.
+pub fn combine_pair_taps_memo<'t, T: Sample + 't>(
+    memo: &mut PairMemo<T>,
     o1: &mut [T],
     o2: &mut [T],
     row1: (&[u32], &[f64]),
@@ -999,7 +1035,13 @@ pub fn combine_pair_taps<'t, T: Sample + 't>(
     for k in 0..n {
         src[k] = tap(cols[k]);
     }
-    combine_pair(o1, o2, &src[..n], &a[..n], m1, &b[..n], m2);
+    let simd = Simd::detected();
+    let entry = if simd >= Simd::Avx2 {
+        memo.entry(&a[..n], m1, &b[..n], m2)
+    } else {
+        None
+    };
+    combine_pair_at(simd, entry, o1, o2, &src[..n], &a[..n], m1, &b[..n], m2);
     true
 }
 
@@ -1147,10 +1189,84 @@ const fn seconds(r: u64) -> u32 {
     m
 }
 
-/// Dispatch of [`combine_pair`] to [`pair_avx2_f32`] / [`pair_avx2_f64`], for `count`
+/// The entry of the pattern table (`pair_patterns`) that serves the pair `(w1, m1)`,
+/// `(w2, m2)` over `w1.len()` inputs (the first of `pair_wants` that has one), or `None`
+/// when none does: what the pair dispatch looks up on every call, for callers that use
+/// one pair many times to look up once ([`PairMemo`], [`super::polyphase::Pair`]).
+pub fn pair_entry<T: Sample>(w1: &[T], m1: u32, w2: &[T], m2: u32) -> Option<u8> {
+    let u = w1.len();
+    if u > 16 || w2.len() != u {
+        return None;
+    }
+    #[cfg(target_arch = "x86_64")]
+    {
+        let wants = pair_wants(w1, m1, w2, m2);
+        macro_rules! find {
+            ($(($U:literal, $M1:literal, $M2:literal, $P1:literal, $N1:literal, $P2:literal, $N2:literal, $R1:literal, $R2:literal)),*) => {
+                for want in wants.into_iter().flatten() {
+                    let mut idx = 0u8;
+                    $(
+                        if (u, m1, m2) == ($U, $M1, $M2) && want == ($P1, $N1, $P2, $N2, $R1, $R2) {
+                            return Some(idx);
+                        }
+                        idx += 1;
+                    )*
+                    let _ = idx;
+                }
+            };
+        }
+        pair_patterns!(find);
+    }
+    let _ = (m1, m2);
+    None
+}
+
+/// A pair's table entry remembered for the next call with the same weights and masks
+/// (one entry: the row pairs of an operator's regular rows repeat one pattern), so that
+/// [`combine_pair_taps_memo`] looks up [`pair_entry`] once per pattern rather than once
+/// per call.
+#[derive(Clone, Debug)]
+pub struct PairMemo<T> {
+    key: Option<MemoKey<T>>,
+    entry: Option<u8>,
+}
+
+/// A pair as [`PairMemo`] knows it: the inputs' count, the masks and the weights.
+type MemoKey<T> = (usize, u32, u32, [T; PAIR_INPUTS], [T; PAIR_INPUTS]);
+
+impl<T: Sample> Default for PairMemo<T> {
+    fn default() -> Self {
+        PairMemo {
+            key: None,
+            entry: None,
+        }
+    }
+}
+
+impl<T: Sample> PairMemo<T> {
+    /// [`pair_entry`] of the pair, from the memo when it holds this pair.
+    fn entry(&mut self, w1: &[T], m1: u32, w2: &[T], m2: u32) -> Option<u8> {
+        let u = w1.len();
+        if u > PAIR_INPUTS {
+            return pair_entry(w1, m1, w2, m2);
+        }
+        let (mut a, mut b) = ([T::default(); PAIR_INPUTS], [T::default(); PAIR_INPUTS]);
+        a[..u].copy_from_slice(w1);
+        b[..u].copy_from_slice(&w2[..u]);
+        let key = (u, m1, m2, a, b);
+        if self.key.as_ref() != Some(&key) {
+            self.entry = pair_entry(w1, m1, w2, m2);
+            self.key = Some(key);
+        }
+        self.entry
+    }
+}
+
+/// Dispatch of [`combine_pair`] to [`pair_avx2_f32`] / [`pair_avx2_f64`]: the kernel of
+/// table entry `entry` ([`pair_entry`] of the pair), for `count`
 /// steps: step `t` reads `src[k] + t·in_step` and writes `o1 + t·out_step[0]`,
-/// `o2 + t·out_step[1]` (`len` samples each). `false` (nothing written) when the pattern or
-/// the type has no AVX2 build.
+/// `o2 + t·out_step[1]` (`len` samples each). `false` (nothing written) when the type has
+/// no AVX2 build, or the entry is not one of the inputs' count and masks.
 ///
 /// # Safety
 /// AVX2 present, AVX-512F too when `wide` (then the steps of at least one 512-bit vector
@@ -1159,7 +1275,8 @@ const fn seconds(r: u64) -> u32 {
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 #[allow(clippy::too_many_arguments)]
-unsafe fn pair_avx2<T: Sample>(
+unsafe fn pair_avx2_at<T: Sample>(
+    entry: u8,
     o: [*mut T; 2],
     len: usize,
     src: &[*const T],
@@ -1176,10 +1293,10 @@ unsafe fn pair_avx2<T: Sample>(
 ) -> bool {
     use std::any::TypeId;
     let u = src.len();
-    if u > 16 {
+    if u > 16 || w1.len() != u || w2.len() != u {
         return false;
     }
-    let wants = pair_wants(w1, m1, w2, m2);
+    debug_assert_eq!(pair_entry(w1, m1, w2, m2), Some(entry));
     macro_rules! go {
         ($t:ty, $f:ident, $g:ident, $U:literal, $M1:literal, $M2:literal, $P1:literal, $N1:literal, $P2:literal, $N2:literal, $R1:literal, $R2:literal) => {{
             let wide = wide && len >= 64 / std::mem::size_of::<$t>();
@@ -1234,20 +1351,21 @@ unsafe fn pair_avx2<T: Sample>(
             return true;
         }};
     }
-    // the entries that serve the pair, in order (see `pair_wants`)
+    // the entry's kernel (its inputs' count and masks checked: they decide what it reads)
     macro_rules! table {
         ($(($U:literal, $M1:literal, $M2:literal, $P1:literal, $N1:literal, $P2:literal, $N2:literal, $R1:literal, $R2:literal)),*) => {
-            for want in wants.into_iter().flatten() {
-                if TypeId::of::<T>() == TypeId::of::<f32>() {
-                    $( if (u, m1, m2) == ($U, $M1, $M2) && want == ($P1, $N1, $P2, $N2, $R1, $R2) {
+            let mut idx = 0u8;
+            $(
+                if entry == idx && (u, m1, m2) == ($U, $M1, $M2) {
+                    if TypeId::of::<T>() == TypeId::of::<f32>() {
                         go!(f32, pair_avx2_f32, pair_avx512_f32, $U, $M1, $M2, $P1, $N1, $P2, $N2, $R1, $R2)
-                    } )*
-                } else if TypeId::of::<T>() == TypeId::of::<f64>() {
-                    $( if (u, m1, m2) == ($U, $M1, $M2) && want == ($P1, $N1, $P2, $N2, $R1, $R2) {
+                    } else if TypeId::of::<T>() == TypeId::of::<f64>() {
                         go!(f64, pair_avx2_f64, pair_avx512_f64, $U, $M1, $M2, $P1, $N1, $P2, $N2, $R1, $R2)
-                    } )*
+                    }
                 }
-            }
+                idx += 1;
+            )*
+            let _ = idx;
         };
     }
     pair_patterns!(table);
@@ -1258,24 +1376,7 @@ unsafe fn pair_avx2<T: Sample>(
 /// inputs' count, masks, unit weights and pairs one of the built patterns): the regular
 /// rows of every scheme have one (tested), other pairs go one output at a time.
 pub fn combine_pair_has_build<T: Sample>(w1: &[T], m1: u32, w2: &[T], m2: u32) -> bool {
-    let u = w1.len();
-    if u > 16 || w2.len() != u {
-        return false;
-    }
-    let wants = pair_wants(w1, m1, w2, m2);
-    macro_rules! has {
-        ($(($U:literal, $M1:literal, $M2:literal, $P1:literal, $N1:literal, $P2:literal, $N2:literal, $R1:literal, $R2:literal)),*) => {
-            $(
-                if (u, m1, m2) == ($U, $M1, $M2)
-                    && wants.contains(&Some(($P1, $N1, $P2, $N2, $R1, $R2)))
-                {
-                    return true;
-                }
-            )*
-        };
-    }
-    pair_patterns!(has);
-    false
+    pair_entry(w1, m1, w2, m2).is_some()
 }
 
 /// [`combine_pair`] with its two outputs interleaved into `out`: `out[2i]` the first,
@@ -1290,13 +1391,27 @@ pub fn combine_pair_merged<T: Sample>(
     w2: &[T],
     m2: u32,
 ) -> bool {
+    combine_pair_merged_at(pair_entry(w1, m1, w2, m2), out, src, w1, m1, w2, m2)
+}
+
+/// [`combine_pair_merged`] with the pair's [`pair_entry`] looked up before (`entry` must
+/// be it).
+pub fn combine_pair_merged_at<T: Sample>(
+    entry: Option<u8>,
+    out: &mut [T],
+    src: &[&[T]],
+    w1: &[T],
+    m1: u32,
+    w2: &[T],
+    m2: u32,
+) -> bool {
     let u = src.len();
     check_pair(u, w1, m1, w2, m2);
     assert!(out.len().is_multiple_of(2));
     let len = out.len() / 2;
     assert!(src.iter().all(|s| s.len() >= len));
     #[cfg(target_arch = "x86_64")]
-    if super::sparse::cpu_has_avx2() {
+    if let (true, Some(entry)) = (super::sparse::cpu_has_avx2(), entry) {
         let p = input_ptrs(src);
         let o = [out.as_mut_ptr(), out.as_mut_ptr()];
         let wide = Simd::detected() == Simd::Avx512;
@@ -1304,7 +1419,8 @@ pub fn combine_pair_merged<T: Sample>(
         // samples, every input len; one step, the merged output written through the
         // first pointer only.
         return unsafe {
-            pair_avx2(
+            pair_avx2_at(
+                entry,
                 o,
                 len,
                 &p[..u],
@@ -1321,6 +1437,7 @@ pub fn combine_pair_merged<T: Sample>(
             )
         };
     }
+    let _ = entry;
     false
 }
 
@@ -1512,10 +1629,11 @@ unsafe fn pair_steps<T: Sample>(
         // input and output stretch lies inside its slice and the outputs of all steps are
         // disjoint (the caller's contract), and `src`, `dst` are distinct slices
         // (borrowed shared and exclusive).
-        let done = unsafe {
+        let done = pair_entry(w1, m1, w2, m2).is_some_and(|entry| unsafe {
             // (merged: both through the first pointer)
             let o = [d.add(out[0]), d.add(if merge { out[0] } else { out[1] })];
-            pair_avx2(
+            pair_avx2_at(
+                entry,
                 o,
                 len,
                 &p[..u],
@@ -1530,7 +1648,7 @@ unsafe fn pair_steps<T: Sample>(
                 split,
                 Simd::detected() == Simd::Avx512,
             )
-        };
+        });
         if done {
             return;
         }
@@ -2399,4 +2517,36 @@ unsafe fn transpose8_ps(a: [std::arch::x86_64::__m256; 8]) -> [std::arch::x86_64
         _mm256_permute2f128_ps(u2, u6, 0x31),
         _mm256_permute2f128_ps(u3, u7, 0x31),
     ]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The memo answers what [`pair_entry`] answers, also when a pair with the same
+    /// inputs and masks but other weights (or unit taps) comes between.
+    #[test]
+    fn pair_memo_follows_the_weights() {
+        // cubic's analysis pair (coarse `a` with its centre of weight 1, detail `b`)
+        let a = [0.125, -0.5, 0.375, 1.0, 0.375, -0.5, 0.125];
+        let b = [0.0, 0.0, -0.125, 0.5, -0.75, 0.5, -0.125];
+        // the same masks, weights without pairs or unit taps
+        let c = [0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7];
+        let d = [0.0, 0.0, 0.8, 0.9, 1.1, 1.2, 1.3];
+        let (m1, m2) = (0b1111111, 0b1111100);
+        let mut memo = PairMemo::<f32>::default();
+        for (w1, w2) in [(a, b), (c, d), (c, d), (a, b), (a, b), (c, d)] {
+            let (w1, w2) = (w1.map(|x| x as f32), w2.map(|x| x as f32));
+            let want = pair_entry(&w1, m1, &w2, m2);
+            assert_eq!(memo.entry(&w1, m1, &w2, m2), want);
+        }
+        #[cfg(target_arch = "x86_64")]
+        {
+            let (w1, w2) = (a.map(|x| x as f32), b.map(|x| x as f32));
+            let (v1, v2) = (c.map(|x| x as f32), d.map(|x| x as f32));
+            // both have builds, and different ones
+            let (e1, e2) = (pair_entry(&w1, m1, &w2, m2), pair_entry(&v1, m1, &v2, m2));
+            assert!(e1.is_some() && e2.is_some() && e1 != e2);
+        }
+    }
 }

@@ -15,10 +15,11 @@
 //! the contiguous slice starting at element `cols[k] / 2` of one half.
 
 use super::kernel::{
-    combine, combine_pair, combine_pair_merged, deinterleave, edge_rows, interleave, EdgeGroup,
+    self, combine, combine_pair_at, combine_pair_merged_at, deinterleave, edge_rows, interleave,
+    EdgeGroup,
 };
 use super::sample::Sample;
-use super::sparse::Csr;
+use super::sparse::{Csr, Simd};
 
 /// Shortest run worth a vector pass; shorter stretches stay boundary rows.
 const MIN_RUN: usize = 4;
@@ -51,7 +52,7 @@ pub struct Polyphase {
     /// rows outside the pair), increasing.
     pub edge_rows: Vec<usize>,
     /// The same rows in groups of up to 8 for lanes of single samples
-    /// ([`kernel::edge_rows`](super::kernel::edge_rows)), and the rows no group takes.
+    /// ([`kernel::edge_rows`]), and the rows no group takes.
     pub edges: Vec<EdgeGroup>,
     pub edge_rest: Vec<usize>,
 }
@@ -61,7 +62,7 @@ pub struct Polyphase {
 /// `runs[j]`, `t < count`, reads the inputs `cols[k] + col_step·t` for the `k` in mask
 /// `masks[j]`, with weights `weights[j][k]`; each row sums its own taps in column order
 /// (the bits of one row at a time), but each input is loaded once for both rows
-/// ([`combine_pair`]).
+/// ([`kernel::combine_pair`]).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Pair {
     pub runs: [usize; 2],
@@ -71,6 +72,9 @@ pub struct Pair {
     pub cols: Vec<usize>,
     pub weights: [Vec<f64>; 2],
     pub masks: [u32; 2],
+    /// [`kernel::pair_entry`] of the pair for `f32` and for `f64` samples (looked up once
+    /// here rather than per lane).
+    pub entries: [Option<u8>; 2],
 }
 
 /// Most inputs a [`Pair`] reads.
@@ -86,6 +90,20 @@ impl Pair {
             }
         }
         w
+    }
+
+    /// [`kernel::pair_entry`] of the pair for samples of type `T`.
+    pub fn entry<T: Sample>(&self) -> Option<u8> {
+        use std::any::TypeId;
+        if TypeId::of::<T>() == TypeId::of::<f32>() {
+            self.entries[0]
+        } else if TypeId::of::<T>() == TypeId::of::<f64>() {
+            self.entries[1]
+        } else {
+            let [w0, w1] = self.sample_weights::<T>();
+            let u = self.cols.len();
+            kernel::pair_entry(&w0[..u], self.masks[0], &w1[..u], self.masks[1])
+        }
     }
 
     /// Row `first[0] + t` of `r0` with row `first[1] + t` of `r1`, `t < count`.
@@ -109,14 +127,26 @@ impl Pair {
             }
         }
         // rows that share no input gain nothing from going together
-        (masks[0] & masks[1] != 0).then_some(Pair {
+        if masks[0] & masks[1] == 0 {
+            return None;
+        }
+        let mut pair = Pair {
             runs,
             first,
             count,
             cols,
             weights,
             masks,
-        })
+            entries: [None; 2],
+        };
+        let u = pair.cols.len();
+        let [a, b] = pair.sample_weights::<f32>();
+        let [c, d] = pair.sample_weights::<f64>();
+        pair.entries = [
+            kernel::pair_entry(&a[..u], masks[0], &b[..u], masks[1]),
+            kernel::pair_entry(&c[..u], masks[0], &d[..u], masks[1]),
+        ];
+        Some(pair)
     }
 
     /// The pairing of an analysis split: its two element-strided runs, a coarse row with
@@ -468,7 +498,15 @@ fn pair_part<T: Sample>(
         };
     }
     let [m0, m1] = pair.masks;
-    combine_pair(
+    let simd = Simd::detected();
+    let entry = if simd >= Simd::Avx2 {
+        pair.entry::<T>()
+    } else {
+        None
+    };
+    combine_pair_at(
+        simd,
+        entry,
         &mut o0[..len],
         &mut o1[..len],
         &src[..u],
@@ -491,7 +529,15 @@ fn pair_merged<T: Sample>(pair: &Pair, x: &[T], out: &mut [T]) -> bool {
         src[k] = &x[c..c + n];
     }
     let [m0, m1] = pair.masks;
-    combine_pair_merged(&mut out[..2 * n], &src[..u], &w0[..u], m0, &w1[..u], m1)
+    combine_pair_merged_at(
+        pair.entry::<T>(),
+        &mut out[..2 * n],
+        &src[..u],
+        &w0[..u],
+        m0,
+        &w1[..u],
+        m1,
+    )
 }
 
 #[cfg(test)]

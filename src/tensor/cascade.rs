@@ -32,7 +32,7 @@
 use super::aligned::Aligned;
 use super::fused::{prefetch, AxisOp, Ctx, PREFETCH_MAX, STREAM_BYTES};
 use super::par::SharedMut;
-use crate::scheme::kernel::{combine_pair_taps, combine_taps, stream_copy};
+use crate::scheme::kernel::{combine_pair_taps_memo, combine_taps, stream_copy, PairMemo};
 use crate::scheme::sparse::Csr;
 use crate::scheme::Sample;
 use rayon::prelude::*;
@@ -610,6 +610,8 @@ struct LevelState<T> {
     /// `pending` ([`Step::combine_pair`]).
     next_slab: Aligned<T>,
     pending: Option<usize>,
+    /// The pattern of the level's last pair of rows ([`Step::combine_pair`]).
+    memo: PairMemo<T>,
     /// A whole output row, compact (analysis rows that feed the next level).
     out: Vec<T>,
 }
@@ -655,6 +657,7 @@ fn level_states<T: Sample>(plan: &Plan, ctxs: &[Ctx], spans: &[Span]) -> Vec<Lev
                 scratch: ctxs[l].scratch(),
                 next_slab: Aligned::heap(ctxs[l].cs()[0]),
                 pending: None,
+                memo: PairMemo::default(),
                 out: vec![T::default(); if needs_out { row } else { 0 }],
             }
         })
@@ -856,7 +859,8 @@ impl<'p, 'a, T: Sample> Part<'p, 'a, T> {
                 });
                 let paired = with.is_some_and(|n| {
                     let (a, b) = (&mut st.scratch[0], &mut st.next_slab);
-                    step.combine_pair(&n, &mut a[..row_len], &mut b[..row_len], 0..row_len, tap)
+                    let (a, b) = (&mut a[..row_len], &mut b[..row_len]);
+                    step.combine_pair(&mut st.memo, &n, a, b, 0..row_len, tap)
                 });
                 if paired {
                     st.pending = Some(step.pos + 1);
@@ -1037,12 +1041,13 @@ impl<'p, 'a, T: Sample> Part<'p, 'a, T> {
                     !wrapping && !wraps(n) && n.taps.0.iter().all(|&c| at_hand(c as usize))
                 });
                 let (a, b) = (&mut st.scratch[0], &mut st.next_slab);
+                let memo = &mut st.memo;
                 let paired = with.is_some_and(|n| {
                     if plan.lines {
-                        (w1 == 0 || step.combine_pair(&n, a, b, 0..w1, coarse))
-                            && step.combine_pair(&n, a, b, w1..row_len, array)
+                        (w1 == 0 || step.combine_pair(memo, &n, a, b, 0..w1, coarse))
+                            && step.combine_pair(memo, &n, a, b, w1..row_len, array)
                     } else {
-                        step.combine_pair(&n, a, b, 0..row_len, held)
+                        step.combine_pair(memo, &n, a, b, 0..row_len, held)
                     }
                 });
                 if paired {
@@ -1131,6 +1136,7 @@ impl Step<'_> {
     /// they do not pair.
     fn combine_pair<'t, T: Sample + 't>(
         &self,
+        memo: &mut PairMemo<T>,
         other: &Step,
         slab: &mut [T],
         slab2: &mut [T],
@@ -1138,7 +1144,9 @@ impl Step<'_> {
         tap: impl Fn(u32) -> &'t [T],
     ) -> bool {
         let (a, b) = (&mut slab[range.clone()], &mut slab2[range.clone()]);
-        combine_pair_taps(a, b, self.taps, other.taps, |c| &tap(c)[range.clone()])
+        combine_pair_taps_memo(memo, a, b, self.taps, other.taps, |c| {
+            &tap(c)[range.clone()]
+        })
     }
 }
 

@@ -15,7 +15,7 @@
 use super::aligned::Aligned;
 use super::par::{for_each_part, SharedMut};
 use crate::scheme::kernel::{
-    self, combine_pair_taps, combine_taps, stream_copy, transpose, LaneTaps,
+    self, combine_pair_taps_memo, combine_taps, stream_copy, transpose, LaneTaps, PairMemo,
 };
 use crate::scheme::polyphase::{Polyphase, PAIR_MOST};
 use crate::scheme::sparse::Csr;
@@ -309,11 +309,13 @@ impl<'a> Ctx<'a> {
         if whole {
             self.prefetch_after(rows[1].0.last(), src, src_st, run);
         }
+        let mut memo = PairMemo::default();
         for line in 0..lines {
             let (so, co) = self.line_at(0, line, src_st);
             let at = |c: u32| c as usize * src_st[0] + so;
             let (a, b) = (&mut slab[co..co + run], &mut slab2[co..co + run]);
-            if !combine_pair_taps(a, b, rows[0], rows[1], |c| &src[at(c)..at(c) + run]) {
+            let tap = |c| &src[at(c)..at(c) + run];
+            if !combine_pair_taps_memo(&mut memo, a, b, rows[0], rows[1], tap) {
                 debug_assert_eq!(line, 0, "the same rows pair on every line");
                 return false;
             }
