@@ -2295,6 +2295,11 @@ pub struct EdgeGroup {
     add: Vec<[u32; 8]>,
     /// Rows with pairs: their terms, step by step (empty when no row pairs).
     steps: Vec<EdgeStep>,
+    /// Rows with pairs whose inputs lie in at most 4 stretches of 8 samples (e.g. the
+    /// first and the last samples of the lane): the starts of those stretches and their
+    /// count; the steps then pick their inputs from those vectors in registers
+    /// ([`EdgeStep::la`]) instead of gathering them from memory.
+    window: Option<([usize; 4], usize)>,
 }
 
 /// One term of each of the 8 rows of an [`EdgeGroup`] (masks: all bits set where true).
@@ -2303,6 +2308,9 @@ struct EdgeStep {
     /// The term's input, and its pair's second input (the first again for a single tap).
     a: [i32; 8],
     b: [i32; 8],
+    /// `a` and `b` in [`EdgeGroup::window`]: `8·v + o` for sample `o` of vector `v`.
+    la: [i32; 8],
+    lb: [i32; 8],
     /// The term's weight (as `f32`).
     w: [f32; 8],
     /// The term is a pair (its input the sum of the two).
@@ -2341,6 +2349,7 @@ impl EdgeGroup {
             first: Vec::new(),
             add: Vec::new(),
             steps: Vec::new(),
+            window: None,
         };
         let paired = rows.iter().any(|(_, ws)| {
             let wf: Vec<f32> = ws.iter().map(|&v| v as f32).collect();
@@ -2372,6 +2381,8 @@ impl EdgeGroup {
         let empty = EdgeStep {
             a: [lo as i32; 8],
             b: [lo as i32; 8],
+            la: [0; 8],
+            lb: [0; 8],
             w: [0.0; 8],
             paired: [0; 8],
             first: [0; 8],
@@ -2409,6 +2420,41 @@ impl EdgeGroup {
                 s += 1;
             }
         }
+        // the stretches of 8 samples that hold the inputs, from the last input down
+        let mut used: Vec<usize> = g
+            .steps
+            .iter()
+            .flat_map(|st| st.a[..n].iter().chain(&st.b[..n]))
+            .map(|&c| c as usize)
+            .collect();
+        used.sort_unstable_by(|x, y| y.cmp(x));
+        let mut bases = Vec::new();
+        for &c in &used {
+            if !bases.iter().any(|&b| (b..b + 8).contains(&c)) {
+                bases.push(c.saturating_sub(7));
+            }
+        }
+        if bases.len() <= 4 {
+            let local = |c: i32| {
+                let c = c as usize;
+                let v = bases.iter().position(|&b| (b..b + 8).contains(&c));
+                let v = v.expect("every input in a stretch");
+                (8 * v + c - bases[v]) as i32
+            };
+            for st in &mut g.steps {
+                for i in 0..8 {
+                    // (the lanes past `n` read input 0 of the first stretch)
+                    (st.la[i], st.lb[i]) = if i < n {
+                        (local(st.a[i]), local(st.b[i]))
+                    } else {
+                        (0, 0)
+                    };
+                }
+            }
+            let mut starts = [0; 4];
+            starts[..bases.len()].copy_from_slice(&bases);
+            g.window = Some((starts, bases.len()));
+        }
         Some(g)
     }
 }
@@ -2426,7 +2472,7 @@ pub fn edge_rows<T: Sample>(groups: &[EdgeGroup], x: &[T], y: &mut [T]) -> bool 
         let (px, py) = (x.as_ptr() as *const f32, y.as_mut_ptr() as *mut f32);
         // SAFETY: AVX2 is present; T is f32; every group's samples and outputs lie inside
         // `x` and `y` (asserted).
-        unsafe { edge_rows_avx2_f32(groups, px, py) };
+        unsafe { edge_rows_avx2_f32(groups, px, x.len(), py) };
         return true;
     }
     let _ = (groups, x, y);
@@ -2436,11 +2482,11 @@ pub fn edge_rows<T: Sample>(groups: &[EdgeGroup], x: &[T], y: &mut [T]) -> bool 
 /// [`edge_rows`] with AVX2 on `f32`.
 ///
 /// # Safety
-/// AVX2 with FMA present; `x` valid up to the `last` sample of every group and `y` for
-/// `r0 + n`.
+/// AVX2 with FMA present; `x` valid for `x_len` samples, past the `last` sample of every
+/// group, and `y` for `r0 + n`.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
-unsafe fn edge_rows_avx2_f32(groups: &[EdgeGroup], x: *const f32, y: *mut f32) {
+unsafe fn edge_rows_avx2_f32(groups: &[EdgeGroup], x: *const f32, x_len: usize, y: *mut f32) {
     use std::arch::x86_64::*;
     let mut part = [0f32; 8];
     for g in groups {
@@ -2456,21 +2502,57 @@ unsafe fn edge_rows_avx2_f32(groups: &[EdgeGroup], x: *const f32, y: *mut f32) {
                 acc = _mm256_blendv_ps(acc, _mm256_add_ps(acc, v), am);
             }
         }
+        // the inputs of a step: picked from the window's vectors, or gathered
+        let window = g
+            .window
+            .filter(|(bases, v)| bases[..*v].iter().all(|&b| b + 8 <= x_len));
+        let vs = match window {
+            // SAFETY: every stretch inside `x` (filtered above).
+            Some((bases, v)) => unsafe {
+                let at = |i: usize| _mm256_loadu_ps(x.add(bases[i.min(v - 1)]));
+                [at(0), at(1), at(2), at(3)]
+            },
+            None => [_mm256_setzero_ps(); 4],
+        };
+        // sample `idx` (< 32) of the window in each lane: bit 3 of the index picks
+        // between vectors 0 and 1 (2 and 3), bit 4 between those two
+        let pick = |idx: __m256i| {
+            let p0 = _mm256_permutevar8x32_ps(vs[0], idx);
+            let p1 = _mm256_permutevar8x32_ps(vs[1], idx);
+            let bit3 = _mm256_castsi256_ps(_mm256_slli_epi32::<28>(idx));
+            let lo = _mm256_blendv_ps(p0, p1, bit3);
+            if window.is_some_and(|(_, v)| v <= 2) {
+                return lo;
+            }
+            let p2 = _mm256_permutevar8x32_ps(vs[2], idx);
+            let p3 = _mm256_permutevar8x32_ps(vs[3], idx);
+            let hi = _mm256_blendv_ps(p2, p3, bit3);
+            let bit4 = _mm256_castsi256_ps(_mm256_slli_epi32::<27>(idx));
+            _mm256_blendv_ps(lo, hi, bit4)
+        };
         for st in &g.steps {
-            // SAFETY: every index is a sample the group reads, inside `x`; the arrays are
-            // 8 lanes wide.
+            // SAFETY: every index is a sample the group reads, inside `x` (gathered), or
+            // inside the window (picked); the arrays are 8 lanes wide.
             unsafe {
-                let ia = _mm256_loadu_si256(st.a.as_ptr() as *const __m256i);
-                let ib = _mm256_loadu_si256(st.b.as_ptr() as *const __m256i);
-                let xa = _mm256_i32gather_ps::<4>(x, ia);
-                let xb = _mm256_i32gather_ps::<4>(x, ib);
+                let load = |a: &[i32; 8]| _mm256_loadu_si256(a.as_ptr() as *const __m256i);
+                let (xa, xb) = if window.is_some() {
+                    (pick(load(&st.la)), pick(load(&st.lb)))
+                } else {
+                    (
+                        _mm256_i32gather_ps::<4>(x, load(&st.a)),
+                        _mm256_i32gather_ps::<4>(x, load(&st.b)),
+                    )
+                };
                 let mask = |m: &[u32; 8]| _mm256_loadu_ps(m.as_ptr() as *const f32);
                 let v = _mm256_blendv_ps(xa, _mm256_add_ps(xa, xb), mask(&st.paired));
                 let w = _mm256_loadu_ps(st.w.as_ptr());
                 let m = _mm256_mul_ps(w, v);
+                // the three ways from the same `acc` (each lane takes at most one), so
+                // that the add and the FMA overlap instead of following one another
+                let (add, fma) = (_mm256_add_ps(acc, m), _mm256_fmadd_ps(v, w, acc));
                 acc = _mm256_blendv_ps(acc, m, mask(&st.first));
-                acc = _mm256_blendv_ps(acc, _mm256_add_ps(acc, m), mask(&st.single));
-                acc = _mm256_blendv_ps(acc, _mm256_fmadd_ps(v, w, acc), mask(&st.fused));
+                acc = _mm256_blendv_ps(acc, add, mask(&st.single));
+                acc = _mm256_blendv_ps(acc, fma, mask(&st.fused));
             }
         }
         // SAFETY: r0 + n <= y.len().
@@ -2522,6 +2604,46 @@ unsafe fn transpose8_ps(a: [std::arch::x86_64::__m256; 8]) -> [std::arch::x86_64
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The edge groups of the schemes' lanes pick their inputs from registers (a window
+    /// of at most 4 vectors), with the bits of the gathered inputs.
+    #[cfg(target_arch = "x86_64")]
+    #[test]
+    fn edge_windows_give_the_bits_of_gathers() {
+        use crate::scheme::{polyphase::Polyphase, two_scale::TwoScale, Boundary, Scheme};
+        if !super::super::sparse::cpu_has_avx2() {
+            return;
+        }
+        let mut windows = 0;
+        for scheme in [Scheme::Haar, Scheme::Chaikin, Scheme::Cubic] {
+            for boundary in [
+                Boundary::Interpolating,
+                Boundary::Periodic,
+                Boundary::Symmetric,
+            ] {
+                for m in [8, 9, 16, 33, 64, 101] {
+                    let t = TwoScale::new(scheme, boundary, m);
+                    for op in [&t.analysis, &t.synthesis] {
+                        let p = Polyphase::new(op);
+                        let x: Vec<f32> = (0..m)
+                            .map(|i| ((i * 37 % 23) as f32 - 11.0) / 7.0)
+                            .collect();
+                        let mut gathered = p.edges.clone();
+                        for g in &mut gathered {
+                            windows += usize::from(g.window.is_some() && !g.steps.is_empty());
+                            g.window = None;
+                        }
+                        let (mut y1, mut y2) = (vec![0f32; m], vec![0f32; m]);
+                        assert!(edge_rows(&p.edges, &x, &mut y1));
+                        assert!(edge_rows(&gathered, &x, &mut y2));
+                        let bits = |y: &[f32]| y.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+                        assert_eq!(bits(&y1), bits(&y2), "{scheme:?} {boundary:?} {m}");
+                    }
+                }
+            }
+        }
+        assert!(windows > 0, "no edge group picks from registers");
+    }
 
     /// The memo answers what [`pair_entry`] answers, also when a pair with the same
     /// inputs and masks but other weights (or unit taps) comes between.
