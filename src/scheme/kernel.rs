@@ -922,11 +922,12 @@ pub fn combine_pair_with<T: Sample>(
     } else {
         None
     };
-    combine_pair_at(simd, entry, o1, o2, src, w1, m1, w2, m2)
+    combine_pair_at(simd, entry, o1, o2, src, w1, m1, w2, m2, false)
 }
 
 /// [`combine_pair`] with the pair's [`pair_entry`] looked up before (`entry` must be it,
-/// or `None` for one output at a time).
+/// or `None` for one output at a time); `split`: each output split into its even
+/// samples, then its odd ones, as [`deinterleave`] places them (the same bits).
 #[allow(clippy::too_many_arguments)]
 pub fn combine_pair_at<T: Sample>(
     simd: Simd,
@@ -938,6 +939,7 @@ pub fn combine_pair_at<T: Sample>(
     m1: u32,
     w2: &[T],
     m2: u32,
+    split: bool,
 ) {
     let u = src.len();
     check_pair(u, w1, m1, w2, m2);
@@ -964,7 +966,7 @@ pub fn combine_pair_at<T: Sample>(
                 0,
                 [0, 0],
                 false,
-                false,
+                split,
                 wide,
             )
         } {
@@ -972,7 +974,13 @@ pub fn combine_pair_at<T: Sample>(
         }
     }
     let _ = entry;
-    pair_by_parts(o1, o2, src, w1, m1, w2, m2, simd)
+    pair_by_parts(o1, o2, src, w1, m1, w2, m2, simd);
+    if split {
+        for o in [o1, o2] {
+            let whole = o.to_vec();
+            deinterleave(&whole, 1, o);
+        }
+    }
 }
 
 /// [`combine_pair`] over two sparse rows (`(columns, weights)`, columns increasing) and
@@ -986,12 +994,14 @@ pub fn combine_pair_taps<'t, T: Sample + 't>(
     row2: (&[u32], &[f64]),
     tap: impl Fn(u32) -> &'t [T],
 ) -> bool {
-    combine_pair_taps_memo(&mut PairMemo::default(), o1, o2, row1, row2, tap)
+    combine_pair_taps_memo(&mut PairMemo::default(), false, o1, o2, row1, row2, tap)
 }
 
-/// [`combine_pair_taps`] looking the pair's pattern up in `memo` first.
+/// [`combine_pair_taps`] looking the pair's pattern up in `memo` first; `split` as
+/// [`combine_pair_at`].
 pub fn combine_pair_taps_memo<'t, T: Sample + 't>(
     memo: &mut PairMemo<T>,
+    split: bool,
     o1: &mut [T],
     o2: &mut [T],
     row1: (&[u32], &[f64]),
@@ -1041,7 +1051,18 @@ pub fn combine_pair_taps_memo<'t, T: Sample + 't>(
     } else {
         None
     };
-    combine_pair_at(simd, entry, o1, o2, &src[..n], &a[..n], m1, &b[..n], m2);
+    combine_pair_at(
+        simd,
+        entry,
+        o1,
+        o2,
+        &src[..n],
+        &a[..n],
+        m1,
+        &b[..n],
+        m2,
+        split,
+    );
     true
 }
 

@@ -55,6 +55,10 @@ pub struct Polyphase {
     /// ([`kernel::edge_rows`]), and the rows no group takes.
     pub edges: Vec<EdgeGroup>,
     pub edge_rest: Vec<usize>,
+    /// Analysis (`col_step` 2) whose rows outside the pair and the short runs read only
+    /// samples within this many of the lane's ends: lanes of single samples may then come
+    /// already split into their even and odd samples ([`Polyphase::apply_lane_split`]).
+    pub split_reach: Option<usize>,
 }
 
 /// Two regular runs whose rows read the same stretch of the lane: a coarse and a detail
@@ -280,6 +284,19 @@ impl Polyphase {
         }
         edge_rows.sort_unstable();
         let (edges, edge_rest) = edge_groups(op, &edge_rows);
+        // the farthest any row read one by one reaches from the nearer end of the lane
+        // (every other run a short one of `run_part`, which reads the halves)
+        let paired_runs = pair.as_ref().map_or([usize::MAX; 2], |p| p.runs);
+        let short = |(i, r): (usize, &Run)| {
+            paired_runs.contains(&i) || (r.row_step == 1 && r.cols.len() <= 16)
+        };
+        let reach = edge_rows
+            .iter()
+            .flat_map(|&r| op.row_slices(r).0)
+            .map(|&c| (c as usize + 1).min(rows - c as usize))
+            .max()
+            .unwrap_or(0);
+        let split_reach = (col_step == 2 && runs.iter().enumerate().all(short)).then_some(reach);
         Polyphase {
             rows,
             col_step,
@@ -290,6 +307,7 @@ impl Polyphase {
             edge_rows,
             edges,
             edge_rest,
+            split_reach,
         }
     }
 
@@ -320,7 +338,7 @@ impl Polyphase {
         if let Some(pair) = &self.pair {
             // its runs' rows outside the pair are edge rows, below
             paired = pair.runs;
-            let (r0, r1) = (&self.runs[pair.runs[0]], &self.runs[pair.runs[1]]);
+            let r0 = &self.runs[pair.runs[0]];
             let (f, n) = (pair.first, pair.count);
             if self.col_step == 1 {
                 // Synthesis (`scratch` is free): the even and the odd rows into its two
@@ -335,12 +353,63 @@ impl Polyphase {
                 }
             } else {
                 // Analysis: the coarse and the detail rows straight into `y`.
-                let (lo, hi) = y.split_at_mut(r1.row0 * e);
-                let o0 = &mut lo[(r0.row0 + f[0]) * e..(r0.row0 + f[0] + n) * e];
-                let o1 = &mut hi[f[1] * e..(f[1] + n) * e];
-                pair_part(pair, 2, ne, x, scratch, e, o0, o1);
+                self.analysis_pair(pair, x, scratch, y, e);
             }
         }
+        self.other_rows(op, x, scratch, y, e, paired);
+    }
+
+    /// [`Polyphase::apply_lane`] for analysis on a lane of single samples that comes
+    /// already split into its even samples, then its odd ones (`halves`, as
+    /// [`deinterleave`] makes them): the same bits without the split's pass. `x_ends`
+    /// (`rows` samples) takes the samples near the ends, for the rows read one by one.
+    /// Only where [`Polyphase::split_reach`] is known.
+    pub fn apply_lane_split<T: Sample>(
+        &self,
+        op: &Csr,
+        halves: &[T],
+        y: &mut [T],
+        x_ends: &mut [T],
+    ) {
+        let m = self.rows;
+        let reach = self.split_reach.expect("a lane that may come split");
+        assert!(halves.len() >= m && y.len() >= m && x_ends.len() >= m);
+        let (halves, y, x) = (&halves[..m], &mut y[..m], &mut x_ends[..m]);
+        let ne = m.div_ceil(2);
+        for c in (0..reach.min(m)).chain(m.saturating_sub(reach)..m) {
+            x[c] = halves[(c % 2) * ne + c / 2];
+        }
+        let mut paired = [usize::MAX; 2];
+        if let Some(pair) = &self.pair {
+            paired = pair.runs;
+            self.analysis_pair(pair, x, halves, y, 1);
+        }
+        self.other_rows(op, x, halves, y, 1, paired);
+    }
+
+    /// Analysis: the rows of `pair` straight into `y` (`halves` the lane split).
+    fn analysis_pair<T: Sample>(&self, pair: &Pair, x: &[T], halves: &[T], y: &mut [T], e: usize) {
+        let (r0, r1) = (&self.runs[pair.runs[0]], &self.runs[pair.runs[1]]);
+        let (f, n) = (pair.first, pair.count);
+        let ne = self.rows.div_ceil(2);
+        let (lo, hi) = y.split_at_mut(r1.row0 * e);
+        let o0 = &mut lo[(r0.row0 + f[0]) * e..(r0.row0 + f[0] + n) * e];
+        let o1 = &mut hi[f[1] * e..(f[1] + n) * e];
+        pair_part(pair, 2, ne, x, halves, e, o0, o1);
+    }
+
+    /// The runs but the `paired` ones, and the rows near the ends (`halves`: the lane
+    /// split, for `col_step` 2).
+    fn other_rows<T: Sample>(
+        &self,
+        op: &Csr,
+        x: &[T],
+        halves: &[T],
+        y: &mut [T],
+        e: usize,
+        paired: [usize; 2],
+    ) {
+        let ne = self.rows.div_ceil(2);
         for (ri, run) in self.runs.iter().enumerate() {
             if paired.contains(&ri) {
                 continue;
@@ -354,7 +423,7 @@ impl Polyphase {
                     0,
                     run.count,
                     x,
-                    scratch,
+                    halves,
                     e,
                     &mut y[run.row0 * e..run.row0 * e + len],
                 );
@@ -514,6 +583,7 @@ fn pair_part<T: Sample>(
         m0,
         &w1[..u],
         m1,
+        false,
     );
 }
 

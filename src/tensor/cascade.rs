@@ -610,6 +610,8 @@ struct LevelState<T> {
     /// `pending` ([`Step::combine_pair`]).
     next_slab: Aligned<T>,
     pending: Option<usize>,
+    /// That row comes split into its even and odd samples.
+    pending_split: bool,
     /// The pattern of the level's last pair of rows ([`Step::combine_pair`]).
     memo: PairMemo<T>,
     /// A whole output row, compact (analysis rows that feed the next level).
@@ -657,6 +659,7 @@ fn level_states<T: Sample>(plan: &Plan, ctxs: &[Ctx], spans: &[Span]) -> Vec<Lev
                 scratch: ctxs[l].scratch(),
                 next_slab: Aligned::heap(ctxs[l].cs()[0]),
                 pending: None,
+                pending_split: false,
                 memo: PairMemo::default(),
                 out: vec![T::default(); if needs_out { row } else { 0 }],
             }
@@ -831,6 +834,10 @@ impl<'p, 'a, T: Sample> Part<'p, 'a, T> {
             }
         }
         let next = (step.pos + 1 < self.spans[l].end).then(|| self.step_at(l, step.pos + 1));
+        // rows combined in pairs come split into their even and odd samples where the
+        // level's lanes take them so (`Ctx::finish_split_row`), saving the lanes' split
+        let split_ok = self.ctxs[l].takes_split_rows();
+        let mut split = false;
         {
             let st = &mut self.levels[l];
             let s0 = strides[0];
@@ -838,6 +845,7 @@ impl<'p, 'a, T: Sample> Part<'p, 'a, T> {
                 // made with the row before (`combine_pair`)
                 std::mem::swap(&mut st.scratch[0], &mut st.next_slab);
                 st.pending = None;
+                split = st.pending_split;
             } else {
                 let ring = &st.ring;
                 let ghosts = (l > 0).then(|| (&self.need[l - 1], &self.ghosts[l - 1]));
@@ -860,10 +868,11 @@ impl<'p, 'a, T: Sample> Part<'p, 'a, T> {
                 let paired = with.is_some_and(|n| {
                     let (a, b) = (&mut st.scratch[0], &mut st.next_slab);
                     let (a, b) = (&mut a[..row_len], &mut b[..row_len]);
-                    step.combine_pair(&mut st.memo, &n, a, b, 0..row_len, tap)
+                    step.combine_pair(&mut st.memo, split_ok, &n, a, b, 0..row_len, tap)
                 });
                 if paired {
                     st.pending = Some(step.pos + 1);
+                    (split, st.pending_split) = (split_ok, split_ok);
                 } else {
                     step.combine(&mut st.scratch[0], 0..row_len, tap);
                 }
@@ -879,8 +888,10 @@ impl<'p, 'a, T: Sample> Part<'p, 'a, T> {
         let (slab, rest) = st.scratch.split_first_mut().expect("slab");
         let slab = &slab[..row_len];
         if !feeds {
-            if let Some(out) = out_row {
-                ctx.finish_row(slab, out, strides, rest);
+            match out_row {
+                Some(out) if split => ctx.finish_split_row(slab, out, rest),
+                Some(out) => ctx.finish_row(slab, out, strides, rest),
+                None => {}
             }
             return;
         }
@@ -890,9 +901,14 @@ impl<'p, 'a, T: Sample> Part<'p, 'a, T> {
         let slot = up[0].ring.put(r);
         let whole: &[T] = if plan.lines {
             // the whole row into the next level's ring (which reads its prefix)
-            local.finish_row(slab, slot, cs, rest);
+            if split {
+                local.finish_split_row(slab, slot, rest);
+            } else {
+                local.finish_row(slab, slot, cs, rest);
+            }
             slot
         } else {
+            debug_assert!(!split, "split rows are rows of images");
             // the coarse box to the next level's ring
             local.finish_row(slab, &mut st.out, cs, rest);
             copy_box_outside(
@@ -1044,10 +1060,10 @@ impl<'p, 'a, T: Sample> Part<'p, 'a, T> {
                 let memo = &mut st.memo;
                 let paired = with.is_some_and(|n| {
                     if plan.lines {
-                        (w1 == 0 || step.combine_pair(memo, &n, a, b, 0..w1, coarse))
-                            && step.combine_pair(memo, &n, a, b, w1..row_len, array)
+                        (w1 == 0 || step.combine_pair(memo, false, &n, a, b, 0..w1, coarse))
+                            && step.combine_pair(memo, false, &n, a, b, w1..row_len, array)
                     } else {
-                        step.combine_pair(memo, &n, a, b, 0..row_len, held)
+                        step.combine_pair(memo, false, &n, a, b, 0..row_len, held)
                     }
                 });
                 if paired {
@@ -1132,11 +1148,13 @@ impl Step<'_> {
 
 impl Step<'_> {
     /// This row into `slab` and `other` into `slab2` over samples `range`, the inputs the
-    /// two rows share read once ([`combine_pair_taps`]); `false` (nothing written) when
-    /// they do not pair.
+    /// two rows share read once ([`combine_pair_taps_memo`]; `split`: each written as its
+    /// even samples, then its odd ones); `false` (nothing written) when they do not pair.
+    #[allow(clippy::too_many_arguments)]
     fn combine_pair<'t, T: Sample + 't>(
         &self,
         memo: &mut PairMemo<T>,
+        split: bool,
         other: &Step,
         slab: &mut [T],
         slab2: &mut [T],
@@ -1144,7 +1162,7 @@ impl Step<'_> {
         tap: impl Fn(u32) -> &'t [T],
     ) -> bool {
         let (a, b) = (&mut slab[range.clone()], &mut slab2[range.clone()]);
-        combine_pair_taps_memo(memo, a, b, self.taps, other.taps, |c| {
+        combine_pair_taps_memo(memo, split, a, b, self.taps, other.taps, |c| {
             &tap(c)[range.clone()]
         })
     }

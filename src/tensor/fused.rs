@@ -198,6 +198,41 @@ impl<'a> Ctx<'a> {
         self.slab(1, slab, out, dst_st, scratch);
     }
 
+    /// Whether rows may reach [`Ctx::finish_split_row`] already split into their even and
+    /// odd samples: images of single samples whose lanes (axis 1) run analysis with
+    /// [`Polyphase::split_reach`] known.
+    pub fn takes_split_rows(&self) -> bool {
+        let lane = &self.ops[self.ops.len() - 1].plan;
+        self.ops.len() == 2
+            && self.e == 1
+            && lane.split_reach.is_some()
+            && lane.rows == self.region[1]
+    }
+
+    /// [`Ctx::finish_row`] for a row combined along axis 0 into its even samples, then
+    /// its odd ones (`halves`; see [`Ctx::takes_split_rows`]): the lane without its split.
+    pub fn finish_split_row<T: Sample>(
+        &self,
+        halves: &[T],
+        out: &mut [T],
+        scratch: &mut [Aligned<T>],
+    ) {
+        debug_assert!(self.takes_split_rows());
+        let a = &self.ops[1];
+        let n = self.region[1];
+        let [.., lane_out, lane_tmp, _, _] = scratch else {
+            unreachable!("two lane buffers")
+        };
+        if self.stream {
+            a.plan
+                .apply_lane_split(a.op, &halves[..n], &mut lane_out[..n], lane_tmp);
+            stream_copy(&lane_out[..n], &mut out[..n]);
+        } else {
+            a.plan
+                .apply_lane_split(a.op, &halves[..n], &mut out[..n], lane_tmp);
+        }
+    }
+
     /// Output row `r` along axis `d`: `out` starts at that row's slab in the destination
     /// (`dst_st` its strides), `src` at the input's origin for axes `d..` (`src_st`).
     #[allow(clippy::too_many_arguments)]
@@ -315,7 +350,7 @@ impl<'a> Ctx<'a> {
             let at = |c: u32| c as usize * src_st[0] + so;
             let (a, b) = (&mut slab[co..co + run], &mut slab2[co..co + run]);
             let tap = |c| &src[at(c)..at(c) + run];
-            if !combine_pair_taps_memo(&mut memo, a, b, rows[0], rows[1], tap) {
+            if !combine_pair_taps_memo(&mut memo, false, a, b, rows[0], rows[1], tap) {
                 debug_assert_eq!(line, 0, "the same rows pair on every line");
                 return false;
             }
