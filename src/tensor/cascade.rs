@@ -30,7 +30,7 @@
 //! [`MAX_HALO`] of the work.
 
 use super::aligned::Aligned;
-use super::fused::{prefetch, AxisOp, Ctx, PREFETCH_MAX, STREAM_BYTES};
+use super::fused::{AxisOp, Ctx, STREAM_BYTES};
 use super::par::SharedMut;
 use crate::scheme::kernel::{combine_pair_taps_memo, combine_taps, stream_copy, PairMemo};
 use crate::scheme::sparse::Csr;
@@ -530,7 +530,6 @@ impl<'a> Plan<'a> {
                 ghosts: (0..levels)
                     .map(|l| vec![T::default(); self.need[p][l].len() * self.ghost_len(l)])
                     .collect(),
-                prefetched: 0,
             };
             part.run();
         };
@@ -632,8 +631,6 @@ struct Part<'p, 'a, T> {
     need: &'p [Vec<usize>],
     /// Per level, the rows of `need` ([`Plan::ghost_len`] samples each).
     ghosts: Vec<Vec<T>>,
-    /// Array rows up to here (exclusive) already asked for with [`prefetch`].
-    prefetched: usize,
 }
 
 /// Every level's state for the part computing `spans`.
@@ -819,20 +816,6 @@ impl<'p, 'a, T: Sample> Part<'p, 'a, T> {
         }
         let (src, strides) = (self.src, self.strides);
         let row_len = self.ctxs[l].cs()[0];
-        if l == 0 && row_len * std::mem::size_of::<T>() <= PREFETCH_MAX {
-            // the array rows the next rows will read first
-            // (each row once: the coarse and the detail row of a pair ask for the same
-            // rows; asking twice took 4% of the samples of 4096² cubic, in the prefetch
-            // loop waiting for the first requests; CPU time of 11 repetitions 697–705 →
-            // 681–697 ms, three interleaved rounds)
-            if let Some(&last) = step.taps.0.last() {
-                let (from, to) = (self.prefetched.max(last as usize + 1), last as usize + 3);
-                for c in from..to {
-                    prefetch(src, c * strides[0], row_len);
-                }
-                self.prefetched = self.prefetched.max(to);
-            }
-        }
         let next = (step.pos + 1 < self.spans[l].end).then(|| self.step_at(l, step.pos + 1));
         // rows combined in pairs come split into their even and odd samples where the
         // level's lanes take them so (`Ctx::finish_split_row`), saving the lanes' split
@@ -993,21 +976,6 @@ impl<'p, 'a, T: Sample> Part<'p, 'a, T> {
         let row_len = self.ctxs[l].cs()[0];
         let nc = plan.regions[l + 1][0];
         let s0 = strides[0];
-        if row_len * std::mem::size_of::<T>() <= PREFETCH_MAX {
-            // the array rows (details) the next rows will read first
-            for &c in step.taps.0.iter().rev() {
-                let c = c as usize;
-                if c >= nc {
-                    if c + 1 < plan.regions[l][0] && (l > 0 || c + 1 >= self.prefetched) {
-                        prefetch(src, (c + 1) * s0, row_len);
-                        if l == 0 {
-                            self.prefetched = c + 2;
-                        }
-                    }
-                    break;
-                }
-            }
-        }
         let next =
             (!made && step.pos + 1 < self.spans[l].end).then(|| self.step_at(l, step.pos + 1));
         // rows of the array in place (images); the coarse rows' first `w1` samples are

@@ -265,9 +265,6 @@ impl<'a> Ctx<'a> {
             )
         };
         let (cols, ws) = self.ops[d].op.row_slices(r);
-        if d == 0 && whole {
-            self.prefetch_after(cols.last(), src, src_st, run);
-        }
         for line in 0..lines {
             let (so, co) = self.line_at(d, line, src_st);
             let at = |c: u32| c as usize * src_st[d] + so;
@@ -276,21 +273,6 @@ impl<'a> Ctx<'a> {
             });
         }
         self.slab(d + 1, slab, out, dst_st, rest);
-    }
-
-    /// From memory: ask early for the slab of axis 0 after input slab `last` (the one the
-    /// next rows read first), when the output streams and the slab is small (rows of
-    /// images; planes of volumes would push the planes in use out of the cache).
-    fn prefetch_after<T>(&self, last: Option<&u32>, src: &[T], src_st: &[usize], run: usize) {
-        if !self.stream || run * std::mem::size_of::<T>() > PREFETCH_MAX {
-            return;
-        }
-        if let Some(&last) = last {
-            let next = last as usize + 1;
-            if next < self.region[0] {
-                prefetch(src, next * src_st[0], run);
-            }
-        }
     }
 
     /// Offsets of line `line` of a slab along axis `d` in the source (strides `src_st`)
@@ -341,9 +323,6 @@ impl<'a> Ctx<'a> {
         }
         let op = self.ops[0].op;
         let rows = [op.row_slices(r[0]), op.row_slices(r[1])];
-        if whole {
-            self.prefetch_after(rows[1].0.last(), src, src_st, run);
-        }
         let mut memo = PairMemo::default();
         for line in 0..lines {
             let (so, co) = self.line_at(0, line, src_st);
@@ -648,31 +627,6 @@ fn lane_taps(a: &AxisOp, split: bool, w: usize) -> LaneTaps {
         .collect();
     LaneTaps::new(rows, w)
 }
-
-/// Ask for `len` samples of `src` from `at` on to be brought into the caches (L2), a
-/// cache line at a time: the rows a level reads next, while it computes this one (the
-/// hardware prefetcher follows one stream well, the start of each new row less so).
-/// Measured on 4096² forward and inverse: 10% less CPU time (cubic 68 → 61 ms).
-pub(super) fn prefetch<T>(src: &[T], at: usize, len: usize) {
-    #[cfg(target_arch = "x86_64")]
-    {
-        use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T1};
-        let end = (at + len).min(src.len());
-        let step = (64 / std::mem::size_of::<T>().max(1)).max(1);
-        let mut i = at;
-        while i < end {
-            // SAFETY: the address is inside `src`; a prefetch never faults.
-            unsafe { _mm_prefetch::<_MM_HINT_T1>(src.as_ptr().add(i) as *const i8) };
-            i += step;
-        }
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    let _ = (src, at, len);
-}
-
-/// Largest slab (bytes) worth a [`prefetch`]: 3D Chaikin took 69 → 82 ms of CPU time
-/// forward and back when its 256 KB planes were prefetched.
-pub(super) const PREFETCH_MAX: usize = 64 << 10;
 
 /// Largest slab (bytes) combined in pairs ([`Ctx::row_pair`]): rows of images and the
 /// planes of volumes up to 256² (256 KB), whose coarse and detail planes along axis 0
