@@ -557,7 +557,7 @@ fn run_part<T: Sample>(
     combine(&mut out[..len], &src[..taps], &w[..taps]);
 }
 
-/// The rows of `pair` into `o0` and `o1` (contiguous) with [`combine_pair`]: every input is
+/// The rows of `pair` into `o0` and `o1` (contiguous) with [`kernel::combine_pair`]: every input is
 /// one slice of the lane (`col_step` 1) or of its even/odd halves (`col_step` 2).
 #[allow(clippy::too_many_arguments)]
 #[inline]
