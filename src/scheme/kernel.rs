@@ -987,19 +987,10 @@ pub fn combine_pair_at<T: Sample>(
 /// the inputs `tap(c)` of their columns: `o1` the first row, `o2` the second, each input
 /// they share read once. `false` (nothing written) when the rows share no column or read
 /// more than [`PAIR_INPUTS`] inputs together (then two [`combine_taps`] do the same).
+///
+/// `memo` remembers the last pair's pattern (the regular row pairs repeat one); `split`
+/// writes each output as its even samples, then its odd ones ([`combine_pair_at`]).
 pub fn combine_pair_taps<'t, T: Sample + 't>(
-    o1: &mut [T],
-    o2: &mut [T],
-    row1: (&[u32], &[f64]),
-    row2: (&[u32], &[f64]),
-    tap: impl Fn(u32) -> &'t [T],
-) -> bool {
-    combine_pair_taps_memo(&mut PairMemo::default(), false, o1, o2, row1, row2, tap)
-}
-
-/// [`combine_pair_taps`] looking the pair's pattern up in `memo` first; `split` as
-/// [`combine_pair_at`].
-pub fn combine_pair_taps_memo<'t, T: Sample + 't>(
     memo: &mut PairMemo<T>,
     split: bool,
     o1: &mut [T],
@@ -1244,7 +1235,7 @@ pub fn pair_entry<T: Sample>(w1: &[T], m1: u32, w2: &[T], m2: u32) -> Option<u8>
 
 /// A pair's table entry remembered for the next call with the same weights and masks
 /// (one entry: the row pairs of an operator's regular rows repeat one pattern), so that
-/// [`combine_pair_taps_memo`] looks up [`pair_entry`] once per pattern rather than once
+/// [`combine_pair_taps`] looks up [`pair_entry`] once per pattern rather than once
 /// per call.
 #[derive(Clone, Debug)]
 pub struct PairMemo<T> {

@@ -32,7 +32,7 @@
 use super::aligned::Aligned;
 use super::fused::{AxisOp, Ctx, STREAM_BYTES};
 use super::par::SharedMut;
-use crate::scheme::kernel::{combine_pair_taps_memo, combine_taps, stream_copy, PairMemo};
+use crate::scheme::kernel::{combine_pair_taps, combine_taps, stream_copy, PairMemo};
 use crate::scheme::sparse::Csr;
 use crate::scheme::Sample;
 use rayon::prelude::*;
@@ -1116,7 +1116,7 @@ impl Step<'_> {
 
 impl Step<'_> {
     /// This row into `slab` and `other` into `slab2` over samples `range`, the inputs the
-    /// two rows share read once ([`combine_pair_taps_memo`]; `split`: each written as its
+    /// two rows share read once ([`combine_pair_taps`]; `split`: each written as its
     /// even samples, then its odd ones); `false` (nothing written) when they do not pair.
     #[allow(clippy::too_many_arguments)]
     fn combine_pair<'t, T: Sample + 't>(
@@ -1130,7 +1130,7 @@ impl Step<'_> {
         tap: impl Fn(u32) -> &'t [T],
     ) -> bool {
         let (a, b) = (&mut slab[range.clone()], &mut slab2[range.clone()]);
-        combine_pair_taps_memo(memo, split, a, b, self.taps, other.taps, |c| {
+        combine_pair_taps(memo, split, a, b, self.taps, other.taps, |c| {
             &tap(c)[range.clone()]
         })
     }

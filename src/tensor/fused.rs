@@ -15,7 +15,7 @@
 use super::aligned::Aligned;
 use super::par::{for_each_part, SharedMut};
 use crate::scheme::kernel::{
-    self, combine_pair_taps_memo, combine_taps, stream_copy, transpose, LaneTaps, PairMemo,
+    self, combine_pair_taps, combine_taps, stream_copy, transpose, LaneTaps, PairMemo,
 };
 use crate::scheme::polyphase::{Polyphase, PAIR_MOST};
 use crate::scheme::sparse::Csr;
@@ -329,7 +329,7 @@ impl<'a> Ctx<'a> {
             let at = |c: u32| c as usize * src_st[0] + so;
             let (a, b) = (&mut slab[co..co + run], &mut slab2[co..co + run]);
             let tap = |c| &src[at(c)..at(c) + run];
-            if !combine_pair_taps_memo(&mut memo, false, a, b, rows[0], rows[1], tap) {
+            if !combine_pair_taps(&mut memo, false, a, b, rows[0], rows[1], tap) {
                 debug_assert_eq!(line, 0, "the same rows pair on every line");
                 return false;
             }
