@@ -2446,7 +2446,7 @@ impl EdgeGroup {
                 bases.push(c.saturating_sub(7));
             }
         }
-        if bases.len() <= 4 {
+        if (1..=4).contains(&bases.len()) {
             let local = |c: i32| {
                 let c = c as usize;
                 let v = bases.iter().position(|&b| (b..b + 8).contains(&c));

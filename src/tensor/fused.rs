@@ -200,10 +200,12 @@ impl<'a> Ctx<'a> {
 
     /// Whether rows may reach [`Ctx::finish_split_row`] already split into their even and
     /// odd samples: images of single samples whose lanes (axis 1) run analysis with
-    /// [`Polyphase::split_reach`] known.
+    /// [`Polyphase::split_reach`] known, on a machine whose pair kernels write split rows
+    /// (elsewhere the split would be a pass of its own, with a buffer per row).
     pub fn takes_split_rows(&self) -> bool {
         let lane = &self.ops[self.ops.len() - 1].plan;
-        self.ops.len() == 2
+        crate::scheme::sparse::cpu_has_avx2()
+            && self.ops.len() == 2
             && self.e == 1
             && lane.split_reach.is_some()
             && lane.rows == self.region[1]
