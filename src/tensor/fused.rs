@@ -30,11 +30,30 @@ pub struct AxisOp<'a> {
     pub order: &'a [usize],
 }
 
-/// Levels whose region is at least this large write their output past the caches.
+/// Levels whose region is at least this large write their output past the caches (with
+/// [`Writes::StreamLarge`]).
 pub(super) const STREAM_BYTES: usize = 16 << 20;
 
 /// Rows of [`AxisOp::order`] handed to one task.
 const ROWS_PER_TASK: usize = 16;
+
+/// How a level writes its output.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Writes {
+    /// Past the caches (non-temporal stores) when the level's region is at least
+    /// [`STREAM_BYTES`], through them otherwise: analysis, whose output the next level
+    /// reads only in part.
+    StreamLarge,
+    /// Through the caches whatever the size: synthesis. Its output rows come two by two
+    /// from one neighbourhood (fine rows `2i`, `2i + 1`), and there plain stores, their
+    /// lines read first and written back later by the caches, cost less than streaming
+    /// each finished plane or row out: 256³ cubic forward + inverse, three levels (best of
+    /// 10, `examples/pyramid_timing`, interleaved) inverse 12.6–13.3 → 11.6–11.8 ms;
+    /// 512³ 138–140 → 118–119 ms; one level of 4096² 8.05–8.18 → 6.80–7.05 ms. The
+    /// analysis (coarse row `i` and detail row `i`, far apart) gets slower that way:
+    /// one level of 256³ forward 10.4–10.8 → 11.5–12.1 ms.
+    Cached,
+}
 
 /// Apply one level along axes `0..ops.len()` to the box `[0, region[d])` of `src`,
 /// writing the same box of `dst`. Both buffers have the array's `strides` (the first
@@ -46,12 +65,14 @@ pub fn fused_level<T: Sample>(
     region: &[usize],
     e: usize,
     ops: &[AxisOp],
+    writes: Writes,
 ) {
-    fused_level_strided(src, strides, dst, strides, region, e, ops)
+    fused_level_strided(src, strides, dst, strides, region, e, ops, writes)
 }
 
 /// [`fused_level`] with the source and the destination laid out differently: `src_st`
 /// and `dst_st` their strides (both nested, the last equal to `e`).
+#[allow(clippy::too_many_arguments)]
 pub fn fused_level_strided<T: Sample>(
     src: &[T],
     src_st: &[usize],
@@ -60,6 +81,7 @@ pub fn fused_level_strided<T: Sample>(
     region: &[usize],
     e: usize,
     ops: &[AxisOp],
+    writes: Writes,
 ) {
     let k = ops.len();
     assert!(k >= 1 && region.len() == k && src_st.len() == k && dst_st.len() == k);
@@ -72,7 +94,8 @@ pub fn fused_level_strided<T: Sample>(
     let extent = |st: &[usize]| (0..k).map(|d| (region[d] - 1) * st[d]).sum::<usize>() + e;
     assert!(extent(src_st) <= src.len() && extent(dst_st) <= dst.len());
     let work_bytes = region.iter().product::<usize>() * e * std::mem::size_of::<T>();
-    let ctx = Ctx::new(region, e, ops, work_bytes >= STREAM_BYTES);
+    let stream = writes == Writes::StreamLarge && work_bytes >= STREAM_BYTES;
+    let ctx = Ctx::new(region, e, ops, stream);
     // a second slab for rows combined in pairs along axis 0 (`Ctx::row_pair`); none
     // where they do not pair (slabs larger than `PAIR_SLAB_MAX`)
     let pairs = ctx.cs()[0] * std::mem::size_of::<T>() <= PAIR_SLAB_MAX;

@@ -9,7 +9,7 @@
 
 use super::array::Array;
 use super::cascade;
-use super::fused::{fused_level, fused_level_strided, AxisOp};
+use super::fused::{fused_level, fused_level_strided, AxisOp, Writes};
 use super::par::{for_each_task, SharedMut};
 use super::transform::transform_axis;
 use super::workspace;
@@ -383,9 +383,13 @@ fn run<T: Sample>(array: &mut Array<T>, pyr: &Pyramid, dir: Direction, engine: E
         let st = &strides[..k];
         let e: usize = shape[k..].iter().product();
         let buf = scratch.get_or_insert_with(|| workspace::take_scratch(array.len()));
+        let writes = match dir {
+            Direction::Analysis => Writes::StreamLarge,
+            Direction::Synthesis => Writes::Cached,
+        };
         let box_ = &region[..k];
         if region == shape {
-            fused_level(array.data(), buf, st, box_, e, &axis_ops);
+            fused_level(array.data(), buf, st, box_, e, &axis_ops, writes);
             array.swap_data(buf);
             continue;
         }
@@ -399,7 +403,16 @@ fn run<T: Sample>(array: &mut Array<T>, pyr: &Pyramid, dir: Direction, engine: E
         let cst: Vec<usize> = super::array::strides(box_).iter().map(|s| s * e).collect();
         let at = compact_at(buf, cst[0] * box_[0]);
         copy_region(array.data(), st, &mut buf[at..], &cst, box_, e);
-        fused_level_strided(&buf[at..], &cst, array.data_mut(), st, box_, e, &axis_ops);
+        fused_level_strided(
+            &buf[at..],
+            &cst,
+            array.data_mut(),
+            st,
+            box_,
+            e,
+            &axis_ops,
+            writes,
+        );
     }
     if let Some(s) = scratch {
         workspace::give_scratch(s);
