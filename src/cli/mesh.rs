@@ -105,9 +105,9 @@ pub enum Command {
     },
     /// Free-form deformation (Sederberg–Parry) by a trivariate B-spline lattice (notes §10.2):
     /// the lattice starts as the identity map over the mesh's bounding box (or the file's box);
-    /// the file moves control points. JSON: {"dims":[4,4,4], "degree":3, "box":{"min":[..],
-    /// "max":[..]} (optional), "moves":[{"index":[i,j,k], "offset":[dx,dy,dz]}]} or "points":
-    /// [[x,y,z], …] (all nx·ny·nz, x index fastest). See docs/solid.md.
+    /// the file moves control points. JSON: `{"dims":[4,4,4], "degree":3, "box":{"min":[..],
+    /// "max":[..]}` (optional), `"moves":[{"index":[i,j,k], "offset":[dx,dy,dz]}]}` or
+    /// `"points": [[x,y,z], …]` (all nx·ny·nz, x index fastest). See docs/solid.md.
     ///
     /// Example: mra solid polygonize corpus/scenes/sphere.json -o ball.obj --resolution 48 &&
     /// mra mesh deform ball.obj -o bulged.obj --lattice corpus/lattices/bulge.json

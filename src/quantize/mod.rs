@@ -7,7 +7,7 @@
 //! numerically from the schemes' own synthesis operators (impulse through `P`, `Q`
 //! level by level). Uniform noise of step `Δ_b` in band `b` adds `G²_b Δ_b²/12` per
 //! coefficient to the squared error, so the steps `Δ_b = Δ / G_b` spend the error
-//! evenly ([`band_steps`]).
+//! evenly (the gains: [`band_gains`]).
 //!
 //! The quantizer is a dead-zone uniform quantizer: `q = sign(c)·⌊|c|/Δ_b + ρ⌋`, and
 //! the decoder returns `sign(q)·(|q| + δ)·Δ_b` (`δ` recorded in the file). The

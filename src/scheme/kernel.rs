@@ -80,7 +80,7 @@ const MAX_FUSED: usize = 8;
 
 /// `out[i] = Σ_k w[k] · src[k][i]` for every `i < out.len()`, `k` in column order, summed
 /// as [`sum_terms`] says (the rounding of [`super::sparse::Csr`]'s row kernel, so both
-/// paths give the same bits): rows without equal weights by [`taps`] / [`taps_avx2`]
+/// paths give the same bits): rows without equal weights by `taps` / `taps_avx2`
 /// (the first tap assigns, the others accumulate), rows with pairs by the terms' loop.
 ///
 /// Every `src[k]` must hold at least `out.len()` samples.

@@ -9,7 +9,7 @@
 //!   so a patch is copied by one integer shift of band-local indices;
 //! * feature of a `q³` window (`q = p + 2o`), sampled every other voxel: heights
 //!   normalised for offset and scale, plus the mean gradient magnitude; distance
-//!   [`super::synth::distance_below`] (cut short once it exceeds the k-th best); the best `choices` of at most `candidates` windows,
+//!   `synth::distance_below` (cut short once it exceeds the k-th best); the best `choices` of at most `candidates` windows,
 //!   one picked by a generator seeded with (seed, level, patch);
 //! * separable ramps over `2o` voxels, blend `Σ wᵢDᵢ / √Σwᵢ²`, then each band scaled to
 //!   the example's band RMS at that level (matched details only);
