@@ -2235,32 +2235,38 @@ unsafe fn lane_taps_avx2_f32<T: Sample>(
             let l = |j: usize| unsafe { _mm256_loadu_ps(px.add((t0 + j) * w + b)) };
             let a = [l(0), l(1), l(2), l(3), l(4), l(5), l(6), l(7)];
             let t = transpose8_ps(a);
-            reg[i * 8..i * 8 + 8].copy_from_slice(&t);
+            for (j, v) in t.into_iter().enumerate() {
+                reg[i * 8 + j] = v;
+            }
         }
         for &(i0, n) in &taps.groups {
-            // the sums of rows i0.. for the 8 lanes, one register per row
+            // the sums of rows i0.. for the 8 lanes, one register per row (each sum in a
+            // local, so that it stays in a register and the rows' chains overlap)
             let mut acc = [_mm256_setzero_ps(); 8];
             for (q, a) in acc.iter_mut().enumerate().take(n) {
                 let i = i0 + q;
                 let row = &taps.slots[taps.ends[i]..taps.ends[i + 1]];
-                for (k, &(s, s2, wk)) in row.iter().enumerate() {
+                let Some((&(s, s2, wk), rest)) = row.split_first() else {
+                    continue;
+                };
+                // SAFETY: every slot is below `8·bases.len()` ≤ LANE_TAPS_SLOTS (made so
+                // by `LaneTaps::new`)
+                let r = |s: usize| unsafe { *reg.get_unchecked(s) };
+                let wv = _mm256_set1_ps(wk);
+                let mut sum = if s2 == usize::MAX {
+                    _mm256_mul_ps(wv, r(s))
+                } else {
+                    _mm256_mul_ps(wv, _mm256_add_ps(r(s), r(s2)))
+                };
+                for &(s, s2, wk) in rest {
                     let wv = _mm256_set1_ps(wk);
-                    *a = if s2 == usize::MAX {
-                        let v = _mm256_mul_ps(wv, reg[s]);
-                        if k == 0 {
-                            v
-                        } else {
-                            _mm256_add_ps(*a, v)
-                        }
+                    sum = if s2 == usize::MAX {
+                        _mm256_add_ps(sum, _mm256_mul_ps(wv, r(s)))
                     } else {
-                        let v = _mm256_add_ps(reg[s], reg[s2]);
-                        if k == 0 {
-                            _mm256_mul_ps(wv, v)
-                        } else {
-                            _mm256_fmadd_ps(v, wv, *a)
-                        }
+                        _mm256_fmadd_ps(_mm256_add_ps(r(s), r(s2)), wv, sum)
                     };
                 }
+                *a = sum;
             }
             // one register per lane: its outputs r0..r0 + n
             let out = transpose8_ps(acc);
