@@ -2227,7 +2227,6 @@ unsafe fn lane_taps_avx2_f32<T: Sample>(
     let px = x.as_ptr() as *const f32;
     let py = y.as_mut_ptr() as *mut f32;
     let mut reg = [_mm256_setzero_ps(); LANE_TAPS_SLOTS];
-    let mut part = [0f32; 8];
     let h8 = h / 8 * 8;
     for t0 in (0..h8).step_by(8) {
         for (i, &b) in bases.iter().enumerate() {
@@ -2278,10 +2277,21 @@ unsafe fn lane_taps_avx2_f32<T: Sample>(
                 if n == 8 {
                     unsafe { _mm256_storeu_ps(at, o) };
                 } else {
-                    _mm256_storeu_ps(part.as_mut_ptr(), o);
-                    for (q, &v) in part.iter().enumerate().take(n) {
-                        // SAFETY: as above.
-                        unsafe { *at.add(q) = v };
+                    // the first n samples of o: 4, 2 and 1 at a time
+                    let (mut v, mut q) = (_mm256_castps256_ps128(o), 0);
+                    if n >= 4 {
+                        // SAFETY: as above (q + 4 <= n).
+                        unsafe { _mm_storeu_ps(at, v) };
+                        (v, q) = (_mm256_extractf128_ps(o, 1), 4);
+                    }
+                    if n - q >= 2 {
+                        // SAFETY: as above (q + 2 <= n).
+                        unsafe { _mm_storel_epi64(at.add(q) as *mut __m128i, _mm_castps_si128(v)) };
+                        (v, q) = (_mm_movehl_ps(v, v), q + 2);
+                    }
+                    if n > q {
+                        // SAFETY: as above (q < n).
+                        unsafe { _mm_store_ss(at.add(q), v) };
                     }
                 }
             }
