@@ -44,14 +44,15 @@ pub enum Writes {
     /// [`STREAM_BYTES`], through them otherwise: analysis, whose output the next level
     /// reads only in part.
     StreamLarge,
-    /// Through the caches whatever the size: synthesis. Its output rows come two by two
-    /// from one neighbourhood (fine rows `2i`, `2i + 1`), and there plain stores, their
-    /// lines read first and written back later by the caches, cost less than streaming
-    /// each finished plane or row out: 256³ cubic forward + inverse, three levels (best of
-    /// 10, `examples/pyramid_timing`, interleaved) inverse 12.6–13.3 → 11.6–11.8 ms;
-    /// 512³ 138–140 → 118–119 ms; one level of 4096² 8.05–8.18 → 6.80–7.05 ms. The
-    /// analysis (coarse row `i` and detail row `i`, far apart) gets slower that way:
-    /// one level of 256³ forward 10.4–10.8 → 11.5–12.1 ms.
+    /// Through the caches whatever the size: synthesis. Measured on the 2-core Zen 3 of
+    /// session 19 (`examples/pyramid_timing`, best of 7, interleaved), plain stores
+    /// straight from the lanes cost the synthesis less than streaming each finished
+    /// plane or row out in a pass of its own: 256³ cubic, three levels, inverse
+    /// 11.8–13.0 → 10.7–12.3 ms (the three boundary modes); 512³ 138–140 → 118–119 ms;
+    /// one level of 4096² 8.05–8.18 → 6.80–7.05 ms. A copy timed right after the
+    /// pyramid is not slower (the write-back is not left to whatever runs next). The
+    /// analysis gets slower that way: one level of 256³ forward 10.4–10.8 → 11.5–12.1
+    /// ms.
     Cached,
 }
 
