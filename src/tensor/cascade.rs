@@ -32,7 +32,9 @@
 use super::aligned::Aligned;
 use super::fused::{AxisOp, Ctx, STREAM_BYTES};
 use super::par::SharedMut;
-use crate::scheme::kernel::{combine_pair_taps, combine_taps, stream_copy, PairMemo};
+use crate::scheme::kernel::{
+    combine_pair_taps, combine_taps, stream_copy_unfenced, stream_fence, PairMemo,
+};
 use crate::scheme::sparse::Csr;
 use crate::scheme::Sample;
 use rayon::prelude::*;
@@ -532,6 +534,9 @@ impl<'a> Plan<'a> {
                     .collect(),
             };
             part.run();
+            // the rows the part streamed out (`Ctx::finish_split_row`, `copy_box_outside`)
+            // copied without a fence each
+            stream_fence();
         };
         if self.spans.len() == 1 {
             run_part(0);
@@ -1188,7 +1193,7 @@ fn copy_box_outside<T: Sample>(
     let mut copy = |ao: usize, bo: usize, len: usize| {
         let (s, d) = (&a[ao..ao + len], &mut b[bo..bo + len]);
         if stream {
-            stream_copy(s, d);
+            stream_copy_unfenced(s, d);
         } else {
             d.copy_from_slice(s);
         }

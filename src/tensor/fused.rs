@@ -15,7 +15,8 @@
 use super::aligned::Aligned;
 use super::par::{for_each_part, SharedMut};
 use crate::scheme::kernel::{
-    self, combine_pair_taps, combine_taps, stream_copy, transpose, LaneTaps, PairMemo,
+    self, combine_pair_taps, combine_taps, stream_copy, stream_copy_unfenced, stream_fence,
+    transpose, LaneTaps, PairMemo,
 };
 use crate::scheme::polyphase::{Polyphase, PAIR_MOST};
 use crate::scheme::sparse::Csr;
@@ -138,6 +139,10 @@ pub fn fused_level_strided<T: Sample>(
             ctx.row(0, rows[i], src, src_st, out_row(rows[i]), dst_st, scratch);
             i += 1;
         }
+        if ctx.stream {
+            // the rows' streamed lanes, copied without a fence each
+            stream_fence();
+        }
     };
     for_each_part(order, ROWS_PER_TASK, work < 1 << 16, make_scratch, task);
 }
@@ -252,7 +257,8 @@ impl<'a> Ctx<'a> {
         if self.stream {
             a.plan
                 .apply_lane_split(a.op, &halves[..n], &mut lane_out[..n], lane_tmp);
-            stream_copy(&lane_out[..n], &mut out[..n]);
+            // (fenced by the caller once its rows are done)
+            stream_copy_unfenced(&lane_out[..n], &mut out[..n]);
         } else {
             a.plan
                 .apply_lane_split(a.op, &halves[..n], &mut out[..n], lane_tmp);
@@ -398,7 +404,8 @@ impl<'a> Ctx<'a> {
             if self.stream {
                 a.plan
                     .apply_lane(a.op, &slab[..n], &mut lane_out[..n], e, lane_tmp);
-                stream_copy(&lane_out[..n], &mut out[..n]);
+                // (fenced once the task's rows are done, in `fused_level_strided`)
+                stream_copy_unfenced(&lane_out[..n], &mut out[..n]);
             } else {
                 a.plan
                     .apply_lane(a.op, &slab[..n], &mut out[..n], e, lane_tmp);
@@ -558,8 +565,9 @@ fn stream_rows<T: Sample>(src: &[T], w: usize, h: usize, dst: &mut [T], stride: 
         return stream_copy(&src[..h * w], &mut dst[..h * w]);
     }
     for r in 0..h {
-        stream_copy(&src[r * w..r * w + w], &mut dst[r * stride..r * stride + w]);
+        stream_copy_unfenced(&src[r * w..r * w + w], &mut dst[r * stride..r * stride + w]);
     }
+    stream_fence();
 }
 
 /// Most rows of a lane's operator outside its pair for [`lanes`] (computed 8 lanes at a
