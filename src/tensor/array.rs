@@ -14,11 +14,13 @@ pub struct Array<T> {
 }
 
 impl<T: Clone + Default> Array<T> {
+    /// An array of `shape` filled with zeros, in a fresh buffer on 2 MB pages where the
+    /// kernel allows ([`super::zeroed_vec`]).
     pub fn zeros(shape: &[usize]) -> Self {
         let n = shape.iter().product();
         Array {
             shape: shape.to_vec(),
-            data: vec![T::default(); n],
+            data: super::pages::zeroed_vec(n),
         }
     }
 }

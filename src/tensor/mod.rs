@@ -5,6 +5,7 @@ mod aligned;
 mod array;
 mod cascade;
 mod fused;
+mod pages;
 mod par;
 pub mod pyramid;
 mod resample;
@@ -12,6 +13,7 @@ mod transform;
 pub mod workspace;
 
 pub use array::{Array, Axis};
+pub use pages::{advise_huge_pages, zeroed_vec};
 pub use pyramid::{
     analyze, analyze_with, synthesize, synthesize_with, Engine, Order, Pyramid, PyramidSpec,
     Subband,

@@ -81,8 +81,9 @@ pub fn take_scratch<T: Sample>(len: usize) -> Vec<T> {
     };
     drop(pool);
     if v.capacity() < len {
-        // a fresh allocation: let the allocator hand out zeroed pages lazily
-        v = vec![T::default(); len];
+        // a fresh allocation: zeroed pages handed out lazily, 2 MB at a time where the
+        // kernel allows (`pages`)
+        v = super::pages::zeroed_vec(len);
     } else {
         v.resize(len, T::default());
     }
