@@ -5,10 +5,7 @@
 //! Each figure is given for the best and the median of the repetitions (the median also
 //! measures the other jobs; the best is the least disturbed run). The JSON also gives the
 //! best of the same copy split over all threads (context only: the target is against the
-//! plain copy; on the 2-core machine the split copy runs at up to twice its speed), and
-//! the best of the same copy between two buffers on 2 MB pages (`mra::tensor::zeroed_vec`,
-//! as the engine's own scratch is allocated; context too: the array timed is the
-//! bench's own `Vec`, on small pages, and the plain copy is the reference).
+//! plain copy; on the 2-core machine the split copy runs at up to twice its speed).
 //!
 //! `cargo bench --bench engine` (set `MRA_BENCH_QUICK=1` for smaller sizes). Prints one
 //! JSON object per line plus a table; `benches/peers/pywavelets_peer.py` runs this and
@@ -63,10 +60,6 @@ fn main() {
         let bytes = (n * 4) as f64;
         let mut dst = vec![0f32; n];
         let mut dst2 = vec![0f32; n];
-        // context: the copy between buffers on huge pages
-        let mut hsrc = mra::tensor::zeroed_vec::<f32>(n);
-        hsrc.copy_from_slice(&data);
-        let mut hdst = mra::tensor::zeroed_vec::<f32>(n);
         for scheme in Scheme::ALL {
             for boundary in Boundary::ALL {
                 let spec = PyramidSpec {
@@ -78,7 +71,7 @@ fn main() {
                 };
                 let mut a = Array::from_shape_vec(&shape, data.clone()).unwrap();
                 let part = n.div_ceil(threads);
-                let [copy, t, copy_par, copy_huge] = time_each(
+                let [copy, t, copy_par] = time_each(
                     reps,
                     [
                         &mut || {
@@ -96,15 +89,10 @@ fn main() {
                                 .for_each(|(d, s)| d.copy_from_slice(s));
                             std::hint::black_box(&mut dst2);
                         },
-                        &mut || {
-                            hdst.copy_from_slice(&hsrc);
-                            std::hint::black_box(&mut hdst);
-                        },
                     ],
                 );
                 let (copy_best, copy_med) = (bytes / copy.0 / 1e6, bytes / copy.1 / 1e6);
                 let copy_par_best = bytes / copy_par.0 / 1e6;
-                let copy_huge_best = bytes / copy_huge.0 / 1e6;
                 let (best, med) = (bytes / t.0 / 1e6, bytes / t.1 / 1e6);
                 let shape_s = shape
                     .iter()
@@ -124,7 +112,7 @@ fn main() {
                     100.0 * med / copy_med
                 );
                 println!(
-                    "{{\"bench\":\"engine\",\"shape\":\"{shape_s}\",\"levels\":{levels},\"scheme\":\"{}\",\"boundary\":\"{}\",\"seconds\":{},\"seconds_best\":{},\"mb_per_s\":{med},\"mb_per_s_best\":{best},\"copy_mb_per_s\":{copy_med},\"copy_mb_per_s_best\":{copy_best},\"copy_all_threads_mb_per_s_best\":{copy_par_best},\"copy_huge_pages_mb_per_s_best\":{copy_huge_best},\"threads\":{threads}}}",
+                    "{{\"bench\":\"engine\",\"shape\":\"{shape_s}\",\"levels\":{levels},\"scheme\":\"{}\",\"boundary\":\"{}\",\"seconds\":{},\"seconds_best\":{},\"mb_per_s\":{med},\"mb_per_s_best\":{best},\"copy_mb_per_s\":{copy_med},\"copy_mb_per_s_best\":{copy_best},\"copy_all_threads_mb_per_s_best\":{copy_par_best},\"threads\":{threads}}}",
                     scheme.name(), boundary.name(), t.1, t.0
                 );
             }

@@ -60,14 +60,6 @@ print(f"copy (best, per case): {min(copies):.0f}-{max(copies):.0f} MB/s; "
 par = [r["copy_all_threads_mb_per_s_best"] for r in rows if "copy_all_threads_mb_per_s_best" in r]
 if par:
     print(f"the copy split over {rows[0]['threads']} threads (best, per case): {min(par):.0f}-{max(par):.0f} MB/s")
-# context only too: the copy between buffers on 2 MB pages (as the engine's scratch is)
-huge = [r for r in rows if "copy_huge_pages_mb_per_s_best" in r]
-for s in sorted({r["shape"] for r in huge}, key=len):
-    hs = [r["copy_huge_pages_mb_per_s_best"] for r in huge if r["shape"] == s]
-    pct = [100 * r["mb_per_s_best"] / r["copy_huge_pages_mb_per_s_best"] for r in huge
-           if r["shape"] == s and r["scheme"] != "haar"]
-    print(f"{s}: the copy between buffers on 2 MB pages (best, per case): {min(hs):.0f}-{max(hs):.0f} MB/s; "
-          f"Chaikin and cubic at {min(pct):.1f}-{max(pct):.1f}% of it (best)")
 for r in rows:
     if r["shape"] != shape:
         print(f"3D {r['shape']} {r['levels']} levels {r['scheme']:<8} {r['boundary']:<14} "
