@@ -18,8 +18,9 @@
 
 /// `len` default (zero) samples in a fresh allocation advised onto huge pages.
 pub fn zeroed_vec<T: Clone + Default>(len: usize) -> Vec<T> {
-    // `vec!` of zeros gets pages the kernel has not touched yet (calloc of a large block
-    // maps them), so the advice applies before the first fault
+    // `vec!` of zeros is calloc: a large block comes freshly mapped, its pages not yet
+    // touched, so the advice applies before their first fault (a block reused from the
+    // heap is already backed, and keeps the pages it has)
     let mut v = vec![T::default(); len];
     advise_huge_pages(&mut v);
     v
