@@ -7,7 +7,8 @@
 //! `/sys/kernel/mm/transparent_hugepage/enabled`, as NumPy does for its large arrays)
 //! before anything touches them. It is advice: contents and behaviour do not change, and
 //! where the kernel declines (or off Linux) the buffer keeps small pages. Arrays that the
-//! caller passes in keep their own pages.
+//! caller passes in keep their own pages. `MRA_HUGE_PAGES=off` in the environment turns
+//! the advice off (every buffer on the pages the allocator gives, as a plain `Vec`'s).
 //!
 //! Measured on the 2-core Zen 3 of session 20 (`examples/pyramid_timing`, 256³ cubic
 //! interpolating, three levels, two threads):
@@ -26,10 +27,17 @@ pub fn zeroed_vec<T: Clone + Default>(len: usize) -> Vec<T> {
     v
 }
 
-/// Ask for huge pages over the whole 2 MB pages inside `v` (nothing for smaller buffers).
+/// Whether the advice is on: unless `MRA_HUGE_PAGES` is `off` (or `0`), read once.
+fn huge_pages_on() -> bool {
+    static ON: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
+    *ON.get_or_init(|| !matches!(std::env::var("MRA_HUGE_PAGES").as_deref(), Ok("off" | "0")))
+}
+
+/// Ask for huge pages over the whole 2 MB pages inside `v` (nothing for smaller buffers,
+/// nothing with `MRA_HUGE_PAGES=off`).
 pub fn advise_huge_pages<T>(v: &mut [T]) {
     #[cfg(target_os = "linux")]
-    {
+    if huge_pages_on() {
         extern "C" {
             fn madvise(addr: *mut std::ffi::c_void, len: usize, advice: i32) -> i32;
         }
