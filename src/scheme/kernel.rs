@@ -1022,37 +1022,19 @@ pub fn combine_pair_taps<'t, T: Sample + 't>(
     tap: impl Fn(u32) -> &'t [T],
 ) -> bool {
     let ((c1, w1), (c2, w2)) = (row1, row2);
-    if c1.is_empty() || c2.is_empty() {
+    let Some((cols, n, m1, m2)) = pair_columns(c1, c2) else {
         return false;
-    }
-    // merge the two increasing column lists
-    let mut cols = [0u32; PAIR_INPUTS];
+    };
+    // each row's weights over the columns it reads (in order: its mask's bits)
     let (mut a, mut b) = ([T::default(); PAIR_INPUTS], [T::default(); PAIR_INPUTS]);
-    let (mut m1, mut m2) = (0u32, 0u32);
-    let (mut i, mut j, mut n) = (0, 0, 0);
-    while i < c1.len() || j < c2.len() {
-        if n == PAIR_INPUTS {
-            return false;
+    for (out, m, w) in [(&mut a, m1, w1), (&mut b, m2, w2)] {
+        let mut i = 0;
+        for (k, o) in out.iter_mut().enumerate().take(n) {
+            if m >> k & 1 == 1 {
+                *o = T::from_f64(w[i]);
+                i += 1;
+            }
         }
-        let c = match (c1.get(i), c2.get(j)) {
-            (Some(&x), Some(&y)) => x.min(y),
-            (Some(&x), None) => x,
-            (None, Some(&y)) => y,
-            (None, None) => unreachable!("one list goes on"),
-        };
-        cols[n] = c;
-        if c1.get(i) == Some(&c) {
-            (a[n], m1) = (T::from_f64(w1[i]), m1 | 1 << n);
-            i += 1;
-        }
-        if c2.get(j) == Some(&c) {
-            (b[n], m2) = (T::from_f64(w2[j]), m2 | 1 << n);
-            j += 1;
-        }
-        n += 1;
-    }
-    if m1 & m2 == 0 {
-        return false; // nothing shared
     }
     let mut src: [&[T]; PAIR_INPUTS] = [&[]; PAIR_INPUTS];
     for k in 0..n {
@@ -1081,6 +1063,44 @@ pub fn combine_pair_taps<'t, T: Sample + 't>(
 
 /// Most inputs two rows combined together by [`combine_pair_taps`] may read.
 pub const PAIR_INPUTS: usize = 8;
+
+/// Whether [`combine_pair_taps`] combines two rows reading the columns `c1` and `c2`
+/// (increasing) together: they share a column and read at most [`PAIR_INPUTS`] together.
+pub fn rows_pair(c1: &[u32], c2: &[u32]) -> bool {
+    pair_columns(c1, c2).is_some()
+}
+
+/// The columns that two rows (their increasing columns `c1`, `c2`) read together, how
+/// many, and each row's mask over them; `None` when the rows share no column or read
+/// more than [`PAIR_INPUTS`] together.
+fn pair_columns(c1: &[u32], c2: &[u32]) -> Option<([u32; PAIR_INPUTS], usize, u32, u32)> {
+    let mut cols = [0u32; PAIR_INPUTS];
+    let (mut m1, mut m2) = (0u32, 0u32);
+    let (mut i, mut j, mut n) = (0, 0, 0);
+    while i < c1.len() || j < c2.len() {
+        if n == PAIR_INPUTS {
+            return None;
+        }
+        let c = match (c1.get(i), c2.get(j)) {
+            (Some(&x), Some(&y)) => x.min(y),
+            (Some(&x), None) => x,
+            (None, Some(&y)) => y,
+            (None, None) => unreachable!("one list goes on"),
+        };
+        cols[n] = c;
+        if c1.get(i) == Some(&c) {
+            m1 |= 1 << n;
+            i += 1;
+        }
+        if c2.get(j) == Some(&c) {
+            m2 |= 1 << n;
+            j += 1;
+        }
+        n += 1;
+    }
+    // (empty rows share nothing)
+    (m1 & m2 != 0).then_some((cols, n, m1, m2))
+}
 
 /// The weights and masks of a pair over `u` inputs: at most 32 inputs, a weight per input
 /// and output, each mask non-empty and within the inputs.

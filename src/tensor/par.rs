@@ -30,11 +30,12 @@ where
     }
 }
 
-/// Run `task(part, &mut scratch)` over consecutive parts of `items` (`per_task` items
-/// each) on rayon's pool, one scratch per worker; on the calling thread when `serial`.
+/// Run `task(&items[part], &mut scratch)` for each of `parts` (consecutive ranges of
+/// `items`) on rayon's pool, one scratch per worker; all of `items` as one part on the
+/// calling thread when `serial`.
 pub(crate) fn for_each_part<S: Send, F, I>(
     items: &[usize],
-    per_task: usize,
+    parts: &[std::ops::Range<usize>],
     serial: bool,
     init: I,
     task: F,
@@ -42,12 +43,12 @@ pub(crate) fn for_each_part<S: Send, F, I>(
     I: Fn() -> S + Sync + Send,
     F: Fn(&[usize], &mut S) + Sync + Send,
 {
-    if serial || items.len() <= per_task {
+    if serial || parts.len() <= 1 {
         let mut s = init();
         task(items, &mut s);
     } else {
-        items
-            .par_chunks(per_task)
-            .for_each_init(init, |s, part| task(part, s));
+        parts
+            .par_iter()
+            .for_each_init(init, |s, part| task(&items[part.clone()], s));
     }
 }
