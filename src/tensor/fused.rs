@@ -29,6 +29,8 @@ pub struct AxisOp<'a> {
     /// Rows in the order to compute them (by first column, so analysis visits the coarse
     /// and detail rows of one neighbourhood together and reads its input once).
     pub order: &'a [usize],
+    /// `order` cut into the parts one task takes ([`pair_parts`]).
+    pub parts: &'a [std::ops::Range<usize>],
 }
 
 /// Levels whose region is at least this large write their output past the caches (with
@@ -144,19 +146,20 @@ pub fn fused_level_strided<T: Sample>(
             stream_fence();
         }
     };
-    let parts = pair_parts(order, ops[0].op, ROWS_PER_TASK);
-    for_each_part(order, &parts, work < 1 << 16, make_scratch, task);
+    for_each_part(order, ops[0].parts, work < 1 << 16, make_scratch, task);
 }
 
-/// `order` cut into parts of about `per` rows, never between two rows that the task
+/// `order` cut into parts of about [`ROWS_PER_TASK`] rows (worked out once per level's
+/// operator, [`super::workspace::LevelOps`]), never between two rows that the task
 /// loop of [`fused_level_strided`] combines together: it pairs each row with the next
 /// when [`kernel::rows_pair`] says so ([`Ctx::row_pair`]), so parts cut at fixed counts
 /// would split pairs wherever an unpaired row shifts them by one. The analysis order of
 /// the symmetric and periodic cubic operators (`C₀, C₁, D₀, C₂, D₁, …`, one unpaired
 /// row near the start) lost two pairs in every part of 16 rows that way: 16 of the 256
 /// output planes of a 256³ level made alone.
-fn pair_parts(order: &[usize], op: &Csr, per: usize) -> Vec<std::ops::Range<usize>> {
-    let mut parts = Vec::with_capacity(order.len() / per.max(1) + 1);
+pub(super) fn pair_parts(order: &[usize], op: &Csr) -> Vec<std::ops::Range<usize>> {
+    let per = ROWS_PER_TASK;
+    let mut parts = Vec::with_capacity(order.len() / per + 1);
     let (mut start, mut i) = (0, 0);
     while i < order.len() {
         let paired = i + 1 < order.len()
@@ -803,7 +806,7 @@ mod tests {
                         (&o.two_scale.analysis, &o.analysis_order),
                         (&o.two_scale.synthesis, &o.synthesis_order),
                     ] {
-                        let parts = pair_parts(order, op, ROWS_PER_TASK);
+                        let parts = pair_parts(order, op);
                         // consecutive, covering, at most one row over the size
                         assert_eq!(parts.first().map(|p| p.start), Some(0));
                         assert_eq!(parts.last().map(|p| p.end), Some(order.len()));

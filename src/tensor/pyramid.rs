@@ -426,11 +426,13 @@ fn axis_op(o: &workspace::LevelOps, dir: Direction) -> AxisOp<'_> {
             op: &o.two_scale.analysis,
             plan: &o.analysis,
             order: &o.analysis_order,
+            parts: &o.analysis_parts,
         },
         Direction::Synthesis => AxisOp {
             op: &o.two_scale.synthesis,
             plan: &o.synthesis,
             order: &o.synthesis_order,
+            parts: &o.synthesis_parts,
         },
     }
 }

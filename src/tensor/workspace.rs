@@ -7,6 +7,7 @@
 //! pages are already mapped, which on a 64 MB array saves as much time as a level takes);
 //! [`release`] returns it to the allocator.
 
+use super::fused::pair_parts;
 use crate::scheme::polyphase::Polyphase;
 use crate::scheme::{Boundary, Sample, Scheme, TwoScale};
 use std::any::Any;
@@ -21,6 +22,10 @@ pub struct LevelOps {
     /// Rows of each operator by increasing first column.
     pub analysis_order: Vec<usize>,
     pub synthesis_order: Vec<usize>,
+    /// Those orders cut into the parts that the tasks of a fused level take
+    /// (`fused::pair_parts`: about 16 rows each, never through a pair of rows).
+    pub analysis_parts: Vec<std::ops::Range<usize>>,
+    pub synthesis_parts: Vec<std::ops::Range<usize>>,
 }
 
 fn order_by_first_column(op: &crate::scheme::sparse::Csr) -> Vec<usize> {
@@ -50,11 +55,15 @@ pub fn level_ops(scheme: Scheme, boundary: Boundary, m: usize) -> Arc<LevelOps> 
         return l.clone();
     }
     let two_scale = TwoScale::new(scheme, boundary, m);
+    let analysis_order = order_by_first_column(&two_scale.analysis);
+    let synthesis_order = order_by_first_column(&two_scale.synthesis);
     let l = Arc::new(LevelOps {
         analysis: Polyphase::new(&two_scale.analysis),
         synthesis: Polyphase::new(&two_scale.synthesis),
-        analysis_order: order_by_first_column(&two_scale.analysis),
-        synthesis_order: order_by_first_column(&two_scale.synthesis),
+        analysis_parts: pair_parts(&analysis_order, &two_scale.analysis),
+        synthesis_parts: pair_parts(&synthesis_order, &two_scale.synthesis),
+        analysis_order,
+        synthesis_order,
         two_scale,
     });
     let mut guard = LEVELS.lock().unwrap_or_else(|e| e.into_inner());
