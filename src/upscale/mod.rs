@@ -26,6 +26,7 @@
 pub mod basis;
 pub mod lane;
 pub mod refine;
+mod slab;
 pub mod voids;
 
 use crate::io::{DataKind, Raster, Samples};
@@ -189,6 +190,15 @@ impl Prepared {
         })
     }
 
+    /// The control points: every planned axis' banded system solved in place.
+    pub(crate) fn prefilter(&self, data: &mut [f32]) {
+        for (axis, k) in &self.systems {
+            if let Some(k) = k {
+                map_lanes(data, &self.shape, *axis, |lane, width| k.solve(lane, width));
+            }
+        }
+    }
+
     /// The output's shape.
     pub(crate) fn out_shape(&self) -> Vec<usize> {
         let mut shape = self.shape.clone();
@@ -232,12 +242,8 @@ impl Prepared {
         out: &mut [U],
         put: impl Fn(&mut U, f32) + Sync + Send,
     ) {
+        self.prefilter(&mut data);
         let mut shape = self.shape.clone();
-        for (axis, k) in &self.systems {
-            if let Some(k) = k {
-                map_lanes(&mut data, &shape, *axis, |lane, width| k.solve(lane, width));
-            }
-        }
         bar.inc(1);
         let last = self.ops.len() - 1;
         for (k, (axis, op)) in self.ops.iter().enumerate() {

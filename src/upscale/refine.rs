@@ -26,6 +26,7 @@
 //! (ridges: the spline's overshoot is real) learn a smaller `t`. Measured in
 //! `docs/upscale.md`.
 
+use super::slab::{self, Planes};
 use super::{upscale_array, AxisPlan, Edge, Geometry, Method, Mode, Prepared};
 use crate::progress::Progress;
 use crate::scheme::sparse::{Csr, Triplets};
@@ -91,7 +92,7 @@ pub fn factors(
     (even && total <= MAX_REFINED).then_some(out)
 }
 
-fn area(method: &Method) -> Method {
+pub(super) fn area(method: &Method) -> Method {
     Method {
         mode: Mode::Area,
         clamp: Clamp::Off,
@@ -158,7 +159,7 @@ pub fn block_mean(data: &[f32], shape: &[usize], f: &[(usize, usize)]) -> (Vec<f
 /// With the lane extended to `e = [before, cells…, after]` (`n + 2` cells), sample `2i`
 /// is `op(e_i, e_{i+1})` and `2i + 1` is `op(e_{i+1}, e_{i+2})`: each adjacent pair is
 /// combined once. Long rows (`inner` large) go row by row instead, in parallel.
-fn pair_gather(
+pub(super) fn pair_gather(
     src: &[f32],
     shape: &[usize],
     axis: usize,
@@ -696,16 +697,24 @@ fn block_residual<const C: usize>(
     }
 }
 
-/// The fully clamped upscale `R(s)`: an odd plain stage, then ×2 clamp stages, the
-/// last correction left pending. With `keep` and a single ×2 stage, also the plain
-/// upscale `B(s)` (its starting point).
-fn refined(
+/// The stage axes of ×2 stage `level` (the axes whose factor has more than `level`
+/// factors 2).
+fn stage_axes(f: &[(usize, usize)], level: u32) -> Vec<usize> {
+    f.iter()
+        .filter(|&&(_, g)| g.trailing_zeros() > level)
+        .map(|&(a, _)| a)
+        .collect()
+}
+
+/// Everything before the last ×2 stage: the odd plain stage and the earlier ×2 stages
+/// (settled). Returns the last stage's input, its shape, the last stage's axes, and
+/// whether that stage is the only one (nothing ran before it).
+fn before_last(
     data: Vec<f32>,
     shape: &[usize],
     method: &Method,
     f: &[(usize, usize)],
-    keep: bool,
-) -> Result<Staged> {
+) -> Result<(Vec<f32>, Vec<usize>, Vec<usize>, bool)> {
     let odd: Vec<(usize, usize)> = f
         .iter()
         .map(|&(a, g)| (a, g >> g.trailing_zeros()))
@@ -716,24 +725,48 @@ fn refined(
         .iter()
         .map(|&(_, g)| g.trailing_zeros())
         .max()
-        .unwrap_or(0);
-    let keep = keep && k == 1 && odd.is_empty();
+        .unwrap_or(0)
+        .max(1);
     let mut st = Staged {
         u,
         c: None,
         shape: s,
         plain: None,
     };
-    for level in 0..k {
-        let axes: Vec<usize> = f
-            .iter()
-            .filter(|&&(_, g)| g.trailing_zeros() > level)
-            .map(|&(a, _)| a)
-            .collect();
+    for level in 0..k - 1 {
         st.settle();
-        st = stage(&st.u, &st.shape, method, &axes, keep)?;
+        st = stage(&st.u, &st.shape, method, &stage_axes(f, level), false)?;
     }
-    Ok(st)
+    st.settle();
+    Ok((
+        st.u,
+        st.shape,
+        stage_axes(f, k - 1),
+        k == 1 && odd.is_empty(),
+    ))
+}
+
+/// The fully clamped upscale `R(s)`: an odd plain stage, then ×2 clamp stages, the
+/// last correction left pending. With `keep` and a single ×2 stage, also the plain
+/// upscale `B(s)` (its starting point).
+fn refined(
+    data: Vec<f32>,
+    shape: &[usize],
+    method: &Method,
+    f: &[(usize, usize)],
+    keep: bool,
+) -> Result<Staged> {
+    let (u, s, axes, only) = before_last(data, shape, method, f)?;
+    stage(&u, &s, method, &axes, keep && only)
+}
+
+/// For a single ×2 stage worked plane by plane ([`slab`]): its planes.
+fn planes(shape: &[usize], method: &Method, f: &[(usize, usize)]) -> Result<Option<Planes>> {
+    let axes: Vec<usize> = f.iter().map(|&(a, _)| a).collect();
+    if !single_stage(f) || !slab::applies(shape, &axes) {
+        return Ok(None);
+    }
+    Planes::new(shape, method, &axes).map(Some)
 }
 
 /// The first `len[a]` samples along every axis.
@@ -768,6 +801,17 @@ pub fn learn_weight(
     method: &Method,
     f: &[(usize, usize)],
 ) -> Result<Option<f64>> {
+    learn_weight_with(data, shape, method, f, true)
+}
+
+/// [`learn_weight`]; `slabs` lets a volume's stage run plane by plane.
+fn learn_weight_with(
+    data: &[f32],
+    shape: &[usize],
+    method: &Method,
+    f: &[(usize, usize)],
+    slabs: bool,
+) -> Result<Option<f64>> {
     let mut len = shape.to_vec();
     for &(a, g) in f {
         if shape[a] / g < 2 {
@@ -777,6 +821,22 @@ pub fn learn_weight(
     }
     let sc = crop(data, shape, &len);
     let (coarse, cs) = block_mean(&sc, &len, f);
+    let (mut num, mut den) = (0f64, 0f64);
+    let mut acc = |s: f32, b: f32, r: f32| {
+        let d = (r - b) as f64;
+        num += (s - b) as f64 * d;
+        den += d * d;
+    };
+    if let Some(p) = planes(&cs, method, f)?.filter(|_| slabs) {
+        let fl = p.fine_len();
+        p.run(&coarse, true, |i, b, r| {
+            let s = &sc[i * fl..(i + 1) * fl];
+            for ((s, b), r) in s.iter().zip(b).zip(r.unwrap_or(b)) {
+                acc(*s, *b, *r);
+            }
+        });
+        return Ok(Some(weight(num, den)));
+    }
     // the plain upscale comes with the refined one for a single ×2 stage (no copy then)
     let b = (!single_stage(f))
         .then(|| plain(coarse.clone(), &cs, method, f))
@@ -785,12 +845,6 @@ pub fn learn_weight(
     let st = refined(coarse, &cs, method, f, true)?;
     let Some(b) = b.or(st.plain) else {
         unreachable!("a single ×2 stage keeps its plain upscale")
-    };
-    let (mut num, mut den) = (0f64, 0f64);
-    let mut acc = |s: f32, b: f32, r: f32| {
-        let d = (r - b) as f64;
-        num += (s - b) as f64 * d;
-        den += d * d;
     };
     match &st.c {
         Some(c) => {
@@ -804,10 +858,15 @@ pub fn learn_weight(
             }
         }
     }
+    Ok(Some(weight(num, den)))
+}
+
+/// `clamp(num / den, 0, 1)`, 0 when `den` is 0 or `num` is not finite.
+fn weight(num: f64, den: f64) -> f64 {
     if den <= 0.0 || !num.is_finite() {
-        return Ok(Some(0.0));
+        return 0.0;
     }
-    Ok(Some((num / den).clamp(0.0, 1.0)))
+    (num / den).clamp(0.0, 1.0)
 }
 
 /// Whether the factors are one ×2 stage (whose plain upscale [`refined`] keeps).
@@ -834,11 +893,57 @@ pub(crate) fn upscale_refined_into<U: Copy + Default + Send + Sync + 'static>(
     f: &[(usize, usize)],
     store: impl Fn(f32) -> U + Sync + Send,
 ) -> Result<(Vec<U>, Vec<usize>)> {
+    upscale_refined_with(data, shape, method, f, store, true)
+}
+
+/// [`upscale_refined_into`]; `slabs` lets a volume's last stage run plane by plane.
+fn upscale_refined_with<U: Copy + Default + Send + Sync + 'static>(
+    data: Vec<f32>,
+    shape: &[usize],
+    method: &Method,
+    f: &[(usize, usize)],
+    store: impl Fn(f32) -> U + Sync + Send,
+    slabs: bool,
+) -> Result<(Vec<U>, Vec<usize>)> {
     let t = match method.clamp {
         Clamp::Off => 0.0,
         Clamp::On => 1.0,
-        Clamp::Auto => learn_weight(&data, shape, method, f)?.unwrap_or(0.0),
+        Clamp::Auto => learn_weight_with(&data, shape, method, f, slabs)?.unwrap_or(0.0),
     };
+    if let Some(p) = planes(shape, method, f)?.filter(|_| slabs) {
+        // plane by plane: the control points of s and of the residuals at the input's
+        // size, a few fine planes, and the typed output
+        let mut fine = shape.to_vec();
+        for &(a, g) in f {
+            fine[a] *= g;
+        }
+        let mut out = vec![U::default(); fine.iter().product()];
+        let fl = p.fine_len();
+        let tf = t as f32;
+        p.run(&data, t > 0.0, |i, b, r| {
+            let o = &mut out[i * fl..(i + 1) * fl];
+            match r {
+                Some(r) if t >= 1.0 => o
+                    .par_iter_mut()
+                    .zip(r.par_iter())
+                    .for_each(|(o, &r)| *o = store(r)),
+                Some(r) => o
+                    .par_iter_mut()
+                    .zip(b.par_iter().zip(r.par_iter()))
+                    .for_each(|(o, (&b, &r))| {
+                        let mut x = b;
+                        x += tf * (r - x);
+                        *o = store(x);
+                    }),
+                None => o
+                    .par_iter_mut()
+                    .zip(b.par_iter())
+                    .for_each(|(o, &b)| *o = store(b)),
+            }
+        });
+        drop(data);
+        return Ok((out, fine));
+    }
     if t <= 0.0 {
         let up = Prepared::new(&area(method), shape, &plans_for(shape, f))?;
         return Ok(up.run(data, &Progress::hidden(), store));
@@ -1016,6 +1121,75 @@ mod tests {
                 assert_eq!(sa, sb);
                 let want: Vec<u8> = a.iter().map(|&x| store(x)).collect();
                 assert_eq!(b, want, "{f:?} {clamp:?}");
+            }
+        }
+    }
+
+    /// A volume's last stage worked plane by plane gives the same bits as the
+    /// whole-array stage, for the output and for the learned weight.
+    #[test]
+    fn plane_by_plane_stage_is_the_whole_array_stage_exactly() {
+        for (shape, f) in [
+            (vec![6usize, 66, 64], vec![(0usize, 2usize), (1, 2), (2, 2)]),
+            (vec![6, 64, 72], vec![(1, 2), (2, 2)]),
+            (vec![7, 64, 64], vec![(0, 2)]),
+            (vec![4, 40, 36, 3], vec![(0, 2), (1, 2), (2, 2)]),
+            (vec![4, 66, 64], vec![(0, 2), (2, 2)]),
+        ] {
+            // both the output's stage and the learning stage (at half size) by planes
+            let half: Vec<usize> = shape
+                .iter()
+                .enumerate()
+                .map(|(a, &n)| {
+                    if f.iter().any(|&(b, _)| a == b) {
+                        n / 2
+                    } else {
+                        n
+                    }
+                })
+                .collect();
+            assert!(planes(&shape, &Method::default(), &f).unwrap().is_some());
+            assert!(planes(&half, &Method::default(), &f).unwrap().is_some());
+            let n: usize = shape.iter().product();
+            let data: Vec<f32> = (0..n)
+                .map(|i| {
+                    let v = ((i * 7919 % 211) as f32 * 0.37).sin() * 900.0;
+                    if i % 13 < 6 {
+                        v
+                    } else {
+                        -v * 0.5 + (i % 7) as f32
+                    }
+                })
+                .collect();
+            for edge in [Edge::Linear, Edge::Mirror] {
+                for clamp in [Clamp::Auto, Clamp::On, Clamp::Off] {
+                    let m = Method {
+                        edge,
+                        clamp,
+                        ..Method::default()
+                    };
+                    let store = |x: f32| x;
+                    let (a, sa) =
+                        upscale_refined_with(data.clone(), &shape, &m, &f, store, true).unwrap();
+                    let (b, sb) =
+                        upscale_refined_with(data.clone(), &shape, &m, &f, store, false).unwrap();
+                    assert_eq!(sa, sb);
+                    assert_eq!(a.len(), b.len());
+                    let differ = a
+                        .iter()
+                        .zip(&b)
+                        .filter(|(x, y)| x.to_bits() != y.to_bits())
+                        .count();
+                    assert_eq!(differ, 0, "{shape:?} {f:?} {edge:?} {clamp:?}");
+                }
+                let m = Method {
+                    edge,
+                    ..Method::default()
+                };
+                let ta = learn_weight_with(&data, &shape, &m, &f, true).unwrap();
+                let tb = learn_weight_with(&data, &shape, &m, &f, false).unwrap();
+                assert!(ta.is_some(), "{shape:?}");
+                assert_eq!(ta, tb, "{shape:?} {f:?} {edge:?}");
             }
         }
     }
