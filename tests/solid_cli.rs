@@ -433,3 +433,79 @@ fn mesh_deform_with_the_corpus_lattice_and_bad_lattices() {
         &["ball.obj", "bulged.obj", "id.json", "same.obj", "bad.json"],
     );
 }
+
+/// `volume isosurface`: the topology check only on request (`--check`), the report as one
+/// JSON object with `--json`, PLY positions as `float` unless `--double`.
+#[test]
+fn isosurface_report_checks_topology_on_request_and_ply_positions_are_float() {
+    let d = tmpdir("iso-report");
+    let field = d.join("sphere.nrrd");
+    ok(&mra(&[
+        "solid",
+        "voxelize",
+        &corpus("scenes/sphere.json"),
+        "-o",
+        s(&field),
+        "--size",
+        "40",
+    ]));
+    let (f32_ply, f64_ply) = (d.join("f.ply"), d.join("d.ply"));
+    let run = |out: &Path, extra: &[&str]| -> serde_json::Value {
+        let mut args = vec![
+            "volume",
+            "isosurface",
+            s(&field),
+            "--level",
+            "0",
+            "-o",
+            s(out),
+            "--json",
+        ];
+        args.extend_from_slice(extra);
+        let o = mra(&args);
+        ok(&o);
+        serde_json::from_slice(&o.stdout).unwrap()
+    };
+    let quick = run(&f32_ply, &[]);
+    assert!(
+        quick["closed"].is_null() && quick["euler"].is_null(),
+        "{quick}"
+    );
+    let checked = run(&f64_ply, &["--check", "--double"]);
+    assert_eq!(checked["closed"], true);
+    assert_eq!(checked["manifold"], true);
+    assert_eq!(checked["euler"], 2);
+    assert_eq!(quick["triangles"], checked["triangles"]);
+    assert!(quick["triangles"].as_u64().unwrap() > 1000);
+    let header = |p: &Path| {
+        let b = std::fs::read(p).unwrap();
+        let end = b.windows(10).position(|w| w == b"end_header").unwrap();
+        text(&b[..end])
+    };
+    assert!(header(&f32_ply).contains("property float x"));
+    assert!(header(&f64_ply).contains("property double x"));
+    let (a, b) = (
+        mra::mesh::io::read(&f32_ply).unwrap(),
+        mra::mesh::io::read(&f64_ply).unwrap(),
+    );
+    assert_eq!(a.indices, b.indices);
+    for (p, q) in a.positions.iter().zip(&b.positions) {
+        for k in 0..3 {
+            assert_eq!(p[k], q[k] as f32 as f64);
+        }
+    }
+    let area = checked["area"].as_f64().unwrap();
+    assert!((area - quick["area"].as_f64().unwrap()).abs() < 1e-9 * area);
+    let text_out = mra(&[
+        "volume",
+        "isosurface",
+        s(&field),
+        "--level",
+        "0",
+        "-o",
+        s(&f32_ply),
+    ]);
+    ok(&text_out);
+    assert!(!text(&text_out.stdout).contains("closed"));
+    let _ = std::fs::remove_dir_all(&d);
+}

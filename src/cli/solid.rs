@@ -95,6 +95,16 @@ pub struct IsoArgs {
     /// Write vertex normals from the volume's gradient.
     #[arg(long)]
     pub normals: bool,
+    /// Also check the mesh's topology (closed, manifold, oriented, Euler characteristic χ);
+    /// about as long as the marching cubes on a large surface.
+    #[arg(long)]
+    pub check: bool,
+    /// Print the report as one JSON object.
+    #[arg(long)]
+    pub json: bool,
+    /// Write PLY positions as `double` (default `float`, as scikit-image and VTK).
+    #[arg(long)]
+    pub double: bool,
 }
 
 fn scene(path: &Path) -> Result<Scene, Failure> {
@@ -102,26 +112,53 @@ fn scene(path: &Path) -> Result<Scene, Failure> {
 }
 
 fn write_mesh(path: &Path, iso: mc::Isosurface) -> CliResult {
+    write_mesh_as(path, iso, None)
+}
+
+/// [`write_mesh`] with the PLY position type (`float` for volume isosurfaces, as
+/// scikit-image and VTK write them; `double` by default).
+fn write_mesh_as(
+    path: &Path,
+    iso: mc::Isosurface,
+    position: Option<crate::mesh::attributes::ScalarType>,
+) -> CliResult {
     let mut m = iso.mesh;
+    m.attributes.position_type = position;
     m.attributes.vertex_normals = iso.normals;
     crate::mesh::io::write(path, &m).map_err(|e| Failure::context(path.display(), e))
 }
 
-fn report(iso: &mc::Isosurface, secs: f64) {
-    let r = crate::mesh::topology::analyze(&iso.mesh);
+/// Print what was made: counts, area, enclosed volume and time; with `check`, the
+/// topology too (closed, manifold, oriented, χ); as text or one JSON object.
+fn report(iso: &mc::Isosurface, secs: f64, check: bool, json: bool) -> CliResult {
+    let topo = check.then(|| crate::mesh::topology::analyze(&iso.mesh));
     let (area, vol) = mc::area_volume(&iso.mesh);
-    println!(
-        "{} vertices, {} triangles, closed {}, manifold {}, oriented {}, χ {}, area {:.6}, volume {:.6}, {:.3} s",
-        iso.mesh.vertex_count(),
-        iso.mesh.face_count(),
-        r.closed,
-        r.manifold,
-        r.oriented,
-        r.euler,
-        area,
-        vol,
-        secs
-    );
+    let (nv, nf) = (iso.mesh.vertex_count(), iso.mesh.face_count());
+    let text = if json {
+        let v = serde_json::json!({
+            "vertices": nv,
+            "triangles": nf,
+            "area": area,
+            "volume": vol,
+            "seconds": secs,
+            "closed": topo.as_ref().map(|r| r.closed),
+            "manifold": topo.as_ref().map(|r| r.manifold),
+            "oriented": topo.as_ref().map(|r| r.oriented),
+            "euler": topo.as_ref().map(|r| r.euler),
+        });
+        format!("{v}\n")
+    } else {
+        let t = topo
+            .map(|r| {
+                format!(
+                    ", closed {}, manifold {}, oriented {}, χ {}",
+                    r.closed, r.manifold, r.oriented, r.euler
+                )
+            })
+            .unwrap_or_default();
+        format!("{nv} vertices, {nf} triangles{t}, area {area:.6}, volume {vol:.6}, {secs:.3} s\n")
+    };
+    super::io_cmds::emit(&text)
 }
 
 pub fn run(c: Command) -> CliResult {
@@ -157,7 +194,7 @@ pub fn run(c: Command) -> CliResult {
             let t = Instant::now();
             let sampled = voxel::sample(&sc.root, resolution)?;
             let iso = mc::polygonize(&sampled.grid(), 0.0, normals)?;
-            report(&iso, t.elapsed().as_secs_f64());
+            report(&iso, t.elapsed().as_secs_f64(), true, false)?;
             write_mesh(&output, iso)
         }
         Command::Voxelize {
@@ -255,6 +292,7 @@ pub fn run_volume(c: VolumeCommand) -> CliResult {
                 crate::io::read(&a.input).map_err(|e| Failure::context(a.input.display(), e))?;
             let t = Instant::now();
             let (values, dims, spacing, origin) = volume_grid(&r, !a.open)?;
+            drop(r);
             let grid = mc::Grid {
                 values: &values,
                 dims,
@@ -262,8 +300,10 @@ pub fn run_volume(c: VolumeCommand) -> CliResult {
                 origin,
             };
             let iso = mc::polygonize(&grid, a.level, a.normals)?;
-            report(&iso, t.elapsed().as_secs_f64());
-            write_mesh(&a.output, iso)
+            drop(values);
+            report(&iso, t.elapsed().as_secs_f64(), a.check, a.json)?;
+            let float = (!a.double).then_some(crate::mesh::attributes::ScalarType::F32);
+            write_mesh_as(&a.output, iso, float)
         }
     }
 }

@@ -1022,28 +1022,40 @@ pub fn polygonize(grid: &Grid, level: f64, normals: bool) -> Result<Isosurface> 
 /// Area and enclosed (signed) volume of a triangle mesh (divergence theorem; positive when
 /// the triangles face outwards).
 pub fn area_volume(mesh: &Mesh) -> (f64, f64) {
-    let mut area = 0.0;
-    let mut vol = 0.0;
-    for f in mesh.faces() {
-        let p0 = mesh.positions[f[0] as usize];
-        for w in 1..f.len() - 1 {
-            let p1 = mesh.positions[f[w] as usize];
-            let p2 = mesh.positions[f[w + 1] as usize];
-            let u = [p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]];
-            let v = [p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2]];
-            let c = [
-                u[1] * v[2] - u[2] * v[1],
-                u[2] * v[0] - u[0] * v[2],
-                u[0] * v[1] - u[1] * v[0],
-            ];
-            area += 0.5 * (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt();
-            vol += (p0[0] * (p1[1] * p2[2] - p1[2] * p2[1])
-                + p0[1] * (p1[2] * p2[0] - p1[0] * p2[2])
-                + p0[2] * (p1[0] * p2[1] - p1[1] * p2[0]))
-                / 6.0;
-        }
-    }
-    (area, vol)
+    // fixed chunks summed in order: the same result on any number of threads
+    const CHUNK: usize = 1 << 15;
+    let nf = mesh.face_count();
+    let parts: Vec<(f64, f64)> = (0..nf.div_ceil(CHUNK))
+        .into_par_iter()
+        .map(|c| {
+            let mut area = 0.0;
+            let mut vol = 0.0;
+            for fi in c * CHUNK..(c * CHUNK + CHUNK).min(nf) {
+                let f = mesh.face(fi);
+                let p0 = mesh.positions[f[0] as usize];
+                for w in 1..f.len() - 1 {
+                    let p1 = mesh.positions[f[w] as usize];
+                    let p2 = mesh.positions[f[w + 1] as usize];
+                    let u = [p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]];
+                    let v = [p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2]];
+                    let c = [
+                        u[1] * v[2] - u[2] * v[1],
+                        u[2] * v[0] - u[0] * v[2],
+                        u[0] * v[1] - u[1] * v[0],
+                    ];
+                    area += 0.5 * (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt();
+                    vol += (p0[0] * (p1[1] * p2[2] - p1[2] * p2[1])
+                        + p0[1] * (p1[2] * p2[0] - p1[0] * p2[2])
+                        + p0[2] * (p1[0] * p2[1] - p1[1] * p2[0]))
+                        / 6.0;
+                }
+            }
+            (area, vol)
+        })
+        .collect();
+    parts
+        .iter()
+        .fold((0.0, 0.0), |(a, v), &(pa, pv)| (a + pa, v + pv))
 }
 
 #[cfg(test)]

@@ -370,6 +370,9 @@ pub fn parse(bytes: &[u8]) -> Result<Mesh> {
     if !seen_vertex {
         return Err(bad("no vertex element"));
     }
+    if positions.is_empty() {
+        return Err(bad("no vertices (element vertex 0)"));
+    }
     if !seen_face {
         attributes.face_list_types = None;
     }
@@ -490,6 +493,10 @@ pub fn to_bytes(mesh: &Mesh, enc: Encoding) -> Result<Vec<u8>> {
     }
     h.push_str("end_header\n");
     out.extend_from_slice(h.as_bytes());
+    if enc != Encoding::Ascii {
+        binary_body(mesh, enc, pty, (ct, it), &vprops, &mut out);
+        return Ok(out);
+    }
     let ascii = enc == Encoding::Ascii;
     for (v, p) in mesh.positions.iter().enumerate() {
         for (k, &x) in p.iter().enumerate() {
@@ -530,6 +537,97 @@ pub fn to_bytes(mesh: &Mesh, enc: Encoding) -> Result<Vec<u8>> {
     Ok(out)
 }
 
+/// `x` as `ty` into the front of `dst` (binary encodings); returns the bytes written.
+#[inline]
+fn put_bin(dst: &mut [u8], le: bool, ty: ScalarType, x: f64) -> usize {
+    macro_rules! wr {
+        ($t:ty) => {{
+            let v = x as $t;
+            let b = if le { v.to_le_bytes() } else { v.to_be_bytes() };
+            dst[..b.len()].copy_from_slice(&b);
+            b.len()
+        }};
+    }
+    match ty {
+        ScalarType::I8 => wr!(i8),
+        ScalarType::U8 => wr!(u8),
+        ScalarType::I16 => wr!(i16),
+        ScalarType::U16 => wr!(u16),
+        ScalarType::I32 => wr!(i32),
+        ScalarType::U32 => wr!(u32),
+        ScalarType::F32 => wr!(f32),
+        ScalarType::F64 => wr!(f64),
+    }
+}
+
+/// Vertices (or faces) per parallel chunk of the binary body.
+const BODY_CHUNK: usize = 1 << 14;
+
+/// The binary body, the same bytes as the value-by-value writer: every vertex record
+/// has a fixed size and face `f` starts at `f · (count + face properties) + offsets[f] ·
+/// index` bytes into the face block, so chunks of vertices and of faces are serialised
+/// in parallel straight into their place in one buffer.
+fn binary_body(
+    mesh: &Mesh,
+    enc: Encoding,
+    pty: ScalarType,
+    (ct, it): (ScalarType, ScalarType),
+    vprops: &[(&str, ScalarType, &[f64])],
+    out: &mut Vec<u8>,
+) {
+    use rayon::prelude::*;
+    let le = enc == Encoding::BinaryLittleEndian;
+    let a = &mesh.attributes;
+    let vrec = 3 * pty.size() + vprops.iter().map(|p| p.1.size()).sum::<usize>();
+    let ffix = ct.size() + a.face.iter().map(|p| p.ty.size()).sum::<usize>();
+    let (nv, nf) = (mesh.vertex_count(), mesh.face_count());
+    let face_at = |f: usize| f * ffix + mesh.offsets[f] as usize * it.size();
+    let vbytes = nv * vrec;
+    let fbytes = face_at(nf);
+    let start = out.len();
+    out.resize(start + vbytes + fbytes, 0);
+    let (vb, fb) = out[start..].split_at_mut(vbytes);
+    vb.par_chunks_mut(BODY_CHUNK * vrec.max(1))
+        .enumerate()
+        .for_each(|(c, dst)| {
+            let first = c * BODY_CHUNK;
+            for (k, rec) in dst.chunks_exact_mut(vrec).enumerate() {
+                let v = first + k;
+                let mut at = 0;
+                for &x in &mesh.positions[v] {
+                    at += put_bin(&mut rec[at..], le, pty, x);
+                }
+                for (_, ty, vals) in vprops {
+                    at += put_bin(&mut rec[at..], le, *ty, vals[v]);
+                }
+            }
+        });
+    // split the face block at chunk boundaries
+    let mut parts = Vec::with_capacity(nf.div_ceil(BODY_CHUNK));
+    let mut rest = fb;
+    let mut f0 = 0;
+    while f0 < nf {
+        let f1 = (f0 + BODY_CHUNK).min(nf);
+        let (head, tail) = rest.split_at_mut(face_at(f1) - face_at(f0));
+        parts.push((f0, f1, head));
+        rest = tail;
+        f0 = f1;
+    }
+    parts.into_par_iter().for_each(|(f0, f1, dst)| {
+        let mut at = 0;
+        for f in f0..f1 {
+            let face = mesh.face(f);
+            at += put_bin(&mut dst[at..], le, ct, face.len() as f64);
+            for &i in face {
+                at += put_bin(&mut dst[at..], le, it, i as f64);
+            }
+            for p in &a.face {
+                at += put_bin(&mut dst[at..], le, p.ty, p.values[f]);
+            }
+        }
+    });
+}
+
 trait MaxFor {
     fn max_for(self, other: ScalarType) -> ScalarType;
 }
@@ -541,6 +639,75 @@ impl MaxFor for ScalarType {
             ScalarType::F64
         } else {
             self
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A mesh of triangles and quads over several body chunks, with vertex and face
+    /// properties of mixed types.
+    fn mesh() -> Mesh {
+        let nf = 2 * BODY_CHUNK + 77;
+        let nv = nf + 3;
+        let positions: Vec<[f64; 3]> = (0..nv)
+            .map(|i| {
+                let x = i as f64;
+                [x * 0.25, (x * 0.37).sin() * 100.0, -x / 3.0]
+            })
+            .collect();
+        let mut offsets = vec![0u32];
+        let mut indices = Vec::new();
+        for f in 0..nf {
+            let deg = if f % 5 == 0 { 4 } else { 3 };
+            for k in 0..deg {
+                indices.push(((f + k) % nv) as u32);
+            }
+            offsets.push(indices.len() as u32);
+        }
+        let mut attributes = Attributes {
+            position_type: Some(ScalarType::F32),
+            ..Attributes::default()
+        };
+        attributes.vertex.push(Property {
+            name: "quality".into(),
+            ty: ScalarType::U16,
+            values: (0..nv).map(|i| (i % 60000) as f64).collect(),
+        });
+        attributes.face.push(Property {
+            name: "label".into(),
+            ty: ScalarType::I8,
+            values: (0..nf).map(|f| (f % 200) as f64 - 100.0).collect(),
+        });
+        Mesh {
+            positions,
+            offsets,
+            indices,
+            attributes,
+        }
+    }
+
+    #[test]
+    fn binary_body_written_in_parallel_reads_back_value_for_value() {
+        let m = mesh();
+        for enc in [Encoding::BinaryLittleEndian, Encoding::BinaryBigEndian] {
+            let bytes = to_bytes(&m, enc).unwrap();
+            // header + 3 f32 + u16 per vertex; count + indices + i8 per face
+            let (_, _, body) = parse_header(&bytes).unwrap();
+            let want = m.vertex_count() * 14 + m.face_count() * 2 + m.indices.len() * 4;
+            assert_eq!(bytes.len() - body, want, "{enc:?}");
+            let back = parse(&bytes).unwrap();
+            assert_eq!(back.offsets, m.offsets);
+            assert_eq!(back.indices, m.indices);
+            for (a, b) in back.positions.iter().zip(&m.positions) {
+                for k in 0..3 {
+                    assert_eq!(a[k], b[k] as f32 as f64);
+                }
+            }
+            assert_eq!(back.attributes.vertex, m.attributes.vertex);
+            assert_eq!(back.attributes.face, m.attributes.face);
         }
     }
 }
