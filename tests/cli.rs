@@ -204,7 +204,8 @@ fn encode_and_decode_report_json_and_decode_keeps_frames() {
     );
     assert!(o.status.success(), "{}", text(&o.stderr));
     let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
-    assert_eq!(j["dims"], serde_json::json!([5, 16, 16]));
+    // x, y, z: the 5 kept frames are the slowest axis, printed last
+    assert_eq!(j["dims"], serde_json::json!([16, 16, 5]));
     assert_eq!(j["complete"], serde_json::json!(true));
     let whole = mra::io::read(&vol).unwrap();
     let cut = mra::io::read(&part).unwrap();
@@ -272,5 +273,434 @@ fn info_json_names_the_colour_transform_and_bound_or_gives_null() {
     let j = info(&rgb, &["--lossless"]);
     assert_eq!(j["colour"], serde_json::json!("YCoCg-R"));
     assert_eq!(j["max_error"], serde_json::Value::Null);
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// A 4×3×2 (x, y, z) u8 NRRD with spacing 0.5, 0.75, 2 and origin (1, 2, 3).
+fn small_nrrd(path: &std::path::Path) {
+    let mut b = b"NRRD0004\ntype: uint8\ndimension: 3\nsizes: 4 3 2\nspace dimension: 3\n\
+space directions: (0.5,0,0) (0,0.75,0) (0,0,2)\nspace origin: (1,2,3)\n\
+encoding: raw\n\n"
+        .to_vec();
+    b.extend((0..24u8).map(|i| i * 10));
+    std::fs::write(path, b).unwrap();
+}
+
+/// `mra info` reads any file (and `.mra` files), `info-file` is the same command, and
+/// every vector is printed x, y, z (fastest first) in text and JSON.
+#[test]
+fn info_reads_any_file_and_prints_every_vector_x_y_z() {
+    let d = tmpdir("info-xyz");
+    let f = d.join("v.nrrd");
+    small_nrrd(&f);
+    let s = |p: &std::path::Path| p.to_str().unwrap().to_string();
+    let o = mra(&["info", &s(&f), "--json"], "");
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(j["dims"], serde_json::json!([4, 3, 2]));
+    assert_eq!(j["spacing"], serde_json::json!([0.5, 0.75, 2.0]));
+    assert_eq!(j["origin"], serde_json::json!([1.0, 2.0, 3.0]));
+    assert_eq!(j["axis_order"], "x, y, z (fastest first)");
+    let old = mra(&["info-file", &s(&f), "--json"], "");
+    assert_eq!(old.stdout, o.stdout);
+    let t = text(&mra(&["info", &s(&f)], "").stdout);
+    assert!(t.contains("dims (x, y, z) [4, 3, 2]"), "{t}");
+    assert!(t.contains("spacing (x, y, z) [0.5, 0.75, 2.0]"), "{t}");
+    assert!(t.contains("origin (x, y, z) [1.0, 2.0, 3.0]"), "{t}");
+    // an .mra file: its header
+    let png = d.join("z.png");
+    let m = d.join("z.mra");
+    assert!(mra(
+        &["generate", "zone-plate", "-o", &s(&png), "--size", "32"],
+        ""
+    )
+    .status
+    .success());
+    assert!(mra(&["encode", &s(&png), "-o", &s(&m)], "")
+        .status
+        .success());
+    let o = mra(&["info", &s(&m), "--json"], "");
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert!(j["levels"].as_u64().is_some_and(|l| l >= 1), "{j}");
+    assert!(j["mode"].is_string(), "{j}");
+    // help lists `info` and hides the old name
+    let help = text(&mra(&["--help"], "").stdout);
+    assert!(
+        help.contains("info") && !help.contains("info-file"),
+        "{help}"
+    );
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// `upscale` and `downscale` read headerless input with --dims/--dtype; `upscale --json`
+/// (old name `--report`) prints the compute time and the output's dims x, y, z.
+#[test]
+fn upscale_reads_raw_input_and_reports_json_dims_x_y_z() {
+    let d = tmpdir("upscale-raw");
+    let raw = d.join("v.raw");
+    let v: Vec<u8> = (0..8 * 6 * 4u16)
+        .flat_map(|i| ((i * 37) % 1000).to_le_bytes())
+        .collect();
+    std::fs::write(&raw, v).unwrap();
+    let s = |p: &std::path::Path| p.to_str().unwrap().to_string();
+    let out = d.join("v2.nrrd");
+    for flag in ["--json", "--report"] {
+        let o = mra(
+            &[
+                "upscale",
+                &s(&raw),
+                "--dims",
+                "8x6x4",
+                "--dtype",
+                "u16",
+                "-o",
+                &s(&out),
+                "--factor",
+                "2",
+                flag,
+                "--quiet",
+            ],
+            "",
+        );
+        assert!(o.status.success(), "{}", text(&o.stderr));
+        let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        assert_eq!(j["dims"], serde_json::json!([16, 12, 8]));
+        assert!(j["compute_seconds"].as_f64().unwrap() >= 0.0);
+        let r = mra::io::read(&out).unwrap();
+        assert_eq!(r.dims, vec![8, 12, 16]);
+        assert_eq!(r.sample_type(), mra::io::SampleType::U16);
+    }
+    let half = d.join("h.nrrd");
+    let o = mra(
+        &[
+            "downscale",
+            &s(&raw),
+            "--dims",
+            "8x6x4",
+            "--dtype",
+            "u16",
+            "-o",
+            &s(&half),
+        ],
+        "",
+    );
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    assert_eq!(mra::io::read(&half).unwrap().dims, vec![2, 3, 4]);
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// `decode --level` beyond the file's levels is an error naming them (no clamp, no
+/// output); the deepest level the file holds decodes.
+#[test]
+fn decode_of_a_level_the_file_lacks_names_the_levels_it_holds() {
+    let d = tmpdir("decode-level");
+    let s = |p: &std::path::Path| p.to_str().unwrap().to_string();
+    let (png, m, out) = (d.join("z.png"), d.join("z.mra"), d.join("o.png"));
+    assert!(mra(
+        &["generate", "zone-plate", "-o", &s(&png), "--size", "64"],
+        ""
+    )
+    .status
+    .success());
+    assert!(
+        mra(&["encode", &s(&png), "-o", &s(&m), "--levels", "3"], "")
+            .status
+            .success()
+    );
+    let o = mra(&["decode", &s(&m), "-o", &s(&out), "--level", "9"], "");
+    assert_eq!(o.status.code(), Some(2));
+    let err = text(&o.stderr);
+    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+    assert!(err.contains("9 of a file with levels 0 to 3"), "{err}");
+    assert!(!out.exists());
+    let o = mra(&["decode", &s(&m), "-o", &s(&out), "--level", "3"], "");
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    assert_eq!(mra::io::read(&out).unwrap().dims, vec![8, 8]);
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// `encode --psnr P --data-range R` reaches P measured with R (as `compare
+/// --data-range R` measures it): with R below the default range, a larger file than
+/// the default gives, and a higher PSNR over R.
+#[test]
+fn encode_psnr_with_a_data_range_meets_the_target_over_that_range() {
+    let d = tmpdir("psnr-range");
+    let s = |p: &std::path::Path| p.to_str().unwrap().to_string();
+    let src = d.join("p.nrrd");
+    assert!(mra(
+        &[
+            "generate",
+            "phantom",
+            "-o",
+            &s(&src),
+            "--size",
+            "32",
+            "--dtype",
+            "i16"
+        ],
+        ""
+    )
+    .status
+    .success());
+    // a range well below the i16 phantom's (0 … 32767, which is also scikit-image's
+    // default for it): the same dB target is harder over it
+    let r = mra::io::read(&src).unwrap();
+    let (lo, hi) = r.samples.min_max().unwrap();
+    assert!(hi - lo > 10000.0);
+    let range = "3000".to_string();
+    let size = |args: &[&str], name: &str| -> (u64, f64) {
+        let (m, back) = (
+            d.join(format!("{name}.mra")),
+            d.join(format!("{name}.nrrd")),
+        );
+        let mut a = vec!["encode".to_string(), s(&src), "-o".into(), s(&m)];
+        a.extend(args.iter().map(|x| x.to_string()));
+        let a: Vec<&str> = a.iter().map(|x| x.as_str()).collect();
+        let o = mra(&a, "");
+        assert!(o.status.success(), "{}", text(&o.stderr));
+        assert!(mra(&["decode", &s(&m), "-o", &s(&back)], "")
+            .status
+            .success());
+        let o = mra(
+            &[
+                "compare",
+                &s(&src),
+                &s(&back),
+                "--data-range",
+                &range,
+                "--json",
+            ],
+            "",
+        );
+        let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        (
+            std::fs::metadata(&m).unwrap().len(),
+            j["psnr"].as_f64().unwrap_or(f64::INFINITY),
+        )
+    };
+    let (with_range, psnr) = size(&["--psnr", "40", "--data-range", &range], "r");
+    assert!(psnr >= 39.9, "PSNR over the data range {psnr}");
+    let (by_dtype, psnr_dtype) = size(&["--psnr", "40"], "t");
+    assert!(with_range > by_dtype, "{with_range} vs {by_dtype}");
+    assert!(psnr_dtype < psnr, "{psnr_dtype} vs {psnr}");
+    let o = mra(
+        &[
+            "encode",
+            &s(&src),
+            "-o",
+            &s(&d.join("x.mra")),
+            "--data-range",
+            "100",
+        ],
+        "",
+    );
+    assert_eq!(o.status.code(), Some(2));
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// An empty or garbage OBJ, PLY or OFF is an error (exit 2, one line naming the file),
+/// not an empty mesh.
+#[test]
+fn empty_or_garbage_meshes_are_errors() {
+    let d = tmpdir("empty-mesh");
+    let cases: [(&str, &[u8]); 6] = [
+        ("empty.obj", b""),
+        ("garbage.obj", b"hello world\nthis is not a mesh\n\x00\xff\xfe"),
+        ("comments.obj", b"# only a comment\n\n"),
+        (
+            "zero.ply",
+            b"ply\nformat ascii 1.0\nelement vertex 0\nproperty float x\nproperty float y\nproperty float z\nelement face 0\nproperty list uchar int vertex_indices\nend_header\n",
+        ),
+        ("garbage.ply", b"\x89PNG not a ply"),
+        ("zero.off", b"OFF\n0 0 0\n"),
+    ];
+    for (name, bytes) in cases {
+        let p = d.join(name);
+        std::fs::write(&p, bytes).unwrap();
+        let o = mra(&["mesh", "info", p.to_str().unwrap()], "");
+        assert_eq!(o.status.code(), Some(2), "{name}: {}", text(&o.stdout));
+        let err = text(&o.stderr);
+        assert_eq!(err.trim_end().lines().count(), 1, "{name}: {err}");
+        assert!(err.contains(name), "{err}");
+        assert!(mra::mesh::io::read(&p).is_err(), "{name}");
+    }
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// `.jpg` outputs: 8-bit gray and RGB at the asked quality (higher quality, larger file,
+/// closer to the source); other sample types are refused with no file left.
+#[test]
+fn jpeg_output_follows_the_quality_and_refuses_16_bit() {
+    let d = tmpdir("jpeg-out");
+    let s = |p: &std::path::Path| p.to_str().unwrap().to_string();
+    let src = d.join("g.png");
+    assert!(mra(
+        &["generate", "gradient", "-o", &s(&src), "--size", "64x48"],
+        ""
+    )
+    .status
+    .success());
+    let mut sizes = Vec::new();
+    let mut psnrs = Vec::new();
+    for q in ["95", "20"] {
+        let out = d.join(format!("q{q}.jpg"));
+        let o = mra(&["convert", &s(&src), "-o", &s(&out), "--quality", q], "");
+        assert!(o.status.success(), "{}", text(&o.stderr));
+        let r = mra::io::read(&out).unwrap();
+        assert_eq!((r.dims.clone(), r.channels), (vec![48, 64], 3));
+        sizes.push(std::fs::metadata(&out).unwrap().len());
+        let c = mra(&["compare", &s(&src), &s(&out), "--json"], "");
+        let j: serde_json::Value = serde_json::from_slice(&c.stdout).unwrap();
+        psnrs.push(j["psnr"].as_f64().unwrap_or(f64::INFINITY));
+    }
+    assert!(sizes[0] > sizes[1], "{sizes:?}");
+    assert!(psnrs[0] > psnrs[1] && psnrs[0] > 35.0, "{psnrs:?}");
+    let wide = d.join("w.png");
+    assert!(mra(
+        &[
+            "generate",
+            "noise",
+            "-o",
+            &s(&wide),
+            "--size",
+            "16",
+            "--dtype",
+            "u16"
+        ],
+        ""
+    )
+    .status
+    .success());
+    let bad = d.join("w.jpg");
+    let o = mra(&["convert", &s(&wide), "-o", &s(&bad)], "");
+    assert_eq!(o.status.code(), Some(2));
+    assert!(text(&o.stderr).contains("8-bit"), "{}", text(&o.stderr));
+    assert!(!bad.exists());
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// `terrain synth` of an example in metres (ASC) under a base in degrees (HGT) is
+/// refused, and goes through with `--example-cell` (or `--any-units`).
+#[test]
+fn terrain_synth_takes_an_explicit_example_cell_past_a_unit_mismatch() {
+    let d = tmpdir("synth-units");
+    let s = |p: &std::path::Path| p.to_str().unwrap().to_string();
+    let (base, ex) = (d.join("base.hgt"), d.join("ex.asc"));
+    for (p, size, ty) in [(&base, "65", "i16"), (&ex, "129", "f32")] {
+        let o = mra(
+            &[
+                "generate",
+                "terrain",
+                "-o",
+                &s(p),
+                "--size",
+                size,
+                "--dtype",
+                ty,
+            ],
+            "",
+        );
+        assert!(o.status.success(), "{}", text(&o.stderr));
+    }
+    let out = d.join("out.tif");
+    let run = |extra: &[&str]| {
+        let mut a = vec![
+            "terrain".to_string(),
+            "synth".into(),
+            "--base".into(),
+            s(&base),
+            "--example".into(),
+            s(&ex),
+            "--levels".into(),
+            "1".into(),
+            "-o".into(),
+            s(&out),
+        ];
+        a.extend(extra.iter().map(|x| x.to_string()));
+        let a: Vec<&str> = a.iter().map(|x| x.as_str()).collect();
+        mra(&a, "")
+    };
+    let o = run(&[]);
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o.stderr));
+    assert!(text(&o.stderr).contains("unit"), "{}", text(&o.stderr));
+    assert!(!out.exists());
+    let o = run(&["--example-cell", "0.0078125"]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let r = mra::io::read(&out).unwrap();
+    assert_eq!(r.dims, vec![130, 130]);
+    let _ = std::fs::remove_file(&out);
+    let o = run(&["--any-units"]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    assert!(out.exists());
+    let o = run(&["--example-cell", "-1"]);
+    assert_eq!(o.status.code(), Some(2));
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+fn mra_bytes(args: &[&str], stdin: &[u8]) -> Output {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_mra"))
+        .args(args)
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut input = child.stdin.take().unwrap();
+    let bytes = stdin.to_vec();
+    let feed = std::thread::spawn(move || {
+        let _ = input.write_all(&bytes);
+    });
+    let o = child.wait_with_output().unwrap();
+    let _ = feed.join();
+    o
+}
+
+/// `-` reads a raster from standard input (format by signature) and writes one to
+/// standard output in `--format`; the samples pass unchanged.
+#[test]
+fn rasters_pass_through_standard_input_and_output() {
+    let d = tmpdir("stdio");
+    let s = |p: &std::path::Path| p.to_str().unwrap().to_string();
+    let png = d.join("z.png");
+    assert!(mra(
+        &["generate", "zone-plate", "-o", &s(&png), "--size", "40x24"],
+        ""
+    )
+    .status
+    .success());
+    let bytes = std::fs::read(&png).unwrap();
+    let o = mra_bytes(&["convert", "-", "-o", "-", "--format", "tif"], &bytes);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    assert!(o.stdout.starts_with(b"II*\0") || o.stdout.starts_with(b"MM\0*"));
+    let tif = d.join("z.tif");
+    std::fs::write(&tif, &o.stdout).unwrap();
+    let (a, b) = (mra::io::read(&png).unwrap(), mra::io::read(&tif).unwrap());
+    assert_eq!((a.dims.clone(), a.samples.clone()), (b.dims, b.samples));
+    // upscale from a pipe to a pipe
+    let o = mra_bytes(
+        &[
+            "upscale", "-", "-o", "-", "--format", "png", "--factor", "2", "--quiet",
+        ],
+        &bytes,
+    );
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let up = d.join("up.png");
+    std::fs::write(&up, &o.stdout).unwrap();
+    assert_eq!(mra::io::read(&up).unwrap().dims, vec![48, 80]);
+    // info of standard input
+    let o = mra_bytes(&["info", "-", "--json"], &bytes);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(j["dims"], serde_json::json!([40, 24]));
+    // -o - without --format, and an unknown format: one line, exit 2, nothing written
+    for extra in [&[][..], &["--format", "xyz"][..]] {
+        let mut args = vec!["convert", "-", "-o", "-"];
+        args.extend_from_slice(extra);
+        let o = mra_bytes(&args, &bytes);
+        assert_eq!(o.status.code(), Some(2));
+        assert!(o.stdout.is_empty());
+        assert_eq!(text(&o.stderr).trim_end().lines().count(), 1);
+    }
     let _ = std::fs::remove_dir_all(&d);
 }

@@ -5,7 +5,7 @@ use std::path::PathBuf;
 
 use clap::Args;
 
-use super::io_cmds::{read_input, write_output, RawArgs};
+use super::io_cmds::{read_input, write_output_as, RawArgs};
 use super::{CliResult, Failure};
 use crate::codec::{self, DecodeOptions, EncodeOptions, Rate};
 use crate::scheme::{Boundary, Scheme};
@@ -13,7 +13,7 @@ use crate::scheme::{Boundary, Scheme};
 /// Compress an image, volume or heightmap into an `.mra` file.
 #[derive(Args, Debug)]
 #[command(
-    after_help = "Rate: pick one of --keep, --threshold, --quality, --psnr, --bpp, --max-error and --lossless (default --quality 50).\n\nExample:\n  mra generate zone-plate -o z.png --size 256\n  mra encode z.png -o z.mra --psnr 40 && mra decode z.mra -o z2.png && mra compare z.png z2.png"
+    after_help = "Rate: pick one of --keep, --threshold, --quality, --psnr, --bpp, --max-error and --lossless (default --quality 50).\n\nExample:\n  mra generate zone-plate -o z.png --size 256\n  mra encode z.png -o z.mra --psnr 40 && mra decode z.mra -o z2.png && mra compare z.png z2.png\n  mra encode ct.nrrd -o ct.mra --psnr 45 --data-range 2510   # CT: PSNR over the data's own range"
 )]
 pub struct EncodeArgs {
     /// Input file or folder (any format `mra info-file` reads).
@@ -42,6 +42,10 @@ pub struct EncodeArgs {
     /// Smallest file reaching this PSNR in dB (as `mra compare` measures it).
     #[arg(long, group = "rate", value_name = "DB")]
     pub psnr: Option<f64>,
+    /// Peak-to-peak data range R of the --psnr target (as `mra compare --data-range`;
+    /// default scikit-image's by sample type, e.g. 65535 for int16).
+    #[arg(long, requires = "psnr", value_name = "R")]
+    pub data_range: Option<f64>,
     /// Largest file within B bits per pixel / voxel.
     #[arg(long, group = "rate", value_name = "B")]
     pub bpp: Option<f64>,
@@ -81,6 +85,9 @@ pub struct DecodeArgs {
     /// Print one JSON object (output, shape, complete, seconds).
     #[arg(long)]
     pub json: bool,
+    /// Format of `-o -` (standard output), as an extension: png, jpg, tif, nrrd, …
+    #[arg(long, value_name = "EXT")]
+    pub format: Option<String>,
 }
 
 /// Show an `.mra` file's header and its bytes per level and per chunk.
@@ -104,7 +111,10 @@ pub fn encode(a: EncodeArgs) -> CliResult {
     } else if let Some(q) = a.quality {
         Rate::Quality(q)
     } else if let Some(d) = a.psnr {
-        Rate::Psnr(d)
+        match a.data_range {
+            Some(r) => Rate::PsnrRange(d, r),
+            None => Rate::Psnr(d),
+        }
     } else if let Some(b) = a.bpp {
         Rate::Bpp(b)
     } else if let Some(e) = a.max_error {
@@ -135,7 +145,8 @@ pub fn encode(a: EncodeArgs) -> CliResult {
             "bytes": bytes.len(),
             "bits_per_position": bpp,
             "ratio": raw as f64 / bytes.len() as f64,
-            "dims": r.dims,
+            "axis_order": super::io_cmds::AXIS_ORDER,
+            "dims": super::io_cmds::xyz(&r.dims),
             "channels": r.channels,
             "dtype": r.sample_type().name(),
             "scheme": a.scheme.name(),
@@ -174,6 +185,21 @@ fn frame_range(s: &str) -> Result<(usize, usize), Failure> {
 }
 
 pub fn decode(a: DecodeArgs) -> CliResult {
+    if a.level > 0 {
+        // a level the file does not hold is an error, not a silent clamp
+        let bytes = std::fs::read(&a.input).map_err(|e| Failure::context(a.input.display(), e))?;
+        let i = codec::info(&bytes).map_err(|e| Failure::context(a.input.display(), e))?;
+        if a.level > i.levels {
+            return Err(Failure::context(
+                a.input.display(),
+                crate::Error::parameter(
+                    "--level",
+                    format!("{} of a file with levels 0 to {}", a.level, i.levels),
+                    "one of the levels the file holds",
+                ),
+            ));
+        }
+    }
     let opts = DecodeOptions {
         level: a.level,
         allow_truncated: a.allow_truncated,
@@ -189,7 +215,7 @@ pub fn decode(a: DecodeArgs) -> CliResult {
         None => d.raster,
     };
     let seconds = t.elapsed().as_secs_f64();
-    write_output(&a.output, &raster, false)?;
+    write_output_as(&a.output, &raster, false, None, a.format.as_deref())?;
     if !d.complete {
         eprintln!(
             "mra: {}: truncated file, decoded what it holds",
@@ -200,7 +226,8 @@ pub fn decode(a: DecodeArgs) -> CliResult {
         let v = serde_json::json!({
             "input": a.input.display().to_string(),
             "output": a.output.display().to_string(),
-            "dims": raster.dims,
+            "axis_order": super::io_cmds::AXIS_ORDER,
+            "dims": super::io_cmds::xyz(&raster.dims),
             "channels": raster.channels,
             "dtype": raster.sample_type().name(),
             "level": a.level,

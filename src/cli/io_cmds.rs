@@ -85,9 +85,94 @@ pub fn emit(text: &str) -> CliResult {
     }
 }
 
-/// Read a file, naming it in any error.
+/// Whether a file argument is `-`: standard input (or output).
+pub fn is_std(path: &Path) -> bool {
+    path.as_os_str() == "-"
+}
+
+/// A fresh private folder through which standard input or output passes as a file
+/// (readers and writers work on files: seeking TIFF, atomic renames); removed on drop.
+struct StdTemp(PathBuf);
+
+impl StdTemp {
+    fn new() -> Result<StdTemp, Failure> {
+        use std::sync::atomic::{AtomicUsize, Ordering};
+        static N: AtomicUsize = AtomicUsize::new(0);
+        let d = std::env::temp_dir().join(format!(
+            "mra-std-{}-{}",
+            std::process::id(),
+            N.fetch_add(1, Ordering::Relaxed)
+        ));
+        std::fs::create_dir_all(&d).map_err(|e| Failure::context(d.display(), e))?;
+        Ok(StdTemp(d))
+    }
+}
+
+impl Drop for StdTemp {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+/// Read a file (`-`: standard input, its format recognised by its signature, or raw
+/// with `--dims`), naming it in any error.
 pub fn read_input(path: &Path, opts: &ReadOptions) -> Result<io::Raster, Failure> {
+    if is_std(path) {
+        use std::io::Read as _;
+        let t = StdTemp::new()?;
+        let f = t.0.join(if opts.raw.is_some() {
+            "stdin.raw"
+        } else {
+            "stdin"
+        });
+        let mut bytes = Vec::new();
+        std::io::stdin()
+            .lock()
+            .read_to_end(&mut bytes)
+            .map_err(|e| Failure::context("standard input", e))?;
+        std::fs::write(&f, &bytes).map_err(|e| Failure::context(f.display(), e))?;
+        drop(bytes);
+        return io::read_with(&f, opts).map_err(|e| Failure::context("standard input", e));
+    }
     io::read_with(path, opts).map_err(|e| Failure::context(path.display(), e))
+}
+
+/// [`write_output_q`], `-` writing to standard output in `format` (an extension: png,
+/// jpg, tif, pgm, ppm, exr, nrrd, nii, hgt, asc, r16, r32, raw).
+pub fn write_output_as(
+    path: &Path,
+    r: &io::Raster,
+    compress: bool,
+    quality: Option<u8>,
+    format: Option<&str>,
+) -> Result<(), Failure> {
+    if !is_std(path) {
+        return write_output_q(path, r, compress, quality);
+    }
+    let Some(ext) = format else {
+        return Err(Failure(
+            "standard output: -o - needs --format (png, jpg, tif, pgm, exr, nrrd, nii, asc, …)"
+                .into(),
+        ));
+    };
+    let t = StdTemp::new()?;
+    let f = t.0.join(format!("stdout.{}", ext.trim_start_matches('.')));
+    if io::Format::from_extension(&f).is_none() {
+        return Err(Failure(format!(
+            "invalid --format: {ext} (expected png, jpg, tif, pgm, ppm, pam, exr, nrrd, nii, hgt, asc, r16, r32 or raw)"
+        )));
+    }
+    write_output_q(&f, r, compress, quality)
+        .map_err(|e| Failure(e.0.replace(&f.display().to_string(), "standard output")))?;
+    let bytes = std::fs::read(&f).map_err(|e| Failure::context(f.display(), e))?;
+    use std::io::Write as _;
+    let mut out = std::io::stdout().lock();
+    match out.write_all(&bytes).and_then(|_| out.flush()) {
+        Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => {
+            Err(Failure::context("standard output", e))
+        }
+        _ => Ok(()),
+    }
 }
 
 /// Write a file atomically, naming it in any error.
@@ -96,13 +181,46 @@ pub fn write_output(path: &Path, r: &io::Raster, compress: bool) -> Result<(), F
         .map_err(|e| Failure::context(path.display(), e))
 }
 
-/// Print what a file holds: format, shape, sample type, range, metadata.
-///
-/// Example: `mra info-file ../shared/corpus/terrain/N44W072.hgt --json`
+/// [`write_output`], a `.jpg` / `.jpeg` at JPEG `quality` (1–100) when given.
+pub fn write_output_q(
+    path: &Path,
+    r: &io::Raster,
+    compress: bool,
+    quality: Option<u8>,
+) -> Result<(), Failure> {
+    match (quality, io::Format::from_extension(path)) {
+        (Some(q), Some(io::Format::Jpeg)) => {
+            crate::fsutil::write_atomic(path, |w| io::jpeg::write(w, r, q))
+                .map_err(|e| Failure::context(path.display(), e))
+        }
+        _ => write_output(path, r, compress),
+    }
+}
+
+/// Every vector `mra` prints (dims, spacing, origin, directions, sizes) lists the axes
+/// fastest first: x, y, z (then t), as NRRD and NIfTI headers do.
+pub const AXIS_ORDER: &str = "x, y, z (fastest first)";
+
+/// A per-axis vector of the array order (slowest first) in the printed order (x, y, z).
+pub fn xyz<T: Clone>(v: &[T]) -> Vec<T> {
+    v.iter().rev().cloned().collect()
+}
+
+/// Print what a file holds: for an `.mra` file its header and bytes per level, for any
+/// other file mra reads its format, shape, sample type, range and metadata.
 #[derive(Args, Debug)]
-#[command(after_help = "Example:\n  mra info-file ../shared/corpus/terrain/N44W072.hgt --json")]
+#[command(
+    after_help = "Vectors (dims, spacing, origin, directions) are printed x, y, z: fastest axis first.
+
+Examples:
+  mra info ../shared/corpus/terrain/N44W072.hgt --json
+  mra info ../shared/corpus/volumes/ct_pancreas_256.nrrd
+  mra info ct.raw --dims 256x256x64 --dtype u16
+  mra generate zone-plate -o z.png && mra encode z.png -o z.mra && mra info z.mra --json"
+)]
 pub struct InfoFileArgs {
-    /// Input file or folder (DICOM series, folder of slices).
+    /// Input file or folder (any format mra reads, an `.mra` file, a DICOM series, a folder
+    /// of slices).
     pub input: PathBuf,
     #[command(flatten)]
     pub raw: RawArgs,
@@ -111,11 +229,38 @@ pub struct InfoFileArgs {
     pub json: bool,
 }
 
+/// Whether `path` starts with the `.mra` signature.
+fn is_mra(path: &Path) -> bool {
+    use std::io::Read as _;
+    let mut head = [0u8; 8];
+    std::fs::File::open(path)
+        .and_then(|mut f| f.read_exact(&mut head))
+        .is_ok()
+        && head == crate::format::SIGNATURE
+}
+
+/// `mra info` (and its old name `info-file`): `.mra` files by their header, anything
+/// else by reading it.
+pub fn info(a: InfoFileArgs) -> CliResult {
+    if a.raw.dims.is_none() && is_mra(&a.input) {
+        return super::codec::info(super::codec::InfoArgs {
+            input: a.input,
+            json: a.json,
+        });
+    }
+    info_file(a)
+}
+
 pub fn info_file(a: InfoFileArgs) -> CliResult {
     let opts = a.raw.options()?;
-    let format =
-        io::Format::detect(&a.input).map_err(|e| Failure::context(a.input.display(), e))?;
     let r = read_input(&a.input, &opts)?;
+    let format = if is_std(&a.input) {
+        "standard input"
+    } else {
+        io::Format::detect(&a.input)
+            .map_err(|e| Failure::context(a.input.display(), e))?
+            .name()
+    };
     let (lo, hi) = r.samples.min_max().unwrap_or((f64::NAN, f64::NAN));
     let nodata_count = r.meta.nodata.map(|nd| {
         (0..r.samples.len())
@@ -126,15 +271,17 @@ pub fn info_file(a: InfoFileArgs) -> CliResult {
     if a.json {
         let v = serde_json::json!({
             "file": a.input.display().to_string(),
-            "format": format.name(),
-            "dims": r.dims,
+            "format": format,
+            "axis_order": AXIS_ORDER,
+            "dims": xyz(&r.dims),
             "channels": r.channels,
             "dtype": r.sample_type().name(),
             "kind": format!("{:?}", r.kind).to_lowercase(),
             "min": lo,
             "max": hi,
-            "spacing": r.meta.spacing,
+            "spacing": r.meta.spacing.as_deref().map(xyz),
             "origin": r.meta.origin,
+            "directions": r.meta.directions,
             "units": r.meta.units,
             "nodata": r.meta.nodata,
             "nodata_count": nodata_count,
@@ -143,28 +290,25 @@ pub fn info_file(a: InfoFileArgs) -> CliResult {
         });
         let _ = writeln!(out, "{v}");
     } else {
+        let _ = writeln!(out, "{}: {} {}", a.input.display(), format, r.summary());
         let _ = writeln!(
             out,
-            "{}: {} {}",
-            a.input.display(),
-            format.name(),
-            r.summary()
-        );
-        let _ = writeln!(
-            out,
-            "  dims (slowest first) {:?}, range {lo} … {hi}",
-            r.dims
+            "  dims (x, y, z) {:?}, range {lo} … {hi}",
+            xyz(&r.dims)
         );
         if let Some(s) = &r.meta.spacing {
             let _ = writeln!(
                 out,
-                "  spacing {:?} {}",
-                s,
+                "  spacing (x, y, z) {:?} {}",
+                xyz(s),
                 r.meta.units.clone().unwrap_or_default()
             );
         }
         if let Some(o) = &r.meta.origin {
-            let _ = writeln!(out, "  origin {o:?}");
+            let _ = writeln!(out, "  origin (x, y, z) {o:?}");
+        }
+        if let Some(d) = &r.meta.directions {
+            let _ = writeln!(out, "  directions (of x, y, z) {d:?}");
         }
         if let (Some(nd), Some(c)) = (r.meta.nodata, nodata_count) {
             let _ = writeln!(out, "  nodata {nd}: {c} samples");
@@ -183,7 +327,7 @@ pub fn info_file(a: InfoFileArgs) -> CliResult {
 /// Convert between formats, keeping samples exact (or converting with --dtype-out).
 #[derive(Args, Debug)]
 #[command(
-    after_help = "Example:\n  mra convert ../shared/corpus/terrain/N44W072.hgt -o n44.tif\n  mra convert ct.raw --dims 256x256x64 --dtype u16 -o ct.nrrd --compress"
+    after_help = "Example:\n  mra convert ../shared/corpus/terrain/N44W072.hgt -o n44.tif\n  mra convert ct.raw --dims 256x256x64 --dtype u16 -o ct.nrrd --compress\n  mra convert photo.png -o photo.jpg --quality 85\n  cat scan.png | mra convert - -o - --format tif > scan.tif"
 )]
 pub struct ConvertArgs {
     /// Input file or folder.
@@ -199,6 +343,12 @@ pub struct ConvertArgs {
     /// Compress where the format offers a choice (NRRD gzip, TIFF Deflate).
     #[arg(long)]
     pub compress: bool,
+    /// Format of `-o -` (standard output), as an extension: png, jpg, tif, pgm, nrrd, …
+    #[arg(long, value_name = "EXT")]
+    pub format: Option<String>,
+    /// JPEG quality of a `.jpg` output, 1–100.
+    #[arg(long, value_parser = clap::value_parser!(u8).range(1..=100), default_value_t = io::jpeg::DEFAULT_QUALITY)]
+    pub quality: u8,
     /// No progress bar (it is drawn only on a terminal anyway).
     #[arg(long)]
     pub quiet: bool,
@@ -213,7 +363,13 @@ pub fn convert(a: ConvertArgs) -> CliResult {
         let ty = SampleType::parse(t)?;
         r.samples = io::Samples::from_f64(&r.to_f64(), ty);
     }
-    write_output(&a.output, &r, a.compress)?;
+    write_output_as(
+        &a.output,
+        &r,
+        a.compress,
+        Some(a.quality),
+        a.format.as_deref(),
+    )?;
     bar.finish();
     Ok(())
 }
@@ -269,11 +425,12 @@ pub fn compare(a: CompareArgs) -> CliResult {
     bar.finish();
     let mut out = String::new();
     if a.json {
-        let _ = writeln!(
-            out,
-            "{}",
-            serde_json::to_string(&m).map_err(|e| Failure(e.to_string()))?
-        );
+        let mut v = serde_json::to_value(&m).map_err(|e| Failure(e.to_string()))?;
+        if let Some(d) = v.get_mut("dims").and_then(|d| d.as_array_mut()) {
+            d.reverse();
+        }
+        v["axis_order"] = AXIS_ORDER.into();
+        let _ = writeln!(out, "{v}");
     } else {
         let psnr = m
             .psnr

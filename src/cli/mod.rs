@@ -49,7 +49,8 @@ pub enum Command {
     Compare(io_cmds::CompareArgs),
     /// Generate test data: zone plate, gradient, edges, strokes, noise, phantom, terrain.
     Generate(io_cmds::GenerateArgs),
-    /// Show format, shape, sample type, range and metadata of a file or folder.
+    /// The old name of `info` (kept for scripts).
+    #[command(hide = true)]
     InfoFile(io_cmds::InfoFileArgs),
     /// Convert between image / volume / heightmap formats, keeping samples exact.
     Convert(io_cmds::ConvertArgs),
@@ -72,8 +73,9 @@ pub enum Command {
     Encode(codec::EncodeArgs),
     /// Decompress an .mra file (optionally at reduced resolution).
     Decode(codec::DecodeArgs),
-    /// Show an .mra file's header and bytes per level.
-    Info(codec::InfoArgs),
+    /// Show what a file holds: format, shape, sample type, range, metadata (x, y, z
+    /// order); for an .mra file its header and bytes per level.
+    Info(io_cmds::InfoFileArgs),
     /// Solid modelling: implicit models, CSG, ray casting, polygonisation, voxelisation.
     #[command(subcommand)]
     Solid(solid::Command),
@@ -143,7 +145,7 @@ pub fn main() -> i32 {
         Command::Mesh(c) => mesh::run(c),
         Command::Compare(a) => io_cmds::compare(a),
         Command::Generate(a) => io_cmds::generate(a),
-        Command::InfoFile(a) => io_cmds::info_file(a),
+        Command::InfoFile(a) => io_cmds::info(a),
         Command::Convert(a) => io_cmds::convert(a),
         Command::Scheme(c) => scheme::run(c),
         Command::Terrain(c) => terrain::run(c),
@@ -153,7 +155,7 @@ pub fn main() -> i32 {
         Command::Downscale(a) => upscale::run_downscale(a),
         Command::Encode(a) => codec::encode(a),
         Command::Decode(a) => codec::decode(a),
-        Command::Info(a) => codec::info(a),
+        Command::Info(a) => io_cmds::info(a),
         Command::Solid(c) => solid::run(c),
         Command::Volume(c) => solid::run_volume(c),
     };

@@ -97,7 +97,8 @@ impl MatchArgs {
 #[command(after_help = "Example:
   mra generate terrain --size 64x64 --seed 3 -o base.png
   mra generate terrain --size 256x256 --seed 9 -o example.png
-  mra terrain synth --base base.png --example example.png --levels 2 --seed 7 -o out.tif --preview out.png")]
+  mra terrain synth --base base.png --example example.png --levels 2 --seed 7 -o out.tif --preview out.png
+  mra terrain synth --base n22.hgt --example helens_30m.asc --example-cell 0.00027 -o out.tif   # base in degrees, example in metres")]
 pub struct SynthArgs {
     /// The smooth or low-resolution heightmap (any format `mra` reads; voids are filled).
     #[arg(long)]
@@ -114,6 +115,15 @@ pub struct SynthArgs {
     /// Also write base, example and result side by side, hillshaded, as a PNG.
     #[arg(long)]
     pub preview: Option<PathBuf>,
+    /// The example's cell size in the base's horizontal unit (e.g. 0.000278 for a 30 m
+    /// example under a base in degrees): overrides the example's own spacing and unit,
+    /// which are otherwise checked against the base's.
+    #[arg(long, value_name = "CELL")]
+    pub example_cell: Option<f64>,
+    /// Skip the height-unit and cell checks of base against example (the example's
+    /// heights and cells are taken as the base's).
+    #[arg(long)]
+    pub any_units: bool,
     #[command(flatten)]
     pub m: MatchArgs,
 }
@@ -348,7 +358,16 @@ fn highpass(a: HighpassArgs) -> CliResult {
 
 fn synth(a: SynthArgs) -> CliResult {
     let (br, base) = load_grid(&a.base)?;
-    let (er, example) = load_grid(&a.example)?;
+    let (mut er, example) = load_grid(&a.example)?;
+    if let Some(c) = a.example_cell {
+        if !(c.is_finite() && c > 0.0) {
+            return Err(Failure(format!(
+                "invalid --example-cell: {c} (expected a positive cell size)"
+            )));
+        }
+        er.meta.spacing = Some(vec![c; er.dims.len()]);
+        er.meta.units = br.meta.units.clone();
+    }
     let mut o = a.m.options();
     if let Some(s) = &a.size {
         o.size = Some(parse_size(s)?);
@@ -357,7 +376,10 @@ fn synth(a: SynthArgs) -> CliResult {
         .size
         .map(|s| s.1)
         .unwrap_or(base.w.saturating_mul(1 << o.levels.min(16)));
-    tr::check_compatible(&br, &er, out_w).map_err(|e| Failure::context(a.example.display(), e))?;
+    if !a.any_units {
+        tr::check_compatible(&br, &er, out_w)
+            .map_err(|e| Failure::context(a.example.display(), e))?;
+    }
     let (g, report) = terrain::synthesize(&base, &example, &o)?;
     let out = tr::from_grid(&g, &br, output_type(&a.output, br.sample_type()))?;
     write_output(&a.output, &out, false)?;

@@ -1,9 +1,8 @@
 //! `mra upscale` and `mra downscale` on images, volumes, heightmaps and image sequences
 //! (a thin shell over [`crate::upscale`]).
 
-use super::io_cmds::{read_input, write_output};
+use super::io_cmds::{read_input, write_output_as, RawArgs};
 use super::{CliResult, Failure};
-use crate::io::ReadOptions;
 use crate::progress::Progress;
 use crate::scheme::subdivide::Refinement;
 use crate::scheme::{Boundary, Scheme};
@@ -18,13 +17,20 @@ use std::path::PathBuf;
   mra upscale zp.png -o zp_1000.png --size 1000x700
   mra upscale ../shared/corpus/volumes/ct_pancreas_256.nrrd -o ct_z.nrrd --factor 2 --axes z
   mra upscale ../shared/corpus/terrain/N22W160.hgt -o n22_x2.tif --factor 2
-  mra upscale zp.png -o zp_plain.png --factor 2 --clamp off")]
+  mra upscale zp.png -o zp_plain.png --factor 2 --clamp off
+  mra upscale ct.raw --dims 256x256x64 --dtype u16 -o ct2.nrrd --factor 2 --json
+  cat zp.png | mra upscale - -o - --format png --factor 2 > zp2.png")]
 pub struct UpscaleArgs {
     /// Image, volume, heightmap or folder of slices.
     pub input: PathBuf,
     /// Output file (format from its extension; sample type of the input).
     #[arg(short, long)]
     pub output: PathBuf,
+    #[command(flatten)]
+    pub raw: RawArgs,
+    /// Format of `-o -` (standard output), as an extension: png, jpg, tif, nrrd, …
+    #[arg(long, value_name = "EXT")]
+    pub format: Option<String>,
     /// Integer factor along every chosen axis (2, 4, 8, … or any integer ≥ 2).
     #[arg(long, conflicts_with = "size")]
     pub factor: Option<usize>,
@@ -55,20 +61,27 @@ pub struct UpscaleArgs {
     /// No progress bar.
     #[arg(long)]
     pub quiet: bool,
-    /// Print one JSON line with the compute time (read and write excluded).
-    #[arg(long)]
-    pub report: bool,
+    /// Print one JSON object: the compute time (read and write excluded) and the output's
+    /// dims (x, y, z).
+    #[arg(long, alias = "report")]
+    pub json: bool,
 }
 
 #[derive(Args, Debug, Clone)]
 #[command(after_help = "Example:
-  mra generate zone-plate -o zp.png && mra downscale zp.png -o zp_quarter.png --levels 2")]
+  mra generate zone-plate -o zp.png && mra downscale zp.png -o zp_quarter.png --levels 2
+  mra downscale ct.raw --dims 256x256x64 --dtype u16 -o ct_half.nrrd")]
 pub struct DownscaleArgs {
     /// Image, volume, heightmap or folder of slices.
     pub input: PathBuf,
     /// Output file (format from its extension; sample type of the input).
     #[arg(short, long)]
     pub output: PathBuf,
+    #[command(flatten)]
+    pub raw: RawArgs,
+    /// Format of `-o -` (standard output), as an extension: png, jpg, tif, nrrd, …
+    #[arg(long, value_name = "EXT")]
+    pub format: Option<String>,
     /// Levels of REDUCE-RESOLUTION (each about halves every chosen axis).
     #[arg(long, default_value_t = 1)]
     pub levels: usize,
@@ -123,7 +136,7 @@ fn keep_freed_buffers() {}
 
 pub fn run_upscale(a: UpscaleArgs) -> CliResult {
     keep_freed_buffers();
-    let r = read_input(&a.input, &ReadOptions::default())?;
+    let r = read_input(&a.input, &a.raw.options()?)?;
     let nd = r.dims.len();
     let (axes, time) = match &a.axes {
         Some(s) => upscale::parse_axes(s, nd)?,
@@ -145,17 +158,22 @@ pub fn run_upscale(a: UpscaleArgs) -> CliResult {
         .map_err(|e| Failure::context(a.input.display(), e))?;
     let seconds = t.elapsed().as_secs_f64();
     bar.finish();
-    if a.report {
-        println!(
-            "{{\"compute_seconds\": {seconds:.6}, \"dims\": {:?}}}",
-            out.dims
-        );
+    write_output_as(&a.output, &out, false, None, a.format.as_deref())?;
+    if a.json {
+        let v = serde_json::json!({
+            "compute_seconds": seconds,
+            "axis_order": super::io_cmds::AXIS_ORDER,
+            "dims": super::io_cmds::xyz(&out.dims),
+            "spacing": out.meta.spacing.as_deref().map(super::io_cmds::xyz),
+            "origin": out.meta.origin,
+        });
+        super::io_cmds::emit(&format!("{v}\n"))?;
     }
-    write_output(&a.output, &out, false)
+    Ok(())
 }
 
 pub fn run_downscale(a: DownscaleArgs) -> CliResult {
-    let r = read_input(&a.input, &ReadOptions::default())?;
+    let r = read_input(&a.input, &a.raw.options()?)?;
     let nd = r.dims.len();
     let axes = match &a.axes {
         Some(s) => upscale::parse_axes(s, nd)?.0,
@@ -163,5 +181,5 @@ pub fn run_downscale(a: DownscaleArgs) -> CliResult {
     };
     let out = upscale::downscale_raster(r, a.scheme, a.boundary, a.levels, &axes)
         .map_err(|e| Failure::context(a.input.display(), e))?;
-    write_output(&a.output, &out, false)
+    write_output_as(&a.output, &out, false, None, a.format.as_deref())
 }

@@ -35,6 +35,9 @@ pub enum Rate {
     Quality(f64),
     /// Target PSNR in dB (skimage convention of `mra compare`).
     Psnr(f64),
+    /// Target PSNR in dB with the peak-to-peak data range `R` of
+    /// `PSNR = 10 log10(R² / MSE)` given (as `mra compare --data-range R`).
+    PsnrRange(f64, f64),
     /// Target bits per position (pixel / voxel), all channels together.
     Bpp(f64),
     /// Every decoded sample within E of the source.
@@ -471,7 +474,16 @@ pub fn encode(r: &Raster, opts: &EncodeOptions) -> Result<Vec<u8>> {
                     }
                     range * (2f64).powf(-q / 10.0)
                 }
-                Rate::Psnr(db) => {
+                Rate::Psnr(db) | Rate::PsnrRange(db, _) => {
+                    if let Rate::PsnrRange(_, r) = rate {
+                        if !(r.is_finite() && r > 0.0) {
+                            return Err(Error::parameter(
+                                "data range",
+                                r,
+                                "a positive, finite peak-to-peak range",
+                            ));
+                        }
+                    }
                     if !(db > 0.0 && db < 400.0) {
                         return Err(Error::parameter(
                             "psnr",
@@ -482,7 +494,10 @@ pub fn encode(r: &Raster, opts: &EncodeOptions) -> Result<Vec<u8>> {
                     // each candidate decoded from its quantized bands, coded only once chosen;
                     // the data range `mra compare` would use, found once
                     let cmp = crate::metrics::CompareOptions {
-                        data_range: Some(crate::metrics::skimage_data_range(&r.samples)),
+                        data_range: Some(match rate {
+                            Rate::PsnrRange(_, range) => range,
+                            _ => crate::metrics::skimage_data_range(&r.samples),
+                        }),
                         ..Default::default()
                     };
                     let (errors, peak) = (p.rate_model(), cmp.data_range.unwrap_or(range));

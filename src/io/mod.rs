@@ -690,7 +690,7 @@ pub fn write_with(path: &Path, r: &Raster, opts: &WriteOptions) -> Result<()> {
         Error::parameter(
             "output extension",
             path.display(),
-            "one of .png .tif .pgm .ppm .pam .exr .nrrd .nhdr .nii .nii.gz .hgt .asc .r16 .r32 .raw",
+            "one of .png .jpg .tif .pgm .ppm .pam .exr .nrrd .nhdr .nii .nii.gz .hgt .asc .r16 .r32 .raw",
         )
     })?;
     let n = bytes::sample_count(&r.dims, r.channels)?;
@@ -717,11 +717,10 @@ pub fn write_with(path: &Path, r: &Raster, opts: &WriteOptions) -> Result<()> {
         Format::R16 => bytes::atomic_write(path, |w| raw::write_r16(w, r)),
         Format::R32 => bytes::atomic_write(path, |w| raw::write_r32(w, r)),
         Format::Raw => bytes::atomic_write(path, |w| raw::write(w, r, false)),
-        Format::Jpeg | Format::Dicom | Format::DicomSeries | Format::SliceFolder => {
-            Err(Error::Unsupported {
-                what: "output format",
-                value: format!("{} is read only", format.name()),
-            })
-        }
+        Format::Jpeg => bytes::atomic_write(path, |w| jpeg::write(w, r, jpeg::DEFAULT_QUALITY)),
+        Format::Dicom | Format::DicomSeries | Format::SliceFolder => Err(Error::Unsupported {
+            what: "output format",
+            value: format!("{} is read only", format.name()),
+        }),
     }
 }

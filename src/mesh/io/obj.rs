@@ -227,6 +227,13 @@ pub fn parse(bytes: &[u8]) -> Result<Mesh> {
         Err(e) => return Err(parse_chunk(bytes).err().unwrap_or(e)),
     };
     let nv: usize = chunks.iter().map(|c| c.v.len()).sum();
+    if nv == 0 {
+        // empty, or text with no OBJ statement in it: not a mesh
+        return Err(Error::format(
+            "no vertex ('v' line)",
+            "an OBJ file with at least one vertex",
+        ));
+    }
     let nt: usize = chunks.iter().map(|c| c.vt.len()).sum();
     let nn: usize = chunks.iter().map(|c| c.vn.len()).sum();
     let nf: usize = chunks.iter().map(|c| c.degrees.len()).sum();

@@ -33,10 +33,10 @@ pub fn parse(bytes: &[u8]) -> Result<Mesh> {
             .ok_or_else(|| Error::format("no counts line", "V F E"))?;
         counts = tokens(l).map(|t| parse_i64(t, ln)).collect::<Result<_>>()?;
     }
-    if counts.len() < 2 || counts[0] < 0 || counts[1] < 0 {
+    if counts.len() < 2 || counts[0] < 1 || counts[1] < 0 {
         return Err(Error::format(
             format!("counts {counts:?}"),
-            "V F E with V, F ≥ 0",
+            "V F E with V ≥ 1, F ≥ 0",
         ));
     }
     let (nv, nf) = (counts[0] as usize, counts[1] as usize);
