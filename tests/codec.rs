@@ -614,6 +614,11 @@ fn cli_encode_decode_info_and_one_line_errors() {
     let bad = dir.join("bad.mra");
     std::fs::write(&bad, &bytes[..bytes.len() / 2]).unwrap();
     let never = dir.join("never.pgm");
+    // `info` reads any file, so its bad input is a damaged .mra: the signature, then junk
+    let junk = dir.join("junk.mra");
+    let mut j = vec![0x8B, b'M', b'R', b'A', 0x0D, 0x0A, 0x1A, 0x0A];
+    j.extend_from_slice(b"not a header at all");
+    std::fs::write(&junk, j).unwrap();
     for args in [
         vec![
             "decode".as_ref(),
@@ -627,7 +632,7 @@ fn cli_encode_decode_info_and_one_line_errors() {
             "-o".as_ref(),
             never.as_os_str(),
         ],
-        vec!["info".as_ref(), src.as_os_str()],
+        vec!["info".as_ref(), junk.as_os_str()],
     ] {
         let o = run(&args);
         assert_eq!(o.status.code(), Some(2));
