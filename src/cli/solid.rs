@@ -269,7 +269,8 @@ pub fn volume_grid(r: &crate::io::Raster, cap: bool) -> Result<VolumeGrid, Failu
         -1.0
     };
     let (px, py, pz) = (nx + 2, ny + 2, nz + 2);
-    let mut out = vec![pad; px * py * pz];
+    let mut out: Vec<f32> = crate::tensor::zeroed_vec(px * py * pz);
+    out.fill(pad);
     for k in 0..nz {
         for j in 0..ny {
             let src = (k * ny + j) * nx;

@@ -29,6 +29,7 @@
 #![allow(clippy::needless_range_loop)]
 
 use crate::mesh::Mesh;
+use crate::tensor::zeroed_vec;
 use crate::{Error, Result};
 use rayon::prelude::*;
 
@@ -946,13 +947,15 @@ pub fn polygonize(grid: &Grid, level: f64, normals: bool) -> Result<Isosurface> 
     }
 
     // pass 3: vertices and triangles, written in place
-    let mut positions = vec![[0.0; 3]; nv + n_extra];
-    let mut nrm_all = if normals {
-        vec![[0.0; 3]; nv + n_extra]
+    // the output arrays on huge pages where the kernel allows (tensor::pages): a large
+    // surface's arrays are tens of MB, a page fault per 4 KB otherwise
+    let mut positions: Vec<[f64; 3]> = zeroed_vec(nv + n_extra);
+    let mut nrm_all: Vec<[f64; 3]> = if normals {
+        zeroed_vec(nv + n_extra)
     } else {
         Vec::new()
     };
-    let mut indices = vec![0u32; 3 * n_tris];
+    let mut indices: Vec<u32> = zeroed_vec(3 * n_tris);
     {
         let (grid_pos, extra_pos) = positions.split_at_mut(nv);
         let pos_parts = split_lengths(grid_pos, plane_len.iter().copied());
@@ -998,7 +1001,7 @@ pub fn polygonize(grid: &Grid, level: f64, normals: bool) -> Result<Isosurface> 
             .enumerate()
             .for_each(|(k, out)| emit_fast(grid, level, &bits, k, out));
     }
-    let mut offsets = vec![0u32; n_tris + 1];
+    let mut offsets: Vec<u32> = zeroed_vec(n_tris + 1);
     offsets
         .par_chunks_mut(1 << 16)
         .enumerate()

@@ -706,15 +706,18 @@ fn stage_axes(f: &[(usize, usize)], level: u32) -> Vec<usize> {
         .collect()
 }
 
+/// The last ×2 stage's input, its shape, the stage's axes, and whether it is the only
+/// stage (nothing ran before it).
+type LastStage = (Vec<f32>, Vec<usize>, Vec<usize>, bool);
+
 /// Everything before the last ×2 stage: the odd plain stage and the earlier ×2 stages
-/// (settled). Returns the last stage's input, its shape, the last stage's axes, and
-/// whether that stage is the only one (nothing ran before it).
+/// (settled).
 fn before_last(
     data: Vec<f32>,
     shape: &[usize],
     method: &Method,
     f: &[(usize, usize)],
-) -> Result<(Vec<f32>, Vec<usize>, Vec<usize>, bool)> {
+) -> Result<LastStage> {
     let odd: Vec<(usize, usize)> = f
         .iter()
         .map(|&(a, g)| (a, g >> g.trailing_zeros()))

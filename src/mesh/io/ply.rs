@@ -585,7 +585,11 @@ fn binary_body(
     let vbytes = nv * vrec;
     let fbytes = face_at(nf);
     let start = out.len();
-    out.resize(start + vbytes + fbytes, 0);
+    // one fresh buffer (on huge pages where the kernel allows: tens of MB for a large
+    // surface) holding the header already written and the body
+    let mut buf: Vec<u8> = crate::tensor::zeroed_vec(start + vbytes + fbytes);
+    buf[..start].copy_from_slice(out);
+    *out = buf;
     let (vb, fb) = out[start..].split_at_mut(vbytes);
     vb.par_chunks_mut(BODY_CHUNK * vrec.max(1))
         .enumerate()
