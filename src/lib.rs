@@ -30,6 +30,7 @@ pub mod format;
 pub mod fsutil;
 pub mod generate;
 pub mod io;
+pub mod kernel;
 pub mod mesh;
 pub mod metrics;
 pub mod points;
@@ -41,6 +42,7 @@ pub mod style;
 pub mod surface;
 pub mod tensor;
 pub mod terrain;
+pub mod tuning;
 pub mod upscale;
 
 pub use error::{Error, ErrorKind, Result};

@@ -113,8 +113,8 @@ proptest! {
 
 // ---- filter rows exactly as in the notes -------------------------------------------
 
+use mra::kernel::CpuLevel;
 use mra::scheme::sparse::Csr as MraCsr;
-use mra::scheme::sparse::Simd;
 fn row(t: &MraCsr, r: usize) -> Vec<(usize, f64)> {
     t.row(r).collect()
 }
@@ -313,12 +313,16 @@ fn every_cpu_level_of_the_kernel_gives_the_same_bits() {
                 let mut a = vec![0f32; m * width];
                 let mut b = vec![0f32; m * width];
                 for op in [&t.analysis, &t.synthesis] {
+                    // the reference loops against every build of the kernel
                     op.apply(&f, width, &mut a, width, width);
-                    op.apply_baseline(&f, width, &mut b, width, width);
-                    assert!(
-                        a.iter().zip(&b).all(|(x, y)| x.to_bits() == y.to_bits()),
-                        "{scheme} {boundary} m={m}"
-                    );
+                    for level in CpuLevel::available() {
+                        b.fill(f32::NAN);
+                        mra::kernel::apply_with(level, op, &f, width, &mut b, width, width);
+                        assert!(
+                            a.iter().zip(&b).all(|(x, y)| x.to_bits() == y.to_bits()),
+                            "{scheme} {boundary} m={m} {level:?}"
+                        );
+                    }
                 }
             }
         }
@@ -330,7 +334,7 @@ fn every_cpu_level_of_the_kernel_gives_the_same_bits() {
 /// element widths 1–3, f32 and f64.
 #[test]
 fn polyphase_lanes_give_the_bits_of_the_matrix() {
-    use mra::scheme::polyphase::Polyphase;
+    use mra::kernel::polyphase::Polyphase;
     fn check<T: mra::scheme::Sample + Into<f64>>(
         f: &[T],
         m: usize,
@@ -373,7 +377,7 @@ fn polyphase_lanes_give_the_bits_of_the_matrix() {
 /// stretches increasing and apart (the plane path computes each row once from them).
 #[test]
 fn pair_and_unpaired_stretches_cover_every_row_once() {
-    use mra::scheme::polyphase::Polyphase;
+    use mra::kernel::polyphase::Polyphase;
     for s in Scheme::ALL {
         for b in Boundary::ALL {
             for m in (1..=70).chain([255, 256]) {
@@ -410,9 +414,9 @@ fn combine_matches_plain_loop<T: mra::scheme::Sample + Into<f64>>(
     len: usize,
 ) {
     let taps = src.len();
-    for simd in Simd::available() {
+    for simd in CpuLevel::available() {
         let mut a = vec![T::from_f64(1.0); len];
-        mra::scheme::kernel::combine_with(simd, &mut a, src, w);
+        mra::kernel::combine_with(simd, &mut a, src, w);
         for i in 0..len {
             let mut acc = if taps == 0 {
                 T::default()
@@ -436,7 +440,7 @@ fn combine_matches_plain_loop<T: mra::scheme::Sample + Into<f64>>(
 /// The vector kernels (every build the CPU has) against plain loops.
 #[test]
 fn vector_kernels_match_plain_loops() {
-    use mra::scheme::kernel::{deinterleave, interleave};
+    use mra::kernel::{deinterleave, interleave};
     for len in 0..70usize {
         for e in 1..=2usize {
             let x: Vec<f32> = (0..len * e).map(|i| i as f32 * 0.5 - 3.0).collect();
@@ -493,7 +497,7 @@ fn pair_case<T: mra::scheme::Sample>(x: &[T], u: usize, len: usize) -> (Vec<&[T]
 /// output reads (the other must not see 0·∞).
 #[test]
 fn combine_pair_gives_the_bits_of_two_combines() {
-    use mra::scheme::kernel::{combine_pair, combine_pair_with, combine_with};
+    use mra::kernel::{combine_pair, combine_pair_with, combine_with};
     // `units`: the taps of weight +1 and −1 of each output (P1, N1, P2, N2), which the
     // kernels add or subtract instead of multiplying
     fn check<T: mra::scheme::Sample + Into<f64>>(
@@ -515,9 +519,9 @@ fn combine_pair_gives_the_bits_of_two_combines() {
                 }
             }
         }
-        for simd in Simd::available() {
+        for simd in CpuLevel::available() {
             let (mut a1, mut a2) = (vec![T::default(); len], vec![T::default(); len]);
-            if simd == Simd::detected() {
+            if simd == CpuLevel::detected() {
                 combine_pair(&mut a1, &mut a2, &src, &w1, m1, &w2, m2);
             } else {
                 combine_pair_with(simd, &mut a1, &mut a2, &src, &w1, m1, &w2, m2);
@@ -527,7 +531,7 @@ fn combine_pair_gives_the_bits_of_two_combines() {
                 let s: Vec<&[T]> = ks.iter().map(|&k| src[k]).collect();
                 let wk: Vec<T> = ks.iter().map(|&k| w[k]).collect();
                 let mut want = vec![T::default(); len];
-                combine_with(Simd::Baseline, &mut want, &s, &wk);
+                combine_with(CpuLevel::Scalar, &mut want, &s, &wk);
                 for i in 0..len {
                     let (p, r): (f64, f64) = (a[i].into(), want[i].into());
                     assert!(
@@ -586,7 +590,7 @@ fn combine_pair_gives_the_bits_of_two_combines() {
 /// where it has none.
 #[test]
 fn combine_pair_merged_interleaves_the_bits_of_combine_pair() {
-    use mra::scheme::kernel::{combine_pair, combine_pair_merged};
+    use mra::kernel::{combine_pair, combine_pair_merged};
     fn check<T: mra::scheme::Sample + Into<f64>>(x: &[T], u: usize, m1: u32, m2: u32, len: usize) {
         let (src, w1, w2) = pair_case(x, u, len);
         let (mut a, mut b) = (vec![T::default(); len], vec![T::default(); len]);
@@ -628,7 +632,7 @@ fn combine_pair_merged_interleaves_the_bits_of_combine_pair() {
 /// AVX2 build.
 #[test]
 fn combine_pair_rows_gives_the_bits_of_combine_pair() {
-    use mra::scheme::kernel::{combine_pair, combine_pair_rows};
+    use mra::kernel::{combine_pair, combine_pair_rows};
     for (u, m1, m2) in [(7usize, 0b1111111u32, 0b1111100u32), (3, 0b011, 0b110)] {
         for (len, count, in_step, rows, steps) in [
             (5usize, 9usize, 2usize, [0usize, 9usize], [1usize, 1usize]),
@@ -681,7 +685,7 @@ fn combine_pair_rows_gives_the_bits_of_combine_pair() {
 
 #[test]
 fn f32_combine_and_transpose_match_plain_loops() {
-    use mra::scheme::kernel::transpose;
+    use mra::kernel::transpose;
     // f32 runs of every length around the vector widths (blocks of 32, then 8, then single)
     let x: Vec<f32> = lcg(5, 120).iter().map(|&v| v as f32).collect();
     for len in 0..100usize {
@@ -724,7 +728,7 @@ fn f32_combine_and_transpose_match_plain_loops() {
 /// lengths around the vector widths, lanes a stride apart, f32 and f64.
 #[test]
 fn combine_pair_lanes_gives_the_bits_of_combine_pair_per_lane() {
-    use mra::scheme::kernel::{combine_pair, combine_pair_lanes};
+    use mra::kernel::{combine_pair, combine_pair_lanes};
     fn check<T: mra::scheme::Sample + Into<f64>>(x: &[T]) {
         // (inputs, mask 1, mask 2): patterns with a build, and one without
         for (u, m1, m2) in [
@@ -793,7 +797,7 @@ fn combine_pair_lanes_gives_the_bits_of_combine_pair_per_lane() {
 /// lengths around two vectors (odd ones too), f32 and f64.
 #[test]
 fn combine_pair_rows_split_gives_the_bits_of_a_split_after() {
-    use mra::scheme::kernel::{combine_pair_rows, combine_pair_rows_split, deinterleave};
+    use mra::kernel::{combine_pair_rows, combine_pair_rows_split, deinterleave};
     fn check<T: mra::scheme::Sample + Into<f64>>(x: &[T]) {
         for (u, m1, m2) in [
             (4usize, 0b1111u32, 0b1111u32),
@@ -860,7 +864,7 @@ fn combine_pair_rows_split_gives_the_bits_of_a_split_after() {
 /// together, f32 and f64.
 #[test]
 fn combine_lane_taps_gives_the_bits_of_plain_loops() {
-    use mra::scheme::kernel::combine_lane_taps;
+    use mra::kernel::combine_lane_taps;
     fn check<T: mra::scheme::Sample + Into<f64>>(x: &[T]) {
         for w in [8usize, 9, 31, 64, 256] {
             for h in [1usize, 7, 8, 9, 17, 24] {
@@ -931,7 +935,7 @@ fn combine_lane_taps_gives_the_bits_of_plain_loops() {
 
 #[test]
 fn combine_rows_matches_combine_row_by_row() {
-    use mra::scheme::kernel::{combine, combine_rows};
+    use mra::kernel::{combine, combine_rows};
     // every scheme × boundary, operators of short lanes (as in a volume's planes), f32 and
     // f64, rows of lengths around the vector widths, a range of rows from the middle
     for scheme in Scheme::ALL {
@@ -980,7 +984,7 @@ fn combine_rows_matches_combine_row_by_row() {
 // rows with equal weights (the regular rows of the schemes) against it, in every build
 // the CPU has, bit for bit.
 
-use mra::scheme::kernel::{
+use mra::kernel::{
     combine_lane_taps, combine_pair_has_build, combine_pair_merged, combine_pair_with,
     combine_with, pair_taps, row_sum, SECOND,
 };
@@ -1074,7 +1078,7 @@ fn combine_with_pairs_gives_the_bits_of_the_rule() {
     fn check<T: Sample + Into<f64>>(x: &[T], w: &[T], len: usize) {
         let n = w.len();
         let src: Vec<&[T]> = (0..n).map(|k| &x[k..k + len]).collect();
-        for simd in Simd::available() {
+        for simd in CpuLevel::available() {
             let mut out = vec![T::from_f64(7.0); len];
             combine_with(simd, &mut out, &src, w);
             for i in 0..len {
@@ -1160,7 +1164,7 @@ fn pair_kernels_on_the_schemes_rows_give_the_bits_of_the_rule() {
                 .collect::<Vec<T>>()
         };
         let (e1, e2) = (want(m1, w1), want(m2, w2));
-        for simd in Simd::available() {
+        for simd in CpuLevel::available() {
             let (mut a, mut b) = (vec![T::default(); len], vec![T::default(); len]);
             combine_pair_with(simd, &mut a, &mut b, &src, w1, m1, w2, m2);
             for i in 0..len {

@@ -99,30 +99,8 @@ fn parse_size(s: &str) -> Result<Vec<usize>, Failure> {
     }
 }
 
-/// Keep freed buffers of up to 32 MiB in the allocator instead of returning them to the
-/// system: the refined area mode allocates and frees image-sized arrays a dozen times, and
-/// fresh pages cost a page fault each (a third of its time on a Kodak image). Larger
-/// arrays (volumes) are still mapped and unmapped directly, so peak memory is unchanged.
-#[cfg(all(target_os = "linux", target_env = "gnu"))]
-fn keep_freed_buffers() {
-    extern "C" {
-        fn mallopt(param: i32, value: i32) -> i32;
-    }
-    const M_TRIM_THRESHOLD: i32 = -1;
-    const M_MMAP_THRESHOLD: i32 = -3;
-    // SAFETY: glibc's mallopt only changes allocator thresholds; called before any
-    // threads of this command allocate.
-    unsafe {
-        mallopt(M_MMAP_THRESHOLD, 32 << 20);
-        mallopt(M_TRIM_THRESHOLD, 256 << 20);
-    }
-}
-
-#[cfg(not(all(target_os = "linux", target_env = "gnu")))]
-fn keep_freed_buffers() {}
-
 pub fn run_upscale(a: UpscaleArgs) -> CliResult {
-    keep_freed_buffers();
+    crate::tuning::keep_freed_buffers();
     let r = read_input(&a.input, &ReadOptions::default())?;
     let nd = r.dims.len();
     let (axes, time) = match &a.axes {

@@ -7,9 +7,7 @@
 pub mod chaikin;
 pub mod cubic;
 pub mod haar;
-pub mod kernel;
 pub mod lane;
-pub mod polyphase;
 pub mod regular;
 pub mod sample;
 pub mod sparse;

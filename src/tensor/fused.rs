@@ -14,11 +14,11 @@
 
 use super::aligned::Aligned;
 use super::par::{for_each_part, SharedMut};
-use crate::scheme::kernel::{
+use crate::kernel::polyphase::{Polyphase, PAIR_MOST};
+use crate::kernel::{
     self, combine_pair_taps, combine_taps, stream_copy, stream_copy_unfenced, stream_fence,
     transpose, LaneTaps, PairMemo,
 };
-use crate::scheme::polyphase::{Polyphase, PAIR_MOST};
 use crate::scheme::sparse::Csr;
 use crate::scheme::Sample;
 
@@ -38,7 +38,7 @@ pub struct AxisOp<'a> {
 pub(super) const STREAM_BYTES: usize = 16 << 20;
 
 /// Rows of [`AxisOp::order`] handed to one task.
-const ROWS_PER_TASK: usize = 16;
+pub(super) const ROWS_PER_TASK: usize = 16;
 
 /// How a level writes its output.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -262,7 +262,7 @@ impl<'a> Ctx<'a> {
     /// (elsewhere the split would be a pass of its own, with a buffer per row).
     pub fn takes_split_rows(&self) -> bool {
         let lane = &self.ops[self.ops.len() - 1].plan;
-        crate::scheme::sparse::cpu_has_avx2()
+        crate::kernel::cpu_has_avx2()
             && self.ops.len() == 2
             && self.e == 1
             && lane.split_reach.is_some()
@@ -711,7 +711,7 @@ fn plane_path(k: usize, region: &[usize], e: usize) -> bool {
 }
 
 /// `dst[r] = Σ_c W_rc · src[c]` for every row `r` of `a.op`, rows of `len` samples: the
-/// rows of the operator's pair ([`crate::scheme::polyphase::Pair`]) two at a time ([`kernel::combine_pair_rows`]: the input
+/// rows of the operator's pair ([`crate::kernel::polyphase::Pair`]) two at a time ([`kernel::combine_pair_rows`]: the input
 /// rows they share read once), the others one by one ([`kernel::combine_rows`]).
 ///
 /// With `split` (a lane's room), every output row is written split into its even
@@ -768,65 +768,6 @@ fn combine_rows<T: Sample>(
         None => {
             for r in &plan.unpaired {
                 kernel::combine_rows(op, src, len, r.clone(), &mut dst[r.start * len..]);
-            }
-        }
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::scheme::{Boundary, Scheme};
-    use crate::tensor::workspace::level_ops;
-
-    /// The pairs the task loop makes over `rows`: greedily, each row with the next when
-    /// they pair.
-    fn greedy_pairs(rows: &[usize], op: &Csr) -> Vec<(usize, usize)> {
-        let (mut pairs, mut i) = (Vec::new(), 0);
-        while i < rows.len() {
-            if i + 1 < rows.len()
-                && kernel::rows_pair(op.row_slices(rows[i]).0, op.row_slices(rows[i + 1]).0)
-            {
-                pairs.push((rows[i], rows[i + 1]));
-                i += 2;
-            } else {
-                i += 1;
-            }
-        }
-        pairs
-    }
-
-    #[test]
-    fn parts_keep_every_pair_of_the_whole_order() {
-        for scheme in Scheme::ALL {
-            for boundary in Boundary::ALL {
-                for m in [5, 16, 64, 67, 130, 256] {
-                    let o = level_ops(scheme, boundary, m);
-                    for (op, order) in [
-                        (&o.two_scale.analysis, &o.analysis_order),
-                        (&o.two_scale.synthesis, &o.synthesis_order),
-                    ] {
-                        let parts = pair_parts(order, op);
-                        // consecutive, covering, at most one row over the size
-                        assert_eq!(parts.first().map(|p| p.start), Some(0));
-                        assert_eq!(parts.last().map(|p| p.end), Some(order.len()));
-                        for w in parts.windows(2) {
-                            assert_eq!(w[0].end, w[1].start);
-                        }
-                        assert!(parts.iter().all(|p| p.len() <= ROWS_PER_TASK + 1));
-                        let by_parts: Vec<_> = parts
-                            .iter()
-                            .flat_map(|p| greedy_pairs(&order[p.clone()], op))
-                            .collect();
-                        let whole = greedy_pairs(order, op);
-                        assert_eq!(by_parts, whole, "{scheme:?} {boundary:?} {m}");
-                        // the regular rows do pair: at most a few rows near the ends and
-                        // the middle of the order are left alone
-                        if m >= 64 {
-                            assert!(2 * whole.len() + 12 >= m, "{scheme:?} {boundary:?} {m}");
-                        }
-                    }
-                }
             }
         }
     }
