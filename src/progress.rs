@@ -2,9 +2,24 @@
 //! only when stderr is a terminal and the user did not ask for `--quiet`. Library code
 //! receives a [`Progress`] and calls [`Progress::inc`]; it never prints otherwise.
 
+//!
+//! Without the `cli` feature (no `indicatif`) every bar is hidden.
+
+#[cfg(feature = "cli")]
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+#[cfg(feature = "cli")]
 use std::io::IsTerminal;
 
-use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+/// What draws: `indicatif`'s bar, or nothing without the `cli` feature.
+#[cfg(not(feature = "cli"))]
+#[derive(Clone)]
+struct ProgressBar;
+#[cfg(not(feature = "cli"))]
+impl ProgressBar {
+    fn inc(&self, _: u64) {}
+    fn set_message(&self, _: String) {}
+    fn finish_and_clear(&self) {}
+}
 
 /// A progress bar that may be hidden; all methods are no-ops when hidden.
 #[derive(Clone)]
@@ -14,6 +29,13 @@ pub struct Progress {
 
 impl Progress {
     /// A bar of `total` steps labelled `label`; hidden when `quiet` or stderr is not a terminal.
+    #[cfg(not(feature = "cli"))]
+    pub fn new(_total: u64, _label: &str, _quiet: bool) -> Self {
+        Progress::hidden()
+    }
+
+    /// A bar of `total` steps labelled `label`; hidden when `quiet` or stderr is not a terminal.
+    #[cfg(feature = "cli")]
     pub fn new(total: u64, label: &str, quiet: bool) -> Self {
         if quiet || !std::io::stderr().is_terminal() {
             return Progress::hidden();

@@ -37,7 +37,42 @@ use crate::{Error, Result};
 pub mod array;
 pub mod asc;
 pub mod bytes;
+#[cfg(feature = "dicom")]
 pub mod dicom;
+/// DICOM without the `dicom` feature: files and series are recognised, then refused.
+#[cfg(not(feature = "dicom"))]
+pub mod dicom {
+    use super::Raster;
+    use crate::{Error, Result};
+    use std::path::{Path, PathBuf};
+
+    fn not_built(path: &Path) -> Error {
+        Error::Unsupported {
+            what: "DICOM input in a build without the `dicom` feature",
+            value: path.display().to_string(),
+        }
+    }
+    pub fn read_file(path: &Path) -> Result<Raster> {
+        Err(not_built(path))
+    }
+    pub fn read_series(dir: &Path) -> Result<Raster> {
+        Err(not_built(dir))
+    }
+    /// Does the file start with the DICOM preamble + `DICM`?
+    pub fn is_dicom(path: &Path) -> bool {
+        let mut head = [0u8; 132];
+        matches!(super::bytes::read_head(path, &mut head), Ok(132)) && &head[128..132] == b"DICM"
+    }
+    /// The DICOM files of a folder, by name.
+    pub fn dicom_files(dir: &Path) -> Result<Vec<PathBuf>> {
+        let mut files: Vec<PathBuf> = std::fs::read_dir(dir)?
+            .filter_map(|e| e.ok().map(|e| e.path()))
+            .filter(|p| p.is_file() && is_dicom(p))
+            .collect();
+        files.sort();
+        Ok(files)
+    }
+}
 pub mod exr;
 pub mod hgt;
 pub mod jpeg;

@@ -17,6 +17,7 @@ impl<T> SharedMut<T> {
     /// # Safety
     /// `i` inside the array, and no other task reads or writes index `i` meanwhile.
     #[inline]
+    #[cfg_attr(not(feature = "geometry"), allow(dead_code))]
     pub(crate) unsafe fn write(&self, i: usize, v: T) {
         // SAFETY: the caller's guarantees.
         unsafe { *self.0.add(i) = v }
