@@ -215,8 +215,9 @@ fn chaikin_interpolating_blocks_are_those_of_reduce_resolution_and_find_details(
 
 #[test]
 fn interpolating_ends_keep_the_first_and_last_points() {
-    for scheme in Scheme::ALL {
-        for m in [8usize, 9, 13, 14, 40, 41] {
+    // CDF 9/7 has no open ends: its interpolating mode is the symmetric extension
+    for scheme in Scheme::ALL.into_iter().filter(|s| s.is_bspline()) {
+        for m in [8usize, 9, 13, 14, 22, 23, 35, 36, 40, 41] {
             let t = TwoScale::new(scheme, Boundary::Interpolating, m);
             if t.kind == LevelKind::HaarFallback || scheme == Scheme::Haar {
                 continue;
@@ -247,18 +248,27 @@ fn constant_input_has_zero_details_and_linear_input_zero_interior_details() {
                         "{scheme} {boundary} m={m}: constant gives detail {k} = {d}"
                     );
                 }
-                if scheme == Scheme::Haar {
+                // Haar (and a lane too short for the scheme, which falls back to Haar) only
+                // annihilates constants
+                if scheme == Scheme::Haar || t.kind == LevelKind::HaarFallback {
                     continue;
                 }
                 let f: Vec<f64> = (0..m).map(|i| 2.0 * i as f64 - 7.0).collect();
                 t.decompose(&f, 1, &mut packed);
                 let s = t.details();
-                // away from the ends (and the carried sample), details of a line vanish
+                // away from the ends (and the carried sample), details of a line vanish; the
+                // open quadratic and cubic end rows do not reproduce a line, so the detail rows
+                // of the interpolating start/end blocks are left out
+                let ends = match (scheme, boundary) {
+                    (Scheme::ChaikinWide, Boundary::Interpolating) => 5,
+                    (Scheme::CubicWide, Boundary::Interpolating) => 8,
+                    _ => 3,
+                };
                 for (k, d) in packed[t.coarse..]
                     .iter()
                     .enumerate()
-                    .skip(3)
-                    .take(s.saturating_sub(6))
+                    .skip(ends)
+                    .take(s.saturating_sub(2 * ends))
                 {
                     assert!(
                         d.abs() < 1e-12,
