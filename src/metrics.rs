@@ -350,3 +350,21 @@ pub fn ssim(a: &Raster, b: &Raster, data_range: f64) -> Option<f64> {
     }
     Some(total / ch as f64)
 }
+
+/// The luma of a colour raster, `Y = 0.299 R + 0.587 G + 0.114 B` (ITU-R BT.601), in the same
+/// sample type (rounded for integer types); other channels (alpha) are dropped. A raster with
+/// fewer than three channels is returned unchanged.
+pub fn luma(r: &Raster) -> Result<Raster> {
+    if r.channels < 3 {
+        return Ok(r.clone());
+    }
+    let c = r.channels;
+    let v = r.to_f64();
+    let y: Vec<f32> = v
+        .chunks_exact(c)
+        .map(|p| (0.299 * p[0] + 0.587 * p[1] + 0.114 * p[2]) as f32)
+        .collect();
+    let mut out = Raster::from_f32(r.dims.clone(), 1, &y, r.sample_type(), r.kind)?;
+    out.meta = r.meta.clone();
+    Ok(out)
+}

@@ -87,6 +87,19 @@ impl Scheme {
             Scheme::Cdf97 => "cdf97",
         }
     }
+    /// The regular (interior) filters; `None` for Haar, whose rows are its own blocks.
+    pub fn regular(self) -> Option<&'static regular::RegularFilters> {
+        match self {
+            Scheme::Haar => None,
+            Scheme::Chaikin => Some(&chaikin::REGULAR),
+            Scheme::Cubic => Some(&cubic::REGULAR),
+            Scheme::Linear => Some(&linear::REGULAR),
+            Scheme::ChaikinWide => Some(&chaikin_wide::REGULAR),
+            Scheme::CubicWide => Some(&cubic_wide::REGULAR),
+            Scheme::Cdf97 => Some(&cdf97::REGULAR),
+        }
+    }
+
     /// Whether the synthesis `P` is B-spline subdivision (every scheme but CDF 9/7).
     pub fn is_bspline(self) -> bool {
         self != Scheme::Cdf97

@@ -515,12 +515,48 @@ fn rescale_meta(
 }
 
 /// The reduce-resolution operator `A` (`coarse × m`) of one level.
+///
+/// With the symmetric boundary every scheme gives exactly `⌈m/2⌉` coarse samples. A scheme
+/// whose regular row `a` has an even number of taps (Chaikin, chaikin-wide) is then centred on
+/// the cells `[2j, 2j+1]`, at `2j + ½` as a block mean is (`C_j = Σ_t a_t F_{2j+1−L/2+t}`,
+/// half-sample mirrors `F_{−1} = F_0`, `F_m = F_{m−1}`), rather than the MRA level's placement,
+/// which has `⌊m/2⌋ + 1` coarse samples (the first centred at `−½`).
 pub fn reduce_operator(scheme: Scheme, boundary: Boundary, m: usize) -> Csr {
+    if boundary == Boundary::Symmetric && m >= 2 {
+        if let Some(f) = scheme.regular().filter(|f| f.a.w.len() % 2 == 0) {
+            return cell_centred(f.a.w, m);
+        }
+    }
     let level = TwoScale::new(scheme, boundary, m);
     let mut t = Triplets::new(level.coarse, m);
     for r in 0..level.coarse {
         for (c, w) in level.analysis.row(r) {
             t.add(r, c, w);
+        }
+    }
+    t.into_csr()
+}
+
+/// `C_j = Σ_t a_t F_{2j+1−L/2+t}` for `j < ⌈m/2⌉`, fine indices folded by half-sample mirrors.
+fn cell_centred(a: &[f64], m: usize) -> Csr {
+    let n = m.div_ceil(2);
+    let half = a.len() as isize / 2;
+    let fold = |mut i: isize| -> usize {
+        let m = m as isize;
+        loop {
+            if i < 0 {
+                i = -1 - i;
+            } else if i >= m {
+                i = 2 * m - 1 - i;
+            } else {
+                return i as usize;
+            }
+        }
+    };
+    let mut t = Triplets::new(n, m);
+    for j in 0..n {
+        for (k, &w) in a.iter().enumerate() {
+            t.add(j, fold(2 * j as isize + 1 - half + k as isize), w);
         }
     }
     t.into_csr()
