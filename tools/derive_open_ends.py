@@ -331,7 +331,7 @@ def cdf97_taps(digits=30):
 
 SCHEMES = {
     "linear": (LINEAR, lambda: [-0.125, 0.25, 0.75, 0.25, -0.125]),
-    "chaikin-wide": (CHAIKIN, lambda: ls_regular_exact(CHAIKIN, 12)),
+    "chaikin-wide": (CHAIKIN, lambda: with_zeros_at_nyquist(CHAIKIN, ls_regular_exact(CHAIKIN, 12), 3)),
     "cubic-wide": (CUBIC, lambda: with_zeros_at_nyquist(CUBIC, ls_regular_exact(CUBIC, 19), 4)),
 }
 

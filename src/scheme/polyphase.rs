@@ -642,9 +642,7 @@ mod tests {
                     // rows near the ends: the boundary blocks, or the rows whose regular
                     // window folds at a mirror, grow with the longest regular filter; lanes
                     // shorter than eight of them are mostly ends
-                    let reach = scheme
-                        .regular()
-                        .map_or(0, |f| f.a.w.len().max(f.q.w.len()));
+                    let reach = scheme.regular().map_or(0, |f| f.a.w.len().max(f.q.w.len()));
                     if n < 8 * reach {
                         continue;
                     }

@@ -822,9 +822,7 @@ mod tests {
                         assert_eq!(by_parts, whole, "{scheme:?} {boundary:?} {m}");
                         // the regular rows do pair: at most a few rows near the ends and
                         // the middle of the order are left alone
-                        let reach = scheme
-                            .regular()
-                            .map_or(0, |f| f.a.w.len().max(f.q.w.len()));
+                        let reach = scheme.regular().map_or(0, |f| f.a.w.len().max(f.q.w.len()));
                         // (the order is tuned for filters of up to 7 taps; the wide schemes'
                         // rows pair less often in it, which costs time, not bits)
                         if m >= 64 && reach <= 7 {
