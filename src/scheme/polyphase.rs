@@ -159,9 +159,9 @@ impl Pair {
             return None;
         }
         // row i of r0 with row i + d of r1, whose columns are those of r1's first row
-        // moved on by 2·d relative to row i of r0 (this read `− 2·d` until session 13,
-        // so that a pair with d ≠ 0 — the interpolating Chaikin analysis, d = −1 — went
-        // unfound: the offset chosen made the two rows share no column)
+        // moved on by 2·d relative to row i of r0 (with `− 2·d` here a pair with d ≠ 0 —
+        // the interpolating Chaikin analysis, d = −1 — goes unfound: the offset chosen
+        // makes the two rows share no column)
         let union = |d: isize| {
             let mut c: Vec<isize> = r0.cols.iter().map(|&c| c as isize).collect();
             c.extend(r1.cols.iter().map(|&c| c as isize + 2 * d));
@@ -632,8 +632,8 @@ mod tests {
 
     /// Every scheme and boundary pairs its regular rows in both directions, leaving a few
     /// rows near the ends (and, in analysis, where the coarse rows meet the details):
-    /// the interpolating Chaikin analysis, whose detail row `i` reads the columns of
-    /// coarse row `i + 1`, went unpaired until session 13.
+    /// among them the interpolating Chaikin analysis, whose detail row `i` reads the
+    /// columns of coarse row `i + 1` (it goes unpaired when the offset's sign is wrong).
     #[test]
     fn every_operator_pairs_its_regular_rows() {
         for scheme in Scheme::ALL {

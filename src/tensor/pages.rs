@@ -10,7 +10,7 @@
 //! caller passes in keep their own pages. `MRA_HUGE_PAGES=off` in the environment turns
 //! the advice off (every buffer on the pages the allocator gives, as a plain `Vec`'s).
 //!
-//! Measured on the 2-core Zen 3 of session 20 (`examples/pyramid_timing`, 256³ cubic
+//! Measured on a 2-core Zen 3 (`examples/pyramid_timing`, 256³ cubic
 //! interpolating, three levels, two threads):
 //! - the first forward of a process (its scratch faulted in): 40.2–41.4 → 20.3–21.2 ms
 //!   (one run in three 44.5 ms: the kernel compacting memory for the pages);
