@@ -22,7 +22,8 @@ fn run(cpu: Option<&str>, args: &[&str]) -> Vec<u8> {
     let o = c.output().unwrap();
     assert!(
         o.status.success(),
-        "MRA_CPU={cpu:?} mra {args:?}: {}",
+        "MRA_CPU={} mra {args:?}: {}",
+        cpu.unwrap_or("(unset)"),
         String::from_utf8_lossy(&o.stderr)
     );
     o.stdout
@@ -232,7 +233,11 @@ fn encode_decode_upscale_and_analyze_give_the_same_bytes_at_every_cpu_level() {
                 Some(p) => std::fs::read(p).unwrap_or_else(|e| panic!("{args:?}: {e}")),
                 None => stdout,
             };
-            assert!(!bytes.is_empty(), "MRA_CPU={cpu:?} {args:?}: empty output");
+            assert!(
+                !bytes.is_empty(),
+                "MRA_CPU={} {args:?}: empty output",
+                cpu.unwrap_or("(unset)")
+            );
             got.push(bytes);
         }
         outputs.push(got);
@@ -243,8 +248,9 @@ fn encode_decode_upscale_and_analyze_give_the_same_bytes_at_every_cpu_level() {
             let first = a.iter().zip(b.iter()).position(|(x, y)| x != y);
             assert!(
                 a == b,
-                "{:?}: MRA_CPU=scalar and MRA_CPU={cpu:?} differ ({} vs {} bytes, first at {first:?})",
+                "{:?}: MRA_CPU=scalar and MRA_CPU={} differ ({} vs {} bytes, first difference at {first:?})",
                 job.args,
+                cpu.unwrap_or("(unset)"),
                 a.len(),
                 b.len()
             );
