@@ -33,8 +33,8 @@ fn s(p: &Path) -> &str {
     p.to_str().unwrap()
 }
 
-/// One job: a name, the arguments (with `{in}` for the inputs' folder and `{out}` for the
-/// output file), and the output's file name (`None`: the job prints to standard output).
+/// One job: the arguments (with `{in}` for the inputs' folder and `{out}` for the output
+/// file), and the output's file name (`None`: the job prints to standard output).
 struct Job {
     args: &'static [&'static str],
     out: Option<&'static str>,
