@@ -17,17 +17,11 @@ const ALL: [Scheme; 5] = [
     Scheme::Butterfly,
 ];
 
-/// `../shared/corpus/meshes` (or `$MRA_CORPUS/meshes` when set, for worktrees elsewhere).
+mod common;
+
+/// The corpus's `meshes` folder (see `common::corpus`).
 fn corpus() -> Option<std::path::PathBuf> {
-    let root = std::env::var("MRA_CORPUS")
-        .unwrap_or_else(|_| concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/corpus").into());
-    let p = std::path::PathBuf::from(root).join("meshes");
-    if p.is_dir() {
-        Some(p)
-    } else {
-        println!("skipped: {} is absent", p.display());
-        None
-    }
+    common::corpus("meshes")
 }
 
 fn tmpdir(name: &str) -> std::path::PathBuf {

@@ -6,6 +6,8 @@ use mra::scheme::{
 };
 use proptest::prelude::*;
 
+mod common;
+
 fn dense_product(t: &TwoScale) -> Vec<Vec<f64>> {
     let a = t.analysis.to_dense();
     let s = t.synthesis.to_dense();
@@ -312,6 +314,8 @@ fn max_levels_follow_the_coarse_lengths() {
 
 #[test]
 fn every_cpu_level_of_the_kernel_gives_the_same_bits() {
+    // the scalar build is checked below in any case; the others where the CPU has them
+    common::vector_builds();
     for scheme in Scheme::ALL {
         for boundary in Boundary::ALL {
             for (m, width) in [(37usize, 1usize), (64, 3), (101, 67)] {
@@ -446,6 +450,8 @@ fn combine_matches_plain_loop<T: mra::scheme::Sample + Into<f64>>(
 /// The vector kernels (every build the CPU has) against plain loops.
 #[test]
 fn vector_kernels_match_plain_loops() {
+    // the scalar build is checked below in any case; the others where the CPU has them
+    common::vector_builds();
     use mra::scheme::kernel::{deinterleave, interleave};
     for len in 0..70usize {
         for e in 1..=2usize {
@@ -503,6 +509,8 @@ fn pair_case<T: mra::scheme::Sample>(x: &[T], u: usize, len: usize) -> (Vec<&[T]
 /// output reads (the other must not see 0·∞).
 #[test]
 fn combine_pair_gives_the_bits_of_two_combines() {
+    // the scalar build is checked below in any case; the others where the CPU has them
+    common::vector_builds();
     use mra::scheme::kernel::{combine_pair, combine_pair_with, combine_with};
     // `units`: the taps of weight +1 and −1 of each output (P1, N1, P2, N2), which the
     // kernels add or subtract instead of multiplying
@@ -691,6 +699,8 @@ fn combine_pair_rows_gives_the_bits_of_combine_pair() {
 
 #[test]
 fn f32_combine_and_transpose_match_plain_loops() {
+    // the scalar build is checked below in any case; the others where the CPU has them
+    common::vector_builds();
     use mra::scheme::kernel::transpose;
     // f32 runs of every length around the vector widths (blocks of 32, then 8, then single)
     let x: Vec<f32> = lcg(5, 120).iter().map(|&v| v as f32).collect();
@@ -1081,6 +1091,8 @@ fn paired_rows() -> Vec<Vec<f64>> {
 /// `combine` of rows with pairs in every build gives the bits of `row_sum`.
 #[test]
 fn combine_with_pairs_gives_the_bits_of_the_rule() {
+    // the scalar build is checked below in any case; the others where the CPU has them
+    common::vector_builds();
     fn check<T: Sample + Into<f64>>(x: &[T], w: &[T], len: usize) {
         let n = w.len();
         let src: Vec<&[T]> = (0..n).map(|k| &x[k..k + len]).collect();
@@ -1159,6 +1171,8 @@ fn scheme_pairs() -> Vec<(u32, Vec<f64>, u32, Vec<f64>)> {
 /// the bits of one `combine` per output, in every build, as two outputs and merged.
 #[test]
 fn pair_kernels_on_the_schemes_rows_give_the_bits_of_the_rule() {
+    // the scalar build is checked below in any case; the others where the CPU has them
+    common::vector_builds();
     fn check<T: Sample + Into<f64>>(x: &[T], m1: u32, w1: &[T], m2: u32, w2: &[T], len: usize) {
         let u = w1.len();
         let src: Vec<&[T]> = (0..u).map(|k| &x[k..k + len]).collect();
