@@ -3,11 +3,14 @@
 //! aliasing, and the reversible integer lifting of the 5/3 pair. (Perfect reconstruction for every
 //! scheme × boundary × length is in `tests/scheme.rs`, which runs over `Scheme::ALL`.)
 
-use mra::scheme::{cdf97, chaikin_wide, cubic_wide, linear, Boundary, LevelKind, Scheme, TwoScale};
+use mra::scheme::{
+    cdf97, chaikin_wide, cubic_wide, linear, linear_wide, Boundary, LevelKind, Scheme, TwoScale,
+};
 use proptest::prelude::*;
 
-const NEW: [Scheme; 4] = [
+const NEW: [Scheme; 5] = [
     Scheme::Linear,
+    Scheme::LinearWide,
     Scheme::ChaikinWide,
     Scheme::CubicWide,
     Scheme::Cdf97,
@@ -23,6 +26,12 @@ fn regular_of(
 ) {
     match s {
         Scheme::Linear => (&linear::A, &linear::B, &linear::P, &linear::Q),
+        Scheme::LinearWide => (
+            &linear_wide::A,
+            &linear_wide::B,
+            &linear_wide::P,
+            &linear_wide::Q,
+        ),
         Scheme::ChaikinWide => (
             &chaikin_wide::A,
             &chaikin_wide::B,
@@ -47,6 +56,9 @@ fn native_lengths_start_where_the_table_says() {
         (Scheme::Linear, Interpolating, 5, 2),
         (Scheme::Linear, Periodic, 6, 2),
         (Scheme::Linear, Symmetric, 3, 1),
+        (Scheme::LinearWide, Interpolating, 17, 2),
+        (Scheme::LinearWide, Periodic, 10, 2),
+        (Scheme::LinearWide, Symmetric, 3, 1),
         (Scheme::ChaikinWide, Interpolating, 22, 2),
         (Scheme::ChaikinWide, Periodic, 12, 2),
         (Scheme::ChaikinWide, Symmetric, 3, 1),
@@ -135,6 +147,7 @@ fn analysis_filters_have_the_documented_zeros_at_nyquist() {
     // (scheme, zeros of a at π, zeros of p at π)
     for (s, za, zp) in [
         (Scheme::Linear, 2, 2),
+        (Scheme::LinearWide, 4, 2),
         (Scheme::ChaikinWide, 3, 3),
         (Scheme::CubicWide, 4, 4),
         (Scheme::Cdf97, 4, 4),
@@ -314,9 +327,13 @@ fn trimmed(v: &serde_json::Value, scale: f64) -> Vec<f64> {
 }
 
 #[test]
-fn linear_and_cdf97_filters_are_pywavelets_bior22_and_bior44() {
+fn linear_linear_wide_and_cdf97_are_pywavelets_bior22_bior24_and_bior44() {
     let r2 = std::f64::consts::SQRT_2;
-    for (scheme, name) in [(Scheme::Linear, "bior2.2"), (Scheme::Cdf97, "bior4.4")] {
+    for (scheme, name) in [
+        (Scheme::Linear, "bior2.2"),
+        (Scheme::LinearWide, "bior2.4"),
+        (Scheme::Cdf97, "bior4.4"),
+    ] {
         let (a, b, p, q) = regular_of(scheme);
         let w = pywt_bank(name);
         // dec_lo reversed = analysis row (symmetric, so as is), rec_lo = synthesis column

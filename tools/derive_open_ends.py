@@ -331,6 +331,7 @@ def cdf97_taps(digits=30):
 
 SCHEMES = {
     "linear": (LINEAR, lambda: [-0.125, 0.25, 0.75, 0.25, -0.125]),
+    "linear-wide": (LINEAR, lambda: with_zeros_at_nyquist(LINEAR, ls_regular_exact(LINEAR, 9), 4)),
     "chaikin-wide": (CHAIKIN, lambda: with_zeros_at_nyquist(CHAIKIN, ls_regular_exact(CHAIKIN, 12), 3)),
     "cubic-wide": (CUBIC, lambda: with_zeros_at_nyquist(CUBIC, ls_regular_exact(CUBIC, 19), 4)),
 }

@@ -90,6 +90,7 @@ fn scheme_code(s: Scheme) -> u8 {
         Scheme::ChaikinWide => 4,
         Scheme::CubicWide => 5,
         Scheme::Cdf97 => 6,
+        Scheme::LinearWide => 7,
     }
 }
 
@@ -219,9 +220,10 @@ impl Header {
                 4 => Scheme::ChaikinWide,
                 5 => Scheme::CubicWide,
                 6 => Scheme::Cdf97,
+            7 => Scheme::LinearWide,
                 k => return Err(bad(
                     format!("scheme {k}"),
-                    "0 haar, 1 chaikin, 2 cubic, 3 linear, 4 chaikin-wide, 5 cubic-wide, 6 cdf97",
+                    "0 haar, 1 chaikin, 2 cubic, 3 linear, 4 chaikin-wide, 5 cubic-wide, 6 cdf97, 7 linear-wide",
                 )),
             };
         let boundary = match c.u8()? {

@@ -13,6 +13,7 @@ pub mod haar;
 pub mod kernel;
 pub mod lane;
 pub mod linear;
+pub mod linear_wide;
 pub mod open_ends;
 pub mod polyphase;
 pub mod regular;
@@ -41,6 +42,9 @@ pub enum Scheme {
     Cubic,
     /// Linear B-spline subdivision with the CDF 5/3 analysis (JPEG 2000's reversible pair).
     Linear,
+    /// Linear B-spline subdivision with the window-9 least-squares analysis (CDF 9/3, bior2.4).
+    #[serde(rename = "linear-wide")]
+    LinearWide,
     /// Chaikin subdivision with the window-12 local least-squares analysis.
     #[serde(rename = "chaikin-wide")]
     ChaikinWide,
@@ -67,11 +71,12 @@ pub enum Boundary {
 }
 
 impl Scheme {
-    pub const ALL: [Scheme; 7] = [
+    pub const ALL: [Scheme; 8] = [
         Scheme::Haar,
         Scheme::Chaikin,
         Scheme::Cubic,
         Scheme::Linear,
+        Scheme::LinearWide,
         Scheme::ChaikinWide,
         Scheme::CubicWide,
         Scheme::Cdf97,
@@ -82,6 +87,7 @@ impl Scheme {
             Scheme::Chaikin => "chaikin",
             Scheme::Cubic => "cubic",
             Scheme::Linear => "linear",
+            Scheme::LinearWide => "linear-wide",
             Scheme::ChaikinWide => "chaikin-wide",
             Scheme::CubicWide => "cubic-wide",
             Scheme::Cdf97 => "cdf97",
@@ -94,6 +100,7 @@ impl Scheme {
             Scheme::Chaikin => Some(&chaikin::REGULAR),
             Scheme::Cubic => Some(&cubic::REGULAR),
             Scheme::Linear => Some(&linear::REGULAR),
+            Scheme::LinearWide => Some(&linear_wide::REGULAR),
             Scheme::ChaikinWide => Some(&chaikin_wide::REGULAR),
             Scheme::CubicWide => Some(&cubic_wide::REGULAR),
             Scheme::Cdf97 => Some(&cdf97::REGULAR),
@@ -140,13 +147,14 @@ impl FromStr for Scheme {
             "chaikin" | "quadratic" => Ok(Scheme::Chaikin),
             "cubic" => Ok(Scheme::Cubic),
             "linear" | "cdf53" | "5/3" | "bior2.2" => Ok(Scheme::Linear),
+            "linear-wide" | "cdf93" | "9/3" | "bior2.4" => Ok(Scheme::LinearWide),
             "chaikin-wide" | "quadratic-wide" => Ok(Scheme::ChaikinWide),
             "cubic-wide" => Ok(Scheme::CubicWide),
             "cdf97" | "9/7" | "bior4.4" => Ok(Scheme::Cdf97),
             _ => Err(Error::parameter(
                 "scheme",
                 s,
-                "haar, chaikin, cubic, linear, chaikin-wide, cubic-wide or cdf97",
+                "haar, chaikin, cubic, linear, linear-wide, chaikin-wide, cubic-wide or cdf97",
             )),
         }
     }

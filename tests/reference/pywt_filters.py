@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
-"""PyWavelets' filter banks that mra's schemes share: bior2.2 (CDF 5/3, mra `linear`) and
-bior4.4 (CDF 9/7, mra `cdf97`). Writes tests/reference/pywt_filters.json; with --check, compares
+"""PyWavelets' filter banks that mra's schemes share: bior2.2 (CDF 5/3, mra `linear`), bior2.4
+(CDF 9/3, mra `linear-wide`) and bior4.4 (CDF 9/7, mra `cdf97`). Writes tests/reference/pywt_filters.json; with --check, compares
 a fresh extraction with the committed file (exit 1 on a difference).
 
 pywt's convention: dec_lo/dec_hi are applied as convolutions (reversed correlation rows), rec_lo/rec_hi
@@ -17,7 +17,7 @@ OUT = Path(__file__).with_name("pywt_filters.json")
 
 def extract():
     out = {"pywt_version": pywt.__version__}
-    for name in ("bior2.2", "bior4.4"):
+    for name in ("bior2.2", "bior2.4", "bior4.4"):
         w = pywt.Wavelet(name)
         out[name] = {k: [float(x) for x in getattr(w, k)] for k in ("dec_lo", "dec_hi", "rec_lo", "rec_hi")}
     return out
