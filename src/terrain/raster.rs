@@ -3,11 +3,13 @@
 //! height unit, compatible cell size), and the output's metadata (units kept, cell size
 //! scaled by the change of lattice, GeoTIFF pixel scale updated, nodata dropped).
 
-use super::{voids, Grid};
+use super::Grid;
+use crate::io::nodata::Voids;
 use crate::io::{GeoValue, Raster, SampleType, Samples};
 use crate::{Error, Result};
 
-/// A 2-D raster as a grid; nodata cells (`meta.nodata`, NaN) are filled first.
+/// A 2-D raster as a grid; nodata cells (`meta.nodata`, NaN) are filled first, by the
+/// membrane of [`crate::io::nodata`].
 /// Returns the grid and the number of filled cells.
 pub fn to_grid(r: &Raster) -> Result<(Grid, usize)> {
     if r.dims.len() != 2 {
@@ -18,7 +20,10 @@ pub fn to_grid(r: &Raster) -> Result<(Grid, usize)> {
         ));
     }
     let mut g = Grid::new(r.dims[0], r.dims[1], r.channels, r.to_f64())?;
-    let filled = voids::fill(&mut g, r.meta.nodata)?;
+    let filled = match Voids::find(&g.data, r.meta.nodata) {
+        Some(v) => v.fill_membrane(&mut g.data, g.h, g.w, g.c)?,
+        None => 0,
+    };
     Ok((g, filled))
 }
 
