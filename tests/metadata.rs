@@ -113,6 +113,23 @@ fn decode_at_level_1_doubles_the_spacing_and_moves_the_origin_to_the_first_coars
         let eb = b.dims[i] as f64 * b.meta.spacing.as_ref().unwrap()[i];
         assert!((ea - eb).abs() < 1e-9);
     }
+    // a cubic B-spline coarse sample sits on fine sample 2i: spacing doubles, the
+    // origin stays; Chaikin's sits at 2i − ½
+    for (scheme, shift) in [("cubic", 0.0), ("chaikin", -0.5)] {
+        let enc = d.join(format!("{scheme}.mra"));
+        let out = d.join(format!("{scheme}1.nrrd"));
+        ok(&["encode", s(&src), "-o", s(&enc), "--scheme", scheme]);
+        ok(&["decode", s(&enc), "-o", s(&out), "--level", "1"]);
+        let r = io::read(&out).unwrap();
+        assert_eq!(r.meta.spacing, Some(vec![3.0, 6.4, 6.4]), "{scheme}");
+        let o = r.meta.origin.clone().unwrap();
+        let want = [
+            -100.0 + shift * 3.2,
+            -50.0 + shift * 3.2,
+            20.0 + shift * 1.5,
+        ];
+        assert!(close(&o, &want, 1e-9), "{scheme}: {o:?}");
+    }
 }
 
 #[test]

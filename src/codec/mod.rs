@@ -474,7 +474,7 @@ fn with_voids_filled(r: &Raster) -> Result<Option<Raster>> {
 /// Mark the voids listed in `meta.extra[VOID_RUNS]` on a raster decoded at level `k`
 /// (an output sample is void when its whole footprint on the full grid is) and drop
 /// the key. Malformed runs are ignored.
-fn mark_voids(r: &mut Raster, full: &[usize]) {
+fn mark_voids(r: &mut Raster, full: &[usize], maps: &[crate::io::AxisMap]) {
     let Some(runs) = r.meta.extra.remove(VOID_RUNS) else {
         return;
     };
@@ -501,12 +501,7 @@ fn mark_voids(r: &mut Raster, full: &[usize]) {
     };
     let mut shape = full.to_vec();
     shape.push(r.channels);
-    let maps: Vec<crate::io::AxisMap> = full
-        .iter()
-        .zip(&r.dims)
-        .map(|(&a, &b)| crate::io::AxisMap::centred(a, b))
-        .collect();
-    let m = voids.footprint(&shape, &r.dims, &maps);
+    let m = voids.footprint(&shape, &r.dims, maps);
     crate::io::with_samples!(&mut r.samples, v => voids.restore(v, &m, false));
 }
 
@@ -1417,15 +1412,58 @@ fn lossy_values(
 fn finish(p: &Parsed, region: Vec<usize>, samples: Samples, k: usize) -> Result<Raster> {
     let h = &p.header;
     let mut r = Raster::new(region.clone(), h.channels, samples, h.kind)?;
-    // a coarse sample covers the fine cells it reduces (for Haar the mean of two, its
-    // centre half a fine cell further): the same extent, cells centred
+    let maps = coarse_maps(p, k);
     r.meta = if k > 0 {
-        p.meta.rescaled(&h.dims, &region)
+        p.meta.resampled(&h.dims, &region, &maps)
     } else {
         p.meta.clone()
     };
-    mark_voids(&mut r, &h.dims);
+    mark_voids(&mut r, &h.dims, &maps);
     Ok(r)
+}
+
+/// Where a scheme's coarse sample `i` sits on the fine grid of one level: at fine index
+/// `2i + o`. Haar (and the lossless S-transform): the mean of fine samples `2i`, `2i+1`,
+/// `o = ½`. Chaikin: fine `2i`, `2i+1` are `¾ C_i + ¼ C_{i+1}` and `¼ C_i + ¾ C_{i+1}`,
+/// so `C_i` sits at `o = −½`. Cubic B-spline: fine `2i` is `⅛ C_{i−1} + ¾ C_i + ⅛ C_{i+1}`,
+/// `o = 0`.
+pub fn coarse_offset(scheme: Scheme) -> f64 {
+    match scheme {
+        Scheme::Haar => 0.5,
+        Scheme::Chaikin => -0.5,
+        Scheme::Cubic => 0.0,
+    }
+}
+
+/// Per spatial axis, where the samples of the coarse block after `k` levels sit on the
+/// full grid: each level that shortens the axis maps by `step 2`, offset
+/// [`coarse_offset`] (an odd length's carried last sample is off this grid by at most
+/// half a coarse cell).
+fn coarse_maps(p: &Parsed, k: usize) -> Vec<crate::io::AxisMap> {
+    let h = &p.header;
+    let o = if h.mode == Mode::Lossless {
+        0.5
+    } else {
+        coarse_offset(h.scheme)
+    };
+    let pyr = &p.plan.pyr;
+    (0..h.dims.len())
+        .map(|a| {
+            let mut m = crate::io::AxisMap::IDENTITY;
+            if let Some(i) = pyr.spec.axes.iter().position(|&x| x == a) {
+                let lens = &pyr.lengths[i];
+                for l in 0..k.min(pyr.axis_levels(i)) {
+                    if lens[l + 1] < lens[l] {
+                        m = m.then(crate::io::AxisMap {
+                            offset: o,
+                            step: 2.0,
+                        });
+                    }
+                }
+            }
+            m
+        })
+        .collect()
 }
 
 /// Decode from a stream of `len` bytes.

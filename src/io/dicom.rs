@@ -271,12 +271,14 @@ fn load_slice(path: &Path) -> Result<Slice> {
         .map(|b| b.div_ceil(8))
         .ok_or_else(|| bad(path, "Rows × Columns × BitsAllocated overflows"))?;
     match walked.pixel_data {
-        Some(len) if len != want && len != want + (want & 1) => return Err(bad(
-            path,
-            format!(
+        Some(len) if len != want && len != want + (want & 1) => {
+            return Err(bad(
+                path,
+                format!(
                 "PixelData of {len} bytes for {rows}x{cols} samples of {alloc} bits ({want} bytes)"
             ),
-        )),
+            ))
+        }
         _ => {}
     }
     let elem = obj

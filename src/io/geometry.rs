@@ -11,9 +11,9 @@
 //! * crop to samples `a..b`: `offset = a`, `step = 1` ([`AxisMap::crop`]);
 //! * resample `n` samples to `m` over the same extent, cells centred
 //!   ([`AxisMap::centred`]): `step = n / m`, `offset = (step − 1) / 2`, so new sample `j`
-//!   covers old cells `[j·step, (j+1)·step)`. For the Haar scheme a coarse sample is the
-//!   mean of fine samples `2j` and `2j + 1`: its centre is half a fine cell further,
-//!   `x_j = 2j + ½`, which is this rule with `m = n / 2`;
+//!   covers old cells `[j·step, (j+1)·step)` (downscale);
+//! * one level of a subdivision scheme's reduce (`decode --level`): `step = 2`, the
+//!   offset where the scheme's coarse sample sits ([`AxisMap::then`] chains levels);
 //! * resample keeping both end samples ([`AxisMap::vertex`]): `step = (n − 1)/(m − 1)`,
 //!   `offset = 0`.
 //!
@@ -71,6 +71,16 @@ impl AxisMap {
         AxisMap {
             offset: 0.0,
             step: (n - 1) as f64 / (m - 1) as f64,
+        }
+    }
+
+    /// This map followed by a further one: new sample `j` of `next` sits at
+    /// `next.offset + j·next.step` of this map's grid, so at
+    /// `offset + step·next.offset + j·step·next.step` of the old one.
+    pub fn then(self, next: AxisMap) -> AxisMap {
+        AxisMap {
+            offset: self.offset + self.step * next.offset,
+            step: self.step * next.step,
         }
     }
 
@@ -295,7 +305,7 @@ mod tests {
     use crate::io::GeoTag;
 
     #[test]
-    fn haar_coarse_sample_sits_half_a_fine_cell_further() {
+    fn a_centred_halving_keeps_the_extent_and_moves_the_origin_half_a_cell() {
         let m = Metadata {
             spacing: Some(vec![1.5, 3.2, 3.2]),
             origin: Some(vec![10.0, 20.0, 30.0]),
