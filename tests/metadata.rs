@@ -558,3 +558,81 @@ fn an_output_that_is_the_input_or_has_the_wrong_extension_is_refused() {
     fails(&["decode", s(&enc), "-o", s(&enc)]);
     assert_eq!(std::fs::read(&enc).unwrap(), kept);
 }
+
+// ---------------------------------------------------------------- the shared corpus
+
+/// `../shared/corpus` (or `MRA_CORPUS`); `None` (test skipped) when absent, unless
+/// `MRA_REQUIRE_CORPUS=1`, which makes a missing corpus file a failure.
+fn corpus_file(rel: &str) -> Option<PathBuf> {
+    let root = std::env::var_os("MRA_CORPUS")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/corpus"));
+    let p = root.join(rel);
+    if p.exists() {
+        return Some(p);
+    }
+    assert!(
+        std::env::var("MRA_REQUIRE_CORPUS").as_deref() != Ok("1"),
+        "MRA_REQUIRE_CORPUS=1 but {} is missing",
+        p.display()
+    );
+    println!("skipped: {} not found", p.display());
+    None
+}
+
+#[test]
+fn corpus_geotiff_decoded_at_level_1_has_60_m_pixels_at_the_same_corner() {
+    let Some(src) = corpus_file("terrain/mt_st_helens_30m_f32.tif") else {
+        return;
+    };
+    let d = tmp_dir("corpus_helens");
+    let (enc, out) = (d.join("h.mra"), d.join("h1.tif"));
+    ok(&["encode", s(&src), "-o", s(&enc)]);
+    ok(&["decode", s(&enc), "-o", s(&out), "--level", "1"]);
+    let (a, b) = (io::read(&src).unwrap(), io::read(&out).unwrap());
+    assert_eq!(b.dims, vec![230, 159]);
+    let (ga, gb) = (geo_transform(&a), geo_transform(&b));
+    assert_eq!(ga[1], 30.0);
+    assert_eq!(gb, [ga[0], 60.0, 0.0, ga[3], 0.0, -60.0]);
+}
+
+#[test]
+fn corpus_dicom_series_to_nrrd_keeps_origin_and_orientation() {
+    let Some(dir) = corpus_file("volumes/ct_pancreas_dicom") else {
+        return;
+    };
+    let d = tmp_dir("corpus_dicom");
+    let out = d.join("ct.nrrd");
+    ok(&["convert", s(&dir), "-o", s(&out)]);
+    let (a, b) = (io::read(&dir).unwrap(), io::read(&out).unwrap());
+    assert!(a.meta.origin.is_some() && a.meta.directions.is_some());
+    assert_eq!(b.meta.origin, a.meta.origin);
+    assert_eq!(b.meta.directions, a.meta.directions);
+    assert_eq!(b.meta.space.as_deref(), Some("left-posterior-superior"));
+    assert_eq!(b.meta.spacing, a.meta.spacing);
+}
+
+#[test]
+fn corpus_srtm_tile_with_voids_downscales_within_its_valid_range() {
+    let Some(src) = corpus_file("terrain/N22W160.hgt") else {
+        return;
+    };
+    let d = tmp_dir("corpus_kauai");
+    let out = d.join("k.tif");
+    ok(&["downscale", s(&src), "-o", s(&out)]);
+    let r = io::read(&out).unwrap();
+    assert_eq!(r.meta.nodata, Some(-32768.0));
+    let v = r.to_f64();
+    let valid: Vec<f64> = v.iter().copied().filter(|&x| x != -32768.0).collect();
+    assert!(valid.len() < v.len(), "the largest voids stay void");
+    let (lo, hi) = valid
+        .iter()
+        .fold((f64::MAX, f64::MIN), |(l, h), &x| (l.min(x), h.max(x)));
+    assert!(lo >= -34.0 && hi <= 1579.0, "{lo}..{hi}");
+    // and the GeoTIFF tags of the tile name follow the coarse grid
+    let t = doubles(&r, 33922);
+    assert!(
+        t[3] > -160.0 && t[3] < -159.99 && t[4] < 23.0 && t[4] > 22.99,
+        "{t:?}"
+    );
+}

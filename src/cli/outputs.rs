@@ -109,28 +109,23 @@ pub fn check(args: &[OsString]) -> Result<(), Failure> {
         .map(|n| n.to_string_lossy().to_ascii_lowercase())
         .unwrap_or_default();
     let command = command.unwrap_or_default();
-    match expected(&command) {
-        Some(Writes::Extensions(exts)) => {
-            if !exts.iter().any(|e| name.ends_with(&format!(".{e}"))) {
-                let want: Vec<String> = exts.iter().map(|e| format!(".{e}")).collect();
-                return Err(Failure(format!(
-                    "{}: invalid output extension for {} (expected {})",
-                    out.display(),
-                    command,
-                    want.join(" ")
-                )));
-            }
+    let bad = match expected(&command) {
+        Some(Writes::Extensions(exts))
+            if !exts.iter().any(|e| name.ends_with(&format!(".{e}"))) =>
+        {
+            let want: Vec<String> = exts.iter().map(|e| format!(".{e}")).collect();
+            Some(want.join(" "))
         }
-        Some(Writes::Raster) => {
-            if !Format::from_extension(&out).is_some_and(writable) {
-                return Err(Failure(format!(
-                    "{}: invalid output extension for {} (expected one of {RASTER_OUT})",
-                    out.display(),
-                    command,
-                )));
-            }
+        Some(Writes::Raster) if !Format::from_extension(&out).is_some_and(writable) => {
+            Some(format!("one of {RASTER_OUT}"))
         }
-        None => {}
+        _ => None,
+    };
+    if let Some(want) = bad {
+        return Err(Failure(format!(
+            "{}: invalid output extension for {command} (expected {want})",
+            out.display(),
+        )));
     }
     Ok(())
 }
