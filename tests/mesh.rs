@@ -1329,11 +1329,11 @@ fn every_mesh_command_runs_and_writes_a_readable_file() {
                 "simplify".into(),
                 i.into(),
                 "-o".into(),
-                path("s.obj"),
+                path("simplified.obj"),
                 "--faces".into(),
                 "40".into(),
             ],
-            Some(path("s.obj")),
+            Some(path("simplified.obj")),
         ),
         (
             vec!["orient".into(), i.into(), "-o".into(), path("o.obj")],

@@ -24,7 +24,7 @@ enum Writes {
 fn expected(command: &str) -> Option<Writes> {
     Some(match command {
         "encode" => Writes::Extensions(&["mra"]),
-        "decode" | "convert" | "upscale" | "downscale" => Writes::Raster,
+        "decode" | "convert" | "upscale" | "downscale" | "transfer" | "terrain" => Writes::Raster,
         _ => return None,
     })
 }
