@@ -1401,7 +1401,7 @@ fn every_mesh_command_runs_and_writes_a_readable_file() {
             .collect::<Vec<_>>(),
         ["nx", "ny", "nz"]
     );
-    assert_eq!(io::read(d.join("s.obj")).unwrap().face_count(), 40);
+    assert_eq!(io::read(d.join("simplified.obj")).unwrap().face_count(), 40);
     let o = mra(&[
         "mesh",
         "analyze",
