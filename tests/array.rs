@@ -261,6 +261,7 @@ fn corpus_inputs(c: &Path) -> Vec<(PathBuf, ReadOptions)> {
                         sample_type: SampleType::U16,
                         big_endian: false,
                     }),
+                    ..Default::default()
                 }
             } else {
                 ReadOptions::default()

@@ -255,7 +255,14 @@ fn heightmap_formats_roundtrip() {
         sample_type: SampleType::U16,
         big_endian: false,
     };
-    let back = io::read_with(&p, &ReadOptions { raw: Some(spec) }).unwrap();
+    let back = io::read_with(
+        &p,
+        &ReadOptions {
+            raw: Some(spec),
+            ..Default::default()
+        },
+    )
+    .unwrap();
     assert_eq!(back.samples, r.samples);
 }
 
@@ -280,7 +287,14 @@ fn raw_reads_both_byte_orders() {
             sample_type: SampleType::U16,
             big_endian: big,
         };
-        let r = io::read_with(&p, &ReadOptions { raw: Some(spec) }).unwrap();
+        let r = io::read_with(
+            &p,
+            &ReadOptions {
+                raw: Some(spec),
+                ..Default::default()
+            },
+        )
+        .unwrap();
         assert_eq!(r.dims, vec![2, 3, 4]);
         assert_eq!(r.samples, Samples::U16(vals.clone()));
     }
@@ -293,9 +307,15 @@ fn raw_reads_both_byte_orders() {
         big_endian: false,
     };
     assert_eq!(
-        io::read_with(&p, &ReadOptions { raw: Some(spec) })
-            .unwrap()
-            .samples,
+        io::read_with(
+            &p,
+            &ReadOptions {
+                raw: Some(spec),
+                ..Default::default()
+            }
+        )
+        .unwrap()
+        .samples,
         r.samples
     );
 }
@@ -478,7 +498,14 @@ fn raw_size_mismatch_is_an_error() {
         sample_type: SampleType::U16,
         big_endian: false,
     };
-    let e = io::read_with(&p, &ReadOptions { raw: Some(spec) }).unwrap_err();
+    let e = io::read_with(
+        &p,
+        &ReadOptions {
+            raw: Some(spec),
+            ..Default::default()
+        },
+    )
+    .unwrap_err();
     assert_eq!(e.kind(), ErrorKind::Format);
     assert!(e.to_string().contains("256"), "{e}");
     // and without a layout at all
@@ -744,6 +771,7 @@ fn corpus_volumes_agree_across_formats() {
                 sample_type: SampleType::U16,
                 big_endian: false,
             }),
+            ..Default::default()
         },
     )
     .unwrap();

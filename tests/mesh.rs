@@ -1323,11 +1323,11 @@ fn every_mesh_command_runs_and_writes_a_readable_file() {
                 "simplify".into(),
                 i.into(),
                 "-o".into(),
-                path("s.obj"),
+                path("simplified.obj"),
                 "--faces".into(),
                 "40".into(),
             ],
-            Some(path("s.obj")),
+            Some(path("simplified.obj")),
         ),
         (
             vec!["orient".into(), i.into(), "-o".into(), path("o.obj")],
@@ -1395,7 +1395,7 @@ fn every_mesh_command_runs_and_writes_a_readable_file() {
             .collect::<Vec<_>>(),
         ["nx", "ny", "nz"]
     );
-    assert_eq!(io::read(d.join("s.obj")).unwrap().face_count(), 40);
+    assert_eq!(io::read(d.join("simplified.obj")).unwrap().face_count(), 40);
     let o = mra(&[
         "mesh",
         "analyze",

@@ -10,6 +10,7 @@ pub mod curve;
 pub mod demo;
 pub mod io_cmds;
 pub mod mesh;
+pub mod outputs;
 pub mod points;
 pub mod scheme;
 pub mod solid;
@@ -133,6 +134,11 @@ pub fn main() -> i32 {
             return code;
         }
     };
+    let args: Vec<std::ffi::OsString> = std::env::args_os().skip(1).collect();
+    if let Err(f) = outputs::check(&args) {
+        eprintln!("mra: {f}");
+        return 2;
+    }
     let result = match cli.command {
         Command::Demo(a) => demo::run(a),
         Command::Analyze(a) => analyze::run_analyze(a),
