@@ -1426,12 +1426,18 @@ fn finish(p: &Parsed, region: Vec<usize>, samples: Samples, k: usize) -> Result<
 /// `2i + o`. Haar (and the lossless S-transform): the mean of fine samples `2i`, `2i+1`,
 /// `o = ½`. Chaikin: fine `2i`, `2i+1` are `¾ C_i + ¼ C_{i+1}` and `¼ C_i + ¾ C_{i+1}`,
 /// so `C_i` sits at `o = −½`. Cubic B-spline: fine `2i` is `⅛ C_{i−1} + ¾ C_i + ⅛ C_{i+1}`,
-/// `o = 0`.
+/// `o = 0`. The schemes with an odd-length regular row (linear, linear-wide, cubic-wide, CDF
+/// 9/7) centre `C_i` on fine `2i` (`o = 0`); chaikin-wide's even row, like Chaikin's, between fine
+/// `2i − 1` and `2i` (`o = −½`).
 pub fn coarse_offset(scheme: Scheme) -> f64 {
     match scheme {
         Scheme::Haar => 0.5,
-        Scheme::Chaikin => -0.5,
-        Scheme::Cubic => 0.0,
+        Scheme::Chaikin | Scheme::ChaikinWide => -0.5,
+        Scheme::Cubic
+        | Scheme::Linear
+        | Scheme::LinearWide
+        | Scheme::CubicWide
+        | Scheme::Cdf97 => 0.0,
     }
 }
 
