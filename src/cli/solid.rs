@@ -62,10 +62,20 @@ pub enum Command {
     Volume {
         /// Scene file (JSON: primitives, CSG operations, blends; examples in corpus/scenes).
         scene: PathBuf,
-        /// Rays per side of the grid of parallel rays.
-        #[arg(long, default_value_t = tlist::DEFAULT_RAYS)]
+        /// Rays per side of the grid of parallel rays (1 to 16384).
+        #[arg(long, default_value_t = tlist::DEFAULT_RAYS, value_parser = parse_rays)]
         rays: usize,
     },
+}
+
+/// Most rays per side of `solid volume` (16384² ≈ 2.7 × 10⁸ rays).
+pub const MAX_RAYS: usize = 1 << 14;
+
+fn parse_rays(s: &str) -> Result<usize, String> {
+    match s.parse::<usize>() {
+        Ok(n) if (1..=MAX_RAYS).contains(&n) => Ok(n),
+        _ => Err(format!("{s} rays per side (expected 1 to {MAX_RAYS})")),
+    }
 }
 
 /// `mra volume …`.
