@@ -694,16 +694,54 @@ fn argument_errors_are_one_line_that_names_what_is_wrong() {
 #[test]
 fn an_error_quoting_binary_bytes_prints_one_bounded_line() {
     let d = folder("binary");
-    // an ASC header whose value is a kilobyte of binary with newlines in it
-    let mut asc = b"ncols ".to_vec();
-    for i in 0..2000u32 {
-        asc.push(if i % 7 == 0 { b'\n' } else { (i % 256) as u8 });
+    // an NRRD encoding of 3000 bytes with control characters: the message quotes it
+    let mut nrrd = b"NRRD0004\ntype: uint8\ndimension: 1\nsizes: 4\nencoding: ".to_vec();
+    for i in 0..3000u32 {
+        let b = (i % 96) as u8;
+        nrrd.push(if b < 32 && b != b'\n' && b != b'\r' {
+            b
+        } else {
+            b'A' + (b % 26)
+        });
     }
-    write(&d, "bin.asc", &asc);
-    let o = run_in(&d, &["convert", "bin.asc", "-o", "out.tif"]);
-    assert_refused(&d, &o, "bin.asc", "out.tif", "binary in the message");
+    nrrd.extend_from_slice(b"\n\n\x01\x02\x03\x04");
+    write(&d, "bin.nrrd", &nrrd);
+    let o = run_in(&d, &["convert", "bin.nrrd", "-o", "out.tif"]);
+    assert_refused(&d, &o, "bin.nrrd", "out.tif", "binary in the message");
     let err = String::from_utf8_lossy(&o.stderr);
-    assert!(err.trim_end().chars().all(|c| !c.is_control()), "{err:?}");
+    let line = err.trim_end();
+    assert!(line.chars().all(|c| !c.is_control()), "{err:?}");
+    assert!(line.contains("more characters"), "cut short: {err:?}");
+}
+
+#[test]
+fn progress_shows_after_a_second_on_a_terminal_and_never_off_one() {
+    let d = folder("progress");
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("corpus/scenes/sphere_and_box.json");
+    let scene = scene.to_str().unwrap();
+    // off a terminal: nothing on stderr, even for a long run
+    let o = run_in(&d, &["solid", "volume", scene, "--rays", "3000"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(
+        o.stderr.is_empty(),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    // on a terminal (script(1) gives the command a pseudo-terminal): a bar of rays
+    let cmd = format!("{BIN} solid volume {scene} --rays 3000");
+    match Command::new("script")
+        .args(["-qefc", &cmd, "/dev/null"])
+        .current_dir(&d)
+        .stdin(Stdio::null())
+        .output()
+    {
+        Ok(o) if o.status.success() => {
+            let shown = String::from_utf8_lossy(&o.stdout);
+            assert!(shown.contains("rays ["), "no bar drawn: {shown:?}");
+            assert!(shown.contains("volume "), "{shown:?}");
+        }
+        other => println!("skipped the terminal case: script(1) did not run ({other:?})"),
+    }
 }
 
 #[test]

@@ -194,7 +194,9 @@ pub fn run(c: Command) -> CliResult {
         Command::Volume { scene: s, rays } => {
             let sc = scene(&s)?;
             let t = Instant::now();
-            let v = tlist::volume(&sc.root, rays, tlist::DEFAULT_STEPS)?;
+            let bar = crate::progress::Progress::new(rays as u64, "rays", false);
+            let v = tlist::volume_with(&sc.root, rays, tlist::DEFAULT_STEPS, &bar)?;
+            bar.finish();
             println!(
                 "volume {v:.9} ({rays}x{rays} rays, {:.3} s)",
                 t.elapsed().as_secs_f64()
