@@ -201,7 +201,7 @@ mod tests {
                         .sum();
                     assert!((b.integral(x) - brute_int).abs() < 1e-12, "k={k} x={x}");
                 }
-                let s: f64 = (-8..=8).map(|i| b.value(x - i as f64)).sum();
+                let s: f64 = (-20..=20).map(|i| b.value(x - i as f64)).sum();
                 assert!((s - 1.0).abs() < 1e-9, "k={k} x={x} sum={s}");
             }
             assert!((b.integral(h - 1e-9) - 1.0).abs() < 1e-6, "k={k}");
