@@ -17,7 +17,8 @@ use crate::{Error, Result};
 /// ```text
 /// PNG   1032   deflate's largest expansion (258-byte matches coded in 2 bits)
 /// PNM      8   one bit per sample (P1/P4 bitmaps) decoded to one byte
-/// JPEG  4096   8 × the 512 pixels one byte can cover (every 8×8 block codes at least one bit)
+/// JPEG  4096   every 8×8 block codes at least one bit: one byte covers at most 512 pixels
+///              (1536 bytes of RGB); the margin allows for arithmetic coding
 /// ```
 fn max_expansion(format: ImageFormat) -> u64 {
     match format {
