@@ -30,6 +30,7 @@ pub mod format;
 pub mod fsutil;
 pub mod generate;
 pub mod io;
+pub mod limits;
 pub mod mesh;
 pub mod metrics;
 pub mod points;

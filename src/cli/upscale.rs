@@ -122,6 +122,39 @@ fn keep_freed_buffers() {
 #[cfg(not(all(target_os = "linux", target_env = "gnu")))]
 fn keep_freed_buffers() {}
 
+/// Refuse an output that cannot fit the memory budget before anything is allocated: the
+/// output's samples in f32 (the working type) plus the output in its stored type.
+fn check_budget(
+    input: &std::path::Path,
+    r: &crate::io::Raster,
+    plans: &[upscale::AxisPlan],
+) -> Result<(), Failure> {
+    let budget = crate::limits::Limits::from_env()?;
+    let dims: Vec<u64> = (0..r.dims.len())
+        .map(|a| {
+            plans
+                .iter()
+                .find(|p| p.axis == a)
+                .map_or(r.dims[a], |p| p.len) as u64
+        })
+        .collect();
+    let samples = dims
+        .iter()
+        .try_fold(r.channels as u64, |acc, &d| acc.checked_mul(d))
+        .unwrap_or(u64::MAX);
+    let bytes = samples.saturating_mul(4 + r.sample_type().size() as u64);
+    if bytes > budget.max_bytes {
+        let size: Vec<String> = dims.iter().rev().map(|d| d.to_string()).collect();
+        return Err(Failure(format!(
+            "{}: output {} needs {bytes} bytes, over the memory budget of {} bytes (expected at most that; MRA_MAX_BYTES raises it)",
+            input.display(),
+            size.join("x"),
+            budget.max_bytes
+        )));
+    }
+    Ok(())
+}
+
 pub fn run_upscale(a: UpscaleArgs) -> CliResult {
     keep_freed_buffers();
     let r = read_input(&a.input, &ReadOptions::default())?;
@@ -139,8 +172,8 @@ pub fn run_upscale(a: UpscaleArgs) -> CliResult {
         order: a.order.map(usize::from),
         clamp: a.clamp,
     };
-    let big = r.samples.len() > 1 << 24;
-    let bar = Progress::new(plans.len() as u64 + 1, "upscale", a.quiet || !big);
+    check_budget(&a.input, &r, &plans)?;
+    let bar = Progress::new(plans.len() as u64 + 1, "upscale", a.quiet);
     let t = std::time::Instant::now();
     let out = upscale::upscale_raster(r, &method, &plans, &bar)
         .map_err(|e| Failure::context(a.input.display(), e))?;

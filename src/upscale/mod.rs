@@ -97,6 +97,11 @@ fn check(method: &Method, shape: &[usize], plans: &[AxisPlan]) -> Result<()> {
     if plans.is_empty() {
         return Err(Error::parameter("axes", "none", "at least one axis"));
     }
+    if let Some(k) = method.order {
+        if !(1..=basis::MAX_ORDER).contains(&k) {
+            return Err(Error::parameter("B-spline order", k, "1 to 12"));
+        }
+    }
     let mut seen = vec![false; shape.len()];
     for p in plans {
         if p.axis >= shape.len() || seen[p.axis] {
