@@ -32,6 +32,7 @@ pub mod fsutil;
 pub mod generate;
 pub mod io;
 pub mod kernel;
+pub mod limits;
 #[cfg(feature = "geometry")]
 pub mod mesh;
 pub mod metrics;

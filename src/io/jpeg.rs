@@ -9,3 +9,9 @@ use crate::Result;
 pub fn read(path: &Path) -> Result<Raster> {
     super::png::decode_with_image(path, image::ImageFormat::Jpeg)
 }
+
+/// The size and channels a JPEG's frame header declares, checked against the file's
+/// length and the memory budget, without decoding the image.
+pub fn read_header(path: &Path) -> Result<super::png::Header> {
+    super::png::read_header(path, image::ImageFormat::Jpeg)
+}

@@ -22,6 +22,8 @@
 //! slices.rs a folder of 2D slices (TIFF / PNG) as one volume
 //! hgt.rs    SRTM .hgt (big-endian i16, void −32768 kept as nodata)
 //! asc.rs    ESRI ASCII grid
+//! geometry.rs  where samples sit after a resample or crop ([`Metadata::resampled`])
+//! nodata.rs  void samples (NaN, `meta.nodata`) kept out of every filter
 //! raw.rs    headerless raw (.raw with dims/dtype/endian, .r16, .r32)
 //! bytes.rs  endian decoding, size checks before allocation, atomic writes
 //! array.rs  rasters through the tensor engine (analyze / synthesize / pictures)
@@ -33,6 +35,8 @@ use std::collections::BTreeMap;
 use std::path::Path;
 
 use crate::{Error, Result};
+
+pub use geometry::AxisMap;
 
 pub mod array;
 pub mod asc;
@@ -74,9 +78,11 @@ pub mod dicom {
     }
 }
 pub mod exr;
+pub mod geometry;
 pub mod hgt;
 pub mod jpeg;
 pub mod nifti;
+pub mod nodata;
 pub mod nrrd;
 pub mod png;
 pub mod pnm;
@@ -669,6 +675,9 @@ pub struct RawSpec {
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct ReadOptions {
     pub raw: Option<RawSpec>,
+    /// Accept a DICOM series whose slice positions are unevenly spaced or repeated
+    /// (a missing or duplicated slice); the slice step is then their mean.
+    pub uneven_slices: bool,
 }
 
 /// Options for [`write_with`].
@@ -696,7 +705,7 @@ pub fn read_with(path: &Path, opts: &ReadOptions) -> Result<Raster> {
         Format::Nrrd => nrrd::read(path),
         Format::Nifti => nifti::read(path),
         Format::Dicom => dicom::read_file(path),
-        Format::DicomSeries => dicom::read_series(path),
+        Format::DicomSeries => dicom::read_series(path, opts.uneven_slices),
         Format::SliceFolder => slices::read(path),
         Format::Hgt => hgt::read(path),
         Format::Asc => asc::read(path),

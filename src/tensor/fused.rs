@@ -693,10 +693,10 @@ fn lane_taps(a: &AxisOp, split: bool, w: usize) -> LaneTaps {
 
 /// Largest slab (bytes) combined in pairs ([`Ctx::row_pair`]): rows of images and the
 /// planes of volumes up to 256² (256 KB), whose coarse and detail planes along axis 0
-/// then read their input planes from L3 once instead of twice. On a machine with 1 MB of
+/// then read their input planes from L3 once instead of twice. On a Zen 4 with 1 MB of
 /// L2 a second plane per worker made 256³ cubic slower (35.3 → 42.2 ms wall, two
-/// threads); on an AMD Zen 3: 512 KB of L2 per core, which the plane path's three
-/// planes overflow anyway; no AVX-512) pairing the planes is faster:
+/// threads); on a Zen 3 (512 KB of L2 per core, which the plane path's three planes
+/// overflow anyway; no AVX-512) pairing the planes is faster:
 /// 256³ forward + inverse, best of 7 warm runs, four interleaved rounds, Chaikin
 /// 24.3–25.1 against 25.4–27.1 ms, cubic 31.5–32.0 against 32.8–33.7 ms.
 const PAIR_SLAB_MAX: usize = 256 << 10;
