@@ -35,8 +35,8 @@ impl Default for Limits {
 impl Limits {
     /// The budget of this process: [`ENV`] when set, else [`DEFAULT_MAX_BYTES`].
     pub fn from_env() -> Result<Limits> {
-        match std::env::var(ENV) {
-            Ok(s) => {
+        match crate::tuning::max_bytes_var() {
+            Some(s) => {
                 parse_bytes(&s)
                     .map(|max_bytes| Limits { max_bytes })
                     .ok_or(Error::Parameter {
@@ -45,7 +45,7 @@ impl Limits {
                         expected: "a byte count such as 1048576, 512M or 8G",
                     })
             }
-            Err(_) => Ok(Limits::default()),
+            None => Ok(Limits::default()),
         }
     }
 

@@ -10,6 +10,7 @@
 //! | `MRA_CPU` | `scalar`, `avx2` (unset: the widest the CPU runs) | caps the kernels' build ([`CpuLevel`]) |
 //! | `MRA_ENGINE` | `levels`, `axis`, `cascade` (unset: the fused cascade) | picks how pyramids run ([`EngineChoice`]) |
 //! | `MRA_HUGE_PAGES` | `off` or `0` (unset: on) | the engine's own large buffers advised onto 2 MB pages (Linux) |
+//! | `MRA_MAX_BYTES` | a byte count: `1048576`, `512M`, `8G` (unset: 8 GiB) | the memory budget a declared size must fit before anything is allocated ([`crate::limits::Limits`]) |
 //!
 //! (`MRA_CORPUS`, `MRA_REQUIRE_CORPUS` and `MRA_BENCH_QUICK` are read by the tests and
 //! benches only, never by the library.)
@@ -134,6 +135,11 @@ pub fn get() -> &'static Tuning {
 /// they were already fixed (by an earlier [`set`] or [`get`]).
 pub fn set(t: Tuning) -> Result<(), Tuning> {
     SETTINGS.set(t).map_err(|_| *get())
+}
+
+/// `MRA_MAX_BYTES` as set in the environment (parsed by [`crate::limits::Limits::from_env`]).
+pub fn max_bytes_var() -> Option<String> {
+    std::env::var("MRA_MAX_BYTES").ok()
 }
 
 /// Keep freed buffers of up to 32 MiB in glibc's allocator instead of returning them to

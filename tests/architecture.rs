@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 
 /// The layers, lowest first: a module may use modules of its own layer or below.
 const LAYERS: &[(usize, &[&str])] = &[
-    (0, &["error", "fsutil", "tuning", "progress"]),
+    (0, &["error", "fsutil", "tuning", "progress", "limits"]),
     (1, &["scheme", "kernel"]),
     (2, &["tensor"]),
     (3, &["io", "metrics", "generate", "demo"]),
