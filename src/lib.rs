@@ -19,6 +19,7 @@
 //!
 //! Data flows one way: read → array → transform → (quantize → code → container) → back.
 
+#[cfg(feature = "cli")]
 pub mod cli;
 pub mod codec;
 pub mod curve;
@@ -30,17 +31,23 @@ pub mod format;
 pub mod fsutil;
 pub mod generate;
 pub mod io;
+pub mod kernel;
+pub mod limits;
+#[cfg(feature = "geometry")]
 pub mod mesh;
 pub mod metrics;
 pub mod points;
 pub mod progress;
 pub mod quantize;
 pub mod scheme;
+#[cfg(feature = "geometry")]
 pub mod solid;
 pub mod style;
+#[cfg(feature = "geometry")]
 pub mod surface;
 pub mod tensor;
 pub mod terrain;
+pub mod tuning;
 pub mod upscale;
 
 pub use error::{Error, ErrorKind, Result};

@@ -2,6 +2,9 @@
 
 fn main() {
     restore_sigpipe();
+    // temporary outputs are removed on Ctrl-C and SIGTERM; without the handler (no
+    // thread could be started) a signal still kills the process, only less tidily
+    let _ = mra::fsutil::remove_temps_on_signals();
     std::process::exit(mra::cli::main());
 }
 

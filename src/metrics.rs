@@ -15,6 +15,11 @@
 //!   averaged over the positions whose window lies inside the data (scikit-image crops
 //!   3 samples at every border), then over channels. `None` when a side is shorter
 //!   than 7.
+//!
+//! Void samples (NaN, or either raster's `meta.nodata`) are left out: N counts the
+//! positions valid in both, and for the SSIM windows both rasters take the reference's
+//! pull-push fill at every void position ([`crate::io::nodata`]), so a void never
+//! enters a filter and contributes no error.
 
 use rayon::prelude::*;
 use serde::Serialize;
@@ -147,7 +152,13 @@ fn oiio_squared_error(a: &Samples, b: &Samples) -> (f64, f64) {
 
 /// Compare reference `a` with test `b` (same dims and channels).
 pub fn compare(a: &Raster, b: &Raster, opts: &CompareOptions) -> Result<Comparison> {
-    let e = errors(a, b, opts)?;
+    check_shapes(a, b)?;
+    let cleaned = without_voids(a, b)?;
+    let (a, b, n) = match &cleaned {
+        Some((x, y, n)) => (x, y, *n),
+        None => (a, b, a.samples.len()),
+    };
+    let e = errors(a, b, opts, n)?;
     let ssim_range = match (opts.data_range, opts.convention, a.sample_type().is_float()) {
         (Some(r), _, _) => r,
         (None, Convention::Skimage, false) => {
@@ -173,7 +184,63 @@ pub fn compare(a: &Raster, b: &Raster, opts: &CompareOptions) -> Result<Comparis
 /// The PSNR of `b` against the reference `a`, exactly as [`compare`] reports it (`None`
 /// when identical), without the SSIM: what the encoder's `--psnr` search measures.
 pub fn psnr(a: &Raster, b: &Raster, opts: &CompareOptions) -> Result<Option<f64>> {
-    Ok(errors(a, b, opts)?.psnr)
+    check_shapes(a, b)?;
+    let cleaned = without_voids(a, b)?;
+    let (a, b, n) = match &cleaned {
+        Some((x, y, n)) => (x, y, *n),
+        None => (a, b, a.samples.len()),
+    };
+    Ok(errors(a, b, opts, n)?.psnr)
+}
+
+fn check_shapes(a: &Raster, b: &Raster) -> Result<()> {
+    if a.dims != b.dims || a.channels != b.channels {
+        return Err(Error::parameter(
+            "shapes",
+            format!("{} vs {}", a.summary(), b.summary()),
+            "two inputs of the same dims and channels",
+        ));
+    }
+    Ok(())
+}
+
+/// `a` and `b` with every position void in either replaced by `a`'s pull-push fill
+/// (the same value in both), and the number of samples valid in both; `None` when no
+/// sample is void.
+fn without_voids(a: &Raster, b: &Raster) -> Result<Option<(Raster, Raster, usize)>> {
+    use crate::io::nodata::{is_void, Voids};
+    let n = a.samples.len();
+    let (na, nb) = (a.meta.nodata, b.meta.nodata);
+    let void: Vec<bool> = (0..n)
+        .map(|i| is_void(a.samples.get_f64(i), na) || is_void(b.samples.get_f64(i), nb))
+        .collect();
+    let valid = void.iter().filter(|&&v| !v).count();
+    if valid == n {
+        return Ok(None);
+    }
+    let mut va = a.to_f64();
+    let voids = Voids {
+        mask: void,
+        marker: f64::NAN,
+        range: (0.0, 0.0),
+    };
+    let mut shape = a.dims.clone();
+    shape.push(a.channels);
+    voids.fill(&mut va, &shape, a.dims.len())?;
+    // in `a`'s type first, so that both sides hold the same value
+    let filled = Samples::from_f64(&va, a.sample_type());
+    let va = filled.to_f64();
+    let mut vb = b.to_f64();
+    for (i, &v) in voids.mask.iter().enumerate() {
+        if v {
+            vb[i] = va[i];
+        }
+    }
+    let mut x = a.clone();
+    x.samples = filled;
+    let mut y = b.clone();
+    y.samples = Samples::from_f64(&vb, b.sample_type());
+    Ok(Some((x, y, valid)))
 }
 
 /// What [`compare`] reports besides the SSIM.
@@ -185,18 +252,13 @@ struct Errors {
     convention: &'static str,
 }
 
-fn errors(a: &Raster, b: &Raster, opts: &CompareOptions) -> Result<Errors> {
-    if a.dims != b.dims || a.channels != b.channels {
-        return Err(Error::parameter(
-            "shapes",
-            format!("{} vs {}", a.summary(), b.summary()),
-            "two inputs of the same dims and channels",
-        ));
-    }
+/// The errors over `valid` samples (the others contribute none, see [`without_voids`]).
+fn errors(a: &Raster, b: &Raster, opts: &CompareOptions, valid: usize) -> Result<Errors> {
+    check_shapes(a, b)?;
     if a.samples.is_empty() {
         return Err(Error::parameter("input", "empty", "at least one sample"));
     }
-    let n = a.samples.len() as f64;
+    let n = valid.max(1) as f64;
     let (sum, max_abs_error) = squared_error(&a.samples, &b.samples);
     let mse = sum / n;
     let (data_range, psnr, name) = match opts.convention {
@@ -349,4 +411,22 @@ pub fn ssim(a: &Raster, b: &Raster, data_range: f64) -> Option<f64> {
         total += s / count as f64;
     }
     Some(total / ch as f64)
+}
+
+/// The luma of a colour raster, `Y = 0.299 R + 0.587 G + 0.114 B` (ITU-R BT.601), in the same
+/// sample type (rounded for integer types); other channels (alpha) are dropped. A raster with
+/// fewer than three channels is returned unchanged.
+pub fn luma(r: &Raster) -> Result<Raster> {
+    if r.channels < 3 {
+        return Ok(r.clone());
+    }
+    let c = r.channels;
+    let v = r.to_f64();
+    let y: Vec<f32> = v
+        .chunks_exact(c)
+        .map(|p| (0.299 * p[0] + 0.587 * p[1] + 0.114 * p[2]) as f32)
+        .collect();
+    let mut out = Raster::from_f32(r.dims.clone(), 1, &y, r.sample_type(), r.kind)?;
+    out.meta = r.meta.clone();
+    Ok(out)
 }

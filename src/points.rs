@@ -22,6 +22,32 @@ impl Points {
     }
 }
 
+/// Parse untagged points: the point-table reader of the curves
+/// ([`crate::curve::csv::parse_list`]: commas, semicolons or white space between
+/// coordinates, an optional header line), without a weight column.
+pub fn parse(text: &str) -> Result<Points> {
+    let t = crate::curve::csv::parse_list(text)?;
+    if t.weights.is_some() {
+        return Err(Error::format(
+            "a weight column (w)",
+            "coordinates only in a point list",
+        ));
+    }
+    Ok(Points {
+        dim: t.dim,
+        data: t.points,
+    })
+}
+
+/// A tagged list: coarse points and detail bands `details[0]` = `D<L>` (coarsest) …
+/// `details[L−1]` = `D1` (finest).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Tagged {
+    pub dim: usize,
+    pub coarse: Vec<f64>,
+    pub details: Vec<Vec<f64>>,
+}
+
 fn fields(line: &str) -> impl Iterator<Item = &str> {
     line.split(|c: char| c == ',' || c.is_whitespace())
         .filter(|f| !f.is_empty())
@@ -45,47 +71,6 @@ fn parse_number(field: &str, line_no: usize) -> Result<f64> {
                 "a finite decimal number",
             )
         })
-}
-
-/// Parse untagged points.
-pub fn parse(text: &str) -> Result<Points> {
-    let mut dim = 0;
-    let mut data = Vec::new();
-    for (i, raw) in text.lines().enumerate() {
-        let line = strip_comment(raw).trim();
-        if line.is_empty() {
-            continue;
-        }
-        let before = data.len();
-        for f in fields(line) {
-            data.push(parse_number(f, i + 1)?);
-        }
-        let d = data.len() - before;
-        if dim == 0 {
-            dim = d;
-        } else if d != dim {
-            return Err(Error::format(
-                format!(
-                    "line {}: {d} coordinates where earlier points have {dim}",
-                    i + 1
-                ),
-                "every point with the same dimension",
-            ));
-        }
-    }
-    if data.is_empty() {
-        return Err(Error::format("no points", "at least one point"));
-    }
-    Ok(Points { dim, data })
-}
-
-/// A tagged list: coarse points and detail bands `details[0]` = `D<L>` (coarsest) …
-/// `details[L−1]` = `D1` (finest).
-#[derive(Clone, Debug, PartialEq)]
-pub struct Tagged {
-    pub dim: usize,
-    pub coarse: Vec<f64>,
-    pub details: Vec<Vec<f64>>,
 }
 
 /// Parse the tagged format written by [`write_tagged`].

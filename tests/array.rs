@@ -10,6 +10,8 @@ use mra::io::{self, ReadOptions, SampleType, Samples};
 use mra::scheme::{Boundary, Scheme};
 use mra::tensor::{Order, PyramidSpec};
 
+mod common;
+
 fn tmp(name: &str) -> PathBuf {
     let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("array_tests");
     std::fs::create_dir_all(&dir).unwrap();
@@ -232,18 +234,6 @@ fn wrong_extensions_and_non_pyramids_are_errors() {
 
 // ---------------------------------------------------------------- shared corpus
 
-fn corpus() -> Option<PathBuf> {
-    let p = std::env::var_os("MRA_CORPUS")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/corpus"));
-    if p.is_dir() {
-        Some(p)
-    } else {
-        println!("skipped: ../shared/corpus not found");
-        None
-    }
-}
-
 /// Every image, volume and terrain file of the corpus (the DICOM folder as one input).
 fn corpus_inputs(c: &Path) -> Vec<(PathBuf, ReadOptions)> {
     let mut out = Vec::new();
@@ -271,6 +261,7 @@ fn corpus_inputs(c: &Path) -> Vec<(PathBuf, ReadOptions)> {
                         sample_type: SampleType::U16,
                         big_endian: false,
                     }),
+                    ..Default::default()
                 }
             } else {
                 ReadOptions::default()
@@ -282,7 +273,7 @@ fn corpus_inputs(c: &Path) -> Vec<(PathBuf, ReadOptions)> {
 }
 
 fn corpus_roundtrip(combos: &[(Scheme, Boundary)]) {
-    let Some(c) = corpus() else { return };
+    let Some(c) = common::corpus("") else { return };
     let inputs = corpus_inputs(&c);
     assert!(inputs.len() >= 30, "corpus files: {}", inputs.len());
     for (path, read) in &inputs {

@@ -169,9 +169,66 @@ fn demo_runs_and_reports_exact_reconstruction() {
     assert!(rows.len() >= 4);
     for r in rows {
         if let Some(p) = r["output"].as_str() {
-            assert!(std::path::Path::new(p).exists(), "{p}");
+            let len = std::fs::metadata(p).map(|m| m.len()).unwrap_or(0);
+            assert!(len > 0, "{p} missing or empty");
         }
     }
+    // the number after `key` in a row's result ("… max error 1.2e-7, …")
+    let after = |result: &str, key: &str| -> f64 {
+        let at = result
+            .find(key)
+            .unwrap_or_else(|| panic!("no {key:?} in {result:?}"));
+        let tail = &result[at + key.len()..];
+        let end = tail.find([',', ' ', ';']).unwrap_or(tail.len());
+        tail[..end]
+            .parse()
+            .unwrap_or_else(|e| panic!("{key:?} in {result:?}: {e}"))
+    };
+    let rows_of = |job: &str| -> Vec<(String, String)> {
+        rows.iter()
+            .filter(|r| r["job"] == job)
+            .map(|r| {
+                (
+                    r["data"].as_str().unwrap().to_string(),
+                    r["result"].as_str().unwrap().to_string(),
+                )
+            })
+            .collect()
+    };
+    // pyramids round trip to rounding error: f64 curve, f32 images (0…255) and a volume
+    // (−1000…1000)
+    let curve = rows_of("analyze+synthesize curve");
+    assert_eq!(curve.len(), 1);
+    let e = after(&curve[0].1, "max reconstruction error ");
+    assert!(e <= 1e-12, "{curve:?}");
+    let images = rows_of("image pyramid forward+inverse");
+    assert_eq!(images.len(), 3, "one row per scheme");
+    for (data, result) in &images {
+        let e = after(result, "max error ");
+        assert!(e <= 1e-3, "{data}: {result}");
+    }
+    let volume = rows_of("volume pyramid forward+inverse");
+    assert_eq!(volume.len(), 1);
+    let e = after(&volume[0].1, "max error ");
+    assert!(e <= 1e-2, "{volume:?}");
+    let sub = rows_of("subdivide");
+    assert!(sub[0].1.ends_with("corners kept: true"), "{sub:?}");
+    // the codec rows meet their targets: lossless is exact, the bound holds, the PSNR is met
+    let codec = rows_of("encode+decode");
+    assert_eq!(codec.len(), 3, "{codec:?}");
+    for (data, result) in &codec {
+        let e = after(result, "max error ");
+        if data.contains("--lossless") {
+            assert_eq!(e, 0.0, "{result}");
+            assert!(result.contains("PSNR inf"), "{result}");
+        } else if data.contains("--max-error 4") {
+            assert!(e <= 4.0 && e > 0.0, "{result}");
+        } else {
+            assert!(data.contains("--psnr 40"), "{data}");
+            assert!(after(result, "PSNR ") >= 40.0, "{result}");
+        }
+    }
+    let _ = std::fs::remove_dir_all(&d);
 }
 
 #[test]

@@ -8,7 +8,8 @@ use mra::io::{DataKind, Raster, SampleType, Samples};
 use mra::scheme::{Boundary, Scheme};
 use mra::ErrorKind;
 use proptest::prelude::*;
-use std::path::PathBuf;
+
+mod common;
 
 const TYPES: [SampleType; 9] = [
     SampleType::U8,
@@ -74,6 +75,30 @@ fn max_err(a: &Raster, b: &Raster) -> f64 {
         .fold(0.0, f64::max)
 }
 
+/// A raster of the shape and type of `r` with every sample at `r`'s mean.
+fn constant_like(r: &Raster) -> Raster {
+    let n = r.samples.len();
+    let mean = (0..n).map(|i| r.samples.get_f64(i)).sum::<f64>() / n as f64;
+    let v = vec![mean; n];
+    Raster::new(
+        r.dims.clone(),
+        r.channels,
+        Samples::from_f64(&v, r.sample_type()),
+        r.kind,
+    )
+    .unwrap()
+}
+
+/// Root-mean-square difference of two rasters of the same shape.
+fn rms_err(a: &Raster, b: &Raster) -> f64 {
+    let n = a.samples.len();
+    assert_eq!(n, b.samples.len());
+    let s: f64 = (0..n)
+        .map(|i| (a.samples.get_f64(i) - b.samples.get_f64(i)).powi(2))
+        .sum();
+    (s / n.max(1) as f64).sqrt()
+}
+
 fn round_trip(r: &Raster, o: &EncodeOptions) -> Raster {
     let bytes = codec::encode(r, o).unwrap();
     codec::decode(&bytes, &DecodeOptions::default())
@@ -97,6 +122,14 @@ fn every_lossy_mode_round_trips_every_type_and_shape() {
             let r = field(dims, ch, ty, (k * 10 + s) as u64);
             let (lo, hi) = r.samples.min_max().unwrap();
             let range = (hi - lo).max(1e-9);
+            // the rms error of the best constant picture (the source's mean)
+            let spread = rms_err(&r, &constant_like(&r));
+            // rounding to the stored type
+            let slack = match ty {
+                SampleType::F16 => 0.01,
+                SampleType::F32 | SampleType::F64 => 1e-6,
+                _ => 0.5,
+            };
             for rate in [
                 Rate::Keep(20.0),
                 Rate::Threshold(range * 0.01),
@@ -114,11 +147,20 @@ fn every_lossy_mode_round_trips_every_type_and_shape() {
                     assert_eq!(d.channels, r.channels);
                     assert_eq!(d.sample_type(), ty);
                     assert_eq!(d.kind, r.kind);
-                    let e = max_err(&r, &d);
-                    assert!(
-                        e <= range * 0.6 + 1.0,
-                        "{ty} {dims:?} {rate:?} {scheme}: error {e} of range {range}"
+                    let (e, rms) = (max_err(&r, &d), rms_err(&r, &d));
+                    let what = format!(
+                        "{ty} {dims:?}x{ch} {rate:?} {scheme}: max error {e}, rms error {rms}, \
+                         range {range}, deviation from the mean {spread}"
                     );
+                    match rate {
+                        // a fifth of the details (on lanes of a few samples, a handful):
+                        // closer to the picture than its mean is
+                        Rate::Keep(_) => assert!(rms <= 0.8 * spread + slack, "{what}"),
+                        _ => assert!(
+                            rms <= 0.02 * range + slack && e <= 0.06 * range + slack,
+                            "{what}"
+                        ),
+                    }
                 }
             }
         }
@@ -262,8 +304,42 @@ fn progressive_levels_halve_the_size_and_approximate_the_picture() {
             let (lo, hi) = r.samples.min_max().unwrap();
             let (a, b) = d.samples.min_max().unwrap();
             assert!(a >= lo - 1.0 && b <= hi + 1.0);
+            let m = block_means(&r, 1 << k);
+            let got = d.samples.to_f64();
+            let rms = (got
+                .iter()
+                .zip(&m)
+                .map(|(g, w)| (g - w).powi(2))
+                .sum::<f64>()
+                / m.len() as f64)
+                .sqrt();
+            assert!(
+                rms <= 0.03 * (hi - lo),
+                "{rate:?} level {k}: rms {rms} from the {0}x{0} block means (range {1})",
+                1 << k,
+                hi - lo
+            );
         }
     }
+}
+
+/// Means of the `b`×`b` blocks of a one-channel image (blocks cut short at the far edges).
+fn block_means(r: &Raster, b: usize) -> Vec<f64> {
+    assert_eq!((r.dims.len(), r.channels), (2, 1));
+    let (h, w) = (r.dims[0], r.dims[1]);
+    let v = r.samples.to_f64();
+    let mut out = Vec::new();
+    for by in (0..h).step_by(b) {
+        for bx in (0..w).step_by(b) {
+            let (y1, x1) = ((by + b).min(h), (bx + b).min(w));
+            let s: f64 = (by..y1)
+                .flat_map(|y| (bx..x1).map(move |x| (y, x)))
+                .map(|(y, x)| v[y * w + x])
+                .sum();
+            out.push(s / ((y1 - by) * (x1 - bx)) as f64);
+        }
+    }
+    out
 }
 
 fn sample_file() -> (Raster, Vec<u8>) {
@@ -380,11 +456,21 @@ fn absurd_dimensions_wrong_magic_and_version_are_rejected() {
     let e = codec::decode(&b, &DecodeOptions::default()).unwrap_err();
     assert_eq!(e.kind(), ErrorKind::Unsupported, "{e}");
     assert!(e.to_string().contains("version"));
-    // a future minor version still decodes
+    // a future minor version still decodes, to the same picture
     let mut b = bytes.clone();
+    assert_ne!(b[17], 9, "the sample file is already of minor version 9");
     b[17] = 9;
     recrc(&mut b);
-    assert!(codec::decode(&b, &DecodeOptions::default()).is_ok());
+    let want = codec::decode(&bytes, &DecodeOptions::default()).unwrap();
+    let got = codec::decode(&b, &DecodeOptions::default())
+        .unwrap_or_else(|e| panic!("minor version 9: {e}"));
+    assert_eq!(got.raster.dims, want.raster.dims);
+    assert_eq!(got.raster.channels, want.raster.channels);
+    assert!(
+        got.raster.samples == want.raster.samples,
+        "minor version 9 decodes to other samples"
+    );
+    assert!(got.complete);
 }
 
 #[test]
@@ -454,7 +540,7 @@ fn metadata_survives() {
 
 #[test]
 fn test_vectors_decode_to_their_digests() {
-    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("formats/vectors");
+    let dir = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("formats/vectors");
     let manifest: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.join("manifest.json")).unwrap()).unwrap();
     let list = manifest.as_array().unwrap();
@@ -489,23 +575,11 @@ fn test_vectors_decode_to_their_digests() {
     }
 }
 
-fn corpus() -> Option<PathBuf> {
-    let p = std::env::var("MRA_CORPUS")
-        .map(PathBuf::from)
-        .unwrap_or_else(|_| {
-            PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/corpus"))
-        });
-    if p.is_dir() {
-        Some(p)
-    } else {
-        eprintln!("skipping: corpus not found at {}", p.display());
-        None
-    }
-}
-
 #[test]
 fn corpus_lossless_is_bit_exact_on_images_volumes_and_heightmaps() {
-    let Some(c) = corpus() else { return };
+    if common::corpus("").is_none() {
+        return;
+    }
     for f in [
         "images/kodak/kodim01.png",
         "images/highbit/artificial_gray16.png",
@@ -513,11 +587,9 @@ fn corpus_lossless_is_bit_exact_on_images_volumes_and_heightmaps() {
         "terrain/N44W072.hgt",
         "terrain/mt_st_helens_30m_f32.tif",
     ] {
-        let path = c.join(f);
-        if !path.exists() {
-            eprintln!("skipping {f}: not in corpus");
+        let Some(path) = common::corpus(f) else {
             continue;
-        }
+        };
         let r = mra::io::read(&path).unwrap();
         let bytes = codec::encode(&r, &opts(Rate::Lossless)).unwrap();
         let d = codec::decode(&bytes, &DecodeOptions::default())
@@ -535,17 +607,17 @@ fn corpus_lossless_is_bit_exact_on_images_volumes_and_heightmaps() {
 
 #[test]
 fn corpus_max_error_and_psnr_targets() {
-    let Some(c) = corpus() else { return };
-    let path = c.join("terrain/N44W072.hgt");
-    if path.exists() {
+    if common::corpus("").is_none() {
+        return;
+    }
+    if let Some(path) = common::corpus("terrain/N44W072.hgt") {
         let r = mra::io::read(&path).unwrap();
         for e in [1.0, 5.0] {
             let d = round_trip(&r, &opts(Rate::MaxError(e)));
             assert!(max_err(&r, &d) <= e);
         }
     }
-    let path = c.join("images/kodak/kodim23.png");
-    if path.exists() {
+    if let Some(path) = common::corpus("images/kodak/kodim23.png") {
         let r = mra::io::read(&path).unwrap();
         for target in [32.0, 40.0] {
             let bytes = codec::encode(&r, &opts(Rate::Psnr(target))).unwrap();

@@ -828,10 +828,19 @@ fn cli_eval_prints_example_2_4_and_samples_with_parameters() {
         "corpus/curves/circle.csv",
     ]);
     assert_eq!(code, 0);
-    for l in out.lines() {
-        let v: Vec<f64> = l.split(',').map(|x| x.parse().unwrap()).collect();
-        assert!((v[0].hypot(v[1]) - 1.0).abs() < 1e-12);
+    let pts: Vec<Vec<f64>> = out
+        .lines()
+        .map(|l| l.split(',').map(|x| x.parse().unwrap()).collect())
+        .collect();
+    assert_eq!(pts.len(), 33, "{out}");
+    for v in &pts {
+        assert_eq!(v.len(), 2, "{v:?}");
+        assert!((v[0].hypot(v[1]) - 1.0).abs() < 1e-12, "{v:?}");
     }
+    // and goes round it: the samples cover every quadrant
+    let quadrants: std::collections::BTreeSet<(bool, bool)> =
+        pts.iter().map(|v| (v[0] >= 0.0, v[1] >= 0.0)).collect();
+    assert_eq!(quadrants.len(), 4, "{pts:?}");
 }
 
 #[test]
@@ -947,6 +956,20 @@ fn cli_insert_knot_midpoints_keeps_the_curve() {
         fine.to_str().unwrap(),
     ]);
     assert_eq!((c1, c2), (0, 0), "{e2}");
+    // the refined control polygon has more points than the source's
+    let count = |p: &std::path::Path| {
+        mra::points::parse(&std::fs::read_to_string(p).unwrap())
+            .unwrap()
+            .len()
+    };
+    let wave = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("corpus/curves/wave.csv");
+    assert!(
+        count(&fine) > count(&wave),
+        "{} vs {}",
+        count(&fine),
+        count(&wave)
+    );
+    assert_eq!((a.lines().count(), b.lines().count()), (41, 41), "{a}\n{b}");
     for (x, y) in a.lines().zip(b.lines()) {
         let x: Vec<f64> = x.split(',').map(|t| t.parse().unwrap()).collect();
         let y: Vec<f64> = y.split(',').map(|t| t.parse().unwrap()).collect();

@@ -9,17 +9,17 @@ use mra::generate::rng::SplitMix64;
 use mra::io::{self, DataKind, Raster, RawSpec, ReadOptions, SampleType, Samples};
 use mra::ErrorKind;
 
+mod common;
+
+/// `name` in a folder of its own: tests run in parallel, and two of them (or one test
+/// twice) never write the same file.
 fn tmp(name: &str) -> PathBuf {
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("io_tests");
-    std::fs::create_dir_all(&dir).unwrap();
-    dir.join(name)
+    common::scratch_file(name)
 }
 
+/// A new, empty folder of its own.
 fn tmp_dir(name: &str) -> PathBuf {
-    let d = tmp(name);
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+    common::scratch_dir(name)
 }
 
 /// Pseudo-random samples covering the type's whole range (floats: ±1000 with fractions).
@@ -255,7 +255,14 @@ fn heightmap_formats_roundtrip() {
         sample_type: SampleType::U16,
         big_endian: false,
     };
-    let back = io::read_with(&p, &ReadOptions { raw: Some(spec) }).unwrap();
+    let back = io::read_with(
+        &p,
+        &ReadOptions {
+            raw: Some(spec),
+            ..Default::default()
+        },
+    )
+    .unwrap();
     assert_eq!(back.samples, r.samples);
 }
 
@@ -280,7 +287,14 @@ fn raw_reads_both_byte_orders() {
             sample_type: SampleType::U16,
             big_endian: big,
         };
-        let r = io::read_with(&p, &ReadOptions { raw: Some(spec) }).unwrap();
+        let r = io::read_with(
+            &p,
+            &ReadOptions {
+                raw: Some(spec),
+                ..Default::default()
+            },
+        )
+        .unwrap();
         assert_eq!(r.dims, vec![2, 3, 4]);
         assert_eq!(r.samples, Samples::U16(vals.clone()));
     }
@@ -293,9 +307,15 @@ fn raw_reads_both_byte_orders() {
         big_endian: false,
     };
     assert_eq!(
-        io::read_with(&p, &ReadOptions { raw: Some(spec) })
-            .unwrap()
-            .samples,
+        io::read_with(
+            &p,
+            &ReadOptions {
+                raw: Some(spec),
+                ..Default::default()
+            }
+        )
+        .unwrap()
+        .samples,
         r.samples
     );
 }
@@ -360,8 +380,12 @@ fn files_written_by_other_tools() {
                 .iter()
                 .map(|v| v.as_f64().unwrap())
                 .collect();
-            let got = r.meta.spacing.clone().unwrap_or_default();
-            assert_eq!(got.len(), want.len(), "{file} spacing");
+            let got = r
+                .meta
+                .spacing
+                .clone()
+                .unwrap_or_else(|| panic!("{file}: spacing lost (expected {want:?})"));
+            assert_eq!(got.len(), want.len(), "{file} spacing {got:?} vs {want:?}");
             for (g, w) in got.iter().zip(&want) {
                 assert!((g - w).abs() < 1e-6, "{file} spacing {got:?} vs {want:?}");
             }
@@ -373,7 +397,12 @@ fn files_written_by_other_tools() {
                 .iter()
                 .map(|v| v.as_f64().unwrap())
                 .collect();
-            let got = r.meta.origin.clone().unwrap_or_default();
+            let got = r
+                .meta
+                .origin
+                .clone()
+                .unwrap_or_else(|| panic!("{file}: origin lost (expected {want:?})"));
+            assert_eq!(got.len(), want.len(), "{file} origin {got:?} vs {want:?}");
             for (g, w) in got.iter().zip(&want) {
                 assert!((g - w).abs() < 1e-6, "{file} origin {got:?} vs {want:?}");
             }
@@ -469,7 +498,14 @@ fn raw_size_mismatch_is_an_error() {
         sample_type: SampleType::U16,
         big_endian: false,
     };
-    let e = io::read_with(&p, &ReadOptions { raw: Some(spec) }).unwrap_err();
+    let e = io::read_with(
+        &p,
+        &ReadOptions {
+            raw: Some(spec),
+            ..Default::default()
+        },
+    )
+    .unwrap_err();
     assert_eq!(e.kind(), ErrorKind::Format);
     assert!(e.to_string().contains("256"), "{e}");
     // and without a layout at all
@@ -490,7 +526,7 @@ fn unsupported_sample_types_are_reported() {
         assert_eq!(e.kind(), ErrorKind::Unsupported, "{ext}");
         assert!(!p.exists(), "{ext}: no output file after a failed write");
         assert!(
-            !mra::fsutil::temp_path(&p).exists(),
+            mra::fsutil::leftover_temps(&p).is_empty(),
             "{ext}: temp file removed"
         );
     }
@@ -678,28 +714,14 @@ fn cli_generate_compare_info_and_convert() {
 
 // ---------------------------------------------------------------- shared corpus
 
-/// `../shared/corpus` beside the repository, or `$MRA_CORPUS` when set (worktrees).
-fn corpus() -> Option<PathBuf> {
-    let p = std::env::var_os("MRA_CORPUS")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/corpus"));
-    if p.is_dir() {
-        Some(p)
-    } else {
-        println!("skipped: ../shared/corpus not found");
-        None
-    }
-}
-
 #[test]
 fn corpus_images_load_with_stated_shapes() {
-    let Some(c) = corpus() else { return };
+    let Some(c) = common::corpus("images") else {
+        return;
+    };
     let mut n = 0;
     for i in 1..=24 {
-        let p = c.join(format!("images/kodak/kodim{i:02}.png"));
-        if !p.exists() {
-            continue;
-        }
+        let p = c.join(format!("kodak/kodim{i:02}.png"));
         let r = io::read(&p).unwrap();
         assert!(
             r.dims == vec![512, 768] || r.dims == vec![768, 512],
@@ -710,15 +732,16 @@ fn corpus_images_load_with_stated_shapes() {
     }
     assert_eq!(n, 24);
     for f in ["artificial_gray16.png", "flower_foveon_gray16_linear.png"] {
-        let r = io::read(&c.join("images/highbit").join(f)).unwrap();
+        let r = io::read(&c.join("highbit").join(f)).unwrap();
         assert_eq!((r.channels, r.sample_type()), (1, SampleType::U16), "{f}");
     }
 }
 
 #[test]
 fn corpus_volumes_agree_across_formats() {
-    let Some(c) = corpus() else { return };
-    let v = c.join("volumes");
+    let Some(v) = common::corpus("volumes") else {
+        return;
+    };
     let nrrd = io::read(&v.join("ct_pancreas_256.nrrd")).unwrap();
     assert_eq!(nrrd.dims, vec![134, 256, 256]);
     assert_eq!(nrrd.sample_type(), SampleType::I16);
@@ -748,6 +771,7 @@ fn corpus_volumes_agree_across_formats() {
                 sample_type: SampleType::U16,
                 big_endian: false,
             }),
+            ..Default::default()
         },
     )
     .unwrap();
@@ -781,8 +805,9 @@ fn corpus_volumes_agree_across_formats() {
 
 #[test]
 fn corpus_terrain_loads_with_voids_and_geotags() {
-    let Some(c) = corpus() else { return };
-    let t = c.join("terrain");
+    let Some(t) = common::corpus("terrain") else {
+        return;
+    };
     let nh = io::read(&t.join("N44W072.hgt")).unwrap();
     assert_eq!(nh.dims, vec![1201, 1201]);
     assert_eq!(nh.samples.min_max(), Some((115.0, 1908.0)));

@@ -17,17 +17,11 @@ const ALL: [Scheme; 5] = [
     Scheme::Butterfly,
 ];
 
-/// `../shared/corpus/meshes` (or `$MRA_CORPUS/meshes` when set, for worktrees elsewhere).
+mod common;
+
+/// The corpus's `meshes` folder (see `common::corpus`).
 fn corpus() -> Option<std::path::PathBuf> {
-    let root = std::env::var("MRA_CORPUS")
-        .unwrap_or_else(|_| concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/corpus").into());
-    let p = std::path::PathBuf::from(root).join("meshes");
-    if p.is_dir() {
-        Some(p)
-    } else {
-        println!("skipped: {} is absent", p.display());
-        None
-    }
+    common::corpus("meshes")
 }
 
 fn tmpdir(name: &str) -> std::path::PathBuf {
@@ -1329,11 +1323,11 @@ fn every_mesh_command_runs_and_writes_a_readable_file() {
                 "simplify".into(),
                 i.into(),
                 "-o".into(),
-                path("s.obj"),
+                path("simplified.obj"),
                 "--faces".into(),
                 "40".into(),
             ],
-            Some(path("s.obj")),
+            Some(path("simplified.obj")),
         ),
         (
             vec!["orient".into(), i.into(), "-o".into(), path("o.obj")],
@@ -1401,7 +1395,7 @@ fn every_mesh_command_runs_and_writes_a_readable_file() {
             .collect::<Vec<_>>(),
         ["nx", "ny", "nz"]
     );
-    assert_eq!(io::read(d.join("s.obj")).unwrap().face_count(), 40);
+    assert_eq!(io::read(d.join("simplified.obj")).unwrap().face_count(), 40);
     let o = mra(&[
         "mesh",
         "analyze",

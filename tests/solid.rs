@@ -11,6 +11,8 @@ use mra::solid::{render, tlist, voxel};
 use mra::ErrorKind;
 use std::f64::consts::PI;
 
+mod common;
+
 /// Small deterministic generator (xorshift) so tests need no extra crate.
 struct Rng(u64);
 impl Rng {
@@ -203,6 +205,7 @@ fn committed_scenes_parse() {
 fn ray_sphere_hits_are_exact() {
     let mut r = Rng(0x9e3779b97f4a7c15);
     let mut worst: f64 = 0.0;
+    let (mut hits, mut misses, mut must_hit, mut must_miss) = (0, 0, 0, 0);
     for _ in 0..20000 {
         let c = r.v3(-5.0, 5.0);
         let rad = r.range(0.01, 3.0);
@@ -214,16 +217,58 @@ fn ray_sphere_hits_are_exact() {
             c[2] + r.range(-rad, rad),
         ];
         let d = [aim[0] - o[0], aim[1] - o[1], aim[2] - o[2]];
-        if let Some((t0, t1)) = tlist::ray_sphere(o, d, c, rad) {
+        // the line's distance from the centre: |(c − o) × d| / |d|
+        let oc = [c[0] - o[0], c[1] - o[1], c[2] - o[2]];
+        let x = [
+            oc[1] * d[2] - oc[2] * d[1],
+            oc[2] * d[0] - oc[0] * d[2],
+            oc[0] * d[1] - oc[1] * d[0],
+        ];
+        let norm = |v: [f64; 3]| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+        let gap = norm(x) / norm(d);
+        let hit = tlist::ray_sphere(o, d, c, rad);
+        if gap < rad * (1.0 - 1e-9) {
+            must_hit += 1;
+            assert!(
+                hit.is_some(),
+                "a line {gap} from the centre misses radius {rad}"
+            );
+        } else if gap > rad * (1.0 + 1e-9) {
+            must_miss += 1;
+            assert!(
+                hit.is_none(),
+                "a line {gap} from the centre hits radius {rad}: {hit:?}"
+            );
+        }
+        if let Some((t0, t1)) = hit {
+            hits += 1;
             assert!(t0 <= t1);
+            // half the chord and the gap make a right triangle with the radius
+            let half = 0.5 * (t1 - t0) * norm(d);
+            let e = (half * half + gap * gap - rad * rad).abs();
+            assert!(
+                e <= 1e-9 * rad * rad,
+                "half chord {half}, gap {gap}, radius {rad}"
+            );
             for t in [t0, t1] {
                 let p = [o[0] + t * d[0], o[1] + t * d[1], o[2] + t * d[2]];
                 let dist =
                     ((p[0] - c[0]).powi(2) + (p[1] - c[1]).powi(2) + (p[2] - c[2]).powi(2)).sqrt();
                 worst = worst.max((dist - rad).abs());
             }
+        } else {
+            misses += 1;
         }
     }
+    // aimed within the sphere's bounding cube: most lines cross it, some pass by
+    assert!(
+        hits >= 10000 && misses >= 1000,
+        "{hits} hits, {misses} misses"
+    );
+    assert!(
+        must_hit + must_miss >= 19900,
+        "{must_hit} + {must_miss} decided"
+    );
     assert!(worst <= 1e-12, "worst |‖p − c‖ − r| = {worst:e}");
 }
 
@@ -573,20 +618,7 @@ fn area_and_volume_match_scikit_image() {
 }
 
 fn corpus_volume(name: &str) -> Option<std::path::PathBuf> {
-    let mut roots = vec![concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/corpus").to_string()];
-    if let Ok(r) = std::env::var("MRA_CORPUS") {
-        roots.insert(0, r);
-    }
-    // worktrees live one level deeper than the main checkout
-    roots.push(concat!(env!("CARGO_MANIFEST_DIR"), "/../../shared/corpus").to_string());
-    for r in roots {
-        let p = std::path::PathBuf::from(r).join("volumes").join(name);
-        if p.exists() {
-            return Some(p);
-        }
-    }
-    println!("skipped: corpus volume {name} is absent");
-    None
+    common::corpus(&format!("volumes/{name}"))
 }
 
 #[test]

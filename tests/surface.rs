@@ -13,6 +13,8 @@ use mra::surface::{
 use mra::ErrorKind;
 use std::f64::consts::{PI, TAU};
 
+mod common;
+
 struct Lcg(u64);
 impl Lcg {
     fn next(&mut self) -> f64 {
@@ -716,17 +718,26 @@ fn cli_surface_commands_write_meshes_and_refuse_bad_input() {
             "--mirror",
         ],
     ] {
-        let out = scratch("example.ply");
+        // a fresh file per command: a command that writes nothing cannot pass on the
+        // output of the one before
+        let out = common::scratch_file("example.ply");
         let mut a = args.clone();
         a.extend(["--resolution", "12,10", "-o", out.to_str().unwrap()]);
         let (code, err) = mra_cmd(&a);
         assert_eq!(code, 0, "{a:?}: {err}");
-        assert!(std::fs::read_to_string(&out)
-            .unwrap()
-            .contains("element vertex 120"));
+        let text = std::fs::read_to_string(&out).unwrap_or_else(|e| panic!("{a:?}: {e}"));
+        assert!(text.contains("element vertex 120"), "{a:?}");
+        let m = mra::mesh::io::read(&out).unwrap_or_else(|e| panic!("{a:?}: {e}"));
+        assert_eq!(m.positions.len(), 120, "{a:?}");
+        assert!(m.face_count() > 0, "{a:?}");
+        assert!(m.positions.iter().flatten().all(|v| v.is_finite()), "{a:?}");
     }
     // corners that do not meet, unknown formats, bad resolution: exit 2, one line, no file
-    let bad = scratch("bad.obj");
+    // (each case its own output path, checked to be absent after the run)
+    let bad_dir = common::scratch_dir("bad_surfaces");
+    let bad_obj = bad_dir.join("bad.obj");
+    let bad_stl = bad_dir.join("bad.stl");
+    let (bad, stl) = (bad_obj.to_str().unwrap(), bad_stl.to_str().unwrap());
     for args in [
         vec![
             "surface",
@@ -742,7 +753,7 @@ fn cli_surface_commands_write_meshes_and_refuse_bad_input() {
             "--q1",
             "corpus/curves/coons_q1.csv",
             "-o",
-            bad.to_str().unwrap(),
+            bad,
         ],
         vec![
             "surface",
@@ -754,7 +765,7 @@ fn cli_surface_commands_write_meshes_and_refuse_bad_input() {
             "--minor",
             "2",
             "-o",
-            bad.to_str().unwrap(),
+            bad,
         ],
         vec![
             "surface",
@@ -764,20 +775,18 @@ fn cli_surface_commands_write_meshes_and_refuse_bad_input() {
             "--resolution",
             "1,5",
             "-o",
-            bad.to_str().unwrap(),
+            bad,
         ],
-        vec![
-            "surface",
-            "primitive",
-            "--shape",
-            "sphere",
-            "-o",
-            "/tmp/mra-bad.stl",
-        ],
+        vec!["surface", "primitive", "--shape", "sphere", "-o", stl],
     ] {
         let (code, err) = mra_cmd(&args);
         assert_eq!(code, 2, "{args:?}");
         assert_eq!(err.trim_end().lines().count(), 1, "{err}");
-        assert!(!bad.exists());
+        assert!(err.starts_with("mra: "), "{err}");
+        let left: Vec<_> = std::fs::read_dir(&bad_dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name())
+            .collect();
+        assert!(left.is_empty(), "{args:?} left {left:?}");
     }
 }

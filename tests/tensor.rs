@@ -197,7 +197,6 @@ proptest! {
         }
     }
     #[test]
-    #[test]
     fn every_2d_array_reconstructs(h in 1usize..80, w in 1usize..80, s in 0usize..3, b in 0usize..3, std in any::<bool>(), levels in 0usize..7, seed in any::<u64>()) {
         let order = if std { Order::Standard } else { Order::NonStandard };
         round_trip(&[h, w], vec![0, 1], s, b, order, levels, seed);

@@ -5,6 +5,8 @@
 use std::path::PathBuf;
 use std::process::Command;
 
+mod common;
+
 use mra::denoise::{denoise, DenoiseOptions};
 use mra::generate::terrain::diamond_square;
 use mra::scheme::Scheme;
@@ -358,20 +360,62 @@ fn cli_bad_inputs_fail_with_one_line_and_no_output() {
 #[test]
 fn cli_denoise_images_and_point_lists() {
     let d = tmpdir("denoise");
-    let img = d.join("zone.png");
-    assert!(
-        mra(&["generate", "zone-plate", "--size", "128", "-o", s(&img)])
-            .status
-            .success()
-    );
-    let o = mra(&["denoise", s(&img), "-o", s(&d.join("z.png")), "--json"]);
+    // an image: a smooth field plus deterministic noise of σ ≈ 8, as f32
+    let (h, w) = (96, 128);
+    let mut rng = mra::generate::rng::SplitMix64::new(36);
+    let clean: Vec<f64> = (0..h * w)
+        .map(|i| {
+            let (y, x) = ((i / w) as f64, (i % w) as f64);
+            100.0 + 60.0 * (x * 0.09).sin() * (y * 0.07).cos()
+        })
+        .collect();
+    // a sum of 4 uniforms on (−1, 1) has σ = √(4/3); scaled to σ = 8
+    let noisy: Vec<f64> = clean
+        .iter()
+        .map(|&c| {
+            c + 8.0 / (4.0f64 / 3.0).sqrt()
+                * (0..4).map(|_| 2.0 * rng.next_f64() - 1.0).sum::<f64>()
+        })
+        .collect();
+    let raster = |v: &[f64]| {
+        mra::io::Raster::new(
+            vec![h, w],
+            1,
+            mra::io::Samples::from_f64(v, mra::io::SampleType::F32),
+            mra::io::DataKind::Image,
+        )
+        .unwrap()
+    };
+    mra::io::write(&d.join("noisy.tif"), &raster(&noisy)).unwrap();
+    let o = mra(&[
+        "denoise",
+        s(&d.join("noisy.tif")),
+        "-o",
+        s(&d.join("z.tif")),
+        "--json",
+    ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let r = mra::io::read(&d.join("z.png")).unwrap();
-    assert_eq!(r.dims, vec![128, 128]);
+    let r = mra::io::read(&d.join("z.tif")).unwrap();
+    assert_eq!(r.dims, vec![h, w]);
+    assert_eq!(r.sample_type(), mra::io::SampleType::F32);
+    let rms = |a: &[f64], b: &[f64]| {
+        (a.iter().zip(b).map(|(x, y)| (x - y).powi(2)).sum::<f64>() / a.len() as f64).sqrt()
+    };
+    let (before, after) = (rms(&noisy, &clean), rms(&r.to_f64(), &clean));
+    // measured: 7.9 → 2.4
+    assert!(
+        after < 0.5 * before,
+        "rms error from the clean image {before} → {after}"
+    );
+    // a point list: a circle of radius 1 with radial noise
+    let n = 64;
     let mut t = String::new();
-    for i in 0..64 {
-        let a = i as f64 / 64.0 * std::f64::consts::TAU;
-        t += &format!("{},{}\n", a.cos() + 0.01 * ((i * 7) % 5) as f64, a.sin());
+    let mut noise_rms = 0.0;
+    for i in 0..n {
+        let a = i as f64 / n as f64 * std::f64::consts::TAU;
+        let e = 0.03 * (2.0 * rng.next_f64() - 1.0);
+        noise_rms += e * e;
+        t += &format!("{},{}\n", (1.0 + e) * a.cos(), (1.0 + e) * a.sin());
     }
     std::fs::write(d.join("c.csv"), t).unwrap();
     let o = mra(&[
@@ -384,7 +428,21 @@ fn cli_denoise_images_and_point_lists() {
     ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let back = mra::points::parse(&std::fs::read_to_string(d.join("o.csv")).unwrap()).unwrap();
-    assert_eq!((back.len(), back.dim), (64, 2));
+    assert_eq!((back.len(), back.dim), (n, 2));
+    let dev = (back
+        .data
+        .chunks(2)
+        .map(|p| (p[0].hypot(p[1]) - 1.0).powi(2))
+        .sum::<f64>()
+        / n as f64)
+        .sqrt();
+    // measured: 0.0147 → 0.0110
+    let noise = (noise_rms / n as f64).sqrt();
+    assert!(
+        dev < 0.85 * noise,
+        "rms distance from the circle {noise} → {dev}"
+    );
+    let _ = std::fs::remove_dir_all(&d);
 }
 
 #[test]
@@ -435,22 +493,12 @@ fn zigzag_style_on_a_circle_keeps_the_circle_coarse_and_the_zigzag_fine() {
     assert!(dev > 0.4 * amp && dev < 2.0 * amp, "radial deviation {dev}");
 }
 
-fn corpus() -> Option<PathBuf> {
-    let p = std::env::var_os("MRA_CORPUS")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/corpus")));
-    if p.is_dir() {
-        Some(p)
-    } else {
-        println!("skipped: no corpus at {}", p.display());
-        None
-    }
-}
-
 #[test]
 fn srtm_voids_are_filled_within_the_range_of_their_rims() {
-    let Some(c) = corpus() else { return };
-    let r = mra::io::read(&c.join("terrain/N22W160.hgt")).unwrap();
+    let Some(p) = common::corpus("terrain/N22W160.hgt") else {
+        return;
+    };
+    let r = mra::io::read(&p).unwrap();
     let voids = mra::io::hgt::void_count(&r);
     assert!(voids > 0);
     let (g, filled) = mra::terrain::raster::to_grid(&r).unwrap();

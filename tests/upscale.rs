@@ -11,6 +11,8 @@ use mra::upscale::{
 };
 use mra::ErrorKind;
 
+mod common;
+
 const MODES: [Mode; 3] = [Mode::Area, Mode::Interpolate, Mode::Control];
 
 fn method(rule: Refinement, mode: Mode) -> Method {
@@ -482,15 +484,9 @@ fn cli_upscale_downscale_and_one_line_errors() {
 
 #[test]
 fn corpus_ct_volume_upscales_along_z() {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../shared/corpus/volumes/ct_pancreas_crop_256x256x64_u16le.raw");
-    let path = std::env::var("MRA_CORPUS")
-        .map(|c| std::path::Path::new(&c).join("volumes/ct_pancreas_crop_256x256x64_u16le.raw"))
-        .unwrap_or(path);
-    if !path.exists() {
-        println!("skipped: {} absent", path.display());
+    let Some(path) = common::corpus("volumes/ct_pancreas_crop_256x256x64_u16le.raw") else {
         return;
-    }
+    };
     let bytes = std::fs::read(&path).unwrap();
     let v: Vec<f32> = bytes
         .chunks(2)

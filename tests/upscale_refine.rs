@@ -8,6 +8,8 @@ use mra::upscale::{
     refine, upscale_array, upscale_raster, AxisPlan, Clamp, Edge, Geometry, Method, Mode,
 };
 
+mod common;
+
 fn method(rule: Refinement, clamp: Clamp) -> Method {
     Method {
         rule,
@@ -279,16 +281,9 @@ fn nan_voids_stay_nan_and_do_not_spread() {
 
 #[test]
 fn corpus_srtm_tile_keeps_its_voids() {
-    let path = std::env::var("MRA_CORPUS")
-        .map(std::path::PathBuf::from)
-        .unwrap_or_else(|_| {
-            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/corpus")
-        })
-        .join("terrain/N22W160.hgt");
-    if !path.exists() {
-        println!("skipped: {} absent", path.display());
+    let Some(path) = common::corpus("terrain/N22W160.hgt") else {
         return;
-    }
+    };
     let r = mra::io::read(&path).unwrap();
     let nd = r.meta.nodata.expect("SRTM nodata");
     let n = r.dims.clone();

@@ -1,9 +1,11 @@
 //! `mra analyze` and `mra synthesize`: point lists go to [`super::points`], images,
 //! volumes and heightmaps to [`super::array`].
 
-use super::CliResult;
+use super::array::{analyze_path, synthesize_path, AnalyzeOptions, DEFAULT_LEVELS};
+use super::{CliResult, Failure};
+use crate::io::ReadOptions;
 use crate::scheme::{Boundary, Scheme};
-use crate::tensor::Order;
+use crate::tensor::{Order, PyramidSpec};
 use clap::Args;
 use std::path::{Path, PathBuf};
 
@@ -74,7 +76,7 @@ pub fn run_analyze(a: AnalyzeArgs) -> CliResult {
     if is_point_list(&a.input) {
         super::points::analyze(&a.input, a.output.as_ref(), a.scheme, a.boundary, a.levels)
     } else {
-        super::array::analyze(&a)
+        analyze_array(&a)
     }
 }
 
@@ -82,6 +84,40 @@ pub fn run_synthesize(a: SynthesizeArgs) -> CliResult {
     if is_point_list(&a.input) {
         super::points::synthesize(&a.input, a.output.as_ref(), a.scheme, a.boundary)
     } else {
-        super::array::synthesize(&a)
+        synthesize_array(&a)
     }
+}
+
+fn required_output(o: &Option<PathBuf>, input: &Path) -> Result<PathBuf, Failure> {
+    o.clone().ok_or_else(|| {
+        Failure(format!(
+            "{}: images, volumes and heightmaps need an output file (-o OUT)",
+            input.display()
+        ))
+    })
+}
+
+/// `mra analyze IN -o OUT` (the arguments as options).
+fn analyze_array(a: &AnalyzeArgs) -> CliResult {
+    let output = required_output(&a.output, &a.input)?;
+    let o = AnalyzeOptions {
+        spec: PyramidSpec {
+            scheme: a.scheme,
+            boundary: a.boundary,
+            levels: a.levels.unwrap_or(DEFAULT_LEVELS),
+            order: a.order,
+            axes: vec![],
+        },
+        visual: a.visual,
+        slice: a.slice,
+        read: ReadOptions::default(),
+        quiet: false,
+    };
+    analyze_path(&a.input, &output, &o)
+}
+
+/// `mra synthesize PYRAMID -o OUT` (the arguments as options).
+fn synthesize_array(a: &SynthesizeArgs) -> CliResult {
+    let output = required_output(&a.output, &a.input)?;
+    synthesize_path(&a.input, &output, false)
 }

@@ -1,7 +1,7 @@
 //! `mra analyze` / `mra synthesize` on images, volumes and heightmaps (any input
 //! [`crate::io`] reads). `src/cli/analyze.rs` parses the arguments and calls
-//! [`analyze`] / [`synthesize`] for every input that is not a point list; the
-//! `*_path` functions take the options directly (tests, other commands).
+//! [`analyze_path`] / [`synthesize_path`] for every input that is not a point list
+//! (tests and other commands call them too).
 //!
 //! `analyze IN -o OUT` writes the pyramid in the Mallat layout as float32 TIFF (2-D,
 //! all channels) or float32 NRRD (3-D) with scheme, boundary, levels, order and the
@@ -9,9 +9,8 @@
 //! (`--slice z` picks the slice of a volume). `synthesize PYRAMID -o OUT` reconstructs
 //! the input in its own sample type, in the format OUT's extension names.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
-use super::analyze::{AnalyzeArgs, SynthesizeArgs};
 use super::io_cmds::{read_input, write_output};
 use super::{CliResult, Failure};
 use crate::io::{self, pyramid_file, ReadOptions};
@@ -20,40 +19,6 @@ use crate::tensor::PyramidSpec;
 
 /// Levels for arrays when `--levels` is not given.
 pub const DEFAULT_LEVELS: usize = 3;
-
-fn required_output(o: &Option<PathBuf>, input: &Path) -> Result<PathBuf, Failure> {
-    o.clone().ok_or_else(|| {
-        Failure(format!(
-            "{}: images, volumes and heightmaps need an output file (-o OUT)",
-            input.display()
-        ))
-    })
-}
-
-/// `mra analyze IN -o OUT` (arguments parsed by `src/cli/analyze.rs`).
-pub fn analyze(a: &AnalyzeArgs) -> CliResult {
-    let output = required_output(&a.output, &a.input)?;
-    let o = AnalyzeOptions {
-        spec: PyramidSpec {
-            scheme: a.scheme,
-            boundary: a.boundary,
-            levels: a.levels.unwrap_or(DEFAULT_LEVELS),
-            order: a.order,
-            axes: vec![],
-        },
-        visual: a.visual,
-        slice: a.slice,
-        read: ReadOptions::default(),
-        quiet: false,
-    };
-    analyze_path(&a.input, &output, &o)
-}
-
-/// `mra synthesize PYRAMID -o OUT` (arguments parsed by `src/cli/analyze.rs`).
-pub fn synthesize(a: &SynthesizeArgs) -> CliResult {
-    let output = required_output(&a.output, &a.input)?;
-    synthesize_path(&a.input, &output, false)
-}
 
 /// What `mra analyze` needs besides the paths.
 #[derive(Clone, Debug)]

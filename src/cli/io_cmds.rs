@@ -22,6 +22,9 @@ pub struct RawArgs {
     /// Byte order of headerless input.
     #[arg(long, value_enum, default_value_t = Endian::Little)]
     pub endian: Endian,
+    /// Accept a DICOM series with missing or repeated slice positions (step = mean).
+    #[arg(long)]
+    pub allow_uneven_slices: bool,
 }
 
 #[derive(ValueEnum, Debug, Clone, Copy, Default, PartialEq, Eq)]
@@ -38,7 +41,10 @@ impl RawArgs {
             if self.dtype.is_some() {
                 return Err(Failure("--dtype needs --dims WxH[xD]".into()));
             }
-            return Ok(ReadOptions::default());
+            return Ok(ReadOptions {
+                uneven_slices: self.allow_uneven_slices,
+                ..Default::default()
+            });
         };
         let mut d: Vec<usize> = dims
             .split(['x', 'X'])
@@ -65,6 +71,7 @@ impl RawArgs {
                 sample_type: ty,
                 big_endian: self.endian == Endian::Big,
             }),
+            uneven_slices: self.allow_uneven_slices,
         })
     }
 }

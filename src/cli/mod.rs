@@ -1,7 +1,7 @@
 //! The `mra` command line. A thin `clap` shell: every command calls the library and
 //! adds the file name to errors. One file per command group.
 
-use clap::{Parser, Subcommand};
+use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 
 pub mod analyze;
 pub mod array;
@@ -10,6 +10,7 @@ pub mod curve;
 pub mod demo;
 pub mod io_cmds;
 pub mod mesh;
+pub mod outputs;
 pub mod points;
 pub mod scheme;
 pub mod solid;
@@ -20,7 +21,13 @@ pub mod upscale;
 
 /// Multiresolution codec, upscaler and terrain synthesis for images, volumes and heightmaps.
 #[derive(Parser, Debug)]
-#[command(name = "mra", version, about, long_about = None)]
+#[command(
+    name = "mra",
+    version,
+    about,
+    long_about = None,
+    after_help = "Environment:\n  MRA_MAX_BYTES  memory budget for one raster, decoded or planned (default 8G; e.g. 512M, 32G):\n                 a file whose header declares more, or a command whose output would take\n                 more, is refused before anything is allocated"
+)]
 pub struct Cli {
     #[command(subcommand)]
     pub command: Command,
@@ -109,32 +116,115 @@ impl Failure {
 
 pub type CliResult = std::result::Result<(), Failure>;
 
-/// Parse the arguments, run the command, and return the process exit code.
+/// The longest error message printed; the rest is counted, not shown (a message may quote
+/// bytes of a damaged file).
+pub const MAX_MESSAGE_CHARS: usize = 400;
+
+/// `message` as one printable line: control characters (newlines, tabs, escapes) become
+/// spaces, runs of spaces one space, undecodable bytes `?`, and past
+/// [`MAX_MESSAGE_CHARS`] the text is cut with "… (N more characters)".
+pub fn one_line(message: &str) -> String {
+    let mut out = String::with_capacity(message.len().min(MAX_MESSAGE_CHARS + 32));
+    let mut shown = 0usize;
+    let mut hidden = 0usize;
+    let mut space = false;
+    for c in message.trim().chars() {
+        let c = match c {
+            c if c.is_control() || c.is_whitespace() => ' ',
+            '\u{FFFD}' => '?',
+            c => c,
+        };
+        if c == ' ' {
+            if space {
+                continue;
+            }
+            space = true;
+        } else {
+            space = false;
+        }
+        if shown < MAX_MESSAGE_CHARS {
+            out.push(c);
+            shown += 1;
+        } else {
+            hidden += 1;
+        }
+    }
+    if hidden > 0 {
+        out.push_str(&format!("… ({hidden} more characters)"));
+    }
+    out
+}
+
+/// The clap command of `mra`, with the conventions every subcommand shares: a value that
+/// reads as a negative number (`--bpp -1`) is taken as the option's value, so that its
+/// check can name it invalid (instead of clap calling it an unexpected argument).
+pub fn command() -> clap::Command {
+    fn negatives(c: clap::Command) -> clap::Command {
+        c.mut_args(|a| {
+            if a.get_action().takes_values() {
+                a.allow_negative_numbers(true)
+            } else {
+                a
+            }
+        })
+        .mut_subcommands(negatives)
+    }
+    negatives(Cli::command())
+}
+
+/// A clap error as one line: its first paragraph (the message, and for missing arguments
+/// the names of the missing ones), without the usage and the tips.
+fn clap_line(e: &clap::Error) -> String {
+    let text = e.render().to_string();
+    let first: Vec<&str> = text
+        .lines()
+        .skip_while(|l| l.trim().is_empty())
+        .take_while(|l| !l.trim().is_empty())
+        .map(|l| l.trim())
+        .collect();
+    let msg = first.join(" ");
+    let msg = msg.trim_start_matches("error: ");
+    if msg.is_empty() {
+        "invalid arguments".into()
+    } else {
+        one_line(msg)
+    }
+}
+
+/// Parse the arguments, run the command, and return the process exit code: 0 on success,
+/// 2 with one line on stderr on any failure (bad arguments included), and 2 with the help
+/// on stderr when a command is missing (`mra` alone, `mra curve`).
 pub fn main() -> i32 {
-    let cli = match Cli::try_parse() {
+    let parsed = command().try_get_matches().and_then(|m| {
+        let name = m.subcommand_name().unwrap_or("mra").to_string();
+        Cli::from_arg_matches(&m).map(|cli| (cli, name))
+    });
+    let (cli, name) = match parsed {
         Ok(cli) => cli,
         Err(e) => {
             use clap::error::ErrorKind as K;
-            let code = match e.kind() {
-                K::DisplayHelp
-                | K::DisplayVersion
-                | K::DisplayHelpOnMissingArgumentOrSubcommand => 0,
-                _ => 2,
+            return match e.kind() {
+                K::DisplayHelp | K::DisplayVersion => {
+                    let _ = e.print();
+                    0
+                }
+                K::DisplayHelpOnMissingArgumentOrSubcommand => {
+                    eprint!("{}", e.render());
+                    2
+                }
+                _ => {
+                    eprintln!("mra: {}", clap_line(&e));
+                    2
+                }
             };
-            if code == 0 {
-                let _ = e.print();
-            } else {
-                // one line: clap's first line of the message
-                let msg = e.to_string();
-                let first = msg
-                    .lines()
-                    .find(|l| !l.trim().is_empty())
-                    .unwrap_or("invalid arguments");
-                eprintln!("mra: {}", first.trim_start_matches("error: "));
-            }
-            return code;
         }
     };
+    let args: Vec<std::ffi::OsString> = std::env::args_os().skip(1).collect();
+    if let Err(f) = outputs::check(&args) {
+        eprintln!("mra: {f}");
+        return 2;
+    }
+    let activity = crate::progress::Activity::start(&name);
     let result = match cli.command {
         Command::Demo(a) => demo::run(a),
         Command::Analyze(a) => analyze::run_analyze(a),
@@ -159,11 +249,32 @@ pub fn main() -> i32 {
         Command::Solid(c) => solid::run(c),
         Command::Volume(c) => solid::run_volume(c),
     };
+    drop(activity);
     match result {
         Ok(()) => 0,
         Err(f) => {
-            eprintln!("mra: {f}");
+            eprintln!("mra: {}", one_line(&f.to_string()));
             2
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn messages_become_one_printable_bounded_line() {
+        assert_eq!(one_line("a\nb\r\n\tc  d"), "a b c d");
+        assert_eq!(one_line("bad \u{1b}[31m\u{0}x\u{FFFD}"), "bad [31m x?");
+        let long = "x".repeat(MAX_MESSAGE_CHARS + 50);
+        let l = one_line(&long);
+        assert!(l.starts_with(&"x".repeat(MAX_MESSAGE_CHARS)));
+        assert!(l.ends_with("… (50 more characters)"), "{l}");
+    }
+
+    #[test]
+    fn the_command_is_consistent() {
+        command().debug_assert();
     }
 }

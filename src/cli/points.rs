@@ -138,6 +138,21 @@ pub fn subdivide(
             rule.min_points(ends)
         )));
     }
+    // the refined length, step by step, against the memory budget before refining
+    let budget = crate::limits::Limits::from_env()?;
+    let mut n = pts.len();
+    for _ in 0..steps {
+        n = rule.refined_len(ends, n);
+        let bytes = (n as u64).saturating_mul(pts.dim as u64 * 8);
+        if bytes > budget.max_bytes {
+            return Err(Failure(format!(
+                "{}: {steps} steps of {rule:?} subdivision from {} points would need more than {bytes} bytes, over the memory budget of {} bytes (expected fewer steps; MRA_MAX_BYTES raises the budget)",
+                input.display(),
+                pts.len(),
+                budget.max_bytes
+            )));
+        }
+    }
     let fine = refine_steps(&pts.data, pts.dim, rule, ends, steps)
         .map_err(|e| Failure::context(input.display(), e))?;
     emit(out, |w| points::write(pts.dim, &fine, w))

@@ -62,10 +62,20 @@ pub enum Command {
     Volume {
         /// Scene file (JSON: primitives, CSG operations, blends; examples in corpus/scenes).
         scene: PathBuf,
-        /// Rays per side of the grid of parallel rays.
-        #[arg(long, default_value_t = tlist::DEFAULT_RAYS)]
+        /// Rays per side of the grid of parallel rays (1 to 16384).
+        #[arg(long, default_value_t = tlist::DEFAULT_RAYS, value_parser = parse_rays)]
         rays: usize,
     },
+}
+
+/// Most rays per side of `solid volume` (16384² ≈ 2.7 × 10⁸ rays).
+pub const MAX_RAYS: usize = 1 << 14;
+
+fn parse_rays(s: &str) -> Result<usize, String> {
+    match s.parse::<usize>() {
+        Ok(n) if (1..=MAX_RAYS).contains(&n) => Ok(n),
+        _ => Err(format!("{s} rays per side (expected 1 to {MAX_RAYS})")),
+    }
 }
 
 /// `mra volume …`.
@@ -221,7 +231,9 @@ pub fn run(c: Command) -> CliResult {
         Command::Volume { scene: s, rays } => {
             let sc = scene(&s)?;
             let t = Instant::now();
-            let v = tlist::volume(&sc.root, rays, tlist::DEFAULT_STEPS)?;
+            let bar = crate::progress::Progress::new(rays as u64, "rays", false);
+            let v = tlist::volume_with(&sc.root, rays, tlist::DEFAULT_STEPS, &bar)?;
+            bar.finish();
             println!(
                 "volume {v:.9} ({rays}x{rays} rays, {:.3} s)",
                 t.elapsed().as_secs_f64()

@@ -434,8 +434,16 @@ fn transfer_volume(a: &TransferArgs, br: Raster, er: Raster) -> CliResult {
             er.dims.len()
         )));
     }
+    // voids are filled (pull-push) before synthesis, as the 2-D path fills them
     let vol = |r: &Raster, p: &Path| {
-        terrain::Volume::new([r.dims[0], r.dims[1], r.dims[2]], r.channels, r.to_f64())
+        let mut data = r.to_f64();
+        let mut shape = r.dims.clone();
+        shape.push(r.channels);
+        if let Some(v) = io::nodata::Voids::find(&data, r.meta.nodata) {
+            v.fill(&mut data, &shape, 3)
+                .map_err(|e| Failure::context(p.display(), e))?;
+        }
+        terrain::Volume::new([r.dims[0], r.dims[1], r.dims[2]], r.channels, data)
             .map_err(|e| Failure::context(p.display(), e))
     };
     let (base, example) = (vol(&br, &a.to)?, vol(&er, &a.from)?);
@@ -445,10 +453,11 @@ fn transfer_volume(a: &TransferArgs, br: Raster, er: Raster) -> CliResult {
     };
     let (v, report) = terrain::transfer_volume(&base, &example, &o)?;
     let ty = br.sample_type();
-    let out = Raster {
+    let mut out = Raster {
         samples: Samples::from_f64(&v.data, ty),
         ..br
     };
+    out.meta.nodata = None;
     write_output(&a.output, &out, false)?;
     if a.m.json {
         print_json(&report);
@@ -512,11 +521,24 @@ pub fn denoise(a: DenoiseArgs) -> CliResult {
     } else {
         let r = read_input(&a.input, &ReadOptions::default())?;
         let (shape, axes) = io::array::array_shape(&r.dims, r.channels);
-        let mut arr = Array::from_shape_vec(&shape, r.to_f64())?;
+        // voids never enter the filter: filled for it, marked again after
+        let mut data = r.to_f64();
+        let voids = io::nodata::Voids::find(&data, r.meta.nodata);
+        if let Some(v) = &voids {
+            let mut grid = r.dims.clone();
+            grid.push(r.channels);
+            v.fill(&mut data, &grid, r.dims.len())
+                .map_err(|e| Failure::context(a.input.display(), e))?;
+        }
+        let mut arr = Array::from_shape_vec(&shape, data)?;
         let rep = denoise::denoise(&mut arr, &axes, &o)
             .map_err(|e| Failure::context(a.input.display(), e))?;
+        let mut out_data = arr.into_data();
+        if let Some(v) = &voids {
+            v.restore(&mut out_data, &v.mask, false);
+        }
         let out = Raster {
-            samples: Samples::from_f64(arr.data(), r.sample_type()),
+            samples: Samples::from_f64(&out_data, r.sample_type()),
             ..r
         };
         write_output(&a.output, &out, false)?;

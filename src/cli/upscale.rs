@@ -85,8 +85,9 @@ pub struct DownscaleArgs {
     /// Levels of REDUCE-RESOLUTION (each about halves every chosen axis).
     #[arg(long, default_value_t = 1)]
     pub levels: usize,
-    /// haar, chaikin or cubic (the MRA's analysis filter A).
-    #[arg(long, default_value = "cubic")]
+    /// The MRA scheme whose analysis filter A reduces (chaikin-wide, the default, aliases least
+    /// and measures best; also haar, chaikin, cubic, linear, cubic-wide, cdf97).
+    #[arg(long, default_value = "chaikin-wide")]
     pub scheme: Scheme,
     /// interpolating, periodic or symmetric.
     #[arg(long, default_value = "symmetric")]
@@ -112,30 +113,41 @@ fn parse_size(s: &str) -> Result<Vec<usize>, Failure> {
     }
 }
 
-/// Keep freed buffers of up to 32 MiB in the allocator instead of returning them to the
-/// system: the refined area mode allocates and frees image-sized arrays a dozen times, and
-/// fresh pages cost a page fault each (a third of its time on a Kodak image). Larger
-/// arrays (volumes) are still mapped and unmapped directly, so peak memory is unchanged.
-#[cfg(all(target_os = "linux", target_env = "gnu"))]
-fn keep_freed_buffers() {
-    extern "C" {
-        fn mallopt(param: i32, value: i32) -> i32;
+/// Refuse an output that cannot fit the memory budget before anything is allocated: the
+/// output's samples in f32 (the working type) plus the output in its stored type.
+fn check_budget(
+    input: &std::path::Path,
+    r: &crate::io::Raster,
+    plans: &[upscale::AxisPlan],
+) -> Result<(), Failure> {
+    let budget = crate::limits::Limits::from_env()?;
+    let dims: Vec<u64> = (0..r.dims.len())
+        .map(|a| {
+            plans
+                .iter()
+                .find(|p| p.axis == a)
+                .map_or(r.dims[a], |p| p.len) as u64
+        })
+        .collect();
+    let samples = dims
+        .iter()
+        .try_fold(r.channels as u64, |acc, &d| acc.checked_mul(d))
+        .unwrap_or(u64::MAX);
+    let bytes = samples.saturating_mul(4 + r.sample_type().size() as u64);
+    if bytes > budget.max_bytes {
+        let size: Vec<String> = dims.iter().rev().map(|d| d.to_string()).collect();
+        return Err(Failure(format!(
+            "{}: output {} needs {bytes} bytes, over the memory budget of {} bytes (expected at most that; MRA_MAX_BYTES raises it)",
+            input.display(),
+            size.join("x"),
+            budget.max_bytes
+        )));
     }
-    const M_TRIM_THRESHOLD: i32 = -1;
-    const M_MMAP_THRESHOLD: i32 = -3;
-    // SAFETY: glibc's mallopt only changes allocator thresholds; called before any
-    // threads of this command allocate.
-    unsafe {
-        mallopt(M_MMAP_THRESHOLD, 32 << 20);
-        mallopt(M_TRIM_THRESHOLD, 256 << 20);
-    }
+    Ok(())
 }
 
-#[cfg(not(all(target_os = "linux", target_env = "gnu")))]
-fn keep_freed_buffers() {}
-
 pub fn run_upscale(a: UpscaleArgs) -> CliResult {
-    keep_freed_buffers();
+    crate::tuning::keep_freed_buffers();
     let r = read_input(&a.input, &a.raw.options()?)?;
     let nd = r.dims.len();
     let (axes, time) = match &a.axes {
@@ -151,8 +163,8 @@ pub fn run_upscale(a: UpscaleArgs) -> CliResult {
         order: a.order.map(usize::from),
         clamp: a.clamp,
     };
-    let big = r.samples.len() > 1 << 24;
-    let bar = Progress::new(plans.len() as u64 + 1, "upscale", a.quiet || !big);
+    check_budget(&a.input, &r, &plans)?;
+    let bar = Progress::new(plans.len() as u64 + 1, "upscale", a.quiet);
     let t = std::time::Instant::now();
     let out = upscale::upscale_raster(r, &method, &plans, &bar)
         .map_err(|e| Failure::context(a.input.display(), e))?;

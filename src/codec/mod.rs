@@ -433,7 +433,84 @@ impl Prepared {
     }
 }
 
-/// Encode a raster into the bytes of an `.mra` file.
+/// The `meta.extra` key listing the void samples of an encoded raster as runs
+/// `start:length` (sample indices, channels interleaved).
+const VOID_RUNS: &str = "nodata.voids";
+
+/// `r` with its void samples ([`crate::io::nodata`]) filled by pull-push and their runs
+/// kept in [`VOID_RUNS`]; `None` when no sample (or every sample) is void.
+fn with_voids_filled(r: &Raster) -> Result<Option<Raster>> {
+    let mut v = r.to_f64();
+    let Some(voids) = crate::io::nodata::Voids::find(&v, r.meta.nodata) else {
+        return Ok(None);
+    };
+    if voids.count() == v.len() {
+        return Ok(None);
+    }
+    let mut shape = r.dims.clone();
+    shape.push(r.channels);
+    voids.fill(&mut v, &shape, r.dims.len())?;
+    let mut runs = Vec::new();
+    let mut i = 0;
+    while i < voids.mask.len() {
+        if voids.mask[i] {
+            let start = i;
+            while i < voids.mask.len() && voids.mask[i] {
+                i += 1;
+            }
+            runs.push(format!("{start}:{}", i - start));
+        } else {
+            i += 1;
+        }
+    }
+    let mut out = Raster::new(
+        r.dims.clone(),
+        r.channels,
+        Samples::from_f64(&v, r.sample_type()),
+        r.kind,
+    )?;
+    out.meta = r.meta.clone();
+    out.meta.extra.insert(VOID_RUNS.into(), runs.join(" "));
+    Ok(Some(out))
+}
+
+/// Mark the voids listed in `meta.extra[VOID_RUNS]` on a raster decoded at level `k`
+/// (an output sample is void when its whole footprint on the full grid is) and drop
+/// the key. Malformed runs are ignored.
+fn mark_voids(r: &mut Raster, full: &[usize], maps: &[crate::io::AxisMap]) {
+    let Some(runs) = r.meta.extra.remove(VOID_RUNS) else {
+        return;
+    };
+    let Ok(n) = crate::io::bytes::sample_count(full, r.channels) else {
+        return;
+    };
+    let mut mask = vec![false; n];
+    for run in runs.split_whitespace() {
+        let Some((a, l)) = run.split_once(':') else {
+            return;
+        };
+        let (Ok(a), Ok(l)) = (a.parse::<usize>(), l.parse::<usize>()) else {
+            return;
+        };
+        match a.checked_add(l).filter(|&e| e <= n) {
+            Some(e) => mask[a..e].iter_mut().for_each(|m| *m = true),
+            None => return,
+        }
+    }
+    let voids = crate::io::nodata::Voids {
+        mask,
+        marker: r.meta.nodata.unwrap_or(f64::NAN),
+        range: (f64::NEG_INFINITY, f64::INFINITY),
+    };
+    let mut shape = full.to_vec();
+    shape.push(r.channels);
+    let m = voids.footprint(&shape, &r.dims, maps);
+    crate::io::with_samples!(&mut r.samples, v => voids.restore(v, &m, false));
+}
+
+/// Encode a raster into the bytes of an `.mra` file. Void samples (NaN, `meta.nodata`)
+/// are filled by pull-push before the transform and listed in the metadata, so that the
+/// decoder marks them again ([`crate::io::nodata`]).
 pub fn encode(r: &Raster, opts: &EncodeOptions) -> Result<Vec<u8>> {
     let n = crate::io::bytes::sample_count(&r.dims, r.channels)?;
     if n != r.samples.len() {
@@ -443,6 +520,13 @@ pub fn encode(r: &Raster, opts: &EncodeOptions) -> Result<Vec<u8>> {
             "dims × channels samples",
         ));
     }
+    match with_voids_filled(r)? {
+        Some(filled) => encode_filled(&filled, opts),
+        None => encode_filled(r, opts),
+    }
+}
+
+fn encode_filled(r: &Raster, opts: &EncodeOptions) -> Result<Vec<u8>> {
     match opts.rate {
         Rate::Lossless => encode_lossless(r, opts),
         Rate::MaxError(e) => encode_max_error(r, opts, e),
@@ -1343,17 +1427,62 @@ fn lossy_values(
 fn finish(p: &Parsed, region: Vec<usize>, samples: Samples, k: usize) -> Result<Raster> {
     let h = &p.header;
     let mut r = Raster::new(region.clone(), h.channels, samples, h.kind)?;
-    r.meta = p.meta.clone();
-    if k > 0 {
-        if let Some(s) = &mut r.meta.spacing {
-            for (i, v) in s.iter_mut().enumerate() {
-                if i < region.len() {
-                    *v *= h.dims[i] as f64 / region[i] as f64;
-                }
-            }
+    let maps = coarse_maps(p, k);
+    r.meta = if k > 0 {
+        p.meta.resampled(&h.dims, &region, &maps)
+    } else {
+        p.meta.clone()
+    };
+    mark_voids(&mut r, &h.dims, &maps);
+    Ok(r)
+}
+
+/// Where a scheme's coarse sample `i` sits on the fine grid of one level: at fine index
+/// `2i + o`. Haar (and the lossless S-transform): the mean of fine samples `2i`, `2i+1`,
+/// `o = ½`. Chaikin: fine `2i`, `2i+1` are `¾ C_i + ¼ C_{i+1}` and `¼ C_i + ¾ C_{i+1}`,
+/// so `C_i` sits at `o = −½`. Cubic B-spline: fine `2i` is `⅛ C_{i−1} + ¾ C_i + ⅛ C_{i+1}`,
+/// `o = 0`. The schemes with an odd-length regular row (linear, linear-wide, cubic-wide, CDF
+/// 9/7) centre `C_i` on fine `2i` (`o = 0`); chaikin-wide's even row, like Chaikin's, between fine
+/// `2i − 1` and `2i` (`o = −½`).
+pub fn coarse_offset(scheme: Scheme) -> f64 {
+    match scheme {
+        Scheme::Haar => 0.5,
+        Scheme::Chaikin | Scheme::ChaikinWide => -0.5,
+        Scheme::Cubic | Scheme::Linear | Scheme::LinearWide | Scheme::CubicWide | Scheme::Cdf97 => {
+            0.0
         }
     }
-    Ok(r)
+}
+
+/// Per spatial axis, where the samples of the coarse block after `k` levels sit on the
+/// full grid: each level that shortens the axis maps by `step 2`, offset
+/// [`coarse_offset`] (an odd length's carried last sample is off this grid by at most
+/// half a coarse cell).
+fn coarse_maps(p: &Parsed, k: usize) -> Vec<crate::io::AxisMap> {
+    let h = &p.header;
+    let o = if h.mode == Mode::Lossless {
+        0.5
+    } else {
+        coarse_offset(h.scheme)
+    };
+    let pyr = &p.plan.pyr;
+    (0..h.dims.len())
+        .map(|a| {
+            let mut m = crate::io::AxisMap::IDENTITY;
+            if let Some(i) = pyr.spec.axes.iter().position(|&x| x == a) {
+                let lens = &pyr.lengths[i];
+                for l in 0..k.min(pyr.axis_levels(i)) {
+                    if lens[l + 1] < lens[l] {
+                        m = m.then(crate::io::AxisMap {
+                            offset: o,
+                            step: 2.0,
+                        });
+                    }
+                }
+            }
+            m
+        })
+        .collect()
 }
 
 /// Decode from a stream of `len` bytes.
@@ -1515,7 +1644,7 @@ pub fn keep_psnr(
 }
 
 /// Keep frames `a..b` of the slowest axis (time of an (x, y, t) sequence, slices of
-/// a volume).
+/// a volume); the origin moves to frame `a` ([`crate::io::AxisMap::crop`]).
 pub fn frames(r: Raster, a: usize, b: usize) -> Result<Raster> {
     let t = if r.dims.len() >= 2 { r.dims[0] } else { 0 };
     if a >= b || b > t {
@@ -1534,8 +1663,11 @@ pub fn frames(r: Raster, a: usize, b: usize) -> Result<Raster> {
         Samples::F32(x) => Samples::F32(x[a * per..b * per].to_vec()),
         _ => Samples::from_f64(&v[a * per..b * per], r.sample_type()),
     };
+    let mut maps = vec![crate::io::AxisMap::IDENTITY; r.dims.len()];
+    maps[0] = crate::io::AxisMap::crop(a);
+    let meta = r.meta.resampled(&r.dims, &dims, &maps);
     let mut out = Raster::new(dims, r.channels, samples, r.kind)?;
-    out.meta = r.meta;
+    out.meta = meta;
     Ok(out)
 }
 

@@ -29,6 +29,16 @@ pub const MAX_POINTS: usize = 50_000_000;
 
 /// Parse a point table (see the module doc).
 pub fn parse(text: &str) -> Result<PointTable> {
+    parse_net(text, true)
+}
+
+/// Parse a plain point list: [`parse`] with blank lines ignored (one row of every point).
+pub fn parse_list(text: &str) -> Result<PointTable> {
+    parse_net(text, false)
+}
+
+/// [`parse`]; a blank line ends a row of the net when `rows` is set.
+fn parse_net(text: &str, rows_on_blank: bool) -> Result<PointTable> {
     let mut header: Option<Vec<String>> = None;
     let mut rows: Vec<Vec<Vec<f64>>> = vec![Vec::new()];
     let mut width: Option<usize> = None;
@@ -37,7 +47,7 @@ pub fn parse(text: &str) -> Result<PointTable> {
         let line = raw.split('#').next().unwrap_or("").trim();
         if line.is_empty() {
             // a blank line (not a comment-only line) ends a row
-            if raw.trim().is_empty() && !rows.last().is_none_or(|r| r.is_empty()) {
+            if rows_on_blank && raw.trim().is_empty() && !rows.last().is_none_or(|r| r.is_empty()) {
                 rows.push(Vec::new());
             }
             continue;

@@ -28,6 +28,7 @@ pub mod eigen;
 pub mod geometry;
 pub mod knot;
 pub mod nurbs;
+#[cfg(feature = "geometry")]
 pub mod plot;
 pub mod poly;
 

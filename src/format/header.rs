@@ -86,6 +86,11 @@ fn scheme_code(s: Scheme) -> u8 {
         Scheme::Haar => 0,
         Scheme::Chaikin => 1,
         Scheme::Cubic => 2,
+        Scheme::Linear => 3,
+        Scheme::ChaikinWide => 4,
+        Scheme::CubicWide => 5,
+        Scheme::Cdf97 => 6,
+        Scheme::LinearWide => 7,
     }
 }
 
@@ -206,12 +211,21 @@ impl Header {
             2 => Mode::MaxError,
             k => return Err(bad(format!("mode {k}"), "0 lossy, 1 lossless, 2 max-error")),
         };
-        let scheme = match c.u8()? {
-            0 => Scheme::Haar,
-            1 => Scheme::Chaikin,
-            2 => Scheme::Cubic,
-            k => return Err(bad(format!("scheme {k}"), "0 haar, 1 chaikin, 2 cubic")),
-        };
+        let scheme =
+            match c.u8()? {
+                0 => Scheme::Haar,
+                1 => Scheme::Chaikin,
+                2 => Scheme::Cubic,
+                3 => Scheme::Linear,
+                4 => Scheme::ChaikinWide,
+                5 => Scheme::CubicWide,
+                6 => Scheme::Cdf97,
+            7 => Scheme::LinearWide,
+                k => return Err(bad(
+                    format!("scheme {k}"),
+                    "0 haar, 1 chaikin, 2 cubic, 3 linear, 4 chaikin-wide, 5 cubic-wide, 6 cdf97, 7 linear-wide",
+                )),
+            };
         let boundary = match c.u8()? {
             0 => Boundary::Interpolating,
             1 => Boundary::Periodic,

@@ -3,13 +3,24 @@
 //! read; compressed transfer syntaxes are reported as unsupported.
 //!
 //! Slices are ordered by their position along the slice normal
-//! `n = row cosines × column cosines` (`ImagePositionPatient · n`); the slice step is the
-//! median distance between consecutive positions. Stored values are masked to
+//! `n = row cosines × column cosines` (`ImagePositionPatient · n`). Their positions must
+//! be evenly spaced (every step within 1 % of the median step) and distinct: a missing
+//! or duplicated slice is an error naming the folder and the positions, unless
+//! [`ReadOptions::uneven_slices`](super::ReadOptions) accepts it (the step is then the mean,
+//! `(last − first)/(slices − 1)`, and the positions are kept in
+//! `meta.extra["dicom.slice_positions"]`). Stored values are masked to
 //! `BitsStored` (sign-extended when `PixelRepresentation` = 1), then rescaled
 //! `v = stored × RescaleSlope + RescaleIntercept`: the result is i16 when the slope is 1,
 //! the intercept is an integer and every value fits, the stored type when there is no
 //! rescale, and f32 otherwise. Spacing `[step, PixelSpacing row, PixelSpacing column]`
-//! (mm), origin = `ImagePositionPatient` of the first slice.
+//! (mm), origin = `ImagePositionPatient` of the first slice, `space` =
+//! left-posterior-superior (DICOM's patient axes) and space directions, fastest axis
+//! first: `row cosines × PixelSpacing[1]`, `column cosines × PixelSpacing[0]` and, for a
+//! series, `(ImagePositionPatient_last − ImagePositionPatient_first)/(slices − 1)`.
+//!
+//! Before the file is parsed its element lengths are walked ([`check_lengths`]): an
+//! element declaring more bytes than the file holds, or a PixelData whose length is not
+//! `Rows × Columns × BitsAllocated / 8`, is rejected before anything is allocated.
 
 use std::path::{Path, PathBuf};
 
@@ -17,6 +28,7 @@ use dicom_object::{open_file, DefaultDicomObject, Tag};
 
 use super::{DataKind, Raster, SampleType, Samples};
 use crate::{Error, Result};
+use byteorder::{ByteOrder, LittleEndian};
 
 const ROWS: Tag = Tag(0x0028, 0x0010);
 const COLUMNS: Tag = Tag(0x0028, 0x0011);
@@ -56,11 +68,154 @@ struct Slice {
     stored_type: SampleType,
 }
 
+/// A malformed file, named by its file name (the caller names the folder or path).
 fn bad(path: &Path, what: impl std::fmt::Display) -> Error {
+    let name = path.file_name().map_or(path.as_os_str(), |n| n);
     Error::format(
-        format!("{}: {what}", path.display()),
+        format!("{}: {what}", Path::new(name).display()),
         "an uncompressed DICOM image",
     )
+}
+
+/// What the walk of a file's elements found: the transfer syntax and PixelData length.
+struct Walked {
+    transfer_syntax: String,
+    pixel_data: Option<u64>,
+}
+
+/// Value representations with a 4-byte length in explicit VR.
+const LONG_VRS: [&[u8; 2]; 13] = [
+    b"OB", b"OD", b"OF", b"OL", b"OV", b"OW", b"SQ", b"SV", b"UC", b"UN", b"UR", b"UT", b"UV",
+];
+
+const UNDEFINED: u32 = 0xFFFF_FFFF;
+
+/// Walk the elements of `b[pos..end]` (items and sequences of undefined length
+/// included), checking that every declared length fits in what remains. Returns the
+/// position after the walked elements (after a delimiter that ends them).
+fn walk(
+    path: &Path,
+    b: &[u8],
+    mut pos: usize,
+    end: usize,
+    explicit: bool,
+    depth: usize,
+    found: &mut Walked,
+) -> Result<usize> {
+    if depth > 32 {
+        return Err(bad(path, "sequences nested more than 32 deep"));
+    }
+    let short = |at: usize| bad(path, format!("element header at byte {at} ends early"));
+    while pos < end {
+        if end - pos < 8 {
+            return Err(short(pos));
+        }
+        let group = LittleEndian::read_u16(&b[pos..]);
+        let elem = LittleEndian::read_u16(&b[pos + 2..]);
+        if group == 0xFFFE {
+            let len = LittleEndian::read_u32(&b[pos + 4..]);
+            pos += 8;
+            match elem {
+                0xE00D | 0xE0DD => return Ok(pos),
+                _ if len == UNDEFINED => pos = walk(path, b, pos, end, explicit, depth + 1, found)?,
+                _ => {
+                    if len as usize > end - pos {
+                        return Err(too_long(path, group, elem, len, end - pos));
+                    }
+                    pos += len as usize;
+                }
+            }
+            continue;
+        }
+        let (len, hdr) = if explicit || group == 0x0002 {
+            let vr = [b[pos + 4], b[pos + 5]];
+            if LONG_VRS.contains(&&vr) {
+                if end - pos < 12 {
+                    return Err(short(pos));
+                }
+                (LittleEndian::read_u32(&b[pos + 8..]), 12)
+            } else {
+                (LittleEndian::read_u16(&b[pos + 6..]) as u32, 8)
+            }
+        } else {
+            (LittleEndian::read_u32(&b[pos + 4..]), 8)
+        };
+        pos += hdr;
+        if len == UNDEFINED {
+            pos = walk(path, b, pos, end, explicit, depth + 1, found)?;
+            continue;
+        }
+        if len as usize > end - pos {
+            return Err(too_long(path, group, elem, len, end - pos));
+        }
+        if (group, elem) == (0x0002, 0x0010) {
+            found.transfer_syntax = String::from_utf8_lossy(&b[pos..pos + len as usize])
+                .trim_end_matches(['\0', ' '])
+                .to_string();
+        }
+        if (group, elem) == (0x7FE0, 0x0010) && depth == 0 {
+            found.pixel_data = Some(len as u64);
+        }
+        pos += len as usize;
+    }
+    Ok(pos)
+}
+
+fn too_long(path: &Path, group: u16, elem: u16, len: u32, left: usize) -> Error {
+    bad(
+        path,
+        format!("element ({group:04X},{elem:04X}) declares {len} bytes but {left} remain"),
+    )
+}
+
+/// Check every element length of a DICOM file against the file before it is parsed
+/// (the parser allocates what a length declares).
+fn check_lengths(path: &Path) -> Result<Walked> {
+    let b = super::bytes::read_all(path)?;
+    if b.len() < 132 || &b[128..132] != b"DICM" {
+        return Err(bad(path, "no DICM preamble"));
+    }
+    let mut found = Walked {
+        transfer_syntax: String::new(),
+        pixel_data: None,
+    };
+    // the file meta group (0002) is explicit VR little endian, no sequences
+    let mut pos = 132;
+    while pos + 8 <= b.len() && LittleEndian::read_u16(&b[pos..]) == 0x0002 {
+        let elem = LittleEndian::read_u16(&b[pos + 2..]);
+        let vr = [b[pos + 4], b[pos + 5]];
+        let (len, hdr) = if LONG_VRS.contains(&&vr) && pos + 12 <= b.len() {
+            (LittleEndian::read_u32(&b[pos + 8..]), 12)
+        } else {
+            (LittleEndian::read_u16(&b[pos + 6..]) as u32, 8)
+        };
+        let left = b.len() - pos - hdr;
+        if len as usize > left {
+            return Err(too_long(path, 0x0002, elem, len, left));
+        }
+        let stop = pos + hdr + len as usize;
+        walk(path, &b, pos, stop, true, 0, &mut found)?;
+        pos = stop;
+    }
+    let ts = found.transfer_syntax.clone();
+    if !UNCOMPRESSED.contains(&ts.as_str()) {
+        let shown: String = ts
+            .chars()
+            .take(64)
+            .map(|c| if c.is_ascii_graphic() { c } else { '?' })
+            .collect();
+        return Err(Error::Unsupported {
+            what: "DICOM transfer syntax",
+            value: format!(
+                "{shown:?} in {} (expected uncompressed little endian: {})",
+                path.display(),
+                UNCOMPRESSED.join(", ")
+            ),
+        });
+    }
+    let explicit = ts != "1.2.840.10008.1.2";
+    walk(path, &b, pos, b.len(), explicit, 0, &mut found)?;
+    Ok(found)
 }
 
 fn int(obj: &DefaultDicomObject, tag: Tag) -> Option<i64> {
@@ -88,17 +243,12 @@ fn text(obj: &DefaultDicomObject, tag: Tag) -> String {
 }
 
 fn load_slice(path: &Path) -> Result<Slice> {
-    let obj = open_file(path).map_err(|e| bad(path, format!("cannot parse: {e}")))?;
-    let ts = obj.meta().transfer_syntax().to_string();
-    if !UNCOMPRESSED.contains(&ts.as_str()) {
-        return Err(Error::Unsupported {
-            what: "DICOM transfer syntax",
-            value: format!(
-                "{ts} in {} (only uncompressed little endian)",
-                path.display()
-            ),
-        });
-    }
+    let walked = check_lengths(path)?;
+    let obj = open_file(path).map_err(|e| {
+        let e = e.to_string();
+        let e: String = e.lines().next().unwrap_or("").chars().take(200).collect();
+        bad(path, format!("cannot parse: {e}"))
+    })?;
     let rows = int(&obj, ROWS).ok_or_else(|| bad(path, "no Rows"))? as usize;
     let cols = int(&obj, COLUMNS).ok_or_else(|| bad(path, "no Columns"))? as usize;
     let spp = int(&obj, SAMPLES_PER_PIXEL).unwrap_or(1);
@@ -116,6 +266,21 @@ fn load_slice(path: &Path) -> Result<Slice> {
     let n = rows
         .checked_mul(cols)
         .ok_or_else(|| bad(path, "Rows × Columns overflows"))?;
+    let want = (n as u64)
+        .checked_mul(alloc.max(0) as u64)
+        .map(|b| b.div_ceil(8))
+        .ok_or_else(|| bad(path, "Rows × Columns × BitsAllocated overflows"))?;
+    match walked.pixel_data {
+        Some(len) if len != want && len != want + (want & 1) => {
+            return Err(bad(
+                path,
+                format!(
+                "PixelData of {len} bytes for {rows}x{cols} samples of {alloc} bits ({want} bytes)"
+            ),
+            ))
+        }
+        _ => {}
+    }
     let elem = obj
         .element(PIXEL_DATA)
         .map_err(|_| bad(path, "no PixelData"))?;
@@ -212,14 +377,28 @@ fn rescale(values: Vec<i64>, slope: f64, intercept: f64, stored: SampleType) -> 
     )
 }
 
-fn set_meta(r: &mut Raster, s: &Slice, step: Option<f64>) {
+/// Spacing, origin, space and directions of a slice (`step`: the slice vector of a
+/// series, from the first slice to the next).
+fn set_meta(r: &mut Raster, s: &Slice, step: Option<[f64; 3]>) {
     let ps = s.pixel_spacing.unwrap_or([1.0, 1.0]);
-    r.meta.spacing = Some(match step {
-        Some(dz) => vec![dz, ps[0], ps[1]],
+    let norm = |v: &[f64; 3]| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+    r.meta.spacing = Some(match &step {
+        Some(dz) => vec![norm(dz), ps[0], ps[1]],
         None => vec![ps[0], ps[1]],
     });
     r.meta.origin = s.position.map(|p| p.to_vec());
     r.meta.units = Some("mm".into());
+    if let (Some(o), Some(_)) = (s.orientation, s.position) {
+        r.meta.space = Some("left-posterior-superior".into());
+        let mut dirs = vec![
+            vec![o[0] * ps[1], o[1] * ps[1], o[2] * ps[1]],
+            vec![o[3] * ps[0], o[4] * ps[0], o[5] * ps[0]],
+        ];
+        if let Some(dz) = step {
+            dirs.push(dz.to_vec());
+        }
+        r.meta.directions = Some(dirs);
+    }
     let ex = &mut r.meta.extra;
     ex.insert("dicom.modality".into(), s.modality.clone());
     ex.insert("dicom.series_uid".into(), s.series.clone());
@@ -263,8 +442,9 @@ pub fn dicom_files(dir: &Path) -> Result<Vec<PathBuf>> {
     Ok(files)
 }
 
-/// Read a folder holding one DICOM series as a volume `[slices, rows, columns]`.
-pub fn read_series(dir: &Path) -> Result<Raster> {
+/// Read a folder holding one DICOM series as a volume `[slices, rows, columns]`;
+/// `uneven_ok` accepts missing or repeated slice positions (see the module doc).
+pub fn read_series(dir: &Path, uneven_ok: bool) -> Result<Raster> {
     let files = dicom_files(dir)?;
     if files.is_empty() {
         return Err(Error::format(
@@ -305,19 +485,53 @@ pub fn read_series(dir: &Path) -> Result<Raster> {
             .unwrap_or(0.0)
     };
     slices.sort_by(|a, b| key(a).total_cmp(&key(b)));
-    let mut steps: Vec<f64> = slices.windows(2).map(|w| key(&w[1]) - key(&w[0])).collect();
+    let positions: Vec<f64> = slices.iter().map(key).collect();
+    let depth = slices.len();
+    let mut steps: Vec<f64> = positions.windows(2).map(|w| w[1] - w[0]).collect();
     steps.sort_by(f64::total_cmp);
-    let step = if steps.is_empty() || steps[steps.len() / 2] <= 0.0 {
-        slices[0].thickness.unwrap_or(1.0)
+    let median = steps.get(steps.len() / 2).copied().unwrap_or(0.0);
+    let even = steps
+        .iter()
+        .all(|&d| d > 0.0 && (d - median).abs() <= 0.01 * median);
+    if depth > 1 && !even && !uneven_ok {
+        let shown: Vec<String> = positions.iter().map(|p| format!("{p}")).collect();
+        let what = if steps
+            .iter()
+            .any(|&d| d.abs() <= 0.01 * median.abs().max(1e-6))
+        {
+            "repeated"
+        } else {
+            "unevenly spaced"
+        };
+        return Err(Error::format(
+            format!(
+                "{what} slice positions {} mm along the slice normal of the series",
+                shown.join(" / ")
+            ),
+            "distinct, evenly spaced slices (or --allow-uneven-slices)",
+        ));
+    }
+    // the slice vector: first to last over the steps between them (mean step)
+    let step = if depth > 1 {
+        match (slices[0].position, slices[depth - 1].position) {
+            (Some(a), Some(b)) if positions[depth - 1] > positions[0] => {
+                let k = (depth - 1) as f64;
+                [(b[0] - a[0]) / k, (b[1] - a[1]) / k, (b[2] - a[2]) / k]
+            }
+            _ => {
+                let t = slices[0].thickness.unwrap_or(1.0);
+                [normal[0] * t, normal[1] * t, normal[2] * t]
+            }
+        }
     } else {
-        steps[steps.len() / 2]
+        let t = slices[0].thickness.unwrap_or(1.0);
+        [normal[0] * t, normal[1] * t, normal[2] * t]
     };
     let (slope, intercept) = (slices[0].slope, slices[0].intercept);
     let same_rescale = slices
         .iter()
         .all(|s| s.slope == slope && s.intercept == intercept);
     let stored_type = slices[0].stored_type;
-    let depth = slices.len();
     let samples = if same_rescale {
         let mut all = Vec::with_capacity(depth * rows * cols);
         for s in &slices {
@@ -337,5 +551,11 @@ pub fn read_series(dir: &Path) -> Result<Raster> {
     };
     let mut r = Raster::new(vec![depth, rows, cols], 1, samples, DataKind::Volume)?;
     set_meta(&mut r, &slices[0], Some(step));
+    if !even {
+        let shown: Vec<String> = positions.iter().map(|p| format!("{p}")).collect();
+        r.meta
+            .extra
+            .insert("dicom.slice_positions".into(), shown.join(" "));
+    }
     Ok(r)
 }

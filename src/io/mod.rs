@@ -22,6 +22,8 @@
 //! slices.rs a folder of 2D slices (TIFF / PNG) as one volume
 //! hgt.rs    SRTM .hgt (big-endian i16, void −32768 kept as nodata)
 //! asc.rs    ESRI ASCII grid
+//! geometry.rs  where samples sit after a resample or crop ([`Metadata::resampled`])
+//! nodata.rs  void samples (NaN, `meta.nodata`) kept out of every filter
 //! raw.rs    headerless raw (.raw with dims/dtype/endian, .r16, .r32)
 //! bytes.rs  endian decoding, size checks before allocation, atomic writes
 //! array.rs  rasters through the tensor engine (analyze / synthesize / pictures)
@@ -34,14 +36,53 @@ use std::path::Path;
 
 use crate::{Error, Result};
 
+pub use geometry::AxisMap;
+
 pub mod array;
 pub mod asc;
 pub mod bytes;
+#[cfg(feature = "dicom")]
 pub mod dicom;
+/// DICOM without the `dicom` feature: files and series are recognised, then refused.
+#[cfg(not(feature = "dicom"))]
+pub mod dicom {
+    use super::Raster;
+    use crate::{Error, Result};
+    use std::path::{Path, PathBuf};
+
+    fn not_built(path: &Path) -> Error {
+        Error::Unsupported {
+            what: "DICOM input in a build without the `dicom` feature",
+            value: path.display().to_string(),
+        }
+    }
+    pub fn read_file(path: &Path) -> Result<Raster> {
+        Err(not_built(path))
+    }
+    pub fn read_series(dir: &Path) -> Result<Raster> {
+        Err(not_built(dir))
+    }
+    /// Does the file start with the DICOM preamble + `DICM`?
+    pub fn is_dicom(path: &Path) -> bool {
+        let mut head = [0u8; 132];
+        matches!(super::bytes::read_head(path, &mut head), Ok(132)) && &head[128..132] == b"DICM"
+    }
+    /// The DICOM files of a folder, by name.
+    pub fn dicom_files(dir: &Path) -> Result<Vec<PathBuf>> {
+        let mut files: Vec<PathBuf> = std::fs::read_dir(dir)?
+            .filter_map(|e| e.ok().map(|e| e.path()))
+            .filter(|p| p.is_file() && is_dicom(p))
+            .collect();
+        files.sort();
+        Ok(files)
+    }
+}
 pub mod exr;
+pub mod geometry;
 pub mod hgt;
 pub mod jpeg;
 pub mod nifti;
+pub mod nodata;
 pub mod nrrd;
 pub mod png;
 pub mod pnm;
@@ -634,6 +675,9 @@ pub struct RawSpec {
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct ReadOptions {
     pub raw: Option<RawSpec>,
+    /// Accept a DICOM series whose slice positions are unevenly spaced or repeated
+    /// (a missing or duplicated slice); the slice step is then their mean.
+    pub uneven_slices: bool,
 }
 
 /// Options for [`write_with`].
@@ -661,7 +705,7 @@ pub fn read_with(path: &Path, opts: &ReadOptions) -> Result<Raster> {
         Format::Nrrd => nrrd::read(path),
         Format::Nifti => nifti::read(path),
         Format::Dicom => dicom::read_file(path),
-        Format::DicomSeries => dicom::read_series(path),
+        Format::DicomSeries => dicom::read_series(path, opts.uneven_slices),
         Format::SliceFolder => slices::read(path),
         Format::Hgt => hgt::read(path),
         Format::Asc => asc::read(path),

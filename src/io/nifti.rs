@@ -69,24 +69,39 @@ fn datatype_code(t: SampleType, channels: usize) -> Result<i16> {
     })
 }
 
-/// Read the whole file, inflating `.nii.gz` (stopping at `limit` bytes).
-fn load(path: &Path) -> Result<Vec<u8>> {
-    let raw = bytes::read_all(path)?;
-    if raw.starts_with(&[0x1f, 0x8b]) {
-        let mut out = Vec::new();
-        MultiGzDecoder::new(&raw[..])
-            .take(1 << 36)
-            .read_to_end(&mut out)
-            .map_err(|e| bad(format!("gzip stream: {e}")))?;
-        Ok(out)
+/// The file as a stream (inflated for `.nii.gz`), with the most bytes it can yield:
+/// its length when plain, deflate's largest expansion (1032:1) of it when gzip.
+fn open(path: &Path) -> Result<(Box<dyn Read>, u64)> {
+    let mut head = [0u8; 2];
+    let n = bytes::read_head(path, &mut head)?;
+    let file = std::fs::File::open(path)?;
+    let len = file.metadata()?.len();
+    let file = std::io::BufReader::new(file);
+    Ok(if n == 2 && head == [0x1f, 0x8b] {
+        (
+            Box::new(MultiGzDecoder::new(file)),
+            len.saturating_mul(1032),
+        )
     } else {
-        Ok(raw)
-    }
+        (Box::new(file), len)
+    })
+}
+
+/// Read at most `n` more bytes of `src` onto `out` (gzip errors reported as format errors).
+fn read_up_to(src: &mut dyn Read, n: u64, out: &mut Vec<u8>) -> Result<()> {
+    src.take(n)
+        .read_to_end(out)
+        .map_err(|e| bad(format!("gzip stream: {e}")))?;
+    Ok(())
 }
 
 /// Read a `.nii` / `.nii.gz` file.
 pub fn read(path: &Path) -> Result<Raster> {
-    let b = load(path)?;
+    // the header first; then only as many bytes as it declares (a stream that inflates
+    // to more is not read further)
+    let (mut src, most) = open(path)?;
+    let mut b = Vec::with_capacity(HDR);
+    read_up_to(&mut src, HDR as u64, &mut b)?;
     if b.len() < HDR {
         return Err(bad(format!(
             "{} bytes, shorter than the 348-byte header",
@@ -147,11 +162,29 @@ pub fn read(path: &Path) -> Result<Raster> {
     if vox_offset.is_nan() || vox_offset < HDR as f32 {
         return Err(bad(format!("vox_offset {vox_offset} (expected ≥ 352)")));
     }
-    let off = vox_offset as usize;
-    let avail = b.len().saturating_sub(off) as u64;
+    let off = vox_offset as u64;
     let dims: Vec<usize> = sizes.iter().rev().copied().collect();
-    let need = checked_bytes(&dims, channels, ty, avail)?;
-    let samples = bytes::decode(&b[off..off + need], ty, big);
+    let budget = crate::limits::Limits::from_env()?;
+    let declared = (bytes::sample_count(&dims, channels)? as u64).saturating_mul(ty.size() as u64);
+    budget.check("NIfTI data bytes (memory budget MRA_MAX_BYTES)", declared)?;
+    // what the file can hold at most, checked before reading (exact for a plain file)
+    checked_bytes(&dims, channels, ty, most.saturating_sub(off))?;
+    let skip = off - HDR as u64;
+    let skipped = std::io::copy(&mut (&mut src).take(skip), &mut std::io::sink())
+        .map_err(|e| bad(format!("gzip stream: {e}")))?;
+    if skipped != skip {
+        return Err(bad(format!("vox_offset {off} beyond the end of the data")));
+    }
+    let mut data = Vec::with_capacity(declared.min(most.saturating_sub(off)).min(1 << 30) as usize);
+    read_up_to(&mut src, declared, &mut data)?;
+    // one byte more, so that a gzip stream that ends here has its trailer (CRC, length)
+    // checked; a stream that goes on is not read further
+    if data.len() as u64 == declared {
+        src.read(&mut [0u8; 1])
+            .map_err(|e| bad(format!("gzip stream: {e}")))?;
+    }
+    let need = checked_bytes(&dims, channels, ty, data.len() as u64)?;
+    let samples = bytes::decode(&data[..need], ty, big);
 
     let pixdim: Vec<f64> = (0..8).map(|i| f32_at(76 + 4 * i) as f64).collect();
     let mut spacing: Vec<f64> = (1..=sizes.len()).map(|i| pixdim[i].abs()).collect();

@@ -277,12 +277,20 @@ pub fn read(path: &Path) -> Result<Raster> {
     };
     let dims: Vec<usize> = spatial.iter().rev().copied().collect();
 
+    // the decoded size, checked against the memory budget before any data is read
+    let budget = crate::limits::Limits::from_env()?;
+    let need_bytes = (sample_count(&dims, channels)? as u64).saturating_mul(ty.size() as u64);
+    budget.check("NRRD data bytes (memory budget MRA_MAX_BYTES)", need_bytes)?;
+
     // the bytes holding the (possibly encoded) data
     let detached;
     let payload: &[u8] = match &h.data_file {
         Some(name) if name != "LIST" && !name.contains('%') => {
             let p: PathBuf = path.parent().unwrap_or(Path::new(".")).join(name);
-            detached = std::fs::read(&p)?;
+            // raw data at a known offset: exactly the bytes the header needs
+            let exact = (h.encoding == "raw" && h.byte_skip >= 0 && h.line_skip == 0)
+                .then(|| need_bytes.saturating_add(h.byte_skip as u64));
+            detached = read_data_file(&p, exact, budget.max_bytes)?;
             &detached
         }
         Some(other) => {
@@ -378,6 +386,53 @@ pub fn read(path: &Path) -> Result<Raster> {
     let mut r = Raster::new(dims, channels, samples, kind)?;
     r.meta = h.meta;
     Ok(r)
+}
+
+/// Read a detached data file: at most `exact` bytes when the header fixes how many it
+/// needs (a regular file or a character device such as `/dev/zero`), else the whole of a
+/// regular file of at most `max` bytes. A FIFO, socket or folder is refused before it is
+/// opened (opening a FIFO blocks until a writer appears, and its data may never end).
+fn read_data_file(p: &Path, exact: Option<u64>, max: u64) -> Result<Vec<u8>> {
+    let md = std::fs::metadata(p)?;
+    let ft = md.file_type();
+    #[cfg(unix)]
+    let device = {
+        use std::os::unix::fs::FileTypeExt;
+        ft.is_char_device() || ft.is_block_device()
+    };
+    #[cfg(not(unix))]
+    let device = false;
+    let limit = match exact {
+        Some(n) if ft.is_file() || device => n,
+        None if ft.is_file() => {
+            if md.len() > max {
+                return Err(Error::LimitsExceeded {
+                    what: "NRRD data file bytes (memory budget MRA_MAX_BYTES)",
+                    requested: md.len(),
+                    limit: max,
+                });
+            }
+            md.len()
+        }
+        _ => {
+            return Err(Error::Unsupported {
+                what: "NRRD data file",
+                value: format!(
+                    "{} is not a regular file (expected a regular file, or a device for raw data at a fixed offset)",
+                    p.display()
+                ),
+            })
+        }
+    };
+    let f = std::fs::File::open(p)?;
+    let cap = if ft.is_file() {
+        limit.min(md.len())
+    } else {
+        limit
+    };
+    let mut v = Vec::with_capacity(cap as usize);
+    f.take(limit).read_to_end(&mut v)?;
+    Ok(v)
 }
 
 /// Index of the end of the header and the start of the data (after `\n\n` or `\r\n\r\n`).

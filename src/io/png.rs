@@ -6,19 +6,107 @@ use std::fs::File;
 use std::io::{BufReader, Write};
 use std::path::Path;
 
-use image::{DynamicImage, ExtendedColorType, ImageEncoder, ImageFormat};
+use image::{DynamicImage, ExtendedColorType, ImageDecoder, ImageEncoder, ImageFormat};
 
 use super::{DataKind, Raster, Samples};
 use crate::{Error, Result};
 
-/// Decode `path` as `format` with `image`, allowing up to 2^33 bytes of pixels.
-pub(super) fn decode_with_image(path: &Path, format: ImageFormat) -> Result<Raster> {
-    let file = BufReader::new(File::open(path)?);
-    let mut reader = image::ImageReader::with_format(file, format);
+/// The most decoded bytes one byte of a file can hold, by format: the bound a header's
+/// declared size must meet before anything is allocated.
+///
+/// ```text
+/// PNG   1032   deflate's largest expansion (258-byte matches coded in 2 bits)
+/// PNM      8   one bit per sample (P1/P4 bitmaps) decoded to one byte
+/// JPEG  4096   every 8×8 block codes at least one bit: one byte covers at most 512 pixels
+///              (1536 bytes of RGB); the margin allows for arithmetic coding
+/// ```
+fn max_expansion(format: ImageFormat) -> u64 {
+    match format {
+        ImageFormat::Png => 1032,
+        ImageFormat::Pnm => 8,
+        _ => 4096,
+    }
+}
+
+/// What the header of an `image`-read file declares, read without decoding the pixels.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Header {
+    pub width: u32,
+    pub height: u32,
+    pub channels: u8,
+    /// Bytes of the decoded pixels.
+    pub decoded_bytes: u64,
+}
+
+/// Open `path` as `format` and read its header; the declared size is checked against the
+/// file's length ([`max_expansion`]) and the memory budget ([`crate::limits`]) before the
+/// decoder is returned, so no pixel buffer is sized by an unchecked header.
+fn open_checked(path: &Path, format: ImageFormat) -> Result<(Header, impl ImageDecoder)> {
+    let budget = crate::limits::Limits::from_env()?;
+    let file = File::open(path)?;
+    let len = file.metadata()?.len();
+    let mut reader = image::ImageReader::with_format(BufReader::new(file), format);
     let mut limits = image::Limits::default();
-    limits.max_alloc = Some(1 << 33);
+    limits.max_alloc = Some(budget.max_bytes);
     reader.limits(limits);
-    let img = reader.decode().map_err(|e| image_error(e, format))?;
+    let decoder = reader.into_decoder().map_err(|e| image_error(e, format))?;
+    let (width, height) = decoder.dimensions();
+    let header = Header {
+        width,
+        height,
+        channels: decoder.color_type().channel_count(),
+        decoded_bytes: decoder.total_bytes(),
+    };
+    let most = len.saturating_mul(max_expansion(format)).max(1 << 16);
+    if header.decoded_bytes > most {
+        return Err(Error::format(
+            format!(
+                "header declares {width}×{height} pixels ({} bytes decoded) but a {len}-byte {format:?} file holds at most {most}",
+                header.decoded_bytes
+            ),
+            "a size the file can hold",
+        ));
+    }
+    budget.check(
+        "decoded image bytes (memory budget MRA_MAX_BYTES)",
+        header.decoded_bytes,
+    )?;
+    if format == ImageFormat::Jpeg {
+        jpeg_end_check(path, len)?;
+    }
+    Ok((header, decoder))
+}
+
+/// A JPEG ends with its end-of-image marker `FF D9`; a file cut short has none in its last
+/// kilobyte (entropy-coded data never holds `FF D9`, it stuffs `FF` as `FF 00`), and the
+/// decoder would fill the missing blocks with grey instead of failing.
+fn jpeg_end_check(path: &Path, len: u64) -> Result<()> {
+    use std::io::{Read, Seek, SeekFrom};
+    let tail = len.min(1024);
+    let mut f = File::open(path)?;
+    f.seek(SeekFrom::Start(len - tail))?;
+    let mut buf = Vec::with_capacity(tail as usize);
+    f.take(tail).read_to_end(&mut buf)?;
+    if buf.windows(2).any(|w| w == [0xFF, 0xD9]) {
+        Ok(())
+    } else {
+        Err(Error::format(
+            format!("JPEG data ends after {len} bytes without an end-of-image marker"),
+            "a complete JPEG file ending with FF D9",
+        ))
+    }
+}
+
+/// The header of a PNG, JPEG or PNM file (size and channels), checked as for a read,
+/// without decoding the pixels.
+pub fn read_header(path: &Path, format: ImageFormat) -> Result<Header> {
+    open_checked(path, format).map(|(h, _)| h)
+}
+
+/// Decode `path` as `format` with `image`, after [`open_checked`].
+pub(super) fn decode_with_image(path: &Path, format: ImageFormat) -> Result<Raster> {
+    let (_, decoder) = open_checked(path, format)?;
+    let img = DynamicImage::from_decoder(decoder).map_err(|e| image_error(e, format))?;
     from_dynamic(img)
 }
 
@@ -28,12 +116,10 @@ pub(super) fn image_error(e: image::ImageError, format: ImageFormat) -> Error {
         image::ImageError::IoError(io) if io.kind() != std::io::ErrorKind::UnexpectedEof => {
             Error::Io(io)
         }
-        image::ImageError::Limits(l) => Error::LimitsExceeded {
-            what: "decoded image size",
-            requested: 0,
-            limit: 1 << 33,
-        }
-        .with_note(l.to_string()),
+        image::ImageError::Limits(l) => Error::Unsupported {
+            what: "image size",
+            value: l.to_string(),
+        },
         image::ImageError::Unsupported(u) => Error::Unsupported {
             what: "image feature",
             value: u.to_string(),
@@ -42,21 +128,6 @@ pub(super) fn image_error(e: image::ImageError, format: ImageFormat) -> Error {
             format!("invalid {format:?} data: {other}"),
             "a complete, valid file",
         ),
-    }
-}
-
-trait WithNote {
-    fn with_note(self, note: String) -> Error;
-}
-impl WithNote for Error {
-    fn with_note(self, note: String) -> Error {
-        match self {
-            Error::LimitsExceeded { .. } => Error::Unsupported {
-                what: "image size",
-                value: note,
-            },
-            e => e,
-        }
     }
 }
 

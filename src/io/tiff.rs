@@ -2,10 +2,12 @@
 //! RGBA, a stack of equal pages as a volume (ImageJ hyperstacks included, with their
 //! `spacing=` and `unit=`), GeoTIFF tags kept verbatim and rewritten on output.
 //!
-//! mra's own metadata travels in ImageDescription as `mra.KEY=VALUE` lines
-//! (`mra.spacing=3,2.1484375,2.1484375`, `mra.units=mm`, `mra.nodata=-32768`, and every
-//! key of [`Metadata::extra`](super::Metadata) as `mra.extra.KEY=VALUE`); other lines of
-//! the description (ImageJ's) are kept as they were.
+//! mra's own metadata travels in a private ASCII tag ([`MRA_TAG`], 65000) as
+//! `mra.KEY=VALUE` lines (`mra.spacing=3,2.1484375,2.1484375`, `mra.units=mm`,
+//! `mra.nodata=-32768`, and every key of [`Metadata::extra`](super::Metadata) as
+//! `mra.extra.KEY=VALUE`), so that ImageDescription stays exactly the text it was (a
+//! tifffile JSON or an ImageJ header remains readable by those tools). `mra.` lines in
+//! an ImageDescription (older mra output) are still read.
 
 use std::fs::File;
 use std::io::{BufReader, Seek, Write};
@@ -18,6 +20,10 @@ use tiff::ColorType;
 
 use super::{DataKind, GeoTag, GeoValue, Metadata, Raster, Samples, GEOTIFF_TAGS};
 use crate::{Error, Result};
+
+/// The private tag holding mra's `mra.KEY=VALUE` lines (in the reusable private range
+/// 65000–65535 of TIFF 6.0).
+pub const MRA_TAG: u16 = 65000;
 
 /// Deflate output can be at most ~1032× smaller than its input: a declared image larger
 /// than this multiple of the file size cannot be real.
@@ -132,24 +138,53 @@ fn parse_list(s: &str) -> Option<Vec<f64>> {
 }
 
 /// Fill spacing/units/nodata/extra from the description, resolution and GeoTIFF tags.
-fn interpret(meta: &mut Metadata, ndims: usize, xres: Option<f64>, yres: Option<f64>) {
+/// One `mra.KEY=VALUE` line into `meta`; false when the line is not one.
+fn mra_line(meta: &mut Metadata, line: &str) -> bool {
+    let Some(rest) = line.strip_prefix("mra.") else {
+        return false;
+    };
+    if let Some((k, v)) = rest.split_once('=') {
+        match k {
+            "spacing" => meta.spacing = parse_list(v),
+            "origin" => meta.origin = parse_list(v),
+            "units" => meta.units = Some(v.to_string()),
+            "nodata" => meta.nodata = v.parse().ok(),
+            _ => {
+                if let Some(key) = k.strip_prefix("extra.") {
+                    meta.extra.insert(key.to_string(), v.to_string());
+                } else if let Some(f) = k.strip_prefix("direction.") {
+                    if let (Ok(f), Some(d)) = (f.parse::<usize>(), parse_list(v)) {
+                        let dirs = meta.directions.get_or_insert_with(Vec::new);
+                        if dirs.len() == f {
+                            dirs.push(d);
+                        }
+                    }
+                } else if k == "space" {
+                    meta.space = Some(v.to_string());
+                }
+            }
+        }
+    }
+    true
+}
+
+fn interpret(
+    meta: &mut Metadata,
+    own: Option<String>,
+    ndims: usize,
+    xres: Option<f64>,
+    yres: Option<f64>,
+) {
     let mut imagej_spacing = None;
+    for line in own.as_deref().unwrap_or("").lines() {
+        mra_line(meta, line);
+    }
     if let Some(desc) = meta.description.clone() {
         let mut kept = Vec::new();
         for line in desc.lines() {
-            if let Some(rest) = line.strip_prefix("mra.") {
-                if let Some((k, v)) = rest.split_once('=') {
-                    match k {
-                        "spacing" => meta.spacing = parse_list(v),
-                        "origin" => meta.origin = parse_list(v),
-                        "units" => meta.units = Some(v.to_string()),
-                        "nodata" => meta.nodata = v.parse().ok(),
-                        _ => {
-                            if let Some(key) = k.strip_prefix("extra.") {
-                                meta.extra.insert(key.to_string(), v.to_string());
-                            }
-                        }
-                    }
+            if line.starts_with("mra.") {
+                if own.is_none() {
+                    mra_line(meta, line);
                 }
                 continue;
             }
@@ -267,6 +302,12 @@ pub fn read(path: &Path) -> Result<Raster> {
             }
         }
     }
+    let own = dec
+        .find_tag(Tag::Unknown(MRA_TAG))
+        .ok()
+        .flatten()
+        .and_then(|v| v.into_string().ok())
+        .map(|s| s.trim_end_matches('\0').to_string());
     let xres = rational(dec.find_tag(Tag::XResolution).ok().flatten());
     let yres = rational(dec.find_tag(Tag::YResolution).ok().flatten());
 
@@ -298,22 +339,15 @@ pub fn read(path: &Path) -> Result<Raster> {
     } else {
         (vec![pages, h as usize, w as usize], DataKind::Volume)
     };
-    interpret(&mut meta, dims.len(), xres, yres);
+    interpret(&mut meta, own, dims.len(), xres, yres);
     let mut r = Raster::new(dims, channels, samples, kind)?;
     r.meta = meta;
     Ok(r)
 }
 
-/// The ImageDescription mra writes: kept foreign lines, then `mra.` lines.
-fn description(r: &Raster) -> String {
+/// The text of [`MRA_TAG`]: mra's `mra.` lines (empty when there is nothing to say).
+fn own_lines(r: &Raster) -> String {
     let mut lines: Vec<String> = Vec::new();
-    if let Some(d) = &r.meta.description {
-        lines.extend(
-            d.lines()
-                .filter(|l| !l.starts_with("mra."))
-                .map(String::from),
-        );
-    }
     let join = |v: &[f64]| {
         v.iter()
             .map(|x| x.to_string())
@@ -332,10 +366,25 @@ fn description(r: &Raster) -> String {
     if let Some(n) = r.meta.nodata {
         lines.push(format!("mra.nodata={n}"));
     }
+    if let Some(sp) = &r.meta.space {
+        lines.push(format!("mra.space={sp}"));
+    }
+    if let Some(d) = &r.meta.directions {
+        for (f, v) in d.iter().enumerate() {
+            lines.push(format!("mra.direction.{f}={}", join(v)));
+        }
+    }
     for (k, v) in &r.meta.extra {
         lines.push(format!("mra.extra.{k}={}", v.replace('\n', " ")));
     }
     lines.join("\n")
+}
+
+/// ASCII tags hold 7-bit text: other characters are written as `?`.
+fn ascii(s: &str) -> String {
+    s.chars()
+        .map(|c| if c.is_ascii() && c != '\0' { c } else { '?' })
+        .collect()
 }
 
 /// Gray + alpha colour types (the `tiff` crate has none): two samples, the second an
@@ -371,7 +420,8 @@ where
 {
     let (width, height) = (r.width() as u32, r.height() as u32);
     let page = r.width() * r.height() * r.channels;
-    let desc = description(r);
+    let desc = r.meta.description.as_deref().map(ascii).unwrap_or_default();
+    let own = ascii(&own_lines(r));
     let mut enc = TiffEncoder::new(w).map_err(tiff_error)?;
     if compress {
         enc = enc.with_compression(tiff::encoder::Compression::Deflate(
@@ -383,6 +433,11 @@ where
         if !desc.is_empty() {
             img.encoder()
                 .write_tag(Tag::ImageDescription, desc.as_str())
+                .map_err(tiff_error)?;
+        }
+        if !own.is_empty() {
+            img.encoder()
+                .write_tag(Tag::Unknown(MRA_TAG), own.as_str())
                 .map_err(tiff_error)?;
         }
         for g in &r.meta.geotiff {

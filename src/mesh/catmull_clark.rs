@@ -13,7 +13,7 @@
 //! `(v_i, e(v_i v_{i+1}), f, e(v_{i−1} v_i))`, so the children of face `f` are its corners'
 //! indices `offsets[f] .. offsets[f+1]`.
 
-use super::features::{Features, Tags, VertexRule};
+use super::features::{sharp_edge_point, Features, Tags};
 use super::halfedge::{HalfEdgeMesh, VertexId};
 use super::loop_subdivision::GRAIN;
 use super::{Attributes, Mesh};
@@ -75,7 +75,7 @@ pub fn step(mesh: &Mesh, he: &HalfEdgeMesh, tags: &Tags) -> Result<(Mesh, Featur
             let [a, b] = he.edges.verts[e];
             let (pa, pb) = (p[a as usize], p[b as usize]);
             *o = if tags.sharp[e] {
-                std::array::from_fn(|k| 0.5 * (pa[k] + pb[k]))
+                sharp_edge_point(pa, pb)
             } else {
                 let [c0, c1] = he.edges.corners[e];
                 let f0 = fp[he.face[c0 as usize] as usize];
@@ -89,13 +89,9 @@ pub fn step(mesh: &Mesh, he: &HalfEdgeMesh, tags: &Tags) -> Result<(Mesh, Featur
         .enumerate()
         .for_each(|(v, o)| {
             let pv = p[v];
-            *o = match tags.rule(he, v as u32) {
-                VertexRule::Corner => pv,
-                VertexRule::Crease(a, b) => {
-                    let (a, b) = (p[a as usize], p[b as usize]);
-                    std::array::from_fn(|k| 0.75 * pv[k] + 0.125 * (a[k] + b[k]))
-                }
-                VertexRule::Smooth => {
+            *o = match tags.rule(he, v as u32).sharp_point(p, v) {
+                Some(q) => q,
+                None => {
                     let mut s = [0.0; 3];
                     let mut n = 0usize;
                     for h in he.outgoing(VertexId(v as u32)) {

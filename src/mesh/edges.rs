@@ -175,11 +175,10 @@ impl Edges {
         let mut uses = vec![0u32; ne];
         let mut corner_edge = vec![0u32; nc];
         {
-            // fill edges per block of vertices; corner_edge is written through raw parts since
-            // each corner belongs to exactly one bucket (disjoint writes)
-            struct Ptr(*mut u32);
-            unsafe impl Sync for Ptr {}
-            let ce = Ptr(corner_edge.as_mut_ptr());
+            // fill edges per block of vertices; corner_edge is written through the shared
+            // pointer of `tensor::par` since each corner belongs to exactly one bucket
+            // (disjoint writes)
+            let ce = crate::tensor::par::SharedMut(corner_edge.as_mut_ptr());
             let ce = &ce;
             let mut parts: Vec<(usize, &mut [[u32; 2]], &mut [[u32; 2]], &mut [u32])> = Vec::new();
             let (mut rv, mut rc, mut ru): (&mut [[u32; 2]], &mut [[u32; 2]], &mut [u32]) =
@@ -221,7 +220,7 @@ impl Edges {
                         }
                         // SAFETY: every corner appears in exactly one bucket, so each index
                         // of corner_edge is written by exactly one task.
-                        unsafe { *ce.0.add(c as usize) = (e - 1) as u32 };
+                        unsafe { ce.write(c as usize, (e - 1) as u32) };
                     }
                 }
             });

@@ -35,6 +35,34 @@ pub enum VertexRule {
     Corner,
 }
 
+impl VertexRule {
+    /// The new position of vertex `v` (positions `p`) under a corner or crease rule,
+    /// shared by Catmull–Clark and Loop: a corner stays, a crease vertex between
+    /// neighbours `a`, `b` moves to `¾ v + ⅛ (a + b)` (the cubic B-spline curve's vertex
+    /// mask, §8.3.2–8.3.3); `None` for a smooth vertex (the scheme's own mask).
+    #[inline]
+    pub fn sharp_point(self, p: &[[f64; 3]], v: usize) -> Option<[f64; 3]> {
+        let pv = p[v];
+        match self {
+            VertexRule::Corner => Some(pv),
+            VertexRule::Crease(a, b) => {
+                let (a, b) = (p[a as usize], p[b as usize]);
+                Some(std::array::from_fn(|k| {
+                    0.75 * pv[k] + 0.125 * (a[k] + b[k])
+                }))
+            }
+            VertexRule::Smooth => None,
+        }
+    }
+}
+
+/// The new point of a sharp (crease or boundary) edge `(a, b)`: its midpoint `½ (a + b)`
+/// (the cubic B-spline curve's edge mask), shared by Catmull–Clark and Loop.
+#[inline]
+pub fn sharp_edge_point(pa: [f64; 3], pb: [f64; 3]) -> [f64; 3] {
+    std::array::from_fn(|k| 0.5 * (pa[k] + pb[k]))
+}
+
 /// Features resolved against a half-edge structure: per edge and per vertex flags.
 #[derive(Clone, Debug)]
 pub struct Tags {

@@ -15,7 +15,7 @@
 //! triangle `(a, b, c)` with edge points `ab, bc, ca` becomes
 //! `(a, ab, ca) (b, bc, ab) (c, ca, bc) (ab, bc, ca)`, so face `f`'s children are `4f .. 4f+4`.
 
-use super::features::{Features, Tags, VertexRule};
+use super::features::{sharp_edge_point, Features, Tags};
 use super::halfedge::{HalfEdgeMesh, VertexId};
 use super::{Attributes, Mesh};
 use crate::{Error, Result};
@@ -88,13 +88,9 @@ pub fn step(
         .enumerate()
         .for_each(|(v, o)| {
             let pv = p[v];
-            *o = match tags.rule(he, v as u32) {
-                VertexRule::Corner => pv,
-                VertexRule::Crease(a, b) => {
-                    let (a, b) = (p[a as usize], p[b as usize]);
-                    std::array::from_fn(|k| 0.75 * pv[k] + 0.125 * (a[k] + b[k]))
-                }
-                VertexRule::Smooth => {
+            *o = match tags.rule(he, v as u32).sharp_point(p, v) {
+                Some(q) => q,
+                None => {
                     let mut s = [0.0; 3];
                     let mut n = 0usize;
                     for h in he.outgoing(VertexId(v as u32)) {
@@ -127,7 +123,7 @@ pub fn step(
             let [a, b] = he.edges.verts[e];
             let (pa, pb) = (p[a as usize], p[b as usize]);
             *o = if tags.sharp[e] {
-                std::array::from_fn(|k| 0.5 * (pa[k] + pb[k]))
+                sharp_edge_point(pa, pb)
             } else {
                 // the vertex opposite corner c's edge is the tail of prev(c)
                 let pc = p[he.from[he.prev[c0 as usize] as usize] as usize];

@@ -289,8 +289,8 @@ impl Mesh {
     }
 }
 
-/// Small vector helpers shared by the mesh code.
-pub(crate) mod vec3 {
+/// Small vector helpers of the geometry modules (meshes, surfaces, solids): the one copy.
+pub mod vec3 {
     #[inline]
     pub fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
         [a[0] - b[0], a[1] - b[1], a[2] - b[2]]

@@ -48,7 +48,9 @@ impl Default for Options {
     }
 }
 
-/// An RGB image, row-major, 3 bytes per pixel.
+/// An 8-bit RGB image, row-major (rows top to bottom), 3 bytes per pixel: what the mesh
+/// and the solid renderers draw.
+#[derive(Clone, Debug)]
 pub struct Image {
     pub width: usize,
     pub height: usize,

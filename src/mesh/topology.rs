@@ -100,10 +100,23 @@ fn next_corner(mesh: &Mesh, f: u32, c: u32) -> u32 {
 /// For every face, +1 or −1 so that flipping the −1 faces orients each component
 /// consistently; `Err(edge)` names an edge where orientation fails (non-orientable).
 pub fn orientation_signs(mesh: &Mesh, edges: &Edges) -> std::result::Result<Vec<i8>, usize> {
+    let mut bad = None;
+    let sign = propagate_signs(mesh, edges, |e, _| {
+        bad.get_or_insert(e);
+    });
+    match bad {
+        Some(e) => Err(e),
+        None => Ok(sign),
+    }
+}
+
+/// The orientation search: from each face not yet reached, signs spread across the
+/// manifold edges (consistent neighbours traverse their shared edge in opposite
+/// directions); `conflict(edge, corner)` for every edge whose two faces disagree.
+fn propagate_signs(mesh: &Mesh, edges: &Edges, mut conflict: impl FnMut(usize, u32)) -> Vec<i8> {
     let nf = mesh.face_count();
     let mut sign = vec![0i8; nf];
     let mut stack = Vec::new();
-    let mut bad = None;
     for seed in 0..nf {
         if sign[seed] != 0 {
             continue;
@@ -118,7 +131,6 @@ pub fn orientation_signs(mesh: &Mesh, edges: &Edges) -> std::result::Result<Vec<
                 }
                 let o = edges.opposite(e, c);
                 let g = edges.corner_face[o as usize] as usize;
-                // consistent neighbours traverse the shared edge in opposite directions
                 let same_dir = mesh.indices[c as usize] == mesh.indices[o as usize];
                 let want = if same_dir {
                     -sign[f as usize]
@@ -128,16 +140,13 @@ pub fn orientation_signs(mesh: &Mesh, edges: &Edges) -> std::result::Result<Vec<
                 if sign[g] == 0 {
                     sign[g] = want;
                     stack.push(g as u32);
-                } else if sign[g] != want && bad.is_none() {
-                    bad = Some(e);
+                } else if sign[g] != want {
+                    conflict(e, c);
                 }
             }
         }
     }
-    match bad {
-        Some(e) => Err(e),
-        None => Ok(sign),
-    }
+    sign
 }
 
 /// Orient every component consistently (flipping faces against each component's first face).
@@ -286,9 +295,10 @@ pub fn analyze_with(mesh: &Mesh, edges: &Edges) -> Report {
     let (orientable, oriented) = match orientation_signs(mesh, edges) {
         Ok(s) => (true, s.iter().all(|&x| x > 0)),
         Err(_) => {
-            // find which components fail: rerun per face sign propagation and mark conflicts
-            let mut signs = vec![0i8; nf];
-            mark_non_orientable(mesh, edges, &mut signs, &vcomp, &mut comps);
+            // find which components fail: the search again, marking the conflicts
+            propagate_signs(mesh, edges, |_, c| {
+                comps[vcomp[mesh.indices[c as usize] as usize] as usize].orientable = false;
+            });
             (false, false)
         }
     };
@@ -326,45 +336,5 @@ pub fn analyze_with(mesh: &Mesh, edges: &Edges) -> Report {
         oriented,
         closed: boundary_edges == 0,
         bounding_box: mesh.bounding_box(),
-    }
-}
-
-fn mark_non_orientable(
-    mesh: &Mesh,
-    edges: &Edges,
-    sign: &mut [i8],
-    vcomp: &[u32],
-    comps: &mut [Component],
-) {
-    let nf = mesh.face_count();
-    let mut stack = Vec::new();
-    for seed in 0..nf {
-        if sign[seed] != 0 {
-            continue;
-        }
-        sign[seed] = 1;
-        stack.push(seed as u32);
-        while let Some(f) = stack.pop() {
-            for c in mesh.offsets[f as usize]..mesh.offsets[f as usize + 1] {
-                let e = edges.corner_edge[c as usize] as usize;
-                if edges.uses[e] != 2 {
-                    continue;
-                }
-                let o = edges.opposite(e, c);
-                let g = edges.corner_face[o as usize] as usize;
-                let same_dir = mesh.indices[c as usize] == mesh.indices[o as usize];
-                let want = if same_dir {
-                    -sign[f as usize]
-                } else {
-                    sign[f as usize]
-                };
-                if sign[g] == 0 {
-                    sign[g] = want;
-                    stack.push(g as u32);
-                } else if sign[g] != want {
-                    comps[vcomp[mesh.indices[c as usize] as usize] as usize].orientable = false;
-                }
-            }
-        }
     }
 }

@@ -4,12 +4,16 @@
 //! `m − n` details (`C = A F`, `D = B F`) and back (`F = P C + Q D`), for any length
 //! `m ≥ 1` and any element width (scalars, points, whole rows).
 
+pub mod cdf97;
 pub mod chaikin;
+pub mod chaikin_wide;
 pub mod cubic;
+pub mod cubic_wide;
 pub mod haar;
-pub mod kernel;
 pub mod lane;
-pub mod polyphase;
+pub mod linear;
+pub mod linear_wide;
+pub mod open_ends;
 pub mod regular;
 pub mod sample;
 pub mod sparse;
@@ -34,6 +38,19 @@ pub enum Scheme {
     Chaikin,
     /// Cubic B-spline, width-7 local filters (§9.5.1).
     Cubic,
+    /// Linear B-spline subdivision with the CDF 5/3 analysis (JPEG 2000's reversible pair).
+    Linear,
+    /// Linear B-spline subdivision with the window-9 least-squares analysis (CDF 9/3, bior2.4).
+    #[serde(rename = "linear-wide")]
+    LinearWide,
+    /// Chaikin subdivision with the window-12 local least-squares analysis.
+    #[serde(rename = "chaikin-wide")]
+    ChaikinWide,
+    /// Cubic B-spline subdivision with a window-19 least-squares analysis, 4 zeros at π.
+    #[serde(rename = "cubic-wide")]
+    CubicWide,
+    /// CDF 9/7, the reference wavelet (not a B-spline synthesis).
+    Cdf97,
 }
 
 /// What happens at the two ends of a lane.
@@ -52,13 +69,45 @@ pub enum Boundary {
 }
 
 impl Scheme {
-    pub const ALL: [Scheme; 3] = [Scheme::Haar, Scheme::Chaikin, Scheme::Cubic];
+    pub const ALL: [Scheme; 8] = [
+        Scheme::Haar,
+        Scheme::Chaikin,
+        Scheme::Cubic,
+        Scheme::Linear,
+        Scheme::LinearWide,
+        Scheme::ChaikinWide,
+        Scheme::CubicWide,
+        Scheme::Cdf97,
+    ];
     pub fn name(self) -> &'static str {
         match self {
             Scheme::Haar => "haar",
             Scheme::Chaikin => "chaikin",
             Scheme::Cubic => "cubic",
+            Scheme::Linear => "linear",
+            Scheme::LinearWide => "linear-wide",
+            Scheme::ChaikinWide => "chaikin-wide",
+            Scheme::CubicWide => "cubic-wide",
+            Scheme::Cdf97 => "cdf97",
         }
+    }
+    /// The regular (interior) filters; `None` for Haar, whose rows are its own blocks.
+    pub fn regular(self) -> Option<&'static regular::RegularFilters> {
+        match self {
+            Scheme::Haar => None,
+            Scheme::Chaikin => Some(&chaikin::REGULAR),
+            Scheme::Cubic => Some(&cubic::REGULAR),
+            Scheme::Linear => Some(&linear::REGULAR),
+            Scheme::LinearWide => Some(&linear_wide::REGULAR),
+            Scheme::ChaikinWide => Some(&chaikin_wide::REGULAR),
+            Scheme::CubicWide => Some(&cubic_wide::REGULAR),
+            Scheme::Cdf97 => Some(&cdf97::REGULAR),
+        }
+    }
+
+    /// Whether the synthesis `P` is B-spline subdivision (every scheme but CDF 9/7).
+    pub fn is_bspline(self) -> bool {
+        self != Scheme::Cdf97
     }
 }
 
@@ -95,7 +144,16 @@ impl FromStr for Scheme {
             "haar" => Ok(Scheme::Haar),
             "chaikin" | "quadratic" => Ok(Scheme::Chaikin),
             "cubic" => Ok(Scheme::Cubic),
-            _ => Err(Error::parameter("scheme", s, "haar, chaikin or cubic")),
+            "linear" | "cdf53" | "5/3" | "bior2.2" => Ok(Scheme::Linear),
+            "linear-wide" | "cdf93" | "9/3" | "bior2.4" => Ok(Scheme::LinearWide),
+            "chaikin-wide" | "quadratic-wide" => Ok(Scheme::ChaikinWide),
+            "cubic-wide" => Ok(Scheme::CubicWide),
+            "cdf97" | "9/7" | "bior4.4" => Ok(Scheme::Cdf97),
+            _ => Err(Error::parameter(
+                "scheme",
+                s,
+                "haar, chaikin, cubic, linear, linear-wide, chaikin-wide, cubic-wide or cdf97",
+            )),
         }
     }
 }

@@ -1,4 +1,4 @@
-//! Sparse two-scale operators and the one kernel that applies them.
+//! Sparse two-scale operators, and the order in which a row's sum is taken.
 //!
 //! A level of a scheme is two square operators on a lane of `m` elements:
 //! analysis `[A; B]` (rows `0..n` give the coarse `C = A F`, rows `n..m` the details
@@ -7,6 +7,18 @@
 //! applying either is one gather pass: `out_r = Σ_k w_rk · in_{c_rk}`, where every
 //! `in_c`/`out_r` is an element of `width` samples and the inner loop runs over the
 //! element (whole rows vectorise).
+//!
+//! **How a row's sum is taken** ([`pair_taps`], [`sum_terms`]; every build of the
+//! kernels gives these bits). The taps in increasing column order; scanning them so, a
+//! tap not yet paired pairs with the next tap of the same weight not yet paired, if any
+//! (the symmetric taps of the regular filters: cubic's `a` sums `(x₀ + x₆)`, `(x₁ + x₅)`,
+//! `(x₂ + x₄)` and takes `x₃` alone). The terms — single taps, and pairs at their first
+//! tap — in column order: the first is `w·x` (a pair's `x` the sum of its two inputs, the
+//! earlier first), each next single tap adds the rounded product `w·x`, each next pair is
+//! `fma(x_a + x_b, w, acc)`, rounded once. A row without equal weights is the plain
+//! sum `((w₀x₀ + w₁x₁) + w₂x₂) + …`. Pairs halve the multiplies of the regular rows and
+//! move half of the rest into FMAs: the arithmetic of cubic's pair of rows goes from 12
+//! multiplies and 10 adds per pair of outputs to 6 FMAs or multiplies and 5–7 adds.
 
 use super::sample::Sample;
 
@@ -56,8 +68,8 @@ impl Csr {
     /// `dst_r = Σ w · src_c` for every row `r`; element `e` of `src` is
     /// `src[e*src_stride .. e*src_stride + width]`, likewise for `dst`.
     ///
-    /// Each row summed as [`super::kernel::sum_terms`] says (its first term assigns, so
-    /// `dst` needs no clearing).
+    /// Each row summed as [`sum_terms`] says (its first term assigns, so `dst` needs no
+    /// clearing). The reference loops: `kernel::apply` gives the same bits faster.
     #[inline]
     pub fn apply<T: Sample>(
         &self,
@@ -69,16 +81,45 @@ impl Csr {
     ) {
         assert!(self.cols == 0 || (self.cols - 1) * src_stride + width <= src.len());
         assert!(self.rows == 0 || (self.rows - 1) * dst_stride + width <= dst.len());
-        // SAFETY: the asserts bound every element read and written; `src` and `dst` are
-        // distinct borrows.
-        unsafe {
-            self.apply_raw(
-                src.as_ptr(),
-                src_stride,
-                dst.as_mut_ptr(),
-                dst_stride,
-                width,
-            )
+        let (mut ws, mut partner) = (Vec::new(), Vec::new());
+        for r in 0..self.rows {
+            let (cols, weights) = self.row_slices(r);
+            let out = &mut dst[r * dst_stride..r * dst_stride + width];
+            if cols.is_empty() {
+                out.fill(T::default());
+                continue;
+            }
+            ws.clear();
+            ws.extend(weights.iter().map(|&v| T::from_f64(v)));
+            partner.resize(cols.len(), 0);
+            pair_taps(&ws, &mut partner);
+            let input = |k: usize| {
+                let at = cols[k] as usize * src_stride;
+                &src[at..at + width]
+            };
+            // the terms of `sum_terms`, whole elements at a time
+            let mut first = true;
+            for k in 0..cols.len() {
+                let q = partner[k];
+                if q == SECOND {
+                    continue;
+                }
+                let (x, w) = (input(k), ws[k]);
+                if q == k {
+                    for (o, &x) in out.iter_mut().zip(x) {
+                        *o = if first { w * x } else { *o + w * x };
+                    }
+                } else {
+                    for ((o, &x), &y) in out.iter_mut().zip(x).zip(input(q)) {
+                        *o = if first {
+                            w * (x + y)
+                        } else {
+                            (x + y).fused_mul_add(w, *o)
+                        };
+                    }
+                }
+                first = false;
+            }
         }
     }
 }
@@ -178,184 +219,60 @@ impl Triplets {
     }
 }
 
-impl Csr {
-    /// [`Csr::apply`] on raw element pointers, for lanes that live inside a larger
-    /// array other threads are writing elsewhere. Only the elements this call reads
-    /// (`src + c*src_stride .. + width` for the columns it uses) and writes
-    /// (`dst + r*dst_stride .. + width`) are turned into slices.
-    ///
-    /// # Safety
-    /// Every element read must be valid for reads and not written concurrently, every
-    /// element written must be valid for writes and touched by no other thread, and the
-    /// two sets must not overlap.
-    #[inline]
-    pub unsafe fn apply_raw<T: Sample>(
-        &self,
-        src: *const T,
-        src_stride: usize,
-        dst: *mut T,
-        dst_stride: usize,
-        width: usize,
-    ) {
-        #[cfg(target_arch = "x86_64")]
-        if crate::scheme::sparse::cpu_has_avx2() {
-            // SAFETY: AVX2 is present; the caller's guarantees pass through.
-            return unsafe { self.apply_avx2(src, src_stride, dst, dst_stride, width) };
+/// [`pair_taps`]' mark of the second tap of a pair.
+pub const SECOND: usize = usize::MAX;
+
+/// The pairs of a row whose weights are `w` (in column order): `partner[k]` is `k` for a
+/// single tap, `j > k` for the first tap of a pair whose second is `j`, and [`SECOND`] for
+/// a pair's second tap. Scanning in order, a tap not yet paired pairs with the next tap
+/// of the same weight not yet paired. `true` when some taps pair.
+#[inline]
+pub fn pair_taps<T: Sample>(w: &[T], partner: &mut [usize]) -> bool {
+    let n = w.len();
+    assert!(partner.len() >= n);
+    for (k, p) in partner.iter_mut().enumerate().take(n) {
+        *p = k;
+    }
+    let mut any = false;
+    for k in 0..n {
+        if partner[k] != k {
+            continue;
         }
-        unsafe { self.apply_generic(src, src_stride, dst, dst_stride, width) }
-    }
-
-    /// [`Csr::apply`] with the baseline (non-AVX2) build of the kernel, for tests that
-    /// check every CPU level gives the same bits.
-    pub fn apply_baseline<T: Sample>(
-        &self,
-        src: &[T],
-        ss: usize,
-        dst: &mut [T],
-        ds: usize,
-        width: usize,
-    ) {
-        assert!(self.cols == 0 || (self.cols - 1) * ss + width <= src.len());
-        assert!(self.rows == 0 || (self.rows - 1) * ds + width <= dst.len());
-        // SAFETY: bounds checked above; distinct borrows.
-        unsafe { self.apply_generic(src.as_ptr(), ss, dst.as_mut_ptr(), ds, width) }
-    }
-
-    /// [`Csr::apply_generic`] compiled for AVX2 and FMA (bit-identical to the baseline
-    /// build, whose FMAs are a software routine).
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2,fma")]
-    unsafe fn apply_avx2<T: Sample>(
-        &self,
-        src: *const T,
-        ss: usize,
-        dst: *mut T,
-        ds: usize,
-        width: usize,
-    ) {
-        unsafe { self.apply_generic(src, ss, dst, ds, width) }
-    }
-
-    #[inline(always)]
-    unsafe fn apply_generic<T: Sample>(
-        &self,
-        src: *const T,
-        src_stride: usize,
-        dst: *mut T,
-        dst_stride: usize,
-        width: usize,
-    ) {
-        // the rows' weights and pairs (on the stack up to 32 taps, the schemes' rows)
-        let (mut ws_stack, mut partner_stack) = ([T::default(); 32], [0usize; 32]);
-        let (mut ws_heap, mut partner_heap): (Vec<T>, Vec<usize>) = (Vec::new(), Vec::new());
-        for r in 0..self.rows {
-            let (a, b) = (self.offsets[r] as usize, self.offsets[r + 1] as usize);
-            // SAFETY: the caller guarantees this element is ours alone.
-            let out = unsafe { std::slice::from_raw_parts_mut(dst.add(r * dst_stride), width) };
-            if a == b {
-                out.fill(T::default());
-                continue;
-            }
-            // the row's sum as `kernel::sum_terms` takes it (pairs of equal weights)
-            let (ws, partner) = if b - a <= 32 {
-                (&mut ws_stack[..b - a], &mut partner_stack[..b - a])
-            } else {
-                ws_heap.resize(b - a, T::default());
-                partner_heap.resize(b - a, 0);
-                (&mut ws_heap[..], &mut partner_heap[..])
-            };
-            for (w, &v) in ws.iter_mut().zip(&self.weight[a..b]) {
-                *w = T::from_f64(v);
-            }
-            crate::scheme::kernel::pair_taps(ws, partner);
-            let input = |k: usize| unsafe {
-                std::slice::from_raw_parts(src.add(self.index[a + k] as usize * src_stride), width)
-            };
-            let mut first = true;
-            for k in 0..b - a {
-                let q = partner[k];
-                if q == crate::scheme::kernel::SECOND {
-                    continue;
-                }
-                let (x, w) = (input(k), ws[k]);
-                if q == k {
-                    if first {
-                        for (o, &x) in out.iter_mut().zip(x) {
-                            *o = w * x;
-                        }
-                    } else {
-                        for (o, &x) in out.iter_mut().zip(x) {
-                            *o += w * x;
-                        }
-                    }
-                } else {
-                    let y = input(q);
-                    if first {
-                        for ((o, &x), &y) in out.iter_mut().zip(x).zip(y) {
-                            *o = w * (x + y);
-                        }
-                    } else {
-                        for ((o, &x), &y) in out.iter_mut().zip(x).zip(y) {
-                            *o = (x + y).fused_mul_add(w, *o);
-                        }
-                    }
-                }
-                first = false;
-            }
+        if let Some(j) = (k + 1..n).find(|&j| partner[j] == j && w[j] == w[k]) {
+            (partner[k], partner[j]) = (j, SECOND);
+            any = true;
         }
     }
+    any
 }
 
-/// The builds of the kernels, narrowest first. All give the same bits: each output's
-/// taps summed as [`super::kernel::sum_terms`] says (its FMAs in software in the
-/// baseline build).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
-pub enum Simd {
-    /// Plain loops (whatever the compiler makes of them for the baseline target).
-    Baseline,
-    /// 256-bit vectors (AVX2 with FMA).
-    Avx2,
-    /// 512-bit vectors for the combines (the rest as [`Simd::Avx2`]).
-    Avx512,
-}
-
-impl Simd {
-    /// The widest build this CPU runs, detected once. `MRA_CPU=scalar` or `MRA_CPU=avx2`
-    /// in the environment caps it (to compare builds).
-    pub fn detected() -> Simd {
-        static LEVEL: std::sync::OnceLock<Simd> = std::sync::OnceLock::new();
-        *LEVEL.get_or_init(|| {
-            let cap = match std::env::var("MRA_CPU").as_deref() {
-                Ok("scalar") => Simd::Baseline,
-                Ok("avx2") => Simd::Avx2,
-                _ => Simd::Avx512,
-            };
-            #[cfg(target_arch = "x86_64")]
-            let fma = std::arch::is_x86_feature_detected!("fma");
-            let found = if fma && std::arch::is_x86_feature_detected!("avx512f") {
-                Simd::Avx512
-            } else if fma && std::arch::is_x86_feature_detected!("avx2") {
-                Simd::Avx2
-            } else {
-                Simd::Baseline
-            };
-            #[cfg(not(target_arch = "x86_64"))]
-            let found = Simd::Baseline;
-            found.min(cap)
-        })
+/// One output of a row, `x(k)` the input of tap `k`: the sum [`pair_taps`] plans (see the
+/// module's documentation; the reference every build and path gives the bits of).
+#[inline(always)]
+pub fn sum_terms<T: Sample>(w: &[T], partner: &[usize], x: impl Fn(usize) -> T) -> T {
+    let mut acc = T::default();
+    let mut first = true;
+    for k in 0..w.len() {
+        let p = partner[k];
+        if p == SECOND {
+            continue;
+        }
+        let v = if p == k { x(k) } else { x(k) + x(p) };
+        acc = if first {
+            w[k] * v
+        } else if p == k {
+            acc + w[k] * v
+        } else {
+            v.fused_mul_add(w[k], acc)
+        };
+        first = false;
     }
-
-    /// Every build this CPU runs, up to [`Simd::detected`] (tests compare them).
-    pub fn available() -> Vec<Simd> {
-        [Simd::Baseline, Simd::Avx2, Simd::Avx512]
-            .into_iter()
-            .filter(|&s| s <= Simd::detected())
-            .collect()
-    }
+    acc
 }
 
-/// Whether the AVX2 build (or a wider one) of the kernels is used ([`Simd::detected`]).
-#[cfg(target_arch = "x86_64")]
-pub fn cpu_has_avx2() -> bool {
-    Simd::detected() >= Simd::Avx2
+/// [`sum_terms`] of a row given as weights alone (pairs worked out here).
+pub fn row_sum<T: Sample>(w: &[T], x: impl Fn(usize) -> T) -> T {
+    let mut partner = vec![0; w.len()];
+    pair_taps(w, &mut partner);
+    sum_terms(w, &partner, x)
 }

@@ -14,10 +14,18 @@
 //! linear : F_{2j} = C_j, F_{2j+1} = ½(C_j + C_{j+1})                         m = 2n − 1
 //! Chaikin: F_0 = C_0, F_1 = ½(C_0 + C_1), then ¾ ¼ / ¼ ¾                    m = 2n − 2, n ≥ 3
 //! cubic  : F_0 = C_0, F_1 = ½(C_0+C_1), F_2 = ¾C_1 + ¼C_2,
-//!          F_3 = 3⁄16 C_1 + 11⁄16 C_2 + ⅛C_3, F_4 = ½(C_2+C_3), then ⅛ ¾ ⅛ / ½ ½   m = 2n − 3, n ≥ 6
+//!          F_3 = 3⁄16 C_1 + 11⁄16 C_2 + ⅛C_3, F_4 = ½(C_2+C_3), then ⅛ ¾ ⅛ / ½ ½   m = 2n − 3, n ≥ 4
 //! quartic: … F_4 = 5⁄12 C_2 + 25⁄48 C_3 + 1⁄16 C_4, F_5 = 1⁄12 C_2 + 29⁄48 C_3 + 5⁄16 C_4,
-//!          then 5⁄16 ⅝ 1⁄16 / 1⁄16 ⅝ 5⁄16                                    m = 2n − 4, n ≥ 8
+//!          then 5⁄16 ⅝ 1⁄16 / 1⁄16 ⅝ 5⁄16                                    m = 2n − 4, n ≥ 5
 //! 4-point: F_1 = (5C_0 + 15C_1 − 5C_2 + C_3)/16 (cubic through the first four)  m = 2n − 1, n ≥ 4
+//! ```
+//! The start and end blocks above need n ≥ 6 (cubic) and n ≥ 8 (quartic) to stay apart; with
+//! fewer points (down to the order, the fewest a clamped B-spline has) the rows come from
+//! the same refinement done directly: Boehm's insertion of the midpoint of every span into
+//! the clamped knots `0^k, 1, …, n−k, (n−k+1)^k` (§7.4), new knot `u` in `[t_s, t_{s+1})`:
+//! ```text
+//! Q_i = P_i (i ≤ s−k+1),  Q_i = (1−a_i) P_{i−1} + a_i P_i,  a_i = (u − t_i)/(t_{i+k−1} − t_i)
+//!       (s−k+2 ≤ i ≤ s),  Q_i = P_{i−1} (i > s)
 //! ```
 
 use super::sparse::{Csr, Triplets};
@@ -74,8 +82,8 @@ impl Refinement {
             (Refinement::Box, _) | (Refinement::Linear, Ends::Open) => 1,
             (Refinement::Linear, Ends::Closed) => 2,
             (Refinement::Chaikin, Ends::Open) => 3,
-            (Refinement::Cubic, Ends::Open) => 6,
-            (Refinement::Quartic, Ends::Open) => 8,
+            (Refinement::Cubic, Ends::Open) => 4,
+            (Refinement::Quartic, Ends::Open) => 5,
             (Refinement::FourPoint, Ends::Open) => 4,
             (Refinement::Chaikin, Ends::Closed) => 2,
             (Refinement::Cubic, Ends::Closed) | (Refinement::Quartic, Ends::Closed) => 3,
@@ -217,6 +225,8 @@ fn open(rule: Refinement, n: usize, m: usize, t: &mut Triplets) {
                 t.add(2 * i + 1, i + 1, 0.75);
             }
         }
+        Refinement::Cubic if n < 6 => clamped_midpoints(4, n, t),
+        Refinement::Quartic if n < 8 => clamped_midpoints(5, n, t),
         Refinement::Cubic => {
             let start: [&[(usize, f64)]; 4] = [
                 &[(0, 1.0)],
@@ -286,6 +296,52 @@ fn open(rule: Refinement, n: usize, m: usize, t: &mut Triplets) {
                 ] {
                     t.add(2 * j + 1, j - 1 + d, w);
                 }
+            }
+        }
+    }
+}
+
+/// The open rule of order `k` for `n ≥ k` points as Boehm's insertion of every span's
+/// midpoint into the clamped knots (module doc), each new point as weights of the old ones.
+fn clamped_midpoints(k: usize, n: usize, t: &mut Triplets) {
+    let spans = n + 1 - k;
+    let mut knots: Vec<f64> = (0..k).map(|_| 0.0).collect();
+    knots.extend((1..spans).map(|j| j as f64));
+    knots.extend((0..k).map(|_| spans as f64));
+    // rows[i][c]: weight of coarse point c in the current point i (the identity at first)
+    let mut rows: Vec<Vec<f64>> = (0..n)
+        .map(|i| (0..n).map(|c| (i == c) as u8 as f64).collect())
+        .collect();
+    for j in 0..spans {
+        let u = j as f64 + 0.5;
+        // the span [t_s, t_{s+1}) holding u
+        let s = (0..knots.len() - 1)
+            .rfind(|&s| knots[s] <= u && u < knots[s + 1])
+            .expect("u lies inside the clamped knots");
+        let mut next = Vec::with_capacity(rows.len() + 1);
+        for i in 0..=rows.len() {
+            if i + k - 1 <= s {
+                next.push(rows[i].clone());
+            } else if i > s {
+                next.push(rows[i - 1].clone());
+            } else {
+                let a = (u - knots[i]) / (knots[i + k - 1] - knots[i]);
+                let row = rows[i - 1]
+                    .iter()
+                    .zip(&rows[i])
+                    .map(|(p, q)| (1.0 - a) * p + a * q)
+                    .collect();
+                next.push(row);
+            }
+        }
+        rows = next;
+        let at = knots.partition_point(|&x| x <= u);
+        knots.insert(at, u);
+    }
+    for (i, row) in rows.iter().enumerate() {
+        for (c, &w) in row.iter().enumerate() {
+            if w != 0.0 {
+                t.add(i, c, w);
             }
         }
     }

@@ -8,6 +8,11 @@
 //! | haar    | even ≥ 2             | even ≥ 2        | even ≥ 2         |
 //! | chaikin | even ≥ 8 (n = m/2+1) | even ≥ 4 (m/2)  | any ≥ 3 (⌊m/2⌋+1)|
 //! | cubic   | odd ≥ 13 (n=(m+3)/2) | even ≥ 8 (m/2)  | any ≥ 3 (⌈m/2⌉)  |
+//! | linear  | odd ≥ 5 (n=(m+1)/2)  | even ≥ 6 (m/2)  | any ≥ 3 (⌈m/2⌉)  |
+//! | linear-wide | odd ≥ 17 ((m+1)/2) | even ≥ 10 (m/2) | any ≥ 3 (⌈m/2⌉) |
+//! | chaikin-wide | even ≥ 22 (m/2+1) | even ≥ 12 (m/2) | any ≥ 3 (⌊m/2⌋+1) |
+//! | cubic-wide | odd ≥ 35 ((m+3)/2) | even ≥ 20 (m/2) | any ≥ 3 (⌈m/2⌉) |
+//! | cdf97   | as symmetric         | even ≥ 10 (m/2) | any ≥ 3 (⌈m/2⌉)  |
 //!
 //! A length of the wrong parity whose predecessor is native is reduced by *carrying*
 //! the last sample: the first `m − 1` samples are transformed, the last one is appended
@@ -19,7 +24,10 @@
 
 use super::regular::{self, LevelTriplets};
 use super::sparse::{Csr, Triplets};
-use super::{chaikin, cubic, haar, Boundary, Sample, Scheme};
+use super::{
+    cdf97, chaikin, chaikin_wide, cubic, cubic_wide, haar, linear, linear_wide, Boundary, Sample,
+    Scheme,
+};
 
 /// How a level was built for its length.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -60,6 +68,18 @@ fn native_len(scheme: Scheme, boundary: Boundary, m: usize) -> Option<usize> {
         }
         (Scheme::Cubic, Periodic) => (m >= 8 && even).then_some(m / 2),
         (Scheme::Cubic, Symmetric) => (m >= 3).then_some(m.div_ceil(2)),
+        (Scheme::Linear, Interpolating) => linear::OPEN.coarse_len(m),
+        (Scheme::LinearWide, Interpolating) => linear_wide::OPEN.coarse_len(m),
+        (Scheme::ChaikinWide, Interpolating) => chaikin_wide::OPEN.coarse_len(m),
+        (Scheme::CubicWide, Interpolating) => cubic_wide::OPEN.coarse_len(m),
+        (Scheme::Linear, Periodic) => (m >= 6 && even).then_some(m / 2),
+        (Scheme::LinearWide, Periodic) => (m >= 10 && even).then_some(m / 2),
+        (Scheme::ChaikinWide, Periodic) => (m >= 12 && even).then_some(m / 2),
+        (Scheme::CubicWide, Periodic) => (m >= 20 && even).then_some(m / 2),
+        (Scheme::Cdf97, Periodic) => (m >= 10 && even).then_some(m / 2),
+        (Scheme::ChaikinWide, Symmetric) => (m >= 3).then_some(m / 2 + 1),
+        (Scheme::Linear | Scheme::LinearWide | Scheme::CubicWide | Scheme::Cdf97, Symmetric)
+        | (Scheme::Cdf97, Interpolating) => (m >= 3).then_some(m.div_ceil(2)),
     }
 }
 
@@ -74,6 +94,20 @@ fn native(scheme: Scheme, boundary: Boundary, m: usize) -> Option<LevelTriplets>
         (Scheme::Cubic, Interpolating) => cubic::interpolating(m),
         (Scheme::Cubic, Periodic) => regular::periodic(&cubic::REGULAR, m),
         (Scheme::Cubic, Symmetric) => regular::symmetric(&cubic::REGULAR, m, true),
+        (Scheme::Linear, Interpolating) => linear::OPEN.level(m),
+        (Scheme::LinearWide, Interpolating) => linear_wide::OPEN.level(m),
+        (Scheme::ChaikinWide, Interpolating) => chaikin_wide::OPEN.level(m),
+        (Scheme::CubicWide, Interpolating) => cubic_wide::OPEN.level(m),
+        (Scheme::Linear, Periodic) => regular::periodic(&linear::REGULAR, m),
+        (Scheme::LinearWide, Periodic) => regular::periodic(&linear_wide::REGULAR, m),
+        (Scheme::ChaikinWide, Periodic) => regular::periodic(&chaikin_wide::REGULAR, m),
+        (Scheme::CubicWide, Periodic) => regular::periodic(&cubic_wide::REGULAR, m),
+        (Scheme::Cdf97, Periodic) => regular::periodic(&cdf97::REGULAR, m),
+        (Scheme::Linear, Symmetric) => regular::symmetric(&linear::REGULAR, m, true),
+        (Scheme::LinearWide, Symmetric) => regular::symmetric(&linear_wide::REGULAR, m, true),
+        (Scheme::ChaikinWide, Symmetric) => regular::symmetric(&chaikin_wide::REGULAR, m, false),
+        (Scheme::CubicWide, Symmetric) => regular::symmetric(&cubic_wide::REGULAR, m, true),
+        (Scheme::Cdf97, Symmetric | Interpolating) => regular::symmetric(&cdf97::REGULAR, m, true),
     })
 }
 

@@ -26,6 +26,7 @@
 #![allow(clippy::needless_range_loop)]
 use super::hyperpatch::{checked_count, greville, HyperPatch};
 use crate::curve::KnotVector;
+use crate::mesh::vec3::cross;
 use crate::mesh::Mesh;
 use crate::{Error, Result};
 use rayon::prelude::*;
@@ -333,14 +334,6 @@ impl Lattice {
 }
 
 const IDENTITY: [[f64; 3]; 3] = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
-
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
 
 /// Axis-aligned bounding box of a mesh's vertices.
 pub fn bounds(mesh: &Mesh) -> Result<([f64; 3], [f64; 3])> {

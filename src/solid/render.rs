@@ -9,13 +9,7 @@ use crate::mesh::vec3::{add, cross, dot, norm, scale, sub};
 use crate::{Error, Result};
 use rayon::prelude::*;
 
-/// An 8-bit RGB image, rows top to bottom.
-#[derive(Clone, Debug)]
-pub struct Image {
-    pub width: usize,
-    pub height: usize,
-    pub rgb: Vec<u8>,
-}
+pub use crate::mesh::render::Image;
 
 fn unit(a: [f64; 3]) -> [f64; 3] {
     scale(a, 1.0 / norm(a).max(1e-300))

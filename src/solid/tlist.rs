@@ -343,6 +343,16 @@ pub const DEFAULT_RAYS: usize = 512;
 /// Volume of a bounded solid from `rays × rays` parallel rays along `z` through the cell
 /// centres of its bounding rectangle: `V ≈ Σ length(t-list) · Δx Δy` (§10.8).
 pub fn volume(node: &Node, rays: usize, steps: usize) -> Result<f64> {
+    volume_with(node, rays, steps, &crate::progress::Progress::hidden())
+}
+
+/// [`volume`], advancing `bar` by one step per row of rays (`rays` steps in all).
+pub fn volume_with(
+    node: &Node,
+    rays: usize,
+    steps: usize,
+    bar: &crate::progress::Progress,
+) -> Result<f64> {
     if rays == 0 {
         return Err(Error::parameter("rays", rays, "at least 1"));
     }
@@ -374,6 +384,7 @@ pub fn volume(node: &Node, rays: usize, steps: usize) -> Result<f64> {
                 );
                 s += length(&t);
             }
+            bar.inc(1);
             s
         })
         .sum();

@@ -32,7 +32,8 @@
 use super::aligned::Aligned;
 use super::fused::{AxisOp, Ctx, STREAM_BYTES};
 use super::par::SharedMut;
-use crate::scheme::kernel::{
+use super::ring::Ring;
+use crate::kernel::{
     combine_pair_taps, combine_taps, stream_copy_unfenced, stream_fence, PairMemo,
 };
 use crate::scheme::sparse::Csr;
@@ -165,10 +166,9 @@ impl<'a> Plan<'a> {
     /// exactly `parts` parts whatever the halos and the rings' size, and boxes of more
     /// than two axes too; otherwise those stay level by level (measured slower, likely
     /// because the planes of two levels and a ring of planes do not fit a 1 MB L2.
-    /// Session 4, 256³ Chaikin forward and back, 91 ms of CPU time against 74 level by
-    /// level; session 12, with the plane path of `fused.rs`, wall time, 2 threads,
-    /// forward: Chaikin 15.5–15.8 ms against 13.5–13.7, cubic 19.3 against 17.3; the
-    /// inverse within 0.5 ms).
+    /// 256³ with the plane path of `fused.rs`, wall time, 2 threads, forward: Chaikin
+    /// 15.5–15.8 ms against 13.5–13.7, cubic 19.3 against 17.3; the inverse within
+    /// 0.5 ms).
     pub fn new(
         way: Way,
         regions: Vec<Vec<usize>>,
@@ -543,59 +543,6 @@ impl<'a> Plan<'a> {
         } else {
             (0..self.spans.len()).into_par_iter().for_each(run_part);
         }
-    }
-}
-
-/// Samples between the slots of a ring: rows of a power-of-two length one after another
-/// would put the same column of every slot in one L1 cache set (eight ways), and a combine
-/// reads up to eight slots at once.
-const RING_PAD: usize = 16;
-
-/// A ring of rows: slots `0..coarse` for rows `< split`, the others for rows `≥ split`.
-struct Ring<T> {
-    data: Vec<T>,
-    row: usize,
-    /// Samples from one slot to the next: a row and [`RING_PAD`].
-    stride: usize,
-    coarse: usize,
-    detail: usize,
-    split: usize,
-    tags: Vec<usize>,
-}
-
-impl<T: Sample> Ring<T> {
-    fn new(row: usize, coarse: usize, detail: usize, split: usize) -> Self {
-        let stride = row + RING_PAD;
-        Ring {
-            data: vec![T::default(); stride * (coarse + detail)],
-            row,
-            stride,
-            coarse,
-            detail,
-            split,
-            tags: vec![usize::MAX; coarse + detail],
-        }
-    }
-    fn slot_of(&self, c: usize) -> usize {
-        if c < self.split {
-            c % self.coarse
-        } else {
-            self.coarse + (c - self.split) % self.detail
-        }
-    }
-    fn has(&self, c: usize) -> bool {
-        self.tags[self.slot_of(c)] == c
-    }
-    fn get(&self, c: usize) -> &[T] {
-        let s = self.slot_of(c);
-        assert_eq!(self.tags[s], c, "cascade ring: row {c} is not held");
-        &self.data[s * self.stride..s * self.stride + self.row]
-    }
-    /// The slot for row `c` (now holding it).
-    fn put(&mut self, c: usize) -> &mut [T] {
-        let s = self.slot_of(c);
-        self.tags[s] = c;
-        &mut self.data[s * self.stride..s * self.stride + self.row]
     }
 }
 

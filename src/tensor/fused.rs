@@ -14,11 +14,11 @@
 
 use super::aligned::Aligned;
 use super::par::{for_each_part, SharedMut};
-use crate::scheme::kernel::{
+use crate::kernel::polyphase::{Polyphase, PAIR_MOST};
+use crate::kernel::{
     self, combine_pair_taps, combine_taps, stream_copy, stream_copy_unfenced, stream_fence,
     transpose, LaneTaps, PairMemo,
 };
-use crate::scheme::polyphase::{Polyphase, PAIR_MOST};
 use crate::scheme::sparse::Csr;
 use crate::scheme::Sample;
 
@@ -38,7 +38,7 @@ pub struct AxisOp<'a> {
 pub(super) const STREAM_BYTES: usize = 16 << 20;
 
 /// Rows of [`AxisOp::order`] handed to one task.
-const ROWS_PER_TASK: usize = 16;
+pub(super) const ROWS_PER_TASK: usize = 16;
 
 /// How a level writes its output.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -47,8 +47,8 @@ pub enum Writes {
     /// [`STREAM_BYTES`], through them otherwise: analysis, whose output the next level
     /// reads only in part.
     StreamLarge,
-    /// Through the caches whatever the size: synthesis. Measured on the 2-core Zen 3 of
-    /// session 19 (`examples/pyramid_timing`, best of 7, interleaved), plain stores
+    /// Through the caches whatever the size: synthesis. Measured on a 2-core Zen 3
+    /// (`examples/pyramid_timing`, best of 7, interleaved), plain stores
     /// straight from the lanes cost the synthesis less than streaming each finished
     /// plane or row out in a pass of its own: 256³ cubic, three levels, inverse
     /// 11.8–13.0 → 10.7–12.3 ms (the three boundary modes); 512³ 138–140 → 118–119 ms;
@@ -262,7 +262,7 @@ impl<'a> Ctx<'a> {
     /// (elsewhere the split would be a pass of its own, with a buffer per row).
     pub fn takes_split_rows(&self) -> bool {
         let lane = &self.ops[self.ops.len() - 1].plan;
-        crate::scheme::sparse::cpu_has_avx2()
+        crate::kernel::cpu_has_avx2()
             && self.ops.len() == 2
             && self.e == 1
             && lane.split_reach.is_some()
@@ -693,10 +693,10 @@ fn lane_taps(a: &AxisOp, split: bool, w: usize) -> LaneTaps {
 
 /// Largest slab (bytes) combined in pairs ([`Ctx::row_pair`]): rows of images and the
 /// planes of volumes up to 256² (256 KB), whose coarse and detail planes along axis 0
-/// then read their input planes from L3 once instead of twice. In session 7 a second
-/// plane per worker made 256³ cubic slower (35.3 → 42.2 ms wall, two threads); on the
-/// machine of session 13 (AMD Zen 3: 512 KB of L2 per core, which the plane path's three
-/// planes overflow anyway; no AVX-512) pairing the planes is faster:
+/// then read their input planes from L3 once instead of twice. On a Zen 4 with 1 MB of
+/// L2 a second plane per worker made 256³ cubic slower (35.3 → 42.2 ms wall, two
+/// threads); on a Zen 3 (512 KB of L2 per core, which the plane path's three planes
+/// overflow anyway; no AVX-512) pairing the planes is faster:
 /// 256³ forward + inverse, best of 7 warm runs, four interleaved rounds, Chaikin
 /// 24.3–25.1 against 25.4–27.1 ms, cubic 31.5–32.0 against 32.8–33.7 ms.
 const PAIR_SLAB_MAX: usize = 256 << 10;
@@ -711,7 +711,7 @@ fn plane_path(k: usize, region: &[usize], e: usize) -> bool {
 }
 
 /// `dst[r] = Σ_c W_rc · src[c]` for every row `r` of `a.op`, rows of `len` samples: the
-/// rows of the operator's pair ([`crate::scheme::polyphase::Pair`]) two at a time ([`kernel::combine_pair_rows`]: the input
+/// rows of the operator's pair ([`crate::kernel::polyphase::Pair`]) two at a time ([`kernel::combine_pair_rows`]: the input
 /// rows they share read once), the others one by one ([`kernel::combine_rows`]).
 ///
 /// With `split` (a lane's room), every output row is written split into its even
@@ -768,65 +768,6 @@ fn combine_rows<T: Sample>(
         None => {
             for r in &plan.unpaired {
                 kernel::combine_rows(op, src, len, r.clone(), &mut dst[r.start * len..]);
-            }
-        }
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::scheme::{Boundary, Scheme};
-    use crate::tensor::workspace::level_ops;
-
-    /// The pairs the task loop makes over `rows`: greedily, each row with the next when
-    /// they pair.
-    fn greedy_pairs(rows: &[usize], op: &Csr) -> Vec<(usize, usize)> {
-        let (mut pairs, mut i) = (Vec::new(), 0);
-        while i < rows.len() {
-            if i + 1 < rows.len()
-                && kernel::rows_pair(op.row_slices(rows[i]).0, op.row_slices(rows[i + 1]).0)
-            {
-                pairs.push((rows[i], rows[i + 1]));
-                i += 2;
-            } else {
-                i += 1;
-            }
-        }
-        pairs
-    }
-
-    #[test]
-    fn parts_keep_every_pair_of_the_whole_order() {
-        for scheme in Scheme::ALL {
-            for boundary in Boundary::ALL {
-                for m in [5, 16, 64, 67, 130, 256] {
-                    let o = level_ops(scheme, boundary, m);
-                    for (op, order) in [
-                        (&o.two_scale.analysis, &o.analysis_order),
-                        (&o.two_scale.synthesis, &o.synthesis_order),
-                    ] {
-                        let parts = pair_parts(order, op);
-                        // consecutive, covering, at most one row over the size
-                        assert_eq!(parts.first().map(|p| p.start), Some(0));
-                        assert_eq!(parts.last().map(|p| p.end), Some(order.len()));
-                        for w in parts.windows(2) {
-                            assert_eq!(w[0].end, w[1].start);
-                        }
-                        assert!(parts.iter().all(|p| p.len() <= ROWS_PER_TASK + 1));
-                        let by_parts: Vec<_> = parts
-                            .iter()
-                            .flat_map(|p| greedy_pairs(&order[p.clone()], op))
-                            .collect();
-                        let whole = greedy_pairs(order, op);
-                        assert_eq!(by_parts, whole, "{scheme:?} {boundary:?} {m}");
-                        // the regular rows do pair: at most a few rows near the ends and
-                        // the middle of the order are left alone
-                        if m >= 64 {
-                            assert!(2 * whole.len() + 12 >= m, "{scheme:?} {boundary:?} {m}");
-                        }
-                    }
-                }
             }
         }
     }

@@ -6,17 +6,19 @@ mod array;
 mod cascade;
 mod fused;
 mod pages;
-mod par;
+pub(crate) mod par;
 pub mod pyramid;
 mod resample;
+mod ring;
 mod transform;
 pub mod workspace;
 
 pub use array::{Array, Axis};
 pub use pages::{advise_huge_pages, zeroed_vec};
 pub use pyramid::{
-    analyze, analyze_with, synthesize, synthesize_with, Engine, Order, Pyramid, PyramidSpec,
-    Subband,
+    analyze, analyze_in, analyze_with, synthesize, synthesize_in, synthesize_with, Engine, Order,
+    Pyramid, PyramidSpec, Subband,
 };
 pub use resample::{map_lanes, resample_axis, resample_axis_with};
 pub use transform::transform_axis;
+pub use workspace::Planner;

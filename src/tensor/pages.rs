@@ -7,10 +7,10 @@
 //! `/sys/kernel/mm/transparent_hugepage/enabled`, as NumPy does for its large arrays)
 //! before anything touches them. It is advice: contents and behaviour do not change, and
 //! where the kernel declines (or off Linux) the buffer keeps small pages. Arrays that the
-//! caller passes in keep their own pages. `MRA_HUGE_PAGES=off` in the environment turns
-//! the advice off (every buffer on the pages the allocator gives, as a plain `Vec`'s).
+//! caller passes in keep their own pages. `tuning` turns the advice off
+//! (`MRA_HUGE_PAGES=off`: every buffer on the pages the allocator gives, as a plain `Vec`'s).
 //!
-//! Measured on the 2-core Zen 3 of session 20 (`examples/pyramid_timing`, 256³ cubic
+//! Measured on a 2-core Zen 3 (`examples/pyramid_timing`, 256³ cubic
 //! interpolating, three levels, two threads):
 //! - the first forward of a process (its scratch faulted in): 40.2–41.4 → 20.3–21.2 ms
 //!   (one run in three 44.5 ms: the kernel compacting memory for the pages);
@@ -27,10 +27,9 @@ pub fn zeroed_vec<T: Clone + Default>(len: usize) -> Vec<T> {
     v
 }
 
-/// Whether the advice is on: unless `MRA_HUGE_PAGES` is `off` (or `0`), read once.
+/// Whether the advice is on ([`crate::tuning::Tuning::huge_pages`], `MRA_HUGE_PAGES`).
 fn huge_pages_on() -> bool {
-    static ON: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
-    *ON.get_or_init(|| !matches!(std::env::var("MRA_HUGE_PAGES").as_deref(), Ok("off" | "0")))
+    crate::tuning::get().huge_pages
 }
 
 /// Ask for huge pages over the whole 2 MB pages inside `v` (nothing for smaller buffers,

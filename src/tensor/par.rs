@@ -11,6 +11,19 @@ pub(crate) struct SharedMut<T>(pub *mut T);
 unsafe impl<T: Send> Send for SharedMut<T> {}
 unsafe impl<T: Send> Sync for SharedMut<T> {}
 
+impl<T> SharedMut<T> {
+    /// Store `v` at index `i` of the array.
+    ///
+    /// # Safety
+    /// `i` inside the array, and no other task reads or writes index `i` meanwhile.
+    #[inline]
+    #[cfg_attr(not(feature = "geometry"), allow(dead_code))]
+    pub(crate) unsafe fn write(&self, i: usize, v: T) {
+        // SAFETY: the caller's guarantees.
+        unsafe { *self.0.add(i) = v }
+    }
+}
+
 /// Run `task(i, &mut scratch)` for `i in 0..count` on rayon's pool, one scratch buffer
 /// per worker (allocated once, not per task). Small jobs run on the calling thread.
 pub(crate) fn for_each_task<S: Send, F, I>(count: usize, work_per_task: usize, init: I, task: F)

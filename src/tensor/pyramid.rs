@@ -12,8 +12,9 @@ use super::cascade;
 use super::fused::{fused_level, fused_level_strided, AxisOp, Writes};
 use super::par::{for_each_task, SharedMut};
 use super::transform::transform_axis;
-use super::workspace;
+use super::workspace::{self, Planner};
 use crate::scheme::{max_levels, Boundary, Sample, Scheme, TwoScale};
+use crate::tuning::EngineChoice;
 use crate::{Error, Result};
 
 /// The order in which levels and axes are visited.
@@ -217,14 +218,15 @@ impl Pyramid {
     }
 }
 
-/// Decompose `array` in place; returns the plan needed to invert it.
+/// Decompose `array` in place; returns the plan needed to invert it. The engine of
+/// [`Engine::tuned`], the operators and scratch of [`Planner::shared`].
 pub fn analyze<T: Sample>(array: &mut Array<T>, spec: &PyramidSpec) -> Result<Pyramid> {
-    analyze_with(array, spec, Engine::default())
+    analyze_with(array, spec, Engine::tuned())
 }
 
 /// Invert [`analyze`] in place.
 pub fn synthesize<T: Sample>(array: &mut Array<T>, pyr: &Pyramid) -> Result<()> {
-    synthesize_with(array, pyr, Engine::default())
+    synthesize_with(array, pyr, Engine::tuned())
 }
 
 /// How the levels of a pyramid are computed. Both give the same bits: every output
@@ -234,9 +236,7 @@ pub fn synthesize<T: Sample>(array: &mut Array<T>, pyr: &Pyramid) -> Result<()> 
 pub enum Engine {
     /// Non-standard pyramids over the leading axes run as one cascade over all levels
     /// (every sample read and written once for the whole pyramid, see `cascade.rs`);
-    /// where that does not apply, [`Engine::FusedLevels`]. The default, unless
-    /// `MRA_ENGINE` is set to `levels` or `axis` in the environment (or to `cascade`:
-    /// [`Engine::CascadeParts`] with a part per thread, volumes included, for timing).
+    /// where that does not apply, [`Engine::FusedLevels`]. The default.
     Fused,
     /// Non-standard levels over the leading axes run fused and out of place, level by
     /// level (one read and one write of every sample per level, the array plus one
@@ -252,14 +252,22 @@ pub enum Engine {
 }
 
 impl Default for Engine {
+    /// [`Engine::Fused`].
     fn default() -> Self {
-        static ON: std::sync::OnceLock<Engine> = std::sync::OnceLock::new();
-        *ON.get_or_init(|| match std::env::var("MRA_ENGINE").as_deref() {
-            Ok("axis") => Engine::AxisByAxis,
-            Ok("levels") => Engine::FusedLevels,
-            Ok("cascade") => Engine::CascadeParts(rayon::current_num_threads()),
-            _ => Engine::Fused,
-        })
+        Engine::Fused
+    }
+}
+
+impl Engine {
+    /// The engine `tuning` asks for (`MRA_ENGINE`: `levels`, `axis`, or `cascade` for
+    /// [`Engine::CascadeParts`] with a part per thread), [`Engine::Fused`] otherwise.
+    pub fn tuned() -> Engine {
+        match crate::tuning::get().engine {
+            EngineChoice::Fused => Engine::Fused,
+            EngineChoice::Levels => Engine::FusedLevels,
+            EngineChoice::Axis => Engine::AxisByAxis,
+            EngineChoice::Cascade => Engine::CascadeParts(rayon::current_num_threads()),
+        }
     }
 }
 
@@ -269,13 +277,33 @@ pub fn analyze_with<T: Sample>(
     spec: &PyramidSpec,
     engine: Engine,
 ) -> Result<Pyramid> {
+    analyze_in(Planner::shared(), array, spec, engine)
+}
+
+/// [`analyze_with`] with the operators and scratch of `planner`.
+pub fn analyze_in<T: Sample>(
+    planner: &Planner,
+    array: &mut Array<T>,
+    spec: &PyramidSpec,
+    engine: Engine,
+) -> Result<Pyramid> {
     let pyr = Pyramid::plan(array.shape(), spec)?;
-    run(array, &pyr, Direction::Analysis, engine);
+    run(planner, array, &pyr, Direction::Analysis, engine);
     Ok(pyr)
 }
 
 /// [`synthesize`] with a chosen [`Engine`].
 pub fn synthesize_with<T: Sample>(
+    array: &mut Array<T>,
+    pyr: &Pyramid,
+    engine: Engine,
+) -> Result<()> {
+    synthesize_in(Planner::shared(), array, pyr, engine)
+}
+
+/// [`synthesize_with`] with the operators and scratch of `planner`.
+pub fn synthesize_in<T: Sample>(
+    planner: &Planner,
     array: &mut Array<T>,
     pyr: &Pyramid,
     engine: Engine,
@@ -287,7 +315,7 @@ pub fn synthesize_with<T: Sample>(
             "the shape the pyramid was computed for",
         ));
     }
-    run(array, pyr, Direction::Synthesis, engine);
+    run(planner, array, pyr, Direction::Synthesis, engine);
     Ok(())
 }
 
@@ -300,11 +328,16 @@ enum Direction {
 /// The levels of `pyr` in the direction asked. With [`Engine::Fused`], a non-standard
 /// level whose axes are the leading axes of the array (an image `[H, W, C]`, a volume `[D, H, W]`) runs fused and
 /// out of place ([`fused_level`]); any other step goes axis by axis in place.
-fn run<T: Sample>(array: &mut Array<T>, pyr: &Pyramid, dir: Direction, engine: Engine) {
+fn run<T: Sample>(
+    planner: &Planner,
+    array: &mut Array<T>,
+    pyr: &Pyramid,
+    dir: Direction,
+    engine: Engine,
+) {
     let shape = array.shape().to_vec();
     let spec = &pyr.spec;
-    let ops =
-        |i: usize, l: usize| workspace::level_ops(spec.scheme, spec.boundary, pyr.lengths[i][l]);
+    let ops = |i: usize, l: usize| planner.level_ops(spec.scheme, spec.boundary, pyr.lengths[i][l]);
     let step = |data: &mut [T], i: usize, l: usize, region: &[usize]| {
         let o = ops(i, l);
         let op = match dir {
@@ -354,7 +387,15 @@ fn run<T: Sample>(array: &mut Array<T>, pyr: &Pyramid, dir: Direction, engine: E
         _ => None,
     };
     if let (true, Some((parts, forced))) = (cascadable, parts) {
-        if cascade(array, pyr, dir, fused_k[0].unwrap_or(0), parts, forced) {
+        if cascade(
+            planner,
+            array,
+            pyr,
+            dir,
+            fused_k[0].unwrap_or(0),
+            parts,
+            forced,
+        ) {
             return;
         }
     }
@@ -382,7 +423,7 @@ fn run<T: Sample>(array: &mut Array<T>, pyr: &Pyramid, dir: Direction, engine: E
         let strides = array.strides();
         let st = &strides[..k];
         let e: usize = shape[k..].iter().product();
-        let buf = scratch.get_or_insert_with(|| workspace::take_scratch(array.len()));
+        let buf = scratch.get_or_insert_with(|| planner.take_scratch(array.len()));
         let writes = match dir {
             Direction::Analysis => Writes::StreamLarge,
             Direction::Synthesis => Writes::Cached,
@@ -415,7 +456,7 @@ fn run<T: Sample>(array: &mut Array<T>, pyr: &Pyramid, dir: Direction, engine: E
         );
     }
     if let Some(s) = scratch {
-        workspace::give_scratch(s);
+        planner.give_scratch(s);
     }
 }
 
@@ -441,6 +482,7 @@ fn axis_op(o: &workspace::LevelOps, dir: Direction) -> AxisOp<'_> {
 /// ([`cascade::Plan`]), into the scratch array which then becomes the array's data;
 /// `false` (nothing done) when the cascade does not apply.
 fn cascade<T: Sample>(
+    planner: &Planner,
     array: &mut Array<T>,
     pyr: &Pyramid,
     dir: Direction,
@@ -463,7 +505,7 @@ fn cascade<T: Sample>(
             (0..k)
                 .map(|d| {
                     let m = pyr.lengths[by_axis[d]][l];
-                    workspace::level_ops(spec.scheme, spec.boundary, m)
+                    planner.level_ops(spec.scheme, spec.boundary, m)
                 })
                 .collect()
         })
@@ -490,10 +532,10 @@ fn cascade<T: Sample>(
         return false;
     };
     let strides = array.strides();
-    let mut buf = workspace::take_scratch(array.len());
+    let mut buf = planner.take_scratch(array.len());
     plan.run(array.data(), &mut buf, &strides[..k]);
     array.swap_data(&mut buf);
-    workspace::give_scratch(buf);
+    planner.give_scratch(buf);
     true
 }
 

@@ -69,7 +69,7 @@ pub fn resample_axis_with<T: Sample, U: Copy + Send + Sync>(
                 let off = s * sw_max;
                 let sw = sw_max.min(inner - off);
                 let base = &src[o * n * inner + off..];
-                op.apply(base, inner, scratch, sw, sw);
+                crate::kernel::apply(op, base, inner, scratch, sw, sw);
                 let p = out;
                 for i in 0..m {
                     // SAFETY: task (o, s) alone writes columns off..off+sw of lane o.
@@ -98,7 +98,7 @@ pub fn resample_axis_with<T: Sample, U: Copy + Send + Sync>(
                     spread(lane, inner, &mut sin[l * inner..], gw, n, |d, x| *d = x);
                 }
                 let cw = lanes * inner;
-                op.apply(sin, gw, sout, gw, cw);
+                crate::kernel::apply(op, sin, gw, sout, gw, cw);
                 let p = out;
                 for l in 0..lanes {
                     // SAFETY: lanes first..first+lanes belong to this task alone.

@@ -83,7 +83,14 @@ pub fn transform_axis<T: Sample>(
                 // elements of lane set `b`, which no other task touches.
                 unsafe {
                     let base = p.0.add(b + off);
-                    op.apply_raw(base as *const T, es, scratch.as_mut_ptr(), sw, sw);
+                    crate::kernel::apply_raw(
+                        op,
+                        base as *const T,
+                        es,
+                        scratch.as_mut_ptr(),
+                        sw,
+                        sw,
+                    );
                     for i in 0..len {
                         std::ptr::copy_nonoverlapping(
                             scratch.as_ptr().add(i * sw),
@@ -114,7 +121,7 @@ pub fn transform_axis<T: Sample>(
                 // SAFETY: the lanes of this group are disjoint from every other group's.
                 unsafe { gather(p.0 as *const T, lanes, es, w, len, sin, gw) };
                 let cw = lanes.len() * w;
-                op.apply(sin, gw, sout, gw, cw);
+                crate::kernel::apply(op, sin, gw, sout, gw, cw);
                 unsafe { scatter(sout, gw, p.0, lanes, es, w, len) };
             },
         );

@@ -11,7 +11,6 @@
 //! ```text
 //! grid.rs      Grid: h × w × channels of f64, row-major
 //! resample.rs  corner-aligned Catmull–Rom resampling (base to the output lattice)
-//! voids.rs     filling nodata cells (SRTM voids) before synthesis
 //! synth.rs     the example's pyramid, patch matching, blended detail transfer
 //! volume.rs    the same detail transfer for 3-D volumes (cube patches, seven bands)
 //! hillshade.rs Horn slope/aspect shading with an optional hypsometric colour ramp
@@ -24,7 +23,6 @@ pub mod hillshade;
 pub mod raster;
 pub mod resample;
 pub mod synth;
-pub mod voids;
 pub mod volume;
 
 pub use demo::demo_rows;

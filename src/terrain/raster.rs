@@ -3,11 +3,13 @@
 //! height unit, compatible cell size), and the output's metadata (units kept, cell size
 //! scaled by the change of lattice, GeoTIFF pixel scale updated, nodata dropped).
 
-use super::{voids, Grid};
-use crate::io::{GeoValue, Raster, SampleType, Samples};
+use super::Grid;
+use crate::io::nodata::Voids;
+use crate::io::{AxisMap, Raster, SampleType, Samples};
 use crate::{Error, Result};
 
-/// A 2-D raster as a grid; nodata cells (`meta.nodata`, NaN) are filled first.
+/// A 2-D raster as a grid; nodata cells (`meta.nodata`, NaN) are filled first, by the
+/// membrane of [`crate::io::nodata`].
 /// Returns the grid and the number of filled cells.
 pub fn to_grid(r: &Raster) -> Result<(Grid, usize)> {
     if r.dims.len() != 2 {
@@ -18,7 +20,10 @@ pub fn to_grid(r: &Raster) -> Result<(Grid, usize)> {
         ));
     }
     let mut g = Grid::new(r.dims[0], r.dims[1], r.channels, r.to_f64())?;
-    let filled = voids::fill(&mut g, r.meta.nodata)?;
+    let filled = match Voids::find(&g.data, r.meta.nodata) {
+        Some(v) => v.fill_membrane(&mut g.data, g.h, g.w, g.c)?,
+        None => 0,
+    };
     Ok((g, filled))
 }
 
@@ -68,8 +73,9 @@ pub fn check_compatible(base: &Raster, example: &Raster, out_w: usize) -> Result
     Ok(())
 }
 
-/// The output raster: `g` in `ty`, with `template`'s metadata, spacing scaled from
-/// `from_dims` to `g`'s lattice (corner-aligned: × (n − 1)/(M − 1)).
+/// The output raster: `g` in `ty`, with `template`'s metadata moved to `g`'s
+/// corner-aligned lattice ([`AxisMap::vertex`], spacing × (n − 1)/(M − 1)); nodata
+/// dropped (the voids were filled).
 pub fn from_grid(g: &Grid, template: &Raster, ty: SampleType) -> Result<Raster> {
     let mut r = Raster::new(
         vec![g.h, g.w],
@@ -77,32 +83,13 @@ pub fn from_grid(g: &Grid, template: &Raster, ty: SampleType) -> Result<Raster> 
         Samples::from_f64(&g.data, ty),
         template.kind,
     )?;
-    let mut meta = template.meta.clone();
+    // corner-aligned lattice: new sample j at old (n − 1)/(M − 1)·j on each axis
     let (n_y, n_x) = (template.dims[0], template.dims[1]);
-    let fy = (n_y.max(2) - 1) as f64 / (g.h.max(2) - 1) as f64;
-    let fx = (n_x.max(2) - 1) as f64 / (g.w.max(2) - 1) as f64;
-    if let Some(sp) = meta.spacing.as_mut() {
-        if sp.len() == 2 {
-            sp[0] *= fy;
-            sp[1] *= fx;
-        }
-    }
-    for key in ["asc.cellsize", "asc.dx", "asc.dy"] {
-        meta.extra.remove(key);
-    }
+    let maps = [AxisMap::vertex(n_y, g.h), AxisMap::vertex(n_x, g.w)];
+    let mut meta = template.meta.resampled(&template.dims, &[g.h, g.w], &maps);
     meta.nodata = None;
     meta.extra.remove("asc.nodata_value");
-    meta.geotiff.retain(|t| t.tag != 42113 && t.tag != 34264);
-    for t in meta.geotiff.iter_mut() {
-        if t.tag == 33550 {
-            if let GeoValue::Doubles(d) = &mut t.value {
-                if d.len() >= 2 {
-                    d[0] *= fx;
-                    d[1] *= fy;
-                }
-            }
-        }
-    }
+    meta.geotiff.retain(|t| t.tag != 42113);
     r.meta = meta;
     Ok(r)
 }

@@ -20,7 +20,7 @@
 //! (exact at every dyadic position up to that level, e.g. every pixel centre of a ×2^k
 //! upscale with k < 12).
 
-use crate::curve::basis::basis_brute;
+use crate::curve::basis::basis_funs;
 use crate::scheme::subdivide::{refine_steps, Ends, Refinement};
 
 /// Dyadic level of the tabulated 4-point function (4096 samples per unit).
@@ -29,22 +29,33 @@ pub const FOUR_POINT_LEVEL: u32 = 12;
 /// A centred one-dimensional basis function with its antiderivative.
 #[derive(Clone, Debug)]
 pub enum Basis {
-    /// Uniform B-spline of this order (1 ≤ k ≤ 6).
+    /// Uniform B-spline of this order (1 ≤ k ≤ [`MAX_ORDER`]).
     BSpline(usize),
     /// Tabulated 4-point fundamental function: values and running integral on
     /// `x = −3 + i / 2^L`.
     FourPoint { value: Vec<f64>, integral: Vec<f64> },
 }
 
-/// Integer knots `0, 1, …` enough for the cardinal B-splines used here (order ≤ 7).
-const KNOTS: [f64; 16] = [
-    0., 1., 2., 3., 4., 5., 6., 7., 8., 9., 10., 11., 12., 13., 14., 15.,
-];
+/// Highest B-spline order [`Basis::BSpline`] evaluates (the CLI offers 1–12; the
+/// antiderivative needs order + 1).
+pub const MAX_ORDER: usize = 12;
 
-/// `N_{i,k}(t)` on the integer knots, by the curve module's Cox–de Boor recursion.
-fn cardinal(i: usize, k: usize, t: f64) -> f64 {
-    // n = 15 keeps the valid range's right end (knots[15]) away from every t used here
-    basis_brute(&KNOTS, KNOTS.len() - 1, i, k, t)
+/// Integer knots `t_j = j − KNOT_SHIFT`, so that every span `[m, m + 1)` with
+/// `0 ≤ m ≤ MAX_ORDER` has `MAX_ORDER + 1` knots on each side (what the triangular
+/// Cox–de Boor recursion reads for order ≤ `MAX_ORDER + 1`).
+const KNOT_SHIFT: usize = MAX_ORDER + 2;
+const KNOT_COUNT: usize = 2 * KNOT_SHIFT + MAX_ORDER + 2;
+
+/// `N_{m−k+1,k}(t) … N_{m,k}(t)` on the integer knots, `m = ⌊t⌋`, written to `out[0..k]`
+/// (the curve module's triangular Cox–de Boor recursion, §3.9.4: O(k²), where the plain
+/// recursion of §3.4.1 costs O(2^k)). Requires `0 ≤ t < MAX_ORDER + 1`, `k ≤ MAX_ORDER + 1`.
+fn cardinal_span(k: usize, t: f64, out: &mut [f64; MAX_ORDER + 1]) -> usize {
+    debug_assert!((1..=MAX_ORDER + 1).contains(&k) && (0.0..(MAX_ORDER + 1) as f64).contains(&t));
+    let knots: [f64; KNOT_COUNT] = std::array::from_fn(|j| j as f64 - KNOT_SHIFT as f64);
+    let m = t.floor() as usize;
+    let (mut left, mut right) = ([0.0; MAX_ORDER + 1], [0.0; MAX_ORDER + 1]);
+    basis_funs(&knots, m + KNOT_SHIFT, t, k, out, &mut left, &mut right);
+    m
 }
 
 impl Basis {
@@ -73,7 +84,10 @@ impl Basis {
                 if x < -h || x >= h {
                     0.0
                 } else {
-                    cardinal(0, *k, x + h)
+                    // N_{0,k}(t) is entry (k − 1) − m of the span's k functions
+                    let mut out = [0.0; MAX_ORDER + 1];
+                    let m = cardinal_span(*k, x + h, &mut out);
+                    out[*k - 1 - m]
                 }
             }
             Basis::FourPoint { value, .. } => table(value, x, 0.0, 0.0),
@@ -92,7 +106,10 @@ impl Basis {
                 } else {
                     // d/dt N_{i,k+1} = N_{i,k} − N_{i+1,k} on unit knots, so the running
                     // integral of N_{0,k} is Σ_{i≥0} N_{i,k+1}
-                    (0..=*k).map(|i| cardinal(i, k + 1, x + h)).sum()
+                    // (span functions N_{m−k..m, k+1}; those with i ≥ 0 are entries k − m …)
+                    let mut out = [0.0; MAX_ORDER + 1];
+                    let m = cardinal_span(k + 1, x + h, &mut out);
+                    out[*k - m..=*k].iter().sum()
                 }
             }
             Basis::FourPoint { integral, .. } => table(integral, x, 0.0, 1.0),
@@ -165,6 +182,29 @@ mod tests {
             }
             assert!((b.integral(10.0) - 1.0).abs() < 1e-6, "{rule:?}");
             assert!(b.integral(-10.0).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn every_offered_order_matches_the_plain_recursion_and_sums_to_one() {
+        use crate::curve::basis::basis_brute;
+        let knots: Vec<f64> = (0..32).map(|j| j as f64).collect();
+        for k in 1..=MAX_ORDER {
+            let b = Basis::BSpline(k);
+            let h = k as f64 / 2.0;
+            for x in [-h, -h + 0.3, -0.5, 0.0, 0.25, h - 0.01] {
+                let brute = basis_brute(&knots, 31, 0, k, x + h);
+                assert!((b.value(x) - brute).abs() < 1e-12, "k={k} x={x}");
+                if k <= 9 {
+                    let brute_int: f64 = (0..=k)
+                        .map(|i| basis_brute(&knots, 31, i, k + 1, x + h))
+                        .sum();
+                    assert!((b.integral(x) - brute_int).abs() < 1e-12, "k={k} x={x}");
+                }
+                let s: f64 = (-20..=20).map(|i| b.value(x - i as f64)).sum();
+                assert!((s - 1.0).abs() < 1e-9, "k={k} x={x} sum={s}");
+            }
+            assert!((b.integral(h - 1e-9) - 1.0).abs() < 1e-6, "k={k}");
         }
     }
 

@@ -14,12 +14,12 @@
 //! `col_step = 2` the lane is first split into its even and odd elements, so tap `k` reads
 //! the contiguous slice starting at element `cols[k] / 2` of one half.
 
-use super::kernel::{
+use crate::kernel::{
     self, combine, combine_pair_at, combine_pair_merged_at, deinterleave, edge_rows, interleave,
-    EdgeGroup,
+    CpuLevel, EdgeGroup,
 };
-use super::sample::Sample;
-use super::sparse::{Csr, Simd};
+use crate::scheme::sparse::Csr;
+use crate::scheme::Sample;
 
 /// Shortest run worth a vector pass; shorter stretches stay boundary rows.
 const MIN_RUN: usize = 4;
@@ -159,9 +159,9 @@ impl Pair {
             return None;
         }
         // row i of r0 with row i + d of r1, whose columns are those of r1's first row
-        // moved on by 2·d relative to row i of r0 (this read `− 2·d` until session 13,
-        // so that a pair with d ≠ 0 — the interpolating Chaikin analysis, d = −1 — went
-        // unfound: the offset chosen made the two rows share no column)
+        // moved on by 2·d relative to row i of r0 (with `− 2·d` here a pair with d ≠ 0 —
+        // the interpolating Chaikin analysis, d = −1 — goes unfound: the offset chosen
+        // makes the two rows share no column)
         let union = |d: isize| {
             let mut c: Vec<isize> = r0.cols.iter().map(|&c| c as isize).collect();
             c.extend(r1.cols.iter().map(|&c| c as isize + 2 * d));
@@ -459,7 +459,7 @@ impl Polyphase {
 }
 
 /// `rows` (increasing) in groups of up to 8 that follow one another, each row of at most
-/// [`EDGE_SPAN`](super::kernel::EDGE_SPAN) taps, and the rows left over.
+/// [`EDGE_SPAN`](kernel::EDGE_SPAN) taps, and the rows left over.
 fn edge_groups(op: &Csr, rows: &[usize]) -> (Vec<EdgeGroup>, Vec<usize>) {
     let (mut groups, mut rest) = (Vec::new(), Vec::new());
     let mut i = 0;
@@ -491,20 +491,20 @@ fn edge_groups(op: &Csr, rows: &[usize]) -> (Vec<EdgeGroup>, Vec<usize>) {
 }
 
 /// One row of `op` on element-wide samples: `y_r = Σ w x_c`, summed as
-/// [`kernel::sum_terms`](super::kernel::sum_terms) says.
+/// [`kernel::sum_terms`](kernel::sum_terms) says.
 #[inline]
 fn op_row<T: Sample>(op: &Csr, r: usize, x: &[T], y: &mut [T], e: usize) {
     let (cols, ws) = op.row_slices(r);
     if e > 1 {
         let out = &mut y[r * e..r * e + e];
-        super::kernel::combine_taps(out, cols, ws, |c| &x[c as usize * e..c as usize * e + e]);
+        kernel::combine_taps(out, cols, ws, |c| &x[c as usize * e..c as usize * e + e]);
         return;
     }
     let n = cols.len();
     let x = |k: usize| x[cols[k] as usize];
     if n > 32 {
         let w: Vec<T> = ws.iter().map(|&v| T::from_f64(v)).collect();
-        y[r] = super::kernel::row_sum(&w, x);
+        y[r] = kernel::row_sum(&w, x);
         return;
     }
     let mut w = [T::default(); 32];
@@ -512,8 +512,8 @@ fn op_row<T: Sample>(op: &Csr, r: usize, x: &[T], y: &mut [T], e: usize) {
     for k in 0..n {
         w[k] = T::from_f64(ws[k]);
     }
-    super::kernel::pair_taps(&w[..n], &mut partner[..n]);
-    y[r] = super::kernel::sum_terms(&w[..n], &partner[..n], x);
+    kernel::pair_taps(&w[..n], &mut partner[..n]);
+    y[r] = kernel::sum_terms(&w[..n], &partner[..n], x);
 }
 
 fn op_rows_run<T: Sample>(op: &Csr, run: &Run, x: &[T], y: &mut [T], e: usize) {
@@ -582,8 +582,8 @@ fn pair_part<T: Sample>(
         };
     }
     let [m0, m1] = pair.masks;
-    let simd = Simd::detected();
-    let entry = if simd >= Simd::Avx2 {
+    let simd = CpuLevel::detected();
+    let entry = if simd >= CpuLevel::Avx2 {
         pair.entry::<T>()
     } else {
         None
@@ -628,17 +628,29 @@ fn pair_merged<T: Sample>(pair: &Pair, x: &[T], out: &mut [T]) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scheme::{two_scale::TwoScale, Boundary, Scheme};
+    use crate::scheme::{Boundary, Scheme, TwoScale};
 
     /// Every scheme and boundary pairs its regular rows in both directions, leaving a few
     /// rows near the ends (and, in analysis, where the coarse rows meet the details):
-    /// the interpolating Chaikin analysis, whose detail row `i` reads the columns of
-    /// coarse row `i + 1`, went unpaired until session 13.
+    /// among them the interpolating Chaikin analysis, whose detail row `i` reads the
+    /// columns of coarse row `i + 1` (it goes unpaired when the offset's sign is wrong).
     #[test]
     fn every_operator_pairs_its_regular_rows() {
         for scheme in Scheme::ALL {
             for boundary in Boundary::ALL {
                 for n in [64usize, 256, 257] {
+                    // rows near the ends: the boundary blocks, or the rows whose regular
+                    // window folds at a mirror, grow with the longest regular filter; lanes
+                    // shorter than eight of them are mostly ends
+                    let reach = scheme.regular().map_or(0, |f| f.a.w.len().max(f.q.w.len()));
+                    if n < 8 * reach {
+                        continue;
+                    }
+                    // a regular row wider than a pair's inputs (cubic-wide's 19 taps) runs
+                    // as plain regular runs
+                    if reach > PAIR_MOST {
+                        continue;
+                    }
                     let t = TwoScale::new(scheme, boundary, n);
                     for (name, op) in [("analysis", &t.analysis), ("synthesis", &t.synthesis)] {
                         let p = Polyphase::new(op);
@@ -647,7 +659,7 @@ mod tests {
                         });
                         let unpaired: usize = p.unpaired.iter().map(|r| r.len()).sum();
                         assert!(
-                            unpaired <= 20,
+                            unpaired <= 20.max(3 * reach),
                             "{scheme:?} {boundary:?} {n} {name}: {unpaired} rows unpaired"
                         );
                         assert_eq!(2 * pair.count + unpaired, n, "{scheme:?} {boundary:?} {n}");

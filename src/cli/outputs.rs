@@ -1,0 +1,159 @@
+//! The one check every command's output path passes before the command runs: the
+//! output is never one of the inputs (the same file, also through another path, a
+//! symbolic or a hard link), and its extension names what the command writes.
+//!
+//! It reads the arguments as given: the output is the value of `-o` / `--output`, the
+//! inputs every other argument naming an existing file or folder. Commands whose output
+//! format is fixed or chosen by the extension are listed in [`expected`].
+
+use std::ffi::OsString;
+use std::path::{Path, PathBuf};
+
+use super::Failure;
+use crate::io::Format;
+
+/// What a command may write, by its name (`None`: any name its writer accepts).
+enum Writes {
+    /// Exactly these extensions (lower case, without the dot).
+    Extensions(&'static [&'static str]),
+    /// A raster format mra writes ([`Format::from_extension`] and writable).
+    Raster,
+}
+
+/// The outputs of the commands whose output kind is known here.
+fn expected(command: &str) -> Option<Writes> {
+    Some(match command {
+        "encode" => Writes::Extensions(&["mra"]),
+        "decode" | "convert" | "upscale" | "downscale" | "transfer" | "terrain" => Writes::Raster,
+        _ => return None,
+    })
+}
+
+/// Raster formats mra writes (the extensions [`crate::io::write`] accepts).
+const RASTER_OUT: &str =
+    ".png .tif .pgm .ppm .pam .exr .nrrd .nhdr .nii .nii.gz .hgt .asc .r16 .r32 .raw";
+
+fn writable(f: Format) -> bool {
+    !matches!(
+        f,
+        Format::Jpeg | Format::Dicom | Format::DicomSeries | Format::SliceFolder
+    )
+}
+
+/// The same file (device and inode on Unix; the canonical path elsewhere).
+fn same_file(a: &Path, b: &Path) -> bool {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::MetadataExt;
+        if let (Ok(x), Ok(y)) = (std::fs::metadata(a), std::fs::metadata(b)) {
+            return x.dev() == y.dev() && x.ino() == y.ino();
+        }
+        false
+    }
+    #[cfg(not(unix))]
+    {
+        match (a.canonicalize(), b.canonicalize()) {
+            (Ok(x), Ok(y)) => x == y,
+            _ => false,
+        }
+    }
+}
+
+/// Split `args` (without the program name) into the command name, the output and the
+/// other non-flag arguments.
+fn split(args: &[OsString]) -> (Option<String>, Option<PathBuf>, Vec<PathBuf>) {
+    let command = args.first().map(|a| a.to_string_lossy().into_owned());
+    let mut output = None;
+    let mut rest = Vec::new();
+    let mut i = 1;
+    while i < args.len() {
+        let a = &args[i];
+        let s = a.to_string_lossy();
+        if s == "-o" || s == "--output" {
+            output = args.get(i + 1).map(PathBuf::from);
+            i += 2;
+            continue;
+        }
+        if let Some(v) = s.strip_prefix("--output=") {
+            output = Some(PathBuf::from(v));
+        } else if let Some(v) = s.strip_prefix("-o").filter(|_| !s.starts_with("--")) {
+            output = Some(PathBuf::from(v.trim_start_matches('=')));
+        } else if !s.starts_with('-') || s == "-" {
+            rest.push(PathBuf::from(a));
+        }
+        i += 1;
+    }
+    (command, output, rest)
+}
+
+/// Check the output of the command line `args` (without the program name).
+pub fn check(args: &[OsString]) -> Result<(), Failure> {
+    let (command, output, rest) = split(args);
+    let Some(out) = output else {
+        return Ok(());
+    };
+    if out.as_os_str() == "-" {
+        return Ok(());
+    }
+    for input in rest.iter().filter(|p| p.exists()) {
+        if out.exists() && same_file(&out, input) {
+            return Err(Failure(format!(
+                "{}: the output is the input {} (expected a different output file)",
+                out.display(),
+                input.display()
+            )));
+        }
+    }
+    let name = out
+        .file_name()
+        .map(|n| n.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default();
+    let command = command.unwrap_or_default();
+    let bad = match expected(&command) {
+        Some(Writes::Extensions(exts))
+            if !exts.iter().any(|e| name.ends_with(&format!(".{e}"))) =>
+        {
+            let want: Vec<String> = exts.iter().map(|e| format!(".{e}")).collect();
+            Some(want.join(" "))
+        }
+        Some(Writes::Raster) if !Format::from_extension(&out).is_some_and(writable) => {
+            Some(format!("one of {RASTER_OUT}"))
+        }
+        _ => None,
+    };
+    if let Some(want) = bad {
+        return Err(Failure(format!(
+            "{}: invalid output extension for {command} (expected {want})",
+            out.display(),
+        )));
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn os(v: &[&str]) -> Vec<OsString> {
+        v.iter().map(OsString::from).collect()
+    }
+
+    #[test]
+    fn split_finds_command_output_and_inputs() {
+        let (c, o, r) = split(&os(&["encode", "a.png", "-o", "b.mra", "--psnr", "40"]));
+        assert_eq!(c.as_deref(), Some("encode"));
+        assert_eq!(o, Some(PathBuf::from("b.mra")));
+        assert_eq!(r, vec![PathBuf::from("a.png"), PathBuf::from("40")]);
+        let (_, o, _) = split(&os(&["decode", "--output=x.png", "a.mra"]));
+        assert_eq!(o, Some(PathBuf::from("x.png")));
+    }
+
+    #[test]
+    fn encode_must_write_mra_and_decode_a_raster() {
+        assert!(check(&os(&["encode", "nowhere.png", "-o", "x.png"])).is_err());
+        assert!(check(&os(&["encode", "nowhere.png", "-o", "x.MRA"])).is_ok());
+        assert!(check(&os(&["decode", "nowhere.mra", "-o", "x.mra"])).is_err());
+        assert!(check(&os(&["decode", "nowhere.mra", "-o", "x.jpg"])).is_err());
+        assert!(check(&os(&["decode", "nowhere.mra", "-o", "x.nii.gz"])).is_ok());
+    }
+}

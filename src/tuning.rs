@@ -1,0 +1,188 @@
+//! Every process-wide setting of mra, and the only place that reads the environment.
+//!
+//! None of these settings changes a result: every CPU level, engine and page size gives
+//! the same bits. They change speed and memory only. A library user sets them with
+//! [`set`] before the first transform (or leaves them to the environment, read once by
+//! [`get`]); the command line reads the environment.
+//!
+//! | variable | values | effect |
+//! |---|---|---|
+//! | `MRA_CPU` | `scalar`, `avx2` (unset: the widest the CPU runs) | caps the kernels' build ([`CpuLevel`]) |
+//! | `MRA_ENGINE` | `levels`, `axis`, `cascade` (unset: the fused cascade) | picks how pyramids run ([`EngineChoice`]) |
+//! | `MRA_HUGE_PAGES` | `off` or `0` (unset: on) | the engine's own large buffers advised onto 2 MB pages (Linux) |
+//! | `MRA_MAX_BYTES` | a byte count: `1048576`, `512M`, `8G` (unset: 8 GiB) | the memory budget a declared size must fit before anything is allocated ([`crate::limits::Limits`]) |
+//!
+//! (`MRA_CORPUS`, `MRA_REQUIRE_CORPUS` and `MRA_BENCH_QUICK` are read by the tests and
+//! benches only, never by the library.)
+
+use std::sync::OnceLock;
+
+/// The builds of the kernels, narrowest first. All give the same bits: each output's
+/// taps summed as `scheme::sparse::sum_terms` says (its FMAs in software in the scalar
+/// build).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum CpuLevel {
+    /// Plain loops (whatever the compiler makes of them for the baseline target).
+    Scalar,
+    /// 256-bit vectors (AVX2 with FMA).
+    Avx2,
+    /// 512-bit vectors for the combines (the rest as [`CpuLevel::Avx2`]).
+    Avx512,
+}
+
+impl CpuLevel {
+    /// The widest build this CPU runs, capped by [`Tuning::cpu_cap`]; worked out once.
+    pub fn detected() -> CpuLevel {
+        static LEVEL: OnceLock<CpuLevel> = OnceLock::new();
+        *LEVEL.get_or_init(|| CpuLevel::widest().min(get().cpu_cap))
+    }
+
+    /// The widest build this CPU runs, whatever the settings.
+    pub fn widest() -> CpuLevel {
+        #[cfg(target_arch = "x86_64")]
+        {
+            let fma = std::arch::is_x86_feature_detected!("fma");
+            if fma && std::arch::is_x86_feature_detected!("avx512f") {
+                CpuLevel::Avx512
+            } else if fma && std::arch::is_x86_feature_detected!("avx2") {
+                CpuLevel::Avx2
+            } else {
+                CpuLevel::Scalar
+            }
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        CpuLevel::Scalar
+    }
+
+    /// Every build this CPU runs, up to [`CpuLevel::detected`] (tests compare them).
+    pub fn available() -> Vec<CpuLevel> {
+        [CpuLevel::Scalar, CpuLevel::Avx2, CpuLevel::Avx512]
+            .into_iter()
+            .filter(|&s| s <= CpuLevel::detected())
+            .collect()
+    }
+}
+
+/// How pyramids run when the caller does not pick (`tensor::Engine`; all give the same
+/// bits).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum EngineChoice {
+    /// The fused cascade (`Engine::Fused`).
+    #[default]
+    Fused,
+    /// Level by level (`Engine::FusedLevels`).
+    Levels,
+    /// Axis by axis (`Engine::AxisByAxis`).
+    Axis,
+    /// The cascade with a part per thread, volumes included (`Engine::CascadeParts`).
+    Cascade,
+}
+
+/// The process-wide settings (see the module's table).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Tuning {
+    /// The widest kernel build used (`MRA_CPU`).
+    pub cpu_cap: CpuLevel,
+    /// The engine of `tensor::analyze` / `synthesize` (`MRA_ENGINE`).
+    pub engine: EngineChoice,
+    /// Whether the engine advises its large buffers onto huge pages (`MRA_HUGE_PAGES`).
+    pub huge_pages: bool,
+}
+
+impl Default for Tuning {
+    /// The widest build, the fused engine, huge pages on (no environment read).
+    fn default() -> Self {
+        Tuning {
+            cpu_cap: CpuLevel::Avx512,
+            engine: EngineChoice::Fused,
+            huge_pages: true,
+        }
+    }
+}
+
+impl Tuning {
+    /// The settings the environment asks for (values not listed in the module's table
+    /// leave the default).
+    pub fn from_env() -> Tuning {
+        let var = |name: &str| std::env::var(name).ok();
+        let d = Tuning::default();
+        Tuning {
+            cpu_cap: match var("MRA_CPU").as_deref() {
+                Some("scalar") => CpuLevel::Scalar,
+                Some("avx2") => CpuLevel::Avx2,
+                _ => d.cpu_cap,
+            },
+            engine: match var("MRA_ENGINE").as_deref() {
+                Some("axis") => EngineChoice::Axis,
+                Some("levels") => EngineChoice::Levels,
+                Some("cascade") => EngineChoice::Cascade,
+                _ => d.engine,
+            },
+            huge_pages: !matches!(var("MRA_HUGE_PAGES").as_deref(), Some("off" | "0")),
+        }
+    }
+}
+
+static SETTINGS: OnceLock<Tuning> = OnceLock::new();
+
+/// The settings in force: those given to [`set`], else the environment's
+/// ([`Tuning::from_env`]), fixed at the first call.
+pub fn get() -> &'static Tuning {
+    SETTINGS.get_or_init(Tuning::from_env)
+}
+
+/// Fix the settings before anything reads them; `Err` with the settings in force when
+/// they were already fixed (by an earlier [`set`] or [`get`]).
+pub fn set(t: Tuning) -> Result<(), Tuning> {
+    SETTINGS.set(t).map_err(|_| *get())
+}
+
+/// `MRA_MAX_BYTES` as set in the environment (parsed by [`crate::limits::Limits::from_env`]).
+pub fn max_bytes_var() -> Option<String> {
+    std::env::var("MRA_MAX_BYTES").ok()
+}
+
+/// Keep freed buffers of up to 32 MiB in glibc's allocator instead of returning them to
+/// the system (`mallopt`: blocks from 32 MiB on are mapped and unmapped directly, the heap
+/// trimmed from 256 MiB of free space on): a command that allocates and frees image-sized
+/// arrays a dozen times (the refined area upscaler) otherwise pays a page fault per
+/// fresh page, a third of its time on a Kodak image. Larger arrays (volumes) are still
+/// mapped directly, so peak memory is unchanged. Call it before any threads allocate;
+/// nothing off Linux with glibc.
+pub fn keep_freed_buffers() {
+    #[cfg(all(target_os = "linux", target_env = "gnu"))]
+    {
+        extern "C" {
+            fn mallopt(param: i32, value: i32) -> i32;
+        }
+        const M_TRIM_THRESHOLD: i32 = -1;
+        const M_MMAP_THRESHOLD: i32 = -3;
+        // SAFETY: glibc's mallopt only changes allocator thresholds.
+        unsafe {
+            mallopt(M_MMAP_THRESHOLD, 32 << 20);
+            mallopt(M_TRIM_THRESHOLD, 256 << 20);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn default_settings_read_no_environment() {
+        let d = Tuning::default();
+        assert_eq!(d.cpu_cap, CpuLevel::Avx512);
+        assert_eq!(d.engine, EngineChoice::Fused);
+        assert!(d.huge_pages);
+    }
+
+    #[test]
+    fn cpu_levels_are_ordered_narrowest_first() {
+        assert!(CpuLevel::Scalar < CpuLevel::Avx2 && CpuLevel::Avx2 < CpuLevel::Avx512);
+        let a = CpuLevel::available();
+        assert_eq!(a[0], CpuLevel::Scalar);
+        assert!(a.windows(2).all(|w| w[0] < w[1]));
+        assert_eq!(*a.last().unwrap(), CpuLevel::detected());
+    }
+}

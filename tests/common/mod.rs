@@ -1,0 +1,186 @@
+//! Helpers shared by the integration tests (`mod common;` in a test file).
+//!
+//! - [`corpus`]: a file of the shared corpus, or a printed skip. With `MRA_REQUIRE_CORPUS=1`
+//!   a missing corpus or file fails the test instead.
+//! - [`scratch_dir`] and [`scratch_file`]: a fresh directory per call, so tests running in
+//!   parallel never share a file.
+//! - [`vector_builds`]: whether the kernels' AVX2 builds can be compared with the scalar
+//!   one here; a printed skip otherwise, a failure with `MRA_REQUIRE_AVX2=1`.
+//!
+//! Skips are written straight to the process's standard error, past the test harness's
+//! capture, so they show in the log of a passing run.
+
+#![allow(dead_code)]
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+/// The variable that turns a missing corpus or corpus file into a failure.
+pub const REQUIRE_CORPUS: &str = "MRA_REQUIRE_CORPUS";
+/// The variable that turns a CPU without AVX2 (and FMA) into a failure of the CPU-level tests.
+pub const REQUIRE_AVX2: &str = "MRA_REQUIRE_AVX2";
+
+fn flag(name: &str) -> bool {
+    std::env::var(name).is_ok_and(|v| v == "1")
+}
+
+fn test_name() -> String {
+    std::thread::current()
+        .name()
+        .unwrap_or("a test")
+        .to_string()
+}
+
+/// One line on the process's standard error, not captured by the test harness.
+pub fn skip(reason: std::fmt::Arguments<'_>) {
+    let _ = writeln!(std::io::stderr(), "skipped: {}: {reason}", test_name());
+}
+
+/// The shared corpus: `$MRA_CORPUS` when set, else `../shared/corpus` beside the repository.
+pub fn corpus_root() -> PathBuf {
+    std::env::var_os("MRA_CORPUS")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/corpus"))
+}
+
+/// `rel` inside the shared corpus (a file or folder; `""` for the corpus itself).
+///
+/// Absent corpus or path: prints `skipped: <test>: …` and gives `None`, or panics when
+/// `MRA_REQUIRE_CORPUS=1`.
+pub fn corpus(rel: &str) -> Option<PathBuf> {
+    let root = corpus_root();
+    let require = flag(REQUIRE_CORPUS);
+    if !root.is_dir() {
+        if require {
+            panic!(
+                "{REQUIRE_CORPUS}=1 but the corpus is absent at {}",
+                root.display()
+            );
+        }
+        skip(format_args!("no corpus at {}", root.display()));
+        return None;
+    }
+    let p = root.join(rel);
+    if !p.exists() {
+        if require {
+            panic!(
+                "{REQUIRE_CORPUS}=1 but {} is not in the corpus at {}",
+                rel,
+                root.display()
+            );
+        }
+        skip(format_args!(
+            "{rel} is not in the corpus at {}",
+            root.display()
+        ));
+        return None;
+    }
+    Some(p)
+}
+
+/// Every path of `rels` inside the corpus, or `None` (with the skip or panic of [`corpus`])
+/// as soon as one is missing.
+pub fn corpus_all<const N: usize>(rels: [&str; N]) -> Option<[PathBuf; N]> {
+    let mut out: [PathBuf; N] = std::array::from_fn(|_| PathBuf::new());
+    for (o, rel) in out.iter_mut().zip(rels) {
+        *o = corpus(rel)?;
+    }
+    Some(out)
+}
+
+static SCRATCH: AtomicUsize = AtomicUsize::new(0);
+
+/// The folder holding every scratch directory of this test binary's runs.
+fn scratch_root() -> PathBuf {
+    Path::new(env!("CARGO_TARGET_TMPDIR")).join("mra-tests")
+}
+
+/// Removes the scratch directories of runs of this test binary that have ended (their
+/// process id is gone), once per process, where `/proc` tells.
+fn remove_stale() {
+    static ONCE: std::sync::Once = std::sync::Once::new();
+    ONCE.call_once(|| {
+        if !Path::new("/proc/self").exists() {
+            return;
+        }
+        let prefix = format!("{}-", env!("CARGO_CRATE_NAME"));
+        let Ok(entries) = std::fs::read_dir(scratch_root()) else {
+            return;
+        };
+        for e in entries.flatten() {
+            let name = e.file_name().to_string_lossy().into_owned();
+            let Some(rest) = name.strip_prefix(&prefix) else {
+                continue;
+            };
+            let Some(pid) = rest.split('-').next() else {
+                continue;
+            };
+            if pid.parse::<u32>().is_ok() && !Path::new("/proc").join(pid).exists() {
+                let _ = std::fs::remove_dir_all(e.path());
+            }
+        }
+    });
+}
+
+/// A new, empty directory that no other call (in this process or another) returns:
+/// `$CARGO_TARGET_TMPDIR/mra-tests/<test binary>-<process id>-<count>-<tag>`.
+pub fn scratch_dir(tag: &str) -> PathBuf {
+    remove_stale();
+    let n = SCRATCH.fetch_add(1, Ordering::Relaxed);
+    let tag: String = tag
+        .chars()
+        .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })
+        .collect();
+    let d = scratch_root().join(format!(
+        "{}-{}-{n}-{tag}",
+        env!("CARGO_CRATE_NAME"),
+        std::process::id()
+    ));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap_or_else(|e| panic!("{}: {e}", d.display()));
+    d
+}
+
+/// `name` inside a new [`scratch_dir`]: the file name is kept as given (readers may go by
+/// its extension), the folder is unique to this call.
+pub fn scratch_file(name: &str) -> PathBuf {
+    scratch_dir(name).join(name)
+}
+
+/// Whether a wider build of the kernels than the scalar one runs here (AVX2 with FMA or
+/// more, and `MRA_CPU` not capping it to scalar), so CPU-level tests compare builds.
+///
+/// When not: prints `skipped: <test>: …`, or panics when `MRA_REQUIRE_AVX2=1`.
+pub fn vector_builds() -> bool {
+    let n = mra::kernel::CpuLevel::available().len();
+    if n > 1 {
+        return true;
+    }
+    if flag(REQUIRE_AVX2) {
+        panic!("{REQUIRE_AVX2}=1 but only the scalar build of the kernels runs here");
+    }
+    skip(format_args!(
+        "the AVX2 and AVX-512 builds of the kernels (not run here: no AVX2 with FMA, or \
+         MRA_CPU=scalar); the scalar build is still checked"
+    ));
+    false
+}
+
+/// Whether this CPU runs AVX2 with FMA (whatever `MRA_CPU` says), for tests that set
+/// `MRA_CPU` in child processes. When not: prints a skip, or panics when
+/// `MRA_REQUIRE_AVX2=1`.
+pub fn cpu_has_avx2() -> bool {
+    #[cfg(target_arch = "x86_64")]
+    let has =
+        std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma");
+    #[cfg(not(target_arch = "x86_64"))]
+    let has = false;
+    if !has {
+        if flag(REQUIRE_AVX2) {
+            panic!("{REQUIRE_AVX2}=1 but this CPU has no AVX2 with FMA");
+        }
+        skip(format_args!("this CPU has no AVX2 with FMA"));
+    }
+    has
+}
