@@ -237,25 +237,13 @@ pub struct InfoFileArgs {
 }
 
 /// Whether `path` starts with the `.mra` signature.
-fn is_mra(path: &Path) -> bool {
+pub fn is_mra(path: &Path) -> bool {
     use std::io::Read as _;
     let mut head = [0u8; 8];
     std::fs::File::open(path)
         .and_then(|mut f| f.read_exact(&mut head))
         .is_ok()
         && head == crate::format::SIGNATURE
-}
-
-/// `mra info` (and its old name `info-file`): `.mra` files by their header, anything
-/// else by reading it.
-pub fn info(a: InfoFileArgs) -> CliResult {
-    if a.raw.dims.is_none() && is_mra(&a.input) {
-        return super::codec::info(super::codec::InfoArgs {
-            input: a.input,
-            json: a.json,
-        });
-    }
-    info_file(a)
 }
 
 pub fn info_file(a: InfoFileArgs) -> CliResult {

@@ -235,7 +235,7 @@ pub fn main() -> i32 {
         Command::Mesh(c) => mesh::run(c),
         Command::Compare(a) => io_cmds::compare(a),
         Command::Generate(a) => io_cmds::generate(a),
-        Command::InfoFile(a) => io_cmds::info(a),
+        Command::InfoFile(a) => info(a),
         Command::Convert(a) => io_cmds::convert(a),
         Command::Scheme(c) => scheme::run(c),
         Command::Terrain(c) => terrain::run(c),
@@ -245,7 +245,7 @@ pub fn main() -> i32 {
         Command::Downscale(a) => upscale::run_downscale(a),
         Command::Encode(a) => codec::encode(a),
         Command::Decode(a) => codec::decode(a),
-        Command::Info(a) => io_cmds::info(a),
+        Command::Info(a) => info(a),
         Command::Solid(c) => solid::run(c),
         Command::Volume(c) => solid::run_volume(c),
     };
@@ -277,4 +277,16 @@ mod tests {
     fn the_command_is_consistent() {
         command().debug_assert();
     }
+}
+
+/// `mra info` (and its old name `info-file`): `.mra` files by their header, anything else
+/// by reading it (here, above both commands' files, so neither imports the other).
+fn info(a: io_cmds::InfoFileArgs) -> CliResult {
+    if a.raw.dims.is_none() && io_cmds::is_mra(&a.input) {
+        return codec::info(codec::InfoArgs {
+            input: a.input,
+            json: a.json,
+        });
+    }
+    io_cmds::info_file(a)
 }
