@@ -25,13 +25,6 @@ const LAYERS: &[(usize, &[&str])] = &[
 /// Imports the map does not allow yet, each with why it stays: `(from, to)` as module
 /// paths (a top-level module, or a file's module).
 const EXCEPTIONS: &[(&str, &str, &str)] = &[
-    // the plane-by-plane ×2 stage reuses the refined area mode's cell kernels (area,
-    // block_mean, pair_gather), which belong in a file of their own below both
-    (
-        "upscale::slab",
-        "upscale::refine",
-        "cell kernels shared with the refined mode",
-    ),
     // the curve plots draw on the surface module's canvas while surfaces are built from
     // curves: a shared raster type belongs below both (geometry, a later round)
     (

@@ -24,6 +24,7 @@
 //! Measured on Kodak, CT and DEM data in `docs/upscale.md`.
 
 pub mod basis;
+mod cells;
 pub mod lane;
 pub mod refine;
 mod slab;

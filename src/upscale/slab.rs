@@ -18,7 +18,7 @@
 //! `r_m`) plus a few fine planes. Every value is computed with the same operators in the
 //! same order as the whole-array stage, so the results are the same bits.
 
-use super::refine::{area, block_mean, pair_gather, ITERATIONS};
+use super::cells::{area, block_mean, pair_gather, ITERATIONS};
 use super::{AxisPlan, Edge, Geometry, Method, Prepared};
 use crate::scheme::sparse::{Csr, Triplets};
 use crate::tensor::resample_axis;
