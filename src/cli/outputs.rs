@@ -31,13 +31,10 @@ fn expected(command: &str) -> Option<Writes> {
 
 /// Raster formats mra writes (the extensions [`crate::io::write`] accepts).
 const RASTER_OUT: &str =
-    ".png .tif .pgm .ppm .pam .exr .nrrd .nhdr .nii .nii.gz .hgt .asc .r16 .r32 .raw";
+    ".png .tif .jpg .pgm .ppm .pam .exr .nrrd .nhdr .nii .nii.gz .hgt .asc .r16 .r32 .raw";
 
 fn writable(f: Format) -> bool {
-    !matches!(
-        f,
-        Format::Jpeg | Format::Dicom | Format::DicomSeries | Format::SliceFolder
-    )
+    !matches!(f, Format::Dicom | Format::DicomSeries | Format::SliceFolder)
 }
 
 /// The same file (device and inode on Unix; the canonical path elsewhere).
