@@ -435,7 +435,8 @@ fn nhdr_data_files_are_read_only_as_far_as_the_header_needs() {
     let o = run_in(&d, &["info-file", "zero.nhdr", "--json"]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
-    assert_eq!(v["dims"], serde_json::json!([48, 64]));
+    // dims x, y (fastest first), as every printed vector
+    assert_eq!(v["dims"], serde_json::json!([64, 48]));
     assert_eq!(v["max"], serde_json::json!(0.0));
     // /dev/zero with an absurd size: refused before reading
     write(
@@ -720,7 +721,9 @@ fn progress_shows_after_a_second_on_a_terminal_and_never_off_one() {
     let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("corpus/scenes/sphere_and_box.json");
     let scene = scene.to_str().unwrap();
     // off a terminal: nothing on stderr, even for a long run
-    let o = run_in(&d, &["solid", "volume", scene, "--rays", "3000"]);
+    // 8000² rays take several seconds (3000² took 0.75 s on a fast machine, under the bar's
+    // one-second reveal)
+    let o = run_in(&d, &["solid", "volume", scene, "--rays", "8000"]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert!(
         o.stderr.is_empty(),
@@ -728,7 +731,7 @@ fn progress_shows_after_a_second_on_a_terminal_and_never_off_one() {
         String::from_utf8_lossy(&o.stderr)
     );
     // on a terminal (script(1) gives the command a pseudo-terminal): a bar of rays
-    let cmd = format!("{BIN} solid volume {scene} --rays 3000");
+    let cmd = format!("{BIN} solid volume {scene} --rays 8000");
     match Command::new("script")
         .args(["-qefc", &cmd, "/dev/null"])
         .current_dir(&d)
