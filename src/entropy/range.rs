@@ -1,6 +1,7 @@
 //! Binary range coder (the LZMA "rc" construction: 32-bit range, carry propagated
-//! through a cached byte) with adaptive bit models whose adaptation rate slows down
-//! as they see more symbols. Normative description: formats/MRA.md §6.
+//! through a cached byte) with adaptive bit models: [`Bit`] (format 1, one estimate
+//! whose adaptation rate slows down as it sees more symbols) and [`Mix`] (format 2,
+//! the mean of a fast and a slow estimate). Normative description: formats/MRA.md §6.
 
 /// Probability scale: a model's `p` is P(bit = 0) · 2^16.
 const PROB_BITS: u32 = 16;
@@ -10,6 +11,82 @@ const PROB_MAX: u32 = PROB_ONE - 32;
 const TOP: u32 = 1 << 24;
 /// Adaptation shift reached after enough symbols.
 const RATE_MAX: u8 = 7;
+
+/// An adaptive binary model: the probability of a 0 it predicts and its update.
+pub trait Model {
+    /// `P(bit = 0) · 2^16`, within `[32, 2^16 − 32]`.
+    fn p0(&self) -> u32;
+    /// Learn from a coded bit.
+    fn update(&mut self, bit: bool);
+    /// Estimated cost in bits of coding `bit` now: `−log₂ P(bit)`.
+    #[inline(always)]
+    fn cost(&self, bit: bool) -> f32 {
+        let p = self.p0();
+        let p = if bit { PROB_ONE - p } else { p };
+        cost_table()[(p >> COST_SHIFT) as usize]
+    }
+}
+
+const COST_SHIFT: u32 = 4;
+
+/// `−log₂(p / 2^16)` at the centre of every `2^COST_SHIFT` wide step of `p`.
+fn cost_table() -> &'static [f32; (PROB_ONE >> COST_SHIFT) as usize + 1] {
+    static TABLE: std::sync::OnceLock<[f32; (PROB_ONE >> COST_SHIFT) as usize + 1]> =
+        std::sync::OnceLock::new();
+    TABLE.get_or_init(|| {
+        let mut t = [0f32; (PROB_ONE >> COST_SHIFT) as usize + 1];
+        for (i, c) in t.iter_mut().enumerate() {
+            let p = ((i as f64 + 0.5) * (1 << COST_SHIFT) as f64).min(PROB_ONE as f64);
+            *c = -(p / PROB_ONE as f64).log2() as f32;
+        }
+        t
+    })
+}
+
+/// Format 2 model: two estimates of `P(0)`, one adapting with shift `min(1 + n, 4)`,
+/// one with `min(1 + n, 6)` (`n` = symbols seen), predicting their mean.
+#[derive(Clone, Copy, Debug)]
+pub struct Mix {
+    fast: u16,
+    slow: u16,
+    n: u8,
+}
+
+impl Default for Mix {
+    fn default() -> Self {
+        Mix {
+            fast: (PROB_ONE / 2) as u16,
+            slow: (PROB_ONE / 2) as u16,
+            n: 0,
+        }
+    }
+}
+
+impl Model for Mix {
+    #[inline(always)]
+    fn p0(&self) -> u32 {
+        ((self.fast as u32 + self.slow as u32) / 2).clamp(PROB_MIN, PROB_MAX)
+    }
+
+    #[inline(always)]
+    fn update(&mut self, bit: bool) {
+        let n = self.n as u32;
+        if self.n < 8 {
+            self.n += 1;
+        }
+        let step = |p: u16, shift: u32| {
+            let p = p as u32;
+            let p = if bit {
+                p - (p >> shift)
+            } else {
+                p + ((PROB_ONE - p) >> shift)
+            };
+            p.clamp(PROB_MIN, PROB_MAX) as u16
+        };
+        self.fast = step(self.fast, (1 + n).min(4));
+        self.slow = step(self.slow, (1 + n).min(6));
+    }
+}
 
 /// One adaptive binary model: P(0) and a symbol count that sets the adaptation rate
 /// `shift = min(2 + n/2, 7)`: fast at first, then stable.
@@ -28,7 +105,12 @@ impl Default for Bit {
     }
 }
 
-impl Bit {
+impl Model for Bit {
+    #[inline(always)]
+    fn p0(&self) -> u32 {
+        self.p as u32
+    }
+
     #[inline(always)]
     fn update(&mut self, bit: bool) {
         let shift = (2 + self.n / 2).min(RATE_MAX) as u32;
@@ -92,8 +174,8 @@ impl Encoder {
 
     /// Code `bit` with the adaptive model `m`, then update `m`.
     #[inline(always)]
-    pub fn bit(&mut self, m: &mut Bit, bit: bool) {
-        let bound = (self.range >> PROB_BITS) * m.p as u32;
+    pub fn bit<M: Model>(&mut self, m: &mut M, bit: bool) {
+        let bound = (self.range >> PROB_BITS) * m.p0();
         if bit {
             self.low += bound as u64;
             self.range -= bound;
@@ -164,8 +246,8 @@ impl<'a> Decoder<'a> {
     }
 
     #[inline(always)]
-    pub fn bit(&mut self, m: &mut Bit) -> bool {
-        let bound = (self.range >> PROB_BITS) * m.p as u32;
+    pub fn bit<M: Model>(&mut self, m: &mut M) -> bool {
+        let bound = (self.range >> PROB_BITS) * m.p0();
         let bit = if self.code < bound {
             self.range = bound;
             false
