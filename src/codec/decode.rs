@@ -1,0 +1,257 @@
+//! Decoding: the chunks read, each channel's bands entropy-decoded level by level,
+//! dequantized and synthesized (or the integer transform inverted), the residual layer
+//! added, and the metadata and voids of the level decoded.
+
+use super::colour::map3;
+use super::container::{read_chunks, Parsed};
+use super::options::{DecodeOptions, Decoded};
+use super::plan::{dequantized, lossy_values};
+use super::voids::mark_voids;
+use super::{layout, lossless};
+use crate::entropy::{self, BandKind, Parent};
+use crate::format::header::Colour;
+use crate::format::Mode;
+use crate::io::{Raster, SampleType, Samples};
+use crate::scheme::Scheme;
+use crate::{Error, Result};
+use rayon::prelude::*;
+use std::io::Read;
+use std::path::Path;
+
+/// Decode one channel's bands into its coefficient indices (None = absent). A band's
+/// context is its parent band (one level coarser), so the bands of one level decode
+/// in parallel, level after level from the coarse block down.
+fn decode_channel(p: &Parsed, c: usize, k: usize) -> Result<Vec<Option<Vec<i64>>>> {
+    let plan = &p.plan;
+    let nb = plan.bands.len();
+    let mut q: Vec<Option<Vec<i64>>> = (0..nb).map(|_| None).collect();
+    let mut levels: Vec<usize> = plan.bands.iter().map(|b| b.level).collect();
+    levels.sort_unstable_by_key(|&l| (l != 0, std::cmp::Reverse(l)));
+    levels.dedup();
+    for level in levels {
+        if k > 0 && level >= 1 && level <= k {
+            continue;
+        }
+        let bands: Vec<usize> = (0..nb).filter(|&j| plan.bands[j].level == level).collect();
+        let decoded: Vec<Result<Option<Vec<i64>>>> = bands
+            .par_iter()
+            .map(|&j| {
+                let Some(bc) = &p.bands[c][j] else {
+                    return Ok(None);
+                };
+                let kind = if level == 0 {
+                    BandKind::Coarse
+                } else {
+                    BandKind::Detail
+                };
+                let parent = match plan.parents[j] {
+                    Some(pj) => match &q[pj] {
+                        Some(v) => Some(Parent {
+                            data: v,
+                            dims: &plan.dims[pj],
+                        }),
+                        None => {
+                            return Err(Error::format(
+                                format!("band {j} of channel {c} without its parent"),
+                                "complete parents",
+                            ))
+                        }
+                    },
+                    None => None,
+                };
+                entropy::decode_band(&bc.data, &plan.dims[j], kind, parent)
+                    .map(Some)
+                    .map_err(|e| {
+                        Error::format(format!("BAND {j} of channel {c}: {e}"), "a valid band")
+                    })
+            })
+            .collect();
+        // the first failing band in file order, as one at a time would report it
+        for (&j, v) in bands.iter().zip(decoded) {
+            q[j] = v?;
+        }
+    }
+    Ok(q)
+}
+
+fn reconstruct(p: &Parsed, k: usize) -> Result<Raster> {
+    let h = &p.header;
+    let plan = &p.plan;
+    let k = k.min(plan.pyr.depth());
+    let region = plan.region(k);
+    let npos: usize = region.iter().product();
+    let c = h.channels;
+    let ty = h.sample_type;
+    if h.mode == Mode::Lossless {
+        let planes = (0..c)
+            .into_par_iter()
+            .map(|ch| {
+                let q = decode_channel(p, ch, k)?;
+                let mut plane = vec![0i64; plan.pyr.shape.iter().product()];
+                for (j, b) in q.iter().enumerate() {
+                    if let Some(b) = b {
+                        layout::scatter(&mut plane, &plan.pyr.shape, &plan.bands[j].ranges, b);
+                    }
+                }
+                lossless::inverse(&mut plane, &plan.pyr, k);
+                let full: Vec<std::ops::Range<usize>> = region.iter().map(|&e| 0..e).collect();
+                Ok(layout::gather(&plane, &plan.pyr.shape, &full))
+            })
+            .collect::<Result<Vec<_>>>()?;
+        let mut planes = planes;
+        if h.colour == Colour::YCoCgR {
+            map3(&mut planes, lossless::ycocg_r_inv);
+        }
+        let samples = match ty {
+            SampleType::F16 | SampleType::F32 | SampleType::F64 => {
+                let w = (ty.size() * 8) as u32;
+                let bits: Vec<u64> = (0..npos * c)
+                    .map(|i| lossless::int_to_float_bits(planes[i % c][i / c], w))
+                    .collect();
+                match ty {
+                    SampleType::F16 => Samples::F16(
+                        bits.iter()
+                            .map(|&b| half::f16::from_bits(b as u16))
+                            .collect(),
+                    ),
+                    SampleType::F32 => {
+                        Samples::F32(bits.iter().map(|&b| f32::from_bits(b as u32)).collect())
+                    }
+                    _ => Samples::F64(bits.iter().map(|&b| f64::from_bits(b)).collect()),
+                }
+            }
+            _ => {
+                let values: Vec<f64> = (0..npos * c).map(|i| planes[i % c][i / c] as f64).collect();
+                Samples::from_f64(&values, ty)
+            }
+        };
+        return finish(p, region, samples, k);
+    }
+    let mut values = lossy_values(h, plan, k, |ch| {
+        let q = decode_channel(p, ch, k)?;
+        Ok(q.into_iter()
+            .enumerate()
+            .map(|(j, b)| match (b, &p.bands[ch][j]) {
+                (Some(b), Some(bc)) => Some(dequantized(h, plan, j, &b, bc.step)),
+                _ => None,
+            })
+            .collect())
+    })?;
+    let mut samples = Samples::from_f64(&values, ty);
+    if k == 0 && h.mode == Mode::MaxError {
+        for (ch, r) in p.resi.iter().enumerate() {
+            let Some(r) = r else { continue };
+            let q =
+                entropy::decode_band(&r.data, &h.dims, BandKind::Detail, None).map_err(|e| {
+                    Error::format(format!("RESI of channel {ch}: {e}"), "a valid residual")
+                })?;
+            for i in 0..npos {
+                values[i * c + ch] = samples.get_f64(i * c + ch) + q[i] as f64 * r.step;
+            }
+            let _ = ch;
+        }
+        samples = Samples::from_f64(&values, ty);
+        let mut all: Vec<(usize, f64)> = Vec::new();
+        for (ch, r) in p.resi.iter().enumerate() {
+            if let Some(r) = r {
+                for &(i, v) in &r.exceptions {
+                    if (i as usize) < npos {
+                        all.push((i as usize * c + ch, v));
+                    }
+                }
+            }
+        }
+        if !all.is_empty() {
+            let mut v = samples.to_f64();
+            for (i, x) in all {
+                v[i] = x;
+            }
+            samples = Samples::from_f64(&v, ty);
+        }
+    }
+    finish(p, region, samples, k)
+}
+
+fn finish(p: &Parsed, region: Vec<usize>, samples: Samples, k: usize) -> Result<Raster> {
+    let h = &p.header;
+    let mut r = Raster::new(region.clone(), h.channels, samples, h.kind)?;
+    let maps = coarse_maps(p, k);
+    r.meta = if k > 0 {
+        p.meta.resampled(&h.dims, &region, &maps)
+    } else {
+        p.meta.clone()
+    };
+    mark_voids(&mut r, &h.dims, &maps);
+    Ok(r)
+}
+
+/// Where a scheme's coarse sample `i` sits on the fine grid of one level: at fine index
+/// `2i + o`. Haar (and the lossless S-transform): the mean of fine samples `2i`, `2i+1`,
+/// `o = ½`. Chaikin: fine `2i`, `2i+1` are `¾ C_i + ¼ C_{i+1}` and `¼ C_i + ¾ C_{i+1}`,
+/// so `C_i` sits at `o = −½`. Cubic B-spline: fine `2i` is `⅛ C_{i−1} + ¾ C_i + ⅛ C_{i+1}`,
+/// `o = 0`. The schemes with an odd-length regular row (linear, linear-wide, cubic-wide, CDF
+/// 9/7) centre `C_i` on fine `2i` (`o = 0`); chaikin-wide's even row, like Chaikin's, between fine
+/// `2i − 1` and `2i` (`o = −½`).
+pub fn coarse_offset(scheme: Scheme) -> f64 {
+    match scheme {
+        Scheme::Haar => 0.5,
+        Scheme::Chaikin | Scheme::ChaikinWide => -0.5,
+        Scheme::Cubic | Scheme::Linear | Scheme::LinearWide | Scheme::CubicWide | Scheme::Cdf97 => {
+            0.0
+        }
+    }
+}
+
+/// Per spatial axis, where the samples of the coarse block after `k` levels sit on the
+/// full grid: each level that shortens the axis maps by `step 2`, offset
+/// [`coarse_offset`] (an odd length's carried last sample is off this grid by at most
+/// half a coarse cell).
+fn coarse_maps(p: &Parsed, k: usize) -> Vec<crate::io::AxisMap> {
+    let h = &p.header;
+    let o = if h.mode == Mode::Lossless {
+        0.5
+    } else {
+        coarse_offset(h.scheme)
+    };
+    let pyr = &p.plan.pyr;
+    (0..h.dims.len())
+        .map(|a| {
+            let mut m = crate::io::AxisMap::IDENTITY;
+            if let Some(i) = pyr.spec.axes.iter().position(|&x| x == a) {
+                let lens = &pyr.lengths[i];
+                for l in 0..k.min(pyr.axis_levels(i)) {
+                    if lens[l + 1] < lens[l] {
+                        m = m.then(crate::io::AxisMap {
+                            offset: o,
+                            step: 2.0,
+                        });
+                    }
+                }
+            }
+            m
+        })
+        .collect()
+}
+
+/// Decode from a stream of `len` bytes.
+pub fn decode_stream<R: Read>(src: R, len: u64, opts: &DecodeOptions) -> Result<Decoded> {
+    let p = read_chunks(src, len, opts.level, opts.allow_truncated)?;
+    let raster = reconstruct(&p, opts.level)?;
+    Ok(Decoded {
+        raster,
+        header: p.header,
+        complete: p.complete,
+    })
+}
+
+/// Decode the bytes of an `.mra` file.
+pub fn decode(bytes: &[u8], opts: &DecodeOptions) -> Result<Decoded> {
+    decode_stream(bytes, bytes.len() as u64, opts)
+}
+
+/// Decode a file, reading only the chunks needed.
+pub fn decode_file(path: &Path, opts: &DecodeOptions) -> Result<Decoded> {
+    let f = std::fs::File::open(path)?;
+    let len = f.metadata()?.len();
+    decode_stream(std::io::BufReader::new(f), len, opts)
+}

@@ -1,0 +1,105 @@
+//! Encoding: voids filled, then the file of the rate mode (lossy at a step, with a
+//! residual layer for `--max-error`, or the integer transform of `--lossless`).
+
+use super::colour::map3;
+use super::container::{band_payload, BAND, HEAD, MEND, META};
+use super::lossy::header_for;
+use super::options::{EncodeOptions, Rate};
+use super::plan::Plan;
+use super::voids::with_voids_filled;
+use super::{layout, lossless, max_error, meta, rate};
+use crate::format::header::Colour;
+use crate::format::{self, put_chunk, Mode};
+use crate::io::{Raster, SampleType, Samples};
+use crate::scheme::{Boundary, Scheme};
+use crate::{Error, Result};
+use rayon::prelude::*;
+
+/// Encode a raster into the bytes of an `.mra` file. Void samples (NaN, `meta.nodata`)
+/// are filled by pull-push before the transform and listed in the metadata, so that the
+/// decoder marks them again ([`crate::io::nodata`]).
+pub fn encode(r: &Raster, opts: &EncodeOptions) -> Result<Vec<u8>> {
+    let n = crate::io::bytes::sample_count(&r.dims, r.channels)?;
+    if n != r.samples.len() {
+        return Err(Error::parameter(
+            "samples",
+            r.samples.len(),
+            "dims × channels samples",
+        ));
+    }
+    match with_voids_filled(r)? {
+        Some(filled) => encode_filled(&filled, opts),
+        None => encode_filled(r, opts),
+    }
+}
+
+fn encode_filled(r: &Raster, opts: &EncodeOptions) -> Result<Vec<u8>> {
+    match opts.rate {
+        Rate::Lossless => encode_lossless(r, opts),
+        Rate::MaxError(e) => {
+            if max_error::is_exact(e, r.sample_type())? {
+                encode_lossless(r, opts)
+            } else {
+                max_error::encode_max_error(r, opts, e)
+            }
+        }
+        rate => rate::encode_lossy(r, opts, rate),
+    }
+}
+
+fn lossless_int(x: f64, t: SampleType) -> i64 {
+    let _ = t;
+    x as i64
+}
+
+fn encode_lossless(r: &Raster, opts: &EncodeOptions) -> Result<Vec<u8>> {
+    let ty = r.sample_type();
+    let colour = if r.channels >= 3 && !ty.is_float() {
+        Colour::YCoCgR
+    } else {
+        Colour::None
+    };
+    let mut o = opts.clone();
+    o.scheme = Scheme::Haar;
+    o.boundary = Boundary::Interpolating;
+    let header = header_for(r, &o, Mode::Lossless, colour)?;
+    let plan = Plan::new(&header)?;
+    let c = r.channels;
+    let n = r.positions();
+    let mut planes = vec![vec![0i64; n]; c];
+    for i in 0..n {
+        for (k, p) in planes.iter_mut().enumerate() {
+            p[i] = match &r.samples {
+                Samples::F16(v) => lossless::float_bits_to_int(v[i * c + k].to_bits() as u64, 16),
+                Samples::F32(v) => lossless::float_bits_to_int(v[i * c + k].to_bits() as u64, 32),
+                Samples::F64(v) => lossless::float_bits_to_int(v[i * c + k].to_bits(), 64),
+                s => lossless_int(s.get_f64(i * c + k), ty),
+            };
+        }
+    }
+    if colour == Colour::YCoCgR {
+        map3(&mut planes, lossless::ycocg_r);
+    }
+    planes
+        .par_iter_mut()
+        .for_each(|p| lossless::forward(p, &plan.pyr));
+    let nb = plan.bands.len();
+    let jobs: Vec<(usize, usize)> = (0..nb).flat_map(|j| (0..c).map(move |k| (j, k))).collect();
+    let q: Vec<Vec<i64>> = jobs
+        .par_iter()
+        .map(|&(j, k)| layout::gather(&planes[k], &plan.pyr.shape, &plan.bands[j].ranges))
+        .collect();
+    drop(planes);
+    let coded = plan.code_bands(&jobs, &q, c);
+    let mut out = format::SIGNATURE.to_vec();
+    put_chunk(&mut out, HEAD, &header.to_bytes());
+    let m = meta::to_bytes(&r.meta);
+    if !m.is_empty() {
+        put_chunk(&mut out, META, &m);
+    }
+    for (i, &(j, k)) in jobs.iter().enumerate() {
+        put_chunk(&mut out, BAND, &band_payload(k, j, 1.0, &coded[i]));
+    }
+    put_chunk(&mut out, MEND, &[]);
+    Ok(out)
+}

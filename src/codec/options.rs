@@ -1,0 +1,66 @@
+//! What the encoder and decoder are asked to do: the rate mode and the options of
+//! each side, and what a decode returns.
+
+use crate::format::Header;
+use crate::io::Raster;
+use crate::scheme::{Boundary, Scheme};
+
+/// How to spend bits.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Rate {
+    /// Keep the largest P percent of the (gain-weighted) details.
+    Keep(f64),
+    /// Zero the details whose gain-weighted magnitude is below T.
+    Threshold(f64),
+    /// 1..100: step `Δ = (max − min) · 2^(−Q/10)`.
+    Quality(f64),
+    /// Target PSNR in dB (skimage convention of `mra compare`).
+    Psnr(f64),
+    /// Target PSNR in dB with the peak-to-peak data range `R` of
+    /// `PSNR = 10 log10(R² / MSE)` given (as `mra compare --data-range R`).
+    PsnrRange(f64, f64),
+    /// Target bits per position (pixel / voxel), all channels together.
+    Bpp(f64),
+    /// Every decoded sample within E of the source.
+    MaxError(f64),
+    /// Bit-exact.
+    Lossless,
+}
+
+/// Encoder settings.
+#[derive(Clone, Debug, PartialEq)]
+pub struct EncodeOptions {
+    pub scheme: Scheme,
+    pub boundary: Boundary,
+    pub levels: usize,
+    pub rate: Rate,
+}
+
+impl Default for EncodeOptions {
+    fn default() -> Self {
+        EncodeOptions {
+            scheme: Scheme::Haar,
+            boundary: Boundary::Symmetric,
+            levels: 6,
+            rate: Rate::Quality(50.0),
+        }
+    }
+}
+
+/// Decoder settings.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct DecodeOptions {
+    /// Reconstruct at 1/2^level resolution, reading only the chunks needed.
+    pub level: usize,
+    /// Decode what a truncated file holds instead of failing.
+    pub allow_truncated: bool,
+}
+
+/// A decoded file.
+#[derive(Clone, Debug)]
+pub struct Decoded {
+    pub raster: Raster,
+    pub header: Header,
+    /// False when the file ended before its `MEND` chunk (only with `allow_truncated`).
+    pub complete: bool,
+}

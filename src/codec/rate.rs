@@ -1,0 +1,516 @@
+//! The base step of each rate mode: set, from the details, or searched on `ln(step)`
+//! with a secant and a model of size and error ([`RateModel`]); and the keep-P% PSNR
+//! of the notes' Figure 9.19.
+
+use super::colour::{map3, ycocg_inverse};
+use super::layout;
+use super::lossy::{prepare, Prepared};
+use super::options::{EncodeOptions, Rate};
+use crate::format::header::Colour;
+use crate::format::Mode;
+use crate::io::{Raster, Samples};
+use crate::quantize::{self, RHO};
+use crate::scheme::{Boundary, Scheme};
+use crate::tensor::{self, Array};
+use crate::{Error, Result};
+use rayon::prelude::*;
+
+/// A lossy file at the base step the rate mode asks for: set (`--quality`), from the
+/// details (`--keep`, `--threshold`), or searched (`--psnr`, `--bpp`).
+pub(super) fn encode_lossy(r: &Raster, opts: &EncodeOptions, rate: Rate) -> Result<Vec<u8>> {
+    let p = prepare(r, opts, Mode::Lossy)?;
+    let range = (p.header.max - p.header.min).max(1e-30);
+    let step = match rate {
+        Rate::Keep(k) => {
+            if !(0.0..=100.0).contains(&k) {
+                return Err(Error::parameter("keep", k, "a percentage from 0 to 100"));
+            }
+            let mut w = p.weighted_details();
+            let t = quantize::keep_threshold(&mut w, k);
+            if t.is_infinite() {
+                range * 1e6
+            } else {
+                (t / (1.0 - RHO)).max(range * 1e-9)
+            }
+        }
+        Rate::Threshold(t) => {
+            if !(t > 0.0 && t.is_finite()) {
+                return Err(Error::parameter("threshold", t, "a positive number"));
+            }
+            t / (1.0 - RHO)
+        }
+        Rate::Quality(q) => {
+            if !(1.0..=100.0).contains(&q) {
+                return Err(Error::parameter("quality", q, "1 to 100"));
+            }
+            range * (2f64).powf(-q / 10.0)
+        }
+        Rate::Psnr(db) | Rate::PsnrRange(db, _) => {
+            if let Rate::PsnrRange(_, r) = rate {
+                if !(r.is_finite() && r > 0.0) {
+                    return Err(Error::parameter(
+                        "data range",
+                        r,
+                        "a positive, finite peak-to-peak range",
+                    ));
+                }
+            }
+            if !(db > 0.0 && db < 400.0) {
+                return Err(Error::parameter(
+                    "psnr",
+                    db,
+                    "a target in dB between 0 and 400",
+                ));
+            }
+            // each candidate decoded from its quantized bands, coded only once chosen;
+            // the data range `mra compare` would use, found once
+            let cmp = crate::metrics::CompareOptions {
+                data_range: Some(match rate {
+                    Rate::PsnrRange(_, range) => range,
+                    _ => crate::metrics::skimage_data_range(&r.samples),
+                }),
+                ..Default::default()
+            };
+            let (errors, peak) = (p.rate_model(), cmp.data_range.unwrap_or(range));
+            let n = (r.positions() * r.channels) as f64;
+            let model = |x: f64| {
+                let mse = (errors.squared_error(x.exp()) / n).max(1e-300);
+                10.0 * (peak * peak / mse).log10() - db
+            };
+            return search(&p, range, false, 0.02, Some(&model), |step| {
+                let dec = p.decoded(step)?;
+                let psnr = crate::metrics::psnr(r, &dec, &cmp)?;
+                Ok((psnr.unwrap_or(f64::INFINITY) - db, None))
+            });
+        }
+        Rate::Bpp(b) => {
+            if !(b > 0.0 && b.is_finite()) {
+                return Err(Error::parameter(
+                    "bpp",
+                    b,
+                    "a positive number of bits per position",
+                ));
+            }
+            let pos = r.positions() as f64;
+            // v = ln b − ln bpp: met when the file is within the budget, within
+            // 1% under it at −ln 0.99; the log of the size is close to a line in
+            // ln(step), where the size itself bends (10 candidates at 1 bpp on
+            // kodim01 against 5)
+            let sizes = p.rate_model();
+            let model = |x: f64| b.ln() - (sizes.bits(x.exp()) / pos).ln();
+            return search(&p, range, true, -(0.99f64.ln()), Some(&model), |step| {
+                let bytes = p.code(step);
+                Ok((b.ln() - (bytes.len() as f64 * 8.0 / pos).ln(), Some(bytes)))
+            });
+        }
+        _ => unreachable!(),
+    };
+    Ok(p.code(step))
+}
+
+/// Search on `x = ln(step)` for the file closest to a target: `f(step)` gives `v ≥ 0`
+/// when the target is met (PSNR reached, or size within budget), which holds for large
+/// steps when `large_ok` (size) and for small steps otherwise (PSNR), and the coded file
+/// if it made it. Returns the met file closest to the target; stops at the first met
+/// file within `tol` of it.
+///
+/// `v` is close to linear in `x` (PSNR falls by 20/ln 10 ≈ 8.7 dB per unit of `x`; the
+/// size by up to 1/ln 2 bits per sample), so each step is a secant: through the last two
+/// points until the target is bracketed, then between the bracket's ends (regula falsi,
+/// aiming at `tol / 2` above the target), kept inside the bracket's middle 80%, and a
+/// bisection whenever the bracket did not halve. A handful of candidates instead of the
+/// 15–25 of a bisection over the whole range.
+///
+/// With a `model` (an estimate of `v` at any `x`, roughly right in shape), the first
+/// candidate is where the model meets the target, and the steps before the target is
+/// bracketed go to where the model, shifted to agree with the last candidate, meets it,
+/// instead of along the secant.
+fn search(
+    p: &Prepared,
+    range: f64,
+    large_ok: bool,
+    tol: f64,
+    model: Option<&dyn Fn(f64) -> f64>,
+    f: impl Fn(f64) -> Result<(f64, Option<Vec<u8>>)>,
+) -> Result<Vec<u8>> {
+    let (x_min, x_max) = ((range * 1e-7).ln(), (range * 4.0).ln());
+    // v as a function rising with x, so that "met" is one side of its root
+    let sign = if large_ok { 1.0 } else { -1.0 };
+    // default slope of sign·v per unit of x until two points give one
+    let slope0 = if large_ok {
+        1.0
+    } else {
+        20.0 / std::f64::consts::LN_10
+    };
+    let aim = 0.5 * tol;
+    let mut met: Option<(f64, f64)> = None; // (x, v) nearest the root on the met side
+    let mut unmet: Option<(f64, f64)> = None;
+    let mut last: Option<(f64, f64)> = None;
+    let mut width = x_max - x_min;
+    // (v, step, file if coded)
+    let mut best: Option<(f64, f64, Option<Vec<u8>>)> = None;
+    let mut x = (range / 32.0).ln(); // `--quality 50`
+    if let Some(m) = model {
+        // where the model itself meets the target
+        x = model_root(m, 0.0, aim, sign, x).clamp(x_min, x_max);
+    }
+    for _ in 0..48 {
+        let (v, bytes) = f(x.exp())?;
+        if v >= 0.0 {
+            if best.as_ref().is_none_or(|(bv, _, _)| v < *bv) {
+                best = Some((v, x.exp(), bytes));
+            }
+            if v <= tol {
+                break;
+            }
+            met = Some((x, v));
+        } else {
+            unmet = Some((x, v));
+        }
+        let prev = last.replace((x, v));
+        x = match (met, unmet) {
+            (Some((xm, vm)), Some((xu, vu))) => {
+                let (lo, hi) = (xm.min(xu), xm.max(xu));
+                // a bracket 0.1% wide in the step changes the size and the PSNR far
+                // less than the tolerances (1%, 0.02 dB): a staircase has its gap there
+                if hi - lo < 1e-3 {
+                    break;
+                }
+                let halved = hi - lo <= 0.5 * width;
+                width = hi - lo;
+                if !halved || !vm.is_finite() {
+                    0.5 * (lo + hi)
+                } else {
+                    let t = xm + (vm - aim) * (xu - xm) / (vm - vu);
+                    t.clamp(lo + 0.1 * (hi - lo), hi - 0.1 * (hi - lo))
+                }
+            }
+            _ => {
+                // not bracketed yet: toward the target along the secant of the last two
+                // points (the default slope if they do not give a usable one)
+                let slope = match prev {
+                    Some((xp, vp)) if xp != x && vp.is_finite() && v.is_finite() => {
+                        let s = sign * (v - vp) / (x - xp);
+                        if s > 0.0 {
+                            s
+                        } else {
+                            slope0
+                        }
+                    }
+                    _ => slope0,
+                };
+                let dx = if let (Some(m), true) = (model, v.is_finite()) {
+                    let off = v - m(x);
+                    let dx = (model_root(m, off, aim, sign, x) - x).clamp(-3.0, 3.0);
+                    dx.signum() * dx.abs().max(0.01)
+                } else if v.is_finite() {
+                    let dx = (sign * (aim - v) / slope).clamp(-3.0, 3.0);
+                    dx.signum() * dx.abs().max(0.01)
+                } else {
+                    // identical to the source (PSNR without bound): a large step toward
+                    // the unmet side
+                    -sign * 3.0
+                };
+                let next = (x + dx).clamp(x_min, x_max);
+                if next == x {
+                    break;
+                }
+                next
+            }
+        };
+    }
+    Ok(match best {
+        Some((_, _, Some(b))) => b,
+        Some((_, step, None)) => p.code(step),
+        None => p.code(if large_ok { x_max.exp() } else { x_min.exp() }),
+    })
+}
+
+/// Where `m(x) + off = aim`, searched within 6 units of `x` (a bisection on the model:
+/// `sign·m` rises with `x`); the nearer end when the model does not reach the target.
+fn model_root(m: &dyn Fn(f64) -> f64, off: f64, aim: f64, sign: f64, x: f64) -> f64 {
+    let g = |t: f64| sign * (m(t) + off - aim);
+    let (mut lo, mut hi) = (x - 6.0, x + 6.0);
+    if g(lo) >= 0.0 {
+        return lo;
+    }
+    if g(hi) <= 0.0 {
+        return hi;
+    }
+    for _ in 0..40 {
+        let mid = 0.5 * (lo + hi);
+        if g(mid) < 0.0 {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    0.5 * (lo + hi)
+}
+
+/// A rough size and error of the coded file at any base step, for [`search`], from a
+/// histogram of the coefficients' `log2(|c|·G_b·w_c)` (a coefficient quantizes to
+/// `t = |c|·G_b·w_c / Δ`; its error times `G_b·w_c` is about its error in the samples):
+/// below the dead zone's edge `1 − ρ` a coefficient costs [`RateModel::ZERO_BITS`] and
+/// its whole value in error, past it about `log2 t + 2` bits and `Δ²/12`.
+struct RateModel {
+    /// Coefficients per bin of `BINS_PER_OCTAVE`-th octaves from `2^LOW`.
+    bins: Vec<f64>,
+    zeros: f64,
+}
+
+impl RateModel {
+    const BINS_PER_OCTAVE: f64 = 8.0;
+    const LOW: f64 = -64.0;
+    /// (Zeros in zero neighbourhoods cost next to nothing; 0.02–0.1 measured alike.)
+    const ZERO_BITS: f64 = 0.05;
+
+    /// Over the coefficients that are not zero, by bin: `(count, d)` with `d = log2 t` at
+    /// base step `step` and `t = |c|·G_b·w_c / Δ`, and whether `t` is past the dead zone.
+    fn at(&self, step: f64) -> impl Iterator<Item = (f64, f64, bool)> + '_ {
+        let (edge, s) = ((1.0 - RHO).log2(), step.log2());
+        self.bins
+            .iter()
+            .enumerate()
+            .filter(|(_, &n)| n > 0.0)
+            .map(move |(k, &n)| {
+                let d = Self::LOW + (k as f64 + 0.5) / Self::BINS_PER_OCTAVE - s;
+                (n, d, d >= edge)
+            })
+    }
+
+    /// Estimated bits at base step `step`.
+    fn bits(&self, step: f64) -> f64 {
+        let zb = Self::ZERO_BITS;
+        let coded: f64 = self
+            .at(step)
+            .map(|(n, d, past)| n * if past { d + 2.0 } else { zb })
+            .sum();
+        (self.zeros * zb + coded).max(1.0)
+    }
+
+    /// Estimated sum of squared errors (samples × channels) at base step `step`: a
+    /// coefficient in the dead zone loses `|c|·G_b·w_c = t·Δ`.
+    fn squared_error(&self, step: f64) -> f64 {
+        self.at(step)
+            .map(|(n, d, past)| n * step * step * if past { 1.0 / 12.0 } else { (2.0 * d).exp2() })
+            .sum()
+    }
+}
+
+impl Prepared {
+    /// The [`RateModel`] of these coefficients.
+    fn rate_model(&self) -> RateModel {
+        let nbins = (2.0 * -RateModel::LOW * RateModel::BINS_PER_OCTAVE) as usize;
+        let plan = &self.plan;
+        let (bins, zeros) = self
+            .band_channels()
+            .par_iter()
+            .map(|&(j, c)| {
+                let mut bins = vec![0.0f64; nbins];
+                let mut zeros = 0.0;
+                let scale = (self.gains[j] * self.weights[c]) as f32;
+                let band = layout::gather(&self.coeffs[c], &plan.pyr.shape, &plan.bands[j].ranges);
+                for &v in &band {
+                    let a = v.abs() * scale;
+                    if !(a > 0.0 && a.is_finite()) {
+                        zeros += 1.0;
+                        continue;
+                    }
+                    // log2 from the bits: exponent plus the mantissa as a fraction (off
+                    // by under 0.09 octave, about a bin)
+                    let b = a.to_bits();
+                    let y = ((b >> 23) as i32 - 127) as f32 + (b & 0x7F_FFFF) as f32 / 8_388_608.0;
+                    let k = ((y as f64 - RateModel::LOW) * RateModel::BINS_PER_OCTAVE) as isize;
+                    bins[k.clamp(0, nbins as isize - 1) as usize] += 1.0;
+                }
+                (bins, zeros)
+            })
+            .reduce(
+                || (vec![0.0; nbins], 0.0),
+                |(mut a, za), (b, zb)| {
+                    for (x, y) in a.iter_mut().zip(&b) {
+                        *x += y;
+                    }
+                    (a, za + zb)
+                },
+            );
+        RateModel { bins, zeros }
+    }
+}
+
+/// PSNR after keeping the largest `keep` percent of details, no quantization (the
+/// notes' Figure 9.19 protocol; details weighted by synthesis gain when `weighted`).
+pub fn keep_psnr(
+    r: &Raster,
+    scheme: Scheme,
+    boundary: Boundary,
+    levels: usize,
+    keep: f64,
+    weighted: bool,
+) -> Result<f64> {
+    let opts = EncodeOptions {
+        scheme,
+        boundary,
+        levels,
+        rate: Rate::Keep(keep),
+    };
+    let mut p = prepare(r, &opts, Mode::Lossy)?;
+    if !weighted {
+        p.gains.iter_mut().for_each(|g| *g = 1.0);
+        p.weights.iter_mut().for_each(|w| *w = 1.0);
+    }
+    let mut w = p.weighted_details();
+    let t = quantize::keep_threshold(&mut w, keep) as f32;
+    let plan = &p.plan;
+    let spec = plan.pyr.spec.clone();
+    let c = r.channels;
+    let mut planes = Vec::new();
+    for (ch, plane) in p.coeffs.iter().enumerate() {
+        let mut plane = plane.clone();
+        for (j, b) in plan.bands.iter().enumerate() {
+            if b.level == 0 {
+                continue;
+            }
+            let wgt = (p.gains[j] * p.weights[ch]) as f32;
+            layout::rows(&plan.pyr.shape, &b.ranges, |off, run, _| {
+                for x in &mut plane[off..off + run] {
+                    if x.abs() * wgt < t {
+                        *x = 0.0;
+                    }
+                }
+            });
+        }
+        let mut a = Array::from_shape_vec(&r.dims, plane)?;
+        tensor::synthesize(&mut a, &plan.pyr)?;
+        planes.push(a.into_data());
+    }
+    let _ = spec;
+    if p.header.colour == Colour::YCoCg {
+        map3(&mut planes, ycocg_inverse);
+    }
+    let n = r.positions();
+    let v: Vec<f64> = (0..n * c).map(|i| planes[i % c][i / c] as f64).collect();
+    let out = Raster::new(
+        r.dims.clone(),
+        c,
+        Samples::from_f64(&v, r.sample_type()),
+        r.kind,
+    )?;
+    let cmp = crate::metrics::compare(r, &out, &Default::default())?;
+    Ok(cmp.psnr.unwrap_or(f64::INFINITY))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::generate::images;
+    use crate::io::SampleType;
+
+    /// The rate search on model curves: `(evaluations, v at the returned step)`.
+    fn run_search(large_ok: bool, tol: f64, v: impl Fn(f64) -> f64) -> (usize, f64) {
+        run_search_with(large_ok, tol, None, v)
+    }
+
+    /// [`run_search`] with a model of `v`.
+    fn run_search_with(
+        large_ok: bool,
+        tol: f64,
+        model: Option<&dyn Fn(f64) -> f64>,
+        v: impl Fn(f64) -> f64,
+    ) -> (usize, f64) {
+        let r = images::zone_plate(8, 8).to_raster(SampleType::U8).unwrap();
+        let p = prepare(&r, &EncodeOptions::default(), Mode::Lossy).unwrap();
+        let calls = std::cell::Cell::new(0);
+        let bytes = search(&p, 1000.0, large_ok, tol, model, |step| {
+            calls.set(calls.get() + 1);
+            Ok((v(step.ln()), Some(step.ln().to_le_bytes().to_vec())))
+        })
+        .unwrap();
+        let x = f64::from_le_bytes(bytes[..8].try_into().unwrap());
+        (calls.get(), v(x))
+    }
+
+    #[test]
+    fn search_finds_the_target_in_a_few_candidates() {
+        let k = 20.0 / std::f64::consts::LN_10;
+        // PSNR-like (falls with the step), size-like (rises), a staircase, a curve that
+        // is infinite (identical output) at small steps, one not quite linear
+        // (size-like, v(ln step), most candidates)
+        type Case<'a> = (bool, &'a dyn Fn(f64) -> f64, usize);
+        let cases: [Case; 5] = [
+            (false, &|x| 30.0 - k * x, 3),
+            (true, &|x| 1.3 * x - 2.0, 4),
+            (false, &|x| 30.0 - k * (x * 4.0).floor() / 4.0, 30),
+            (
+                false,
+                &|x| {
+                    if x < -3.0 {
+                        f64::INFINITY
+                    } else {
+                        20.0 - k * x
+                    }
+                },
+                4,
+            ),
+            (false, &|x| 45.0 - k * x - 0.4 * x * x.abs(), 6),
+        ];
+        for (i, (large_ok, v, most)) in cases.into_iter().enumerate() {
+            let (n, at) = run_search(large_ok, 0.02, v);
+            assert!(at >= 0.0, "case {i}: target not met ({at})");
+            assert!(n <= most, "case {i}: {n} candidates");
+            if i == 2 {
+                // the staircase's lowest met stair (30 − 13·k/4)
+                assert!((at - (30.0 - 13.0 * k / 4.0)).abs() < 1e-9, "case 2: {at}");
+            } else {
+                assert!(at <= 0.02, "case {i}: {at} above the tolerance");
+            }
+        }
+    }
+
+    /// A model of the right shape but the wrong level takes the search to the target in
+    /// two candidates (the first where the model meets it, the second where the model,
+    /// shifted through the first, does); a model of the wrong shape still ends within
+    /// the tolerance, and the rate model of an image gives its coded sizes and squared
+    /// errors within a factor of 2.5.
+    #[test]
+    fn search_with_a_model() {
+        let v = |x: f64| 1.3 * x - 2.0;
+        // (off by 3 in v, 2.3 in x: within the 3 units a step may go)
+        let off = |x: f64| 1.3 * x + 1.0;
+        let (n, at) = run_search_with(true, 0.01, Some(&off), v);
+        assert!(
+            n <= 2 && (0.0..=0.01).contains(&at),
+            "{n} candidates, v = {at}"
+        );
+        let bent = |x: f64| 0.2 * x + 0.1 * x * x.abs();
+        let (n, at) = run_search_with(true, 0.01, Some(&bent), v);
+        assert!(
+            n <= 10 && (0.0..=0.01).contains(&at),
+            "{n} candidates, v = {at}"
+        );
+        // the size model against the coded sizes of a zone plate
+        let r = images::zone_plate(96, 128)
+            .to_raster(SampleType::U8)
+            .unwrap();
+        let p = prepare(&r, &EncodeOptions::default(), Mode::Lossy).unwrap();
+        let m = p.rate_model();
+        let src = r.samples.to_f64();
+        for step in [2.0, 8.0, 32.0] {
+            let real = p.code(step).len() as f64 * 8.0;
+            let est = m.bits(step);
+            assert!(
+                est > real / 2.5 && est < real * 2.5,
+                "step {step}: {est} vs {real}"
+            );
+            // and the squared error against the decoder's samples
+            let dec = p.decoded(step).unwrap().samples.to_f64();
+            let real: f64 = src.iter().zip(&dec).map(|(a, b)| (a - b) * (a - b)).sum();
+            let est = m.squared_error(step);
+            assert!(
+                est > real / 2.5 && est < real * 2.5,
+                "step {step}: squared error {est} vs {real}"
+            );
+        }
+    }
+}
