@@ -21,8 +21,11 @@ pub struct EncodeArgs {
     /// Output `.mra` file.
     #[arg(short, long)]
     pub output: PathBuf,
-    /// Scheme: haar, chaikin, cubic.
-    #[arg(long, default_value = "haar")]
+    /// Scheme: cdf97, linear-wide, linear, chaikin-wide, cubic-wide, haar, chaikin,
+    /// cubic. cdf97 (the default) wins on photographs, CT and terrain: a near-orthogonal
+    /// basis with 4 zeros at π keeps the energy in few coefficients and does not amplify
+    /// quantization noise; linear-wide is the best B-spline synthesis, 0.2–0.3 dB behind.
+    #[arg(long, default_value = "cdf97")]
     pub scheme: Scheme,
     /// Boundary: interpolating, periodic, symmetric.
     #[arg(long, default_value = "symmetric")]

@@ -1,30 +1,29 @@
 //! The chunks of an `.mra` file as the codec writes and reads them: `HEAD`, `mETA`,
-//! one `BAND` per band and channel (channel, band, step, coded indices), `RESI` per
-//! channel in `--max-error` files (channel, step, exceptions, coded residuals), `MEND`.
-//! Framing and CRCs are [`crate::format`]'s.
+//! the bands (format 2: one `LEVL` per level, [`super::levels`]; format 1: one `BAND`
+//! per band and channel), `RESI` per channel in `--max-error` files (channel, step,
+//! exceptions, coded residuals), `MEND`. Framing and CRCs are [`crate::format`]'s.
+//!
+//! The header commits to the chunks that follow: the bands its pyramid has, every one
+//! exactly once and coarse to fine, and a `RESI` per channel in mode 2. A file that ends
+//! or reaches `MEND` without one of them is an error naming what is missing (with
+//! `--allow-truncated`, a decode that reports itself incomplete).
 
+use super::levels::parse_level;
 use super::meta;
 use super::plan::Plan;
+use crate::format::Mode;
 use crate::format::{ChunkEnd, ChunkReader, Cursor, Header};
 use crate::{Error, Result};
 use std::io::Read;
 
-pub(super) const BAND: &[u8; 4] = b"BAND";
+pub(super) const LEVL: &[u8; 4] = b"LEVL";
 pub(super) const HEAD: &[u8; 4] = b"HEAD";
 pub(super) const RESI: &[u8; 4] = b"RESI";
 pub(super) const MEND: &[u8; 4] = b"MEND";
 pub(super) const META: &[u8; 4] = b"mETA";
 
-pub(super) fn band_payload(channel: usize, band: usize, step: f64, coded: &[u8]) -> Vec<u8> {
-    let mut p = Vec::with_capacity(12 + coded.len());
-    p.extend_from_slice(&(channel as u16).to_le_bytes());
-    p.extend_from_slice(&(band as u16).to_le_bytes());
-    p.extend_from_slice(&step.to_le_bytes());
-    p.extend_from_slice(coded);
-    p
-}
-
-/// A BAND chunk's contents.
+/// One band of one channel as read (from a `LEVL` or a `BAND` chunk): its step and
+/// coded bytes.
 pub(super) struct BandChunk {
     pub(super) step: f64,
     pub(super) data: Vec<u8>,
@@ -138,6 +137,55 @@ pub(super) fn read_chunks<R: Read>(
         };
         last = ch.name();
         match &ch.kind {
+            b"BAND" if header.major >= 2 => {
+                return Err(Error::format(
+                    format!(
+                        "BAND chunk at byte {} in a format {} file",
+                        ch.offset, header.major
+                    ),
+                    "LEVL chunks (BAND belongs to format 1)",
+                ));
+            }
+            b"LEVL" if header.major < 2 => {
+                return Err(Error::format(
+                    format!("LEVL chunk at byte {} in a format 1 file", ch.offset),
+                    "BAND chunks",
+                ));
+            }
+            b"LEVL" => {
+                let (level, got) = parse_level(&ch.payload, &plan, header.channels)?;
+                if stop_level > 0 && level >= 1 && level <= stop_level {
+                    complete = true;
+                    break;
+                }
+                let first = got.first().map(|b| b.0).unwrap_or(0);
+                if let Some(pj) = plan.parents[first] {
+                    if bands[0][pj].is_none() {
+                        return Err(Error::format(
+                            format!("LEVL {level} before the level of its parent bands"),
+                            "levels in coarse-to-fine order",
+                        ));
+                    }
+                }
+                if bands[0][first].is_some() {
+                    return Err(Error::format(
+                        format!("a second LEVL chunk for level {level} (byte {})", ch.offset),
+                        "each level once",
+                    ));
+                }
+                info.level = Some(level);
+                info.coefficients = Some(
+                    got.iter()
+                        .map(|(j, _, _)| plan.dims[*j].iter().product::<usize>() as u64)
+                        .sum(),
+                );
+                for (j, c, lb) in got {
+                    bands[c][j] = Some(BandChunk {
+                        step: header.step * lb.ratio as f64,
+                        data: lb.data,
+                    });
+                }
+            }
             b"BAND" => {
                 let mut c = Cursor::new(&ch.payload, "BAND");
                 let channel = c.u16()? as usize;
@@ -162,6 +210,15 @@ pub(super) fn read_chunks<R: Read>(
                 if stop_level > 0 && level >= 1 && level <= stop_level {
                     complete = true;
                     break;
+                }
+                if bands[channel][band].is_some() {
+                    return Err(Error::format(
+                        format!(
+                            "a second BAND chunk for band {band} of channel {channel} (byte {})",
+                            ch.offset
+                        ),
+                        "each band once",
+                    ));
                 }
                 if let Some(p) = plan.parents[band] {
                     if bands[channel][p].is_none() {
@@ -197,10 +254,26 @@ pub(super) fn read_chunks<R: Read>(
                         "exceptions that fit the chunk",
                     ));
                 }
+                if resi[channel].is_some() {
+                    return Err(Error::format(
+                        format!(
+                            "a second RESI chunk for channel {channel} (byte {})",
+                            ch.offset
+                        ),
+                        "one RESI chunk per channel",
+                    ));
+                }
+                let positions: u64 = header.dims.iter().map(|&d| d as u64).product();
                 let mut exc = Vec::with_capacity(n);
                 for _ in 0..n {
                     let i = u64::from_le_bytes(c.take(8)?.try_into().unwrap());
                     let v = c.f64()?;
+                    if i >= positions {
+                        return Err(Error::format(
+                            format!("RESI exception at sample {i} of channel {channel} (of {positions})"),
+                            "sample indices within the raster",
+                        ));
+                    }
                     exc.push((i, v));
                 }
                 info.channel = Some(channel);
@@ -212,6 +285,15 @@ pub(super) fn read_chunks<R: Read>(
             }
             b"MEND" => {
                 chunks.push(info);
+                if let Some(missing) = first_missing(&header, &plan, &bands, &resi) {
+                    if !allow_truncated {
+                        return Err(Error::format(
+                            format!("{missing} missing (MEND at byte {})", ch.offset),
+                            "every chunk the header commits to (or --allow-truncated)",
+                        ));
+                    }
+                    break;
+                }
                 complete = true;
                 break;
             }
@@ -237,4 +319,30 @@ pub(super) fn read_chunks<R: Read>(
         complete,
         chunks,
     })
+}
+
+/// The first chunk the header commits to that `bands` and `resi` lack, named.
+fn first_missing(
+    header: &Header,
+    plan: &Plan,
+    bands: &[Vec<Option<BandChunk>>],
+    resi: &[Option<ResiChunk>],
+) -> Option<String> {
+    for (j, b) in plan.bands.iter().enumerate() {
+        for (c, ch) in bands.iter().enumerate() {
+            if ch[j].is_none() {
+                return Some(if header.major >= 2 {
+                    format!("LEVL chunk of level {} (band {j}, channel {c})", b.level)
+                } else {
+                    format!("BAND chunk of band {j}, channel {c}")
+                });
+            }
+        }
+    }
+    if header.mode == Mode::MaxError {
+        if let Some(c) = resi.iter().position(|r| r.is_none()) {
+            return Some(format!("RESI chunk of channel {c}"));
+        }
+    }
+    None
 }

@@ -8,6 +8,7 @@ use super::options::{DecodeOptions, Decoded};
 use super::plan::{dequantized, lossy_values};
 use super::voids::mark_voids;
 use super::{layout, lossless};
+use crate::entropy::range::Decoder;
 use crate::entropy::{self, BandKind, Parent};
 use crate::format::header::Colour;
 use crate::format::Mode;
@@ -17,6 +18,21 @@ use crate::{Error, Result};
 use rayon::prelude::*;
 use std::io::Read;
 use std::path::Path;
+
+/// One band's indices from its coded bytes, by the coding of format `major`.
+fn decode_band(
+    major: u8,
+    data: &[u8],
+    dims: &[usize],
+    kind: BandKind,
+    parent: Option<Parent>,
+) -> Result<Vec<i64>> {
+    if major >= 2 {
+        entropy::band::decode(&mut Decoder::new_short(data), dims, kind, parent)
+    } else {
+        entropy::decode_band(data, dims, kind, parent)
+    }
+}
 
 /// Decode one channel's bands into its coefficient indices (None = absent). A band's
 /// context is its parent band (one level coarser), so the bands of one level decode
@@ -59,10 +75,10 @@ fn decode_channel(p: &Parsed, c: usize, k: usize) -> Result<Vec<Option<Vec<i64>>
                     },
                     None => None,
                 };
-                entropy::decode_band(&bc.data, &plan.dims[j], kind, parent)
+                decode_band(p.header.major, &bc.data, &plan.dims[j], kind, parent)
                     .map(Some)
                     .map_err(|e| {
-                        Error::format(format!("BAND {j} of channel {c}: {e}"), "a valid band")
+                        Error::format(format!("band {j} of channel {c}: {e}"), "a valid band")
                     })
             })
             .collect();
@@ -142,7 +158,7 @@ fn reconstruct(p: &Parsed, k: usize) -> Result<Raster> {
         for (ch, r) in p.resi.iter().enumerate() {
             let Some(r) = r else { continue };
             let q =
-                entropy::decode_band(&r.data, &h.dims, BandKind::Detail, None).map_err(|e| {
+                decode_band(h.major, &r.data, &h.dims, BandKind::Detail, None).map_err(|e| {
                     Error::format(format!("RESI of channel {ch}: {e}"), "a valid residual")
                 })?;
             for i in 0..npos {
@@ -208,11 +224,9 @@ pub fn coarse_offset(scheme: Scheme) -> f64 {
 /// half a coarse cell).
 fn coarse_maps(p: &Parsed, k: usize) -> Vec<crate::io::AxisMap> {
     let h = &p.header;
-    let o = if h.mode == Mode::Lossless {
-        0.5
-    } else {
-        coarse_offset(h.scheme)
-    };
+    // the integer transforms sit where their real schemes do (the S-transform's floored
+    // mean like Haar's, the 5/3 lifting's coarse samples on even samples like linear's)
+    let o = coarse_offset(h.scheme);
     let pyr = &p.plan.pyr;
     (0..h.dims.len())
         .map(|a| {

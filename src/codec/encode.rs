@@ -2,7 +2,8 @@
 //! residual layer for `--max-error`, or the integer transform of `--lossless`).
 
 use super::colour::map3;
-use super::container::{band_payload, BAND, HEAD, MEND, META};
+use super::container::{HEAD, MEND, META};
+use super::levels::{BandInput, Choice};
 use super::lossy::header_for;
 use super::options::{EncodeOptions, Rate};
 use super::plan::Plan;
@@ -60,8 +61,8 @@ fn encode_lossless(r: &Raster, opts: &EncodeOptions) -> Result<Vec<u8>> {
         Colour::None
     };
     let mut o = opts.clone();
-    o.scheme = Scheme::Haar;
-    o.boundary = Boundary::Interpolating;
+    o.scheme = Scheme::Linear;
+    o.boundary = Boundary::Symmetric;
     let header = header_for(r, &o, Mode::Lossless, colour)?;
     let plan = Plan::new(&header)?;
     let c = r.channels;
@@ -83,23 +84,21 @@ fn encode_lossless(r: &Raster, opts: &EncodeOptions) -> Result<Vec<u8>> {
     planes
         .par_iter_mut()
         .for_each(|p| lossless::forward(p, &plan.pyr));
-    let nb = plan.bands.len();
-    let jobs: Vec<(usize, usize)> = (0..nb).flat_map(|j| (0..c).map(move |k| (j, k))).collect();
-    let q: Vec<Vec<i64>> = jobs
-        .par_iter()
-        .map(|&(j, k)| layout::gather(&planes[k], &plan.pyr.shape, &plan.bands[j].ranges))
-        .collect();
+    let coded = plan.code_levels(c, Choice::Given, |k, j| {
+        BandInput::Indices(layout::gather(
+            &planes[k],
+            &plan.pyr.shape,
+            &plan.bands[j].ranges,
+        ))
+    });
     drop(planes);
-    let coded = plan.code_bands(&jobs, &q, c);
     let mut out = format::SIGNATURE.to_vec();
     put_chunk(&mut out, HEAD, &header.to_bytes());
     let m = meta::to_bytes(&r.meta);
     if !m.is_empty() {
         put_chunk(&mut out, META, &m);
     }
-    for (i, &(j, k)) in jobs.iter().enumerate() {
-        put_chunk(&mut out, BAND, &band_payload(k, j, 1.0, &coded[i]));
-    }
+    plan.put_levels(&mut out, &coded, |_, _| 1.0);
     put_chunk(&mut out, MEND, &[]);
     Ok(out)
 }

@@ -56,7 +56,10 @@ pub fn info(bytes: &[u8]) -> Result<Info> {
         sample_type: h.sample_type.name().into(),
         mode: format!("{:?}", h.mode).to_lowercase(),
         scheme: if h.mode == Mode::Lossless {
-            "integer-haar".into()
+            match h.scheme {
+                crate::scheme::Scheme::Linear => "integer-5/3".into(),
+                _ => "integer-haar".into(),
+            }
         } else {
             h.scheme.name().into()
         },

@@ -1,13 +1,22 @@
-//! Integer-reversible pieces of `--lossless`: the S-transform (integer Haar, notes §9.2
-//! with the averages floored) on every spatial axis in the non-standard order, the
-//! integer YCoCg-R colour lifting, and the order-preserving map from float bit patterns
-//! to integers. All arithmetic wraps, so every step inverts exactly for any input.
+//! Integer-reversible pieces of `--lossless`: the reversible 5/3 lifting of the linear
+//! B-spline scheme ([`crate::scheme::linear::lift_forward`], format 2 writers) or the
+//! S-transform (integer Haar, notes §9.2 with the averages floored; format 1 files) on
+//! every spatial axis in the non-standard order, the integer YCoCg-R colour lifting,
+//! and the order-preserving map from float bit patterns to integers. All arithmetic
+//! wraps, so every step inverts exactly for any input.
 
 use crate::scheme::{Boundary, Scheme};
 use crate::tensor::{Order, Pyramid, PyramidSpec};
 
-/// Plan of an S-transform pyramid: lane lengths halve (rounding up) while ≥ 2.
-pub fn plan(dims: &[usize], levels: usize) -> Pyramid {
+/// The integer transforms `--lossless` files use: the 5/3 lifting (scheme `linear`) and
+/// the S-transform (scheme `haar`).
+pub fn supports(scheme: Scheme) -> bool {
+    matches!(scheme, Scheme::Linear | Scheme::Haar)
+}
+
+/// Plan of an integer pyramid of `scheme` ([`supports`]): lane lengths halve (rounding
+/// up) while ≥ 2.
+pub fn plan(dims: &[usize], levels: usize, scheme: Scheme) -> Pyramid {
     let lengths = dims
         .iter()
         .map(|&n| {
@@ -21,8 +30,12 @@ pub fn plan(dims: &[usize], levels: usize) -> Pyramid {
         .collect();
     Pyramid {
         spec: PyramidSpec {
-            scheme: Scheme::Haar,
-            boundary: Boundary::Interpolating,
+            scheme,
+            boundary: if scheme == Scheme::Haar {
+                Boundary::Interpolating
+            } else {
+                Boundary::Symmetric
+            },
             levels,
             order: Order::NonStandard,
             axes: (0..dims.len()).collect(),
@@ -111,14 +124,41 @@ fn s_inverse(lane: &mut [i64]) {
     lane.copy_from_slice(&out);
 }
 
-/// Forward S-transform pyramid of `plan` in place.
+/// One level of the integer transform of `scheme` on a lane.
+fn level_forward(scheme: Scheme) -> impl FnMut(&mut [i64]) {
+    let mut scratch = Vec::new();
+    move |lane: &mut [i64]| {
+        if scheme == Scheme::Linear {
+            scratch.resize(lane.len(), 0);
+            crate::scheme::linear::lift_forward(lane, &mut scratch);
+        } else {
+            s_forward(lane);
+        }
+    }
+}
+
+/// The inverse of [`level_forward`].
+fn level_inverse(scheme: Scheme) -> impl FnMut(&mut [i64]) {
+    let mut scratch = Vec::new();
+    move |lane: &mut [i64]| {
+        if scheme == Scheme::Linear {
+            scratch.resize(lane.len(), 0);
+            crate::scheme::linear::lift_inverse(lane, &mut scratch);
+        } else {
+            s_inverse(lane);
+        }
+    }
+}
+
+/// Forward integer pyramid of `plan` in place.
 pub fn forward(data: &mut [i64], pyr: &Pyramid) {
+    let mut f = level_forward(pyr.spec.scheme);
     let mut region = pyr.shape.clone();
     for l in 0..pyr.depth() {
         let before = region.clone();
         for (i, &a) in pyr.spec.axes.iter().enumerate() {
             if l < pyr.axis_levels(i) {
-                lanes(data, &pyr.shape, &before, a, &mut s_forward);
+                lanes(data, &pyr.shape, &before, a, &mut f);
                 region[a] = pyr.lengths[i][l + 1];
             }
         }
@@ -128,6 +168,7 @@ pub fn forward(data: &mut [i64], pyr: &Pyramid) {
 /// Inverse of [`forward`], stopping `skip` levels early (the result then holds the
 /// coarse block of level `skip` at the origin).
 pub fn inverse(data: &mut [i64], pyr: &Pyramid, skip: usize) {
+    let mut f = level_inverse(pyr.spec.scheme);
     let mut regions = vec![pyr.shape.clone()];
     for l in 0..pyr.depth() {
         let mut r = regions[l].clone();
@@ -141,7 +182,7 @@ pub fn inverse(data: &mut [i64], pyr: &Pyramid, skip: usize) {
     for l in (skip..pyr.depth()).rev() {
         for (i, &a) in pyr.spec.axes.iter().enumerate().rev() {
             if l < pyr.axis_levels(i) {
-                lanes(data, &pyr.shape, &regions[l], a, &mut s_inverse);
+                lanes(data, &pyr.shape, &regions[l], a, &mut f);
             }
         }
     }
@@ -198,18 +239,39 @@ mod tests {
     use super::*;
 
     #[test]
-    fn s_transform_inverts_on_odd_shapes_and_extremes() {
-        for dims in [vec![1usize], vec![7], vec![5, 3], vec![3, 4, 5]] {
-            let n: usize = dims.iter().product();
-            let orig: Vec<i64> = (0..n as i64).map(|i| (i * 7919) % 601 - 300).collect();
-            let mut v = orig.clone();
-            v[0] = i64::MIN;
-            let orig2 = v.clone();
-            let p = plan(&dims, 5);
-            forward(&mut v, &p);
-            inverse(&mut v, &p, 0);
-            assert_eq!(v, orig2);
+    fn integer_transforms_invert_on_odd_shapes_and_extremes() {
+        for scheme in [Scheme::Haar, Scheme::Linear] {
+            for dims in [vec![1usize], vec![2], vec![7], vec![5, 3], vec![3, 4, 5]] {
+                let n: usize = dims.iter().product();
+                let mut v: Vec<i64> = (0..n as i64).map(|i| (i * 7919) % 601 - 300).collect();
+                v[0] = i64::MIN;
+                if n > 2 {
+                    v[1] = i64::MAX;
+                    v[2] = i64::MIN + 1;
+                }
+                let orig = v.clone();
+                let p = plan(&dims, 5, scheme);
+                forward(&mut v, &p);
+                if n > 3 {
+                    assert_ne!(v, orig, "{scheme:?} {dims:?} did nothing");
+                }
+                inverse(&mut v, &p, 0);
+                assert_eq!(v, orig, "{scheme:?} {dims:?}");
+            }
         }
+    }
+
+    /// On a smooth ramp the 5/3 details vanish (two zeros at π: it predicts lines
+    /// exactly), where the S-transform's stay at the slope.
+    #[test]
+    fn the_5_3_lifting_predicts_lines() {
+        let mut v: Vec<i64> = (0..16).map(|i| 3 * i + 5).collect();
+        let p = plan(&[16], 1, Scheme::Linear);
+        forward(&mut v, &p);
+        assert!(v[8..15].iter().all(|&d| d == 0), "{v:?}");
+        let mut h: Vec<i64> = (0..16).map(|i| 3 * i + 5).collect();
+        forward(&mut h, &plan(&[16], 1, Scheme::Haar));
+        assert!(h[8..].iter().all(|&d| d == -3), "{h:?}");
     }
 
     #[test]

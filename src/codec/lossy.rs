@@ -2,7 +2,8 @@
 //! ([`Prepared`]), then quantized and coded at any base step.
 
 use super::colour::{channel_weights, planes_f32};
-use super::container::{band_payload, BAND, HEAD, MEND, META};
+use super::container::{HEAD, MEND, META};
+use super::levels::{BandInput, Choice, CodedBand};
 use super::options::EncodeOptions;
 use super::plan::{band_rho, dequantized, lossy_values, Plan};
 use super::{layout, meta};
@@ -39,6 +40,9 @@ pub(super) struct Prepared {
     pub(super) weights: Vec<f64>,
     pub(super) coeffs: Vec<Vec<f32>>,
     pub(super) meta: Vec<u8>,
+    /// The multiplier of rate–distortion optimised quantization, or `None` for the
+    /// dead-zone quantizer ([`quantize::quantize`] with `ρ`).
+    pub(super) rdo: Option<f32>,
 }
 
 pub(super) fn header_for(
@@ -115,12 +119,44 @@ pub(super) fn prepare(r: &Raster, opts: &EncodeOptions, mode: Mode) -> Result<Pr
         weights,
         coeffs,
         meta: meta::to_bytes(&r.meta),
+        rdo: None,
     })
 }
 
 impl Prepared {
+    /// Quantize with rate–distortion optimisation (multiplier [`quantize::LAMBDA`]) and
+    /// reconstruct at the index (`δ = 0`).
+    pub(super) fn optimise(&mut self) {
+        self.rdo = Some(quantize::LAMBDA);
+        self.header.delta = 0.0;
+    }
+
+    /// Band `j`'s step over the base step, `1 / (G_b · w_c)`, as the file stores it.
+    pub(super) fn band_ratio(&self, band: usize, channel: usize) -> f32 {
+        (1.0 / (self.gains[band] * self.weights[channel])) as f32
+    }
+
     pub(super) fn band_step(&self, step: f64, band: usize, channel: usize) -> f64 {
-        step / (self.gains[band] * self.weights[channel])
+        step * self.band_ratio(band, channel) as f64
+    }
+
+    /// Every band of every channel quantized and coded at base step `step`.
+    pub(super) fn coded(&self, step: f64) -> Vec<Vec<CodedBand>> {
+        let (plan, nc) = (&self.plan, self.coeffs.len());
+        match self.rdo {
+            Some(lambda) => plan.code_levels(nc, Choice::Rdo(lambda), |c, j| {
+                let s = self.band_step(step, j, c);
+                BandInput::Scaled(
+                    layout::gather(&self.coeffs[c], &plan.pyr.shape, &plan.bands[j].ranges)
+                        .into_iter()
+                        .map(|x| (x as f64 / s) as f32)
+                        .collect(),
+                )
+            }),
+            None => plan.code_levels(nc, Choice::Given, |c, j| {
+                BandInput::Indices(self.quantized(step, j, c))
+            }),
+        }
     }
 
     /// Band `j` of channel `c` quantized at base step `step`: its indices.
@@ -137,12 +173,17 @@ impl Prepared {
     /// quantized bands without coding them (the coding is lossless): the same samples.
     pub(super) fn decoded(&self, step: f64) -> Result<Raster> {
         let (h, plan) = (&self.header, &self.plan);
+        // optimised indices are known only by coding them
+        let coded = self.rdo.map(|_| self.coded(step));
         let values = lossy_values(h, plan, 0, |c| {
             Ok((0..plan.bands.len())
                 .into_par_iter()
                 .map(|j| {
-                    let q = self.quantized(step, j, c);
-                    Some(dequantized(h, plan, j, &q, self.band_step(step, j, c)))
+                    let s = self.band_step(step, j, c);
+                    Some(match &coded {
+                        Some(cb) => dequantized(h, plan, j, &cb[c][j].q, s),
+                        None => dequantized(h, plan, j, &self.quantized(step, j, c), s),
+                    })
                 })
                 .collect())
         })?;
@@ -154,7 +195,7 @@ impl Prepared {
         )
     }
 
-    /// Every (band, channel) in file order: bands in order, the channels of each.
+    /// Every (band, channel): bands in order, the channels of each.
     pub(super) fn band_channels(&self) -> Vec<(usize, usize)> {
         let nc = self.coeffs.len();
         (0..self.plan.bands.len())
@@ -164,14 +205,7 @@ impl Prepared {
 
     /// Quantize and code at base step `step`; the whole file.
     pub(super) fn code(&self, step: f64) -> Vec<u8> {
-        let plan = &self.plan;
-        let nc = self.coeffs.len();
-        let jobs = self.band_channels();
-        let q: Vec<Vec<i64>> = jobs
-            .par_iter()
-            .map(|&(j, c)| self.quantized(step, j, c))
-            .collect();
-        let coded = plan.code_bands(&jobs, &q, nc);
+        let coded = self.coded(step);
         let mut h = self.header.clone();
         h.step = step;
         let mut out = format::SIGNATURE.to_vec();
@@ -179,14 +213,8 @@ impl Prepared {
         if !self.meta.is_empty() {
             put_chunk(&mut out, META, &self.meta);
         }
-        for (k, &(j, c)) in jobs.iter().enumerate() {
-            let s = if plan.bands[j].level == 0 || h.mode != Mode::Lossless {
-                self.band_step(step, j, c)
-            } else {
-                1.0
-            };
-            put_chunk(&mut out, BAND, &band_payload(c, j, s, &coded[k]));
-        }
+        self.plan
+            .put_levels(&mut out, &coded, |c, j| self.band_ratio(j, c));
         put_chunk(&mut out, MEND, &[]);
         out
     }

@@ -5,7 +5,8 @@ use super::container::{MEND, RESI};
 use super::decode::decode;
 use super::lossy::prepare;
 use super::options::{DecodeOptions, EncodeOptions};
-use crate::entropy::{self, BandKind};
+use crate::entropy::range::Encoder;
+use crate::entropy::{band, BandKind};
 use crate::format::{put_chunk, Mode};
 use crate::io::{Raster, SampleType, Samples};
 use crate::{Error, Result};
@@ -66,7 +67,9 @@ pub(super) fn encode_max_error(r: &Raster, opts: &EncodeOptions, e: f64) -> Resu
                     exc.push((i as u64, x));
                 }
             }
-            let coded = entropy::encode_band(&q, &r.dims, BandKind::Detail, None);
+            let mut enc = Encoder::new();
+            band::encode(&mut enc, &q, &r.dims, BandKind::Detail, None);
+            let coded = enc.finish_short();
             let mut pl = Vec::new();
             pl.extend_from_slice(&(k as u16).to_le_bytes());
             pl.extend_from_slice(&s.to_le_bytes());

@@ -21,6 +21,7 @@ mod encode;
 mod frames;
 mod info;
 pub mod layout;
+mod levels;
 pub mod lossless;
 mod lossy;
 mod max_error;

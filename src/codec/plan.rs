@@ -4,7 +4,6 @@
 
 use super::colour::{map3, ycocg_inverse};
 use super::{layout, lossless};
-use crate::entropy::{self, BandKind, Parent};
 use crate::format::header::Colour;
 use crate::format::{Header, Mode};
 use crate::quantize::{self, RHO};
@@ -21,34 +20,15 @@ pub(super) struct Plan {
 }
 
 impl Plan {
-    /// Range-code every `(band, channel)` job's quantized indices `q[job]` (jobs band-major,
-    /// `channels` per band), each band with its parent band of the same channel (§9).
-    pub(super) fn code_bands(
-        &self,
-        jobs: &[(usize, usize)],
-        q: &[Vec<i64>],
-        channels: usize,
-    ) -> Vec<Vec<u8>> {
-        jobs.par_iter()
-            .enumerate()
-            .map(|(i, &(j, c))| {
-                let kind = if self.bands[j].level == 0 {
-                    BandKind::Coarse
-                } else {
-                    BandKind::Detail
-                };
-                let parent = self.parents[j].map(|p| Parent {
-                    data: &q[p * channels + c],
-                    dims: &self.dims[p],
-                });
-                entropy::encode_band(&q[i], &self.dims[j], kind, parent)
-            })
-            .collect()
-    }
-
     pub(super) fn new(h: &Header) -> Result<Plan> {
         let pyr = if h.mode == Mode::Lossless {
-            lossless::plan(&h.dims, h.levels)
+            if !lossless::supports(h.scheme) {
+                return Err(crate::Error::Unsupported {
+                    what: "lossless scheme",
+                    value: h.scheme.name().to_string(),
+                });
+            }
+            lossless::plan(&h.dims, h.levels, h.scheme)
         } else {
             let spec = PyramidSpec {
                 scheme: h.scheme,

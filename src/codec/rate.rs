@@ -18,7 +18,13 @@ use rayon::prelude::*;
 /// A lossy file at the base step the rate mode asks for: set (`--quality`), from the
 /// details (`--keep`, `--threshold`), or searched (`--psnr`, `--bpp`).
 pub(super) fn encode_lossy(r: &Raster, opts: &EncodeOptions, rate: Rate) -> Result<Vec<u8>> {
-    let p = prepare(r, opts, Mode::Lossy)?;
+    let mut p = prepare(r, opts, Mode::Lossy)?;
+    if matches!(
+        rate,
+        Rate::Quality(_) | Rate::Psnr(_) | Rate::PsnrRange(..) | Rate::Bpp(_)
+    ) {
+        p.optimise();
+    }
     let range = (p.header.max - p.header.min).max(1e-30);
     let step = match rate {
         Rate::Keep(k) => {

@@ -1,6 +1,6 @@
 //! The `HEAD` chunk: what the data is and how it was coded (formats/MRA.md §4).
 
-use super::{Cursor, MAJOR, MINOR};
+use super::{Cursor, MAJOR, OLDEST_MAJOR};
 use crate::io::{DataKind, SampleType};
 use crate::scheme::{Boundary, Scheme};
 use crate::{Error, Result};
@@ -121,7 +121,7 @@ impl Header {
     }
 
     pub fn to_bytes(&self) -> Vec<u8> {
-        let mut b = vec![MAJOR, MINOR, kind_code(self.kind)];
+        let mut b = vec![self.major, self.minor, kind_code(self.kind)];
         b.push(TYPES.iter().position(|&t| t == self.sample_type).unwrap() as u8);
         b.push(self.dims.len() as u8);
         for &d in &self.dims {
@@ -147,10 +147,12 @@ impl Header {
         let mut c = Cursor::new(payload, "HEAD");
         let major = c.u8()?;
         let minor = c.u8()?;
-        if major != MAJOR {
+        if !(OLDEST_MAJOR..=MAJOR).contains(&major) {
             return Err(Error::Unsupported {
                 what: "format version",
-                value: format!("{major}.{minor} (this reader implements {MAJOR}.x)"),
+                value: format!(
+                    "{major}.{minor} (this reader implements {OLDEST_MAJOR}.x to {MAJOR}.x)"
+                ),
             });
         }
         let kind = match c.u8()? {

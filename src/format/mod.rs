@@ -15,8 +15,11 @@ use std::io::Read;
 
 /// The file signature (PNG-style: a high byte, the name, CR LF, ^Z, LF).
 pub const SIGNATURE: [u8; 8] = [0x8B, b'M', b'R', b'A', 0x0D, 0x0A, 0x1A, 0x0A];
-/// The major version this reader implements; files with another major are rejected.
-pub const MAJOR: u8 = 1;
+/// The major version written (2: level chunks, format-2 coefficient coding); readers
+/// decode majors [`OLDEST_MAJOR`] to this one and reject others.
+pub const MAJOR: u8 = 2;
+/// The oldest major version readers still decode.
+pub const OLDEST_MAJOR: u8 = 1;
 /// The minor version written; readers accept any minor of their major.
 pub const MINOR: u8 = 0;
 /// Largest chunk payload accepted (1 GiB).
@@ -31,6 +34,15 @@ pub fn put_chunk(out: &mut Vec<u8>, kind: &[u8; 4], payload: &[u8]) {
     c.update(kind);
     c.update(payload);
     out.extend_from_slice(&c.finish().to_le_bytes());
+}
+
+/// Append `v` as an unsigned LEB128 integer (7 bits a byte, low first).
+pub fn put_varint(out: &mut Vec<u8>, mut v: u64) {
+    while v >= 0x80 {
+        out.push((v as u8 & 0x7F) | 0x80);
+        v >>= 7;
+    }
+    out.push(v as u8);
 }
 
 /// One chunk as read: its type, payload, and byte offset in the file.
@@ -196,6 +208,29 @@ impl<'a> Cursor<'a> {
     }
     pub fn f64(&mut self) -> Result<f64> {
         Ok(f64::from_le_bytes(self.take(8)?.try_into().unwrap()))
+    }
+    /// An unsigned LEB128 integer (7 bits a byte, low first) of at most 10 bytes that
+    /// fits in 64 bits.
+    pub fn varint(&mut self) -> Result<u64> {
+        let mut v = 0u64;
+        for k in 0..10 {
+            let b = self.u8()?;
+            let bits = (b & 0x7F) as u64;
+            if k == 9 && bits > 1 {
+                break;
+            }
+            v |= bits << (7 * k);
+            if b & 0x80 == 0 {
+                return Ok(v);
+            }
+        }
+        Err(Error::format(
+            format!(
+                "{} chunk: an integer over 64 bits at byte {}",
+                self.what, self.pos
+            ),
+            "LEB128 integers of at most 64 bits",
+        ))
     }
     pub fn rest(&mut self) -> &'a [u8] {
         let s = &self.data[self.pos..];

@@ -16,6 +16,13 @@
 use crate::scheme::{Boundary, Scheme, TwoScale};
 use crate::tensor::{Pyramid, Subband};
 
+/// Multiplier `λ` of rate–distortion optimised quantization, in units of the squared
+/// step: an index costs `(x − q)² + λ·bits` with `x` the coefficient over its band's
+/// step (the weighted bands make one `λ` right for all of them). High-rate theory puts
+/// the slope of a uniform quantizer at `2 ln 2 / 12 ≈ 0.116`; 0.1 measured best on
+/// photographs (0.05–0.15 within 0.05 dB).
+pub const LAMBDA: f32 = 0.1;
+
 /// Encoder rounding offset of detail bands (dead zone `|c| < (1 − ρ)Δ`).
 pub const RHO: f64 = 0.34;
 /// Reconstruction offset of detail bands (written into the file).

@@ -67,7 +67,10 @@ pub const Q_START: &[&[f64]] = &[&[
 ]];
 
 /// Reversible integer 5/3 lifting of a lane (`x.len() ≥ 1`), in place, packed as
-/// `[C_0 … C_{n−1}, D_0 … D_{s−1}]` with `n = ⌈m/2⌉` (the layout of the symmetric level).
+/// `[C_0 … C_{n−1}, D_0 … D_{s−1}]` with `n = ⌈m/2⌉` (the layout of the symmetric level):
+/// `D_j = x_{2j+1} − ⌊(x_{2j} + x_{2j+2})/2⌋`, `C_j = x_{2j} + ⌊(D_{j−1} + D_j + 2)/4⌋`
+/// (whole-sample mirror at the ends). The floors are exact (sums in 128 bits) and the
+/// final additions wrap, so every 64-bit lane inverts exactly.
 /// `scratch` must hold `x.len()` values.
 pub fn lift_forward(x: &mut [i64], scratch: &mut [i64]) {
     let m = x.len();
@@ -91,14 +94,26 @@ pub fn lift_forward(x: &mut [i64], scratch: &mut [i64]) {
     let (c, d) = scratch[..m].split_at_mut(n);
     for (j, dj) in d.iter_mut().enumerate().take(s) {
         let j = j as isize;
-        *dj = f(2 * j + 1) - (f(2 * j) + f(2 * j + 2)).div_euclid(2);
+        *dj = f(2 * j + 1).wrapping_sub(half(f(2 * j), f(2 * j + 2)));
     }
     for (j, cj) in c.iter_mut().enumerate() {
         let dl = if j == 0 { d[0] } else { d[j - 1] };
         let dr = if j < s { d[j] } else { d[s - 1] };
-        *cj = x[2 * j] + (dl + dr + 2).div_euclid(4);
+        *cj = x[2 * j].wrapping_add(quarter(dl, dr));
     }
     x.copy_from_slice(&scratch[..m]);
+}
+
+/// `⌊(a + b)/2⌋` without overflow (wrapped back to 64 bits).
+#[inline(always)]
+fn half(a: i64, b: i64) -> i64 {
+    (a as i128 + b as i128).div_euclid(2) as i64
+}
+
+/// `⌊(a + b + 2)/4⌋` without overflow (wrapped back to 64 bits).
+#[inline(always)]
+fn quarter(a: i64, b: i64) -> i64 {
+    (a as i128 + b as i128 + 2).div_euclid(4) as i64
 }
 
 /// Inverse of [`lift_forward`]: the exact integer samples back.
@@ -114,7 +129,7 @@ pub fn lift_inverse(x: &mut [i64], scratch: &mut [i64]) {
     for j in 0..n {
         let dl = if j == 0 { d[0] } else { d[j - 1] };
         let dr = if j < s { d[j] } else { d[s - 1] };
-        out[2 * j] = c[j] - (dl + dr + 2).div_euclid(4);
+        out[2 * j] = c[j].wrapping_sub(quarter(dl, dr));
     }
     for j in 0..s {
         let right = if 2 * j + 2 < m {
@@ -122,7 +137,7 @@ pub fn lift_inverse(x: &mut [i64], scratch: &mut [i64]) {
         } else {
             out[2 * j]
         };
-        out[2 * j + 1] = d[j] + (out[2 * j] + right).div_euclid(2);
+        out[2 * j + 1] = d[j].wrapping_add(half(out[2 * j], right));
     }
     x.copy_from_slice(out);
 }

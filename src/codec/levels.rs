@@ -1,0 +1,218 @@
+//! Format 2 band layout: one `LEVL` chunk per level (the coarse block first, then the
+//! detail levels from the coarsest down), holding for every band of the level and every
+//! channel the band's step as a ratio to the header's base step, the length of its
+//! range-coded stream and the stream (formats/MRA.md §8).
+//!
+//! Coding goes channel by channel (in parallel), level after level (a band's context is
+//! its parent band, one level coarser), the bands of a level in parallel; every band has
+//! its own stream, so decoding is as parallel.
+
+use super::container::LEVL;
+use super::plan::Plan;
+use crate::entropy::range::Encoder;
+use crate::entropy::{band, BandKind, Parent};
+use crate::format::{put_chunk, put_varint, Cursor};
+use crate::{Error, Result};
+use rayon::prelude::*;
+
+/// One band of one channel, coded: its indices (the context of its children) and stream.
+pub(super) struct CodedBand {
+    pub(super) q: Vec<i64>,
+    pub(super) stream: Vec<u8>,
+}
+
+/// How the indices of a band are made from its coefficients.
+#[derive(Clone, Copy, Debug)]
+pub(super) enum Choice {
+    /// Fixed indices (integer coefficients, or quantized beforehand).
+    Given,
+    /// Rate–distortion optimised choice with multiplier `λ` (details; the coarse block
+    /// is rounded).
+    Rdo(f32),
+}
+
+impl Plan {
+    /// The bands of each level in file order: the coarse block first, then the detail
+    /// levels from the coarsest to the finest.
+    pub(super) fn level_groups(&self) -> Vec<(usize, Vec<usize>)> {
+        let mut groups: Vec<(usize, Vec<usize>)> = Vec::new();
+        for (j, b) in self.bands.iter().enumerate() {
+            match groups.last_mut() {
+                Some((l, v)) if *l == b.level => v.push(j),
+                _ => groups.push((b.level, vec![j])),
+            }
+        }
+        groups
+    }
+
+    /// Code every band of `channels` channels; `input(c, j)` gives band `j` of channel
+    /// `c` ([`BandInput`]). With [`Choice::Rdo`] the scaled coefficients of detail bands
+    /// get rate–distortion optimised indices; other scaled bands are rounded.
+    pub(super) fn code_levels(
+        &self,
+        channels: usize,
+        choice: Choice,
+        input: impl Fn(usize, usize) -> BandInput + Sync,
+    ) -> Vec<Vec<CodedBand>> {
+        let groups = self.level_groups();
+        (0..channels)
+            .into_par_iter()
+            .map(|c| {
+                let mut out: Vec<Option<CodedBand>> = (0..self.bands.len()).map(|_| None).collect();
+                for (level, js) in &groups {
+                    let coded: Vec<CodedBand> = js
+                        .par_iter()
+                        .map(|&j| {
+                            let parent = self.parents[j].map(|p| Parent {
+                                data: &out[p].as_ref().expect("parents coded first").q,
+                                dims: &self.dims[p],
+                            });
+                            let mut e = Encoder::new();
+                            let dims = &self.dims[j];
+                            let q = match (input(c, j), choice) {
+                                (BandInput::Indices(q), _) => {
+                                    let kind = if *level == 0 {
+                                        BandKind::Coarse
+                                    } else {
+                                        BandKind::Detail
+                                    };
+                                    band::encode(&mut e, &q, dims, kind, parent);
+                                    q
+                                }
+                                (BandInput::Scaled(x), Choice::Rdo(lambda)) if *level > 0 => {
+                                    band::encode_rdo(&mut e, &x, dims, parent, lambda)
+                                }
+                                (BandInput::Scaled(x), _) => {
+                                    let q: Vec<i64> = x.iter().map(|&v| round_index(v)).collect();
+                                    let kind = if *level == 0 {
+                                        BandKind::Coarse
+                                    } else {
+                                        BandKind::Detail
+                                    };
+                                    band::encode(&mut e, &q, dims, kind, parent);
+                                    q
+                                }
+                            };
+                            CodedBand {
+                                q,
+                                stream: e.finish_short(),
+                            }
+                        })
+                        .collect();
+                    for (&j, cb) in js.iter().zip(coded) {
+                        out[j] = Some(cb);
+                    }
+                }
+                out.into_iter()
+                    .map(|b| b.expect("every band coded"))
+                    .collect()
+            })
+            .collect()
+    }
+
+    /// Append the `LEVL` chunks of `coded` (`[channel][band]`) to `out`; `ratio(c, j)` =
+    /// band `j`'s step over the base step (as written, `f32`).
+    pub(super) fn put_levels(
+        &self,
+        out: &mut Vec<u8>,
+        coded: &[Vec<CodedBand>],
+        ratio: impl Fn(usize, usize) -> f32,
+    ) {
+        for (level, js) in self.level_groups() {
+            let mut p = Vec::new();
+            p.extend_from_slice(&(level as u16).to_le_bytes());
+            for &j in &js {
+                for (c, bands) in coded.iter().enumerate() {
+                    p.extend_from_slice(&ratio(c, j).to_le_bytes());
+                    put_varint(&mut p, bands[j].stream.len() as u64);
+                    p.extend_from_slice(&bands[j].stream);
+                }
+            }
+            put_chunk(out, LEVL, &p);
+        }
+    }
+}
+
+/// A band handed to [`Plan::code_levels`].
+pub(super) enum BandInput {
+    /// Its indices.
+    Indices(Vec<i64>),
+    /// Its coefficients divided by its step.
+    Scaled(Vec<f32>),
+}
+
+/// `round(v)` half away from zero, 0 for values that are not finite, capped at 9·10^15.
+#[inline]
+fn round_index(v: f32) -> i64 {
+    if !v.is_finite() {
+        return 0;
+    }
+    let a = (v.abs() + 0.5).min(9.0e15) as i64;
+    if v < 0.0 {
+        -a
+    } else {
+        a
+    }
+}
+
+/// One band of one channel as read from a `LEVL` chunk.
+pub(super) struct LevelBand {
+    pub(super) ratio: f32,
+    pub(super) data: Vec<u8>,
+}
+
+/// Parse the payload of a `LEVL` chunk of a file with `channels` channels: its level
+/// and, for each band `js` of that level and each channel, the band's step ratio and
+/// stream.
+pub(super) fn parse_level(
+    payload: &[u8],
+    plan: &Plan,
+    channels: usize,
+) -> Result<(usize, Vec<(usize, usize, LevelBand)>)> {
+    let mut cur = Cursor::new(payload, "LEVL");
+    let level = cur.u16()? as usize;
+    let groups = plan.level_groups();
+    let Some((_, js)) = groups.iter().find(|(l, _)| *l == level) else {
+        return Err(Error::format(
+            format!(
+                "LEVL chunk for level {level} (the pyramid has levels 0 to {})",
+                groups.iter().map(|g| g.0).max().unwrap_or(0)
+            ),
+            "a level of the file's pyramid",
+        ));
+    };
+    let mut bands = Vec::with_capacity(js.len() * channels);
+    for &j in js {
+        for c in 0..channels {
+            let ratio = cur.f32()?;
+            if !(ratio > 0.0 && ratio.is_finite()) {
+                return Err(Error::format(
+                    format!("LEVL {level}: band {j} of channel {c} with step ratio {ratio}"),
+                    "a positive finite ratio",
+                ));
+            }
+            let len = cur.varint()?;
+            let left = (cur.data.len() - cur.pos) as u64;
+            if len > left {
+                return Err(Error::format(
+                    format!(
+                        "LEVL {level}: band {j} of channel {c} declaring {len} bytes, {left} left"
+                    ),
+                    "streams within the chunk",
+                ));
+            }
+            let data = cur.take(len as usize)?.to_vec();
+            bands.push((j, c, LevelBand { ratio, data }));
+        }
+    }
+    if cur.pos != cur.data.len() {
+        return Err(Error::format(
+            format!(
+                "LEVL {level} with {} bytes after its last band",
+                cur.data.len() - cur.pos
+            ),
+            "a chunk that ends with its last band",
+        ));
+    }
+    Ok((level, bands))
+}
