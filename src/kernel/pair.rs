@@ -154,8 +154,9 @@ impl<'a, T> PairSteps<'a, T> {
 
 /// [`combine_pair`] over two sparse rows (`(columns, weights)`, columns increasing) and
 /// the inputs `tap(c)` of their columns: `o1` the first row, `o2` the second, each input
-/// they share read once. `false` (nothing written) when the rows share no column or read
-/// more than [`PAIR_INPUTS`] inputs together (then two [`combine_taps`] do the same).
+/// they share read once. `false` (nothing written) when the rows share no column, read
+/// more than [`PAIR_INPUTS`] inputs together or have no vector build of the pair kernels
+/// at this CPU level (then two [`combine_taps`] do the same).
 ///
 /// `memo` remembers the last pair's pattern (the regular row pairs repeat one); `split`
 /// writes each output as its even samples, then its odd ones ([`combine_pair_at`]).
@@ -193,6 +194,11 @@ pub fn combine_pair_taps<'t, T: Sample + 't>(
     } else {
         None
     };
+    // without a vector build the pair would be two combines anyway (and a split
+    // written through a copy)
+    if entry.is_none() {
+        return false;
+    }
     combine_pair_at(
         simd,
         entry,
@@ -209,7 +215,7 @@ pub fn combine_pair_taps<'t, T: Sample + 't>(
 }
 
 /// Most inputs two rows combined together by [`combine_pair_taps`] may read.
-pub const PAIR_INPUTS: usize = 8;
+pub const PAIR_INPUTS: usize = PAIR_KERNEL_MOST;
 
 /// Whether [`combine_pair_taps`] combines two rows reading the columns `c1` and `c2`
 /// (increasing) together: they share a column and read at most [`PAIR_INPUTS`] together.
@@ -293,10 +299,10 @@ pub(crate) fn pair_by_parts<T: Sample>(
 /// The pairs and the unit weights of one output of a pair over the inputs `w` (its taps
 /// those of `mask`, in increasing `k`): `(p, n, r)` with `p` / `n` the terms (single taps
 /// and pairs' first taps) of weight +1 / −1, which the kernels add or subtract instead of
-/// multiplying (the same bits), and `r` the pairs of [`pair_taps`], nibble `k` of it
-/// `j + 1` for a pair `(k, j)`.
-pub(crate) fn pattern_of<T: Sample>(w: &[T], mask: u32) -> (u32, u32, u64) {
-    let (mut p, mut n, mut r) = (0u32, 0u32, 0u64);
+/// multiplying (the same bits), and `r` the pairs of [`pair_taps`]: field `k` of it
+/// ([`PAIR_FIELD`] bits) is `j + 1` for a pair `(k, j)` ([`pair_code`]).
+pub(crate) fn pattern_of<T: Sample>(w: &[T], mask: u32) -> (u32, u32, u128) {
+    let (mut p, mut n, mut r) = (0u32, 0u32, 0u128);
     let mut left = mask & ((1u64 << w.len().min(32)) - 1) as u32;
     while left != 0 {
         let k = left.trailing_zeros() as usize;
@@ -308,7 +314,7 @@ pub(crate) fn pattern_of<T: Sample>(w: &[T], mask: u32) -> (u32, u32, u64) {
             let j = later.trailing_zeros() as usize;
             later &= later - 1;
             if w[j] == wk {
-                r |= ((j + 1) as u64) << (4 * k);
+                r |= ((j + 1) as u128) << (PAIR_FIELD * k);
                 left &= !(1 << j);
                 break;
             }
@@ -322,6 +328,26 @@ pub(crate) fn pattern_of<T: Sample>(w: &[T], mask: u32) -> (u32, u32, u64) {
     (p, n, r)
 }
 
+/// Bits per input in a pattern's pairs ([`pattern_of`]): `j + 1 ≤ 24` for the
+/// [`PAIR_KERNEL_MOST`] inputs.
+pub(crate) const PAIR_FIELD: usize = 5;
+
+/// Most inputs of a pair with a vector build (the table in `patterns.rs`).
+pub const PAIR_KERNEL_MOST: usize = 24;
+
+/// The pairs `(k, j)` (`k < j`) of one output as [`pattern_of`] encodes them, for the
+/// pattern table: field `k` holds `j + 1`.
+pub(crate) const fn pair_code(pairs: &[(usize, usize)]) -> u128 {
+    let mut r = 0u128;
+    let mut i = 0;
+    while i < pairs.len() {
+        let (k, j) = pairs[i];
+        r |= ((j + 1) as u128) << (PAIR_FIELD * k);
+        i += 1;
+    }
+    r
+}
+
 /// The patterns `(P1, N1, P2, N2, R1, R2)` of the table entries that serve the pair
 /// `(w1, m1)`, `(w2, m2)`, best first: the entry with its unit taps and pairs; then,
 /// when no taps pair, the plain entry (every tap multiplied: the same bits).
@@ -331,7 +357,7 @@ pub(crate) fn pair_wants<T: Sample>(
     m1: u32,
     w2: &[T],
     m2: u32,
-) -> [Option<(u32, u32, u32, u32, u64, u64)>; 2] {
+) -> [Option<(u32, u32, u32, u32, u128, u128)>; 2] {
     let ((p1, n1, r1), (p2, n2, r2)) = (pattern_of(w1, m1), pattern_of(w2, m2));
     let exact = (p1, n1, p2, n2, r1, r2);
     let plain = (0, 0, 0, 0, 0, 0);
@@ -340,17 +366,17 @@ pub(crate) fn pair_wants<T: Sample>(
 }
 
 /// [`seconds`] of a pattern's pairs, as a constant of the kernel built for it.
-pub(crate) struct Seconds<const R: u64>;
-impl<const R: u64> Seconds<R> {
+pub(crate) struct Seconds<const R: u128>;
+impl<const R: u128> Seconds<R> {
     pub(crate) const MASK: u32 = seconds(R);
 }
 
 /// The second taps of the pairs `r` (as [`pattern_of`] gives them).
-pub(crate) const fn seconds(r: u64) -> u32 {
+pub(crate) const fn seconds(r: u128) -> u32 {
     let mut m = 0u32;
     let mut k = 0;
-    while k < 16 {
-        let j = (r >> (4 * k)) & 15;
+    while k < PAIR_KERNEL_MOST {
+        let j = (r >> (PAIR_FIELD * k)) & 31;
         if j > 0 {
             m |= 1 << (j - 1);
         }
@@ -365,14 +391,14 @@ pub(crate) const fn seconds(r: u64) -> u32 {
 /// one pair many times to look up once ([`PairMemo`], [`super::polyphase::Pair`]).
 pub fn pair_entry<T: Sample>(w1: &[T], m1: u32, w2: &[T], m2: u32) -> Option<u8> {
     let u = w1.len();
-    if u > 16 || w2.len() != u {
+    if u > PAIR_KERNEL_MOST || w2.len() != u {
         return None;
     }
     #[cfg(target_arch = "x86_64")]
     {
         let wants = pair_wants(w1, m1, w2, m2);
         macro_rules! find {
-            ($(($U:literal, $M1:literal, $M2:literal, $P1:literal, $N1:literal, $P2:literal, $N2:literal, $R1:literal, $R2:literal)),*) => {
+            ($(($U:literal, $M1:literal, $M2:literal, $P1:literal, $N1:literal, $P2:literal, $N2:literal, $R1:expr, $R2:expr)),*) => {
                 for want in wants.into_iter().flatten() {
                     let mut idx = 0u8;
                     $(

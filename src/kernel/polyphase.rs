@@ -81,8 +81,12 @@ pub struct Pair {
     pub entries: [Option<u8>; 2],
 }
 
-/// Most inputs a [`Pair`] reads.
-pub const PAIR_MOST: usize = 16;
+/// Most inputs a [`Pair`] reads (as many as a pair kernel takes).
+pub const PAIR_MOST: usize = kernel::PAIR_KERNEL_MOST;
+
+/// Most taps of a run computed over the whole run at once ([`run_part`]); longer rows go
+/// one by one.
+const RUN_MOST: usize = 32;
 
 impl Pair {
     /// The two rows' weights as samples (inputs past `cols.len()` weigh 0).
@@ -303,7 +307,7 @@ impl Polyphase {
         // (every other run a short one of `run_part`, which reads the halves)
         let paired_runs = pair.as_ref().map_or([usize::MAX; 2], |p| p.runs);
         let short = |(i, r): (usize, &Run)| {
-            paired_runs.contains(&i) || (r.row_step == 1 && r.cols.len() <= 16)
+            paired_runs.contains(&i) || (r.row_step == 1 && r.cols.len() <= RUN_MOST)
         };
         let reach = edge_rows
             .iter()
@@ -429,7 +433,7 @@ impl Polyphase {
             if paired.contains(&ri) {
                 continue;
             }
-            if run.row_step == 1 && run.cols.len() <= 16 {
+            if run.row_step == 1 && run.cols.len() <= RUN_MOST {
                 let len = run.count * e;
                 run_part(
                     self.col_step,
@@ -538,8 +542,8 @@ fn run_part<T: Sample>(
     e: usize,
     out: &mut [T],
 ) {
-    let mut src: [&[T]; 16] = [&[]; 16];
-    let mut w = [T::default(); 16];
+    let mut src: [&[T]; RUN_MOST] = [&[]; RUN_MOST];
+    let mut w = [T::default(); RUN_MOST];
     let taps = run.cols.len();
     let len = count * e;
     for (k, (&c, &wk)) in run.cols.iter().zip(&run.weights).enumerate() {
@@ -646,11 +650,6 @@ mod tests {
                     if n < 8 * reach {
                         continue;
                     }
-                    // a regular row wider than a pair's inputs (cubic-wide's 19 taps) runs
-                    // as plain regular runs
-                    if reach > PAIR_MOST {
-                        continue;
-                    }
                     let t = TwoScale::new(scheme, boundary, n);
                     for (name, op) in [("analysis", &t.analysis), ("synthesis", &t.synthesis)] {
                         let p = Polyphase::new(op);
@@ -665,6 +664,118 @@ mod tests {
                         assert_eq!(2 * pair.count + unpaired, n, "{scheme:?} {boundary:?} {n}");
                         assert!(pair.masks[0] & pair.masks[1] != 0);
                     }
+                }
+            }
+        }
+    }
+
+    /// The pairs of regular rows the engine combines: along a lane ([`Polyphase::pair`])
+    /// and along axis 0 (consecutive rows of the fused levels' order, analysis by first
+    /// column, synthesis by index, paired from the start as the cascade pairs them), rows
+    /// away from the ends only; `(weights, masks)` over the pair's inputs.
+    fn regular_pairs(scheme: Scheme, boundary: Boundary) -> Vec<([Vec<f64>; 2], [u32; 2])> {
+        let n = 512;
+        let t = TwoScale::new(scheme, boundary, n);
+        let mut pairs = Vec::new();
+        for (analysis, op) in [(true, &t.analysis), (false, &t.synthesis)] {
+            let p = Polyphase::new(op);
+            let pair = p.pair.as_ref().expect("a lane pair");
+            pairs.push((pair.weights.clone(), pair.masks));
+            let mut order: Vec<usize> = (0..n).collect();
+            if analysis {
+                order.sort_by_key(|&r| (op.row_slices(r).0.first().copied(), r));
+            }
+            let mut i = 0;
+            while i + 1 < n {
+                let (c1, w1) = op.row_slices(order[i]);
+                let (c2, w2) = op.row_slices(order[i + 1]);
+                let Some((cols, u, m1, m2)) = kernel::pair_columns(c1, c2) else {
+                    i += 1;
+                    continue;
+                };
+                let middle = cols[..u].iter().all(|&c| (64..n as u32 - 64).contains(&c));
+                if middle {
+                    let spread = |m: u32, ws: &[f64]| {
+                        let mut at = ws.iter();
+                        (0..u)
+                            .map(|k| {
+                                if m >> k & 1 == 1 {
+                                    at.next().copied()
+                                } else {
+                                    Some(0.0)
+                                }
+                            })
+                            .collect::<Option<Vec<f64>>>()
+                            .expect("a weight per tap")
+                    };
+                    pairs.push(([spread(m1, w1), spread(m2, w2)], [m1, m2]));
+                }
+                i += 2;
+            }
+        }
+        pairs.sort_by(|a, b| format!("{a:?}").cmp(&format!("{b:?}")));
+        pairs.dedup();
+        pairs
+    }
+
+    /// Every pair of regular rows of every scheme and boundary has a vector build of the
+    /// pair kernels (for `f32` and `f64` samples), and every CPU level gives the bits of
+    /// one combine per output in the scalar build (the rule of `sum_terms`): apart, split
+    /// into even and odd samples, and interleaved.
+    #[test]
+    fn every_schemes_regular_pairs_have_a_build() {
+        fn check<T: Sample>(w: &[Vec<f64>; 2], m: [u32; 2], name: &str) {
+            let u = w[0].len();
+            let w1: Vec<T> = w[0].iter().map(|&v| T::from_f64(v)).collect();
+            let w2: Vec<T> = w[1].iter().map(|&v| T::from_f64(v)).collect();
+            let entry = kernel::pair_entry(&w1, m[0], &w2, m[1]);
+            #[cfg(target_arch = "x86_64")]
+            assert!(
+                entry.is_some(),
+                "{name}: no build for {u} inputs, masks {m:?}, {w:?}"
+            );
+            for len in [1usize, 7, 8, 9, 16, 17, 33, 64, 100] {
+                let x: Vec<T> = (0..len + u)
+                    .map(|i| T::from_f64(((i * 7919 % 211) as f64 - 105.0) / 13.0))
+                    .collect();
+                let src: Vec<&[T]> = (0..u).map(|k| &x[k..k + len]).collect();
+                let (mut e1, mut e2) = (vec![T::default(); len], vec![T::default(); len]);
+                let s = CpuLevel::Scalar;
+                kernel::pair_by_parts(&mut e1, &mut e2, &src, &w1, m[0], &w2, m[1], s);
+                let bits = |v: &[T]| v.iter().map(|x| x.to_f64().to_bits()).collect::<Vec<_>>();
+                for level in CpuLevel::available() {
+                    let entry = if level >= CpuLevel::Avx2 { entry } else { None };
+                    for split in [false, true] {
+                        let (mut a, mut b) = (vec![T::default(); len], vec![T::default(); len]);
+                        let (w1, w2) = (&w1[..], &w2[..]);
+                        combine_pair_at(
+                            level, entry, &mut a, &mut b, &src, w1, m[0], w2, m[1], split,
+                        );
+                        let (mut f1, mut f2) = (e1.clone(), e2.clone());
+                        if split {
+                            deinterleave(&e1, 1, &mut f1);
+                            deinterleave(&e2, 1, &mut f2);
+                        }
+                        let what = format!("{name} {level:?} split {split} len {len}");
+                        assert_eq!(bits(&a), bits(&f1), "{what}: first output");
+                        assert_eq!(bits(&b), bits(&f2), "{what}: second output");
+                    }
+                }
+                let mut merged = vec![T::default(); 2 * len];
+                if combine_pair_merged_at(entry, &mut merged, &src, &w1, m[0], &w2, m[1]) {
+                    let want: Vec<T> = (0..2 * len)
+                        .map(|i| if i % 2 == 0 { e1[i / 2] } else { e2[i / 2] })
+                        .collect();
+                    assert_eq!(bits(&merged), bits(&want), "{name} merged len {len}");
+                }
+            }
+        }
+        for scheme in Scheme::ALL {
+            for boundary in Boundary::ALL {
+                for (w, m) in regular_pairs(scheme, boundary) {
+                    let name = format!("{scheme} {boundary}");
+                    check::<f32>(&w, m, &name);
+                    check::<f64>(&w, m, &name);
                 }
             }
         }

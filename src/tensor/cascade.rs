@@ -157,6 +157,247 @@ fn col_range(
     out
 }
 
+/// The levels a [`Plan`] is built for: the steps of [`Plan::build`], each a question
+/// about their rows.
+struct Levels<'r, 'a> {
+    way: Way,
+    /// `regions[l]` = box before level `l`; `regions[levels]` = the coarsest block.
+    regions: &'r [Vec<usize>],
+    ops: &'a [Vec<AxisOp<'a>>],
+    e: usize,
+}
+
+impl Levels<'_, '_> {
+    fn count(&self) -> usize {
+        self.ops.len()
+    }
+
+    /// Rows along axis 0 before level `l`.
+    fn n(&self, l: usize) -> usize {
+        self.regions[l][0]
+    }
+
+    /// Samples of a row of level `l`.
+    fn row_len(&self, l: usize) -> usize {
+        self.regions[l][1..].iter().product::<usize>() * self.e
+    }
+
+    /// Per level, the rows that reach across the lane (periodic ends): inputs more than
+    /// half of it apart (synthesis: coarse inputs more than half of the coarse rows
+    /// apart; the details come from the array).
+    fn wrapping_rows(&self) -> Vec<Vec<bool>> {
+        (0..self.count())
+            .map(|l| {
+                let op = self.ops[l][0].op;
+                let (lim, within) = match self.way {
+                    Way::Analysis => (self.n(l), self.n(l)),
+                    Way::Synthesis => (self.n(l + 1), self.n(l + 1)),
+                };
+                (0..self.n(l))
+                    .map(|r| {
+                        let cs = op.row_slices(r).0.iter().map(|&c| c as usize);
+                        let mut inside = cs.filter(|&c| c < within);
+                        let first = inside.next();
+                        let last = inside.next_back().or(first);
+                        matches!((first, last), (Some(a), Some(b)) if b - a > lim / 2)
+                    })
+                    .collect()
+            })
+            .collect()
+    }
+
+    /// Per level, the order in which its rows are computed: analysis by first column
+    /// (a wrapping row by its first column on its own side of the lane, the half around
+    /// where its index puts it); synthesis in index order. `None` when the coarse rows of
+    /// an analysis do not come in increasing order, as the next level asks for them.
+    fn row_orders(&self, wrap: &[Vec<bool>], ghosts: bool) -> Option<Vec<Vec<usize>>> {
+        let levels = self.count();
+        let mut order: Vec<Vec<usize>> = (0..levels)
+            .map(|l| match self.way {
+                Way::Analysis => self.ops[l][0].order.to_vec(),
+                Way::Synthesis => (0..self.n(l)).collect(),
+            })
+            .collect();
+        if self.way == Way::Synthesis {
+            return Some(order);
+        }
+        if ghosts {
+            for (l, ord) in order.iter_mut().enumerate() {
+                let (n, nc) = (self.n(l), self.n(l + 1));
+                let nd = n - nc;
+                let key = |r: usize| -> usize {
+                    let cols = self.ops[l][0]
+                        .op
+                        .row_slices(r)
+                        .0
+                        .iter()
+                        .map(|&c| c as usize);
+                    if wrap[l][r] {
+                        let at = if r < nc {
+                            r * n / nc.max(1)
+                        } else {
+                            (r - nc) * n / nd.max(1)
+                        };
+                        cols.filter(|&c| c.abs_diff(at) <= n / 2)
+                            .min()
+                            .unwrap_or(at)
+                    } else {
+                        cols.min().unwrap_or(0)
+                    }
+                };
+                ord.sort_by_key(|&r| (key(r), r));
+            }
+        }
+        for (l, ord) in order.iter().enumerate().take(levels - 1) {
+            let coarse: Vec<usize> = ord.iter().copied().filter(|&r| r < self.n(l + 1)).collect();
+            if coarse.len() != self.n(l + 1) || coarse.windows(2).any(|w| w[0] >= w[1]) {
+                return None;
+            }
+        }
+        Some(order)
+    }
+
+    /// Per level, the slots of its input ring (coarse rows, detail rows): the input rows
+    /// alive at once in `order` ([`live_span`]).
+    fn ring_caps(
+        &self,
+        order: &[Vec<usize>],
+        wrap: &[Vec<bool>],
+        lines: bool,
+    ) -> Vec<(usize, usize)> {
+        let levels = self.count();
+        (0..levels)
+            .map(|l| {
+                let op = self.ops[l][0].op;
+                let (n, nc) = (self.n(l), self.n(l + 1));
+                match self.way {
+                    Way::Analysis if l == 0 => (0, 0),
+                    Way::Analysis => (live_span(op, &order[l], 0..n, &wrap[l]), 0),
+                    // images: the coarsest level reads the array, details come from it
+                    Way::Synthesis if lines && l + 1 == levels => (0, 0),
+                    Way::Synthesis if lines => (live_span(op, &order[l], 0..nc, &wrap[l]), 0),
+                    Way::Synthesis => {
+                        let detail = if l == 0 {
+                            0
+                        } else {
+                            live_span(op, &order[l], nc..n, &[])
+                        };
+                        (live_span(op, &order[l], 0..nc, &[]), detail)
+                    }
+                }
+            })
+            .collect()
+    }
+
+    /// Samples of all levels' boxes.
+    fn total(&self) -> usize {
+        (0..self.count()).map(|l| self.n(l) * self.row_len(l)).sum()
+    }
+
+    /// How many parts: `parts` when `forced`, else at most one per [`MIN_PART`] samples
+    /// and per row of the last level.
+    fn part_count(&self, parts: usize, forced: bool) -> usize {
+        if forced {
+            return parts.max(1);
+        }
+        parts
+            .clamp(1, (self.total() / MIN_PART).max(1))
+            .min(self.n(self.count() - 1).max(1))
+    }
+
+    /// Per part and level, the ghosts: level `l`'s wrapping rows read rows that level
+    /// `l − 1` (analysis) or `l + 1` (synthesis, its coarse inputs) makes, computed first,
+    /// and so do those rows themselves (a few rows at one end or both, doubling away from
+    /// the wrapping level); each part for the wrapping rows it computes. Empty without
+    /// wrapping rows.
+    fn ghost_needs(
+        &self,
+        order: &[Vec<usize>],
+        wrap: &[Vec<bool>],
+        spans: &[Vec<Span>],
+    ) -> Vec<Vec<Vec<usize>>> {
+        let levels = self.count();
+        // each row's position in its level's order
+        let pos: Vec<Vec<usize>> = order
+            .iter()
+            .map(|ord| {
+                let mut at = vec![0; ord.len()];
+                for (i, &r) in ord.iter().enumerate() {
+                    at[r] = i;
+                }
+                at
+            })
+            .collect();
+        spans
+            .iter()
+            .map(|sp| {
+                let mine = |l: usize, r: usize| {
+                    wrap[l].get(r) == Some(&true) && (sp[l].start..sp[l].end).contains(&pos[l][r])
+                };
+                let mut need: Vec<Vec<usize>> = vec![Vec::new(); levels];
+                let inputs = |l: usize, need_l: &[usize], within: usize| {
+                    let op = self.ops[l][0].op;
+                    let mut rows = std::collections::BTreeSet::new();
+                    for r in 0..self.n(l) {
+                        if mine(l, r) || need_l.binary_search(&r).is_ok() {
+                            let cs = op.row_slices(r).0.iter().map(|&c| c as usize);
+                            rows.extend(cs.filter(|&c| c < within));
+                        }
+                    }
+                    rows.into_iter().collect::<Vec<usize>>()
+                };
+                match self.way {
+                    Way::Analysis => {
+                        for l in (1..levels).rev() {
+                            need[l - 1] = inputs(l, &need[l], self.n(l));
+                        }
+                    }
+                    Way::Synthesis => {
+                        // the coarsest level's inputs are the array's
+                        for l in 0..levels.saturating_sub(1) {
+                            need[l + 1] = inputs(l, &need[l], self.n(l + 1));
+                        }
+                    }
+                }
+                need
+            })
+            .collect()
+    }
+
+    /// Whether the parts' memory (rings, a few rows of scratch per level, ghosts) stays
+    /// within 1/[`MAX_HELD`] of the array (a short image with very long rows would need
+    /// rings as large as the image), and their work (rows computed twice at seams) within
+    /// [`MAX_HALO`] more than the pyramid's.
+    fn fits(&self, caps: &[(usize, usize)], spans: &[Vec<Span>], need: &[Vec<Vec<usize>>]) -> bool {
+        let levels = self.count();
+        // samples of a ghost row of level l: what its reader takes (analysis: the box of
+        // level l + 1, a prefix of the row)
+        let ghost_len = |l: usize| match self.way {
+            Way::Analysis => self.row_len((l + 1).min(levels)),
+            Way::Synthesis => self.row_len(l),
+        };
+        let work: usize = spans
+            .iter()
+            .flat_map(|s| s.iter().enumerate())
+            .map(|(l, s)| (s.end - s.start) * self.row_len(l))
+            .sum();
+        let held: usize = (0..levels)
+            .map(|l| {
+                let row = self.row_len(l) + if l > 0 { self.row_len(l - 1) } else { 0 };
+                (caps[l].0 + caps[l].1 + 8) * row
+            })
+            .sum::<usize>()
+            * spans.len()
+            + need
+                .iter()
+                .flat_map(|nd| nd.iter().enumerate())
+                .map(|(l, rows)| rows.len() * ghost_len(l))
+                .sum::<usize>();
+        held * MAX_HELD <= self.n(0) * self.row_len(0)
+            && work as f64 <= self.total() as f64 * (1.0 + MAX_HALO)
+    }
+}
+
 impl<'a> Plan<'a> {
     /// Plan `ops.len()` levels (at least 2) whose regions are `regions` (one more than
     /// levels), with up to `parts` parts; `None` when the cascade does not apply (row
@@ -185,7 +426,9 @@ impl<'a> Plan<'a> {
         })
     }
 
-    /// [`Plan::new`], with ghosts for the rows that reach across the lane when `ghosts`.
+    /// [`Plan::new`], with ghosts for the rows that reach across the lane when `ghosts`:
+    /// the rows' orders, the rings' sizes, the parts and their ghosts, then the checks of
+    /// memory and halos.
     fn build(
         way: Way,
         regions: Vec<Vec<usize>>,
@@ -204,194 +447,33 @@ impl<'a> Plan<'a> {
         {
             return None;
         }
-        let n = |l: usize| regions[l][0];
-        let row_len = |l: usize| regions[l][1..].iter().product::<usize>() * e;
-        // row orders: analysis by first column (coarse rows must come in increasing
-        // order, as the next level asks for them); synthesis in index order
-        let mut order: Vec<Vec<usize>> = (0..levels)
-            .map(|l| match way {
-                Way::Analysis => ops[l][0].order.to_vec(),
-                Way::Synthesis => (0..n(l)).collect(),
-            })
-            .collect();
-        // rows that reach across the lane (periodic ends): inputs more than half of it
-        // apart (synthesis: coarse inputs more than half of the coarse rows apart; the
-        // details come from the array)
-        let wrap: Vec<Vec<bool>> = if ghosts {
-            (0..levels)
-                .map(|l| {
-                    let op = ops[l][0].op;
-                    let (lim, within) = match way {
-                        Way::Analysis => (n(l), n(l)),
-                        Way::Synthesis => (n(l + 1), n(l + 1)),
-                    };
-                    (0..n(l))
-                        .map(|r| {
-                            let cs = op.row_slices(r).0.iter().map(|&c| c as usize);
-                            let mut inside = cs.filter(|&c| c < within);
-                            let first = inside.next();
-                            let last = inside.next_back().or(first);
-                            matches!((first, last), (Some(a), Some(b)) if b - a > lim / 2)
-                        })
-                        .collect()
-                })
-                .collect()
+        let g = Levels {
+            way,
+            regions: &regions,
+            ops,
+            e,
+        };
+        let wrap = if ghosts {
+            g.wrapping_rows()
         } else {
             vec![Vec::new(); levels]
         };
         if ghosts && !wrap.iter().flatten().any(|&w| w) {
             return None;
         }
-        if ghosts && way == Way::Analysis {
-            // rows by first column; a wrapping row by its first column on its own side of
-            // the lane (the half around where its index puts it)
-            for l in 0..levels {
-                let (nc, nd) = (n(l + 1), n(l) - n(l + 1));
-                let key = |r: usize| -> usize {
-                    let cols = ops[l][0].op.row_slices(r).0.iter().map(|&c| c as usize);
-                    if wrap[l][r] {
-                        let at = if r < nc {
-                            r * n(l) / nc.max(1)
-                        } else {
-                            (r - nc) * n(l) / nd.max(1)
-                        };
-                        cols.filter(|&c| c.abs_diff(at) <= n(l) / 2)
-                            .min()
-                            .unwrap_or(at)
-                    } else {
-                        cols.min().unwrap_or(0)
-                    }
-                };
-                order[l].sort_by_key(|&r| (key(r), r));
-            }
-        }
-        if way == Way::Analysis {
-            for (l, ord) in order.iter().enumerate().take(levels - 1) {
-                let coarse: Vec<usize> = ord.iter().copied().filter(|&r| r < n(l + 1)).collect();
-                if coarse.len() != n(l + 1) || coarse.windows(2).any(|w| w[0] >= w[1]) {
-                    return None;
-                }
-            }
-        }
+        let order = g.row_orders(&wrap, ghosts)?;
         let lines = regions[0].len() == 2;
-        // ring slots per level's inputs
-        let caps: Vec<(usize, usize)> = (0..levels)
-            .map(|l| {
-                let op = ops[l][0].op;
-                match way {
-                    Way::Analysis if l == 0 => (0, 0),
-                    Way::Analysis => (live_span(op, &order[l], 0..n(l), &wrap[l]), 0),
-                    // images: the coarsest level reads the array, details come from it
-                    Way::Synthesis if lines && l + 1 == levels => (0, 0),
-                    Way::Synthesis if lines => (live_span(op, &order[l], 0..n(l + 1), &wrap[l]), 0),
-                    Way::Synthesis => {
-                        let nc = n(l + 1);
-                        let detail = if l == 0 {
-                            0
-                        } else {
-                            live_span(op, &order[l], nc..n(l), &[])
-                        };
-                        (live_span(op, &order[l], 0..nc, &[]), detail)
-                    }
-                }
-            })
-            .collect();
+        let caps = g.ring_caps(&order, &wrap, lines);
         // rows that reach across the lane (periodic ends) would hold a whole level
         if caps.iter().any(|&(c, d)| c + d > MAX_RING) {
             return None;
         }
-        let total: usize = (0..levels).map(|l| n(l) * row_len(l)).sum();
-        let parts = if forced {
-            parts.max(1)
-        } else {
-            parts
-                .clamp(1, (total / MIN_PART).max(1))
-                .min(n(levels - 1).max(1))
-        };
+        let parts = g.part_count(parts, forced);
         let spans: Vec<Vec<Span>> = (0..parts)
             .map(|p| Self::part_spans(way, &regions, ops, &order, &wrap, p, parts))
             .collect::<Option<_>>()?;
-        // ghosts: level l's wrapping rows read rows that level l − 1 (analysis) or l + 1
-        // (synthesis, its coarse inputs) makes, computed first, and so do those rows
-        // themselves (a few rows at one end or both, doubling away from the wrapping
-        // level); each part for the wrapping rows it computes
-        let pos: Vec<Vec<usize>> = if ghosts {
-            order
-                .iter()
-                .map(|ord| {
-                    let mut at = vec![0; ord.len()];
-                    for (i, &r) in ord.iter().enumerate() {
-                        at[r] = i;
-                    }
-                    at
-                })
-                .collect()
-        } else {
-            Vec::new()
-        };
-        let need: Vec<Vec<Vec<usize>>> = spans
-            .iter()
-            .map(|sp| {
-                let mine = |l: usize, r: usize| {
-                    wrap[l].get(r) == Some(&true) && (sp[l].start..sp[l].end).contains(&pos[l][r])
-                };
-                let mut need: Vec<Vec<usize>> = vec![Vec::new(); levels];
-                let inputs = |l: usize, need_l: &[usize], within: usize| {
-                    let op = ops[l][0].op;
-                    let mut rows = std::collections::BTreeSet::new();
-                    for r in 0..n(l) {
-                        if mine(l, r) || need_l.binary_search(&r).is_ok() {
-                            let cs = op.row_slices(r).0.iter().map(|&c| c as usize);
-                            rows.extend(cs.filter(|&c| c < within));
-                        }
-                    }
-                    rows.into_iter().collect::<Vec<usize>>()
-                };
-                match way {
-                    Way::Analysis => {
-                        for l in (1..levels).rev() {
-                            need[l - 1] = inputs(l, &need[l], n(l));
-                        }
-                    }
-                    Way::Synthesis => {
-                        // the coarsest level's inputs are the array's
-                        for l in 0..levels.saturating_sub(1) {
-                            need[l + 1] = inputs(l, &need[l], n(l + 1));
-                        }
-                    }
-                }
-                need
-            })
-            .collect();
-        // samples of a ghost row of level l: what its reader takes (analysis: the box of
-        // level l + 1, a prefix of the row)
-        let ghost_len = |l: usize| match way {
-            Way::Analysis => row_len((l + 1).min(levels)),
-            Way::Synthesis => row_len(l),
-        };
-        let work: usize = spans
-            .iter()
-            .flat_map(|s| s.iter().enumerate())
-            .map(|(l, s)| (s.end - s.start) * row_len(l))
-            .sum();
-        // memory of the parts (rings, a few rows of scratch per level) next to the array:
-        // a short image with very long rows would need rings as large as the image
-        let held: usize = (0..levels)
-            .map(|l| {
-                let row = row_len(l) + if l > 0 { row_len(l - 1) } else { 0 };
-                (caps[l].0 + caps[l].1 + 8) * row
-            })
-            .sum::<usize>()
-            * spans.len()
-            + need
-                .iter()
-                .flat_map(|nd| nd.iter().enumerate())
-                .map(|(l, rows)| rows.len() * ghost_len(l))
-                .sum::<usize>();
-        if !forced && held * MAX_HELD > n(0) * row_len(0) {
-            return None;
-        }
-        if !forced && work as f64 > total as f64 * (1.0 + MAX_HALO) {
+        let need = g.ghost_needs(&order, &wrap, &spans);
+        if !forced && !g.fits(&caps, &spans, &need) {
             return None;
         }
         Some(Plan {

@@ -33,12 +33,12 @@ pub(crate) unsafe fn pair_avx2_at<T: Sample>(
     let wide = level == CpuLevel::Avx512;
     use std::any::TypeId;
     let u = src.len();
-    if u > 16 || w1.len() != u || w2.len() != u {
+    if u > PAIR_KERNEL_MOST || w1.len() != u || w2.len() != u {
         return false;
     }
     debug_assert_eq!(pair_entry(w1, m1, w2, m2), Some(entry));
     macro_rules! go {
-        ($t:ty, $f:ident, $g:ident, $U:literal, $M1:literal, $M2:literal, $P1:literal, $N1:literal, $P2:literal, $N2:literal, $R1:literal, $R2:literal) => {{
+        ($t:ty, $f:ident, $g:ident, $U:literal, $M1:literal, $M2:literal, $P1:literal, $N1:literal, $P2:literal, $N2:literal, $R1:expr, $R2:expr) => {{
             let wide = wide && len >= 64 / std::mem::size_of::<$t>();
             // (plain loops: the closures of `array::from_fn` were not inlined here)
             let (mut a, mut b) = ([0.0 as $t; $U], [0.0 as $t; $U]);
@@ -56,32 +56,32 @@ pub(crate) unsafe fn pair_avx2_at<T: Sample>(
                     let q2 = o[1].add(t * out_step[1]) as *mut $t;
                     match (wide, merge, split) {
                         (true, true, _) => {
-                            $g::<$U, $M1, $M2, $P1, $N1, $P2, $N2, $R1, $R2, true, false>(
+                            $g::<$U, $M1, $M2, $P1, $N1, $P2, $N2, { $R1 }, { $R2 }, true, false>(
                                 q1, q2, len, &p, &a, &b,
                             )
                         }
                         (true, false, true) => {
-                            $g::<$U, $M1, $M2, $P1, $N1, $P2, $N2, $R1, $R2, false, true>(
+                            $g::<$U, $M1, $M2, $P1, $N1, $P2, $N2, { $R1 }, { $R2 }, false, true>(
                                 q1, q2, len, &p, &a, &b,
                             )
                         }
                         (true, false, false) => {
-                            $g::<$U, $M1, $M2, $P1, $N1, $P2, $N2, $R1, $R2, false, false>(
+                            $g::<$U, $M1, $M2, $P1, $N1, $P2, $N2, { $R1 }, { $R2 }, false, false>(
                                 q1, q2, len, &p, &a, &b,
                             )
                         }
                         (false, true, _) => {
-                            $f::<$U, $M1, $M2, $P1, $N1, $P2, $N2, $R1, $R2, true, false>(
+                            $f::<$U, $M1, $M2, $P1, $N1, $P2, $N2, { $R1 }, { $R2 }, true, false>(
                                 q1, q2, len, &p, &a, &b,
                             )
                         }
                         (false, false, true) => {
-                            $f::<$U, $M1, $M2, $P1, $N1, $P2, $N2, $R1, $R2, false, true>(
+                            $f::<$U, $M1, $M2, $P1, $N1, $P2, $N2, { $R1 }, { $R2 }, false, true>(
                                 q1, q2, len, &p, &a, &b,
                             )
                         }
                         (false, false, false) => {
-                            $f::<$U, $M1, $M2, $P1, $N1, $P2, $N2, $R1, $R2, false, false>(
+                            $f::<$U, $M1, $M2, $P1, $N1, $P2, $N2, { $R1 }, { $R2 }, false, false>(
                                 q1, q2, len, &p, &a, &b,
                             )
                         }
@@ -93,7 +93,7 @@ pub(crate) unsafe fn pair_avx2_at<T: Sample>(
     }
     // the entry's kernel (its inputs' count and masks checked: they decide what it reads)
     macro_rules! table {
-        ($(($U:literal, $M1:literal, $M2:literal, $P1:literal, $N1:literal, $P2:literal, $N2:literal, $R1:literal, $R2:literal)),*) => {
+        ($(($U:literal, $M1:literal, $M2:literal, $P1:literal, $N1:literal, $P2:literal, $N2:literal, $R1:expr, $R2:expr)),*) => {
             let mut idx = 0u8;
             $(
                 if entry == idx && (u, m1, m2) == ($U, $M1, $M2) {
@@ -112,11 +112,12 @@ pub(crate) unsafe fn pair_avx2_at<T: Sample>(
     false
 }
 
-/// `$body` for `$k` = 0, 1, … 15, each copy with its `$k` a constant (the pair kernels'
-/// tap loops, which the compiler must see whole to fold their masks).
-macro_rules! unroll16 {
+/// `$body` for `$k` = 0, 1, … 23 ([`PAIR_KERNEL_MOST`]), each copy with its `$k` a
+/// constant (the pair kernels' tap loops, which the compiler must see whole to fold their
+/// masks).
+macro_rules! unroll24 {
     ($k:ident, $body:block) => {
-        unroll16!(@ $k, $body, 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15)
+        unroll24!(@ $k, $body, 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17, 18, 19, 20, 21, 22, 23)
     };
     (@ $k:ident, $body:block, $($n:literal),*) => {
         $( { let $k: usize = $n; $body } )*
@@ -142,8 +143,8 @@ macro_rules! pair_avx2_body {
             const N1: u32,
             const P2: u32,
             const N2: u32,
-            const R1: u64,
-            const R2: u64,
+            const R1: u128,
+            const R2: u128,
             const MERGE: bool,
             const SPLIT: bool,
         >(
@@ -180,9 +181,9 @@ macro_rules! pair_avx2_body {
                     macro_rules! out {
                         ($v:ident, $m:ident, $f:ident, $p:ident, $n:ident, $r:ident, $s:ident) => {{
                             let mut acc = $zero();
-                            unroll16!(k, {
+                            unroll24!(k, {
                                 if k < U && $m >> k & 1 == 1 && $s >> k & 1 == 0 {
-                                    let j = ($r >> (4 * k) & 15) as usize;
+                                    let j = ($r >> (PAIR_FIELD * k) & 31) as usize;
                                     let v = if j > 0 { $add(x[k], x[j - 1]) } else { x[k] };
                                     acc = if k == $f {
                                         if $p >> k & 1 == 1 {
@@ -226,9 +227,9 @@ macro_rules! pair_avx2_body {
                     macro_rules! out {
                         ($w:ident, $m:ident, $f:ident, $p:ident, $n:ident, $r:ident, $s:ident) => {{
                             let mut acc: $t = 0.0;
-                            unroll16!(k, {
+                            unroll24!(k, {
                                 if k < U && $m >> k & 1 == 1 && $s >> k & 1 == 0 {
-                                    let j = ($r >> (4 * k) & 15) as usize;
+                                    let j = ($r >> (PAIR_FIELD * k) & 31) as usize;
                                     let v = if j > 0 { x[k] + x[j - 1] } else { x[k] };
                                     acc = if k == $f {
                                         if $p >> k & 1 == 1 {
