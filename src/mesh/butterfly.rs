@@ -22,7 +22,7 @@ use super::features::{Features, Tags, VertexRule};
 use super::halfedge::{HalfEdgeMesh, VertexId};
 use super::loop_subdivision::{quadrisect, GRAIN};
 use super::Mesh;
-use crate::{Error, Result};
+use crate::Result;
 use rayon::prelude::*;
 use std::f64::consts::PI;
 
@@ -70,20 +70,11 @@ fn wing(he: &HalfEdgeMesh, h: u32) -> Option<u32> {
 
 /// One step of modified Butterfly subdivision of a triangle mesh.
 pub fn step(mesh: &Mesh, he: &HalfEdgeMesh, tags: &Tags) -> Result<(Mesh, Features)> {
-    if !mesh.is_triangle_mesh() {
-        return Err(Error::Unsupported {
-            what: "Butterfly subdivision of faces that are not triangles",
-            value: format!(
-                "{} faces, {} corners",
-                mesh.face_count(),
-                mesh.corner_count()
-            ),
-        });
-    }
-    let nv = mesh.vertex_count();
-    let ne = he.edge_count();
-    let nf = mesh.face_count();
-    super::catmull_clark::check_size(nv + ne, 12 * nf)?;
+    let (nv, ne) = super::catmull_clark::triangle_counts(
+        mesh,
+        he,
+        "Butterfly subdivision of faces that are not triangles",
+    )?;
     let p = &mesh.positions;
     let valence: Vec<u32> = (0..nv as u32)
         .into_par_iter()

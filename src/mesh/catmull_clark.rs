@@ -20,6 +20,29 @@ use super::{Attributes, Mesh};
 use crate::{Error, Result};
 use rayon::prelude::*;
 
+/// `(vertices, edges)` of a triangle mesh about to take a step that splits every
+/// triangle in four; an error unless every face is a triangle (`what`: the step that needs
+/// them) and the refined mesh fits 32-bit indices ([`check_size`]).
+pub(crate) fn triangle_counts(
+    mesh: &Mesh,
+    he: &HalfEdgeMesh,
+    what: &'static str,
+) -> Result<(usize, usize)> {
+    if !mesh.is_triangle_mesh() {
+        return Err(Error::Unsupported {
+            what,
+            value: format!(
+                "{} faces, {} corners",
+                mesh.face_count(),
+                mesh.corner_count()
+            ),
+        });
+    }
+    let (nv, ne, nf) = (mesh.vertex_count(), he.edge_count(), mesh.face_count());
+    check_size(nv + ne, 12 * nf)?;
+    Ok((nv, ne))
+}
+
 /// Fail early when the refined mesh would not fit 32-bit indices.
 pub(crate) fn check_size(vertices: usize, indices: usize) -> Result<()> {
     let n = vertices.max(indices);

@@ -18,7 +18,7 @@
 use super::features::{sharp_edge_point, Features, Tags};
 use super::halfedge::{HalfEdgeMesh, VertexId};
 use super::{Attributes, Mesh};
-use crate::{Error, Result};
+use crate::Result;
 use rayon::prelude::*;
 use std::f64::consts::PI;
 
@@ -62,20 +62,11 @@ pub fn step(
     tags: &Tags,
     weights: LoopWeights,
 ) -> Result<(Mesh, Features)> {
-    if !mesh.is_triangle_mesh() {
-        return Err(Error::Unsupported {
-            what: "Loop subdivision of faces that are not triangles",
-            value: format!(
-                "{} faces, {} corners",
-                mesh.face_count(),
-                mesh.corner_count()
-            ),
-        });
-    }
-    let nv = mesh.vertex_count();
-    let ne = he.edge_count();
-    let nf = mesh.face_count();
-    super::catmull_clark::check_size(nv + ne, 12 * nf)?;
+    let (nv, ne) = super::catmull_clark::triangle_counts(
+        mesh,
+        he,
+        "Loop subdivision of faces that are not triangles",
+    )?;
     let p = &mesh.positions;
     let beta_table: Vec<f64> = (0..64)
         .map(|n| if n == 0 { 0.0 } else { beta(n, weights) })

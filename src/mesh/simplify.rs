@@ -490,7 +490,9 @@ pub fn simplify(mesh: &Mesh, target_faces: usize) -> Result<Mesh> {
     simplify_with_room(mesh, target_faces, 3)
 }
 
-/// [`simplify`] with room for `room ×` the initial face lists in `refs` before a compaction.
+/// [`simplify`] with room for `room ×` the initial face lists in `refs` before a compaction:
+/// face lists, vertex quadrics, the manifold check, every edge queued by its cost, then
+/// collapses from the cheapest until `target_faces` remain, and the live faces compacted.
 fn simplify_with_room(mesh: &Mesh, target_faces: usize, room: usize) -> Result<Mesh> {
     let m = if mesh.is_triangle_mesh() {
         std::borrow::Cow::Borrowed(mesh)
@@ -507,54 +509,123 @@ fn simplify_with_room(mesh: &Mesh, target_faces: usize, room: usize) -> Result<M
             v: [c[0], c[1], c[2]],
         })
         .collect();
-    // face lists by counting sort: counts, prefix sums, fill
+    let (start, refs, refs_limit) = face_lists(&m.indices, nv, room);
+    let vert = vertex_quadrics(&m.positions, &face, &refs, &start);
+    let run: Vec<Run> = start
+        .windows(2)
+        .map(|w| Run {
+            start: w[0],
+            count: w[1] - w[0],
+        })
+        .collect();
+    drop(start);
+    check_manifold(&vert, &face, &refs, &run)?;
+    let (lo, hi) = m.bounding_box().unwrap_or(([0.0; 3], [1.0; 3]));
+    let scale = vec3::norm(vec3::sub(hi, lo)).max(1e-300);
+    let mut s = State {
+        vert,
+        face,
+        refs,
+        run,
+        stamp: vec![0; nv],
+        mark_id: 0,
+        lim: 1e3 * scale.max(1.0),
+    };
+    let mut heap = BinQueue::new();
+    heap.fill(&s.initial_candidates());
+    let mut faces = nf;
+    let (mut fa, mut fb) = (Vec::new(), Vec::new());
+    let (mut ring, mut ring_cost) = (Vec::new(), Vec::new());
+    while faces > target_faces {
+        let Some(c) = heap.pop() else { break };
+        let (a, b) = (c.a, c.b);
+        if !s.is_live(&c) {
+            continue;
+        }
+        // start loading the next live candidate's data while this one is processed
+        if let Some(n) = heap.peek(8).find(|n| s.is_live(n)) {
+            s.prefetch_edge(n);
+        }
+        s.faces_of(a, &mut fa);
+        s.faces_of(b, &mut fb);
+        let (x, _) = s.place(a, b);
+        if !s.can_collapse(a, b, x, &fa, &fb) {
+            continue;
+        }
+        faces -= s.collapse(a, b, x, &mut fa, &fb, refs_limit);
+        // new candidates around a (its live faces were collected above)
+        s.ring_of(a, &fa, &mut ring);
+        s.costs(a, &ring, &mut ring_cost);
+        let sa = s.stamp[a as usize];
+        for (&v, &cost) in ring.iter().zip(&ring_cost) {
+            heap.push(
+                cost,
+                Candidate {
+                    a,
+                    b: v,
+                    stamp: sa.wrapping_add(s.stamp[v as usize]),
+                },
+            );
+        }
+    }
+    Ok(s.into_mesh(nv, faces))
+}
+
+/// The faces around each vertex by a counting sort of `indices` (triangles): vertex `v`'s
+/// faces are `refs[start[v]..start[v + 1]]`, in face order. `refs` has room for `room ×`
+/// these lists (the limit returned third): collapses append lists, compacted when full.
+fn face_lists(indices: &[u32], nv: usize, room: usize) -> (Vec<u32>, Vec<u32>, usize) {
     let mut start = vec![0u32; nv + 1];
-    for &v in &m.indices {
+    for &v in indices {
         start[v as usize + 1] += 1;
     }
     for v in 0..nv {
         start[v + 1] += start[v];
     }
     let total = start[nv] as usize;
-    // room for the lists appended by collapses (compacted when full)
     let refs_limit = (room * total + 64).min(u32::MAX as usize);
     let mut refs = Vec::with_capacity(refs_limit);
     refs.resize(total, 0u32);
-    {
-        let mut fill = start.clone();
-        for (c, &v) in m.indices.iter().enumerate() {
-            refs[fill[v as usize] as usize] = (c / 3) as u32;
-            fill[v as usize] += 1;
-        }
+    let mut fill = start.clone();
+    for (c, &v) in indices.iter().enumerate() {
+        refs[fill[v as usize] as usize] = (c / 3) as u32;
+        fill[v as usize] += 1;
     }
-    // per vertex, in parallel: quadric of its faces' planes, its edges' face counts (boundary
-    // edges add a plane ⟂ the face through the edge, weight 100; edges in three or more faces
-    // are flagged)
-    let positions = &m.positions;
+    (start, refs, refs_limit)
+}
+
+/// Per vertex, in parallel: the quadric of its faces' planes and its edges' face counts
+/// (boundary edges add a plane ⟂ the face through the edge, weight 100; edges in three or
+/// more faces are flagged).
+fn vertex_quadrics(
+    positions: &[[f64; 3]],
+    face: &[Face],
+    refs: &[u32],
+    start: &[u32],
+) -> Vec<Vertex> {
     let plane_of = |t: [u32; 3]| {
         let p = t.map(|v| positions[v as usize]);
         let n = vec3::normalized(vec3::cross(vec3::sub(p[1], p[0]), vec3::sub(p[2], p[0])));
         (n, -vec3::dot(n, p[0]))
     };
-    let (faces_ref, refs_ref, start_ref) = (&face, &refs, &start);
-    let vert: Vec<Vertex> = (0..nv)
+    (0..start.len() - 1)
         .into_par_iter()
         .with_min_len(1024)
         .map_init(Vec::new, |ring, v| {
-            let (s0, s1) = (start_ref[v], start_ref[v + 1]);
-            let run = &refs_ref[s0 as usize..s1 as usize];
-            neighbours(faces_ref, run, v as u32, ring);
+            let (s0, s1) = (start[v], start[v + 1]);
+            let run = &refs[s0 as usize..s1 as usize];
+            neighbours(face, run, v as u32, ring);
             let pos = positions[v];
             let mut q = Quadric::default();
             for &f in run {
-                let (n, d) = plane_of(faces_ref[f as usize].v);
+                let (n, d) = plane_of(face[f as usize].v);
                 q.add(&Quadric::plane(n, d, 1.0));
             }
             let mut flags = 0;
             for &(w, uses, f) in ring.iter() {
                 if uses == 1 {
                     flags |= BOUNDARY;
-                    let (n, _) = plane_of(faces_ref[f as usize].v);
+                    let (n, _) = plane_of(face[f as usize].v);
                     let pw = positions[w as usize];
                     let p = vec3::normalized(vec3::cross(vec3::sub(pw, pos), n));
                     q.add(&Quadric::plane(p, -vec3::dot(p, pos), 100.0));
@@ -569,47 +640,35 @@ fn simplify_with_room(mesh: &Mesh, target_faces: usize, room: usize) -> Result<M
                 flags,
             }
         })
-        .collect();
-    let run: Vec<Run> = start
-        .windows(2)
-        .map(|w| Run {
-            start: w[0],
-            count: w[1] - w[0],
-        })
-        .collect();
-    drop(start);
-    if let Some(v) = vert.iter().position(|x| x.flags & NON_MANIFOLD != 0) {
-        // the first such edge from its smaller vertex
-        let mut ring = Vec::new();
-        let r = run[v];
-        neighbours(
-            &face,
-            &refs[r.start as usize..][..r.count as usize],
-            v as u32,
-            &mut ring,
-        );
-        let &(w, uses, _) = ring.iter().filter(|e| e.1 > 2).min().unwrap();
-        let (a, b) = (v.min(w as usize), v.max(w as usize));
-        return Err(Error::format(
-            format!("non-manifold edge ({a}, {b}): used by {uses} faces"),
-            "a manifold mesh (each edge in one or two faces)",
-        ));
-    }
-    let (lo, hi) = m.bounding_box().unwrap_or(([0.0; 3], [1.0; 3]));
-    let scale = vec3::norm(vec3::sub(hi, lo)).max(1e-300);
-    let mut s = State {
-        vert,
-        face,
-        refs,
-        run,
-        stamp: vec![0; nv],
-        mark_id: 0,
-        lim: 1e3 * scale.max(1.0),
+        .collect()
+}
+
+/// An error naming the first non-manifold edge (from its smaller vertex), if any.
+fn check_manifold(vert: &[Vertex], face: &[Face], refs: &[u32], run: &[Run]) -> Result<()> {
+    let Some(v) = vert.iter().position(|x| x.flags & NON_MANIFOLD != 0) else {
+        return Ok(());
     };
-    // every edge once (from its smaller vertex) with its cost, in vertex order
-    let initial: Vec<Vec<(u32, Candidate)>> = {
-        let st = &s;
-        (0..nv as u32)
+    let mut ring = Vec::new();
+    let r = run[v];
+    neighbours(
+        face,
+        &refs[r.start as usize..][..r.count as usize],
+        v as u32,
+        &mut ring,
+    );
+    let &(w, uses, _) = ring.iter().filter(|e| e.1 > 2).min().unwrap();
+    let (a, b) = (v.min(w as usize), v.max(w as usize));
+    Err(Error::format(
+        format!("non-manifold edge ({a}, {b}): used by {uses} faces"),
+        "a manifold mesh (each edge in one or two faces)",
+    ))
+}
+
+impl State {
+    /// Every edge once (from its smaller vertex) with its cost's bin, in vertex order.
+    fn initial_candidates(&self) -> Vec<Vec<(u32, Candidate)>> {
+        let nv = self.vert.len() as u32;
+        (0..nv)
             .into_par_iter()
             .chunks(16384)
             .map_init(
@@ -617,10 +676,10 @@ fn simplify_with_room(mesh: &Mesh, target_faces: usize, room: usize) -> Result<M
                 |(ring, ws, cost), vs| {
                     let mut out = Vec::with_capacity(3 * vs.len());
                     for v in vs {
-                        neighbours(&st.face, st.refs_of(v), v, ring);
+                        neighbours(&self.face, self.refs_of(v), v, ring);
                         ws.clear();
                         ws.extend(ring.iter().map(|e| e.0).filter(|&w| w > v));
-                        st.costs(v, ws, cost);
+                        self.costs(v, ws, cost);
                         for (&w, &c) in ws.iter().zip(cost.iter()) {
                             let b = BinQueue::bin(c) as u32;
                             out.push((
@@ -637,50 +696,47 @@ fn simplify_with_room(mesh: &Mesh, target_faces: usize, room: usize) -> Result<M
                 },
             )
             .collect()
-    };
-    let mut heap = BinQueue::new();
-    heap.fill(&initial);
-    drop(initial);
-    let mut faces = nf;
-    let (mut fa, mut fb) = (Vec::new(), Vec::new());
-    let (mut ring, mut ring_cost) = (Vec::new(), Vec::new());
-    while faces > target_faces {
-        let Some(c) = heap.pop() else { break };
-        let (a, b) = (c.a, c.b);
-        if s.stamp[a as usize].wrapping_add(s.stamp[b as usize]) != c.stamp {
-            continue;
+    }
+
+    /// Whether a queued candidate is current (no collapse touched its ends since).
+    #[inline]
+    fn is_live(&self, c: &Candidate) -> bool {
+        self.stamp[c.a as usize].wrapping_add(self.stamp[c.b as usize]) == c.stamp
+    }
+
+    /// Start loading the face lists and vertex data of candidate `n`'s ends.
+    fn prefetch_edge(&self, n: &Candidate) {
+        for v in [n.a, n.b] {
+            let r = self.run[v as usize];
+            prefetch(self.refs.as_ptr().wrapping_add(r.start as usize));
+            let p = &self.vert[v as usize] as *const Vertex as *const u8;
+            prefetch(p);
+            prefetch(p.wrapping_add(64));
         }
-        // start loading the next live candidate's data while this one is processed
-        if let Some(n) = heap
-            .peek(8)
-            .find(|n| s.stamp[n.a as usize].wrapping_add(s.stamp[n.b as usize]) == n.stamp)
-        {
-            for v in [n.a, n.b] {
-                let r = s.run[v as usize];
-                prefetch(s.refs.as_ptr().wrapping_add(r.start as usize));
-                let p = &s.vert[v as usize] as *const Vertex as *const u8;
-                prefetch(p);
-                prefetch(p.wrapping_add(64));
-            }
-        }
-        s.faces_of(a, &mut fa);
-        s.faces_of(b, &mut fb);
-        let (x, _) = s.place(a, b);
-        if !s.can_collapse(a, b, x, &fa, &fb) {
-            continue;
-        }
-        // collapse b into a: its faces on ab die, the others move to a; a's new face list
-        // is a's live faces then b's
-        for &f in &fa {
-            let t = &mut s.face[f as usize];
+    }
+
+    /// Collapse `b` into `a` at `x`: its faces on `ab` die, the others move to `a`; `fa`
+    /// becomes `a`'s new face list (`a`'s live faces, then `b`'s). Returns the faces removed.
+    fn collapse(
+        &mut self,
+        a: u32,
+        b: u32,
+        x: [f64; 3],
+        fa: &mut Vec<u32>,
+        fb: &[u32],
+        refs_limit: usize,
+    ) -> usize {
+        let mut removed = 0;
+        for &f in fa.iter() {
+            let t = &mut self.face[f as usize];
             if t.v.contains(&b) {
                 t.v = [NONE; 3];
-                faces -= 1;
+                removed += 1;
             }
         }
-        fa.retain(|&f| s.face[f as usize].alive());
-        for &f in &fb {
-            let t = &mut s.face[f as usize];
+        fa.retain(|&f| self.face[f as usize].alive());
+        for &f in fb {
+            let t = &mut self.face[f as usize];
             if t.alive() {
                 for w in t.v.iter_mut() {
                     if *w == b {
@@ -690,66 +746,61 @@ fn simplify_with_room(mesh: &Mesh, target_faces: usize, room: usize) -> Result<M
                 fa.push(f);
             }
         }
-        if s.refs.len() + fa.len() > refs_limit {
-            s.compact_refs();
+        if self.refs.len() + fa.len() > refs_limit {
+            self.compact_refs();
         }
-        s.set_faces(a, &fa);
-        let vb = s.vert[b as usize];
-        let va = &mut s.vert[a as usize];
+        self.set_faces(a, fa);
+        let vb = self.vert[b as usize];
+        let va = &mut self.vert[a as usize];
         va.pos = x;
         va.quadric.add(&vb.quadric);
         va.flags |= vb.flags;
-        s.run[b as usize].count = 0;
-        s.stamp[a as usize] = s.stamp[a as usize].wrapping_add(1);
-        s.stamp[b as usize] = s.stamp[b as usize].wrapping_add(1);
-        // new candidates around a (its live faces were collected above)
-        let id = s.next_mark();
-        let sa = s.stamp[a as usize];
+        self.run[b as usize].count = 0;
+        self.stamp[a as usize] = self.stamp[a as usize].wrapping_add(1);
+        self.stamp[b as usize] = self.stamp[b as usize].wrapping_add(1);
+        removed
+    }
+
+    /// The distinct vertices other than `a` of faces `fa`, in face order.
+    fn ring_of(&mut self, a: u32, fa: &[u32], ring: &mut Vec<u32>) {
+        let id = self.next_mark();
         ring.clear();
-        for &f in &fa {
-            for v in s.face[f as usize].v {
-                if v != a && s.vert[v as usize].mark != id {
-                    s.vert[v as usize].mark = id;
+        for &f in fa {
+            for v in self.face[f as usize].v {
+                if v != a && self.vert[v as usize].mark != id {
+                    self.vert[v as usize].mark = id;
                     ring.push(v);
                 }
             }
         }
-        s.costs(a, &ring, &mut ring_cost);
-        for (&v, &cost) in ring.iter().zip(&ring_cost) {
-            heap.push(
-                cost,
-                Candidate {
-                    a,
-                    b: v,
-                    stamp: sa.wrapping_add(s.stamp[v as usize]),
-                },
-            );
-        }
     }
-    // compact
-    let nv = m.vertex_count();
-    let mut remap = vec![NONE; nv];
-    let mut positions = Vec::new();
-    let mut indices = Vec::with_capacity(3 * faces);
-    for t in &s.face {
-        if !t.alive() {
-            continue;
-        }
-        for &v in &t.v {
-            if remap[v as usize] == NONE {
-                remap[v as usize] = positions.len() as u32;
-                positions.push(s.vert[v as usize].pos);
+
+    /// The live faces as a mesh (`faces` of them) over the vertices they use, in first-use
+    /// order; `nv` vertices before simplification.
+    fn into_mesh(self, nv: usize, faces: usize) -> Mesh {
+        let mut remap = vec![NONE; nv];
+        let mut positions = Vec::new();
+        let mut indices = Vec::with_capacity(3 * faces);
+        for t in &self.face {
+            if !t.alive() {
+                continue;
             }
-            indices.push(remap[v as usize]);
+            for &v in &t.v {
+                if remap[v as usize] == NONE {
+                    remap[v as usize] = positions.len() as u32;
+                    positions.push(self.vert[v as usize].pos);
+                }
+                indices.push(remap[v as usize]);
+            }
+        }
+        let n = indices.len() / 3;
+        Mesh {
+            positions,
+            offsets: (0..=n as u32).map(|i| 3 * i).collect(),
+            indices,
+            attributes: Attributes::default(),
         }
     }
-    let n = indices.len() / 3;
-    Ok(Mesh {
-        positions,
-        offsets: (0..=n as u32).map(|i| 3 * i).collect(),
-        indices,
-        attributes: Attributes::default(),
-    })
 }
 
 /// One-sided Hausdorff distance from the vertices of `a` to the surface of `b` (brute force

@@ -705,18 +705,34 @@ struct Out<'a> {
 /// precomputed triangles, or the general linking with the asymptotic decider.
 #[inline(always)]
 fn emit_plane(g: &Grid, level: f64, bits: &Bits, k: usize, out: Out<'_>) {
-    let [_, ny, nz] = g.dims;
-    let w = bits.w;
     let Out {
         pos,
-        mut nrm,
+        nrm,
         extra_pos,
-        mut extra_nrm,
+        extra_nrm,
         extra_first,
         tris,
     } = out;
+    emit_vertices(g, level, bits, k, pos, nrm);
+    if k + 1 < g.dims[2] {
+        emit_triangles(g, level, bits, k, extra_pos, extra_nrm, extra_first, tris);
+    }
+}
+
+/// The vertices of plane `k`: per row, the crossings along x, then y, then z, in index
+/// order (with normals when `nrm` is given).
+#[inline(always)]
+fn emit_vertices(
+    g: &Grid,
+    level: f64,
+    bits: &Bits,
+    k: usize,
+    pos: &mut [[f64; 3]],
+    mut nrm: Option<&mut [[f64; 3]]>,
+) {
+    let [nx, ny, _] = g.dims;
+    let w = bits.w;
     let mut at = 0;
-    let nx = g.dims[0];
     let strides = [1, nx, nx * ny];
     for j in 0..ny {
         let r = k * ny + j;
@@ -745,11 +761,26 @@ fn emit_plane(g: &Grid, level: f64, bits: &Bits, k: usize, out: Out<'_>) {
             }
         }
     }
-    if k + 1 >= nz {
-        return;
-    }
+}
+
+/// The triangles of slab `k` (between planes `k` and `k + 1`), cell by cell in index order:
+/// a case's precomputed triangles, or the general loops fanned from a vertex or from a
+/// centre vertex of their own (`extra_pos`, numbered from `extra_first`).
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn emit_triangles(
+    g: &Grid,
+    level: f64,
+    bits: &Bits,
+    k: usize,
+    extra_pos: &mut [[f64; 3]],
+    mut extra_nrm: Option<&mut [[f64; 3]]>,
+    extra_first: u32,
+    tris: &mut [u32],
+) {
+    let ny = g.dims[1];
     let table = case_table();
-    let mut ranks = RowRanks::new(w);
+    let mut ranks = RowRanks::new(bits.w);
     let mut t = 0;
     let mut nx_extra = 0;
     for j in 0..ny - 1 {
@@ -783,30 +814,10 @@ fn emit_plane(g: &Grid, level: f64, bits: &Bits, k: usize, out: Out<'_>) {
                     }
                     None => {
                         // centre vertex: every new edge is private to this cell
-                        let mut c = [0.0; 3];
-                        let mut cn = [0.0; 3];
-                        for &e in lp {
-                            let (cc, axis) = EDGES[e as usize];
-                            let p = [
-                                i + (cc & 1) as usize,
-                                j + (cc >> 1 & 1) as usize,
-                                k + (cc >> 2 & 1) as usize,
-                            ];
-                            let (q, nn) =
-                                edge_vertex(g, level, p, axis as usize, extra_nrm.is_some());
-                            for a in 0..3 {
-                                c[a] += q[a] / n as f64;
-                                cn[a] += nn[a];
-                            }
-                        }
+                        let (c, cn) = centre_vertex(g, level, [i, j, k], lp, extra_nrm.is_some());
                         extra_pos[nx_extra] = c;
                         if let Some(en) = extra_nrm.as_mut() {
-                            let l = (cn[0] * cn[0] + cn[1] * cn[1] + cn[2] * cn[2]).sqrt();
-                            en[nx_extra] = if l > 0.0 {
-                                [cn[0] / l, cn[1] / l, cn[2] / l]
-                            } else {
-                                cn
-                            };
+                            en[nx_extra] = cn;
                         }
                         let vc = extra_first + nx_extra as u32;
                         nx_extra += 1;
@@ -823,6 +834,41 @@ fn emit_plane(g: &Grid, level: f64, bits: &Bits, k: usize, out: Out<'_>) {
     }
     debug_assert_eq!(t, tris.len());
     debug_assert_eq!(nx_extra, extra_pos.len());
+}
+
+/// The centre vertex of a loop `lp` of cell `[i, j, k]`'s edges: the mean of its edge
+/// vertices, and (when `normals`) the normalized sum of their normals.
+#[inline(always)]
+fn centre_vertex(
+    g: &Grid,
+    level: f64,
+    [i, j, k]: [usize; 3],
+    lp: &[u8],
+    normals: bool,
+) -> ([f64; 3], [f64; 3]) {
+    let n = lp.len();
+    let mut c = [0.0; 3];
+    let mut cn = [0.0; 3];
+    for &e in lp {
+        let (cc, axis) = EDGES[e as usize];
+        let p = [
+            i + (cc & 1) as usize,
+            j + (cc >> 1 & 1) as usize,
+            k + (cc >> 2 & 1) as usize,
+        ];
+        let (q, nn) = edge_vertex(g, level, p, axis as usize, normals);
+        for a in 0..3 {
+            c[a] += q[a] / n as f64;
+            cn[a] += nn[a];
+        }
+    }
+    let l = (cn[0] * cn[0] + cn[1] * cn[1] + cn[2] * cn[2]).sqrt();
+    let cn = if l > 0.0 {
+        [cn[0] / l, cn[1] / l, cn[2] / l]
+    } else {
+        cn
+    };
+    (c, cn)
 }
 
 /// [`count_plane`] and [`emit_plane`] compiled for the CPU's `popcnt` instruction when it has
