@@ -15,11 +15,18 @@ fn field(dims: &[usize], channels: usize, ty: SampleType) -> Raster {
         .map(|i| {
             let p = i / channels;
             let (x, y) = ((p % w) as f64, (p / w) as f64);
-            120.0 + 80.0 * (x * 0.3 + (i % channels) as f64).sin() * (y * 0.2).cos()
+            120.0
+                + 80.0 * (x * 0.3 + (i % channels) as f64).sin() * (y * 0.2).cos()
                 + ((i * 7919) % 17) as f64
         })
         .collect();
-    Raster::new(dims.to_vec(), channels, Samples::from_f64(&v, ty), DataKind::Image).unwrap()
+    Raster::new(
+        dims.to_vec(),
+        channels,
+        Samples::from_f64(&v, ty),
+        DataKind::Image,
+    )
+    .unwrap()
 }
 
 fn opts(rate: Rate) -> EncodeOptions {
@@ -81,7 +88,10 @@ fn every_band_chunk_removed_is_named_and_never_complete() {
                 "{rate:?}: {err}"
             );
             if let Ok(d) = decode(&cut, true) {
-                assert!(!d.complete, "{rate:?}: a file without a level claims complete");
+                assert!(
+                    !d.complete,
+                    "{rate:?}: a file without a level claims complete"
+                );
             }
         }
     }

@@ -67,7 +67,7 @@ def run_openjpeg(path, ref, bpp, extra, tmp):
 def run_webp(path, ref, bpp, extra, tmp):
     import imagecodecs as ic
     npix = ref.shape[0] * ref.shape[1]
-    return bisect(lambda q: ic.webp_encode(ref, level=q, method=6), ic.webp_decode, bpp, npix, 0, 100)
+    return bisect(lambda q: ic.webp_encode(ref, level=q, method=6, lossless=False), ic.webp_decode, bpp, npix, 0, 100)
 
 
 def run_jpegxl(path, ref, bpp, extra, tmp):
@@ -119,7 +119,7 @@ def plot(curves, path):
     w, h, m = 720, 480, 60
     img = Image.new("RGB", (w, h), "white")
     d = ImageDraw.Draw(img)
-    pts = [p for c in curves.values() for p in c]
+    pts = [p for c in curves.values() for p in c if np.isfinite(p[1])]
     lo_r, hi_r = np.log2(min(p[0] for p in pts)), np.log2(max(p[0] for p in pts))
     lo_p, hi_p = np.floor(min(p[1] for p in pts)), np.ceil(max(p[1] for p in pts))
     X = lambda r: m + (np.log2(r) - lo_r) / (hi_r - lo_r) * (w - 2 * m)

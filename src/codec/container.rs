@@ -16,7 +16,6 @@ use crate::format::{ChunkEnd, ChunkReader, Cursor, Header};
 use crate::{Error, Result};
 use std::io::Read;
 
-pub(super) const LEVL: &[u8; 4] = b"LEVL";
 pub(super) const HEAD: &[u8; 4] = b"HEAD";
 pub(super) const RESI: &[u8; 4] = b"RESI";
 pub(super) const MEND: &[u8; 4] = b"MEND";

@@ -7,13 +7,15 @@
 //! its parent band, one level coarser), the bands of a level in parallel; every band has
 //! its own stream, so decoding is as parallel.
 
-use super::container::LEVL;
 use super::plan::Plan;
 use crate::entropy::range::Encoder;
 use crate::entropy::{band, BandKind, Parent};
 use crate::format::{put_chunk, put_varint, Cursor};
 use crate::{Error, Result};
 use rayon::prelude::*;
+
+/// The chunk type of a level's bands.
+pub(super) const LEVL: &[u8; 4] = b"LEVL";
 
 /// One band of one channel, coded: its indices (the context of its children) and stream.
 pub(super) struct CodedBand {

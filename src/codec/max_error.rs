@@ -39,7 +39,15 @@ pub(super) fn encode_max_error(r: &Raster, opts: &EncodeOptions, e: f64) -> Resu
     let mut p = prepare(r, opts, Mode::MaxError)?;
     p.header.max_error = e;
     let base = p.code(2.0 * e);
-    let dec = decode(&base, &DecodeOptions::default())?.raster;
+    // the base alone: its header commits to the RESI chunks written below
+    let dec = decode(
+        &base,
+        &DecodeOptions {
+            level: 0,
+            allow_truncated: true,
+        },
+    )?
+    .raster;
     let s = residual_step(e, ty);
     let c = r.channels;
     let n = r.positions();

@@ -39,7 +39,7 @@ pub struct EncodeOptions {
 impl Default for EncodeOptions {
     fn default() -> Self {
         EncodeOptions {
-            scheme: Scheme::Haar,
+            scheme: Scheme::Cdf97,
             boundary: Boundary::Symmetric,
             levels: 6,
             rate: Rate::Quality(50.0),
