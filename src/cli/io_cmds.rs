@@ -276,7 +276,9 @@ pub fn is_mra(path: &Path) -> bool {
         && head == crate::format::SIGNATURE
 }
 
-pub fn info_file(a: InfoFileArgs) -> CliResult {
+/// `mra info` of any file mra reads but `.mra` files; `stdin`: the bytes of standard
+/// input when the caller has read them already (to tell an `.mra` stream apart).
+pub fn info_file(a: InfoFileArgs, stdin: Option<Vec<u8>>) -> CliResult {
     let opts = a.raw.options()?;
     if !is_std(&a.input) && opts.raw.is_none() {
         let format =
@@ -286,10 +288,10 @@ pub fn info_file(a: InfoFileArgs) -> CliResult {
         }
     }
     let r = if is_std(&a.input) {
-        let bytes = stdin_bytes()?;
-        if opts.raw.is_none() && bytes.starts_with(&crate::format::SIGNATURE) {
-            return super::codec::info_bytes("standard input", &bytes, a.json);
-        }
+        let bytes = match stdin {
+            Some(b) => b,
+            None => stdin_bytes()?,
+        };
         read_std_bytes(bytes, &opts)?
     } else {
         read_input(&a.input, &opts)?
