@@ -337,6 +337,18 @@ pub fn read(path: &Path) -> Result<Raster> {
                     value: "with gzip encoding".into(),
                 });
             }
+            // deflate expands one byte to at most 1032 (258-byte matches in 2 bits): a
+            // declared size the stream cannot hold is refused before the buffer is made
+            let most = (payload.len() as u64).saturating_mul(1032).max(1 << 16);
+            if need as u64 > most {
+                return Err(Error::format(
+                    format!(
+                        "header declares {need} bytes of data but a {}-byte gzip stream inflates to at most {most}",
+                        payload.len()
+                    ),
+                    "a data size that fits the file",
+                ));
+            }
             // inflated straight into the samples' buffer (the size checked above)
             bytes::read_samples(MultiGzDecoder::new(payload), n, ty, h.big_endian).map_err(|e| {
                 match e.kind() {
