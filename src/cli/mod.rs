@@ -259,26 +259,6 @@ pub fn main() -> i32 {
     }
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn messages_become_one_printable_bounded_line() {
-        assert_eq!(one_line("a\nb\r\n\tc  d"), "a b c d");
-        assert_eq!(one_line("bad \u{1b}[31m\u{0}x\u{FFFD}"), "bad [31m x?");
-        let long = "x".repeat(MAX_MESSAGE_CHARS + 50);
-        let l = one_line(&long);
-        assert!(l.starts_with(&"x".repeat(MAX_MESSAGE_CHARS)));
-        assert!(l.ends_with("… (50 more characters)"), "{l}");
-    }
-
-    #[test]
-    fn the_command_is_consistent() {
-        command().debug_assert();
-    }
-}
-
 /// `mra info` (and its old name `info-file`): `.mra` files by their header, anything else
 /// by reading it (here, above both commands' files, so neither imports the other).
 fn info(a: io_cmds::InfoFileArgs) -> CliResult {
@@ -297,4 +277,24 @@ fn info(a: io_cmds::InfoFileArgs) -> CliResult {
         });
     }
     io_cmds::info_file(a, None)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn messages_become_one_printable_bounded_line() {
+        assert_eq!(one_line("a\nb\r\n\tc  d"), "a b c d");
+        assert_eq!(one_line("bad \u{1b}[31m\u{0}x\u{FFFD}"), "bad [31m x?");
+        let long = "x".repeat(MAX_MESSAGE_CHARS + 50);
+        let l = one_line(&long);
+        assert!(l.starts_with(&"x".repeat(MAX_MESSAGE_CHARS)));
+        assert!(l.ends_with("… (50 more characters)"), "{l}");
+    }
+
+    #[test]
+    fn the_command_is_consistent() {
+        command().debug_assert();
+    }
 }
