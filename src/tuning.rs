@@ -165,6 +165,30 @@ pub fn keep_freed_buffers() {
     }
 }
 
+/// Serve every allocation from glibc's heap and never give freed memory back to the
+/// system (`mallopt`: no direct mappings, no trimming), so a large buffer freed early is
+/// reused by the next ones instead of fresh pages the kernel must clear on first touch.
+/// For one-shot commands whose arrays are freed before the next are made (the volume
+/// isosurface: the compressed file, then the grid, then the mesh and its file bytes):
+/// on a 256³ field the system time falls from 0.36 s to 0.13 s, the peak rises by what
+/// is freed before it is reused (143 → 175 MB). Call it before any threads allocate;
+/// nothing off Linux with glibc.
+pub fn reuse_freed_memory() {
+    #[cfg(all(target_os = "linux", target_env = "gnu"))]
+    {
+        extern "C" {
+            fn mallopt(param: i32, value: i32) -> i32;
+        }
+        const M_TRIM_THRESHOLD: i32 = -1;
+        const M_MMAP_MAX: i32 = -4;
+        // SAFETY: glibc's mallopt only changes allocator thresholds.
+        unsafe {
+            mallopt(M_MMAP_MAX, 0);
+            mallopt(M_TRIM_THRESHOLD, i32::MAX);
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

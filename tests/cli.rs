@@ -765,3 +765,296 @@ fn rasters_pass_through_standard_input_and_output() {
     }
     let _ = std::fs::remove_dir_all(&d);
 }
+
+#[test]
+fn decode_reads_an_mra_file_from_standard_input_and_reports_on_stderr_when_piping() {
+    let d = tmpdir("decode-stdin");
+    let (png, mra_file) = (d.join("z.png"), d.join("z.mra"));
+    let (ps, ms) = (png.to_str().unwrap(), mra_file.to_str().unwrap());
+    assert!(
+        mra(&["generate", "zone-plate", "-o", ps, "--size", "48x32"], "")
+            .status
+            .success()
+    );
+    assert!(mra(&["encode", ps, "-o", ms, "--quality", "60"], "")
+        .status
+        .success());
+    let from_file = d.join("file.png");
+    assert!(mra(&["decode", ms, "-o", from_file.to_str().unwrap()], "")
+        .status
+        .success());
+    let bytes = std::fs::read(&mra_file).unwrap();
+    // from a pipe to a file: the same image as from the file
+    let from_pipe = d.join("pipe.png");
+    let o = mra_bytes(&["decode", "-", "-o", from_pipe.to_str().unwrap()], &bytes);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let (a, b) = (
+        mra::io::read(&from_file).unwrap(),
+        mra::io::read(&from_pipe).unwrap(),
+    );
+    assert_eq!((a.dims.clone(), a.samples.clone()), (b.dims, b.samples));
+    // from a pipe to a pipe with --json: standard output is the PNG alone, the report on
+    // standard error
+    let o = mra_bytes(
+        &[
+            "decode", "-", "-o", "-", "--format", "png", "--json", "--level", "1",
+        ],
+        &bytes,
+    );
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    assert!(o.stdout.starts_with(b"\x89PNG\r\n\x1a\n"));
+    let half = d.join("half.png");
+    std::fs::write(&half, &o.stdout).unwrap();
+    assert_eq!(mra::io::read(&half).unwrap().dims, vec![16, 24]);
+    let j: serde_json::Value = serde_json::from_str(text(&o.stderr).trim()).unwrap();
+    assert_eq!(j["dims"], serde_json::json!([24, 16]));
+    assert_eq!(j["complete"], serde_json::json!(true));
+    // a level the piped file lacks, and bytes that are no .mra file: one line, exit 2
+    let o = mra_bytes(&["decode", "-", "-o", "x.png", "--level", "9"], &bytes);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        text(&o.stderr).contains("levels 0 to"),
+        "{}",
+        text(&o.stderr)
+    );
+    let o = mra_bytes(
+        &["decode", "-", "-o", "-", "--format", "png"],
+        b"not an mra file",
+    );
+    assert_eq!(o.status.code(), Some(2));
+    assert!(o.stdout.is_empty());
+    assert_eq!(text(&o.stderr).trim_end().lines().count(), 1);
+    assert!(text(&o.stderr).contains("standard input"));
+    // info of an .mra file on standard input reads its header
+    let o = mra_bytes(&["info", "-", "--json"], &bytes);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(j["file_bytes"], serde_json::json!(bytes.len()));
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+#[test]
+fn upscale_to_standard_output_with_json_keeps_the_report_out_of_the_raster() {
+    let d = tmpdir("upscale-stdout-json");
+    let png = d.join("z.png");
+    assert!(mra(
+        &[
+            "generate",
+            "zone-plate",
+            "-o",
+            png.to_str().unwrap(),
+            "--size",
+            "40x24"
+        ],
+        ""
+    )
+    .status
+    .success());
+    let o = mra(
+        &[
+            "upscale",
+            png.to_str().unwrap(),
+            "-o",
+            "-",
+            "--format",
+            "png",
+            "--factor",
+            "2",
+            "--json",
+            "--quiet",
+        ],
+        "",
+    );
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    // standard output is exactly one PNG: it decodes, and nothing follows its IEND chunk
+    assert!(o.stdout.starts_with(b"\x89PNG\r\n\x1a\n"));
+    let iend = o.stdout.windows(4).rposition(|w| w == b"IEND").unwrap();
+    assert_eq!(o.stdout.len(), iend + 8, "bytes after the PNG's IEND chunk");
+    let up = d.join("up.png");
+    std::fs::write(&up, &o.stdout).unwrap();
+    assert_eq!(mra::io::read(&up).unwrap().dims, vec![48, 80]);
+    let j: serde_json::Value = serde_json::from_str(text(&o.stderr).trim()).unwrap();
+    assert_eq!(j["dims"], serde_json::json!([80, 48]));
+    // to a file, the report stays on standard output
+    let out = d.join("up2.png");
+    let o = mra(
+        &[
+            "upscale",
+            png.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+            "--factor",
+            "2",
+            "--json",
+            "--quiet",
+        ],
+        "",
+    );
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(j["dims"], serde_json::json!([80, 48]));
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+#[test]
+fn info_of_a_jpeg_reads_its_header_and_not_its_pixels() {
+    let d = tmpdir("info-jpeg");
+    let (png, jpg) = (d.join("z.png"), d.join("z.jpg"));
+    assert!(mra(
+        &[
+            "generate",
+            "gradient",
+            "-o",
+            png.to_str().unwrap(),
+            "--size",
+            "40x24"
+        ],
+        ""
+    )
+    .status
+    .success());
+    assert!(mra(
+        &[
+            "convert",
+            png.to_str().unwrap(),
+            "-o",
+            jpg.to_str().unwrap()
+        ],
+        ""
+    )
+    .status
+    .success());
+    let good = std::fs::read(&jpg).unwrap();
+    // the entropy-coded data replaced by zeros: the pixels are garbage, the header alone
+    // answers (no range, which only the pixels could give)
+    let sos = good.windows(2).position(|w| w == [0xFF, 0xDA]).unwrap();
+    let len = u16::from_be_bytes([good[sos + 2], good[sos + 3]]) as usize;
+    let mut blank = good.clone();
+    let n = blank.len();
+    blank[sos + 2 + len..n - 2].fill(0);
+    let blank_path = d.join("blank.jpg");
+    std::fs::write(&blank_path, &blank).unwrap();
+    for p in [&jpg, &blank_path] {
+        let o = mra(&["info", p.to_str().unwrap(), "--json"], "");
+        assert!(o.status.success(), "{}", text(&o.stderr));
+        let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        assert_eq!(j["format"], "JPEG");
+        assert_eq!(j["dims"], serde_json::json!([40, 24]));
+        assert_eq!(j["channels"], serde_json::json!(3));
+        assert_eq!(j["dtype"], "u8");
+        assert_eq!(j["header_only"], serde_json::json!(true));
+        assert!(j["min"].is_null() && j["max"].is_null(), "{j}");
+        let t = text(&mra(&["info", p.to_str().unwrap()], "").stdout);
+        assert!(
+            t.contains("40x24 RGB u8") && t.contains("header only"),
+            "{t}"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+#[test]
+fn generate_denoise_mesh_and_curve_refuse_an_output_extension_they_do_not_write() {
+    let d = tmpdir("out-ext");
+    let p = |n: &str| d.join(n).to_str().unwrap().to_string();
+    std::fs::write(
+        d.join("pts.csv"),
+        "0,0\n1,1\n2,0\n3,1\n4,0\n5,1\n6,0\n7,1\n",
+    )
+    .unwrap();
+    std::fs::write(
+        d.join("tri.obj"),
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 2 3 4\nf 1 4 3\n",
+    )
+    .unwrap();
+    assert!(mra(
+        &["generate", "zone-plate", "-o", &p("z.png"), "--size", "32"],
+        ""
+    )
+    .status
+    .success());
+    let cases: Vec<(Vec<String>, &str, &str)> = vec![
+        (
+            vec!["generate".into(), "zone-plate".into()],
+            "z.obj",
+            "invalid output extension for generate",
+        ),
+        (
+            vec!["denoise".into(), p("pts.csv")],
+            "pts.png",
+            "invalid output extension for denoise",
+        ),
+        (
+            vec!["denoise".into(), p("z.png")],
+            "z.csv",
+            "invalid output extension for denoise",
+        ),
+        (
+            vec!["mesh".into(), "smooth".into(), p("tri.obj")],
+            "tri.png",
+            "invalid output extension for mesh smooth",
+        ),
+        (
+            vec!["mesh".into(), "render".into(), p("tri.obj")],
+            "tri2.obj",
+            "invalid output extension for mesh render",
+        ),
+        (
+            vec![
+                "curve".into(),
+                "plot".into(),
+                "--kind".into(),
+                "bezier".into(),
+                p("pts.csv"),
+            ],
+            "plot.csv",
+            "invalid output extension for curve plot",
+        ),
+        (
+            vec![
+                "curve".into(),
+                "eval".into(),
+                "--kind".into(),
+                "bezier".into(),
+                p("pts.csv"),
+            ],
+            "eval.png",
+            "invalid output extension for curve eval",
+        ),
+    ];
+    for (args, out, want) in &cases {
+        let mut a: Vec<&str> = args.iter().map(String::as_str).collect();
+        let o_path = p(out);
+        a.extend_from_slice(&["-o", &o_path]);
+        let o = mra(&a, "");
+        let err = text(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{a:?}: {err}");
+        assert!(err.contains(want), "{a:?}: {err}");
+        assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+        assert!(!d.join(out).exists(), "{a:?} wrote {out}");
+    }
+    // the same commands with a matching extension run
+    for (args, out) in [
+        (vec!["denoise", &p("pts.csv") as &str], "pts_d.csv"),
+        (vec!["mesh", "smooth", &p("tri.obj")], "tri_s.obj"),
+        (
+            vec!["mesh", "render", &p("tri.obj"), "--size", "32x24"],
+            "tri.png",
+        ),
+    ] {
+        let mut a = args.clone();
+        let o_path = p(out);
+        a.extend_from_slice(&["-o", &o_path]);
+        let o = mra(&a, "");
+        assert!(o.status.success(), "{a:?}: {}", text(&o.stderr));
+        assert!(d.join(out).exists(), "{a:?}");
+    }
+    // an output that is the input is refused before anything runs
+    let o = mra(&["mesh", "smooth", &p("tri.obj"), "-o", &p("tri.obj")], "");
+    assert_eq!(o.status.code(), Some(2));
+    assert!(text(&o.stderr).contains("the output is the input"));
+    let o = mra(&["denoise", &p("z.png"), "-o", &p("z.png")], "");
+    assert_eq!(o.status.code(), Some(2));
+    assert!(text(&o.stderr).contains("the output is the input"));
+    let _ = std::fs::remove_dir_all(&d);
+}

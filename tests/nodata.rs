@@ -9,6 +9,8 @@ use std::process::Command;
 
 use mra::io::{self, DataKind, Raster, SampleType, Samples};
 
+mod common;
+
 const VOID: f64 = -32768.0;
 
 fn tmp_dir(name: &str) -> PathBuf {
@@ -267,4 +269,100 @@ fn a_lossless_file_with_voids_decodes_bit_exact() {
     let dec = d.join("back.tif");
     mra(&["decode", s(&enc), "-o", s(&dec)]);
     assert_eq!(io::read(&dec).unwrap().samples, i16_tile().samples);
+}
+
+/// The fine samples of coarse cell `j` when `n` samples become `m` over the same extent:
+/// those whose centre (`i + ½`, in fine cells) lies in the coarse cell `[j·n/m, (j+1)·n/m]`;
+/// the nearest one when none does.
+fn cell_footprint(n: usize, m: usize, j: usize) -> std::ops::RangeInclusive<usize> {
+    let s = n as f64 / m as f64;
+    let (a, b) = (j as f64 * s, (j + 1) as f64 * s);
+    let first = (a - 0.5 - 1e-9).ceil().max(0.0) as usize;
+    let last = ((b - 0.5 + 1e-9).floor().max(0.0) as usize).min(n - 1);
+    if first > last {
+        let near = (((j as f64 + 0.5) * s - 0.5).round().max(0.0) as usize).min(n - 1);
+        near..=near
+    } else {
+        first..=last
+    }
+}
+
+#[test]
+fn downscale_of_every_corpus_srtm_tile_keeps_valid_samples_in_range_and_marks_all_void_cells() {
+    let Some(dir) = common::corpus("terrain") else {
+        return;
+    };
+    let mut tiles: Vec<PathBuf> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| {
+            let name = p
+                .file_name()
+                .unwrap()
+                .to_string_lossy()
+                .to_ascii_lowercase();
+            name.ends_with(".hgt") || name.starts_with("srtm")
+        })
+        .collect();
+    tiles.sort();
+    assert!(
+        tiles.len() >= 2,
+        "SRTM tiles in {}: {tiles:?}",
+        dir.display()
+    );
+    let d = tmp_dir("srtm_sweep");
+    let mut with_voids = 0;
+    for tile in &tiles {
+        let input = io::read(tile).unwrap();
+        let nd = input.meta.nodata;
+        let (h, w) = (input.dims[0], input.dims[1]);
+        let fine = input.to_f64();
+        let (lo, hi) = valid_range(&input);
+        let voids = fine.iter().filter(|&&v| is_void(v, nd)).count();
+        with_voids += usize::from(voids > 0);
+        for levels in ["1", "2"] {
+            let what = format!("{} --levels {levels}", tile.display());
+            let out_path = d.join("out.tif");
+            mra(&["downscale", s(tile), "-o", s(&out_path), "--levels", levels]);
+            let out = io::read(&out_path).unwrap();
+            assert_eq!(out.meta.nodata, nd, "{what}: nodata value");
+            let (oh, ow) = (out.dims[0], out.dims[1]);
+            assert!(oh < h && ow < w, "{what}: {oh}x{ow} from {h}x{w}");
+            let v = out.to_f64();
+            let (mut marked, mut kept) = (0usize, 0usize);
+            for y in 0..oh {
+                let rows = cell_footprint(h, oh, y);
+                for x in 0..ow {
+                    let cols = cell_footprint(w, ow, x);
+                    let all_void = rows
+                        .clone()
+                        .all(|fy| cols.clone().all(|fx| is_void(fine[fy * w + fx], nd)));
+                    let o = v[y * ow + x];
+                    assert_eq!(
+                        is_void(o, nd),
+                        all_void,
+                        "{what}: output ({x}, {y}) = {o}, footprint rows {rows:?} columns {cols:?}"
+                    );
+                    if all_void {
+                        marked += 1;
+                    } else {
+                        kept += 1;
+                        assert!(
+                            (lo..=hi).contains(&o),
+                            "{what}: output ({x}, {y}) = {o} outside the valid input range {lo}..{hi}"
+                        );
+                    }
+                }
+            }
+            assert_eq!(marked + kept, oh * ow);
+            if voids == 0 {
+                assert_eq!(marked, 0, "{what}");
+            }
+        }
+    }
+    assert!(
+        with_voids >= 1,
+        "no corpus SRTM tile with voids among {tiles:?}"
+    );
+    let _ = std::fs::remove_dir_all(&d);
 }

@@ -68,10 +68,10 @@ pub struct EncodeArgs {
 /// Decompress an `.mra` file.
 #[derive(Args, Debug)]
 #[command(
-    after_help = "Example:\n  mra generate zone-plate -o z.png --size 256 && mra encode z.png -o z.mra --quality 60\n  mra decode z.mra -o z.png --level 2   # 64x64 preview from the coarse chunks only"
+    after_help = "Example:\n  mra generate zone-plate -o z.png --size 256 && mra encode z.png -o z.mra --quality 60\n  mra decode z.mra -o z.png --level 2   # 64x64 preview from the coarse chunks only\n  cat z.mra | mra decode - -o - --format png --json > z.png 2> report.json\n\nWith -o - the image alone goes to standard output; --json then prints on standard error."
 )]
 pub struct DecodeArgs {
-    /// Input `.mra` file.
+    /// Input `.mra` file (`-`: standard input).
     pub input: PathBuf,
     /// Output file; the extension picks the format (.png .tif .exr .nrrd .hgt …).
     #[arg(short, long)]
@@ -85,7 +85,8 @@ pub struct DecodeArgs {
     /// Keep frames a..b (end excluded) of a sequence (or slices of a volume).
     #[arg(long, value_name = "A..B")]
     pub frames: Option<String>,
-    /// Print one JSON object (output, shape, complete, seconds).
+    /// Print one JSON object (output, shape, complete, seconds); on standard error when
+    /// `-o -` sends the image to standard output.
     #[arg(long)]
     pub json: bool,
     /// Format of `-o -` (standard output), as an extension: png, jpg, tif, nrrd, …
@@ -188,13 +189,30 @@ fn frame_range(s: &str) -> Result<(usize, usize), Failure> {
 }
 
 pub fn decode(a: DecodeArgs) -> CliResult {
+    let from_stdin = super::io_cmds::is_std(&a.input);
+    let name = if from_stdin {
+        "standard input".to_string()
+    } else {
+        a.input.display().to_string()
+    };
+    // standard input is read whole, within the memory budget; a file is read chunk by chunk
+    let stdin = if from_stdin {
+        Some(super::io_cmds::stdin_bytes()?)
+    } else {
+        None
+    };
     if a.level > 0 {
         // a level the file does not hold is an error, not a silent clamp
-        let bytes = std::fs::read(&a.input).map_err(|e| Failure::context(a.input.display(), e))?;
-        let i = codec::info(&bytes).map_err(|e| Failure::context(a.input.display(), e))?;
+        let i = match &stdin {
+            Some(bytes) => codec::info(bytes),
+            None => std::fs::read(&a.input)
+                .map_err(crate::Error::from)
+                .and_then(|bytes| codec::info(&bytes)),
+        }
+        .map_err(|e| Failure::context(&name, e))?;
         if a.level > i.levels {
             return Err(Failure::context(
-                a.input.display(),
+                &name,
                 crate::Error::parameter(
                     "--level",
                     format!("{} of a file with levels 0 to {}", a.level, i.levels),
@@ -209,21 +227,22 @@ pub fn decode(a: DecodeArgs) -> CliResult {
     };
     let range = a.frames.as_deref().map(frame_range).transpose()?;
     let t = std::time::Instant::now();
-    let d =
-        codec::decode_file(&a.input, &opts).map_err(|e| Failure::context(a.input.display(), e))?;
+    let d = match &stdin {
+        Some(bytes) => codec::decode(bytes, &opts),
+        None => codec::decode_file(&a.input, &opts),
+    }
+    .map_err(|e| Failure::context(&name, e))?;
+    drop(stdin);
     let raster = match range {
         Some((f0, f1)) => {
-            codec::frames(d.raster, f0, f1).map_err(|e| Failure::context(a.input.display(), e))?
+            codec::frames(d.raster, f0, f1).map_err(|e| Failure::context(&name, e))?
         }
         None => d.raster,
     };
     let seconds = t.elapsed().as_secs_f64();
     write_output_as(&a.output, &raster, false, None, a.format.as_deref())?;
     if !d.complete {
-        eprintln!(
-            "mra: {}: truncated file, decoded what it holds",
-            a.input.display()
-        );
+        eprintln!("mra: {name}: truncated file, decoded what it holds");
     }
     if a.json {
         let v = serde_json::json!({
@@ -237,14 +256,23 @@ pub fn decode(a: DecodeArgs) -> CliResult {
             "complete": d.complete,
             "seconds": seconds,
         });
-        println!("{v}");
+        super::io_cmds::report(&a.output, &v.to_string())?;
     }
     Ok(())
 }
 
 pub fn info(a: InfoArgs) -> CliResult {
     let bytes = std::fs::read(&a.input).map_err(|e| Failure::context(a.input.display(), e))?;
-    let i = codec::info(&bytes).map_err(|e| Failure::context(a.input.display(), e))?;
+    info_bytes(&a.input.display().to_string(), &bytes, a.json)
+}
+
+/// `mra info` of the `.mra` bytes of `name` (a file, or standard input).
+pub fn info_bytes(name: &str, bytes: &[u8], json: bool) -> CliResult {
+    let a = InfoArgs {
+        input: PathBuf::from(name),
+        json,
+    };
+    let i = codec::info(bytes).map_err(|e| Failure::context(name, e))?;
     if a.json {
         println!(
             "{}",

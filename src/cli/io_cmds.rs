@@ -121,27 +121,57 @@ impl Drop for StdTemp {
     }
 }
 
+/// Standard input, whole, read with a bound: at most the memory budget
+/// ([`crate::limits`], `MRA_MAX_BYTES`); more is refused before it is kept.
+pub fn stdin_bytes() -> Result<Vec<u8>, Failure> {
+    use std::io::Read as _;
+    let budget = crate::limits::Limits::from_env()?;
+    let mut bytes = Vec::new();
+    std::io::stdin()
+        .lock()
+        .take(budget.max_bytes.saturating_add(1))
+        .read_to_end(&mut bytes)
+        .map_err(|e| Failure::context("standard input", e))?;
+    budget
+        .check(
+            "bytes of standard input (memory budget MRA_MAX_BYTES)",
+            bytes.len() as u64,
+        )
+        .map_err(|e| Failure::context("standard input", e))?;
+    Ok(bytes)
+}
+
+/// The raster in `bytes` read from standard input: its format recognised by its
+/// signature, or raw with `--dims`.
+fn read_std_bytes(bytes: Vec<u8>, opts: &ReadOptions) -> Result<io::Raster, Failure> {
+    let t = StdTemp::new()?;
+    let f = t.0.join(if opts.raw.is_some() {
+        "stdin.raw"
+    } else {
+        "stdin"
+    });
+    std::fs::write(&f, &bytes).map_err(|e| Failure::context(f.display(), e))?;
+    drop(bytes);
+    io::read_with(&f, opts).map_err(|e| Failure::context("standard input", e))
+}
+
 /// Read a file (`-`: standard input, its format recognised by its signature, or raw
 /// with `--dims`), naming it in any error.
 pub fn read_input(path: &Path, opts: &ReadOptions) -> Result<io::Raster, Failure> {
     if is_std(path) {
-        use std::io::Read as _;
-        let t = StdTemp::new()?;
-        let f = t.0.join(if opts.raw.is_some() {
-            "stdin.raw"
-        } else {
-            "stdin"
-        });
-        let mut bytes = Vec::new();
-        std::io::stdin()
-            .lock()
-            .read_to_end(&mut bytes)
-            .map_err(|e| Failure::context("standard input", e))?;
-        std::fs::write(&f, &bytes).map_err(|e| Failure::context(f.display(), e))?;
-        drop(bytes);
-        return io::read_with(&f, opts).map_err(|e| Failure::context("standard input", e));
+        return read_std_bytes(stdin_bytes()?, opts);
     }
     io::read_with(path, opts).map_err(|e| Failure::context(path.display(), e))
+}
+
+/// Print a command's `--json` report: on standard output, or on standard error when the
+/// command's output `-o -` already sends data to standard output (the two never mix).
+pub fn report(output: &Path, line: &str) -> CliResult {
+    if is_std(output) {
+        eprintln!("{line}");
+        return Ok(());
+    }
+    emit(&format!("{line}\n"))
 }
 
 /// [`write_output_q`], `-` writing to standard output in `format` (an extension: png,
@@ -246,9 +276,26 @@ pub fn is_mra(path: &Path) -> bool {
         && head == crate::format::SIGNATURE
 }
 
-pub fn info_file(a: InfoFileArgs) -> CliResult {
+/// `mra info` of any file mra reads but `.mra` files; `stdin`: the bytes of standard
+/// input when the caller has read them already (to tell an `.mra` stream apart).
+pub fn info_file(a: InfoFileArgs, stdin: Option<Vec<u8>>) -> CliResult {
     let opts = a.raw.options()?;
-    let r = read_input(&a.input, &opts)?;
+    if !is_std(&a.input) && opts.raw.is_none() {
+        let format =
+            io::Format::detect(&a.input).map_err(|e| Failure::context(a.input.display(), e))?;
+        if format == io::Format::Jpeg {
+            return info_jpeg(&a);
+        }
+    }
+    let r = if is_std(&a.input) {
+        let bytes = match stdin {
+            Some(b) => b,
+            None => stdin_bytes()?,
+        };
+        read_std_bytes(bytes, &opts)?
+    } else {
+        read_input(&a.input, &opts)?
+    };
     let format = if is_std(&a.input) {
         "standard input"
     } else {
@@ -316,6 +363,43 @@ pub fn info_file(a: InfoFileArgs) -> CliResult {
             let _ = writeln!(out, "  {k} = {v}");
         }
     }
+    emit(&out)
+}
+
+/// `mra info` of a JPEG: its frame header only (size, channels; 8-bit samples), checked
+/// against the file's length and the memory budget; the pixels are not decoded, so the
+/// range is not shown.
+fn info_jpeg(a: &InfoFileArgs) -> CliResult {
+    let h = io::jpeg::read_header(&a.input).map_err(|e| Failure::context(a.input.display(), e))?;
+    let dims = [h.width as usize, h.height as usize];
+    let out = if a.json {
+        let v = serde_json::json!({
+            "file": a.input.display().to_string(),
+            "format": io::Format::Jpeg.name(),
+            "axis_order": AXIS_ORDER,
+            "dims": dims,
+            "channels": h.channels,
+            "dtype": SampleType::U8.name(),
+            "kind": "image",
+            "header_only": true,
+            "min": null,
+            "max": null,
+        });
+        format!("{v}\n")
+    } else {
+        format!(
+            "{}: {} {}x{} {} u8 image\n  dims (x, y, z) {dims:?}, range not read (header only)\n",
+            a.input.display(),
+            io::Format::Jpeg.name(),
+            h.width,
+            h.height,
+            match h.channels {
+                1 => "gray".to_string(),
+                3 => "RGB".to_string(),
+                c => format!("{c}-channel"),
+            },
+        )
+    };
     emit(&out)
 }
 

@@ -259,6 +259,26 @@ pub fn main() -> i32 {
     }
 }
 
+/// `mra info` (and its old name `info-file`): `.mra` files by their header, anything else
+/// by reading it (here, above both commands' files, so neither imports the other).
+fn info(a: io_cmds::InfoFileArgs) -> CliResult {
+    if a.raw.dims.is_none() && io_cmds::is_std(&a.input) {
+        // standard input is read once, then told apart by its signature
+        let bytes = io_cmds::stdin_bytes()?;
+        if bytes.starts_with(&crate::format::SIGNATURE) {
+            return codec::info_bytes("standard input", &bytes, a.json);
+        }
+        return io_cmds::info_file(a, Some(bytes));
+    }
+    if a.raw.dims.is_none() && io_cmds::is_mra(&a.input) {
+        return codec::info(codec::InfoArgs {
+            input: a.input,
+            json: a.json,
+        });
+    }
+    io_cmds::info_file(a, None)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -277,16 +297,4 @@ mod tests {
     fn the_command_is_consistent() {
         command().debug_assert();
     }
-}
-
-/// `mra info` (and its old name `info-file`): `.mra` files by their header, anything else
-/// by reading it (here, above both commands' files, so neither imports the other).
-fn info(a: io_cmds::InfoFileArgs) -> CliResult {
-    if a.raw.dims.is_none() && io_cmds::is_mra(&a.input) {
-        return codec::info(codec::InfoArgs {
-            input: a.input,
-            json: a.json,
-        });
-    }
-    io_cmds::info_file(a)
 }

@@ -20,11 +20,30 @@ enum Writes {
     Raster,
 }
 
-/// The outputs of the commands whose output kind is known here.
-fn expected(command: &str) -> Option<Writes> {
-    Some(match command {
-        "encode" => Writes::Extensions(&["mra"]),
-        "decode" | "convert" | "upscale" | "downscale" | "transfer" | "terrain" => Writes::Raster,
+/// Point lists (curves, signals): text, one point per line.
+const POINTS: &[&str] = &["csv", "txt", "pts", "xy", "xyz"];
+/// Meshes: the formats `crate::mesh::io` writes.
+const MESHES: &[&str] = &["obj", "ply", "off"];
+
+/// The outputs of the commands whose output kind is known here: `command` and, for a
+/// command group (`mesh`, `curve`), its `subcommand`; `input` is the first input named
+/// (a point list or a raster for `denoise`).
+fn expected(command: &str, subcommand: &str, input: Option<&Path>) -> Option<Writes> {
+    Some(match (command, subcommand) {
+        ("encode", _) => Writes::Extensions(&["mra"]),
+        (
+            "decode" | "convert" | "upscale" | "downscale" | "transfer" | "terrain" | "generate",
+            _,
+        ) => Writes::Raster,
+        ("denoise", _) if input.is_some_and(super::analyze::is_point_list) => {
+            Writes::Extensions(POINTS)
+        }
+        ("denoise", _) => Writes::Raster,
+        ("mesh", "render") => Writes::Extensions(&["png"]),
+        ("mesh", "info" | "analyze") => return None,
+        ("mesh", _) => Writes::Extensions(MESHES),
+        ("curve", "plot") => Writes::Extensions(&["svg", "png"]),
+        ("curve", _) => Writes::Extensions(POINTS),
         _ => return None,
     })
 }
@@ -57,7 +76,7 @@ fn same_file(a: &Path, b: &Path) -> bool {
 }
 
 /// Split `args` (without the program name) into the command name, the output and the
-/// other non-flag arguments.
+/// other non-flag arguments (for a command group, its subcommand first).
 fn split(args: &[OsString]) -> (Option<String>, Option<PathBuf>, Vec<PathBuf>) {
     let command = args.first().map(|a| a.to_string_lossy().into_owned());
     let mut output = None;
@@ -106,7 +125,15 @@ pub fn check(args: &[OsString]) -> Result<(), Failure> {
         .map(|n| n.to_string_lossy().to_ascii_lowercase())
         .unwrap_or_default();
     let command = command.unwrap_or_default();
-    let bad = match expected(&command) {
+    let subcommand = rest
+        .first()
+        .map(|p| p.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let input = match command.as_str() {
+        "denoise" => rest.first().map(PathBuf::as_path),
+        _ => None,
+    };
+    let bad = match expected(&command, &subcommand, input) {
         Some(Writes::Extensions(exts))
             if !exts.iter().any(|e| name.ends_with(&format!(".{e}"))) =>
         {
@@ -120,8 +147,13 @@ pub fn check(args: &[OsString]) -> Result<(), Failure> {
     };
     if let Some(want) = bad {
         return Err(Failure(format!(
-            "{}: invalid output extension for {command} (expected {want})",
+            "{}: invalid output extension for {} (expected {want})",
             out.display(),
+            if matches!(command.as_str(), "mesh" | "curve") {
+                format!("{command} {subcommand}")
+            } else {
+                command
+            },
         )));
     }
     Ok(())
@@ -153,5 +185,28 @@ mod tests {
         assert!(check(&os(&["decode", "nowhere.mra", "-o", "x.jpg"])).is_ok());
         assert!(check(&os(&["decode", "nowhere.mra", "-o", "x.obj"])).is_err());
         assert!(check(&os(&["decode", "nowhere.mra", "-o", "x.nii.gz"])).is_ok());
+    }
+
+    #[test]
+    fn generate_denoise_mesh_and_curve_outputs_name_what_they_write() {
+        assert!(check(&os(&["generate", "zone-plate", "-o", "z.obj"])).is_err());
+        assert!(check(&os(&["generate", "zone-plate", "-o", "z.png"])).is_ok());
+        assert!(check(&os(&["denoise", "a.csv", "-o", "b.png"])).is_err());
+        assert!(check(&os(&["denoise", "a.csv", "-o", "b.csv"])).is_ok());
+        assert!(check(&os(&["denoise", "a.png", "-o", "b.csv"])).is_err());
+        assert!(check(&os(&["denoise", "a.png", "-o", "b.tif"])).is_ok());
+        assert!(check(&os(&["mesh", "smooth", "a.obj", "-o", "b.png"])).is_err());
+        assert!(check(&os(&["mesh", "convert", "a.obj", "-o", "b.PLY"])).is_ok());
+        assert!(check(&os(&["mesh", "render", "a.obj", "-o", "b.obj"])).is_err());
+        assert!(check(&os(&["mesh", "render", "a.obj", "-o", "b.png"])).is_ok());
+        assert!(check(&os(&["curve", "plot", "-o", "c.csv"])).is_err());
+        assert!(check(&os(&["curve", "plot", "-o", "c.svg"])).is_ok());
+        assert!(check(&os(&["curve", "eval", "-o", "c.png"])).is_err());
+        assert!(check(&os(&["curve", "eval", "-o", "c.csv"])).is_ok());
+        let e = check(&os(&["mesh", "simplify", "a.obj", "-o", "b.stl"])).unwrap_err();
+        assert!(
+            e.0.contains("mesh simplify") && e.0.contains(".obj .ply .off"),
+            "{e}"
+        );
     }
 }

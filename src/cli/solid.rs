@@ -249,6 +249,14 @@ pub type VolumeGrid = (Vec<f32>, [usize; 3], [f64; 3], [f64; 3]);
 /// The volume as a grid (x fastest, physical spacing), optionally padded by one sample of
 /// `−∞`-like value on every side so the isosurface closes at the border.
 pub fn volume_grid(r: &crate::io::Raster, cap: bool) -> Result<VolumeGrid, Failure> {
+    into_volume_grid(r.clone(), cap)
+}
+
+/// [`volume_grid`] taking the raster: `f32` samples are used in place (no copy), and the
+/// padding grows that same buffer, so a 256³ volume costs no second 64 MiB array (whose
+/// fresh pages the kernel must clear: a fifth of the whole `volume isosurface` on the
+/// peer benchmark).
+pub fn into_volume_grid(r: crate::io::Raster, cap: bool) -> Result<VolumeGrid, Failure> {
     if r.channels != 1 || r.dims.len() != 3 {
         return Err(Failure(format!(
             "volume with dims {:?} and {} channels (expected a single-channel 3-D volume)",
@@ -270,7 +278,10 @@ pub fn volume_grid(r: &crate::io::Raster, cap: bool) -> Result<VolumeGrid, Failu
         .filter(|o| o.len() == 3)
         .map(|o| [o[0], o[1], o[2]])
         .unwrap_or([0.0; 3]);
-    let v = r.to_f32();
+    let mut v = match r.samples {
+        crate::io::Samples::F32(v) => v,
+        other => other.to_f32(),
+    };
     if !cap {
         return Ok((v, [nx, ny, nz], spacing, origin));
     }
@@ -281,31 +292,50 @@ pub fn volume_grid(r: &crate::io::Raster, cap: bool) -> Result<VolumeGrid, Failu
         -1.0
     };
     let (px, py, pz) = (nx + 2, ny + 2, nz + 2);
-    let mut out: Vec<f32> = crate::tensor::zeroed_vec(px * py * pz);
-    out.fill(pad);
-    for k in 0..nz {
-        for j in 0..ny {
+    crate::limits::Limits::from_env()?.check_elems(
+        "padded volume samples (memory budget MRA_MAX_BYTES)",
+        (px * py) as u64 * pz as u64,
+        4,
+    )?;
+    v.resize(px * py * pz, pad);
+    // row (j, k) moves from (k·ny + j)·nx to ((k+1)·py + j+1)·px + 1, never to an earlier
+    // place: moved last row first, no row overwrites one not yet moved
+    for k in (0..nz).rev() {
+        for j in (0..ny).rev() {
             let src = (k * ny + j) * nx;
             let dst = ((k + 1) * py + j + 1) * px + 1;
-            out[dst..dst + nx].copy_from_slice(&v[src..src + nx]);
+            v.copy_within(src..src + nx, dst);
         }
     }
+    // the border: plane 0, and in each inner plane rows 0 and py−1 and the two end
+    // samples of every row (plane pz−1 came from `resize` or is overwritten below)
+    v[..px * py].fill(pad);
+    for k in 1..=nz {
+        let plane = &mut v[k * px * py..(k + 1) * px * py];
+        plane[..px].fill(pad);
+        plane[(py - 1) * px..].fill(pad);
+        for j in 1..=ny {
+            plane[j * px] = pad;
+            plane[j * px + px - 1] = pad;
+        }
+    }
+    v[(pz - 1) * px * py..].fill(pad);
     let origin = [
         origin[0] - spacing[0],
         origin[1] - spacing[1],
         origin[2] - spacing[2],
     ];
-    Ok((out, [px, py, pz], spacing, origin))
+    Ok((v, [px, py, pz], spacing, origin))
 }
 
 pub fn run_volume(c: VolumeCommand) -> CliResult {
     match c {
         VolumeCommand::Isosurface(a) => {
+            crate::tuning::reuse_freed_memory();
             let r =
                 crate::io::read(&a.input).map_err(|e| Failure::context(a.input.display(), e))?;
             let t = Instant::now();
-            let (values, dims, spacing, origin) = volume_grid(&r, !a.open)?;
-            drop(r);
+            let (values, dims, spacing, origin) = into_volume_grid(r, !a.open)?;
             let grid = mc::Grid {
                 values: &values,
                 dims,

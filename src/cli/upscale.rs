@@ -19,7 +19,10 @@ use std::path::PathBuf;
   mra upscale ../shared/corpus/terrain/N22W160.hgt -o n22_x2.tif --factor 2
   mra upscale zp.png -o zp_plain.png --factor 2 --clamp off
   mra upscale ct.raw --dims 256x256x64 --dtype u16 -o ct2.nrrd --factor 2 --json
-  cat zp.png | mra upscale - -o - --format png --factor 2 > zp2.png")]
+  cat zp.png | mra upscale - -o - --format png --factor 2 > zp2.png
+  mra upscale zp.png -o - --format png --factor 2 --json > zp2.png 2> report.json
+
+With -o - the raster alone goes to standard output; --json then prints on standard error.")]
 pub struct UpscaleArgs {
     /// Image, volume, heightmap or folder of slices.
     pub input: PathBuf,
@@ -62,7 +65,7 @@ pub struct UpscaleArgs {
     #[arg(long)]
     pub quiet: bool,
     /// Print one JSON object: the compute time (read and write excluded) and the output's
-    /// dims (x, y, z).
+    /// dims (x, y, z); on standard error when `-o -` sends the raster to standard output.
     #[arg(long, alias = "report")]
     pub json: bool,
 }
@@ -179,7 +182,7 @@ pub fn run_upscale(a: UpscaleArgs) -> CliResult {
             "spacing": out.meta.spacing.as_deref().map(super::io_cmds::xyz),
             "origin": out.meta.origin,
         });
-        super::io_cmds::emit(&format!("{v}\n"))?;
+        super::io_cmds::report(&a.output, &v.to_string())?;
     }
     Ok(())
 }

@@ -106,6 +106,51 @@ pub fn decode(bytes: &[u8], ty: SampleType, big_endian: bool) -> Samples {
     }
 }
 
+/// `n` samples of type `ty` read from `r` straight into their typed buffer (no byte
+/// buffer in between: a decoded volume costs one array, not two). A stream ending
+/// before `n` samples is `UnexpectedEof`. The caller checks `n` against the budget.
+pub fn read_samples<R: std::io::Read>(
+    mut r: R,
+    n: usize,
+    ty: SampleType,
+    big_endian: bool,
+) -> std::io::Result<Samples> {
+    use byteorder::ReadBytesExt;
+    macro_rules! typed {
+        ($t:ty, $read:ident) => {{
+            let mut v: Vec<$t> = crate::tensor::zeroed_vec(n);
+            if big_endian {
+                r.$read::<BigEndian>(&mut v)?;
+            } else {
+                r.$read::<LittleEndian>(&mut v)?;
+            }
+            v
+        }};
+    }
+    Ok(match ty {
+        SampleType::U8 => {
+            let mut v: Vec<u8> = crate::tensor::zeroed_vec(n);
+            r.read_exact(&mut v)?;
+            Samples::U8(v)
+        }
+        SampleType::I8 => {
+            let mut v: Vec<i8> = crate::tensor::zeroed_vec(n);
+            r.read_i8_into(&mut v)?;
+            Samples::I8(v)
+        }
+        SampleType::U16 => Samples::U16(typed!(u16, read_u16_into)),
+        SampleType::I16 => Samples::I16(typed!(i16, read_i16_into)),
+        SampleType::U32 => Samples::U32(typed!(u32, read_u32_into)),
+        SampleType::I32 => Samples::I32(typed!(i32, read_i32_into)),
+        SampleType::F16 => {
+            let bits: Vec<u16> = typed!(u16, read_u16_into);
+            Samples::F16(bits.into_iter().map(half::f16::from_bits).collect())
+        }
+        SampleType::F32 => Samples::F32(typed!(f32, read_f32_into)),
+        SampleType::F64 => Samples::F64(typed!(f64, read_f64_into)),
+    })
+}
+
 /// Encode samples as bytes in the given byte order.
 pub fn encode(s: &Samples, big_endian: bool) -> Vec<u8> {
     macro_rules! enc {

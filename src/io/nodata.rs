@@ -25,8 +25,9 @@
 //!
 //! **Footprint.** With the new grid placed on the old one by [`AxisMap`]s (new sample
 //! `j` at old index `x_j = offset + j·step`), the footprint of `j` along an axis is the
-//! old cells within `step/2` of `x_j` (at least the nearest cell); a new sample is void
-//! when every cell of its box footprint is.
+//! old cells whose centres lie within `step/2` of `x_j`, `|i − x_j| ≤ step/2` (at least
+//! the nearest cell; an old cell straddling two new cells is in the footprint of the one
+//! holding its centre); a new sample is void when every cell of its box footprint is.
 
 use super::AxisMap;
 use crate::{Error, Result};
@@ -253,8 +254,10 @@ impl Voids {
                     let x = map.offset + j as f64 * map.step;
                     let half = map.step / 2.0;
                     let nearest = (x.round().max(0.0) as usize).min(n - 1);
-                    let first = ((x - half + 0.5 - 1e-9).ceil().max(0.0) as usize).min(n - 1);
-                    let last = ((x + half - 0.5 + 1e-9).floor().max(0.0) as usize).min(n - 1);
+                    // old cells whose centre lies in [x − half, x + half]: every old cell
+                    // falls in the footprint of the new cell covering its centre
+                    let first = ((x - half - 1e-9).ceil().max(0.0) as usize).min(n - 1);
+                    let last = ((x + half + 1e-9).floor().max(0.0) as usize).min(n - 1);
                     if last < first || x + half < 0.0 || x - half > n as f64 - 1.0 {
                         (nearest, nearest)
                     } else {

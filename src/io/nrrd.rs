@@ -330,22 +330,6 @@ pub fn read(path: &Path) -> Result<Raster> {
         }
         "gzip" | "gz" => {
             let need = checked_bytes(&dims, channels, ty, u64::MAX)?;
-            let mut out = Vec::new();
-            MultiGzDecoder::new(payload)
-                .take(need as u64)
-                .read_to_end(&mut out)
-                .map_err(|e| {
-                    Error::format(format!("gzip data: {e}"), "valid gzip-encoded NRRD data")
-                })?;
-            if out.len() < need {
-                return Err(Error::format(
-                    format!(
-                        "header declares {need} bytes of data but the gzip stream holds {}",
-                        out.len()
-                    ),
-                    "a data size that fits the file",
-                ));
-            }
             let skip = h.byte_skip.max(0) as usize;
             if skip > 0 {
                 return Err(Error::Unsupported {
@@ -353,7 +337,30 @@ pub fn read(path: &Path) -> Result<Raster> {
                     value: "with gzip encoding".into(),
                 });
             }
-            bytes::decode(&out, ty, h.big_endian)
+            // deflate expands one byte to at most 1032 (258-byte matches in 2 bits): a
+            // declared size the stream cannot hold is refused before the buffer is made
+            let most = (payload.len() as u64).saturating_mul(1032).max(1 << 16);
+            if need as u64 > most {
+                return Err(Error::format(
+                    format!(
+                        "header declares {need} bytes of data but a {}-byte gzip stream inflates to at most {most}",
+                        payload.len()
+                    ),
+                    "a data size that fits the file",
+                ));
+            }
+            // inflated straight into the samples' buffer (the size checked above)
+            bytes::read_samples(MultiGzDecoder::new(payload), n, ty, h.big_endian).map_err(|e| {
+                match e.kind() {
+                    std::io::ErrorKind::UnexpectedEof => Error::format(
+                        format!(
+                            "header declares {need} bytes of data but the gzip stream ends before"
+                        ),
+                        "a data size that fits the file",
+                    ),
+                    _ => Error::format(format!("gzip data: {e}"), "valid gzip-encoded NRRD data"),
+                }
+            })?
         }
         "ascii" | "text" | "txt" => {
             let text = std::str::from_utf8(payload).map_err(|_| bad("ascii data is not text"))?;

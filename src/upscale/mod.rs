@@ -609,7 +609,8 @@ pub fn downscale_array(
     Ok((data, shape))
 }
 
-/// Downscale a raster over its spatial `axes`, keeping its sample type. The metadata
+/// Downscale a raster over its spatial `axes`, keeping its sample type; every output
+/// sample not void lies within the input's valid range `[min, max]`. The metadata
 /// follows the coarse grid by [`crate::io::Metadata::rescaled`]: the same extent, cells
 /// centred (spacing × `n / m` per axis, origin at the first coarse cell's centre).
 pub fn downscale_raster(
@@ -638,6 +639,17 @@ pub fn downscale_raster(
     if let Some(v) = &voids {
         v.fill(&mut data, &shape, r.dims.len())?;
     }
+    // without voids, the input's range bounds the output too (the filter's negative
+    // lobes would otherwise dip below a flat minimum: 114 under an SRTM tile's 115 m)
+    let range = match voids {
+        None => data
+            .iter()
+            .fold(None, |acc: Option<(f32, f32)>, &x| match acc {
+                None => Some((x, x)),
+                Some((lo, hi)) => Some((lo.min(x), hi.max(x))),
+            }),
+        Some(_) => None,
+    };
     let (mut out, new_shape) = downscale_array(data, &shape, scheme, boundary, levels, axes)?;
     let new_dims = new_shape[..r.dims.len()].to_vec();
     if let Some(v) = &voids {
@@ -645,6 +657,11 @@ pub fn downscale_raster(
             .map(|(&n, &m)| crate::io::AxisMap::centred(n, m))
             .collect();
         v.restore(&mut out, &v.footprint(&shape, &new_dims, &maps), true);
+    }
+    if let Some((lo, hi)) = range {
+        for x in &mut out {
+            *x = x.clamp(lo, hi);
+        }
     }
     let meta = r.meta.rescaled(&r.dims, &new_dims);
     let mut o = Raster::from_f32(new_dims, r.channels, &out, ty, r.kind)?;
