@@ -20,6 +20,7 @@
 pub mod demo;
 pub mod grid;
 pub mod hillshade;
+pub mod matching;
 pub mod raster;
 pub mod resample;
 pub mod synth;
