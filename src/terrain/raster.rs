@@ -40,8 +40,8 @@ fn cell_x(r: &Raster) -> Option<(f64, &str)> {
 
 /// Check that the example's heights and cells go with the output's and return the
 /// example's cell ÷ the output's cell `base cell × n/M` (1 when either cell is unknown):
-/// the same height unit when both say, the same horizontal unit (or both convertible to
-/// metres), and a ratio within 1/16 to 16.
+/// the same height unit when both say, the same horizontal unit, and a ratio within
+/// 1/16 to 16.
 pub fn check_compatible(base: &Raster, example: &Raster, out_w: usize) -> Result<f64> {
     if let (Some(a), Some(b)) = (height_unit(base), height_unit(example)) {
         if a != b {
@@ -54,17 +54,11 @@ pub fn check_compatible(base: &Raster, example: &Raster, out_w: usize) -> Result
     }
     let mut scale = 1.0;
     if let (Some((cb, ub)), Some((ce, ue))) = (cell_x(base), cell_x(example)) {
-        let metres = |u: &str| u.starts_with("deg") || u.starts_with("met") || u == "m";
-        let (cb, ce, ub, ue) = if ub != ue && metres(ub) && metres(ue) {
-            (cell_metres(base).1, cell_metres(example).1, "m", "m")
-        } else {
-            (cb, ce, ub, ue)
-        };
         if ub != ue {
             return Err(Error::parameter(
                 "example cell unit",
                 format!("{ue:?} (base: {ub:?})"),
-                "the base's horizontal unit, or both in metres or degrees (or --example-cell)",
+                "the base's horizontal unit",
             ));
         }
         let n = base.width().max(1) as f64;
