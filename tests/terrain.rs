@@ -122,9 +122,12 @@ fn finest_levels_of_matched_details_have_the_examples_roughness() {
     let base = smooth_base(48, 5);
     let ex = grid_of(192, 192, 11, 0.6, 1000.0);
     let ehp = highpass(&ex, Scheme::Chaikin, 2).unwrap();
+    // a size that is not a multiple of the base's: no back-projection, so the finest
+    // levels are the details alone
     let run = |d: Details| {
         let o = SynthOptions {
             details: d,
+            size: Some((190, 190)),
             ..opts(3)
         };
         let (g, rep) = synthesize(&base, &ex, &o).unwrap();
