@@ -94,7 +94,7 @@ fn result_reduced_to_the_base_resolution_keeps_the_base() {
     for scheme in [Scheme::Chaikin, Scheme::Cubic] {
         let o = SynthOptions { scheme, ..opts(1) };
         let (out, report) = synthesize(&base, &ex, &o).unwrap();
-        let back = reduce(&out, base.h, base.w, scheme, 2).unwrap();
+        let back = mra::terrain::synth::block_means(&out, base.h, base.w, (4, 4));
         let p = psnr(&back, &base);
         assert!(p >= 40.0, "{scheme}: PSNR {p:.1} dB");
         // the details are really there: rougher than the base refined alone
@@ -122,9 +122,12 @@ fn finest_levels_of_matched_details_have_the_examples_roughness() {
     let base = smooth_base(48, 5);
     let ex = grid_of(192, 192, 11, 0.6, 1000.0);
     let ehp = highpass(&ex, Scheme::Chaikin, 2).unwrap();
+    // a size that is not a multiple of the base's: no back-projection, so the finest
+    // levels are the details alone
     let run = |d: Details| {
         let o = SynthOptions {
             details: d,
+            size: Some((190, 190)),
             ..opts(3)
         };
         let (g, rep) = synthesize(&base, &ex, &o).unwrap();
@@ -144,10 +147,9 @@ fn finest_levels_of_matched_details_have_the_examples_roughness() {
         (r_matched - 1.0).abs() < 0.1,
         "matched roughness ratio {r_matched}"
     );
-    assert!(
-        (r_matched - 1.0).abs() < (r_copy - 1.0).abs(),
-        "matched {r_matched} vs copy {r_copy}"
-    );
+    // copying without matching is no longer inflated (one source shift per patch counts
+    // once in the blend), so it is only required to be rough too
+    assert!(r_copy > 0.5, "copy roughness ratio {r_copy}");
 }
 
 #[test]
@@ -660,4 +662,103 @@ fn cli_transfer_on_nrrd_volumes() {
     assert_eq!(o.status.code(), Some(2));
     assert_eq!(String::from_utf8_lossy(&o.stderr).trim().lines().count(), 1);
     assert!(!bad.exists());
+}
+
+/// The output's 4×4 block means lie on the base (back-projection), and the result is the
+/// same bytes on one thread as on two.
+#[test]
+fn block_means_of_the_result_keep_the_base_and_threads_do_not_change_the_bytes() {
+    let base = smooth_base(48, 5);
+    let ex = grid_of(192, 192, 11, 0.6, 1000.0);
+    let run = |threads: usize| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| synthesize(&base, &ex, &opts(4)).unwrap())
+    };
+    let (one, rep) = run(1);
+    let (two, _) = run(2);
+    assert_eq!(one.data, two.data);
+    let means = mra::terrain::synth::block_means(&one, 48, 48, (4, 4));
+    let p = psnr(&means, &base);
+    assert!(p >= 40.0, "block-mean PSNR {p:.1} dB");
+    assert!((rep.fidelity_psnr.unwrap() - p).abs() < 1e-6);
+}
+
+/// An example with cells 3 times the output's is resampled to the output's cell first:
+/// the result has the roughness of the example at that cell, not of the example as stored.
+#[test]
+fn example_cell_is_matched_to_the_output_cell() {
+    let base = smooth_base(48, 5);
+    let fine = grid_of(192, 192, 11, 0.6, 1000.0);
+    let coarse_cells = mra::terrain::synth::example_at_scale(&fine, 1.0 / 3.0).unwrap();
+    assert_eq!((coarse_cells.h, coarse_cells.w), (64, 64));
+    // the same terrain stored at a third of the resolution, declared as such
+    let big = mra::terrain::synth::example_at_scale(&coarse_cells, 3.0).unwrap();
+    assert_eq!((big.h, big.w), (192, 192));
+    let o = SynthOptions {
+        example_scale: 1.0 / 3.0,
+        ..opts(2)
+    };
+    let (a, _) = synthesize(&base, &big, &o).unwrap();
+    let (b, _) = synthesize(&base, &big, &opts(2)).unwrap();
+    let ehp = roughness(&highpass(&example_at(&big, 1.0 / 3.0), Scheme::Chaikin, 2).unwrap());
+    let ra = roughness(&highpass(&a, Scheme::Chaikin, 2).unwrap()) / ehp;
+    let rb = roughness(&highpass(&b, Scheme::Chaikin, 2).unwrap()) / ehp;
+    assert!(
+        (ra - 1.0).abs() < 0.25,
+        "scaled example: roughness ratio {ra}"
+    );
+    assert!(
+        (rb - 1.0).abs() > (ra - 1.0).abs(),
+        "unscaled {rb} vs scaled {ra}"
+    );
+}
+
+fn example_at(g: &Grid, s: f64) -> Grid {
+    mra::terrain::synth::example_at_scale(g, s).unwrap()
+}
+
+/// `terrain synth` writes the output on the base's cells split in 2^L (cell-centred):
+/// spacing × n/M, the ASCII grid's lower-left corner kept, heights in the base's unit.
+#[test]
+fn cli_synth_output_keeps_the_extent_and_splits_the_cells() {
+    let d = tmpdir("synth-meta");
+    let grid = |p: &std::path::Path, cell: f64, n: usize, seed: u64| {
+        let g = grid_of(n, n, seed, 0.6, 300.0);
+        let mut t =
+            format!("ncols {n}\nnrows {n}\nxllcorner 500\nyllcorner 1000\ncellsize {cell}\n");
+        for y in 0..n {
+            let row: Vec<String> = (0..n).map(|x| format!("{:.2}", g.at(y, x, 0))).collect();
+            t += &(row.join(" ") + "\n");
+        }
+        std::fs::write(p, t).unwrap();
+    };
+    let (b, e, out) = (d.join("b.asc"), d.join("e.asc"), d.join("out.asc"));
+    grid(&b, 40.0, 48, 3);
+    grid(&e, 10.0, 160, 9);
+    let o = mra(&[
+        "terrain",
+        "synth",
+        "--base",
+        s(&b),
+        "--example",
+        s(&e),
+        "-o",
+        s(&out),
+        "--levels",
+        "2",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let (rb, ro) = (mra::io::read(&b).unwrap(), mra::io::read(&out).unwrap());
+    assert_eq!(ro.dims, vec![192, 192]);
+    let (sb, so) = (rb.meta.spacing.unwrap(), ro.meta.spacing.unwrap());
+    assert!((so[1] - sb[1] / 4.0).abs() < 1e-9, "{so:?} vs {sb:?}");
+    for k in ["asc.xllcorner", "asc.yllcorner"] {
+        let (x, y) = (&rb.meta.extra[k], &ro.meta.extra[k]);
+        let (x, y): (f64, f64) = (x.parse().unwrap(), y.parse().unwrap());
+        assert!((x - y).abs() < 1e-6, "{k}: {x} vs {y}");
+    }
+    let _ = std::fs::remove_dir_all(&d);
 }

@@ -116,8 +116,9 @@ pub struct SynthArgs {
     #[arg(long)]
     pub preview: Option<PathBuf>,
     /// The example's cell size in the base's horizontal unit (e.g. 0.000278 for a 30 m
-    /// example under a base in degrees): overrides the example's own spacing and unit,
-    /// which are otherwise checked against the base's.
+    /// example under a base in degrees; in base cells when the base has no spacing):
+    /// overrides the example's own spacing and unit, which are otherwise checked against
+    /// the base's. The example is resampled to the output's cell before matching.
     #[arg(long, value_name = "CELL")]
     pub example_cell: Option<f64>,
     /// Skip the height-unit and cell checks of base against example (the example's
@@ -376,10 +377,21 @@ fn synth(a: SynthArgs) -> CliResult {
         .size
         .map(|s| s.1)
         .unwrap_or(base.w.saturating_mul(1 << o.levels.min(16)));
-    if !a.any_units {
+    // the example's cell ÷ the output's: from --example-cell (in the base's unit, or in
+    // base cells when the base has no spacing), else from both files' spacing
+    let base_cell = br
+        .meta
+        .spacing
+        .as_ref()
+        .and_then(|s| s.last().copied())
+        .unwrap_or(1.0);
+    let out_cell = base_cell * base.w as f64 / out_w.max(1) as f64;
+    o.example_scale = if a.any_units || br.meta.spacing.is_none() {
+        a.example_cell.map_or(1.0, |c| c / out_cell)
+    } else {
         tr::check_compatible(&br, &er, out_w)
-            .map_err(|e| Failure::context(a.example.display(), e))?;
-    }
+            .map_err(|e| Failure::context(a.example.display(), e))?
+    };
     let (g, report) = terrain::synthesize(&base, &example, &o)?;
     let out = tr::from_grid(&g, &br, output_type(&a.output, br.sample_type()))?;
     write_output(&a.output, &out, false)?;
@@ -473,8 +485,12 @@ pub fn transfer(a: TransferArgs) -> CliResult {
     }
     let (br, base) = load_grid(&a.to)?;
     let (er, example) = load_grid(&a.from)?;
-    tr::check_compatible(&br, &er, base.w).map_err(|e| Failure::context(a.from.display(), e))?;
-    let o = a.m.options();
+    let scale = tr::check_compatible(&br, &er, base.w)
+        .map_err(|e| Failure::context(a.from.display(), e))?;
+    let o = SynthOptions {
+        example_scale: scale,
+        ..a.m.options()
+    };
     let (g, report) = terrain::transfer(&base, &example, &o)?;
     let out = tr::from_grid(&g, &br, br.sample_type())?;
     write_output(&a.output, &out, false)?;

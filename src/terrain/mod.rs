@@ -10,8 +10,9 @@
 //!
 //! ```text
 //! grid.rs      Grid: h × w × channels of f64, row-major
-//! resample.rs  corner-aligned Catmull–Rom resampling (base to the output lattice)
-//! synth.rs     the example's pyramid, patch matching, blended detail transfer
+//! resample.rs  Catmull–Rom resampling on affine maps (base to the output lattice)
+//! synth.rs     the example's pyramid, coarse-to-fine patch matching, blended detail transfer
+//! matching.rs  window descriptors (shape, slope direction, curvature) from summed-area tables
 //! volume.rs    the same detail transfer for 3-D volumes (cube patches, seven bands)
 //! hillshade.rs Horn slope/aspect shading with an optional hypsometric colour ramp
 //! raster.rs    Raster <-> Grid with units, cell size and nodata checks
@@ -20,6 +21,7 @@
 pub mod demo;
 pub mod grid;
 pub mod hillshade;
+pub mod matching;
 pub mod raster;
 pub mod resample;
 pub mod synth;

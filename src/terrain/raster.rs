@@ -38,10 +38,11 @@ fn cell_x(r: &Raster) -> Option<(f64, &str)> {
     Some((*sp.last()?, r.meta.units.as_deref().unwrap_or("")))
 }
 
-/// Check that the example's heights and cells go with the output's: the same height
-/// unit when both say, and (same horizontal unit) an example cell within a factor of
-/// 4 of the output cell `base cell × (n − 1)/(M − 1)`.
-pub fn check_compatible(base: &Raster, example: &Raster, out_w: usize) -> Result<()> {
+/// Check that the example's heights and cells go with the output's and return the
+/// example's cell ÷ the output's cell `base cell × n/M` (1 when either cell is unknown):
+/// the same height unit when both say, the same horizontal unit, and a ratio within
+/// 1/16 to 16.
+pub fn check_compatible(base: &Raster, example: &Raster, out_w: usize) -> Result<f64> {
     if let (Some(a), Some(b)) = (height_unit(base), height_unit(example)) {
         if a != b {
             return Err(Error::parameter(
@@ -51,6 +52,7 @@ pub fn check_compatible(base: &Raster, example: &Raster, out_w: usize) -> Result
             ));
         }
     }
+    let mut scale = 1.0;
     if let (Some((cb, ub)), Some((ce, ue))) = (cell_x(base), cell_x(example)) {
         if ub != ue {
             return Err(Error::parameter(
@@ -59,23 +61,23 @@ pub fn check_compatible(base: &Raster, example: &Raster, out_w: usize) -> Result
                 "the base's horizontal unit",
             ));
         }
-        let n = base.width().max(2) as f64;
-        let out = cb * (n - 1.0) / (out_w.max(2) as f64 - 1.0);
-        let ratio = out / ce;
-        if !(0.25..=4.0).contains(&ratio) {
+        let n = base.width().max(1) as f64;
+        let out = cb * n / out_w.max(1) as f64;
+        scale = ce / out;
+        if !(1.0 / 16.0..=16.0).contains(&scale) {
             return Err(Error::parameter(
                 "example cell size",
                 format!("{ce} {ue} (output cell {out:.6} {ub})"),
-                "an example cell within a factor 4 of the output cell",
+                "an example cell within a factor 16 of the output cell",
             ));
         }
     }
-    Ok(())
+    Ok(scale)
 }
 
 /// The output raster: `g` in `ty`, with `template`'s metadata moved to `g`'s
-/// corner-aligned lattice ([`AxisMap::vertex`], spacing × (n − 1)/(M − 1)); nodata
-/// dropped (the voids were filled).
+/// cell-centred lattice ([`AxisMap::centred`]: spacing × n/M, origin moved by half a
+/// cell less half an output cell); nodata dropped (the voids were filled).
 pub fn from_grid(g: &Grid, template: &Raster, ty: SampleType) -> Result<Raster> {
     let mut r = Raster::new(
         vec![g.h, g.w],
@@ -83,9 +85,9 @@ pub fn from_grid(g: &Grid, template: &Raster, ty: SampleType) -> Result<Raster> 
         Samples::from_f64(&g.data, ty),
         template.kind,
     )?;
-    // corner-aligned lattice: new sample j at old (n − 1)/(M − 1)·j on each axis
+    // cell-centred lattice: new sample j at old (j + ½)·n/M − ½ on each axis
     let (n_y, n_x) = (template.dims[0], template.dims[1]);
-    let maps = [AxisMap::vertex(n_y, g.h), AxisMap::vertex(n_x, g.w)];
+    let maps = [AxisMap::centred(n_y, g.h), AxisMap::centred(n_x, g.w)];
     let mut meta = template.meta.resampled(&template.dims, &[g.h, g.w], &maps);
     meta.nodata = None;
     meta.extra.remove("asc.nodata_value");

@@ -1,7 +1,6 @@
-//! Corner-aligned resampling with the Catmull–Rom cubic (Keys, a = −½): output sample
-//! `i` of `m` sits at input position `u = i (n − 1)/(m − 1)`, so the first and last
-//! samples coincide (the interpolating-boundary convention of the terrain lattice) and
-//! the extent is kept. Weights of the four neighbours at fraction `t`:
+//! Resampling with the Catmull–Rom cubic (Keys, a = −½) on an affine map: output sample
+//! `i` sits at input position `u = offset + i·step` ([`Map`]); [`resample`] is the
+//! corner-aligned map `u = i (n − 1)/(m − 1)` (first and last samples coincide). Weights of the four neighbours at fraction `t`:
 //! `w₋₁ = (−t³ + 2t² − t)/2`, `w₀ = (3t³ − 5t² + 2)/2`, `w₁ = (−3t³ + 4t² + t)/2`,
 //! `w₂ = (t³ − t²)/2`; indices beyond the ends are clamped.
 
@@ -17,17 +16,57 @@ fn weights(t: f64) -> [f64; 4] {
     ]
 }
 
+/// Output sample `i` of an axis at input position `offset + i·step`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Map {
+    pub offset: f64,
+    pub step: f64,
+}
+
+impl Map {
+    /// Corner-aligned: `n` inputs to `m` outputs with the first and last coinciding.
+    pub fn corners(n: usize, m: usize) -> Map {
+        let step = if m > 1 {
+            (n.max(1) - 1) as f64 / (m - 1) as f64
+        } else {
+            0.0
+        };
+        Map { offset: 0.0, step }
+    }
+
+    /// Cell-centred: `n` cells to `m` cells over the same extent,
+    /// `u = (i + ½)·n/m − ½`.
+    pub fn centred(n: usize, m: usize) -> Map {
+        let step = n as f64 / m.max(1) as f64;
+        Map {
+            offset: 0.5 * step - 0.5,
+            step,
+        }
+    }
+
+    /// Input position of output `i`.
+    pub fn at(&self, i: usize) -> f64 {
+        self.offset + i as f64 * self.step
+    }
+}
+
 /// For each of `m` outputs: four input indices and their weights. A tap beyond an end
 /// uses the linear extrapolation `f(−1) = 2f(0) − f(1)` (and likewise at `n`), so
-/// straight lines are reproduced up to the ends.
-fn taps(n: usize, m: usize) -> Vec<([usize; 4], [f64; 4])> {
+/// straight lines are reproduced up to the ends; a position outside `[0, n − 1]` takes
+/// the line through the two end samples, `f(u) = (1 − u) f(0) + u f(1)` below 0.
+fn taps(n: usize, m: usize, map: Map) -> Vec<([usize; 4], [f64; 4])> {
     (0..m)
         .map(|i| {
-            let u = if m > 1 {
-                i as f64 * (n - 1) as f64 / (m - 1) as f64
-            } else {
-                0.0
-            };
+            let u = map.at(i);
+            if n > 1 && (u < 0.0 || u > (n - 1) as f64) {
+                let (a, b, t) = if u < 0.0 {
+                    (0, 1, u)
+                } else {
+                    (n - 1, n - 2, u - (n - 1) as f64)
+                };
+                return ([a, b, a, a], [1.0 + t.abs(), -t.abs(), 0.0, 0.0]);
+            }
+            let u = u.clamp(0.0, (n - 1) as f64);
             let i0 = (u.floor() as usize).min(n - 1);
             let t = u - i0 as f64;
             let w = weights(t);
@@ -62,14 +101,19 @@ fn taps(n: usize, m: usize) -> Vec<([usize; 4], [f64; 4])> {
         .collect()
 }
 
-/// Resample `g` to `h × w` (each channel separately).
+/// Resample `g` to `h × w`, corner-aligned (each channel separately).
 pub fn resample(g: &Grid, h: usize, w: usize) -> Grid {
     if g.h == h && g.w == w {
         return g.clone();
     }
+    resample_map(g, (h, Map::corners(g.h, h)), (w, Map::corners(g.w, w)))
+}
+
+/// Resample `g` to `h` rows and `w` columns on the maps `my`, `mx`.
+pub fn resample_map(g: &Grid, (h, my): (usize, Map), (w, mx): (usize, Map)) -> Grid {
     let c = g.c;
     // along x
-    let tx = taps(g.w, w);
+    let tx = taps(g.w, w, mx);
     let mut mid = Grid::zeros(g.h, w, c);
     for y in 0..g.h {
         for (x, (idx, wt)) in tx.iter().enumerate() {
@@ -83,7 +127,7 @@ pub fn resample(g: &Grid, h: usize, w: usize) -> Grid {
         }
     }
     // along y
-    let ty = taps(g.h, h);
+    let ty = taps(g.h, h, my);
     let mut out = Grid::zeros(h, w, c);
     for (y, (idx, wt)) in ty.iter().enumerate() {
         for x in 0..w {
