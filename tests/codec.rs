@@ -280,19 +280,6 @@ fn psnr_and_bpp_targets_are_met() {
     }
 }
 
-/// Every `s`-th sample of a one-channel 2-D raster, from the first.
-fn even_samples(r: &Raster, s: usize) -> Vec<f64> {
-    let (h, w) = (r.dims[0], r.dims[1]);
-    let v = r.samples.to_f64();
-    let mut out = Vec::new();
-    for y in (0..h).step_by(s) {
-        for x in (0..w).step_by(s) {
-            out.push(v[y * w + x]);
-        }
-    }
-    out
-}
-
 #[test]
 fn progressive_levels_halve_the_size_and_approximate_the_picture() {
     let r = field(&[33, 50], 1, SampleType::U8, 2);
@@ -321,11 +308,33 @@ fn progressive_levels_halve_the_size_and_approximate_the_picture() {
             // the coarse picture is a local mean of the source
             let (lo, hi) = r.samples.min_max().unwrap();
             let (a, b) = d.samples.min_max().unwrap();
-            assert!(a >= lo - 1.0 && b <= hi + 1.0);
-            // the S-transform's and Haar's coarse samples are cell means; the 5/3
-            // lifting's sit on the even samples
+            // the 5/3 low-pass (−⅛, ¼, ¾, ¼, −⅛) may overshoot the range a little
+            let slack = if rate == Rate::Lossless {
+                0.25 * (hi - lo)
+            } else {
+                1.0
+            };
+            assert!(
+                a >= lo - slack && b <= hi + slack,
+                "{rate:?} level {k}: {a}..{b}"
+            );
+            // Haar's coarse samples are cell means; the 5/3 lifting's are the linear
+            // scheme's (CDF 5/3) coarse samples, up to the lifting's roundings
             let m = if rate == Rate::Lossless {
-                even_samples(&r, 1 << k)
+                let fine = EncodeOptions {
+                    scheme: Scheme::Linear,
+                    ..opts(Rate::Quality(100.0))
+                };
+                let bytes = codec::encode(&r, &fine).unwrap();
+                let opts = DecodeOptions {
+                    level: k,
+                    allow_truncated: false,
+                };
+                codec::decode(&bytes, &opts)
+                    .unwrap()
+                    .raster
+                    .samples
+                    .to_f64()
             } else {
                 block_means(&r, 1 << k)
             };
@@ -337,8 +346,11 @@ fn progressive_levels_halve_the_size_and_approximate_the_picture() {
                 .sum::<f64>()
                 / m.len() as f64)
                 .sqrt();
+            // (the integer lifting floors at every step: within 4% of the float
+            // scheme's coarse block at level 3)
+            let tol = if rate == Rate::Lossless { 0.04 } else { 0.03 };
             assert!(
-                rms <= 0.03 * (hi - lo),
+                rms <= tol * (hi - lo),
                 "{rate:?} level {k}: rms {rms} from the {0}x{0} block means (range {1})",
                 1 << k,
                 hi - lo
@@ -575,7 +587,7 @@ fn test_vectors_decode_to_their_digests() {
         for v in list {
             let bytes = std::fs::read(dir.join(v["file"].as_str().unwrap())).unwrap();
             assert_eq!(
-                bytes[12], major,
+                bytes[16], major,
                 "{} is not a format {major} file",
                 v["name"]
             );

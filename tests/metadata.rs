@@ -586,14 +586,25 @@ fn corpus_geotiff_decoded_at_level_1_has_60_m_pixels_at_the_same_corner() {
         return;
     };
     let d = tmp_dir("corpus_helens");
-    let (enc, out) = (d.join("h.mra"), d.join("h1.tif"));
-    ok(&["encode", s(&src), "-o", s(&enc)]);
-    ok(&["decode", s(&enc), "-o", s(&out), "--level", "1"]);
-    let (a, b) = (io::read(&src).unwrap(), io::read(&out).unwrap());
-    assert_eq!(b.dims, vec![230, 159]);
-    let (ga, gb) = (geo_transform(&a), geo_transform(&b));
-    assert_eq!(ga[1], 30.0);
-    assert_eq!(gb, [ga[0], 60.0, 0.0, ga[3], 0.0, -60.0]);
+    // Haar's coarse pixel is the mean of 2×2 fine pixels: the same corner; CDF 9/7's
+    // coarse sample sits on fine sample 2i, so its pixel starts half a fine pixel before
+    for (scheme, shift) in [("haar", 0.0), ("cdf97", -15.0)] {
+        let (enc, out) = (
+            d.join(format!("h_{scheme}.mra")),
+            d.join(format!("h1_{scheme}.tif")),
+        );
+        ok(&["encode", s(&src), "-o", s(&enc), "--scheme", scheme]);
+        ok(&["decode", s(&enc), "-o", s(&out), "--level", "1"]);
+        let (a, b) = (io::read(&src).unwrap(), io::read(&out).unwrap());
+        assert_eq!(b.dims, vec![230, 159]);
+        let (ga, gb) = (geo_transform(&a), geo_transform(&b));
+        assert_eq!(ga[1], 30.0);
+        assert_eq!(
+            gb,
+            [ga[0] + shift, 60.0, 0.0, ga[3] - shift, 0.0, -60.0],
+            "{scheme}"
+        );
+    }
 }
 
 #[test]
