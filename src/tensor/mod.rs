@@ -3,6 +3,7 @@
 
 mod aligned;
 mod array;
+mod boxes;
 mod cascade;
 mod fused;
 mod pages;
