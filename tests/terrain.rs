@@ -762,3 +762,38 @@ fn cli_synth_output_keeps_the_extent_and_splits_the_cells() {
     }
     let _ = std::fs::remove_dir_all(&d);
 }
+
+/// The JSON report of `terrain synth` gives its extents fastest axis first (x, y), as
+/// every other command does: a 48 wide, 32 high base makes a report `dims` of
+/// `[width, height]` matching the output file's.
+#[test]
+fn synth_json_reports_extents_fastest_axis_first() {
+    let d = tmpdir("json_axes");
+    let (base, ex, out) = (d.join("base.png"), d.join("ex.png"), d.join("out.tif"));
+    for (p, size) in [(&base, "48x32"), (&ex, "192x192")] {
+        let o = mra(&["generate", "terrain", "--size", size, "-o", s(p)]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    }
+    let b = mra::io::read(&base).unwrap();
+    assert_eq!(b.dims, vec![32, 48], "a 48 wide, 32 high base");
+    let o = mra(&[
+        "terrain",
+        "synth",
+        "--base",
+        s(&base),
+        "--example",
+        s(&ex),
+        "-o",
+        s(&out),
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let rep: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let r = mra::io::read(&out).unwrap();
+    let (h, w) = (r.dims[0] as u64, r.dims[1] as u64);
+    assert!(w > h, "{:?}", r.dims);
+    assert_eq!(rep["dims"], serde_json::json!([w, h]));
+    assert_eq!(rep["axis_order"], "x, y, z (fastest first)");
+    let c = rep["coarse"].as_array().unwrap();
+    assert!(c[0].as_u64().unwrap() > c[1].as_u64().unwrap(), "{rep}");
+}

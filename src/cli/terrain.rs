@@ -337,8 +337,25 @@ fn preview(base: &Grid, example: &Grid, out_r: &Raster, out: &Grid) -> Result<Ra
     )?)
 }
 
+/// Print a report as one JSON object in the axis order of every other command: `dims`
+/// and `coarse` fastest axis first (x, y, z; the reports hold them slowest first), and
+/// `axis_order` saying so.
 fn print_json(v: &impl serde::Serialize) {
-    println!("{}", serde_json::to_string(v).unwrap_or_default());
+    let mut j = serde_json::to_value(v).unwrap_or_default();
+    if let Some(o) = j.as_object_mut() {
+        for key in ["dims", "coarse"] {
+            if let Some(serde_json::Value::Array(a)) = o.get_mut(key) {
+                a.reverse();
+            }
+        }
+        if o.contains_key("dims") {
+            o.insert(
+                "axis_order".into(),
+                serde_json::Value::from("x, y, z (fastest first)"),
+            );
+        }
+    }
+    println!("{j}");
 }
 
 pub fn run(c: TerrainCommand) -> CliResult {
