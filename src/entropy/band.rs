@@ -21,10 +21,11 @@
 //! 0 that minimises `(|x| − |q|)² + λ·bits(q)`, the bits read from the models' current
 //! state — rate–distortion optimised quantization, invisible to the decoder.
 
+use super::golomb;
 use super::range::{Decoder, Encoder, Mix, Model};
 use super::walk::{median_residuals, parent_plane, undo_median, Walk};
 use super::{BandKind, Parent};
-use crate::{Error, Result};
+use crate::Result;
 
 const ZCLS: usize = 12;
 const PCLS: usize = 3;
@@ -239,19 +240,8 @@ fn encode_value(e: &mut Encoder, m: &mut Models, q: i64, ctx: (usize, usize, usi
     if a == 2 {
         return;
     }
-    let v = a - 3 + 1; // ≥ 1
-    let nb = 63 - v.leading_zeros() as usize; // v in [2^nb, 2^(nb+1))
     let pre = &mut m.prefix[cm * PREFIX..(cm + 1) * PREFIX];
-    for k in 0..nb {
-        e.bit(&mut pre[k.min(PREFIX - 1)], true);
-    }
-    e.bit(&mut pre[nb.min(PREFIX - 1)], false);
-    if nb > 0 {
-        e.bit(&mut m.top[nb], (v >> (nb - 1)) & 1 == 1);
-        for j in (0..nb.saturating_sub(1)).rev() {
-            e.raw((v >> j) & 1 == 1);
-        }
-    }
+    golomb::encode(e, pre, &mut m.top, a - 3 + 1);
 }
 
 fn decode_value(d: &mut Decoder, m: &mut Models, ctx: (usize, usize, usize)) -> Result<i64> {
@@ -266,24 +256,7 @@ fn decode_value(d: &mut Decoder, m: &mut Models, ctx: (usize, usize, usize)) -> 
         2
     } else {
         let pre = &mut m.prefix[cm * PREFIX..(cm + 1) * PREFIX];
-        let mut nb = 0usize;
-        while d.bit(&mut pre[nb.min(PREFIX - 1)]) {
-            nb += 1;
-            if nb > 62 {
-                return Err(Error::format(
-                    "coefficient exponent over 62",
-                    "a valid band",
-                ));
-            }
-        }
-        let mut v: u64 = 1;
-        if nb > 0 {
-            v = (v << 1) | d.bit(&mut m.top[nb]) as u64;
-            for _ in 0..nb - 1 {
-                v = (v << 1) | d.raw() as u64;
-            }
-        }
-        v - 1 + 3
+        golomb::decode(d, pre, &mut m.top)? - 1 + 3
     };
     Ok(if neg {
         0u64.wrapping_sub(a) as i64

@@ -16,6 +16,7 @@
 //! The coarsest block (level 0) is coded as the residual of the LOCO-I median
 //! predictor `med(W, N, W + N − NW)` with the same models. Normative: formats/MRA.md §6.
 
+use super::golomb;
 use super::range::{Bit, Decoder, Encoder};
 use super::walk::{median_residuals, parent_plane, undo_median, Walk};
 use super::{BandKind, Parent};
@@ -211,18 +212,8 @@ fn encode_value(e: &mut Encoder, m: &mut Models, q: i64, ctx: (usize, usize, usi
     if a == 1 {
         return;
     }
-    let v = a - 2 + 1; // ≥ 1
-    let nb = 63 - v.leading_zeros() as usize; // v in [2^nb, 2^(nb+1))
-    for k in 0..nb {
-        e.bit(&mut m.prefix[cg * PREFIX + k.min(PREFIX - 1)], true);
-    }
-    e.bit(&mut m.prefix[cg * PREFIX + nb.min(PREFIX - 1)], false);
-    if nb > 0 {
-        e.bit(&mut m.top[nb], (v >> (nb - 1)) & 1 == 1);
-        for j in (0..nb.saturating_sub(1)).rev() {
-            e.raw((v >> j) & 1 == 1);
-        }
-    }
+    let pre = &mut m.prefix[cg * PREFIX..(cg + 1) * PREFIX];
+    golomb::encode(e, pre, &mut m.top, a - 2 + 1);
 }
 
 fn decode_value(d: &mut Decoder, m: &mut Models, ctx: (usize, usize, usize, usize)) -> Result<i64> {
@@ -234,24 +225,8 @@ fn decode_value(d: &mut Decoder, m: &mut Models, ctx: (usize, usize, usize, usiz
     let a: u64 = if !d.bit(&mut m.one[c1]) {
         1
     } else {
-        let mut nb = 0usize;
-        while d.bit(&mut m.prefix[cg * PREFIX + nb.min(PREFIX - 1)]) {
-            nb += 1;
-            if nb > 62 {
-                return Err(Error::format(
-                    "coefficient exponent over 62",
-                    "a valid band",
-                ));
-            }
-        }
-        let mut v: u64 = 1;
-        if nb > 0 {
-            v = (v << 1) | d.bit(&mut m.top[nb]) as u64;
-            for _ in 0..nb - 1 {
-                v = (v << 1) | d.raw() as u64;
-            }
-        }
-        v - 1 + 2
+        let pre = &mut m.prefix[cg * PREFIX..(cg + 1) * PREFIX];
+        golomb::decode(d, pre, &mut m.top)? - 1 + 2
     };
     Ok(if neg {
         0u64.wrapping_sub(a) as i64
