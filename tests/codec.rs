@@ -208,6 +208,62 @@ fn lossless_is_bit_exact_for_every_type_and_shape_including_nan() {
 }
 
 #[test]
+fn lossless_codes_floats_on_a_power_of_two_grid_as_integers() {
+    // heights in whole metres and in quarter metres stored as floats: mode 3, exact and
+    // far smaller than the bit patterns; one −0 or one 0.1 falls back to mode 1, exact
+    let base = field(&[61, 47], 1, SampleType::I16, 3);
+    let ints: Vec<f64> = (0..base.samples.len())
+        .map(|i| base.samples.get_f64(i))
+        .collect();
+    for (ty, scale) in [
+        (SampleType::F32, 1.0),
+        (SampleType::F64, 0.25),
+        (SampleType::F16, 0.5),
+    ] {
+        let mut v: Vec<f64> = ints.iter().map(|x| (x / 64.0).round() * scale).collect();
+        let r = Raster::new(
+            vec![61, 47],
+            1,
+            Samples::from_f64(&v, ty),
+            DataKind::Heightmap,
+        )
+        .unwrap();
+        let bytes = codec::encode(&r, &opts(Rate::Lossless)).unwrap();
+        let d = codec::decode(&bytes, &DecodeOptions::default()).unwrap();
+        assert_eq!(d.raster.samples, r.samples, "{ty} × {scale}");
+        assert_eq!(d.header.delta, scale, "{ty}: the quantum");
+        let (start, _) = head_of(&bytes);
+        assert_eq!(bytes[start + 8 + 4 * 2], 3, "{ty}: mode byte 3 (two axes)");
+        for odd in [-0.0, 0.1] {
+            v[5] = odd;
+            let r2 = Raster::new(
+                vec![61, 47],
+                1,
+                Samples::from_f64(&v, ty),
+                DataKind::Heightmap,
+            )
+            .unwrap();
+            let b2 = codec::encode(&r2, &opts(Rate::Lossless)).unwrap();
+            let d2 = codec::decode(&b2, &DecodeOptions::default()).unwrap();
+            assert_eq!(d2.header.delta, 0.0, "{ty} with {odd}: bit patterns");
+            let a = mra::io::bytes::encode(&r2.samples, false);
+            assert_eq!(
+                a,
+                mra::io::bytes::encode(&d2.raster.samples, false),
+                "{ty} with {odd}"
+            );
+            assert!(
+                bytes.len() < b2.len(),
+                "{ty}: {} ≥ {}",
+                bytes.len(),
+                b2.len()
+            );
+            v[5] = (ints[5] / 64.0).round() * scale;
+        }
+    }
+}
+
+#[test]
 fn extreme_integer_values_survive_lossless() {
     let v: Vec<i32> = vec![
         i32::MIN,

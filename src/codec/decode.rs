@@ -119,6 +119,13 @@ fn reconstruct(p: &Parsed, k: usize) -> Result<Raster> {
             map3(&mut planes, lossless::ycocg_r_inv);
         }
         let samples = match ty {
+            SampleType::F16 | SampleType::F32 | SampleType::F64 if h.delta > 0.0 => {
+                // mode 3: integer multiples of the quantum δ, exact in the sample type
+                let values: Vec<f64> = (0..npos * c)
+                    .map(|i| planes[i % c][i / c] as f64 * h.delta)
+                    .collect();
+                Samples::from_f64(&values, ty)
+            }
             SampleType::F16 | SampleType::F32 | SampleType::F64 => {
                 let w = (ty.size() * 8) as u32;
                 let bits: Vec<u64> = (0..npos * c)

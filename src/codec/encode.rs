@@ -63,18 +63,32 @@ fn encode_lossless(r: &Raster, opts: &EncodeOptions) -> Result<Vec<u8>> {
     let mut o = opts.clone();
     o.scheme = Scheme::Linear;
     o.boundary = Boundary::Symmetric;
-    let header = header_for(r, &o, Mode::Lossless, colour)?;
-    let plan = Plan::new(&header)?;
+    let mut header = header_for(r, &o, Mode::Lossless, colour)?;
     let c = r.channels;
     let n = r.positions();
+    // float samples that are all multiples of a power of two are coded as the integers
+    let quantum = if ty.is_float() {
+        lossless::float_quantum((0..n * c).map(|i| r.samples.get_f64(i)))
+    } else {
+        None
+    };
+    if let Some(q) = quantum {
+        header.delta = q;
+    }
+    let plan = Plan::new(&header)?;
     let mut planes = vec![vec![0i64; n]; c];
     for i in 0..n {
         for (k, p) in planes.iter_mut().enumerate() {
-            p[i] = match &r.samples {
-                Samples::F16(v) => lossless::float_bits_to_int(v[i * c + k].to_bits() as u64, 16),
-                Samples::F32(v) => lossless::float_bits_to_int(v[i * c + k].to_bits() as u64, 32),
-                Samples::F64(v) => lossless::float_bits_to_int(v[i * c + k].to_bits(), 64),
-                s => lossless_int(s.get_f64(i * c + k), ty),
+            p[i] = match (&r.samples, quantum) {
+                (s, Some(q)) => (s.get_f64(i * c + k) / q) as i64,
+                (Samples::F16(v), None) => {
+                    lossless::float_bits_to_int(v[i * c + k].to_bits() as u64, 16)
+                }
+                (Samples::F32(v), None) => {
+                    lossless::float_bits_to_int(v[i * c + k].to_bits() as u64, 32)
+                }
+                (Samples::F64(v), None) => lossless::float_bits_to_int(v[i * c + k].to_bits(), 64),
+                (s, None) => lossless_int(s.get_f64(i * c + k), ty),
             };
         }
     }

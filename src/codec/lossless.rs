@@ -207,6 +207,39 @@ pub fn ycocg_r_inv(y: i64, co: i64, cg: i64) -> (i64, i64, i64) {
     (b.wrapping_add(co), g, b)
 }
 
+/// The quantum `q = 2^-p` (0 ≤ p ≤ 40) of float samples when every sample is an integer
+/// multiple `k·q` with `|k| < 2^40` and none is −0 or non-finite; `None` otherwise. Such
+/// samples (heights stored as whole metres in f32, fixed-point data) are coded as the
+/// integers `k = x/q`, which the transform predicts far better than bit patterns;
+/// `k·q` gives `x` back exactly in any float type that held it.
+pub fn float_quantum(values: impl Iterator<Item = f64>) -> Option<f64> {
+    const LIMIT: i32 = 40;
+    let (mut p, mut top) = (0i32, 0i32);
+    for v in values {
+        if !v.is_finite() || v.to_bits() == (-0.0f64).to_bits() {
+            return None;
+        }
+        if v == 0.0 {
+            continue;
+        }
+        let bits = v.to_bits();
+        let exp = ((bits >> 52) & 0x7ff) as i32;
+        if exp == 0 {
+            return None; // subnormal
+        }
+        let m = (bits & ((1u64 << 52) - 1)) | (1u64 << 52);
+        let tz = m.trailing_zeros() as i32;
+        // v = ±(m >> tz)·2^e with (m >> tz) odd, of 53 − tz bits
+        let e = exp - 1075 + tz;
+        p = p.max(-e);
+        top = top.max(e + 53 - tz);
+        if p > LIMIT || top + p > LIMIT {
+            return None;
+        }
+    }
+    Some((-(p as f64)).exp2())
+}
+
 /// Order-preserving map of a float's bit pattern (`bits` wide) to a signed integer.
 #[inline]
 pub fn float_bits_to_int(bits: u64, width: u32) -> i64 {
@@ -272,6 +305,26 @@ mod tests {
         let mut h: Vec<i64> = (0..16).map(|i| 3 * i + 5).collect();
         forward(&mut h, &plan(&[16], 1, Scheme::Haar));
         assert!(h[8..].iter().all(|&d| d == -3), "{h:?}");
+    }
+
+    #[test]
+    fn float_quantum_finds_the_power_of_two_every_sample_is_a_multiple_of() {
+        assert_eq!(
+            float_quantum([908.0, -3.0, 0.0, 2543.0].into_iter()),
+            Some(1.0)
+        );
+        assert_eq!(float_quantum([0.5, 0.25, 12.0].into_iter()), Some(0.25));
+        assert_eq!(float_quantum([1024.0, 4096.0].into_iter()), Some(1.0));
+        assert_eq!(float_quantum([0.1f32 as f64].into_iter()), None);
+        assert_eq!(float_quantum([1.0, -0.0].into_iter()), None);
+        assert_eq!(float_quantum([1.0, f64::NAN].into_iter()), None);
+        assert_eq!(float_quantum([(1u64 << 41) as f64].into_iter()), None);
+        assert_eq!(float_quantum(std::iter::empty()), Some(1.0));
+        for x in [0.75f64, -1e6, 3.0 * 2f64.powi(-30)] {
+            let q = float_quantum([x].into_iter()).unwrap();
+            assert_eq!((x / q).fract(), 0.0);
+            assert_eq!((x / q) as i64 as f64 * q, x);
+        }
     }
 
     #[test]

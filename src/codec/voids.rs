@@ -1,12 +1,82 @@
 //! Void samples (NaN, `meta.nodata`) through the codec: filled by pull-push before the
-//! transform, listed in the metadata, and marked again after decoding.
+//! transform, their mask kept in the metadata, and marked again after decoding.
 
+use crate::entropy::range::{Decoder, Encoder, Mix};
 use crate::io::{Raster, Samples};
 use crate::Result;
+use base64::Engine as _;
 
-/// The `meta.extra` key listing the void samples of an encoded raster as runs
-/// `start:length` (sample indices, channels interleaved).
+/// The `meta.extra` key holding the void mask of an encoded raster: `m1:` then the
+/// base64 of the mask range-coded by [`code_mask`]; files written before the coded mask
+/// list runs `start:length` (sample indices, channels interleaved) instead.
 const VOID_RUNS: &str = "nodata.voids";
+/// The prefix of a coded mask.
+const CODED: &str = "m1:";
+
+/// The causal neighbours of sample `i` as a context: the previous position along the
+/// fastest axis (W), the row before (N, NW, NE), the slice before and the previous
+/// channel, each 1 when inside the raster and void. `shape` is slowest first, with the
+/// channel count last.
+#[inline]
+fn context(mask: &[bool], i: usize, shape: &[usize]) -> usize {
+    let nd = shape.len();
+    let c = shape[nd - 1];
+    let k = i % c;
+    let pos = i / c;
+    let get = |j: usize| mask[j] as usize;
+    let mut ctx = 0;
+    if k > 0 {
+        ctx |= get(i - 1);
+    }
+    if nd >= 2 {
+        let w = shape[nd - 2];
+        let x = pos % w;
+        if x > 0 {
+            ctx |= get(i - c) << 1;
+        }
+        if nd >= 3 {
+            let h = shape[nd - 3];
+            let y = (pos / w) % h;
+            if y > 0 {
+                let n = i - c * w;
+                ctx |= get(n) << 2;
+                if x > 0 {
+                    ctx |= get(n - c) << 3;
+                }
+                if x + 1 < w {
+                    ctx |= get(n + c) << 4;
+                }
+            }
+            if nd >= 4 && pos >= w * h {
+                ctx |= get(i - c * w * h) << 5;
+            }
+        }
+    }
+    ctx
+}
+
+/// The void mask (one flag per sample, channels interleaved; `shape` slowest first with
+/// the channel count last) range-coded with adaptive binary models in the 64 contexts of
+/// its causal neighbours ([`context`]).
+fn code_mask(mask: &[bool], shape: &[usize]) -> Vec<u8> {
+    let mut models = [Mix::default(); 64];
+    let mut enc = Encoder::new();
+    for i in 0..mask.len() {
+        enc.bit(&mut models[context(mask, i, shape)], mask[i]);
+    }
+    enc.finish_short()
+}
+
+/// Inverse of [`code_mask`] for a mask of `n` samples.
+fn decode_mask(data: &[u8], n: usize, shape: &[usize]) -> Vec<bool> {
+    let mut models = [Mix::default(); 64];
+    let mut dec = Decoder::new_short(data);
+    let mut mask = vec![false; n];
+    for i in 0..n {
+        mask[i] = dec.bit(&mut models[context(&mask, i, shape)]);
+    }
+    mask
+}
 
 /// `r` with its void samples ([`crate::io::nodata`]) filled by pull-push and their runs
 /// kept in [`VOID_RUNS`]; `None` when no sample (or every sample) is void.
@@ -21,19 +91,7 @@ pub(super) fn with_voids_filled(r: &Raster) -> Result<Option<Raster>> {
     let mut shape = r.dims.clone();
     shape.push(r.channels);
     voids.fill(&mut v, &shape, r.dims.len())?;
-    let mut runs = Vec::new();
-    let mut i = 0;
-    while i < voids.mask.len() {
-        if voids.mask[i] {
-            let start = i;
-            while i < voids.mask.len() && voids.mask[i] {
-                i += 1;
-            }
-            runs.push(format!("{start}:{}", i - start));
-        } else {
-            i += 1;
-        }
-    }
+    let coded = code_mask(&voids.mask, &shape);
     let mut out = Raster::new(
         r.dims.clone(),
         r.channels,
@@ -41,13 +99,30 @@ pub(super) fn with_voids_filled(r: &Raster) -> Result<Option<Raster>> {
         r.kind,
     )?;
     out.meta = r.meta.clone();
-    out.meta.extra.insert(VOID_RUNS.into(), runs.join(" "));
+    let text = format!(
+        "{CODED}{}",
+        base64::engine::general_purpose::STANDARD_NO_PAD.encode(coded)
+    );
+    out.meta.extra.insert(VOID_RUNS.into(), text);
     Ok(Some(out))
+}
+
+/// The mask of runs `start:length` (files written before the coded mask); `None` when
+/// one is malformed or past `n`.
+fn parse_runs(runs: &str, n: usize) -> Option<Vec<bool>> {
+    let mut mask = vec![false; n];
+    for run in runs.split_whitespace() {
+        let (a, l) = run.split_once(':')?;
+        let (a, l) = (a.parse::<usize>().ok()?, l.parse::<usize>().ok()?);
+        let e = a.checked_add(l).filter(|&e| e <= n)?;
+        mask[a..e].iter_mut().for_each(|m| *m = true);
+    }
+    Some(mask)
 }
 
 /// Mark the voids listed in `meta.extra[VOID_RUNS]` on a raster decoded at level `k`
 /// (an output sample is void when its whole footprint on the full grid is) and drop
-/// the key. Malformed runs are ignored.
+/// the key. A malformed list is ignored.
 pub(super) fn mark_voids(r: &mut Raster, full: &[usize], maps: &[crate::io::AxisMap]) {
     let Some(runs) = r.meta.extra.remove(VOID_RUNS) else {
         return;
@@ -55,26 +130,65 @@ pub(super) fn mark_voids(r: &mut Raster, full: &[usize], maps: &[crate::io::Axis
     let Ok(n) = crate::io::bytes::sample_count(full, r.channels) else {
         return;
     };
-    let mut mask = vec![false; n];
-    for run in runs.split_whitespace() {
-        let Some((a, l)) = run.split_once(':') else {
-            return;
-        };
-        let (Ok(a), Ok(l)) = (a.parse::<usize>(), l.parse::<usize>()) else {
-            return;
-        };
-        match a.checked_add(l).filter(|&e| e <= n) {
-            Some(e) => mask[a..e].iter_mut().for_each(|m| *m = true),
+    let mut shape = full.to_vec();
+    shape.push(r.channels);
+    let mask = if let Some(b64) = runs.strip_prefix(CODED) {
+        match base64::engine::general_purpose::STANDARD_NO_PAD.decode(b64) {
+            Ok(data) => decode_mask(&data, n, &shape),
+            Err(_) => return,
+        }
+    } else {
+        match parse_runs(&runs, n) {
+            Some(m) => m,
             None => return,
         }
-    }
+    };
     let voids = crate::io::nodata::Voids {
         mask,
         marker: r.meta.nodata.unwrap_or(f64::NAN),
         range: (f64::NEG_INFINITY, f64::INFINITY),
     };
-    let mut shape = full.to_vec();
-    shape.push(r.channels);
     let m = voids.footprint(&shape, &r.dims, maps);
     crate::io::with_samples!(&mut r.samples, v => voids.restore(v, &m, false));
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn coded_masks_invert_on_every_shape() {
+        let mut seed = 7u64;
+        for shape in [
+            vec![1, 1],
+            vec![17, 1],
+            vec![9, 13, 2],
+            vec![5, 7, 11, 1],
+            vec![3, 4, 5, 6, 1],
+        ] {
+            let n: usize = shape.iter().product();
+            for density in [0u64, 3, 50, 100] {
+                let mask: Vec<bool> = (0..n)
+                    .map(|_| {
+                        seed = seed
+                            .wrapping_mul(6364136223846793005)
+                            .wrapping_add(1442695040888963407);
+                        (seed >> 33) % 100 < density
+                    })
+                    .collect();
+                let coded = code_mask(&mask, &shape);
+                assert_eq!(decode_mask(&coded, n, &shape), mask, "{shape:?} {density}%");
+            }
+        }
+    }
+
+    #[test]
+    fn old_run_lists_still_parse() {
+        assert_eq!(
+            parse_runs("1:2 4:1", 6),
+            Some(vec![false, true, true, false, true, false])
+        );
+        assert_eq!(parse_runs("5:2", 6), None);
+        assert_eq!(parse_runs("x", 6), None);
+    }
 }

@@ -60,6 +60,16 @@ pub const MAX_AXES: usize = 4;
 pub const MAX_CHANNELS: usize = 256;
 pub const MAX_LEVELS: usize = 32;
 
+/// The mode byte: lossless files whose float samples are coded as integer multiples of
+/// the quantum δ > 0 get their own code (3), which readers before it reject instead of
+/// reading the integers as float bit patterns.
+fn mode_code(m: Mode, delta: f64) -> u8 {
+    match m {
+        Mode::Lossless if delta > 0.0 => 3,
+        m => m as u8,
+    }
+}
+
 fn kind_code(k: DataKind) -> u8 {
     match k {
         DataKind::Image => 0,
@@ -129,7 +139,7 @@ impl Header {
         }
         b.extend_from_slice(&(self.channels as u16).to_le_bytes());
         b.push(self.colour as u8);
-        b.push(self.mode as u8);
+        b.push(mode_code(self.mode, self.delta));
         b.push(scheme_code(self.scheme));
         b.push(boundary_code(self.boundary));
         b.push(self.levels as u8);
@@ -207,11 +217,17 @@ impl Header {
                 "3 or more channels",
             ));
         }
-        let mode = match c.u8()? {
+        let code = c.u8()?;
+        let mode = match code {
             0 => Mode::Lossy,
-            1 => Mode::Lossless,
+            1 | 3 => Mode::Lossless,
             2 => Mode::MaxError,
-            k => return Err(bad(format!("mode {k}"), "0 lossy, 1 lossless, 2 max-error")),
+            k => {
+                return Err(bad(
+                    format!("mode {k}"),
+                    "0 lossy, 1 lossless, 2 max-error, 3 lossless scaled floats",
+                ))
+            }
         };
         let scheme =
             match c.u8()? {
@@ -259,6 +275,16 @@ impl Header {
                 format!("range {min}..{max}, δ {delta}, bound {max_error}"),
                 "finite values with min ≤ max",
             ));
+        }
+        // mode 3: float samples, δ the quantum (a power of two); mode 1: δ = 0
+        if mode == Mode::Lossless {
+            let quantum = delta > 0.0 && delta.log2().fract() == 0.0 && sample_type.is_float();
+            if (code == 3) != quantum || (code == 1 && delta != 0.0) {
+                return Err(bad(
+                    format!("lossless mode {code} with δ {delta} on {sample_type:?} samples"),
+                    "mode 1 with δ = 0, or mode 3 with float samples and δ a power of two",
+                ));
+            }
         }
         let mut tile = Vec::with_capacity(nd);
         for _ in 0..nd {
