@@ -614,7 +614,7 @@ mod tests {
         let range = p.header.max - p.header.min;
         let pos = r.positions() as f64;
         let sizes = p.rate_model();
-        for b in [0.5, 1.0, 2.0] {
+        for b in [0.5f64, 1.0, 2.0] {
             let model = |x: f64| b.ln() - (sizes.bits(x.exp()) / pos).ln();
             let bytes = calibrated_bpp(&p, range, b * pos, &model)
                 .unwrap_or_else(|| panic!("{b} bpp: no file within 1% under the budget"));
