@@ -150,7 +150,7 @@ fn reconstruct(p: &Parsed, k: usize) -> Result<Raster> {
         };
         return finish(p, region, samples, k);
     }
-    let mut values = lossy_values(h, plan, k, |ch| {
+    let mut samples = lossy_values(h, plan, k, |ch| {
         let q = decode_channel(p, ch, k)?;
         Ok(q.into_iter()
             .enumerate()
@@ -160,8 +160,8 @@ fn reconstruct(p: &Parsed, k: usize) -> Result<Raster> {
             })
             .collect())
     })?;
-    let mut samples = Samples::from_f64(&values, ty);
     if k == 0 && h.mode == Mode::MaxError {
+        let mut values = samples.to_f64();
         for (ch, r) in p.resi.iter().enumerate() {
             let Some(r) = r else { continue };
             let q =

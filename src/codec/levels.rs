@@ -56,6 +56,19 @@ impl Plan {
         choice: Choice,
         input: impl Fn(usize, usize) -> BandInput + Sync,
     ) -> Vec<Vec<CodedBand>> {
+        self.code_levels_with(channels, choice, true, input)
+    }
+
+    /// [`Plan::code_levels`], keeping each band's indices only while its children are
+    /// coded when `keep_indices` is false (the returned [`CodedBand::q`] are then empty):
+    /// the indices of a whole image (8 bytes a sample) are never held at once.
+    pub(super) fn code_levels_with(
+        &self,
+        channels: usize,
+        choice: Choice,
+        keep_indices: bool,
+        input: impl Fn(usize, usize) -> BandInput + Sync,
+    ) -> Vec<Vec<CodedBand>> {
         let groups = self.level_groups();
         (0..channels)
             .into_par_iter()
@@ -103,6 +116,16 @@ impl Plan {
                         .collect();
                     for (&j, cb) in js.iter().zip(coded) {
                         out[j] = Some(cb);
+                    }
+                    if !keep_indices && *level > 0 {
+                        // the parents of this level have no other children
+                        for (p, b) in out.iter_mut().zip(&self.bands) {
+                            if b.level == level + 1 {
+                                if let Some(cb) = p {
+                                    cb.q = Vec::new();
+                                }
+                            }
+                        }
                     }
                 }
                 out.into_iter()

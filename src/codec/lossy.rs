@@ -140,11 +140,12 @@ impl Prepared {
         step * self.band_ratio(band, channel) as f64
     }
 
-    /// Every band of every channel quantized and coded at base step `step`.
-    pub(super) fn coded(&self, step: f64) -> Vec<Vec<CodedBand>> {
+    /// Every band of every channel quantized and coded at base step `step`; the indices
+    /// of each band kept when `keep_indices` (else they are empty).
+    pub(super) fn coded(&self, step: f64, keep_indices: bool) -> Vec<Vec<CodedBand>> {
         let (plan, nc) = (&self.plan, self.coeffs.len());
         match self.rdo {
-            Some(lambda) => plan.code_levels(nc, Choice::Rdo(lambda), |c, j| {
+            Some(lambda) => plan.code_levels_with(nc, Choice::Rdo(lambda), keep_indices, |c, j| {
                 let s = self.band_step(step, j, c);
                 BandInput::Scaled(
                     layout::gather(&self.coeffs[c], &plan.pyr.shape, &plan.bands[j].ranges)
@@ -153,7 +154,7 @@ impl Prepared {
                         .collect(),
                 )
             }),
-            None => plan.code_levels(nc, Choice::Given, |c, j| {
+            None => plan.code_levels_with(nc, Choice::Given, keep_indices, |c, j| {
                 BandInput::Indices(self.quantized(step, j, c))
             }),
         }
@@ -174,8 +175,8 @@ impl Prepared {
     pub(super) fn decoded(&self, step: f64) -> Result<Raster> {
         let (h, plan) = (&self.header, &self.plan);
         // optimised indices are known only by coding them
-        let coded = self.rdo.map(|_| self.coded(step));
-        let values = lossy_values(h, plan, 0, |c| {
+        let coded = self.rdo.map(|_| self.coded(step, true));
+        let samples = lossy_values(h, plan, 0, |c| {
             Ok((0..plan.bands.len())
                 .into_par_iter()
                 .map(|j| {
@@ -187,12 +188,7 @@ impl Prepared {
                 })
                 .collect())
         })?;
-        Raster::new(
-            h.dims.clone(),
-            h.channels,
-            Samples::from_f64(&values, h.sample_type),
-            h.kind,
-        )
+        Raster::new(h.dims.clone(), h.channels, samples, h.kind)
     }
 
     /// Every (band, channel): bands in order, the channels of each.
@@ -205,7 +201,7 @@ impl Prepared {
 
     /// Quantize and code at base step `step`; the whole file.
     pub(super) fn code(&self, step: f64) -> Vec<u8> {
-        let coded = self.coded(step);
+        let coded = self.coded(step, false);
         let mut h = self.header.clone();
         h.step = step;
         let mut out = format::SIGNATURE.to_vec();

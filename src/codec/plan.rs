@@ -6,6 +6,7 @@ use super::colour::{map3, ycocg_inverse};
 use super::{layout, lossless};
 use crate::format::header::Colour;
 use crate::format::{Header, Mode};
+use crate::io::Samples;
 use crate::quantize::{self, RHO};
 use crate::tensor::{self, Array, Order, Pyramid, PyramidSpec, Subband};
 use crate::Result;
@@ -117,14 +118,15 @@ pub(super) fn dequantized(h: &Header, plan: &Plan, j: usize, q: &[i64], step: f6
 /// A lossy file's samples (interleaved, clamped to the source's range, before the
 /// `--max-error` residuals) of the coarse block after `k` levels (k = 0: full size):
 /// per channel, its bands' dequantized values (`bands(channel)[band]`, None = absent,
-/// as [`dequantized`] makes them) synthesized and taken back from YCoCg. The decoder's
-/// way, and the encoder's `--psnr` search's.
+/// as [`dequantized`] makes them) synthesized and taken back from YCoCg, converted
+/// straight into the header's sample type ([`Samples::from_iter_f64`]: no whole-image
+/// `f64` copy). The decoder's way, and the encoder's `--psnr` search's.
 pub(super) fn lossy_values(
     h: &Header,
     plan: &Plan,
     k: usize,
     bands: impl Fn(usize) -> Result<Vec<Option<Vec<f32>>>> + Sync,
-) -> Result<Vec<f64>> {
+) -> Result<Samples> {
     let region = plan.region(k);
     let npos: usize = region.iter().product();
     let c = h.channels;
@@ -134,9 +136,9 @@ pub(super) fn lossy_values(
         .map(|ch| {
             let q = bands(ch)?;
             let mut plane = vec![0f32; plan.pyr.shape.iter().product()];
-            for (j, v) in q.iter().enumerate() {
+            for (j, v) in q.into_iter().enumerate() {
                 if let Some(v) = v {
-                    layout::scatter(&mut plane, &plan.pyr.shape, &plan.bands[j].ranges, v);
+                    layout::scatter(&mut plane, &plan.pyr.shape, &plan.bands[j].ranges, &v);
                 }
             }
             let full: Vec<std::ops::Range<usize>> = region.iter().map(|&e| 0..e).collect();
@@ -153,13 +155,7 @@ pub(super) fn lossy_values(
     if h.colour == Colour::YCoCg {
         map3(&mut planes, ycocg_inverse);
     }
-    let mut values = Vec::with_capacity(npos * c);
-    if c == 1 {
-        values.extend(planes[0].iter().map(|&x| (x as f64).clamp(h.min, h.max)));
-    } else {
-        for i in 0..npos {
-            values.extend(planes.iter().map(|p| (p[i] as f64).clamp(h.min, h.max)));
-        }
-    }
-    Ok(values)
+    let (lo, hi) = (h.min, h.max);
+    let it = (0..npos * c).map(|i| (planes[i % c][i / c] as f64).clamp(lo, hi));
+    Ok(Samples::from_iter_f64(it, npos * c, h.sample_type))
 }

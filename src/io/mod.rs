@@ -293,7 +293,13 @@ impl Samples {
         Self::from_iter_f64(data.iter().copied(), data.len(), ty)
     }
 
-    fn from_iter_f64(it: impl Iterator<Item = f64>, n: usize, ty: SampleType) -> Samples {
+    /// Convert `n` f64 values to `ty` as [`Samples::from_f32`] does, from an iterator
+    /// (no intermediate buffer).
+    pub(crate) fn from_iter_f64(
+        it: impl Iterator<Item = f64>,
+        n: usize,
+        ty: SampleType,
+    ) -> Samples {
         let (lo, hi) = ty.range();
         macro_rules! ints {
             ($t:ty, $var:ident) => {{
