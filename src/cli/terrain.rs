@@ -415,6 +415,7 @@ fn synth(a: SynthArgs) -> CliResult {
         tr::check_compatible(&br, &er, out_w)
             .map_err(|e| Failure::context(a.example.display(), e))?
     };
+    drop(er);
     let (g, report) = terrain::synthesize(&base, &example, &o)?;
     let out = tr::from_grid(&g, &br, output_type(&a.output, br.sample_type()))?;
     write_output(&a.output, &out, false)?;

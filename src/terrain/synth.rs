@@ -119,7 +119,7 @@ impl Default for SynthOptions {
             slope_weight: 1.0,
             details: Details::Matched,
             example_scale: 1.0,
-            relief_cap: 1.0,
+            relief_cap: 0.0,
         }
     }
 }
@@ -800,11 +800,13 @@ fn refine(
             k,
             parent.as_ref(),
         )?;
+        drop(t);
         t = synthesize_one(packed, o.scheme, &planner)?;
         report.patches.push(sh.rows * sh.cols);
         report.mean_distance.push(md);
         parent = Some(sh);
     }
+    drop(planner);
     report.seam_ratio = seam_ratio(&t, 2 * o.patch);
     Ok((t, report))
 }
@@ -817,7 +819,14 @@ pub fn seam_ratio(g: &Grid, period: usize) -> f64 {
     if h < 3 || w < 3 {
         return f64::NAN;
     }
-    let height: Vec<f64> = (0..h * w).map(|i| g.mean_at(i / w, i % w)).collect();
+    // the heights themselves when there is one channel (no copy of the grid)
+    let means: Vec<f64>;
+    let height: &[f64] = if g.c == 1 {
+        &g.data
+    } else {
+        means = (0..h * w).map(|i| g.mean_at(i / w, i % w)).collect();
+        &means
+    };
     let tally = SeamTally::new(period);
     let border: Vec<bool> = (0..h.max(w)).map(|i| tally.is_border(i)).collect();
     // per-row sums in parallel, added in row order (the same figure for any thread count)
@@ -931,8 +940,15 @@ pub fn synthesize(base: &Grid, example: &Grid, o: &SynthOptions) -> Result<(Grid
         (ly[l], span(base.h, h, ly[l])),
         (lx[l], span(base.w, w, lx[l])),
     );
-    let example = example_at_scale(example, o.example_scale)?;
-    let (mut g, mut report) = refine(coarse, &ly, &lx, &example, o)?;
+    // the example itself when its cell is the output's (no copy)
+    let scaled: Grid;
+    let example = if (o.example_scale - 1.0).abs() < 1e-9 {
+        example
+    } else {
+        scaled = example_at_scale(example, o.example_scale)?;
+        &scaled
+    };
+    let (mut g, mut report) = refine(coarse, &ly, &lx, example, o)?;
     let (lo, hi) = base.range();
     let psnr = |back: &Grid| {
         let mse = back
