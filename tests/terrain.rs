@@ -797,3 +797,62 @@ fn synth_json_reports_extents_fastest_axis_first() {
     let c = rep["coarse"].as_array().unwrap();
     assert!(c[0].as_u64().unwrap() > c[1].as_u64().unwrap(), "{rep}");
 }
+
+/// RMS of `a − b` over columns `[x0, x1)` (all rows).
+fn rms_diff_cols(a: &Grid, b: &Grid, x0: usize, x1: usize) -> f64 {
+    let mut s = 0.0;
+    for y in 0..a.h {
+        for x in x0..x1 {
+            s += (a.at(y, x, 0) - b.at(y, x, 0)).powi(2);
+        }
+    }
+    (s / (a.h * (x1 - x0)) as f64).sqrt()
+}
+
+/// A base whose left third is a flat sea: with the relief gain the sea gets next to no
+/// detail while the hills keep theirs; without it (cap 0) the sea gets the example's.
+#[test]
+fn flat_ground_gets_no_mountain_detail_with_the_relief_gain() {
+    let mut base = smooth_base(48, 5);
+    for y in 0..48 {
+        for x in 0..16 {
+            *base.at_mut(y, x, 0) = 0.0;
+        }
+    }
+    let ex = grid_of(192, 192, 9, 0.6, 1000.0);
+    let detail = |cap: f64| {
+        let o = SynthOptions {
+            relief_cap: cap,
+            ..opts(3)
+        };
+        let (g, _) = synthesize(&base, &ex, &o).unwrap();
+        let none = SynthOptions {
+            details: Details::None,
+            ..o
+        };
+        let (g0, _) = synthesize(&base, &ex, &none).unwrap();
+        // the sea away from its coast (output columns 0..24; the coast is at 64) and the
+        // hills (96..192)
+        (
+            rms_diff_cols(&g, &g0, 0, 24),
+            rms_diff_cols(&g, &g0, 96, 192),
+        )
+    };
+    let (sea_on, land_on) = detail(1.0);
+    let (sea_off, land_off) = detail(0.0);
+    assert!(land_on > 0.0 && land_off > 0.0);
+    assert!(
+        sea_on < 0.15 * land_on,
+        "with the gain: sea {sea_on:.3} against hills {land_on:.3}"
+    );
+    assert!(
+        sea_off > 0.3 * land_off,
+        "without the gain: sea {sea_off:.3} against hills {land_off:.3}"
+    );
+    // a bad cap is an error, not a panic
+    let bad = SynthOptions {
+        relief_cap: f64::NAN,
+        ..opts(3)
+    };
+    assert!(synthesize(&base, &ex, &bad).is_err());
+}

@@ -70,6 +70,11 @@ pub struct MatchArgs {
     /// matched (the method), copy (same place, no matching) or none (subdivision only).
     #[arg(long, default_value = "matched")]
     pub details: Details,
+    /// Cap of the relief gain: each patch's details are scaled by the ratio of its coarse
+    /// mean slope to its source window's, at most this (flat ground gets no mountain
+    /// detail); 0 turns it off.
+    #[arg(long, default_value_t = SynthOptions::default().relief_cap)]
+    pub relief_cap: f64,
     /// Print what was done as one JSON object.
     #[arg(long)]
     pub json: bool,
@@ -88,6 +93,7 @@ impl MatchArgs {
                 .candidates
                 .unwrap_or(SynthOptions::default().candidates),
             details: self.details,
+            relief_cap: self.relief_cap,
             ..SynthOptions::default()
         }
     }
@@ -409,6 +415,7 @@ fn synth(a: SynthArgs) -> CliResult {
         tr::check_compatible(&br, &er, out_w)
             .map_err(|e| Failure::context(a.example.display(), e))?
     };
+    drop(er);
     let (g, report) = terrain::synthesize(&base, &example, &o)?;
     let out = tr::from_grid(&g, &br, output_type(&a.output, br.sample_type()))?;
     write_output(&a.output, &out, false)?;

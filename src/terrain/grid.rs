@@ -84,6 +84,16 @@ impl Grid {
         ))
     }
 
+    /// The engine's array by move (no copy): `[h, w]` or `[h, w, c]`.
+    pub fn into_array(self) -> Result<Array<f64>> {
+        let shape = if self.c == 1 {
+            vec![self.h, self.w]
+        } else {
+            vec![self.h, self.w, self.c]
+        };
+        Array::from_shape_vec(&shape, self.data)
+    }
+
     /// `(min, max)` over all samples.
     pub fn range(&self) -> (f64, f64) {
         self.data

@@ -36,12 +36,18 @@ pub struct Tables {
 }
 
 impl Tables {
+    /// The tables of the whole grid.
     pub fn new(g: &Grid) -> Tables {
-        let (h, w) = (g.h, g.w);
-        let height: Vec<f64> = (0..h * w).map(|i| g.mean_at(i / w, i % w)).collect();
-        let at = |y: i64, x: i64| {
-            height[y.clamp(0, h as i64 - 1) as usize * w + x.clamp(0, w as i64 - 1) as usize]
-        };
+        Tables::region(g, 0, 0, g.h, g.w)
+    }
+
+    /// The tables of the `h × w` region of `g` with top-left `(y0, x0)`; gradients and
+    /// Laplacians take their neighbours from the whole grid (indices clamped at its ends),
+    /// so a window's descriptor is the same as from [`Tables::new`] up to rounding.
+    pub fn region(g: &Grid, y0: usize, x0: usize, h: usize, w: usize) -> Tables {
+        let (gh, gw) = (g.h as i64, g.w as i64);
+        let at =
+            |y: i64, x: i64| g.mean_at(y.clamp(0, gh - 1) as usize, x.clamp(0, gw - 1) as usize);
         let n = (h + 1) * (w + 1);
         let mut t = Tables {
             w,
@@ -55,7 +61,7 @@ impl Tables {
         for y in 0..h {
             let (mut rh, mut rx, mut ry, mut rm, mut rl) = (0.0, 0.0, 0.0, 0.0, 0.0);
             for x in 0..w {
-                let (yi, xi) = (y as i64, x as i64);
+                let (yi, xi) = ((y0 + y) as i64, (x0 + x) as i64);
                 let c = at(yi, xi);
                 let dx = 0.5 * (at(yi, xi + 1) - at(yi, xi - 1));
                 let dy = 0.5 * (at(yi + 1, xi) - at(yi - 1, xi));
@@ -74,6 +80,13 @@ impl Tables {
             }
         }
         t
+    }
+
+    /// The descriptor of one `q × q` window of `g` with top-left `(y0, x0)`, without
+    /// tables of the whole grid (memory `O(q²)`: how the output's few windows per level
+    /// are described).
+    pub fn window_descriptor(g: &Grid, y0: usize, x0: usize, q: usize, out: &mut [f32]) {
+        Tables::region(g, y0, x0, q, q).descriptor(0, 0, q, out);
     }
 
     /// Sum of table `v` over rows `[y0, y1)` × columns `[x0, x1)`.
@@ -171,5 +184,29 @@ mod tests {
             .all(|(a, b)| (a - b).abs() < 1e-5));
         let r: f64 = (6.0 - 3.0) / (9.0 + 1e-9);
         assert!((distance(&v, &v2, 1.0) - r * r).abs() < 1e-4);
+    }
+
+    /// A window described from its own small tables equals the same window read from
+    /// the whole grid's tables (edges included, where neighbours are clamped).
+    #[test]
+    fn window_descriptor_equals_the_whole_grid_tables() {
+        let g = Grid::new(
+            30,
+            26,
+            1,
+            (0..780)
+                .map(|i| ((i % 26) as f64 * 0.7).sin() * 40.0 + ((i / 26) as f64).powi(2) * 0.3)
+                .collect(),
+        )
+        .unwrap();
+        let t = Tables::new(&g);
+        for (y0, x0) in [(0, 0), (5, 7), (18, 14)] {
+            let (mut a, mut b) = (vec![0.0f32; LEN], vec![0.0f32; LEN]);
+            t.descriptor(y0, x0, 12, &mut a);
+            Tables::window_descriptor(&g, y0, x0, 12, &mut b);
+            for (u, v) in a.iter().zip(&b) {
+                assert!((u - v).abs() <= 1e-4 * (1.0 + u.abs()), "{u} {v}");
+            }
+        }
     }
 }

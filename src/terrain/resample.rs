@@ -4,6 +4,8 @@
 //! `w₋₁ = (−t³ + 2t² − t)/2`, `w₀ = (3t³ − 5t² + 2)/2`, `w₁ = (−3t³ + 4t² + t)/2`,
 //! `w₂ = (t³ − t²)/2`; indices beyond the ends are clamped.
 
+use rayon::prelude::*;
+
 use super::Grid;
 
 fn weights(t: f64) -> [f64; 4] {
@@ -111,7 +113,16 @@ pub fn resample(g: &Grid, h: usize, w: usize) -> Grid {
 
 /// Resample `g` to `h` rows and `w` columns on the maps `my`, `mx`.
 pub fn resample_map(g: &Grid, (h, my): (usize, Map), (w, mx): (usize, Map)) -> Grid {
-    let c = g.c;
+    let mut out = Grid::zeros(h, w, g.c);
+    resample_add(g, &mut out, my, mx);
+    out
+}
+
+/// `out ← out + R g`, with `R` the resampling of `g` to `out`'s rows and columns on the
+/// maps `my`, `mx` (the values of [`resample_map`], added in place: no grid of the
+/// output's size is allocated).
+pub fn resample_add(g: &Grid, out: &mut Grid, my: Map, mx: Map) {
+    let (c, h, w) = (g.c, out.h, out.w);
     // along x
     let tx = taps(g.w, w, mx);
     let mut mid = Grid::zeros(g.h, w, c);
@@ -126,21 +137,22 @@ pub fn resample_map(g: &Grid, (h, my): (usize, Map), (w, mx): (usize, Map)) -> G
             }
         }
     }
-    // along y
+    // along y, one output row per task
     let ty = taps(g.h, h, my);
-    let mut out = Grid::zeros(h, w, c);
-    for (y, (idx, wt)) in ty.iter().enumerate() {
-        for x in 0..w {
-            for k in 0..c {
-                let mut s = 0.0;
-                for j in 0..4 {
-                    s += wt[j] * mid.at(idx[j], x, k);
+    out.data
+        .par_chunks_mut(w * c)
+        .zip(ty.par_iter())
+        .for_each(|(row, (idx, wt))| {
+            for x in 0..w {
+                for k in 0..c {
+                    let mut s = 0.0;
+                    for j in 0..4 {
+                        s += wt[j] * mid.at(idx[j], x, k);
+                    }
+                    row[x * c + k] += s;
                 }
-                *out.at_mut(y, x, k) = s;
             }
-        }
-    }
-    out
+        });
 }
 
 #[cfg(test)]

@@ -44,11 +44,11 @@
 use rayon::prelude::*;
 
 use super::matching::{distance, Tables, LEN};
-use super::resample::{resample_map, Map};
+use super::resample::{resample_add, resample_map, Map};
 use super::Grid;
 use crate::generate::rng::SplitMix64;
 use crate::scheme::{max_levels, Boundary, Scheme, TwoScale};
-use crate::tensor::{self, Order, Pyramid, PyramidSpec};
+use crate::tensor::{self, Engine, Order, Planner, Pyramid, PyramidSpec};
 use crate::{Error, Result};
 
 /// Where the output's details come from.
@@ -98,6 +98,11 @@ pub struct SynthOptions {
     pub details: Details,
     /// The example's cell ÷ the output's cell (the example is resampled by it first).
     pub example_scale: f64,
+    /// Cap `c` of the relief gain: each patch's details are scaled by
+    /// `min(c, (G_t + ε)/(G_e + ε))`, the mean coarse slope of the output's window over
+    /// that of its source window (`ε` = 5 % of the example's mean), so that flat ground
+    /// (sea, plains) gets no mountain detail; 0 turns it off.
+    pub relief_cap: f64,
 }
 
 impl Default for SynthOptions {
@@ -114,6 +119,7 @@ impl Default for SynthOptions {
             slope_weight: 1.0,
             details: Details::Matched,
             example_scale: 1.0,
+            relief_cap: 0.0,
         }
     }
 }
@@ -171,21 +177,23 @@ pub(super) fn lengths_down(
     Ok(v)
 }
 
-/// One level of analysis of a grid: the Mallat block `[C | D]` and the coarse size.
-fn analyze_one(g: &Grid, scheme: Scheme) -> Result<(Grid, usize, usize)> {
-    let (mut a, _) = g.to_array()?;
-    tensor::analyze(&mut a, &spec(scheme, 1))?;
-    let ny = TwoScale::coarse_len(scheme, BOUNDARY, g.h);
-    let nx = TwoScale::coarse_len(scheme, BOUNDARY, g.w);
-    Ok((Grid::new(g.h, g.w, g.c, a.into_data())?, ny, nx))
+/// One level of analysis of a grid (taken by value and transformed in place): the
+/// Mallat block `[C | D]` and the coarse size.
+fn analyze_one(g: Grid, scheme: Scheme, planner: &Planner) -> Result<(Grid, usize, usize)> {
+    let (h, w, c) = (g.h, g.w, g.c);
+    let mut a = g.into_array()?;
+    tensor::analyze_in(planner, &mut a, &spec(scheme, 1), Engine::tuned())?;
+    let ny = TwoScale::coarse_len(scheme, BOUNDARY, h);
+    let nx = TwoScale::coarse_len(scheme, BOUNDARY, w);
+    Ok((Grid::new(h, w, c, a.into_data())?, ny, nx))
 }
 
-/// One level of reconstruction of a Mallat block.
-fn synthesize_one(packed: Grid, scheme: Scheme) -> Result<Grid> {
+/// One level of reconstruction of a Mallat block, in place.
+fn synthesize_one(packed: Grid, scheme: Scheme, planner: &Planner) -> Result<Grid> {
     let (h, w, c) = (packed.h, packed.w, packed.c);
-    let (mut a, _) = packed.to_array()?;
+    let mut a = packed.into_array()?;
     let pyr = Pyramid::plan(a.shape(), &spec(scheme, 1))?;
-    tensor::synthesize(&mut a, &pyr)?;
+    tensor::synthesize_in(planner, &mut a, &pyr, Engine::tuned())?;
     Grid::new(h, w, c, a.into_data())
 }
 
@@ -195,11 +203,11 @@ struct ExamplePyramid {
 }
 
 impl ExamplePyramid {
-    fn new(example: &Grid, scheme: Scheme, levels: usize) -> Result<Self> {
+    fn new(example: &Grid, scheme: Scheme, levels: usize, planner: &Planner) -> Result<Self> {
         let mut blocks = Vec::with_capacity(levels);
         let mut g = example.clone();
         for _ in 0..levels {
-            let (packed, ny, nx) = analyze_one(&g, scheme)?;
+            let (packed, ny, nx) = analyze_one(g, scheme, planner)?;
             g = packed.crop(ny, nx);
             blocks.push((packed, ny, nx));
         }
@@ -294,6 +302,8 @@ pub(super) struct Shifts {
     rows: usize,
     cols: usize,
     shift: Vec<(i64, i64)>,
+    /// Relief gain of each patch (see [`SynthOptions::relief_cap`]).
+    gain: Vec<f64>,
 }
 
 impl Shifts {
@@ -342,11 +352,12 @@ fn level_details(
         rows: npy,
         cols: npx,
         shift: vec![(0, 0); npy * npx],
+        gain: vec![1.0; npy * npx],
     };
     let mut mean_d = 0.0;
     if matched {
         let ce = e.crop(*ne_y, *ne_x);
-        let (te, tt) = (Tables::new(&ce), Tables::new(t));
+        let te = Tables::new(&ce);
         // the global candidate grid
         let budget = match parent {
             None => o.candidates.max(1),
@@ -370,19 +381,26 @@ fn level_details(
                 v
             })
             .collect();
+        // the relief gain's ε: 5 % of the mean coarse slope of the example's windows
+        let eps = 0.05
+            * gfeat
+                .chunks_exact(LEN)
+                .map(|v| v[LEN - 1] as f64)
+                .sum::<f64>()
+            / global.len().max(1) as f64;
         let k = if parent.is_none() {
             o.choices.max(1)
         } else {
             1
         };
-        let chosen: Vec<((i64, i64), f64)> = (0..npy * npx)
+        let chosen: Vec<((i64, i64), f64, f64)> = (0..npy * npx)
             .into_par_iter()
             .map(|idx| {
                 let (a, b) = (idx / npx, idx % npx);
                 let wy = window_origin(a * p, ov, q, n_y);
                 let wx = window_origin(b * p, ov, q, n_x);
                 let mut f = [0.0f32; LEN];
-                tt.descriptor(wy, wx, q, &mut f);
+                Tables::window_descriptor(t, wy, wx, q, &mut f);
                 let mut best: Vec<(f64, usize, usize)> = Vec::with_capacity(k + 1);
                 let mut offer = |d: f64, y: usize, x: usize| {
                     if best.len() < k || d < best[best.len() - 1].0 {
@@ -429,10 +447,19 @@ fn level_details(
                 }
                 let mut r = mix(o.seed, level, idx);
                 let (d, y, x) = best[(r.next_u64() % best.len() as u64) as usize];
-                ((y as i64 - wy as i64, x as i64 - wx as i64), d)
+                let gain = if o.relief_cap > 0.0 {
+                    let mut v = [0.0f32; LEN];
+                    te.descriptor(y, x, q, &mut v);
+                    let (gt, ge) = (f[LEN - 1] as f64, v[LEN - 1] as f64);
+                    ((gt + eps) / (ge + eps)).min(o.relief_cap)
+                } else {
+                    1.0
+                };
+                ((y as i64 - wy as i64, x as i64 - wx as i64), d, gain)
             })
             .collect();
         mean_d = chosen.iter().map(|c| c.1).sum::<f64>() / chosen.len().max(1) as f64;
+        shifts.gain = chosen.iter().map(|c| c.2).collect();
         shifts.shift = chosen.into_iter().map(|c| c.0).collect();
     } else if o.details == Details::Copy {
         // same place in the example (wrapped into the candidate range)
@@ -454,6 +481,9 @@ fn level_details(
         blend(&mut acc, (n_y, n_x), e, (*ne_y, *ne_x), &shifts, p, ov);
         if matched {
             match_band_rms(&mut acc, (n_y, n_x), e, (*ne_y, *ne_x));
+            if o.relief_cap > 0.0 {
+                relief_gain(&mut acc, (n_y, n_x), &shifts, p, ov);
+            }
         }
     }
     acc.paste(t);
@@ -547,6 +577,41 @@ fn blend(
         });
 }
 
+/// Scale the detail bands of the Mallat block `acc` (coarse part `n_y × n_x`) by the
+/// patches' relief gains `gᵢ`, blended with the ramps `w` of [`blend`]: each detail
+/// sample is multiplied by `Σ wᵢ gᵢ / Σ wᵢ` over the patches whose windows cover it (a
+/// gain field as smooth as the blend, so no seam is made).
+fn relief_gain(acc: &mut Grid, (n_y, n_x): (usize, usize), s: &Shifts, p: usize, ov: usize) {
+    let (m_x, c) = (acc.w, acc.c);
+    acc.data
+        .par_chunks_mut(m_x * c)
+        .enumerate()
+        .for_each(|(py, row)| {
+            let hy = py >= n_y;
+            let iy = if hy { py - n_y } else { py };
+            let cy = cover(iy, s.rows, p, ov);
+            for px in 0..m_x {
+                let hx = px >= n_x;
+                if !hy && !hx {
+                    continue;
+                }
+                let ix = if hx { px - n_x } else { px };
+                let (mut sw, mut sg) = (0.0, 0.0);
+                for &(a, wy) in &cy {
+                    for &(b, wx) in &cover(ix, s.cols, p, ov) {
+                        let w = wy * wx;
+                        sw += w;
+                        sg += w * s.gain[a.min(s.rows - 1) * s.cols + b.min(s.cols - 1)];
+                    }
+                }
+                if sw > 0.0 {
+                    let g = sg / sw;
+                    row[px * c..(px + 1) * c].iter_mut().for_each(|v| *v *= g);
+                }
+            }
+        });
+}
+
 /// Root mean square of the channel values of `g` over rows `ry` × columns `rx`.
 fn rms(g: &Grid, ry: std::ops::Range<usize>, rx: std::ops::Range<usize>) -> f64 {
     let (mut s, mut n) = (0.0, 0usize);
@@ -617,6 +682,13 @@ pub(super) fn check_options(base_c: usize, example_c: usize, o: &SynthOptions) -
     }
     if o.levels == 0 || o.levels > 8 {
         return Err(Error::parameter("levels", o.levels, "1 to 8"));
+    }
+    if !(o.relief_cap.is_finite() && o.relief_cap >= 0.0) {
+        return Err(Error::parameter(
+            "relief cap",
+            o.relief_cap,
+            "a finite gain ≥ 0 (0: off)",
+        ));
     }
     Ok(())
 }
@@ -705,7 +777,9 @@ fn refine(
             "an example larger than the filter support: its coarsest grid must hold a patch window plus the detail band",
         ));
     }
-    let pyr = ExamplePyramid::new(example, o.scheme, l)?;
+    // the levels' scratch and operators, returned to the allocator when refinement ends
+    let planner = Planner::new();
+    let pyr = ExamplePyramid::new(example, o.scheme, l, &planner)?;
     let mut t = coarse;
     let mut report = SynthReport {
         dims: [ly[0], lx[0]],
@@ -726,11 +800,13 @@ fn refine(
             k,
             parent.as_ref(),
         )?;
-        t = synthesize_one(packed, o.scheme)?;
+        drop(t);
+        t = synthesize_one(packed, o.scheme, &planner)?;
         report.patches.push(sh.rows * sh.cols);
         report.mean_distance.push(md);
         parent = Some(sh);
     }
+    drop(planner);
     report.seam_ratio = seam_ratio(&t, 2 * o.patch);
     Ok((t, report))
 }
@@ -743,7 +819,14 @@ pub fn seam_ratio(g: &Grid, period: usize) -> f64 {
     if h < 3 || w < 3 {
         return f64::NAN;
     }
-    let height: Vec<f64> = (0..h * w).map(|i| g.mean_at(i / w, i % w)).collect();
+    // the heights themselves when there is one channel (no copy of the grid)
+    let means: Vec<f64>;
+    let height: &[f64] = if g.c == 1 {
+        &g.data
+    } else {
+        means = (0..h * w).map(|i| g.mean_at(i / w, i % w)).collect();
+        &means
+    };
     let tally = SeamTally::new(period);
     let border: Vec<bool> = (0..h.max(w)).map(|i| tally.is_border(i)).collect();
     // per-row sums in parallel, added in row order (the same figure for any thread count)
@@ -857,8 +940,15 @@ pub fn synthesize(base: &Grid, example: &Grid, o: &SynthOptions) -> Result<(Grid
         (ly[l], span(base.h, h, ly[l])),
         (lx[l], span(base.w, w, lx[l])),
     );
-    let example = example_at_scale(example, o.example_scale)?;
-    let (mut g, mut report) = refine(coarse, &ly, &lx, &example, o)?;
+    // the example itself when its cell is the output's (no copy)
+    let scaled: Grid;
+    let example = if (o.example_scale - 1.0).abs() < 1e-9 {
+        example
+    } else {
+        scaled = example_at_scale(example, o.example_scale)?;
+        &scaled
+    };
+    let (mut g, mut report) = refine(coarse, &ly, &lx, example, o)?;
     let (lo, hi) = base.range();
     let psnr = |back: &Grid| {
         let mse = back
@@ -946,15 +1036,8 @@ fn back_project(g: &mut Grid, base: &Grid, f: (usize, usize)) {
     for (v, b) in r.data.iter_mut().zip(&base.data) {
         *v = b - *v;
     }
-    let up = resample_map(
-        &r,
-        (g.h, Map::centred(base.h, g.h)),
-        (g.w, Map::centred(base.w, g.w)),
-    );
-    g.data
-        .par_iter_mut()
-        .zip(up.data.par_iter())
-        .for_each(|(v, u)| *v += u);
+    let (my, mx) = (Map::centred(base.h, g.h), Map::centred(base.w, g.w));
+    resample_add(&r, g, my, mx);
 }
 
 /// Detail transfer at the base's own size: the base is analysed `L` levels, its details
