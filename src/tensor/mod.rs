@@ -21,5 +21,5 @@ pub use pyramid::{
     Pyramid, PyramidSpec, Subband,
 };
 pub use resample::{map_lanes, resample_axis, resample_axis_with};
-pub use transform::transform_axis;
+pub use transform::{transform_axis, transform_axis_with};
 pub use workspace::Planner;

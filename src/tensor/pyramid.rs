@@ -11,7 +11,7 @@ use super::array::Array;
 use super::cascade;
 use super::fused::{fused_level, fused_level_strided, AxisOp, Writes};
 use super::par::{for_each_task, SharedMut};
-use super::transform::transform_axis;
+use super::transform::transform_axis_with;
 use super::workspace::{self, Planner};
 use crate::scheme::{max_levels, Boundary, Sample, Scheme, TwoScale};
 use crate::tuning::EngineChoice;
@@ -337,6 +337,7 @@ fn run<T: Sample>(
 ) {
     let shape = array.shape().to_vec();
     let spec = &pyr.spec;
+    let k = planner.kernels();
     let ops = |i: usize, l: usize| planner.level_ops(spec.scheme, spec.boundary, pyr.lengths[i][l]);
     let step = |data: &mut [T], i: usize, l: usize, region: &[usize]| {
         let o = ops(i, l);
@@ -344,7 +345,7 @@ fn run<T: Sample>(
             Direction::Analysis => &o.two_scale.analysis,
             Direction::Synthesis => &o.two_scale.synthesis,
         };
-        transform_axis(data, &shape, region, spec.axes[i], op);
+        transform_axis_with(k, data, &shape, region, spec.axes[i], op);
     };
     if spec.order == Order::Standard {
         let mut steps = pyr.steps();
