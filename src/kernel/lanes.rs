@@ -13,6 +13,7 @@ pub(crate) const LANE_TAPS_SLOTS: usize = 64;
 /// lane and window instead of one per tap and row), and the sums of 8 rows that follow
 /// one another transposed back (one store per lane instead of one per row and lane).
 /// [`LaneTaps`] prepares the rows once for many calls ([`combine_lane_taps_with`]).
+#[cfg(any(test, feature = "testing"))]
 pub fn combine_lane_taps<T: Sample>(
     k: Kernels,
     x: &[T],

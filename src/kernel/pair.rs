@@ -12,6 +12,7 @@ use super::*;
 ///
 /// Every `src[k]` must hold at least `o1.len()` samples; `o2` as long as `o1`; both masks
 /// non-empty and within `src`. The build is `k`'s.
+#[cfg(any(test, feature = "testing"))]
 #[allow(clippy::too_many_arguments)]
 pub fn combine_pair<T: Sample>(
     k: Kernels,
@@ -436,6 +437,7 @@ impl<T: Sample> PairMemo<T> {
 /// Whether [`combine_pair`] has a vector build for the pair `(w1, m1)`, `(w2, m2)` (its
 /// inputs' count, masks, unit weights and pairs one of the built patterns): the regular
 /// rows of every scheme have one (tested), other pairs go one output at a time.
+#[cfg(any(test, feature = "testing"))]
 pub fn combine_pair_has_build<T: Sample>(w1: &[T], m1: u32, w2: &[T], m2: u32) -> bool {
     pair_entry(w1, m1, w2, m2).is_some()
 }
@@ -444,6 +446,7 @@ pub fn combine_pair_has_build<T: Sample>(w1: &[T], m1: u32, w2: &[T], m2: u32) -
 /// `out[2i + 1]` the second (the even and the odd fine samples of synthesis, without a
 /// pass through two buffers and [`interleave`]). The same bits; `false` (nothing written)
 /// where there is no AVX2 build for the pattern or the type.
+#[cfg(any(test, feature = "testing"))]
 pub fn combine_pair_merged<T: Sample>(
     k: Kernels,
     out: &mut [T],

@@ -12,8 +12,9 @@ pub mod pyramid;
 mod resample;
 mod ring;
 mod transform;
-pub mod workspace;
+mod workspace;
 
+pub use crate::kernel::Kernels;
 pub use array::{Array, Axis};
 pub use pages::{advise_huge_pages, zeroed_vec};
 pub use pyramid::{

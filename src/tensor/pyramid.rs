@@ -245,9 +245,10 @@ pub enum Engine {
     FusedLevels,
     /// Every level axis by axis, in place.
     AxisByAxis,
-    /// [`Engine::Fused`] with the cascade split into this many parts, volumes included
-    /// (tests).
-    #[doc(hidden)]
+    /// [`Engine::Fused`] with the cascade split into exactly this many parts (at least
+    /// one), volumes included, whatever its halos cost: what `MRA_ENGINE=cascade` runs
+    /// (a part per thread), and how the tests reach every cut of the cascade. The same
+    /// bits as every engine.
     CascadeParts(usize),
 }
 

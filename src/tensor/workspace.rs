@@ -11,7 +11,7 @@
 //! A library user who wants that memory back, or several independent caches, creates a
 //! [`Planner`] and passes it (`pyramid::analyze_in`, `synthesize_in`). The functions
 //! without a planner use [`Planner::shared`], one instance for the process (what the
-//! command line uses); [`release`] empties it.
+//! command line uses); [`Planner::clear`] empties it.
 
 use super::fused::pair_parts;
 use crate::kernel::polyphase::Polyphase;
@@ -190,16 +190,6 @@ impl Planner {
     }
 }
 
-/// [`Planner::level_ops`] of [`Planner::shared`].
-pub fn level_ops(scheme: Scheme, boundary: Boundary, m: usize) -> Arc<LevelOps> {
-    Planner::shared().level_ops(scheme, boundary, m)
-}
-
-/// Free the kept scratch arrays and operators of [`Planner::shared`].
-pub fn release() {
-    Planner::shared().clear()
-}
-
 #[cfg(test)]
 mod tests {
     use super::super::fused::ROWS_PER_TASK;
@@ -246,7 +236,7 @@ mod tests {
         for scheme in Scheme::ALL {
             for boundary in Boundary::ALL {
                 for m in [5, 16, 64, 67, 130, 256] {
-                    let o = level_ops(scheme, boundary, m);
+                    let o = Planner::new().level_ops(scheme, boundary, m);
                     for (op, order) in [
                         (&o.two_scale.analysis, &o.analysis_order),
                         (&o.two_scale.synthesis, &o.synthesis_order),
