@@ -28,7 +28,7 @@ pub fn zigzag_circle(n: usize) -> Vec<f64> {
 /// The generated zone plate (`mra generate zone-plate`) on the 8-bit scale, as f32.
 pub fn zone_plate(h: usize, w: usize) -> Vec<f32> {
     crate::generate::images::zone_plate(h, w)
-        .data
+        .data()
         .iter()
         .map(|&v| (v * 255.0) as f32)
         .collect()
@@ -38,7 +38,7 @@ pub fn zone_plate(h: usize, w: usize) -> Vec<f32> {
 /// mapped to a CT-like range (−1000 … 1000) as f32.
 pub fn blob_volume(n: usize) -> Vec<f32> {
     crate::generate::phantom::shepp_logan(n, n, n)
-        .data
+        .data()
         .iter()
         .map(|&v| (v * 2000.0 - 1000.0) as f32)
         .collect()

@@ -31,7 +31,12 @@ pub mod format;
 pub mod fsutil;
 pub mod generate;
 pub mod io;
+// the kernels are the tensor engine's inner loops: public only to the tests and benches
+// (feature `testing`), which check every CPU level's build against the plain loops
+#[cfg(feature = "testing")]
 pub mod kernel;
+#[cfg(not(feature = "testing"))]
+mod kernel;
 pub mod limits;
 #[cfg(feature = "geometry")]
 pub mod mesh;

@@ -115,8 +115,16 @@ proptest! {
 
 // ---- filter rows exactly as in the notes -------------------------------------------
 
-use mra::kernel::CpuLevel;
+use mra::kernel::{CpuLevel, Kernels};
 use mra::scheme::sparse::Csr as MraCsr;
+
+/// The kernel table of every CPU level this machine runs (scalar first).
+fn tables() -> Vec<Kernels> {
+    CpuLevel::available()
+        .into_iter()
+        .map(Kernels::new)
+        .collect()
+}
 fn row(t: &MraCsr, r: usize) -> Vec<(usize, f64)> {
     t.row(r).collect()
 }
@@ -331,7 +339,15 @@ fn every_cpu_level_of_the_kernel_gives_the_same_bits() {
                     op.apply(&f, width, &mut a, width, width);
                     for level in CpuLevel::available() {
                         b.fill(f32::NAN);
-                        mra::kernel::apply_with(level, op, &f, width, &mut b, width, width);
+                        mra::kernel::apply(
+                            Kernels::new(level),
+                            op,
+                            &f,
+                            width,
+                            &mut b,
+                            width,
+                            width,
+                        );
                         assert!(
                             a.iter().zip(&b).all(|(x, y)| x.to_bits() == y.to_bits()),
                             "{scheme} {boundary} m={m} {level:?}"
@@ -345,7 +361,7 @@ fn every_cpu_level_of_the_kernel_gives_the_same_bits() {
 
 /// The regular-run form of an operator (`Polyphase`) applies exactly as the assembled
 /// matrix does: same bits, every scheme × boundary, lengths 1..=80 and long lanes,
-/// element widths 1–3, f32 and f64.
+/// element widths 1–3, f32 and f64, with the kernel table of every CPU level.
 #[test]
 fn polyphase_lanes_give_the_bits_of_the_matrix() {
     use mra::kernel::polyphase::Polyphase;
@@ -358,18 +374,20 @@ fn polyphase_lanes_give_the_bits_of_the_matrix() {
     ) {
         let t = TwoScale::new(s, b, m);
         for op in [&t.analysis, &t.synthesis] {
-            let plan = Polyphase::new(op);
             let mut want = vec![T::default(); m * e];
             op.apply(f, e, &mut want, e, e);
-            let mut got = vec![T::default(); m * e];
-            let mut scratch = vec![T::default(); plan.scratch_len(e)];
-            plan.apply_lane(op, f, &mut got, e, &mut scratch);
-            for (i, (x, y)) in want.iter().zip(&got).enumerate() {
-                let (x, y): (f64, f64) = ((*x).into(), (*y).into());
-                assert!(
-                    x.to_bits() == y.to_bits(),
-                    "{s} {b} m={m} e={e} sample {i}: {x} vs {y}"
-                );
+            for k in tables() {
+                let plan = Polyphase::new(op, k);
+                let mut got = vec![T::default(); m * e];
+                let mut scratch = vec![T::default(); plan.scratch_len(e)];
+                plan.apply_lane(op, f, &mut got, e, &mut scratch);
+                for (i, (x, y)) in want.iter().zip(&got).enumerate() {
+                    let (x, y): (f64, f64) = ((*x).into(), (*y).into());
+                    assert!(
+                        x.to_bits() == y.to_bits(),
+                        "{s} {b} m={m} e={e} {k:?} sample {i}: {x} vs {y}"
+                    );
+                }
             }
         }
     }
@@ -397,7 +415,7 @@ fn pair_and_unpaired_stretches_cover_every_row_once() {
             for m in (1..=70).chain([255, 256]) {
                 let t = TwoScale::new(s, b, m);
                 for op in [&t.analysis, &t.synthesis] {
-                    let plan = Polyphase::new(op);
+                    let plan = Polyphase::new(op, Kernels::detected());
                     let mut seen = vec![0u32; m];
                     if let Some(p) = &plan.pair {
                         for j in 0..2 {
@@ -430,7 +448,7 @@ fn combine_matches_plain_loop<T: mra::scheme::Sample + Into<f64>>(
     let taps = src.len();
     for simd in CpuLevel::available() {
         let mut a = vec![T::from_f64(1.0); len];
-        mra::kernel::combine_with(simd, &mut a, src, w);
+        mra::kernel::combine(Kernels::new(simd), &mut a, src, w);
         for i in 0..len {
             let mut acc = if taps == 0 {
                 T::default()
@@ -458,36 +476,35 @@ fn vector_kernels_match_plain_loops() {
     common::vector_builds();
     use mra::kernel::{deinterleave, interleave};
     for len in 0..70usize {
-        for e in 1..=2usize {
+        for (e, k) in (1..=2usize).flat_map(|e| tables().into_iter().map(move |k| (e, k))) {
             let x: Vec<f32> = (0..len * e).map(|i| i as f32 * 0.5 - 3.0).collect();
             let mut d = vec![0f32; len * e];
-            deinterleave(&x, e, &mut d);
+            deinterleave(k, &x, e, &mut d);
             let ne = len.div_ceil(2);
             for i in 0..len {
                 let at = if i % 2 == 0 { i / 2 } else { ne + i / 2 };
                 assert_eq!(
                     &d[at * e..at * e + e],
                     &x[i * e..i * e + e],
-                    "deinterleave len {len} e {e}"
+                    "deinterleave len {len} e {e} {k:?}"
                 );
             }
             let half = len / 2;
             let (a, b) = (&x[..half * e], &x[half * e..2 * half * e]);
             let mut y = vec![0f32; 2 * half * e];
-            interleave(a, b, e, &mut y);
+            interleave(k, a, b, e, &mut y);
             for i in 0..half {
                 assert_eq!(&y[2 * i * e..2 * i * e + e], &a[i * e..i * e + e]);
                 assert_eq!(&y[(2 * i + 1) * e..(2 * i + 2) * e], &b[i * e..i * e + e]);
             }
         }
         let x64: Vec<f64> = lcg(len as u64, len + 12);
-        let d64: Vec<f64> = {
-            let mut d = vec![0.0; len];
-            deinterleave(&x64[..len], 1, &mut d);
-            d
-        };
-        let ne = len.div_ceil(2);
-        assert!((0..len).all(|i| d64[if i % 2 == 0 { i / 2 } else { ne + i / 2 }] == x64[i]));
+        for k in tables() {
+            let mut d64 = vec![0.0; len];
+            deinterleave(k, &x64[..len], 1, &mut d64);
+            let ne = len.div_ceil(2);
+            assert!((0..len).all(|i| d64[if i % 2 == 0 { i / 2 } else { ne + i / 2 }] == x64[i]));
+        }
         for taps in 0..=11usize {
             let src: Vec<&[f64]> = (0..taps).map(|k| &x64[k..k + len]).collect();
             let w: Vec<f64> = (0..taps).map(|k| 0.125 * k as f64 - 0.3).collect();
@@ -515,7 +532,7 @@ fn pair_case<T: mra::scheme::Sample>(x: &[T], u: usize, len: usize) -> (Vec<&[T]
 fn combine_pair_gives_the_bits_of_two_combines() {
     // the scalar build is checked below in any case; the others where the CPU has them
     common::vector_builds();
-    use mra::kernel::{combine_pair, combine_pair_with, combine_with};
+    use mra::kernel::{combine, combine_pair};
     // `units`: the taps of weight +1 and −1 of each output (P1, N1, P2, N2), which the
     // kernels add or subtract instead of multiplying
     fn check<T: mra::scheme::Sample + Into<f64>>(
@@ -539,17 +556,13 @@ fn combine_pair_gives_the_bits_of_two_combines() {
         }
         for simd in CpuLevel::available() {
             let (mut a1, mut a2) = (vec![T::default(); len], vec![T::default(); len]);
-            if simd == CpuLevel::detected() {
-                combine_pair(&mut a1, &mut a2, &src, &w1, m1, &w2, m2);
-            } else {
-                combine_pair_with(simd, &mut a1, &mut a2, &src, &w1, m1, &w2, m2);
-            }
+            combine_pair(Kernels::new(simd), &mut a1, &mut a2, &src, &w1, m1, &w2, m2);
             for (m, w, a) in [(m1, &w1, &a1), (m2, &w2, &a2)] {
                 let ks: Vec<usize> = (0..u).filter(|&k| m >> k & 1 == 1).collect();
                 let s: Vec<&[T]> = ks.iter().map(|&k| src[k]).collect();
                 let wk: Vec<T> = ks.iter().map(|&k| w[k]).collect();
                 let mut want = vec![T::default(); len];
-                combine_with(CpuLevel::Scalar, &mut want, &s, &wk);
+                combine(Kernels::scalar(), &mut want, &s, &wk);
                 for i in 0..len {
                     let (p, r): (f64, f64) = (a[i].into(), want[i].into());
                     assert!(
@@ -612,22 +625,24 @@ fn combine_pair_merged_interleaves_the_bits_of_combine_pair() {
     fn check<T: mra::scheme::Sample + Into<f64>>(x: &[T], u: usize, m1: u32, m2: u32, len: usize) {
         let (src, w1, w2) = pair_case(x, u, len);
         let (mut a, mut b) = (vec![T::default(); len], vec![T::default(); len]);
-        combine_pair(&mut a, &mut b, &src, &w1, m1, &w2, m2);
-        let sentinel = T::from_f64(12345.0);
-        let mut out = vec![sentinel; 2 * len];
-        if combine_pair_merged(&mut out, &src, &w1, m1, &w2, m2) {
-            for i in 0..len {
-                let (p, q): (f64, f64) = (out[2 * i].into(), out[2 * i + 1].into());
-                let (r, t): (f64, f64) = (a[i].into(), b[i].into());
-                assert!(
-                    p.to_bits() == r.to_bits() && q.to_bits() == t.to_bits(),
-                    "pattern ({u}, {m1:#b}, {m2:#b}) len {len} sample {i}"
-                );
+        combine_pair(Kernels::scalar(), &mut a, &mut b, &src, &w1, m1, &w2, m2);
+        for k in tables() {
+            let sentinel = T::from_f64(12345.0);
+            let mut out = vec![sentinel; 2 * len];
+            if combine_pair_merged(k, &mut out, &src, &w1, m1, &w2, m2) {
+                for i in 0..len {
+                    let (p, q): (f64, f64) = (out[2 * i].into(), out[2 * i + 1].into());
+                    let (r, t): (f64, f64) = (a[i].into(), b[i].into());
+                    assert!(
+                        p.to_bits() == r.to_bits() && q.to_bits() == t.to_bits(),
+                        "{k:?} pattern ({u}, {m1:#b}, {m2:#b}) len {len} sample {i}"
+                    );
+                }
+            } else {
+                assert!(out
+                    .iter()
+                    .all(|&v| v.into().to_bits() == sentinel.into().to_bits()));
             }
-        } else {
-            assert!(out
-                .iter()
-                .all(|&v| v.into().to_bits() == sentinel.into().to_bits()));
         }
     }
     for (u, m1, m2) in [
@@ -666,35 +681,38 @@ fn combine_pair_rows_gives_the_bits_of_combine_pair() {
             let w1: Vec<f32> = (0..u).map(|k| 0.375 * k as f32 - 1.1).collect();
             let w2: Vec<f32> = (0..u).map(|k| 0.7 - 0.25 * k as f32).collect();
             let n_out = (0..2).map(|j| rows[j] + steps[j] * count).max().unwrap();
-            let mut got = vec![0f32; n_out * len];
-            combine_pair_rows(
-                &src,
-                len,
-                &cols,
-                in_step,
-                (&w1, m1),
-                (&w2, m2),
-                &mut got,
-                rows,
-                steps,
-                count,
-            );
-            for t in 0..count {
-                let inputs: Vec<&[f32]> = cols
-                    .iter()
-                    .map(|&c| &src[(c + in_step * t) * len..][..len])
-                    .collect();
-                let (mut a, mut b) = (vec![0f32; len], vec![0f32; len]);
-                combine_pair(&mut a, &mut b, &inputs, &w1, m1, &w2, m2);
-                for (j, want) in [(0, &a), (1, &b)] {
-                    let r = rows[j] + steps[j] * t;
-                    let row = &got[r * len..][..len];
-                    assert!(
-                        row.iter()
-                            .zip(want.iter())
-                            .all(|(x, y)| x.to_bits() == y.to_bits()),
-                        "pattern ({u}, {m1:#b}, {m2:#b}) len {len} pair {t} output {j}"
-                    );
+            for k in tables() {
+                let mut got = vec![0f32; n_out * len];
+                combine_pair_rows(
+                    k,
+                    &src,
+                    len,
+                    &cols,
+                    in_step,
+                    (&w1, m1),
+                    (&w2, m2),
+                    &mut got,
+                    rows,
+                    steps,
+                    count,
+                );
+                for t in 0..count {
+                    let inputs: Vec<&[f32]> = cols
+                        .iter()
+                        .map(|&c| &src[(c + in_step * t) * len..][..len])
+                        .collect();
+                    let (mut a, mut b) = (vec![0f32; len], vec![0f32; len]);
+                    combine_pair(Kernels::scalar(), &mut a, &mut b, &inputs, &w1, m1, &w2, m2);
+                    for (j, want) in [(0, &a), (1, &b)] {
+                        let r = rows[j] + steps[j] * t;
+                        let row = &got[r * len..][..len];
+                        assert!(
+                            row.iter()
+                                .zip(want.iter())
+                                .all(|(x, y)| x.to_bits() == y.to_bits()),
+                            "{k:?} pattern ({u}, {m1:#b}, {m2:#b}) len {len} pair {t} output {j}"
+                        );
+                    }
                 }
             }
         }
@@ -724,19 +742,25 @@ fn f32_combine_and_transpose_match_plain_loops() {
             let stride = rows + 3;
             let src32: Vec<f32> = (0..rows * cols).map(|i| i as f32 + 0.5).collect();
             let src64: Vec<f64> = src32.iter().map(|&v| v as f64 * 3.0).collect();
-            let mut d32 = vec![-1f32; cols * stride];
-            let mut d64 = vec![-1f64; cols * stride];
-            transpose(&src32, rows, cols, &mut d32, stride);
-            transpose(&src64, rows, cols, &mut d64, stride);
-            for c in 0..cols {
-                for r in 0..stride {
-                    let (want32, want64) = if r < rows {
-                        (src32[r * cols + c], src64[r * cols + c])
-                    } else {
-                        (-1.0, -1.0)
-                    };
-                    assert_eq!(d32[c * stride + r], want32, "{rows}x{cols} at {r},{c}");
-                    assert_eq!(d64[c * stride + r], want64);
+            for k in tables() {
+                let mut d32 = vec![-1f32; cols * stride];
+                let mut d64 = vec![-1f64; cols * stride];
+                transpose(k, &src32, rows, cols, &mut d32, stride);
+                transpose(k, &src64, rows, cols, &mut d64, stride);
+                for c in 0..cols {
+                    for r in 0..stride {
+                        let (want32, want64) = if r < rows {
+                            (src32[r * cols + c], src64[r * cols + c])
+                        } else {
+                            (-1.0, -1.0)
+                        };
+                        assert_eq!(
+                            d32[c * stride + r],
+                            want32,
+                            "{k:?} {rows}x{cols} at {r},{c}"
+                        );
+                        assert_eq!(d64[c * stride + r], want64);
+                    }
                 }
             }
         }
@@ -761,10 +785,14 @@ fn combine_pair_lanes_gives_the_bits_of_combine_pair_per_lane() {
             for len in [1usize, 7, 8, 9, 15, 17, 33] {
                 let (count, stride) = (5usize, 2 * len + 11);
                 let off: Vec<usize> = (0..u).map(|k| 3 * k + 1).collect();
-                for merge in [false, true] {
+                for (merge, k) in [false, true]
+                    .into_iter()
+                    .flat_map(|m| tables().into_iter().map(move |k| (m, k)))
+                {
                     let out = if merge { [4, 4] } else { [len + 6, 2] };
                     let mut got = vec![T::default(); stride * count];
                     combine_pair_lanes(
+                        k,
                         x,
                         &off,
                         stride,
@@ -781,7 +809,7 @@ fn combine_pair_lanes_gives_the_bits_of_combine_pair_per_lane() {
                         let src: Vec<&[T]> =
                             off.iter().map(|&o| &x[o + stride * t..][..len]).collect();
                         let (mut a, mut b) = (vec![T::default(); len], vec![T::default(); len]);
-                        combine_pair(&mut a, &mut b, &src, &w1, m1, &w2, m2);
+                        combine_pair(Kernels::scalar(), &mut a, &mut b, &src, &w1, m1, &w2, m2);
                         let row = &got[stride * t..];
                         for i in 0..len {
                             let (ga, gb): (f64, f64) = if merge {
@@ -793,12 +821,12 @@ fn combine_pair_lanes_gives_the_bits_of_combine_pair_per_lane() {
                             assert_eq!(
                                 ga.to_bits(),
                                 wa.to_bits(),
-                                "u {u} len {len} merge {merge} lane {t} at {i}"
+                                "{k:?} u {u} len {len} merge {merge} lane {t} at {i}"
                             );
                             assert_eq!(
                                 gb.to_bits(),
                                 wb.to_bits(),
-                                "u {u} len {len} merge {merge} lane {t} at {i}"
+                                "{k:?} u {u} len {len} merge {merge} lane {t} at {i}"
                             );
                         }
                     }
@@ -827,7 +855,10 @@ fn combine_pair_rows_split_gives_the_bits_of_a_split_after() {
         ] {
             let w1: Vec<T> = (0..u).map(|k| T::from_f64(0.3 * k as f64 - 0.55)).collect();
             let w2: Vec<T> = (0..u).map(|k| T::from_f64(0.7 - 0.25 * k as f64)).collect();
-            for len in [1usize, 2, 15, 16, 17, 31, 32, 33, 47, 64, 256] {
+            for (len, k) in [1usize, 2, 15, 16, 17, 31, 32, 33, 47, 64, 256]
+                .into_iter()
+                .flat_map(|n| tables().into_iter().map(move |k| (n, k)))
+            {
                 let count = 5;
                 let cols: Vec<usize> = (0..u).collect();
                 let rows = [0, count];
@@ -837,6 +868,7 @@ fn combine_pair_rows_split_gives_the_bits_of_a_split_after() {
                 );
                 let src = &x[..(u + 2 * count) * len];
                 combine_pair_rows(
+                    Kernels::scalar(),
                     src,
                     len,
                     &cols,
@@ -849,6 +881,7 @@ fn combine_pair_rows_split_gives_the_bits_of_a_split_after() {
                     count,
                 );
                 combine_pair_rows_split(
+                    k,
                     src,
                     len,
                     &cols,
@@ -862,10 +895,14 @@ fn combine_pair_rows_split_gives_the_bits_of_a_split_after() {
                 );
                 for r in 0..2 * count {
                     let mut want = vec![T::default(); len];
-                    deinterleave(&plain[r * len..r * len + len], 1, &mut want);
+                    deinterleave(k, &plain[r * len..r * len + len], 1, &mut want);
                     for i in 0..len {
                         let (g, e): (f64, f64) = (split[r * len + i].into(), want[i].into());
-                        assert_eq!(g.to_bits(), e.to_bits(), "u {u} len {len} row {r} at {i}");
+                        assert_eq!(
+                            g.to_bits(),
+                            e.to_bits(),
+                            "{k:?} u {u} len {len} row {r} at {i}"
+                        );
                     }
                 }
             }
@@ -931,17 +968,23 @@ fn combine_lane_taps_gives_the_bits_of_plain_loops() {
                     rows.push((r, taps));
                 }
                 let ys = 19;
-                let mut got = vec![T::from_f64(9.0); h * ys];
-                combine_lane_taps(&x[..h * w], w, h, &rows, &mut got, ys);
-                for t in 0..h {
-                    for (r, taps) in &rows {
-                        let mut want = T::default();
-                        for (k, &(c, wk)) in taps.iter().enumerate() {
-                            let v = wk * x[t * w + c];
-                            want = if k == 0 { v } else { want + v };
+                for table in tables() {
+                    let mut got = vec![T::from_f64(9.0); h * ys];
+                    combine_lane_taps(table, &x[..h * w], w, h, &rows, &mut got, ys);
+                    for t in 0..h {
+                        for (r, taps) in &rows {
+                            let mut want = T::default();
+                            for (k, &(c, wk)) in taps.iter().enumerate() {
+                                let v = wk * x[t * w + c];
+                                want = if k == 0 { v } else { want + v };
+                            }
+                            let (g, e): (f64, f64) = (got[t * ys + r].into(), want.into());
+                            assert_eq!(
+                                g.to_bits(),
+                                e.to_bits(),
+                                "{table:?} w {w} h {h} lane {t} row {r}"
+                            );
                         }
-                        let (g, e): (f64, f64) = (got[t * ys + r].into(), want.into());
-                        assert_eq!(g.to_bits(), e.to_bits(), "w {w} h {h} lane {t} row {r}");
                     }
                 }
             }
@@ -963,14 +1006,17 @@ fn combine_rows_matches_combine_row_by_row() {
             for m in [1usize, 2, 3, 7, 16, 33] {
                 let t = TwoScale::new(scheme, boundary, m);
                 for op in [&t.analysis, &t.synthesis] {
-                    for len in [1usize, 8, 37] {
+                    for (len, k) in [1usize, 8, 37]
+                        .into_iter()
+                        .flat_map(|n| tables().into_iter().map(move |k| (n, k)))
+                    {
                         let x: Vec<f64> = lcg(m as u64 * 31 + len as u64, m * len);
                         let x32: Vec<f32> = x.iter().map(|&v| v as f32).collect();
                         let rows = m / 3..m;
                         let mut a = vec![0.5f32; rows.len() * len];
-                        combine_rows(op, &x32, len, rows.clone(), &mut a);
+                        combine_rows(k, op, &x32, len, rows.clone(), &mut a);
                         let mut a64 = vec![0.5f64; rows.len() * len];
-                        combine_rows(op, &x, len, rows.clone(), &mut a64);
+                        combine_rows(k, op, &x, len, rows.clone(), &mut a64);
                         for (i, r) in rows.enumerate() {
                             let (cols, ws) = op.row_slices(r);
                             let src: Vec<&[f32]> = cols
@@ -979,7 +1025,7 @@ fn combine_rows_matches_combine_row_by_row() {
                                 .collect();
                             let w: Vec<f32> = ws.iter().map(|&v| v as f32).collect();
                             let mut b = vec![0f32; len];
-                            combine(&mut b, &src, &w);
+                            combine(Kernels::scalar(), &mut b, &src, &w);
                             let got = &a[i * len..][..len];
                             assert!(got.iter().zip(&b).all(|(p, q)| p.to_bits() == q.to_bits()));
                             let src: Vec<&[f64]> = cols
@@ -987,7 +1033,7 @@ fn combine_rows_matches_combine_row_by_row() {
                                 .map(|&c| &x[c as usize * len..][..len])
                                 .collect();
                             let mut b = vec![0f64; len];
-                            combine(&mut b, &src, ws);
+                            combine(Kernels::scalar(), &mut b, &src, ws);
                             let got = &a64[i * len..][..len];
                             assert!(got.iter().zip(&b).all(|(p, q)| p.to_bits() == q.to_bits()));
                         }
@@ -1005,8 +1051,8 @@ fn combine_rows_matches_combine_row_by_row() {
 // the CPU has, bit for bit.
 
 use mra::kernel::{
-    combine_lane_taps, combine_pair_has_build, combine_pair_merged, combine_pair_with,
-    combine_with, pair_taps, row_sum, SECOND,
+    combine, combine_lane_taps, combine_pair, combine_pair_has_build, combine_pair_merged,
+    pair_taps, row_sum, SECOND,
 };
 use mra::scheme::Sample;
 
@@ -1102,7 +1148,7 @@ fn combine_with_pairs_gives_the_bits_of_the_rule() {
         let src: Vec<&[T]> = (0..n).map(|k| &x[k..k + len]).collect();
         for simd in CpuLevel::available() {
             let mut out = vec![T::from_f64(7.0); len];
-            combine_with(simd, &mut out, &src, w);
+            combine(Kernels::new(simd), &mut out, &src, w);
             for i in 0..len {
                 let want = row_sum(w, |k| src[k][i]);
                 assert!(same(out[i], want), "{simd:?} {n} taps len {len} at {i}");
@@ -1190,7 +1236,7 @@ fn pair_kernels_on_the_schemes_rows_give_the_bits_of_the_rule() {
         let (e1, e2) = (want(m1, w1), want(m2, w2));
         for simd in CpuLevel::available() {
             let (mut a, mut b) = (vec![T::default(); len], vec![T::default(); len]);
-            combine_pair_with(simd, &mut a, &mut b, &src, w1, m1, w2, m2);
+            combine_pair(Kernels::new(simd), &mut a, &mut b, &src, w1, m1, w2, m2);
             for i in 0..len {
                 assert!(
                     same(a[i], e1[i]) && same(b[i], e2[i]),
@@ -1198,10 +1244,12 @@ fn pair_kernels_on_the_schemes_rows_give_the_bits_of_the_rule() {
                 );
             }
         }
-        let mut merged = vec![T::default(); 2 * len];
-        if combine_pair_merged(&mut merged, &src, w1, m1, w2, m2) {
-            for i in 0..len {
-                assert!(same(merged[2 * i], e1[i]) && same(merged[2 * i + 1], e2[i]));
+        for k in tables() {
+            let mut merged = vec![T::default(); 2 * len];
+            if combine_pair_merged(k, &mut merged, &src, w1, m1, w2, m2) {
+                for i in 0..len {
+                    assert!(same(merged[2 * i], e1[i]) && same(merged[2 * i + 1], e2[i]));
+                }
             }
         }
     }
@@ -1248,13 +1296,18 @@ fn lane_taps_with_pairs_give_the_bits_of_the_rule() {
             ));
         }
         let ys = rows.len() + 2;
-        let mut y = vec![0f32; h * ys];
-        combine_lane_taps(&x, w, h, &rows, &mut y, ys);
-        for t in 0..h {
-            for (r, taps) in &rows {
-                let ws: Vec<f32> = taps.iter().map(|p| p.1).collect();
-                let want = row_sum(&ws, |k| x[t * w + taps[k].0]);
-                assert!(same(y[t * ys + r], want), "w {w} h {h} lane {t} row {r}");
+        for table in tables() {
+            let mut y = vec![0f32; h * ys];
+            combine_lane_taps(table, &x, w, h, &rows, &mut y, ys);
+            for t in 0..h {
+                for (r, taps) in &rows {
+                    let ws: Vec<f32> = taps.iter().map(|p| p.1).collect();
+                    let want = row_sum(&ws, |k| x[t * w + taps[k].0]);
+                    assert!(
+                        same(y[t * ys + r], want),
+                        "{table:?} w {w} h {h} lane {t} row {r}"
+                    );
+                }
             }
         }
     }

@@ -19,7 +19,7 @@ use mra::terrain::{
 
 fn grid_of(h: usize, w: usize, seed: u64, rough: f64, scale: f64) -> Grid {
     let f = diamond_square(h, w, seed, rough);
-    Grid::new(h, w, 1, f.data.iter().map(|v| v * scale).collect()).unwrap()
+    Grid::new(h, w, 1, f.data().iter().map(|v| v * scale).collect()).unwrap()
 }
 
 /// A smooth base: a generated terrain box-filtered down by 4.

@@ -5,12 +5,7 @@ use super::Field;
 use crate::io::DataKind;
 
 fn field(h: usize, w: usize, channels: usize, data: Vec<f64>) -> Field {
-    Field {
-        dims: vec![h, w],
-        channels,
-        data,
-        kind: DataKind::Image,
-    }
+    Field::new(&[h, w], channels, data, DataKind::Image)
 }
 
 /// Circular zone plate `½ (1 + cos(π r² / s))`, r measured from the centre in samples,

@@ -13,6 +13,7 @@
 //! ```
 
 use crate::io::{DataKind, Raster, SampleType, Samples};
+use crate::tensor::Array;
 use crate::{Error, Result};
 
 pub mod images;
@@ -20,24 +21,49 @@ pub mod phantom;
 pub mod rng;
 pub mod terrain;
 
-/// Generated values in [0, 1] over a row-major grid, channels interleaved last.
+/// Generated values in [0, 1]: the engine's array ([`Array`]) of shape `dims` then
+/// `channels` (the last axis, also when 1: channels interleaved last), and what the
+/// samples are.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Field {
-    pub dims: Vec<usize>,
-    pub channels: usize,
-    pub data: Vec<f64>,
+    pub values: Array<f64>,
     pub kind: DataKind,
 }
 
 impl Field {
+    /// `data` (row-major, channels last) over `dims` × `channels`; every size at least 1
+    /// and `data` as long as their product (the generators' own sizes).
+    pub(crate) fn new(dims: &[usize], channels: usize, data: Vec<f64>, kind: DataKind) -> Field {
+        let shape: Vec<usize> = dims.iter().copied().chain([channels]).collect();
+        let values = Array::from_shape_vec(&shape, data)
+            .expect("a generator makes a value per sample of its sizes");
+        Field { values, kind }
+    }
+
+    /// Spatial extent, slowest axis first: `[H, W]` or `[D, H, W]`.
+    pub fn dims(&self) -> &[usize] {
+        let s = self.values.shape();
+        &s[..s.len() - 1]
+    }
+
+    /// Values per position.
+    pub fn channels(&self) -> usize {
+        self.values.shape()[self.values.ndim() - 1]
+    }
+
+    /// The values, row-major, channels last.
+    pub fn data(&self) -> &[f64] {
+        self.values.data()
+    }
+
     /// Scale to `ty`: integer types map [0, 1] to [0, type max] (rounded), floats keep
     /// the values.
     pub fn to_raster(&self, ty: SampleType) -> Result<Raster> {
         let scale = if ty.is_float() { 1.0 } else { ty.range().1 };
-        let v: Vec<f64> = self.data.iter().map(|&x| x * scale).collect();
+        let v: Vec<f64> = self.data().iter().map(|&x| x * scale).collect();
         Raster::new(
-            self.dims.clone(),
-            self.channels,
+            self.dims().to_vec(),
+            self.channels(),
             Samples::from_f64(&v, ty),
             self.kind,
         )
@@ -140,9 +166,9 @@ mod tests {
             let a = generate(kind, &dims, 1, 5).unwrap();
             let b = generate(kind, &dims, 1, 5).unwrap();
             assert_eq!(a, b, "{}", kind.name());
-            assert_eq!(a.data.len(), dims.iter().product::<usize>());
+            assert_eq!(a.data().len(), dims.iter().product::<usize>());
             assert!(
-                a.data.iter().all(|v| (0.0..=1.0).contains(v)),
+                a.data().iter().all(|v| (0.0..=1.0).contains(v)),
                 "{}",
                 kind.name()
             );
@@ -154,14 +180,14 @@ mod tests {
         for kind in [Kind::Strokes, Kind::Noise, Kind::Terrain] {
             let a = generate(kind, &[64, 64], 1, 1).unwrap();
             let b = generate(kind, &[64, 64], 1, 2).unwrap();
-            assert_ne!(a.data, b.data, "{}", kind.name());
+            assert_ne!(a.data(), b.data(), "{}", kind.name());
         }
     }
 
     #[test]
     fn zone_plate_is_symmetric_with_peak_at_centre() {
         let f = images::zone_plate(31, 31);
-        let at = |y: usize, x: usize| f.data[y * 31 + x];
+        let at = |y: usize, x: usize| f.data()[y * 31 + x];
         assert!((at(15, 15) - 1.0).abs() < 1e-12);
         for y in 0..31 {
             for x in 0..31 {
@@ -175,21 +201,21 @@ mod tests {
     #[test]
     fn gradient_ramps_span_zero_to_one() {
         let f = images::gradient(5, 9, 3);
-        assert_eq!(f.data[0..3], [0.0, 0.0, 0.0]);
-        let last = f.data.len() - 3;
-        assert_eq!(f.data[last..], [1.0, 1.0, 1.0]);
+        assert_eq!(f.data()[0..3], [0.0, 0.0, 0.0]);
+        let last = f.data().len() - 3;
+        assert_eq!(f.data()[last..], [1.0, 1.0, 1.0]);
         // channel 0 depends on x only
-        assert_eq!(f.data[(2 * 9 + 4) * 3], 0.5);
+        assert_eq!(f.data()[(2 * 9 + 4) * 3], 0.5);
     }
 
     #[test]
     fn phantom_has_air_skull_and_brain() {
         let n = 33;
         let f = phantom::shepp_logan(n, n, n);
-        let at = |z: usize, y: usize, x: usize| f.data[(z * n + y) * n + x];
+        let at = |z: usize, y: usize, x: usize| f.data()[(z * n + y) * n + x];
         assert_eq!(at(0, 0, 0), 0.0, "corner is air");
         assert!((at(16, 16, 16) - 0.2).abs() < 1e-12, "centre is brain");
-        assert!(f.data.contains(&1.0), "skull");
+        assert!(f.data().contains(&1.0), "skull");
         let int = f.to_raster(SampleType::U16).unwrap();
         assert_eq!(int.samples.min_max(), Some((0.0, 65535.0)));
     }
@@ -197,16 +223,16 @@ mod tests {
     #[test]
     fn terrain_is_normalised_and_rough() {
         let f = terrain::diamond_square(65, 65, 3, 0.55);
-        let lo = f.data.iter().cloned().fold(f64::INFINITY, f64::min);
-        let hi = f.data.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
+        let lo = f.data().iter().cloned().fold(f64::INFINITY, f64::min);
+        let hi = f.data().iter().cloned().fold(f64::NEG_INFINITY, f64::max);
         assert_eq!((lo, hi), (0.0, 1.0));
         // neighbours differ less than far-apart samples on average (spatial correlation)
         let near: f64 = (0..64)
-            .map(|x| (f.data[x] - f.data[x + 1]).abs())
+            .map(|x| (f.data()[x] - f.data()[x + 1]).abs())
             .sum::<f64>()
             / 64.0;
         let far: f64 = (0..32)
-            .map(|x| (f.data[x] - f.data[x + 32]).abs())
+            .map(|x| (f.data()[x] - f.data()[x + 32]).abs())
             .sum::<f64>()
             / 32.0;
         assert!(near < far, "near {near} far {far}");

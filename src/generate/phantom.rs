@@ -70,10 +70,5 @@ pub fn shepp_logan(d: usize, h: usize, w: usize) -> Field {
             }
         }
     }
-    Field {
-        dims: vec![d, h, w],
-        channels: 1,
-        data,
-        kind: DataKind::Volume,
-    }
+    Field::new(&[d, h, w], 1, data, DataKind::Volume)
 }

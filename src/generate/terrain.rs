@@ -78,10 +78,5 @@ pub fn diamond_square(h: usize, w: usize, seed: u64, roughness: f64) -> Field {
         });
     let span = (hi - lo).max(f64::MIN_POSITIVE);
     data.iter_mut().for_each(|v| *v = (*v - lo) / span);
-    Field {
-        dims: vec![h, w],
-        channels: 1,
-        data,
-        kind: DataKind::Heightmap,
-    }
+    Field::new(&[h, w], 1, data, DataKind::Heightmap)
 }

@@ -192,18 +192,18 @@ impl EdgeGroup {
 /// `y[r] = Σ_k w_rk · x[c_rk]` for the rows of every group (`y` and `x` one lane of
 /// single samples), 8 rows at a time, when the build has it (AVX2, `f32`); `false`
 /// (nothing written) otherwise.
-pub fn edge_rows<T: Sample>(groups: &[EdgeGroup], x: &[T], y: &mut [T]) -> bool {
+pub fn edge_rows<T: Sample>(k: Kernels, groups: &[EdgeGroup], x: &[T], y: &mut [T]) -> bool {
     #[cfg(target_arch = "x86_64")]
-    if std::any::TypeId::of::<T>() == std::any::TypeId::of::<f32>() && cpu_has_avx2() {
+    if std::any::TypeId::of::<T>() == std::any::TypeId::of::<f32>() && k.avx2() {
         for g in groups {
             assert!(g.last < x.len() && g.r0 + g.n <= y.len());
         }
         let (px, py) = (x.as_ptr() as *const f32, y.as_mut_ptr() as *mut f32);
-        // SAFETY: AVX2 is present; T is f32; every group's samples and outputs lie inside
+        // SAFETY: AVX2 is present (a table holds no build the CPU lacks); T is f32; every group's samples and outputs lie inside
         // `x` and `y` (asserted).
         unsafe { edge_rows_avx2_f32(groups, px, x.len(), py) };
         return true;
     }
-    let _ = (groups, x, y);
+    let _ = (k, groups, x, y);
     false
 }

@@ -13,7 +13,9 @@ pub(crate) const LANE_TAPS_SLOTS: usize = 64;
 /// lane and window instead of one per tap and row), and the sums of 8 rows that follow
 /// one another transposed back (one store per lane instead of one per row and lane).
 /// [`LaneTaps`] prepares the rows once for many calls ([`combine_lane_taps_with`]).
+#[cfg(any(test, feature = "testing"))]
 pub fn combine_lane_taps<T: Sample>(
+    k: Kernels,
     x: &[T],
     w: usize,
     h: usize,
@@ -25,7 +27,7 @@ pub fn combine_lane_taps<T: Sample>(
         .iter()
         .map(|(r, t)| (*r, t.iter().map(|&(c, wk)| (c, wk.to_f64())).collect()))
         .collect();
-    combine_lane_taps_with(&LaneTaps::new(rows, w), x, h, y, ys)
+    combine_lane_taps_with(k, &LaneTaps::new(rows, w), x, h, y, ys)
 }
 
 /// The rows of [`combine_lane_taps`] (weights as `f64`, each used as `T::from_f64` of
@@ -145,6 +147,7 @@ impl LaneTaps {
 
 /// [`combine_lane_taps`] with its rows prepared (`taps`, for lanes of `taps.w` samples).
 pub fn combine_lane_taps_with<T: Sample>(
+    k: Kernels,
     taps: &LaneTaps,
     x: &[T],
     h: usize,
@@ -161,8 +164,8 @@ pub fn combine_lane_taps_with<T: Sample>(
     }
     let mut done = 0;
     #[cfg(target_arch = "x86_64")]
-    if std::mem::size_of::<T>() == 4 && !taps.bases.is_empty() && cpu_has_avx2() {
-        // SAFETY: AVX2 is present; T is a 4-byte float (f32), bounds checked above and
+    if std::mem::size_of::<T>() == 4 && !taps.bases.is_empty() && k.avx2() {
+        // SAFETY: AVX2 is present (a table holds no build the CPU lacks); T is a 4-byte float (f32), bounds checked above and
         // in `LaneTaps::new`.
         done = unsafe { lane_taps_avx2_f32(taps, x, h, y, ys) };
     }

@@ -5,12 +5,12 @@ use super::*;
 /// Split `x` (elements of `e` samples) into its even elements, then its odd elements:
 /// `dst = [x_0, x_2, x_4, … | x_1, x_3, …]`.
 #[inline]
-pub fn deinterleave<T: Sample>(x: &[T], e: usize, dst: &mut [T]) {
+pub fn deinterleave<T: Sample>(k: Kernels, x: &[T], e: usize, dst: &mut [T]) {
     assert_eq!(x.len() % e, 0);
     assert!(dst.len() >= x.len());
     #[cfg(target_arch = "x86_64")]
-    if cpu_has_avx2() {
-        // SAFETY: AVX2 is present.
+    if k.avx2() {
+        // SAFETY: AVX2 is present (a table holds no build the CPU lacks).
         return unsafe { deinterleave_avx2(x, e, dst) };
     }
     deinterleave_generic(x, e, dst)
@@ -18,12 +18,12 @@ pub fn deinterleave<T: Sample>(x: &[T], e: usize, dst: &mut [T]) {
 
 /// `dst = [a_0, b_0, a_1, b_1, …]` for elements of `e` samples (`a`, `b` of equal length).
 #[inline]
-pub fn interleave<T: Sample>(a: &[T], b: &[T], e: usize, dst: &mut [T]) {
+pub fn interleave<T: Sample>(k: Kernels, a: &[T], b: &[T], e: usize, dst: &mut [T]) {
     assert_eq!(a.len(), b.len());
     assert!(dst.len() >= 2 * a.len());
     #[cfg(target_arch = "x86_64")]
-    if cpu_has_avx2() {
-        // SAFETY: AVX2 is present.
+    if k.avx2() {
+        // SAFETY: AVX2 is present (a table holds no build the CPU lacks).
         return unsafe { interleave_avx2(a, b, e, dst) };
     }
     interleave_generic(a, b, e, dst)
@@ -34,8 +34,8 @@ pub fn interleave<T: Sample>(a: &[T], b: &[T], e: usize, dst: &mut [T]) {
 /// not fit in cache is written once and read back only by the next level). Ends with a
 /// store fence ([`stream_fence`]).
 #[inline]
-pub fn stream_copy<T: Sample>(src: &[T], dst: &mut [T]) {
-    stream_copy_unfenced(src, dst);
+pub fn stream_copy<T: Sample>(k: Kernels, src: &[T], dst: &mut [T]) {
+    stream_copy_unfenced(k, src, dst);
     stream_fence();
 }
 
@@ -45,11 +45,11 @@ pub fn stream_copy<T: Sample>(src: &[T], dst: &mut [T]) {
 /// the CPU time of a cubic pyramid forward and back (one thread, 38.6–39.5 →
 /// 36.7–37.5 ms symmetric, 41.1–41.5 → 38.9–39.1 ms periodic).
 #[inline]
-pub fn stream_copy_unfenced<T: Sample>(src: &[T], dst: &mut [T]) {
+pub fn stream_copy_unfenced<T: Sample>(k: Kernels, src: &[T], dst: &mut [T]) {
     assert_eq!(src.len(), dst.len());
     #[cfg(target_arch = "x86_64")]
-    if cpu_has_avx2() {
-        // SAFETY: AVX2 is present.
+    if k.avx2() {
+        // SAFETY: AVX2 is present (a table holds no build the CPU lacks).
         return unsafe { stream_copy_avx2(src, dst) };
     }
     dst.copy_from_slice(src)
@@ -68,12 +68,19 @@ pub fn stream_fence() {
 
 /// `dst[c·stride + r] = src[r·cols + c]` for a `rows × cols` block `src`: the lanes of one
 /// axis become rows of another. 8 × 8 tiles in registers for 4-byte samples with AVX2.
-pub fn transpose<T: Sample>(src: &[T], rows: usize, cols: usize, dst: &mut [T], stride: usize) {
+pub fn transpose<T: Sample>(
+    k: Kernels,
+    src: &[T],
+    rows: usize,
+    cols: usize,
+    dst: &mut [T],
+    stride: usize,
+) {
     assert!(src.len() >= rows * cols);
     assert!(cols == 0 || rows == 0 || (stride >= rows && dst.len() >= (cols - 1) * stride + rows));
     #[cfg(target_arch = "x86_64")]
-    if std::mem::size_of::<T>() == 4 && cpu_has_avx2() {
-        // SAFETY: AVX2 is present; T is a 4-byte float, moved as bits; bounds above.
+    if std::mem::size_of::<T>() == 4 && k.avx2() {
+        // SAFETY: AVX2 is present (a table holds no build the CPU lacks); T is a 4-byte float, moved as bits; bounds above.
         return unsafe { transpose_avx2_32(src, rows, cols, dst, stride) };
     }
     transpose_generic(src, rows, cols, dst, stride, 0, 0)

@@ -4,9 +4,9 @@
 //!
 //! Every build and every path gives the same bits: each output sums its row's taps as
 //! [`pair_taps`] and [`sum_terms`] say (`scheme::sparse` states the order; this module
-//! only decides how fast it runs). The build is a [`CpuLevel`]: [`CpuLevel::detected`]
-//! once per process (capped by `tuning`), or one given to the `*_with` functions, which
-//! the tests run at every level the CPU has and compare with [`CpuLevel::Scalar`].
+//! only decides how fast it runs). The build is a [`Kernels`] table, chosen once per
+//! plan from a [`CpuLevel`] and passed to every entry; the tests run every level the CPU
+//! has and compare it with [`CpuLevel::Scalar`].
 //!
 //! - `combine.rs`: one row, `out = Σ_k w_k · src_k`, and an operator's rows in one call;
 //! - `pair.rs`: two rows over the inputs they share, in one pass (the regular rows);
@@ -42,17 +42,63 @@ pub(crate) use scalar::*;
 #[cfg(target_arch = "x86_64")]
 pub(crate) use x86::{avx2::*, pair::*};
 
-/// Whether the AVX2 build (or a wider one) of the kernels is used ([`CpuLevel::detected`]).
-#[inline]
-pub fn cpu_has_avx2() -> bool {
-    CpuLevel::detected() >= CpuLevel::Avx2
+/// The kernel table of one plan: the build every kernel entry runs, fixed when the plan
+/// is made (from a [`CpuLevel`] it is given: `tuning` caps the process's level with
+/// `MRA_CPU` in [`CpuLevel::detected`], read only where a plan is made) and passed down
+/// to every call. Each entry dispatches on it once, at its top; every build gives the
+/// same bits, so the table changes speed only.
+///
+/// A table never holds a build the CPU does not run: [`Kernels::new`] caps the level at
+/// [`CpuLevel::widest`], which is what makes the vector builds' `unsafe` calls sound.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct Kernels {
+    level: CpuLevel,
+}
+
+impl Kernels {
+    /// The table of `level`, capped at what this CPU runs.
+    pub fn new(level: CpuLevel) -> Kernels {
+        Kernels {
+            level: level.min(CpuLevel::widest()),
+        }
+    }
+
+    /// The table of the plain loops (every CPU).
+    pub const fn scalar() -> Kernels {
+        Kernels {
+            level: CpuLevel::Scalar,
+        }
+    }
+
+    /// The table of [`CpuLevel::detected`] (the widest build, capped by `tuning`): for a
+    /// plan made without a level of its own.
+    pub fn detected() -> Kernels {
+        Kernels::new(CpuLevel::detected())
+    }
+
+    /// The build of every entry.
+    pub fn level(self) -> CpuLevel {
+        self.level
+    }
+
+    /// Whether the AVX2 build (or a wider one) runs.
+    #[inline]
+    pub fn avx2(self) -> bool {
+        self.level >= CpuLevel::Avx2
+    }
+
+    /// Whether the combines run their AVX-512 build.
+    #[inline]
+    pub fn avx512(self) -> bool {
+        self.level == CpuLevel::Avx512
+    }
 }
 
 /// `dst_r = Σ w · src_c` for every row `r` of `op`; element `e` of `src` is
-/// `src[e*src_stride .. e*src_stride + width]`, likewise for `dst`: [`Csr::apply`] with
-/// the build of [`CpuLevel::detected`] (the same bits).
-#[inline]
+/// `src[e*src_stride .. e*src_stride + width]`, likewise for `dst`: [`Csr::apply`] in
+/// the build of `k` (the same bits).
 pub fn apply<T: Sample>(
+    k: Kernels,
     op: &Csr,
     src: &[T],
     src_stride: usize,
@@ -60,41 +106,12 @@ pub fn apply<T: Sample>(
     dst_stride: usize,
     width: usize,
 ) {
-    apply_with(
-        CpuLevel::detected(),
-        op,
-        src,
-        src_stride,
-        dst,
-        dst_stride,
-        width,
-    )
-}
-
-/// [`apply`] with the build `level` (at most [`CpuLevel::detected`]; tests compare the
-/// builds).
-pub fn apply_with<T: Sample>(
-    level: CpuLevel,
-    op: &Csr,
-    src: &[T],
-    src_stride: usize,
-    dst: &mut [T],
-    dst_stride: usize,
-    width: usize,
-) {
-    assert!(level <= CpuLevel::detected(), "{level:?} is not available");
     assert!(op.cols() == 0 || (op.cols() - 1) * src_stride + width <= src.len());
     assert!(op.rows() == 0 || (op.rows() - 1) * dst_stride + width <= dst.len());
     let (s, d) = (src.as_ptr(), dst.as_mut_ptr());
-    #[cfg(target_arch = "x86_64")]
-    if level >= CpuLevel::Avx2 {
-        // SAFETY: AVX2 with FMA is present (`level` is at most the detected one); the
-        // asserts bound every element read and written; `src` and `dst` are distinct
-        // borrows.
-        return unsafe { apply_avx2(op, s, src_stride, d, dst_stride, width) };
-    }
-    // SAFETY: as above.
-    unsafe { apply_scalar(op, s, src_stride, d, dst_stride, width) }
+    // SAFETY: the asserts bound every element read and written; `src` and `dst` are
+    // distinct borrows.
+    unsafe { apply_raw(k, op, s, src_stride, d, dst_stride, width) }
 }
 
 /// [`apply`] on raw element pointers, for lanes that live inside a larger array other
@@ -108,6 +125,7 @@ pub fn apply_with<T: Sample>(
 /// two sets must not overlap.
 #[inline]
 pub unsafe fn apply_raw<T: Sample>(
+    k: Kernels,
     op: &Csr,
     src: *const T,
     src_stride: usize,
@@ -116,8 +134,9 @@ pub unsafe fn apply_raw<T: Sample>(
     width: usize,
 ) {
     #[cfg(target_arch = "x86_64")]
-    if cpu_has_avx2() {
-        // SAFETY: AVX2 is present; the caller's guarantees pass through.
+    if k.avx2() {
+        // SAFETY: AVX2 with FMA is present (a table holds no build the CPU lacks); the
+        // caller's guarantees pass through.
         return unsafe { apply_avx2(op, src, src_stride, dst, dst_stride, width) };
     }
     // SAFETY: the caller's guarantees.
@@ -135,7 +154,8 @@ mod tests {
     fn edge_windows_give_the_bits_of_gathers() {
         use crate::kernel::polyphase::Polyphase;
         use crate::scheme::{Boundary, Scheme, TwoScale};
-        if !super::cpu_has_avx2() {
+        let k = Kernels::detected();
+        if !k.avx2() {
             return;
         }
         let mut windows = 0;
@@ -148,7 +168,7 @@ mod tests {
                 for m in [8, 9, 16, 33, 64, 101] {
                     let t = TwoScale::new(scheme, boundary, m);
                     for op in [&t.analysis, &t.synthesis] {
-                        let p = Polyphase::new(op);
+                        let p = Polyphase::new(op, k);
                         let x: Vec<f32> = (0..m)
                             .map(|i| ((i * 37 % 23) as f32 - 11.0) / 7.0)
                             .collect();
@@ -158,8 +178,8 @@ mod tests {
                             g.window = None;
                         }
                         let (mut y1, mut y2) = (vec![0f32; m], vec![0f32; m]);
-                        assert!(edge_rows(&p.edges, &x, &mut y1));
-                        assert!(edge_rows(&gathered, &x, &mut y2));
+                        assert!(edge_rows(k, &p.edges, &x, &mut y1));
+                        assert!(edge_rows(k, &gathered, &x, &mut y2));
                         let bits = |y: &[f32]| y.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
                         assert_eq!(bits(&y1), bits(&y2), "{scheme:?} {boundary:?} {m}");
                     }

@@ -11,24 +11,11 @@ use super::*;
 /// multiplies, bound the single combines).
 ///
 /// Every `src[k]` must hold at least `o1.len()` samples; `o2` as long as `o1`; both masks
-/// non-empty and within `src`.
-pub fn combine_pair<T: Sample>(
-    o1: &mut [T],
-    o2: &mut [T],
-    src: &[&[T]],
-    w1: &[T],
-    m1: u32,
-    w2: &[T],
-    m2: u32,
-) {
-    combine_pair_with(CpuLevel::detected(), o1, o2, src, w1, m1, w2, m2)
-}
-
-/// [`combine_pair`] with the build `simd` (at most [`CpuLevel::detected`]; tests compare the
-/// builds).
+/// non-empty and within `src`. The build is `k`'s.
+#[cfg(any(test, feature = "testing"))]
 #[allow(clippy::too_many_arguments)]
-pub fn combine_pair_with<T: Sample>(
-    simd: CpuLevel,
+pub fn combine_pair<T: Sample>(
+    k: Kernels,
     o1: &mut [T],
     o2: &mut [T],
     src: &[&[T]],
@@ -37,12 +24,12 @@ pub fn combine_pair_with<T: Sample>(
     w2: &[T],
     m2: u32,
 ) {
-    let entry = if simd >= CpuLevel::Avx2 {
+    let entry = if k.avx2() {
         pair_entry(w1, m1, w2, m2)
     } else {
         None
     };
-    combine_pair_at(simd, entry, o1, o2, src, w1, m1, w2, m2, false)
+    combine_pair_at(k, entry, o1, o2, src, w1, m1, w2, m2, false)
 }
 
 /// [`combine_pair`] with the pair's [`pair_entry`] looked up before (`entry` must be it,
@@ -50,7 +37,7 @@ pub fn combine_pair_with<T: Sample>(
 /// samples, then its odd ones, as [`deinterleave`] places them (the same bits).
 #[allow(clippy::too_many_arguments)]
 pub fn combine_pair_at<T: Sample>(
-    simd: CpuLevel,
+    k: Kernels,
     entry: Option<u8>,
     o1: &mut [T],
     o2: &mut [T],
@@ -64,9 +51,8 @@ pub fn combine_pair_at<T: Sample>(
     let u = src.len();
     check_pair(u, w1, m1, w2, m2);
     assert!(o1.len() == o2.len() && src.iter().all(|s| s.len() >= o1.len()));
-    assert!(simd <= CpuLevel::detected(), "{simd:?} is not available");
     #[cfg(target_arch = "x86_64")]
-    if let (true, Some(entry)) = (simd >= CpuLevel::Avx2, entry) {
+    if let (true, Some(entry)) = (k.avx2(), entry) {
         let p = input_ptrs(src);
         let o = [o1.as_mut_ptr(), o2.as_mut_ptr()];
         // SAFETY: AVX2 (and AVX-512 at that level) present; lengths and masks checked
@@ -76,18 +62,18 @@ pub fn combine_pair_at<T: Sample>(
                 entry,
                 PairRows { w1, m1, w2, m2 },
                 &PairSteps::one(o, o1.len(), &p[..u], PairOutput::apart_or_split(split)),
-                simd,
+                k.level(),
             )
         } {
             return;
         }
     }
     let _ = entry;
-    pair_by_parts(o1, o2, src, w1, m1, w2, m2, simd);
+    pair_by_parts(k, o1, o2, src, w1, m1, w2, m2);
     if split {
         for o in [o1, o2] {
             let whole = o.to_vec();
-            deinterleave(&whole, 1, o);
+            deinterleave(k, &whole, 1, o);
         }
     }
 }
@@ -160,7 +146,9 @@ impl<'a, T> PairSteps<'a, T> {
 ///
 /// `memo` remembers the last pair's pattern (the regular row pairs repeat one); `split`
 /// writes each output as its even samples, then its odd ones ([`combine_pair_at`]).
+#[allow(clippy::too_many_arguments)]
 pub fn combine_pair_taps<'t, T: Sample + 't>(
+    k: Kernels,
     memo: &mut PairMemo<T>,
     split: bool,
     o1: &mut [T],
@@ -188,8 +176,7 @@ pub fn combine_pair_taps<'t, T: Sample + 't>(
     for k in 0..n {
         src[k] = tap(cols[k]);
     }
-    let simd = CpuLevel::detected();
-    let entry = if simd >= CpuLevel::Avx2 {
+    let entry = if k.avx2() {
         memo.entry(&a[..n], m1, &b[..n], m2)
     } else {
         None
@@ -199,18 +186,7 @@ pub fn combine_pair_taps<'t, T: Sample + 't>(
     if entry.is_none() {
         return false;
     }
-    combine_pair_at(
-        simd,
-        entry,
-        o1,
-        o2,
-        &src[..n],
-        &a[..n],
-        m1,
-        &b[..n],
-        m2,
-        split,
-    );
+    combine_pair_at(k, entry, o1, o2, &src[..n], &a[..n], m1, &b[..n], m2, split);
     true
 }
 
@@ -275,6 +251,7 @@ pub(crate) fn input_ptrs<T>(src: &[&[T]]) -> [*const T; 32] {
 /// and the reference the tests compare with).
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn pair_by_parts<T: Sample>(
+    k: Kernels,
     o1: &mut [T],
     o2: &mut [T],
     src: &[&[T]],
@@ -282,7 +259,6 @@ pub(crate) fn pair_by_parts<T: Sample>(
     m1: u32,
     w2: &[T],
     m2: u32,
-    simd: CpuLevel,
 ) {
     for (o, w, m) in [(o1, w1, m1), (o2, w2, m2)] {
         let mut s: [&[T]; 32] = [&[]; 32];
@@ -292,7 +268,7 @@ pub(crate) fn pair_by_parts<T: Sample>(
             (s[n], wk[n]) = (src[k], w[k]);
             n += 1;
         }
-        combine_with(simd, o, &s[..n], &wk[..n]);
+        combine(k, o, &s[..n], &wk[..n]);
     }
 }
 
@@ -461,6 +437,7 @@ impl<T: Sample> PairMemo<T> {
 /// Whether [`combine_pair`] has a vector build for the pair `(w1, m1)`, `(w2, m2)` (its
 /// inputs' count, masks, unit weights and pairs one of the built patterns): the regular
 /// rows of every scheme have one (tested), other pairs go one output at a time.
+#[cfg(any(test, feature = "testing"))]
 pub fn combine_pair_has_build<T: Sample>(w1: &[T], m1: u32, w2: &[T], m2: u32) -> bool {
     pair_entry(w1, m1, w2, m2).is_some()
 }
@@ -469,7 +446,9 @@ pub fn combine_pair_has_build<T: Sample>(w1: &[T], m1: u32, w2: &[T], m2: u32) -
 /// `out[2i + 1]` the second (the even and the odd fine samples of synthesis, without a
 /// pass through two buffers and [`interleave`]). The same bits; `false` (nothing written)
 /// where there is no AVX2 build for the pattern or the type.
+#[cfg(any(test, feature = "testing"))]
 pub fn combine_pair_merged<T: Sample>(
+    k: Kernels,
     out: &mut [T],
     src: &[&[T]],
     w1: &[T],
@@ -477,12 +456,14 @@ pub fn combine_pair_merged<T: Sample>(
     w2: &[T],
     m2: u32,
 ) -> bool {
-    combine_pair_merged_at(pair_entry(w1, m1, w2, m2), out, src, w1, m1, w2, m2)
+    combine_pair_merged_at(k, pair_entry(w1, m1, w2, m2), out, src, w1, m1, w2, m2)
 }
 
 /// [`combine_pair_merged`] with the pair's [`pair_entry`] looked up before (`entry` must
 /// be it).
+#[allow(clippy::too_many_arguments)]
 pub fn combine_pair_merged_at<T: Sample>(
+    k: Kernels,
     entry: Option<u8>,
     out: &mut [T],
     src: &[&[T]],
@@ -497,10 +478,10 @@ pub fn combine_pair_merged_at<T: Sample>(
     let len = out.len() / 2;
     assert!(src.iter().all(|s| s.len() >= len));
     #[cfg(target_arch = "x86_64")]
-    if let (true, Some(entry)) = (cpu_has_avx2(), entry) {
+    if let (true, Some(entry)) = (k.avx2(), entry) {
         let p = input_ptrs(src);
         let o = [out.as_mut_ptr(), out.as_mut_ptr()];
-        // SAFETY: AVX2 is present, AVX-512F at the detected level; `out` holds 2·len
+        // SAFETY: AVX2 is present, AVX-512F at the table's level; `out` holds 2·len
         // samples, every input len; one step, the merged output written through the
         // first pointer only.
         return unsafe {
@@ -508,7 +489,7 @@ pub fn combine_pair_merged_at<T: Sample>(
                 entry,
                 PairRows { w1, m1, w2, m2 },
                 &PairSteps::one(o, len, &p[..u], PairOutput::Merged),
-                CpuLevel::detected(),
+                k.level(),
             )
         };
     }
@@ -523,6 +504,7 @@ pub fn combine_pair_merged_at<T: Sample>(
 /// by pair; one dispatch for all of them.
 #[allow(clippy::too_many_arguments)]
 pub fn combine_pair_rows<T: Sample>(
+    k: Kernels,
     src: &[T],
     len: usize,
     cols: &[usize],
@@ -535,7 +517,7 @@ pub fn combine_pair_rows<T: Sample>(
     count: usize,
 ) {
     pair_rows(
-        src, len, cols, in_step, w1, w2, dst, rows, out_step, count, false,
+        k, src, len, cols, in_step, w1, w2, dst, rows, out_step, count, false,
     )
 }
 
@@ -544,6 +526,7 @@ pub fn combine_pair_rows<T: Sample>(
 /// same bits, placed as `deinterleave` places them, without a pass of its own.
 #[allow(clippy::too_many_arguments)]
 pub fn combine_pair_rows_split<T: Sample>(
+    k: Kernels,
     src: &[T],
     len: usize,
     cols: &[usize],
@@ -556,12 +539,13 @@ pub fn combine_pair_rows_split<T: Sample>(
     count: usize,
 ) {
     pair_rows(
-        src, len, cols, in_step, w1, w2, dst, rows, out_step, count, true,
+        k, src, len, cols, in_step, w1, w2, dst, rows, out_step, count, true,
     )
 }
 
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn pair_rows<T: Sample>(
+    k: Kernels,
     src: &[T],
     len: usize,
     cols: &[usize],
@@ -607,6 +591,7 @@ pub(crate) fn pair_rows<T: Sample>(
     // distinct (asserted above).
     unsafe {
         pair_steps(
+            k,
             src,
             &off[..u],
             in_step * len,
@@ -632,6 +617,7 @@ pub(crate) fn pair_rows<T: Sample>(
 /// [`combine_pair`] lane by lane.
 #[allow(clippy::too_many_arguments)]
 pub fn combine_pair_lanes<T: Sample>(
+    k: Kernels,
     src: &[T],
     off: &[usize],
     in_step: usize,
@@ -666,6 +652,7 @@ pub fn combine_pair_lanes<T: Sample>(
     // lie apart within its own `out_step` samples (asserted above).
     unsafe {
         pair_steps(
+            k,
             src,
             off,
             in_step,
@@ -695,6 +682,7 @@ pub fn combine_pair_lanes<T: Sample>(
 /// any steps overlapping; weights and masks as [`check_pair`] checks them.
 #[allow(clippy::too_many_arguments)]
 pub(crate) unsafe fn pair_steps<T: Sample>(
+    k: Kernels,
     src: &[T],
     off: &[usize],
     in_step: usize,
@@ -711,9 +699,9 @@ pub(crate) unsafe fn pair_steps<T: Sample>(
     let p = input_ptrs_at(src, off);
     let merge = output == PairOutput::Merged;
     #[cfg(target_arch = "x86_64")]
-    if cpu_has_avx2() {
+    if k.avx2() {
         let d = dst.as_mut_ptr();
-        // SAFETY: AVX2 is present (AVX-512F too when detected, the last argument); every
+        // SAFETY: AVX2 is present (AVX-512F too at the table's level); every
         // input and output stretch lies inside its slice and the outputs of all steps are
         // disjoint (the caller's contract), and `src`, `dst` are distinct slices
         // (borrowed shared and exclusive).
@@ -729,12 +717,7 @@ pub(crate) unsafe fn pair_steps<T: Sample>(
                 out_step,
                 output,
             };
-            pair_avx2_at(
-                entry,
-                PairRows { w1, m1, w2, m2 },
-                &at,
-                CpuLevel::detected(),
-            )
+            pair_avx2_at(entry, PairRows { w1, m1, w2, m2 }, &at, k.level())
         });
         if done {
             return;
@@ -747,16 +730,7 @@ pub(crate) unsafe fn pair_steps<T: Sample>(
         for (k, &o) in off.iter().enumerate() {
             s[k] = &src[o + in_step * t..][..len];
         }
-        pair_by_parts(
-            &mut a,
-            &mut b,
-            &s[..u],
-            w1,
-            m1,
-            w2,
-            m2,
-            CpuLevel::detected(),
-        );
+        pair_by_parts(k, &mut a, &mut b, &s[..u], w1, m1, w2, m2);
         let at = [out[0] + out_step[0] * t, out[1] + out_step[1] * t];
         if merge {
             let o = &mut dst[at[0]..][..2 * len];
@@ -764,8 +738,8 @@ pub(crate) unsafe fn pair_steps<T: Sample>(
                 (o[2 * i], o[2 * i + 1]) = (a[i], b[i]);
             }
         } else if output == PairOutput::Split {
-            deinterleave(&a, 1, &mut dst[at[0]..][..len]);
-            deinterleave(&b, 1, &mut dst[at[1]..][..len]);
+            deinterleave(k, &a, 1, &mut dst[at[0]..][..len]);
+            deinterleave(k, &b, 1, &mut dst[at[1]..][..len]);
         } else {
             dst[at[0]..][..len].copy_from_slice(&a);
             dst[at[1]..][..len].copy_from_slice(&b);

@@ -16,7 +16,7 @@
 
 use crate::kernel::{
     self, combine, combine_pair_at, combine_pair_merged_at, deinterleave, edge_rows, interleave,
-    CpuLevel, EdgeGroup,
+    EdgeGroup, Kernels,
 };
 use crate::scheme::sparse::Csr;
 use crate::scheme::Sample;
@@ -59,6 +59,8 @@ pub struct Polyphase {
     /// samples within this many of the lane's ends: lanes of single samples may then come
     /// already split into their even and odd samples ([`Polyphase::apply_lane_split`]).
     pub split_reach: Option<usize>,
+    /// The kernel table every application of this plan runs (chosen when it is made).
+    pub kernels: Kernels,
 }
 
 /// Two regular runs whose rows read the same stretch of the lane: a coarse and a detail
@@ -204,8 +206,8 @@ impl Pair {
 
 impl Polyphase {
     /// Find the runs of `op`: tries (row_step, col_step) = (1, 2) and (2, 1) and keeps the
-    /// split that covers more rows.
-    pub fn new(op: &Csr) -> Polyphase {
+    /// split that covers more rows. Applied with the kernels of `kernels`.
+    pub fn new(op: &Csr, kernels: Kernels) -> Polyphase {
         // the rest (pair, edge groups) only for the split kept: the other one's rows are
         // nearly all boundary rows, whose edge groups took most of the build
         let a = Self::find_runs(op, 1, 2);
@@ -213,9 +215,9 @@ impl Polyphase {
         let uncovered =
             |(_, covered): &(Vec<Run>, Vec<bool>)| covered.iter().filter(|&&c| !c).count();
         if uncovered(&b) < uncovered(&a) {
-            Self::split(op, 2, 1, b)
+            Self::split(op, 2, 1, b, kernels)
         } else {
-            Self::split(op, 1, 2, a)
+            Self::split(op, 1, 2, a, kernels)
         }
     }
 
@@ -264,6 +266,7 @@ impl Polyphase {
         row_step: usize,
         col_step: usize,
         (runs, covered): (Vec<Run>, Vec<bool>),
+        kernels: Kernels,
     ) -> Polyphase {
         let rows = op.rows();
         let pair = if row_step == 1 {
@@ -327,6 +330,7 @@ impl Polyphase {
             edges,
             edge_rest,
             split_reach,
+            kernels,
         }
     }
 
@@ -346,12 +350,12 @@ impl Polyphase {
         e: usize,
         scratch: &mut [T],
     ) {
-        let m = self.rows;
+        let (m, k) = (self.rows, self.kernels);
         assert!(x.len() >= m * e && y.len() >= m * e && scratch.len() >= m * e);
         let (x, y) = (&x[..m * e], &mut y[..m * e]);
         let ne = m.div_ceil(2);
         if self.col_step == 2 && !self.runs.is_empty() {
-            deinterleave(x, e, scratch);
+            deinterleave(k, x, e, scratch);
         }
         let mut paired = [usize::MAX; 2];
         if let Some(pair) = &self.pair {
@@ -365,10 +369,10 @@ impl Polyphase {
                 let p0 = r0.row0 / 2 + f[0];
                 let out = &mut y[2 * p0 * e..2 * (p0 + n) * e];
                 // samples (not wider elements) straight into place where there is a build
-                if e > 1 || !pair_merged(pair, x, out) {
+                if e > 1 || !pair_merged(k, pair, x, out) {
                     let (t0, t1) = scratch[..2 * n * e].split_at_mut(n * e);
-                    pair_part(pair, 1, ne, x, &[], e, t0, t1);
-                    interleave(t0, t1, e, out);
+                    pair_part(k, pair, 1, ne, x, &[], e, t0, t1);
+                    interleave(k, t0, t1, e, out);
                 }
             } else {
                 // Analysis: the coarse and the detail rows straight into `y`.
@@ -414,7 +418,7 @@ impl Polyphase {
         let (lo, hi) = y.split_at_mut(r1.row0 * e);
         let o0 = &mut lo[(r0.row0 + f[0]) * e..(r0.row0 + f[0] + n) * e];
         let o1 = &mut hi[f[1] * e..(f[1] + n) * e];
-        pair_part(pair, 2, ne, x, halves, e, o0, o1);
+        pair_part(self.kernels, pair, 2, ne, x, halves, e, o0, o1);
     }
 
     /// The runs but the `paired` ones, and the rows near the ends (`halves`: the lane
@@ -428,7 +432,7 @@ impl Polyphase {
         e: usize,
         paired: [usize; 2],
     ) {
-        let ne = self.rows.div_ceil(2);
+        let (ne, k) = (self.rows.div_ceil(2), self.kernels);
         for (ri, run) in self.runs.iter().enumerate() {
             if paired.contains(&ri) {
                 continue;
@@ -436,6 +440,7 @@ impl Polyphase {
             if run.row_step == 1 && run.cols.len() <= RUN_MOST {
                 let len = run.count * e;
                 run_part(
+                    k,
                     self.col_step,
                     ne,
                     run,
@@ -447,17 +452,17 @@ impl Polyphase {
                     &mut y[run.row0 * e..run.row0 * e + len],
                 );
             } else {
-                op_rows_run(op, run, x, y, e);
+                op_rows_run(k, op, run, x, y, e);
             }
         }
         // the rows near the ends: 8 at a time where the build has it
-        let rest = if e == 1 && edge_rows(&self.edges, x, y) {
+        let rest = if e == 1 && edge_rows(k, &self.edges, x, y) {
             &self.edge_rest
         } else {
             &self.edge_rows
         };
         for &r in rest {
-            op_row(op, r, x, y, e);
+            op_row(k, op, r, x, y, e);
         }
     }
 }
@@ -497,11 +502,11 @@ fn edge_groups(op: &Csr, rows: &[usize]) -> (Vec<EdgeGroup>, Vec<usize>) {
 /// One row of `op` on element-wide samples: `y_r = Σ w x_c`, summed as
 /// [`kernel::sum_terms`](kernel::sum_terms) says.
 #[inline]
-fn op_row<T: Sample>(op: &Csr, r: usize, x: &[T], y: &mut [T], e: usize) {
+fn op_row<T: Sample>(k: Kernels, op: &Csr, r: usize, x: &[T], y: &mut [T], e: usize) {
     let (cols, ws) = op.row_slices(r);
     if e > 1 {
         let out = &mut y[r * e..r * e + e];
-        kernel::combine_taps(out, cols, ws, |c| &x[c as usize * e..c as usize * e + e]);
+        kernel::combine_taps(k, out, cols, ws, |c| &x[c as usize * e..c as usize * e + e]);
         return;
     }
     let n = cols.len();
@@ -520,9 +525,9 @@ fn op_row<T: Sample>(op: &Csr, r: usize, x: &[T], y: &mut [T], e: usize) {
     y[r] = kernel::sum_terms(&w[..n], &partner[..n], x);
 }
 
-fn op_rows_run<T: Sample>(op: &Csr, run: &Run, x: &[T], y: &mut [T], e: usize) {
+fn op_rows_run<T: Sample>(k: Kernels, op: &Csr, run: &Run, x: &[T], y: &mut [T], e: usize) {
     for i in 0..run.count {
-        op_row(op, run.row0 + run.row_step * i, x, y, e);
+        op_row(k, op, run.row0 + run.row_step * i, x, y, e);
     }
 }
 
@@ -532,6 +537,7 @@ fn op_rows_run<T: Sample>(op: &Csr, run: &Run, x: &[T], y: &mut [T], e: usize) {
 #[allow(clippy::too_many_arguments)]
 #[inline]
 fn run_part<T: Sample>(
+    k: Kernels,
     col_step: usize,
     ne: usize,
     run: &Run,
@@ -556,7 +562,7 @@ fn run_part<T: Sample>(
         };
         w[k] = T::from_f64(wk);
     }
-    combine(&mut out[..len], &src[..taps], &w[..taps]);
+    combine(k, &mut out[..len], &src[..taps], &w[..taps]);
 }
 
 /// The rows of `pair` into `o0` and `o1` (contiguous) with [`kernel::combine_pair`]: every input is
@@ -564,6 +570,7 @@ fn run_part<T: Sample>(
 #[allow(clippy::too_many_arguments)]
 #[inline]
 fn pair_part<T: Sample>(
+    k: Kernels,
     pair: &Pair,
     col_step: usize,
     ne: usize,
@@ -586,14 +593,9 @@ fn pair_part<T: Sample>(
         };
     }
     let [m0, m1] = pair.masks;
-    let simd = CpuLevel::detected();
-    let entry = if simd >= CpuLevel::Avx2 {
-        pair.entry::<T>()
-    } else {
-        None
-    };
+    let entry = if k.avx2() { pair.entry::<T>() } else { None };
     combine_pair_at(
-        simd,
+        k,
         entry,
         &mut o0[..len],
         &mut o1[..len],
@@ -609,7 +611,7 @@ fn pair_part<T: Sample>(
 /// The rows of a synthesis `pair` (even and odd fine samples) straight into `out`,
 /// interleaved ([`combine_pair_merged`]); `false` (nothing written) where that has no
 /// build.
-fn pair_merged<T: Sample>(pair: &Pair, x: &[T], out: &mut [T]) -> bool {
+fn pair_merged<T: Sample>(k: Kernels, pair: &Pair, x: &[T], out: &mut [T]) -> bool {
     let mut src: [&[T]; PAIR_MOST] = [&[]; PAIR_MOST];
     let [w0, w1] = pair.sample_weights::<T>();
     let n = pair.count;
@@ -619,6 +621,7 @@ fn pair_merged<T: Sample>(pair: &Pair, x: &[T], out: &mut [T]) -> bool {
     }
     let [m0, m1] = pair.masks;
     combine_pair_merged_at(
+        k,
         pair.entry::<T>(),
         &mut out[..2 * n],
         &src[..u],
@@ -632,6 +635,7 @@ fn pair_merged<T: Sample>(pair: &Pair, x: &[T], out: &mut [T]) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::kernel::CpuLevel;
     use crate::scheme::{Boundary, Scheme, TwoScale};
 
     /// Every scheme and boundary pairs its regular rows in both directions, leaving a few
@@ -652,7 +656,7 @@ mod tests {
                     }
                     let t = TwoScale::new(scheme, boundary, n);
                     for (name, op) in [("analysis", &t.analysis), ("synthesis", &t.synthesis)] {
-                        let p = Polyphase::new(op);
+                        let p = Polyphase::new(op, Kernels::detected());
                         let pair = p.pair.as_ref().unwrap_or_else(|| {
                             panic!("{scheme:?} {boundary:?} {n} {name}: no pair")
                         });
@@ -678,7 +682,7 @@ mod tests {
         let t = TwoScale::new(scheme, boundary, n);
         let mut pairs = Vec::new();
         for (analysis, op) in [(true, &t.analysis), (false, &t.synthesis)] {
-            let p = Polyphase::new(op);
+            let p = Polyphase::new(op, Kernels::detected());
             let pair = p.pair.as_ref().expect("a lane pair");
             pairs.push((pair.weights.clone(), pair.masks));
             let mut order: Vec<usize> = (0..n).collect();
@@ -740,21 +744,20 @@ mod tests {
                     .collect();
                 let src: Vec<&[T]> = (0..u).map(|k| &x[k..k + len]).collect();
                 let (mut e1, mut e2) = (vec![T::default(); len], vec![T::default(); len]);
-                let s = CpuLevel::Scalar;
-                kernel::pair_by_parts(&mut e1, &mut e2, &src, &w1, m[0], &w2, m[1], s);
+                let s = Kernels::scalar();
+                kernel::pair_by_parts(s, &mut e1, &mut e2, &src, &w1, m[0], &w2, m[1]);
                 let bits = |v: &[T]| v.iter().map(|x| x.to_f64().to_bits()).collect::<Vec<_>>();
                 for level in CpuLevel::available() {
-                    let entry = if level >= CpuLevel::Avx2 { entry } else { None };
+                    let k = Kernels::new(level);
+                    let entry = if k.avx2() { entry } else { None };
                     for split in [false, true] {
                         let (mut a, mut b) = (vec![T::default(); len], vec![T::default(); len]);
                         let (w1, w2) = (&w1[..], &w2[..]);
-                        combine_pair_at(
-                            level, entry, &mut a, &mut b, &src, w1, m[0], w2, m[1], split,
-                        );
+                        combine_pair_at(k, entry, &mut a, &mut b, &src, w1, m[0], w2, m[1], split);
                         let (mut f1, mut f2) = (e1.clone(), e2.clone());
                         if split {
-                            deinterleave(&e1, 1, &mut f1);
-                            deinterleave(&e2, 1, &mut f2);
+                            deinterleave(s, &e1, 1, &mut f1);
+                            deinterleave(s, &e2, 1, &mut f2);
                         }
                         let what = format!("{name} {level:?} split {split} len {len}");
                         assert_eq!(bits(&a), bits(&f1), "{what}: first output");
@@ -762,7 +765,8 @@ mod tests {
                     }
                 }
                 let mut merged = vec![T::default(); 2 * len];
-                if combine_pair_merged_at(entry, &mut merged, &src, &w1, m[0], &w2, m[1]) {
+                let k = Kernels::detected();
+                if combine_pair_merged_at(k, entry, &mut merged, &src, &w1, m[0], &w2, m[1]) {
                     let want: Vec<T> = (0..2 * len)
                         .map(|i| if i % 2 == 0 { e1[i / 2] } else { e2[i / 2] })
                         .collect();

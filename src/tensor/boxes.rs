@@ -1,7 +1,7 @@
 //! Copies of strided boxes: the lines of a box, and a box copied without an inner
 //! box (the cascade's parts that stay where a level leaves them).
 
-use crate::kernel::stream_copy_unfenced;
+use crate::kernel::{stream_copy_unfenced, Kernels};
 use crate::scheme::Sample;
 
 /// Lines of a box `bx` (axes `1..k`, the last of `e`-sample elements): calls
@@ -33,7 +33,7 @@ fn for_lines(
 }
 
 /// Copy the box `bx` without the box `inner` from `a` (strides `a_st`) to `b` (strides
-/// `b_st`), with non-temporal stores when `stream`.
+/// `b_st`), with non-temporal stores (in the build of the table) when `stream` has one.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn copy_box_outside<T: Sample>(
     a: &[T],
@@ -43,14 +43,14 @@ pub(super) fn copy_box_outside<T: Sample>(
     bx: &[usize],
     inner: &[usize],
     e: usize,
-    stream: bool,
+    stream: Option<Kernels>,
 ) {
     let m = bx.len();
     let run = bx[m - 1] * e;
     let mut copy = |ao: usize, bo: usize, len: usize| {
         let (s, d) = (&a[ao..ao + len], &mut b[bo..bo + len]);
-        if stream {
-            stream_copy_unfenced(s, d);
+        if let Some(k) = stream {
+            stream_copy_unfenced(k, s, d);
         } else {
             d.copy_from_slice(s);
         }

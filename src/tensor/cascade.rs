@@ -34,7 +34,7 @@ use super::boxes::copy_box_outside;
 use super::fused::{AxisOp, Ctx, STREAM_BYTES};
 use super::par::SharedMut;
 use super::ring::Ring;
-use crate::kernel::{combine_pair_taps, combine_taps, stream_fence, PairMemo};
+use crate::kernel::{combine_pair_taps, combine_taps, stream_fence, Kernels, PairMemo};
 use crate::scheme::sparse::Csr;
 use crate::scheme::Sample;
 use rayon::prelude::*;
@@ -747,6 +747,7 @@ impl<'p, 'a, T: Sample> Part<'p, 'a, T> {
     fn step_at(&self, l: usize, pos: usize) -> Step<'a> {
         let r = self.plan.order[l][pos];
         Step {
+            k: self.plan.ops[l][0].plan.kernels,
             pos,
             r,
             taps: self.plan.ops[l][0].op.row_slices(r),
@@ -763,6 +764,7 @@ impl<'p, 'a, T: Sample> Part<'p, 'a, T> {
         let need = self.need;
         let r = need[l][i];
         let step = Step {
+            k: plan.ops[l][0].plan.kernels,
             pos: usize::MAX,
             r,
             taps: plan.ops[l][0].op.row_slices(r),
@@ -935,7 +937,7 @@ impl<'p, 'a, T: Sample> Part<'p, 'a, T> {
                 &next[1..],
                 whole(next.len() - 1),
                 plan.e,
-                false,
+                None,
             );
             &st.out
         };
@@ -949,7 +951,7 @@ impl<'p, 'a, T: Sample> Part<'p, 'a, T> {
                 &plan.regions[l][1..],
                 &next[1..],
                 plan.e,
-                ctx.stream,
+                ctx.stream.then_some(ctx.k),
             );
         }
     }
@@ -985,7 +987,7 @@ impl<'p, 'a, T: Sample> Part<'p, 'a, T> {
             &plan.regions[l][1..],
             whole(plan.regions[l].len() - 1),
             plan.e,
-            false,
+            None,
         );
     }
 
@@ -1110,7 +1112,7 @@ impl<'p, 'a, T: Sample> Part<'p, 'a, T> {
             &plan.regions[l - 1][1..],
             &plan.regions[l][1..],
             plan.e,
-            false,
+            None,
         );
     }
 }
@@ -1126,6 +1128,8 @@ fn ghost<'g, T>(rows: &[usize], data: &'g [T], c: usize, len: usize) -> &'g [T] 
 /// One row of a level's operator along axis 0: its position in the level's order, its
 /// index and its taps.
 struct Step<'o> {
+    /// The kernel table of the level's operator plan.
+    k: Kernels,
     pos: usize,
     r: usize,
     taps: (&'o [u32], &'o [f64]),
@@ -1141,7 +1145,7 @@ impl Step<'_> {
         tap: impl Fn(u32) -> &'t [T],
     ) {
         let (cols, ws) = self.taps;
-        combine_taps(&mut slab[range.clone()], cols, ws, |c| {
+        combine_taps(self.k, &mut slab[range.clone()], cols, ws, |c| {
             &tap(c)[range.clone()]
         });
     }
@@ -1163,7 +1167,7 @@ impl Step<'_> {
         tap: impl Fn(u32) -> &'t [T],
     ) -> bool {
         let (a, b) = (&mut slab[range.clone()], &mut slab2[range.clone()]);
-        combine_pair_taps(memo, split, a, b, self.taps, other.taps, |c| {
+        combine_pair_taps(self.k, memo, split, a, b, self.taps, other.taps, |c| {
             &tap(c)[range.clone()]
         })
     }

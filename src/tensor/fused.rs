@@ -17,7 +17,7 @@ use super::par::{for_each_part, SharedMut};
 use crate::kernel::polyphase::{Polyphase, PAIR_MOST};
 use crate::kernel::{
     self, combine_pair_taps, combine_taps, stream_copy, stream_copy_unfenced, stream_fence,
-    transpose, LaneTaps, PairMemo,
+    transpose, Kernels, LaneTaps, PairMemo,
 };
 use crate::scheme::sparse::Csr;
 use crate::scheme::Sample;
@@ -181,6 +181,8 @@ pub(super) fn pair_parts(order: &[usize], op: &Csr) -> Vec<std::ops::Range<usize
 pub(super) struct Ctx<'a> {
     /// Write lanes with non-temporal stores (output larger than the caches).
     pub stream: bool,
+    /// The kernel table of the level's operator plans ([`Polyphase::kernels`]).
+    pub k: Kernels,
     region: &'a [usize],
     e: usize,
     ops: &'a [AxisOp<'a>],
@@ -199,6 +201,7 @@ impl<'a> Ctx<'a> {
         for d in 0..k {
             assert_eq!(ops[d].op.rows(), region[d]);
             assert_eq!(ops[d].plan.rows, region[d]);
+            assert_eq!(ops[d].plan.kernels, ops[0].plan.kernels);
         }
         let mut cs = vec![e; k];
         for d in (0..k - 1).rev() {
@@ -206,6 +209,7 @@ impl<'a> Ctx<'a> {
         }
         let mut ctx = Ctx {
             stream,
+            k: ops[0].plan.kernels,
             region,
             e,
             ops,
@@ -262,7 +266,7 @@ impl<'a> Ctx<'a> {
     /// (elsewhere the split would be a pass of its own, with a buffer per row).
     pub fn takes_split_rows(&self) -> bool {
         let lane = &self.ops[self.ops.len() - 1].plan;
-        crate::kernel::cpu_has_avx2()
+        self.k.avx2()
             && self.ops.len() == 2
             && self.e == 1
             && lane.split_reach.is_some()
@@ -287,7 +291,7 @@ impl<'a> Ctx<'a> {
             a.plan
                 .apply_lane_split(a.op, &halves[..n], &mut lane_out[..n], lane_tmp);
             // (fenced by the caller once its rows are done)
-            stream_copy_unfenced(&lane_out[..n], &mut out[..n]);
+            stream_copy_unfenced(self.k, &lane_out[..n], &mut out[..n]);
         } else {
             a.plan
                 .apply_lane_split(a.op, &halves[..n], &mut out[..n], lane_tmp);
@@ -329,7 +333,7 @@ impl<'a> Ctx<'a> {
         for line in 0..lines {
             let (so, co) = self.line_at(d, line, src_st);
             let at = |c: u32| c as usize * src_st[d] + so;
-            combine_taps(&mut slab[co..co + run], cols, ws, |c| {
+            combine_taps(self.k, &mut slab[co..co + run], cols, ws, |c| {
                 &src[at(c)..at(c) + run]
             });
         }
@@ -390,7 +394,7 @@ impl<'a> Ctx<'a> {
             let at = |c: u32| c as usize * src_st[0] + so;
             let (a, b) = (&mut slab[co..co + run], &mut slab2[co..co + run]);
             let tap = |c| &src[at(c)..at(c) + run];
-            if !combine_pair_taps(&mut memo, false, a, b, rows[0], rows[1], tap) {
+            if !combine_pair_taps(self.k, &mut memo, false, a, b, rows[0], rows[1], tap) {
                 debug_assert_eq!(line, 0, "the same rows pair on every line");
                 return false;
             }
@@ -434,7 +438,7 @@ impl<'a> Ctx<'a> {
                 a.plan
                     .apply_lane(a.op, &slab[..n], &mut lane_out[..n], e, lane_tmp);
                 // (fenced once the task's rows are done, in `fused_level_strided`)
-                stream_copy_unfenced(&lane_out[..n], &mut out[..n]);
+                stream_copy_unfenced(self.k, &lane_out[..n], &mut out[..n]);
             } else {
                 a.plan
                     .apply_lane(a.op, &slab[..n], &mut out[..n], e, lane_tmp);
@@ -545,20 +549,21 @@ impl<'a> Ctx<'a> {
             // analysis has no pair, its detail rows read other places than its coarse
             // rows): the plane transposed so that the lanes become rows, combined as
             // rows, and transposed back
-            transpose(pa, h, w, pb, h);
+            let k = self.k;
+            transpose(k, pa, h, w, pb, h);
             combine_rows(a, pb, h, pa, None);
             if !self.stream {
-                return transpose(pa, w, h, out, out_stride);
+                return transpose(k, pa, w, h, out, out_stride);
             }
-            transpose(pa, w, h, pb, w);
-            return stream_rows(pb, w, h, out, out_stride);
+            transpose(k, pa, w, h, pb, w);
+            return stream_rows(k, pb, w, h, out, out_stride);
         }
         let split = a.plan.col_step == 2;
         let taps = self.lane_taps.as_ref().expect("made for planes by lanes");
         let lanes = |x: &[T], y: &mut [T], ys: usize| lanes(a, taps, x, split, h, w, y, ys);
         if split && !presplit {
             for (x, y) in pa.chunks_exact(w).zip(pb.chunks_exact_mut(w)) {
-                kernel::deinterleave(x, 1, y);
+                kernel::deinterleave(self.k, x, 1, y);
             }
         }
         // the lanes' input, and the plane free for their output
@@ -583,18 +588,22 @@ impl<'a> Ctx<'a> {
             return;
         }
         lanes(x, free, w);
-        stream_rows(free, w, h, out, out_stride);
+        stream_rows(self.k, free, w, h, out, out_stride);
     }
 }
 
 /// The `h` rows of `w` samples of `src` (compact) into `dst`, rows `stride` apart, with
 /// non-temporal stores.
-fn stream_rows<T: Sample>(src: &[T], w: usize, h: usize, dst: &mut [T], stride: usize) {
+fn stream_rows<T: Sample>(k: Kernels, src: &[T], w: usize, h: usize, dst: &mut [T], stride: usize) {
     if stride == w {
-        return stream_copy(&src[..h * w], &mut dst[..h * w]);
+        return stream_copy(k, &src[..h * w], &mut dst[..h * w]);
     }
     for r in 0..h {
-        stream_copy_unfenced(&src[r * w..r * w + w], &mut dst[r * stride..r * stride + w]);
+        stream_copy_unfenced(
+            k,
+            &src[r * w..r * w + w],
+            &mut dst[r * stride..r * stride + w],
+        );
     }
     stream_fence();
 }
@@ -643,6 +652,7 @@ fn lanes<T: Sample>(
             ([2 * p0, 2 * p0], true)
         };
         kernel::combine_pair_lanes(
+            plan.kernels,
             x,
             &off[..u],
             w,
@@ -657,7 +667,7 @@ fn lanes<T: Sample>(
         );
     }
     // the other rows (near the ends of the lanes)
-    kernel::combine_lane_taps_with(taps, x, h, y, ys);
+    kernel::combine_lane_taps_with(plan.kernels, taps, x, h, y, ys);
 }
 
 /// Where sample `c` of a lane of `w` samples is in its row (`split`: the even samples,
@@ -724,16 +734,17 @@ fn combine_rows<T: Sample>(
     split: Option<&mut [T]>,
 ) {
     let (op, plan) = (a.op, a.plan);
+    let k = plan.kernels;
     let rows_split = |rows: std::ops::Range<usize>, dst: &mut [T], row: &mut [T]| {
         for r in rows {
-            kernel::combine_rows(op, src, len, r..r + 1, &mut row[..len]);
-            kernel::deinterleave(&row[..len], 1, &mut dst[r * len..r * len + len]);
+            kernel::combine_rows(k, op, src, len, r..r + 1, &mut row[..len]);
+            kernel::deinterleave(k, &row[..len], 1, &mut dst[r * len..r * len + len]);
         }
     };
     let Some(pair) = &plan.pair else {
         return match split {
             Some(row) => rows_split(0..op.rows(), dst, row),
-            None => kernel::combine_rows(op, src, len, 0..op.rows(), dst),
+            None => kernel::combine_rows(k, op, src, len, 0..op.rows(), dst),
         };
     };
     let runs = [&plan.runs[pair.runs[0]], &plan.runs[pair.runs[1]]];
@@ -748,6 +759,7 @@ fn combine_rows<T: Sample>(
         kernel::combine_pair_rows
     };
     pair_rows(
+        k,
         src,
         len,
         &pair.cols,
@@ -767,7 +779,7 @@ fn combine_rows<T: Sample>(
         }
         None => {
             for r in &plan.unpaired {
-                kernel::combine_rows(op, src, len, r.clone(), &mut dst[r.start * len..]);
+                kernel::combine_rows(k, op, src, len, r.clone(), &mut dst[r.start * len..]);
             }
         }
     }

@@ -12,8 +12,9 @@ pub mod pyramid;
 mod resample;
 mod ring;
 mod transform;
-pub mod workspace;
+mod workspace;
 
+pub use crate::kernel::Kernels;
 pub use array::{Array, Axis};
 pub use pages::{advise_huge_pages, zeroed_vec};
 pub use pyramid::{
@@ -21,5 +22,5 @@ pub use pyramid::{
     Pyramid, PyramidSpec, Subband,
 };
 pub use resample::{map_lanes, resample_axis, resample_axis_with};
-pub use transform::transform_axis;
+pub use transform::{transform_axis, transform_axis_with};
 pub use workspace::Planner;

@@ -11,7 +11,7 @@ use super::array::Array;
 use super::cascade;
 use super::fused::{fused_level, fused_level_strided, AxisOp, Writes};
 use super::par::{for_each_task, SharedMut};
-use super::transform::transform_axis;
+use super::transform::transform_axis_with;
 use super::workspace::{self, Planner};
 use crate::scheme::{max_levels, Boundary, Sample, Scheme, TwoScale};
 use crate::tuning::EngineChoice;
@@ -245,9 +245,10 @@ pub enum Engine {
     FusedLevels,
     /// Every level axis by axis, in place.
     AxisByAxis,
-    /// [`Engine::Fused`] with the cascade split into this many parts, volumes included
-    /// (tests).
-    #[doc(hidden)]
+    /// [`Engine::Fused`] with the cascade split into exactly this many parts (at least
+    /// one), volumes included, whatever its halos cost: what `MRA_ENGINE=cascade` runs
+    /// (a part per thread), and how the tests reach every cut of the cascade. The same
+    /// bits as every engine.
     CascadeParts(usize),
 }
 
@@ -337,6 +338,7 @@ fn run<T: Sample>(
 ) {
     let shape = array.shape().to_vec();
     let spec = &pyr.spec;
+    let k = planner.kernels();
     let ops = |i: usize, l: usize| planner.level_ops(spec.scheme, spec.boundary, pyr.lengths[i][l]);
     let step = |data: &mut [T], i: usize, l: usize, region: &[usize]| {
         let o = ops(i, l);
@@ -344,7 +346,7 @@ fn run<T: Sample>(
             Direction::Analysis => &o.two_scale.analysis,
             Direction::Synthesis => &o.two_scale.synthesis,
         };
-        transform_axis(data, &shape, region, spec.axes[i], op);
+        transform_axis_with(k, data, &shape, region, spec.axes[i], op);
     };
     if spec.order == Order::Standard {
         let mut steps = pyr.steps();

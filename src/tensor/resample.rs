@@ -57,6 +57,8 @@ pub fn resample_axis_with<T: Sample, U: Copy + Send + Sync>(
     assert_eq!(op.cols(), n);
     assert_eq!(dst.len(), outer * m * inner);
     let out = SharedMut(dst.as_mut_ptr());
+    // the plan of this call: the kernels of the level `tuning` allows
+    let k = crate::kernel::Kernels::detected();
     if inner >= ROW_MIN {
         let strips = inner.div_ceil(STRIP);
         let sw_max = inner.div_ceil(strips);
@@ -69,7 +71,7 @@ pub fn resample_axis_with<T: Sample, U: Copy + Send + Sync>(
                 let off = s * sw_max;
                 let sw = sw_max.min(inner - off);
                 let base = &src[o * n * inner + off..];
-                crate::kernel::apply(op, base, inner, scratch, sw, sw);
+                crate::kernel::apply(k, op, base, inner, scratch, sw, sw);
                 let p = out;
                 for i in 0..m {
                     // SAFETY: task (o, s) alone writes columns off..off+sw of lane o.
@@ -98,7 +100,7 @@ pub fn resample_axis_with<T: Sample, U: Copy + Send + Sync>(
                     spread(lane, inner, &mut sin[l * inner..], gw, n, |d, x| *d = x);
                 }
                 let cw = lanes * inner;
-                crate::kernel::apply(op, sin, gw, sout, gw, cw);
+                crate::kernel::apply(k, op, sin, gw, sout, gw, cw);
                 let p = out;
                 for l in 0..lanes {
                     // SAFETY: lanes first..first+lanes belong to this task alone.

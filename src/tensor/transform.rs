@@ -11,6 +11,7 @@
 
 use super::array::strides;
 use super::par::{for_each_task, SharedMut};
+use crate::kernel::Kernels;
 use crate::scheme::sparse::Csr;
 use crate::scheme::Sample;
 
@@ -43,8 +44,21 @@ fn lane_bases(shape: &[usize], region: &[usize], skip: usize, skip_last: bool) -
 }
 
 /// Apply `op` (`region[axis]` × `region[axis]`, an analysis `[A;B]` or synthesis `[P|Q]`
-/// level) to every lane along `axis` inside `region`.
+/// level) to every lane along `axis` inside `region`, with the kernels of
+/// [`Kernels::detected`].
 pub fn transform_axis<T: Sample>(
+    data: &mut [T],
+    shape: &[usize],
+    region: &[usize],
+    axis: usize,
+    op: &Csr,
+) {
+    transform_axis_with(Kernels::detected(), data, shape, region, axis, op)
+}
+
+/// [`transform_axis`] with the kernel table `k` (a plan's).
+pub fn transform_axis_with<T: Sample>(
+    k: Kernels,
     data: &mut [T],
     shape: &[usize],
     region: &[usize],
@@ -84,6 +98,7 @@ pub fn transform_axis<T: Sample>(
                 unsafe {
                     let base = p.0.add(b + off);
                     crate::kernel::apply_raw(
+                        k,
                         op,
                         base as *const T,
                         es,
@@ -121,7 +136,7 @@ pub fn transform_axis<T: Sample>(
                 // SAFETY: the lanes of this group are disjoint from every other group's.
                 unsafe { gather(p.0 as *const T, lanes, es, w, len, sin, gw) };
                 let cw = lanes.len() * w;
-                crate::kernel::apply(op, sin, gw, sout, gw, cw);
+                crate::kernel::apply(k, op, sin, gw, sout, gw, cw);
                 unsafe { scatter(sout, gw, p.0, lanes, es, w, len) };
             },
         );

@@ -11,10 +11,11 @@
 //! A library user who wants that memory back, or several independent caches, creates a
 //! [`Planner`] and passes it (`pyramid::analyze_in`, `synthesize_in`). The functions
 //! without a planner use [`Planner::shared`], one instance for the process (what the
-//! command line uses); [`release`] empties it.
+//! command line uses); [`Planner::clear`] empties it.
 
 use super::fused::pair_parts;
 use crate::kernel::polyphase::Polyphase;
+use crate::kernel::{CpuLevel, Kernels};
 use crate::scheme::{Boundary, Sample, Scheme, TwoScale};
 use std::any::Any;
 use std::collections::HashMap;
@@ -48,21 +49,41 @@ type Key = (Scheme, Boundary, usize);
 const MAX_CACHED: usize = 256;
 
 /// The operators and the scratch arrays that transforms reuse (see the module's
-/// documentation). Results never depend on it: a fresh planner and a warm one give the
-/// same bits.
+/// documentation), and the CPU level whose kernel table ([`Kernels`]) every plan it
+/// makes runs. Results never depend on it: a fresh planner and a warm one, and every
+/// level, give the same bits.
 #[derive(Default)]
 pub struct Planner {
     levels: Mutex<Option<HashMap<Key, Arc<LevelOps>>>>,
     scratch: Mutex<Vec<Box<dyn Any + Send>>>,
+    /// `None`: [`CpuLevel::detected`] (the widest build, capped by `tuning`).
+    cpu: Option<CpuLevel>,
 }
 
 impl Planner {
-    /// An empty planner (nothing cached, nothing allocated).
+    /// An empty planner (nothing cached, nothing allocated) whose plans run the kernels
+    /// of [`CpuLevel::detected`].
     pub const fn new() -> Planner {
         Planner {
             levels: Mutex::new(None),
             scratch: Mutex::new(Vec::new()),
+            cpu: None,
         }
+    }
+
+    /// An empty planner whose plans run the kernels of `level` (capped at what the CPU
+    /// runs): the same bits at every level, the speed of that build.
+    pub const fn with_cpu(level: CpuLevel) -> Planner {
+        Planner {
+            levels: Mutex::new(None),
+            scratch: Mutex::new(Vec::new()),
+            cpu: Some(level),
+        }
+    }
+
+    /// The kernel table of this planner's plans, chosen from its CPU level.
+    pub fn kernels(&self) -> Kernels {
+        Kernels::new(self.cpu.unwrap_or_else(CpuLevel::detected))
     }
 
     /// The planner of the functions that take none, one for the process.
@@ -85,11 +106,12 @@ impl Planner {
             return l.clone();
         }
         let two_scale = TwoScale::new(scheme, boundary, m);
+        let k = self.kernels();
         let analysis_order = order_by_first_column(&two_scale.analysis);
         let synthesis_order = order_by_first_column(&two_scale.synthesis);
         let l = Arc::new(LevelOps {
-            analysis: Polyphase::new(&two_scale.analysis),
-            synthesis: Polyphase::new(&two_scale.synthesis),
+            analysis: Polyphase::new(&two_scale.analysis, k),
+            synthesis: Polyphase::new(&two_scale.synthesis, k),
             analysis_parts: pair_parts(&analysis_order, &two_scale.analysis),
             synthesis_parts: pair_parts(&synthesis_order, &two_scale.synthesis),
             analysis_order,
@@ -168,16 +190,6 @@ impl Planner {
     }
 }
 
-/// [`Planner::level_ops`] of [`Planner::shared`].
-pub fn level_ops(scheme: Scheme, boundary: Boundary, m: usize) -> Arc<LevelOps> {
-    Planner::shared().level_ops(scheme, boundary, m)
-}
-
-/// Free the kept scratch arrays and operators of [`Planner::shared`].
-pub fn release() {
-    Planner::shared().clear()
-}
-
 #[cfg(test)]
 mod tests {
     use super::super::fused::ROWS_PER_TASK;
@@ -224,7 +236,7 @@ mod tests {
         for scheme in Scheme::ALL {
             for boundary in Boundary::ALL {
                 for m in [5, 16, 64, 67, 130, 256] {
-                    let o = level_ops(scheme, boundary, m);
+                    let o = Planner::new().level_ops(scheme, boundary, m);
                     for (op, order) in [
                         (&o.two_scale.analysis, &o.analysis_order),
                         (&o.two_scale.synthesis, &o.synthesis_order),

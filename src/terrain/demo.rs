@@ -21,13 +21,13 @@ pub fn demo_rows(out: &Path) -> Result<Vec<DemoRow>> {
         for x in 0..n {
             let mut s = 0.0;
             for k in 0..16 {
-                s += fine.data[(4 * y + k / 4) * 4 * n + 4 * x + k % 4];
+                s += fine.data()[(4 * y + k / 4) * 4 * n + 4 * x + k % 4];
             }
             *base.at_mut(y, x, 0) = 1000.0 * s / 16.0;
         }
     }
     let ex = diamond_square(256, 256, 9, 0.65);
-    let example = Grid::new(256, 256, 1, ex.data.iter().map(|v| v * 1000.0).collect())?;
+    let example = Grid::new(256, 256, 1, ex.data().iter().map(|v| v * 1000.0).collect())?;
     let o = SynthOptions {
         levels: l,
         seed: 7,

@@ -715,7 +715,7 @@ pub fn is_sequence(r: &Raster) -> bool {
 pub fn demo_rows(out: &std::path::Path) -> Result<Vec<crate::demo::DemoRow>> {
     let n = 512;
     let img: Vec<f32> = crate::generate::terrain::diamond_square(n, n, 7, 0.6)
-        .data
+        .data()
         .iter()
         .map(|&v| (v * 255.0) as f32)
         .collect();

@@ -469,6 +469,7 @@ pub(crate) unsafe fn transpose_avx2_32<T: Sample>(
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
 pub(crate) unsafe fn combine_rows_avx2_f32(
+    k: Kernels,
     op: &Csr,
     src: *const f32,
     len: usize,
@@ -519,7 +520,7 @@ pub(crate) unsafe fn combine_rows_avx2_f32(
                     .map(|&c| unsafe { std::slice::from_raw_parts(src.add(c as usize * len), len) })
                     .collect();
                 let wv: Vec<f32> = ws.iter().map(|&x| x as f32).collect();
-                combine_with(CpuLevel::detected(), out, &t, &wv);
+                combine(k, out, &t, &wv);
             }
         }
     }
