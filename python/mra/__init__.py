@@ -52,11 +52,12 @@ RATE_MODES = ("lossless", "max_error", "psnr", "bpp", "quality", "keep", "thresh
 
 
 def _array(a: Any) -> np.ndarray:
-    """``a`` as an ndarray in native byte order (no copy when it already is one)."""
+    """``a`` as a C-contiguous ndarray in native byte order (no copy when it already is
+    one)."""
     a = np.asarray(a)
     if a.dtype.byteorder not in ("=", "|"):
         a = a.astype(a.dtype.newbyteorder("="))
-    return a
+    return np.ascontiguousarray(a)
 
 
 def _bytes(b: Any) -> Union[bytes, np.ndarray]:

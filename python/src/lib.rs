@@ -122,9 +122,10 @@ fn with_input<R>(
                     .try_readonly()
                     .map_err(|e| PyValueError::new_err(e.to_string()))?;
                 let shape = ro.shape().to_vec();
+                // `as_slice` also accepts Fortran order (memory order ≠ C order)
                 let cow = match ro.as_slice() {
-                    Ok(s) => Cow::Borrowed(s),
-                    Err(_) => Cow::Owned(ro.as_array().iter().copied().collect()),
+                    Ok(s) if ro.is_c_contiguous() => Cow::Borrowed(s),
+                    _ => Cow::Owned(ro.as_array().iter().copied().collect()),
                 };
                 return f(Input::$v(cow), shape);
             }

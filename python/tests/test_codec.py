@@ -106,9 +106,9 @@ def test_level_decodes_a_smaller_preview():
     data = mra.encode(a, quality=70, levels=4)
     b = mra.decode(data, level=2)
     assert b.shape == (32, 24)
-    # the preview is the coarse image: close to 4x4 block means
+    # the preview is the coarse image: close to 4x4 block means (within 5 % of the range)
     means = a.reshape(32, 4, 24, 4).mean(axis=(1, 3))
-    assert np.abs(b - means).mean() < 8
+    assert np.abs(b - means).mean() < 0.05 * 255
     with pytest.raises(ValueError, match="expected one of the levels"):
         mra.decode(data, level=9)
 
