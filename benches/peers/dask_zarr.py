@@ -179,7 +179,7 @@ def main():
             if codec is None:
                 t = time.perf_counter()
                 src.sum().compute()
-                rows.append((name, kind, "-", "-", "-", f"{raw_mb / (time.perf_counter() - t):.0f}", "-",
+                rows.append((name, kind, "-", "-", "-", f"{raw_mb / (time.perf_counter() - t):.1f}", "-",
                              " / ".join(f"{m:.0f}" for m in peak_rss(client))))
                 continue
             path = os.path.join(a.out, name.replace(" ", "_").replace("=", ""))
@@ -191,7 +191,7 @@ def main():
             psnr = float("inf") if mse == 0 else 10 * np.log10(65535.0**2 / mse)
             rows.append((name, kind, f"{np.prod(shape) * 2 / stored:.2f}",
                          "inf" if psnr == float("inf") else f"{psnr:.2f}", f"{emax:g}",
-                         f"{raw_mb / t_write:.0f}", f"{raw_mb / t_read:.0f}",
+                         f"{raw_mb / t_write:.1f}", f"{raw_mb / t_read:.1f}",
                          " / ".join(f"{m:.0f}" for m in peak_rss(client))))
             shutil.rmtree(path, ignore_errors=True)
         print(" | ".join(rows[-1]), file=sys.stderr, flush=True)
