@@ -89,7 +89,7 @@ class FloatWrap:
 
             raw = bytes(b)
             nd = int(np.frombuffer(raw[:8], np.int64)[0])
-            shp = tuple(np.frombuffer(raw[8 : 8 + 8 * nd], np.int64))
+            shp = tuple(int(n) for n in np.frombuffer(raw[8 : 8 + 8 * nd], np.int64))
             d = pysz.sz.decompress(np.frombuffer(raw[8 + 8 * nd :], np.uint8), np.float32, shp)
             d = d[0] if isinstance(d, tuple) else d
         return np.clip(np.round(np.asarray(d).reshape(shape)), 0, 65535).astype(np.uint16)
