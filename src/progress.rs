@@ -34,6 +34,7 @@ pub const REVEAL_AFTER: Duration = Duration::from_secs(1);
 /// The spinner of the running command, while it shows (at most one per process).
 static ACTIVITY: Mutex<Option<ProgressBar>> = Mutex::new(None);
 
+#[cfg(feature = "cli")]
 fn drawable(quiet: bool) -> bool {
     !quiet && std::io::stderr().is_terminal()
 }
@@ -42,6 +43,8 @@ fn drawable(quiet: bool) -> bool {
 #[derive(Clone)]
 pub struct Progress {
     bar: Option<ProgressBar>,
+    /// When the job started (read to reveal the bar; unused without the `cli` feature).
+    #[cfg_attr(not(feature = "cli"), allow(dead_code))]
     start: Instant,
 }
 
@@ -87,6 +90,7 @@ impl Progress {
     /// Advance by `n` steps.
     pub fn inc(&self, n: u64) {
         if let Some(b) = &self.bar {
+            #[cfg(feature = "cli")]
             if b.is_hidden() && self.start.elapsed() >= REVEAL_AFTER {
                 reveal(b);
             }
@@ -110,6 +114,7 @@ impl Progress {
 }
 
 /// Draw `b` from now on, in place of the command's spinner.
+#[cfg(feature = "cli")]
 fn reveal(b: &ProgressBar) {
     if let Some(spinner) = ACTIVITY.lock().unwrap_or_else(|p| p.into_inner()).take() {
         spinner.finish_and_clear();
@@ -125,7 +130,15 @@ pub struct Activity {
 }
 
 impl Activity {
+    /// Start the spinner labelled `label` (nothing off a terminal, nothing without the
+    /// `cli` feature).
+    #[cfg(not(feature = "cli"))]
+    pub fn start(_label: &str) -> Activity {
+        Activity { bar: None }
+    }
+
     /// Start the spinner labelled `label` (nothing off a terminal).
+    #[cfg(feature = "cli")]
     pub fn start(label: &str) -> Activity {
         if !drawable(false) {
             return Activity { bar: None };

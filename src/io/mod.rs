@@ -59,7 +59,7 @@ pub mod dicom {
     pub fn read_file(path: &Path) -> Result<Raster> {
         Err(not_built(path))
     }
-    pub fn read_series(dir: &Path) -> Result<Raster> {
+    pub fn read_series(dir: &Path, _uneven_ok: bool) -> Result<Raster> {
         Err(not_built(dir))
     }
     /// Does the file start with the DICOM preamble + `DICM`?
