@@ -296,6 +296,7 @@ fn progressive_levels_halve_the_size_and_approximate_the_picture() {
                 &DecodeOptions {
                     level: k,
                     allow_truncated: false,
+                    ..Default::default()
                 },
             )
             .unwrap()
@@ -329,6 +330,7 @@ fn progressive_levels_halve_the_size_and_approximate_the_picture() {
                 let opts = DecodeOptions {
                     level: k,
                     allow_truncated: false,
+                    ..Default::default()
                 };
                 codec::decode(&bytes, &opts)
                     .unwrap()
@@ -397,6 +399,7 @@ fn truncated_files_fail_without_the_flag_and_decode_with_it() {
             &DecodeOptions {
                 level: 0,
                 allow_truncated: true,
+                ..Default::default()
             },
         );
         // with the flag every cut after the HEAD chunk decodes to the full shape
@@ -417,6 +420,7 @@ fn truncated_files_fail_without_the_flag_and_decode_with_it() {
                 &DecodeOptions {
                     level: 0,
                     allow_truncated: true,
+                    ..Default::default()
                 },
             )
             .unwrap();
@@ -555,6 +559,7 @@ fn random_damage_never_panics() {
             &DecodeOptions {
                 level: (x % 3) as usize,
                 allow_truncated: x.is_multiple_of(2),
+                ..Default::default()
             },
         );
         let _ = codec::info(&b);
@@ -597,6 +602,7 @@ fn test_vectors_decode_to_their_digests() {
                 &DecodeOptions {
                     level,
                     allow_truncated: false,
+                    ..Default::default()
                 },
             )
             .unwrap()
