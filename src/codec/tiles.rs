@@ -1019,16 +1019,17 @@ pub(super) fn decode_seek<R: Read + Seek>(
             continue;
         }
         src.seek(SeekFrom::Start(off))?;
-        let ch =
-            match ChunkReader::at(&mut *src, off, off + l).next_chunk()? {
-                Ok(c) if &c.kind == TILE && c.payload.len() as u64 + 12 == l => c,
-                _ => return Err(Error::format(
+        let ch = match ChunkReader::at(&mut *src, off, off + l).next_chunk()? {
+            Ok(c) if &c.kind == TILE && c.payload.len() as u64 + 12 == l => c,
+            _ => {
+                return Err(Error::format(
                     format!(
                         "TIDX entry of tile {i} ({l} bytes at byte {off}) not on its TILE chunk"
                     ),
                     "an index pointing at each tile's chunk",
-                )),
-            };
+                ))
+            }
+        };
         let (j, inner) = tile_payload(&ch, n)?;
         if j != i {
             return Err(Error::format(
