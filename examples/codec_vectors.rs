@@ -78,9 +78,58 @@ fn main() {
             0,
         ),
     ];
+    // format 2.1: tiles (extents slowest axis first)
+    let tiled: Vec<(
+        &str,
+        &str,
+        Raster,
+        Scheme,
+        Boundary,
+        Rate,
+        usize,
+        Vec<usize>,
+    )> = vec![
+        (
+            "tiled_gray16_q40",
+            "21x18 gray u16 in tiles of 8x8 (x, y), cdf97 symmetric, quality 40",
+            raster(&[18, 21], 1, SampleType::U16, DataKind::Image),
+            Scheme::Cdf97,
+            Boundary::Symmetric,
+            Rate::Quality(40.0),
+            0,
+            vec![8, 8],
+        ),
+        (
+            "tiled_gray16_q40_level1",
+            "the previous file decoded with --level 1",
+            raster(&[18, 21], 1, SampleType::U16, DataKind::Image),
+            Scheme::Cdf97,
+            Boundary::Symmetric,
+            Rate::Quality(40.0),
+            1,
+            vec![8, 8],
+        ),
+        (
+            "tiled_vol_u8_lossless",
+            "9x7x6 volume u8 in tiles of 4x4x4 (x, y, z), lossless",
+            raster(&[6, 7, 9], 1, SampleType::U8, DataKind::Volume),
+            Scheme::Haar,
+            Boundary::Symmetric,
+            Rate::Lossless,
+            0,
+            vec![4, 4, 4],
+        ),
+    ];
+    let cases = cases
+        .into_iter()
+        .map(|(a, b, r, s, bd, rate, l)| {
+            let t = r.dims.clone();
+            (a, b, r, s, bd, rate, l, t)
+        })
+        .chain(tiled);
     let mut manifest = Vec::new();
-    for (name, what, r, scheme, boundary, rate, level) in cases {
-        let bytes = codec::encode(
+    for (name, what, r, scheme, boundary, rate, level, tile) in cases {
+        let bytes = codec::encode_tiled(
             &r,
             &EncodeOptions {
                 scheme,
@@ -88,6 +137,7 @@ fn main() {
                 levels: 3,
                 rate,
             },
+            &tile,
         )
         .unwrap();
         let file = format!("{}.mra", name.trim_end_matches("_level1"));
@@ -97,6 +147,7 @@ fn main() {
             &DecodeOptions {
                 level,
                 allow_truncated: false,
+                ..Default::default()
             },
         )
         .unwrap();

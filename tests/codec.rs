@@ -352,6 +352,7 @@ fn progressive_levels_halve_the_size_and_approximate_the_picture() {
                 &DecodeOptions {
                     level: k,
                     allow_truncated: false,
+                    ..Default::default()
                 },
             )
             .unwrap()
@@ -385,6 +386,7 @@ fn progressive_levels_halve_the_size_and_approximate_the_picture() {
                 let opts = DecodeOptions {
                     level: k,
                     allow_truncated: false,
+                    ..Default::default()
                 };
                 codec::decode(&bytes, &opts)
                     .unwrap()
@@ -453,6 +455,7 @@ fn truncated_files_fail_without_the_flag_and_decode_with_it() {
             &DecodeOptions {
                 level: 0,
                 allow_truncated: true,
+                ..Default::default()
             },
         );
         // with the flag every cut after the HEAD chunk decodes to the full shape
@@ -473,6 +476,7 @@ fn truncated_files_fail_without_the_flag_and_decode_with_it() {
                 &DecodeOptions {
                     level: 0,
                     allow_truncated: true,
+                    ..Default::default()
                 },
             )
             .unwrap();
@@ -611,6 +615,7 @@ fn random_damage_never_panics() {
             &DecodeOptions {
                 level: (x % 3) as usize,
                 allow_truncated: x.is_multiple_of(2),
+                ..Default::default()
             },
         );
         let _ = codec::info(&b);
@@ -653,6 +658,7 @@ fn test_vectors_decode_to_their_digests() {
                 &DecodeOptions {
                     level,
                     allow_truncated: false,
+                    ..Default::default()
                 },
             )
             .unwrap()

@@ -61,6 +61,7 @@ fn decode(bytes: &[u8], allow_truncated: bool) -> mra::Result<codec::Decoded> {
         &DecodeOptions {
             level: 0,
             allow_truncated,
+            ..Default::default()
         },
     )
 }

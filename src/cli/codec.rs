@@ -58,6 +58,11 @@ pub struct EncodeArgs {
     /// Bit-exact (integer Haar S-transform, YCoCg-R colour).
     #[arg(long, group = "rate")]
     pub lossless: bool,
+    /// Tile extents, fastest axis first: `N` (every axis), `X,Y[,Z]`, or `whole` (one
+    /// tile). Default: one tile up to 2^24 positions, else 1024 per axis in 2-D and
+    /// 128 in 3-D. Each tile is coded on its own at the step of the whole raster.
+    #[arg(long, value_name = "T")]
+    pub tile: Option<String>,
     #[command(flatten)]
     pub raw: RawArgs,
     /// Print one JSON object (output, bytes, bits per position, shape, seconds).
@@ -85,6 +90,10 @@ pub struct DecodeArgs {
     /// Keep frames a..b (end excluded) of a sequence (or slices of a volume).
     #[arg(long, value_name = "A..B")]
     pub frames: Option<String>,
+    /// Decode only the box x0:x1,y0:y1[,z0:z1] (ends excluded, full-resolution samples,
+    /// fastest axis first); a tiled file is read only where its tiles meet the box.
+    #[arg(long, value_name = "X0:X1,Y0:Y1")]
+    pub region: Option<String>,
     /// Print one JSON object (output, shape, complete, seconds); on standard error when
     /// `-o -` sends the image to standard output.
     #[arg(long)]
@@ -135,8 +144,13 @@ pub fn encode(a: EncodeArgs) -> CliResult {
         levels: a.levels,
         rate,
     };
+    let tile = match a.tile.as_deref() {
+        None => codec::default_tile(&r.dims),
+        Some(s) => tile_extents(s, &r.dims)?,
+    };
     let t = std::time::Instant::now();
-    let bytes = codec::encode(&r, &opts).map_err(|e| Failure::context(a.input.display(), e))?;
+    let bytes = codec::encode_tiled(&r, &opts, &tile)
+        .map_err(|e| Failure::context(a.input.display(), e))?;
     let seconds = t.elapsed().as_secs_f64();
     crate::fsutil::write_atomic(&a.output, |w| w.write_all(&bytes))
         .map_err(|e| Failure::context(a.output.display(), e))?;
@@ -155,6 +169,7 @@ pub fn encode(a: EncodeArgs) -> CliResult {
             "dtype": r.sample_type().name(),
             "scheme": a.scheme.name(),
             "boundary": a.boundary.name(),
+            "tile": super::io_cmds::xyz(&tile),
             "seconds": seconds,
         });
         println!("{v}");
@@ -168,6 +183,57 @@ pub fn encode(a: EncodeArgs) -> CliResult {
         r.summary()
     );
     Ok(())
+}
+
+/// `--tile`: `N`, `X,Y[,Z…]` (fastest axis first) or `whole`, as extents slowest axis
+/// first, each capped at the axis extent.
+fn tile_extents(s: &str, dims: &[usize]) -> Result<Vec<usize>, Failure> {
+    let bad = || {
+        Failure(format!(
+            "--tile {s}: expected N, one extent per axis X,Y[,Z] (fastest first, each ≥ 1), or whole"
+        ))
+    };
+    if s.trim() == "whole" {
+        return Ok(dims.to_vec());
+    }
+    let v: Vec<usize> = s
+        .split(',')
+        .map(|t| t.trim().parse::<usize>().ok().filter(|&n| n >= 1))
+        .collect::<Option<_>>()
+        .ok_or_else(bad)?;
+    let fastest_first: Vec<usize> = match v.len() {
+        1 => vec![v[0]; dims.len()],
+        n if n == dims.len() => v,
+        _ => return Err(bad()),
+    };
+    Ok(fastest_first
+        .iter()
+        .rev()
+        .zip(dims)
+        .map(|(&t, &d)| t.min(d))
+        .collect())
+}
+
+/// `--region x0:x1,y0:y1[,…]` (ends excluded, fastest axis first) as ranges.
+fn region_ranges(s: &str) -> Result<Vec<std::ops::Range<usize>>, Failure> {
+    let bad = || {
+        Failure(format!(
+            "--region {s}: expected x0:x1,y0:y1[,z0:z1], whole numbers with x0 < x1"
+        ))
+    };
+    s.split(',')
+        .map(|p| {
+            let (a, b) = p.split_once(':').ok_or_else(bad)?;
+            let (a, b): (usize, usize) = (
+                a.trim().parse().map_err(|_| bad())?,
+                b.trim().parse().map_err(|_| bad())?,
+            );
+            if a >= b {
+                return Err(bad());
+            }
+            Ok(a..b)
+        })
+        .collect()
 }
 
 /// `A..B` (end excluded) as a pair.
@@ -221,11 +287,35 @@ pub fn decode(a: DecodeArgs) -> CliResult {
             ));
         }
     }
+    let mut range = a.frames.as_deref().map(frame_range).transpose()?;
+    let mut region = a.region.as_deref().map(region_ranges).transpose()?;
+    if let (Some((f0, f1)), 0) = (range, a.level) {
+        // frames at full resolution: a region along the slowest axis, so that a tiled
+        // file is read only where the frames are
+        let head = match &stdin {
+            Some(bytes) => codec::info(bytes).map(|i| i.dims),
+            None => codec::header_of_file(&a.input).map(|h| h.dims),
+        }
+        .map_err(|e| Failure::context(&name, e))?;
+        if head.len() >= 2 && f1 <= head[0] {
+            let mut reg = region
+                .take()
+                .unwrap_or_else(|| head.iter().rev().map(|&d| 0..d).collect());
+            if reg.len() == head.len() {
+                let last = reg.len() - 1;
+                reg[last] = f0..f1;
+                region = Some(reg);
+                range = None;
+            } else {
+                region = Some(reg);
+            }
+        }
+    }
     let opts = DecodeOptions {
         level: a.level,
         allow_truncated: a.allow_truncated,
+        region,
     };
-    let range = a.frames.as_deref().map(frame_range).transpose()?;
     let t = std::time::Instant::now();
     let d = match &stdin {
         Some(bytes) => codec::decode(bytes, &opts),
@@ -301,6 +391,10 @@ pub fn info_bytes(name: &str, bytes: &[u8], json: bool) -> CliResult {
         "  mode {}, {} {} {} levels, step {:.6}{bound}, range {}..{}",
         i.mode, i.scheme, i.boundary, i.levels, i.step, i.range[0], i.range[1]
     );
+    if i.tiles > 1 {
+        let t: Vec<String> = i.tile.iter().rev().map(|d| d.to_string()).collect();
+        println!("  {} tiles of {}", i.tiles, t.join("x"));
+    }
     println!(
         "  {} bytes, {:.4} bits per position{}",
         i.file_bytes,
@@ -325,7 +419,10 @@ pub fn info_bytes(name: &str, bytes: &[u8], json: bool) -> CliResult {
                 c.level.unwrap_or(0),
                 c.coefficients.unwrap_or(0)
             ),
-            _ => println!("    {} @{} {} bytes", c.kind, c.offset, c.bytes),
+            _ => match c.tile {
+                Some(t) => println!("    {} @{} {} bytes: tile {t}", c.kind, c.offset, c.bytes),
+                None => println!("    {} @{} {} bytes", c.kind, c.offset, c.bytes),
+            },
         }
     }
     Ok(())

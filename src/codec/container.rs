@@ -12,7 +12,7 @@ use super::levels::parse_level;
 use super::meta;
 use super::plan::Plan;
 use crate::format::Mode;
-use crate::format::{ChunkEnd, ChunkReader, Cursor, Header};
+use crate::format::{Chunk, ChunkEnd, ChunkReader, Cursor, Header};
 use crate::{Error, Result};
 use std::io::Read;
 
@@ -45,6 +45,8 @@ pub struct ChunkInfo {
     pub band: Option<usize>,
     pub level: Option<usize>,
     pub coefficients: Option<u64>,
+    /// The tile a `TILE` chunk holds (files of more than one tile).
+    pub tile: Option<usize>,
 }
 
 /// Everything read from a file before reconstruction.
@@ -64,6 +66,18 @@ pub(super) fn read_chunks<R: Read>(
     stop_level: usize,
     allow_truncated: bool,
 ) -> Result<Parsed> {
+    let (rd, first, header) = read_head(src, len)?;
+    if header.is_tiled() {
+        return Err(Error::format(
+            format!("a file of {:?} tiles {:?}", header.dims, header.tile),
+            "one tile here (tiled files go through codec::tiles)",
+        ));
+    }
+    read_rest(rd, first, header, stop_level, allow_truncated)
+}
+
+/// The signature and the `HEAD` chunk, parsed and checked against the limits of §4.
+pub(super) fn read_head<R: Read>(src: R, len: u64) -> Result<(ChunkReader<R>, Chunk, Header)> {
     let mut rd = ChunkReader::new(src, len)?;
     let first = match rd.next_chunk()? {
         Ok(c) => c,
@@ -90,6 +104,18 @@ pub(super) fn read_chunks<R: Read>(
             limit,
         });
     }
+    Ok((rd, first, header))
+}
+
+/// The chunks after `HEAD` of a file of one tile.
+pub(super) fn read_rest<R: Read>(
+    mut rd: ChunkReader<R>,
+    first: Chunk,
+    header: Header,
+    stop_level: usize,
+    allow_truncated: bool,
+) -> Result<Parsed> {
+    let len = rd.total();
     let plan = Plan::new(&header)?;
     let nb = plan.bands.len();
     let mut bands: Vec<Vec<Option<BandChunk>>> = (0..header.channels)
@@ -105,6 +131,7 @@ pub(super) fn read_chunks<R: Read>(
         band: None,
         level: None,
         coefficients: None,
+        tile: None,
     }];
     let mut complete = false;
     let mut last = "HEAD".to_string();
@@ -133,6 +160,7 @@ pub(super) fn read_chunks<R: Read>(
             band: None,
             level: None,
             coefficients: None,
+            tile: None,
         };
         last = ch.name();
         match &ch.kind {

@@ -3,20 +3,23 @@
 //! added, and the metadata and voids of the level decoded.
 
 use super::colour::map3;
-use super::container::{read_chunks, Parsed};
+use super::container::{read_head, read_rest, Parsed};
 use super::options::{DecodeOptions, Decoded};
+use super::plan::Plan;
 use super::plan::{dequantized, lossy_values};
+use super::tiles;
 use super::voids::mark_voids;
 use super::{layout, lossless};
 use crate::entropy::range::Decoder;
 use crate::entropy::{self, BandKind, Parent};
 use crate::format::header::Colour;
+use crate::format::Header;
 use crate::format::Mode;
 use crate::io::{Raster, SampleType, Samples};
 use crate::scheme::Scheme;
 use crate::{Error, Result};
 use rayon::prelude::*;
-use std::io::Read;
+use std::io::{Read, Seek, SeekFrom};
 use std::path::Path;
 
 /// One band's indices from its coded bytes, by the coding of format `major`.
@@ -230,11 +233,15 @@ pub fn coarse_offset(scheme: Scheme) -> f64 {
 /// [`coarse_offset`] (an odd length's carried last sample is off this grid by at most
 /// half a coarse cell).
 fn coarse_maps(p: &Parsed, k: usize) -> Vec<crate::io::AxisMap> {
-    let h = &p.header;
+    coarse_maps_of(&p.header, &p.plan, k)
+}
+
+/// [`coarse_maps`] of a header and its plan.
+pub(super) fn coarse_maps_of(h: &Header, plan: &Plan, k: usize) -> Vec<crate::io::AxisMap> {
     // the integer transforms sit where their real schemes do (the S-transform's floored
     // mean like Haar's, the 5/3 lifting's coarse samples on even samples like linear's)
     let o = coarse_offset(h.scheme);
-    let pyr = &p.plan.pyr;
+    let pyr = &plan.pyr;
     (0..h.dims.len())
         .map(|a| {
             let mut m = crate::io::AxisMap::IDENTITY;
@@ -254,10 +261,26 @@ fn coarse_maps(p: &Parsed, k: usize) -> Vec<crate::io::AxisMap> {
         .collect()
 }
 
-/// Decode from a stream of `len` bytes.
+/// Decode from a stream of `len` bytes, read in order (a tiled file's tiles as they
+/// come; [`decode_seek`] reads only those a region needs).
 pub fn decode_stream<R: Read>(src: R, len: u64, opts: &DecodeOptions) -> Result<Decoded> {
-    let p = read_chunks(src, len, opts.level, opts.allow_truncated)?;
-    let raster = reconstruct(&p, opts.level)?;
+    let (rd, first, header) = read_head(src, len)?;
+    if header.is_tiled() {
+        return tiles::decode_sequential(rd, header, opts);
+    }
+    one_tile(
+        read_rest(rd, first, header, opts.level, opts.allow_truncated)?,
+        opts,
+    )
+}
+
+/// A one-tile file's chunks reconstructed, and cut to the region asked for.
+fn one_tile(p: Parsed, opts: &DecodeOptions) -> Result<Decoded> {
+    let mut raster = reconstruct(&p, opts.level)?;
+    if let Some(region) = &opts.region {
+        let st = tiles::Stitch::new(&p.header, opts.level, Some(region))?;
+        raster = tiles::crop_raster(&raster, st.out_box())?;
+    }
     Ok(Decoded {
         raster,
         header: p.header,
@@ -265,14 +288,37 @@ pub fn decode_stream<R: Read>(src: R, len: u64, opts: &DecodeOptions) -> Result<
     })
 }
 
+/// Decode from a seekable stream of `len` bytes: a tiled file's `HEAD`, `mETA` and tile
+/// index, then only the tiles that `opts.region` meets (all without a region).
+pub fn decode_seek<R: Read + Seek>(mut src: R, len: u64, opts: &DecodeOptions) -> Result<Decoded> {
+    src.seek(SeekFrom::Start(0))?;
+    let (rd, first, header) = read_head(&mut src, len)?;
+    if header.is_tiled() {
+        let at = rd.position();
+        drop(rd);
+        return tiles::decode_seek(&mut src, len, at, header, opts);
+    }
+    one_tile(
+        read_rest(rd, first, header, opts.level, opts.allow_truncated)?,
+        opts,
+    )
+}
+
+/// The `HEAD` of an `.mra` file, read alone.
+pub fn header_of_file(path: &Path) -> Result<Header> {
+    let f = std::fs::File::open(path)?;
+    let len = f.metadata()?.len();
+    Ok(read_head(std::io::BufReader::new(f), len)?.2)
+}
+
 /// Decode the bytes of an `.mra` file.
 pub fn decode(bytes: &[u8], opts: &DecodeOptions) -> Result<Decoded> {
-    decode_stream(bytes, bytes.len() as u64, opts)
+    decode_seek(std::io::Cursor::new(bytes), bytes.len() as u64, opts)
 }
 
 /// Decode a file, reading only the chunks needed.
 pub fn decode_file(path: &Path, opts: &DecodeOptions) -> Result<Decoded> {
     let f = std::fs::File::open(path)?;
     let len = f.metadata()?.len();
-    decode_stream(std::io::BufReader::new(f), len, opts)
+    decode_seek(std::io::BufReader::new(f), len, opts)
 }

@@ -1,6 +1,8 @@
 //! What `mra info` reports of a file: its header, sizes by level, and chunk table.
 
-use super::container::{read_chunks, ChunkInfo};
+use super::container::{read_chunks, read_head, ChunkInfo};
+use super::plan::Plan;
+use super::tiles::read_tiled_info;
 use crate::format::header::Colour;
 use crate::format::Mode;
 use crate::io::DataKind;
@@ -29,20 +31,41 @@ pub struct Info {
     pub complete: bool,
     /// Bytes and bits per position by level (0 = coarse block, then coarsest details first).
     pub levels_bytes: Vec<(usize, u64, f64)>,
+    /// Tile extents, slowest axis first (equal to `dims`: one tile).
+    pub tile: Vec<usize>,
+    /// Number of tiles (1 for a file of one tile).
+    pub tiles: usize,
     pub chunks: Vec<ChunkInfo>,
 }
 
 /// Read a file's header and chunk table (verifying every CRC).
 pub fn info(bytes: &[u8]) -> Result<Info> {
-    let p = read_chunks(bytes, bytes.len() as u64, 0, true)?;
-    let h = &p.header;
-    let pos: f64 = h.dims.iter().map(|&d| d as f64).product();
+    let (_, _, head) = read_head(bytes, bytes.len() as u64)?;
     let mut lv: std::collections::BTreeMap<usize, u64> = Default::default();
-    for c in &p.chunks {
-        if let Some(l) = c.level {
-            *lv.entry(l).or_default() += c.bytes;
+    let (h, depth, complete, chunks, tiles) = if head.is_tiled() {
+        let t = read_tiled_info(bytes)?;
+        // bytes per level summed over the tiles
+        for (_, f) in &t.tiles {
+            for (l, b, _) in info(f)?.levels_bytes {
+                *lv.entry(l).or_default() += b;
+            }
         }
-    }
+        let mut th = t.header.clone();
+        th.dims = th.tile.clone();
+        let depth = Plan::new(&th)?.pyr.depth();
+        let n = super::tiles::Grid::new(&t.header.dims, &t.header.tile)?.len();
+        (t.header, depth, t.complete, t.chunks, n)
+    } else {
+        let p = read_chunks(bytes, bytes.len() as u64, 0, true)?;
+        for c in &p.chunks {
+            if let Some(l) = c.level {
+                *lv.entry(l).or_default() += c.bytes;
+            }
+        }
+        (p.header, p.plan.pyr.depth(), p.complete, p.chunks, 1)
+    };
+    let h = &h;
+    let pos: f64 = h.dims.iter().map(|&d| d as f64).product();
     let mut levels_bytes: Vec<(usize, u64, f64)> = lv
         .into_iter()
         .map(|(l, b)| (l, b, b as f64 * 8.0 / pos))
@@ -64,7 +87,7 @@ pub fn info(bytes: &[u8]) -> Result<Info> {
             h.scheme.name().into()
         },
         boundary: h.boundary.name().into(),
-        levels: p.plan.pyr.depth(),
+        levels: depth,
         colour: match h.colour {
             Colour::None => None,
             Colour::YCoCg => Some("YCoCg".into()),
@@ -76,9 +99,11 @@ pub fn info(bytes: &[u8]) -> Result<Info> {
         range: [h.min, h.max],
         file_bytes: bytes.len() as u64,
         bits_per_position: bytes.len() as f64 * 8.0 / pos,
-        complete: p.complete,
+        complete,
         levels_bytes,
-        chunks: p.chunks,
+        tile: h.tile.clone(),
+        tiles,
+        chunks,
     })
 }
 

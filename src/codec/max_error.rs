@@ -49,6 +49,7 @@ pub(super) fn encode_max_error(r: &Raster, opts: &EncodeOptions, e: f64) -> Resu
         &DecodeOptions {
             level: 0,
             allow_truncated: true,
+            ..Default::default()
         },
     )?
     .raster;

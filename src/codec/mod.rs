@@ -29,12 +29,14 @@ pub mod meta;
 mod options;
 mod plan;
 mod rate;
+pub mod tiles;
 mod voids;
 
 pub use container::ChunkInfo;
-pub use decode::{coarse_offset, decode, decode_file, decode_stream};
-pub use encode::encode;
+pub use decode::{coarse_offset, decode, decode_file, decode_seek, decode_stream, header_of_file};
+pub use encode::{encode, encode_tiled};
 pub use frames::frames;
 pub use info::{info, kind_name, Info};
 pub use options::{DecodeOptions, Decoded, EncodeOptions, Rate};
 pub use rate::keep_psnr;
+pub use tiles::default_tile;

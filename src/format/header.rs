@@ -130,6 +130,11 @@ impl Header {
         Ok(n)
     }
 
+    /// Whether the file is split into more than one tile (format 2.1, formats/MRA.md §14).
+    pub fn is_tiled(&self) -> bool {
+        self.tile != self.dims
+    }
+
     pub fn to_bytes(&self) -> Vec<u8> {
         let mut b = vec![self.major, self.minor, kind_code(self.kind)];
         b.push(TYPES.iter().position(|&t| t == self.sample_type).unwrap() as u8);
@@ -291,10 +296,20 @@ impl Header {
             tile.push(c.u32()? as usize);
         }
         if tile != dims {
-            return Err(Error::Unsupported {
-                what: "tile grid",
-                value: format!("tiles {tile:?} of {dims:?} (this reader decodes one tile)"),
-            });
+            if major < 2 || minor < 1 {
+                return Err(Error::Unsupported {
+                    what: "tile grid",
+                    value: format!(
+                        "tiles {tile:?} of {dims:?} in a {major}.{minor} file (tiles need 2.1)"
+                    ),
+                });
+            }
+            if let Some(k) = (0..nd).find(|&k| tile[k] == 0 || tile[k] > dims[k]) {
+                return Err(bad(
+                    format!("tile extent {} on axis {k} of extent {}", tile[k], dims[k]),
+                    "tile extents from 1 to the axis extent",
+                ));
+            }
         }
         Ok(Header {
             major,

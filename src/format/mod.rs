@@ -22,6 +22,8 @@ pub const MAJOR: u8 = 2;
 pub const OLDEST_MAJOR: u8 = 1;
 /// The minor version written; readers accept any minor of their major.
 pub const MINOR: u8 = 0;
+/// The minor version of a file split into tiles (`TIDX` and `TILE` chunks, 2.1).
+pub const MINOR_TILED: u8 = 1;
 /// Largest chunk payload accepted (1 GiB).
 pub const MAX_CHUNK: u64 = 1 << 30;
 
@@ -96,6 +98,21 @@ impl<R: Read> ChunkReader<R> {
             ));
         }
         Ok(ChunkReader { src, pos: 8, len })
+    }
+
+    /// A reader whose stream is positioned at byte `pos` of a file of `len` bytes (after
+    /// a seek to a chunk an index points at); no signature is read.
+    pub fn at(src: R, pos: u64, len: u64) -> Self {
+        ChunkReader {
+            src,
+            pos: pos.min(len),
+            len,
+        }
+    }
+
+    /// The byte offset of the next chunk.
+    pub fn position(&self) -> u64 {
+        self.pos
     }
 
     /// Bytes of the stream.

@@ -1,0 +1,1072 @@
+//! Files of more than one tile (format 2.1, formats/MRA.md §14): the raster cut on a
+//! grid of tiles of extents `t` (the last tile of an axis shorter), each tile coded on
+//! its own as a one-tile file (its own pyramid, levels and bands) at one base step for
+//! the whole raster, so every tile gets the same quality.
+//!
+//! Layout: `HEAD` (the whole raster's extents, the tile extents `t`), `mETA`, `TIDX` (the
+//! byte offset and length of each `TILE` chunk), one `TILE` per tile in tile order (its
+//! index, then the chunks of the tile's one-tile file after the signature), `MEND`. A
+//! reader that can seek reads `HEAD`, `mETA` and `TIDX`, then only the tiles a region
+//! meets; a reader that cannot reads the chunks in order.
+//!
+//! Tiles are coded and decoded in parallel (rayon); each tile's bytes depend on the tile
+//! alone, so the file is the same whatever the thread count.
+
+use super::container::{read_head, MEND, META};
+use super::decode::{coarse_maps_of, decode_stream};
+use super::encode::encode_filled;
+use super::lossy::{finite_range, prepare, Prepared};
+use super::options::{DecodeOptions, Decoded, EncodeOptions, Rate};
+use super::plan::Plan;
+use super::voids::with_voids_filled;
+use super::{layout, meta};
+use crate::format::{self, put_chunk, Chunk, ChunkEnd, ChunkReader, Cursor, Header, Mode};
+use crate::io::{AxisMap, Metadata, Raster, SampleType, Samples};
+use crate::quantize::{self, RHO};
+use crate::{Error, Result};
+use rayon::prelude::*;
+use std::io::{Read, Seek, SeekFrom};
+use std::ops::Range;
+
+/// The chunk type of the tile index.
+pub(super) const TIDX: &[u8; 4] = b"TIDX";
+/// The chunk type of one tile.
+pub(super) const TILE: &[u8; 4] = b"TILE";
+/// Most tiles a file may have.
+pub const MAX_TILES: u64 = 1 << 24;
+/// Rasters of at most this many positions are one tile by default.
+pub const ONE_PIECE_POSITIONS: u64 = 1 << 24;
+/// Default tile extent of 1-D and 2-D rasters over [`ONE_PIECE_POSITIONS`].
+pub const DEFAULT_TILE_2D: usize = 1024;
+/// Default tile extent of 3-D and 4-D rasters over [`ONE_PIECE_POSITIONS`].
+pub const DEFAULT_TILE_3D: usize = 128;
+/// Tiles sampled by the `--psnr` and `--bpp` searches on rasters of more tiles.
+pub const SEARCH_SAMPLE_TILES: usize = 64;
+
+/// Default tile extents of a raster of extents `dims` (slowest first): one tile up to
+/// [`ONE_PIECE_POSITIONS`] positions, else [`DEFAULT_TILE_2D`] per axis in 1-D and 2-D
+/// and [`DEFAULT_TILE_3D`] in 3-D and 4-D (each at most the axis extent).
+pub fn default_tile(dims: &[usize]) -> Vec<usize> {
+    let n = dims
+        .iter()
+        .try_fold(1u64, |a, &d| a.checked_mul(d as u64))
+        .unwrap_or(u64::MAX);
+    if n <= ONE_PIECE_POSITIONS {
+        return dims.to_vec();
+    }
+    let t = if dims.len() >= 3 {
+        DEFAULT_TILE_3D
+    } else {
+        DEFAULT_TILE_2D
+    };
+    dims.iter().map(|&d| d.min(t)).collect()
+}
+
+/// A grid of tiles: `counts[k] = ⌈dims[k] / tile[k]⌉` tiles on axis k, numbered in
+/// row-major order (slowest axis first).
+#[derive(Clone, Debug)]
+pub(super) struct Grid {
+    pub(super) dims: Vec<usize>,
+    pub(super) tile: Vec<usize>,
+    pub(super) counts: Vec<usize>,
+}
+
+impl Grid {
+    pub(super) fn new(dims: &[usize], tile: &[usize]) -> Result<Grid> {
+        if tile.len() != dims.len() || tile.iter().zip(dims).any(|(&t, &d)| t == 0 || t > d) {
+            return Err(Error::parameter(
+                "tile",
+                format!("{tile:?} for extents {dims:?}"),
+                "one extent per axis, each from 1 to the axis extent",
+            ));
+        }
+        let counts: Vec<usize> = dims
+            .iter()
+            .zip(tile)
+            .map(|(&d, &t)| d.div_ceil(t))
+            .collect();
+        let n = counts
+            .iter()
+            .try_fold(1u64, |a, &c| a.checked_mul(c as u64))
+            .unwrap_or(u64::MAX);
+        if n > MAX_TILES {
+            return Err(Error::LimitsExceeded {
+                what: "tile count",
+                requested: n,
+                limit: MAX_TILES,
+            });
+        }
+        Ok(Grid {
+            dims: dims.to_vec(),
+            tile: tile.to_vec(),
+            counts,
+        })
+    }
+
+    pub(super) fn len(&self) -> usize {
+        self.counts.iter().product()
+    }
+
+    /// The grid coordinates of tile `i`, slowest axis first.
+    pub(super) fn coords(&self, mut i: usize) -> Vec<usize> {
+        let mut c = vec![0; self.counts.len()];
+        for a in (0..c.len()).rev() {
+            c[a] = i % self.counts[a];
+            i /= self.counts[a];
+        }
+        c
+    }
+
+    /// Extent on axis `a` of the tiles at grid coordinate `i`.
+    pub(super) fn extent(&self, a: usize, i: usize) -> usize {
+        self.tile[a].min(self.dims[a] - i * self.tile[a])
+    }
+
+    /// The samples of tile `i`, a range per axis.
+    pub(super) fn ranges(&self, i: usize) -> Vec<Range<usize>> {
+        self.coords(i)
+            .iter()
+            .enumerate()
+            .map(|(a, &c)| c * self.tile[a]..c * self.tile[a] + self.extent(a, c))
+            .collect()
+    }
+
+    /// The extents of tile `i`.
+    pub(super) fn tile_dims(&self, i: usize) -> Vec<usize> {
+        self.ranges(i).iter().map(|r| r.len()).collect()
+    }
+}
+
+macro_rules! map_samples {
+    ($s:expr, $v:ident => $body:expr) => {
+        match $s {
+            Samples::U8($v) => Samples::U8($body),
+            Samples::I8($v) => Samples::I8($body),
+            Samples::U16($v) => Samples::U16($body),
+            Samples::I16($v) => Samples::I16($body),
+            Samples::U32($v) => Samples::U32($body),
+            Samples::I32($v) => Samples::I32($body),
+            Samples::F16($v) => Samples::F16($body),
+            Samples::F32($v) => Samples::F32($body),
+            Samples::F64($v) => Samples::F64($body),
+        }
+    };
+}
+
+/// The block `ranges` (one per spatial axis) of samples over `dims` × `channels`.
+fn crop_samples(s: &Samples, dims: &[usize], channels: usize, ranges: &[Range<usize>]) -> Samples {
+    let mut shape = dims.to_vec();
+    shape.push(channels);
+    let mut r = ranges.to_vec();
+    r.push(0..channels);
+    map_samples!(s, v => layout::gather(v, &shape, &r))
+}
+
+/// `n` zero samples of type `t`.
+fn zeros(t: SampleType, n: usize) -> Samples {
+    match t {
+        SampleType::U8 => Samples::U8(vec![0; n]),
+        SampleType::I8 => Samples::I8(vec![0; n]),
+        SampleType::U16 => Samples::U16(vec![0; n]),
+        SampleType::I16 => Samples::I16(vec![0; n]),
+        SampleType::U32 => Samples::U32(vec![0; n]),
+        SampleType::I32 => Samples::I32(vec![0; n]),
+        SampleType::F16 => Samples::F16(vec![half::f16::ZERO; n]),
+        SampleType::F32 => Samples::F32(vec![0.0; n]),
+        SampleType::F64 => Samples::F64(vec![0.0; n]),
+    }
+}
+
+/// Copy the block `from` of `src` (extents `sdims` × channels) into the block `to` of
+/// `dst` (extents `ddims` × channels); both blocks have the same extents.
+fn copy_block(
+    dst: &mut Samples,
+    ddims: &[usize],
+    to: &[Range<usize>],
+    src: &Samples,
+    sdims: &[usize],
+    from: &[Range<usize>],
+    channels: usize,
+) -> Result<()> {
+    let packed = crop_samples(src, sdims, channels, from);
+    let mut shape = ddims.to_vec();
+    shape.push(channels);
+    let mut r = to.to_vec();
+    r.push(0..channels);
+    macro_rules! pair {
+        ($($var:ident),*) => {
+            match (dst, &packed) {
+                $((Samples::$var(d), Samples::$var(p)) => layout::scatter(d, &shape, &r, p),)*
+                (_, p) => {
+                    return Err(Error::format(
+                        format!("a tile of {} samples", p.sample_type().name()),
+                        "tiles of the file's sample type",
+                    ))
+                }
+            }
+        };
+    }
+    pair!(U8, I8, U16, I16, U32, I32, F16, F32, F64);
+    Ok(())
+}
+
+/// The block `ranges` (one per spatial axis, slowest first) of a raster, its metadata
+/// moved to the block's first sample.
+pub(super) fn crop_raster(r: &Raster, ranges: &[Range<usize>]) -> Result<Raster> {
+    if ranges
+        .iter()
+        .zip(&r.dims)
+        .all(|(g, &d)| g.start == 0 && g.end == d)
+    {
+        return Ok(r.clone());
+    }
+    let dims: Vec<usize> = ranges.iter().map(|g| g.len()).collect();
+    let samples = crop_samples(&r.samples, &r.dims, r.channels, ranges);
+    let mut out = Raster::new(dims.clone(), r.channels, samples, r.kind)?;
+    let maps: Vec<AxisMap> = ranges.iter().map(|g| AxisMap::crop(g.start)).collect();
+    out.meta = r.meta.resampled(&r.dims, &dims, &maps);
+    Ok(out)
+}
+
+// ---------------------------------------------------------------- encoding
+
+/// Encode a raster as tiles of extents `tile` (slowest first). Each tile's voids are
+/// filled in the tile ([`with_voids_filled`]) and listed in the tile's own `mETA`, with
+/// the raster's no-data value, so that the tile's decode marks them again.
+pub(super) fn encode_tiled(r: &Raster, opts: &EncodeOptions, tile: &[usize]) -> Result<Vec<u8>> {
+    let grid = Grid::new(&r.dims, tile)?;
+    let n = grid.len();
+    let tile_of = |i: usize| -> Result<Raster> {
+        let g = grid.ranges(i);
+        let mut t = Raster::new(
+            grid.tile_dims(i),
+            r.channels,
+            crop_samples(&r.samples, &r.dims, r.channels, &g),
+            r.kind,
+        )?;
+        t.meta.nodata = r.meta.nodata;
+        Ok(with_voids_filled(&t)?.unwrap_or(t))
+    };
+    let (lo, hi) = finite_range(&r.samples);
+    let range = (hi - lo).max(1e-30);
+    let all: Vec<usize> = (0..n).collect();
+    let coded: Vec<Vec<u8>> = match opts.rate {
+        // the step does not depend on the tile's samples
+        Rate::Lossless | Rate::MaxError(_) | Rate::Threshold(_) => all
+            .par_iter()
+            .map(|&i| encode_filled(&tile_of(i)?, opts))
+            .collect::<Result<_>>()?,
+        Rate::Quality(q) => {
+            if !(1.0..=100.0).contains(&q) {
+                return Err(Error::parameter("quality", q, "1 to 100"));
+            }
+            let step = range * (2f64).powf(-q / 10.0);
+            code_at(&all, &tile_of, opts, step, true)?
+        }
+        Rate::Keep(k) => {
+            if !(0.0..=100.0).contains(&k) {
+                return Err(Error::parameter("keep", k, "a percentage from 0 to 100"));
+            }
+            // the threshold of the largest k% over every tile's details
+            let mut w: Vec<f32> = all
+                .par_iter()
+                .map(|&i| Ok(prepare(&tile_of(i)?, opts, Mode::Lossy)?.weighted_details()))
+                .collect::<Result<Vec<_>>>()?
+                .concat();
+            let t = quantize::keep_threshold(&mut w, k);
+            drop(w);
+            let step = if t.is_infinite() {
+                range * 1e6
+            } else {
+                (t / (1.0 - RHO)).max(range * 1e-9)
+            };
+            code_at(&all, &tile_of, opts, step, false)?
+        }
+        Rate::Psnr(_) | Rate::PsnrRange(..) | Rate::Bpp(_) => {
+            let step = search_step(r, &grid, &tile_of, opts, range)?;
+            code_at(&all, &tile_of, opts, step, true)?
+        }
+    };
+    assemble(r, tile, &coded)
+}
+
+/// Each tile of `tiles` coded at base step `step` (with rate–distortion optimised
+/// indices when `rdo`): its one-tile file.
+fn code_at(
+    tiles: &[usize],
+    tile_of: &(impl Fn(usize) -> Result<Raster> + Sync),
+    opts: &EncodeOptions,
+    step: f64,
+    rdo: bool,
+) -> Result<Vec<Vec<u8>>> {
+    tiles
+        .par_iter()
+        .map(|&i| {
+            let mut p = prepare(&tile_of(i)?, opts, Mode::Lossy)?;
+            if rdo {
+                p.optimise();
+            }
+            Ok(p.code(step))
+        })
+        .collect()
+}
+
+/// The base step of `--psnr` and `--bpp` for the whole raster: a search on `x = ln step`
+/// over the tiles (every ⌈n/64⌉-th tile when there are more than
+/// [`SEARCH_SAMPLE_TILES`]), each candidate measured on all of them at once: the PSNR
+/// of their summed squared error, or their bits over their positions.
+fn search_step(
+    r: &Raster,
+    grid: &Grid,
+    tile_of: &(impl Fn(usize) -> Result<Raster> + Sync),
+    opts: &EncodeOptions,
+    range: f64,
+) -> Result<f64> {
+    let n = grid.len();
+    let every = n.div_ceil(SEARCH_SAMPLE_TILES).max(1);
+    let sample: Vec<usize> = (0..n).step_by(every).collect();
+    let prepared: Vec<(Raster, Prepared)> = sample
+        .par_iter()
+        .map(|&i| {
+            let t = tile_of(i)?;
+            let mut p = prepare(&t, opts, Mode::Lossy)?;
+            p.optimise();
+            Ok((t, p))
+        })
+        .collect::<Result<_>>()?;
+    let positions: f64 = prepared.iter().map(|(t, _)| t.positions() as f64).sum();
+    // the bytes outside the tiles' own files (signature, HEAD, mETA, TIDX, TILE framing,
+    // MEND), the sample's share of them
+    let outside = 8
+        + 12
+        + 52
+        + 8 * r.dims.len()
+        + {
+            let m = meta::to_bytes(&r.meta).len();
+            if m > 0 {
+                12 + m
+            } else {
+                0
+            }
+        }
+        + 12
+        + 16 * n
+        + (12 + 4 - 8) * n
+        + 12;
+    let outside = outside as f64 * positions / r.positions() as f64;
+    match opts.rate {
+        Rate::Bpp(b) => {
+            if !(b > 0.0 && b.is_finite()) {
+                return Err(Error::parameter(
+                    "bpp",
+                    b,
+                    "a positive number of bits per position",
+                ));
+            }
+            // met (≥ 0) within the budget; within 1% under it below −ln 0.99
+            search(range, true, -(0.99f64.ln()), |step| {
+                let bytes: usize = prepared.par_iter().map(|(_, p)| p.code(step).len()).sum();
+                Ok(b.ln() - ((bytes as f64 + outside) * 8.0 / positions).ln())
+            })
+        }
+        Rate::Psnr(db) | Rate::PsnrRange(db, _) => {
+            if !(db > 0.0 && db < 400.0) {
+                return Err(Error::parameter(
+                    "psnr",
+                    db,
+                    "a target in dB between 0 and 400",
+                ));
+            }
+            let peak = match opts.rate {
+                Rate::PsnrRange(_, p) => {
+                    if !(p.is_finite() && p > 0.0) {
+                        return Err(Error::parameter(
+                            "data range",
+                            p,
+                            "a positive, finite peak-to-peak range",
+                        ));
+                    }
+                    p
+                }
+                _ => crate::metrics::skimage_data_range(&r.samples),
+            };
+            let count = positions * r.channels as f64;
+            search(range, false, 0.02, |step| {
+                let sse = prepared
+                    .par_iter()
+                    .map(|(t, p)| {
+                        let d = p.decoded(step)?;
+                        let (a, b) = (t.samples.to_f64(), d.samples.to_f64());
+                        Ok(a.iter()
+                            .zip(&b)
+                            .filter(|(x, _)| x.is_finite())
+                            .map(|(x, y)| (x - y) * (x - y))
+                            .sum::<f64>())
+                    })
+                    .collect::<Result<Vec<f64>>>()?
+                    .iter()
+                    .sum::<f64>();
+                if sse == 0.0 {
+                    return Ok(f64::INFINITY);
+                }
+                Ok(10.0 * (peak * peak * count / sse).log10() - db)
+            })
+        }
+        _ => unreachable!("search_step is for --psnr and --bpp"),
+    }
+}
+
+/// Search on `x = ln step` for the step whose `v = f(step)` is closest to 0 from above
+/// (`v ≥ 0`: target met; met for large steps when `large_ok`, for small ones otherwise):
+/// steps of doubling size until the target is bracketed, then the secant between the
+/// bracket's ends kept inside its middle half (the bracket shrinks by at least a quarter
+/// each time); stops at a met step within `tol` or a bracket under 0.1% of the step.
+fn search(range: f64, large_ok: bool, tol: f64, f: impl Fn(f64) -> Result<f64>) -> Result<f64> {
+    let (x_min, x_max) = ((range * 1e-7).ln(), (range * 4.0).ln());
+    let mut met: Option<(f64, f64)> = None;
+    let mut unmet: Option<(f64, f64)> = None;
+    let mut x = (range / 32.0).ln();
+    let mut jump = 1.0;
+    for _ in 0..48 {
+        let v = f(x.exp())?;
+        if v >= 0.0 {
+            if v <= tol {
+                return Ok(x.exp());
+            }
+            met = Some((x, v));
+        } else {
+            unmet = Some((x, v));
+        }
+        x = match (met, unmet) {
+            (Some((xm, vm)), Some((xu, vu))) => {
+                let (lo, hi) = (xm.min(xu), xm.max(xu));
+                if hi - lo < 1e-3 {
+                    break;
+                }
+                let t = if vm.is_finite() {
+                    xm + (vm - 0.5 * tol) * (xu - xm) / (vm - vu)
+                } else {
+                    0.5 * (lo + hi)
+                };
+                t.clamp(lo + 0.25 * (hi - lo), hi - 0.25 * (hi - lo))
+            }
+            _ => {
+                // toward the other side: larger steps when met and small steps are not
+                // the met side, …
+                let toward_large = (v >= 0.0) != large_ok;
+                let next = (x + if toward_large { jump } else { -jump }).clamp(x_min, x_max);
+                jump *= 2.0;
+                if next == x {
+                    break;
+                }
+                next
+            }
+        };
+    }
+    Ok(match met {
+        Some((x, _)) => x.exp(),
+        None if large_ok => x_max.exp(),
+        None => x_min.exp(),
+    })
+}
+
+/// The chunks of a tiled file from each tile's one-tile file.
+fn assemble(r: &Raster, tile: &[usize], coded: &[Vec<u8>]) -> Result<Vec<u8>> {
+    let first = coded
+        .first()
+        .ok_or_else(|| Error::parameter("tile", 0, "a tile"))?;
+    // the tiles' common fields from the first tile's HEAD (after the signature)
+    let hl = u32::from_le_bytes(first[8..12].try_into().unwrap()) as usize;
+    let mut h = Header::parse(&first[16..16 + hl])?;
+    h.minor = format::MINOR_TILED;
+    h.dims = r.dims.clone();
+    h.tile = tile.to_vec();
+    let (lo, hi) = finite_range(&r.samples);
+    (h.min, h.max) = (lo, hi);
+    let mut out = format::SIGNATURE.to_vec();
+    put_chunk(&mut out, super::container::HEAD, &h.to_bytes());
+    let m = meta::to_bytes(&r.meta);
+    if !m.is_empty() {
+        put_chunk(&mut out, META, &m);
+    }
+    let mut at = out.len() as u64 + 12 + 16 * coded.len() as u64;
+    let mut index = Vec::with_capacity(16 * coded.len());
+    for c in coded {
+        let bytes = 12 + 4 + (c.len() - 8) as u64;
+        index.extend_from_slice(&at.to_le_bytes());
+        index.extend_from_slice(&bytes.to_le_bytes());
+        at += bytes;
+    }
+    put_chunk(&mut out, TIDX, &index);
+    for (i, c) in coded.iter().enumerate() {
+        let mut p = Vec::with_capacity(c.len() - 4);
+        p.extend_from_slice(&(i as u32).to_le_bytes());
+        p.extend_from_slice(&c[8..]);
+        put_chunk(&mut out, TILE, &p);
+    }
+    put_chunk(&mut out, MEND, &[]);
+    Ok(out)
+}
+
+// ---------------------------------------------------------------- decoding
+
+/// Where each tile's samples go in the output of a decode at level `k`: per axis, the
+/// level-k offset of each tile (prefix sums of the tiles' level-k extents), and the
+/// output box.
+pub(super) struct Stitch {
+    grid: Grid,
+    level: usize,
+    header: Header,
+    /// Per axis: level-k start of each tile along it, then the axis' level-k extent.
+    offs: Vec<Vec<usize>>,
+    /// Output box in level-k coordinates, slowest axis first.
+    out: Vec<Range<usize>>,
+    samples: Samples,
+    /// Tiles put so far.
+    done: Vec<bool>,
+}
+
+impl Stitch {
+    pub(super) fn new(h: &Header, level: usize, region: Option<&[Range<usize>]>) -> Result<Stitch> {
+        let grid = Grid::new(&h.dims, &h.tile)?;
+        let nd = h.dims.len();
+        // the level-k extent of a tile depends on its extent along each axis alone
+        let full_tile = grid.tile.clone();
+        let mut cache: Vec<(usize, usize, usize)> = Vec::new();
+        let mut extent_at = |a: usize, e: usize| -> Result<usize> {
+            if let Some(&(_, _, r)) = cache.iter().find(|c| c.0 == a && c.1 == e) {
+                return Ok(r);
+            }
+            let mut th = h.clone();
+            th.dims = full_tile.clone();
+            th.dims[a] = e;
+            th.tile = th.dims.clone();
+            let r = Plan::new(&th)?.region(level)[a];
+            cache.push((a, e, r));
+            Ok(r)
+        };
+        let mut offs = Vec::with_capacity(nd);
+        for a in 0..nd {
+            let mut o = vec![0usize];
+            for i in 0..grid.counts[a] {
+                let e = extent_at(a, grid.extent(a, i))?;
+                o.push(o[i] + e);
+            }
+            offs.push(o);
+        }
+        let out: Vec<Range<usize>> = match region {
+            None => offs.iter().map(|o| 0..*o.last().unwrap()).collect(),
+            Some(reg) => {
+                if reg.len() != nd {
+                    return Err(Error::parameter(
+                        "region",
+                        format!("{} ranges", reg.len()),
+                        "one range per spatial axis",
+                    ));
+                }
+                (0..nd)
+                    .map(|a| {
+                        // fastest axis first in the option, slowest first here
+                        let g = &reg[nd - 1 - a];
+                        let d = h.dims[a];
+                        if g.start >= g.end || g.end > d {
+                            return Err(Error::parameter(
+                                "region",
+                                format!("{}..{} on an axis of {d}", g.start, g.end),
+                                "a non-empty range within the axis",
+                            ));
+                        }
+                        let r = *offs[a].last().unwrap() as u128;
+                        let lo = (g.start as u128 * r / d as u128) as usize;
+                        let hi = ((g.end as u128 * r).div_ceil(d as u128) as usize)
+                            .clamp(lo + 1, r as usize);
+                        Ok(lo..hi)
+                    })
+                    .collect::<Result<_>>()?
+            }
+        };
+        let n = crate::io::bytes::sample_count(
+            &out.iter().map(|g| g.len()).collect::<Vec<_>>(),
+            h.channels,
+        )?;
+        let done = vec![false; grid.len()];
+        Ok(Stitch {
+            samples: zeros(h.sample_type, n),
+            grid,
+            level,
+            header: h.clone(),
+            offs,
+            out,
+            done,
+        })
+    }
+
+    /// The output box, level-k coordinates, slowest axis first.
+    pub(super) fn out_box(&self) -> &[Range<usize>] {
+        &self.out
+    }
+
+    pub(super) fn tiles(&self) -> usize {
+        self.grid.len()
+    }
+
+    /// Tile `i`'s level-k box (global level-k coordinates).
+    fn tile_box(&self, i: usize) -> Vec<Range<usize>> {
+        self.grid
+            .coords(i)
+            .iter()
+            .enumerate()
+            .map(|(a, &c)| self.offs[a][c]..self.offs[a][c + 1])
+            .collect()
+    }
+
+    /// Whether tile `i` meets the output box.
+    pub(super) fn wanted(&self, i: usize) -> bool {
+        self.tile_box(i)
+            .iter()
+            .zip(&self.out)
+            .all(|(t, o)| t.start < o.end && o.start < t.end)
+    }
+
+    /// Decode the one-tile file of tile `i` (the `TILE` payload after its index) and
+    /// check it against the file's header.
+    pub(super) fn decode_tile(
+        &self,
+        i: usize,
+        inner: &[u8],
+        allow_truncated: bool,
+    ) -> Result<Decoded> {
+        let src = (&format::SIGNATURE[..]).chain(inner);
+        let d = decode_stream(
+            src,
+            8 + inner.len() as u64,
+            &DecodeOptions {
+                level: self.level,
+                allow_truncated,
+                region: None,
+            },
+        )
+        .map_err(|e| Error::format(format!("tile {i}: {e}"), "a valid tile"))?;
+        let (h, t) = (&self.header, &d.header);
+        let want = self.grid.tile_dims(i);
+        if t.major != h.major
+            || t.sample_type != h.sample_type
+            || t.channels != h.channels
+            || t.colour != h.colour
+            || t.mode != h.mode
+            || t.scheme != h.scheme
+            || t.boundary != h.boundary
+            || t.levels != h.levels
+            || t.dims != want
+        {
+            return Err(Error::format(
+                format!(
+                    "tile {i} of extents {:?}, {} {:?} {:?}",
+                    t.dims,
+                    t.sample_type.name(),
+                    t.mode,
+                    t.scheme
+                ),
+                "tiles of the grid's extents with the file's type, mode and scheme",
+            ));
+        }
+        let b = self.tile_box(i);
+        let got: Vec<usize> = b.iter().map(|g| g.len()).collect();
+        if d.raster.dims != got {
+            return Err(Error::format(
+                format!("tile {i} decoding to extents {:?}", d.raster.dims),
+                "the tile's extents at the level decoded",
+            ));
+        }
+        Ok(d)
+    }
+
+    /// Place tile `i`'s decoded samples.
+    pub(super) fn put(&mut self, i: usize, r: &Raster) -> Result<()> {
+        let b = self.tile_box(i);
+        let mut from = Vec::with_capacity(b.len());
+        let mut to = Vec::with_capacity(b.len());
+        for (t, o) in b.iter().zip(&self.out) {
+            let (lo, hi) = (t.start.max(o.start), t.end.min(o.end));
+            if lo >= hi {
+                return Ok(());
+            }
+            from.push(lo - t.start..hi - t.start);
+            to.push(lo - o.start..hi - o.start);
+        }
+        let dims: Vec<usize> = self.out.iter().map(|g| g.len()).collect();
+        copy_block(
+            &mut self.samples,
+            &dims,
+            &to,
+            &r.samples,
+            &r.dims,
+            &from,
+            self.header.channels,
+        )?;
+        self.done[i] = true;
+        Ok(())
+    }
+
+    /// The output raster with the file's metadata moved to it.
+    pub(super) fn finish(self, meta: &Metadata) -> Result<Raster> {
+        let h = &self.header;
+        let dims: Vec<usize> = self.out.iter().map(|g| g.len()).collect();
+        let mut r = Raster::new(dims.clone(), h.channels, self.samples, h.kind)?;
+        // a full tile's pyramid places the coarse samples as the whole raster's would
+        let mut th = h.clone();
+        th.dims = self.grid.tile.clone();
+        th.tile = th.dims.clone();
+        let plan = Plan::new(&th)?;
+        let maps: Vec<AxisMap> = coarse_maps_of(&th, &plan, self.level)
+            .into_iter()
+            .zip(&self.out)
+            .map(|(m, g)| m.then(AxisMap::crop(g.start)))
+            .collect();
+        // voids were marked in each tile's decode
+        r.meta = meta.resampled(&h.dims, &dims, &maps);
+        Ok(r)
+    }
+}
+
+/// Decode tiles `(i, payload after the index)` in parallel and place them.
+fn decode_batch(
+    st: &mut Stitch,
+    batch: &mut Vec<(usize, Vec<u8>)>,
+    allow_truncated: bool,
+    complete: &mut bool,
+) -> Result<()> {
+    let decoded: Vec<Result<Decoded>> = batch
+        .par_iter()
+        .map(|(i, inner)| st.decode_tile(*i, inner, allow_truncated))
+        .collect();
+    for ((i, _), d) in batch.iter().zip(decoded) {
+        let d = d?;
+        *complete &= d.complete;
+        st.put(*i, &d.raster)?;
+    }
+    batch.clear();
+    Ok(())
+}
+
+/// Tiles decoded at once: enough to keep every thread busy.
+fn batch_size() -> usize {
+    2 * rayon::current_num_threads()
+}
+
+/// The tile index of a `TILE` chunk and the rest of its payload.
+fn tile_payload<'a>(ch: &'a Chunk, n: usize) -> Result<(usize, &'a [u8])> {
+    let mut c = Cursor::new(&ch.payload, "TILE");
+    let i = c.u32()? as usize;
+    if i >= n {
+        return Err(Error::format(
+            format!("TILE chunk at byte {} for tile {i}", ch.offset),
+            "a tile of the grid",
+        ));
+    }
+    Ok((i, c.rest()))
+}
+
+/// Parse a `TIDX` payload: `(offset, length)` of each tile's chunk.
+fn parse_index(ch: &Chunk, n: usize, len: u64) -> Result<Vec<(u64, u64)>> {
+    if ch.payload.len() as u64 != 16 * n as u64 {
+        return Err(Error::format(
+            format!("TIDX chunk of {} bytes for {n} tiles", ch.payload.len()),
+            "16 bytes per tile",
+        ));
+    }
+    let first = ch.offset + 12 + ch.payload.len() as u64;
+    let mut c = Cursor::new(&ch.payload, "TIDX");
+    let mut v = Vec::with_capacity(n);
+    for i in 0..n {
+        let (o, l) = (
+            u64::from_le_bytes(c.take(8)?.try_into().unwrap()),
+            u64::from_le_bytes(c.take(8)?.try_into().unwrap()),
+        );
+        if o < first || !(16..=format::MAX_CHUNK + 12).contains(&l) || o.checked_add(l).is_none() {
+            return Err(Error::format(
+                format!("TIDX entry of tile {i}: {l} bytes at byte {o} (the index ends at {first}, the file at {len})"),
+                "chunks after the index",
+            ));
+        }
+        v.push((o, l));
+    }
+    Ok(v)
+}
+
+fn chunk_info(ch: &Chunk, tile: Option<usize>) -> super::container::ChunkInfo {
+    super::container::ChunkInfo {
+        kind: ch.name(),
+        offset: ch.offset,
+        bytes: ch.payload.len() as u64 + 12,
+        channel: None,
+        band: None,
+        level: None,
+        coefficients: None,
+        tile,
+    }
+}
+
+/// What a tiled file's chunks say, read in order.
+pub(super) struct TiledInfo {
+    pub(super) header: Header,
+    pub(super) chunks: Vec<super::container::ChunkInfo>,
+    /// Each tile's one-tile file, for its bytes per level.
+    pub(super) tiles: Vec<(usize, Vec<u8>)>,
+    pub(super) complete: bool,
+}
+
+/// Read a tiled file's chunks in order (for `info`): every CRC checked, the tiles kept.
+pub(super) fn read_tiled_info(bytes: &[u8]) -> Result<TiledInfo> {
+    let len = bytes.len() as u64;
+    let (mut rd, first, header) = read_head(bytes, len)?;
+    let grid = Grid::new(&header.dims, &header.tile)?;
+    let n = grid.len();
+    let mut chunks = vec![chunk_info(&first, None)];
+    let mut tiles = Vec::new();
+    let mut seen = vec![false; n];
+    let mut complete = false;
+    while let Ok(ch) = rd.next_chunk()? {
+        match &ch.kind {
+            b"TILE" => {
+                let (i, inner) = tile_payload(&ch, n)?;
+                if std::mem::replace(&mut seen[i], true) {
+                    return Err(Error::format(
+                        format!("a second TILE chunk for tile {i} (byte {})", ch.offset),
+                        "each tile once",
+                    ));
+                }
+                let mut f = format::SIGNATURE.to_vec();
+                f.extend_from_slice(inner);
+                tiles.push((i, f));
+                chunks.push(chunk_info(&ch, Some(i)));
+            }
+            b"MEND" => {
+                chunks.push(chunk_info(&ch, None));
+                complete = seen.iter().all(|&s| s);
+                break;
+            }
+            _ => chunks.push(chunk_info(&ch, None)),
+        }
+    }
+    Ok(TiledInfo {
+        header,
+        chunks,
+        tiles,
+        complete,
+    })
+}
+
+/// Decode a tiled file read in order (no seeking): the tiles the region meets decoded in
+/// batches as they come.
+pub(super) fn decode_sequential<R: Read>(
+    mut rd: ChunkReader<R>,
+    header: Header,
+    opts: &DecodeOptions,
+) -> Result<Decoded> {
+    let len = rd.total();
+    let mut st = Stitch::new(&header, opts.level, opts.region.as_deref())?;
+    let n = st.tiles();
+    let mut meta = Metadata::default();
+    let mut seen = vec![false; n];
+    let mut index_seen = false;
+    let mut batch = Vec::new();
+    let mut complete = true;
+    let mut last = "HEAD".to_string();
+    let mut ended = false;
+    loop {
+        let ch = match rd.next_chunk()? {
+            Ok(c) => c,
+            Err(end) => {
+                if !opts.allow_truncated {
+                    let at = match end {
+                        ChunkEnd::Eof => len,
+                        ChunkEnd::Truncated { offset } => offset,
+                    };
+                    return Err(Error::format(
+                        format!("file truncated after chunk {last} (byte {at} of {len})"),
+                        "a complete file ending with MEND (or --allow-truncated)",
+                    ));
+                }
+                break;
+            }
+        };
+        last = ch.name();
+        match &ch.kind {
+            b"mETA" => meta = meta::parse(&ch.payload),
+            b"TIDX" => {
+                if index_seen {
+                    return Err(Error::format("a second TIDX chunk", "one TIDX chunk"));
+                }
+                parse_index(&ch, n, len)?;
+                index_seen = true;
+            }
+            b"TILE" => {
+                if !index_seen {
+                    return Err(Error::format(
+                        format!("TILE chunk at byte {} before the TIDX chunk", ch.offset),
+                        "TIDX before the tiles",
+                    ));
+                }
+                let (i, inner) = tile_payload(&ch, n)?;
+                if std::mem::replace(&mut seen[i], true) {
+                    return Err(Error::format(
+                        format!("a second TILE chunk for tile {i} (byte {})", ch.offset),
+                        "each tile once",
+                    ));
+                }
+                if st.wanted(i) {
+                    batch.push((i, inner.to_vec()));
+                    if batch.len() >= batch_size() {
+                        decode_batch(&mut st, &mut batch, opts.allow_truncated, &mut complete)?;
+                    }
+                }
+            }
+            b"MEND" => {
+                ended = true;
+                break;
+            }
+            b"HEAD" => return Err(Error::format("a second HEAD chunk", "one HEAD chunk")),
+            k => {
+                if k[0].is_ascii_uppercase() {
+                    return Err(Error::Unsupported {
+                        what: "critical chunk",
+                        value: ch.name(),
+                    });
+                }
+            }
+        }
+    }
+    decode_batch(&mut st, &mut batch, opts.allow_truncated, &mut complete)?;
+    if let Some(i) = seen.iter().position(|&s| !s) {
+        if !opts.allow_truncated {
+            return Err(Error::format(
+                format!(
+                    "TILE chunk of tile {i} missing ({})",
+                    if ended { "MEND reached" } else { "file ends" }
+                ),
+                "every tile of the grid (or --allow-truncated)",
+            ));
+        }
+        complete = false;
+    }
+    complete &= ended;
+    let raster = st.finish(&meta)?;
+    Ok(Decoded {
+        raster,
+        header,
+        complete,
+    })
+}
+
+/// Decode a tiled file from a seekable stream of `len` bytes whose `HEAD` has been read
+/// by `rd` (positioned after it): `mETA` and `TIDX` read in order, then only the tiles
+/// the region meets, each found by the index.
+pub(super) fn decode_seek<R: Read + Seek>(
+    src: &mut R,
+    len: u64,
+    after_head: u64,
+    header: Header,
+    opts: &DecodeOptions,
+) -> Result<Decoded> {
+    let mut st = Stitch::new(&header, opts.level, opts.region.as_deref())?;
+    let n = st.tiles();
+    let mut meta = Metadata::default();
+    src.seek(SeekFrom::Start(after_head))?;
+    let mut rd = ChunkReader::at(&mut *src, after_head, len);
+    let index = loop {
+        let ch = match rd.next_chunk()? {
+            Ok(c) => c,
+            Err(_) => {
+                return Err(Error::format(
+                    format!("tiled file of {len} bytes without its TIDX chunk"),
+                    "a TIDX chunk after HEAD",
+                ))
+            }
+        };
+        match &ch.kind {
+            b"mETA" => meta = meta::parse(&ch.payload),
+            b"TIDX" => break parse_index(&ch, n, len)?,
+            b"HEAD" => return Err(Error::format("a second HEAD chunk", "one HEAD chunk")),
+            k => {
+                if k[0].is_ascii_uppercase() {
+                    return Err(Error::format(
+                        format!("chunk {} at byte {} before TIDX", ch.name(), ch.offset),
+                        "HEAD, mETA, then TIDX",
+                    ));
+                }
+            }
+        }
+    };
+    drop(rd);
+    let mut complete = true;
+    let mut batch = Vec::new();
+    for (i, &(off, l)) in index.iter().enumerate() {
+        if !st.wanted(i) {
+            continue;
+        }
+        if off + l > len {
+            if !opts.allow_truncated {
+                return Err(Error::format(
+                    format!(
+                        "file truncated: tile {i} at bytes {off}..{} of {len}",
+                        off + l
+                    ),
+                    "a complete file (or --allow-truncated)",
+                ));
+            }
+            complete = false;
+            continue;
+        }
+        src.seek(SeekFrom::Start(off))?;
+        let ch = match ChunkReader::at(&mut *src, off, off + l).next_chunk()? {
+            Ok(c) if &c.kind == TILE && c.payload.len() as u64 + 12 == l => c,
+            _ => {
+                return Err(Error::format(
+                    format!(
+                        "TIDX entry of tile {i} ({l} bytes at byte {off}) not on its TILE chunk"
+                    ),
+                    "an index pointing at each tile's chunk",
+                ))
+            }
+        };
+        let (j, inner) = tile_payload(&ch, n)?;
+        if j != i {
+            return Err(Error::format(
+                format!("TIDX entry of tile {i} on the chunk of tile {j} (byte {off})"),
+                "an index pointing at each tile's chunk",
+            ));
+        }
+        batch.push((i, inner.to_vec()));
+        if batch.len() >= batch_size() {
+            decode_batch(&mut st, &mut batch, opts.allow_truncated, &mut complete)?;
+        }
+    }
+    decode_batch(&mut st, &mut batch, opts.allow_truncated, &mut complete)?;
+    // a whole decode also checks that the file ends with MEND after the last tile
+    if opts.region.is_none() {
+        let end = index
+            .iter()
+            .map(|&(o, l)| o + l)
+            .max()
+            .unwrap_or(after_head);
+        src.seek(SeekFrom::Start(end))?;
+        let ok =
+            matches!(ChunkReader::at(&mut *src, end, len).next_chunk()?, Ok(c) if &c.kind == MEND);
+        if !ok {
+            if !opts.allow_truncated {
+                return Err(Error::format(
+                    format!("no MEND chunk after the last tile (byte {end} of {len})"),
+                    "a complete file ending with MEND (or --allow-truncated)",
+                ));
+            }
+            complete = false;
+        }
+    }
+    let raster = st.finish(&meta)?;
+    Ok(Decoded {
+        raster,
+        header,
+        complete,
+    })
+}
