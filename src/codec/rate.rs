@@ -593,7 +593,7 @@ mod tests {
     fn calibrated_bpp_lands_within_one_percent_under_the_budget() {
         let mut f = images::strokes(384, 512, 7);
         let g = images::noise(384, 512, 1, 3);
-        for (a, b) in f.data.iter_mut().zip(&g.data) {
+        for (a, b) in f.values.data_mut().iter_mut().zip(g.data()) {
             *a += 0.05 * b;
         }
         let grey = f.to_raster(SampleType::U8).unwrap();
