@@ -7,7 +7,6 @@ use super::container::{read_head, read_rest, Parsed};
 use super::options::{DecodeOptions, Decoded};
 use super::plan::Plan;
 use super::plan::{dequantized, lossy_values};
-use super::tiles;
 use super::voids::mark_voids;
 use super::{layout, lossless};
 use crate::entropy::range::Decoder;
@@ -19,8 +18,7 @@ use crate::io::{Raster, SampleType, Samples};
 use crate::scheme::Scheme;
 use crate::{Error, Result};
 use rayon::prelude::*;
-use std::io::{Read, Seek, SeekFrom};
-use std::path::Path;
+use std::io::Read;
 
 /// One band's indices from its coded bytes, by the coding of format `major`.
 fn decode_band(
@@ -93,7 +91,7 @@ fn decode_channel(p: &Parsed, c: usize, k: usize) -> Result<Vec<Option<Vec<i64>>
     Ok(q)
 }
 
-fn reconstruct(p: &Parsed, k: usize) -> Result<Raster> {
+pub(super) fn reconstruct(p: &Parsed, k: usize) -> Result<Raster> {
     let h = &p.header;
     let plan = &p.plan;
     let k = k.min(plan.pyr.depth());
@@ -261,64 +259,20 @@ pub(super) fn coarse_maps_of(h: &Header, plan: &Plan, k: usize) -> Vec<crate::io
         .collect()
 }
 
-/// Decode from a stream of `len` bytes, read in order (a tiled file's tiles as they
-/// come; [`decode_seek`] reads only those a region needs).
-pub fn decode_stream<R: Read>(src: R, len: u64, opts: &DecodeOptions) -> Result<Decoded> {
+/// Decode a one-tile file read in order (a tile of a tiled file, the base of a
+/// `--max-error` file): its chunks reconstructed at `opts.level`, no region.
+pub(super) fn decode_untiled<R: Read>(src: R, len: u64, opts: &DecodeOptions) -> Result<Decoded> {
     let (rd, first, header) = read_head(src, len)?;
     if header.is_tiled() {
-        return tiles::decode_sequential(rd, header, opts);
+        return Err(Error::format(
+            "a tiled file inside a tile",
+            "a one-tile file",
+        ));
     }
-    one_tile(
-        read_rest(rd, first, header, opts.level, opts.allow_truncated)?,
-        opts,
-    )
-}
-
-/// A one-tile file's chunks reconstructed, and cut to the region asked for.
-fn one_tile(p: Parsed, opts: &DecodeOptions) -> Result<Decoded> {
-    let mut raster = reconstruct(&p, opts.level)?;
-    if let Some(region) = &opts.region {
-        let st = tiles::Stitch::new(&p.header, opts.level, Some(region))?;
-        raster = tiles::crop_raster(&raster, st.out_box())?;
-    }
+    let p = read_rest(rd, first, header, opts.level, opts.allow_truncated)?;
     Ok(Decoded {
-        raster,
+        raster: reconstruct(&p, opts.level)?,
         header: p.header,
         complete: p.complete,
     })
-}
-
-/// Decode from a seekable stream of `len` bytes: a tiled file's `HEAD`, `mETA` and tile
-/// index, then only the tiles that `opts.region` meets (all without a region).
-pub fn decode_seek<R: Read + Seek>(mut src: R, len: u64, opts: &DecodeOptions) -> Result<Decoded> {
-    src.seek(SeekFrom::Start(0))?;
-    let (rd, first, header) = read_head(&mut src, len)?;
-    if header.is_tiled() {
-        let at = rd.position();
-        drop(rd);
-        return tiles::decode_seek(&mut src, len, at, header, opts);
-    }
-    one_tile(
-        read_rest(rd, first, header, opts.level, opts.allow_truncated)?,
-        opts,
-    )
-}
-
-/// The `HEAD` of an `.mra` file, read alone.
-pub fn header_of_file(path: &Path) -> Result<Header> {
-    let f = std::fs::File::open(path)?;
-    let len = f.metadata()?.len();
-    Ok(read_head(std::io::BufReader::new(f), len)?.2)
-}
-
-/// Decode the bytes of an `.mra` file.
-pub fn decode(bytes: &[u8], opts: &DecodeOptions) -> Result<Decoded> {
-    decode_seek(std::io::Cursor::new(bytes), bytes.len() as u64, opts)
-}
-
-/// Decode a file, reading only the chunks needed.
-pub fn decode_file(path: &Path, opts: &DecodeOptions) -> Result<Decoded> {
-    let f = std::fs::File::open(path)?;
-    let len = f.metadata()?.len();
-    decode_seek(std::io::BufReader::new(f), len, opts)
 }

@@ -315,7 +315,12 @@ mod tests {
         );
         assert_eq!(float_quantum([0.5, 0.25, 12.0].into_iter()), Some(0.25));
         assert_eq!(float_quantum([1024.0, 4096.0].into_iter()), Some(1.0));
-        assert_eq!(float_quantum([0.1f32 as f64].into_iter()), None);
+        assert_eq!(float_quantum([0.1f64].into_iter()), None);
+        // 0.1 as f32 is exactly 13421773·2^−27
+        assert_eq!(
+            float_quantum([0.1f32 as f64].into_iter()),
+            Some(2f64.powi(-27))
+        );
         assert_eq!(float_quantum([1.0, -0.0].into_iter()), None);
         assert_eq!(float_quantum([1.0, f64::NAN].into_iter()), None);
         assert_eq!(float_quantum([(1u64 << 41) as f64].into_iter()), None);

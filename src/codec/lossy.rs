@@ -236,7 +236,7 @@ impl Prepared {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::codec::decode::decode;
+    use crate::codec::decode::decode_untiled;
     use crate::codec::options::{DecodeOptions, Rate};
     use crate::generate::{images, phantom};
     use crate::io::SampleType;
@@ -271,7 +271,10 @@ mod tests {
                 let p = prepare(r, &opts, Mode::Lossy).unwrap();
                 let range = p.header.max - p.header.min;
                 for step in [range * 1e-4, range * 0.01, range * 0.3] {
-                    let file = decode(&p.code(step), &DecodeOptions::default()).unwrap();
+                    let coded = p.code(step);
+                    let file =
+                        decode_untiled(&coded[..], coded.len() as u64, &DecodeOptions::default())
+                            .unwrap();
                     let ours = p.decoded(step).unwrap();
                     assert_eq!(
                         ours.samples,

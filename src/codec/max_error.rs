@@ -2,7 +2,7 @@
 //! a spatial residual layer (one `RESI` chunk per channel).
 
 use super::container::{MEND, RESI};
-use super::decode::decode;
+use super::decode::decode_untiled;
 use super::lossy::prepare;
 use super::options::{DecodeOptions, EncodeOptions};
 use crate::entropy::range::Encoder;
@@ -44,8 +44,9 @@ pub(super) fn encode_max_error(r: &Raster, opts: &EncodeOptions, e: f64) -> Resu
     let step = s.max(2.0 * e);
     let base = p.code(step);
     // the base alone: its header commits to the RESI chunks written below
-    let dec = decode(
-        &base,
+    let dec = decode_untiled(
+        &base[..],
+        base.len() as u64,
         &DecodeOptions {
             level: 0,
             allow_truncated: true,

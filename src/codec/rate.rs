@@ -623,48 +623,6 @@ mod tests {
         }
     }
 
-    /// Bands and channels are coded in parallel, each into its own stream: the file, and
-    /// what the decoder makes of it, are the same with 1, 2 or 3 threads, in every rate mode.
-    #[test]
-    fn the_file_is_the_same_whatever_the_thread_count() {
-        let r = images::noise(70, 90, 3, 4)
-            .to_raster(SampleType::U8)
-            .unwrap();
-        let rates = [
-            Rate::Bpp(1.5),
-            Rate::Quality(60.0),
-            Rate::Psnr(35.0),
-            Rate::MaxError(2.0),
-            Rate::Lossless,
-        ];
-        for rate in rates {
-            let opts = EncodeOptions {
-                rate,
-                ..Default::default()
-            };
-            let run = |threads: usize| {
-                let pool = rayon::ThreadPoolBuilder::new()
-                    .num_threads(threads)
-                    .build()
-                    .unwrap();
-                pool.install(|| {
-                    let bytes = crate::codec::encode(&r, &opts).unwrap();
-                    let back = crate::codec::decode(&bytes, &Default::default()).unwrap();
-                    (bytes, back.raster.samples)
-                })
-            };
-            let one = run(1);
-            for t in [2, 3] {
-                let other = run(t);
-                assert!(one.0 == other.0, "{rate:?}: file differs with {t} threads");
-                assert!(
-                    one.1 == other.1,
-                    "{rate:?}: decode differs with {t} threads"
-                );
-            }
-        }
-    }
-
     #[test]
     fn search_finds_the_target_in_a_few_candidates() {
         let k = 20.0 / std::f64::consts::LN_10;

@@ -13,7 +13,7 @@
 //! alone, so the file is the same whatever the thread count.
 
 use super::container::{read_head, MEND, META};
-use super::decode::{coarse_maps_of, decode_stream};
+use super::decode::{coarse_maps_of, decode_untiled};
 use super::encode::encode_filled;
 use super::lossy::{finite_range, prepare, Prepared};
 use super::options::{DecodeOptions, Decoded, EncodeOptions, Rate};
@@ -637,7 +637,7 @@ impl Stitch {
         allow_truncated: bool,
     ) -> Result<Decoded> {
         let src = (&format::SIGNATURE[..]).chain(inner);
-        let d = decode_stream(
+        let d = decode_untiled(
             src,
             8 + inner.len() as u64,
             &DecodeOptions {
