@@ -303,6 +303,7 @@ fn decode<'py>(
             let opts = DecodeOptions {
                 level,
                 allow_truncated,
+                region: None,
             };
             Ok(codec::decode(bytes, &opts)?.raster)
         })
