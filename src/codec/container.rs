@@ -21,6 +21,19 @@ pub(super) const RESI: &[u8; 4] = b"RESI";
 pub(super) const MEND: &[u8; 4] = b"MEND";
 pub(super) const META: &[u8; 4] = b"mETA";
 
+/// The error of a file of `len` bytes that ends (at `end`) after chunk `last` without
+/// its `MEND`.
+pub(super) fn truncated(end: ChunkEnd, last: &str, len: u64) -> Error {
+    let at = match end {
+        ChunkEnd::Eof => len,
+        ChunkEnd::Truncated { offset } => offset,
+    };
+    Error::format(
+        format!("file truncated after chunk {last} (byte {at} of {len})"),
+        "a complete file ending with MEND (or --allow-truncated)",
+    )
+}
+
 /// One band of one channel as read (from a `LEVL` or a `BAND` chunk): its step and
 /// coded bytes.
 pub(super) struct BandChunk {
@@ -140,14 +153,7 @@ pub(super) fn read_rest<R: Read>(
             Ok(c) => c,
             Err(end) => {
                 if !allow_truncated {
-                    let at = match end {
-                        ChunkEnd::Eof => len,
-                        ChunkEnd::Truncated { offset } => offset,
-                    };
-                    return Err(Error::format(
-                        format!("file truncated after chunk {last} (byte {at} of {len})"),
-                        "a complete file ending with MEND (or --allow-truncated)",
-                    ));
+                    return Err(truncated(end, &last, len));
                 }
                 break;
             }

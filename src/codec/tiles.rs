@@ -12,7 +12,7 @@
 //! Tiles are coded and decoded in parallel (rayon); each tile's bytes depend on the tile
 //! alone, so the file is the same whatever the thread count.
 
-use super::container::{read_head, MEND, META};
+use super::container::{read_head, truncated, MEND, META};
 use super::decode::{coarse_maps_of, decode_untiled};
 use super::encode::encode_filled;
 use super::lossy::{finite_range, prepare, Prepared};
@@ -20,7 +20,7 @@ use super::options::{DecodeOptions, Decoded, EncodeOptions, Rate};
 use super::plan::Plan;
 use super::voids::with_voids_filled;
 use super::{layout, meta};
-use crate::format::{self, put_chunk, Chunk, ChunkEnd, ChunkReader, Cursor, Header, Mode};
+use crate::format::{self, put_chunk, Chunk, ChunkReader, Cursor, Header, Mode};
 use crate::io::{AxisMap, Metadata, Raster, SampleType, Samples};
 use crate::quantize::{self, RHO};
 use crate::{Error, Result};
@@ -879,14 +879,7 @@ pub(super) fn decode_sequential<R: Read>(
             Ok(c) => c,
             Err(end) => {
                 if !opts.allow_truncated {
-                    let at = match end {
-                        ChunkEnd::Eof => len,
-                        ChunkEnd::Truncated { offset } => offset,
-                    };
-                    return Err(Error::format(
-                        format!("file truncated after chunk {last} (byte {at} of {len})"),
-                        "a complete file ending with MEND (or --allow-truncated)",
-                    ));
+                    return Err(truncated(end, &last, len));
                 }
                 break;
             }
