@@ -119,6 +119,7 @@ def encode(
     boundary: str = "symmetric",
     levels: int = 6,
     channels_last: bool = False,
+    tile: Optional[Sequence[int]] = None,
 ) -> bytes:
     """Encode ``a`` into the bytes of an ``.mra`` file (the ``mra encode`` format).
 
@@ -127,6 +128,11 @@ def encode(
     peak-to-peak ``data_range`` may be given), ``bpp=B`` (largest file within B bits
     per position), ``quality=Q`` (1..100, step ``(max − min)·2^(−Q/10)``; the default,
     50), ``keep=P`` (largest P % of details), ``threshold=T``.
+
+    ``tile`` cuts the array into tiles of these extents (one per spatial axis, NumPy
+    order), each coded on its own at one quality for the whole array, so that
+    ``decode(..., region=)`` reads only the tiles a block meets. Without it, arrays up
+    to 2^24 positions are one tile, larger ones tiles of 1024² (2-D) or 128³ (3-D).
     """
     mode, value = _rate_of(
         lossless=lossless,
@@ -148,24 +154,26 @@ def encode(
         boundary,
         int(levels),
         bool(channels_last),
+        None if tile is None else [int(t) for t in tile],
     )
 
 
 Region = Sequence[Union[slice, Tuple[int, int]]]
 
 
-def _crop(a: np.ndarray, region: Region) -> np.ndarray:
-    """The block ``region`` of ``a``: one ``slice`` or ``(start, stop)`` pair per
-    leading (spatial) axis, ends excluded, steps of 1, inside the array."""
+def _ranges(region: Region, shape: Sequence[int]) -> List[Tuple[int, int]]:
+    """``region`` as one ``(start, stop)`` per axis of ``shape`` (axes it leaves out
+    whole): a ``slice`` or ``(start, stop)`` pair per leading (spatial) axis, ends
+    excluded, steps of 1, inside the array."""
     region = tuple(region)
-    if len(region) > a.ndim:
+    if len(region) > len(shape):
         raise MraError(
-            f"invalid region: {len(region)} axes for shape {a.shape} "
+            f"invalid region: {len(region)} axes for shape {tuple(shape)} "
             "(expected at most one per spatial axis)"
         )
-    index = []
-    for axis, r in enumerate(region):
-        n = a.shape[axis]
+    out = []
+    for axis, n in enumerate(shape):
+        r = region[axis] if axis < len(region) else slice(None)
         if isinstance(r, slice):
             if r.step not in (None, 1):
                 raise MraError(f"invalid region: step {r.step} on axis {axis} (expected 1)")
@@ -179,8 +187,8 @@ def _crop(a: np.ndarray, region: Region) -> np.ndarray:
                 f"invalid region: {start}..{stop} on axis {axis} of length {n} "
                 f"(expected 0 <= start < stop <= {n})"
             )
-        index.append(slice(start, stop))
-    return np.ascontiguousarray(a[tuple(index)])
+        out.append((start, stop))
+    return out
 
 
 def decode(
@@ -193,14 +201,22 @@ def decode(
     """Decode ``.mra`` bytes (``bytes`` or any buffer) into an array of the encoded type.
 
     ``level=k`` reconstructs at 1/2^k resolution from the coarse chunks only.
-    ``region`` keeps one block of the result: a ``slice`` or ``(start, stop)`` per
-    spatial axis, in the coordinates of the decoded level (the whole level is decoded,
-    then cropped). ``allow_truncated`` decodes what a cut file holds.
+    ``region`` decodes one block: a ``slice`` or ``(start, stop)`` per spatial axis,
+    in the coordinates of the decoded level. At full resolution a tiled file (see
+    ``tile=`` in :func:`encode`) is read only where its tiles meet the block; at a
+    coarser level the level is decoded whole, then cropped. ``allow_truncated``
+    decodes what a cut file holds.
     """
-    out = _mra.decode(_bytes(b), int(level or 0), bool(allow_truncated))
-    if region is not None:
-        out = _crop(out, region)
-    return out
+    data = _bytes(b)
+    level = int(level or 0)
+    if region is None:
+        return _mra.decode(data, level, bool(allow_truncated))
+    if level == 0:
+        dims = _mra.dims(data)
+        return _mra.decode(data, 0, bool(allow_truncated), _ranges(region, dims))
+    out = _mra.decode(data, level, bool(allow_truncated))
+    index = tuple(slice(a, b) for a, b in _ranges(region, out.shape))
+    return np.ascontiguousarray(out[index])
 
 
 def info(b: Any) -> Dict[str, Any]:

@@ -20,8 +20,15 @@ def encode(
     boundary: str,
     levels: int,
     channels_last: bool,
+    tile: Optional[List[int]] = None,
 ) -> bytes: ...
-def decode(data: _Bytes, level: int = 0, allow_truncated: bool = False) -> npt.NDArray[np.generic]: ...
+def decode(
+    data: _Bytes,
+    level: int = 0,
+    allow_truncated: bool = False,
+    region: Optional[List[Tuple[int, int]]] = None,
+) -> npt.NDArray[np.generic]: ...
+def dims(data: _Bytes) -> List[int]: ...
 def info(data: _Bytes) -> str: ...
 def analyze(
     a: npt.NDArray[np.floating],

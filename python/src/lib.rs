@@ -226,7 +226,7 @@ fn rate(kind: &str, value: f64, data_range: Option<f64>) -> PyResult<Rate> {
 
 /// Encode an array into the bytes of an `.mra` file.
 #[pyfunction]
-#[pyo3(signature = (a, rate_kind, value, data_range, scheme, boundary, levels, channels_last))]
+#[pyo3(signature = (a, rate_kind, value, data_range, scheme, boundary, levels, channels_last, tile=None))]
 #[allow(clippy::too_many_arguments)]
 fn encode<'py>(
     py: Python<'py>,
@@ -238,6 +238,7 @@ fn encode<'py>(
     boundary: &str,
     levels: usize,
     channels_last: bool,
+    tile: Option<Vec<usize>>,
 ) -> PyResult<Bound<'py, PyBytes>> {
     let opts = EncodeOptions {
         scheme: parse::<Scheme>(scheme)?,
@@ -248,7 +249,21 @@ fn encode<'py>(
     let bytes = with_input(a, |input, shape| {
         run(py, "encode", || {
             let r = raster(input, &shape, channels_last)?;
-            codec::encode(&r, &opts)
+            match &tile {
+                None => codec::encode(&r, &opts),
+                Some(t) => {
+                    if t.len() != r.dims.len() || t.contains(&0) {
+                        return Err(Error::parameter(
+                            "tile",
+                            format!("{t:?} for spatial shape {:?}", r.dims),
+                            "one extent of at least 1 per spatial axis",
+                        ));
+                    }
+                    // a tile larger than the axis is the whole axis
+                    let t: Vec<usize> = t.iter().zip(&r.dims).map(|(&t, &d)| t.min(d)).collect();
+                    codec::encode_tiled(&r, &opts, &t)
+                }
+            }
         })
     })?;
     Ok(PyBytes::new(py, &bytes))
@@ -278,14 +293,17 @@ fn with_bytes<R>(
     )))
 }
 
-/// Decode `.mra` bytes at resolution level `level` (0 = full).
+/// Decode `.mra` bytes at resolution level `level` (0 = full); with `region` (one
+/// `(start, stop)` per spatial axis, slowest first, full-resolution samples) only that box,
+/// reading only the tiles it meets.
 #[pyfunction]
-#[pyo3(signature = (data, level=0, allow_truncated=false))]
+#[pyo3(signature = (data, level=0, allow_truncated=false, region=None))]
 fn decode<'py>(
     py: Python<'py>,
     data: &Bound<'py, PyAny>,
     level: usize,
     allow_truncated: bool,
+    region: Option<Vec<(usize, usize)>>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let r = with_bytes(data, |bytes| {
         run(py, "decode", || {
@@ -303,12 +321,23 @@ fn decode<'py>(
             let opts = DecodeOptions {
                 level,
                 allow_truncated,
-                region: None,
+                // the library takes the fastest axis first
+                region: region
+                    .as_ref()
+                    .map(|r| r.iter().rev().map(|&(a, b)| a..b).collect()),
             };
             Ok(codec::decode(bytes, &opts)?.raster)
         })
     })?;
     array_of(py, r)
+}
+
+/// The spatial extents of `.mra` bytes (slowest axis first), from their `HEAD` alone.
+#[pyfunction]
+fn dims(py: Python<'_>, data: &Bound<'_, PyAny>) -> PyResult<Vec<usize>> {
+    with_bytes(data, |bytes| {
+        run(py, "dims", || Ok(codec::header_of(bytes)?.dims))
+    })
 }
 
 /// The `mra info --json` object of `.mra` bytes, as JSON text.
@@ -550,6 +579,7 @@ fn _mra(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(encode, m)?)?;
     m.add_function(wrap_pyfunction!(decode, m)?)?;
     m.add_function(wrap_pyfunction!(info, m)?)?;
+    m.add_function(wrap_pyfunction!(dims, m)?)?;
     m.add_function(wrap_pyfunction!(analyze, m)?)?;
     m.add_function(wrap_pyfunction!(synthesize, m)?)?;
     m.add_function(wrap_pyfunction!(upscale, m)?)?;

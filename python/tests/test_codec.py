@@ -124,6 +124,33 @@ def test_region_is_the_crop_of_the_whole_decode():
         mra.decode(data, region=((0, 100),))
 
 
+def test_region_of_a_tiled_file_reads_only_its_tiles():
+    a = field((96, 80), np.uint16)
+    data = mra.encode(a, max_error=2, tile=(32, 32))
+    i = mra.info(data)
+    assert i["tiles"] == 9 and i["tile"] == [32, 32] and i["dims"] == [96, 80]
+    full = mra.decode(data)
+    assert np.abs(full.astype(np.int64) - a).max() <= 2
+    for region in [(slice(0, 96), slice(0, 80)), ((40, 41), (5, 70)), (slice(33, 95),)]:
+        index = tuple(slice(*r) if isinstance(r, tuple) else r for r in region)
+        assert np.array_equal(mra.decode(data, region=region), full[index])
+    # a corrupt tile that the region does not meet is never read
+    last = [c for c in i["chunks"] if c["kind"] == "TILE" and c["tile"] == 8][0]
+    bad = bytearray(data)
+    bad[last["offset"] + last["bytes"] // 2] ^= 0xFF
+    bad = bytes(bad)
+    with pytest.raises(ValueError):
+        mra.decode(bad)
+    assert np.array_equal(mra.decode(bad, region=((0, 64), (0, 64))), full[:64, :64])
+    with pytest.raises(ValueError):
+        mra.decode(bad, region=((64, 96), (64, 80)))
+    # coarser levels decode whole, then crop
+    half = mra.decode(data, level=1)
+    assert np.array_equal(mra.decode(data, level=1, region=((3, 20),)), half[3:20])
+    with pytest.raises(ValueError, match="invalid tile"):
+        mra.encode(a, tile=(32,))
+
+
 def test_info_reports_the_header():
     a = field((20, 30), np.float32)
     i = mra.info(mra.encode(a, max_error=0.5))

@@ -40,6 +40,6 @@ pub use frames::frames;
 pub use info::{info, kind_name, Info};
 pub use options::{DecodeOptions, Decoded, EncodeOptions, Rate};
 pub use rate::keep_psnr;
-pub use read::{decode, decode_file, decode_seek, decode_stream, header_of_file};
+pub use read::{decode, decode_file, decode_seek, decode_stream, header_of, header_of_file};
 pub use tiles::default_tile;
 pub use write::{encode, encode_tiled};

@@ -61,6 +61,12 @@ pub fn header_of_file(path: &Path) -> Result<Header> {
     Ok(read_head(std::io::BufReader::new(f), len)?.2)
 }
 
+/// The `HEAD` of the bytes of an `.mra` file, read alone (the other chunks are not
+/// read or checked).
+pub fn header_of(bytes: &[u8]) -> Result<Header> {
+    Ok(read_head(bytes, bytes.len() as u64)?.2)
+}
+
 /// Decode the bytes of an `.mra` file.
 pub fn decode(bytes: &[u8], opts: &DecodeOptions) -> Result<Decoded> {
     decode_seek(std::io::Cursor::new(bytes), bytes.len() as u64, opts)
