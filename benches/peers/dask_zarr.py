@@ -13,7 +13,8 @@ includes generating the source; the `generate` row gives that time alone), and t
 resident memory of each worker process (`ru_maxrss` gathered by `Client.run`; the
 cluster is started anew for every codec).
 
-Needs: `pip install ./python[dask]` (and `zfpy`, `pysz` for those rows). Usage:
+Needs: `pip install ./python[dask]` (and `zfpy==1.0.1`, `pysz` for those rows: zfpy
+1.0.1.post0's version string makes `import numcodecs` fail). Usage:
   python3 benches/peers/dask_zarr.py [--size 1024] [--chunk 128] [--max-error 4]
       [--memory-limit 2GiB] [--out /tmp/dask_zarr] [--markdown]
 """
