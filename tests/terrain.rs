@@ -856,3 +856,42 @@ fn flat_ground_gets_no_mountain_detail_with_the_relief_gain() {
     };
     assert!(synthesize(&base, &ex, &bad).is_err());
 }
+
+/// The finest details' gain is fitted so that the result's spectral slope over its finest
+/// octave is the example's; a fixed gain away from it misses (no back-projection here:
+/// the output size is not a multiple of the base's).
+#[test]
+fn fitted_finest_gain_gives_the_result_the_examples_spectral_slope() {
+    use mra::terrain::spectrum::spectral_slope;
+    use mra::terrain::FinestGain;
+    let base = smooth_base(40, 3);
+    let ex = grid_of(200, 200, 9, 0.6, 1000.0);
+    let want = spectral_slope(&ex.data, ex.h, ex.w);
+    let o = SynthOptions {
+        size: Some((158, 158)),
+        ..opts(2)
+    };
+    let (fit, report) = synthesize(&base, &ex, &o).unwrap();
+    assert_eq!(report.example_spectral_slope, Some(want));
+    assert!((0.5..=2.0).contains(&report.finest_gain));
+    let got = spectral_slope(&fit.data, fit.h, fit.w);
+    assert!(
+        (got - want).abs() < 0.03,
+        "slope {got:.3}, example {want:.3}"
+    );
+    for g in [0.5, 2.0] {
+        let fixed = SynthOptions {
+            finest_gain: FinestGain::Fixed(g),
+            ..o.clone()
+        };
+        let (r, rep) = synthesize(&base, &ex, &fixed).unwrap();
+        assert_eq!(rep.finest_gain, g);
+        let off = spectral_slope(&r.data, r.h, r.w);
+        assert!(
+            (off - want).abs() > 5.0 * (got - want).abs().max(0.01),
+            "gain {g}: slope {off:.3}, example {want:.3}"
+        );
+    }
+    // the same bytes for a seed
+    assert_eq!(synthesize(&base, &ex, &o).unwrap().0.data, fit.data);
+}

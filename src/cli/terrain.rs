@@ -12,7 +12,7 @@ use crate::io::{self, DataKind, Format, Raster, ReadOptions, SampleType, Samples
 use crate::scheme::{Boundary, Scheme};
 use crate::tensor::Array;
 use crate::terrain::synth::Details;
-use crate::terrain::{self, raster as tr, Grid, Shading, SynthOptions};
+use crate::terrain::{self, raster as tr, FinestGain, Grid, Shading, SynthOptions};
 
 #[derive(Subcommand, Debug)]
 pub enum TerrainCommand {
@@ -131,6 +131,10 @@ pub struct SynthArgs {
     /// heights and cells are taken as the base's).
     #[arg(long)]
     pub any_units: bool,
+    /// Gain of the finest details: `fit` (the result's spectral slope over its finest
+    /// octave is made the example's; 0.5 to 2) or a fixed gain (1: the example's band RMS).
+    #[arg(long, default_value = "fit", value_name = "fit|G")]
+    pub finest_gain: FinestGain,
     #[command(flatten)]
     pub m: MatchArgs,
 }
@@ -393,6 +397,7 @@ fn synth(a: SynthArgs) -> CliResult {
         er.meta.units = br.meta.units.clone();
     }
     let mut o = a.m.options();
+    o.finest_gain = a.finest_gain;
     if let Some(s) = &a.size {
         o.size = Some(parse_size(s)?);
     }
