@@ -123,11 +123,14 @@ fn finest_levels_of_matched_details_have_the_examples_roughness() {
     let ex = grid_of(192, 192, 11, 0.6, 1000.0);
     let ehp = highpass(&ex, Scheme::Chaikin, 2).unwrap();
     // a size that is not a multiple of the base's: no back-projection, so the finest
-    // levels are the details alone
+    // levels are the details alone; the finest gain at 1, so each band keeps the
+    // example's RMS (the fitted gain trades it for the example's spectral slope: 1.44×
+    // the example's roughness on this generated terrain)
     let run = |d: Details| {
         let o = SynthOptions {
             details: d,
             size: Some((190, 190)),
+            finest_gain: mra::terrain::FinestGain::Fixed(1.0),
             ..opts(3)
         };
         let (g, rep) = synthesize(&base, &ex, &o).unwrap();
