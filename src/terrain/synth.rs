@@ -216,21 +216,19 @@ pub(super) fn lengths_down(
 /// One level of analysis of a grid (taken by value and transformed in place): the
 /// Mallat block `[C | D]` and the coarse size.
 fn analyze_one(g: Grid, scheme: Scheme, planner: &Planner) -> Result<(Grid, usize, usize)> {
-    let (h, w, c) = (g.h, g.w, g.c);
-    let mut a = g.into_array()?;
+    let ny = TwoScale::coarse_len(scheme, BOUNDARY, g.h());
+    let nx = TwoScale::coarse_len(scheme, BOUNDARY, g.w());
+    let mut a = g.into_array();
     tensor::analyze_in(planner, &mut a, &spec(scheme, 1), Engine::tuned())?;
-    let ny = TwoScale::coarse_len(scheme, BOUNDARY, h);
-    let nx = TwoScale::coarse_len(scheme, BOUNDARY, w);
-    Ok((Grid::new(h, w, c, a.into_data())?, ny, nx))
+    Ok((Grid::from_array(a)?, ny, nx))
 }
 
 /// One level of reconstruction of a Mallat block, in place.
 fn synthesize_one(packed: Grid, scheme: Scheme, planner: &Planner) -> Result<Grid> {
-    let (h, w, c) = (packed.h, packed.w, packed.c);
-    let mut a = packed.into_array()?;
+    let mut a = packed.into_array();
     let pyr = Pyramid::plan(a.shape(), &spec(scheme, 1))?;
     tensor::synthesize_in(planner, &mut a, &pyr, Engine::tuned())?;
-    Grid::new(h, w, c, a.into_data())
+    Grid::from_array(a)
 }
 
 /// The example's one-level blocks, finest first (`levels[k-1]` = level k).
@@ -368,16 +366,16 @@ fn level_details(
     level: usize,
     parent: Option<&Shifts>,
 ) -> Result<(Grid, Shifts, f64)> {
-    let (n_y, n_x, c) = (t.h, t.w, t.c);
+    let (n_y, n_x, c) = (t.h(), t.w(), t.c());
     let (p, ov) = (o.patch, o.overlap);
-    let (de_y, de_x) = (e.h - ne_y, e.w - ne_x);
+    let (de_y, de_x) = (e.h() - ne_y, e.w() - ne_x);
     // example windows must lie inside the coarse grid and the detail bands
     let (lim_y, lim_x) = ((*ne_y).min(de_y), (*ne_x).min(de_x));
     let q = (p + 2 * ov).min(n_y).min(n_x);
     if lim_y < q + 1 || lim_x < q + 1 {
         return Err(Error::parameter(
             "example",
-            format!("{}x{} coefficients at level {level}", e.w, e.h),
+            format!("{}x{} coefficients at level {level}", e.w(), e.h()),
             "an example whose coarse grid holds at least one patch window at every level",
         ));
     }
@@ -560,9 +558,9 @@ fn blend(
     p: usize,
     ov: usize,
 ) {
-    let (m_x, c) = (acc.w, acc.c);
-    let (de_y, de_x) = (e.h - ne_y, e.w - ne_x);
-    acc.data
+    let (m_x, c) = (acc.w(), acc.c());
+    let (de_y, de_x) = (e.h() - ne_y, e.w() - ne_x);
+    acc.data_mut()
         .par_chunks_mut(m_x * c)
         .enumerate()
         .for_each(|(py, row)| {
@@ -592,7 +590,7 @@ fn blend(
                         } else {
                             let jy = (iy as i64 + sh.0).clamp(0, elen_y as i64 - 1) as usize;
                             let jx = (ix as i64 + sh.1).clamp(0, elen_x as i64 - 1) as usize;
-                            terms[nt] = (sh, wgt, (ebase_y + jy) * e.w + ebase_x + jx);
+                            terms[nt] = (sh, wgt, (ebase_y + jy) * e.w() + ebase_x + jx);
                             nt += 1;
                         }
                     }
@@ -605,7 +603,7 @@ fn blend(
                 for k in 0..c {
                     row[px * c + k] = terms[..nt]
                         .iter()
-                        .map(|t| t.1 * e.data[t.2 * c + k])
+                        .map(|t| t.1 * e.data()[t.2 * c + k])
                         .sum::<f64>()
                         * inv;
                 }
@@ -618,8 +616,8 @@ fn blend(
 /// sample is multiplied by `Σ wᵢ gᵢ / Σ wᵢ` over the patches whose windows cover it (a
 /// gain field as smooth as the blend, so no seam is made).
 fn relief_gain(acc: &mut Grid, (n_y, n_x): (usize, usize), s: &Shifts, p: usize, ov: usize) {
-    let (m_x, c) = (acc.w, acc.c);
-    acc.data
+    let (m_x, c) = (acc.w(), acc.c());
+    acc.data_mut()
         .par_chunks_mut(m_x * c)
         .enumerate()
         .for_each(|(py, row)| {
@@ -653,7 +651,7 @@ fn rms(g: &Grid, ry: std::ops::Range<usize>, rx: std::ops::Range<usize>) -> f64 
     let (mut s, mut n) = (0.0, 0usize);
     for y in ry {
         for x in rx.clone() {
-            for k in 0..g.c {
+            for k in 0..g.c() {
                 s += g.at(y, x, k).powi(2);
                 n += 1;
             }
@@ -675,19 +673,19 @@ fn match_band_rms(
 ) {
     for (hy, hx) in [(true, false), (false, true), (true, true)] {
         let (ry, rx) = (
-            if hy { n_y..acc.h } else { 0..n_y },
-            if hx { n_x..acc.w } else { 0..n_x },
+            if hy { n_y..acc.h() } else { 0..n_y },
+            if hx { n_x..acc.w() } else { 0..n_x },
         );
         let (ey, ex) = (
-            if hy { ne_y..e.h } else { 0..ne_y },
-            if hx { ne_x..e.w } else { 0..ne_x },
+            if hy { ne_y..e.h() } else { 0..ne_y },
+            if hx { ne_x..e.w() } else { 0..ne_x },
         );
         let (have, want) = (rms(acc, ry.clone(), rx.clone()), rms(e, ey, ex));
         if have > 0.0 {
             let f = want / have;
             for y in ry {
                 for x in rx.clone() {
-                    for k in 0..acc.c {
+                    for k in 0..acc.c() {
                         *acc.at_mut(y, x, k) *= f;
                     }
                 }
@@ -697,7 +695,7 @@ fn match_band_rms(
 }
 
 fn check(base: &Grid, example: &Grid, o: &SynthOptions) -> Result<()> {
-    check_options(base.c, example.c, o)
+    check_options(base.c(), example.c(), o)
 }
 
 /// Same channels; patch ≥ 2, overlap ≤ patch/2; 1 to 8 levels.
@@ -743,8 +741,8 @@ pub fn example_at_scale(example: &Grid, scale: f64) -> Result<Grid> {
     if (scale - 1.0).abs() < 1e-9 {
         return Ok(example.clone());
     }
-    let h = ((example.h as f64 * scale).round() as usize).max(1);
-    let w = ((example.w as f64 * scale).round() as usize).max(1);
+    let h = ((example.h() as f64 * scale).round() as usize).max(1);
+    let w = ((example.w() as f64 * scale).round() as usize).max(1);
     if (h as u64) * (w as u64) > 1 << 28 {
         return Err(Error::LimitsExceeded {
             what: "example samples at the output's cell",
@@ -759,8 +757,8 @@ pub fn example_at_scale(example: &Grid, scale: f64) -> Result<Grid> {
     };
     Ok(resample_map(
         &src,
-        (h, Map::centred(example.h, h)),
-        (w, Map::centred(example.w, w)),
+        (h, Map::centred(example.h(), h)),
+        (w, Map::centred(example.w(), w)),
     ))
 }
 
@@ -773,15 +771,15 @@ fn box_filter(g: &Grid, r: usize) -> Grid {
     for pass in 0..2 {
         let src = out.clone();
         let n = (2 * r + 1) as f64;
-        for y in 0..g.h {
-            for x in 0..g.w {
-                for k in 0..g.c {
+        for y in 0..g.h() {
+            for x in 0..g.w() {
+                for k in 0..g.c() {
                     let mut s = 0.0;
                     for d in -(r as i64)..=r as i64 {
                         let (yy, xx) = if pass == 0 {
-                            (y, (x as i64 + d).clamp(0, g.w as i64 - 1) as usize)
+                            (y, (x as i64 + d).clamp(0, g.w() as i64 - 1) as usize)
                         } else {
-                            ((y as i64 + d).clamp(0, g.h as i64 - 1) as usize, x)
+                            ((y as i64 + d).clamp(0, g.h() as i64 - 1) as usize, x)
                         };
                         s += src.at(yy, xx, k);
                     }
@@ -803,13 +801,13 @@ fn refine(
     o: &SynthOptions,
 ) -> Result<(Grid, SynthReport)> {
     let l = o.levels;
-    let ey = lengths_down(o.scheme, example.h, l, "example height")?;
-    let ex = lengths_down(o.scheme, example.w, l, "example width")?;
+    let ey = lengths_down(o.scheme, example.h(), l, "example height")?;
+    let ex = lengths_down(o.scheme, example.w(), l, "example width")?;
     let q = o.patch + 2 * o.overlap;
     if ey[l] < q + 4 || ex[l] < q + 4 {
         return Err(Error::parameter(
             "example size",
-            format!("{}x{} (coarse {}x{} after {l} levels)", example.w, example.h, ex[l], ey[l]),
+            format!("{}x{} (coarse {}x{} after {l} levels)", example.w(), example.h(), ex[l], ey[l]),
             "an example larger than the filter support: its coarsest grid must hold a patch window plus the detail band",
         ));
     }
@@ -843,7 +841,7 @@ fn refine(
             k,
             parent.as_ref(),
         )?;
-        let (n_y, n_x) = (t.h, t.w);
+        let (n_y, n_x) = (t.h(), t.w());
         drop(t);
         // the example's block of this level is not used again
         pyr.blocks.truncate(k - 1);
@@ -873,15 +871,15 @@ fn refine(
 /// its channel means).
 fn example_slope(example: &Grid) -> f64 {
     let means: Vec<f64>;
-    let h: &[f64] = if example.c == 1 {
-        &example.data
+    let h: &[f64] = if example.c() == 1 {
+        example.data()
     } else {
-        means = (0..example.h * example.w)
-            .map(|i| example.mean_at(i / example.w, i % example.w))
+        means = (0..example.h() * example.w())
+            .map(|i| example.mean_at(i / example.w(), i % example.w()))
             .collect();
         &means
     };
-    spectrum::spectral_slope(h, example.h, example.w)
+    spectrum::spectral_slope(h, example.h(), example.w())
 }
 
 /// Fine samples past the square that a sub-block of the finest level keeps, so that the
@@ -935,7 +933,7 @@ fn sub_block(
                 (true, n_x + x - c_x)
             };
             if (!hy && !hx) == coarse {
-                g.data[y * m_x + x] = packed.mean_at(py, px);
+                g.data_mut()[y * m_x + x] = packed.mean_at(py, px);
             }
         }
     }
@@ -957,9 +955,9 @@ fn fit_finest_gain(
     if !target.is_finite() {
         return Ok(1.0);
     }
-    let s = packed.h.min(packed.w).min(spectrum::MAX_SIDE);
-    let ay = sub_axis(scheme, packed.h, n_y, s);
-    let ax = sub_axis(scheme, packed.w, n_x, s);
+    let s = packed.h().min(packed.w()).min(spectrum::MAX_SIDE);
+    let ay = sub_axis(scheme, packed.h(), n_y, s);
+    let ax = sub_axis(scheme, packed.w(), n_x, s);
     // `P C₁` into the real parts and `Q D₁` into the imaginary parts, one at a time
     let mut z = vec![Complex::default(); s * s];
     for coarse in [true, false] {
@@ -969,7 +967,7 @@ fn fit_finest_gain(
             planner,
         )?;
         // the square's mean is taken out in f64 before the f32 store
-        let at = |i: usize| f.data[(i / s) * f.w + i % s];
+        let at = |i: usize| f.data()[(i / s) * f.w() + i % s];
         let mean = (0..s * s).map(at).sum::<f64>() / (s * s) as f64;
         for (i, v) in z.iter_mut().enumerate() {
             let a = (at(i) - mean) as f32;
@@ -988,9 +986,9 @@ fn scale_details(packed: &mut Grid, (n_y, n_x): (usize, usize), g: f64) {
     if g == 1.0 {
         return;
     }
-    let (w, c) = (packed.w, packed.c);
+    let (w, c) = (packed.w(), packed.c());
     packed
-        .data
+        .data_mut()
         .par_chunks_mut(w * c)
         .enumerate()
         .for_each(|(y, row)| {
@@ -1003,14 +1001,14 @@ fn scale_details(packed: &mut Grid, (n_y, n_x): (usize, usize), g: f64) {
 /// (`δ ∈ {−1, 0, 1}`: the finest patch borders, which lie near fine index `2t − 1`)
 /// divided by the same over every other line; rows and columns together.
 pub fn seam_ratio(g: &Grid, period: usize) -> f64 {
-    let (h, w) = (g.h, g.w);
+    let (h, w) = (g.h(), g.w());
     if h < 3 || w < 3 {
         return f64::NAN;
     }
     // the heights themselves when there is one channel (no copy of the grid)
     let means: Vec<f64>;
-    let height: &[f64] = if g.c == 1 {
-        &g.data
+    let height: &[f64] = if g.c() == 1 {
+        g.data()
     } else {
         means = (0..h * w).map(|i| g.mean_at(i / w, i % w)).collect();
         &means
@@ -1110,8 +1108,8 @@ pub fn synthesize(base: &Grid, example: &Grid, o: &SynthOptions) -> Result<(Grid
     let (h, w) = match o.size {
         Some(s) => s,
         None => (
-            base.h.checked_shl(l as u32).unwrap_or(usize::MAX),
-            base.w.checked_shl(l as u32).unwrap_or(usize::MAX),
+            base.h().checked_shl(l as u32).unwrap_or(usize::MAX),
+            base.w().checked_shl(l as u32).unwrap_or(usize::MAX),
         ),
     };
     if (h as u64) * (w as u64) > 1 << 30 {
@@ -1125,8 +1123,8 @@ pub fn synthesize(base: &Grid, example: &Grid, o: &SynthOptions) -> Result<(Grid
     let lx = lengths_down(o.scheme, w, l, "output width")?;
     let coarse = resample_map(
         base,
-        (ly[l], span(base.h, h, ly[l])),
-        (lx[l], span(base.w, w, lx[l])),
+        (ly[l], span(base.h(), h, ly[l])),
+        (lx[l], span(base.w(), w, lx[l])),
     );
     // the example itself when its cell is the output's (no copy)
     let scaled: Grid;
@@ -1140,23 +1138,23 @@ pub fn synthesize(base: &Grid, example: &Grid, o: &SynthOptions) -> Result<(Grid
     let (lo, hi) = base.range();
     let psnr = |back: &Grid| {
         let mse = back
-            .data
+            .data()
             .iter()
-            .zip(&base.data)
+            .zip(base.data())
             .map(|(a, b)| (a - b).powi(2))
             .sum::<f64>()
-            / base.data.len() as f64;
+            / base.data().len() as f64;
         10.0 * ((hi - lo).max(1e-12).powi(2) / mse.max(1e-300)).log10()
     };
-    let blocks = (h % base.h == 0 && w % base.w == 0).then(|| (h / base.h, w / base.w));
+    let blocks = (h % base.h() == 0 && w % base.w() == 0).then(|| (h / base.h(), w / base.w()));
     report.fidelity_psnr = Some(match blocks {
         Some(f) => {
             for _ in 0..BACK_PROJECTIONS {
                 back_project(&mut g, base, f);
             }
-            psnr(&block_means(&g, base.h, base.w, f))
+            psnr(&block_means(&g, base.h(), base.w(), f))
         }
-        None => psnr(&reduce(&g, base.h, base.w, o.scheme, l)?),
+        None => psnr(&reduce(&g, base.h(), base.w(), o.scheme, l)?),
     });
     Ok((g, report))
 }
@@ -1197,15 +1195,15 @@ const BACK_PROJECTIONS: usize = 3;
 
 /// Means of the `f_y × f_x` blocks of `g` (`n_y·f_y × n_x·f_x`).
 pub fn block_means(g: &Grid, n_y: usize, n_x: usize, (f_y, f_x): (usize, usize)) -> Grid {
-    let c = g.c;
+    let c = g.c();
     let inv = 1.0 / (f_y * f_x) as f64;
     let mut out = Grid::zeros(n_y, n_x, c);
-    out.data
+    out.data_mut()
         .par_chunks_mut(n_x * c)
         .enumerate()
         .for_each(|(by, orow)| {
             for y in by * f_y..(by + 1) * f_y {
-                let row = &g.data[y * g.w * c..(y + 1) * g.w * c];
+                let row = &g.data()[y * g.w() * c..(y + 1) * g.w() * c];
                 for (x, v) in row[..n_x * f_x * c].chunks_exact(c).enumerate() {
                     let o = &mut orow[(x / f_x) * c..(x / f_x + 1) * c];
                     o.iter_mut().zip(v).for_each(|(o, v)| *o += v * inv);
@@ -1220,11 +1218,11 @@ pub fn block_means(g: &Grid, n_y: usize, n_x: usize, (f_y, f_x): (usize, usize))
 /// the base). A correction restricted to the span of `P^L` (which would leave the finest
 /// levels exact) diverged on the bench's DEMs: its block means do not invert `B`.
 fn back_project(g: &mut Grid, base: &Grid, f: (usize, usize)) {
-    let mut r = block_means(g, base.h, base.w, f);
-    for (v, b) in r.data.iter_mut().zip(&base.data) {
+    let mut r = block_means(g, base.h(), base.w(), f);
+    for (v, b) in r.data_mut().iter_mut().zip(base.data()) {
         *v = b - *v;
     }
-    let (my, mx) = (Map::centred(base.h, g.h), Map::centred(base.w, g.w));
+    let (my, mx) = (Map::centred(base.h(), g.h()), Map::centred(base.w(), g.w()));
     resample_add(&r, g, my, mx);
 }
 
@@ -1234,11 +1232,11 @@ fn back_project(g: &mut Grid, base: &Grid, f: (usize, usize)) {
 pub fn transfer(base: &Grid, example: &Grid, o: &SynthOptions) -> Result<(Grid, SynthReport)> {
     check(base, example, o)?;
     let l = o.levels;
-    let ly = lengths_down(o.scheme, base.h, l, "base height")?;
-    let lx = lengths_down(o.scheme, base.w, l, "base width")?;
+    let ly = lengths_down(o.scheme, base.h(), l, "base height")?;
+    let lx = lengths_down(o.scheme, base.w(), l, "base width")?;
     let (mut a, _) = base.to_array()?;
     tensor::analyze(&mut a, &spec(o.scheme, l))?;
-    let packed = Grid::new(base.h, base.w, base.c, a.into_data())?;
+    let packed = Grid::new(base.h(), base.w(), base.c(), a.into_data())?;
     let example = example_at_scale(example, o.example_scale)?;
     let o = SynthOptions {
         finest_gain: FinestGain::Fixed(1.0),
@@ -1251,16 +1249,16 @@ pub fn transfer(base: &Grid, example: &Grid, o: &SynthOptions) -> Result<(Grid, 
 /// resampling from the coarse lattice to `h × w` (the inverse of the lattice of
 /// [`synthesize`]: the result's samples cell-centred on the `h × w` cells).
 pub fn reduce(result: &Grid, h: usize, w: usize, scheme: Scheme, levels: usize) -> Result<Grid> {
-    let ly = lengths_down(scheme, result.h, levels, "result height")?;
-    let lx = lengths_down(scheme, result.w, levels, "result width")?;
+    let ly = lengths_down(scheme, result.h(), levels, "result height")?;
+    let lx = lengths_down(scheme, result.w(), levels, "result width")?;
     let (mut a, _) = result.to_array()?;
     tensor::analyze(&mut a, &spec(scheme, levels))?;
-    let packed = Grid::new(result.h, result.w, result.c, a.into_data())?;
+    let packed = Grid::new(result.h(), result.w(), result.c(), a.into_data())?;
     let c = packed.crop(ly[levels], lx[levels]);
     Ok(resample_map(
         &c,
-        (h, span_inverse(h, result.h, ly[levels])),
-        (w, span_inverse(w, result.w, lx[levels])),
+        (h, span_inverse(h, result.h(), ly[levels])),
+        (w, span_inverse(w, result.w(), lx[levels])),
     ))
 }
 
@@ -1268,18 +1266,18 @@ pub fn reduce(result: &Grid, h: usize, w: usize, scheme: Scheme, levels: usize) 
 /// reduction-then-reconstruction; the part that synthesis adds). The realism metrics of
 /// `benches/terrain_quality.py` are taken on this part of the result and of the example.
 pub fn highpass(g: &Grid, scheme: Scheme, levels: usize) -> Result<Grid> {
-    let ly = lengths_down(scheme, g.h, levels, "height")?;
-    let lx = lengths_down(scheme, g.w, levels, "width")?;
+    let ly = lengths_down(scheme, g.h(), levels, "height")?;
+    let lx = lengths_down(scheme, g.w(), levels, "width")?;
     let (mut a, _) = g.to_array()?;
     let sp = spec(scheme, levels);
     let pyr = tensor::analyze(&mut a, &sp)?;
-    let packed = Grid::new(g.h, g.w, g.c, a.into_data())?;
-    let mut low = Grid::zeros(g.h, g.w, g.c);
+    let packed = Grid::new(g.h(), g.w(), g.c(), a.into_data())?;
+    let mut low = Grid::zeros(g.h(), g.w(), g.c());
     low.paste(&packed.crop(ly[levels], lx[levels]));
     let (mut a, _) = low.to_array()?;
     tensor::synthesize(&mut a, &pyr)?;
-    let data = g.data.iter().zip(a.data()).map(|(f, l)| f - l).collect();
-    Grid::new(g.h, g.w, g.c, data)
+    let data = g.data().iter().zip(a.data()).map(|(f, l)| f - l).collect();
+    Grid::new(g.h(), g.w(), g.c(), data)
 }
 
 #[cfg(test)]
