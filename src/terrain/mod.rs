@@ -9,7 +9,7 @@
 //! decides *which* details are added.
 //!
 //! ```text
-//! grid.rs      Grid: h × w × channels of f64, row-major
+//! grid.rs      Grid: h × w × channels of f64, row-major, held as the engine's Array
 //! resample.rs  Catmull–Rom resampling on affine maps (base to the output lattice)
 //! spectrum.rs  radially averaged power spectra, the finest octave's slope, the gain fit
 //! synth.rs     the example's pyramid, coarse-to-fine patch matching, blended detail transfer
