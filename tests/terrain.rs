@@ -43,20 +43,20 @@ fn smooth_base(n: usize, seed: u64) -> Grid {
 fn psnr(a: &Grid, b: &Grid) -> f64 {
     let (lo, hi) = b.range();
     let mse = a
-        .data
+        .data()
         .iter()
-        .zip(&b.data)
+        .zip(b.data())
         .map(|(x, y)| (x - y).powi(2))
         .sum::<f64>()
-        / a.data.len() as f64;
+        / a.data().len() as f64;
     10.0 * ((hi - lo).powi(2) / mse).log10()
 }
 
 /// Standard deviation of the 5-point Laplacian (roughness).
 fn roughness(g: &Grid) -> f64 {
     let mut v = Vec::new();
-    for y in 1..g.h - 1 {
-        for x in 1..g.w - 1 {
+    for y in 1..g.h() - 1 {
+        for x in 1..g.w() - 1 {
             v.push(
                 g.at(y - 1, x, 0) + g.at(y + 1, x, 0) + g.at(y, x - 1, 0) + g.at(y, x + 1, 0)
                     - 4.0 * g.at(y, x, 0),
@@ -82,9 +82,9 @@ fn same_seed_gives_identical_output_and_another_seed_differs() {
     let (a, _) = synthesize(&base, &ex, &opts(7)).unwrap();
     let (b, _) = synthesize(&base, &ex, &opts(7)).unwrap();
     let (c, _) = synthesize(&base, &ex, &opts(8)).unwrap();
-    assert_eq!(a.data, b.data);
-    assert_ne!(a.data, c.data);
-    assert_eq!((a.h, a.w), (160, 160));
+    assert_eq!(a.data(), b.data());
+    assert_ne!(a.data(), c.data());
+    assert_eq!((a.h(), a.w()), (160, 160));
 }
 
 #[test]
@@ -94,7 +94,7 @@ fn result_reduced_to_the_base_resolution_keeps_the_base() {
     for scheme in [Scheme::Chaikin, Scheme::Cubic] {
         let o = SynthOptions { scheme, ..opts(1) };
         let (out, report) = synthesize(&base, &ex, &o).unwrap();
-        let back = mra::terrain::synth::block_means(&out, base.h, base.w, (4, 4));
+        let back = mra::terrain::synth::block_means(&out, base.h(), base.w(), (4, 4));
         let p = psnr(&back, &base);
         assert!(p >= 40.0, "{scheme}: PSNR {p:.1} dB");
         // the details are really there: rougher than the base refined alone
@@ -123,11 +123,14 @@ fn finest_levels_of_matched_details_have_the_examples_roughness() {
     let ex = grid_of(192, 192, 11, 0.6, 1000.0);
     let ehp = highpass(&ex, Scheme::Chaikin, 2).unwrap();
     // a size that is not a multiple of the base's: no back-projection, so the finest
-    // levels are the details alone
+    // levels are the details alone; the finest gain at 1, so each band keeps the
+    // example's RMS (the fitted gain trades it for the example's spectral slope: 1.44×
+    // the example's roughness on this generated terrain)
     let run = |d: Details| {
         let o = SynthOptions {
             details: d,
             size: Some((190, 190)),
+            finest_gain: mra::terrain::FinestGain::Fixed(1.0),
             ..opts(3)
         };
         let (g, rep) = synthesize(&base, &ex, &o).unwrap();
@@ -136,7 +139,7 @@ fn finest_levels_of_matched_details_have_the_examples_roughness() {
     };
     let none = run(Details::None);
     let (lo, hi) = ex.range();
-    let biggest = none.data.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let biggest = none.data().iter().fold(0.0f64, |m, v| m.max(v.abs()));
     assert!(
         biggest < 1e-9 * (hi - lo),
         "subdivision alone has finest levels {biggest}"
@@ -161,10 +164,10 @@ fn output_size_can_be_chosen_and_transfer_keeps_the_size() {
         ..opts(1)
     };
     let (out, _) = synthesize(&base, &ex, &o).unwrap();
-    assert_eq!((out.h, out.w), (100, 140));
+    assert_eq!((out.h(), out.w()), (100, 140));
     let blurred = reduce(&ex, 128, 128, Scheme::Chaikin, 0).unwrap();
     let (t, _) = transfer(&blurred, &ex, &opts(1)).unwrap();
-    assert_eq!((t.h, t.w), (128, 128));
+    assert_eq!((t.h(), t.w()), (128, 128));
 }
 
 #[test]
@@ -543,8 +546,8 @@ fn volume_of(n: usize, seed: u64, rough: f64) -> Volume {
 
 /// Standard deviation of the 7-point Laplacian of a volume (interior).
 fn roughness3(v: &Volume) -> f64 {
-    let [d, h, w] = v.dims;
-    let at = |z: usize, y: usize, x: usize| v.data[(z * h + y) * w + x];
+    let [d, h, w] = v.dims();
+    let at = |z: usize, y: usize, x: usize| v.data()[(z * h + y) * w + x];
     let mut s = Vec::new();
     for z in 1..d - 1 {
         for y in 1..h - 1 {
@@ -566,8 +569,8 @@ fn roughness3(v: &Volume) -> f64 {
 }
 
 fn minus(a: &Volume, b: &Volume) -> Volume {
-    let d = a.data.iter().zip(&b.data).map(|(x, y)| x - y).collect();
-    Volume::new(a.dims, a.c, d).unwrap()
+    let d = a.data().iter().zip(b.data()).map(|(x, y)| x - y).collect();
+    Volume::new(a.dims(), a.c(), d).unwrap()
 }
 
 #[test]
@@ -582,7 +585,7 @@ fn volume_transfer_keeps_the_base_coarse_and_takes_the_examples_fine_texture() {
         ..SynthOptions::default()
     };
     let (v, rep) = transfer_volume(&base, &ex, &o(Details::Matched, 5)).unwrap();
-    assert_eq!(v.dims, [40, 40, 40]);
+    assert_eq!(v.dims(), [40, 40, 40]);
     assert_eq!(rep.patches.len(), 2);
     // A Q = 0: the base's coarse points come back exactly
     let (cb, cv) = (
@@ -590,9 +593,9 @@ fn volume_transfer_keeps_the_base_coarse_and_takes_the_examples_fine_texture() {
         coarse_points(&v, Scheme::Chaikin, 2).unwrap(),
     );
     let err = cb
-        .data
+        .data()
         .iter()
-        .zip(&cv.data)
+        .zip(cv.data())
         .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
     assert!(err < 1e-9, "coarse points moved by {err}");
     // fine texture: the finest levels (result minus subdivision alone) are as rough as
@@ -613,8 +616,8 @@ fn volume_transfer_keeps_the_base_coarse_and_takes_the_examples_fine_texture() {
     // determinism
     let (again, _) = transfer_volume(&base, &ex, &o(Details::Matched, 5)).unwrap();
     let (other, _) = transfer_volume(&base, &ex, &o(Details::Matched, 6)).unwrap();
-    assert!(again.data == v.data);
-    assert!(other.data != v.data);
+    assert!(again.data() == v.data());
+    assert!(other.data() != v.data());
     // an example too small for the patch window at the coarsest level
     let small = volume_of(16, 3, 4.0);
     let e = transfer_volume(&base, &small, &o(Details::Matched, 5)).unwrap_err();
@@ -625,9 +628,9 @@ fn volume_transfer_keeps_the_base_coarse_and_takes_the_examples_fine_texture() {
 fn cli_transfer_on_nrrd_volumes() {
     let d = tmpdir("vol");
     let write = |v: &Volume, p: &std::path::Path| {
-        let samples = mra::io::Samples::F32(v.data.iter().map(|&x| x as f32).collect());
+        let samples = mra::io::Samples::F32(v.data().iter().map(|&x| x as f32).collect());
         let r =
-            mra::io::Raster::new(v.dims.to_vec(), 1, samples, mra::io::DataKind::Volume).unwrap();
+            mra::io::Raster::new(v.dims().to_vec(), 1, samples, mra::io::DataKind::Volume).unwrap();
         mra::io::write(p, &r).unwrap();
     };
     let (b, e, out) = (d.join("base.nrrd"), d.join("ex.nrrd"), d.join("out.nrrd"));
@@ -679,7 +682,7 @@ fn block_means_of_the_result_keep_the_base_and_threads_do_not_change_the_bytes()
     };
     let (one, rep) = run(1);
     let (two, _) = run(2);
-    assert_eq!(one.data, two.data);
+    assert_eq!(one.data(), two.data());
     let means = mra::terrain::synth::block_means(&one, 48, 48, (4, 4));
     let p = psnr(&means, &base);
     assert!(p >= 40.0, "block-mean PSNR {p:.1} dB");
@@ -693,10 +696,10 @@ fn example_cell_is_matched_to_the_output_cell() {
     let base = smooth_base(48, 5);
     let fine = grid_of(192, 192, 11, 0.6, 1000.0);
     let coarse_cells = mra::terrain::synth::example_at_scale(&fine, 1.0 / 3.0).unwrap();
-    assert_eq!((coarse_cells.h, coarse_cells.w), (64, 64));
+    assert_eq!((coarse_cells.h(), coarse_cells.w()), (64, 64));
     // the same terrain stored at a third of the resolution, declared as such
     let big = mra::terrain::synth::example_at_scale(&coarse_cells, 3.0).unwrap();
-    assert_eq!((big.h, big.w), (192, 192));
+    assert_eq!((big.h(), big.w()), (192, 192));
     let o = SynthOptions {
         example_scale: 1.0 / 3.0,
         ..opts(2)
@@ -801,12 +804,12 @@ fn synth_json_reports_extents_fastest_axis_first() {
 /// RMS of `a − b` over columns `[x0, x1)` (all rows).
 fn rms_diff_cols(a: &Grid, b: &Grid, x0: usize, x1: usize) -> f64 {
     let mut s = 0.0;
-    for y in 0..a.h {
+    for y in 0..a.h() {
         for x in x0..x1 {
             s += (a.at(y, x, 0) - b.at(y, x, 0)).powi(2);
         }
     }
-    (s / (a.h * (x1 - x0)) as f64).sqrt()
+    (s / (a.h() * (x1 - x0)) as f64).sqrt()
 }
 
 /// A base whose left third is a flat sea: with the relief gain the sea gets next to no
@@ -855,4 +858,43 @@ fn flat_ground_gets_no_mountain_detail_with_the_relief_gain() {
         ..opts(3)
     };
     assert!(synthesize(&base, &ex, &bad).is_err());
+}
+
+/// The finest details' gain is fitted so that the result's spectral slope over its finest
+/// octave is the example's; a fixed gain away from it misses (no back-projection here:
+/// the output size is not a multiple of the base's).
+#[test]
+fn fitted_finest_gain_gives_the_result_the_examples_spectral_slope() {
+    use mra::terrain::spectrum::spectral_slope;
+    use mra::terrain::FinestGain;
+    let base = smooth_base(40, 3);
+    let ex = grid_of(200, 200, 9, 0.6, 1000.0);
+    let want = spectral_slope(ex.data(), ex.h(), ex.w());
+    let o = SynthOptions {
+        size: Some((158, 158)),
+        ..opts(2)
+    };
+    let (fit, report) = synthesize(&base, &ex, &o).unwrap();
+    assert_eq!(report.example_spectral_slope, Some(want));
+    assert!((0.5..=2.0).contains(&report.finest_gain));
+    let got = spectral_slope(fit.data(), fit.h(), fit.w());
+    assert!(
+        (got - want).abs() < 0.03,
+        "slope {got:.3}, example {want:.3}"
+    );
+    for g in [0.5, 2.0] {
+        let fixed = SynthOptions {
+            finest_gain: FinestGain::Fixed(g),
+            ..o.clone()
+        };
+        let (r, rep) = synthesize(&base, &ex, &fixed).unwrap();
+        assert_eq!(rep.finest_gain, g);
+        let off = spectral_slope(r.data(), r.h(), r.w());
+        assert!(
+            (off - want).abs() > 5.0 * (got - want).abs().max(0.01),
+            "gain {g}: slope {off:.3}, example {want:.3}"
+        );
+    }
+    // the same bytes for a seed
+    assert_eq!(synthesize(&base, &ex, &o).unwrap().0.data(), fit.data());
 }

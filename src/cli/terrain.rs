@@ -12,7 +12,7 @@ use crate::io::{self, DataKind, Format, Raster, ReadOptions, SampleType, Samples
 use crate::scheme::{Boundary, Scheme};
 use crate::tensor::Array;
 use crate::terrain::synth::Details;
-use crate::terrain::{self, raster as tr, Grid, Shading, SynthOptions};
+use crate::terrain::{self, raster as tr, FinestGain, Grid, Shading, SynthOptions};
 
 #[derive(Subcommand, Debug)]
 pub enum TerrainCommand {
@@ -131,6 +131,10 @@ pub struct SynthArgs {
     /// heights and cells are taken as the base's).
     #[arg(long)]
     pub any_units: bool,
+    /// Gain of the finest details: `fit` (the result's spectral slope over its finest
+    /// octave is made the example's; 0.5 to 2) or a fixed gain (1: the example's band RMS).
+    #[arg(long, default_value = "fit", value_name = "fit|G")]
+    pub finest_gain: FinestGain,
     #[command(flatten)]
     pub m: MatchArgs,
 }
@@ -269,7 +273,7 @@ fn shading_cell(r: &Raster, g: &Grid, cell: Option<f64>) -> (f64, f64) {
         return tr::cell_metres(r);
     }
     let (lo, hi) = g.range();
-    let c = ((hi - lo) / (0.25 * g.w.max(g.h) as f64)).max(f64::MIN_POSITIVE);
+    let c = ((hi - lo) / (0.25 * g.w().max(g.h()) as f64)).max(f64::MIN_POSITIVE);
     (c, c)
 }
 
@@ -277,7 +281,7 @@ fn shade_raster(g: &Grid, s: &Shading) -> Result<Raster, Failure> {
     let ch = if s.colour { 3 } else { 1 };
     let px = terrain::hillshade(g, s);
     Ok(Raster::new(
-        vec![g.h, g.w],
+        vec![g.h(), g.w()],
         ch,
         Samples::U8(px),
         DataKind::Image,
@@ -306,11 +310,11 @@ fn scale_to(px: &Raster, h: usize) -> (usize, Vec<u8>) {
 /// with the result's cell size (the base's scaled by the change of lattice), so that
 /// the three share one vertical scale.
 fn preview(base: &Grid, example: &Grid, out_r: &Raster, out: &Grid) -> Result<Raster, Failure> {
-    let h = out.h.max(example.h);
+    let h = out.h().max(example.h());
     let gap = 8;
     let (cy, cx) = shading_cell(out_r, out, None);
-    let fy = (out.h.max(2) - 1) as f64 / (base.h.max(2) - 1) as f64;
-    let fx = (out.w.max(2) - 1) as f64 / (base.w.max(2) - 1) as f64;
+    let fy = (out.h().max(2) - 1) as f64 / (base.h().max(2) - 1) as f64;
+    let fx = (out.w().max(2) - 1) as f64 / (base.w().max(2) - 1) as f64;
     let parts = [
         (base, (cy * fy, cx * fx)),
         (example, (cy, cx)),
@@ -393,13 +397,14 @@ fn synth(a: SynthArgs) -> CliResult {
         er.meta.units = br.meta.units.clone();
     }
     let mut o = a.m.options();
+    o.finest_gain = a.finest_gain;
     if let Some(s) = &a.size {
         o.size = Some(parse_size(s)?);
     }
     let out_w = o
         .size
         .map(|s| s.1)
-        .unwrap_or(base.w.saturating_mul(1 << o.levels.min(16)));
+        .unwrap_or(base.w().saturating_mul(1 << o.levels.min(16)));
     // the example's cell ÷ the output's: from --example-cell (in the base's unit, or in
     // base cells when the base has no spacing), else from both files' spacing
     let base_cell = br
@@ -408,7 +413,7 @@ fn synth(a: SynthArgs) -> CliResult {
         .as_ref()
         .and_then(|s| s.last().copied())
         .unwrap_or(1.0);
-    let out_cell = base_cell * base.w as f64 / out_w.max(1) as f64;
+    let out_cell = base_cell * base.w() as f64 / out_w.max(1) as f64;
     o.example_scale = if a.any_units || br.meta.spacing.is_none() {
         a.example_cell.map_or(1.0, |c| c / out_cell)
     } else {
@@ -429,10 +434,10 @@ fn synth(a: SynthArgs) -> CliResult {
         eprintln!(
             "{}: {}x{} from base {}x{} (coarse lattice {}x{}), {} levels, seam ratio {:.3}",
             a.output.display(),
-            g.w,
-            g.h,
-            base.w,
-            base.h,
+            g.w(),
+            g.h(),
+            base.w(),
+            base.h(),
             report.coarse[1],
             report.coarse[0],
             report.levels,
@@ -490,7 +495,7 @@ fn transfer_volume(a: &TransferArgs, br: Raster, er: Raster) -> CliResult {
     let (v, report) = terrain::transfer_volume(&base, &example, &o)?;
     let ty = br.sample_type();
     let mut out = Raster {
-        samples: Samples::from_f64(&v.data, ty),
+        samples: Samples::from_f64(v.data(), ty),
         ..br
     };
     out.meta.nodata = None;
@@ -509,7 +514,7 @@ pub fn transfer(a: TransferArgs) -> CliResult {
     }
     let (br, base) = load_grid(&a.to)?;
     let (er, example) = load_grid(&a.from)?;
-    let scale = tr::check_compatible(&br, &er, base.w)
+    let scale = tr::check_compatible(&br, &er, base.w())
         .map_err(|e| Failure::context(a.from.display(), e))?;
     let o = SynthOptions {
         example_scale: scale,

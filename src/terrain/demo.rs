@@ -39,14 +39,14 @@ pub fn demo_rows(out: &Path) -> Result<Vec<DemoRow>> {
     let back = reduce(&g, n, n, o.scheme, l)?;
     let (lo, hi) = base.range();
     let mse = back
-        .data
+        .data()
         .iter()
-        .zip(&base.data)
+        .zip(base.data())
         .map(|(a, b)| (a - b).powi(2))
         .sum::<f64>()
-        / base.data.len() as f64;
+        / base.data().len() as f64;
     let psnr = 10.0 * ((hi - lo).powi(2) / mse).log10();
-    let c = (hi - lo) / (0.25 * g.w as f64);
+    let c = (hi - lo) / (0.25 * g.w() as f64);
     let px = hillshade(
         &g,
         &Shading {
@@ -56,14 +56,16 @@ pub fn demo_rows(out: &Path) -> Result<Vec<DemoRow>> {
         },
     );
     let path = out.join("terrain_synth.png");
-    let pic = Raster::new(vec![g.h, g.w], 3, Samples::U8(px), DataKind::Image)?;
+    let pic = Raster::new(vec![g.h(), g.w()], 3, Samples::U8(px), DataKind::Image)?;
     crate::io::write(&path, &pic)?;
     Ok(vec![DemoRow {
         job: "terrain synth by example".into(),
         data: format!("generated base {n}x{n} (smooth), example 256x256, chaikin, {l} levels"),
         result: format!(
             "{}x{}; reduced back: PSNR {psnr:.1} dB vs base; seam ratio {:.3}",
-            g.w, g.h, report.seam_ratio
+            g.w(),
+            g.h(),
+            report.seam_ratio
         ),
         seconds: secs,
         output: Some(path),

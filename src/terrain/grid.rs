@@ -1,5 +1,7 @@
 //! A small dense grid of `h × w` positions with `c` interleaved channels, in f64: the
-//! working form of heightmaps and images inside the terrain module.
+//! working form of heightmaps and images inside the terrain module, held as the engine's
+//! [`Array`] (shape `[h, w]`, or `[h, w, c]` when `c > 1`), so that it goes to the
+//! transforms and back by move.
 
 use crate::tensor::Array;
 use crate::{Error, Result};
@@ -7,20 +9,23 @@ use crate::{Error, Result};
 /// `h × w × c` samples, row-major, channels last.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Grid {
-    pub h: usize,
-    pub w: usize,
-    pub c: usize,
-    pub data: Vec<f64>,
+    values: Array<f64>,
+}
+
+/// The engine's shape of an `h × w × c` grid: `[h, w]` or `[h, w, c]`.
+fn shape(h: usize, w: usize, c: usize) -> Vec<usize> {
+    if c == 1 {
+        vec![h, w]
+    } else {
+        vec![h, w, c]
+    }
 }
 
 impl Grid {
     /// Zeros of the given size.
     pub fn zeros(h: usize, w: usize, c: usize) -> Grid {
         Grid {
-            h,
-            w,
-            c,
-            data: vec![0.0; h * w * c],
+            values: Array::zeros(&shape(h, w, c)),
         }
     }
 
@@ -33,70 +38,119 @@ impl Grid {
                 "h × w × channels, all non-zero",
             ));
         }
-        Ok(Grid { h, w, c, data })
+        Ok(Grid {
+            values: Array::from_shape_vec(&shape(h, w, c), data)?,
+        })
+    }
+
+    /// Rows.
+    #[inline]
+    pub fn h(&self) -> usize {
+        self.values.shape()[0]
+    }
+
+    /// Columns.
+    #[inline]
+    pub fn w(&self) -> usize {
+        self.values.shape()[1]
+    }
+
+    /// Channels.
+    #[inline]
+    pub fn c(&self) -> usize {
+        self.values.shape().get(2).copied().unwrap_or(1)
+    }
+
+    /// The samples, row-major, channels last.
+    #[inline]
+    pub fn data(&self) -> &[f64] {
+        self.values.data()
+    }
+
+    /// The samples, mutable.
+    #[inline]
+    pub fn data_mut(&mut self) -> &mut [f64] {
+        self.values.data_mut()
+    }
+
+    /// The samples by move.
+    pub fn into_data(self) -> Vec<f64> {
+        self.values.into_data()
     }
 
     #[inline]
     pub fn at(&self, y: usize, x: usize, k: usize) -> f64 {
-        self.data[(y * self.w + x) * self.c + k]
+        let (w, c) = (self.w(), self.c());
+        self.data()[(y * w + x) * c + k]
     }
 
     #[inline]
     pub fn at_mut(&mut self, y: usize, x: usize, k: usize) -> &mut f64 {
-        &mut self.data[(y * self.w + x) * self.c + k]
+        let (w, c) = (self.w(), self.c());
+        &mut self.data_mut()[(y * w + x) * c + k]
     }
 
     /// Mean over channels at a position (the "height" used for matching).
     #[inline]
     pub fn mean_at(&self, y: usize, x: usize) -> f64 {
-        let o = (y * self.w + x) * self.c;
-        self.data[o..o + self.c].iter().sum::<f64>() / self.c as f64
+        let c = self.c();
+        let o = (y * self.w() + x) * c;
+        self.data()[o..o + c].iter().sum::<f64>() / c as f64
     }
 
     /// The top-left `h × w` block.
     pub fn crop(&self, h: usize, w: usize) -> Grid {
-        let mut g = Grid::zeros(h, w, self.c);
-        for y in 0..h {
-            let src = &self.data[y * self.w * self.c..(y * self.w + w) * self.c];
-            g.data[y * w * self.c..(y + 1) * w * self.c].copy_from_slice(src);
+        let (sw, c) = (self.w(), self.c());
+        let mut g = Grid::zeros(h, w, c);
+        let src = self.data();
+        for (y, row) in g.data_mut().chunks_exact_mut(w * c).enumerate() {
+            row.copy_from_slice(&src[y * sw * c..(y * sw + w) * c]);
         }
         g
     }
 
     /// Copy `src` into the top-left corner.
     pub fn paste(&mut self, src: &Grid) {
-        for y in 0..src.h {
-            let d = &mut self.data[y * self.w * self.c..(y * self.w + src.w) * self.c];
-            d.copy_from_slice(&src.data[y * src.w * src.c..(y + 1) * src.w * src.c]);
+        let (w, c, sw) = (self.w(), self.c(), src.w());
+        let s = src.data();
+        let d = self.data_mut();
+        for y in 0..src.h() {
+            d[y * w * c..(y * w + sw) * c].copy_from_slice(&s[y * sw * c..(y + 1) * sw * c]);
         }
     }
 
-    /// The engine's array: `[h, w]` or `[h, w, c]`, with the spatial axes to transform.
+    /// The engine's array (a copy): `[h, w]` or `[h, w, c]`, with the spatial axes to transform.
     pub fn to_array(&self) -> Result<(Array<f64>, Vec<usize>)> {
-        let shape = if self.c == 1 {
-            vec![self.h, self.w]
-        } else {
-            vec![self.h, self.w, self.c]
-        };
-        Ok((
-            Array::from_shape_vec(&shape, self.data.clone())?,
-            vec![0, 1],
-        ))
+        Ok((self.values.clone(), vec![0, 1]))
     }
 
     /// The engine's array by move (no copy): `[h, w]` or `[h, w, c]`.
-    pub fn into_array(self) -> Result<Array<f64>> {
-        let shape = if self.c == 1 {
-            vec![self.h, self.w]
-        } else {
-            vec![self.h, self.w, self.c]
-        };
-        Array::from_shape_vec(&shape, self.data)
+    pub fn into_array(self) -> Array<f64> {
+        self.values
+    }
+
+    /// The engine's array, borrowed.
+    pub fn array(&self) -> &Array<f64> {
+        &self.values
+    }
+
+    /// A grid from the engine's array of shape `[h, w]` or `[h, w, c]` (by move); errors on
+    /// another rank or an empty side.
+    pub fn from_array(values: Array<f64>) -> Result<Grid> {
+        let s = values.shape();
+        if !(s.len() == 2 || s.len() == 3) || s.contains(&0) || (s.len() == 3 && s[2] == 1) {
+            return Err(Error::parameter(
+                "grid shape",
+                format!("{s:?}"),
+                "[h, w] or [h, w, c] with c > 1, all non-zero",
+            ));
+        }
+        Ok(Grid { values })
     }
 
     /// `(min, max)` over all samples.
     pub fn range(&self) -> (f64, f64) {
-        self.data
+        self.data()
             .iter()
             .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, u), &v| {
                 (l.min(v), u.max(v))

@@ -60,7 +60,7 @@ fn ramp(t: f64) -> [f64; 3] {
 /// Shade channel 0 (or the channel mean) of `g`: returns 8-bit samples, 1 channel
 /// (gray) or 3 (colour), row-major.
 pub fn hillshade(g: &Grid, s: &Shading) -> Vec<u8> {
-    let (h, w) = (g.h, g.w);
+    let (h, w) = (g.h(), g.w());
     let (alt, az) = (s.altitude.to_radians(), s.azimuth.to_radians());
     let sun = [az.sin() * alt.cos(), az.cos() * alt.cos(), alt.sin()];
     let (lo, hi) = g.range();

@@ -38,14 +38,14 @@ pub struct Tables {
 impl Tables {
     /// The tables of the whole grid.
     pub fn new(g: &Grid) -> Tables {
-        Tables::region(g, 0, 0, g.h, g.w)
+        Tables::region(g, 0, 0, g.h(), g.w())
     }
 
     /// The tables of the `h × w` region of `g` with top-left `(y0, x0)`; gradients and
     /// Laplacians take their neighbours from the whole grid (indices clamped at its ends),
     /// so a window's descriptor is the same as from [`Tables::new`] up to rounding.
     pub fn region(g: &Grid, y0: usize, x0: usize, h: usize, w: usize) -> Tables {
-        let (gh, gw) = (g.h as i64, g.w as i64);
+        let (gh, gw) = (g.h() as i64, g.w() as i64);
         let at =
             |y: i64, x: i64| g.mean_at(y.clamp(0, gh - 1) as usize, x.clamp(0, gw - 1) as usize);
         let n = (h + 1) * (w + 1);

@@ -9,8 +9,9 @@
 //! decides *which* details are added.
 //!
 //! ```text
-//! grid.rs      Grid: h × w × channels of f64, row-major
+//! grid.rs      Grid: h × w × channels of f64, row-major, held as the engine's Array
 //! resample.rs  Catmull–Rom resampling on affine maps (base to the output lattice)
+//! spectrum.rs  radially averaged power spectra, the finest octave's slope, the gain fit
 //! synth.rs     the example's pyramid, coarse-to-fine patch matching, blended detail transfer
 //! matching.rs  window descriptors (shape, slope direction, curvature) from summed-area tables
 //! volume.rs    the same detail transfer for 3-D volumes (cube patches, seven bands)
@@ -24,11 +25,12 @@ pub mod hillshade;
 pub mod matching;
 pub mod raster;
 pub mod resample;
+pub mod spectrum;
 pub mod synth;
 pub mod volume;
 
 pub use demo::demo_rows;
 pub use grid::Grid;
 pub use hillshade::{hillshade, Shading};
-pub use synth::{highpass, reduce, synthesize, transfer, SynthOptions, SynthReport};
+pub use synth::{highpass, reduce, synthesize, transfer, FinestGain, SynthOptions, SynthReport};
 pub use volume::{transfer_volume, Volume, VolumeReport};

@@ -20,8 +20,11 @@ pub fn to_grid(r: &Raster) -> Result<(Grid, usize)> {
         ));
     }
     let mut g = Grid::new(r.dims[0], r.dims[1], r.channels, r.to_f64())?;
-    let filled = match Voids::find(&g.data, r.meta.nodata) {
-        Some(v) => v.fill_membrane(&mut g.data, g.h, g.w, g.c)?,
+    let filled = match Voids::find(g.data(), r.meta.nodata) {
+        Some(v) => {
+            let (h, w, c) = (g.h(), g.w(), g.c());
+            v.fill_membrane(g.data_mut(), h, w, c)?
+        }
         None => 0,
     };
     Ok((g, filled))
@@ -80,15 +83,17 @@ pub fn check_compatible(base: &Raster, example: &Raster, out_w: usize) -> Result
 /// cell less half an output cell); nodata dropped (the voids were filled).
 pub fn from_grid(g: &Grid, template: &Raster, ty: SampleType) -> Result<Raster> {
     let mut r = Raster::new(
-        vec![g.h, g.w],
-        g.c,
-        Samples::from_f64(&g.data, ty),
+        vec![g.h(), g.w()],
+        g.c(),
+        Samples::from_f64(g.data(), ty),
         template.kind,
     )?;
     // cell-centred lattice: new sample j at old (j + ½)·n/M − ½ on each axis
     let (n_y, n_x) = (template.dims[0], template.dims[1]);
-    let maps = [AxisMap::centred(n_y, g.h), AxisMap::centred(n_x, g.w)];
-    let mut meta = template.meta.resampled(&template.dims, &[g.h, g.w], &maps);
+    let maps = [AxisMap::centred(n_y, g.h()), AxisMap::centred(n_x, g.w())];
+    let mut meta = template
+        .meta
+        .resampled(&template.dims, &[g.h(), g.w()], &maps);
     meta.nodata = None;
     meta.extra.remove("asc.nodata_value");
     meta.geotiff.retain(|t| t.tag != 42113);

@@ -105,15 +105,15 @@ fn taps(n: usize, m: usize, map: Map) -> Vec<([usize; 4], [f64; 4])> {
 
 /// Resample `g` to `h × w`, corner-aligned (each channel separately).
 pub fn resample(g: &Grid, h: usize, w: usize) -> Grid {
-    if g.h == h && g.w == w {
+    if g.h() == h && g.w() == w {
         return g.clone();
     }
-    resample_map(g, (h, Map::corners(g.h, h)), (w, Map::corners(g.w, w)))
+    resample_map(g, (h, Map::corners(g.h(), h)), (w, Map::corners(g.w(), w)))
 }
 
 /// Resample `g` to `h` rows and `w` columns on the maps `my`, `mx`.
 pub fn resample_map(g: &Grid, (h, my): (usize, Map), (w, mx): (usize, Map)) -> Grid {
-    let mut out = Grid::zeros(h, w, g.c);
+    let mut out = Grid::zeros(h, w, g.c());
     resample_add(g, &mut out, my, mx);
     out
 }
@@ -122,11 +122,11 @@ pub fn resample_map(g: &Grid, (h, my): (usize, Map), (w, mx): (usize, Map)) -> G
 /// maps `my`, `mx` (the values of [`resample_map`], added in place: no grid of the
 /// output's size is allocated).
 pub fn resample_add(g: &Grid, out: &mut Grid, my: Map, mx: Map) {
-    let (c, h, w) = (g.c, out.h, out.w);
+    let (c, h, w) = (g.c(), out.h(), out.w());
     // along x
-    let tx = taps(g.w, w, mx);
-    let mut mid = Grid::zeros(g.h, w, c);
-    for y in 0..g.h {
+    let tx = taps(g.w(), w, mx);
+    let mut mid = Grid::zeros(g.h(), w, c);
+    for y in 0..g.h() {
         for (x, (idx, wt)) in tx.iter().enumerate() {
             for k in 0..c {
                 let mut s = 0.0;
@@ -138,8 +138,8 @@ pub fn resample_add(g: &Grid, out: &mut Grid, my: Map, mx: Map) {
         }
     }
     // along y, one output row per task
-    let ty = taps(g.h, h, my);
-    out.data
+    let ty = taps(g.h(), h, my);
+    out.data_mut()
         .par_chunks_mut(w * c)
         .zip(ty.par_iter())
         .for_each(|(row, (idx, wt))| {

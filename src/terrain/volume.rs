@@ -25,12 +25,21 @@ use crate::scheme::{Scheme, TwoScale};
 use crate::tensor::{self, Array, Order, Pyramid, PyramidSpec};
 use crate::{Error, Result};
 
-/// A volume: `dims = [depth, rows, columns]`, `c` channels, row-major, channel fastest.
+/// A volume: `dims = [depth, rows, columns]`, `c` channels, row-major, channel fastest;
+/// held as the engine's [`Array`] (shape `[d, h, w]`, or `[d, h, w, c]` when `c > 1`).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Volume {
-    pub dims: [usize; 3],
-    pub c: usize,
-    pub data: Vec<f64>,
+    dims: [usize; 3],
+    values: Array<f64>,
+}
+
+/// The engine's shape of a volume: `[d, h, w]` or `[d, h, w, c]`.
+fn shape(dims: [usize; 3], c: usize) -> Vec<usize> {
+    let mut s = dims.to_vec();
+    if c > 1 {
+        s.push(c);
+    }
+    s
 }
 
 impl Volume {
@@ -43,35 +52,73 @@ impl Volume {
                 "depth × rows × columns × channels samples, non-empty",
             ));
         }
-        Ok(Volume { dims, c, data })
+        Ok(Volume {
+            dims,
+            values: Array::from_shape_vec(&shape(dims, c), data)?,
+        })
     }
 
     fn zeros(dims: [usize; 3], c: usize) -> Volume {
         Volume {
             dims,
-            c,
-            data: vec![0.0; dims.iter().product::<usize>() * c],
+            values: Array::zeros(&shape(dims, c)),
         }
     }
 
+    /// `[depth, rows, columns]`.
+    #[inline]
+    pub fn dims(&self) -> [usize; 3] {
+        self.dims
+    }
+
+    /// Channels.
+    #[inline]
+    pub fn c(&self) -> usize {
+        self.values.shape().get(3).copied().unwrap_or(1)
+    }
+
+    /// The samples, row-major, channel fastest.
+    #[inline]
+    pub fn data(&self) -> &[f64] {
+        self.values.data()
+    }
+
+    /// The samples, mutable.
+    #[inline]
+    pub fn data_mut(&mut self) -> &mut [f64] {
+        self.values.data_mut()
+    }
+
+    /// The samples by move.
+    pub fn into_data(self) -> Vec<f64> {
+        self.values.into_data()
+    }
+
+    /// The engine's array, borrowed.
+    pub fn array(&self) -> &Array<f64> {
+        &self.values
+    }
+
     fn idx(&self, p: [usize; 3]) -> usize {
-        ((p[0] * self.dims[1] + p[1]) * self.dims[2] + p[2]) * self.c
+        ((p[0] * self.dims[1] + p[1]) * self.dims[2] + p[2]) * self.c()
     }
 
     /// Mean over channels at `p`, with each index clamped into the volume.
     fn mean_clamped(&self, p: [i64; 3]) -> f64 {
         let q = [0, 1, 2].map(|a| p[a].clamp(0, self.dims[a] as i64 - 1) as usize);
         let i = self.idx(q);
-        self.data[i..i + self.c].iter().sum::<f64>() / self.c as f64
+        let c = self.c();
+        self.data()[i..i + c].iter().sum::<f64>() / c as f64
     }
 
     /// The corner `n` of the volume.
     fn crop(&self, n: [usize; 3]) -> Volume {
-        let mut out = Volume::zeros(n, self.c);
+        let c = self.c();
+        let mut out = Volume::zeros(n, c);
         for z in 0..n[0] {
             for y in 0..n[1] {
                 let (s, d) = (self.idx([z, y, 0]), out.idx([z, y, 0]));
-                out.data[d..d + n[2] * self.c].copy_from_slice(&self.data[s..s + n[2] * self.c]);
+                out.data_mut()[d..d + n[2] * c].copy_from_slice(&self.data()[s..s + n[2] * c]);
             }
         }
         out
@@ -79,21 +126,19 @@ impl Volume {
 
     /// Copy `src` into the corner.
     fn paste(&mut self, src: &Volume) {
+        let c = self.c();
         for z in 0..src.dims[0] {
             for y in 0..src.dims[1] {
                 let (s, d) = (src.idx([z, y, 0]), self.idx([z, y, 0]));
-                let n = src.dims[2] * self.c;
-                self.data[d..d + n].copy_from_slice(&src.data[s..s + n]);
+                let n = src.dims[2] * c;
+                self.data_mut()[d..d + n].copy_from_slice(&src.data()[s..s + n]);
             }
         }
     }
 
+    /// The engine's array (a copy): `[d, h, w]` or `[d, h, w, c]`.
     fn to_array(&self) -> Result<Array<f64>> {
-        let mut shape = self.dims.to_vec();
-        if self.c > 1 {
-            shape.push(self.c);
-        }
-        Array::from_shape_vec(&shape, self.data.clone())
+        Ok(self.values.clone())
     }
 }
 
@@ -127,12 +172,12 @@ fn spec3(scheme: Scheme, levels: usize) -> PyramidSpec {
 fn analyze_one(v: &Volume, scheme: Scheme) -> Result<(Volume, [usize; 3])> {
     let mut a = v.to_array()?;
     tensor::analyze(&mut a, &spec3(scheme, 1))?;
-    let n = v.dims.map(|m| TwoScale::coarse_len(scheme, BOUNDARY, m));
-    Ok((Volume::new(v.dims, v.c, a.into_data())?, n))
+    let n = v.dims().map(|m| TwoScale::coarse_len(scheme, BOUNDARY, m));
+    Ok((Volume::new(v.dims(), v.c(), a.into_data())?, n))
 }
 
 fn synthesize_one(packed: Volume, scheme: Scheme) -> Result<Volume> {
-    let (dims, c) = (packed.dims, packed.c);
+    let (dims, c) = (packed.dims(), packed.c());
     let mut a = packed.to_array()?;
     let pyr = Pyramid::plan(a.shape(), &spec3(scheme, 1))?;
     tensor::synthesize(&mut a, &pyr)?;
@@ -187,10 +232,10 @@ fn level_details(
     o: &SynthOptions,
     level: usize,
 ) -> Result<(Volume, usize, f64)> {
-    let (n, c) = (t.dims, t.c);
+    let (n, c) = (t.dims(), t.c());
     let (p, ov) = (o.patch, o.overlap);
     let q = p + 2 * ov;
-    let de = [0, 1, 2].map(|a| e.dims[a] - ne[a]);
+    let de = [0, 1, 2].map(|a| e.dims()[a] - ne[a]);
     let ce = e.crop(*ne);
     let mut count = [0usize; 3];
     for a in 0..3 {
@@ -198,7 +243,7 @@ fn level_details(
         if hi < ov as i64 {
             return Err(Error::parameter(
                 "example",
-                format!("{:?} coefficients at level {level}", e.dims),
+                format!("{:?} coefficients at level {level}", e.dims()),
                 "an example whose coarse grid holds at least one patch window at every level",
             ));
         }
@@ -281,7 +326,7 @@ fn level_details(
                             let w = wz * wy * wx;
                             let (io, ie) = (acc.idx([oz, oy, ox]), e.idx([ez, ey, ex]));
                             for k in 0..c {
-                                acc.data[io + k] += w * e.data[ie + k];
+                                acc.data_mut()[io + k] += w * e.data()[ie + k];
                             }
                             w2[io / c] += w * w;
                         }
@@ -292,7 +337,7 @@ fn level_details(
         for (i, &s) in w2.iter().enumerate() {
             if s > 0.0 {
                 let inv = 1.0 / s.sqrt();
-                acc.data[i * c..(i + 1) * c]
+                acc.data_mut()[i * c..(i + 1) * c]
                     .iter_mut()
                     .for_each(|v| *v *= inv);
             }
@@ -315,7 +360,7 @@ fn band_rms(v: &Volume, r: &[std::ops::Range<usize>; 3]) -> f64 {
     for z in r[0].clone() {
         for y in r[1].clone() {
             let i = v.idx([z, y, r[2].start]);
-            let row = &v.data[i..i + r[2].len() * v.c];
+            let row = &v.data()[i..i + r[2].len() * v.c()];
             s += row.iter().map(|x| x * x).sum::<f64>();
             k += row.len();
         }
@@ -326,15 +371,18 @@ fn band_rms(v: &Volume, r: &[std::ops::Range<usize>; 3]) -> f64 {
 /// Each detail band scaled to the example's band RMS: `D_b ← D_b · rms(E_b)/rms(D_b)`.
 fn match_band_rms(acc: &mut Volume, n: [usize; 3], e: &Volume, ne: [usize; 3]) {
     for hb in bands() {
-        let r = band_ranges(hb, acc.dims, n);
-        let (have, want) = (band_rms(acc, &r), band_rms(e, &band_ranges(hb, e.dims, ne)));
+        let r = band_ranges(hb, acc.dims(), n);
+        let (have, want) = (
+            band_rms(acc, &r),
+            band_rms(e, &band_ranges(hb, e.dims(), ne)),
+        );
         if have > 0.0 {
             let f = want / have;
             for z in r[0].clone() {
                 for y in r[1].clone() {
                     let i = acc.idx([z, y, r[2].start]);
-                    let len = r[2].len() * acc.c;
-                    acc.data[i..i + len].iter_mut().for_each(|v| *v *= f);
+                    let len = r[2].len() * acc.c();
+                    acc.data_mut()[i..i + len].iter_mut().for_each(|v| *v *= f);
                 }
             }
         }
@@ -345,7 +393,7 @@ fn match_band_rms(acc: &mut Volume, n: [usize; 3], e: &Volume, ne: [usize; 3]) {
 /// every axis ÷ the same elsewhere (the volume form of [`super::synth::seam_ratio`]).
 pub fn seam_ratio(v: &Volume, period: usize) -> f64 {
     let mut seams = super::synth::SeamTally::new(period);
-    let [dz, dy, dx] = v.dims;
+    let [dz, dy, dx] = v.dims();
     for z in 1..dz.saturating_sub(1) {
         for y in 1..dy.saturating_sub(1) {
             for x in 1..dx.saturating_sub(1) {
@@ -371,7 +419,7 @@ pub fn transfer_volume(
     example: &Volume,
     o: &SynthOptions,
 ) -> Result<(Volume, VolumeReport)> {
-    check_options(base.c, example.c, o)?;
+    check_options(base.c(), example.c(), o)?;
     let l = o.levels;
     const NAMES: [(&str, &str); 3] = [
         ("base depth", "example depth"),
@@ -382,12 +430,12 @@ pub fn transfer_volume(
     let mut lb = Vec::new();
     let mut le = Vec::new();
     for (a, names) in NAMES.iter().enumerate() {
-        lb.push(lengths_down(o.scheme, base.dims[a], l, names.0)?);
-        let e = lengths_down(o.scheme, example.dims[a], l, names.1)?;
+        lb.push(lengths_down(o.scheme, base.dims()[a], l, names.0)?);
+        let e = lengths_down(o.scheme, example.dims()[a], l, names.1)?;
         if e[l] < q + 4 {
             return Err(Error::parameter(
                 "example size",
-                format!("{:?} (coarse {} along axis {a} after {l} levels)", example.dims, e[l]),
+                format!("{:?} (coarse {} along axis {a} after {l} levels)", example.dims(), e[l]),
                 "an example larger than the filter support: its coarsest grid must hold a patch window plus the detail band",
             ));
         }
@@ -402,11 +450,11 @@ pub fn transfer_volume(
     }
     let mut a = base.to_array()?;
     tensor::analyze(&mut a, &spec3(o.scheme, l))?;
-    let packed = Volume::new(base.dims, base.c, a.into_data())?;
+    let packed = Volume::new(base.dims(), base.c(), a.into_data())?;
     let coarse = [0, 1, 2].map(|a| lb[a][l]);
     let mut t = packed.crop(coarse);
     let mut report = VolumeReport {
-        dims: base.dims,
+        dims: base.dims(),
         coarse,
         levels: l,
         patches: Vec::new(),
@@ -427,10 +475,10 @@ pub fn transfer_volume(
 /// The coarse points `A^L F` of a volume (the part a transfer keeps), as a volume.
 pub fn coarse_points(v: &Volume, scheme: Scheme, levels: usize) -> Result<Volume> {
     let n: Vec<Vec<usize>> = (0..3)
-        .map(|a| lengths_down(scheme, v.dims[a], levels, "volume side"))
+        .map(|a| lengths_down(scheme, v.dims()[a], levels, "volume side"))
         .collect::<Result<_>>()?;
     let mut a = v.to_array()?;
     tensor::analyze(&mut a, &spec3(scheme, levels))?;
-    let packed = Volume::new(v.dims, v.c, a.into_data())?;
+    let packed = Volume::new(v.dims(), v.c(), a.into_data())?;
     Ok(packed.crop([n[0][levels], n[1][levels], n[2][levels]]))
 }
