@@ -7,6 +7,7 @@ use super::decode::reconstruct;
 use super::options::{DecodeOptions, Decoded};
 use super::tiles;
 use crate::format::Header;
+use crate::io::slab::{Shape, SlabSink};
 use crate::Result;
 use std::io::{Read, Seek, SeekFrom};
 use std::path::Path;
@@ -71,4 +72,33 @@ pub fn decode_file(path: &Path, opts: &DecodeOptions) -> Result<Decoded> {
     let f = std::fs::File::open(path)?;
     let len = f.metadata()?.len();
     decode_seek(std::io::BufReader::new(f), len, opts)
+}
+
+/// Decode a file into `sink` a slab of rows at a time: a tiled file one tile-row (2-D)
+/// or tile-slab (3-D) at a time, reading only the tiles `opts.region` meets; a file of
+/// one tile decoded whole and handed over as one slab. Returns the output's shape and
+/// whether the file was complete.
+pub fn decode_file_slabs(
+    path: &Path,
+    opts: &DecodeOptions,
+    sink: &mut dyn SlabSink,
+) -> Result<(Shape, bool)> {
+    let f = std::fs::File::open(path)?;
+    let len = f.metadata()?.len();
+    let mut src = std::io::BufReader::new(f);
+    let (rd, first, header) = read_head(&mut src, len)?;
+    if header.is_tiled() {
+        let at = rd.position();
+        drop(rd);
+        return tiles::decode_seek_slabs(&mut src, len, at, header, opts, sink);
+    }
+    let d = one_tile(
+        read_rest(rd, first, header, opts.level, opts.allow_truncated)?,
+        opts,
+    )?;
+    let shape = Shape::of(&d.raster);
+    sink.begin(&shape)?;
+    sink.rows(&d.raster.samples)?;
+    sink.end()?;
+    Ok((shape, d.complete))
 }

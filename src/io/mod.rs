@@ -25,6 +25,7 @@
 //! geometry.rs  where samples sit after a resample or crop ([`Metadata::resampled`])
 //! nodata.rs  void samples (NaN, `meta.nodata`) kept out of every filter
 //! raw.rs    headerless raw (.raw with dims/dtype/endian, .r16, .r32)
+//! slab.rs   rasters read and written a slab of rows at a time (raw, NRRD raw)
 //! bytes.rs  endian decoding, size checks before allocation, atomic writes
 //! array.rs  rasters through the tensor engine (analyze / synthesize / pictures)
 //! pyramid_file.rs  the float32 TIFF / NRRD a pyramid is stored in, with its keys
@@ -88,6 +89,7 @@ pub mod png;
 pub mod pnm;
 pub mod pyramid_file;
 pub mod raw;
+pub mod slab;
 pub mod slices;
 pub mod tiff;
 pub mod visual;
@@ -494,22 +496,27 @@ impl Raster {
 
     /// A short description: `768x512 RGB u8 image`.
     pub fn summary(&self) -> String {
-        let dims: Vec<String> = self.dims.iter().rev().map(|d| d.to_string()).collect();
-        let ch = match self.channels {
-            1 => "gray".to_string(),
-            2 => "gray+alpha".to_string(),
-            3 => "RGB".to_string(),
-            4 => "RGBA".to_string(),
-            c => format!("{c}-channel"),
-        };
-        let kind = match self.kind {
-            DataKind::Image => "image",
-            DataKind::Volume => "volume",
-            DataKind::Heightmap => "heightmap",
-            DataKind::Sequence => "sequence",
-        };
-        format!("{} {} {} {}", dims.join("x"), ch, self.sample_type(), kind)
+        summary(&self.dims, self.channels, self.sample_type(), self.kind)
     }
+}
+
+/// A short description of a raster: `768x512 RGB u8 image`.
+pub fn summary(dims: &[usize], channels: usize, ty: SampleType, kind: DataKind) -> String {
+    let dims: Vec<String> = dims.iter().rev().map(|d| d.to_string()).collect();
+    let ch = match channels {
+        1 => "gray".to_string(),
+        2 => "gray+alpha".to_string(),
+        3 => "RGB".to_string(),
+        4 => "RGBA".to_string(),
+        c => format!("{c}-channel"),
+    };
+    let kind = match kind {
+        DataKind::Image => "image",
+        DataKind::Volume => "volume",
+        DataKind::Heightmap => "heightmap",
+        DataKind::Sequence => "sequence",
+    };
+    format!("{} {} {} {}", dims.join("x"), ch, ty, kind)
 }
 
 /// A file format known to this module.

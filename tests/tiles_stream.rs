@@ -1,0 +1,339 @@
+//! Tiled files encoded and decoded in slabs (docs/tiles.md): a raw volume or a raw
+//! NRRD read a tile-row at a time gives the bytes of the in-memory encode in every rate
+//! mode, the metadata survives a streamed encode and decode, a decode in slabs (whole,
+//! a region, a level) writes what the in-memory decode writes, and the CLI streams
+//! without leaving a partial output behind.
+
+mod common;
+
+use mra::codec::{self, DecodeOptions, EncodeOptions, Rate};
+use mra::io::slab::{self, Shape, SlabSink, SlabSource};
+use mra::io::{self, DataKind, Raster, RawSpec, ReadOptions, SampleType, Samples};
+use mra::scheme::{Boundary, Scheme};
+use std::ops::Range;
+use std::path::Path;
+use std::process::Command;
+
+fn field(dims: &[usize], ty: SampleType) -> Raster {
+    let n: usize = dims.iter().product();
+    let w = *dims.last().unwrap();
+    let h = dims[dims.len() - 2];
+    let v: Vec<f64> = (0..n)
+        .map(|p| {
+            let (x, y, z) = ((p % w) as f64, ((p / w) % h) as f64, (p / w / h) as f64);
+            3000.0
+                + 900.0 * (x * 0.13).sin() * (y * 0.09 + z * 0.2).cos()
+                + ((p * 7919) % 37) as f64
+        })
+        .collect();
+    let kind = if dims.len() == 2 {
+        DataKind::Image
+    } else {
+        DataKind::Volume
+    };
+    Raster::new(dims.to_vec(), 1, Samples::from_f64(&v, ty), kind).unwrap()
+}
+
+fn opts(rate: Rate) -> EncodeOptions {
+    EncodeOptions {
+        scheme: Scheme::Cdf97,
+        boundary: Boundary::Symmetric,
+        levels: 4,
+        rate,
+    }
+}
+
+fn streamed(src: &mut dyn SlabSource, o: &EncodeOptions, tile: &[usize]) -> Vec<u8> {
+    let mut out = std::io::Cursor::new(Vec::new());
+    let n = codec::encode_stream(src, o, tile, &mut out).unwrap();
+    let bytes = out.into_inner();
+    assert_eq!(n as usize, bytes.len());
+    bytes
+}
+
+/// A sink keeping what it is given, counting the slabs.
+#[derive(Default)]
+struct Keep {
+    shape: Option<Shape>,
+    samples: Vec<f64>,
+    slabs: usize,
+    ended: bool,
+}
+
+impl SlabSink for Keep {
+    fn begin(&mut self, shape: &Shape) -> mra::Result<()> {
+        self.shape = Some(shape.clone());
+        Ok(())
+    }
+    fn rows(&mut self, s: &Samples) -> mra::Result<()> {
+        self.samples.extend(s.to_f64());
+        self.slabs += 1;
+        Ok(())
+    }
+    fn end(&mut self) -> mra::Result<()> {
+        self.ended = true;
+        Ok(())
+    }
+}
+
+#[test]
+fn a_raw_file_streamed_gives_the_bytes_of_the_in_memory_encode_in_every_rate_mode() {
+    let dir = common::scratch_dir("tiles_stream");
+    // odd edges on both axes: 3 × 4 tiles of 16 × 12, the last ones shorter
+    let r = field(&[37, 45], SampleType::U16);
+    let p = dir.join("f.raw");
+    std::fs::write(&p, io::bytes::encode(&r.samples, false)).unwrap();
+    let ro = ReadOptions {
+        raw: Some(RawSpec {
+            dims: vec![37, 45],
+            sample_type: SampleType::U16,
+            big_endian: false,
+        }),
+        ..Default::default()
+    };
+    let tile = [16, 12];
+    for rate in [
+        Rate::Quality(60.0),
+        Rate::Keep(10.0),
+        Rate::Threshold(20.0),
+        Rate::Psnr(45.0),
+        Rate::Bpp(1.0),
+        Rate::MaxError(3.0),
+        Rate::Lossless,
+    ] {
+        let o = opts(rate);
+        let mut src = slab::open(&p, &ro).unwrap().expect("a raw file streams");
+        let s = streamed(&mut src, &o, &tile);
+        let m = codec::encode_tiled(&r, &o, &tile).unwrap();
+        assert!(s == m, "{rate:?}: streamed and in-memory bytes differ");
+        let d = codec::decode(&s, &DecodeOptions::default()).unwrap();
+        assert_eq!(d.raster.dims, r.dims, "{rate:?}");
+        assert_eq!(
+            Some((d.header.min, d.header.max)),
+            r.samples.min_max(),
+            "{rate:?}"
+        );
+    }
+    // a big-endian 3-D raw file, slabs of 5 slices
+    let v = field(&[11, 9, 14], SampleType::I16);
+    let p3 = dir.join("v.raw");
+    std::fs::write(&p3, io::bytes::encode(&v.samples, true)).unwrap();
+    let ro3 = ReadOptions {
+        raw: Some(RawSpec {
+            dims: vec![11, 9, 14],
+            sample_type: SampleType::I16,
+            big_endian: true,
+        }),
+        ..Default::default()
+    };
+    let mut src = slab::open(&p3, &ro3).unwrap().unwrap();
+    let o = opts(Rate::Quality(70.0));
+    assert!(streamed(&mut src, &o, &[5, 4, 6]) == codec::encode_tiled(&v, &o, &[5, 4, 6]).unwrap());
+}
+
+#[test]
+fn the_range_in_head_is_the_whole_rasters_in_one_pass_modes_too() {
+    let r = field(&[30, 40], SampleType::F32);
+    let (lo, hi) = r.samples.min_max().unwrap();
+    for rate in [Rate::Lossless, Rate::MaxError(0.5), Rate::Quality(50.0)] {
+        let mut src = slab::MemorySlabs::new(&r);
+        let b = streamed(&mut src, &opts(rate), &[8, 16]);
+        let h = codec::decode(&b, &DecodeOptions::default()).unwrap().header;
+        assert_eq!((h.min, h.max), (lo, hi), "{rate:?}");
+    }
+}
+
+fn nrrd_volume(dir: &Path) -> (std::path::PathBuf, Raster) {
+    let mut r = field(&[13, 10, 12], SampleType::I16);
+    r.meta.space = Some("left-posterior-superior".into());
+    r.meta.spacing = Some(vec![2.5, 0.7, 0.6]);
+    r.meta.directions = Some(vec![
+        vec![0.6, 0.0, 0.0],
+        vec![0.0, 0.7, 0.0],
+        vec![0.0, 0.0, 2.5],
+    ]);
+    r.meta.origin = Some(vec![-10.0, 20.5, 3.0]);
+    r.meta.nodata = Some(-1000.0);
+    r.meta.description = Some("phantom".into());
+    if let Samples::I16(v) = &mut r.samples {
+        v[5] = -1000;
+        v[777] = -1000;
+    }
+    let p = dir.join("v.nrrd");
+    io::write(&p, &r).unwrap();
+    let back = io::read(&p).unwrap();
+    (p, back)
+}
+
+#[test]
+fn metadata_survives_a_streamed_encode_and_decode() {
+    let dir = common::scratch_dir("tiles_stream");
+    let (p, r) = nrrd_volume(&dir);
+    let mut src = slab::open(&p, &ReadOptions::default())
+        .unwrap()
+        .expect("a raw NRRD streams");
+    assert_eq!(src.shape(), &Shape::of(&r));
+    let o = opts(Rate::MaxError(2.0));
+    let tile = [5, 4, 5];
+    let bytes = streamed(&mut src, &o, &tile);
+    assert!(bytes == codec::encode_tiled(&r, &o, &tile).unwrap());
+    let f = dir.join("v.mra");
+    std::fs::write(&f, &bytes).unwrap();
+    // decoded in slabs into a NRRD, read back
+    let out = dir.join("back.nrrd");
+    let mut w = std::fs::File::create(&out).unwrap();
+    let mut sink = slab::sink_for(&out, &mut w).unwrap();
+    let (shape, complete) =
+        codec::decode_file_slabs(&f, &DecodeOptions::default(), &mut sink).unwrap();
+    drop(w);
+    assert!(complete);
+    let back = io::read(&out).unwrap();
+    let whole = codec::decode_file(&f, &DecodeOptions::default())
+        .unwrap()
+        .raster;
+    assert_eq!(shape, Shape::of(&whole));
+    assert_eq!(back.samples, whole.samples);
+    for m in [&back.meta, &whole.meta] {
+        assert_eq!(m.spacing, r.meta.spacing);
+        assert_eq!(m.origin, r.meta.origin);
+        assert_eq!(m.directions, r.meta.directions);
+        assert_eq!(m.space, r.meta.space);
+        assert_eq!(m.nodata, r.meta.nodata);
+        assert_eq!(m.description, r.meta.description);
+    }
+    // voids marked again, every other sample within the bound
+    let (a, b) = (r.to_f64(), back.to_f64());
+    for (i, (x, y)) in a.iter().zip(&b).enumerate() {
+        if *x == -1000.0 {
+            assert_eq!(*y, -1000.0, "void {i}");
+        } else {
+            assert!((x - y).abs() <= 2.0, "sample {i}: {x} → {y}");
+        }
+    }
+}
+
+#[test]
+fn a_decode_in_slabs_equals_the_decode_whole_for_regions_and_levels() {
+    let dir = common::scratch_dir("tiles_stream");
+    let r = field(&[40, 50, 36], SampleType::U16);
+    let tile = [16, 16, 16];
+    let bytes = codec::encode_tiled(&r, &opts(Rate::Quality(55.0)), &tile).unwrap();
+    let f = dir.join("v.mra");
+    std::fs::write(&f, &bytes).unwrap();
+    let cases: [(usize, Option<Vec<Range<usize>>>, usize); 6] = [
+        (0, None, 3),
+        (1, None, 3),
+        (2, None, 3),
+        (0, Some(vec![3..20, 17..18, 10..33]), 3),
+        (2, Some(vec![3..20, 17..18, 20..30]), 1),
+        (1, Some(vec![0..36, 0..50, 33..40]), 1),
+    ];
+    for (level, region, slabs) in cases {
+        let o = DecodeOptions {
+            level,
+            allow_truncated: false,
+            region: region.clone(),
+        };
+        let mut k = Keep::default();
+        let (shape, complete) = codec::decode_file_slabs(&f, &o, &mut k).unwrap();
+        let whole = codec::decode_file(&f, &o).unwrap().raster;
+        assert!(complete && k.ended);
+        assert_eq!(k.slabs, slabs, "level {level} region {region:?}");
+        assert_eq!(shape, Shape::of(&whole), "level {level} region {region:?}");
+        assert_eq!(k.samples, whole.to_f64(), "level {level} region {region:?}");
+    }
+}
+
+#[test]
+fn a_raw_file_of_the_wrong_size_and_an_unstreamable_nrrd_are_told_apart() {
+    let dir = common::scratch_dir("tiles_stream");
+    let p = dir.join("short.raw");
+    std::fs::write(&p, vec![0u8; 99]).unwrap();
+    let ro = ReadOptions {
+        raw: Some(RawSpec {
+            dims: vec![10, 5],
+            sample_type: SampleType::U16,
+            big_endian: false,
+        }),
+        ..Default::default()
+    };
+    let e = slab::open(&p, &ro).err().expect("a size mismatch");
+    assert_eq!(e.kind(), mra::ErrorKind::Format, "{e}");
+    assert!(e.to_string().contains("99"), "{e}");
+    // a gzip NRRD is read whole
+    let r = field(&[6, 7], SampleType::U8);
+    let g = dir.join("g.nrrd");
+    io::write_with(&g, &r, &io::WriteOptions { compress: true }).unwrap();
+    assert!(slab::open(&g, &ReadOptions::default()).unwrap().is_none());
+    // a NRRD whose header declares more data than the file holds
+    let bad = dir.join("bad.nrrd");
+    std::fs::write(
+        &bad,
+        b"NRRD0004\ntype: uint16\ndimension: 2\nsizes: 4000 4000\nencoding: raw\nendian: little\n\n\x01\x02",
+    )
+    .unwrap();
+    let e = slab::open(&bad, &ReadOptions::default())
+        .err()
+        .expect("too short");
+    assert_eq!(e.kind(), mra::ErrorKind::Format, "{e}");
+}
+
+fn mra(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_mra"))
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+#[test]
+fn the_cli_streams_raw_in_and_out_and_leaves_nothing_on_error() {
+    let dir = common::scratch_dir("tiles_stream");
+    let r = field(&[70, 90], SampleType::U16);
+    let raw = dir.join("in.raw");
+    std::fs::write(&raw, io::bytes::encode(&r.samples, false)).unwrap();
+    let f = dir.join("f.mra");
+    let s = |p: &Path| p.to_str().unwrap().to_string();
+    let o = mra(&[
+        "encode",
+        &s(&raw),
+        "--dims",
+        "90x70",
+        "--dtype",
+        "u16",
+        "-o",
+        &s(&f),
+        "--tile",
+        "32",
+        "--lossless",
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(j["dims"], serde_json::json!([90, 70]));
+    assert_eq!(
+        j["bytes"].as_u64().unwrap(),
+        std::fs::metadata(&f).unwrap().len()
+    );
+    let back = dir.join("back.raw");
+    let o = mra(&["decode", &s(&f), "-o", &s(&back), "--json"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(std::fs::read(&back).unwrap(), std::fs::read(&raw).unwrap());
+    // a region to NRRD
+    let reg = dir.join("reg.nrrd");
+    let o = mra(&["decode", &s(&f), "-o", &s(&reg), "--region", "30:70,10:40"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let g = io::read(&reg).unwrap();
+    assert_eq!(g.dims, vec![30, 40]);
+    assert_eq!(g.samples.get_f64(0), r.samples.get_f64(10 * 90 + 30));
+    // a truncated file: exit 2, one line naming the file, no output left behind
+    let cut = dir.join("cut.mra");
+    let b = std::fs::read(&f).unwrap();
+    std::fs::write(&cut, &b[..b.len() - 300]).unwrap();
+    let out = dir.join("cut.raw");
+    let o = mra(&["decode", &s(&cut), "-o", &s(&out)]);
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("cut.mra") && err.lines().count() == 1, "{err}");
+    assert!(!out.exists());
+    assert!(mra::fsutil::leftover_temps(&out).is_empty());
+}
