@@ -183,10 +183,11 @@ fn metadata_survives_a_streamed_encode_and_decode() {
     let out = dir.join("back.nrrd");
     let mut w = std::fs::File::create(&out).unwrap();
     let mut sink = slab::sink_for(&out, &mut w).unwrap();
-    let (shape, complete) =
-        codec::decode_file_slabs(&f, &DecodeOptions::default(), &mut sink).unwrap();
+    let d = codec::decode_file_slabs(&f, &DecodeOptions::default(), &mut sink).unwrap();
     drop(w);
+    let (shape, complete) = (d.shape, d.complete);
     assert!(complete);
+    assert_eq!(d.bytes_read, bytes.len() as u64);
     let back = io::read(&out).unwrap();
     let whole = codec::decode_file(&f, &DecodeOptions::default())
         .unwrap()
@@ -235,9 +236,19 @@ fn a_decode_in_slabs_equals_the_decode_whole_for_regions_and_levels() {
             region: region.clone(),
         };
         let mut k = Keep::default();
-        let (shape, complete) = codec::decode_file_slabs(&f, &o, &mut k).unwrap();
+        let d = codec::decode_file_slabs(&f, &o, &mut k).unwrap();
+        let (shape, complete) = (d.shape, d.complete);
         let whole = codec::decode_file(&f, &o).unwrap().raster;
         assert!(complete && k.ended);
+        if region.is_some() {
+            // a third of the tiles at most, read by seeking
+            assert!(
+                d.bytes_read < bytes.len() as u64 / 2,
+                "{} of {} bytes read for {region:?}",
+                d.bytes_read,
+                bytes.len()
+            );
+        }
         assert_eq!(k.slabs, slabs, "level {level} region {region:?}");
         assert_eq!(shape, Shape::of(&whole), "level {level} region {region:?}");
         assert_eq!(k.samples, whole.to_f64(), "level {level} region {region:?}");
@@ -336,4 +347,195 @@ fn the_cli_streams_raw_in_and_out_and_leaves_nothing_on_error() {
     assert!(err.contains("cut.mra") && err.lines().count() == 1, "{err}");
     assert!(!out.exists());
     assert!(mra::fsutil::leftover_temps(&out).is_empty());
+}
+
+/// A little-endian u16 gray TIFF of `w`×`h` in tiles of 16×16 (padding 0xFFFF), sample
+/// (x, y) = y·w + x + 7: the tiled layout mra's own writer does not make.
+fn tiled_tiff(w: usize, h: usize) -> Vec<u8> {
+    let (across, down) = (w.div_ceil(16), h.div_ceil(16));
+    let n = across * down;
+    let mut f = b"II*\0".to_vec();
+    let data_at = 8u32;
+    let ifd_at = data_at + (n * 512) as u32;
+    f.extend_from_slice(&ifd_at.to_le_bytes());
+    for t in 0..n {
+        let (tx, ty) = (t % across, t / across);
+        for y in 0..16 {
+            for x in 0..16 {
+                let (gx, gy) = (tx * 16 + x, ty * 16 + y);
+                let v = if gx < w && gy < h {
+                    (gy * w + gx + 7) as u16
+                } else {
+                    0xFFFF
+                };
+                f.extend_from_slice(&v.to_le_bytes());
+            }
+        }
+    }
+    let tags: [(u16, u16, u32, u32); 12] = [
+        (256, 3, 1, w as u32),
+        (257, 3, 1, h as u32),
+        (258, 3, 1, 16),
+        (259, 3, 1, 1),
+        (262, 3, 1, 1),
+        (277, 3, 1, 1),
+        (284, 3, 1, 1),
+        (322, 3, 1, 16),
+        (323, 3, 1, 16),
+        (324, 4, n as u32, 0),
+        (325, 4, n as u32, 0),
+        (339, 3, 1, 1),
+    ];
+    let arrays_at = ifd_at + 2 + 12 * tags.len() as u32 + 4;
+    f.extend_from_slice(&(tags.len() as u16).to_le_bytes());
+    for (i, &(tag, ty, count, value)) in tags.iter().enumerate() {
+        f.extend_from_slice(&tag.to_le_bytes());
+        f.extend_from_slice(&ty.to_le_bytes());
+        f.extend_from_slice(&count.to_le_bytes());
+        let v = match tag {
+            324 => arrays_at,
+            325 => arrays_at + 4 * n as u32,
+            _ => value,
+        };
+        let _ = i;
+        f.extend_from_slice(&v.to_le_bytes());
+    }
+    f.extend_from_slice(&0u32.to_le_bytes());
+    for t in 0..n {
+        f.extend_from_slice(&(data_at + 512 * t as u32).to_le_bytes());
+    }
+    for _ in 0..n {
+        f.extend_from_slice(&512u32.to_le_bytes());
+    }
+    f
+}
+
+/// The rows of `src` read in slabs of uneven heights, joined.
+fn all_rows(src: &mut dyn SlabSource, cuts: &[usize]) -> Vec<f64> {
+    let d0 = src.shape().dims[0];
+    let mut at = 0;
+    let mut v = Vec::new();
+    for &c in cuts.iter().chain(std::iter::once(&d0)) {
+        if c > at {
+            v.extend(src.read_rows(at..c).unwrap().to_f64());
+            at = c;
+        }
+    }
+    v
+}
+
+#[test]
+fn a_tiff_read_in_slabs_gives_the_raster_of_the_whole_reader() {
+    let dir = common::scratch_dir("tiles_stream");
+    // tiles with odd edges, slabs cutting through tile rows
+    let t = dir.join("tiled.tif");
+    std::fs::write(&t, tiled_tiff(40, 35)).unwrap();
+    let whole = io::read(&t).unwrap();
+    assert_eq!(whole.dims, vec![35, 40]);
+    assert_eq!(
+        whole.samples.get_f64(34 * 40 + 39),
+        (34 * 40 + 39 + 7) as f64
+    );
+    let mut src = slab::open(&t, &ReadOptions::default()).unwrap().unwrap();
+    assert_eq!(src.shape(), &Shape::of(&whole));
+    assert_eq!(all_rows(&mut src, &[5, 16, 17, 33]), whole.to_f64());
+    // a page stack with metadata
+    let mut v = field(&[7, 9, 11], SampleType::F32);
+    v.meta.spacing = Some(vec![2.0, 0.5, 0.25]);
+    v.meta.nodata = Some(-5.0);
+    v.meta.description = Some("stack".into());
+    let p = dir.join("stack.tif");
+    io::write_with(&p, &v, &io::WriteOptions { compress: true }).unwrap();
+    let whole = io::read(&p).unwrap();
+    let mut src = slab::open(&p, &ReadOptions::default()).unwrap().unwrap();
+    assert_eq!(src.shape(), &Shape::of(&whole));
+    assert_eq!(all_rows(&mut src, &[2, 3, 6]), whole.to_f64());
+    // strips: Deflate with the floating-point predictor, GeoTIFF tags
+    if let Some(g) = common::corpus("terrain/mt_st_helens_30m_f32.tif") {
+        let whole = io::read(&g).unwrap();
+        let mut src = slab::open(&g, &ReadOptions::default()).unwrap().unwrap();
+        assert_eq!(src.shape(), &Shape::of(&whole));
+        assert!(!src.shape().meta.geotiff.is_empty());
+        assert_eq!(all_rows(&mut src, &[1, 205, 206, 207, 413]), whole.to_f64());
+        // streamed encode: the bytes of the in-memory encode
+        let o = opts(Rate::MaxError(0.5));
+        let mut src = slab::open(&g, &ReadOptions::default()).unwrap().unwrap();
+        assert!(
+            streamed(&mut src, &o, &[128, 100])
+                == codec::encode_tiled(&whole, &o, &[128, 100]).unwrap()
+        );
+    }
+}
+
+#[test]
+fn a_tiff_written_in_slabs_reads_back_with_its_samples_and_tags() {
+    use mra::io::{GeoTag, GeoValue};
+    let dir = common::scratch_dir("tiles_stream");
+    let s = |p: &Path| p.to_str().unwrap().to_string();
+    let mut r = field(&[45, 37], SampleType::U16);
+    r.meta.geotiff = vec![
+        GeoTag {
+            tag: 33550,
+            value: GeoValue::Doubles(vec![30.0, 30.0, 0.0]),
+        },
+        GeoTag {
+            tag: 33922,
+            value: GeoValue::Doubles(vec![0.0, 0.0, 0.0, 500000.0, 5000000.0, 0.0]),
+        },
+    ];
+    r.meta.description = Some("relief".into());
+    let f = dir.join("r.mra");
+    std::fs::write(
+        &f,
+        codec::encode_tiled(&r, &opts(Rate::Lossless), &[16, 16]).unwrap(),
+    )
+    .unwrap();
+    let out = dir.join("r.tif");
+    let o = mra(&["decode", &s(&f), "-o", &s(&out)]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let back = io::read(&out).unwrap();
+    assert_eq!(back.samples, r.samples);
+    assert_eq!(back.meta.geotiff, r.meta.geotiff);
+    assert_eq!(back.meta.description, r.meta.description);
+    // a region, at a level
+    let reg = dir.join("reg.tif");
+    let o = mra(&[
+        "decode",
+        &s(&f),
+        "-o",
+        &s(&reg),
+        "--region",
+        "3:30,10:40",
+        "--level",
+        "1",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let whole = codec::decode_file(
+        &f,
+        &DecodeOptions {
+            level: 1,
+            allow_truncated: false,
+            region: Some(vec![3..30, 10..40]),
+        },
+    )
+    .unwrap()
+    .raster;
+    let back = io::read(&reg).unwrap();
+    assert_eq!(
+        (back.dims.clone(), back.samples),
+        (whole.dims, whole.samples)
+    );
+    // a volume: one page per slice
+    let v = field(&[9, 20, 18], SampleType::I16);
+    let fv = dir.join("v.mra");
+    std::fs::write(
+        &fv,
+        codec::encode_tiled(&v, &opts(Rate::Lossless), &[4, 8, 8]).unwrap(),
+    )
+    .unwrap();
+    let ov = dir.join("v.tif");
+    let o = mra(&["decode", &s(&fv), "-o", &s(&ov)]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let back = io::read(&ov).unwrap();
+    assert_eq!((back.dims, back.samples), (v.dims, v.samples));
 }

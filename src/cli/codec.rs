@@ -350,16 +350,29 @@ pub fn decode(a: DecodeArgs) -> CliResult {
         && !super::io_cmds::is_std(&a.output)
         && crate::io::slab::streams_output(&a.output)
     {
-        // raw and NRRD outputs are written a tile-row (or tile-slab) at a time
+        // raw, NRRD and TIFF outputs are written a tile-row (or tile-slab) at a time
         let mut got = None;
         crate::fsutil::write_atomic(&a.output, |w| {
-            let mut sink = crate::io::slab::sink_for(&a.output, w)?;
-            got = Some(codec::decode_file_slabs(&a.input, &opts, &mut sink)?);
+            let mut d = codec::SlabDecoder::open(&a.input, &opts)?;
+            let shape = d.shape().clone();
+            crate::io::slab::write_slabs(&a.output, w, &shape, &mut || d.next_slab())?;
+            got = Some(codec::SlabDecode {
+                shape,
+                complete: d.complete(),
+                bytes_read: d.bytes_read(),
+            });
             Ok::<(), crate::Error>(())
         })
         .map_err(|e| Failure::context(&name, e))?;
-        let (shape, complete) = got.expect("set by a successful decode");
-        return decode_report(&a, &name, &shape, complete, t.elapsed().as_secs_f64());
+        let d = got.expect("set by a successful decode");
+        return decode_report(
+            &a,
+            &name,
+            &d.shape,
+            d.complete,
+            t.elapsed().as_secs_f64(),
+            Some(d.bytes_read),
+        );
     }
     let d = match &stdin {
         Some(bytes) => codec::decode(bytes, &opts),
@@ -376,7 +389,7 @@ pub fn decode(a: DecodeArgs) -> CliResult {
     let seconds = t.elapsed().as_secs_f64();
     write_output_as(&a.output, &raster, false, None, a.format.as_deref())?;
     let shape = crate::io::slab::Shape::of(&raster);
-    decode_report(&a, &name, &shape, d.complete, seconds)
+    decode_report(&a, &name, &shape, d.complete, seconds, None)
 }
 
 /// The end of `mra decode`: the truncation note and the `--json` report.
@@ -386,6 +399,7 @@ fn decode_report(
     shape: &crate::io::slab::Shape,
     complete: bool,
     seconds: f64,
+    bytes_read: Option<u64>,
 ) -> CliResult {
     if !complete {
         eprintln!("mra: {name}: truncated file, decoded what it holds");
@@ -402,6 +416,11 @@ fn decode_report(
             "complete": complete,
             "seconds": seconds,
         });
+        let mut v = v;
+        if let Some(b) = bytes_read {
+            // written in slabs: the bytes of the .mra file read (a region reads its tiles)
+            v["bytes_read"] = b.into();
+        }
         super::io_cmds::report(&a.output, &v.to_string())?;
     }
     Ok(())

@@ -20,7 +20,7 @@ use super::plan::Plan;
 use super::voids::with_voids_filled;
 use super::{layout, meta};
 use crate::format::{self, Chunk, ChunkReader, Cursor, Header};
-use crate::io::slab::{MemorySlabs, Shape, SlabSink};
+use crate::io::slab::{MemorySlabs, Shape};
 use crate::io::{AxisMap, Metadata, Raster, SampleType, Samples};
 use crate::{Error, Result};
 use rayon::prelude::*;
@@ -891,47 +891,99 @@ pub(super) fn decode_seek<R: Read + Seek>(
     })
 }
 
-/// [`decode_seek`] handing the output to `sink` one tile-row (2-D) or tile-slab (3-D)
-/// at a time, so that memory holds one row of tiles, not the output: the output's shape,
-/// then its rows in order. Returns the shape and whether the file was complete.
-pub(super) fn decode_seek_slabs<R: Read + Seek>(
-    src: &mut R,
+/// [`decode_seek`] one tile-row (2-D) or tile-slab (3-D) at a time, so that memory
+/// holds one row of tiles, not the output: the output's shape first, then its rows in
+/// order ([`TiledSlabs::next_slab`]).
+pub(super) struct TiledSlabs<R> {
+    src: R,
     len: u64,
     after_head: u64,
-    header: Header,
-    opts: &DecodeOptions,
-    sink: &mut dyn SlabSink,
-) -> Result<(Shape, bool)> {
-    let st = Stitch::geometry(&header, opts.level, opts.region.as_deref())?;
-    let n = st.tiles();
-    let (meta, index) = read_index(src, len, after_head, n)?;
-    let shape = st.out_shape(&meta)?;
-    sink.begin(&shape)?;
-    let mut complete = true;
-    let per_row = n / st.grid.counts[0];
-    for g0 in 0..st.grid.counts[0] {
-        let Some(mut row) = st.row_slab(g0)? else {
-            continue;
-        };
-        let mut batch = Vec::new();
-        for i in g0 * per_row..(g0 + 1) * per_row {
-            if !row.wanted(i) {
+    st: Stitch,
+    index: Vec<(u64, u64)>,
+    shape: Shape,
+    opts: DecodeOptions,
+    /// The next grid row along the slowest axis.
+    g0: usize,
+    complete: bool,
+    ended: bool,
+}
+
+impl<R: Read + Seek> TiledSlabs<R> {
+    /// Read `mETA` and `TIDX` of a tiled file whose `HEAD` ends at byte `after_head`.
+    pub(super) fn new(
+        mut src: R,
+        len: u64,
+        after_head: u64,
+        header: Header,
+        opts: &DecodeOptions,
+    ) -> Result<Self> {
+        let st = Stitch::geometry(&header, opts.level, opts.region.as_deref())?;
+        let (meta, index) = read_index(&mut src, len, after_head, st.tiles())?;
+        let shape = st.out_shape(&meta)?;
+        Ok(TiledSlabs {
+            src,
+            len,
+            after_head,
+            st,
+            index,
+            shape,
+            opts: opts.clone(),
+            g0: 0,
+            complete: true,
+            ended: false,
+        })
+    }
+
+    /// The output's extents, type and metadata.
+    pub(super) fn shape(&self) -> &Shape {
+        &self.shape
+    }
+
+    /// Whether every tile read was complete (known after the last slab).
+    pub(super) fn complete(&self) -> bool {
+        self.complete
+    }
+
+    /// The next rows of the output (those of one grid row), `None` after the last.
+    pub(super) fn next_slab(&mut self) -> Result<Option<Samples>> {
+        let n = self.st.tiles();
+        let rows = self.st.grid.counts[0];
+        let per_row = n / rows;
+        while self.g0 < rows {
+            let g0 = self.g0;
+            self.g0 += 1;
+            let Some(mut row) = self.st.row_slab(g0)? else {
                 continue;
+            };
+            let allow = self.opts.allow_truncated;
+            let mut batch = Vec::new();
+            for i in g0 * per_row..(g0 + 1) * per_row {
+                if !row.wanted(i) {
+                    continue;
+                }
+                match fetch_tile(&mut self.src, self.len, n, i, self.index[i], allow)? {
+                    Some(t) => batch.push((i, t)),
+                    None => self.complete = false,
+                }
+                if batch.len() >= batch_size() {
+                    decode_batch(&mut row, &mut batch, allow, &mut self.complete)?;
+                }
             }
-            match fetch_tile(src, len, n, i, index[i], opts.allow_truncated)? {
-                Some(t) => batch.push((i, t)),
-                None => complete = false,
-            }
-            if batch.len() >= batch_size() {
-                decode_batch(&mut row, &mut batch, opts.allow_truncated, &mut complete)?;
+            decode_batch(&mut row, &mut batch, allow, &mut self.complete)?;
+            return Ok(Some(row.samples));
+        }
+        if !self.ended {
+            self.ended = true;
+            if self.opts.region.is_none() {
+                self.complete &= check_end(
+                    &mut self.src,
+                    self.len,
+                    self.after_head,
+                    &self.index,
+                    self.opts.allow_truncated,
+                )?;
             }
         }
-        decode_batch(&mut row, &mut batch, opts.allow_truncated, &mut complete)?;
-        sink.rows(&row.samples)?;
+        Ok(None)
     }
-    if opts.region.is_none() {
-        complete &= check_end(src, len, after_head, &index, opts.allow_truncated)?;
-    }
-    sink.end()?;
-    Ok((shape, complete))
 }

@@ -323,6 +323,57 @@ impl Samples {
         }
     }
 
+    /// `n` zero samples of type `t`.
+    pub fn zeros(t: SampleType, n: usize) -> Samples {
+        match t {
+            SampleType::U8 => Samples::U8(vec![0; n]),
+            SampleType::I8 => Samples::I8(vec![0; n]),
+            SampleType::U16 => Samples::U16(vec![0; n]),
+            SampleType::I16 => Samples::I16(vec![0; n]),
+            SampleType::U32 => Samples::U32(vec![0; n]),
+            SampleType::I32 => Samples::I32(vec![0; n]),
+            SampleType::F16 => Samples::F16(vec![half::f16::ZERO; n]),
+            SampleType::F32 => Samples::F32(vec![0.0; n]),
+            SampleType::F64 => Samples::F64(vec![0.0; n]),
+        }
+    }
+
+    /// The samples `r` (a copy).
+    pub fn range(&self, r: std::ops::Range<usize>) -> Samples {
+        match self {
+            Samples::U8(v) => Samples::U8(v[r].to_vec()),
+            Samples::I8(v) => Samples::I8(v[r].to_vec()),
+            Samples::U16(v) => Samples::U16(v[r].to_vec()),
+            Samples::I16(v) => Samples::I16(v[r].to_vec()),
+            Samples::U32(v) => Samples::U32(v[r].to_vec()),
+            Samples::I32(v) => Samples::I32(v[r].to_vec()),
+            Samples::F16(v) => Samples::F16(v[r].to_vec()),
+            Samples::F32(v) => Samples::F32(v[r].to_vec()),
+            Samples::F64(v) => Samples::F64(v[r].to_vec()),
+        }
+    }
+
+    /// Copy `n` samples of `src` from `from` to `to` (same sample type, both in range).
+    pub fn copy_from(&mut self, to: usize, src: &Samples, from: usize, n: usize) -> Result<()> {
+        macro_rules! pair {
+            ($($var:ident),*) => {
+                match (self, src) {
+                    $((Samples::$var(d), Samples::$var(s)) if to + n <= d.len() && from + n <= s.len() => {
+                        d[to..to + n].copy_from_slice(&s[from..from + n])
+                    })*
+                    (d, s) => {
+                        return Err(Error::format(
+                            format!("{n} {} samples from {from} of {} into {to} of {} {}", s.sample_type(), s.len(), d.len(), d.sample_type()),
+                            "samples of one type within both buffers",
+                        ))
+                    }
+                }
+            };
+        }
+        pair!(U8, I8, U16, I16, U32, I32, F16, F32, F64);
+        Ok(())
+    }
+
     /// `(min, max)` over all samples, ignoring NaN; `None` when empty or all NaN.
     pub fn min_max(&self) -> Option<(f64, f64)> {
         let mut lo = f64::INFINITY;

@@ -2,9 +2,11 @@
 //! of a volume), so that a file larger than memory is handled a slab at a time.
 //!
 //! Reading ([`SlabSource`]): a headerless `.raw` of a given layout and a NRRD of raw
-//! encoding are read by seeking to the slab's first byte ([`open`]); any raster in
-//! memory is a source too ([`MemorySlabs`]). Writing ([`SlabSink`]): `.raw` and NRRD of
-//! raw encoding ([`sink_for`]) take the slabs in order after the header.
+//! encoding are read by seeking to the slab's first byte, a TIFF by its strips, tiles
+//! or pages ([`open`]); any raster in
+//! memory is a source too ([`MemorySlabs`]). Writing ([`write_slabs`]): `.raw`, NRRD of
+//! raw encoding ([`sink_for`], a [`SlabSink`]) and TIFF take the slabs in order after
+//! the header (a TIFF image in strips, a volume page by page).
 //!
 //! A slab of rows `a..b` of a raster of extents `[d0, d1, …]` × `c` channels holds the
 //! `(b − a)·d1·…·c` samples of those rows, row-major, as the whole raster would.
@@ -89,18 +91,7 @@ impl SlabSource for MemorySlabs<'_> {
     fn read_rows(&mut self, rows: Range<usize>) -> Result<Samples> {
         check_rows(&self.shape, &rows)?;
         let per = self.shape.row_samples();
-        let (a, b) = (rows.start * per, rows.end * per);
-        Ok(match &self.raster.samples {
-            Samples::U8(v) => Samples::U8(v[a..b].to_vec()),
-            Samples::I8(v) => Samples::I8(v[a..b].to_vec()),
-            Samples::U16(v) => Samples::U16(v[a..b].to_vec()),
-            Samples::I16(v) => Samples::I16(v[a..b].to_vec()),
-            Samples::U32(v) => Samples::U32(v[a..b].to_vec()),
-            Samples::I32(v) => Samples::I32(v[a..b].to_vec()),
-            Samples::F16(v) => Samples::F16(v[a..b].to_vec()),
-            Samples::F32(v) => Samples::F32(v[a..b].to_vec()),
-            Samples::F64(v) => Samples::F64(v[a..b].to_vec()),
-        })
+        Ok(self.raster.samples.range(rows.start * per..rows.end * per))
     }
 }
 
@@ -182,10 +173,35 @@ impl SlabSource for FileSlabs {
     }
 }
 
-/// A file readable in slabs: a `.raw` with its layout, or a NRRD of raw encoding.
+/// A file read in slabs.
+pub enum Slabs {
+    /// Samples at a byte offset: headerless raw, NRRD of raw encoding.
+    File(FileSlabs),
+    /// A TIFF's strips, tiles or pages.
+    Tiff(Box<super::tiff::TiffSlabs>),
+}
+
+impl SlabSource for Slabs {
+    fn shape(&self) -> &Shape {
+        match self {
+            Slabs::File(f) => f.shape(),
+            Slabs::Tiff(t) => t.shape(),
+        }
+    }
+
+    fn read_rows(&mut self, rows: Range<usize>) -> Result<Samples> {
+        match self {
+            Slabs::File(f) => f.read_rows(rows),
+            Slabs::Tiff(t) => t.read_rows(rows),
+        }
+    }
+}
+
+/// A file readable in slabs: a `.raw` with its layout, a NRRD of raw encoding, or a
+/// TIFF (strips, tiles or a page stack).
 /// `None` for every other file (the caller reads it whole); errors as the whole reader
 /// would give them (a raw file of the wrong size, a bad NRRD header).
-pub fn open(path: &Path, opts: &ReadOptions) -> Result<Option<FileSlabs>> {
+pub fn open(path: &Path, opts: &ReadOptions) -> Result<Option<Slabs>> {
     let format = Format::detect(path)?;
     match (format, &opts.raw) {
         (Format::Raw, Some(spec)) => {
@@ -207,9 +223,10 @@ pub fn open(path: &Path, opts: &ReadOptions) -> Result<Option<FileSlabs>> {
                 kind,
                 meta: Metadata::default(),
             };
-            FileSlabs::new(shape, path, 0, spec.big_endian).map(Some)
+            FileSlabs::new(shape, path, 0, spec.big_endian).map(|f| Some(Slabs::File(f)))
         }
         (Format::Nrrd, _) => super::nrrd::open_slabs(path),
+        (Format::Tiff, _) => super::tiff::open_slabs(path).map(|t| Some(Slabs::Tiff(Box::new(t)))),
         _ => Ok(None),
     }
 }
@@ -222,11 +239,12 @@ pub trait SlabSink {
     fn end(&mut self) -> Result<()>;
 }
 
-/// Which formats [`sink_for`] writes in slabs.
+/// Which outputs [`write_slabs`] writes a slab at a time: `.raw`, attached `.nrrd`
+/// (raw encoding) and `.tif` (uncompressed).
 pub fn streams_output(path: &Path) -> bool {
     matches!(
         Format::from_extension(path),
-        Some(Format::Raw | Format::Nrrd)
+        Some(Format::Raw | Format::Nrrd | Format::Tiff)
     ) && !path
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("nhdr"))
@@ -240,11 +258,37 @@ pub struct StreamSink<W: Write> {
     left: u64,
 }
 
-/// A sink writing the format of `path`'s extension into `w` (see [`streams_output`]).
+/// Write a raster handed over in slabs (`next` gives the rows of the slowest axis in
+/// order, `None` at the end) into `w` in the format of `path`'s extension (see
+/// [`streams_output`]), as [`super::write`] would write it.
+pub fn write_slabs<W: Write + Seek>(
+    path: &Path,
+    w: &mut W,
+    shape: &Shape,
+    next: &mut dyn FnMut() -> Result<Option<Samples>>,
+) -> Result<()> {
+    if Format::from_extension(path) == Some(Format::Tiff) {
+        return super::tiff::write_slabs(w, shape, next);
+    }
+    let mut sink = sink_for(path, w)?;
+    sink.begin(shape)?;
+    while let Some(s) = next()? {
+        sink.rows(&s)?;
+    }
+    sink.end()
+}
+
+/// A sink writing `.raw` or attached `.nrrd` into `w`.
 pub fn sink_for<W: Write>(path: &Path, w: W) -> Result<StreamSink<W>> {
     let nrrd = match Format::from_extension(path) {
         Some(Format::Raw) => false,
-        Some(Format::Nrrd) if streams_output(path) => true,
+        Some(Format::Nrrd)
+            if !path
+                .extension()
+                .is_some_and(|e| e.eq_ignore_ascii_case("nhdr")) =>
+        {
+            true
+        }
         _ => {
             return Err(Error::Unsupported {
                 what: "output written in slabs",

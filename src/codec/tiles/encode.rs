@@ -298,15 +298,17 @@ fn search_step(
     range: f64,
     peak: f64,
 ) -> Result<f64> {
-    let prepared: Vec<(Raster, Prepared)> = sample
+    let positions: f64 = sample.iter().map(|t| t.positions() as f64).sum();
+    // the tiles' samples are kept for the PSNR only (a tile goes as soon as it is prepared)
+    let keep = !matches!(opts.rate, Rate::Bpp(_));
+    let prepared: Vec<(Option<Raster>, Prepared)> = sample
         .into_par_iter()
         .map(|t| {
             let mut p = prepare(&t, opts, Mode::Lossy)?;
             p.optimise();
-            Ok((t, p))
+            Ok((keep.then_some(t), p))
         })
         .collect::<Result<_>>()?;
-    let positions: f64 = prepared.iter().map(|(t, _)| t.positions() as f64).sum();
     // the bytes outside the tiles' own files (signature, HEAD, mETA, TIDX, TILE framing,
     // MEND), the sample's share of them
     let outside = 8
@@ -342,6 +344,7 @@ fn search_step(
                 let sse = prepared
                     .par_iter()
                     .map(|(t, p)| {
+                        let t = t.as_ref().expect("kept for the PSNR");
                         let d = p.decoded(step)?;
                         let (a, b) = (t.samples.to_f64(), d.samples.to_f64());
                         Ok(a.iter()
