@@ -539,3 +539,38 @@ fn a_tiff_written_in_slabs_reads_back_with_its_samples_and_tags() {
     let back = io::read(&ov).unwrap();
     assert_eq!((back.dims, back.samples), (v.dims, v.samples));
 }
+
+#[test]
+fn the_tiled_test_vectors_decode_in_slabs_to_their_digests() {
+    use mra::format::sha256::{hex, sha256};
+    let dir = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("formats/vectors");
+    let manifest: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("manifest.json")).unwrap()).unwrap();
+    let mut dims_seen = Vec::new();
+    for v in manifest.as_array().unwrap() {
+        let file = dir.join(v["file"].as_str().unwrap());
+        if !codec::header_of_file(&file).unwrap().is_tiled() {
+            continue;
+        }
+        let o = DecodeOptions {
+            level: v["level"].as_u64().unwrap() as usize,
+            ..Default::default()
+        };
+        let mut k = Keep::default();
+        let d = codec::decode_file_slabs(&file, &o, &mut k).unwrap();
+        assert!(d.complete && k.slabs >= 2, "{}", v["name"]);
+        let s = Samples::from_f64(&k.samples, d.shape.sample_type);
+        assert_eq!(
+            hex(&sha256(&io::bytes::encode(&s, false))),
+            v["sha256"].as_str().unwrap(),
+            "{}",
+            v["name"]
+        );
+        dims_seen.push(d.shape.dims.len());
+    }
+    // a tiled image (twice: two levels) and a tiled volume
+    assert!(
+        dims_seen.contains(&2) && dims_seen.contains(&3),
+        "{dims_seen:?}"
+    );
+}
