@@ -221,7 +221,9 @@ fn a_decode_in_slabs_equals_the_decode_whole_for_regions_and_levels() {
     let bytes = codec::encode_tiled(&r, &opts(Rate::Quality(55.0)), &tile).unwrap();
     let f = dir.join("v.mra");
     std::fs::write(&f, &bytes).unwrap();
-    let cases: [(usize, Option<Vec<Range<usize>>>, usize); 6] = [
+    // (level, region, slabs handed over)
+    type Case = (usize, Option<Vec<Range<usize>>>, usize);
+    let cases: [Case; 6] = [
         (0, None, 3),
         (1, None, 3),
         (2, None, 3),

@@ -47,7 +47,6 @@ pub fn decode_seek<R: Read + Seek>(mut src: R, len: u64, opts: &DecodeOptions) -
     let (rd, first, header) = read_head(&mut src, len)?;
     if header.is_tiled() {
         let at = rd.position();
-        drop(rd);
         return tiles::decode_seek(&mut src, len, at, header, opts);
     }
     one_tile(
@@ -133,7 +132,6 @@ impl SlabDecoder {
         let (rd, first, header) = read_head(&mut src, len)?;
         if header.is_tiled() {
             let at = rd.position();
-            drop(rd);
             let t = tiles::TiledSlabs::new(src, len, at, header, opts)?;
             return Ok(SlabDecoder {
                 shape: t.shape().clone(),

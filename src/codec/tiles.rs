@@ -552,7 +552,7 @@ fn batch_size() -> usize {
 }
 
 /// The tile index of a `TILE` chunk and the rest of its payload.
-fn tile_payload<'a>(ch: &'a Chunk, n: usize) -> Result<(usize, &'a [u8])> {
+fn tile_payload(ch: &Chunk, n: usize) -> Result<(usize, &[u8])> {
     let mut c = Cursor::new(&ch.payload, "TILE");
     let i = c.u32()? as usize;
     if i >= n {

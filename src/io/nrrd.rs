@@ -461,7 +461,8 @@ pub fn open_slabs(path: &Path) -> Result<Option<super::slab::Slabs>> {
         kind,
         meta: h.meta,
     };
-    FileSlabs::new(shape, &data, offset, h.big_endian).map(|f| Some(super::slab::Slabs::File(f)))
+    FileSlabs::new(shape, &data, offset, h.big_endian)
+        .map(|f| Some(super::slab::Slabs::File(Box::new(f))))
 }
 
 /// Read a detached data file: at most `exact` bytes when the header fixes how many it

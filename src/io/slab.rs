@@ -176,7 +176,7 @@ impl SlabSource for FileSlabs {
 /// A file read in slabs.
 pub enum Slabs {
     /// Samples at a byte offset: headerless raw, NRRD of raw encoding.
-    File(FileSlabs),
+    File(Box<FileSlabs>),
     /// A TIFF's strips, tiles or pages.
     Tiff(Box<super::tiff::TiffSlabs>),
 }
@@ -184,14 +184,14 @@ pub enum Slabs {
 impl SlabSource for Slabs {
     fn shape(&self) -> &Shape {
         match self {
-            Slabs::File(f) => f.shape(),
+            Slabs::File(f) => f.as_ref().shape(),
             Slabs::Tiff(t) => t.shape(),
         }
     }
 
     fn read_rows(&mut self, rows: Range<usize>) -> Result<Samples> {
         match self {
-            Slabs::File(f) => f.read_rows(rows),
+            Slabs::File(f) => f.as_mut().read_rows(rows),
             Slabs::Tiff(t) => t.read_rows(rows),
         }
     }
@@ -223,7 +223,7 @@ pub fn open(path: &Path, opts: &ReadOptions) -> Result<Option<Slabs>> {
                 kind,
                 meta: Metadata::default(),
             };
-            FileSlabs::new(shape, path, 0, spec.big_endian).map(|f| Some(Slabs::File(f)))
+            FileSlabs::new(shape, path, 0, spec.big_endian).map(|f| Some(Slabs::File(Box::new(f))))
         }
         (Format::Nrrd, _) => super::nrrd::open_slabs(path),
         (Format::Tiff, _) => super::tiff::open_slabs(path).map(|t| Some(Slabs::Tiff(Box::new(t)))),
