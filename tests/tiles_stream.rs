@@ -8,6 +8,7 @@ mod common;
 
 use mra::codec::{self, DecodeOptions, EncodeOptions, Rate};
 use mra::io::slab::{self, Shape, SlabSink, SlabSource};
+use mra::io::stream;
 use mra::io::{self, DataKind, Raster, RawSpec, ReadOptions, SampleType, Samples};
 use mra::scheme::{Boundary, Scheme};
 use std::ops::Range;
@@ -102,7 +103,7 @@ fn a_raw_file_streamed_gives_the_bytes_of_the_in_memory_encode_in_every_rate_mod
         Rate::Lossless,
     ] {
         let o = opts(rate);
-        let mut src = slab::open(&p, &ro).unwrap().expect("a raw file streams");
+        let mut src = stream::open(&p, &ro).unwrap().expect("a raw file streams");
         let s = streamed(&mut src, &o, &tile);
         let m = codec::encode_tiled(&r, &o, &tile).unwrap();
         assert!(s == m, "{rate:?}: streamed and in-memory bytes differ");
@@ -126,7 +127,7 @@ fn a_raw_file_streamed_gives_the_bytes_of_the_in_memory_encode_in_every_rate_mod
         }),
         ..Default::default()
     };
-    let mut src = slab::open(&p3, &ro3).unwrap().unwrap();
+    let mut src = stream::open(&p3, &ro3).unwrap().unwrap();
     let o = opts(Rate::Quality(70.0));
     assert!(streamed(&mut src, &o, &[5, 4, 6]) == codec::encode_tiled(&v, &o, &[5, 4, 6]).unwrap());
 }
@@ -169,7 +170,7 @@ fn nrrd_volume(dir: &Path) -> (std::path::PathBuf, Raster) {
 fn metadata_survives_a_streamed_encode_and_decode() {
     let dir = common::scratch_dir("tiles_stream");
     let (p, r) = nrrd_volume(&dir);
-    let mut src = slab::open(&p, &ReadOptions::default())
+    let mut src = stream::open(&p, &ReadOptions::default())
         .unwrap()
         .expect("a raw NRRD streams");
     assert_eq!(src.shape(), &Shape::of(&r));
@@ -182,7 +183,7 @@ fn metadata_survives_a_streamed_encode_and_decode() {
     // decoded in slabs into a NRRD, read back
     let out = dir.join("back.nrrd");
     let mut w = std::fs::File::create(&out).unwrap();
-    let mut sink = slab::sink_for(&out, &mut w).unwrap();
+    let mut sink = stream::sink_for(&out, &mut w).unwrap();
     let d = codec::decode_file_slabs(&f, &DecodeOptions::default(), &mut sink).unwrap();
     drop(w);
     let (shape, complete) = (d.shape, d.complete);
@@ -270,14 +271,14 @@ fn a_raw_file_of_the_wrong_size_and_an_unstreamable_nrrd_are_told_apart() {
         }),
         ..Default::default()
     };
-    let e = slab::open(&p, &ro).err().expect("a size mismatch");
+    let e = stream::open(&p, &ro).err().expect("a size mismatch");
     assert_eq!(e.kind(), mra::ErrorKind::Format, "{e}");
     assert!(e.to_string().contains("99"), "{e}");
     // a gzip NRRD is read whole
     let r = field(&[6, 7], SampleType::U8);
     let g = dir.join("g.nrrd");
     io::write_with(&g, &r, &io::WriteOptions { compress: true }).unwrap();
-    assert!(slab::open(&g, &ReadOptions::default()).unwrap().is_none());
+    assert!(stream::open(&g, &ReadOptions::default()).unwrap().is_none());
     // a NRRD whose header declares more data than the file holds
     let bad = dir.join("bad.nrrd");
     std::fs::write(
@@ -285,7 +286,7 @@ fn a_raw_file_of_the_wrong_size_and_an_unstreamable_nrrd_are_told_apart() {
         b"NRRD0004\ntype: uint16\ndimension: 2\nsizes: 4000 4000\nencoding: raw\nendian: little\n\n\x01\x02",
     )
     .unwrap();
-    let e = slab::open(&bad, &ReadOptions::default())
+    let e = stream::open(&bad, &ReadOptions::default())
         .err()
         .expect("too short");
     assert_eq!(e.kind(), mra::ErrorKind::Format, "{e}");
@@ -438,7 +439,7 @@ fn a_tiff_read_in_slabs_gives_the_raster_of_the_whole_reader() {
         whole.samples.get_f64(34 * 40 + 39),
         (34 * 40 + 39 + 7) as f64
     );
-    let mut src = slab::open(&t, &ReadOptions::default()).unwrap().unwrap();
+    let mut src = stream::open(&t, &ReadOptions::default()).unwrap().unwrap();
     assert_eq!(src.shape(), &Shape::of(&whole));
     assert_eq!(all_rows(&mut src, &[5, 16, 17, 33]), whole.to_f64());
     // a page stack with metadata
@@ -449,19 +450,19 @@ fn a_tiff_read_in_slabs_gives_the_raster_of_the_whole_reader() {
     let p = dir.join("stack.tif");
     io::write_with(&p, &v, &io::WriteOptions { compress: true }).unwrap();
     let whole = io::read(&p).unwrap();
-    let mut src = slab::open(&p, &ReadOptions::default()).unwrap().unwrap();
+    let mut src = stream::open(&p, &ReadOptions::default()).unwrap().unwrap();
     assert_eq!(src.shape(), &Shape::of(&whole));
     assert_eq!(all_rows(&mut src, &[2, 3, 6]), whole.to_f64());
     // strips: Deflate with the floating-point predictor, GeoTIFF tags
     if let Some(g) = common::corpus("terrain/mt_st_helens_30m_f32.tif") {
         let whole = io::read(&g).unwrap();
-        let mut src = slab::open(&g, &ReadOptions::default()).unwrap().unwrap();
+        let mut src = stream::open(&g, &ReadOptions::default()).unwrap().unwrap();
         assert_eq!(src.shape(), &Shape::of(&whole));
         assert!(!src.shape().meta.geotiff.is_empty());
         assert_eq!(all_rows(&mut src, &[1, 205, 206, 207, 413]), whole.to_f64());
         // streamed encode: the bytes of the in-memory encode
         let o = opts(Rate::MaxError(0.5));
-        let mut src = slab::open(&g, &ReadOptions::default()).unwrap().unwrap();
+        let mut src = stream::open(&g, &ReadOptions::default()).unwrap().unwrap();
         assert!(
             streamed(&mut src, &o, &[128, 100])
                 == codec::encode_tiled(&whole, &o, &[128, 100]).unwrap()

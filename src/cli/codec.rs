@@ -148,7 +148,7 @@ pub fn encode(a: EncodeArgs) -> CliResult {
     let slabs = if super::io_cmds::is_std(&a.input) {
         None
     } else {
-        crate::io::slab::open(&a.input, &read_opts)
+        crate::io::stream::open(&a.input, &read_opts)
             .map_err(|e| Failure::context(a.input.display(), e))?
     };
     let (shape, tile, bytes, seconds) = match slabs {
@@ -348,14 +348,14 @@ pub fn decode(a: DecodeArgs) -> CliResult {
     if stdin.is_none()
         && range.is_none()
         && !super::io_cmds::is_std(&a.output)
-        && crate::io::slab::streams_output(&a.output)
+        && crate::io::stream::streams_output(&a.output)
     {
         // raw, NRRD and TIFF outputs are written a tile-row (or tile-slab) at a time
         let mut got = None;
         crate::fsutil::write_atomic(&a.output, |w| {
             let mut d = codec::SlabDecoder::open(&a.input, &opts)?;
             let shape = d.shape().clone();
-            crate::io::slab::write_slabs(&a.output, w, &shape, &mut || d.next_slab())?;
+            crate::io::stream::write_slabs(&a.output, w, &shape, &mut || d.next_slab())?;
             got = Some(codec::SlabDecode {
                 shape,
                 complete: d.complete(),

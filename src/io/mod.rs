@@ -25,7 +25,8 @@
 //! geometry.rs  where samples sit after a resample or crop ([`Metadata::resampled`])
 //! nodata.rs  void samples (NaN, `meta.nodata`) kept out of every filter
 //! raw.rs    headerless raw (.raw with dims/dtype/endian, .r16, .r32)
-//! slab.rs   rasters read and written a slab of rows at a time (raw, NRRD raw)
+//! slab.rs   a raster's shape, sources and sinks of slabs of rows
+//! stream.rs  the files read and written a slab at a time (raw, raw NRRD, TIFF)
 //! bytes.rs  endian decoding, size checks before allocation, atomic writes
 //! array.rs  rasters through the tensor engine (analyze / synthesize / pictures)
 //! pyramid_file.rs  the float32 TIFF / NRRD a pyramid is stored in, with its keys
@@ -91,6 +92,7 @@ pub mod pyramid_file;
 pub mod raw;
 pub mod slab;
 pub mod slices;
+pub mod stream;
 pub mod tiff;
 pub mod visual;
 

@@ -399,7 +399,7 @@ pub fn read(path: &Path) -> Result<Raster> {
 /// A NRRD of raw encoding (attached, or detached with a plain data file name) as a
 /// source of slabs, its samples read by seeking; `None` for any other encoding or
 /// layout (line skips, data file lists), which [`read`] reads whole.
-pub fn open_slabs(path: &Path) -> Result<Option<super::slab::Slabs>> {
+pub fn open_slabs(path: &Path) -> Result<Option<FileSlabs>> {
     // the header: up to its blank line, or the whole of a detached header
     const MOST: u64 = 1 << 20;
     let mut head = Vec::new();
@@ -461,8 +461,7 @@ pub fn open_slabs(path: &Path) -> Result<Option<super::slab::Slabs>> {
         kind,
         meta: h.meta,
     };
-    FileSlabs::new(shape, &data, offset, h.big_endian)
-        .map(|f| Some(super::slab::Slabs::File(Box::new(f))))
+    FileSlabs::new(shape, &data, offset, h.big_endian).map(Some)
 }
 
 /// Read a detached data file: at most `exact` bytes when the header fixes how many it
