@@ -19,6 +19,18 @@ fn raster(dims: &[usize], channels: usize, ty: SampleType, kind: DataKind) -> Ra
     Raster::new(dims.to_vec(), channels, Samples::from_f64(&v, ty), kind).unwrap()
 }
 
+/// name, description, raster, scheme, boundary, rate, level decoded, tile extents
+type Case = (
+    &'static str,
+    &'static str,
+    Raster,
+    Scheme,
+    Boundary,
+    Rate,
+    usize,
+    Vec<usize>,
+);
+
 fn main() {
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("formats/vectors");
     std::fs::create_dir_all(&dir).unwrap();
@@ -79,16 +91,7 @@ fn main() {
         ),
     ];
     // format 2.1: tiles (extents slowest axis first)
-    let tiled: Vec<(
-        &str,
-        &str,
-        Raster,
-        Scheme,
-        Boundary,
-        Rate,
-        usize,
-        Vec<usize>,
-    )> = vec![
+    let tiled: Vec<Case> = vec![
         (
             "tiled_gray16_q40",
             "21x18 gray u16 in tiles of 8x8 (x, y), cdf97 symmetric, quality 40",

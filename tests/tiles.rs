@@ -473,6 +473,7 @@ fn bad_tile_extents_and_regions_are_parameter_errors() {
         assert!(matches!(e.kind(), ErrorKind::Parameter), "{tile:?}: {e}");
     }
     let bytes = codec::encode_tiled(&r, &opts(Rate::Quality(50.0)), &[8, 8]).unwrap();
+    #[allow(clippy::single_range_in_vec_init)] // one range for a 2-D raster: the error
     for reg in [vec![0..5], vec![0..5, 3..3], vec![0..21, 0..5]] {
         let e = dec(&bytes, 0, Some(reg.clone())).err().unwrap();
         assert!(matches!(e.kind(), ErrorKind::Parameter), "{reg:?}: {e}");

@@ -137,36 +137,65 @@ pub fn encode(a: EncodeArgs) -> CliResult {
     } else {
         Rate::Quality(50.0)
     };
-    let r = read_input(&a.input, &a.raw.options()?)?;
     let opts = EncodeOptions {
         scheme: a.scheme,
         boundary: a.boundary,
         levels: a.levels,
         rate,
     };
-    let tile = match a.tile.as_deref() {
-        None => codec::default_tile(&r.dims),
-        Some(s) => tile_extents(s, &r.dims)?,
+    let read_opts = a.raw.options()?;
+    // a raw volume or raw NRRD cut into tiles is read a slab of tiles at a time
+    let slabs = if super::io_cmds::is_std(&a.input) {
+        None
+    } else {
+        crate::io::stream::open(&a.input, &read_opts)
+            .map_err(|e| Failure::context(a.input.display(), e))?
     };
-    let t = std::time::Instant::now();
-    let bytes = codec::encode_tiled(&r, &opts, &tile)
-        .map_err(|e| Failure::context(a.input.display(), e))?;
-    let seconds = t.elapsed().as_secs_f64();
-    crate::fsutil::write_atomic(&a.output, |w| w.write_all(&bytes))
-        .map_err(|e| Failure::context(a.output.display(), e))?;
-    let bpp = bytes.len() as f64 * 8.0 / r.positions() as f64;
+    let (shape, tile, bytes, seconds) = match slabs {
+        Some(mut src) => {
+            let shape = crate::io::slab::SlabSource::shape(&src).clone();
+            let tile = match a.tile.as_deref() {
+                None => codec::default_tile(&shape.dims),
+                Some(s) => tile_extents(s, &shape.dims)?,
+            };
+            let t = std::time::Instant::now();
+            let mut n = 0;
+            crate::fsutil::write_atomic(&a.output, |w| {
+                n = codec::encode_stream(&mut src, &opts, &tile, w)?;
+                Ok::<(), crate::Error>(())
+            })
+            .map_err(|e| Failure::context(a.input.display(), e))?;
+            (shape, tile, n as usize, t.elapsed().as_secs_f64())
+        }
+        None => {
+            let r = read_input(&a.input, &read_opts)?;
+            let tile = match a.tile.as_deref() {
+                None => codec::default_tile(&r.dims),
+                Some(s) => tile_extents(s, &r.dims)?,
+            };
+            let t = std::time::Instant::now();
+            let bytes = codec::encode_tiled(&r, &opts, &tile)
+                .map_err(|e| Failure::context(a.input.display(), e))?;
+            let seconds = t.elapsed().as_secs_f64();
+            crate::fsutil::write_atomic(&a.output, |w| w.write_all(&bytes))
+                .map_err(|e| Failure::context(a.output.display(), e))?;
+            (crate::io::slab::Shape::of(&r), tile, bytes.len(), seconds)
+        }
+    };
+    let positions = shape.positions();
+    let bpp = bytes as f64 * 8.0 / positions as f64;
     if a.json {
-        let raw = r.samples.len() * r.sample_type().size();
+        let raw = positions * shape.channels * shape.sample_type.size();
         let v = serde_json::json!({
             "input": a.input.display().to_string(),
             "output": a.output.display().to_string(),
-            "bytes": bytes.len(),
+            "bytes": bytes,
             "bits_per_position": bpp,
-            "ratio": raw as f64 / bytes.len() as f64,
+            "ratio": raw as f64 / bytes as f64,
             "axis_order": super::io_cmds::AXIS_ORDER,
-            "dims": super::io_cmds::xyz(&r.dims),
-            "channels": r.channels,
-            "dtype": r.sample_type().name(),
+            "dims": super::io_cmds::xyz(&shape.dims),
+            "channels": shape.channels,
+            "dtype": shape.sample_type.name(),
             "scheme": a.scheme.name(),
             "boundary": a.boundary.name(),
             "tile": super::io_cmds::xyz(&tile),
@@ -178,9 +207,9 @@ pub fn encode(a: EncodeArgs) -> CliResult {
     println!(
         "{}: {} bytes, {:.4} bits per position ({})",
         a.output.display(),
-        bytes.len(),
+        bytes,
         bpp,
-        r.summary()
+        crate::io::summary(&shape.dims, shape.channels, shape.sample_type, shape.kind)
     );
     Ok(())
 }
@@ -269,19 +298,18 @@ pub fn decode(a: DecodeArgs) -> CliResult {
     };
     if a.level > 0 {
         // a level the file does not hold is an error, not a silent clamp
-        let i = match &stdin {
-            Some(bytes) => codec::info(bytes),
-            None => std::fs::read(&a.input)
-                .map_err(crate::Error::from)
-                .and_then(|bytes| codec::info(&bytes)),
+        // the header alone tells (a file is not read whole)
+        let levels = match &stdin {
+            Some(bytes) => codec::info(bytes).map(|i| i.levels),
+            None => codec::header_of_file(&a.input).and_then(|h| codec::depth_of(&h)),
         }
         .map_err(|e| Failure::context(&name, e))?;
-        if a.level > i.levels {
+        if a.level > levels {
             return Err(Failure::context(
                 &name,
                 crate::Error::parameter(
                     "--level",
-                    format!("{} of a file with levels 0 to {}", a.level, i.levels),
+                    format!("{} of a file with levels 0 to {levels}", a.level),
                     "one of the levels the file holds",
                 ),
             ));
@@ -317,6 +345,35 @@ pub fn decode(a: DecodeArgs) -> CliResult {
         region,
     };
     let t = std::time::Instant::now();
+    if stdin.is_none()
+        && range.is_none()
+        && !super::io_cmds::is_std(&a.output)
+        && crate::io::stream::streams_output(&a.output)
+    {
+        // raw, NRRD and TIFF outputs are written a tile-row (or tile-slab) at a time
+        let mut got = None;
+        crate::fsutil::write_atomic(&a.output, |w| {
+            let mut d = codec::SlabDecoder::open(&a.input, &opts)?;
+            let shape = d.shape().clone();
+            crate::io::stream::write_slabs(&a.output, w, &shape, &mut || d.next_slab())?;
+            got = Some(codec::SlabDecode {
+                shape,
+                complete: d.complete(),
+                bytes_read: d.bytes_read(),
+            });
+            Ok::<(), crate::Error>(())
+        })
+        .map_err(|e| Failure::context(&name, e))?;
+        let d = got.expect("set by a successful decode");
+        return decode_report(
+            &a,
+            &name,
+            &d.shape,
+            d.complete,
+            t.elapsed().as_secs_f64(),
+            Some(d.bytes_read),
+        );
+    }
     let d = match &stdin {
         Some(bytes) => codec::decode(bytes, &opts),
         None => codec::decode_file(&a.input, &opts),
@@ -331,7 +388,20 @@ pub fn decode(a: DecodeArgs) -> CliResult {
     };
     let seconds = t.elapsed().as_secs_f64();
     write_output_as(&a.output, &raster, false, None, a.format.as_deref())?;
-    if !d.complete {
+    let shape = crate::io::slab::Shape::of(&raster);
+    decode_report(&a, &name, &shape, d.complete, seconds, None)
+}
+
+/// The end of `mra decode`: the truncation note and the `--json` report.
+fn decode_report(
+    a: &DecodeArgs,
+    name: &str,
+    shape: &crate::io::slab::Shape,
+    complete: bool,
+    seconds: f64,
+    bytes_read: Option<u64>,
+) -> CliResult {
+    if !complete {
         eprintln!("mra: {name}: truncated file, decoded what it holds");
     }
     if a.json {
@@ -339,13 +409,18 @@ pub fn decode(a: DecodeArgs) -> CliResult {
             "input": a.input.display().to_string(),
             "output": a.output.display().to_string(),
             "axis_order": super::io_cmds::AXIS_ORDER,
-            "dims": super::io_cmds::xyz(&raster.dims),
-            "channels": raster.channels,
-            "dtype": raster.sample_type().name(),
+            "dims": super::io_cmds::xyz(&shape.dims),
+            "channels": shape.channels,
+            "dtype": shape.sample_type.name(),
             "level": a.level,
-            "complete": d.complete,
+            "complete": complete,
             "seconds": seconds,
         });
+        let mut v = v;
+        if let Some(b) = bytes_read {
+            // written in slabs: the bytes of the .mra file read (a region reads its tiles)
+            v["bytes_read"] = b.into();
+        }
         super::io_cmds::report(&a.output, &v.to_string())?;
     }
     Ok(())

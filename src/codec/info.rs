@@ -107,6 +107,14 @@ pub fn info(bytes: &[u8]) -> Result<Info> {
     })
 }
 
+/// The levels a file of header `h` holds (those of a tile's pyramid in a tiled file),
+/// as [`info`] gives them.
+pub fn depth_of(h: &crate::format::Header) -> Result<usize> {
+    let mut th = h.clone();
+    th.dims = th.tile.clone();
+    Ok(Plan::new(&th)?.pyr.depth())
+}
+
 /// Kind names for the CLI.
 pub fn kind_name(k: DataKind) -> &'static str {
     match k {

@@ -37,9 +37,12 @@ mod write;
 pub use container::ChunkInfo;
 pub use decode::coarse_offset;
 pub use frames::frames;
-pub use info::{info, kind_name, Info};
+pub use info::{depth_of, info, kind_name, Info};
 pub use options::{DecodeOptions, Decoded, EncodeOptions, Rate};
 pub use rate::keep_psnr;
-pub use read::{decode, decode_file, decode_seek, decode_stream, header_of, header_of_file};
+pub use read::{
+    decode, decode_file, decode_file_slabs, decode_seek, decode_stream, header_of, header_of_file,
+    SlabDecode, SlabDecoder,
+};
 pub use tiles::default_tile;
-pub use write::{encode, encode_tiled};
+pub use write::{encode, encode_stream, encode_tiled};

@@ -7,6 +7,8 @@ use super::decode::reconstruct;
 use super::options::{DecodeOptions, Decoded};
 use super::tiles;
 use crate::format::Header;
+use crate::io::slab::{Shape, SlabSink};
+use crate::io::Samples;
 use crate::Result;
 use std::io::{Read, Seek, SeekFrom};
 use std::path::Path;
@@ -45,7 +47,6 @@ pub fn decode_seek<R: Read + Seek>(mut src: R, len: u64, opts: &DecodeOptions) -
     let (rd, first, header) = read_head(&mut src, len)?;
     if header.is_tiled() {
         let at = rd.position();
-        drop(rd);
         return tiles::decode_seek(&mut src, len, at, header, opts);
     }
     one_tile(
@@ -77,4 +78,132 @@ pub fn decode_file(path: &Path, opts: &DecodeOptions) -> Result<Decoded> {
     let f = std::fs::File::open(path)?;
     let len = f.metadata()?.len();
     decode_seek(std::io::BufReader::new(f), len, opts)
+}
+
+/// What [`decode_file_slabs`] decoded.
+#[derive(Clone, Debug)]
+pub struct SlabDecode {
+    /// The output's extents, type and metadata.
+    pub shape: Shape,
+    /// False when the file ended before its `MEND` chunk (only with `allow_truncated`).
+    pub complete: bool,
+    /// Bytes of the file the decoder read: what a region costs.
+    pub bytes_read: u64,
+}
+
+/// A reader counting the bytes it hands out.
+struct Counting<R> {
+    inner: R,
+    count: std::rc::Rc<std::cell::Cell<u64>>,
+}
+
+impl<R: Read> Read for Counting<R> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        let n = self.inner.read(buf)?;
+        self.count.set(self.count.get() + n as u64);
+        Ok(n)
+    }
+}
+
+impl<R: Seek> Seek for Counting<R> {
+    fn seek(&mut self, pos: SeekFrom) -> std::io::Result<u64> {
+        self.inner.seek(pos)
+    }
+}
+
+type CountedFile = Counting<std::io::BufReader<std::fs::File>>;
+
+/// A file decoded a slab of rows at a time: a tiled file one tile-row (2-D) or
+/// tile-slab (3-D) at a time, reading only the tiles `opts.region` meets; a file of one
+/// tile decoded whole and handed over as one slab.
+pub struct SlabDecoder {
+    tiled: Option<tiles::TiledSlabs<CountedFile>>,
+    /// A file of one tile: its samples (until handed over) and completeness.
+    whole: Option<Samples>,
+    whole_complete: bool,
+    shape: Shape,
+    count: std::rc::Rc<std::cell::Cell<u64>>,
+}
+
+impl SlabDecoder {
+    /// Open `path` and read its header (and a tiled file's index).
+    pub fn open(path: &Path, opts: &DecodeOptions) -> Result<SlabDecoder> {
+        let f = std::fs::File::open(path)?;
+        let len = f.metadata()?.len();
+        let count = std::rc::Rc::new(std::cell::Cell::new(0));
+        let mut src = Counting {
+            inner: std::io::BufReader::new(f),
+            count: count.clone(),
+        };
+        let (rd, first, header) = read_head(&mut src, len)?;
+        if header.is_tiled() {
+            let at = rd.position();
+            let t = tiles::TiledSlabs::new(src, len, at, header, opts)?;
+            return Ok(SlabDecoder {
+                shape: t.shape().clone(),
+                tiled: Some(t),
+                whole: None,
+                whole_complete: true,
+                count,
+            });
+        }
+        let d = one_tile(
+            read_rest(rd, first, header, opts.level, opts.allow_truncated)?,
+            opts,
+        )?;
+        Ok(SlabDecoder {
+            shape: Shape::of(&d.raster),
+            tiled: None,
+            whole: Some(d.raster.samples),
+            whole_complete: d.complete,
+            count,
+        })
+    }
+
+    /// The output's extents, type and metadata.
+    pub fn shape(&self) -> &Shape {
+        &self.shape
+    }
+
+    /// The next rows of the output (along the slowest axis), `None` after the last.
+    pub fn next_slab(&mut self) -> Result<Option<Samples>> {
+        match &mut self.tiled {
+            Some(t) => t.next_slab(),
+            None => Ok(self.whole.take()),
+        }
+    }
+
+    /// False when the file ended before its `MEND` chunk (only with `allow_truncated`);
+    /// final after the last slab.
+    pub fn complete(&self) -> bool {
+        match &self.tiled {
+            Some(t) => t.complete(),
+            None => self.whole_complete,
+        }
+    }
+
+    /// Bytes of the file the decoder has read so far (the buffered reader under it
+    /// reads ahead by up to 8 KiB after each seek).
+    pub fn bytes_read(&self) -> u64 {
+        self.count.get()
+    }
+}
+
+/// Decode a file into `sink` a slab of rows at a time ([`SlabDecoder`]).
+pub fn decode_file_slabs(
+    path: &Path,
+    opts: &DecodeOptions,
+    sink: &mut dyn SlabSink,
+) -> Result<SlabDecode> {
+    let mut d = SlabDecoder::open(path, opts)?;
+    sink.begin(d.shape())?;
+    while let Some(s) = d.next_slab()? {
+        sink.rows(&s)?;
+    }
+    sink.end()?;
+    Ok(SlabDecode {
+        shape: d.shape().clone(),
+        complete: d.complete(),
+        bytes_read: d.bytes_read(),
+    })
 }

@@ -12,17 +12,16 @@
 //! Tiles are coded and decoded in parallel (rayon); each tile's bytes depend on the tile
 //! alone, so the file is the same whatever the thread count.
 
-use super::container::{read_head, truncated, MEND, META};
+use super::container::{read_head, truncated, MEND};
 use super::decode::{coarse_maps_of, decode_untiled};
-use super::encode::encode_filled;
-use super::lossy::{finite_range, prepare, Prepared};
-use super::options::{DecodeOptions, Decoded, EncodeOptions, Rate};
+use super::options::{DecodeOptions, Decoded, EncodeOptions};
 use super::plan::Plan;
+#[cfg(doc)]
 use super::voids::with_voids_filled;
 use super::{layout, meta};
-use crate::format::{self, put_chunk, Chunk, ChunkReader, Cursor, Header, Mode};
+use crate::format::{self, Chunk, ChunkReader, Cursor, Header};
+use crate::io::slab::{MemorySlabs, Shape};
 use crate::io::{AxisMap, Metadata, Raster, SampleType, Samples};
-use crate::quantize::{self, RHO};
 use crate::{Error, Result};
 use rayon::prelude::*;
 use std::io::{Read, Seek, SeekFrom};
@@ -230,282 +229,17 @@ pub(super) fn crop_raster(r: &Raster, ranges: &[Range<usize>]) -> Result<Raster>
 
 // ---------------------------------------------------------------- encoding
 
-/// Encode a raster as tiles of extents `tile` (slowest first). Each tile's voids are
-/// filled in the tile ([`with_voids_filled`]) and listed in the tile's own `mETA`, with
-/// the raster's no-data value, so that the tile's decode marks them again.
+mod encode;
+pub(crate) use encode::encode_slabs;
+
+/// Encode a raster as tiles of extents `tile` (slowest first), as [`encode_slabs`]
+/// does from a raster in memory. Each tile's voids are filled in the tile
+/// ([`with_voids_filled`]) and listed in the tile's own `mETA`, with the raster's
+/// no-data value, so that the tile's decode marks them again.
 pub(super) fn encode_tiled(r: &Raster, opts: &EncodeOptions, tile: &[usize]) -> Result<Vec<u8>> {
-    let grid = Grid::new(&r.dims, tile)?;
-    let n = grid.len();
-    let tile_of = |i: usize| -> Result<Raster> {
-        let g = grid.ranges(i);
-        let mut t = Raster::new(
-            grid.tile_dims(i),
-            r.channels,
-            crop_samples(&r.samples, &r.dims, r.channels, &g),
-            r.kind,
-        )?;
-        t.meta.nodata = r.meta.nodata;
-        Ok(with_voids_filled(&t)?.unwrap_or(t))
-    };
-    let (lo, hi) = finite_range(&r.samples);
-    let range = (hi - lo).max(1e-30);
-    let all: Vec<usize> = (0..n).collect();
-    let coded: Vec<Vec<u8>> = match opts.rate {
-        // the step does not depend on the tile's samples
-        Rate::Lossless | Rate::MaxError(_) | Rate::Threshold(_) => all
-            .par_iter()
-            .map(|&i| encode_filled(&tile_of(i)?, opts))
-            .collect::<Result<_>>()?,
-        Rate::Quality(q) => {
-            if !(1.0..=100.0).contains(&q) {
-                return Err(Error::parameter("quality", q, "1 to 100"));
-            }
-            let step = range * (2f64).powf(-q / 10.0);
-            code_at(&all, &tile_of, opts, step, true)?
-        }
-        Rate::Keep(k) => {
-            if !(0.0..=100.0).contains(&k) {
-                return Err(Error::parameter("keep", k, "a percentage from 0 to 100"));
-            }
-            // the threshold of the largest k% over every tile's details
-            let mut w: Vec<f32> = all
-                .par_iter()
-                .map(|&i| Ok(prepare(&tile_of(i)?, opts, Mode::Lossy)?.weighted_details()))
-                .collect::<Result<Vec<_>>>()?
-                .concat();
-            let t = quantize::keep_threshold(&mut w, k);
-            drop(w);
-            let step = if t.is_infinite() {
-                range * 1e6
-            } else {
-                (t / (1.0 - RHO)).max(range * 1e-9)
-            };
-            code_at(&all, &tile_of, opts, step, false)?
-        }
-        Rate::Psnr(_) | Rate::PsnrRange(..) | Rate::Bpp(_) => {
-            let step = search_step(r, &grid, &tile_of, opts, range)?;
-            code_at(&all, &tile_of, opts, step, true)?
-        }
-    };
-    assemble(r, tile, &coded)
-}
-
-/// Each tile of `tiles` coded at base step `step` (with rate–distortion optimised
-/// indices when `rdo`): its one-tile file.
-fn code_at(
-    tiles: &[usize],
-    tile_of: &(impl Fn(usize) -> Result<Raster> + Sync),
-    opts: &EncodeOptions,
-    step: f64,
-    rdo: bool,
-) -> Result<Vec<Vec<u8>>> {
-    tiles
-        .par_iter()
-        .map(|&i| {
-            let mut p = prepare(&tile_of(i)?, opts, Mode::Lossy)?;
-            if rdo {
-                p.optimise();
-            }
-            Ok(p.code(step))
-        })
-        .collect()
-}
-
-/// The base step of `--psnr` and `--bpp` for the whole raster: a search on `x = ln step`
-/// over the tiles (every ⌈n/64⌉-th tile when there are more than
-/// [`SEARCH_SAMPLE_TILES`]), each candidate measured on all of them at once: the PSNR
-/// of their summed squared error, or their bits over their positions.
-fn search_step(
-    r: &Raster,
-    grid: &Grid,
-    tile_of: &(impl Fn(usize) -> Result<Raster> + Sync),
-    opts: &EncodeOptions,
-    range: f64,
-) -> Result<f64> {
-    let n = grid.len();
-    let every = n.div_ceil(SEARCH_SAMPLE_TILES).max(1);
-    let sample: Vec<usize> = (0..n).step_by(every).collect();
-    let prepared: Vec<(Raster, Prepared)> = sample
-        .par_iter()
-        .map(|&i| {
-            let t = tile_of(i)?;
-            let mut p = prepare(&t, opts, Mode::Lossy)?;
-            p.optimise();
-            Ok((t, p))
-        })
-        .collect::<Result<_>>()?;
-    let positions: f64 = prepared.iter().map(|(t, _)| t.positions() as f64).sum();
-    // the bytes outside the tiles' own files (signature, HEAD, mETA, TIDX, TILE framing,
-    // MEND), the sample's share of them
-    let outside = 8
-        + 12
-        + 52
-        + 8 * r.dims.len()
-        + {
-            let m = meta::to_bytes(&r.meta).len();
-            if m > 0 {
-                12 + m
-            } else {
-                0
-            }
-        }
-        + 12
-        + 16 * n
-        + (12 + 4 - 8) * n
-        + 12;
-    let outside = outside as f64 * positions / r.positions() as f64;
-    match opts.rate {
-        Rate::Bpp(b) => {
-            if !(b > 0.0 && b.is_finite()) {
-                return Err(Error::parameter(
-                    "bpp",
-                    b,
-                    "a positive number of bits per position",
-                ));
-            }
-            // met (≥ 0) within the budget; within 1% under it below −ln 0.99
-            search(range, true, -(0.99f64.ln()), |step| {
-                let bytes: usize = prepared.par_iter().map(|(_, p)| p.code(step).len()).sum();
-                Ok(b.ln() - ((bytes as f64 + outside) * 8.0 / positions).ln())
-            })
-        }
-        Rate::Psnr(db) | Rate::PsnrRange(db, _) => {
-            if !(db > 0.0 && db < 400.0) {
-                return Err(Error::parameter(
-                    "psnr",
-                    db,
-                    "a target in dB between 0 and 400",
-                ));
-            }
-            let peak = match opts.rate {
-                Rate::PsnrRange(_, p) => {
-                    if !(p.is_finite() && p > 0.0) {
-                        return Err(Error::parameter(
-                            "data range",
-                            p,
-                            "a positive, finite peak-to-peak range",
-                        ));
-                    }
-                    p
-                }
-                _ => crate::metrics::skimage_data_range(&r.samples),
-            };
-            let count = positions * r.channels as f64;
-            search(range, false, 0.02, |step| {
-                let sse = prepared
-                    .par_iter()
-                    .map(|(t, p)| {
-                        let d = p.decoded(step)?;
-                        let (a, b) = (t.samples.to_f64(), d.samples.to_f64());
-                        Ok(a.iter()
-                            .zip(&b)
-                            .filter(|(x, _)| x.is_finite())
-                            .map(|(x, y)| (x - y) * (x - y))
-                            .sum::<f64>())
-                    })
-                    .collect::<Result<Vec<f64>>>()?
-                    .iter()
-                    .sum::<f64>();
-                if sse == 0.0 {
-                    return Ok(f64::INFINITY);
-                }
-                Ok(10.0 * (peak * peak * count / sse).log10() - db)
-            })
-        }
-        _ => unreachable!("search_step is for --psnr and --bpp"),
-    }
-}
-
-/// Search on `x = ln step` for the step whose `v = f(step)` is closest to 0 from above
-/// (`v ≥ 0`: target met; met for large steps when `large_ok`, for small ones otherwise):
-/// steps of doubling size until the target is bracketed, then the secant between the
-/// bracket's ends kept inside its middle half (the bracket shrinks by at least a quarter
-/// each time); stops at a met step within `tol` or a bracket under 0.1% of the step.
-fn search(range: f64, large_ok: bool, tol: f64, f: impl Fn(f64) -> Result<f64>) -> Result<f64> {
-    let (x_min, x_max) = ((range * 1e-7).ln(), (range * 4.0).ln());
-    let mut met: Option<(f64, f64)> = None;
-    let mut unmet: Option<(f64, f64)> = None;
-    let mut x = (range / 32.0).ln();
-    let mut jump = 1.0;
-    for _ in 0..48 {
-        let v = f(x.exp())?;
-        if v >= 0.0 {
-            if v <= tol {
-                return Ok(x.exp());
-            }
-            met = Some((x, v));
-        } else {
-            unmet = Some((x, v));
-        }
-        x = match (met, unmet) {
-            (Some((xm, vm)), Some((xu, vu))) => {
-                let (lo, hi) = (xm.min(xu), xm.max(xu));
-                if hi - lo < 1e-3 {
-                    break;
-                }
-                let t = if vm.is_finite() {
-                    xm + (vm - 0.5 * tol) * (xu - xm) / (vm - vu)
-                } else {
-                    0.5 * (lo + hi)
-                };
-                t.clamp(lo + 0.25 * (hi - lo), hi - 0.25 * (hi - lo))
-            }
-            _ => {
-                // toward the other side: larger steps when met and small steps are not
-                // the met side, …
-                let toward_large = (v >= 0.0) != large_ok;
-                let next = (x + if toward_large { jump } else { -jump }).clamp(x_min, x_max);
-                jump *= 2.0;
-                if next == x {
-                    break;
-                }
-                next
-            }
-        };
-    }
-    Ok(match met {
-        Some((x, _)) => x.exp(),
-        None if large_ok => x_max.exp(),
-        None => x_min.exp(),
-    })
-}
-
-/// The chunks of a tiled file from each tile's one-tile file.
-fn assemble(r: &Raster, tile: &[usize], coded: &[Vec<u8>]) -> Result<Vec<u8>> {
-    let first = coded
-        .first()
-        .ok_or_else(|| Error::parameter("tile", 0, "a tile"))?;
-    // the tiles' common fields from the first tile's HEAD (after the signature)
-    let hl = u32::from_le_bytes(first[8..12].try_into().unwrap()) as usize;
-    let mut h = Header::parse(&first[16..16 + hl])?;
-    h.minor = format::MINOR_TILED;
-    h.dims = r.dims.clone();
-    h.tile = tile.to_vec();
-    let (lo, hi) = finite_range(&r.samples);
-    (h.min, h.max) = (lo, hi);
-    let mut out = format::SIGNATURE.to_vec();
-    put_chunk(&mut out, super::container::HEAD, &h.to_bytes());
-    let m = meta::to_bytes(&r.meta);
-    if !m.is_empty() {
-        put_chunk(&mut out, META, &m);
-    }
-    let mut at = out.len() as u64 + 12 + 16 * coded.len() as u64;
-    let mut index = Vec::with_capacity(16 * coded.len());
-    for c in coded {
-        let bytes = 12 + 4 + (c.len() - 8) as u64;
-        index.extend_from_slice(&at.to_le_bytes());
-        index.extend_from_slice(&bytes.to_le_bytes());
-        at += bytes;
-    }
-    put_chunk(&mut out, TIDX, &index);
-    for (i, c) in coded.iter().enumerate() {
-        let mut p = Vec::with_capacity(c.len() - 4);
-        p.extend_from_slice(&(i as u32).to_le_bytes());
-        p.extend_from_slice(&c[8..]);
-        put_chunk(&mut out, TILE, &p);
-    }
-    put_chunk(&mut out, MEND, &[]);
-    Ok(out)
+    let mut out = std::io::Cursor::new(Vec::new());
+    encode_slabs(&mut MemorySlabs::new(r), opts, tile, &mut out)?;
+    Ok(out.into_inner())
 }
 
 // ---------------------------------------------------------------- decoding
@@ -528,6 +262,23 @@ pub(super) struct Stitch {
 
 impl Stitch {
     pub(super) fn new(h: &Header, level: usize, region: Option<&[Range<usize>]>) -> Result<Stitch> {
+        let mut st = Stitch::geometry(h, level, region)?;
+        st.alloc()?;
+        Ok(st)
+    }
+
+    /// Zero samples for the output box.
+    fn alloc(&mut self) -> Result<()> {
+        let n = crate::io::bytes::sample_count(
+            &self.out.iter().map(|g| g.len()).collect::<Vec<_>>(),
+            self.header.channels,
+        )?;
+        self.samples = zeros(self.header.sample_type, n);
+        Ok(())
+    }
+
+    /// The places of the tiles and the output box, without the output's samples.
+    fn geometry(h: &Header, level: usize, region: Option<&[Range<usize>]>) -> Result<Stitch> {
         let grid = Grid::new(&h.dims, &h.tile)?;
         let nd = h.dims.len();
         // the level-k extent of a tile depends on its extent along each axis alone
@@ -585,13 +336,13 @@ impl Stitch {
                     .collect::<Result<_>>()?
             }
         };
-        let n = crate::io::bytes::sample_count(
+        crate::io::bytes::sample_count(
             &out.iter().map(|g| g.len()).collect::<Vec<_>>(),
             h.channels,
         )?;
         let done = vec![false; grid.len()];
         Ok(Stitch {
-            samples: zeros(h.sample_type, n),
+            samples: zeros(h.sample_type, 0),
             grid,
             level,
             header: h.clone(),
@@ -710,9 +461,56 @@ impl Stitch {
 
     /// The output raster with the file's metadata moved to it.
     pub(super) fn finish(self, meta: &Metadata) -> Result<Raster> {
+        let m = self.out_meta(meta)?;
         let h = &self.header;
         let dims: Vec<usize> = self.out.iter().map(|g| g.len()).collect();
-        let mut r = Raster::new(dims.clone(), h.channels, self.samples, h.kind)?;
+        let mut r = Raster::new(dims, h.channels, self.samples, h.kind)?;
+        r.meta = m;
+        Ok(r)
+    }
+
+    /// The output's shape: the output box's extents, the file's metadata moved to it.
+    fn out_shape(&self, meta: &Metadata) -> Result<Shape> {
+        let h = &self.header;
+        Ok(Shape {
+            dims: self.out.iter().map(|g| g.len()).collect(),
+            channels: h.channels,
+            sample_type: h.sample_type,
+            kind: h.kind,
+            meta: self.out_meta(meta)?,
+        })
+    }
+
+    /// The rows of the output that grid row `g0` (along the slowest axis) covers, as a
+    /// stitch of their own with zero samples; `None` when the row is outside the box.
+    fn row_slab(&self, g0: usize) -> Result<Option<Stitch>> {
+        let (lo, hi) = (
+            self.offs[0][g0].max(self.out[0].start),
+            self.offs[0][g0 + 1].min(self.out[0].end),
+        );
+        if lo >= hi {
+            return Ok(None);
+        }
+        let mut out = self.out.clone();
+        out[0] = lo..hi;
+        let mut st = Stitch {
+            grid: self.grid.clone(),
+            level: self.level,
+            header: self.header.clone(),
+            offs: self.offs.clone(),
+            out,
+            samples: zeros(self.header.sample_type, 0),
+            done: Vec::new(),
+        };
+        st.done = vec![false; st.grid.len()];
+        st.alloc()?;
+        Ok(Some(st))
+    }
+
+    /// The file's metadata moved to the output box.
+    fn out_meta(&self, meta: &Metadata) -> Result<Metadata> {
+        let h = &self.header;
+        let dims: Vec<usize> = self.out.iter().map(|g| g.len()).collect();
         // a full tile's pyramid places the coarse samples as the whole raster's would
         let mut th = h.clone();
         th.dims = self.grid.tile.clone();
@@ -724,8 +522,7 @@ impl Stitch {
             .map(|(m, g)| m.then(AxisMap::crop(g.start)))
             .collect();
         // voids were marked in each tile's decode
-        r.meta = meta.resampled(&h.dims, &dims, &maps);
-        Ok(r)
+        Ok(meta.resampled(&h.dims, &dims, &maps))
     }
 }
 
@@ -755,7 +552,7 @@ fn batch_size() -> usize {
 }
 
 /// The tile index of a `TILE` chunk and the rest of its payload.
-fn tile_payload<'a>(ch: &'a Chunk, n: usize) -> Result<(usize, &'a [u8])> {
+fn tile_payload(ch: &Chunk, n: usize) -> Result<(usize, &[u8])> {
     let mut c = Cursor::new(&ch.payload, "TILE");
     let i = c.u32()? as usize;
     if i >= n {
@@ -952,22 +749,18 @@ pub(super) fn decode_sequential<R: Read>(
     })
 }
 
-/// Decode a tiled file from a seekable stream of `len` bytes whose `HEAD` has been read
-/// by `rd` (positioned after it): `mETA` and `TIDX` read in order, then only the tiles
-/// the region meets, each found by the index.
-pub(super) fn decode_seek<R: Read + Seek>(
+/// Read `mETA` and `TIDX` of a tiled file of `n` tiles from a seekable stream of `len`
+/// bytes, from byte `after_head` (just after `HEAD`).
+fn read_index<R: Read + Seek>(
     src: &mut R,
     len: u64,
     after_head: u64,
-    header: Header,
-    opts: &DecodeOptions,
-) -> Result<Decoded> {
-    let mut st = Stitch::new(&header, opts.level, opts.region.as_deref())?;
-    let n = st.tiles();
+    n: usize,
+) -> Result<(Metadata, Vec<(u64, u64)>)> {
     let mut meta = Metadata::default();
     src.seek(SeekFrom::Start(after_head))?;
     let mut rd = ChunkReader::at(&mut *src, after_head, len);
-    let index = loop {
+    loop {
         let ch = match rd.next_chunk()? {
             Ok(c) => c,
             Err(_) => {
@@ -979,7 +772,7 @@ pub(super) fn decode_seek<R: Read + Seek>(
         };
         match &ch.kind {
             b"mETA" => meta = meta::parse(&ch.payload),
-            b"TIDX" => break parse_index(&ch, n, len)?,
+            b"TIDX" => return Ok((meta, parse_index(&ch, n, len)?)),
             b"HEAD" => return Err(Error::format("a second HEAD chunk", "one HEAD chunk")),
             k => {
                 if k[0].is_ascii_uppercase() {
@@ -990,71 +783,105 @@ pub(super) fn decode_seek<R: Read + Seek>(
                 }
             }
         }
+    }
+}
+
+/// The `TILE` payload (after its index) of tile `i`, found by its index entry
+/// `(off, l)`; `None` when the file ends before it and truncated input is allowed.
+fn fetch_tile<R: Read + Seek>(
+    src: &mut R,
+    len: u64,
+    n: usize,
+    i: usize,
+    (off, l): (u64, u64),
+    allow_truncated: bool,
+) -> Result<Option<Vec<u8>>> {
+    if off + l > len {
+        if !allow_truncated {
+            return Err(Error::format(
+                format!(
+                    "file truncated: tile {i} at bytes {off}..{} of {len}",
+                    off + l
+                ),
+                "a complete file (or --allow-truncated)",
+            ));
+        }
+        return Ok(None);
+    }
+    src.seek(SeekFrom::Start(off))?;
+    let ch = match ChunkReader::at(&mut *src, off, off + l).next_chunk()? {
+        Ok(c) if &c.kind == TILE && c.payload.len() as u64 + 12 == l => c,
+        _ => {
+            return Err(Error::format(
+                format!("TIDX entry of tile {i} ({l} bytes at byte {off}) not on its TILE chunk"),
+                "an index pointing at each tile's chunk",
+            ))
+        }
     };
-    drop(rd);
+    let (j, inner) = tile_payload(&ch, n)?;
+    if j != i {
+        return Err(Error::format(
+            format!("TIDX entry of tile {i} on the chunk of tile {j} (byte {off})"),
+            "an index pointing at each tile's chunk",
+        ));
+    }
+    Ok(Some(inner.to_vec()))
+}
+
+/// Whether a `MEND` chunk follows the last tile (a whole decode checks it).
+fn check_end<R: Read + Seek>(
+    src: &mut R,
+    len: u64,
+    after_head: u64,
+    index: &[(u64, u64)],
+    allow_truncated: bool,
+) -> Result<bool> {
+    let end = index
+        .iter()
+        .map(|&(o, l)| o + l)
+        .max()
+        .unwrap_or(after_head);
+    src.seek(SeekFrom::Start(end))?;
+    let ok = matches!(ChunkReader::at(&mut *src, end, len).next_chunk()?, Ok(c) if &c.kind == MEND);
+    if !ok && !allow_truncated {
+        return Err(Error::format(
+            format!("no MEND chunk after the last tile (byte {end} of {len})"),
+            "a complete file ending with MEND (or --allow-truncated)",
+        ));
+    }
+    Ok(ok)
+}
+
+/// Decode a tiled file from a seekable stream of `len` bytes whose `HEAD` has been read
+/// (ending at byte `after_head`): `mETA` and `TIDX` read in order, then only the tiles
+/// the region meets, each found by the index.
+pub(super) fn decode_seek<R: Read + Seek>(
+    src: &mut R,
+    len: u64,
+    after_head: u64,
+    header: Header,
+    opts: &DecodeOptions,
+) -> Result<Decoded> {
+    let mut st = Stitch::new(&header, opts.level, opts.region.as_deref())?;
+    let n = st.tiles();
+    let (meta, index) = read_index(src, len, after_head, n)?;
     let mut complete = true;
     let mut batch = Vec::new();
-    for (i, &(off, l)) in index.iter().enumerate() {
+    for (i, &e) in index.iter().enumerate() {
         if !st.wanted(i) {
             continue;
         }
-        if off + l > len {
-            if !opts.allow_truncated {
-                return Err(Error::format(
-                    format!(
-                        "file truncated: tile {i} at bytes {off}..{} of {len}",
-                        off + l
-                    ),
-                    "a complete file (or --allow-truncated)",
-                ));
-            }
-            complete = false;
-            continue;
+        match fetch_tile(src, len, n, i, e, opts.allow_truncated)? {
+            Some(t) => batch.push((i, t)),
+            None => complete = false,
         }
-        src.seek(SeekFrom::Start(off))?;
-        let ch = match ChunkReader::at(&mut *src, off, off + l).next_chunk()? {
-            Ok(c) if &c.kind == TILE && c.payload.len() as u64 + 12 == l => c,
-            _ => {
-                return Err(Error::format(
-                    format!(
-                        "TIDX entry of tile {i} ({l} bytes at byte {off}) not on its TILE chunk"
-                    ),
-                    "an index pointing at each tile's chunk",
-                ))
-            }
-        };
-        let (j, inner) = tile_payload(&ch, n)?;
-        if j != i {
-            return Err(Error::format(
-                format!("TIDX entry of tile {i} on the chunk of tile {j} (byte {off})"),
-                "an index pointing at each tile's chunk",
-            ));
-        }
-        batch.push((i, inner.to_vec()));
         if batch.len() >= batch_size() {
             decode_batch(&mut st, &mut batch, opts.allow_truncated, &mut complete)?;
         }
     }
     decode_batch(&mut st, &mut batch, opts.allow_truncated, &mut complete)?;
-    // a whole decode also checks that the file ends with MEND after the last tile
     if opts.region.is_none() {
-        let end = index
-            .iter()
-            .map(|&(o, l)| o + l)
-            .max()
-            .unwrap_or(after_head);
-        src.seek(SeekFrom::Start(end))?;
-        let ok =
-            matches!(ChunkReader::at(&mut *src, end, len).next_chunk()?, Ok(c) if &c.kind == MEND);
-        if !ok {
-            if !opts.allow_truncated {
-                return Err(Error::format(
-                    format!("no MEND chunk after the last tile (byte {end} of {len})"),
-                    "a complete file ending with MEND (or --allow-truncated)",
-                ));
-            }
-            complete = false;
-        }
+        complete &= check_end(src, len, after_head, &index, opts.allow_truncated)?;
     }
     let raster = st.finish(&meta)?;
     Ok(Decoded {
@@ -1062,4 +889,101 @@ pub(super) fn decode_seek<R: Read + Seek>(
         header,
         complete,
     })
+}
+
+/// [`decode_seek`] one tile-row (2-D) or tile-slab (3-D) at a time, so that memory
+/// holds one row of tiles, not the output: the output's shape first, then its rows in
+/// order ([`TiledSlabs::next_slab`]).
+pub(super) struct TiledSlabs<R> {
+    src: R,
+    len: u64,
+    after_head: u64,
+    st: Stitch,
+    index: Vec<(u64, u64)>,
+    shape: Shape,
+    opts: DecodeOptions,
+    /// The next grid row along the slowest axis.
+    g0: usize,
+    complete: bool,
+    ended: bool,
+}
+
+impl<R: Read + Seek> TiledSlabs<R> {
+    /// Read `mETA` and `TIDX` of a tiled file whose `HEAD` ends at byte `after_head`.
+    pub(super) fn new(
+        mut src: R,
+        len: u64,
+        after_head: u64,
+        header: Header,
+        opts: &DecodeOptions,
+    ) -> Result<Self> {
+        let st = Stitch::geometry(&header, opts.level, opts.region.as_deref())?;
+        let (meta, index) = read_index(&mut src, len, after_head, st.tiles())?;
+        let shape = st.out_shape(&meta)?;
+        Ok(TiledSlabs {
+            src,
+            len,
+            after_head,
+            st,
+            index,
+            shape,
+            opts: opts.clone(),
+            g0: 0,
+            complete: true,
+            ended: false,
+        })
+    }
+
+    /// The output's extents, type and metadata.
+    pub(super) fn shape(&self) -> &Shape {
+        &self.shape
+    }
+
+    /// Whether every tile read was complete (known after the last slab).
+    pub(super) fn complete(&self) -> bool {
+        self.complete
+    }
+
+    /// The next rows of the output (those of one grid row), `None` after the last.
+    pub(super) fn next_slab(&mut self) -> Result<Option<Samples>> {
+        let n = self.st.tiles();
+        let rows = self.st.grid.counts[0];
+        let per_row = n / rows;
+        while self.g0 < rows {
+            let g0 = self.g0;
+            self.g0 += 1;
+            let Some(mut row) = self.st.row_slab(g0)? else {
+                continue;
+            };
+            let allow = self.opts.allow_truncated;
+            let mut batch = Vec::new();
+            for i in g0 * per_row..(g0 + 1) * per_row {
+                if !row.wanted(i) {
+                    continue;
+                }
+                match fetch_tile(&mut self.src, self.len, n, i, self.index[i], allow)? {
+                    Some(t) => batch.push((i, t)),
+                    None => self.complete = false,
+                }
+                if batch.len() >= batch_size() {
+                    decode_batch(&mut row, &mut batch, allow, &mut self.complete)?;
+                }
+            }
+            decode_batch(&mut row, &mut batch, allow, &mut self.complete)?;
+            return Ok(Some(row.samples));
+        }
+        if !self.ended {
+            self.ended = true;
+            if self.opts.region.is_none() {
+                self.complete &= check_end(
+                    &mut self.src,
+                    self.len,
+                    self.after_head,
+                    &self.index,
+                    self.opts.allow_truncated,
+                )?;
+            }
+        }
+        Ok(None)
+    }
 }

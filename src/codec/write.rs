@@ -4,6 +4,7 @@
 use super::encode::encode_filled;
 use super::options::EncodeOptions;
 use super::voids::with_voids_filled;
+use crate::io::slab::SlabSource;
 use crate::io::Raster;
 use crate::{Error, Result};
 
@@ -43,4 +44,25 @@ pub fn encode_tiled(r: &Raster, opts: &EncodeOptions, tile: &[usize]) -> Result<
         Some(filled) => encode_filled(&filled, opts),
         None => encode_filled(r, opts),
     }
+}
+
+/// [`encode_tiled`] of the raster `src` hands out in slabs, written into `out`; returns
+/// the bytes written. A tiled file is coded one tile-row (2-D) or tile-slab (3-D) at a
+/// time, so memory holds a slab and the tiles in flight (the rate modes that need the
+/// whole raster take a first pass over it, see [`super::tiles`]); one tile is read
+/// whole. The bytes are those of [`encode_tiled`] of the same raster.
+pub fn encode_stream<S: SlabSource + ?Sized, W: std::io::Write + std::io::Seek>(
+    src: &mut S,
+    opts: &EncodeOptions,
+    tile: &[usize],
+    out: &mut W,
+) -> Result<u64> {
+    let shape = src.shape().clone();
+    if tile != shape.dims.as_slice() {
+        return super::tiles::encode_slabs(src, opts, tile, out);
+    }
+    let r = shape.raster(shape.dims.clone(), src.read_rows(0..shape.dims[0])?)?;
+    let bytes = encode_tiled(&r, opts, tile)?;
+    out.write_all(&bytes)?;
+    Ok(bytes.len() as u64)
 }

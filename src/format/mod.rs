@@ -38,6 +38,26 @@ pub fn put_chunk(out: &mut Vec<u8>, kind: &[u8; 4], payload: &[u8]) {
     out.extend_from_slice(&c.finish().to_le_bytes());
 }
 
+/// Write a chunk whose payload is the concatenation of `parts` (as [`put_chunk`] would
+/// frame it); returns the bytes written, framing included.
+pub fn write_chunk<W: std::io::Write>(
+    w: &mut W,
+    kind: &[u8; 4],
+    parts: &[&[u8]],
+) -> std::io::Result<u64> {
+    let len: usize = parts.iter().map(|p| p.len()).sum();
+    w.write_all(&(len as u32).to_le_bytes())?;
+    w.write_all(kind)?;
+    let mut c = crc::Crc32c::new();
+    c.update(kind);
+    for p in parts {
+        w.write_all(p)?;
+        c.update(p);
+    }
+    w.write_all(&c.finish().to_le_bytes())?;
+    Ok(len as u64 + 12)
+}
+
 /// Append `v` as an unsigned LEB128 integer (7 bits a byte, low first).
 pub fn put_varint(out: &mut Vec<u8>, mut v: u64) {
     while v >= 0x80 {

@@ -25,6 +25,8 @@
 //! geometry.rs  where samples sit after a resample or crop ([`Metadata::resampled`])
 //! nodata.rs  void samples (NaN, `meta.nodata`) kept out of every filter
 //! raw.rs    headerless raw (.raw with dims/dtype/endian, .r16, .r32)
+//! slab.rs   a raster's shape, sources and sinks of slabs of rows
+//! stream.rs  the files read and written a slab at a time (raw, raw NRRD, TIFF)
 //! bytes.rs  endian decoding, size checks before allocation, atomic writes
 //! array.rs  rasters through the tensor engine (analyze / synthesize / pictures)
 //! pyramid_file.rs  the float32 TIFF / NRRD a pyramid is stored in, with its keys
@@ -88,7 +90,9 @@ pub mod png;
 pub mod pnm;
 pub mod pyramid_file;
 pub mod raw;
+pub mod slab;
 pub mod slices;
+pub mod stream;
 pub mod tiff;
 pub mod visual;
 
@@ -321,6 +325,57 @@ impl Samples {
         }
     }
 
+    /// `n` zero samples of type `t`.
+    pub fn zeros(t: SampleType, n: usize) -> Samples {
+        match t {
+            SampleType::U8 => Samples::U8(vec![0; n]),
+            SampleType::I8 => Samples::I8(vec![0; n]),
+            SampleType::U16 => Samples::U16(vec![0; n]),
+            SampleType::I16 => Samples::I16(vec![0; n]),
+            SampleType::U32 => Samples::U32(vec![0; n]),
+            SampleType::I32 => Samples::I32(vec![0; n]),
+            SampleType::F16 => Samples::F16(vec![half::f16::ZERO; n]),
+            SampleType::F32 => Samples::F32(vec![0.0; n]),
+            SampleType::F64 => Samples::F64(vec![0.0; n]),
+        }
+    }
+
+    /// The samples `r` (a copy).
+    pub fn range(&self, r: std::ops::Range<usize>) -> Samples {
+        match self {
+            Samples::U8(v) => Samples::U8(v[r].to_vec()),
+            Samples::I8(v) => Samples::I8(v[r].to_vec()),
+            Samples::U16(v) => Samples::U16(v[r].to_vec()),
+            Samples::I16(v) => Samples::I16(v[r].to_vec()),
+            Samples::U32(v) => Samples::U32(v[r].to_vec()),
+            Samples::I32(v) => Samples::I32(v[r].to_vec()),
+            Samples::F16(v) => Samples::F16(v[r].to_vec()),
+            Samples::F32(v) => Samples::F32(v[r].to_vec()),
+            Samples::F64(v) => Samples::F64(v[r].to_vec()),
+        }
+    }
+
+    /// Copy `n` samples of `src` from `from` to `to` (same sample type, both in range).
+    pub fn copy_from(&mut self, to: usize, src: &Samples, from: usize, n: usize) -> Result<()> {
+        macro_rules! pair {
+            ($($var:ident),*) => {
+                match (self, src) {
+                    $((Samples::$var(d), Samples::$var(s)) if to + n <= d.len() && from + n <= s.len() => {
+                        d[to..to + n].copy_from_slice(&s[from..from + n])
+                    })*
+                    (d, s) => {
+                        return Err(Error::format(
+                            format!("{n} {} samples from {from} of {} into {to} of {} {}", s.sample_type(), s.len(), d.len(), d.sample_type()),
+                            "samples of one type within both buffers",
+                        ))
+                    }
+                }
+            };
+        }
+        pair!(U8, I8, U16, I16, U32, I32, F16, F32, F64);
+        Ok(())
+    }
+
     /// `(min, max)` over all samples, ignoring NaN; `None` when empty or all NaN.
     pub fn min_max(&self) -> Option<(f64, f64)> {
         let mut lo = f64::INFINITY;
@@ -494,22 +549,27 @@ impl Raster {
 
     /// A short description: `768x512 RGB u8 image`.
     pub fn summary(&self) -> String {
-        let dims: Vec<String> = self.dims.iter().rev().map(|d| d.to_string()).collect();
-        let ch = match self.channels {
-            1 => "gray".to_string(),
-            2 => "gray+alpha".to_string(),
-            3 => "RGB".to_string(),
-            4 => "RGBA".to_string(),
-            c => format!("{c}-channel"),
-        };
-        let kind = match self.kind {
-            DataKind::Image => "image",
-            DataKind::Volume => "volume",
-            DataKind::Heightmap => "heightmap",
-            DataKind::Sequence => "sequence",
-        };
-        format!("{} {} {} {}", dims.join("x"), ch, self.sample_type(), kind)
+        summary(&self.dims, self.channels, self.sample_type(), self.kind)
     }
+}
+
+/// A short description of a raster: `768x512 RGB u8 image`.
+pub fn summary(dims: &[usize], channels: usize, ty: SampleType, kind: DataKind) -> String {
+    let dims: Vec<String> = dims.iter().rev().map(|d| d.to_string()).collect();
+    let ch = match channels {
+        1 => "gray".to_string(),
+        2 => "gray+alpha".to_string(),
+        3 => "RGB".to_string(),
+        4 => "RGBA".to_string(),
+        c => format!("{c}-channel"),
+    };
+    let kind = match kind {
+        DataKind::Image => "image",
+        DataKind::Volume => "volume",
+        DataKind::Heightmap => "heightmap",
+        DataKind::Sequence => "sequence",
+    };
+    format!("{} {} {} {}", dims.join("x"), ch, ty, kind)
 }
 
 /// A file format known to this module.

@@ -14,6 +14,7 @@ use std::path::{Path, PathBuf};
 use flate2::read::MultiGzDecoder;
 
 use super::bytes::{self, checked_bytes, sample_count};
+use super::slab::{FileSlabs, Shape};
 use super::{DataKind, Metadata, Raster, SampleType, Samples};
 use crate::{Error, Result};
 
@@ -395,6 +396,74 @@ pub fn read(path: &Path) -> Result<Raster> {
     Ok(r)
 }
 
+/// A NRRD of raw encoding (attached, or detached with a plain data file name) as a
+/// source of slabs, its samples read by seeking; `None` for any other encoding or
+/// layout (line skips, data file lists), which [`read`] reads whole.
+pub fn open_slabs(path: &Path) -> Result<Option<FileSlabs>> {
+    // the header: up to its blank line, or the whole of a detached header
+    const MOST: u64 = 1 << 20;
+    let mut head = Vec::new();
+    std::fs::File::open(path)?
+        .take(MOST)
+        .read_to_end(&mut head)?;
+    let len = std::fs::metadata(path)?.len();
+    let (head_end, data_start) = match find_blank_line(&head) {
+        Some(p) => p,
+        None if (head.len() as u64) == len => (head.len(), head.len()),
+        None => return Ok(None),
+    };
+    let text = std::str::from_utf8(&head[..head_end]).map_err(|_| bad("header is not text"))?;
+    let h = parse_header(text)?;
+    if h.encoding != "raw" || h.line_skip != 0 || h.byte_skip < -1 {
+        return Ok(None);
+    }
+    let ty = h.sample_type.expect("checked");
+    let dim = h.sizes.len();
+    let chan_axis = dim >= 2 && h.kinds.first().is_some_and(|k| is_channel_kind(k));
+    let (channels, spatial) = if chan_axis {
+        (h.sizes[0], &h.sizes[1..])
+    } else {
+        (1, &h.sizes[..])
+    };
+    let dims: Vec<usize> = spatial.iter().rev().copied().collect();
+    let (data, start) = match &h.data_file {
+        None if data_start == head_end && head_end as u64 == len => {
+            return Err(bad("no blank line after the header and no 'data file'"))
+        }
+        None => (path.to_path_buf(), data_start as u64),
+        Some(name) if name != "LIST" && !name.contains('%') => {
+            let p = path.parent().unwrap_or(Path::new(".")).join(name);
+            if !std::fs::metadata(&p)?.is_file() {
+                return Ok(None);
+            }
+            (p, 0)
+        }
+        Some(_) => return Ok(None),
+    };
+    let data_len = std::fs::metadata(&data)?.len();
+    let need = checked_bytes(&dims, channels, ty, data_len.saturating_sub(start))? as u64;
+    let offset = if h.byte_skip == -1 {
+        data_len - need
+    } else {
+        let o = start + h.byte_skip as u64;
+        checked_bytes(&dims, channels, ty, data_len.saturating_sub(o))?;
+        o
+    };
+    let kind = match dims.len() {
+        1 => DataKind::Sequence,
+        2 => DataKind::Image,
+        _ => DataKind::Volume,
+    };
+    let shape = Shape {
+        dims,
+        channels,
+        sample_type: ty,
+        kind,
+        meta: h.meta,
+    };
+    FileSlabs::new(shape, &data, offset, h.big_endian).map(Some)
+}
+
 /// Read a detached data file: at most `exact` bytes when the header fixes how many it
 /// needs (a regular file or a character device such as `/dev/zero`), else the whole of a
 /// regular file of at most `max` bytes. A FIFO, socket or folder is refused before it is
@@ -460,8 +529,8 @@ fn find_blank_line(b: &[u8]) -> Option<(usize, usize)> {
 }
 
 /// The header text for `r` (ending with a newline, without the blank separator line).
-fn header_text(r: &Raster, encoding: &str, data_file: Option<&str>) -> Result<String> {
-    let ty = type_name(r.sample_type())?;
+pub(super) fn header_text(r: &Shape, encoding: &str, data_file: Option<&str>) -> Result<String> {
+    let ty = type_name(r.sample_type)?;
     let mut sizes: Vec<usize> = r.dims.iter().rev().copied().collect();
     let mut kinds: Vec<&str> = vec!["domain"; sizes.len()];
     let chan = r.channels > 1;
@@ -525,7 +594,7 @@ fn header_text(r: &Raster, encoding: &str, data_file: Option<&str>) -> Result<St
         }
     }
     s += &format!("kinds: {}\n", kinds.join(" "));
-    if r.sample_type().size() > 1 {
+    if r.sample_type.size() > 1 {
         s += "endian: little\n";
     }
     s += &format!("encoding: {encoding}\n");
@@ -568,7 +637,7 @@ fn payload(r: &Raster, gzip: bool) -> Result<Vec<u8>> {
 
 /// Write an attached NRRD (header, blank line, data) into `w`.
 pub fn write<W: Write>(w: &mut W, r: &Raster, gzip: bool) -> Result<()> {
-    let head = header_text(r, if gzip { "gzip" } else { "raw" }, None)?;
+    let head = header_text(&Shape::of(r), if gzip { "gzip" } else { "raw" }, None)?;
     w.write_all(head.as_bytes())?;
     w.write_all(b"\n")?;
     w.write_all(&payload(r, gzip)?)?;
@@ -590,7 +659,11 @@ pub fn write_path(path: &Path, r: &Raster, gzip: bool) -> Result<()> {
         .unwrap_or_else(|| "data".into());
     let data_name = format!("{stem}.raw{}", if gzip { ".gz" } else { "" });
     let data_path = path.with_file_name(&data_name);
-    let head = header_text(r, if gzip { "gzip" } else { "raw" }, Some(&data_name))?;
+    let head = header_text(
+        &Shape::of(r),
+        if gzip { "gzip" } else { "raw" },
+        Some(&data_name),
+    )?;
     let data = payload(r, gzip)?;
     bytes::atomic_write(&data_path, |w| Ok(w.write_all(&data)?))?;
     let res = bytes::atomic_write(path, |w| Ok(w.write_all(head.as_bytes())?));

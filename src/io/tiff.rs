@@ -11,6 +11,7 @@
 
 use std::fs::File;
 use std::io::{BufReader, Seek, Write};
+use std::ops::Range;
 use std::path::Path;
 
 use tiff::decoder::{ifd::Value, Decoder, DecodingResult, Limits};
@@ -18,7 +19,8 @@ use tiff::encoder::{colortype, TiffEncoder};
 use tiff::tags::Tag;
 use tiff::ColorType;
 
-use super::{DataKind, GeoTag, GeoValue, Metadata, Raster, Samples, GEOTIFF_TAGS};
+use super::slab::{Shape, SlabSource};
+use super::{DataKind, GeoTag, GeoValue, Metadata, Raster, SampleType, Samples, GEOTIFF_TAGS};
 use crate::{Error, Result};
 
 /// The private tag holding mra's `mra.KEY=VALUE` lines (in the reusable private range
@@ -239,8 +241,21 @@ fn rational(v: Option<Value>) -> Option<f64> {
     }
 }
 
-/// Read a TIFF file: one page → 2-D image, several equal pages → volume `[D, H, W]`.
-pub fn read(path: &Path) -> Result<Raster> {
+/// What the first page of a TIFF says, before its samples are read.
+struct Head {
+    w: u32,
+    h: u32,
+    ct: ColorType,
+    channels: usize,
+    meta: Metadata,
+    own: Option<String>,
+    xres: Option<f64>,
+    yres: Option<f64>,
+}
+
+/// Open a TIFF and read its first page's tags, checking the declared size against the
+/// file (before anything is allocated).
+fn open_head(path: &Path) -> Result<(Decoder<BufReader<File>>, Head)> {
     let file_len = std::fs::metadata(path)?.len();
     let mut dec = Decoder::new(BufReader::new(File::open(path)?)).map_err(tiff_error)?;
     let mut limits = Limits::default();
@@ -310,6 +325,46 @@ pub fn read(path: &Path) -> Result<Raster> {
         .map(|s| s.trim_end_matches('\0').to_string());
     let xres = rational(dec.find_tag(Tag::XResolution).ok().flatten());
     let yres = rational(dec.find_tag(Tag::YResolution).ok().flatten());
+    Ok((
+        dec,
+        Head {
+            w,
+            h,
+            ct,
+            channels,
+            meta,
+            own,
+            xres,
+            yres,
+        },
+    ))
+}
+
+/// The kind of a TIFF of `pages` pages (a single float gray page or a GeoTIFF is a
+/// heightmap).
+fn kind_of(pages: usize, meta: &Metadata, float: bool, channels: usize) -> DataKind {
+    if pages > 1 {
+        DataKind::Volume
+    } else if meta.geotiff.is_empty() && !(float && channels == 1) {
+        DataKind::Image
+    } else {
+        DataKind::Heightmap
+    }
+}
+
+/// Read a TIFF file: one page → 2-D image, several equal pages → volume `[D, H, W]`.
+pub fn read(path: &Path) -> Result<Raster> {
+    let (mut dec, head) = open_head(path)?;
+    let Head {
+        w,
+        h,
+        ct,
+        channels,
+        mut meta,
+        own,
+        xres,
+        yres,
+    } = head;
 
     let mut acc: Option<Samples> = None;
     let mut pages = 0usize;
@@ -328,16 +383,11 @@ pub fn read(path: &Path) -> Result<Raster> {
         }
     }
     let samples = acc.expect("at least one page");
-    let (dims, kind) = if pages == 1 {
-        let kind =
-            if meta.geotiff.is_empty() && !(samples.sample_type().is_float() && channels == 1) {
-                DataKind::Image
-            } else {
-                DataKind::Heightmap
-            };
-        (vec![h as usize, w as usize], kind)
+    let kind = kind_of(pages, &meta, samples.sample_type().is_float(), channels);
+    let dims = if pages == 1 {
+        vec![h as usize, w as usize]
     } else {
-        (vec![pages, h as usize, w as usize], DataKind::Volume)
+        vec![pages, h as usize, w as usize]
     };
     interpret(&mut meta, own, dims.len(), xres, yres);
     let mut r = Raster::new(dims, channels, samples, kind)?;
@@ -345,8 +395,132 @@ pub fn read(path: &Path) -> Result<Raster> {
     Ok(r)
 }
 
+/// A TIFF read a slab of rows (one page) or pages (a stack) at a time: strips and tiles
+/// are decoded only where the slab lies.
+pub struct TiffSlabs {
+    dec: Decoder<BufReader<File>>,
+    shape: Shape,
+    pages: usize,
+}
+
+/// A TIFF as a source of slabs: the raster [`read`] would give, read by strips, tiles
+/// or pages.
+pub fn open_slabs(path: &Path) -> Result<TiffSlabs> {
+    let (mut dec, head) = open_head(path)?;
+    let mut pages = 1;
+    while dec.more_images() {
+        dec.next_image().map_err(tiff_error)?;
+        let (w2, h2) = dec.dimensions().map_err(tiff_error)?;
+        let ct2 = dec.colortype().map_err(tiff_error)?;
+        if (w2, h2) != (head.w, head.h) || ct2 != head.ct {
+            break;
+        }
+        pages += 1;
+    }
+    dec.seek_to_image(0).map_err(tiff_error)?;
+    // the sample type as the first chunk decodes
+    let mut first = None;
+    append(&mut first, dec.read_chunk(0).map_err(tiff_error)?)?;
+    let ty = first.expect("one chunk").sample_type();
+    let mut meta = head.meta;
+    let (w, h) = (head.w as usize, head.h as usize);
+    let dims = if pages == 1 {
+        vec![h, w]
+    } else {
+        vec![pages, h, w]
+    };
+    interpret(&mut meta, head.own, dims.len(), head.xres, head.yres);
+    let kind = kind_of(pages, &meta, ty.is_float(), head.channels);
+    Ok(TiffSlabs {
+        dec,
+        shape: Shape {
+            dims,
+            channels: head.channels,
+            sample_type: ty,
+            kind,
+            meta,
+        },
+        pages,
+    })
+}
+
+impl TiffSlabs {
+    /// Rows `rows` of the one page: the strips or tile rows holding them, decoded and cut.
+    fn page_rows(&mut self, rows: Range<usize>) -> Result<Samples> {
+        let (h, w) = (self.shape.dims[0], self.shape.dims[1]);
+        let c = self.shape.channels;
+        let (cw, ch) = self.dec.chunk_dimensions();
+        let (cw, ch) = (cw as usize, ch.max(1) as usize);
+        let across = match self.dec.get_chunk_type() {
+            tiff::decoder::ChunkType::Strip => 1,
+            tiff::decoder::ChunkType::Tile => w.div_ceil(cw.max(1)),
+        };
+        let (b0, b1) = (rows.start / ch, rows.end.div_ceil(ch));
+        let band_rows = (b1 * ch).min(h) - b0 * ch;
+        let mut band = Samples::zeros(self.shape.sample_type, band_rows * w * c);
+        for b in b0..b1 {
+            for x in 0..across {
+                let i = b * across + x;
+                let (dw, dh) = self.dec.chunk_data_dimensions(i as u32);
+                let (dw, dh) = (dw as usize, dh as usize);
+                let mut chunk = None;
+                append(
+                    &mut chunk,
+                    self.dec.read_chunk(i as u32).map_err(tiff_error)?,
+                )?;
+                let chunk = chunk.expect("one chunk");
+                if chunk.len() != dw * dh * c || (b - b0) * ch + dh > band_rows {
+                    return Err(Error::format(
+                        format!("TIFF chunk {i} of {} samples for {dw}x{dh}", chunk.len()),
+                        "chunks of the image's layout",
+                    ));
+                }
+                // rows of the chunk into the band
+                for y in 0..dh {
+                    let to = ((b - b0) * ch + y) * w * c + x * cw * c;
+                    band.copy_from(to, &chunk, y * dw * c, dw * c)?;
+                }
+            }
+        }
+        let skip = (rows.start - b0 * ch) * w * c;
+        Ok(band.range(skip..skip + rows.len() * w * c))
+    }
+}
+
+impl SlabSource for TiffSlabs {
+    fn shape(&self) -> &Shape {
+        &self.shape
+    }
+
+    fn read_rows(&mut self, rows: Range<usize>) -> Result<Samples> {
+        if rows.start >= rows.end || rows.end > self.shape.dims[0] {
+            return Err(Error::parameter(
+                "rows",
+                format!("{}..{} of {}", rows.start, rows.end, self.shape.dims[0]),
+                "a non-empty range within the slowest axis",
+            ));
+        }
+        if self.pages == 1 {
+            return self.page_rows(rows);
+        }
+        let mut acc = None;
+        for z in rows {
+            self.dec.seek_to_image(z).map_err(tiff_error)?;
+            append(&mut acc, self.dec.read_image().map_err(tiff_error)?)?;
+        }
+        let s = acc.expect("a page");
+        if s.sample_type() != self.shape.sample_type {
+            return Err(Error::Unsupported {
+                what: "TIFF stack",
+                value: "pages with different sample types".into(),
+            });
+        }
+        Ok(s)
+    }
+}
+
 /// The text of [`MRA_TAG`]: mra's `mra.` lines (empty when there is nothing to say).
-fn own_lines(r: &Raster) -> String {
+fn own_lines(meta: &Metadata) -> String {
     let mut lines: Vec<String> = Vec::new();
     let join = |v: &[f64]| {
         v.iter()
@@ -354,27 +528,27 @@ fn own_lines(r: &Raster) -> String {
             .collect::<Vec<_>>()
             .join(",")
     };
-    if let Some(s) = &r.meta.spacing {
+    if let Some(s) = &meta.spacing {
         lines.push(format!("mra.spacing={}", join(s)));
     }
-    if let Some(o) = &r.meta.origin {
+    if let Some(o) = &meta.origin {
         lines.push(format!("mra.origin={}", join(o)));
     }
-    if let Some(u) = &r.meta.units {
+    if let Some(u) = &meta.units {
         lines.push(format!("mra.units={u}"));
     }
-    if let Some(n) = r.meta.nodata {
+    if let Some(n) = meta.nodata {
         lines.push(format!("mra.nodata={n}"));
     }
-    if let Some(sp) = &r.meta.space {
+    if let Some(sp) = &meta.space {
         lines.push(format!("mra.space={sp}"));
     }
-    if let Some(d) = &r.meta.directions {
+    if let Some(d) = &meta.directions {
         for (f, v) in d.iter().enumerate() {
             lines.push(format!("mra.direction.{f}={}", join(v)));
         }
     }
-    for (k, v) in &r.meta.extra {
+    for (k, v) in &meta.extra {
         lines.push(format!("mra.extra.{k}={}", v.replace('\n', " ")));
     }
     lines.join("\n")
@@ -411,6 +585,190 @@ gray_alpha!(GrayA8, u8, 8, Uint);
 gray_alpha!(GrayA16, u16, 16, Uint);
 gray_alpha!(GrayA32Float, f32, 32, IEEEFP);
 
+/// ImageDescription, mra's own tag, the GeoTIFF tags and (gray + alpha) ExtraSamples.
+fn put_tags<W: Write + Seek, K: tiff::encoder::TiffKind>(
+    e: &mut tiff::encoder::DirectoryEncoder<'_, W, K>,
+    desc: &str,
+    own: &str,
+    meta: &Metadata,
+    channels: usize,
+) -> Result<()> {
+    if !desc.is_empty() {
+        e.write_tag(Tag::ImageDescription, desc)
+            .map_err(tiff_error)?;
+    }
+    if !own.is_empty() {
+        e.write_tag(Tag::Unknown(MRA_TAG), own)
+            .map_err(tiff_error)?;
+    }
+    for g in &meta.geotiff {
+        match &g.value {
+            GeoValue::Shorts(v) => e.write_tag(Tag::Unknown(g.tag), &v[..]),
+            GeoValue::Doubles(v) => e.write_tag(Tag::Unknown(g.tag), &v[..]),
+            GeoValue::Ascii(s) => e.write_tag(Tag::Unknown(g.tag), s.as_str()),
+        }
+        .map_err(tiff_error)?;
+    }
+    if channels == 2 {
+        // ExtraSamples = 2 (unassociated alpha) for the second of the two samples
+        e.write_tag(Tag::ExtraSamples, &[2u16][..])
+            .map_err(tiff_error)?;
+    }
+    Ok(())
+}
+
+/// Write a raster handed over in slabs (`next` gives the rows of the slowest axis in
+/// order, `None` at the end) as [`write`] writes it uncompressed: a volume page by page,
+/// an image strip by strip (strips of about 1 MiB), so memory holds a slab.
+pub fn write_slabs<W: Write + Seek>(
+    w: &mut W,
+    shape: &Shape,
+    next: &mut dyn FnMut() -> Result<Option<Samples>>,
+) -> Result<()> {
+    if shape.dims.len() < 2 || shape.dims.len() > 3 {
+        return Err(Error::Unsupported {
+            what: "TIFF output",
+            value: format!("{}-D data (expected 2-D or 3-D)", shape.dims.len()),
+        });
+    }
+    use colortype as c;
+    use SampleType as T;
+    macro_rules! go {
+        ($c:ty, $var:ident, $inner:ty) => {{
+            fn get(s: &Samples) -> Option<&[$inner]> {
+                match s {
+                    Samples::$var(v) => Some(v),
+                    _ => None,
+                }
+            }
+            slabs_as::<_, $c>(w, shape, next, get)
+        }};
+    }
+    match (shape.sample_type, shape.channels) {
+        (T::U8, 1) => go!(c::Gray8, U8, u8),
+        (T::I8, 1) => go!(c::GrayI8, I8, i8),
+        (T::U16, 1) => go!(c::Gray16, U16, u16),
+        (T::I16, 1) => go!(c::GrayI16, I16, i16),
+        (T::U32, 1) => go!(c::Gray32, U32, u32),
+        (T::I32, 1) => go!(c::GrayI32, I32, i32),
+        (T::F32, 1) => go!(c::Gray32Float, F32, f32),
+        (T::F64, 1) => go!(c::Gray64Float, F64, f64),
+        (T::U8, 2) => go!(GrayA8, U8, u8),
+        (T::U16, 2) => go!(GrayA16, U16, u16),
+        (T::F32, 2) => go!(GrayA32Float, F32, f32),
+        (T::U8, 3) => go!(c::RGB8, U8, u8),
+        (T::U16, 3) => go!(c::RGB16, U16, u16),
+        (T::U32, 3) => go!(c::RGB32, U32, u32),
+        (T::F32, 3) => go!(c::RGB32Float, F32, f32),
+        (T::F64, 3) => go!(c::RGB64Float, F64, f64),
+        (T::U8, 4) => go!(c::RGBA8, U8, u8),
+        (T::U16, 4) => go!(c::RGBA16, U16, u16),
+        (T::U32, 4) => go!(c::RGBA32, U32, u32),
+        (T::F32, 4) => go!(c::RGBA32Float, F32, f32),
+        (T::F64, 4) => go!(c::RGBA64Float, F64, f64),
+        _ => Err(Error::Unsupported {
+            what: "TIFF output",
+            value: format!(
+                "{} channels of {} (expected gray of any type, or RGB/RGBA of u8, u16, u32, f32, f64; f16 → .exr)",
+                shape.channels, shape.sample_type
+            ),
+        }),
+    }
+}
+
+fn slabs_as<W, C>(
+    w: &mut W,
+    shape: &Shape,
+    next: &mut dyn FnMut() -> Result<Option<Samples>>,
+    get: fn(&Samples) -> Option<&[C::Inner]>,
+) -> Result<()>
+where
+    W: Write + Seek,
+    C: colortype::ColorType,
+    C::Inner: Copy,
+    [C::Inner]: tiff::encoder::TiffValue,
+{
+    let nd = shape.dims.len();
+    let (width, height) = (shape.dims[nd - 1], shape.dims[nd - 2]);
+    let row = width * shape.channels;
+    let page = row * height;
+    let desc = shape
+        .meta
+        .description
+        .as_deref()
+        .map(ascii)
+        .unwrap_or_default();
+    let own = ascii(&own_lines(&shape.meta));
+    let mut enc = TiffEncoder::new(w).map_err(tiff_error)?;
+    let wrong = |s: &Samples| {
+        Error::format(
+            format!("a slab of {} {} samples", s.len(), s.sample_type()),
+            "whole rows of the raster's sample type",
+        )
+    };
+    if nd == 3 {
+        let mut pages = 0;
+        while let Some(s) = next()? {
+            let v = get(&s)
+                .filter(|v| v.len() % page == 0)
+                .ok_or_else(|| wrong(&s))?;
+            for p in v.chunks(page) {
+                let mut img = enc
+                    .new_image::<C>(width as u32, height as u32)
+                    .map_err(tiff_error)?;
+                put_tags(img.encoder(), &desc, &own, &shape.meta, shape.channels)?;
+                img.write_data(p).map_err(tiff_error)?;
+                pages += 1;
+            }
+        }
+        if pages != shape.dims[0] {
+            return Err(Error::format(
+                format!("{pages} pages written of {}", shape.dims[0]),
+                "every page of the volume",
+            ));
+        }
+        return Ok(());
+    }
+    let mut img = enc
+        .new_image::<C>(width as u32, height as u32)
+        .map_err(tiff_error)?;
+    put_tags(img.encoder(), &desc, &own, &shape.meta, shape.channels)?;
+    let bytes = (row * std::mem::size_of::<C::Inner>()).max(1);
+    let rows_per_strip = ((1usize << 20) / bytes).clamp(1, height);
+    img.rows_per_strip(rows_per_strip as u32)
+        .map_err(tiff_error)?;
+    let strip = rows_per_strip * row;
+    let mut carry: Vec<C::Inner> = Vec::with_capacity(strip);
+    let mut rows = 0;
+    while let Some(s) = next()? {
+        let v = get(&s)
+            .filter(|v| v.len() % row == 0)
+            .ok_or_else(|| wrong(&s))?;
+        rows += v.len() / row;
+        let mut v = v;
+        while !v.is_empty() {
+            let take = (strip - carry.len()).min(v.len());
+            carry.extend_from_slice(&v[..take]);
+            v = &v[take..];
+            if carry.len() == strip {
+                img.write_strip(&carry).map_err(tiff_error)?;
+                carry.clear();
+            }
+        }
+    }
+    if rows != height {
+        return Err(Error::format(
+            format!("{rows} rows written of {height}"),
+            "every row of the image",
+        ));
+    }
+    if !carry.is_empty() {
+        img.write_strip(&carry).map_err(tiff_error)?;
+    }
+    img.finish().map_err(tiff_error)?;
+    Ok(())
+}
+
 /// Write one page per `[H, W]` slice, with ImageDescription and GeoTIFF tags on each.
 fn write_pages<W, C>(w: &mut W, r: &Raster, data: &[C::Inner], compress: bool) -> Result<()>
 where
@@ -421,7 +779,7 @@ where
     let (width, height) = (r.width() as u32, r.height() as u32);
     let page = r.width() * r.height() * r.channels;
     let desc = r.meta.description.as_deref().map(ascii).unwrap_or_default();
-    let own = ascii(&own_lines(r));
+    let own = ascii(&own_lines(&r.meta));
     let mut enc = TiffEncoder::new(w).map_err(tiff_error)?;
     if compress {
         enc = enc.with_compression(tiff::encoder::Compression::Deflate(
@@ -430,31 +788,7 @@ where
     }
     for chunk in data.chunks(page.max(1)) {
         let mut img = enc.new_image::<C>(width, height).map_err(tiff_error)?;
-        if !desc.is_empty() {
-            img.encoder()
-                .write_tag(Tag::ImageDescription, desc.as_str())
-                .map_err(tiff_error)?;
-        }
-        if !own.is_empty() {
-            img.encoder()
-                .write_tag(Tag::Unknown(MRA_TAG), own.as_str())
-                .map_err(tiff_error)?;
-        }
-        for g in &r.meta.geotiff {
-            let e = img.encoder();
-            match &g.value {
-                GeoValue::Shorts(v) => e.write_tag(Tag::Unknown(g.tag), &v[..]),
-                GeoValue::Doubles(v) => e.write_tag(Tag::Unknown(g.tag), &v[..]),
-                GeoValue::Ascii(s) => e.write_tag(Tag::Unknown(g.tag), s.as_str()),
-            }
-            .map_err(tiff_error)?;
-        }
-        if r.channels == 2 {
-            // ExtraSamples = 2 (unassociated alpha) for the second of the two samples
-            img.encoder()
-                .write_tag(Tag::ExtraSamples, &[2u16][..])
-                .map_err(tiff_error)?;
-        }
+        put_tags(img.encoder(), &desc, &own, &r.meta, r.channels)?;
         img.write_data(chunk).map_err(tiff_error)?;
     }
     Ok(())
