@@ -108,8 +108,15 @@ impl Plan {
                                     q
                                 }
                             };
+                            // a band without children (the finest level) is nobody's
+                            // context: its indices go as soon as it is coded
+                            let childless = !self.parents.iter().any(|&p| p == Some(j));
                             CodedBand {
-                                q,
+                                q: if !keep_indices && childless {
+                                    Vec::new()
+                                } else {
+                                    q
+                                },
                                 stream: e.finish_short(),
                             }
                         })
