@@ -20,7 +20,16 @@ use rayon::prelude::*;
 
 /// A lossy file at the base step the rate mode asks for: set (`--quality`), from the
 /// details (`--keep`, `--threshold`), or searched (`--psnr`, `--bpp`).
-pub(super) fn encode_lossy(r: &Raster, opts: &EncodeOptions, rate: Rate) -> Result<Vec<u8>> {
+///
+/// `lossless()` makes the `--lossless` file: `--bpp` returns it when the budget is near
+/// the lossless cost or above ([`LOSSLESS_SHARE`]) and it fits the budget (no error at
+/// all).
+pub(super) fn encode_lossy(
+    r: &Raster,
+    opts: &EncodeOptions,
+    rate: Rate,
+    lossless: &dyn Fn() -> Result<Vec<u8>>,
+) -> Result<Vec<u8>> {
     let mut p = prepare(r, opts, Mode::Lossy)?;
     if matches!(
         rate,
@@ -107,6 +116,12 @@ pub(super) fn encode_lossy(r: &Raster, opts: &EncodeOptions, rate: Rate) -> Resu
             // kodim01 against 5)
             let sizes = p.rate_model();
             let model = |x: f64| b.ln() - (sizes.bits(x.exp()) / pos).ln();
+            if !r.sample_type().is_float() && b * pos >= LOSSLESS_SHARE * sizes.bits(1.0) {
+                let bytes = lossless()?;
+                if bytes.len() as f64 * 8.0 <= b * pos {
+                    return Ok(bytes);
+                }
+            }
             if let Some(bytes) = calibrated_bpp(&p, range, b * pos, &model) {
                 return Ok(bytes);
             }
@@ -119,6 +134,12 @@ pub(super) fn encode_lossy(r: &Raster, opts: &EncodeOptions, rate: Rate) -> Resu
     };
     Ok(p.code(step))
 }
+
+/// `--bpp` on integer samples tries the lossless file first when the budget is at least
+/// this share of the rate model's size at base step 1 (the samples' unit, about the
+/// lossless cost; the model is within a factor of 2.5): a lossless file within the
+/// budget has no error at all, and a budget that far below it is never met by one.
+const LOSSLESS_SHARE: f64 = 0.5;
 
 /// Search on `x = ln(step)` for the file closest to a target: `f(step)` gives `v ≥ 0`
 /// when the target is met (PSNR reached, or size within budget), which holds for large
