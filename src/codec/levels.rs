@@ -110,7 +110,7 @@ impl Plan {
                             };
                             // a band without children (the finest level) is nobody's
                             // context: its indices go as soon as it is coded
-                            let childless = !self.parents.iter().any(|&p| p == Some(j));
+                            let childless = !self.parents.contains(&Some(j));
                             CodedBand {
                                 q: if !keep_indices && childless {
                                     Vec::new()
@@ -187,6 +187,9 @@ fn round_index(v: f32) -> i64 {
     }
 }
 
+/// `(band, channel, its step ratio and stream)` of one band of a `LEVL` chunk.
+pub(super) type BandOfLevel = (usize, usize, LevelBand);
+
 /// One band of one channel as read from a `LEVL` chunk.
 pub(super) struct LevelBand {
     pub(super) ratio: f32,
@@ -200,7 +203,7 @@ pub(super) fn parse_level(
     payload: &[u8],
     plan: &Plan,
     channels: usize,
-) -> Result<(usize, Vec<(usize, usize, LevelBand)>)> {
+) -> Result<(usize, Vec<BandOfLevel>)> {
     let mut cur = Cursor::new(payload, "LEVL");
     let level = cur.u16()? as usize;
     let groups = plan.level_groups();

@@ -312,7 +312,7 @@ fn calibrated_bpp(
     };
     let cal0 = SAMPLED_RATIO.ln();
     let s0 = p.sampled_bits(x0.exp());
-    if !(s0 > 0.0) {
+    if s0.is_nan() || s0 <= 0.0 {
         return None;
     }
     let mut x = sampled_root(x0, cal0 + s0.ln() - aim, cal0);
@@ -325,7 +325,7 @@ fn calibrated_bpp(
         if real <= budget && real >= 0.99 * budget {
             return Some(bytes);
         }
-        if !(real > 0.0) {
+        if real.is_nan() || real <= 0.0 {
             return None;
         }
         let g = real.ln() - aim;
@@ -348,7 +348,7 @@ fn calibrated_bpp(
             }
             _ => {
                 let sampled = p.sampled_bits(x.exp());
-                if !(sampled > 0.0) {
+                if sampled.is_nan() || sampled <= 0.0 {
                     return None;
                 }
                 sampled_root(x, g, (real / sampled).ln())
