@@ -4,7 +4,7 @@
 //! is in [`super::lossless`].)
 
 use crate::format::header::Colour;
-use crate::io::Raster;
+use crate::io::{Raster, Samples};
 
 /// Squared synthesis gain of each channel after the colour transform (inverse YCoCg
 /// columns: Y → (1,1,1), Co → (½,0,−½), Cg → (−½,½,−½)).
@@ -41,13 +41,25 @@ pub(super) fn ycocg_inverse(y: f32, co: f32, cg: f32) -> (f32, f32, f32) {
 pub(super) fn planes_f32(r: &Raster, colour: Colour) -> Vec<Vec<f32>> {
     let c = r.channels;
     let n = r.positions();
-    let mut planes = vec![vec![0f32; n]; c];
-    for i in 0..n {
-        for (k, p) in planes.iter_mut().enumerate() {
-            let x = r.samples.get_f64(i * c + k);
-            p[i] = if x.is_finite() { x as f32 } else { 0.0 };
-        }
-    }
+    // integers convert exactly through f64 or straight (one rounding either way)
+    let mut planes = match &r.samples {
+        Samples::U8(v) => split(v, c, n, |x| x as f32),
+        Samples::I8(v) => split(v, c, n, |x| x as f32),
+        Samples::U16(v) => split(v, c, n, |x| x as f32),
+        Samples::I16(v) => split(v, c, n, |x| x as f32),
+        Samples::U32(v) => split(v, c, n, |x| x as f32),
+        Samples::I32(v) => split(v, c, n, |x| x as f32),
+        Samples::F32(v) => split(v, c, n, |x| if x.is_finite() { x } else { 0.0 }),
+        Samples::F64(v) => split(v, c, n, |x| if x.is_finite() { x as f32 } else { 0.0 }),
+        Samples::F16(v) => split(v, c, n, |x| {
+            let x = x.to_f64();
+            if x.is_finite() {
+                x as f32
+            } else {
+                0.0
+            }
+        }),
+    };
     if colour == Colour::YCoCg {
         map3(&mut planes, |r, g, b| {
             let co = r - b;
@@ -57,4 +69,69 @@ pub(super) fn planes_f32(r: &Raster, colour: Colour) -> Vec<Vec<f32>> {
         });
     }
     planes
+}
+
+/// The `c` planes of `n` interleaved positions, `f` applied to every sample.
+fn split<T: Copy>(v: &[T], c: usize, n: usize, f: impl Fn(T) -> f32) -> Vec<Vec<f32>> {
+    if c == 1 {
+        return vec![v[..n].iter().map(|&x| f(x)).collect()];
+    }
+    let mut planes = vec![vec![0f32; n]; c];
+    for (i, px) in v[..n * c].chunks_exact(c).enumerate() {
+        for (p, &x) in planes.iter_mut().zip(px) {
+            p[i] = f(x);
+        }
+    }
+    planes
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::io::{DataKind, SampleType};
+
+    /// The planes of every sample type, one and three channels, are the samples read as
+    /// `f64`, cast to `f32`, with the values that are not finite as 0.
+    #[test]
+    fn planes_are_the_samples_as_f32() {
+        let vals = [
+            0.0,
+            1.0,
+            -3.0,
+            255.0,
+            65535.0,
+            -40000.5,
+            3.0e9,
+            f64::NAN,
+            f64::INFINITY,
+            1.0e300,
+            0.1,
+            -7.25,
+        ];
+        for ty in [
+            SampleType::U8,
+            SampleType::I8,
+            SampleType::U16,
+            SampleType::I16,
+            SampleType::U32,
+            SampleType::I32,
+            SampleType::F16,
+            SampleType::F32,
+            SampleType::F64,
+        ] {
+            for c in [1usize, 3] {
+                let v: Vec<f64> = (0..4 * c).map(|i| vals[i % vals.len()]).collect();
+                let r =
+                    Raster::new(vec![2, 2], c, Samples::from_f64(&v, ty), DataKind::Image).unwrap();
+                let planes = planes_f32(&r, Colour::None);
+                for i in 0..4 {
+                    for (k, p) in planes.iter().enumerate() {
+                        let x = r.samples.get_f64(i * c + k);
+                        let want = if x.is_finite() { x as f32 } else { 0.0 };
+                        assert_eq!(p[i].to_bits(), want.to_bits(), "{ty:?} {c} {i} {k}");
+                    }
+                }
+            }
+        }
+    }
 }

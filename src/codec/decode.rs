@@ -5,8 +5,8 @@
 use super::colour::map3;
 use super::container::{read_head, read_rest, Parsed};
 use super::options::{DecodeOptions, Decoded};
+use super::plan::lossy_values;
 use super::plan::Plan;
-use super::plan::{dequantized, lossy_values};
 use super::voids::mark_voids;
 use super::{layout, lossless};
 use crate::entropy::range::Decoder;
@@ -156,7 +156,7 @@ pub(super) fn reconstruct(p: &Parsed, k: usize) -> Result<Raster> {
         Ok(q.into_iter()
             .enumerate()
             .map(|(j, b)| match (b, &p.bands[ch][j]) {
-                (Some(b), Some(bc)) => Some(dequantized(h, plan, j, &b, bc.step)),
+                (Some(b), Some(bc)) => Some((b.into(), bc.step)),
                 _ => None,
             })
             .collect())

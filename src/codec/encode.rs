@@ -27,7 +27,7 @@ pub(super) fn encode_filled(r: &Raster, opts: &EncodeOptions) -> Result<Vec<u8>>
                 max_error::encode_max_error(r, opts, e)
             }
         }
-        rate => rate::encode_lossy(r, opts, rate),
+        rate => rate::encode_lossy(r, opts, rate, &|| encode_lossless(r, opts)),
     }
 }
 

@@ -108,8 +108,15 @@ impl Plan {
                                     q
                                 }
                             };
+                            // a band without children (the finest level) is nobody's
+                            // context: its indices go as soon as it is coded
+                            let childless = !self.parents.contains(&Some(j));
                             CodedBand {
-                                q,
+                                q: if !keep_indices && childless {
+                                    Vec::new()
+                                } else {
+                                    q
+                                },
                                 stream: e.finish_short(),
                             }
                         })
@@ -180,6 +187,9 @@ fn round_index(v: f32) -> i64 {
     }
 }
 
+/// `(band, channel, its step ratio and stream)` of one band of a `LEVL` chunk.
+pub(super) type BandOfLevel = (usize, usize, LevelBand);
+
 /// One band of one channel as read from a `LEVL` chunk.
 pub(super) struct LevelBand {
     pub(super) ratio: f32,
@@ -193,7 +203,7 @@ pub(super) fn parse_level(
     payload: &[u8],
     plan: &Plan,
     channels: usize,
-) -> Result<(usize, Vec<(usize, usize, LevelBand)>)> {
+) -> Result<(usize, Vec<BandOfLevel>)> {
     let mut cur = Cursor::new(payload, "LEVL");
     let level = cur.u16()? as usize;
     let groups = plan.level_groups();

@@ -5,7 +5,7 @@ use super::colour::{channel_weights, planes_f32};
 use super::container::{HEAD, MEND, META};
 use super::levels::{BandInput, Choice, CodedBand};
 use super::options::EncodeOptions;
-use super::plan::{band_rho, dequantized, lossy_values, Plan};
+use super::plan::{band_rho, lossy_values, Plan};
 use super::{layout, meta};
 use crate::format::header::Colour;
 use crate::format::{self, put_chunk, Header, Mode};
@@ -14,6 +14,7 @@ use crate::quantize::{self, DELTA};
 use crate::tensor::{self, Array};
 use crate::{Error, Result};
 use rayon::prelude::*;
+use std::borrow::Cow;
 
 pub(super) fn finite_range(s: &Samples) -> (f64, f64) {
     let mut lo = f64::INFINITY;
@@ -182,8 +183,8 @@ impl Prepared {
                 .map(|j| {
                     let s = self.band_step(step, j, c);
                     Some(match &coded {
-                        Some(cb) => dequantized(h, plan, j, &cb[c][j].q, s),
-                        None => dequantized(h, plan, j, &self.quantized(step, j, c), s),
+                        Some(cb) => (Cow::Borrowed(&cb[c][j].q[..]), s),
+                        None => (Cow::Owned(self.quantized(step, j, c)), s),
                     })
                 })
                 .collect())

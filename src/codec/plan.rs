@@ -11,6 +11,7 @@ use crate::quantize::{self, RHO};
 use crate::tensor::{self, Array, Order, Pyramid, PyramidSpec, Subband};
 use crate::Result;
 use rayon::prelude::*;
+use std::borrow::Cow;
 
 /// Pyramid, bands, their parents and extents for a header.
 pub(super) struct Plan {
@@ -107,25 +108,32 @@ fn band_delta(h: &Header, plan: &Plan, j: usize) -> f64 {
     }
 }
 
-/// Band `j`'s values from its indices `q` and its step.
-pub(super) fn dequantized(h: &Header, plan: &Plan, j: usize, q: &[i64], step: f64) -> Vec<f32> {
+/// Band `j`'s values from its indices `q` and its step, written where the band sits in
+/// `plane` (laid out as the pyramid's shape).
+fn dequantize_into(h: &Header, plan: &Plan, j: usize, q: &[i64], step: f64, plane: &mut [f32]) {
     let d = band_delta(h, plan, j);
-    q.iter()
-        .map(|&x| quantize::dequantize(x, step, d) as f32)
-        .collect()
+    layout::rows(&plan.pyr.shape, &plan.bands[j].ranges, |off, run, at| {
+        for (o, &x) in plane[off..off + run].iter_mut().zip(&q[at..at + run]) {
+            *o = quantize::dequantize(x, step, d) as f32;
+        }
+    });
 }
+
+/// One band handed to [`lossy_values`]: its indices and its step.
+pub(super) type BandIndices<'a> = Option<(Cow<'a, [i64]>, f64)>;
 
 /// A lossy file's samples (interleaved, clamped to the source's range, before the
 /// `--max-error` residuals) of the coarse block after `k` levels (k = 0: full size):
-/// per channel, its bands' dequantized values (`bands(channel)[band]`, None = absent,
-/// as [`dequantized`] makes them) synthesized and taken back from YCoCg, converted
-/// straight into the header's sample type ([`Samples::from_iter_f64`]: no whole-image
-/// `f64` copy). The decoder's way, and the encoder's `--psnr` search's.
-pub(super) fn lossy_values(
+/// per channel, its bands' indices and steps (`bands(channel)[band]`, None = absent)
+/// dequantized in place into the channel's plane (no copy of each band), synthesized
+/// and taken back from YCoCg, converted straight into the header's sample type
+/// ([`Samples::from_iter_f64`]: no whole-image `f64` copy). The decoder's way, and the
+/// encoder's `--psnr` search's.
+pub(super) fn lossy_values<'a>(
     h: &Header,
     plan: &Plan,
     k: usize,
-    bands: impl Fn(usize) -> Result<Vec<Option<Vec<f32>>>> + Sync,
+    bands: impl Fn(usize) -> Result<Vec<BandIndices<'a>>> + Sync,
 ) -> Result<Samples> {
     let region = plan.region(k);
     let npos: usize = region.iter().product();
@@ -137,8 +145,8 @@ pub(super) fn lossy_values(
             let q = bands(ch)?;
             let mut plane = vec![0f32; plan.pyr.shape.iter().product()];
             for (j, v) in q.into_iter().enumerate() {
-                if let Some(v) = v {
-                    layout::scatter(&mut plane, &plan.pyr.shape, &plan.bands[j].ranges, &v);
+                if let Some((v, step)) = v {
+                    dequantize_into(h, plan, j, &v, step, &mut plane);
                 }
             }
             let full: Vec<std::ops::Range<usize>> = region.iter().map(|&e| 0..e).collect();
@@ -156,6 +164,11 @@ pub(super) fn lossy_values(
         map3(&mut planes, ycocg_inverse);
     }
     let (lo, hi) = (h.min, h.max);
+    if c == 1 {
+        // one plane: its values in order (no division per sample)
+        let it = planes[0].iter().map(|&x| (x as f64).clamp(lo, hi));
+        return Ok(Samples::from_iter_f64(it, npos, h.sample_type));
+    }
     let it = (0..npos * c).map(|i| (planes[i % c][i / c] as f64).clamp(lo, hi));
     Ok(Samples::from_iter_f64(it, npos * c, h.sample_type))
 }

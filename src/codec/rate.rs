@@ -20,7 +20,16 @@ use rayon::prelude::*;
 
 /// A lossy file at the base step the rate mode asks for: set (`--quality`), from the
 /// details (`--keep`, `--threshold`), or searched (`--psnr`, `--bpp`).
-pub(super) fn encode_lossy(r: &Raster, opts: &EncodeOptions, rate: Rate) -> Result<Vec<u8>> {
+///
+/// `lossless()` makes the `--lossless` file: `--bpp` returns it when the budget is near
+/// the lossless cost or above ([`LOSSLESS_SHARE`]) and it fits the budget (no error at
+/// all).
+pub(super) fn encode_lossy(
+    r: &Raster,
+    opts: &EncodeOptions,
+    rate: Rate,
+    lossless: &dyn Fn() -> Result<Vec<u8>>,
+) -> Result<Vec<u8>> {
     let mut p = prepare(r, opts, Mode::Lossy)?;
     if matches!(
         rate,
@@ -107,6 +116,12 @@ pub(super) fn encode_lossy(r: &Raster, opts: &EncodeOptions, rate: Rate) -> Resu
             // kodim01 against 5)
             let sizes = p.rate_model();
             let model = |x: f64| b.ln() - (sizes.bits(x.exp()) / pos).ln();
+            if !r.sample_type().is_float() && b * pos >= LOSSLESS_SHARE * sizes.bits(1.0) {
+                let bytes = lossless()?;
+                if bytes.len() as f64 * 8.0 <= b * pos {
+                    return Ok(bytes);
+                }
+            }
             if let Some(bytes) = calibrated_bpp(&p, range, b * pos, &model) {
                 return Ok(bytes);
             }
@@ -119,6 +134,12 @@ pub(super) fn encode_lossy(r: &Raster, opts: &EncodeOptions, rate: Rate) -> Resu
     };
     Ok(p.code(step))
 }
+
+/// `--bpp` on integer samples tries the lossless file first when the budget is at least
+/// this share of the rate model's size at base step 1 (the samples' unit, about the
+/// lossless cost; the model is within a factor of 2.5): a lossless file within the
+/// budget has no error at all, and a budget that far below it is never met by one.
+const LOSSLESS_SHARE: f64 = 0.5;
 
 /// Search on `x = ln(step)` for the file closest to a target: `f(step)` gives `v ≥ 0`
 /// when the target is met (PSNR reached, or size within budget), which holds for large
@@ -243,44 +264,28 @@ fn search(
 /// the budget and at most 1% under it, else `None` (the caller's [`search`] then codes
 /// candidates in full).
 ///
-/// Each round codes the file in full at `x` (size `S`), then the sampled size
-/// ([`Prepared::sampled_bits`], about an eighth of the work) at `x` gives the
-/// calibration `r = S / Ŝ(x)`; the next `x` is where `r·Ŝ` meets the aim (0.5% under the
-/// budget), found by secant steps on `ln Ŝ` in `x` (the first with the model's slope),
-/// each a sampled size only. The ratio of the sampled size to the real one changes little
-/// between nearby steps, so the second full encode is usually the last: about 2.4 encodes'
-/// work where the search on full encodes takes 4 to 5.
+/// The sampled size ([`Prepared::sampled_bits`], about an eighth of the work) times a
+/// calibration `r` stands for the real size: `r` is first [`SAMPLED_RATIO`], then
+/// `S / Ŝ(x)` measured at the last full encode (size `S` at `x`). The next `x` to code
+/// in full is where `r·Ŝ` meets the aim (0.5% under the budget), found by secant steps on
+/// `ln Ŝ` in `x` (the first with the model's slope), each a sampled size only. Once two
+/// full encodes bracket the budget, the next is their secant in `(x, ln S)` instead
+/// (regula falsi, kept inside the bracket's middle 80%), with no sampled size. The
+/// calibrated first guess usually lands the first or second full encode in the window.
 fn calibrated_bpp(
     p: &Prepared,
     range: f64,
     budget: f64,
     model: &dyn Fn(f64) -> f64,
 ) -> Option<Vec<u8>> {
-    const ROUNDS: usize = 3;
+    const ROUNDS: usize = 6;
     let (x_min, x_max) = ((range * 1e-7).ln(), (range * 4.0).ln());
     let aim = (0.995 * budget).ln();
     // the model's ln b − ln bpp rises with x; met at 0.5% under the budget
-    let mut x =
-        model_root(model, 0.0, -(0.995f64.ln()), 1.0, (range / 32.0).ln()).clamp(x_min, x_max);
-    let mut best: Option<Vec<u8>> = None;
-    for _ in 0..ROUNDS {
-        let bytes = p.code(x.exp());
-        let real = bytes.len() as f64 * 8.0;
-        if real <= budget {
-            if real >= 0.99 * budget {
-                return Some(bytes);
-            }
-            if best.as_ref().is_none_or(|b| b.len() < bytes.len()) {
-                best = Some(bytes);
-            }
-        }
-        let sampled = p.sampled_bits(x.exp());
-        if !(sampled > 0.0 && real > 0.0) {
-            return None;
-        }
-        let cal = (real / sampled).ln();
-        // secant on g(x) = ln r·Ŝ(x) − aim, falling with x
-        let (mut xa, mut ga) = (x, real.ln() - aim);
+    let x0 = model_root(model, 0.0, -(0.995f64.ln()), 1.0, (range / 32.0).ln()).clamp(x_min, x_max);
+    // where r·Ŝ meets the aim, from `x` where ln(r·Ŝ) − aim = `g`
+    let sampled_root = |x: f64, g: f64, cal: f64| -> f64 {
+        let (mut xa, mut ga) = (x, g);
         let h = 0.05;
         let mut slope = -(model(x + h) - model(x - h)) / (2.0 * h);
         if !(slope < -1e-3 && slope.is_finite()) {
@@ -303,14 +308,64 @@ fn calibrated_bpp(
                 break;
             }
         }
-        if (xa - x).abs() < 1e-6 {
+        xa
+    };
+    let cal0 = SAMPLED_RATIO.ln();
+    let s0 = p.sampled_bits(x0.exp());
+    if s0.is_nan() || s0 <= 0.0 {
+        return None;
+    }
+    let mut x = sampled_root(x0, cal0 + s0.ln() - aim, cal0);
+    // the real encodes nearest the aim on either side: (x, ln S − aim)
+    let mut over: Option<(f64, f64)> = None;
+    let mut under: Option<(f64, f64)> = None;
+    for _ in 0..ROUNDS {
+        let bytes = p.code(x.exp());
+        let real = bytes.len() as f64 * 8.0;
+        if real <= budget && real >= 0.99 * budget {
+            return Some(bytes);
+        }
+        if real.is_nan() || real <= 0.0 {
+            return None;
+        }
+        let g = real.ln() - aim;
+        // the size falls as x rises
+        if real > budget {
+            if over.is_none_or(|(xo, _)| x > xo) {
+                over = Some((x, g));
+            }
+        } else if under.is_none_or(|(xu, _)| x < xu) {
+            under = Some((x, g));
+        }
+        let next = match (over, under) {
+            (Some((xo, go)), Some((xu, gu))) => {
+                let (lo, hi) = (xo.min(xu), xo.max(xu));
+                if hi - lo < 1e-4 {
+                    break;
+                }
+                let t = xo + go * (xu - xo) / (go - gu);
+                t.clamp(lo + 0.1 * (hi - lo), hi - 0.1 * (hi - lo))
+            }
+            _ => {
+                let sampled = p.sampled_bits(x.exp());
+                if sampled.is_nan() || sampled <= 0.0 {
+                    return None;
+                }
+                sampled_root(x, g, (real / sampled).ln())
+            }
+        };
+        if (next - x).abs() < 1e-6 {
             break;
         }
-        x = xa;
+        x = next;
     }
-    let _ = best;
     None
 }
+
+/// The usual ratio of a coded size to its sampled estimate ([`Prepared::sampled_bits`]
+/// misses the parent context and restarts the models in every band): the calibration
+/// of [`calibrated_bpp`]'s first guess.
+const SAMPLED_RATIO: f64 = 0.95;
 
 /// Where `m(x) + off = aim`, searched within 6 units of `x` (a bisection on the model:
 /// `sign·m` rises with `x`); the nearer end when the model does not reach the target.
@@ -391,8 +446,9 @@ impl Prepared {
     const SAMPLE_EVERY: usize = 8;
 
     /// An estimate of the coded bits at base step `step` from a fraction of the work:
-    /// every band's blocks of [`Self::SAMPLE_BLOCK`] indices along its first axis, one
-    /// in [`Self::SAMPLE_EVERY`] (all of a band shorter than two periods), coded as one
+    /// every band's blocks of [`Self::SAMPLE_BLOCK`] indices along its first axis (fewer
+    /// in a band shorter than two such periods, at least one), one in
+    /// [`Self::SAMPLE_EVERY`] (all of a band shorter than two periods of one), coded as one
     /// band of their own with no parent context, the bits scaled by the band's count over
     /// the count coded. Biased (the parent context is missing, the models learn
     /// each sample afresh), but by a ratio nearly constant between nearby steps, which
@@ -406,7 +462,9 @@ impl Prepared {
                 let ranges = &plan.bands[j].ranges;
                 let len0 = ranges[0].len();
                 let mut picked: Vec<std::ops::Range<usize>> = Vec::new();
-                if len0 >= 2 * b * k {
+                // shorter blocks in shorter bands (one in k all the same)
+                let b = b.min(len0 / (2 * k));
+                if b > 0 {
                     let mut at = 0;
                     while at < len0 {
                         let s = ranges[0].start + at;

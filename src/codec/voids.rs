@@ -81,6 +81,11 @@ fn decode_mask(data: &[u8], n: usize, shape: &[usize]) -> Vec<bool> {
 /// `r` with its void samples ([`crate::io::nodata`]) filled by pull-push and their runs
 /// kept in [`VOID_RUNS`]; `None` when no sample (or every sample) is void.
 pub(super) fn with_voids_filled(r: &Raster) -> Result<Option<Raster>> {
+    // integer samples are never NaN: without a nodata value there is nothing to look for
+    // (and no whole-raster `f64` copy to make)
+    if !r.sample_type().is_float() && r.meta.nodata.is_none() {
+        return Ok(None);
+    }
     let mut v = r.to_f64();
     let Some(voids) = crate::io::nodata::Voids::find(&v, r.meta.nodata) else {
         return Ok(None);
