@@ -13,6 +13,7 @@
 //! resample.rs  Catmull–Rom resampling on affine maps (base to the output lattice)
 //! spectrum.rs  radially averaged power spectra, the finest octave's slope, the gain fit
 //! synth.rs     the example's pyramid, coarse-to-fine patch matching, blended detail transfer
+//! finest_gain.rs  the finest level's gain g₁ fitted to the example's spectral slope
 //! matching.rs  window descriptors (shape, slope direction, curvature) from summed-area tables
 //! volume.rs    the same detail transfer for 3-D volumes (cube patches, seven bands)
 //! hillshade.rs Horn slope/aspect shading with an optional hypsometric colour ramp
@@ -20,6 +21,7 @@
 //! ```
 
 pub mod demo;
+mod finest_gain;
 pub mod grid;
 pub mod hillshade;
 pub mod matching;
