@@ -7,10 +7,8 @@
 use rayon::prelude::*;
 
 use super::spectrum::{self, Complex, Rings};
-use super::synth::{synthesize_one, BOUNDARY};
 use super::Grid;
-use crate::scheme::{max_levels, Scheme, TwoScale};
-use crate::tensor::Planner;
+use crate::scheme::{max_levels, Boundary, Scheme, TwoScale};
 use crate::Result;
 /// The example's spectral slope over the finest octave ([`spectrum::spectral_slope`] of
 /// its channel means).
@@ -35,15 +33,21 @@ const SUB_MARGIN: usize = 16;
 /// of its coarse and detail parts, whose reconstruction gives the first `s` fine samples
 /// of the whole axis (`m` fine, `n` coarse): `s + SUB_MARGIN` samples (or one more, for
 /// the length rule), or the whole axis when that is not shorter.
-fn sub_axis(scheme: Scheme, m: usize, n: usize, s: usize) -> (usize, usize) {
+pub(super) fn sub_axis(
+    scheme: Scheme,
+    boundary: Boundary,
+    m: usize,
+    n: usize,
+    s: usize,
+) -> (usize, usize) {
     for m_s in [s + SUB_MARGIN, s + SUB_MARGIN + 1] {
         if m_s >= m {
             break;
         }
-        let n_s = TwoScale::coarse_len(scheme, BOUNDARY, m_s);
+        let n_s = TwoScale::coarse_len(scheme, boundary, m_s);
         // the same length relation as the whole axis (so the same start filters), the
         // coarse part inside `n` and the details inside `m − n`
-        if max_levels(scheme, BOUNDARY, m_s) >= 1
+        if max_levels(scheme, boundary, m_s) >= 1
             && 2 * n_s + m == 2 * n + m_s
             && n_s <= n
             && m_s - n_s <= m - n
@@ -57,7 +61,7 @@ fn sub_axis(scheme: Scheme, m: usize, n: usize, s: usize) -> (usize, usize) {
 /// The channel-mean part of the top-left `(m_y, m_x)` sub-block of a Mallat block `packed`
 /// (coarse part `n_y × n_x`) with coarse part `(c_y, c_x)`: its coarse quadrant when
 /// `coarse`, else its three detail quadrants, the rest zero.
-fn sub_block(
+pub(super) fn sub_block(
     packed: &Grid,
     (n_y, n_x): (usize, usize),
     (m_y, c_y): (usize, usize),
@@ -89,28 +93,25 @@ fn sub_block(
 /// over its finest octave is `target` ([`Rings::fit_gain`]), taken on the top-left square
 /// of side `min(m_y, m_x, 512)` (the definition of [`spectrum::spectral_slope`]). `P C₁`
 /// and `Q D₁` are reconstructed separately from a sub-block of the Mallat block that
-/// covers the square ([`sub_axis`]): the square's samples are the whole result's.
+/// covers the square ([`sub_axis`]) by `synthesize` (one level of `scheme` with
+/// `boundary`): the square's samples are the whole result's.
 pub(super) fn fit_finest_gain(
     packed: &Grid,
     (n_y, n_x): (usize, usize),
     target: f64,
-    scheme: Scheme,
-    planner: &Planner,
+    (scheme, boundary): (Scheme, Boundary),
+    synthesize: impl Fn(Grid) -> Result<Grid>,
 ) -> Result<f64> {
     if !target.is_finite() {
         return Ok(1.0);
     }
     let s = packed.h().min(packed.w()).min(spectrum::MAX_SIDE);
-    let ay = sub_axis(scheme, packed.h(), n_y, s);
-    let ax = sub_axis(scheme, packed.w(), n_x, s);
+    let ay = sub_axis(scheme, boundary, packed.h(), n_y, s);
+    let ax = sub_axis(scheme, boundary, packed.w(), n_x, s);
     // `P C₁` into the real parts and `Q D₁` into the imaginary parts, one at a time
     let mut z = vec![Complex::default(); s * s];
     for coarse in [true, false] {
-        let f = synthesize_one(
-            sub_block(packed, (n_y, n_x), ay, ax, coarse),
-            scheme,
-            planner,
-        )?;
+        let f = synthesize(sub_block(packed, (n_y, n_x), ay, ax, coarse))?;
         // the square's mean is taken out in f64 before the f32 store
         let at = |i: usize| f.data()[(i / s) * f.w() + i % s];
         let mean = (0..s * s).map(at).sum::<f64>() / (s * s) as f64;
@@ -140,54 +141,4 @@ pub(super) fn scale_details(packed: &mut Grid, (n_y, n_x): (usize, usize), g: f6
             let from = if y < n_y { n_x * c } else { 0 };
             row[from..].iter_mut().for_each(|v| *v *= g);
         });
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::terrain::synth::lengths_down;
-
-    #[test]
-    fn a_sub_block_reconstructs_the_first_samples_of_the_whole_block() {
-        for scheme in [Scheme::Chaikin, Scheme::Cubic] {
-            for (m_y, m_x, s) in [(200usize, 160usize, 64usize), (160, 161, 100), (90, 90, 64)] {
-                let ly = lengths_down(scheme, m_y, 1, "h").unwrap();
-                let lx = lengths_down(scheme, m_x, 1, "w").unwrap();
-                let (n_y, n_x) = (ly[1], lx[1]);
-                let data = (0..m_y * m_x)
-                    .map(|i| ((i * 2654435761) % 1000) as f64 / 500.0 - 1.0)
-                    .collect();
-                let packed = Grid::new(m_y, m_x, 1, data).unwrap();
-                let planner = Planner::new();
-                let (ay, ax) = (sub_axis(scheme, m_y, n_y, s), sub_axis(scheme, m_x, n_x, s));
-                assert!(ay.0 >= s && ax.0 >= s);
-                for coarse in [true, false] {
-                    let mut whole = packed.clone();
-                    for y in 0..m_y {
-                        for x in 0..m_x {
-                            if (y < n_y && x < n_x) != coarse {
-                                *whole.at_mut(y, x, 0) = 0.0;
-                            }
-                        }
-                    }
-                    let whole = synthesize_one(whole, scheme, &planner).unwrap();
-                    let sub = synthesize_one(
-                        sub_block(&packed, (n_y, n_x), ay, ax, coarse),
-                        scheme,
-                        &planner,
-                    )
-                    .unwrap();
-                    for y in 0..s {
-                        for x in 0..s {
-                            let (a, b) = (whole.at(y, x, 0), sub.at(y, x, 0));
-                            assert!(
-                                (a - b).abs() < 1e-9,
-                                "{scheme} {m_y}x{m_x} coarse {coarse} at ({y}, {x}): {a} vs {b}"
-                            );
-                        }
-                    }
-                }
-            }
-        }
-    }
 }

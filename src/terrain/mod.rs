@@ -14,6 +14,7 @@
 //! spectrum.rs  radially averaged power spectra, the finest octave's slope, the gain fit
 //! synth.rs     the example's pyramid, coarse-to-fine patch matching, blended detail transfer
 //! finest_gain.rs  the finest level's gain g₁ fitted to the example's spectral slope
+//! seams.rs     the seam ratio: second differences on patch borders against elsewhere
 //! matching.rs  window descriptors (shape, slope direction, curvature) from summed-area tables
 //! volume.rs    the same detail transfer for 3-D volumes (cube patches, seven bands)
 //! hillshade.rs Horn slope/aspect shading with an optional hypsometric colour ramp
@@ -27,6 +28,7 @@ pub mod hillshade;
 pub mod matching;
 pub mod raster;
 pub mod resample;
+mod seams;
 pub mod spectrum;
 pub mod synth;
 pub mod volume;

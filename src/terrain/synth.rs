@@ -44,8 +44,11 @@
 use rayon::prelude::*;
 
 use super::finest_gain::{example_slope, fit_finest_gain, scale_details};
+#[cfg(test)]
+use super::finest_gain::{sub_axis, sub_block};
 use super::matching::{distance, Tables, LEN};
 use super::resample::{resample_add, resample_map, Map};
+pub use super::seams::seam_ratio;
 use super::Grid;
 use crate::generate::rng::SplitMix64;
 use crate::scheme::{max_levels, Boundary, Scheme, TwoScale};
@@ -224,7 +227,7 @@ fn analyze_one(g: Grid, scheme: Scheme, planner: &Planner) -> Result<(Grid, usiz
 }
 
 /// One level of reconstruction of a Mallat block, in place.
-pub(super) fn synthesize_one(packed: Grid, scheme: Scheme, planner: &Planner) -> Result<Grid> {
+fn synthesize_one(packed: Grid, scheme: Scheme, planner: &Planner) -> Result<Grid> {
     let mut a = packed.into_array();
     let pyr = Pyramid::plan(a.shape(), &spec(scheme, 1))?;
     tensor::synthesize_in(planner, &mut a, &pyr, Engine::tuned())?;
@@ -850,7 +853,9 @@ fn refine(
                 (FinestGain::Fixed(g), _) => g,
                 (FinestGain::Fitted, Some(target)) => {
                     report.example_spectral_slope = Some(target);
-                    fit_finest_gain(&packed, (n_y, n_x), target, o.scheme, &planner)?
+                    fit_finest_gain(&packed, (n_y, n_x), target, (o.scheme, BOUNDARY), |g| {
+                        synthesize_one(g, o.scheme, &planner)
+                    })?
                 }
                 (FinestGain::Fitted, None) => 1.0,
             };
@@ -865,99 +870,6 @@ fn refine(
     drop(planner);
     report.seam_ratio = seam_ratio(&t, 2 * o.patch);
     Ok((t, report))
-}
-
-/// Mean |second difference| of channel-mean heights across the lines `period·j − 1 + δ`
-/// (`δ ∈ {−1, 0, 1}`: the finest patch borders, which lie near fine index `2t − 1`)
-/// divided by the same over every other line; rows and columns together.
-pub fn seam_ratio(g: &Grid, period: usize) -> f64 {
-    let (h, w) = (g.h(), g.w());
-    if h < 3 || w < 3 {
-        return f64::NAN;
-    }
-    // the heights themselves when there is one channel (no copy of the grid)
-    let means: Vec<f64>;
-    let height: &[f64] = if g.c() == 1 {
-        g.data()
-    } else {
-        means = (0..h * w).map(|i| g.mean_at(i / w, i % w)).collect();
-        &means
-    };
-    let tally = SeamTally::new(period);
-    let border: Vec<bool> = (0..h.max(w)).map(|i| tally.is_border(i)).collect();
-    // per-row sums in parallel, added in row order (the same figure for any thread count)
-    let rows: Vec<[(f64, usize); 2]> = (1..h - 1)
-        .into_par_iter()
-        .map(|y| {
-            let mut t = [(0.0, 0usize); 2];
-            let r = &height[y * w..(y + 1) * w];
-            let (up, down) = (
-                &height[(y - 1) * w..y * w],
-                &height[(y + 1) * w..(y + 2) * w],
-            );
-            for x in 1..w - 1 {
-                let sx = (r[x + 1] - 2.0 * r[x] + r[x - 1]).abs();
-                let sy = (down[x] - 2.0 * r[x] + up[x]).abs();
-                let bx = &mut t[border[x] as usize];
-                bx.0 += sx;
-                bx.1 += 1;
-                let by = &mut t[border[y] as usize];
-                by.0 += sy;
-                by.1 += 1;
-            }
-            t
-        })
-        .collect();
-    let mut seams = tally;
-    for t in rows {
-        seams.off.0 += t[0].0;
-        seams.off.1 += t[0].1;
-        seams.on.0 += t[1].0;
-        seams.on.1 += t[1].1;
-    }
-    seams.ratio()
-}
-
-/// Second differences split by whether their line is a patch border (`period·j − 1 ± 1`),
-/// for the seam ratios of images and volumes.
-pub(crate) struct SeamTally {
-    period: usize,
-    on: (f64, usize),
-    off: (f64, usize),
-}
-
-impl SeamTally {
-    pub(crate) fn new(period: usize) -> SeamTally {
-        SeamTally {
-            period: period.max(1),
-            on: (0.0, 0),
-            off: (0.0, 0),
-        }
-    }
-
-    /// Whether line `i` is a patch border `period·j − 1 ± 1` (j ≥ 1).
-    pub(crate) fn is_border(&self, i: usize) -> bool {
-        (1..=1 + i / self.period).any(|j| {
-            let b = (self.period * j) as i64 - 1;
-            (i as i64 - b).abs() <= 1
-        })
-    }
-
-    /// Count `s`, the second difference across line `i` of its axis.
-    pub(crate) fn add(&mut self, i: usize, s: f64) {
-        let border = self.is_border(i);
-        let t = if border { &mut self.on } else { &mut self.off };
-        t.0 += s;
-        t.1 += 1;
-    }
-
-    /// Mean on the borders ÷ mean elsewhere (NaN when either is undefined).
-    pub(crate) fn ratio(&self) -> f64 {
-        if self.on.1 == 0 || self.off.1 == 0 || self.off.0 == 0.0 {
-            return f64::NAN;
-        }
-        (self.on.0 / self.on.1 as f64) / (self.off.0 / self.off.1 as f64)
-    }
 }
 
 /// Synthesize a terrain of `base × 2^L` (or `o.size`) from a smooth or coarse `base`
@@ -1148,4 +1060,56 @@ pub fn highpass(g: &Grid, scheme: Scheme, levels: usize) -> Result<Grid> {
     tensor::synthesize(&mut a, &pyr)?;
     let data = g.data().iter().zip(a.data()).map(|(f, l)| f - l).collect();
     Grid::new(g.h(), g.w(), g.c(), data)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_sub_block_reconstructs_the_first_samples_of_the_whole_block() {
+        for scheme in [Scheme::Chaikin, Scheme::Cubic] {
+            for (m_y, m_x, s) in [(200usize, 160usize, 64usize), (160, 161, 100), (90, 90, 64)] {
+                let ly = lengths_down(scheme, m_y, 1, "h").unwrap();
+                let lx = lengths_down(scheme, m_x, 1, "w").unwrap();
+                let (n_y, n_x) = (ly[1], lx[1]);
+                let data = (0..m_y * m_x)
+                    .map(|i| ((i * 2654435761) % 1000) as f64 / 500.0 - 1.0)
+                    .collect();
+                let packed = Grid::new(m_y, m_x, 1, data).unwrap();
+                let planner = Planner::new();
+                let (ay, ax) = (
+                    sub_axis(scheme, BOUNDARY, m_y, n_y, s),
+                    sub_axis(scheme, BOUNDARY, m_x, n_x, s),
+                );
+                assert!(ay.0 >= s && ax.0 >= s);
+                for coarse in [true, false] {
+                    let mut whole = packed.clone();
+                    for y in 0..m_y {
+                        for x in 0..m_x {
+                            if (y < n_y && x < n_x) != coarse {
+                                *whole.at_mut(y, x, 0) = 0.0;
+                            }
+                        }
+                    }
+                    let whole = synthesize_one(whole, scheme, &planner).unwrap();
+                    let sub = synthesize_one(
+                        sub_block(&packed, (n_y, n_x), ay, ax, coarse),
+                        scheme,
+                        &planner,
+                    )
+                    .unwrap();
+                    for y in 0..s {
+                        for x in 0..s {
+                            let (a, b) = (whole.at(y, x, 0), sub.at(y, x, 0));
+                            assert!(
+                                (a - b).abs() < 1e-9,
+                                "{scheme} {m_y}x{m_x} coarse {coarse} at ({y}, {x}): {a} vs {b}"
+                            );
+                        }
+                    }
+                }
+            }
+        }
+    }
 }

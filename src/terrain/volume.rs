@@ -392,7 +392,7 @@ fn match_band_rms(acc: &mut Volume, n: [usize; 3], e: &Volume, ne: [usize; 3]) {
 /// Mean |second difference| of channel means across the lines `period·j − 1 ± 1` of
 /// every axis ÷ the same elsewhere (the volume form of [`super::synth::seam_ratio`]).
 pub fn seam_ratio(v: &Volume, period: usize) -> f64 {
-    let mut seams = super::synth::SeamTally::new(period);
+    let mut seams = super::seams::SeamTally::new(period);
     let [dz, dy, dx] = v.dims();
     for z in 1..dz.saturating_sub(1) {
         for y in 1..dy.saturating_sub(1) {
