@@ -21,7 +21,7 @@ use super::voids::with_voids_filled;
 use super::{layout, meta};
 use crate::format::{self, Chunk, ChunkReader, Cursor, Header};
 use crate::io::slab::{MemorySlabs, Shape};
-use crate::io::{AxisMap, Metadata, Raster, SampleType, Samples};
+use crate::io::{AxisMap, Metadata, Raster, Samples};
 use crate::{Error, Result};
 use rayon::prelude::*;
 use std::io::{Read, Seek, SeekFrom};
@@ -161,21 +161,6 @@ fn crop_samples(s: &Samples, dims: &[usize], channels: usize, ranges: &[Range<us
     map_samples!(s, v => layout::gather(v, &shape, &r))
 }
 
-/// `n` zero samples of type `t`.
-fn zeros(t: SampleType, n: usize) -> Samples {
-    match t {
-        SampleType::U8 => Samples::U8(vec![0; n]),
-        SampleType::I8 => Samples::I8(vec![0; n]),
-        SampleType::U16 => Samples::U16(vec![0; n]),
-        SampleType::I16 => Samples::I16(vec![0; n]),
-        SampleType::U32 => Samples::U32(vec![0; n]),
-        SampleType::I32 => Samples::I32(vec![0; n]),
-        SampleType::F16 => Samples::F16(vec![half::f16::ZERO; n]),
-        SampleType::F32 => Samples::F32(vec![0.0; n]),
-        SampleType::F64 => Samples::F64(vec![0.0; n]),
-    }
-}
-
 /// Copy the block `from` of `src` (extents `sdims` × channels) into the block `to` of
 /// `dst` (extents `ddims` × channels); both blocks have the same extents.
 fn copy_block(
@@ -273,7 +258,7 @@ impl Stitch {
             &self.out.iter().map(|g| g.len()).collect::<Vec<_>>(),
             self.header.channels,
         )?;
-        self.samples = zeros(self.header.sample_type, n);
+        self.samples = Samples::zeros(self.header.sample_type, n);
         Ok(())
     }
 
@@ -342,7 +327,7 @@ impl Stitch {
         )?;
         let done = vec![false; grid.len()];
         Ok(Stitch {
-            samples: zeros(h.sample_type, 0),
+            samples: Samples::zeros(h.sample_type, 0),
             grid,
             level,
             header: h.clone(),
@@ -499,7 +484,7 @@ impl Stitch {
             header: self.header.clone(),
             offs: self.offs.clone(),
             out,
-            samples: zeros(self.header.sample_type, 0),
+            samples: Samples::zeros(self.header.sample_type, 0),
             done: Vec::new(),
         };
         st.done = vec![false; st.grid.len()];
