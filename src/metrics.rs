@@ -24,7 +24,7 @@
 use rayon::prelude::*;
 use serde::Serialize;
 
-use crate::io::{Raster, SampleType, Samples};
+use crate::io::{Raster, RasterView, SampleType, Samples, SamplesRef};
 use crate::{Error, Result};
 
 /// Whose definition of the data range R (and so of PSNR) to follow.
@@ -73,7 +73,7 @@ pub struct Comparison {
 }
 
 /// scikit-image's default PSNR data range for reference samples `a` (see [`Convention`]).
-pub fn skimage_data_range(a: &Samples) -> f64 {
+pub fn skimage_data_range(a: SamplesRef<'_>) -> f64 {
     let t = a.sample_type();
     let (dmin, dmax) = t.range();
     let (lo, hi) = a.min_max().unwrap_or((0.0, 0.0));
@@ -101,7 +101,7 @@ pub fn oiio_scale(t: SampleType) -> f64 {
 }
 
 /// `Σ (a − b)²` and `max |a − b|`, computed as scikit-image does (see module doc).
-fn squared_error(a: &Samples, b: &Samples) -> (f64, f64) {
+fn squared_error(a: SamplesRef<'_>, b: SamplesRef<'_>) -> (f64, f64) {
     let single = matches!(a.sample_type(), SampleType::F16 | SampleType::F32)
         && matches!(b.sample_type(), SampleType::F16 | SampleType::F32);
     let mut sum = 0.0f64;
@@ -124,18 +124,18 @@ fn squared_error(a: &Samples, b: &Samples) -> (f64, f64) {
 
 /// A sample as OpenImageIO's float iterator reads it: integers times the f32 constant
 /// `1 / scale`, floats cast to f32.
-fn oiio_value(s: &Samples, i: usize, inv: f32) -> f32 {
+fn oiio_value(s: SamplesRef<'_>, i: usize, inv: f32) -> f32 {
     match s {
-        Samples::F16(v) => v[i].to_f32(),
-        Samples::F32(v) => v[i],
-        Samples::F64(v) => v[i] as f32,
+        SamplesRef::F16(v) => v[i].to_f32(),
+        SamplesRef::F32(v) => v[i],
+        SamplesRef::F64(v) => v[i] as f32,
         other => other.get_f64(i) as f32 * inv,
     }
 }
 
 /// `(Σ d², peak)` as `ImageBufAlgo.compare` computes them: `d = a − b` and `d²` in f32,
 /// summed in f64; `peak = max(1, largest value of a or b)`.
-fn oiio_squared_error(a: &Samples, b: &Samples) -> (f64, f64) {
+fn oiio_squared_error(a: SamplesRef<'_>, b: SamplesRef<'_>) -> (f64, f64) {
     let ia = (1.0 / oiio_scale(a.sample_type())) as f32;
     let ib = (1.0 / oiio_scale(b.sample_type())) as f32;
     let mut sum = 0.0f64;
@@ -152,12 +152,22 @@ fn oiio_squared_error(a: &Samples, b: &Samples) -> (f64, f64) {
 
 /// Compare reference `a` with test `b` (same dims and channels).
 pub fn compare(a: &Raster, b: &Raster, opts: &CompareOptions) -> Result<Comparison> {
+    compare_view(&a.view(), &b.view(), opts)
+}
+
+/// [`compare`] of borrowed rasters (samples read where they are, e.g. NumPy arrays).
+pub fn compare_view(
+    a: &RasterView<'_>,
+    b: &RasterView<'_>,
+    opts: &CompareOptions,
+) -> Result<Comparison> {
     check_shapes(a, b)?;
     let cleaned = without_voids(a, b)?;
     let (a, b, n) = match &cleaned {
-        Some((x, y, n)) => (x, y, *n),
-        None => (a, b, a.samples.len()),
+        Some((x, y, n)) => (x.view(), y.view(), *n),
+        None => (*a, *b, a.samples.len()),
     };
+    let (a, b) = (&a, &b);
     let e = errors(a, b, opts, n)?;
     let ssim_range = match (opts.data_range, opts.convention, a.sample_type().is_float()) {
         (Some(r), _, _) => r,
@@ -167,7 +177,7 @@ pub fn compare(a: &Raster, b: &Raster, opts: &CompareOptions) -> Result<Comparis
         }
         _ => e.data_range,
     };
-    let ssim = ssim(a, b, ssim_range);
+    let ssim = ssim_view(a, b, ssim_range);
     Ok(Comparison {
         mse: e.mse,
         psnr: e.psnr,
@@ -175,7 +185,7 @@ pub fn compare(a: &Raster, b: &Raster, opts: &CompareOptions) -> Result<Comparis
         ssim,
         data_range: e.data_range,
         convention: e.convention,
-        dims: a.dims.clone(),
+        dims: a.dims.to_vec(),
         channels: a.channels,
         dtype: a.sample_type().name(),
     })
@@ -184,20 +194,29 @@ pub fn compare(a: &Raster, b: &Raster, opts: &CompareOptions) -> Result<Comparis
 /// The PSNR of `b` against the reference `a`, exactly as [`compare`] reports it (`None`
 /// when identical), without the SSIM: what the encoder's `--psnr` search measures.
 pub fn psnr(a: &Raster, b: &Raster, opts: &CompareOptions) -> Result<Option<f64>> {
+    psnr_view(&a.view(), &b.view(), opts)
+}
+
+/// [`psnr`] of borrowed rasters.
+pub fn psnr_view(
+    a: &RasterView<'_>,
+    b: &RasterView<'_>,
+    opts: &CompareOptions,
+) -> Result<Option<f64>> {
     check_shapes(a, b)?;
     let cleaned = without_voids(a, b)?;
     let (a, b, n) = match &cleaned {
-        Some((x, y, n)) => (x, y, *n),
-        None => (a, b, a.samples.len()),
+        Some((x, y, n)) => (x.view(), y.view(), *n),
+        None => (*a, *b, a.samples.len()),
     };
-    Ok(errors(a, b, opts, n)?.psnr)
+    Ok(errors(&a, &b, opts, n)?.psnr)
 }
 
-fn check_shapes(a: &Raster, b: &Raster) -> Result<()> {
+fn check_shapes(a: &RasterView<'_>, b: &RasterView<'_>) -> Result<()> {
     if a.dims != b.dims || a.channels != b.channels {
         return Err(Error::parameter(
             "shapes",
-            format!("{} vs {}", a.summary(), b.summary()),
+            format!("{} vs {}", view_summary(a), view_summary(b)),
             "two inputs of the same dims and channels",
         ));
     }
@@ -207,7 +226,10 @@ fn check_shapes(a: &Raster, b: &Raster) -> Result<()> {
 /// `a` and `b` with every position void in either replaced by `a`'s pull-push fill
 /// (the same value in both), and the number of samples valid in both; `None` when no
 /// sample is void.
-fn without_voids(a: &Raster, b: &Raster) -> Result<Option<(Raster, Raster, usize)>> {
+fn without_voids(
+    a: &RasterView<'_>,
+    b: &RasterView<'_>,
+) -> Result<Option<(Raster, Raster, usize)>> {
     use crate::io::nodata::{is_void, Voids};
     let n = a.samples.len();
     let (na, nb) = (a.meta.nodata, b.meta.nodata);
@@ -218,29 +240,49 @@ fn without_voids(a: &Raster, b: &Raster) -> Result<Option<(Raster, Raster, usize
     if valid == n {
         return Ok(None);
     }
-    let mut va = a.to_f64();
+    let mut va = a.samples.to_f64();
     let voids = Voids {
         mask: void,
         marker: f64::NAN,
         range: (0.0, 0.0),
     };
-    let mut shape = a.dims.clone();
+    let mut shape = a.dims.to_vec();
     shape.push(a.channels);
     voids.fill(&mut va, &shape, a.dims.len())?;
     // in `a`'s type first, so that both sides hold the same value
     let filled = Samples::from_f64(&va, a.sample_type());
     let va = filled.to_f64();
-    let mut vb = b.to_f64();
+    let mut vb = b.samples.to_f64();
     for (i, &v) in voids.mask.iter().enumerate() {
         if v {
             vb[i] = va[i];
         }
     }
-    let mut x = a.clone();
-    x.samples = filled;
-    let mut y = b.clone();
-    y.samples = Samples::from_f64(&vb, b.sample_type());
+    let x = Raster {
+        samples: filled,
+        ..raster_shell(a)
+    };
+    let y = Raster {
+        samples: Samples::from_f64(&vb, b.sample_type()),
+        ..raster_shell(b)
+    };
     Ok(Some((x, y, valid)))
+}
+
+/// `r`'s dims, channels, kind and metadata with no samples (to be filled in).
+fn raster_shell(r: &RasterView<'_>) -> Raster {
+    Raster {
+        dims: r.dims.to_vec(),
+        channels: r.channels,
+        samples: Samples::U8(Vec::new()),
+        kind: r.kind,
+        meta: r.meta.clone(),
+    }
+}
+
+/// [`Raster::summary`] of a borrowed raster.
+fn view_summary(r: &RasterView<'_>) -> String {
+    crate::io::summary(r.dims, r.channels, r.sample_type(), r.kind)
 }
 
 /// What [`compare`] reports besides the SSIM.
@@ -253,26 +295,31 @@ struct Errors {
 }
 
 /// The errors over `valid` samples (the others contribute none, see [`without_voids`]).
-fn errors(a: &Raster, b: &Raster, opts: &CompareOptions, valid: usize) -> Result<Errors> {
+fn errors(
+    a: &RasterView<'_>,
+    b: &RasterView<'_>,
+    opts: &CompareOptions,
+    valid: usize,
+) -> Result<Errors> {
     check_shapes(a, b)?;
     if a.samples.is_empty() {
         return Err(Error::parameter("input", "empty", "at least one sample"));
     }
     let n = valid.max(1) as f64;
-    let (sum, max_abs_error) = squared_error(&a.samples, &b.samples);
+    let (sum, max_abs_error) = squared_error(a.samples, b.samples);
     let mse = sum / n;
     let (data_range, psnr, name) = match opts.convention {
         Convention::Skimage => {
             let r = opts
                 .data_range
-                .unwrap_or_else(|| skimage_data_range(&a.samples));
+                .unwrap_or_else(|| skimage_data_range(a.samples));
             let psnr = (mse > 0.0).then(|| 10.0 * (r * r / mse).log10());
             (r, psnr, "skimage")
         }
         Convention::Oiio => match opts.data_range {
             Some(r) => (r, (mse > 0.0).then(|| 10.0 * (r * r / mse).log10()), "oiio"),
             None => {
-                let (sq, peak) = oiio_squared_error(&a.samples, &b.samples);
+                let (sq, peak) = oiio_squared_error(a.samples, b.samples);
                 let rms = (sq / n).sqrt();
                 let psnr = (rms > 0.0).then(|| 20.0 * (peak / rms).log10());
                 (peak * oiio_scale(a.sample_type()), psnr, "oiio")
@@ -329,9 +376,14 @@ fn box_sums(data: &[f64], shape: &[usize], w: usize) -> Vec<f64> {
 /// Memory stays proportional to one slice: the window sums along the first axis are
 /// kept as running sums over 7 slices (five quantities: a, b, a², b², ab), and each
 /// output slab is then box-summed over the remaining axes.
+pub fn ssim(a: &Raster, b: &Raster, data_range: f64) -> Option<f64> {
+    ssim_view(&a.view(), &b.view(), data_range)
+}
+
+/// [`ssim`] of borrowed rasters.
 // the five running sums are indexed by position together: a range loop reads best
 #[allow(clippy::needless_range_loop)]
-pub fn ssim(a: &Raster, b: &Raster, data_range: f64) -> Option<f64> {
+pub fn ssim_view(a: &RasterView<'_>, b: &RasterView<'_>, data_range: f64) -> Option<f64> {
     const W: usize = 7;
     if a.dims.iter().any(|&d| d < W) {
         return None;
@@ -343,7 +395,7 @@ pub fn ssim(a: &Raster, b: &Raster, data_range: f64) -> Option<f64> {
     let c2 = (0.03 * data_range).powi(2);
     let ch = a.channels;
     let single = a.sample_type().is_float() && a.sample_type() != SampleType::F64;
-    let value = |s: &Samples, i: usize| {
+    let value = |s: SamplesRef<'_>, i: usize| {
         let v = s.get_f64(i);
         if single {
             v as f32 as f64
@@ -363,7 +415,7 @@ pub fn ssim(a: &Raster, b: &Raster, data_range: f64) -> Option<f64> {
         let add = |run: &mut Vec<Vec<f64>>, z: usize, sign: f64| {
             for p in 0..slice_len {
                 let i = (z * slice_len + p) * ch + c;
-                let (x, y) = (value(&a.samples, i), value(&b.samples, i));
+                let (x, y) = (value(a.samples, i), value(b.samples, i));
                 run[0][p] += sign * x;
                 run[1][p] += sign * y;
                 run[2][p] += sign * x * x;

@@ -7,9 +7,12 @@
 //! * An array's axes are spatial, slowest first (`[H, W]`, `[D, H, W]`), 1 to 3 of them;
 //!   with `channels_last` the last axis holds the channels (interleaved samples, never
 //!   transformed). A result has a channel axis when it has more than one channel.
-//! * Inputs are borrowed read-only (no NumPy-side copy for C-contiguous arrays; other
-//!   layouts are gathered once in C order). The library's rasters own their samples,
-//!   so the samples are copied once into the raster, with the GIL released.
+//! * Inputs are borrowed read-only: `encode` and `compare` read a C-contiguous array's
+//!   samples where they are ([`RasterView`], no copy); other layouts are gathered once
+//!   in C order. `analyze`/`synthesize` copy the samples once into their output (the
+//!   transform runs in place on it); `upscale`/`downscale` copy them once into the
+//!   raster they resample. Do not write to an array while a call reads it (the GIL is
+//!   released).
 //! * Every call that transforms, codes or measures runs with the GIL released.
 //! * A library error becomes `MraError` (a `ValueError`) carrying the library's one-line
 //!   message "what … (expected …)"; an operating-system error becomes `OSError`.
@@ -20,7 +23,7 @@ use std::borrow::Cow;
 use std::panic::{catch_unwind, AssertUnwindSafe};
 
 use mra::codec::{self, DecodeOptions, EncodeOptions, Rate};
-use mra::io::{DataKind, Raster, Samples};
+use mra::io::{DataKind, Metadata, Raster, RasterView, Samples, SamplesRef};
 use mra::metrics::{self, CompareOptions, Convention};
 use mra::progress::Progress;
 use mra::scheme::subdivide::Refinement;
@@ -93,6 +96,20 @@ enum Input<'a> {
 }
 
 impl Input<'_> {
+    /// The samples, borrowed.
+    fn view(&self) -> SamplesRef<'_> {
+        match self {
+            Input::U8(c) => SamplesRef::U8(c),
+            Input::I8(c) => SamplesRef::I8(c),
+            Input::U16(c) => SamplesRef::U16(c),
+            Input::I16(c) => SamplesRef::I16(c),
+            Input::U32(c) => SamplesRef::U32(c),
+            Input::I32(c) => SamplesRef::I32(c),
+            Input::F32(c) => SamplesRef::F32(c),
+            Input::F64(c) => SamplesRef::F64(c),
+        }
+    }
+
     /// The raster's samples (one copy of a borrowed slice, none of a gathered one).
     fn into_samples(self) -> Samples {
         match self {
@@ -164,14 +181,29 @@ fn layout(shape: &[usize], channels_last: bool) -> mra::Result<(Vec<usize>, usiz
     Ok((dims, channels))
 }
 
-/// A raster over the array's samples (see the module doc for the axes).
-fn raster(input: Input<'_>, shape: &[usize], channels_last: bool) -> mra::Result<Raster> {
-    let (dims, channels) = layout(shape, channels_last)?;
-    let kind = if dims.len() == 3 {
+/// The kind of data an array of `dims` holds.
+fn kind_of(dims: &[usize]) -> DataKind {
+    if dims.len() == 3 {
         DataKind::Volume
     } else {
         DataKind::Image
-    };
+    }
+}
+
+/// A borrowed raster over the array's samples (no copy); `dims` from [`layout`].
+fn view<'a>(
+    input: &'a Input<'_>,
+    dims: &'a [usize],
+    channels: usize,
+    meta: &'a Metadata,
+) -> mra::Result<RasterView<'a>> {
+    RasterView::new(dims, channels, input.view(), kind_of(dims), meta)
+}
+
+/// A raster over the array's samples (see the module doc for the axes).
+fn raster(input: Input<'_>, shape: &[usize], channels_last: bool) -> mra::Result<Raster> {
+    let (dims, channels) = layout(shape, channels_last)?;
+    let kind = kind_of(&dims);
     Raster::new(dims, channels, input.into_samples(), kind)
 }
 
@@ -248,9 +280,11 @@ fn encode<'py>(
     };
     let bytes = with_input(a, |input, shape| {
         run(py, "encode", || {
-            let r = raster(input, &shape, channels_last)?;
+            let (dims, channels) = layout(&shape, channels_last)?;
+            let meta = Metadata::default();
+            let r = view(&input, &dims, channels, &meta)?;
             match &tile {
-                None => codec::encode(&r, &opts),
+                None => codec::encode_view(&r, &opts),
                 Some(t) => {
                     if t.len() != r.dims.len() || t.contains(&0) {
                         return Err(Error::parameter(
@@ -260,8 +294,8 @@ fn encode<'py>(
                         ));
                     }
                     // a tile larger than the axis is the whole axis
-                    let t: Vec<usize> = t.iter().zip(&r.dims).map(|(&t, &d)| t.min(d)).collect();
-                    codec::encode_tiled(&r, &opts, &t)
+                    let t: Vec<usize> = t.iter().zip(r.dims).map(|(&t, &d)| t.min(d)).collect();
+                    codec::encode_tiled_view(&r, &opts, &t)
                 }
             }
         })
@@ -559,9 +593,12 @@ fn compare(
     let m = with_input(a, |ia, sa| {
         with_input(b, |ib, sb| {
             run(py, "compare", || {
-                let ra = raster(ia, &sa, channels_last)?;
-                let rb = raster(ib, &sb, channels_last)?;
-                metrics::compare(&ra, &rb, &opts)
+                let meta = Metadata::default();
+                let (da, ca) = layout(&sa, channels_last)?;
+                let (db, cb) = layout(&sb, channels_last)?;
+                let ra = view(&ia, &da, ca, &meta)?;
+                let rb = view(&ib, &db, cb, &meta)?;
+                metrics::compare_view(&ra, &rb, &opts)
             })
         })
     })?;

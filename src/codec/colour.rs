@@ -4,7 +4,7 @@
 //! is in [`super::lossless`].)
 
 use crate::format::header::Colour;
-use crate::io::{Raster, Samples};
+use crate::io::{RasterView, SamplesRef};
 
 /// Squared synthesis gain of each channel after the colour transform (inverse YCoCg
 /// columns: Y → (1,1,1), Co → (½,0,−½), Cg → (−½,½,−½)).
@@ -38,20 +38,20 @@ pub(super) fn ycocg_inverse(y: f32, co: f32, cg: f32) -> (f32, f32, f32) {
 }
 
 /// Split interleaved samples into per-channel f32 planes, NaN/∞ → 0, colour applied.
-pub(super) fn planes_f32(r: &Raster, colour: Colour) -> Vec<Vec<f32>> {
+pub(super) fn planes_f32(r: &RasterView<'_>, colour: Colour) -> Vec<Vec<f32>> {
     let c = r.channels;
     let n = r.positions();
     // integers convert exactly through f64 or straight (one rounding either way)
-    let mut planes = match &r.samples {
-        Samples::U8(v) => split(v, c, n, |x| x as f32),
-        Samples::I8(v) => split(v, c, n, |x| x as f32),
-        Samples::U16(v) => split(v, c, n, |x| x as f32),
-        Samples::I16(v) => split(v, c, n, |x| x as f32),
-        Samples::U32(v) => split(v, c, n, |x| x as f32),
-        Samples::I32(v) => split(v, c, n, |x| x as f32),
-        Samples::F32(v) => split(v, c, n, |x| if x.is_finite() { x } else { 0.0 }),
-        Samples::F64(v) => split(v, c, n, |x| if x.is_finite() { x as f32 } else { 0.0 }),
-        Samples::F16(v) => split(v, c, n, |x| {
+    let mut planes = match r.samples {
+        SamplesRef::U8(v) => split(v, c, n, |x| x as f32),
+        SamplesRef::I8(v) => split(v, c, n, |x| x as f32),
+        SamplesRef::U16(v) => split(v, c, n, |x| x as f32),
+        SamplesRef::I16(v) => split(v, c, n, |x| x as f32),
+        SamplesRef::U32(v) => split(v, c, n, |x| x as f32),
+        SamplesRef::I32(v) => split(v, c, n, |x| x as f32),
+        SamplesRef::F32(v) => split(v, c, n, |x| if x.is_finite() { x } else { 0.0 }),
+        SamplesRef::F64(v) => split(v, c, n, |x| if x.is_finite() { x as f32 } else { 0.0 }),
+        SamplesRef::F16(v) => split(v, c, n, |x| {
             let x = x.to_f64();
             if x.is_finite() {
                 x as f32
@@ -88,7 +88,7 @@ fn split<T: Copy>(v: &[T], c: usize, n: usize, f: impl Fn(T) -> f32) -> Vec<Vec<
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::io::{DataKind, SampleType};
+    use crate::io::{DataKind, Raster, SampleType, Samples};
 
     /// The planes of every sample type, one and three channels, are the samples read as
     /// `f64`, cast to `f32`, with the values that are not finite as 0.
@@ -123,7 +123,7 @@ mod tests {
                 let v: Vec<f64> = (0..4 * c).map(|i| vals[i % vals.len()]).collect();
                 let r =
                     Raster::new(vec![2, 2], c, Samples::from_f64(&v, ty), DataKind::Image).unwrap();
-                let planes = planes_f32(&r, Colour::None);
+                let planes = planes_f32(&r.view(), Colour::None);
                 for i in 0..4 {
                     for (k, p) in planes.iter().enumerate() {
                         let x = r.samples.get_f64(i * c + k);

@@ -10,14 +10,14 @@ use super::plan::Plan;
 use super::{layout, lossless, max_error, meta, rate};
 use crate::format::header::Colour;
 use crate::format::{self, put_chunk, Mode};
-use crate::io::{Raster, SampleType, Samples};
+use crate::io::{RasterView, SampleType, SamplesRef};
 use crate::scheme::{Boundary, Scheme};
 use crate::Result;
 use rayon::prelude::*;
 
 /// The file of one tile (a whole raster or one tile of a tiled file) whose voids are
 /// already filled: the rate mode's coding.
-pub(super) fn encode_filled(r: &Raster, opts: &EncodeOptions) -> Result<Vec<u8>> {
+pub(super) fn encode_filled(r: &RasterView<'_>, opts: &EncodeOptions) -> Result<Vec<u8>> {
     match opts.rate {
         Rate::Lossless => encode_lossless(r, opts),
         Rate::MaxError(e) => {
@@ -36,7 +36,7 @@ fn lossless_int(x: f64, t: SampleType) -> i64 {
     x as i64
 }
 
-fn encode_lossless(r: &Raster, opts: &EncodeOptions) -> Result<Vec<u8>> {
+fn encode_lossless(r: &RasterView<'_>, opts: &EncodeOptions) -> Result<Vec<u8>> {
     let ty = r.sample_type();
     let colour = if r.channels >= 3 && !ty.is_float() {
         Colour::YCoCgR
@@ -62,15 +62,17 @@ fn encode_lossless(r: &Raster, opts: &EncodeOptions) -> Result<Vec<u8>> {
     let mut planes = vec![vec![0i64; n]; c];
     for i in 0..n {
         for (k, p) in planes.iter_mut().enumerate() {
-            p[i] = match (&r.samples, quantum) {
+            p[i] = match (r.samples, quantum) {
                 (s, Some(q)) => (s.get_f64(i * c + k) / q) as i64,
-                (Samples::F16(v), None) => {
+                (SamplesRef::F16(v), None) => {
                     lossless::float_bits_to_int(v[i * c + k].to_bits() as u64, 16)
                 }
-                (Samples::F32(v), None) => {
+                (SamplesRef::F32(v), None) => {
                     lossless::float_bits_to_int(v[i * c + k].to_bits() as u64, 32)
                 }
-                (Samples::F64(v), None) => lossless::float_bits_to_int(v[i * c + k].to_bits(), 64),
+                (SamplesRef::F64(v), None) => {
+                    lossless::float_bits_to_int(v[i * c + k].to_bits(), 64)
+                }
                 (s, None) => lossless_int(s.get_f64(i * c + k), ty),
             };
         }
@@ -91,7 +93,7 @@ fn encode_lossless(r: &Raster, opts: &EncodeOptions) -> Result<Vec<u8>> {
     drop(planes);
     let mut out = format::SIGNATURE.to_vec();
     put_chunk(&mut out, HEAD, &header.to_bytes());
-    let m = meta::to_bytes(&r.meta);
+    let m = meta::to_bytes(r.meta);
     if !m.is_empty() {
         put_chunk(&mut out, META, &m);
     }

@@ -9,14 +9,14 @@ use super::plan::{band_rho, lossy_values, Plan};
 use super::{layout, meta};
 use crate::format::header::Colour;
 use crate::format::{self, put_chunk, Header, Mode};
-use crate::io::{Raster, Samples};
+use crate::io::{Raster, RasterView, SamplesRef};
 use crate::quantize::{self, DELTA};
 use crate::tensor::{self, Array};
 use crate::{Error, Result};
 use rayon::prelude::*;
 use std::borrow::Cow;
 
-pub(super) fn finite_range(s: &Samples) -> (f64, f64) {
+pub(super) fn finite_range(s: SamplesRef<'_>) -> (f64, f64) {
     let mut lo = f64::INFINITY;
     let mut hi = f64::NEG_INFINITY;
     for i in 0..s.len() {
@@ -47,7 +47,7 @@ pub(super) struct Prepared {
 }
 
 pub(super) fn header_for(
-    r: &Raster,
+    r: &RasterView<'_>,
     opts: &EncodeOptions,
     mode: Mode,
     colour: Colour,
@@ -72,13 +72,13 @@ pub(super) fn header_for(
     if opts.levels > format::header::MAX_LEVELS {
         return Err(Error::parameter("levels", opts.levels, "0 to 32"));
     }
-    let (min, max) = finite_range(&r.samples);
+    let (min, max) = finite_range(r.samples);
     Ok(Header {
         major: format::MAJOR,
         minor: format::MINOR,
         kind: r.kind,
         sample_type: r.sample_type(),
-        dims: r.dims.clone(),
+        dims: r.dims.to_vec(),
         channels: r.channels,
         colour,
         mode,
@@ -90,11 +90,11 @@ pub(super) fn header_for(
         max_error: 0.0,
         min,
         max,
-        tile: r.dims.clone(),
+        tile: r.dims.to_vec(),
     })
 }
 
-pub(super) fn prepare(r: &Raster, opts: &EncodeOptions, mode: Mode) -> Result<Prepared> {
+pub(super) fn prepare(r: &RasterView<'_>, opts: &EncodeOptions, mode: Mode) -> Result<Prepared> {
     let colour = if r.channels >= 3 {
         Colour::YCoCg
     } else {
@@ -108,7 +108,7 @@ pub(super) fn prepare(r: &Raster, opts: &EncodeOptions, mode: Mode) -> Result<Pr
     let coeffs = planes_f32(r, colour)
         .into_par_iter()
         .map(|p| {
-            let mut a = Array::from_shape_vec(&r.dims, p)?;
+            let mut a = Array::from_shape_vec(r.dims, p)?;
             tensor::analyze(&mut a, &spec)?;
             Ok(a.into_data())
         })
@@ -119,7 +119,7 @@ pub(super) fn prepare(r: &Raster, opts: &EncodeOptions, mode: Mode) -> Result<Pr
         gains,
         weights,
         coeffs,
-        meta: meta::to_bytes(&r.meta),
+        meta: meta::to_bytes(r.meta),
         rdo: None,
     })
 }
@@ -269,7 +269,7 @@ mod tests {
                     levels: 4,
                     rate: Rate::Quality(50.0),
                 };
-                let p = prepare(r, &opts, Mode::Lossy).unwrap();
+                let p = prepare(&r.view(), &opts, Mode::Lossy).unwrap();
                 let range = p.header.max - p.header.min;
                 for step in [range * 1e-4, range * 0.01, range * 0.3] {
                     let coded = p.code(step);

@@ -8,7 +8,7 @@ use super::options::{DecodeOptions, EncodeOptions};
 use crate::entropy::range::Encoder;
 use crate::entropy::{band, BandKind};
 use crate::format::{put_chunk, Mode};
-use crate::io::{Raster, SampleType, Samples};
+use crate::io::{RasterView, SampleType, Samples};
 use crate::{Error, Result};
 use rayon::prelude::*;
 
@@ -34,7 +34,11 @@ fn residual_step(e: f64, t: SampleType) -> f64 {
 /// A `--max-error` file for a bound `e` that [`is_exact`] found lossy: the lossy base at
 /// the residual's step (`2E`, or `2⌊E⌋ + 1` on integer samples), then per channel the residual to the decoded base quantized with
 /// [`residual_step`] and the samples still outside the bound listed as exceptions.
-pub(super) fn encode_max_error(r: &Raster, opts: &EncodeOptions, e: f64) -> Result<Vec<u8>> {
+pub(super) fn encode_max_error(
+    r: &RasterView<'_>,
+    opts: &EncodeOptions,
+    e: f64,
+) -> Result<Vec<u8>> {
     let ty = r.sample_type();
     let s = residual_step(e, ty);
     let mut p = prepare(r, opts, Mode::MaxError)?;
@@ -81,7 +85,7 @@ pub(super) fn encode_max_error(r: &Raster, opts: &EncodeOptions, e: f64) -> Resu
                 }
             }
             let mut enc = Encoder::new();
-            band::encode(&mut enc, &q, &r.dims, BandKind::Detail, None);
+            band::encode(&mut enc, &q, r.dims, BandKind::Detail, None);
             let coded = enc.finish_short();
             let mut pl = Vec::new();
             pl.extend_from_slice(&(k as u16).to_le_bytes());

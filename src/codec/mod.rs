@@ -45,4 +45,4 @@ pub use read::{
     SlabDecode, SlabDecoder,
 };
 pub use tiles::default_tile;
-pub use write::{encode, encode_stream, encode_tiled};
+pub use write::{encode, encode_stream, encode_tiled, encode_tiled_view, encode_view};

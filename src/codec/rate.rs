@@ -11,7 +11,7 @@ use crate::entropy::range::Encoder;
 use crate::entropy::{band, BandKind};
 use crate::format::header::Colour;
 use crate::format::Mode;
-use crate::io::{Raster, Samples};
+use crate::io::{Raster, RasterView, Samples};
 use crate::quantize::{self, RHO};
 use crate::scheme::{Boundary, Scheme};
 use crate::tensor::{self, Array};
@@ -25,7 +25,7 @@ use rayon::prelude::*;
 /// the lossless cost or above ([`LOSSLESS_SHARE`]) and it fits the budget (no error at
 /// all).
 pub(super) fn encode_lossy(
-    r: &Raster,
+    r: &RasterView<'_>,
     opts: &EncodeOptions,
     rate: Rate,
     lossless: &dyn Fn() -> Result<Vec<u8>>,
@@ -85,7 +85,7 @@ pub(super) fn encode_lossy(
             let cmp = crate::metrics::CompareOptions {
                 data_range: Some(match rate {
                     Rate::PsnrRange(_, range) => range,
-                    _ => crate::metrics::skimage_data_range(&r.samples),
+                    _ => crate::metrics::skimage_data_range(r.samples),
                 }),
                 ..Default::default()
             };
@@ -97,7 +97,7 @@ pub(super) fn encode_lossy(
             };
             return search(&p, range, false, 0.02, Some(&model), |step| {
                 let dec = p.decoded(step)?;
-                let psnr = crate::metrics::psnr(r, &dec, &cmp)?;
+                let psnr = crate::metrics::psnr_view(r, &dec.view(), &cmp)?;
                 Ok((psnr.unwrap_or(f64::INFINITY) - db, None))
             });
         }
@@ -569,7 +569,7 @@ pub fn keep_psnr(
         levels,
         rate: Rate::Keep(keep),
     };
-    let mut p = prepare(r, &opts, Mode::Lossy)?;
+    let mut p = prepare(&r.view(), &opts, Mode::Lossy)?;
     if !weighted {
         p.gains.iter_mut().for_each(|g| *g = 1.0);
         p.weights.iter_mut().for_each(|w| *w = 1.0);
@@ -634,7 +634,7 @@ mod tests {
         v: impl Fn(f64) -> f64,
     ) -> (usize, f64) {
         let r = images::zone_plate(8, 8).to_raster(SampleType::U8).unwrap();
-        let p = prepare(&r, &EncodeOptions::default(), Mode::Lossy).unwrap();
+        let p = prepare(&r.view(), &EncodeOptions::default(), Mode::Lossy).unwrap();
         let calls = std::cell::Cell::new(0);
         let bytes = search(&p, 1000.0, large_ok, tol, model, |step| {
             calls.set(calls.get() + 1);
@@ -667,7 +667,7 @@ mod tests {
             grey.kind,
         )
         .unwrap();
-        let mut p = prepare(&r, &EncodeOptions::default(), Mode::Lossy).unwrap();
+        let mut p = prepare(&r.view(), &EncodeOptions::default(), Mode::Lossy).unwrap();
         p.optimise();
         let range = p.header.max - p.header.min;
         let pos = r.positions() as f64;
@@ -743,7 +743,7 @@ mod tests {
         let r = images::zone_plate(96, 128)
             .to_raster(SampleType::U8)
             .unwrap();
-        let p = prepare(&r, &EncodeOptions::default(), Mode::Lossy).unwrap();
+        let p = prepare(&r.view(), &EncodeOptions::default(), Mode::Lossy).unwrap();
         let m = p.rate_model();
         let src = r.samples.to_f64();
         for step in [2.0, 8.0, 32.0] {

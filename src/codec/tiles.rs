@@ -21,7 +21,7 @@ use super::voids::with_voids_filled;
 use super::{layout, meta};
 use crate::format::{self, Chunk, ChunkReader, Cursor, Header};
 use crate::io::slab::{MemorySlabs, Shape};
-use crate::io::{AxisMap, Metadata, Raster, Samples};
+use crate::io::{AxisMap, Metadata, Raster, RasterView, Samples};
 use crate::{Error, Result};
 use rayon::prelude::*;
 use std::io::{Read, Seek, SeekFrom};
@@ -221,9 +221,13 @@ pub(crate) use encode::encode_slabs;
 /// does from a raster in memory. Each tile's voids are filled in the tile
 /// ([`with_voids_filled`]) and listed in the tile's own `mETA`, with the raster's
 /// no-data value, so that the tile's decode marks them again.
-pub(super) fn encode_tiled(r: &Raster, opts: &EncodeOptions, tile: &[usize]) -> Result<Vec<u8>> {
+pub(super) fn encode_tiled(
+    r: &RasterView<'_>,
+    opts: &EncodeOptions,
+    tile: &[usize],
+) -> Result<Vec<u8>> {
     let mut out = std::io::Cursor::new(Vec::new());
-    encode_slabs(&mut MemorySlabs::new(r), opts, tile, &mut out)?;
+    encode_slabs(&mut MemorySlabs::of_view(*r), opts, tile, &mut out)?;
     Ok(out.into_inner())
 }
 

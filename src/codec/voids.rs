@@ -2,7 +2,7 @@
 //! transform, their mask kept in the metadata, and marked again after decoding.
 
 use crate::entropy::range::{Decoder, Encoder, Mix};
-use crate::io::{Raster, Samples};
+use crate::io::{Raster, RasterView, Samples};
 use crate::Result;
 use base64::Engine as _;
 
@@ -80,25 +80,25 @@ fn decode_mask(data: &[u8], n: usize, shape: &[usize]) -> Vec<bool> {
 
 /// `r` with its void samples ([`crate::io::nodata`]) filled by pull-push and their runs
 /// kept in [`VOID_RUNS`]; `None` when no sample (or every sample) is void.
-pub(super) fn with_voids_filled(r: &Raster) -> Result<Option<Raster>> {
+pub(super) fn with_voids_filled(r: &RasterView<'_>) -> Result<Option<Raster>> {
     // integer samples are never NaN: without a nodata value there is nothing to look for
     // (and no whole-raster `f64` copy to make)
     if !r.sample_type().is_float() && r.meta.nodata.is_none() {
         return Ok(None);
     }
-    let mut v = r.to_f64();
+    let mut v = r.samples.to_f64();
     let Some(voids) = crate::io::nodata::Voids::find(&v, r.meta.nodata) else {
         return Ok(None);
     };
     if voids.count() == v.len() {
         return Ok(None);
     }
-    let mut shape = r.dims.clone();
+    let mut shape = r.dims.to_vec();
     shape.push(r.channels);
     voids.fill(&mut v, &shape, r.dims.len())?;
     let coded = code_mask(&voids.mask, &shape);
     let mut out = Raster::new(
-        r.dims.clone(),
+        r.dims.to_vec(),
         r.channels,
         Samples::from_f64(&v, r.sample_type()),
         r.kind,

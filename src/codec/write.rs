@@ -5,7 +5,7 @@ use super::encode::encode_filled;
 use super::options::EncodeOptions;
 use super::voids::with_voids_filled;
 use crate::io::slab::SlabSource;
-use crate::io::Raster;
+use crate::io::{Raster, RasterView};
 use crate::{Error, Result};
 
 /// Encode a raster into the bytes of an `.mra` file. Void samples (NaN, `meta.nodata`)
@@ -13,22 +13,42 @@ use crate::{Error, Result};
 /// decoder marks them again ([`crate::io::nodata`]). Large rasters are cut into the
 /// tiles of [`super::tiles::default_tile`] ([`encode_tiled`]).
 pub fn encode(r: &Raster, opts: &EncodeOptions) -> Result<Vec<u8>> {
-    let n = crate::io::bytes::sample_count(&r.dims, r.channels)?;
-    if n != r.samples.len() {
-        return Err(Error::parameter(
-            "samples",
-            r.samples.len(),
-            "dims × channels samples",
-        ));
-    }
-    encode_tiled(r, opts, &super::tiles::default_tile(&r.dims))
+    encode_view(&r.view(), opts)
+}
+
+/// [`encode`] of a borrowed raster (samples read where they are, e.g. in a NumPy array).
+pub fn encode_view(r: &RasterView<'_>, opts: &EncodeOptions) -> Result<Vec<u8>> {
+    check_count(r)?;
+    encode_tiled_view(r, opts, &super::tiles::default_tile(r.dims))
 }
 
 /// [`encode`] with the raster cut into tiles of extents `tile` (slowest axis first,
 /// each from 1 to the axis extent; equal to the extents: one tile, a format 2.0 file),
 /// each coded on its own at one base step for the whole raster (formats/MRA.md §14).
 pub fn encode_tiled(r: &Raster, opts: &EncodeOptions, tile: &[usize]) -> Result<Vec<u8>> {
-    let n = crate::io::bytes::sample_count(&r.dims, r.channels)?;
+    encode_tiled_view(&r.view(), opts, tile)
+}
+
+/// [`encode_tiled`] of a borrowed raster.
+pub fn encode_tiled_view(
+    r: &RasterView<'_>,
+    opts: &EncodeOptions,
+    tile: &[usize],
+) -> Result<Vec<u8>> {
+    check_count(r)?;
+    if tile != r.dims {
+        // voids are filled tile by tile (each tile's file lists its own)
+        return super::tiles::encode_tiled(r, opts, tile);
+    }
+    match with_voids_filled(r)? {
+        Some(filled) => encode_filled(&filled.view(), opts),
+        None => encode_filled(r, opts),
+    }
+}
+
+/// An error unless the raster holds dims × channels samples.
+fn check_count(r: &RasterView<'_>) -> Result<()> {
+    let n = crate::io::bytes::sample_count(r.dims, r.channels)?;
     if n != r.samples.len() {
         return Err(Error::parameter(
             "samples",
@@ -36,14 +56,7 @@ pub fn encode_tiled(r: &Raster, opts: &EncodeOptions, tile: &[usize]) -> Result<
             "dims × channels samples",
         ));
     }
-    if tile != r.dims.as_slice() {
-        // voids are filled tile by tile (each tile's file lists its own)
-        return super::tiles::encode_tiled(r, opts, tile);
-    }
-    match with_voids_filled(r)? {
-        Some(filled) => encode_filled(&filled, opts),
-        None => encode_filled(r, opts),
-    }
+    Ok(())
 }
 
 /// [`encode_tiled`] of the raster `src` hands out in slabs, written into `out`; returns

@@ -39,6 +39,7 @@ use std::path::Path;
 use crate::{Error, Result};
 
 pub use geometry::AxisMap;
+pub use view::{RasterView, SamplesRef};
 
 pub mod array;
 pub mod asc;
@@ -94,6 +95,7 @@ pub mod slab;
 pub mod slices;
 pub mod stream;
 pub mod tiff;
+pub mod view;
 pub mod visual;
 
 /// The largest number of samples a reader accepts (2^34, 64 GiB of f32): a declared size

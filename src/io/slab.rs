@@ -13,7 +13,7 @@ use std::io::{Read, Seek, SeekFrom};
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 
-use super::{bytes, DataKind, Metadata, Raster, SampleType, Samples};
+use super::{bytes, DataKind, Metadata, Raster, RasterView, SampleType, Samples};
 use crate::{Error, Result};
 
 /// What a raster is, without its samples.
@@ -30,8 +30,13 @@ pub struct Shape {
 impl Shape {
     /// The shape of a raster.
     pub fn of(r: &Raster) -> Shape {
+        Shape::of_view(&r.view())
+    }
+
+    /// The shape of a borrowed raster.
+    pub fn of_view(r: &RasterView<'_>) -> Shape {
         Shape {
-            dims: r.dims.clone(),
+            dims: r.dims.to_vec(),
             channels: r.channels,
             sample_type: r.sample_type(),
             kind: r.kind,
@@ -67,14 +72,19 @@ pub trait SlabSource {
 
 /// A raster in memory as a [`SlabSource`].
 pub struct MemorySlabs<'a> {
-    raster: &'a Raster,
+    raster: RasterView<'a>,
     shape: Shape,
 }
 
 impl<'a> MemorySlabs<'a> {
     pub fn new(raster: &'a Raster) -> Self {
+        Self::of_view(raster.view())
+    }
+
+    /// Slabs of a borrowed raster (no copy but the slabs handed out).
+    pub fn of_view(raster: RasterView<'a>) -> Self {
         MemorySlabs {
-            shape: Shape::of(raster),
+            shape: Shape::of_view(&raster),
             raster,
         }
     }

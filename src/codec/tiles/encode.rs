@@ -99,7 +99,7 @@ fn slab_tile(grid: &Grid, shape: &Shape, slab: &Samples, row0: usize, i: usize) 
         shape.kind,
     )?;
     t.meta.nodata = shape.meta.nodata;
-    Ok(with_voids_filled(&t)?.unwrap_or(t))
+    Ok(with_voids_filled(&t.view())?.unwrap_or(t))
 }
 
 /// Encode the raster of `src` as tiles of extents `tile` (slowest first) into `out`,
@@ -184,7 +184,7 @@ pub(crate) fn encode_slabs<S: SlabSource + ?Sized, W: Write + Seek>(
             // the threshold of the largest k% over the sampled tiles' details
             let mut w: Vec<f32> = sample
                 .par_iter()
-                .map(|t| Ok(prepare(t, opts, Mode::Lossy)?.weighted_details()))
+                .map(|t| Ok(prepare(&t.view(), opts, Mode::Lossy)?.weighted_details()))
                 .collect::<Result<Vec<_>>>()?
                 .concat();
             let t = quantize::keep_threshold(&mut w, k);
@@ -201,10 +201,9 @@ pub(crate) fn encode_slabs<S: SlabSource + ?Sized, W: Write + Seek>(
                 (_, all) => {
                     // the whole raster's default peak, from its extremes
                     let (a, b) = all.unwrap_or((0.0, 0.0));
-                    crate::metrics::skimage_data_range(&Samples::from_f64(
-                        &[a, b],
-                        shape.sample_type,
-                    ))
+                    crate::metrics::skimage_data_range(
+                        Samples::from_f64(&[a, b], shape.sample_type).view(),
+                    )
                 }
             };
             let step = search_step(&shape, n, std::mem::take(&mut sample), opts, range, peak)?;
@@ -234,9 +233,9 @@ pub(crate) fn encode_slabs<S: SlabSource + ?Sized, W: Write + Seek>(
             .map(|&i| {
                 let t = slab_tile(&grid, &shape, &slab, r.start, i)?;
                 match coding {
-                    Coding::Own => encode_filled(&t, opts),
+                    Coding::Own => encode_filled(&t.view(), opts),
                     Coding::Step { step, rdo } => {
-                        let mut p = prepare(&t, opts, Mode::Lossy)?;
+                        let mut p = prepare(&t.view(), opts, Mode::Lossy)?;
                         if rdo {
                             p.optimise();
                         }
@@ -304,7 +303,7 @@ fn search_step(
     let prepared: Vec<(Option<Raster>, Prepared)> = sample
         .into_par_iter()
         .map(|t| {
-            let mut p = prepare(&t, opts, Mode::Lossy)?;
+            let mut p = prepare(&t.view(), opts, Mode::Lossy)?;
             p.optimise();
             Ok((keep.then_some(t), p))
         })
