@@ -142,3 +142,32 @@ fn a_view_round_trips_to_an_owned_raster() {
     assert_eq!(r.view().positions(), 5 * 6 * 7);
     assert_eq!(r.samples.view().min_max(), r.samples.min_max());
 }
+
+#[test]
+fn views_resample_as_the_owned_rasters() {
+    use mra::progress::Progress;
+    use mra::scheme::{Boundary, Scheme};
+    use mra::upscale::{self, Method};
+    for ty in [
+        SampleType::U8,
+        SampleType::U16,
+        SampleType::F32,
+        SampleType::F64,
+    ] {
+        let mut r = field(&[23, 18], 2, ty, 6);
+        r.meta.spacing = Some(vec![0.5, 0.25]);
+        let plans = upscale::plan_raster(&r.dims, &[0, 1], Some(2), None, false).unwrap();
+        let m = Method::default();
+        let up_view = upscale::upscale_view(&r.view(), &m, &plans, &Progress::hidden()).unwrap();
+        let up_owned = upscale::upscale_raster(r.clone(), &m, &plans, &Progress::hidden()).unwrap();
+        assert_eq!(up_view, up_owned, "{ty:?}");
+        let down_view =
+            upscale::downscale_view(&r.view(), Scheme::Cubic, Boundary::Symmetric, 1, &[0, 1])
+                .unwrap();
+        let down_owned =
+            upscale::downscale_raster(r.clone(), Scheme::Cubic, Boundary::Symmetric, 1, &[0, 1])
+                .unwrap();
+        assert_eq!(down_view, down_owned, "{ty:?}");
+        assert_eq!(down_view.dims, vec![12, 9]);
+    }
+}

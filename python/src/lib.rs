@@ -7,12 +7,12 @@
 //! * An array's axes are spatial, slowest first (`[H, W]`, `[D, H, W]`), 1 to 3 of them;
 //!   with `channels_last` the last axis holds the channels (interleaved samples, never
 //!   transformed). A result has a channel axis when it has more than one channel.
-//! * Inputs are borrowed read-only: `encode` and `compare` read a C-contiguous array's
-//!   samples where they are ([`RasterView`], no copy); other layouts are gathered once
-//!   in C order. `analyze`/`synthesize` copy the samples once into their output (the
-//!   transform runs in place on it); `upscale`/`downscale` copy them once into the
-//!   raster they resample. Do not write to an array while a call reads it (the GIL is
-//!   released).
+//! * Inputs are borrowed read-only: a C-contiguous array's samples are read where they
+//!   are ([`RasterView`]); other layouts are gathered once in C order. `encode` and
+//!   `compare` make no copy; `upscale`/`downscale` convert the samples once to their f32
+//!   working buffer and `analyze`/`synthesize` copy them once into their result, on
+//!   which the transform runs in place. Do not write to an array while a call reads it
+//!   (the GIL is released).
 //! * Every call that transforms, codes or measures runs with the GIL released.
 //! * A library error becomes `MraError` (a `ValueError`) carrying the library's one-line
 //!   message "what … (expected …)"; an operating-system error becomes `OSError`.
@@ -109,20 +109,6 @@ impl Input<'_> {
             Input::F64(c) => SamplesRef::F64(c),
         }
     }
-
-    /// The raster's samples (one copy of a borrowed slice, none of a gathered one).
-    fn into_samples(self) -> Samples {
-        match self {
-            Input::U8(c) => Samples::U8(c.into_owned()),
-            Input::I8(c) => Samples::I8(c.into_owned()),
-            Input::U16(c) => Samples::U16(c.into_owned()),
-            Input::I16(c) => Samples::I16(c.into_owned()),
-            Input::U32(c) => Samples::U32(c.into_owned()),
-            Input::I32(c) => Samples::I32(c.into_owned()),
-            Input::F32(c) => Samples::F32(c.into_owned()),
-            Input::F64(c) => Samples::F64(c.into_owned()),
-        }
-    }
 }
 
 const DTYPES: &str = "one of uint8, int8, uint16, int16, uint32, int32, float32, float64";
@@ -200,12 +186,6 @@ fn view<'a>(
     RasterView::new(dims, channels, input.view(), kind_of(dims), meta)
 }
 
-/// A raster over the array's samples (see the module doc for the axes).
-fn raster(input: Input<'_>, shape: &[usize], channels_last: bool) -> mra::Result<Raster> {
-    let (dims, channels) = layout(shape, channels_last)?;
-    let kind = kind_of(&dims);
-    Raster::new(dims, channels, input.into_samples(), kind)
-}
 
 fn nd<'py, T: Element>(py: Python<'py>, shape: &[usize], v: Vec<T>) -> PyResult<Bound<'py, PyAny>> {
     let a = ArrayD::from_shape_vec(IxDyn(shape), v)
@@ -483,7 +463,7 @@ fn synthesize<'py>(
 
 /// Refuse an output over the memory budget (`MRA_MAX_BYTES`, default 8 GiB) before
 /// anything is allocated: its samples in f32 (the working type) plus its stored type.
-fn check_budget(r: &Raster, plans: &[up::AxisPlan]) -> mra::Result<()> {
+fn check_budget(r: &RasterView<'_>, plans: &[up::AxisPlan]) -> mra::Result<()> {
     let samples = (0..r.dims.len())
         .map(|a| {
             plans
@@ -531,11 +511,13 @@ fn upscale<'py>(
     };
     let r = with_input(a, |input, shape| {
         run(py, "upscale", || {
-            let r = raster(input, &shape, channels_last)?;
+            let (dims, channels) = layout(&shape, channels_last)?;
+            let meta = Metadata::default();
+            let r = view(&input, &dims, channels, &meta)?;
             let axes = axes.unwrap_or_else(|| (0..r.dims.len()).collect());
-            let plans = up::plan_raster(&r.dims, &axes, factor, size.as_deref(), false)?;
+            let plans = up::plan_raster(r.dims, &axes, factor, size.as_deref(), false)?;
             check_budget(&r, &plans)?;
-            up::upscale_raster(r, &method, &plans, &Progress::hidden())
+            up::upscale_view(&r, &method, &plans, &Progress::hidden())
         })
     })?;
     array_of(py, r)
@@ -557,9 +539,11 @@ fn downscale<'py>(
     let boundary = parse::<Boundary>(boundary)?;
     let r = with_input(a, |input, shape| {
         run(py, "downscale", || {
-            let r = raster(input, &shape, channels_last)?;
+            let (dims, channels) = layout(&shape, channels_last)?;
+            let meta = Metadata::default();
+            let r = view(&input, &dims, channels, &meta)?;
             let axes = axes.unwrap_or_else(|| (0..r.dims.len()).collect());
-            up::downscale_raster(r, scheme, boundary, levels, &axes)
+            up::downscale_view(&r, scheme, boundary, levels, &axes)
         })
     })?;
     array_of(py, r)

@@ -83,6 +83,21 @@ impl SamplesRef<'_> {
         }
     }
 
+    /// All samples as f32 (exact for u8, i8, u16, i16, f16, f32; rounded for the rest).
+    pub fn to_f32(&self) -> Vec<f32> {
+        match self {
+            SamplesRef::F32(v) => v.to_vec(),
+            SamplesRef::F16(v) => v.iter().map(|x| x.to_f32()).collect(),
+            SamplesRef::F64(v) => v.iter().map(|&x| x as f32).collect(),
+            SamplesRef::U8(v) => v.iter().map(|&x| x as f32).collect(),
+            SamplesRef::I8(v) => v.iter().map(|&x| x as f32).collect(),
+            SamplesRef::U16(v) => v.iter().map(|&x| x as f32).collect(),
+            SamplesRef::I16(v) => v.iter().map(|&x| x as f32).collect(),
+            SamplesRef::U32(v) => v.iter().map(|&x| x as f32).collect(),
+            SamplesRef::I32(v) => v.iter().map(|&x| x as f32).collect(),
+        }
+    }
+
     /// All samples as f64 (exact).
     pub fn to_f64(&self) -> Vec<f64> {
         (0..self.len()).map(|i| self.get_f64(i)).collect()

@@ -402,13 +402,43 @@ pub fn upscale_raster(
         channels,
         samples,
         kind,
-        mut meta,
+        meta,
     } = r;
     let ty = samples.sample_type();
-    let mut data = match samples {
+    let data = match samples {
         Samples::F32(v) => v,
         s => s.to_f32(),
     };
+    upscale_f32(dims, channels, ty, kind, meta, data, method, plans, bar)
+}
+
+/// [`upscale_raster`] of a borrowed raster (its samples converted to f32 where they are:
+/// the one copy).
+pub fn upscale_view(
+    r: &crate::io::RasterView<'_>,
+    method: &Method,
+    plans: &[AxisPlan],
+    bar: &Progress,
+) -> Result<Raster> {
+    let data = r.samples.to_f32();
+    let (dims, meta) = (r.dims.to_vec(), r.meta.clone());
+    let ty = r.sample_type();
+    upscale_f32(dims, r.channels, ty, r.kind, meta, data, method, plans, bar)
+}
+
+/// [`upscale_raster`] of samples already in f32 (`data`, stored type `ty`).
+#[allow(clippy::too_many_arguments)]
+fn upscale_f32(
+    dims: Vec<usize>,
+    channels: usize,
+    ty: crate::io::SampleType,
+    kind: crate::io::DataKind,
+    mut meta: crate::io::Metadata,
+    mut data: Vec<f32>,
+    method: &Method,
+    plans: &[AxisPlan],
+    bar: &Progress,
+) -> Result<Raster> {
     let mut shape = dims.clone();
     if channels > 1 {
         shape.push(channels);
@@ -620,8 +650,20 @@ pub fn downscale_raster(
     levels: usize,
     axes: &[usize],
 ) -> Result<Raster> {
+    downscale_view(&r.view(), scheme, boundary, levels, axes)
+}
+
+/// [`downscale_raster`] of a borrowed raster (its samples converted to f32 where they
+/// are: the one copy).
+pub fn downscale_view(
+    r: &crate::io::RasterView<'_>,
+    scheme: Scheme,
+    boundary: Boundary,
+    levels: usize,
+    axes: &[usize],
+) -> Result<Raster> {
     let ty = r.sample_type();
-    let mut shape = r.dims.clone();
+    let mut shape = r.dims.to_vec();
     if r.channels > 1 {
         shape.push(r.channels);
     }
@@ -632,7 +674,7 @@ pub fn downscale_raster(
             "spatial axes of the input",
         ));
     }
-    let mut data = r.to_f32();
+    let mut data = r.samples.to_f32();
     // voids never enter the filter: filled, then marked again where the footprint is
     // all void, the rest clamped into the valid range ([`crate::io::nodata`])
     let voids = crate::io::nodata::Voids::find(&data, r.meta.nodata);
@@ -663,7 +705,7 @@ pub fn downscale_raster(
             *x = x.clamp(lo, hi);
         }
     }
-    let meta = r.meta.rescaled(&r.dims, &new_dims);
+    let meta = r.meta.rescaled(r.dims, &new_dims);
     let mut o = Raster::from_f32(new_dims, r.channels, &out, ty, r.kind)?;
     o.meta = meta;
     Ok(o)
