@@ -11,17 +11,7 @@ use proptest::prelude::*;
 
 mod common;
 
-const TYPES: [SampleType; 9] = [
-    SampleType::U8,
-    SampleType::I8,
-    SampleType::U16,
-    SampleType::I16,
-    SampleType::U32,
-    SampleType::I32,
-    SampleType::F16,
-    SampleType::F32,
-    SampleType::F64,
-];
+const TYPES: [SampleType; 9] = SampleType::ALL;
 
 /// Smooth field plus a little texture, scaled into the type's useful range.
 fn field(dims: &[usize], channels: usize, ty: SampleType, seed: u64) -> Raster {

@@ -55,17 +55,7 @@ fn roundtrip(r: &Raster, name: &str) -> Raster {
     back
 }
 
-const ALL_TYPES: [SampleType; 9] = [
-    SampleType::U8,
-    SampleType::I8,
-    SampleType::U16,
-    SampleType::I16,
-    SampleType::U32,
-    SampleType::I32,
-    SampleType::F16,
-    SampleType::F32,
-    SampleType::F64,
-];
+const ALL_TYPES: [SampleType; 9] = SampleType::ALL;
 
 #[test]
 fn png_roundtrip_8_and_16_bit_all_channel_counts() {

@@ -5,17 +5,7 @@ use mra::codec::{self, EncodeOptions, Rate};
 use mra::io::{DataKind, Metadata, Raster, RasterView, SampleType, Samples, SamplesRef};
 use mra::metrics;
 
-const TYPES: [SampleType; 9] = [
-    SampleType::U8,
-    SampleType::I8,
-    SampleType::U16,
-    SampleType::I16,
-    SampleType::U32,
-    SampleType::I32,
-    SampleType::F16,
-    SampleType::F32,
-    SampleType::F64,
-];
+const TYPES: [SampleType; 9] = SampleType::ALL;
 
 /// A smooth field with texture in `ty` (values within every type's range).
 fn field(dims: &[usize], channels: usize, ty: SampleType, seed: u64) -> Raster {

@@ -108,17 +108,7 @@ mod tests {
             0.1,
             -7.25,
         ];
-        for ty in [
-            SampleType::U8,
-            SampleType::I8,
-            SampleType::U16,
-            SampleType::I16,
-            SampleType::U32,
-            SampleType::I32,
-            SampleType::F16,
-            SampleType::F32,
-            SampleType::F64,
-        ] {
+        for ty in SampleType::ALL {
             for c in [1usize, 3] {
                 let v: Vec<f64> = (0..4 * c).map(|i| vals[i % vals.len()]).collect();
                 let r =

@@ -117,6 +117,19 @@ pub enum SampleType {
 }
 
 impl SampleType {
+    /// Every sample type, integers by size then floats.
+    pub const ALL: [SampleType; 9] = [
+        SampleType::U8,
+        SampleType::I8,
+        SampleType::U16,
+        SampleType::I16,
+        SampleType::U32,
+        SampleType::I32,
+        SampleType::F16,
+        SampleType::F32,
+        SampleType::F64,
+    ];
+
     /// Bytes per sample.
     pub fn size(self) -> usize {
         match self {
@@ -231,61 +244,34 @@ fn quantize(x: f64, lo: f64, hi: f64) -> f64 {
 }
 
 impl Samples {
+    #[inline]
     pub fn len(&self) -> usize {
-        with_samples!(self, v => v.len())
+        self.view().len()
     }
 
     pub fn is_empty(&self) -> bool {
         self.len() == 0
     }
 
+    #[inline]
     pub fn sample_type(&self) -> SampleType {
-        match self {
-            Samples::U8(_) => SampleType::U8,
-            Samples::I8(_) => SampleType::I8,
-            Samples::U16(_) => SampleType::U16,
-            Samples::I16(_) => SampleType::I16,
-            Samples::U32(_) => SampleType::U32,
-            Samples::I32(_) => SampleType::I32,
-            Samples::F16(_) => SampleType::F16,
-            Samples::F32(_) => SampleType::F32,
-            Samples::F64(_) => SampleType::F64,
-        }
+        self.view().sample_type()
     }
 
     /// Sample `i` as f64 (exact for every stored type).
+    #[inline]
     pub fn get_f64(&self, i: usize) -> f64 {
-        match self {
-            Samples::U8(v) => v[i] as f64,
-            Samples::I8(v) => v[i] as f64,
-            Samples::U16(v) => v[i] as f64,
-            Samples::I16(v) => v[i] as f64,
-            Samples::U32(v) => v[i] as f64,
-            Samples::I32(v) => v[i] as f64,
-            Samples::F16(v) => v[i].to_f64(),
-            Samples::F32(v) => v[i] as f64,
-            Samples::F64(v) => v[i],
-        }
+        self.view().get_f64(i)
     }
 
     /// All samples as f32 (exact for u8, i8, u16, i16, f16, f32; rounded for the rest).
     pub fn to_f32(&self) -> Vec<f32> {
-        match self {
-            Samples::F32(v) => v.clone(),
-            Samples::F16(v) => v.iter().map(|x| x.to_f32()).collect(),
-            Samples::F64(v) => v.iter().map(|&x| x as f32).collect(),
-            Samples::U8(v) => v.iter().map(|&x| x as f32).collect(),
-            Samples::I8(v) => v.iter().map(|&x| x as f32).collect(),
-            Samples::U16(v) => v.iter().map(|&x| x as f32).collect(),
-            Samples::I16(v) => v.iter().map(|&x| x as f32).collect(),
-            Samples::U32(v) => v.iter().map(|&x| x as f32).collect(),
-            Samples::I32(v) => v.iter().map(|&x| x as f32).collect(),
-        }
+        self.view().to_f32()
     }
 
     /// All samples as f64 (exact).
     pub fn to_f64(&self) -> Vec<f64> {
-        (0..self.len()).map(|i| self.get_f64(i)).collect()
+        self.view().to_f64()
     }
 
     /// Convert f32 values to `ty`: integers are rounded to nearest and clamped to the
@@ -344,17 +330,7 @@ impl Samples {
 
     /// The samples `r` (a copy).
     pub fn range(&self, r: std::ops::Range<usize>) -> Samples {
-        match self {
-            Samples::U8(v) => Samples::U8(v[r].to_vec()),
-            Samples::I8(v) => Samples::I8(v[r].to_vec()),
-            Samples::U16(v) => Samples::U16(v[r].to_vec()),
-            Samples::I16(v) => Samples::I16(v[r].to_vec()),
-            Samples::U32(v) => Samples::U32(v[r].to_vec()),
-            Samples::I32(v) => Samples::I32(v[r].to_vec()),
-            Samples::F16(v) => Samples::F16(v[r].to_vec()),
-            Samples::F32(v) => Samples::F32(v[r].to_vec()),
-            Samples::F64(v) => Samples::F64(v[r].to_vec()),
-        }
+        self.view().range(r)
     }
 
     /// Copy `n` samples of `src` from `from` to `to` (same sample type, both in range).
@@ -380,18 +356,7 @@ impl Samples {
 
     /// `(min, max)` over all samples, ignoring NaN; `None` when empty or all NaN.
     pub fn min_max(&self) -> Option<(f64, f64)> {
-        let mut lo = f64::INFINITY;
-        let mut hi = f64::NEG_INFINITY;
-        for i in 0..self.len() {
-            let x = self.get_f64(i);
-            if x < lo {
-                lo = x;
-            }
-            if x > hi {
-                hi = x;
-            }
-        }
-        (lo <= hi).then_some((lo, hi))
+        self.view().min_max()
     }
 }
 
@@ -471,24 +436,7 @@ impl Raster {
         samples: Samples,
         kind: DataKind,
     ) -> Result<Self> {
-        if dims.is_empty() || dims.contains(&0) || channels == 0 {
-            return Err(Error::format(
-                format!("empty raster: dims {dims:?}, {channels} channels"),
-                "every size and the channel count ≥ 1",
-            ));
-        }
-        let n = bytes::sample_count(&dims, channels)?;
-        if n != samples.len() {
-            return Err(Error::format(
-                format!(
-                    "{} samples for dims {:?} × {} channels",
-                    samples.len(),
-                    dims,
-                    channels
-                ),
-                "dims × channels samples",
-            ));
-        }
+        RasterView::new(&dims, channels, samples.view(), kind, &Metadata::default())?;
         Ok(Raster {
             dims,
             channels,

@@ -20,6 +20,7 @@ pub enum SamplesRef<'a> {
 
 impl Samples {
     /// The samples, borrowed.
+    #[inline]
     pub fn view(&self) -> SamplesRef<'_> {
         match self {
             Samples::U8(v) => SamplesRef::U8(v),
@@ -36,6 +37,7 @@ impl Samples {
 }
 
 impl SamplesRef<'_> {
+    #[inline]
     pub fn len(&self) -> usize {
         match self {
             SamplesRef::U8(v) => v.len(),
@@ -54,6 +56,7 @@ impl SamplesRef<'_> {
         self.len() == 0
     }
 
+    #[inline]
     pub fn sample_type(&self) -> SampleType {
         match self {
             SamplesRef::U8(_) => SampleType::U8,
@@ -69,6 +72,7 @@ impl SamplesRef<'_> {
     }
 
     /// Sample `i` as f64 (exact for every stored type).
+    #[inline]
     pub fn get_f64(&self, i: usize) -> f64 {
         match self {
             SamplesRef::U8(v) => v[i] as f64,
