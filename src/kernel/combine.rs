@@ -24,7 +24,10 @@ pub fn combine<T: Sample>(k: Kernels, out: &mut [T], src: &[&[T]], w: &[T]) {
         heap.resize(n, 0);
         &mut heap[..]
     };
-    if pair_taps(w, partner) {
+    // rows with pairs, and rows too long for one fused pass of `taps` (summed in one
+    // pass over all their taps: the terms of a row without pairs are its taps in order,
+    // the plain sum, so the same bits as a first pass of 8 taps and one pass per tap after)
+    if pair_taps(w, partner) || (k.avx2() && n > MAX_FUSED && n <= 32) {
         return combine_terms(k, out, src, w, partner);
     }
     #[cfg(target_arch = "x86_64")]
@@ -122,7 +125,7 @@ pub fn combine_taps<'t, T: Sample + 't>(
     ws: &[f64],
     tap: impl Fn(u32) -> &'t [T],
 ) {
-    const MOST: usize = 16;
+    const MOST: usize = 32;
     let mut taps: [&[T]; MOST] = [&[]; MOST];
     let mut w = [T::default(); MOST];
     if cols.len() <= MOST {
@@ -135,5 +138,84 @@ pub fn combine_taps<'t, T: Sample + 't>(
         let t: Vec<&[T]> = cols.iter().map(|&c| tap(c)).collect();
         let wv: Vec<T> = ws.iter().map(|&x| T::from_f64(x)).collect();
         combine(k, out, &t, &wv);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Rows of many taps without pairs (the boundary rows of the wide schemes: 12 to 20
+    /// distinct weights) sum in one pass at every CPU level, with the bits of the plain
+    /// loop `((w₀x₀ + w₁x₁) + w₂x₂) + …`; so do [`combine_rows`]' rows.
+    #[test]
+    fn long_rows_without_pairs_give_the_bits_of_the_plain_loop() {
+        fn check<T: Sample>() {
+            let x: Vec<T> = (0..200)
+                .map(|i| T::from_f64(((i * 7919 % 211) as f64 - 105.0) / 13.0))
+                .collect();
+            for taps in [9usize, 12, 13, 20, 32, 33] {
+                // distinct weights (no pairs)
+                let w: Vec<T> = (0..taps)
+                    .map(|k| T::from_f64(0.0625 * k as f64 - 0.71))
+                    .collect();
+                for len in [1usize, 7, 8, 15, 16, 17, 31, 33, 64, 100] {
+                    let src: Vec<&[T]> = (0..taps).map(|k| &x[3 * k..3 * k + len]).collect();
+                    let want: Vec<u64> = (0..len)
+                        .map(|i| {
+                            let mut acc = w[0] * src[0][i];
+                            for k in 1..taps {
+                                acc += w[k] * src[k][i];
+                            }
+                            acc.to_f64().to_bits()
+                        })
+                        .collect();
+                    for level in CpuLevel::available() {
+                        let k = Kernels::new(level);
+                        let mut out = vec![T::from_f64(9.0); len];
+                        combine(k, &mut out, &src, &w);
+                        let got: Vec<u64> = out.iter().map(|v| v.to_f64().to_bits()).collect();
+                        assert_eq!(got, want, "{level:?} taps {taps} len {len}");
+                    }
+                }
+            }
+        }
+        check::<f32>();
+        check::<f64>();
+    }
+
+    /// [`combine_rows`] at every CPU level gives the bits of [`Csr::apply`] (the reference
+    /// loops) on the operators of short lanes whose boundary rows are long: every row of
+    /// the wide schemes' interpolating levels, rows of lengths around the vector widths.
+    #[test]
+    fn combine_rows_gives_the_bits_of_the_reference_on_long_boundary_rows() {
+        use crate::scheme::{Boundary, Scheme, TwoScale};
+        for scheme in [Scheme::ChaikinWide, Scheme::CubicWide, Scheme::LinearWide] {
+            for boundary in Boundary::ALL {
+                for m in [22usize, 33, 35, 64] {
+                    let t = TwoScale::new(scheme, boundary, m);
+                    for op in [&t.analysis, &t.synthesis] {
+                        for len in [1usize, 9, 16, 40] {
+                            let x: Vec<f32> = (0..m * len)
+                                .map(|i| ((i * 37 % 101) as f32 - 50.0) / 7.0)
+                                .collect();
+                            let mut want = vec![0f32; m * len];
+                            op.apply(&x, len, &mut want, len, len);
+                            for level in CpuLevel::available() {
+                                let mut got = vec![1f32; m * len];
+                                combine_rows(Kernels::new(level), op, &x, len, 0..m, &mut got);
+                                let bits =
+                                    |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                                assert_eq!(
+                                    bits(&got),
+                                    bits(&want),
+                                    "{scheme} {boundary} m {m} len {len} {level:?}"
+                                );
+                            }
+                        }
+                    }
+                }
+            }
+        }
     }
 }

@@ -15,7 +15,7 @@
 //! - `polyphase.rs`: an operator cut into regular runs and boundary rows, applied;
 //! - `scalar.rs`: the plain loops; `x86/`: the AVX2 and AVX-512 builds.
 
-use crate::scheme::sparse::Csr;
+use crate::scheme::sparse::{Csr, Term};
 use crate::scheme::Sample;
 
 pub use crate::scheme::sparse::{pair_taps, row_sum, sum_terms, SECOND};

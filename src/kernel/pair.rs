@@ -516,8 +516,9 @@ pub fn combine_pair_rows<T: Sample>(
     out_step: [usize; 2],
     count: usize,
 ) {
+    let entry = lookup(k, w1, w2);
     pair_rows(
-        k, src, len, cols, in_step, w1, w2, dst, rows, out_step, count, false,
+        k, entry, src, len, cols, in_step, w1, w2, dst, rows, out_step, count, false,
     )
 }
 
@@ -538,14 +539,29 @@ pub fn combine_pair_rows_split<T: Sample>(
     out_step: [usize; 2],
     count: usize,
 ) {
+    let entry = lookup(k, w1, w2);
     pair_rows(
-        k, src, len, cols, in_step, w1, w2, dst, rows, out_step, count, true,
+        k, entry, src, len, cols, in_step, w1, w2, dst, rows, out_step, count, true,
     )
 }
 
+/// [`pair_entry`] of a pair where the build has the pair kernels (`None` elsewhere).
+fn lookup<T: Sample>(k: Kernels, (w1, m1): (&[T], u32), (w2, m2): (&[T], u32)) -> Option<u8> {
+    if k.avx2() {
+        pair_entry(w1, m1, w2, m2)
+    } else {
+        None
+    }
+}
+
+/// [`combine_pair_rows`] (`split`: [`combine_pair_rows_split`]) with the pair's
+/// [`pair_entry`] looked up before (`entry` must be it, or `None` for one output at a
+/// time): for callers that apply one pair many times ([`super::polyphase::Pair`] holds
+/// its entries).
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn pair_rows<T: Sample>(
     k: Kernels,
+    entry: Option<u8>,
     src: &[T],
     len: usize,
     cols: &[usize],
@@ -592,6 +608,7 @@ pub(crate) fn pair_rows<T: Sample>(
     unsafe {
         pair_steps(
             k,
+            entry,
             src,
             &off[..u],
             in_step * len,
@@ -618,6 +635,30 @@ pub(crate) fn pair_rows<T: Sample>(
 #[allow(clippy::too_many_arguments)]
 pub fn combine_pair_lanes<T: Sample>(
     k: Kernels,
+    src: &[T],
+    off: &[usize],
+    in_step: usize,
+    w1: (&[T], u32),
+    w2: (&[T], u32),
+    dst: &mut [T],
+    out: [usize; 2],
+    out_step: usize,
+    len: usize,
+    count: usize,
+    merge: bool,
+) {
+    let entry = lookup(k, w1, w2);
+    combine_pair_lanes_at(
+        k, entry, src, off, in_step, w1, w2, dst, out, out_step, len, count, merge,
+    )
+}
+
+/// [`combine_pair_lanes`] with the pair's [`pair_entry`] looked up before (`entry` must
+/// be it, or `None` for one output at a time).
+#[allow(clippy::too_many_arguments)]
+pub fn combine_pair_lanes_at<T: Sample>(
+    k: Kernels,
+    entry: Option<u8>,
     src: &[T],
     off: &[usize],
     in_step: usize,
@@ -653,6 +694,7 @@ pub fn combine_pair_lanes<T: Sample>(
     unsafe {
         pair_steps(
             k,
+            entry,
             src,
             off,
             in_step,
@@ -683,6 +725,7 @@ pub fn combine_pair_lanes<T: Sample>(
 #[allow(clippy::too_many_arguments)]
 pub(crate) unsafe fn pair_steps<T: Sample>(
     k: Kernels,
+    entry: Option<u8>,
     src: &[T],
     off: &[usize],
     in_step: usize,
@@ -705,7 +748,7 @@ pub(crate) unsafe fn pair_steps<T: Sample>(
         // input and output stretch lies inside its slice and the outputs of all steps are
         // disjoint (the caller's contract), and `src`, `dst` are distinct slices
         // (borrowed shared and exclusive).
-        let done = pair_entry(w1, m1, w2, m2).is_some_and(|entry| unsafe {
+        let done = entry.is_some_and(|entry| unsafe {
             // (merged: both through the first pointer)
             let o = [d.add(out[0]), d.add(if merge { out[0] } else { out[1] })];
             let at = PairSteps {
@@ -723,7 +766,7 @@ pub(crate) unsafe fn pair_steps<T: Sample>(
             return;
         }
     }
-    let _ = p;
+    let _ = (p, entry);
     let (mut a, mut b) = (vec![T::default(); len], vec![T::default(); len]);
     for t in 0..count {
         let mut s: [&[T]; 32] = [&[]; 32];

@@ -24,6 +24,11 @@ use super::sample::Sample;
 
 /// Row-compressed sparse matrix with `f64` weights (the filters are dyadic rationals,
 /// exact in any float type except where a derived boundary weight is not).
+///
+/// Each row also carries its sum as [`sum_terms`] takes it, worked out once when the
+/// matrix is made ([`Csr::terms32`], [`Csr::terms64`]: the pairs of [`pair_taps`] differ
+/// between `f32` and `f64` weights where two weights round to the same `f32`), so that
+/// the kernels that apply a row many times never pair its taps again.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Csr {
     rows: usize,
@@ -31,6 +36,72 @@ pub struct Csr {
     offsets: Vec<u32>,
     index: Vec<u32>,
     weight: Vec<f64>,
+    terms32: RowTerms<f32>,
+    terms64: RowTerms<f64>,
+}
+
+/// One term of a row's sum ([`sum_terms`]): the input at column `a`, plus the input at
+/// column `b` for a pair ([`Term::SINGLE`] for a single tap), times `w`. The first term of
+/// a row assigns `w·x`; a next single tap adds the rounded product `w·x`; a next pair is
+/// `fma(x_a + x_b, w, acc)`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Term<W> {
+    pub a: u32,
+    pub b: u32,
+    pub w: W,
+}
+
+impl<W> Term<W> {
+    /// [`Term::b`] of a single tap.
+    pub const SINGLE: u32 = u32::MAX;
+}
+
+/// The terms of every row, row `r`'s at `terms[ends[r]..ends[r + 1]]`.
+#[derive(Clone, Debug, PartialEq, Default)]
+struct RowTerms<W> {
+    ends: Vec<u32>,
+    terms: Vec<Term<W>>,
+}
+
+impl<W: Sample> RowTerms<W> {
+    /// The terms of the rows of `(offsets, index, weight)`, weights as `W`.
+    fn new(offsets: &[u32], index: &[u32], weight: &[f64]) -> Self {
+        let mut t = RowTerms {
+            ends: Vec::with_capacity(offsets.len()),
+            terms: Vec::with_capacity(index.len()),
+        };
+        t.ends.push(0);
+        let (mut ws, mut partner) = (Vec::new(), Vec::new());
+        for r in offsets.windows(2) {
+            let (cols, w) = (
+                &index[r[0] as usize..r[1] as usize],
+                &weight[r[0] as usize..r[1] as usize],
+            );
+            ws.clear();
+            ws.extend(w.iter().map(|&v| W::from_f64(v)));
+            partner.resize(cols.len(), 0);
+            pair_taps(&ws, &mut partner);
+            for k in 0..cols.len() {
+                let b = match partner[k] {
+                    SECOND => continue,
+                    q if q == k => Term::<W>::SINGLE,
+                    q => cols[q],
+                };
+                t.terms.push(Term {
+                    a: cols[k],
+                    b,
+                    w: ws[k],
+                });
+            }
+            t.ends.push(t.terms.len() as u32);
+        }
+        t
+    }
+
+    #[inline]
+    fn row(&self, r: usize) -> &[Term<W>] {
+        &self.terms[self.ends[r] as usize..self.ends[r + 1] as usize]
+    }
 }
 
 impl Csr {
@@ -53,6 +124,17 @@ impl Csr {
     pub fn row_slices(&self, r: usize) -> (&[u32], &[f64]) {
         let (a, b) = (self.offsets[r] as usize, self.offsets[r + 1] as usize);
         (&self.index[a..b], &self.weight[a..b])
+    }
+    /// The terms of row `r`'s sum with `f32` weights ([`Term`]; the same sum as
+    /// [`sum_terms`] over the row's taps as `f32`).
+    #[inline]
+    pub fn terms32(&self, r: usize) -> &[Term<f32>] {
+        self.terms32.row(r)
+    }
+    /// [`Csr::terms32`] with `f64` weights.
+    #[inline]
+    pub fn terms64(&self, r: usize) -> &[Term<f64>] {
+        self.terms64.row(r)
     }
     /// Dense copy, row-major (tests and eigen analysis only).
     pub fn to_dense(&self) -> Vec<Vec<f64>> {
@@ -195,6 +277,8 @@ impl Triplets {
         Csr {
             rows: self.rows,
             cols: self.cols,
+            terms32: RowTerms::new(&offsets, &index, &weight),
+            terms64: RowTerms::new(&offsets, &index, &weight),
             offsets,
             index,
             weight,
@@ -275,4 +359,70 @@ pub fn row_sum<T: Sample>(w: &[T], x: impl Fn(usize) -> T) -> T {
     let mut partner = vec![0; w.len()];
     pair_taps(w, &mut partner);
     sum_terms(w, &partner, x)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scheme::{Boundary, Scheme, TwoScale};
+
+    /// The terms a matrix keeps for each row are the sum [`sum_terms`] takes over the
+    /// row's taps (pairs as [`pair_taps`] makes them, for `f32` and for `f64` weights):
+    /// evaluated term by term they give its bits, on every row of every scheme.
+    #[test]
+    fn every_rows_terms_are_the_sum_of_its_taps() {
+        fn eval<W: Sample>(terms: &[Term<W>], x: &[W]) -> W {
+            let mut acc = W::default();
+            for (t, term) in terms.iter().enumerate() {
+                let v = if term.b == Term::<W>::SINGLE {
+                    x[term.a as usize]
+                } else {
+                    x[term.a as usize] + x[term.b as usize]
+                };
+                acc = if t == 0 {
+                    term.w * v
+                } else if term.b == Term::<W>::SINGLE {
+                    acc + term.w * v
+                } else {
+                    v.fused_mul_add(term.w, acc)
+                };
+            }
+            acc
+        }
+        for scheme in Scheme::ALL {
+            for boundary in Boundary::ALL {
+                for m in [1usize, 2, 5, 22, 33, 35, 64, 101] {
+                    let t = TwoScale::new(scheme, boundary, m);
+                    for op in [&t.analysis, &t.synthesis] {
+                        let x: Vec<f64> = (0..m)
+                            .map(|i| ((i * 7919 % 211) as f64 - 105.0) / 13.0)
+                            .collect();
+                        let x32: Vec<f32> = x.iter().map(|&v| v as f32).collect();
+                        for r in 0..m {
+                            let (cols, ws) = op.row_slices(r);
+                            let w64: Vec<f64> = ws.to_vec();
+                            let w32: Vec<f32> = ws.iter().map(|&v| v as f32).collect();
+                            let want64 = row_sum(&w64, |k| x[cols[k] as usize]);
+                            let want32 = row_sum(&w32, |k| x32[cols[k] as usize]);
+                            let (t32, t64) = (op.terms32(r), op.terms64(r));
+                            if cols.is_empty() {
+                                assert!(t32.is_empty() && t64.is_empty());
+                                continue;
+                            }
+                            assert_eq!(
+                                eval(t64, &x).to_bits(),
+                                want64.to_bits(),
+                                "{scheme} {boundary} {m} row {r}"
+                            );
+                            assert_eq!(
+                                eval(t32, &x32).to_bits(),
+                                want32.to_bits(),
+                                "{scheme} {boundary} {m} row {r}"
+                            );
+                        }
+                    }
+                }
+            }
+        }
+    }
 }

@@ -651,8 +651,14 @@ fn lanes<T: Sample>(
             let p0 = r0.row0 / 2 + f[0];
             ([2 * p0, 2 * p0], true)
         };
-        kernel::combine_pair_lanes(
+        let entry = if plan.kernels.avx2() {
+            pair.entry::<T>()
+        } else {
+            None
+        };
+        kernel::combine_pair_lanes_at(
             plan.kernels,
+            entry,
             x,
             &off[..u],
             w,
@@ -753,13 +759,11 @@ fn combine_rows<T: Sample>(
     let u = pair.cols.len();
     let w = pair.sample_weights::<T>();
     let [m0, m1] = pair.masks;
-    let pair_rows = if split.is_some() {
-        kernel::combine_pair_rows_split
-    } else {
-        kernel::combine_pair_rows
-    };
-    pair_rows(
+    // (the pair's entry of the pair kernels, looked up when the plan was made)
+    let entry = if k.avx2() { pair.entry::<T>() } else { None };
+    kernel::pair_rows(
         k,
+        entry,
         src,
         len,
         &pair.cols,
@@ -770,6 +774,7 @@ fn combine_rows<T: Sample>(
         first,
         steps,
         pair.count,
+        split.is_some(),
     );
     match split {
         Some(row) => {

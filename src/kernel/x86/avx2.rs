@@ -156,9 +156,12 @@ macro_rules! taps_avx2_body {
 }
 
 /// `o[i] = ` [`sum_terms`] of the row `w` (pairs `partner`) over `p[k][i]`, `i < len`: the
-/// rows whose taps pair outside [`combine_pair`]'s patterns (terms looked up per vector).
+/// rows whose taps pair outside [`combine_pair`]'s patterns (terms looked up per vector),
+/// and rows of more than 8 taps without pairs (their terms are their taps in order: the
+/// plain sum). `$name_at` takes the terms already made, as pointers: `(first input,
+/// second input or null, weight)`.
 macro_rules! terms_avx2_body {
-    ($name:ident, $feat:literal, $t:ty, $lanes:expr, $set1:ident, $mul:ident, $add:ident, $fma:ident, $load:ident, $store:ident) => {
+    ($name:ident, $name_at:ident, $feat:literal, $t:ty, $lanes:expr, $set1:ident, $mul:ident, $add:ident, $fma:ident, $load:ident, $store:ident) => {
         /// See [`terms_avx2_body`].
         ///
         /// # Safety
@@ -173,19 +176,35 @@ macro_rules! terms_avx2_body {
             w: &[$t],
             partner: &[usize],
         ) {
-            use std::arch::x86_64::*;
-            const L: usize = $lanes;
-            // the terms: (first input, second input or usize::MAX, weight)
-            let mut terms = [(0usize, usize::MAX, 0.0 as $t); 32];
+            // the terms: (first input, second input or null, weight)
+            let mut terms = [(std::ptr::null::<$t>(), std::ptr::null::<$t>(), 0.0 as $t); 32];
             let mut n = 0;
             for k in 0..w.len() {
                 let q = partner[k];
                 if q != SECOND {
-                    terms[n] = (k, if q == k { usize::MAX } else { q }, w[k]);
+                    let b = if q == k { std::ptr::null() } else { p[q] };
+                    terms[n] = (p[k], b, w[k]);
                     n += 1;
                 }
             }
-            let terms = &terms[..n];
+            // SAFETY: the caller's guarantees, term by term.
+            unsafe { $name_at(o, len, &terms[..n]) }
+        }
+
+        /// See [`terms_avx2_body`].
+        ///
+        /// # Safety
+        /// The target feature present; `o` and every input of `terms` valid for `len`
+        /// samples; at least one term.
+        #[cfg(target_arch = "x86_64")]
+        #[target_feature(enable = $feat)]
+        pub(crate) unsafe fn $name_at(
+            o: *mut $t,
+            len: usize,
+            terms: &[(*const $t, *const $t, $t)],
+        ) {
+            use std::arch::x86_64::*;
+            const L: usize = $lanes;
             // `$n` vectors from `i` (four at once keep four independent sums in flight)
             macro_rules! at {
                 ($i:expr, $n:literal) => {{
@@ -194,8 +213,8 @@ macro_rules! terms_avx2_body {
                     for (t, &(a, b, wk)) in terms.iter().enumerate() {
                         let wv = $set1(wk);
                         for (j, acc) in acc.iter_mut().enumerate() {
-                            let x = $load(p[a].add(i + j * L));
-                            *acc = if b == usize::MAX {
+                            let x = $load(a.add(i + j * L));
+                            *acc = if b.is_null() {
                                 let m = $mul(wv, x);
                                 if t == 0 {
                                     m
@@ -203,7 +222,7 @@ macro_rules! terms_avx2_body {
                                     $add(*acc, m)
                                 }
                             } else {
-                                let v = $add(x, $load(p[b].add(i + j * L)));
+                                let v = $add(x, $load(b.add(i + j * L)));
                                 if t == 0 {
                                     $mul(wv, v)
                                 } else {
@@ -234,7 +253,26 @@ macro_rules! terms_avx2_body {
                     i = len;
                 }
                 while i < len {
-                    *o.add(i) = sum_terms(w, partner, |k| *p[k].add(i));
+                    // the terms of `sum_terms`, one sample
+                    let mut acc = 0.0 as $t;
+                    for (t, &(a, b, wk)) in terms.iter().enumerate() {
+                        let x = *a.add(i);
+                        acc = if b.is_null() {
+                            if t == 0 {
+                                wk * x
+                            } else {
+                                acc + wk * x
+                            }
+                        } else {
+                            let v = x + *b.add(i);
+                            if t == 0 {
+                                wk * v
+                            } else {
+                                v.mul_add(wk, acc)
+                            }
+                        };
+                    }
+                    *o.add(i) = acc;
                     i += 1;
                 }
             }
@@ -243,6 +281,7 @@ macro_rules! terms_avx2_body {
 }
 terms_avx2_body!(
     terms_avx2_f32,
+    terms_at_avx2_f32,
     "avx2,fma",
     f32,
     8,
@@ -255,6 +294,7 @@ terms_avx2_body!(
 );
 terms_avx2_body!(
     terms_avx2_f64,
+    terms_at_avx2_f64,
     "avx2,fma",
     f64,
     4,
@@ -267,6 +307,7 @@ terms_avx2_body!(
 );
 terms_avx2_body!(
     terms_avx512_f32,
+    terms_at_avx512_f32,
     "avx512f,fma",
     f32,
     16,
@@ -279,6 +320,7 @@ terms_avx2_body!(
 );
 terms_avx2_body!(
     terms_avx512_f64,
+    terms_at_avx512_f64,
     "avx512f,fma",
     f64,
     8,
@@ -460,8 +502,11 @@ pub(crate) unsafe fn transpose_avx2_32<T: Sample>(
     transpose_generic(src, rows, cols, dst, stride, r8, c8)
 }
 
-/// [`combine_rows`] for `f32` with AVX2: the rows' tap loops ([`taps_avx2_f32`]) called
-/// from one function, without a call's checks and dispatch per row.
+/// [`combine_rows`] for `f32` with AVX2: each row's terms as the operator made them once
+/// ([`Csr::terms32`]: no pairing of taps per row, no copy of a long row), the rows with a
+/// few taps and no pairs by the fused tap loops ([`taps_avx2_f32`]), the others by the
+/// terms' loop ([`terms_at_avx2_f32`], AVX-512 when `k` has it) — the same sums as one
+/// [`combine`] per row.
 ///
 /// # Safety
 /// AVX2 present; every column of `op` times `len` plus `len` within `src`; the output rows
@@ -476,48 +521,57 @@ pub(crate) unsafe fn combine_rows_avx2_f32(
     rows: std::ops::Range<usize>,
     dst: *mut f32,
 ) {
-    let mut partner = [0usize; 32];
-    let mut wf = [0f32; 32];
-    let mut pf = [std::ptr::null::<f32>(); 32];
+    type At = (*const f32, *const f32, f32);
+    let mut at: [At; 32] = [(std::ptr::null(), std::ptr::null(), 0.0); 32];
+    // SAFETY (all): the caller's bounds; every column (`a`, `b` of a term) below op.cols().
+    let input = |c: u32| unsafe { src.add(c as usize * len) };
     for (i, r) in rows.enumerate() {
-        let (cols, ws) = op.row_slices(r);
-        // SAFETY (all): the caller's bounds; columns below op.cols().
         let o = unsafe { dst.add(i * len) };
-        let n = cols.len();
-        if n <= 32 {
-            for k in 0..n {
-                wf[k] = ws[k] as f32;
-                pf[k] = unsafe { src.add(cols[k] as usize * len) };
-            }
-            if pair_taps(&wf[..n], &mut partner[..n]) {
-                unsafe { terms_avx2_f32(o, len, &pf[..n], &wf[..n], &partner[..n]) };
-                continue;
-            }
-        }
+        let terms = op.terms32(r);
+        let n = terms.len();
+        let paired = terms.iter().any(|t| t.b != Term::<f32>::SINGLE);
         macro_rules! arm {
             ($n:literal) => {{
-                let p: [*const f32; $n] =
-                    std::array::from_fn(|k| unsafe { src.add(cols[k] as usize * len) });
-                let w: [f32; $n] = std::array::from_fn(|k| ws[k] as f32);
+                let p: [*const f32; $n] = std::array::from_fn(|k| input(terms[k].a));
+                let w: [f32; $n] = std::array::from_fn(|k| terms[k].w);
                 unsafe { taps_avx2_f32::<$n>(o, len, &p, &w) }
             }};
         }
-        match cols.len() {
+        match n {
             0 => unsafe { std::ptr::write_bytes(o, 0, len) },
-            1 => arm!(1),
-            2 => arm!(2),
-            3 => arm!(3),
-            4 => arm!(4),
-            5 => arm!(5),
-            6 => arm!(6),
-            7 => arm!(7),
-            8 => arm!(8),
+            1..=8 if !paired => match n {
+                1 => arm!(1),
+                2 => arm!(2),
+                3 => arm!(3),
+                4 => arm!(4),
+                5 => arm!(5),
+                6 => arm!(6),
+                7 => arm!(7),
+                _ => arm!(8),
+            },
+            1..=32 => {
+                for (a, t) in at.iter_mut().zip(terms) {
+                    let b = if t.b == Term::<f32>::SINGLE {
+                        std::ptr::null()
+                    } else {
+                        input(t.b)
+                    };
+                    *a = (input(t.a), b, t.w);
+                }
+                // SAFETY: AVX-512F present when the table has it; the inputs as above.
+                if k.avx512() && len >= 16 {
+                    unsafe { terms_at_avx512_f32(o, len, &at[..n]) };
+                } else {
+                    unsafe { terms_at_avx2_f32(o, len, &at[..n]) };
+                }
+            }
             _ => {
-                // SAFETY: as above, as slices.
+                // (no scheme's row has that many terms) one combine
+                let (cols, ws) = op.row_slices(r);
                 let out = unsafe { std::slice::from_raw_parts_mut(o, len) };
                 let t: Vec<&[f32]> = cols
                     .iter()
-                    .map(|&c| unsafe { std::slice::from_raw_parts(src.add(c as usize * len), len) })
+                    .map(|&c| unsafe { std::slice::from_raw_parts(input(c), len) })
                     .collect();
                 let wv: Vec<f32> = ws.iter().map(|&x| x as f32).collect();
                 combine(k, out, &t, &wv);
