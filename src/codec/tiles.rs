@@ -910,6 +910,9 @@ pub(super) fn decode_seek<R: Read + Seek>(
 /// A grid row's decode handed to the thread pool: its samples and completeness.
 type RowResult = Result<(Samples, bool)>;
 
+/// A grid row to decode: its stitch and its tiles' payloads.
+type RowTiles = (Stitch, Vec<(usize, Vec<u8>)>);
+
 /// [`decode_seek`] one tile-row (2-D) or tile-slab (3-D) at a time, so that memory
 /// holds one row of tiles, not the output: the output's shape first, then its rows in
 /// order ([`TiledSlabs::next_slab`]).
@@ -974,7 +977,7 @@ impl<R: Read + Seek> TiledSlabs<R> {
 
     /// The next grid row that meets the output box: its stitch and its tiles' payloads
     /// (read now), `None` after the last.
-    fn fetch_row(&mut self) -> Result<Option<(Stitch, Vec<(usize, Vec<u8>)>)>> {
+    fn fetch_row(&mut self) -> Result<Option<RowTiles>> {
         let n = self.st.tiles();
         let rows = self.st.grid.counts[0];
         let per_row = n / rows;
