@@ -371,12 +371,17 @@ fn info_shows_the_grid_and_bytes_per_level() {
     let r = field(&[40, 70], 1, SampleType::U8, DataKind::Image);
     let bytes = codec::encode_tiled(&r, &opts(Rate::Quality(50.0)), &[16, 32]).unwrap();
     let i = codec::info(&bytes).unwrap();
-    assert_eq!(i.version, "2.1");
+    // lossy tiles are compact (2.2): one TRAT chunk for the grid's four tile classes
+    assert_eq!(i.version, "2.2");
     assert_eq!((i.tile.clone(), i.tiles), (vec![16, 32], 9));
     assert!(i.complete);
     assert_eq!(i.chunks.iter().filter(|c| c.kind == "TILE").count(), 9);
+    assert_eq!(i.chunks.iter().filter(|c| c.kind == "TRAT").count(), 1);
     let coded: u64 = i.levels_bytes.iter().map(|l| l.1).sum();
     assert!(coded > 0 && coded < bytes.len() as u64);
+    // lossless tiles stay 2.1
+    let lossless = codec::encode_tiled(&r, &opts(Rate::Lossless), &[16, 32]).unwrap();
+    assert_eq!(codec::info(&lossless).unwrap().version, "2.1");
 }
 
 #[test]
@@ -477,5 +482,107 @@ fn bad_tile_extents_and_regions_are_parameter_errors() {
     for reg in [vec![0..5], vec![0..5, 3..3], vec![0..21, 0..5]] {
         let e = dec(&bytes, 0, Some(reg.clone())).err().unwrap();
         assert!(matches!(e.kind(), ErrorKind::Parameter), "{reg:?}: {e}");
+    }
+}
+
+fn vector(name: &str) -> Vec<u8> {
+    let dir = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("formats/vectors");
+    std::fs::read(dir.join(name)).unwrap()
+}
+
+/// Format 2.2 stores a lossy tile as its range and its streams (the rest from `HEAD`
+/// and `TRAT`): the 2.1 and 2.2 files of one raster decode to the same samples at
+/// every level and region, and each of the 9 tiles saves at least its `HEAD` chunk
+/// (80 bytes) and its `MEND` (12).
+#[test]
+fn compact_tiles_decode_as_the_chunks_they_stand_for_and_save_the_headers() {
+    let old = vector("tiled_gray16_q40.mra");
+    let new = vector("tiled22_gray16_q40.mra");
+    // HEAD's payload starts at byte 16: major, minor
+    assert_eq!((old[17], new[17]), (1, 2), "minor versions");
+    let tiles = chunks(&new).iter().filter(|c| &c.0 == b"TILE").count();
+    assert_eq!(tiles, 9);
+    assert!(
+        new.len() + 92 * tiles <= old.len(),
+        "{} bytes against {}",
+        new.len(),
+        old.len()
+    );
+    for level in [0, 1, 2] {
+        for region in [None, Some(vec![3..11, 9..10])] {
+            let a = dec(&old, level, region.clone()).unwrap().raster;
+            let b = dec(&new, level, region.clone()).unwrap().raster;
+            assert_eq!(a.samples, b.samples, "level {level} {region:?}");
+            assert_eq!(a.meta, b.meta, "level {level} {region:?}");
+        }
+    }
+    // the encoder writes lossy tiles compact, and what it writes decodes in order too
+    let r = field(&[18, 21], 1, SampleType::U16, DataKind::Image);
+    let bytes = codec::encode_tiled(&r, &opts(Rate::Quality(45.0)), &[8, 8]).unwrap();
+    let seek = codec::decode(&bytes, &DecodeOptions::default()).unwrap();
+    let in_order =
+        codec::decode_stream(&bytes[..], bytes.len() as u64, &DecodeOptions::default()).unwrap();
+    assert_eq!(bytes[17], 2);
+    assert_eq!(seek.raster.samples, in_order.raster.samples);
+    assert!(psnr(&r, &seek.raster) > 30.0);
+}
+
+/// What a 2.2 reader must reject (formats/MRA.md §14.1): another form, a stream
+/// length past the payload, bytes after the last stream, a missing `TRAT`, a `TRAT` of
+/// the wrong length or with a ratio that is not positive, and a `TRAT` in a 2.1 file.
+#[test]
+fn a_bad_compact_tile_or_trat_chunk_is_named() {
+    let good = vector("tiled22_gray16_q40.mra");
+    let cs = chunks(&good);
+    let (_, ts, te) = cs.iter().find(|c| &c.0 == b"TILE").cloned().unwrap();
+    let (_, rs, re) = cs.iter().find(|c| &c.0 == b"TRAT").cloned().unwrap();
+    let tile = good[ts + 8..te - 4].to_vec();
+    let with_tile = |p: &[u8]| [&good[..ts], &chunk(b"TILE", p), &good[te..]].concat();
+    let with_trat = |p: &[u8]| [&good[..rs], &chunk(b"TRAT", p), &good[re..]].concat();
+    let both = |b: &[u8]| {
+        let o = DecodeOptions::default();
+        [
+            codec::decode(b, &o).err().map(|e| e.to_string()),
+            codec::decode_stream(b, b.len() as u64, &o)
+                .err()
+                .map(|e| e.to_string()),
+        ]
+    };
+    // payload: index (4), form (1), min and max (16), then the first stream's length
+    let mut p = tile.clone();
+    p[4] = 7;
+    for e in both(&with_tile(&p)) {
+        assert!(e.as_deref().unwrap_or("").contains("form 7"), "{e:?}");
+    }
+    let mut p = tile.clone();
+    p[21] = 0x7F;
+    for e in both(&with_tile(&p)) {
+        assert!(e.as_deref().unwrap_or("").contains("left"), "{e:?}");
+    }
+    let mut p = tile.clone();
+    p.push(0);
+    let e = both(&with_tile(&p))[1].clone().unwrap_or_default();
+    assert!(e.contains("after its last stream"), "{e}");
+    let trat = good[rs + 8..re - 4].to_vec();
+    let e = both(&with_trat(&trat[4..]))[1].clone().unwrap_or_default();
+    assert!(e.contains("TRAT"), "{e}");
+    let mut zero = trat.clone();
+    zero[..4].copy_from_slice(&0f32.to_le_bytes());
+    for e in both(&with_trat(&zero)) {
+        assert!(e.as_deref().unwrap_or("").contains("ratio"), "{e:?}");
+    }
+    let without = [&good[..rs], &good[re..]].concat();
+    let e = both(&without)[1].clone().unwrap_or_default();
+    assert!(e.contains("TRAT"), "{e}");
+    // a 2.1 file does not have one
+    let old = vector("tiled_gray16_q40.mra");
+    let (_, is, _) = chunks(&old)
+        .iter()
+        .find(|c| &c.0 == b"TIDX")
+        .cloned()
+        .unwrap();
+    let old_with = [&old[..is], &chunk(b"TRAT", &trat), &old[is..]].concat();
+    for e in both(&old_with) {
+        assert!(e.as_deref().unwrap_or("").contains("TRAT"), "{e:?}");
     }
 }

@@ -577,3 +577,77 @@ fn the_tiled_test_vectors_decode_in_slabs_to_their_digests() {
         "{dims_seen:?}"
     );
 }
+
+/// The streamed paths read the next slab (encode) or decode the next tile-row (decode)
+/// while the current one is coded or written when there is more than one thread, and go
+/// one slab at a time with one thread: the file's bytes and the decoded slabs are the
+/// same with 1, 2 and 3 threads, in a one-pass and a two-pass rate mode, and a
+/// truncated file is still named in slabs.
+#[test]
+fn the_pipelined_slabs_give_the_same_bytes_and_samples_with_any_thread_count() {
+    let dir = common::scratch_dir("tiles_stream");
+    let r = field(&[21, 40, 30], SampleType::U16);
+    let p = dir.join("pipe.raw");
+    std::fs::write(&p, io::bytes::encode(&r.samples, false)).unwrap();
+    let ro = ReadOptions {
+        raw: Some(RawSpec {
+            dims: vec![21, 40, 30],
+            sample_type: SampleType::U16,
+            big_endian: false,
+        }),
+        ..Default::default()
+    };
+    let tile = [4, 16, 16];
+    for rate in [Rate::Quality(60.0), Rate::Bpp(2.0), Rate::MaxError(4.0)] {
+        let o = opts(rate);
+        let mut files = Vec::new();
+        let mut decoded = Vec::new();
+        for threads in [1, 2, 3] {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            let bytes = pool.install(|| {
+                let mut src = stream::open(&p, &ro).unwrap().unwrap();
+                streamed(&mut src, &o, &tile)
+            });
+            let f = dir.join(format!("pipe{threads}.mra"));
+            std::fs::write(&f, &bytes).unwrap();
+            let k = pool.install(|| {
+                let mut k = Keep::default();
+                let d = codec::decode_file_slabs(&f, &DecodeOptions::default(), &mut k).unwrap();
+                assert!(d.complete && k.ended);
+                k
+            });
+            // one slab per grid row: ⌈21 / 4⌉
+            assert_eq!(k.slabs, 6, "{rate:?} {threads} threads");
+            files.push(bytes);
+            decoded.push(k.samples);
+        }
+        let whole = codec::decode(&files[0], &DecodeOptions::default()).unwrap();
+        assert_eq!(decoded[0], whole.raster.to_f64(), "{rate:?}");
+        assert!(
+            files.iter().all(|f| *f == files[0]),
+            "{rate:?}: bytes differ"
+        );
+        assert!(
+            decoded.iter().all(|d| *d == decoded[0]),
+            "{rate:?}: samples differ"
+        );
+        // cut inside the fourth row of tiles: the slabs before it come, then the error
+        let cut = dir.join("pipe_cut.mra");
+        std::fs::write(&cut, &files[0][..files[0].len() * 2 / 3]).unwrap();
+        for threads in [1, 2] {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            let err = pool
+                .install(|| {
+                    codec::decode_file_slabs(&cut, &DecodeOptions::default(), &mut Keep::default())
+                })
+                .unwrap_err();
+            assert!(err.to_string().contains("truncated"), "{threads}: {err}");
+        }
+    }
+}

@@ -44,10 +44,24 @@ pub fn info(bytes: &[u8]) -> Result<Info> {
     let mut lv: std::collections::BTreeMap<usize, u64> = Default::default();
     let (h, depth, complete, chunks, tiles) = if head.is_tiled() {
         let t = read_tiled_info(bytes)?;
-        // bytes per level summed over the tiles
-        for (_, f) in &t.tiles {
-            for (l, b, _) in info(f)?.levels_bytes {
-                *lv.entry(l).or_default() += b;
+        // bytes per level summed over the tiles; a compact tile holds of each level's
+        // LEVL chunk its streams and their lengths only (no framing, level or ratios)
+        for (_, f, compact) in &t.tiles {
+            let fi = info(f)?;
+            let streams: Vec<(usize, u64)> = if *compact {
+                let th = super::read::header_of(f)?;
+                Plan::new(&th)?
+                    .level_groups()
+                    .into_iter()
+                    .map(|(l, js)| (l, (js.len() * th.channels) as u64))
+                    .collect()
+            } else {
+                Vec::new()
+            };
+            for (l, b, _) in fi.levels_bytes {
+                let k = streams.iter().find(|s| s.0 == l).map_or(0, |s| s.1);
+                let framing = if *compact { 12 + 2 + 4 * k } else { 0 };
+                *lv.entry(l).or_default() += b.saturating_sub(framing);
             }
         }
         let mut th = t.header.clone();

@@ -214,7 +214,9 @@ pub(super) fn crop_raster(r: &Raster, ranges: &[Range<usize>]) -> Result<Raster>
 
 // ---------------------------------------------------------------- encoding
 
+mod compact;
 mod encode;
+use compact::{tile_file, Ratios};
 pub(crate) use encode::encode_slabs;
 
 /// Encode a raster as tiles of extents `tile` (slowest first), as [`encode_slabs`]
@@ -245,8 +247,8 @@ pub(super) struct Stitch {
     /// Output box in level-k coordinates, slowest axis first.
     out: Vec<Range<usize>>,
     samples: Samples,
-    /// Tiles put so far.
-    done: Vec<bool>,
+    /// The step ratios of compact tiles (2.2), once `TRAT` is read.
+    ratios: Option<std::sync::Arc<Ratios>>,
 }
 
 impl Stitch {
@@ -329,7 +331,6 @@ impl Stitch {
             &out.iter().map(|g| g.len()).collect::<Vec<_>>(),
             h.channels,
         )?;
-        let done = vec![false; grid.len()];
         Ok(Stitch {
             samples: Samples::zeros(h.sample_type, 0),
             grid,
@@ -337,7 +338,7 @@ impl Stitch {
             header: h.clone(),
             offs,
             out,
-            done,
+            ratios: None,
         })
     }
 
@@ -376,10 +377,10 @@ impl Stitch {
         inner: &[u8],
         allow_truncated: bool,
     ) -> Result<Decoded> {
-        let src = (&format::SIGNATURE[..]).chain(inner);
+        let f = tile_file(&self.header, &self.grid, self.ratios.as_deref(), i, inner)?;
         let d = decode_untiled(
-            src,
-            8 + inner.len() as u64,
+            &f[..],
+            f.len() as u64,
             &DecodeOptions {
                 level: self.level,
                 allow_truncated,
@@ -421,8 +422,10 @@ impl Stitch {
         Ok(d)
     }
 
-    /// Place tile `i`'s decoded samples.
-    pub(super) fn put(&mut self, i: usize, r: &Raster) -> Result<()> {
+    /// Copy the part of tile `i`'s decoded samples `r` that falls in the output box into
+    /// `samples` (the output's samples, taken out of the stitch so that the tiles decoded
+    /// in parallel can share them under a lock while the stitch is read).
+    fn place(&self, samples: &mut Samples, i: usize, r: &Raster) -> Result<()> {
         let b = self.tile_box(i);
         let mut from = Vec::with_capacity(b.len());
         let mut to = Vec::with_capacity(b.len());
@@ -436,16 +439,14 @@ impl Stitch {
         }
         let dims: Vec<usize> = self.out.iter().map(|g| g.len()).collect();
         copy_block(
-            &mut self.samples,
+            samples,
             &dims,
             &to,
             &r.samples,
             &r.dims,
             &from,
             self.header.channels,
-        )?;
-        self.done[i] = true;
-        Ok(())
+        )
     }
 
     /// The output raster with the file's metadata moved to it.
@@ -489,9 +490,8 @@ impl Stitch {
             offs: self.offs.clone(),
             out,
             samples: Samples::zeros(self.header.sample_type, 0),
-            done: Vec::new(),
+            ratios: self.ratios.clone(),
         };
-        st.done = vec![false; st.grid.len()];
         st.alloc()?;
         Ok(Some(st))
     }
@@ -515,29 +515,39 @@ impl Stitch {
     }
 }
 
-/// Decode tiles `(i, payload after the index)` in parallel and place them.
+/// Decode tiles `(i, payload after the index)` in parallel and place them, each as
+/// soon as it is decoded (the output's samples shared under a lock), so that memory
+/// holds the tiles in flight, not the batch decoded.
 fn decode_batch(
     st: &mut Stitch,
     batch: &mut Vec<(usize, Vec<u8>)>,
     allow_truncated: bool,
     complete: &mut bool,
 ) -> Result<()> {
-    let decoded: Vec<Result<Decoded>> = batch
+    let empty = Samples::zeros(st.header.sample_type, 0);
+    let samples = std::sync::Mutex::new(std::mem::replace(&mut st.samples, empty));
+    let shared = &*st;
+    let placed: Vec<Result<bool>> = batch
         .par_iter()
-        .map(|(i, inner)| st.decode_tile(*i, inner, allow_truncated))
+        .map(|(i, inner)| {
+            let d = shared.decode_tile(*i, inner, allow_truncated)?;
+            let mut s = samples.lock().unwrap_or_else(|e| e.into_inner());
+            shared.place(&mut s, *i, &d.raster)?;
+            Ok(d.complete)
+        })
         .collect();
-    for ((i, _), d) in batch.iter().zip(decoded) {
-        let d = d?;
-        *complete &= d.complete;
-        st.put(*i, &d.raster)?;
+    st.samples = samples.into_inner().unwrap_or_else(|e| e.into_inner());
+    for p in placed {
+        *complete &= p?;
     }
     batch.clear();
     Ok(())
 }
 
-/// Tiles decoded at once: enough to keep every thread busy.
+/// Tiles fetched before they are decoded together: enough to keep every thread busy
+/// (each is placed as soon as it is decoded, so this bounds the coded bytes held).
 fn batch_size() -> usize {
-    2 * rayon::current_num_threads()
+    8 * rayon::current_num_threads()
 }
 
 /// The tile index of a `TILE` chunk and the rest of its payload.
@@ -597,8 +607,9 @@ fn chunk_info(ch: &Chunk, tile: Option<usize>) -> super::container::ChunkInfo {
 pub(super) struct TiledInfo {
     pub(super) header: Header,
     pub(super) chunks: Vec<super::container::ChunkInfo>,
-    /// Each tile's one-tile file, for its bytes per level.
-    pub(super) tiles: Vec<(usize, Vec<u8>)>,
+    /// Each tile's one-tile file, for its bytes per level, and whether the tile is
+    /// compact (2.2: its `LEVL` chunks are the file's streams and their lengths only).
+    pub(super) tiles: Vec<(usize, Vec<u8>, bool)>,
     pub(super) complete: bool,
 }
 
@@ -612,8 +623,13 @@ pub(super) fn read_tiled_info(bytes: &[u8]) -> Result<TiledInfo> {
     let mut tiles = Vec::new();
     let mut seen = vec![false; n];
     let mut complete = false;
+    let mut ratios = None;
     while let Ok(ch) = rd.next_chunk()? {
         match &ch.kind {
+            b"TRAT" if header.minor >= format::MINOR_COMPACT => {
+                ratios = Some(Ratios::parse(&ch, &header, &grid)?);
+                chunks.push(chunk_info(&ch, None));
+            }
             b"TILE" => {
                 let (i, inner) = tile_payload(&ch, n)?;
                 if std::mem::replace(&mut seen[i], true) {
@@ -622,9 +638,9 @@ pub(super) fn read_tiled_info(bytes: &[u8]) -> Result<TiledInfo> {
                         "each tile once",
                     ));
                 }
-                let mut f = format::SIGNATURE.to_vec();
-                f.extend_from_slice(inner);
-                tiles.push((i, f));
+                let f = tile_file(&header, &grid, ratios.as_ref(), i, inner)?;
+                let compact = header.minor >= format::MINOR_COMPACT && inner.first() == Some(&1);
+                tiles.push((i, f.into_owned(), compact));
                 chunks.push(chunk_info(&ch, Some(i)));
             }
             b"MEND" => {
@@ -673,6 +689,10 @@ pub(super) fn decode_sequential<R: Read>(
         last = ch.name();
         match &ch.kind {
             b"mETA" => meta = meta::parse(&ch.payload),
+            b"TRAT" if header.minor >= format::MINOR_COMPACT && !index_seen => {
+                let g = Grid::new(&header.dims, &header.tile)?;
+                st.ratios = Some(std::sync::Arc::new(Ratios::parse(&ch, &header, &g)?));
+            }
             b"TIDX" => {
                 if index_seen {
                     return Err(Error::format("a second TIDX chunk", "one TIDX chunk"));
@@ -738,14 +758,21 @@ pub(super) fn decode_sequential<R: Read>(
     })
 }
 
-/// Read `mETA` and `TIDX` of a tiled file of `n` tiles from a seekable stream of `len`
-/// bytes, from byte `after_head` (just after `HEAD`).
+/// What a tiled file says before its tiles: its metadata, the place of each tile and
+/// the step ratios of compact tiles.
+type Index = (Metadata, Vec<(u64, u64)>, Option<std::sync::Arc<Ratios>>);
+
+/// Read `mETA`, `TRAT` (2.2) and `TIDX` of the tiled file of `st` from a seekable stream
+/// of `len` bytes, from byte `after_head` (just after `HEAD`).
 fn read_index<R: Read + Seek>(
     src: &mut R,
     len: u64,
     after_head: u64,
-    n: usize,
-) -> Result<(Metadata, Vec<(u64, u64)>)> {
+    st: &Stitch,
+) -> Result<Index> {
+    let n = st.tiles();
+    let h = &st.header;
+    let mut ratios = None;
     let mut meta = Metadata::default();
     src.seek(SeekFrom::Start(after_head))?;
     let mut rd = ChunkReader::at(&mut *src, after_head, len);
@@ -761,13 +788,16 @@ fn read_index<R: Read + Seek>(
         };
         match &ch.kind {
             b"mETA" => meta = meta::parse(&ch.payload),
-            b"TIDX" => return Ok((meta, parse_index(&ch, n, len)?)),
+            b"TRAT" if h.minor >= format::MINOR_COMPACT => {
+                ratios = Some(std::sync::Arc::new(Ratios::parse(&ch, h, &st.grid)?));
+            }
+            b"TIDX" => return Ok((meta, parse_index(&ch, n, len)?, ratios)),
             b"HEAD" => return Err(Error::format("a second HEAD chunk", "one HEAD chunk")),
             k => {
                 if k[0].is_ascii_uppercase() {
                     return Err(Error::format(
                         format!("chunk {} at byte {} before TIDX", ch.name(), ch.offset),
-                        "HEAD, mETA, then TIDX",
+                        "HEAD, mETA, TRAT (2.2), then TIDX",
                     ));
                 }
             }
@@ -853,7 +883,8 @@ pub(super) fn decode_seek<R: Read + Seek>(
 ) -> Result<Decoded> {
     let mut st = Stitch::new(&header, opts.level, opts.region.as_deref())?;
     let n = st.tiles();
-    let (meta, index) = read_index(src, len, after_head, n)?;
+    let (meta, index, ratios) = read_index(src, len, after_head, &st)?;
+    st.ratios = ratios;
     let mut complete = true;
     let mut batch = Vec::new();
     for (i, &e) in index.iter().enumerate() {
@@ -880,9 +911,20 @@ pub(super) fn decode_seek<R: Read + Seek>(
     })
 }
 
+/// A grid row's decode handed to the thread pool: its samples and completeness.
+type RowResult = Result<(Samples, bool)>;
+
+/// A grid row to decode: its stitch and its tiles' payloads.
+type RowTiles = (Stitch, Vec<(usize, Vec<u8>)>);
+
 /// [`decode_seek`] one tile-row (2-D) or tile-slab (3-D) at a time, so that memory
 /// holds one row of tiles, not the output: the output's shape first, then its rows in
 /// order ([`TiledSlabs::next_slab`]).
+///
+/// With more than one thread the rows are pipelined: while the caller writes row `g`,
+/// the pool decodes row `g + 1` (its tiles read beforehand on the caller's thread), so
+/// that reading and writing overlap the decoding; one row ahead at most. With one
+/// thread every row is decoded when asked for.
 pub(super) struct TiledSlabs<R> {
     src: R,
     len: u64,
@@ -893,6 +935,8 @@ pub(super) struct TiledSlabs<R> {
     opts: DecodeOptions,
     /// The next grid row along the slowest axis.
     g0: usize,
+    /// The row being decoded in the pool.
+    pending: Option<std::sync::mpsc::Receiver<RowResult>>,
     complete: bool,
     ended: bool,
 }
@@ -906,8 +950,9 @@ impl<R: Read + Seek> TiledSlabs<R> {
         header: Header,
         opts: &DecodeOptions,
     ) -> Result<Self> {
-        let st = Stitch::geometry(&header, opts.level, opts.region.as_deref())?;
-        let (meta, index) = read_index(&mut src, len, after_head, st.tiles())?;
+        let mut st = Stitch::geometry(&header, opts.level, opts.region.as_deref())?;
+        let (meta, index, ratios) = read_index(&mut src, len, after_head, &st)?;
+        st.ratios = ratios;
         let shape = st.out_shape(&meta)?;
         Ok(TiledSlabs {
             src,
@@ -918,6 +963,7 @@ impl<R: Read + Seek> TiledSlabs<R> {
             shape,
             opts: opts.clone(),
             g0: 0,
+            pending: None,
             complete: true,
             ended: false,
         })
@@ -933,31 +979,68 @@ impl<R: Read + Seek> TiledSlabs<R> {
         self.complete
     }
 
-    /// The next rows of the output (those of one grid row), `None` after the last.
-    pub(super) fn next_slab(&mut self) -> Result<Option<Samples>> {
+    /// The next grid row that meets the output box: its stitch and its tiles' payloads
+    /// (read now), `None` after the last.
+    fn fetch_row(&mut self) -> Result<Option<RowTiles>> {
         let n = self.st.tiles();
         let rows = self.st.grid.counts[0];
         let per_row = n / rows;
         while self.g0 < rows {
             let g0 = self.g0;
             self.g0 += 1;
-            let Some(mut row) = self.st.row_slab(g0)? else {
+            let Some(row) = self.st.row_slab(g0)? else {
                 continue;
             };
-            let allow = self.opts.allow_truncated;
             let mut batch = Vec::new();
             for i in g0 * per_row..(g0 + 1) * per_row {
                 if !row.wanted(i) {
                     continue;
                 }
+                let allow = self.opts.allow_truncated;
                 match fetch_tile(&mut self.src, self.len, n, i, self.index[i], allow)? {
                     Some(t) => batch.push((i, t)),
                     None => self.complete = false,
                 }
-                if batch.len() >= batch_size() {
-                    decode_batch(&mut row, &mut batch, allow, &mut self.complete)?;
-                }
             }
+            return Ok(Some((row, batch)));
+        }
+        Ok(None)
+    }
+
+    /// Read the next row's tiles and hand their decode to the pool.
+    fn launch(&mut self) -> Result<()> {
+        if let Some((mut row, mut batch)) = self.fetch_row()? {
+            let allow = self.opts.allow_truncated;
+            let (tx, rx) = std::sync::mpsc::sync_channel(1);
+            rayon::spawn(move || {
+                let mut complete = true;
+                let r = decode_batch(&mut row, &mut batch, allow, &mut complete)
+                    .map(|()| (row.samples, complete));
+                // the receiver is gone when the caller stopped early
+                let _ = tx.send(r);
+            });
+            self.pending = Some(rx);
+        }
+        Ok(())
+    }
+
+    /// The next rows of the output (those of one grid row), `None` after the last.
+    pub(super) fn next_slab(&mut self) -> Result<Option<Samples>> {
+        if rayon::current_num_threads() > 1 {
+            if self.pending.is_none() && self.g0 == 0 {
+                self.launch()?;
+            }
+            if let Some(rx) = self.pending.take() {
+                let (samples, complete) = rx.recv().map_err(|_| {
+                    Error::Io(std::io::Error::other("a tile row's decoder stopped"))
+                })??;
+                self.complete &= complete;
+                // the next row is decoded while this one is written
+                self.launch()?;
+                return Ok(Some(samples));
+            }
+        } else if let Some((mut row, mut batch)) = self.fetch_row()? {
+            let allow = self.opts.allow_truncated;
             decode_batch(&mut row, &mut batch, allow, &mut self.complete)?;
             return Ok(Some(row.samples));
         }

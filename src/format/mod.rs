@@ -24,6 +24,9 @@ pub const OLDEST_MAJOR: u8 = 1;
 pub const MINOR: u8 = 0;
 /// The minor version of a file split into tiles (`TIDX` and `TILE` chunks, 2.1).
 pub const MINOR_TILED: u8 = 1;
+/// The minor version of a lossy tiled file whose tiles may be compact (a `TRAT` chunk
+/// of step ratios per tile class, a form byte in each `TILE`, 2.2).
+pub const MINOR_COMPACT: u8 = 2;
 /// Largest chunk payload accepted (1 GiB).
 pub const MAX_CHUNK: u64 = 1 << 30;
 

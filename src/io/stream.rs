@@ -156,7 +156,17 @@ impl<W: Write> SlabSink for StreamSink<W> {
             ));
         }
         self.left -= n;
-        self.w.write_all(&bytes::encode(samples, false))?;
+        // a piece at a time: no byte copy of the whole slab beside it
+        const PIECE: usize = 1 << 20;
+        let len = samples.len();
+        if len <= PIECE {
+            self.w.write_all(&bytes::encode(samples, false))?;
+        } else {
+            for at in (0..len).step_by(PIECE) {
+                let piece = samples.range(at..(at + PIECE).min(len));
+                self.w.write_all(&bytes::encode(&piece, false))?;
+            }
+        }
         Ok(())
     }
 

@@ -12,6 +12,7 @@
 //! all of them up to 64 tiles): `--keep`'s threshold is that of the sample's details,
 //! the `--psnr` / `--bpp` search measures the sample.
 
+use super::compact::{self, Ratios, TRAT};
 use super::{crop_samples, Grid, SEARCH_SAMPLE_TILES, TIDX, TILE};
 use crate::codec::container::{HEAD, MEND, META};
 use crate::codec::encode::encode_filled;
@@ -45,10 +46,34 @@ impl Ranges {
         }
     }
 
+    /// Merge the ranges of `s` (in parallel, pieces of 2^16 samples).
     fn add(&mut self, s: &Samples) {
+        const PIECE: usize = 1 << 16;
+        let parts: Vec<Ranges> = (0..s.len().div_ceil(PIECE))
+            .into_par_iter()
+            .map(|k| {
+                let mut r = Ranges::new();
+                r.add_range(s, k * PIECE..((k + 1) * PIECE).min(s.len()));
+                r
+            })
+            .collect();
+        for p in parts {
+            self.merge(&p);
+        }
+    }
+
+    fn merge(&mut self, o: &Ranges) {
+        self.finite = (self.finite.0.min(o.finite.0), self.finite.1.max(o.finite.1));
+        self.all = match (self.all, o.all) {
+            (Some(a), Some(b)) => Some((a.0.min(b.0), a.1.max(b.1))),
+            (a, b) => a.or(b),
+        };
+    }
+
+    fn add_range(&mut self, s: &Samples, r: std::ops::Range<usize>) {
         let (mut flo, mut fhi) = self.finite;
         let (mut lo, mut hi) = self.all.unwrap_or((f64::INFINITY, f64::NEG_INFINITY));
-        for i in 0..s.len() {
+        for i in r {
             let x = s.get_f64(i);
             if x.is_finite() {
                 flo = flo.min(x);
@@ -77,6 +102,7 @@ impl Ranges {
 }
 
 /// How each tile is coded, once the first pass (if any) has been taken.
+#[derive(Clone, Copy)]
 enum Coding {
     /// The rate mode's coding, which does not depend on the samples of other tiles.
     Own,
@@ -155,21 +181,42 @@ pub(crate) fn encode_slabs<S: SlabSource + ?Sized, W: Write + Seek>(
     let every = n.div_ceil(SEARCH_SAMPLE_TILES).max(1);
     let mut ranges = Ranges::new();
     let mut sample: Vec<Raster> = Vec::new();
+    // with more than one thread the next slab is read while this one is measured and
+    // coded
+    let ahead = rayon::current_num_threads() > 1;
     if first_pass {
+        let mut next = Some(src.read_rows(rows_of(0))?);
         for g0 in 0..rows {
             let r = rows_of(g0);
-            let slab = src.read_rows(r.clone())?;
-            ranges.add(&slab);
-            if sampled {
+            let slab = match next.take() {
+                Some(s) => s,
+                None => src.read_rows(r.clone())?,
+            };
+            let job = || -> Result<(Ranges, Vec<Raster>)> {
+                let mut got = Ranges::new();
+                got.add(&slab);
                 let mine: Vec<usize> = (g0 * per_row..(g0 + 1) * per_row)
-                    .filter(|i| i % every == 0)
+                    .filter(|i| sampled && i % every == 0)
                     .collect();
                 let tiles: Vec<Raster> = mine
                     .par_iter()
                     .map(|&i| slab_tile(&grid, &shape, &slab, r.start, i))
                     .collect::<Result<_>>()?;
-                sample.extend(tiles);
-            }
+                Ok((got, tiles))
+            };
+            let (got, tiles) = if ahead && g0 + 1 < rows {
+                let (got, read) = std::thread::scope(|s| {
+                    let measuring = s.spawn(job);
+                    let read = src.read_rows(rows_of(g0 + 1));
+                    (measuring.join(), read)
+                });
+                next = Some(read?);
+                got.map_err(|_| stopped())??
+            } else {
+                job()?
+            };
+            ranges.merge(&got);
+            sample.extend(tiles);
         }
     }
     let (lo, hi) = ranges.finite();
@@ -206,7 +253,15 @@ pub(crate) fn encode_slabs<S: SlabSource + ?Sized, W: Write + Seek>(
                     )
                 }
             };
-            let step = search_step(&shape, n, std::mem::take(&mut sample), opts, range, peak)?;
+            let step = search_step(
+                &shape,
+                &grid,
+                n,
+                std::mem::take(&mut sample),
+                opts,
+                range,
+                peak,
+            )?;
             Coding::Step { step, rdo: true }
         }
     };
@@ -217,40 +272,46 @@ pub(crate) fn encode_slabs<S: SlabSource + ?Sized, W: Write + Seek>(
     let start = out.stream_position()?;
     out.write_all(&format::SIGNATURE)?;
     let mut head: Option<(u64, Header)> = None;
+    // the step ratios of each tile class when the tiles are compact (lossy files, 2.2)
+    let mut ratios: Option<Ratios> = None;
     let mut index_at = 0u64;
     let mut index = Vec::with_capacity(16 * n);
     let mut at = start + 8;
     let mut ranges_now = Ranges::new();
+    let mut next = Some(src.read_rows(rows_of(0))?);
     for g0 in 0..rows {
         let r = rows_of(g0);
-        let slab = src.read_rows(r.clone())?;
+        let slab = match next.take() {
+            Some(s) => s,
+            None => src.read_rows(r.clone())?,
+        };
         if !first_pass {
             ranges_now.add(&slab);
         }
         let mine: Vec<usize> = (g0 * per_row..(g0 + 1) * per_row).collect();
-        let coded: Vec<Vec<u8>> = mine
-            .par_iter()
-            .map(|&i| {
-                let t = slab_tile(&grid, &shape, &slab, r.start, i)?;
-                match coding {
-                    Coding::Own => encode_filled(&t.view(), opts),
-                    Coding::Step { step, rdo } => {
-                        let mut p = prepare(&t.view(), opts, Mode::Lossy)?;
-                        if rdo {
-                            p.optimise();
-                        }
-                        Ok(p.code(step))
-                    }
-                }
-            })
-            .collect::<Result<_>>()?;
+        let job = || code_slab(&grid, &shape, &slab, r.start, &mine, coding, opts);
+        let coded = if ahead && g0 + 1 < rows {
+            let (coded, read) = std::thread::scope(|s| {
+                let coding = s.spawn(job);
+                let read = src.read_rows(rows_of(g0 + 1));
+                (coding.join(), read)
+            });
+            next = Some(read?);
+            coded.map_err(|_| stopped())??
+        } else {
+            job()?
+        };
         drop(slab);
         if head.is_none() {
             // the tiles' common fields from the first tile's HEAD (after the signature)
             let first = &coded[0];
             let hl = u32::from_le_bytes(first[8..12].try_into().unwrap()) as usize;
             let mut h = Header::parse(&first[16..16 + hl])?;
-            h.minor = format::MINOR_TILED;
+            h.minor = if h.mode == Mode::Lossy {
+                format::MINOR_COMPACT
+            } else {
+                format::MINOR_TILED
+            };
             h.dims = shape.dims.clone();
             h.tile = grid.tile.clone();
             at += write_chunk(out, HEAD, &[&h.to_bytes()])?;
@@ -258,12 +319,22 @@ pub(crate) fn encode_slabs<S: SlabSource + ?Sized, W: Write + Seek>(
             if !m.is_empty() {
                 at += write_chunk(out, META, &[&m])?;
             }
+            if h.mode == Mode::Lossy {
+                let r = Ratios::of(&h, &grid)?;
+                at += write_chunk(out, TRAT, &[&r.to_bytes()])?;
+                ratios = Some(r);
+            }
             index_at = at;
             at += write_chunk(out, TIDX, &[&vec![0u8; 16 * n]])?;
             head = Some((start + 8, h));
         }
+        let h = &head.as_ref().expect("the head is written first").1;
         for (&i, c) in mine.iter().zip(&coded) {
-            let bytes = write_chunk(out, TILE, &[&(i as u32).to_le_bytes(), &c[8..]])?;
+            let body = match &ratios {
+                Some(r) => std::borrow::Cow::Owned(compact::tile_body(c, h, &grid, r, i)),
+                None => std::borrow::Cow::Borrowed(&c[8..]),
+            };
+            let bytes = write_chunk(out, TILE, &[&(i as u32).to_le_bytes(), &body])?;
             index.extend_from_slice(&at.to_le_bytes());
             index.extend_from_slice(&bytes.to_le_bytes());
             at += bytes;
@@ -285,12 +356,46 @@ pub(crate) fn encode_slabs<S: SlabSource + ?Sized, W: Write + Seek>(
     Ok(at - start)
 }
 
+/// The error of a slab's coding thread that ended without its result.
+fn stopped() -> Error {
+    Error::Io(std::io::Error::other("a tile slab's coder stopped"))
+}
+
+/// The coded one-tile files of tiles `mine` of the slab `slab` (rows from `row0`), in
+/// parallel.
+fn code_slab(
+    grid: &Grid,
+    shape: &Shape,
+    slab: &Samples,
+    row0: usize,
+    mine: &[usize],
+    coding: Coding,
+    opts: &EncodeOptions,
+) -> Result<Vec<Vec<u8>>> {
+    mine.par_iter()
+        .map(|&i| {
+            let t = slab_tile(grid, shape, slab, row0, i)?;
+            match coding {
+                Coding::Own => encode_filled(&t.view(), opts),
+                Coding::Step { step, rdo } => {
+                    let mut p = prepare(&t.view(), opts, Mode::Lossy)?;
+                    if rdo {
+                        p.optimise();
+                    }
+                    Ok(p.code(step))
+                }
+            }
+        })
+        .collect()
+}
+
 /// The base step of `--psnr` and `--bpp` for the whole raster (`n` tiles): a search on
 /// `x = ln step` over the sampled tiles, each candidate measured on all of them at
 /// once: the PSNR of their summed squared error (peak `peak`), or their bits over their
 /// positions (with their share of the bytes outside the tiles).
 fn search_step(
     shape: &Shape,
+    grid: &Grid,
     n: usize,
     sample: Vec<Raster>,
     opts: &EncodeOptions,
@@ -308,8 +413,10 @@ fn search_step(
             Ok((keep.then_some(t), p))
         })
         .collect::<Result<_>>()?;
-    // the bytes outside the tiles' own files (signature, HEAD, mETA, TIDX, TILE framing,
-    // MEND), the sample's share of them
+    // the bytes outside the tiles' compact bodies (signature, HEAD, mETA, TRAT, TIDX,
+    // TILE framing and index, MEND), the sample's share of them
+    let bands = prepared.first().map_or(0, |p| p.1.plan.bands.len());
+    let ratios = 4 * grid.classes().len() * bands * shape.channels;
     let outside = 8
         + 12
         + 52
@@ -323,8 +430,10 @@ fn search_step(
             }
         }
         + 12
+        + ratios
+        + 12
         + 16 * n
-        + (12 + 4 - 8) * n
+        + (12 + 4) * n
         + 12;
     let outside = outside as f64 * positions / shape.positions() as f64;
     match opts.rate {
@@ -333,7 +442,10 @@ fn search_step(
             let prepared: Vec<Prepared> = prepared.into_iter().map(|(_, p)| p).collect();
             // met (≥ 0) within the budget; within 1% under it below −ln 0.99
             search(range, true, -(0.99f64.ln()), |step| {
-                let bytes: usize = prepared.par_iter().map(|p| p.code(step).len()).sum();
+                let bytes: usize = prepared
+                    .par_iter()
+                    .map(|p| compact::compact_len(&p.code(step)))
+                    .sum();
                 Ok(b.ln() - ((bytes as f64 + outside) * 8.0 / positions).ln())
             })
         }
