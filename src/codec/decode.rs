@@ -150,7 +150,7 @@ fn decode_channel_into(p: &Parsed, c: usize, k: usize, plane: &mut [f32]) -> Res
                 let mut d = Decoder::new_short(&bc.data);
                 let mut at_row = 0;
                 entropy::band::decode_rows(&mut d, dims, parent, |_, r| {
-                    dequantize_row(r, step, delta, &mut rows[at_row]);
+                    dequantize_row(r, step, delta, rows[at_row]);
                     at_row += 1;
                 })
                 .map_err(failed)?;
