@@ -5,8 +5,8 @@
 use super::colour::map3;
 use super::container::{read_head, read_rest, Parsed};
 use super::options::{DecodeOptions, Decoded};
-use super::plan::lossy_values;
 use super::plan::Plan;
+use super::plan::{band_delta, band_rows, dequantize_row, lossy_values};
 use super::voids::mark_voids;
 use super::{layout, lossless};
 use crate::entropy::range::Decoder;
@@ -91,6 +91,88 @@ fn decode_channel(p: &Parsed, c: usize, k: usize) -> Result<Vec<Option<Vec<i64>>
     Ok(q)
 }
 
+/// Decode one channel's bands of a lossy file straight into its `plane` (laid out as the
+/// pyramid's shape, zeroed; absent bands stay 0), dequantized as they are decoded, level
+/// by level from the coarse block down, the bands of a level in parallel. Only the
+/// indices of the level that is the next one's context are held (a band with children,
+/// until they are decoded); a band without children is decoded a row at a time
+/// ([`entropy::band::decode_rows`]) straight into the plane.
+fn decode_channel_into(p: &Parsed, c: usize, k: usize, plane: &mut [f32]) -> Result<()> {
+    let (h, plan) = (&p.header, &p.plan);
+    let nb = plan.bands.len();
+    let has_children: Vec<bool> = (0..nb).map(|j| plan.parents.contains(&Some(j))).collect();
+    let mut q: Vec<Option<Vec<i64>>> = (0..nb).map(|_| None).collect();
+    for (level, js) in plan.level_groups() {
+        if k > 0 && level >= 1 && level <= k {
+            continue;
+        }
+        let rows = band_rows(plan, &js, plane);
+        let decoded: Vec<Result<Option<Vec<i64>>>> = js
+            .par_iter()
+            .zip(rows)
+            .map(|(&j, mut rows)| {
+                let Some(bc) = &p.bands[c][j] else {
+                    return Ok(None);
+                };
+                let parent = match plan.parents[j] {
+                    Some(pj) => match &q[pj] {
+                        Some(v) => Some(Parent {
+                            data: v,
+                            dims: &plan.dims[pj],
+                        }),
+                        None => {
+                            return Err(Error::format(
+                                format!("band {j} of channel {c} without its parent"),
+                                "complete parents",
+                            ))
+                        }
+                    },
+                    None => None,
+                };
+                let (step, delta) = (bc.step, band_delta(h, plan, j));
+                let dims = &plan.dims[j];
+                let failed = |e: Error| {
+                    Error::format(format!("band {j} of channel {c}: {e}"), "a valid band")
+                };
+                if h.major < 2 || level == 0 || has_children[j] {
+                    let kind = if level == 0 {
+                        BandKind::Coarse
+                    } else {
+                        BandKind::Detail
+                    };
+                    let v = decode_band(h.major, &bc.data, dims, kind, parent).map_err(failed)?;
+                    let cols = dims.last().copied().unwrap_or(1).max(1);
+                    for (r, out) in v.chunks(cols).zip(rows.iter_mut()) {
+                        dequantize_row(r, step, delta, out);
+                    }
+                    return Ok(has_children[j].then_some(v));
+                }
+                let mut d = Decoder::new_short(&bc.data);
+                let mut at_row = 0;
+                entropy::band::decode_rows(&mut d, dims, parent, |_, r| {
+                    dequantize_row(r, step, delta, rows[at_row]);
+                    at_row += 1;
+                })
+                .map_err(failed)?;
+                Ok(None)
+            })
+            .collect();
+        // the first failing band in file order, as one at a time would report it
+        for (&j, v) in js.iter().zip(decoded) {
+            q[j] = v?;
+        }
+        if level > 0 {
+            // the bands of the level above have no other children
+            for (v, b) in q.iter_mut().zip(&plan.bands) {
+                if b.level == level + 1 {
+                    *v = None;
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
 pub(super) fn reconstruct(p: &Parsed, k: usize) -> Result<Raster> {
     let h = &p.header;
     let plan = &p.plan;
@@ -151,16 +233,7 @@ pub(super) fn reconstruct(p: &Parsed, k: usize) -> Result<Raster> {
         };
         return finish(p, region, samples, k);
     }
-    let mut samples = lossy_values(h, plan, k, |ch| {
-        let q = decode_channel(p, ch, k)?;
-        Ok(q.into_iter()
-            .enumerate()
-            .map(|(j, b)| match (b, &p.bands[ch][j]) {
-                (Some(b), Some(bc)) => Some((b.into(), bc.step)),
-                _ => None,
-            })
-            .collect())
-    })?;
+    let mut samples = lossy_values(h, plan, k, |ch, plane| decode_channel_into(p, ch, k, plane))?;
     if k == 0 && h.mode == Mode::MaxError {
         let mut values = samples.to_f64();
         for (ch, r) in p.resi.iter().enumerate() {

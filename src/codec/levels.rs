@@ -7,6 +7,7 @@
 //! its parent band, one level coarser), the bands of a level in parallel; every band has
 //! its own stream, so decoding is as parallel.
 
+use super::layout;
 use super::plan::Plan;
 use crate::entropy::range::Encoder;
 use crate::entropy::{band, BandKind, Parent};
@@ -50,11 +51,11 @@ impl Plan {
     /// Code every band of `channels` channels; `input(c, j)` gives band `j` of channel
     /// `c` ([`BandInput`]). With [`Choice::Rdo`] the scaled coefficients of detail bands
     /// get rate–distortion optimised indices; other scaled bands are rounded.
-    pub(super) fn code_levels(
+    pub(super) fn code_levels<'a>(
         &self,
         channels: usize,
         choice: Choice,
-        input: impl Fn(usize, usize) -> BandInput + Sync,
+        input: impl Fn(usize, usize) -> BandInput<'a> + Sync,
     ) -> Vec<Vec<CodedBand>> {
         self.code_levels_with(channels, choice, true, input)
     }
@@ -62,12 +63,12 @@ impl Plan {
     /// [`Plan::code_levels`], keeping each band's indices only while its children are
     /// coded when `keep_indices` is false (the returned [`CodedBand::q`] are then empty):
     /// the indices of a whole image (8 bytes a sample) are never held at once.
-    pub(super) fn code_levels_with(
+    pub(super) fn code_levels_with<'a>(
         &self,
         channels: usize,
         choice: Choice,
         keep_indices: bool,
-        input: impl Fn(usize, usize) -> BandInput + Sync,
+        input: impl Fn(usize, usize) -> BandInput<'a> + Sync,
     ) -> Vec<Vec<CodedBand>> {
         let groups = self.level_groups();
         (0..channels)
@@ -84,39 +85,55 @@ impl Plan {
                             });
                             let mut e = Encoder::new();
                             let dims = &self.dims[j];
+                            // a band without children (the finest level) is nobody's
+                            // context: unless asked for, its indices are not kept
+                            let childless = !self.parents.contains(&Some(j));
+                            let keep = keep_indices || !childless;
+                            let kind = if *level == 0 {
+                                BandKind::Coarse
+                            } else {
+                                BandKind::Detail
+                            };
                             let q = match (input(c, j), choice) {
                                 (BandInput::Indices(q), _) => {
-                                    let kind = if *level == 0 {
-                                        BandKind::Coarse
-                                    } else {
-                                        BandKind::Detail
-                                    };
                                     band::encode(&mut e, &q, dims, kind, parent);
                                     q
                                 }
-                                (BandInput::Scaled(x), Choice::Rdo(lambda)) if *level > 0 => {
-                                    band::encode_rdo(&mut e, &x, dims, parent, lambda)
+                                (BandInput::Coefficients { plane, step }, Choice::Rdo(lambda))
+                                    if *level > 0 =>
+                                {
+                                    let offs = self.row_offsets(j);
+                                    let cols = dims.last().copied().unwrap_or(1);
+                                    band::encode_rdo_with(
+                                        &mut e,
+                                        dims,
+                                        parent,
+                                        lambda,
+                                        keep,
+                                        |g, out| {
+                                            let row = &plane[offs[g]..offs[g] + cols];
+                                            for (o, &x) in out.iter_mut().zip(row) {
+                                                *o = (x as f64 / step) as f32;
+                                            }
+                                        },
+                                    )
+                                    .unwrap_or_default()
                                 }
-                                (BandInput::Scaled(x), _) => {
-                                    let q: Vec<i64> = x.iter().map(|&v| round_index(v)).collect();
-                                    let kind = if *level == 0 {
-                                        BandKind::Coarse
-                                    } else {
-                                        BandKind::Detail
-                                    };
+                                (BandInput::Coefficients { plane, step }, _) => {
+                                    let q: Vec<i64> = layout::gather(
+                                        plane,
+                                        &self.pyr.shape,
+                                        &self.bands[j].ranges,
+                                    )
+                                    .into_iter()
+                                    .map(|x| round_index((x as f64 / step) as f32))
+                                    .collect();
                                     band::encode(&mut e, &q, dims, kind, parent);
                                     q
                                 }
                             };
-                            // a band without children (the finest level) is nobody's
-                            // context: its indices go as soon as it is coded
-                            let childless = !self.parents.contains(&Some(j));
                             CodedBand {
-                                q: if !keep_indices && childless {
-                                    Vec::new()
-                                } else {
-                                    q
-                                },
+                                q: if keep { q } else { Vec::new() },
                                 stream: e.finish_short(),
                             }
                         })
@@ -140,6 +157,15 @@ impl Plan {
                     .collect()
             })
             .collect()
+    }
+
+    /// The offset in the pyramid's plane of every row of band `j` (raster order).
+    pub(super) fn row_offsets(&self, j: usize) -> Vec<usize> {
+        let mut offs = Vec::new();
+        layout::rows(&self.pyr.shape, &self.bands[j].ranges, |off, _, _| {
+            offs.push(off)
+        });
+        offs
     }
 
     /// Append the `LEVL` chunks of `coded` (`[channel][band]`) to `out`; `ratio(c, j)` =
@@ -166,11 +192,13 @@ impl Plan {
 }
 
 /// A band handed to [`Plan::code_levels`].
-pub(super) enum BandInput {
+pub(super) enum BandInput<'a> {
     /// Its indices.
     Indices(Vec<i64>),
-    /// Its coefficients divided by its step.
-    Scaled(Vec<f32>),
+    /// Its coefficients, where they sit in `plane` (laid out as the pyramid's shape),
+    /// to be divided by `step` (as `f64`, then taken to `f32`) as they are coded: no
+    /// copy of the band.
+    Coefficients { plane: &'a [f32], step: f64 },
 }
 
 /// `round(v)` half away from zero, 0 for values that are not finite, capped at 9·10^15.

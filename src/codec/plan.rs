@@ -2,16 +2,15 @@
 //! entropy coding) and extents, all derived from the header; and the way from
 //! quantized bands back to samples, shared by the decoder and the encoder's searches.
 
-use super::colour::{map3, ycocg_inverse};
+use super::colour::ycocg_inverse;
 use super::{layout, lossless};
 use crate::format::header::Colour;
 use crate::format::{Header, Mode};
-use crate::io::Samples;
+use crate::io::{SampleType, Samples};
 use crate::quantize::{self, RHO};
 use crate::tensor::{self, Array, Order, Pyramid, PyramidSpec, Subband};
 use crate::Result;
 use rayon::prelude::*;
-use std::borrow::Cow;
 
 /// Pyramid, bands, their parents and extents for a header.
 pub(super) struct Plan {
@@ -100,7 +99,7 @@ pub(super) fn band_rho(plan: &Plan, j: usize) -> f64 {
 }
 
 /// Dequantization offset of band `j` (none for the coarse block).
-fn band_delta(h: &Header, plan: &Plan, j: usize) -> f64 {
+pub(super) fn band_delta(h: &Header, plan: &Plan, j: usize) -> f64 {
     if plan.bands[j].level == 0 {
         0.0
     } else {
@@ -110,45 +109,80 @@ fn band_delta(h: &Header, plan: &Plan, j: usize) -> f64 {
 
 /// Band `j`'s values from its indices `q` and its step, written where the band sits in
 /// `plane` (laid out as the pyramid's shape).
-fn dequantize_into(h: &Header, plan: &Plan, j: usize, q: &[i64], step: f64, plane: &mut [f32]) {
+pub(super) fn dequantize_into(
+    h: &Header,
+    plan: &Plan,
+    j: usize,
+    q: &[i64],
+    step: f64,
+    plane: &mut [f32],
+) {
     let d = band_delta(h, plan, j);
     layout::rows(&plan.pyr.shape, &plan.bands[j].ranges, |off, run, at| {
-        for (o, &x) in plane[off..off + run].iter_mut().zip(&q[at..at + run]) {
-            *o = quantize::dequantize(x, step, d) as f32;
-        }
+        dequantize_row(&q[at..at + run], step, d, &mut plane[off..off + run]);
     });
 }
 
-/// One band handed to [`lossy_values`]: its indices and its step.
-pub(super) type BandIndices<'a> = Option<(Cow<'a, [i64]>, f64)>;
+/// `out[i] = sign(q)·(|q| + δ)·Δ` ([`quantize::dequantize`]) as `f32`.
+#[inline]
+pub(super) fn dequantize_row(q: &[i64], step: f64, delta: f64, out: &mut [f32]) {
+    for (o, &x) in out.iter_mut().zip(q) {
+        *o = quantize::dequantize(x, step, delta) as f32;
+    }
+}
+
+/// The rows of bands `js` in `plane` (laid out as the pyramid's shape), split into
+/// disjoint slices: for each band, its rows in raster order (the band's row `r` is
+/// `out[i][r]`, as long as the band's last extent). The bands of one level can so be
+/// written in parallel.
+pub(super) fn band_rows<'p>(
+    plan: &Plan,
+    js: &[usize],
+    plane: &'p mut [f32],
+) -> Vec<Vec<&'p mut [f32]>> {
+    // (offset, length, band) of every row, in plane order
+    let mut runs: Vec<(usize, usize, usize)> = Vec::new();
+    for (i, &j) in js.iter().enumerate() {
+        layout::rows(&plan.pyr.shape, &plan.bands[j].ranges, |off, run, _| {
+            runs.push((off, run, i))
+        });
+    }
+    runs.sort_unstable();
+    let mut out: Vec<Vec<&'p mut [f32]>> = js.iter().map(|_| Vec::new()).collect();
+    let mut rest = plane;
+    let mut at = 0;
+    for (off, run, i) in runs {
+        let (_, tail) = std::mem::take(&mut rest).split_at_mut(off - at);
+        let (row, tail) = tail.split_at_mut(run);
+        out[i].push(row);
+        rest = tail;
+        at = off + run;
+    }
+    out
+}
 
 /// A lossy file's samples (interleaved, clamped to the source's range, before the
 /// `--max-error` residuals) of the coarse block after `k` levels (k = 0: full size):
-/// per channel, its bands' indices and steps (`bands(channel)[band]`, None = absent)
-/// dequantized in place into the channel's plane (no copy of each band), synthesized
-/// and taken back from YCoCg, converted straight into the header's sample type
-/// ([`Samples::from_iter_f64`]: no whole-image `f64` copy). The decoder's way, and the
-/// encoder's `--psnr` search's.
-pub(super) fn lossy_values<'a>(
+/// `fill(channel, plane)` writes the channel's dequantized bands into its zeroed plane
+/// (laid out as the pyramid's shape, see [`dequantize_into`]), which is synthesized and
+/// taken back from YCoCg and converted straight into the header's sample type
+/// ([`to_samples`]: no whole-image `f64` copy). The decoder's way, and the encoder's
+/// `--psnr` search's.
+pub(super) fn lossy_values(
     h: &Header,
     plan: &Plan,
     k: usize,
-    bands: impl Fn(usize) -> Result<Vec<BandIndices<'a>>> + Sync,
+    fill: impl Fn(usize, &mut [f32]) -> Result<()> + Sync,
 ) -> Result<Samples> {
     let region = plan.region(k);
     let npos: usize = region.iter().product();
     let c = h.channels;
     let sub = plan.sub(k);
-    let mut planes = (0..c)
+    let planes = (0..c)
         .into_par_iter()
         .map(|ch| {
-            let q = bands(ch)?;
             let mut plane = vec![0f32; plan.pyr.shape.iter().product()];
-            for (j, v) in q.into_iter().enumerate() {
-                if let Some((v, step)) = v {
-                    dequantize_into(h, plan, j, &v, step, &mut plane);
-                }
-            }
+            fill(ch, &mut plane)?;
             let full: Vec<std::ops::Range<usize>> = region.iter().map(|&e| 0..e).collect();
             let small = if k == 0 {
                 plane
@@ -156,19 +190,170 @@ pub(super) fn lossy_values<'a>(
                 layout::gather(&plane, &plan.pyr.shape, &full)
             };
             let mut a = Array::from_shape_vec(&region, small)?;
-            tensor::synthesize(&mut a, &sub)?;
+            // a volume synthesized in place (the default engine's levels of 3 or more
+            // axes run out of place, through a scratch array as large as the plane,
+            // which would double the decoder's memory; in place costs little time)
+            let engine = if region.len() >= 3 {
+                tensor::Engine::AxisByAxis
+            } else {
+                tensor::Engine::tuned()
+            };
+            tensor::synthesize_with(&mut a, &sub, engine)?;
             Ok(a.into_data())
         })
         .collect::<Result<Vec<_>>>()?;
-    if h.colour == Colour::YCoCg {
-        map3(&mut planes, ycocg_inverse);
+    Ok(to_samples(
+        planes,
+        npos,
+        h.colour == Colour::YCoCg,
+        (h.min, h.max),
+        h.sample_type,
+    ))
+}
+
+/// Interleaved samples of type `ty` from `planes` (`npos` values each): the first three
+/// taken back from YCoCg when `ycocg` ([`ycocg_inverse`], in `f32`), every value then
+/// clamped to `lo..=hi` in `f64` and converted as [`Samples::from_iter_f64`] does
+/// (integers rounded half away from zero and clamped to the type, NaN → 0), in parallel
+/// over blocks of positions.
+///
+/// The planes are consumed from their ends: the last [`TAIL`] positions converted, the
+/// planes shortened and their tails given back (`shrink_to_fit`: the allocator returns
+/// the pages of a large block at once), and so on to the first, so that the samples
+/// and the planes are not both held whole (a volume's `f32` plane is twice its `u16`
+/// samples). The output's pages, zeroed lazily, are touched as the planes shrink.
+pub(super) fn to_samples(
+    mut planes: Vec<Vec<f32>>,
+    npos: usize,
+    ycocg: bool,
+    (lo, hi): (f64, f64),
+    ty: SampleType,
+) -> Samples {
+    let c = planes.len();
+    let mut out = Samples::zeros(ty, npos * c);
+    let (tlo, thi) = ty.range();
+    let mut end = npos;
+    while end > 0 {
+        let start = end.saturating_sub(TAIL);
+        let part: Vec<&[f32]> = planes.iter().map(|p| &p[start..end]).collect();
+        let (a, b) = (start * c, end * c);
+        macro_rules! fill {
+            ($v:expr, $conv:expr) => {{
+                let conv = $conv;
+                interleave(&mut $v[a..b], &part, ycocg, |x: f32| {
+                    conv((x as f64).clamp(lo, hi))
+                })
+            }};
+        }
+        macro_rules! int {
+            ($v:expr, $t:ty) => {
+                fill!($v, |x: f64| round_to(x, tlo as i64, thi as i64) as $t)
+            };
+        }
+        // 8- and 16-bit samples whose range is whole numbers exact in f32 (every
+        // valid file's): the same clamp and rounding in f32, the same results
+        // (the clamp's ends are the same numbers, and rounding an f32 value is exact)
+        let in_f32 = [lo, hi]
+            .iter()
+            .all(|&e| e.fract() == 0.0 && e.abs() <= F32_EXACT);
+        let (flo, fhi) = (lo as f32, hi as f32);
+        macro_rules! small {
+            ($v:expr, $t:ty) => {
+                if in_f32 {
+                    let (tl, th) = (tlo as i32, thi as i32);
+                    interleave(&mut $v[a..b], &part, ycocg, |x: f32| {
+                        round_to_f32(x.clamp(flo, fhi), tl, th) as $t
+                    })
+                } else {
+                    int!($v, $t)
+                }
+            };
+        }
+        match &mut out {
+            Samples::U8(v) => small!(v, u8),
+            Samples::I8(v) => small!(v, i8),
+            Samples::U16(v) => small!(v, u16),
+            Samples::I16(v) => small!(v, i16),
+            Samples::U32(v) => int!(v, u32),
+            Samples::I32(v) => int!(v, i32),
+            Samples::F16(v) => fill!(v, half::f16::from_f64),
+            Samples::F32(v) => fill!(v, |x: f64| x as f32),
+            Samples::F64(v) => fill!(v, |x: f64| x),
+        }
+        for p in &mut planes {
+            p.truncate(start);
+            p.shrink_to_fit();
+        }
+        end = start;
     }
-    let (lo, hi) = (h.min, h.max);
-    if c == 1 {
-        // one plane: its values in order (no division per sample)
-        let it = planes[0].iter().map(|&x| (x as f64).clamp(lo, hi));
-        return Ok(Samples::from_iter_f64(it, npos, h.sample_type));
+    out
+}
+
+/// Positions [`to_samples`] converts before it shortens the planes (4 MB of one `f32`
+/// plane).
+const TAIL: usize = 1 << 20;
+
+/// `round(x)` half away from zero, clamped to `lo..=hi`, NaN → 0: what
+/// [`Samples::from_iter_f64`] makes of `x` for an integer type of range `lo..=hi` (a
+/// range within ±2^53), without a call to `f64::round`: the integer part by truncation,
+/// then one up or down when the fraction (exact: `x` and its integer part are within 1
+/// of each other) is half or more.
+#[inline(always)]
+fn round_to(x: f64, lo: i64, hi: i64) -> i64 {
+    const BIG: f64 = (1u64 << 53) as f64;
+    let x = x.clamp(-BIG, BIG); // NaN stays NaN
+    let i = x as i64; // NaN → 0
+    let f = x - i as f64;
+    (i + (f >= 0.5) as i64 - (f <= -0.5) as i64).clamp(lo, hi)
+}
+
+/// Whole numbers up to this magnitude are exact in `f32`.
+const F32_EXACT: f64 = (1u32 << 24) as f64;
+
+/// [`round_to`] of an `f32` value within ±2^24 (or NaN → 0) into `lo..=hi`.
+#[inline(always)]
+fn round_to_f32(x: f32, lo: i32, hi: i32) -> i32 {
+    let i = x as i32; // NaN → 0
+    let f = x - i as f32;
+    (i + (f >= 0.5) as i32 - (f <= -0.5) as i32).clamp(lo, hi)
+}
+
+/// `out[i·c + ch] = conv(planes[ch][i])`, the first three planes through
+/// [`ycocg_inverse`] first when `ycocg`; blocks of positions in parallel.
+fn interleave<T: Send + Copy>(
+    out: &mut [T],
+    planes: &[&[f32]],
+    ycocg: bool,
+    conv: impl Fn(f32) -> T + Sync,
+) {
+    const BLOCK: usize = 1 << 14;
+    let c = planes.len();
+    if c == 0 {
+        return;
     }
-    let it = (0..npos * c).map(|i| (planes[i % c][i / c] as f64).clamp(lo, hi));
-    Ok(Samples::from_iter_f64(it, npos * c, h.sample_type))
+    out.par_chunks_mut(BLOCK * c)
+        .enumerate()
+        .for_each(|(b, chunk)| {
+            let i0 = b * BLOCK;
+            let n = chunk.len() / c;
+            if c == 1 {
+                for (o, &x) in chunk.iter_mut().zip(&planes[0][i0..i0 + n]) {
+                    *o = conv(x);
+                }
+                return;
+            }
+            let first = if ycocg && c >= 3 { 3 } else { 0 };
+            for (i, px) in chunk.chunks_exact_mut(c).enumerate() {
+                let at = i0 + i;
+                if first == 3 {
+                    let (r, g, b) = ycocg_inverse(planes[0][at], planes[1][at], planes[2][at]);
+                    px[0] = conv(r);
+                    px[1] = conv(g);
+                    px[2] = conv(b);
+                }
+                for (o, p) in px[first..].iter_mut().zip(&planes[first..]) {
+                    *o = conv(p[at]);
+                }
+            }
+        });
 }

@@ -95,16 +95,28 @@ fn zcls(t: u64) -> usize {
 /// Class of the magnitude context `u`: 0–1, 2–3, 4–6, 7–10, 11–18, 19–34, 35–66, 67–130, more.
 #[inline(always)]
 fn mcls(u: u64) -> usize {
-    match u {
-        0..=1 => 0,
-        2..=3 => 1,
-        4..=6 => 2,
-        7..=10 => 3,
-        11..=18 => 4,
-        19..=34 => 5,
-        35..=66 => 6,
-        67..=130 => 7,
-        _ => 8,
+    const T: [u8; 131] = {
+        let mut t = [0u8; 131];
+        let mut s = 0;
+        while s <= 130 {
+            t[s] = match s {
+                0..=1 => 0,
+                2..=3 => 1,
+                4..=6 => 2,
+                7..=10 => 3,
+                11..=18 => 4,
+                19..=34 => 5,
+                35..=66 => 6,
+                _ => 7,
+            };
+            s += 1;
+        }
+        t
+    };
+    if u <= 130 {
+        T[u as usize] as usize
+    } else {
+        8
     }
 }
 
@@ -173,19 +185,37 @@ impl<'a> Ctx<'a> {
         }
     }
 
-    /// The contexts of row `y` of plane `p` (it starts at `v[at]`; everything before is
-    /// known) that do not depend on the row itself.
-    fn prepare(&self, r: &mut Row, v: &[i64], at: usize, p: usize, y: usize, pbase: usize) {
+    /// The rows a row's contexts read: the two rows above it (`y > 0`, `y > 1`) and the
+    /// same row of the previous plane (volumes, within one extent of the third-last
+    /// axis), from a band `v` whose row `y` of plane `p` starts at `v[at]`.
+    fn neighbours<'v>(&self, v: &'v [i64], at: usize, p: usize, y: usize) -> Neighbours<'v> {
         let cols = self.walk.cols;
         let plane = self.walk.rows * cols;
+        Neighbours {
+            n: (y > 0).then(|| &v[at - cols..at]),
+            nn: (y > 1).then(|| &v[at - 2 * cols..at - cols]),
+            z: self.has_z(p).then(|| &v[at - plane..at - plane + cols]),
+        }
+    }
+
+    /// Whether plane `p` has a Z neighbour (a previous plane along the third-last axis).
+    #[inline]
+    fn has_z(&self, p: usize) -> bool {
+        self.walk.zdim > 0 && !p.is_multiple_of(self.walk.zdim)
+    }
+
+    /// The contexts of row `y` (parent plane at `pbase`) that do not depend on the row
+    /// itself, from its [`Neighbours`].
+    fn prepare(&self, r: &mut Row, nb: Neighbours, y: usize, pbase: usize) {
+        let cols = self.walk.cols;
         let n1 = &mut r.n1[..cols + 4];
         n1[..2].fill(0);
         n1[cols + 2..].fill(0);
-        if y > 0 {
+        if let Some(above) = nb.n {
             for ((m, s), &val) in n1[2..cols + 2]
                 .iter_mut()
                 .zip(r.ns[..cols].iter_mut())
-                .zip(&v[at - cols..at])
+                .zip(above)
             {
                 *m = mag(val);
                 *s = sgn(val) as u8;
@@ -198,13 +228,13 @@ impl<'a> Ctx<'a> {
         for (b, w) in base.iter_mut().zip(n1.windows(5)) {
             *b = 2 * w[2] + w[1] + w[3];
         }
-        if y > 1 {
-            for (b, &val) in base.iter_mut().zip(&v[at - 2 * cols..at - cols]) {
+        if let Some(nn) = nb.nn {
+            for (b, &val) in base.iter_mut().zip(nn) {
                 *b += mag(val);
             }
         }
-        if self.walk.zdim > 0 && !p.is_multiple_of(self.walk.zdim) {
-            for (b, &zv) in base.iter_mut().zip(&v[at - plane..at - plane + cols]) {
+        if let Some(z) = nb.z {
+            for (b, &zv) in base.iter_mut().zip(z) {
                 *b += 2 * mag(zv);
             }
         }
@@ -224,12 +254,28 @@ impl<'a> Ctx<'a> {
     }
 }
 
+/// The already coded rows a row's contexts read (None where there is none).
+#[derive(Clone, Copy)]
+struct Neighbours<'v> {
+    n: Option<&'v [i64]>,
+    nn: Option<&'v [i64]>,
+    z: Option<&'v [i64]>,
+}
+
+/// Code index `q` in context `ctx`: the zero flag inline (most indices are 0), the rest
+/// in [`encode_nonzero`].
+#[inline(always)]
 fn encode_value(e: &mut Encoder, m: &mut Models, q: i64, ctx: (usize, usize, usize)) {
     let (cz, cm, cs) = ctx;
     e.bit(&mut m.zero[cz], q != 0);
-    if q == 0 {
-        return;
+    if q != 0 {
+        encode_nonzero(e, m, q, cm, cs);
     }
+}
+
+/// The sign and magnitude of an index that is not 0.
+#[inline(never)]
+fn encode_nonzero(e: &mut Encoder, m: &mut Models, q: i64, cm: usize, cs: usize) {
     e.bit(&mut m.sign[cs], q < 0);
     let a = q.unsigned_abs();
     e.bit(&mut m.gt1[cm], a > 1);
@@ -244,11 +290,20 @@ fn encode_value(e: &mut Encoder, m: &mut Models, q: i64, ctx: (usize, usize, usi
     golomb::encode(e, pre, &mut m.top, a - 3 + 1);
 }
 
+/// Decode one index in context `ctx`: the zero flag inline (most indices are 0), the
+/// rest in [`decode_nonzero`].
+#[inline(always)]
 fn decode_value(d: &mut Decoder, m: &mut Models, ctx: (usize, usize, usize)) -> Result<i64> {
     let (cz, cm, cs) = ctx;
     if !d.bit(&mut m.zero[cz]) {
         return Ok(0);
     }
+    decode_nonzero(d, m, cm, cs)
+}
+
+/// The sign and magnitude of an index known not to be 0.
+#[inline(never)]
+fn decode_nonzero(d: &mut Decoder, m: &mut Models, cm: usize, cs: usize) -> Result<i64> {
     let neg = d.bit(&mut m.sign[cs]);
     let a: u64 = if !d.bit(&mut m.gt1[cm]) {
         1
@@ -283,7 +338,7 @@ pub fn encode(e: &mut Encoder, q: &[i64], dims: &[usize], kind: BandKind, parent
         let pbase = ctx.parent_base(p, dims);
         for y in 0..w.rows {
             let at = (p * w.rows + y) * w.cols;
-            ctx.prepare(&mut row, v, at, p, y, pbase);
+            ctx.prepare(&mut row, ctx.neighbours(v, at, p, y), y, pbase);
             let (mut w1, mut w2) = (0, 0);
             for (x, &q) in v[at..at + w.cols].iter().enumerate() {
                 encode_value(e, &mut m, q, row.context(x, w1, w2));
@@ -303,30 +358,51 @@ pub fn encode_rdo(
     parent: Option<Parent>,
     lambda: f32,
 ) -> Vec<i64> {
+    let cols = Walk::new(dims).cols;
+    encode_rdo_with(e, dims, parent, lambda, true, |g, out| {
+        out.copy_from_slice(&x[g * cols..(g + 1) * cols])
+    })
+    .unwrap_or_default()
+}
+
+/// [`encode_rdo`] with the band's values handed over a row at a time: `row(g, out)`
+/// fills `out` with row `g` (raster order) of the coefficients divided by the step.
+/// Returns the indices when `keep`; otherwise only the rows the contexts read are held
+/// ([`Window`]), not the whole band.
+pub fn encode_rdo_with(
+    e: &mut Encoder,
+    dims: &[usize],
+    parent: Option<Parent>,
+    lambda: f32,
+    keep: bool,
+    mut row: impl FnMut(usize, &mut [f32]),
+) -> Option<Vec<i64>> {
     let ctx = Ctx::new(dims, parent);
     let mut m = Models::new();
     let w = ctx.walk;
-    let mut row = Row::new(w.cols);
-    let mut q = vec![0i64; x.len()];
+    let mut r = Row::new(w.cols);
+    let mut q = Window::new(w, keep);
+    let mut x = vec![0f32; w.cols];
     for p in 0..w.planes {
         let pbase = ctx.parent_base(p, dims);
         for y in 0..w.rows {
-            let at = (p * w.rows + y) * w.cols;
-            ctx.prepare(&mut row, &q, at, p, y, pbase);
+            let g = p * w.rows + y;
+            row(g, &mut x);
+            ctx.prepare(&mut r, q.neighbours(&ctx, p, y, g), y, pbase);
+            let out = q.row_mut(g);
             let (mut w1, mut w2) = (0, 0);
-            for xi in 0..w.cols {
-                let v = x[at + xi];
-                let c = row.context(xi, w1, w2);
+            for (xi, (o, &v)) in out.iter_mut().zip(&x).enumerate() {
+                let c = r.context(xi, w1, w2);
                 let a = choose(&m, v, c, lambda);
                 let qv = if v < 0.0 { -a } else { a };
                 encode_value(e, &mut m, qv, c);
-                q[at + xi] = qv;
+                *o = qv;
                 w2 = w1;
                 w1 = qv;
             }
         }
     }
-    q
+    keep.then_some(q.data)
 }
 
 /// The index magnitude among `round(|v|)`, `round(|v|) − 1` and 0 with the least
@@ -383,6 +459,57 @@ fn value_cost(m: &Models, a: u64, ctx: (usize, usize, usize), neg: bool) -> f32 
     c
 }
 
+/// The rows of a band being coded or decoded: all of them (`keep`), or a ring of the
+/// last rows the contexts read (the row being coded, the two above it and, in a volume,
+/// the same row of the previous plane, `rows` rows back): three rows of a 2-D band, a
+/// plane and a row of a volume's.
+struct Window {
+    cols: usize,
+    slots: usize,
+    data: Vec<i64>,
+}
+
+impl Window {
+    fn new(w: Walk, keep: bool) -> Self {
+        let total = w.planes * w.rows;
+        let slots = if keep {
+            total
+        } else if w.zdim > 0 && w.planes > 1 {
+            w.rows.max(2) + 1
+        } else {
+            3
+        }
+        .min(total);
+        Window {
+            cols: w.cols,
+            slots,
+            data: vec![0; slots * w.cols],
+        }
+    }
+
+    /// Row `g` (raster order over the planes' rows).
+    #[inline]
+    fn row(&self, g: usize) -> &[i64] {
+        let at = (g % self.slots) * self.cols;
+        &self.data[at..at + self.cols]
+    }
+
+    #[inline]
+    fn row_mut(&mut self, g: usize) -> &mut [i64] {
+        let at = (g % self.slots) * self.cols;
+        &mut self.data[at..at + self.cols]
+    }
+
+    /// The neighbours of row `g`, row `y` of plane `p`.
+    fn neighbours(&self, ctx: &Ctx, p: usize, y: usize, g: usize) -> Neighbours<'_> {
+        Neighbours {
+            n: (y > 0).then(|| self.row(g - 1)),
+            nn: (y > 1).then(|| self.row(g - 2)),
+            z: ctx.has_z(p).then(|| self.row(g - ctx.walk.rows)),
+        }
+    }
+}
+
 /// Decode one band written by [`encode`] or [`encode_rdo`] from `d` (a stream may end
 /// early: its trailing zero bytes are left out, so reading past the end is no damage).
 /// Fails on an exponent over 62.
@@ -393,30 +520,50 @@ pub fn decode(
     parent: Option<Parent>,
 ) -> Result<Vec<i64>> {
     let coarse = kind == BandKind::Coarse;
-    let ctx = Ctx::new(dims, if coarse { None } else { parent });
     let n: usize = dims.iter().product();
     let mut v = vec![0i64; n];
+    decode_rows(d, dims, if coarse { None } else { parent }, |at, row| {
+        v[at..at + row.len()].copy_from_slice(row)
+    })?;
+    if coarse {
+        undo_median(&mut v, Walk::new(dims));
+    }
+    Ok(v)
+}
+
+/// Decode one detail band written by [`encode`] or [`encode_rdo`] a row at a time:
+/// `row(at, values)` receives every row in raster order (`at` = the offset of its first
+/// sample in the band), and only the rows its successors' contexts read are kept (three
+/// rows of a 2-D band, a plane and a row of a volume's), not the whole band. Fails on an
+/// exponent over 62.
+pub fn decode_rows(
+    d: &mut Decoder,
+    dims: &[usize],
+    parent: Option<Parent>,
+    mut row: impl FnMut(usize, &[i64]),
+) -> Result<()> {
+    let ctx = Ctx::new(dims, parent);
     let mut m = Models::new();
     let w = ctx.walk;
-    let mut row = Row::new(w.cols);
+    let mut q = Window::new(w, false);
+    let mut r = Row::new(w.cols);
     for p in 0..w.planes {
         let pbase = ctx.parent_base(p, dims);
         for y in 0..w.rows {
-            let at = (p * w.rows + y) * w.cols;
-            ctx.prepare(&mut row, &v, at, p, y, pbase);
+            let g = p * w.rows + y;
+            ctx.prepare(&mut r, q.neighbours(&ctx, p, y, g), y, pbase);
+            let out = q.row_mut(g);
             let (mut w1, mut w2) = (0, 0);
-            for (x, out) in v[at..at + w.cols].iter_mut().enumerate() {
-                let q = decode_value(d, &mut m, row.context(x, w1, w2))?;
-                *out = q;
+            for (x, o) in out.iter_mut().enumerate() {
+                let v = decode_value(d, &mut m, r.context(x, w1, w2))?;
+                *o = v;
                 w2 = w1;
-                w1 = q;
+                w1 = v;
             }
+            row(g * w.cols, out);
         }
     }
-    if coarse {
-        undo_median(&mut v, w);
-    }
-    Ok(v)
+    Ok(())
 }
 
 #[cfg(test)]
@@ -519,6 +666,79 @@ mod tests {
         for (q, b) in [(&q0, &b0), (&q1, &b1)] {
             let mut d = Decoder::new(b);
             assert_eq!(&decode(&mut d, &dims, BandKind::Detail, None).unwrap(), q);
+        }
+    }
+
+    /// Coding a band with only the rows its contexts read ([`Window`]: three rows, or a
+    /// plane and a row of a volume) writes the same stream as with the whole band kept
+    /// and as the chosen indices coded whole, and [`decode_rows`] hands back the same
+    /// rows as [`decode`]: 1-D to 4-D bands with a parent, planes along one and two
+    /// outer axes.
+    #[test]
+    fn row_windows_code_and_decode_as_whole_bands() {
+        let shapes = [
+            vec![9usize],
+            vec![1, 5],
+            vec![2, 7],
+            vec![11, 6],
+            vec![5, 4, 6],
+            vec![3, 1, 5],
+            vec![4, 3, 2, 5],
+        ];
+        for dims in &shapes {
+            let n: usize = dims.iter().product();
+            let cols = *dims.last().unwrap();
+            let x: Vec<f32> = sample(n, n as u64 + 3, 9)
+                .iter()
+                .enumerate()
+                .map(|(i, &v)| v as f32 * 0.7 + (i % 3) as f32 * 0.2)
+                .collect();
+            let pdims: Vec<usize> = dims.iter().map(|d| d.div_ceil(2)).collect();
+            let pq = sample(pdims.iter().product(), 5, 4);
+            let parent = Parent {
+                data: &pq,
+                dims: &pdims,
+            };
+            let code = |keep: bool| {
+                let mut e = Encoder::new();
+                let q = encode_rdo_with(&mut e, dims, Some(parent), 0.1, keep, |g, out| {
+                    out.copy_from_slice(&x[g * cols..(g + 1) * cols])
+                });
+                (q, e.finish_short())
+            };
+            let (q, whole) = code(true);
+            let (none, windowed) = code(false);
+            let q = q.unwrap();
+            assert!(none.is_none());
+            assert_eq!(whole, windowed, "{dims:?}");
+            assert!(q.iter().any(|&v| v != 0), "{dims:?}");
+            // the chosen indices coded as given (contexts read from the whole band)
+            let mut e = Encoder::new();
+            encode(&mut e, &q, dims, BandKind::Detail, Some(parent));
+            assert_eq!(e.finish_short(), whole, "{dims:?}");
+            let back = decode(
+                &mut Decoder::new_short(&whole),
+                dims,
+                BandKind::Detail,
+                Some(parent),
+            )
+            .unwrap();
+            assert_eq!(back, q, "{dims:?}");
+            let mut rows = vec![0i64; n];
+            let mut seen = 0;
+            decode_rows(
+                &mut Decoder::new_short(&whole),
+                dims,
+                Some(parent),
+                |at, r| {
+                    assert_eq!(at, seen, "{dims:?}");
+                    rows[at..at + r.len()].copy_from_slice(r);
+                    seen += r.len();
+                },
+            )
+            .unwrap();
+            assert_eq!(seen, n);
+            assert_eq!(rows, q, "{dims:?}");
         }
     }
 

@@ -65,7 +65,9 @@ impl Default for Mix {
 impl Model for Mix {
     #[inline(always)]
     fn p0(&self) -> u32 {
-        ((self.fast as u32 + self.slow as u32) / 2).clamp(PROB_MIN, PROB_MAX)
+        // both estimates stay within [PROB_MIN, PROB_MAX] (`update` clamps them), so
+        // their mean does
+        (self.fast as u32 + self.slow as u32) / 2
     }
 
     #[inline(always)]

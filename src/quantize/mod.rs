@@ -39,6 +39,15 @@ pub fn gain_1d(
     level: usize,
     high: bool,
 ) -> f64 {
+    let ops: Vec<TwoScale> = (0..level)
+        .map(|l| TwoScale::new(scheme, boundary, lengths[l]))
+        .collect();
+    gain_1d_with(&ops, lengths, level, high)
+}
+
+/// [`gain_1d`] with the axis' operators already built: `ops[l]` = the two-scale
+/// operator of level `l` (lanes of `lengths[l]`), at least `level` of them.
+fn gain_1d_with(ops: &[TwoScale], lengths: &[usize], level: usize, high: bool) -> f64 {
     // the coefficient lives in the packed lane of length lengths[level-1] (detail, or
     // coarse block after `level` steps); level 0 means an untransformed axis
     if level == 0 {
@@ -55,9 +64,6 @@ pub fn gain_1d(
     if count == 0 {
         return 1.0;
     }
-    let ops: Vec<TwoScale> = (0..level)
-        .map(|l| TwoScale::new(scheme, boundary, lengths[l]))
-        .collect();
     // sample at most 64 coefficients evenly; their impulses are synthesized together,
     // impulse t in lane t of elements `picks` wide (the operators work on whole
     // elements, each lane with the arithmetic of a lone one)
@@ -91,6 +97,14 @@ pub fn gain_1d(
 pub fn band_gains(pyr: &Pyramid, bands: &[Subband]) -> Vec<f64> {
     let (scheme, boundary) = (pyr.spec.scheme, pyr.spec.boundary);
     let mut cache = std::collections::HashMap::new();
+    // every axis' operators built once, for all its levels (not once a band)
+    let ops: Vec<Vec<TwoScale>> = (0..pyr.spec.axes.len())
+        .map(|i| {
+            (0..pyr.axis_levels(i))
+                .map(|l| TwoScale::new(scheme, boundary, pyr.lengths[i][l]))
+                .collect()
+        })
+        .collect();
     bands
         .iter()
         .map(|b| {
@@ -108,7 +122,7 @@ pub fn band_gains(pyr: &Pyramid, bands: &[Subband]) -> Vec<f64> {
                 let key = (i, lvl, high);
                 let g = *cache
                     .entry(key)
-                    .or_insert_with(|| gain_1d(scheme, boundary, &pyr.lengths[i], lvl, high));
+                    .or_insert_with(|| gain_1d_with(&ops[i], &pyr.lengths[i], lvl, high));
                 g2 *= g;
             }
             g2.sqrt()
