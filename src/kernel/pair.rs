@@ -502,6 +502,10 @@ pub fn combine_pair_merged_at<T: Sample>(
 /// `cols[k] + in_step·t` of `src` and writes the rows `rows[j] + out_step[j]·t` of `dst`
 /// (`j` = 0 for the first output, 1 for the second). The same bits as [`combine_pair`] pair
 /// by pair; one dispatch for all of them.
+// the engine calls the `_at` forms with the entry its plan holds: this form and the
+// other lookups of their own (`lookup`, `combine_pair_rows_split`, `combine_pair_lanes`)
+// serve the tests (feature `testing`)
+#[cfg(feature = "testing")]
 #[allow(clippy::too_many_arguments)]
 pub fn combine_pair_rows<T: Sample>(
     k: Kernels,
@@ -525,6 +529,7 @@ pub fn combine_pair_rows<T: Sample>(
 /// [`combine_pair_rows`] with every output row split into its even samples, then its
 /// odd ones (as [`deinterleave`] makes them, for a next axis that reads them so): the
 /// same bits, placed as `deinterleave` places them, without a pass of its own.
+#[cfg(feature = "testing")]
 #[allow(clippy::too_many_arguments)]
 pub fn combine_pair_rows_split<T: Sample>(
     k: Kernels,
@@ -546,6 +551,7 @@ pub fn combine_pair_rows_split<T: Sample>(
 }
 
 /// [`pair_entry`] of a pair where the build has the pair kernels (`None` elsewhere).
+#[cfg(feature = "testing")]
 fn lookup<T: Sample>(k: Kernels, (w1, m1): (&[T], u32), (w2, m2): (&[T], u32)) -> Option<u8> {
     if k.avx2() {
         pair_entry(w1, m1, w2, m2)
@@ -632,6 +638,7 @@ pub(crate) fn pair_rows<T: Sample>(
 /// samples and apart. One dispatch for all the lanes (e.g. every row of a volume's plane
 /// along its last axis, the weights kept in registers); the same bits as
 /// [`combine_pair`] lane by lane.
+#[cfg(feature = "testing")]
 #[allow(clippy::too_many_arguments)]
 pub fn combine_pair_lanes<T: Sample>(
     k: Kernels,
