@@ -144,6 +144,73 @@ fn the_range_in_head_is_the_whole_rasters_in_one_pass_modes_too() {
     }
 }
 
+#[test]
+fn one_piece_read_in_slabs_gives_the_bytes_of_the_in_memory_encode() {
+    // over 2^20 positions, so that the planes are filled from several slabs: a volume
+    // (slabs of 4 planes) and an RGB image (colour transform per slab)
+    let v = field(&[5, 300, 700], SampleType::U16);
+    let mut rgb = Raster::new(
+        vec![1030, 1024],
+        3,
+        Samples::U8(
+            (0..1030 * 1024 * 3)
+                .map(|i| ((i * 7 + (i / 3072) * 3) % 251) as u8)
+                .collect(),
+        ),
+        DataKind::Image,
+    )
+    .unwrap();
+    rgb.meta.description = Some("gradient".into());
+    for r in [&v, &rgb] {
+        let whole = r.dims.clone();
+        for rate in [
+            Rate::Quality(55.0),
+            Rate::Keep(5.0),
+            Rate::Threshold(40.0),
+            Rate::Bpp(0.5),
+            // near the lossless cost: the lossless file, read again whole
+            Rate::Bpp(14.0),
+            Rate::Psnr(40.0),
+        ] {
+            let o = opts(rate);
+            let s = streamed(&mut slab::MemorySlabs::new(r), &o, &whole);
+            let m = codec::encode(r, &o).unwrap();
+            assert!(
+                s == m,
+                "{:?} {rate:?}: streamed and in-memory bytes differ",
+                r.dims
+            );
+            let d = codec::decode(&s, &DecodeOptions::default()).unwrap();
+            assert_eq!(d.raster.dims, r.dims);
+            assert_eq!(d.raster.meta.description, r.meta.description);
+        }
+    }
+}
+
+#[test]
+fn metadata_survives_a_one_piece_encode_read_in_slabs() {
+    let dir = common::scratch_dir("tiles_stream");
+    let mut r = field(&[6, 10, 12], SampleType::I16);
+    r.meta.space = Some("left-posterior-superior".into());
+    r.meta.spacing = Some(vec![2.5, 0.7, 0.6]);
+    r.meta.origin = Some(vec![-10.0, 20.5, 3.0]);
+    r.meta.description = Some("phantom".into());
+    let p = dir.join("one.nrrd");
+    io::write(&p, &r).unwrap();
+    let r = io::read(&p).unwrap();
+    let mut src = stream::open(&p, &ReadOptions::default()).unwrap().unwrap();
+    let o = opts(Rate::Quality(60.0));
+    let bytes = streamed(&mut src, &o, &r.dims.clone());
+    assert!(bytes == codec::encode(&r, &o).unwrap());
+    let d = codec::decode(&bytes, &DecodeOptions::default())
+        .unwrap()
+        .raster;
+    assert_eq!(d.meta.spacing, r.meta.spacing);
+    assert_eq!(d.meta.origin, r.meta.origin);
+    assert_eq!(d.meta.space, r.meta.space);
+    assert_eq!(d.meta.description, r.meta.description);
+}
+
 fn nrrd_volume(dir: &Path) -> (std::path::PathBuf, Raster) {
     let mut r = field(&[13, 10, 12], SampleType::I16);
     r.meta.space = Some("left-posterior-superior".into());

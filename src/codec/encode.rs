@@ -10,6 +10,7 @@ use super::plan::Plan;
 use super::{layout, lossless, max_error, meta, rate};
 use crate::format::header::Colour;
 use crate::format::{self, put_chunk, Mode};
+use crate::io::slab::SlabSource;
 use crate::io::{RasterView, SampleType, SamplesRef};
 use crate::scheme::{Boundary, Scheme};
 use crate::Result;
@@ -29,6 +30,36 @@ pub(super) fn encode_filled(r: &RasterView<'_>, opts: &EncodeOptions) -> Result<
         }
         rate => rate::encode_lossy(r, opts, rate, &|| encode_lossless(r, opts)),
     }
+}
+
+/// The file of a whole raster that `src` hands out in slabs, for the rate modes that need
+/// nothing of the samples but their transform (`--quality`, `--keep`, `--threshold`,
+/// `--bpp`) on integer samples without a nodata value (no voids to fill): the bytes of
+/// [`encode_filled`], with the samples read a slab at a time into the transform's planes
+/// ([`super::lossy::prepare_slabs`]), so that they are never held whole beside them.
+/// `--bpp` near the lossless cost reads them again, whole, for the lossless file.
+/// `None` for the other rate modes and samples, which need the raster whole.
+pub(super) fn encode_slabs<S: SlabSource + ?Sized>(
+    src: &mut S,
+    opts: &EncodeOptions,
+) -> Result<Option<Vec<u8>>> {
+    let shape = src.shape();
+    let transform_only = matches!(
+        opts.rate,
+        Rate::Quality(_) | Rate::Keep(_) | Rate::Threshold(_) | Rate::Bpp(_)
+    );
+    if !transform_only || shape.sample_type.is_float() || shape.meta.nodata.is_some() {
+        return Ok(None);
+    }
+    let p = super::lossy::prepare_slabs(src, opts, Mode::Lossy)?;
+    let src = std::cell::RefCell::new(src);
+    let lossless = || {
+        let mut src = src.borrow_mut();
+        let shape = src.shape().clone();
+        let r = shape.raster(shape.dims.clone(), src.read_rows(0..shape.dims[0])?)?;
+        encode_lossless(&r.view(), opts)
+    };
+    rate::encode_prepared(p, opts.rate, None, &lossless).map(Some)
 }
 
 fn lossless_int(x: f64, t: SampleType) -> i64 {

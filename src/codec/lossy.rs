@@ -9,6 +9,7 @@ use super::plan::{band_rho, dequantize_into, lossy_values, Plan};
 use super::{layout, meta};
 use crate::format::header::Colour;
 use crate::format::{self, put_chunk, Header, Mode};
+use crate::io::slab::SlabSource;
 use crate::io::{Raster, RasterView, SamplesRef};
 use crate::quantize::{self, DELTA};
 use crate::tensor::{self, Array};
@@ -62,68 +63,146 @@ pub(super) fn header_for(
     mode: Mode,
     colour: Colour,
 ) -> Result<Header> {
-    if r.dims.is_empty() || r.dims.len() > format::header::MAX_AXES {
-        return Err(Error::parameter(
-            "dims",
-            format!("{:?}", r.dims),
-            "1 to 4 spatial axes",
-        ));
-    }
-    if r.dims.iter().any(|&d| d == 0 || d > u32::MAX as usize) {
-        return Err(Error::parameter(
-            "dims",
-            format!("{:?}", r.dims),
-            "extents from 1 to 2^32−1",
-        ));
-    }
-    if r.channels == 0 || r.channels > format::header::MAX_CHANNELS {
-        return Err(Error::parameter("channels", r.channels, "1 to 256"));
-    }
-    if opts.levels > format::header::MAX_LEVELS {
-        return Err(Error::parameter("levels", opts.levels, "0 to 32"));
-    }
-    let (min, max) = finite_range(r.samples);
-    Ok(Header {
-        major: format::MAJOR,
-        minor: format::MINOR,
-        kind: r.kind,
-        sample_type: r.sample_type(),
-        dims: r.dims.to_vec(),
+    let shape = Frame {
+        dims: r.dims,
         channels: r.channels,
-        colour,
-        mode,
-        scheme: opts.scheme,
-        boundary: opts.boundary,
-        levels: opts.levels,
-        step: 1.0,
-        delta: if mode == Mode::Lossless { 0.0 } else { DELTA },
-        max_error: 0.0,
-        min,
-        max,
-        tile: r.dims.to_vec(),
-    })
+        sample_type: r.sample_type(),
+        kind: r.kind,
+    };
+    let mut header = shape.header(opts, mode, colour)?;
+    (header.min, header.max) = finite_range(r.samples);
+    Ok(header)
 }
 
-pub(super) fn prepare(r: &RasterView<'_>, opts: &EncodeOptions, mode: Mode) -> Result<Prepared> {
-    let colour = if r.channels >= 3 {
+/// What a header says of a raster besides its samples.
+pub(super) struct Frame<'a> {
+    pub(super) dims: &'a [usize],
+    pub(super) channels: usize,
+    pub(super) sample_type: crate::io::SampleType,
+    pub(super) kind: crate::io::DataKind,
+}
+
+impl Frame<'_> {
+    /// The header of a raster of this frame, its extents and channels checked; `min` and
+    /// `max` are left at 0 for the caller.
+    fn header(&self, opts: &EncodeOptions, mode: Mode, colour: Colour) -> Result<Header> {
+        let (dims, channels) = (self.dims, self.channels);
+        if dims.is_empty() || dims.len() > format::header::MAX_AXES {
+            return Err(Error::parameter(
+                "dims",
+                format!("{dims:?}"),
+                "1 to 4 spatial axes",
+            ));
+        }
+        if dims.iter().any(|&d| d == 0 || d > u32::MAX as usize) {
+            return Err(Error::parameter(
+                "dims",
+                format!("{dims:?}"),
+                "extents from 1 to 2^32−1",
+            ));
+        }
+        if channels == 0 || channels > format::header::MAX_CHANNELS {
+            return Err(Error::parameter("channels", channels, "1 to 256"));
+        }
+        if opts.levels > format::header::MAX_LEVELS {
+            return Err(Error::parameter("levels", opts.levels, "0 to 32"));
+        }
+        Ok(Header {
+            major: format::MAJOR,
+            minor: format::MINOR,
+            kind: self.kind,
+            sample_type: self.sample_type,
+            dims: dims.to_vec(),
+            channels,
+            colour,
+            mode,
+            scheme: opts.scheme,
+            boundary: opts.boundary,
+            levels: opts.levels,
+            step: 1.0,
+            delta: if mode == Mode::Lossless { 0.0 } else { DELTA },
+            max_error: 0.0,
+            min: 0.0,
+            max: 0.0,
+            tile: dims.to_vec(),
+        })
+    }
+}
+
+/// The colour transform of a lossy encode: YCoCg for three channels or more.
+fn lossy_colour(channels: usize) -> Colour {
+    if channels >= 3 {
         Colour::YCoCg
     } else {
         Colour::None
-    };
+    }
+}
+
+pub(super) fn prepare(r: &RasterView<'_>, opts: &EncodeOptions, mode: Mode) -> Result<Prepared> {
+    let colour = lossy_colour(r.channels);
     let header = header_for(r, opts, mode, colour)?;
+    let planes = planes_f32(r, colour);
+    analysed(header, planes, meta::to_bytes(r.meta))
+}
+
+/// [`prepare`] of an integer raster without voids that `src` hands out in slabs: each
+/// slab converted into the `f32` planes as it is read, so that the samples are never
+/// held whole beside the planes (a 256³ u16 volume: 67 MB of planes, not 101 MB). The
+/// planes, the header and so the file are those of [`prepare`] of the whole raster: the
+/// conversion and the colour transform act on each position alone, and the range is the
+/// least and greatest of the slabs'.
+pub(super) fn prepare_slabs<S: SlabSource + ?Sized>(
+    src: &mut S,
+    opts: &EncodeOptions,
+    mode: Mode,
+) -> Result<Prepared> {
+    let shape = src.shape().clone();
+    let colour = lossy_colour(shape.channels);
+    let frame = Frame {
+        dims: &shape.dims,
+        channels: shape.channels,
+        sample_type: shape.sample_type,
+        kind: shape.kind,
+    };
+    let mut header = frame.header(opts, mode, colour)?;
+    let n = shape.positions();
+    let row = n / shape.dims[0];
+    // about 2^20 positions a slab
+    let rows = ((1usize << 20) / row.max(1)).clamp(1, shape.dims[0]);
+    let mut planes: Vec<Vec<f32>> = (0..shape.channels).map(|_| Vec::with_capacity(n)).collect();
+    let (mut min, mut max) = (f64::INFINITY, f64::NEG_INFINITY);
+    for r0 in (0..shape.dims[0]).step_by(rows) {
+        let r1 = (r0 + rows).min(shape.dims[0]);
+        let mut dims = shape.dims.clone();
+        dims[0] = r1 - r0;
+        let slab = Raster::new(dims, shape.channels, src.read_rows(r0..r1)?, shape.kind)?;
+        let view = slab.view();
+        let (lo, hi) = finite_range(view.samples);
+        (min, max) = (min.min(lo), max.max(hi));
+        for (plane, part) in planes.iter_mut().zip(planes_f32(&view, colour)) {
+            plane.extend_from_slice(&part);
+        }
+    }
+    (header.min, header.max) = (min, max);
+    analysed(header, planes, meta::to_bytes(&shape.meta))
+}
+
+/// The pyramid of each plane, analysed in place, and what a lossy encode keeps beside it.
+fn analysed(header: Header, planes: Vec<Vec<f32>>, meta: Vec<u8>) -> Result<Prepared> {
     let plan = Plan::new(&header)?;
     let gains = quantize::band_gains(&plan.pyr, &plan.bands);
-    let weights = channel_weights(colour, r.channels);
+    let weights = channel_weights(header.colour, header.channels);
     let spec = plan.pyr.spec.clone();
-    let coeffs = planes_f32(r, colour)
+    let dims = header.dims.clone();
+    let coeffs = planes
         .into_par_iter()
         .map(|p| {
-            let mut a = Array::from_shape_vec(r.dims, p)?;
+            let mut a = Array::from_shape_vec(&dims, p)?;
             // a volume analysed in place: the default engine's levels of 3 or more axes
             // run through a scratch array as large as the plane (kept by the shared
             // planner), which would add a third to the encoder's memory; in place costs
             // little time (CT 256³: 1.71 against 1.66 s of CPU for a whole encode)
-            let engine = if r.dims.len() >= 3 {
+            let engine = if dims.len() >= 3 {
                 tensor::Engine::AxisByAxis
             } else {
                 tensor::Engine::tuned()
@@ -138,7 +217,7 @@ pub(super) fn prepare(r: &RasterView<'_>, opts: &EncodeOptions, mode: Mode) -> R
         gains,
         weights,
         coeffs,
-        meta: meta::to_bytes(r.meta),
+        meta,
         rdo: None,
     })
 }

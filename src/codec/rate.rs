@@ -30,7 +30,18 @@ pub(super) fn encode_lossy(
     rate: Rate,
     lossless: &dyn Fn() -> Result<Vec<u8>>,
 ) -> Result<Vec<u8>> {
-    let mut p = prepare(r, opts, Mode::Lossy)?;
+    encode_prepared(prepare(r, opts, Mode::Lossy)?, rate, Some(r), lossless)
+}
+
+/// [`encode_lossy`] of a transform already prepared; `r` is the raster, needed by
+/// `--psnr` alone (its candidates are compared with it): without it `--psnr` is an
+/// error.
+pub(super) fn encode_prepared(
+    mut p: Prepared,
+    rate: Rate,
+    r: Option<&RasterView<'_>>,
+    lossless: &dyn Fn() -> Result<Vec<u8>>,
+) -> Result<Vec<u8>> {
     if matches!(
         rate,
         Rate::Quality(_) | Rate::Psnr(_) | Rate::PsnrRange(..) | Rate::Bpp(_)
@@ -80,6 +91,13 @@ pub(super) fn encode_lossy(
                     "a target in dB between 0 and 400",
                 ));
             }
+            let Some(r) = r else {
+                return Err(Error::parameter(
+                    "psnr",
+                    db,
+                    "a raster in memory to compare the candidates with",
+                ));
+            };
             // each candidate decoded from its quantized bands, coded only once chosen;
             // the data range `mra compare` would use, found once
             let cmp = crate::metrics::CompareOptions {
@@ -109,14 +127,14 @@ pub(super) fn encode_lossy(
                     "a positive number of bits per position",
                 ));
             }
-            let pos = r.positions() as f64;
+            let pos = p.header.dims.iter().product::<usize>() as f64;
             // v = ln b − ln bpp: met when the file is within the budget, within
             // 1% under it at −ln 0.99; the log of the size is close to a line in
             // ln(step), where the size itself bends (10 candidates at 1 bpp on
             // kodim01 against 5)
             let sizes = p.rate_model();
             let model = |x: f64| b.ln() - (sizes.bits(x.exp()) / pos).ln();
-            if !r.sample_type().is_float() && b * pos >= LOSSLESS_SHARE * sizes.bits(1.0) {
+            if !p.header.sample_type.is_float() && b * pos >= LOSSLESS_SHARE * sizes.bits(1.0) {
                 let bytes = lossless()?;
                 if bytes.len() as f64 * 8.0 <= b * pos {
                     return Ok(bytes);

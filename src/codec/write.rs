@@ -63,7 +63,8 @@ fn check_count(r: &RasterView<'_>) -> Result<()> {
 /// the bytes written. A tiled file is coded one tile-row (2-D) or tile-slab (3-D) at a
 /// time, so memory holds a slab and the tiles in flight (the rate modes that need the
 /// whole raster take a first pass over it, see [`super::tiles`]); one tile is read
-/// whole. The bytes are those of [`encode_tiled`] of the same raster.
+/// slab by slab into the transform's planes where the rate mode needs nothing else
+/// ([`super::encode::encode_slabs`]), else whole. The bytes are those of [`encode_tiled`] of the same raster.
 pub fn encode_stream<S: SlabSource + ?Sized, W: std::io::Write + std::io::Seek>(
     src: &mut S,
     opts: &EncodeOptions,
@@ -74,8 +75,13 @@ pub fn encode_stream<S: SlabSource + ?Sized, W: std::io::Write + std::io::Seek>(
     if tile != shape.dims.as_slice() {
         return super::tiles::encode_slabs(src, opts, tile, out);
     }
-    let r = shape.raster(shape.dims.clone(), src.read_rows(0..shape.dims[0])?)?;
-    let bytes = encode_tiled(&r, opts, tile)?;
+    let bytes = match super::encode::encode_slabs(src, opts)? {
+        Some(bytes) => bytes,
+        None => {
+            let r = shape.raster(shape.dims.clone(), src.read_rows(0..shape.dims[0])?)?;
+            encode_tiled(&r, opts, tile)?
+        }
+    };
     out.write_all(&bytes)?;
     Ok(bytes.len() as u64)
 }
