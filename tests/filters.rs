@@ -247,12 +247,13 @@ fn least_squares_row(p: &[f64], pfirst: i64, lo: i64, hi: i64) -> Vec<f64> {
     };
     // normal equations G x = Pᵀ e_i, solved for every i by Gauss–Jordan on [G | Pᵀ]
     let mut g = vec![vec![0.0; cols + rows]; cols];
-    for r in 0..cols {
-        for c in 0..cols {
-            g[r][c] = (0..rows).map(|i| pw(i, r) * pw(i, c)).sum();
+    for (r, row) in g.iter_mut().enumerate() {
+        let (gram, rhs) = row.split_at_mut(cols);
+        for (c, x) in gram.iter_mut().enumerate() {
+            *x = (0..rows).map(|i| pw(i, r) * pw(i, c)).sum();
         }
-        for i in 0..rows {
-            g[r][cols + i] = pw(i, r);
+        for (i, x) in rhs.iter_mut().enumerate() {
+            *x = pw(i, r);
         }
     }
     for c in 0..cols {
