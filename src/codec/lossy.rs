@@ -85,7 +85,11 @@ pub(super) fn header_for(
     let (min, max) = finite_range(r.samples);
     Ok(Header {
         major: format::MAJOR,
-        minor: format::MINOR,
+        minor: if mode == Mode::Lossless {
+            format::MINOR_WIDE
+        } else {
+            format::MINOR
+        },
         kind: r.kind,
         sample_type: r.sample_type(),
         dims: r.dims.to_vec(),
