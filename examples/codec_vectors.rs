@@ -19,6 +19,52 @@ fn raster(dims: &[usize], channels: usize, ty: SampleType, kind: DataKind) -> Ra
     Raster::new(dims.to_vec(), channels, Samples::from_f64(&v, ty), kind).unwrap()
 }
 
+/// A 16-bit gray raster whose texture doubles in scale every 6 columns (from units to
+/// hundreds), so that some lossless bands take the wide magnitude classes of format 2.3.
+fn raster_scales(dims: &[usize]) -> Raster {
+    let n: usize = dims.iter().product::<usize>();
+    let w = *dims.last().unwrap();
+    let v: Vec<f64> = (0..n)
+        .map(|i| {
+            let r = ((i * 7919) % 13) as f64 - 6.0;
+            let scale = (1u64 << ((i % w) / 6)) as f64;
+            30000.0 + r * scale + ((i * 104729) % 7) as f64 * scale * 0.5
+        })
+        .collect();
+    Raster::new(
+        dims.to_vec(),
+        1,
+        Samples::from_f64(&v, SampleType::U16),
+        DataKind::Image,
+    )
+    .unwrap()
+}
+
+/// A raster over most of the 16-bit range with sharp steps, so that lossless details
+/// reach thousands and bands take the wide magnitude classes of format 2.3.
+fn raster_wide(dims: &[usize], channels: usize, kind: DataKind) -> Raster {
+    let n: usize = dims.iter().product::<usize>() * channels;
+    let w = *dims.last().unwrap();
+    let v: Vec<f64> = (0..n)
+        .map(|i| {
+            let p = i / channels;
+            let (x, y) = ((p % w) as f64, (p / w) as f64);
+            let step = if (p % w) % 5 < 2 { 20000.0 } else { 0.0 };
+            30000.0
+                + 9000.0 * (x * 0.9).sin() * (y * 0.7 + (i % channels) as f64).cos()
+                + step
+                + 300.0 * ((i * 7919) % 13) as f64
+        })
+        .collect();
+    Raster::new(
+        dims.to_vec(),
+        channels,
+        Samples::from_f64(&v, SampleType::U16),
+        kind,
+    )
+    .unwrap()
+}
+
 /// name, description, raster, scheme, boundary, rate, level decoded, tile extents
 type Case = (
     &'static str,
@@ -82,12 +128,30 @@ fn main() {
         ),
         (
             "rgba16_lossless",
-            "7x5 RGBA u16, lossless (YCoCg-R + alpha)",
+            "7x5 RGBA u16, lossless (YCoCg-R + alpha; format 2.0)",
             raster(&[5, 7], 4, SampleType::U16, DataKind::Image),
             Scheme::Haar,
             Boundary::Symmetric,
             Rate::Lossless,
             0,
+        ),
+        (
+            "lossless23_gray16",
+            "48x40 gray u16, texture doubling in scale every 6 columns, lossless (format 2.3: two bands take the wide classes)",
+            raster_scales(&[40, 48]),
+            Scheme::Haar,
+            Boundary::Symmetric,
+            Rate::Lossless,
+            0,
+        ),
+        (
+            "lossless23_gray16_level1",
+            "the previous file decoded with --level 1",
+            raster_scales(&[40, 48]),
+            Scheme::Haar,
+            Boundary::Symmetric,
+            Rate::Lossless,
+            1,
         ),
     ];
     // format 2.1: tiles (extents slowest axis first); the lossy one is kept as a 2.1
@@ -115,7 +179,7 @@ fn main() {
         ),
         (
             "tiled_vol_u8_lossless",
-            "9x7x6 volume u8 in tiles of 4x4x4 (x, y, z), lossless",
+            "9x7x6 volume u8 in tiles of 4x4x4 (x, y, z), lossless (format 2.1, tiles 2.0)",
             raster(&[6, 7, 9], 1, SampleType::U8, DataKind::Volume),
             Scheme::Haar,
             Boundary::Symmetric,
@@ -154,9 +218,28 @@ fn main() {
             0,
             vec![8, 8],
         ),
+        // format 2.3 tiles: a lossless tiled file (2.1) whose tiles are 2.3 files
+        (
+            "tiled23_vol_u16_lossless",
+            "9x7x6 volume u16 over most of the range in tiles of 4x4x4 (x, y, z), lossless (format 2.1, tiles 2.3)",
+            raster_wide(&[6, 7, 9], 1, DataKind::Volume),
+            Scheme::Haar,
+            Boundary::Symmetric,
+            Rate::Lossless,
+            0,
+            vec![4, 4, 4],
+        ),
     ];
-    // files of an older format, kept as written: decoded, not encoded again
-    let frozen = ["tiled_gray16_q40"];
+    // files of an older format or encoder, kept as written: decoded, not encoded again
+    // (the lossless ones are 2.0 files, or 2.0 tiles, from before 2.3's classes; the
+    // max-error one has the base step of an earlier encoder)
+    let frozen = [
+        "tiled_gray16_q40",
+        "gray8_lossless",
+        "rgba16_lossless",
+        "tiled_vol_u8_lossless",
+        "vol_i16_maxerr",
+    ];
     let cases = cases
         .into_iter()
         .map(|(a, b, r, s, bd, rate, l)| {

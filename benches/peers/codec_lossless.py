@@ -7,6 +7,7 @@ bit-exact.
 Needs: `apt-get install libopenjp2-tools`, `pip install imagecodecs pillow numpy`.
 Usage (from the repository root, after `cargo build --release`):
   python3 benches/peers/codec_lossless.py [--corpus ../shared/corpus] [--images 24] [--mra BIN]
+      [--sets kodak,gray16] [--per-image]
 """
 import argparse, io, os, subprocess, sys, tempfile
 import numpy as np
@@ -47,23 +48,35 @@ def main():
     ap.add_argument("--corpus", default=os.path.join(ROOT, "..", "shared", "corpus"))
     ap.add_argument("--images", type=int, default=24)
     ap.add_argument("--mra", default=os.path.join(ROOT, "target", "release", "mra"))
+    ap.add_argument("--sets", default="kodak,gray16", help="comma-separated: kodak, gray16")
+    ap.add_argument("--per-image", action="store_true", help="a row per image as well")
     a = ap.parse_args()
+    wanted = set(a.sets.split(","))
     kodak = os.path.join(a.corpus, "images", "kodak")
     sets = {
-        "Kodak (RGB u8)": sorted(os.path.join(kodak, f) for f in os.listdir(kodak) if f.endswith(".png"))[: a.images],
-        "16-bit gray": sorted(
+        "kodak": sorted(os.path.join(kodak, f) for f in os.listdir(kodak) if f.endswith(".png"))[: a.images],
+        "gray16": sorted(
             os.path.join(a.corpus, "images", "highbit", f)
             for f in os.listdir(os.path.join(a.corpus, "images", "highbit"))
             if f.endswith(".png") and np.asarray(Image.open(os.path.join(a.corpus, "images", "highbit", f))).ndim == 2
         ),
     }
+    names = {"kodak": "Kodak (RGB u8)", "gray16": "16-bit gray"}
+    keys = ("mra", "openjpeg", "webp", "png")
+    cell = lambda v: "—" if np.isnan(v) else f"{v:.3f}"
     print("| set | images | mra | OpenJPEG 5/3 | WebP lossless | PNG |\n|---|---|---|---|---|---|")
     with tempfile.TemporaryDirectory() as tmp:
-        for name, files in sets.items():
+        for key, files in sets.items():
+            if key not in wanted:
+                continue
             rows = [bits(f, a.mra, tmp) for f in files]
+            if a.per_image:
+                for f, r in zip(files, rows):
+                    cells = " | ".join(cell(r.get(k, float("nan"))) for k in keys)
+                    print(f"| {os.path.basename(f)} | 1 | {cells} |")
             mean = lambda k: np.mean([r[k] for r in rows]) if all(k in r for r in rows) else float("nan")
-            cells = " | ".join("—" if np.isnan(mean(k)) else f"{mean(k):.3f}" for k in ("mra", "openjpeg", "webp", "png"))
-            print(f"| {name} | {len(files)} | {cells} |")
+            cells = " | ".join(cell(mean(k)) for k in keys)
+            print(f"| {names[key]} | {len(files)} | {cells} |")
     print("\n(bits per pixel, mean over the images; every file decoded bit-exact)")
 
 

@@ -20,16 +20,17 @@ use crate::{Error, Result};
 use rayon::prelude::*;
 use std::io::Read;
 
-/// One band's indices from its coded bytes, by the coding of format `major`.
+/// One band's indices from its coded bytes, by the coding of the file of header `h`.
 fn decode_band(
-    major: u8,
+    h: &Header,
     data: &[u8],
     dims: &[usize],
     kind: BandKind,
     parent: Option<Parent>,
 ) -> Result<Vec<i64>> {
-    if major >= 2 {
-        entropy::band::decode(&mut Decoder::new_short(data), dims, kind, parent)
+    if h.major >= 2 {
+        let coding = super::plan::coding_of(h);
+        entropy::band::decode(&mut Decoder::new_short(data), dims, kind, parent, coding)
     } else {
         entropy::decode_band(data, dims, kind, parent)
     }
@@ -76,7 +77,7 @@ fn decode_channel(p: &Parsed, c: usize, k: usize) -> Result<Vec<Option<Vec<i64>>
                     },
                     None => None,
                 };
-                decode_band(p.header.major, &bc.data, &plan.dims[j], kind, parent)
+                decode_band(&p.header, &bc.data, &plan.dims[j], kind, parent)
                     .map(Some)
                     .map_err(|e| {
                         Error::format(format!("band {j} of channel {c}: {e}"), "a valid band")
@@ -140,7 +141,7 @@ fn decode_channel_into(p: &Parsed, c: usize, k: usize, plane: &mut [f32]) -> Res
                     } else {
                         BandKind::Detail
                     };
-                    let v = decode_band(h.major, &bc.data, dims, kind, parent).map_err(failed)?;
+                    let v = decode_band(h, &bc.data, dims, kind, parent).map_err(failed)?;
                     let cols = dims.last().copied().unwrap_or(1).max(1);
                     for (r, out) in v.chunks(cols).zip(rows.iter_mut()) {
                         dequantize_row(r, step, delta, out);
@@ -149,7 +150,7 @@ fn decode_channel_into(p: &Parsed, c: usize, k: usize, plane: &mut [f32]) -> Res
                 }
                 let mut d = Decoder::new_short(&bc.data);
                 let mut at_row = 0;
-                entropy::band::decode_rows(&mut d, dims, parent, |_, r| {
+                entropy::band::decode_rows(&mut d, dims, parent, plan.coding, |_, r| {
                     dequantize_row(r, step, delta, rows[at_row]);
                     at_row += 1;
                 })
@@ -238,10 +239,9 @@ pub(super) fn reconstruct(p: &Parsed, k: usize) -> Result<Raster> {
         let mut values = samples.to_f64();
         for (ch, r) in p.resi.iter().enumerate() {
             let Some(r) = r else { continue };
-            let q =
-                decode_band(h.major, &r.data, &h.dims, BandKind::Detail, None).map_err(|e| {
-                    Error::format(format!("RESI of channel {ch}: {e}"), "a valid residual")
-                })?;
+            let q = decode_band(h, &r.data, &h.dims, BandKind::Detail, None).map_err(|e| {
+                Error::format(format!("RESI of channel {ch}: {e}"), "a valid residual")
+            })?;
             for i in 0..npos {
                 values[i * c + ch] = samples.get_f64(i * c + ch) + q[i] as f64 * r.step;
             }

@@ -83,8 +83,8 @@ impl Plan {
                                 data: &out[p].as_ref().expect("parents coded first").q,
                                 dims: &self.dims[p],
                             });
-                            let mut e = Encoder::new();
                             let dims = &self.dims[j];
+                            let stream: Vec<u8>;
                             // a band without children (the finest level) is nobody's
                             // context: unless asked for, its indices are not kept
                             let childless = !self.parents.contains(&Some(j));
@@ -96,7 +96,8 @@ impl Plan {
                             };
                             let q = match (input(c, j), choice) {
                                 (BandInput::Indices(q), _) => {
-                                    band::encode(&mut e, &q, dims, kind, parent);
+                                    stream =
+                                        band::encode_stream(&q, dims, kind, parent, self.coding);
                                     q
                                 }
                                 (BandInput::Coefficients { plane, step }, Choice::Rdo(lambda))
@@ -104,11 +105,13 @@ impl Plan {
                                 {
                                     let offs = self.row_offsets(j);
                                     let cols = dims.last().copied().unwrap_or(1);
-                                    band::encode_rdo_with(
+                                    let mut e = Encoder::new();
+                                    let q = band::encode_rdo_with(
                                         &mut e,
                                         dims,
                                         parent,
                                         lambda,
+                                        self.coding,
                                         keep,
                                         |g, out| {
                                             let row = &plane[offs[g]..offs[g] + cols];
@@ -117,7 +120,9 @@ impl Plan {
                                             }
                                         },
                                     )
-                                    .unwrap_or_default()
+                                    .unwrap_or_default();
+                                    stream = e.finish_short();
+                                    q
                                 }
                                 (BandInput::Coefficients { plane, step }, _) => {
                                     let q: Vec<i64> = layout::gather(
@@ -128,13 +133,14 @@ impl Plan {
                                     .into_iter()
                                     .map(|x| round_index((x as f64 / step) as f32))
                                     .collect();
-                                    band::encode(&mut e, &q, dims, kind, parent);
+                                    stream =
+                                        band::encode_stream(&q, dims, kind, parent, self.coding);
                                     q
                                 }
                             };
                             CodedBand {
                                 q: if keep { q } else { Vec::new() },
-                                stream: e.finish_short(),
+                                stream,
                             }
                         })
                         .collect();

@@ -109,7 +109,11 @@ impl Frame<'_> {
         }
         Ok(Header {
             major: format::MAJOR,
-            minor: format::MINOR,
+            minor: if mode == Mode::Lossless {
+                format::MINOR_WIDE
+            } else {
+                format::MINOR
+            },
             kind: self.kind,
             sample_type: self.sample_type,
             dims: dims.to_vec(),

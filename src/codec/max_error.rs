@@ -5,7 +5,6 @@ use super::container::{MEND, RESI};
 use super::decode::decode_untiled;
 use super::lossy::prepare;
 use super::options::{DecodeOptions, EncodeOptions};
-use crate::entropy::range::Encoder;
 use crate::entropy::{band, BandKind};
 use crate::format::{put_chunk, Mode};
 use crate::io::{RasterView, SampleType, Samples};
@@ -60,6 +59,7 @@ pub(super) fn encode_max_error(
     .raster;
     let c = r.channels;
     let n = r.positions();
+    let coding = p.plan.coding;
     let mut out = base[..base.len() - 12].to_vec(); // drop MEND
     let chunks: Vec<Vec<u8>> = (0..c)
         .into_par_iter()
@@ -84,9 +84,7 @@ pub(super) fn encode_max_error(
                     exc.push((i as u64, x));
                 }
             }
-            let mut enc = Encoder::new();
-            band::encode(&mut enc, &q, r.dims, BandKind::Detail, None);
-            let coded = enc.finish_short();
+            let coded = band::encode_stream(&q, r.dims, BandKind::Detail, None, coding);
             let mut pl = Vec::new();
             pl.extend_from_slice(&(k as u16).to_le_bytes());
             pl.extend_from_slice(&s.to_le_bytes());

@@ -4,6 +4,7 @@
 
 use super::colour::ycocg_inverse;
 use super::{layout, lossless};
+use crate::entropy::band::Coding;
 use crate::format::header::Colour;
 use crate::format::{Header, Mode};
 use crate::io::{SampleType, Samples};
@@ -12,12 +13,24 @@ use crate::tensor::{self, Array, Order, Pyramid, PyramidSpec, Subband};
 use crate::Result;
 use rayon::prelude::*;
 
+/// The coefficient coding of a file of header `h`: from format 2.3 on each band
+/// chooses its magnitude classes (formats/MRA.md §9).
+pub(super) fn coding_of(h: &Header) -> Coding {
+    if h.major == 2 && h.minor >= crate::format::MINOR_WIDE {
+        Coding::Chosen
+    } else {
+        Coding::Narrow
+    }
+}
+
 /// Pyramid, bands, their parents and extents for a header.
 pub(super) struct Plan {
     pub(super) pyr: Pyramid,
     pub(super) bands: Vec<Subband>,
     pub(super) parents: Vec<Option<usize>>,
     pub(super) dims: Vec<Vec<usize>>,
+    /// The coefficient coding (format 2.3 and later: each band's classes chosen).
+    pub(super) coding: Coding,
 }
 
 impl Plan {
@@ -61,6 +74,7 @@ impl Plan {
             bands,
             parents,
             dims,
+            coding: coding_of(h),
         })
     }
 

@@ -506,11 +506,12 @@ impl Prepared {
                     return 0.0;
                 }
                 let s = self.band_step(step, j, c);
-                let mut e = Encoder::new();
-                match (self.rdo, plan.bands[j].level) {
+                let bytes = match (self.rdo, plan.bands[j].level) {
                     (Some(lambda), l) if l > 0 => {
                         let scaled: Vec<f32> = x.iter().map(|&v| (v as f64 / s) as f32).collect();
-                        band::encode_rdo(&mut e, &scaled, &dims, None, lambda);
+                        let mut e = Encoder::new();
+                        band::encode_rdo(&mut e, &scaled, &dims, None, lambda, plan.coding);
+                        e.finish_short().len()
                     }
                     (_, l) => {
                         let rho = band_rho(plan, j);
@@ -523,10 +524,10 @@ impl Prepared {
                         } else {
                             BandKind::Detail
                         };
-                        band::encode(&mut e, &q, &dims, kind, None);
+                        band::encode_stream(&q, &dims, kind, None, plan.coding).len()
                     }
-                }
-                e.finish_short().len() as f64 * 8.0 * total as f64 / x.len() as f64
+                };
+                bytes as f64 * 8.0 * total as f64 / x.len() as f64
             })
             .sum()
     }

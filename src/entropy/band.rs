@@ -13,6 +13,11 @@
 //!   (unary exponent with adaptive models, top mantissa bit modelled, the rest raw), all
 //!   in the class of `u = t + 2|P|` (9 classes).
 //!
+//! Format 2.3 ([`Coding::Chosen`]) opens each band's stream with a bit choosing those
+//! nine classes or [`Classes::Wide`]: the classes continued one per octave of `u` past
+//! 130 (25 in all), the top mantissa bit modelled per class and exponent and the
+//! second per exponent and top bit, for the large indices of high-bit lossless data.
+//!
 //! The coarsest block is coded as the residual of the LOCO-I median predictor
 //! `med(W, N, W + N − NW)` with the same models and no parent.
 //!
@@ -29,27 +34,37 @@ use crate::Result;
 
 const ZCLS: usize = 12;
 const PCLS: usize = 3;
-const MCLS: usize = 9;
+/// Magnitude classes of [`Classes::Wide`]: the nine of [`Classes::Narrow`], then one per
+/// octave of `u` up to the largest `u` the capped magnitudes make.
+const MCLS_WIDE: usize = 25;
 const PREFIX: usize = 20;
 const CAP: u64 = 1 << 20;
 
 struct Models {
     zero: [Mix; ZCLS * PCLS],
     sign: [Mix; 9],
-    gt1: [Mix; MCLS],
-    gt2: [Mix; MCLS],
-    prefix: [Mix; PREFIX * MCLS],
+    gt1: [Mix; MCLS_WIDE],
+    gt2: [Mix; MCLS_WIDE],
+    prefix: [Mix; PREFIX * MCLS_WIDE],
     top: [Mix; 64],
+    /// [`Classes::Wide`]: the top mantissa bit per class and exponent, the second
+    /// one per exponent and top bit
+    top_wide: [Mix; 64 * MCLS_WIDE],
+    second: [Mix; 128],
+    wide: bool,
 }
 
 impl Models {
-    fn new() -> Self {
+    fn new(classes: Classes) -> Self {
         Models {
+            top_wide: [Mix::default(); 64 * MCLS_WIDE],
+            second: [Mix::default(); 128],
+            wide: classes == Classes::Wide,
             zero: [Mix::default(); ZCLS * PCLS],
             sign: [Mix::default(); 9],
-            gt1: [Mix::default(); MCLS],
-            gt2: [Mix::default(); MCLS],
-            prefix: [Mix::default(); PREFIX * MCLS],
+            gt1: [Mix::default(); MCLS_WIDE],
+            gt2: [Mix::default(); MCLS_WIDE],
+            prefix: [Mix::default(); PREFIX * MCLS_WIDE],
             top: [Mix::default(); 64],
         }
     }
@@ -120,6 +135,87 @@ fn mcls(u: u64) -> usize {
     }
 }
 
+/// Class of `u` in [`Classes::Wide`]: [`mcls`] up to 130, then `8 + ⌊log₂(u / 131)⌋`
+/// (131–261, 262–523, …), at most 24.
+#[inline(always)]
+fn mcls_wide(u: u64) -> usize {
+    if u <= 130 {
+        mcls(u)
+    } else {
+        (8 + (u / 131).ilog2() as usize).min(MCLS_WIDE - 1)
+    }
+}
+
+/// The coefficient coding of a file (formats/MRA.md §9).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Coding {
+    /// Formats 2.0–2.2: every band in [`Classes::Narrow`].
+    #[default]
+    Narrow,
+    /// Format 2.3: a band's stream opens with one bit of probability ½ choosing its
+    /// classes, 0 for [`Classes::Narrow`], 1 for [`Classes::Wide`] (the encoder codes
+    /// both and keeps the shorter).
+    Chosen,
+}
+
+/// The magnitude classes of a band's coding (formats/MRA.md §9).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Classes {
+    /// Formats 2.0–2.2: nine classes of `u`, the last one `u > 130`.
+    #[default]
+    Narrow,
+    /// Format 2.3: the nine classes up to `u = 130`, then one per octave of `u`
+    /// ([`mcls_wide`], 25 in all), so that the large indices of high-bit data (16-bit
+    /// lossless details reach thousands) keep their neighbourhood's scale; the top
+    /// mantissa bit of the Exp-Golomb tail modelled per class and exponent, the second
+    /// per exponent and top bit.
+    Wide,
+}
+
+/// Write the opening of a band's stream of `coding` coded with `classes` (the selector
+/// bit of [`Coding::Chosen`]; nothing in [`Coding::Narrow`], which has no wide classes).
+fn open(e: &mut Encoder, coding: Coding, classes: Classes) {
+    debug_assert!(coding == Coding::Chosen || classes == Classes::Narrow);
+    if coding == Coding::Chosen {
+        e.raw(classes == Classes::Wide);
+    }
+}
+
+/// Read the opening of a band's stream of `coding`: the classes it is coded with.
+fn opened(d: &mut Decoder, coding: Coding) -> Classes {
+    match coding {
+        Coding::Chosen if d.raw() => Classes::Wide,
+        _ => Classes::Narrow,
+    }
+}
+
+/// One band of indices `q` coded ([`encode`]) into a stream of its own, finished short
+/// ([`Encoder::finish_short`]): in [`Coding::Chosen`] with both classes, keeping the
+/// shorter stream (the narrow one on a tie).
+pub fn encode_stream(
+    q: &[i64],
+    dims: &[usize],
+    kind: BandKind,
+    parent: Option<Parent>,
+    coding: Coding,
+) -> Vec<u8> {
+    let code = |classes: Classes| {
+        let mut e = Encoder::new();
+        open(&mut e, coding, classes);
+        encode(&mut e, q, dims, kind, parent, classes);
+        e.finish_short()
+    };
+    if coding == Coding::Narrow {
+        return code(Classes::Narrow);
+    }
+    let (narrow, wide) = rayon::join(|| code(Classes::Narrow), || code(Classes::Wide));
+    if wide.len() < narrow.len() {
+        wide
+    } else {
+        narrow
+    }
+}
+
 #[inline(always)]
 fn cls3(m: u64) -> usize {
     m.min(2) as usize
@@ -140,11 +236,14 @@ struct Row {
     base: Vec<u64>,
     /// parent magnitude (capped)
     pm: Vec<u64>,
+    /// magnitude classes of [`Classes::Wide`]
+    wide: bool,
 }
 
 impl Row {
-    fn new(cols: usize) -> Self {
+    fn new(cols: usize, classes: Classes) -> Self {
         Row {
+            wide: classes == Classes::Wide,
             n1: vec![0; cols + 4],
             ns: vec![1; cols],
             base: vec![0; cols],
@@ -159,7 +258,11 @@ impl Row {
         let t = self.base[x] + 2 * mag(w) + mag(ww);
         let pm = self.pm[x];
         let cz = zcls(t) * PCLS + cls3(pm);
-        let cm = mcls(t + 2 * pm);
+        let cm = if self.wide {
+            mcls_wide(t + 2 * pm)
+        } else {
+            mcls(t + 2 * pm)
+        };
         (cz, cm, sgn(w) * 3 + self.ns[x] as usize)
     }
 }
@@ -287,7 +390,53 @@ fn encode_nonzero(e: &mut Encoder, m: &mut Models, q: i64, cm: usize, cs: usize)
         return;
     }
     let pre = &mut m.prefix[cm * PREFIX..(cm + 1) * PREFIX];
-    golomb::encode(e, pre, &mut m.top, a - 3 + 1);
+    if !m.wide {
+        golomb::encode(e, pre, &mut m.top, a - 3 + 1);
+        return;
+    }
+    let v = a - 3 + 1;
+    let nb = 63 - v.leading_zeros() as usize;
+    for k in 0..nb {
+        e.bit(&mut pre[k.min(PREFIX - 1)], true);
+    }
+    e.bit(&mut pre[nb.min(PREFIX - 1)], false);
+    if nb > 0 {
+        let t = (v >> (nb - 1)) & 1;
+        e.bit(&mut m.top_wide[cm * 64 + nb], t == 1);
+        if nb > 1 {
+            e.bit(&mut m.second[2 * nb + t as usize], (v >> (nb - 2)) & 1 == 1);
+            for j in (0..nb - 2).rev() {
+                e.raw((v >> j) & 1 == 1);
+            }
+        }
+    }
+}
+
+/// Decode the magnitude tail of [`Classes::Wide`].
+fn decode_wide(d: &mut Decoder, m: &mut Models, cm: usize) -> Result<u64> {
+    let pre = &mut m.prefix[cm * PREFIX..(cm + 1) * PREFIX];
+    let mut nb = 0usize;
+    while d.bit(&mut pre[nb.min(PREFIX - 1)]) {
+        nb += 1;
+        if nb > 62 {
+            return Err(crate::Error::format(
+                "coefficient exponent over 62",
+                "a valid band",
+            ));
+        }
+    }
+    let mut v: u64 = 1;
+    if nb > 0 {
+        let t = d.bit(&mut m.top_wide[cm * 64 + nb]) as u64;
+        v = (v << 1) | t;
+        if nb > 1 {
+            v = (v << 1) | d.bit(&mut m.second[2 * nb + t as usize]) as u64;
+            for _ in 0..nb - 2 {
+                v = (v << 1) | d.raw() as u64;
+            }
+        }
+    }
+    Ok(v)
 }
 
 /// Decode one index in context `ctx`: the zero flag inline (most indices are 0), the
@@ -309,6 +458,8 @@ fn decode_nonzero(d: &mut Decoder, m: &mut Models, cm: usize, cs: usize) -> Resu
         1
     } else if !d.bit(&mut m.gt2[cm]) {
         2
+    } else if m.wide {
+        decode_wide(d, m, cm)? - 1 + 3
     } else {
         let pre = &mut m.prefix[cm * PREFIX..(cm + 1) * PREFIX];
         golomb::decode(d, pre, &mut m.top)? - 1 + 3
@@ -321,12 +472,19 @@ fn decode_nonzero(d: &mut Decoder, m: &mut Models, cm: usize, cs: usize) -> Resu
 }
 
 /// Code one band of indices `q` with extents `dims` (raster order) into `e`.
-pub fn encode(e: &mut Encoder, q: &[i64], dims: &[usize], kind: BandKind, parent: Option<Parent>) {
+pub fn encode(
+    e: &mut Encoder,
+    q: &[i64],
+    dims: &[usize],
+    kind: BandKind,
+    parent: Option<Parent>,
+    classes: Classes,
+) {
     let coarse = kind == BandKind::Coarse;
     let ctx = Ctx::new(dims, if coarse { None } else { parent });
-    let mut m = Models::new();
+    let mut m = Models::new(classes);
     let w = ctx.walk;
-    let mut row = Row::new(w.cols);
+    let mut row = Row::new(w.cols, classes);
     let res: Vec<i64>;
     let v: &[i64] = if coarse {
         res = median_residuals(q, w);
@@ -357,9 +515,10 @@ pub fn encode_rdo(
     dims: &[usize],
     parent: Option<Parent>,
     lambda: f32,
+    coding: Coding,
 ) -> Vec<i64> {
     let cols = Walk::new(dims).cols;
-    encode_rdo_with(e, dims, parent, lambda, true, |g, out| {
+    encode_rdo_with(e, dims, parent, lambda, coding, true, |g, out| {
         out.copy_from_slice(&x[g * cols..(g + 1) * cols])
     })
     .unwrap_or_default()
@@ -374,13 +533,17 @@ pub fn encode_rdo_with(
     dims: &[usize],
     parent: Option<Parent>,
     lambda: f32,
+    coding: Coding,
     keep: bool,
     mut row: impl FnMut(usize, &mut [f32]),
 ) -> Option<Vec<i64>> {
+    // the index choice reads the narrow classes' costs
+    let classes = Classes::Narrow;
+    open(e, coding, classes);
     let ctx = Ctx::new(dims, parent);
-    let mut m = Models::new();
+    let mut m = Models::new(classes);
     let w = ctx.walk;
-    let mut r = Row::new(w.cols);
+    let mut r = Row::new(w.cols, classes);
     let mut q = Window::new(w, keep);
     let mut x = vec![0f32; w.cols];
     for p in 0..w.planes {
@@ -518,13 +681,18 @@ pub fn decode(
     dims: &[usize],
     kind: BandKind,
     parent: Option<Parent>,
+    coding: Coding,
 ) -> Result<Vec<i64>> {
     let coarse = kind == BandKind::Coarse;
     let n: usize = dims.iter().product();
     let mut v = vec![0i64; n];
-    decode_rows(d, dims, if coarse { None } else { parent }, |at, row| {
-        v[at..at + row.len()].copy_from_slice(row)
-    })?;
+    decode_rows(
+        d,
+        dims,
+        if coarse { None } else { parent },
+        coding,
+        |at, row| v[at..at + row.len()].copy_from_slice(row),
+    )?;
     if coarse {
         undo_median(&mut v, Walk::new(dims));
     }
@@ -540,13 +708,15 @@ pub fn decode_rows(
     d: &mut Decoder,
     dims: &[usize],
     parent: Option<Parent>,
+    coding: Coding,
     mut row: impl FnMut(usize, &[i64]),
 ) -> Result<()> {
+    let classes = opened(d, coding);
     let ctx = Ctx::new(dims, parent);
-    let mut m = Models::new();
+    let mut m = Models::new(classes);
     let w = ctx.walk;
     let mut q = Window::new(w, false);
-    let mut r = Row::new(w.cols);
+    let mut r = Row::new(w.cols, classes);
     for p in 0..w.planes {
         let pbase = ctx.parent_base(p, dims);
         for y in 0..w.rows {
@@ -615,7 +785,7 @@ mod tests {
                     data: &pq,
                     dims: &pdims,
                 };
-                encode(&mut e, &q, dims, kind, Some(parent));
+                encode(&mut e, &q, dims, kind, Some(parent), Classes::Narrow);
                 written.push((dims.clone(), kind, q.clone(), pq.clone(), pdims.clone()));
             }
         }
@@ -626,7 +796,7 @@ mod tests {
                 data: pq,
                 dims: pdims,
             };
-            let back = decode(&mut d, dims, *kind, Some(parent)).unwrap();
+            let back = decode(&mut d, dims, *kind, Some(parent), Coding::Narrow).unwrap();
             assert_eq!(&back, q, "{dims:?} {kind:?}");
         }
     }
@@ -651,13 +821,13 @@ mod tests {
             })
             .collect();
         let mut e0 = Encoder::new();
-        let q0 = encode_rdo(&mut e0, &x, &dims, None, 0.0);
+        let q0 = encode_rdo(&mut e0, &x, &dims, None, 0.0, Coding::Narrow);
         let b0 = e0.finish();
         for (qi, xi) in q0.iter().zip(&x) {
             assert_eq!(*qi, (xi.abs() + 0.5).floor().copysign(*xi) as i64);
         }
         let mut e1 = Encoder::new();
-        let q1 = encode_rdo(&mut e1, &x, &dims, None, 0.1);
+        let q1 = encode_rdo(&mut e1, &x, &dims, None, 0.1, Coding::Narrow);
         let b1 = e1.finish();
         for ((a, b), xi) in q1.iter().zip(&q0).zip(&x) {
             assert!(*a == *b || *a == b - b.signum() || *a == 0, "{xi} {a} {b}");
@@ -665,7 +835,10 @@ mod tests {
         assert!(b1.len() < b0.len(), "{} vs {}", b1.len(), b0.len());
         for (q, b) in [(&q0, &b0), (&q1, &b1)] {
             let mut d = Decoder::new(b);
-            assert_eq!(&decode(&mut d, &dims, BandKind::Detail, None).unwrap(), q);
+            assert_eq!(
+                &decode(&mut d, &dims, BandKind::Detail, None, Coding::Narrow).unwrap(),
+                q
+            );
         }
     }
 
@@ -701,9 +874,15 @@ mod tests {
             };
             let code = |keep: bool| {
                 let mut e = Encoder::new();
-                let q = encode_rdo_with(&mut e, dims, Some(parent), 0.1, keep, |g, out| {
-                    out.copy_from_slice(&x[g * cols..(g + 1) * cols])
-                });
+                let q = encode_rdo_with(
+                    &mut e,
+                    dims,
+                    Some(parent),
+                    0.1,
+                    Coding::Narrow,
+                    keep,
+                    |g, out| out.copy_from_slice(&x[g * cols..(g + 1) * cols]),
+                );
                 (q, e.finish_short())
             };
             let (q, whole) = code(true);
@@ -714,13 +893,21 @@ mod tests {
             assert!(q.iter().any(|&v| v != 0), "{dims:?}");
             // the chosen indices coded as given (contexts read from the whole band)
             let mut e = Encoder::new();
-            encode(&mut e, &q, dims, BandKind::Detail, Some(parent));
+            encode(
+                &mut e,
+                &q,
+                dims,
+                BandKind::Detail,
+                Some(parent),
+                Classes::Narrow,
+            );
             assert_eq!(e.finish_short(), whole, "{dims:?}");
             let back = decode(
                 &mut Decoder::new_short(&whole),
                 dims,
                 BandKind::Detail,
                 Some(parent),
+                Coding::Narrow,
             )
             .unwrap();
             assert_eq!(back, q, "{dims:?}");
@@ -730,6 +917,7 @@ mod tests {
                 &mut Decoder::new_short(&whole),
                 dims,
                 Some(parent),
+                Coding::Narrow,
                 |at, r| {
                     assert_eq!(at, seen, "{dims:?}");
                     rows[at..at + r.len()].copy_from_slice(r);
@@ -742,13 +930,68 @@ mod tests {
         }
     }
 
+    /// In format 2.3's coding a band of large indices whose scale varies across it
+    /// (16-bit lossless details) takes the wide classes, in fewer bytes than the narrow
+    /// ones; a band of small indices keeps the narrow ones (equal streams but for the
+    /// selector bit: the tie goes to narrow); both decode exactly.
+    #[test]
+    fn chosen_classes_are_wide_for_large_indices_and_narrow_for_small_ones() {
+        let dims = [48usize, 64];
+        let n = 48 * 64;
+        let mut s = 5u64;
+        let big: Vec<i64> = (0..n)
+            .map(|i| {
+                s = s
+                    .wrapping_mul(6364136223846793005)
+                    .wrapping_add(1442695040888963407);
+                let r = (s >> 33) as i64;
+                let scale = 1i64 << ((i % 64) / 6);
+                (r % 9 - 4) * scale + r % 3
+            })
+            .collect();
+        let small = sample(n, 3, 3);
+        for (q, wide) in [(&big, true), (&small, false)] {
+            let chosen = encode_stream(q, &dims, BandKind::Detail, None, Coding::Chosen);
+            let narrow = encode_stream(q, &dims, BandKind::Detail, None, Coding::Narrow);
+            assert_eq!(Decoder::new_short(&chosen).raw(), wide);
+            if wide {
+                assert!(
+                    chosen.len() < narrow.len(),
+                    "{} vs {}",
+                    chosen.len(),
+                    narrow.len()
+                );
+            } else {
+                assert!(chosen.len() <= narrow.len() + 1);
+            }
+            let mut d = Decoder::new_short(&chosen);
+            let back = decode(&mut d, &dims, BandKind::Detail, None, Coding::Chosen).unwrap();
+            assert_eq!(&back, q);
+            let mut d = Decoder::new_short(&narrow);
+            let back = decode(&mut d, &dims, BandKind::Detail, None, Coding::Narrow).unwrap();
+            assert_eq!(&back, q);
+        }
+    }
+
     #[test]
     fn garbage_never_panics() {
         let dims = [13usize, 17];
         for seed in 0..50u64 {
             let bytes: Vec<u8> = sample(40, seed, 128).iter().map(|&v| v as u8).collect();
-            let _ = decode(&mut Decoder::new(&bytes), &dims, BandKind::Detail, None);
-            let _ = decode(&mut Decoder::new(&bytes), &dims, BandKind::Coarse, None);
+            let _ = decode(
+                &mut Decoder::new(&bytes),
+                &dims,
+                BandKind::Detail,
+                None,
+                Coding::Chosen,
+            );
+            let _ = decode(
+                &mut Decoder::new(&bytes),
+                &dims,
+                BandKind::Coarse,
+                None,
+                Coding::Narrow,
+            );
         }
     }
 }

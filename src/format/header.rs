@@ -1,6 +1,6 @@
 //! The `HEAD` chunk: what the data is and how it was coded (formats/MRA.md §4).
 
-use super::{Cursor, MAJOR, OLDEST_MAJOR};
+use super::{Cursor, LATEST_MINOR, MAJOR, OLDEST_MAJOR};
 use crate::io::{DataKind, SampleType};
 use crate::scheme::{Boundary, Scheme};
 use crate::{Error, Result};
@@ -167,6 +167,14 @@ impl Header {
                 what: "format version",
                 value: format!(
                     "{major}.{minor} (this reader implements {OLDEST_MAJOR}.x to {MAJOR}.x)"
+                ),
+            });
+        }
+        if major == MAJOR && minor > LATEST_MINOR {
+            return Err(Error::Unsupported {
+                what: "format version",
+                value: format!(
+                    "{major}.{minor} (this reader implements {MAJOR}.0 to {MAJOR}.{LATEST_MINOR})"
                 ),
             });
         }

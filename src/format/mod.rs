@@ -20,13 +20,19 @@ pub const SIGNATURE: [u8; 8] = [0x8B, b'M', b'R', b'A', 0x0D, 0x0A, 0x1A, 0x0A];
 pub const MAJOR: u8 = 2;
 /// The oldest major version readers still decode.
 pub const OLDEST_MAJOR: u8 = 1;
-/// The minor version written; readers accept any minor of their major.
+/// The minor version written for a file with neither tiles nor format 2.3's coding.
 pub const MINOR: u8 = 0;
 /// The minor version of a file split into tiles (`TIDX` and `TILE` chunks, 2.1).
 pub const MINOR_TILED: u8 = 1;
 /// The minor version of a lossy tiled file whose tiles may be compact (a `TRAT` chunk
 /// of step ratios per tile class, a form byte in each `TILE`, 2.2).
 pub const MINOR_COMPACT: u8 = 2;
+/// The minor version from which every band's stream chooses its magnitude classes,
+/// narrow or wide (2.3; mra writes it for lossless files and tiles).
+pub const MINOR_WIDE: u8 = 3;
+/// The highest minor version of [`MAJOR`] readers implement; they reject higher ones
+/// (a 2.3 band would decode wrongly as a 2.2 one).
+pub const LATEST_MINOR: u8 = MINOR_WIDE;
 /// Largest chunk payload accepted (1 GiB).
 pub const MAX_CHUNK: u64 = 1 << 30;
 
