@@ -125,6 +125,22 @@ fn parse_runs(runs: &str, n: usize) -> Option<Vec<bool>> {
     Some(mask)
 }
 
+/// The void mask a filled raster's metadata lists ([`with_voids_filled`]; one flag per
+/// sample, channels interleaved), `None` without one or when it is malformed.
+pub(super) fn void_mask(r: &RasterView<'_>) -> Option<Vec<bool>> {
+    let runs = r.meta.extra.get(VOID_RUNS)?;
+    let n = crate::io::bytes::sample_count(r.dims, r.channels).ok()?;
+    let mut shape = r.dims.to_vec();
+    shape.push(r.channels);
+    match runs.strip_prefix(CODED) {
+        Some(b64) => base64::engine::general_purpose::STANDARD_NO_PAD
+            .decode(b64)
+            .ok()
+            .map(|data| decode_mask(&data, n, &shape)),
+        None => parse_runs(runs, n),
+    }
+}
+
 /// Mark the voids listed in `meta.extra[VOID_RUNS]` on a raster decoded at level `k`
 /// (an output sample is void when its whole footprint on the full grid is) and drop
 /// the key. A malformed list is ignored.
