@@ -6,6 +6,12 @@ a slab at a time and removed after): peak RSS and time of encode and decode (str
 raw in and out), 1 thread against 2, per-sample speed against a one-piece 512² / 256³
 crop, and a region decode's bytes read (`mra decode --json` `bytes_read`) and time.
 
+The thread count is RAYON_NUM_THREADS, the coding threads of the pool: "1" is one
+worker with the command's own thread waiting for it at every step (one busy core);
+with "2" the command's own thread also reads (encode) or writes (decode) beside the two
+workers. The big files go to /dev/shm when it has room for them, so that the times are
+those of the coding and not of the disk.
+
 Run from the repository root after `cargo build --release`:
     python3 benches/tiles.py [--kodak N] [--skip-rd] [--skip-image] [--skip-volume] [--bpp]
 Needs ../shared/corpus (or MRA_CORPUS) for the Kodak and CT rows and the CT the volume
@@ -24,8 +30,12 @@ MRA = os.environ.get("MRA", "target/release/mra")
 CORPUS = os.environ.get("MRA_CORPUS", "../shared/corpus")
 
 
+CPU = {}
+
+
 def run(args, env=None):
-    """Run mra under /usr/bin/time -v: (stdout, seconds, peak RSS in MiB)."""
+    """Run mra under /usr/bin/time -v: (stdout, seconds, peak RSS in MiB); the CPU seconds
+    (user + system) of the run are left in CPU["last"]."""
     e = dict(os.environ)
     e.update(env or {})
     t = time.time()
@@ -34,7 +44,23 @@ def run(args, env=None):
     if p.returncode != 0:
         sys.exit(f"mra {' '.join(args)} failed:\n{p.stderr[-2000:]}")
     m = re.search(r"Maximum resident set size \(kbytes\): (\d+)", p.stderr)
+    cpu = sum(float(x) for x in re.findall(r"(?:User|System) time \(seconds\): ([\d.]+)", p.stderr))
+    CPU["last"] = cpu
     return p.stdout, dt, int(m.group(1)) / 1024 if m else float("nan")
+
+
+def scratch_dir():
+    """A folder for the big files: /dev/shm when it has room for them (a file system in
+    memory: the times are those of the coding, not of the disk's write-back), else the
+    temporary folder."""
+    shm = "/dev/shm"
+    try:
+        st = os.statvfs(shm)
+        if st.f_bavail * st.f_frsize >= 6 * 2**30:
+            return tempfile.mkdtemp(prefix="mra-tiles-", dir=shm)
+    except OSError:
+        pass
+    return tempfile.mkdtemp(prefix="mra-tiles-")
 
 
 def psnr(a, b, extra=()):
@@ -123,17 +149,20 @@ def big(name, raw, dims, tile_label, rate, region, crop_dims, tmp, bpp, threads=
     for t in threads:
         env = {"RAYON_NUM_THREADS": t}
         out, te, me = run(["encode", raw, "--dims", xyz, "--dtype", "u16", "-o", f, *rate, "--json"], env)
+        ce = CPU["last"]
         enc = json.loads(out)
         _, td, md = run(["decode", f, "-o", back], env)
+        cd = CPU["last"]
         os.remove(back)
-        rows.append((t, te, me, td, md))
-        print(f"| {t} thread(s) | encode {te:.2f} s, {me:.0f} MiB | decode {td:.2f} s, {md:.0f} MiB |", flush=True)
+        rows.append((t, te, me, td, md, ce, cd))
+        print(f"| {t} thread(s) | encode {te:.2f} s ({ce:.2f} s CPU), {me:.0f} MiB "
+              f"| decode {td:.2f} s ({cd:.2f} s CPU), {md:.0f} MiB |", flush=True)
     info = json.loads(run(["info", f, "--json"])[0])
     print(f"file: {info['file_bytes']} bytes ({enc['bits_per_position']:.3f} bits/sample), "
           f"{info['tiles']} tiles of {'x'.join(str(t) for t in reversed(info['tile']))}")
-    print("| threads | encode s | encode peak MiB | decode s | decode peak MiB |\n|---|---|---|---|---|")
-    for t, te, me, td, md in rows:
-        print(f"| {t} | {te:.2f} | {me:.0f} | {td:.2f} | {md:.0f} |")
+    print("| threads | encode s / CPU s / peak MiB | decode s / CPU s / peak MiB |\n|---|---|---|")
+    for t, te, me, td, md, ce, cd in rows:
+        print(f"| {t} | {te:.2f} / {ce:.2f} / {me:.0f} | {td:.2f} / {cd:.2f} / {md:.0f} |")
     if len(rows) == 2:
         print(f"2 threads against 1: encode {rows[0][1] / rows[1][1]:.2f}x, decode {rows[0][3] / rows[1][3]:.2f}x")
     # one piece: a crop of the same data, 2 threads
@@ -177,7 +206,8 @@ def main():
     ap.add_argument("--volume-threads", default="1,2", help="thread counts for the volume, e.g. 2")
     ap.add_argument("--volume-raw", help="use this generated volume (kept) instead of making one")
     a = ap.parse_args()
-    tmp = tempfile.mkdtemp(prefix="mra-tiles-")
+    tmp = scratch_dir()
+    print(f"scratch folder: {tmp}")
     kodak = os.path.join(CORPUS, "images/kodak")
     if os.path.isdir(kodak) and not a.skip_rd:
         tiles = ["whole", "512", "256"]

@@ -718,3 +718,73 @@ fn the_pipelined_slabs_give_the_same_bytes_and_samples_with_any_thread_count() {
         }
     }
 }
+
+/// A chunk rebuilt with a new payload (its CRC recomputed).
+fn chunk(kind: &[u8; 4], payload: &[u8]) -> Vec<u8> {
+    let mut c = mra::format::crc::Crc32c::new();
+    c.update(kind);
+    c.update(payload);
+    let mut v = (payload.len() as u32).to_le_bytes().to_vec();
+    v.extend_from_slice(kind);
+    v.extend_from_slice(payload);
+    v.extend_from_slice(&c.finish().to_le_bytes());
+    v
+}
+
+/// The pipelined decode runs the tiles of a row as pool jobs, a few at a time, and
+/// queues the next row's behind them: a tile whose chunk is sound but whose contents
+/// are not (its body overwritten, its CRC recomputed) stops the decode with an error
+/// naming that tile, after the rows before it, with any thread count and whether the
+/// caller is a thread of the pool or not; the same file unbroken decodes in slabs to
+/// the samples of the whole decode.
+#[test]
+fn a_bad_tile_in_a_pipelined_row_is_named_after_the_rows_before_it() {
+    let dir = common::scratch_dir("tiles_stream");
+    let r = field(&[20, 24, 24], SampleType::U16);
+    let tile = [4, 8, 8];
+    let bytes = codec::encode_tiled(&r, &opts(Rate::Quality(60.0)), &tile).unwrap();
+    // the TILE chunks, in tile order: (start, end past the CRC)
+    let mut tiles = Vec::new();
+    let mut at = 8;
+    while at + 12 <= bytes.len() {
+        let len = u32::from_le_bytes(bytes[at..at + 4].try_into().unwrap()) as usize;
+        if &bytes[at + 4..at + 8] == b"TILE" {
+            tiles.push((at, at + 12 + len));
+        }
+        at += 12 + len;
+    }
+    // 5 rows of 3 × 3 tiles; tile 31 is in the fourth row (27..36)
+    assert_eq!(tiles.len(), 45);
+    let (s, e) = tiles[31];
+    let mut p = bytes[s + 8..e - 4].to_vec();
+    for b in &mut p[4..] {
+        *b = 0xA5;
+    }
+    let bad = [&bytes[..s], &chunk(b"TILE", &p), &bytes[e..]].concat();
+    assert_eq!(bad.len(), bytes.len());
+    let (good_f, bad_f) = (dir.join("good.mra"), dir.join("bad.mra"));
+    std::fs::write(&good_f, &bytes).unwrap();
+    std::fs::write(&bad_f, &bad).unwrap();
+    let whole = codec::decode(&bytes, &DecodeOptions::default()).unwrap();
+    let check = |threads: &str| {
+        let mut k = Keep::default();
+        let d = codec::decode_file_slabs(&good_f, &DecodeOptions::default(), &mut k).unwrap();
+        assert!(d.complete && k.ended && k.slabs == 5, "{threads}");
+        assert_eq!(k.samples, whole.raster.to_f64(), "{threads}");
+        let mut k = Keep::default();
+        let err = codec::decode_file_slabs(&bad_f, &DecodeOptions::default(), &mut k).unwrap_err();
+        assert!(err.to_string().contains("tile 31"), "{threads}: {err}");
+        assert_eq!(k.slabs, 3, "{threads}: the rows before the bad one");
+        assert!(!k.ended, "{threads}");
+    };
+    // the caller outside the pool (the global pool's threads)
+    check("global pool");
+    // the caller a thread of the pool
+    for threads in [1, 2, 3] {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        pool.install(|| check(&format!("{threads} threads")));
+    }
+}

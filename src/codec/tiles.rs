@@ -152,12 +152,36 @@ macro_rules! map_samples {
     };
 }
 
+/// The extents and block of samples over `dims` × `channels` as [`layout::rows`] walks
+/// them with the longest runs: the channels folded into the fastest spatial axis, and
+/// every axis the block covers whole folded into the next slower one (a run per row of
+/// the block, not per sample).
+fn runs(
+    dims: &[usize],
+    channels: usize,
+    ranges: &[Range<usize>],
+) -> (Vec<usize>, Vec<Range<usize>>) {
+    let mut shape = dims.to_vec();
+    let mut r = ranges.to_vec();
+    let last = shape.len() - 1;
+    shape[last] *= channels;
+    r[last] = r[last].start * channels..r[last].end * channels;
+    while shape.len() > 1 {
+        let k = shape.len() - 1;
+        if r[k].start != 0 || r[k].end != shape[k] {
+            break;
+        }
+        let e = shape.pop().expect("more than one axis");
+        r.pop();
+        shape[k - 1] *= e;
+        r[k - 1] = r[k - 1].start * e..r[k - 1].end * e;
+    }
+    (shape, r)
+}
+
 /// The block `ranges` (one per spatial axis) of samples over `dims` × `channels`.
 fn crop_samples(s: &Samples, dims: &[usize], channels: usize, ranges: &[Range<usize>]) -> Samples {
-    let mut shape = dims.to_vec();
-    shape.push(channels);
-    let mut r = ranges.to_vec();
-    r.push(0..channels);
+    let (shape, r) = runs(dims, channels, ranges);
     map_samples!(s, v => layout::gather(v, &shape, &r))
 }
 
@@ -172,14 +196,20 @@ fn copy_block(
     from: &[Range<usize>],
     channels: usize,
 ) -> Result<()> {
-    let packed = crop_samples(src, sdims, channels, from);
-    let mut shape = ddims.to_vec();
-    shape.push(channels);
-    let mut r = to.to_vec();
-    r.push(0..channels);
+    // a whole tile (the usual case) is scattered as it is, without a packed copy
+    let whole = from
+        .iter()
+        .zip(sdims)
+        .all(|(g, &d)| g.start == 0 && g.end == d);
+    let packed = if whole {
+        std::borrow::Cow::Borrowed(src)
+    } else {
+        std::borrow::Cow::Owned(crop_samples(src, sdims, channels, from))
+    };
+    let (shape, r) = runs(ddims, channels, to);
     macro_rules! pair {
         ($($var:ident),*) => {
-            match (dst, &packed) {
+            match (dst, &*packed) {
                 $((Samples::$var(d), Samples::$var(p)) => layout::scatter(d, &shape, &r, p),)*
                 (_, p) => {
                     return Err(Error::format(
@@ -216,6 +246,7 @@ pub(super) fn crop_raster(r: &Raster, ranges: &[Range<usize>]) -> Result<Raster>
 
 mod compact;
 mod encode;
+mod feed;
 use compact::{tile_file, Ratios};
 pub(crate) use encode::encode_slabs;
 
@@ -542,6 +573,30 @@ fn decode_batch(
     }
     batch.clear();
     Ok(())
+}
+
+/// The next message of `rx`, `None` when every sender is gone. On a thread of the pool
+/// (a caller inside `ThreadPool::install`) the wait runs the pool's pending jobs, so that
+/// the jobs it waits for run even when it is the pool's only thread.
+pub(super) fn receive<T>(rx: &std::sync::mpsc::Receiver<T>) -> Option<T> {
+    use std::sync::mpsc::RecvTimeoutError;
+    if rayon::current_thread_index().is_none() {
+        return rx.recv().ok();
+    }
+    loop {
+        match rx.try_recv() {
+            Ok(v) => return Some(v),
+            Err(std::sync::mpsc::TryRecvError::Disconnected) => return None,
+            Err(std::sync::mpsc::TryRecvError::Empty) => {}
+        }
+        if rayon::yield_now() != Some(rayon::Yield::Executed) {
+            match rx.recv_timeout(std::time::Duration::from_millis(1)) {
+                Ok(v) => return Some(v),
+                Err(RecvTimeoutError::Disconnected) => return None,
+                Err(RecvTimeoutError::Timeout) => {}
+            }
+        }
+    }
 }
 
 /// Tiles fetched before they are decoded together: enough to keep every thread busy
@@ -917,14 +972,76 @@ type RowResult = Result<(Samples, bool)>;
 /// A grid row to decode: its stitch and its tiles' payloads.
 type RowTiles = (Stitch, Vec<(usize, Vec<u8>)>);
 
+/// A grid row being decoded in the pool, one job per tile: each tile places its samples
+/// as soon as it is decoded, and the last tile to finish sends the row.
+struct RowJob {
+    /// The row's geometry (its samples are in `samples`).
+    st: Stitch,
+    samples: std::sync::Mutex<Samples>,
+    /// Tiles not yet placed.
+    left: std::sync::atomic::AtomicUsize,
+    /// Whether every tile decoded so far was complete, and the failure of the first tile
+    /// (in tile order) that failed.
+    state: std::sync::Mutex<(bool, Option<(usize, Error)>)>,
+    tx: std::sync::mpsc::SyncSender<RowResult>,
+}
+
+impl RowJob {
+    /// Decode and place tile `i`; the last tile sends the row.
+    fn tile(&self, i: usize, inner: &[u8], allow_truncated: bool) {
+        let r = self
+            .st
+            .decode_tile(i, inner, allow_truncated)
+            .and_then(|d| {
+                let mut s = self.samples.lock().unwrap_or_else(|e| e.into_inner());
+                self.st.place(&mut s, i, &d.raster)?;
+                Ok(d.complete)
+            });
+        {
+            let mut g = self.state.lock().unwrap_or_else(|e| e.into_inner());
+            match r {
+                Ok(c) => g.0 &= c,
+                Err(e) => {
+                    if g.1.as_ref().is_none_or(|(j, _)| i < *j) {
+                        g.1 = Some((i, e));
+                    }
+                }
+            }
+        }
+        if self.left.fetch_sub(1, std::sync::atomic::Ordering::AcqRel) == 1 {
+            self.send();
+        }
+    }
+
+    /// Send the row (or the first failure) to the caller.
+    fn send(&self) {
+        let empty = Samples::zeros(self.st.header.sample_type, 0);
+        let samples = std::mem::replace(
+            &mut *self.samples.lock().unwrap_or_else(|e| e.into_inner()),
+            empty,
+        );
+        let mut g = self.state.lock().unwrap_or_else(|e| e.into_inner());
+        let r = match g.1.take() {
+            Some((_, e)) => Err(e),
+            None => Ok((samples, g.0)),
+        };
+        // the receiver is gone when the caller stopped early
+        let _ = self.tx.send(r);
+    }
+}
+
 /// [`decode_seek`] one tile-row (2-D) or tile-slab (3-D) at a time, so that memory
-/// holds one row of tiles, not the output: the output's shape first, then its rows in
-/// order ([`TiledSlabs::next_slab`]).
+/// holds a few rows of tiles, not the output: the output's shape first, then its rows
+/// in order ([`TiledSlabs::next_slab`]).
 ///
-/// With more than one thread the rows are pipelined: while the caller writes row `g`,
-/// the pool decodes row `g + 1` (its tiles read beforehand on the caller's thread), so
-/// that reading and writing overlap the decoding; one row ahead at most. With one
-/// thread every row is decoded when asked for.
+/// With more than one thread the rows are pipelined, one pool job per tile: when the
+/// caller asks for row `g`, the tiles of row `g + 1` are read (on the caller's thread,
+/// while the pool decodes row `g`) and queued behind row `g`'s, so that the pool goes
+/// from the last tiles of one row to the next row without waiting, and decodes row
+/// `g + 1` while the caller writes row `g`. Memory holds two rows: the one written
+/// and the one decoded (the next is queued when the caller has let go of the one it
+/// wrote). With one thread every row is decoded when asked for, so that one thread is
+/// one busy core.
 pub(super) struct TiledSlabs<R> {
     src: R,
     len: u64,
@@ -935,10 +1052,13 @@ pub(super) struct TiledSlabs<R> {
     opts: DecodeOptions,
     /// The next grid row along the slowest axis.
     g0: usize,
-    /// The row being decoded in the pool.
-    pending: Option<std::sync::mpsc::Receiver<RowResult>>,
+    /// The rows queued in the pool, in order.
+    pending: std::collections::VecDeque<std::sync::mpsc::Receiver<RowResult>>,
     complete: bool,
     ended: bool,
+    /// The tiles queued for the pool (dropped with the decoder).
+    feed: std::sync::Arc<feed::Feed>,
+    _stop: feed::StopOnDrop,
 }
 
 impl<R: Read + Seek> TiledSlabs<R> {
@@ -954,6 +1074,7 @@ impl<R: Read + Seek> TiledSlabs<R> {
         let (meta, index, ratios) = read_index(&mut src, len, after_head, &st)?;
         st.ratios = ratios;
         let shape = st.out_shape(&meta)?;
+        let feed = feed::Feed::new();
         Ok(TiledSlabs {
             src,
             len,
@@ -963,9 +1084,11 @@ impl<R: Read + Seek> TiledSlabs<R> {
             shape,
             opts: opts.clone(),
             g0: 0,
-            pending: None,
+            pending: std::collections::VecDeque::new(),
             complete: true,
             ended: false,
+            _stop: feed.stop_on_drop(),
+            feed,
         })
     }
 
@@ -1007,36 +1130,46 @@ impl<R: Read + Seek> TiledSlabs<R> {
         Ok(None)
     }
 
-    /// Read the next row's tiles and hand their decode to the pool.
+    /// Read the next row's tiles and queue their decode in the pool, a job per tile.
     fn launch(&mut self) -> Result<()> {
-        if let Some((mut row, mut batch)) = self.fetch_row()? {
-            let allow = self.opts.allow_truncated;
-            let (tx, rx) = std::sync::mpsc::sync_channel(1);
-            rayon::spawn(move || {
-                let mut complete = true;
-                let r = decode_batch(&mut row, &mut batch, allow, &mut complete)
-                    .map(|()| (row.samples, complete));
-                // the receiver is gone when the caller stopped early
-                let _ = tx.send(r);
-            });
-            self.pending = Some(rx);
+        let Some((mut row, batch)) = self.fetch_row()? else {
+            return Ok(());
+        };
+        let allow = self.opts.allow_truncated;
+        let (tx, rx) = std::sync::mpsc::sync_channel(1);
+        let samples =
+            std::mem::replace(&mut row.samples, Samples::zeros(row.header.sample_type, 0));
+        let job = std::sync::Arc::new(RowJob {
+            st: row,
+            samples: std::sync::Mutex::new(samples),
+            left: std::sync::atomic::AtomicUsize::new(batch.len()),
+            state: std::sync::Mutex::new((true, None)),
+            tx,
+        });
+        if batch.is_empty() {
+            job.send();
         }
+        self.feed.push(batch.into_iter().map(|(i, inner)| {
+            let job = job.clone();
+            Box::new(move || job.tile(i, &inner, allow)) as feed::Job
+        }));
+        self.pending.push_back(rx);
         Ok(())
     }
 
     /// The next rows of the output (those of one grid row), `None` after the last.
     pub(super) fn next_slab(&mut self) -> Result<Option<Samples>> {
         if rayon::current_num_threads() > 1 {
-            if self.pending.is_none() && self.g0 == 0 {
+            if self.g0 == 0 {
                 self.launch()?;
             }
-            if let Some(rx) = self.pending.take() {
-                let (samples, complete) = rx.recv().map_err(|_| {
+            // the next row is read and queued while this one is decoded
+            self.launch()?;
+            if let Some(rx) = self.pending.pop_front() {
+                let (samples, complete) = receive(&rx).ok_or_else(|| {
                     Error::Io(std::io::Error::other("a tile row's decoder stopped"))
                 })??;
                 self.complete &= complete;
-                // the next row is decoded while this one is written
-                self.launch()?;
                 return Ok(Some(samples));
             }
         } else if let Some((mut row, mut batch)) = self.fetch_row()? {
@@ -1057,5 +1190,68 @@ impl<R: Read + Seek> TiledSlabs<R> {
             }
         }
         Ok(None)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The samples of `block` of a raster `dims` × `c` counted out one sample at a time.
+    fn by_hand(v: &[u32], dims: &[usize], c: usize, block: &[Range<usize>]) -> Vec<u32> {
+        let mut out = Vec::new();
+        let n: usize = block.iter().map(|g| g.len()).product();
+        for k in 0..n {
+            // the k-th position of the block, slowest axis first
+            let (mut rest, mut flat) = (k, 0);
+            let mut idx = vec![0; dims.len()];
+            for a in (0..dims.len()).rev() {
+                idx[a] = block[a].start + rest % block[a].len();
+                rest /= block[a].len();
+            }
+            for a in 0..dims.len() {
+                flat = flat * dims[a] + idx[a];
+            }
+            out.extend((0..c).map(|ch| v[flat * c + ch]));
+        }
+        out
+    }
+
+    /// Extents, channels and a block.
+    type Case = (&'static [usize], usize, Vec<Range<usize>>);
+
+    #[test]
+    fn blocks_cut_and_placed_in_long_runs_hold_the_samples_counted_one_by_one() {
+        let cases: [Case; 6] = [
+            (&[6, 7], 1, vec![0..6, 0..7]),
+            (&[6, 7], 3, vec![2..5, 0..7]),
+            (&[6, 7], 3, vec![0..6, 3..4]),
+            (&[4, 5, 6], 1, vec![1..3, 0..5, 0..6]),
+            (&[4, 5, 6], 2, vec![0..4, 2..5, 1..6]),
+            (&[4, 5, 6], 1, vec![3..4, 4..5, 5..6]),
+        ];
+        for (dims, c, block) in cases {
+            let n = dims.iter().product::<usize>() * c;
+            let v: Vec<u32> = (0..n as u32).map(|x| x * 7 + 1).collect();
+            let want = by_hand(&v, dims, c, &block);
+            let got = crop_samples(&Samples::U32(v.clone()), dims, c, &block);
+            assert_eq!(got, Samples::U32(want.clone()), "{dims:?} {c} {block:?}");
+            // placed back into zeros: the block's samples where they were, zeros elsewhere
+            let bdims: Vec<usize> = block.iter().map(|g| g.len()).collect();
+            let whole: Vec<Range<usize>> = bdims.iter().map(|&d| 0..d).collect();
+            let mut dst = Samples::U32(vec![0; n]);
+            copy_block(&mut dst, dims, &block, &got, &bdims, &whole, c).unwrap();
+            let back = crop_samples(&dst, dims, c, &block);
+            assert_eq!(back, Samples::U32(want), "{dims:?} {c} {block:?}");
+            let Samples::U32(d) = &dst else {
+                unreachable!()
+            };
+            let placed = d.iter().filter(|&&x| x != 0).count();
+            assert_eq!(
+                placed,
+                bdims.iter().product::<usize>() * c,
+                "{dims:?} {block:?}"
+            );
+        }
     }
 }

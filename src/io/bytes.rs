@@ -182,6 +182,52 @@ pub fn encode(s: &Samples, big_endian: bool) -> Vec<u8> {
     }
 }
 
+/// The bytes of samples `r` of `s` (as [`encode`] gives them) into `out`, replacing its
+/// contents: a reused buffer instead of a copy of the samples and a fresh vector.
+pub fn encode_into(s: &Samples, r: std::ops::Range<usize>, big_endian: bool, out: &mut Vec<u8>) {
+    macro_rules! enc {
+        ($v:expr, $size:expr, $write:ident) => {{
+            let v = &$v[r];
+            out.clear();
+            out.resize(v.len() * $size, 0);
+            for (c, &x) in out.chunks_exact_mut($size).zip(v.iter()) {
+                if big_endian {
+                    BigEndian::$write(c, x);
+                } else {
+                    LittleEndian::$write(c, x);
+                }
+            }
+        }};
+    }
+    match s {
+        Samples::U8(v) => {
+            out.clear();
+            out.extend_from_slice(&v[r]);
+        }
+        Samples::I8(v) => {
+            out.clear();
+            out.extend(v[r].iter().map(|&x| x as u8));
+        }
+        Samples::U16(v) => enc!(v, 2, write_u16),
+        Samples::I16(v) => enc!(v, 2, write_i16),
+        Samples::U32(v) => enc!(v, 4, write_u32),
+        Samples::I32(v) => enc!(v, 4, write_i32),
+        Samples::F16(v) => {
+            out.clear();
+            out.resize(v[r.clone()].len() * 2, 0);
+            for (c, x) in out.chunks_exact_mut(2).zip(&v[r]) {
+                if big_endian {
+                    BigEndian::write_u16(c, x.to_bits());
+                } else {
+                    LittleEndian::write_u16(c, x.to_bits());
+                }
+            }
+        }
+        Samples::F32(v) => enc!(v, 4, write_f32),
+        Samples::F64(v) => enc!(v, 8, write_f64),
+    }
+}
+
 /// Write through `body` into a temporary file beside `path`, then rename it onto
 /// `path` ([`crate::fsutil::write_atomic`]).
 pub fn atomic_write<F>(path: &Path, body: F) -> Result<()>

@@ -68,6 +68,12 @@ pub trait SlabSource {
     fn shape(&self) -> &Shape;
     /// The samples of rows `rows` of the slowest axis (within `0..dims[0]`).
     fn read_rows(&mut self, rows: Range<usize>) -> Result<Samples>;
+    /// [`SlabSource::read_rows`], its pieces read on the threads of the pool where the
+    /// source allows it (the same samples; for a caller with nothing else for the pool
+    /// to do).
+    fn read_rows_parallel(&mut self, rows: Range<usize>) -> Result<Samples> {
+        self.read_rows(rows)
+    }
 }
 
 /// A raster in memory as a [`SlabSource`].
@@ -163,20 +169,108 @@ impl SlabSource for FileSlabs {
         let n = rows.len() * per;
         self.file.seek(SeekFrom::Start(at))?;
         let rd = std::io::BufReader::with_capacity(1 << 20, (&self.file).take(n as u64 * size));
-        bytes::read_samples(rd, n, self.shape.sample_type, self.big_endian).map_err(|e| {
-            match e.kind() {
-                std::io::ErrorKind::UnexpectedEof => Error::format(
-                    format!(
-                        "{} ends within rows {}..{} (file changed while reading)",
-                        self.path.display(),
-                        rows.start,
-                        rows.end
-                    ),
-                    "a stable file",
-                ),
-                _ => e.into(),
+        bytes::read_samples(rd, n, self.shape.sample_type, self.big_endian)
+            .map_err(|e| self.read_error(e, &rows))
+    }
+
+    #[cfg(unix)]
+    fn read_rows_parallel(&mut self, rows: Range<usize>) -> Result<Samples> {
+        use byteorder::{BigEndian, LittleEndian, ReadBytesExt};
+        use rayon::prelude::*;
+        check_rows(&self.shape, &rows)?;
+        let per = self.shape.row_samples();
+        let ty = self.shape.sample_type;
+        let size = ty.size();
+        let at = self.offset + (rows.start * per * size) as u64;
+        let n = rows.len() * per;
+        // pieces of 2^20 samples, each read at its own offset (`pread`) by a thread of
+        // the pool
+        const PIECE: usize = 1 << 20;
+        let file = &self.file;
+        let big = self.big_endian;
+        let reader = |k: usize| At {
+            file,
+            pos: at + (k * PIECE * size) as u64,
+        };
+        macro_rules! typed {
+            ($t:ty, $read:ident) => {{
+                let mut v: Vec<$t> = crate::tensor::zeroed_vec(n);
+                v.par_chunks_mut(PIECE)
+                    .enumerate()
+                    .try_for_each(|(k, c)| {
+                        if big {
+                            reader(k).$read::<BigEndian>(c)
+                        } else {
+                            reader(k).$read::<LittleEndian>(c)
+                        }
+                    })
+                    .map_err(|e| self.read_error(e, &rows))?;
+                v
+            }};
+        }
+        Ok(match ty {
+            SampleType::U8 => {
+                let mut v: Vec<u8> = crate::tensor::zeroed_vec(n);
+                v.par_chunks_mut(PIECE)
+                    .enumerate()
+                    .try_for_each(|(k, c)| reader(k).read_exact(c))
+                    .map_err(|e| self.read_error(e, &rows))?;
+                Samples::U8(v)
             }
+            SampleType::I8 => {
+                let mut v: Vec<i8> = crate::tensor::zeroed_vec(n);
+                v.par_chunks_mut(PIECE)
+                    .enumerate()
+                    .try_for_each(|(k, c)| reader(k).read_i8_into(c))
+                    .map_err(|e| self.read_error(e, &rows))?;
+                Samples::I8(v)
+            }
+            SampleType::U16 => Samples::U16(typed!(u16, read_u16_into)),
+            SampleType::I16 => Samples::I16(typed!(i16, read_i16_into)),
+            SampleType::U32 => Samples::U32(typed!(u32, read_u32_into)),
+            SampleType::I32 => Samples::I32(typed!(i32, read_i32_into)),
+            SampleType::F16 => {
+                let bits: Vec<u16> = typed!(u16, read_u16_into);
+                Samples::F16(bits.into_iter().map(half::f16::from_bits).collect())
+            }
+            SampleType::F32 => Samples::F32(typed!(f32, read_f32_into)),
+            SampleType::F64 => Samples::F64(typed!(f64, read_f64_into)),
         })
+    }
+}
+
+impl FileSlabs {
+    /// The error of a read of rows `rows`: the file ending early means it changed.
+    fn read_error(&self, e: std::io::Error, rows: &Range<usize>) -> Error {
+        match e.kind() {
+            std::io::ErrorKind::UnexpectedEof => Error::format(
+                format!(
+                    "{} ends within rows {}..{} (file changed while reading)",
+                    self.path.display(),
+                    rows.start,
+                    rows.end
+                ),
+                "a stable file",
+            ),
+            _ => e.into(),
+        }
+    }
+}
+
+/// A reader at a byte offset of a shared file, by positioned reads (`pread`): readers at
+/// different offsets of one file on several threads.
+#[cfg(unix)]
+struct At<'a> {
+    file: &'a File,
+    pos: u64,
+}
+
+#[cfg(unix)]
+impl Read for At<'_> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        let k = std::os::unix::fs::FileExt::read_at(self.file, buf, self.pos)?;
+        self.pos += k as u64;
+        Ok(k)
     }
 }
 

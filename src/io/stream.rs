@@ -39,6 +39,13 @@ impl SlabSource for Slabs {
             Slabs::Tiff(t) => t.read_rows(rows),
         }
     }
+
+    fn read_rows_parallel(&mut self, rows: Range<usize>) -> Result<Samples> {
+        match self {
+            Slabs::File(f) => f.as_mut().read_rows_parallel(rows),
+            Slabs::Tiff(t) => t.read_rows(rows),
+        }
+    }
 }
 
 /// A file readable in slabs: a `.raw` with its layout, a NRRD of raw encoding, or a
@@ -92,6 +99,8 @@ pub struct StreamSink<W: Write> {
     w: W,
     nrrd: bool,
     left: u64,
+    /// The bytes of the piece being written.
+    buf: Vec<u8>,
 }
 
 /// Write a raster handed over in slabs (`next` gives the rows of the slowest axis in
@@ -132,7 +141,12 @@ pub fn sink_for<W: Write>(path: &Path, w: W) -> Result<StreamSink<W>> {
             })
         }
     };
-    Ok(StreamSink { w, nrrd, left: 0 })
+    Ok(StreamSink {
+        w,
+        nrrd,
+        left: 0,
+        buf: Vec::new(),
+    })
 }
 
 impl<W: Write> SlabSink for StreamSink<W> {
@@ -156,16 +170,12 @@ impl<W: Write> SlabSink for StreamSink<W> {
             ));
         }
         self.left -= n;
-        // a piece at a time: no byte copy of the whole slab beside it
+        // a piece at a time through one buffer: no byte copy of the whole slab beside it
         const PIECE: usize = 1 << 20;
         let len = samples.len();
-        if len <= PIECE {
-            self.w.write_all(&bytes::encode(samples, false))?;
-        } else {
-            for at in (0..len).step_by(PIECE) {
-                let piece = samples.range(at..(at + PIECE).min(len));
-                self.w.write_all(&bytes::encode(&piece, false))?;
-            }
+        for at in (0..len).step_by(PIECE) {
+            bytes::encode_into(samples, at..(at + PIECE).min(len), false, &mut self.buf);
+            self.w.write_all(&self.buf)?;
         }
         Ok(())
     }

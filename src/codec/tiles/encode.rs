@@ -13,6 +13,7 @@
 //! the `--psnr` / `--bpp` search measures the sample.
 
 use super::compact::{self, Ratios, TRAT};
+use super::feed::{self, Feed};
 use super::{crop_samples, Grid, SEARCH_SAMPLE_TILES, TIDX, TILE};
 use crate::codec::container::{HEAD, MEND, META};
 use crate::codec::encode::encode_filled;
@@ -71,6 +72,31 @@ impl Ranges {
     }
 
     fn add_range(&mut self, s: &Samples, r: std::ops::Range<usize>) {
+        // integers are never NaN nor infinite: their extremes, in their own type
+        macro_rules! ints {
+            ($v:expr) => {{
+                let part = &$v[r];
+                if let Some(&first) = part.first() {
+                    let (lo, hi) = part
+                        .iter()
+                        .fold((first, first), |(a, b), &x| (a.min(x), b.max(x)));
+                    self.merge(&Ranges {
+                        finite: (lo as f64, hi as f64),
+                        all: Some((lo as f64, hi as f64)),
+                    });
+                }
+                return;
+            }};
+        }
+        match s {
+            Samples::U8(v) => ints!(v),
+            Samples::I8(v) => ints!(v),
+            Samples::U16(v) => ints!(v),
+            Samples::I16(v) => ints!(v),
+            Samples::U32(v) => ints!(v),
+            Samples::I32(v) => ints!(v),
+            _ => {}
+        }
         let (mut flo, mut fhi) = self.finite;
         let (mut lo, mut hi) = self.all.unwrap_or((f64::INFINITY, f64::NEG_INFINITY));
         for i in r {
@@ -110,9 +136,9 @@ enum Coding {
     Step { step: f64, rdo: bool },
 }
 
-/// The tiles of the slab of grid row `g0` (tiles `g0·per_row ..`), each cut from `slab`
-/// (the rows of that grid row), its voids filled in the tile.
-fn slab_tile(grid: &Grid, shape: &Shape, slab: &Samples, row0: usize, i: usize) -> Result<Raster> {
+/// Tile `i` cut from `slab` (the rows of its grid row, from row `row0`), its voids
+/// not filled.
+fn cut_tile(grid: &Grid, shape: &Shape, slab: &Samples, row0: usize, i: usize) -> Result<Raster> {
     let mut g = grid.ranges(i);
     let slab_rows = grid.extent(0, grid.coords(i)[0]);
     g[0] = g[0].start - row0..g[0].end - row0;
@@ -125,6 +151,12 @@ fn slab_tile(grid: &Grid, shape: &Shape, slab: &Samples, row0: usize, i: usize) 
         shape.kind,
     )?;
     t.meta.nodata = shape.meta.nodata;
+    Ok(t)
+}
+
+/// Tile `i` cut from `slab` (rows from `row0`), its voids filled in the tile.
+fn slab_tile(grid: &Grid, shape: &Shape, slab: &Samples, row0: usize, i: usize) -> Result<Raster> {
+    let t = cut_tile(grid, shape, slab, row0, i)?;
     Ok(with_voids_filled(&t.view())?.unwrap_or(t))
 }
 
@@ -181,41 +213,22 @@ pub(crate) fn encode_slabs<S: SlabSource + ?Sized, W: Write + Seek>(
     let every = n.div_ceil(SEARCH_SAMPLE_TILES).max(1);
     let mut ranges = Ranges::new();
     let mut sample: Vec<Raster> = Vec::new();
-    // with more than one thread the next slab is read while this one is measured and
-    // coded
+    // with more than one thread the next slab is read while this one is coded
     let ahead = rayon::current_num_threads() > 1;
     if first_pass {
-        let mut next = Some(src.read_rows(rows_of(0))?);
+        // the pool has nothing else to do: each slab is read on all its threads, then
+        // measured
         for g0 in 0..rows {
             let r = rows_of(g0);
-            let slab = match next.take() {
-                Some(s) => s,
-                None => src.read_rows(r.clone())?,
-            };
-            let job = || -> Result<(Ranges, Vec<Raster>)> {
-                let mut got = Ranges::new();
-                got.add(&slab);
-                let mine: Vec<usize> = (g0 * per_row..(g0 + 1) * per_row)
-                    .filter(|i| sampled && i % every == 0)
-                    .collect();
-                let tiles: Vec<Raster> = mine
-                    .par_iter()
-                    .map(|&i| slab_tile(&grid, &shape, &slab, r.start, i))
-                    .collect::<Result<_>>()?;
-                Ok((got, tiles))
-            };
-            let (got, tiles) = if ahead && g0 + 1 < rows {
-                let (got, read) = std::thread::scope(|s| {
-                    let measuring = s.spawn(job);
-                    let read = src.read_rows(rows_of(g0 + 1));
-                    (measuring.join(), read)
-                });
-                next = Some(read?);
-                got.map_err(|_| stopped())??
-            } else {
-                job()?
-            };
-            ranges.merge(&got);
+            let slab = src.read_rows_parallel(r.clone())?;
+            ranges.add(&slab);
+            let mine: Vec<usize> = (g0 * per_row..(g0 + 1) * per_row)
+                .filter(|i| sampled && i % every == 0)
+                .collect();
+            let tiles: Vec<Raster> = mine
+                .par_iter()
+                .map(|&i| slab_tile(&grid, &shape, &slab, r.start, i))
+                .collect::<Result<_>>()?;
             sample.extend(tiles);
         }
     }
@@ -267,81 +280,88 @@ pub(crate) fn encode_slabs<S: SlabSource + ?Sized, W: Write + Seek>(
     };
     drop(sample);
 
-    // HEAD, mETA and TIDX are reserved when the first slab is coded, and rewritten at
-    // the end with the raster's range and the tiles' places
+    // HEAD, mETA and TIDX are reserved when the first tile is written, and rewritten
+    // at the end with the raster's range and the tiles' places
     let start = out.stream_position()?;
     out.write_all(&format::SIGNATURE)?;
-    let mut head: Option<(u64, Header)> = None;
-    // the step ratios of each tile class when the tiles are compact (lossy files, 2.2)
-    let mut ratios: Option<Ratios> = None;
-    let mut index_at = 0u64;
-    let mut index = Vec::with_capacity(16 * n);
-    let mut at = start + 8;
+    let mut w = TileWriter {
+        grid: &grid,
+        shape: &shape,
+        head: None,
+        ratios: None,
+        index_at: 0,
+        index: Vec::with_capacity(16 * n),
+        at: start + 8,
+    };
     let mut ranges_now = Ranges::new();
+    let measure = !first_pass;
+    // The tiles are coded one pool job each and written in tile order as they come.
+    // With more than one thread the slabs are pipelined: the tiles of slab g are queued
+    // behind those of slab g − 1 (the pool goes from one slab's last tiles to the next
+    // slab's without waiting), and slab g + 1 is read while slab g is coded, once the
+    // tiles of slab g − 1 are written (memory holds two slabs and a tile per thread).
+    // With one thread each slab is coded and written before the next is read.
+    let feed = Feed::new();
+    let _stop = feed.stop_on_drop();
+    let common = std::sync::Arc::new((grid.clone(), shape.clone(), opts.clone()));
+    let (tx, rx) = std::sync::mpsc::channel::<(usize, Result<(Vec<u8>, Ranges)>)>();
+    // coded tiles that came before their turn to be written
+    let mut early = std::collections::BTreeMap::new();
+    let mut written = 0usize;
+    let mut drain = |upto: usize, w: &mut TileWriter, out: &mut W, rn: &mut Ranges| {
+        while written < upto {
+            let c = match early.remove(&written) {
+                Some(c) => c,
+                None => {
+                    let (i, r) = super::receive(&rx).ok_or_else(stopped)?;
+                    let (c, got) = r?;
+                    rn.merge(&got);
+                    if i != written {
+                        early.insert(i, c);
+                        continue;
+                    }
+                    c
+                }
+            };
+            w.put(out, written, &c)?;
+            written += 1;
+        }
+        Ok::<(), Error>(())
+    };
     let mut next = Some(src.read_rows(rows_of(0))?);
     for g0 in 0..rows {
-        let r = rows_of(g0);
-        let slab = match next.take() {
-            Some(s) => s,
-            None => src.read_rows(r.clone())?,
-        };
-        if !first_pass {
-            ranges_now.add(&slab);
-        }
-        let mine: Vec<usize> = (g0 * per_row..(g0 + 1) * per_row).collect();
-        let job = || code_slab(&grid, &shape, &slab, r.start, &mine, coding, opts);
-        let coded = if ahead && g0 + 1 < rows {
-            let (coded, read) = std::thread::scope(|s| {
-                let coding = s.spawn(job);
-                let read = src.read_rows(rows_of(g0 + 1));
-                (coding.join(), read)
-            });
-            next = Some(read?);
-            coded.map_err(|_| stopped())??
-        } else {
-            job()?
-        };
+        let row0 = rows_of(g0).start;
+        let slab = std::sync::Arc::new(next.take().expect("read before its turn"));
+        feed.push((g0 * per_row..(g0 + 1) * per_row).map(|i| {
+            let (tx, slab, common) = (tx.clone(), slab.clone(), common.clone());
+            Box::new(move || {
+                let (grid, shape, opts) = &*common;
+                let got = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                    code_tile(grid, shape, &slab, row0, i, coding, opts, measure)
+                }));
+                drop(slab);
+                // the receiver is gone when writing failed
+                let _ = tx.send((i, got.unwrap_or_else(|_| Err(stopped()))));
+            }) as feed::Job
+        }));
         drop(slab);
-        if head.is_none() {
-            // the tiles' common fields from the first tile's HEAD (after the signature)
-            let first = &coded[0];
-            let hl = u32::from_le_bytes(first[8..12].try_into().unwrap()) as usize;
-            let mut h = Header::parse(&first[16..16 + hl])?;
-            h.minor = if h.mode == Mode::Lossy {
-                format::MINOR_COMPACT
-            } else {
-                format::MINOR_TILED
-            };
-            h.dims = shape.dims.clone();
-            h.tile = grid.tile.clone();
-            at += write_chunk(out, HEAD, &[&h.to_bytes()])?;
-            let m = meta::to_bytes(&shape.meta);
-            if !m.is_empty() {
-                at += write_chunk(out, META, &[&m])?;
-            }
-            if h.mode == Mode::Lossy {
-                let r = Ratios::of(&h, &grid)?;
-                at += write_chunk(out, TRAT, &[&r.to_bytes()])?;
-                ratios = Some(r);
-            }
-            index_at = at;
-            at += write_chunk(out, TIDX, &[&vec![0u8; 16 * n]])?;
-            head = Some((start + 8, h));
-        }
-        let h = &head.as_ref().expect("the head is written first").1;
-        for (&i, c) in mine.iter().zip(&coded) {
-            let body = match &ratios {
-                Some(r) => std::borrow::Cow::Owned(compact::tile_body(c, h, &grid, r, i)),
-                None => std::borrow::Cow::Borrowed(&c[8..]),
-            };
-            let bytes = write_chunk(out, TILE, &[&(i as u32).to_le_bytes(), &body])?;
-            index.extend_from_slice(&at.to_le_bytes());
-            index.extend_from_slice(&bytes.to_le_bytes());
-            at += bytes;
+        let upto = if ahead {
+            g0 * per_row
+        } else {
+            (g0 + 1) * per_row
+        };
+        drain(upto, &mut w, &mut *out, &mut ranges_now)?;
+        if g0 + 1 < rows {
+            next = Some(src.read_rows(rows_of(g0 + 1))?);
         }
     }
-    at += write_chunk(out, MEND, &[])?;
-    let (head_at, mut h) = head.ok_or_else(|| Error::parameter("tile", 0, "a tile"))?;
+    drop(tx);
+    drain(n, &mut w, &mut *out, &mut ranges_now)?;
+    w.at += write_chunk(out, MEND, &[])?;
+    let at = w.at;
+    let (head_at, mut h) = w
+        .head
+        .ok_or_else(|| Error::parameter("tile", 0, "a tile"))?;
     (h.min, h.max) = if first_pass {
         ranges.finite()
     } else {
@@ -349,11 +369,69 @@ pub(crate) fn encode_slabs<S: SlabSource + ?Sized, W: Write + Seek>(
     };
     out.seek(SeekFrom::Start(head_at))?;
     write_chunk(out, HEAD, &[&h.to_bytes()])?;
-    out.seek(SeekFrom::Start(index_at))?;
-    write_chunk(out, TIDX, &[&index])?;
+    out.seek(SeekFrom::Start(w.index_at))?;
+    write_chunk(out, TIDX, &[&w.index])?;
     out.seek(SeekFrom::Start(at))?;
     out.flush()?;
     Ok(at - start)
+}
+
+/// The chunks of a tiled file written in order: `HEAD`, `mETA`, `TRAT` and `TIDX`
+/// (zeroed) from the first tile's coded file, then each tile's `TILE` chunk.
+struct TileWriter<'a> {
+    grid: &'a Grid,
+    shape: &'a Shape,
+    /// Where `HEAD` is and the file's header (its range set at the end).
+    head: Option<(u64, Header)>,
+    /// The step ratios of each tile class when the tiles are compact (lossy, 2.2).
+    ratios: Option<Ratios>,
+    index_at: u64,
+    index: Vec<u8>,
+    /// The byte the next chunk starts at.
+    at: u64,
+}
+
+impl TileWriter<'_> {
+    /// Write tile `i` from its coded one-tile file `c` (tile 0 first).
+    fn put<W: Write>(&mut self, out: &mut W, i: usize, c: &[u8]) -> Result<()> {
+        let (grid, n) = (self.grid, self.grid.len());
+        if self.head.is_none() {
+            // the tiles' common fields from the first tile's HEAD (after the signature)
+            let hl = u32::from_le_bytes(c[8..12].try_into().unwrap()) as usize;
+            let mut h = Header::parse(&c[16..16 + hl])?;
+            h.minor = if h.mode == Mode::Lossy {
+                format::MINOR_COMPACT
+            } else {
+                format::MINOR_TILED
+            };
+            h.dims = self.shape.dims.clone();
+            h.tile = grid.tile.clone();
+            let head_at = self.at;
+            self.at += write_chunk(out, HEAD, &[&h.to_bytes()])?;
+            let m = meta::to_bytes(&self.shape.meta);
+            if !m.is_empty() {
+                self.at += write_chunk(out, META, &[&m])?;
+            }
+            if h.mode == Mode::Lossy {
+                let r = Ratios::of(&h, grid)?;
+                self.at += write_chunk(out, TRAT, &[&r.to_bytes()])?;
+                self.ratios = Some(r);
+            }
+            self.index_at = self.at;
+            self.at += write_chunk(out, TIDX, &[&vec![0u8; 16 * n]])?;
+            self.head = Some((head_at, h));
+        }
+        let h = &self.head.as_ref().expect("the head is written first").1;
+        let body = match &self.ratios {
+            Some(r) => std::borrow::Cow::Owned(compact::tile_body(c, h, grid, r, i)),
+            None => std::borrow::Cow::Borrowed(&c[8..]),
+        };
+        let bytes = write_chunk(out, TILE, &[&(i as u32).to_le_bytes(), &body])?;
+        self.index.extend_from_slice(&self.at.to_le_bytes());
+        self.index.extend_from_slice(&bytes.to_le_bytes());
+        self.at += bytes;
+        Ok(())
+    }
 }
 
 /// The error of a slab's coding thread that ended without its result.
@@ -361,32 +439,36 @@ fn stopped() -> Error {
     Error::Io(std::io::Error::other("a tile slab's coder stopped"))
 }
 
-/// The coded one-tile files of tiles `mine` of the slab `slab` (rows from `row0`), in
-/// parallel.
-fn code_slab(
+/// The coded one-tile file of tile `i` of the slab `slab` (rows from `row0`), and the
+/// range of its samples when `measure` (before its voids are filled).
+#[allow(clippy::too_many_arguments)]
+fn code_tile(
     grid: &Grid,
     shape: &Shape,
     slab: &Samples,
     row0: usize,
-    mine: &[usize],
+    i: usize,
     coding: Coding,
     opts: &EncodeOptions,
-) -> Result<Vec<Vec<u8>>> {
-    mine.par_iter()
-        .map(|&i| {
-            let t = slab_tile(grid, shape, slab, row0, i)?;
-            match coding {
-                Coding::Own => encode_filled(&t.view(), opts),
-                Coding::Step { step, rdo } => {
-                    let mut p = prepare(&t.view(), opts, Mode::Lossy)?;
-                    if rdo {
-                        p.optimise();
-                    }
-                    Ok(p.code(step))
-                }
+    measure: bool,
+) -> Result<(Vec<u8>, Ranges)> {
+    let t = cut_tile(grid, shape, slab, row0, i)?;
+    let mut got = Ranges::new();
+    if measure {
+        got.add_range(&t.samples, 0..t.samples.len());
+    }
+    let t = with_voids_filled(&t.view())?.unwrap_or(t);
+    let c = match coding {
+        Coding::Own => encode_filled(&t.view(), opts)?,
+        Coding::Step { step, rdo } => {
+            let mut p = prepare(&t.view(), opts, Mode::Lossy)?;
+            if rdo {
+                p.optimise();
             }
-        })
-        .collect()
+            p.code(step)
+        }
+    };
+    Ok((c, got))
 }
 
 /// The base step of `--psnr` and `--bpp` for the whole raster (`n` tiles): a search on
