@@ -4,17 +4,38 @@
 //! each written as start block + regular rows + end block) applied along any axis of any
 //! array. On it stand the codec, the upscaler, terrain synthesis and the course module.
 //!
+//! The module map, lowest layer first. A module may use the modules of a lower layer, and
+//! those of its own layer only where `tests/architecture.rs` lists the pair; the test reads
+//! the layers from this table and checks it against `src/`.
+//!
 //! ```text
-//! src/error.rs        Error with kind(): Parameter, Format, Unsupported, LimitsExceeded, Io
-//! src/scheme/         1D schemes (Haar, Chaikin, cubic B-spline), boundary modes, subdivision
-//! src/tensor/         N-d arrays, transforms along any axis, pyramids; par.rs holds the rayon code
-//! src/io/             images, volumes, heightmaps, point lists (one file per format)
-//! src/metrics.rs      MSE, PSNR, SSIM
-//! src/curve/          Bézier, B-spline (de Boor), NURBS, knot insertion
-//! src/surface/        patches, Coons, revolution, sweep, blends
-//! src/mesh/           half-edge meshes, I/O, topology, subdivision surfaces
-//! src/solid/          implicit solids, CSG, ray casting, polygonisation
-//! src/cli/            the `mra` command line, a thin shell over the above
+//! layer  module            job
+//! 0      src/error.rs      Error with kind(): Parameter, Format, Unsupported, LimitsExceeded, Io
+//! 0      src/fsutil.rs     temporary outputs renamed into place, removed on failure or signal
+//! 0      src/tuning.rs     every environment variable and tuning constant, read in one place
+//! 0      src/progress.rs   progress reports of long work
+//! 0      src/limits.rs     the memory budget a declared size must fit before allocation
+//! 1      src/scheme/       1D schemes (Haar, Chaikin, cubic B-spline, CDF), boundary modes
+//! 1      src/kernel/       row kernels: scalar, AVX2, AVX-512, one table chosen per plan
+//! 2      src/tensor/       N-d arrays, transforms along any axis, pyramids, the rayon helpers
+//! 3      src/io/           images, volumes, heightmaps, point lists (one file per format)
+//! 3      src/metrics.rs    MSE, PSNR, SSIM
+//! 3      src/generate/     the test rasters and volumes of `mra generate`
+//! 3      src/demo.rs       the demo table's rows and the generated data they run on
+//! 4      src/format/       the .mra container's header, chunks and checksums
+//! 4      src/quantize/     quantizers and rate–distortion choices
+//! 4      src/entropy/      the coefficient coders
+//! 4      src/codec/        encode and decode of .mra files (one file per job)
+//! 5      src/upscale/      upscaling by the pyramid's details
+//! 5      src/terrain/      terrain synthesis by example, rendering
+//! 5      src/denoise.rs    wavelet denoising
+//! 5      src/style.rs      curve style transfer
+//! 5      src/curve/        Bézier, B-spline (de Boor), NURBS, knot insertion
+//! 5      src/surface/      patches, Coons, revolution, sweep, blends
+//! 5      src/mesh/         half-edge meshes, I/O, topology, subdivision surfaces
+//! 5      src/solid/        implicit solids, CSG, ray casting, polygonisation
+//! 5      src/points.rs     point lists as text (one point per line)
+//! 6      src/cli/          the `mra` command line, a thin shell over the above
 //! ```
 //!
 //! Data flows one way: read → array → transform → (quantize → code → container) → back.

@@ -142,51 +142,58 @@ pub fn max_bytes_var() -> Option<String> {
     std::env::var("MRA_MAX_BYTES").ok()
 }
 
-/// Keep freed buffers of up to 32 MiB in glibc's allocator instead of returning them to
-/// the system (`mallopt`: blocks from 32 MiB on are mapped and unmapped directly, the heap
-/// trimmed from 256 MiB of free space on): a command that allocates and frees image-sized
-/// arrays a dozen times (the refined area upscaler) otherwise pays a page fault per
-/// fresh page, a third of its time on a Kodak image. Larger arrays (volumes) are still
-/// mapped directly, so peak memory is unchanged. Call it before any threads allocate;
-/// nothing off Linux with glibc.
-pub fn keep_freed_buffers() {
-    #[cfg(all(target_os = "linux", target_env = "gnu"))]
-    {
-        extern "C" {
-            fn mallopt(param: i32, value: i32) -> i32;
-        }
-        const M_TRIM_THRESHOLD: i32 = -1;
-        const M_MMAP_THRESHOLD: i32 = -3;
-        // SAFETY: glibc's mallopt only changes allocator thresholds.
-        unsafe {
-            mallopt(M_MMAP_THRESHOLD, 32 << 20);
-            mallopt(M_TRIM_THRESHOLD, 256 << 20);
-        }
-    }
+/// How glibc's allocator keeps or returns freed memory (`mallopt`), one policy per
+/// process, set by [`use_allocator`] before threads allocate. Each command picks the one
+/// its arrays' lifetimes call for; off Linux with glibc the allocator keeps its own.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Allocator {
+    /// Blocks from 1 MiB on mapped on their own and unmapped when freed (the command
+    /// line's default). glibc otherwise raises its mapping threshold after each large free
+    /// (up to 32 MiB) and serves later buffers from its heap, which keeps what they freed:
+    /// a 256³ u16 encode at `--bpp 1` held 101 MB for 86 MB of live buffers, 93 MB with the
+    /// threshold fixed (the same bytes; 0.1 s more of system time for the page faults).
+    ReturnLarge,
+    /// Freed buffers of up to 32 MiB kept in the heap (blocks from 32 MiB on mapped
+    /// directly, the heap trimmed from 256 MiB of free space on): a command that allocates
+    /// and frees image-sized arrays a dozen times (the refined area upscaler) otherwise
+    /// pays a page fault per fresh page, a third of its time on a Kodak image. Larger
+    /// arrays (volumes) are still mapped directly, so peak memory is unchanged.
+    KeepFreed,
+    /// Every allocation from the heap and nothing given back (no direct mappings, no
+    /// trimming), so a large buffer freed early is reused by the next ones instead of fresh
+    /// pages the kernel must clear: for one-shot commands whose arrays are freed before the
+    /// next are made (the volume isosurface: the compressed file, the grid, the mesh and its
+    /// bytes). On a 256³ field the system time falls from 0.36 s to 0.13 s and the peak rises
+    /// by what is freed before it is reused (143 → 175 MB).
+    ReuseFreed,
 }
 
-/// Serve every allocation from glibc's heap and never give freed memory back to the
-/// system (`mallopt`: no direct mappings, no trimming), so a large buffer freed early is
-/// reused by the next ones instead of fresh pages the kernel must clear on first touch.
-/// For one-shot commands whose arrays are freed before the next are made (the volume
-/// isosurface: the compressed file, then the grid, then the mesh and its file bytes):
-/// on a 256³ field the system time falls from 0.36 s to 0.13 s, the peak rises by what
-/// is freed before it is reused (143 → 175 MB). Call it before any threads allocate;
-/// nothing off Linux with glibc.
-pub fn reuse_freed_memory() {
+/// Sets the allocator's policy ([`Allocator`]); call it before threads allocate much.
+pub fn use_allocator(policy: Allocator) {
     #[cfg(all(target_os = "linux", target_env = "gnu"))]
     {
         extern "C" {
             fn mallopt(param: i32, value: i32) -> i32;
         }
+        // <malloc.h>
         const M_TRIM_THRESHOLD: i32 = -1;
+        const M_MMAP_THRESHOLD: i32 = -3;
         const M_MMAP_MAX: i32 = -4;
-        // SAFETY: glibc's mallopt only changes allocator thresholds.
-        unsafe {
-            mallopt(M_MMAP_MAX, 0);
-            mallopt(M_TRIM_THRESHOLD, i32::MAX);
+        let settings: &[(i32, i32)] = match policy {
+            Allocator::ReturnLarge => &[(M_MMAP_THRESHOLD, 1 << 20)],
+            Allocator::KeepFreed => &[(M_MMAP_THRESHOLD, 32 << 20), (M_TRIM_THRESHOLD, 256 << 20)],
+            Allocator::ReuseFreed => &[(M_MMAP_MAX, 0), (M_TRIM_THRESHOLD, i32::MAX)],
+        };
+        for &(param, value) in settings {
+            // SAFETY: glibc's mallopt only changes allocator thresholds; a refused setting
+            // (result 0) leaves the allocator's own, which is still correct.
+            unsafe {
+                mallopt(param, value);
+            }
         }
     }
+    #[cfg(not(all(target_os = "linux", target_env = "gnu")))]
+    let _ = policy;
 }
 
 #[cfg(test)]

@@ -1,25 +1,76 @@
-//! The module map of `STYLE.md`, checked: every `crate::…` and `super::…` path in `src/`
-//! names a module of the same or a lower layer, and no modules import each other round
-//! in a cycle (neither the top-level modules, nor the files, a module and its own
-//! submodules apart). An import that breaks the map fails here with the file and path.
+//! The module map of `src/lib.rs`, checked: the map names every top-level module of
+//! `src/` with its layer; every `crate::…` and `super::…` path in `src/` names a module of
+//! a lower layer, or of the same layer where [`SAME_LAYER`] lists the pair; and no modules
+//! import each other round in a cycle (neither the top-level modules, nor the files, a
+//! module and its own submodules apart). An import that breaks the map fails here with
+//! the file and path.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
 
-/// The layers, lowest first: a module may use modules of its own layer or below.
-const LAYERS: &[(usize, &[&str])] = &[
-    (0, &["error", "fsutil", "tuning", "progress", "limits"]),
-    (1, &["scheme", "kernel"]),
-    (2, &["tensor"]),
-    (3, &["io", "metrics", "generate", "demo"]),
-    (4, &["codec", "quantize", "entropy", "format"]),
+/// The layers as `src/lib.rs`'s map gives them: `(module, layer)`, read from the lines
+/// `//! <layer>  src/<module>/ …` or `//! <layer>  src/<module>.rs …` of its `text` block.
+fn parse_map(lib_rs: &str) -> Vec<(String, usize)> {
+    let mut out = Vec::new();
+    for line in lib_rs.lines() {
+        let Some(rest) = line.strip_prefix("//!") else {
+            continue;
+        };
+        let mut words = rest.split_whitespace();
+        let (Some(layer), Some(path)) = (words.next(), words.next()) else {
+            continue;
+        };
+        let (Ok(layer), Some(path)) = (layer.parse::<usize>(), path.strip_prefix("src/")) else {
+            continue;
+        };
+        let name = path.trim_end_matches('/').trim_end_matches(".rs");
+        out.push((name.to_string(), layer));
+    }
+    out
+}
+
+fn map() -> &'static [(String, usize)] {
+    static MAP: OnceLock<Vec<(String, usize)>> = OnceLock::new();
+    MAP.get_or_init(|| {
+        let lib = std::fs::read_to_string(src().join("lib.rs")).expect("read src/lib.rs");
+        parse_map(&lib)
+    })
+}
+
+/// Imports between two modules of one layer that the map allows: `(from, to)`, each with
+/// why. Any other import within a layer fails, as an upward one does.
+const SAME_LAYER: &[(&str, &str, &str)] = &[
     (
-        5,
-        &[
-            "upscale", "terrain", "denoise", "style", "curve", "surface", "mesh", "solid", "points",
-        ],
+        "kernel",
+        "scheme",
+        "the kernels apply the schemes' operators",
     ),
-    (6, &["cli"]),
+    (
+        "limits",
+        "tuning",
+        "the budget's variable is read where every variable is",
+    ),
+    ("metrics", "io", "PSNR of files compares rasters as read"),
+    ("generate", "io", "generated rasters are io's raster types"),
+    ("demo", "generate", "the demo runs on generated data"),
+    (
+        "codec",
+        "entropy",
+        "the codec codes bands with the coefficient coders",
+    ),
+    ("codec", "quantize", "the codec quantizes bands"),
+    (
+        "codec",
+        "format",
+        "the codec writes and reads the container",
+    ),
+    ("surface", "curve", "surfaces are built from curves"),
+    ("surface", "mesh", "surfaces are tessellated into meshes"),
+    ("solid", "curve", "swept and revolved solids follow curves"),
+    ("solid", "mesh", "solids are polygonised into meshes"),
+    ("points", "curve", "point lists are curves' control points"),
+    ("upscale", "curve", "the upscaler's edge curves"),
 ];
 
 /// Imports the map does not allow yet, each with why it stays: `(from, to)` as module
@@ -34,12 +85,27 @@ const EXCEPTIONS: &[(&str, &str, &str)] = &[
     ),
 ];
 
-/// The layer of a top-level module (`None`: the crate root's own files).
+/// The layer of a top-level module (`None`: a module the map does not name).
 fn layer(room: &str) -> Option<usize> {
-    LAYERS
-        .iter()
-        .find(|(_, rooms)| rooms.contains(&room))
-        .map(|&(l, _)| l)
+    map().iter().find(|(m, _)| m == room).map(|&(_, l)| l)
+}
+
+/// Why an import from top-level module `a` to `b` breaks the map, if it does.
+fn breaks_map(a: &str, b: &str, layer: &dyn Fn(&str) -> Option<usize>) -> Option<String> {
+    match (layer(a), layer(b)) {
+        (Some(la), Some(lb)) if lb > la => Some(format!("(layer {la}) uses a layer above, {lb}")),
+        (Some(la), Some(lb))
+            if lb == la && a != b && !SAME_LAYER.iter().any(|&(x, y, _)| x == a && y == b) =>
+        {
+            Some(format!(
+                "(layer {la}) uses its own layer's {b}, a pair SAME_LAYER does not list"
+            ))
+        }
+        (None, _) | (_, None) => Some(format!(
+            "a module missing from src/lib.rs's map: {a} or {b}"
+        )),
+        _ => None,
+    }
 }
 
 fn src() -> PathBuf {
@@ -205,6 +271,8 @@ struct Graph {
     files: BTreeMap<String, BTreeSet<String>>,
     /// (from file, the path as written) → for messages.
     upward: Vec<String>,
+    /// The pairs of top-level modules some file imports across.
+    rooms: BTreeSet<(String, String)>,
 }
 
 fn build() -> Graph {
@@ -215,6 +283,7 @@ fn build() -> Graph {
     let mut g = Graph {
         files: BTreeMap::new(),
         upward: Vec::new(),
+        rooms: BTreeSet::new(),
     };
     for f in &all {
         let m = module_of(f);
@@ -241,18 +310,13 @@ fn build() -> Graph {
             let allowed = EXCEPTIONS
                 .iter()
                 .any(|&(x, y, _)| from.starts_with(x) && to.starts_with(y));
+            if a != b {
+                g.rooms.insert((a.clone(), b.clone()));
+            }
             if a != b && !allowed {
-                match (layer(a), layer(b)) {
-                    (Some(la), Some(lb)) if lb > la => g.upward.push(format!(
-                        "{} (layer {la}) uses {} (layer {lb})",
-                        f.display(),
-                        p.join("::")
-                    )),
-                    (_, None) | (None, _) => g.upward.push(format!(
-                        "{}: a module missing from the layer table: {a} or {b}",
-                        f.display()
-                    )),
-                    _ => {}
+                if let Some(why) = breaks_map(a, b, &layer) {
+                    g.upward
+                        .push(format!("{} uses {}: {why}", f.display(), p.join("::")));
                 }
             }
             if !allowed {
@@ -313,14 +377,95 @@ fn cycle(edges: &BTreeMap<String, BTreeSet<String>>) -> Option<Vec<String>> {
     None
 }
 
+/// The top-level modules of `src/`: its folders and its files but `lib.rs` and `main.rs`.
+fn top_level_modules() -> BTreeSet<String> {
+    std::fs::read_dir(src())
+        .expect("read src/")
+        .map(|e| e.expect("dir entry").path())
+        .filter_map(|p| {
+            let name = p.file_name()?.to_string_lossy().into_owned();
+            if p.is_dir() {
+                Some(name)
+            } else {
+                let stem = name.strip_suffix(".rs")?;
+                (!matches!(stem, "lib" | "main")).then(|| stem.to_string())
+            }
+        })
+        .collect()
+}
+
+#[test]
+fn the_module_map_names_every_module_of_src_once() {
+    let named: Vec<&str> = map().iter().map(|(m, _)| m.as_str()).collect();
+    let set: BTreeSet<String> = named.iter().map(|m| m.to_string()).collect();
+    assert_eq!(
+        set.len(),
+        named.len(),
+        "a module named twice in src/lib.rs's map"
+    );
+    assert_eq!(
+        set,
+        top_level_modules(),
+        "src/lib.rs's map against the folders and files of src/"
+    );
+    for (m, l) in map() {
+        let declared = format!("pub mod {m};");
+        let lib = std::fs::read_to_string(src().join("lib.rs")).expect("read src/lib.rs");
+        assert!(
+            lib.contains(&declared) || lib.contains(&format!("mod {m};")),
+            "{m} (layer {l}) is in the map but not declared in src/lib.rs"
+        );
+    }
+    for &(a, b, _) in SAME_LAYER {
+        assert_eq!(
+            layer(a),
+            layer(b),
+            "SAME_LAYER lists {a} → {b} of two layers"
+        );
+    }
+}
+
+#[test]
+fn the_readme_layout_names_every_module() {
+    let readme = std::fs::read_to_string(src().join("../README.md")).expect("read README.md");
+    let start = readme
+        .find("## Layout")
+        .expect("README.md has a Layout section");
+    let block = &readme[start..];
+    for m in top_level_modules() {
+        let dir = format!("src/{m}/");
+        let file = format!("src/{m}.rs");
+        assert!(
+            block.contains(&dir) || block.contains(&file),
+            "README.md's Layout does not name {dir} or {file}"
+        );
+    }
+}
+
+#[test]
+fn the_map_parser_reads_layers_and_paths() {
+    let text = "//! ```text\n//! layer  module  job\n//! 0      src/error.rs   e\n\
+                //! 4      src/codec/     c\n//! not a row\n";
+    assert_eq!(
+        parse_map(text),
+        [("error".to_string(), 0), ("codec".to_string(), 4)]
+    );
+}
+
 #[test]
 fn no_module_uses_a_layer_above_its_own() {
     let g = build();
     assert!(
         g.upward.is_empty(),
-        "upward imports (see STYLE.md's module map):\n{}",
+        "imports that break src/lib.rs's module map:\n{}",
         g.upward.join("\n")
     );
+    for &(a, b, why) in SAME_LAYER {
+        assert!(
+            g.rooms.contains(&(a.to_string(), b.to_string())),
+            "SAME_LAYER allows {a} → {b} ({why}), which no file imports: remove it"
+        );
+    }
 }
 
 #[test]
@@ -372,6 +517,23 @@ fn the_checker_sees_imports_and_cycles() {
         ]
     );
     assert!(layer("tensor") > layer("kernel"), "that import is upward");
+    assert!(breaks_map("kernel", "tensor", &layer).is_some(), "upward");
+    // within a layer only the listed pairs pass: the coders never see the codec, the
+    // meshes never the upscaler
+    assert!(
+        breaks_map("entropy", "codec", &layer).is_some(),
+        "entropy → codec"
+    );
+    assert!(
+        breaks_map("mesh", "upscale", &layer).is_some(),
+        "mesh → upscale"
+    );
+    assert!(
+        breaks_map("codec", "entropy", &layer).is_none(),
+        "codec → entropy"
+    );
+    assert!(breaks_map("codec", "io", &layer).is_none(), "downward");
+    assert!(breaks_map("codec", "nowhere", &layer).is_some(), "unmapped");
     let mut e: BTreeMap<String, BTreeSet<String>> = BTreeMap::new();
     e.entry("a".into()).or_default().insert("b".into());
     e.entry("b".into()).or_default().insert("c".into());

@@ -331,7 +331,7 @@ pub fn into_volume_grid(r: crate::io::Raster, cap: bool) -> Result<VolumeGrid, F
 pub fn run_volume(c: VolumeCommand) -> CliResult {
     match c {
         VolumeCommand::Isosurface(a) => {
-            crate::tuning::reuse_freed_memory();
+            crate::tuning::use_allocator(crate::tuning::Allocator::ReuseFreed);
             let r =
                 crate::io::read(&a.input).map_err(|e| Failure::context(a.input.display(), e))?;
             let t = Instant::now();

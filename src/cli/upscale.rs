@@ -150,7 +150,7 @@ fn check_budget(
 }
 
 pub fn run_upscale(a: UpscaleArgs) -> CliResult {
-    crate::tuning::keep_freed_buffers();
+    crate::tuning::use_allocator(crate::tuning::Allocator::KeepFreed);
     let r = read_input(&a.input, &a.raw.options()?)?;
     let nd = r.dims.len();
     let (axes, time) = match &a.axes {

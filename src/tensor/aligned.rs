@@ -4,9 +4,8 @@
 //! allocator hands out blocks 16 bytes past a page (large blocks, mapped) or anywhere on
 //! 16 bytes (reused heap), so a 32-byte load or store may cross a line every other time,
 //! and where two planes a transpose reads and writes fall relative to each other changes
-//! from run to run. The planes of [`super::fused`] (then transposed) on page boundaries: 256³
-//! cubic forward+inverse CPU time 72.3 -> 67.4 ms (median 80.8 -> 73.6; perf task-clock,
-//! ten interleaved rounds). Measured and not kept: every scratch buffer on a page (slower,
+//! from run to run. The planes of [`super::fused`] (then transposed) start on page
+//! boundaries, which measured faster. Measured and not kept: every scratch buffer on a page (slower,
 //! loads then fall on the same place in a page as the stores of the same loop), and
 //! buffers placed half a page apart (no change).
 

@@ -404,11 +404,9 @@ impl<'a> Plan<'a> {
     /// ghosts for them), halos too costly for that
     /// many parts, rings above 1/[`MAX_HELD`] of the array). When `forced` (tests),
     /// exactly `parts` parts whatever the halos and the rings' size, and boxes of more
-    /// than two axes too; otherwise those stay level by level (measured slower, likely
-    /// because the planes of two levels and a ring of planes do not fit a 1 MB L2.
-    /// 256³ with the plane path of `fused.rs`, wall time, 2 threads, forward: Chaikin
-    /// 15.5–15.8 ms against 13.5–13.7, cubic 19.3 against 17.3; the inverse within
-    /// 0.5 ms).
+    /// than two axes too; otherwise those stay level by level (measured slower on
+    /// volumes, likely because the planes of two levels and a ring of planes do not fit
+    /// a 1 MB L2).
     pub fn new(
         way: Way,
         regions: Vec<Vec<usize>>,

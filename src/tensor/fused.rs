@@ -47,15 +47,10 @@ pub enum Writes {
     /// [`STREAM_BYTES`], through them otherwise: analysis, whose output the next level
     /// reads only in part.
     StreamLarge,
-    /// Through the caches whatever the size: synthesis. Measured on a 2-core Zen 3
-    /// (`examples/pyramid_timing`, best of 7, interleaved), plain stores
-    /// straight from the lanes cost the synthesis less than streaming each finished
-    /// plane or row out in a pass of its own: 256³ cubic, three levels, inverse
-    /// 11.8–13.0 → 10.7–12.3 ms (the three boundary modes); 512³ 138–140 → 118–119 ms;
-    /// one level of 4096² 8.05–8.18 → 6.80–7.05 ms. A copy timed right after the
-    /// pyramid is not slower (the write-back is not left to whatever runs next). The
-    /// analysis gets slower that way: one level of 256³ forward 10.4–10.8 → 11.5–12.1
-    /// ms.
+    /// Through the caches whatever the size: synthesis. Plain stores straight from the
+    /// lanes cost the synthesis less than streaming each finished plane or row out in a
+    /// pass of its own (`examples/pyramid_timing`), and leave no write-back to whatever
+    /// runs next; the analysis is slower that way, so it streams.
     Cached,
 }
 
@@ -611,9 +606,8 @@ fn stream_rows<T: Sample>(k: Kernels, src: &[T], w: usize, h: usize, dst: &mut [
 /// Most rows of a lane's operator outside its pair for [`lanes`] (computed 8 lanes at a
 /// time there, [`kernel::combine_lane_taps`]); with more, [`Ctx::plane`] transposes the
 /// plane. 20 takes the interpolating cubic operators (12 such rows in analysis, 18 in
-/// synthesis) through the lanes: 256³ forward + inverse 30.9–31.4 → 28.7–30.0 ms, CPU
-/// time of 11 repetitions 854–861 → 809–820 ms (three interleaved rounds); with 8 they
-/// were transposed twice per plane.
+/// synthesis) through the lanes, which is faster than transposing them twice per plane
+/// (`examples/pyramid_timing`).
 const LANES_MOST_UNPAIRED: usize = 20;
 
 /// The operator of `a` on the `h` lanes of `w` samples of `x` (lane `t` at `x[t·w..]`),
@@ -709,12 +703,10 @@ fn lane_taps(a: &AxisOp, split: bool, w: usize) -> LaneTaps {
 
 /// Largest slab (bytes) combined in pairs ([`Ctx::row_pair`]): rows of images and the
 /// planes of volumes up to 256² (256 KB), whose coarse and detail planes along axis 0
-/// then read their input planes from L3 once instead of twice. On a Zen 4 with 1 MB of
-/// L2 a second plane per worker made 256³ cubic slower (35.3 → 42.2 ms wall, two
-/// threads); on a Zen 3 (512 KB of L2 per core, which the plane path's three planes
-/// overflow anyway; no AVX-512) pairing the planes is faster:
-/// 256³ forward + inverse, best of 7 warm runs, four interleaved rounds, Chaikin
-/// 24.3–25.1 against 25.4–27.1 ms, cubic 31.5–32.0 against 32.8–33.7 ms.
+/// then read their input planes from L3 once instead of twice. Whether a second plane
+/// per worker pays depends on the L2: where the plane path's three planes overflow it
+/// anyway (512 KB per core), pairing is faster; with 1 MB of L2 it is slower for larger
+/// planes, hence the cap (`examples/pyramid_timing`, docs/engine-performance.md).
 const PAIR_SLAB_MAX: usize = 256 << 10;
 
 /// Lanes at most this long go through [`Ctx::plane`] (volumes of a few hundred samples a

@@ -1,5 +1,6 @@
 //! Tensor-product engine: N-d arrays, one level along any axis, multilevel pyramids in
-//! the standard and the non-standard (Mallat) order. `par.rs` holds the only rayon code.
+//! the standard and the non-standard (Mallat) order. `par.rs` holds the
+//! engine's own parallel helpers (other modules call rayon directly where they split work).
 
 mod aligned;
 mod array;

@@ -10,12 +10,8 @@
 //! caller passes in keep their own pages. `tuning` turns the advice off
 //! (`MRA_HUGE_PAGES=off`: every buffer on the pages the allocator gives, as a plain `Vec`'s).
 //!
-//! Measured on a 2-core Zen 3 (`examples/pyramid_timing`, 256³ cubic
-//! interpolating, three levels, two threads):
-//! - the first forward of a process (its scratch faulted in): 40.2–41.4 → 20.3–21.2 ms
-//!   (one run in three 44.5 ms: the kernel compacting memory for the pages);
-//! - later runs, best of 7, three interleaved rounds: forward / inverse 13.10–13.39 /
-//!   11.68–12.00 → 12.68–13.04 / 10.72–11.69 ms.
+//! The gain is largest on the first transform of a process, whose scratch is faulted in
+//! page by page otherwise; later runs gain a few percent (`examples/pyramid_timing`).
 
 /// `len` default (zero) samples in a fresh allocation advised onto huge pages.
 pub fn zeroed_vec<T: Clone + Default>(len: usize) -> Vec<T> {
