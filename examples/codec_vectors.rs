@@ -65,6 +65,21 @@ fn raster_wide(dims: &[usize], channels: usize, kind: DataKind) -> Raster {
     .unwrap()
 }
 
+/// A 16x12 f32 heightmap with a hole of NaN voids (a lake) and a few single ones, so
+/// that the file is 2.4: its `HEAD` flag says the `mETA` lists the voids.
+fn raster_voids() -> Raster {
+    let mut r = raster(&[12, 16], 1, SampleType::F32, DataKind::Heightmap);
+    let mut v = r.samples.to_f64();
+    for (i, x) in v.iter_mut().enumerate() {
+        let (y, c) = (i / 16, i % 16);
+        if (3..7).contains(&y) && (4..9).contains(&c) || i % 37 == 5 {
+            *x = f64::NAN;
+        }
+    }
+    r.samples = Samples::from_f64(&v, SampleType::F32);
+    r
+}
+
 /// name, description, raster, scheme, boundary, rate, level decoded, tile extents
 type Case = (
     &'static str,
@@ -152,6 +167,15 @@ fn main() {
             Boundary::Symmetric,
             Rate::Lossless,
             1,
+        ),
+        (
+            "voids24_height_f32",
+            "16x12 heightmap f32 with NaN voids, cdf97 symmetric, quality 50 (format 2.4: the HEAD flag of listed voids)",
+            raster_voids(),
+            Scheme::Cdf97,
+            Boundary::Symmetric,
+            Rate::Quality(50.0),
+            0,
         ),
     ];
     // format 2.1: tiles (extents slowest axis first); the lossy one is kept as a 2.1

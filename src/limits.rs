@@ -67,6 +67,18 @@ impl Limits {
     }
 }
 
+/// [`Limits::check`] against the budget of this process ([`Limits::from_env`]): the one
+/// call every reader and command makes before an allocation sized by a header or by
+/// arguments. `what` names the allocation (the error adds the budget's name).
+pub fn check(what: &'static str, bytes: u64) -> Result<()> {
+    Limits::from_env()?.check(what, bytes)
+}
+
+/// [`check`] of `count × size` bytes (an overflow is over any budget).
+pub fn check_elems(what: &'static str, count: u64, size: u64) -> Result<()> {
+    check(what, count.saturating_mul(size))
+}
+
 /// A byte count: digits with an optional suffix K, M, G or T (powers of 1024, an optional
 /// trailing `B` or `iB`, any case). `None` when malformed or over `u64`.
 pub fn parse_bytes(s: &str) -> Option<u64> {

@@ -827,3 +827,193 @@ fn temporary_outputs_are_removed_on_sigterm_and_sigint() {
         );
     }
 }
+
+/// The chunks of an `.mra` file after its signature: (type, start, end past the CRC).
+fn mra_chunks(bytes: &[u8]) -> Vec<([u8; 4], usize, usize)> {
+    let mut out = Vec::new();
+    let mut at = 8;
+    while at + 12 <= bytes.len() {
+        let len = u32::from_le_bytes(bytes[at..at + 4].try_into().unwrap()) as usize;
+        out.push((bytes[at + 4..at + 8].try_into().unwrap(), at, at + 12 + len));
+        at += 12 + len;
+    }
+    out
+}
+
+#[test]
+fn decode_at_level_1_of_a_file_missing_or_swapping_level_2_is_refused() {
+    let d = folder("level-gap");
+    sample(&d, "png");
+    make(&d, &["encode", "zp.png", "-o", "zp.mra"]);
+    let good = std::fs::read(d.join("zp.mra")).unwrap();
+    let levels: Vec<_> = mra_chunks(&good)
+        .into_iter()
+        .filter(|c| &c.0 == b"LEVL")
+        .collect();
+    let (_, s2, e2) = levels[levels.len() - 2];
+    let (_, s1, e1) = levels[levels.len() - 1];
+    write(&d, "missing.mra", &[&good[..s2], &good[e2..]].concat());
+    write(
+        &d,
+        "swapped.mra",
+        &[&good[..s2], &good[s1..e1], &good[s2..e2], &good[e1..]].concat(),
+    );
+    for name in ["missing.mra", "swapped.mra"] {
+        let o = run_in(&d, &["decode", name, "-o", "out.png", "--level", "1"]);
+        assert_refused(&d, &o, name, "out.png", &format!("{name} at level 1"));
+        assert!(String::from_utf8_lossy(&o.stderr).contains("LEVL chunk of level 2"));
+    }
+}
+
+#[test]
+fn an_mra_declaring_8000_squared_decodes_within_the_budget_or_not_at_all() {
+    let d = folder("mra-budget");
+    sample(&d, "png");
+    make(&d, &["encode", "zp.png", "-o", "zp.mra", "--levels", "4"]);
+    let good = std::fs::read(d.join("zp.mra")).unwrap();
+    let cs = mra_chunks(&good);
+    let (_, s, e) = cs[0];
+    let mut head = good[s + 8..e - 4].to_vec();
+    for at in [5, 9] {
+        head[at..at + 4].copy_from_slice(&8000u32.to_le_bytes());
+    }
+    // the tile extents (one tile) follow the 52 + 4N bytes of fields
+    for at in [60, 64] {
+        head[at..at + 4].copy_from_slice(&8000u32.to_le_bytes());
+    }
+    let mut forged = good[..s].to_vec();
+    mra::format::put_chunk(&mut forged, b"HEAD", &head);
+    forged.extend_from_slice(&good[e..cs.last().unwrap().1]);
+    // an ancillary chunk long enough that the declared samples pass the length check
+    mra::format::put_chunk(&mut forged, b"pADs", &vec![0u8; 24_000]);
+    mra::format::put_chunk(&mut forged, b"MEND", &[]);
+    write(&d, "huge.mra", &forged);
+    let o = run_env(
+        &d,
+        &["decode", "huge.mra", "-o", "out.png"],
+        &[("MRA_MAX_BYTES", "16M")],
+    );
+    assert_refused(&d, &o, "huge.mra", "out.png", "8000² under 16 MB");
+    assert!(String::from_utf8_lossy(&o.stderr).contains("MRA_MAX_BYTES"));
+    // the header alone is readable
+    let o = run_env(&d, &["info", "huge.mra"], &[("MRA_MAX_BYTES", "16M")]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    // 8000² at level 4 is a 500² preview, but the decoder's planes are the full
+    // pyramid's: still over 16 MB
+    let o = run_env(
+        &d,
+        &["decode", "huge.mra", "-o", "out.png", "--level", "4"],
+        &[("MRA_MAX_BYTES", "16M")],
+    );
+    assert_refused(
+        &d,
+        &o,
+        "huge.mra",
+        "out.png",
+        "8000² at level 4 under 16 MB",
+    );
+}
+
+#[test]
+fn tiff_generate_and_mesh_subdivide_keep_to_the_budget() {
+    let d = folder("budgets");
+    make(
+        &d,
+        &[
+            "generate",
+            "terrain",
+            "--size",
+            "1025",
+            "--dtype",
+            "f32",
+            "-o",
+            "t.tif",
+            "--compress",
+        ],
+    );
+    let env = [("MRA_MAX_BYTES", "2M")];
+    let o = run_env(&d, &["convert", "t.tif", "-o", "out.png"], &env);
+    assert_refused(&d, &o, "t.tif", "out.png", "TIFF of 4 MB under 2 MB");
+    assert!(String::from_utf8_lossy(&o.stderr).contains("MRA_MAX_BYTES"));
+    let o = run_env(
+        &d,
+        &[
+            "generate",
+            "zone-plate",
+            "--size",
+            "20000x20000",
+            "-o",
+            "g.png",
+        ],
+        &[("MRA_MAX_BYTES", "256M")],
+    );
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(err.contains("MRA_MAX_BYTES"), "{err}");
+    assert!(!d.join("g.png").exists());
+    // a 50 × 50 grid of 4,802 triangles: 8 Loop steps make 315 million
+    let mut obj = String::new();
+    for y in 0..50 {
+        for x in 0..50 {
+            obj += &format!("v {x} {y} {}\n", ((x * y) % 7) as f64 * 0.1);
+        }
+    }
+    for y in 0..49 {
+        for x in 0..49 {
+            let v = |dx: usize, dy: usize| (y + dy) * 50 + x + dx + 1;
+            obj += &format!("f {} {} {}\n", v(0, 0), v(1, 0), v(1, 1));
+            obj += &format!("f {} {} {}\n", v(0, 0), v(1, 1), v(0, 1));
+        }
+    }
+    write(&d, "grid.obj", obj.as_bytes());
+    let args = [
+        "mesh",
+        "subdivide",
+        "grid.obj",
+        "-o",
+        "out.obj",
+        "--scheme",
+        "loop",
+        "--steps",
+        "8",
+    ];
+    let o = run_env(&d, &args, &[("MRA_MAX_BYTES", "256M")]);
+    assert_refused(&d, &o, "grid.obj", "out.obj", "8 Loop steps under 256 MB");
+    assert!(String::from_utf8_lossy(&o.stderr).contains("MRA_MAX_BYTES"));
+    // two steps fit
+    let o = run_env(
+        &d,
+        &{
+            let mut a = args;
+            a[8] = "2";
+            a
+        },
+        &[("MRA_MAX_BYTES", "256M")],
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}
+
+#[test]
+fn exr_declaring_100000_squared_is_refused_by_info_convert_and_encode() {
+    let d = folder("exr-100k");
+    let mut good = sample(&d, "exr");
+    let key = b"dataWindow\0box2i\0";
+    let at = good
+        .windows(key.len())
+        .position(|w| w == key)
+        .expect("dataWindow attribute")
+        + key.len()
+        + 4;
+    good[at + 8..at + 12].copy_from_slice(&99_999i32.to_le_bytes());
+    good[at + 12..at + 16].copy_from_slice(&99_999i32.to_le_bytes());
+    write(&d, "huge.exr", &good);
+    for (args, out) in [
+        (vec!["info", "huge.exr"], "none"),
+        (vec!["convert", "huge.exr", "-o", "out.png"], "out.png"),
+        (vec!["encode", "huge.exr", "-o", "out.mra"], "out.mra"),
+    ] {
+        let o = run_in(&d, &args);
+        assert_refused(&d, &o, "huge.exr", out, &format!("{args:?}"));
+    }
+}

@@ -4,14 +4,7 @@
 //! 2.1 and 2.2) reach the `TRAT`, `TIDX` and `TILE` chunks (chunk and compact tiles).
 #![no_main]
 use libfuzzer_sys::fuzz_target;
-use mra::codec::{decode, decode_stream, info, DecodeOptions};
 
-fuzz_target!(|data: &[u8]| {
-    let _ = info(data);
-    for level in [0usize, 1] {
-        let _ = decode(data, &DecodeOptions { level, allow_truncated: level == 1, region: None });
-    }
-    let region = Some(vec![0..3, 1..2]);
-    let _ = decode(data, &DecodeOptions { level: 0, allow_truncated: true, region });
-    let _ = decode_stream(data, data.len() as u64, &DecodeOptions::default());
-});
+mod common;
+
+fuzz_target!(|data: &[u8]| common::exercise(data));

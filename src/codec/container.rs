@@ -148,6 +148,7 @@ pub(super) fn read_rest<R: Read>(
     }];
     let mut complete = false;
     let mut last = "HEAD".to_string();
+    let (mut meta_seen, mut first_band) = (false, None);
     loop {
         let ch = match rd.next_chunk()? {
             Ok(c) => c,
@@ -169,6 +170,9 @@ pub(super) fn read_rest<R: Read>(
             tile: None,
         };
         last = ch.name();
+        if matches!(&ch.kind, b"LEVL" | b"BAND" | b"RESI") && first_band.is_none() {
+            first_band = Some(ch.offset);
+        }
         match &ch.kind {
             b"BAND" if header.major >= 2 => {
                 return Err(Error::format(
@@ -188,7 +192,14 @@ pub(super) fn read_rest<R: Read>(
             b"LEVL" => {
                 let (level, got) = parse_level(&ch.payload, &plan, header.channels)?;
                 if stop_level > 0 && level >= 1 && level <= stop_level {
-                    complete = true;
+                    complete = coarse_present(
+                        &header,
+                        &plan,
+                        &bands,
+                        stop_level,
+                        ch.offset,
+                        allow_truncated,
+                    )?;
                     break;
                 }
                 let first = got.first().map(|b| b.0).unwrap_or(0);
@@ -241,7 +252,14 @@ pub(super) fn read_rest<R: Read>(
                 }
                 let level = plan.bands[band].level;
                 if stop_level > 0 && level >= 1 && level <= stop_level {
-                    complete = true;
+                    complete = coarse_present(
+                        &header,
+                        &plan,
+                        &bands,
+                        stop_level,
+                        ch.offset,
+                        allow_truncated,
+                    )?;
                     break;
                 }
                 if bands[channel][band].is_some() {
@@ -330,7 +348,7 @@ pub(super) fn read_rest<R: Read>(
                 complete = true;
                 break;
             }
-            b"mETA" => meta = meta::parse(&ch.payload),
+            b"mETA" => meta = meta_chunk(&ch, &mut meta_seen, first_band)?,
             b"HEAD" => return Err(Error::format("a second HEAD chunk", "one HEAD chunk")),
             k => {
                 if k[0].is_ascii_uppercase() {
@@ -343,6 +361,13 @@ pub(super) fn read_rest<R: Read>(
         }
         chunks.push(info);
     }
+    if header.voids && first_band.is_some() && !super::voids::lists_voids(&meta) {
+        // past where the mETA must be, without the void list the header promises
+        return Err(Error::format(
+            "no void list in mETA, though the header says the file has voids",
+            "the mETA chunk with extra.nodata.voids (format 2.4 HEAD flag)",
+        ));
+    }
     Ok(Parsed {
         header,
         meta,
@@ -354,6 +379,57 @@ pub(super) fn read_rest<R: Read>(
     })
 }
 
+/// A `mETA` chunk's metadata: at most one, before the first band chunk (or `TIDX` in a
+/// tiled file) at byte `first_band` when one was read.
+pub(super) fn meta_chunk(
+    ch: &Chunk,
+    seen: &mut bool,
+    first_band: Option<u64>,
+) -> Result<crate::io::Metadata> {
+    if *seen {
+        return Err(Error::format(
+            format!("a second mETA chunk at byte {}", ch.offset),
+            "at most one mETA chunk",
+        ));
+    }
+    if let Some(at) = first_band {
+        return Err(Error::format(
+            format!(
+                "mETA chunk at byte {} after the data chunk at byte {at}",
+                ch.offset
+            ),
+            "mETA right after HEAD, before the bands or the tile index",
+        ));
+    }
+    *seen = true;
+    Ok(meta::parse(&ch.payload))
+}
+
+/// Whether a decode stopping at level `stop_level` (on reaching a chunk of a level it
+/// does not need, at byte `at`) has every band it does need: the coarse block and the
+/// detail levels above `stop_level`. A band missing there (a `LEVL` left out, or two
+/// swapped so that a finer one comes first) is an error naming it, or with
+/// `allow_truncated` an incomplete decode (`Ok(false)`).
+fn coarse_present(
+    header: &Header,
+    plan: &Plan,
+    bands: &[Vec<Option<BandChunk>>],
+    stop_level: usize,
+    at: u64,
+    allow_truncated: bool,
+) -> Result<bool> {
+    let Some(missing) = first_missing_above(header, plan, bands, &[], stop_level) else {
+        return Ok(true);
+    };
+    if allow_truncated {
+        return Ok(false);
+    }
+    Err(Error::format(
+        format!("{missing} missing before the chunk of level {stop_level} or finer at byte {at}"),
+        "every coarser level before the finer ones",
+    ))
+}
+
 /// The first chunk the header commits to that `bands` and `resi` lack, named.
 fn first_missing(
     header: &Header,
@@ -361,7 +437,23 @@ fn first_missing(
     bands: &[Vec<Option<BandChunk>>],
     resi: &[Option<ResiChunk>],
 ) -> Option<String> {
+    first_missing_above(header, plan, bands, resi, 0)
+}
+
+/// [`first_missing`] among the chunks a decode at level `stop_level` needs (every one at
+/// level 0: the coarse block, the detail levels above `stop_level`, and the `RESI`
+/// chunks only at level 0).
+fn first_missing_above(
+    header: &Header,
+    plan: &Plan,
+    bands: &[Vec<Option<BandChunk>>],
+    resi: &[Option<ResiChunk>],
+    stop_level: usize,
+) -> Option<String> {
     for (j, b) in plan.bands.iter().enumerate() {
+        if stop_level > 0 && b.level >= 1 && b.level <= stop_level {
+            continue;
+        }
         for (c, ch) in bands.iter().enumerate() {
             if ch[j].is_none() {
                 return Some(if header.major >= 2 {
@@ -372,7 +464,7 @@ fn first_missing(
             }
         }
     }
-    if header.mode == Mode::MaxError {
+    if header.mode == Mode::MaxError && stop_level == 0 {
         if let Some(c) = resi.iter().position(|r| r.is_none()) {
             return Some(format!("RESI chunk of channel {c}"));
         }

@@ -174,10 +174,42 @@ fn decode_channel_into(p: &Parsed, c: usize, k: usize, plane: &mut [f32]) -> Res
     Ok(())
 }
 
+/// The most bytes [`reconstruct`] holds at once for level `k`, checked against the memory
+/// budget ([`crate::limits`]) before anything is allocated:
+///
+/// ```text
+/// bytes = C · Π shape · w  +  C · Π R_k · (s + x)
+/// ```
+/// with `shape` the full pyramid (every channel's plane is as large whatever the level),
+/// `w` its bytes per coefficient (8: `i64` in lossless files, 4: `f32` otherwise),
+/// `R_k` the level's extents, `s` the sample type's bytes, and `x` = 8 where the
+/// samples also pass through `f64` (lossless, and the residual layer of mode 2).
+fn check_budget(p: &Parsed, k: usize) -> Result<()> {
+    let (h, plan) = (&p.header, &p.plan);
+    let c = h.channels as u64;
+    let full = plan
+        .pyr
+        .shape
+        .iter()
+        .fold(c, |n, &e| n.saturating_mul(e as u64));
+    let out = plan
+        .region(k)
+        .iter()
+        .fold(c, |n, &e| n.saturating_mul(e as u64));
+    let wide = h.mode == Mode::Lossless || (h.mode == Mode::MaxError && k == 0);
+    let w = if h.mode == Mode::Lossless { 8 } else { 4 };
+    let x = if wide { 8 } else { 0 };
+    let bytes = full
+        .saturating_mul(w)
+        .saturating_add(out.saturating_mul(h.sample_type.size() as u64 + x));
+    crate::limits::check("decoded bytes (memory budget MRA_MAX_BYTES)", bytes)
+}
+
 pub(super) fn reconstruct(p: &Parsed, k: usize) -> Result<Raster> {
     let h = &p.header;
     let plan = &p.plan;
     let k = k.min(plan.pyr.depth());
+    check_budget(p, k)?;
     let region = plan.region(k);
     let npos: usize = region.iter().product();
     let c = h.channels;

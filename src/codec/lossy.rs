@@ -71,6 +71,11 @@ pub(super) fn header_for(
     };
     let mut header = shape.header(opts, mode, colour)?;
     (header.min, header.max) = finite_range(r.samples);
+    if super::voids::lists_voids(&r.meta) {
+        // 2.4: the header says the mETA lists voids, so a file without it is refused
+        header.voids = true;
+        header.minor = header.minor.max(format::MINOR_VOIDS);
+    }
     Ok(header)
 }
 
@@ -129,6 +134,7 @@ impl Frame<'_> {
             min: 0.0,
             max: 0.0,
             tile: dims.to_vec(),
+            voids: false,
         })
     }
 }

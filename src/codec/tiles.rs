@@ -12,13 +12,13 @@
 //! Tiles are coded and decoded in parallel (rayon); each tile's bytes depend on the tile
 //! alone, so the file is the same whatever the thread count.
 
-use super::container::{read_head, truncated, MEND};
+use super::container::{meta_chunk, read_head, truncated, MEND};
 use super::decode::{coarse_maps_of, decode_untiled};
+use super::layout;
 use super::options::{DecodeOptions, Decoded, EncodeOptions};
 use super::plan::Plan;
 #[cfg(doc)]
 use super::voids::with_voids_filled;
-use super::{layout, meta};
 use crate::format::{self, Chunk, ChunkReader, Cursor, Header};
 use crate::io::slab::{MemorySlabs, Shape};
 use crate::io::{AxisMap, Metadata, Raster, RasterView, Samples};
@@ -294,6 +294,11 @@ impl Stitch {
         let n = crate::io::bytes::sample_count(
             &self.out.iter().map(|g| g.len()).collect::<Vec<_>>(),
             self.header.channels,
+        )?;
+        crate::limits::check_elems(
+            "decoded bytes (memory budget MRA_MAX_BYTES)",
+            n as u64,
+            self.header.sample_type.size() as u64,
         )?;
         self.samples = Samples::zeros(self.header.sample_type, n);
         Ok(())
@@ -727,6 +732,7 @@ pub(super) fn decode_sequential<R: Read>(
     let mut meta = Metadata::default();
     let mut seen = vec![false; n];
     let mut index_seen = false;
+    let (mut meta_seen, mut first_data) = (false, None);
     let mut batch = Vec::new();
     let mut complete = true;
     let mut last = "HEAD".to_string();
@@ -742,8 +748,11 @@ pub(super) fn decode_sequential<R: Read>(
             }
         };
         last = ch.name();
+        if matches!(&ch.kind, b"TRAT" | b"TIDX" | b"TILE") && first_data.is_none() {
+            first_data = Some(ch.offset);
+        }
         match &ch.kind {
-            b"mETA" => meta = meta::parse(&ch.payload),
+            b"mETA" => meta = meta_chunk(&ch, &mut meta_seen, first_data)?,
             b"TRAT" if header.minor >= format::MINOR_COMPACT && !index_seen => {
                 let g = Grid::new(&header.dims, &header.tile)?;
                 st.ratios = Some(std::sync::Arc::new(Ratios::parse(&ch, &header, &g)?));
@@ -829,6 +838,7 @@ fn read_index<R: Read + Seek>(
     let h = &st.header;
     let mut ratios = None;
     let mut meta = Metadata::default();
+    let (mut meta_seen, mut first_data) = (false, None);
     src.seek(SeekFrom::Start(after_head))?;
     let mut rd = ChunkReader::at(&mut *src, after_head, len);
     loop {
@@ -842,8 +852,9 @@ fn read_index<R: Read + Seek>(
             }
         };
         match &ch.kind {
-            b"mETA" => meta = meta::parse(&ch.payload),
+            b"mETA" => meta = meta_chunk(&ch, &mut meta_seen, first_data)?,
             b"TRAT" if h.minor >= format::MINOR_COMPACT => {
+                first_data = Some(ch.offset);
                 ratios = Some(std::sync::Arc::new(Ratios::parse(&ch, h, &st.grid)?));
             }
             b"TIDX" => return Ok((meta, parse_index(&ch, n, len)?, ratios)),

@@ -78,6 +78,11 @@ fn decode_mask(data: &[u8], n: usize, shape: &[usize]) -> Vec<bool> {
     mask
 }
 
+/// Whether `meta` lists void samples (a filled raster's, or a decoded file's `mETA`).
+pub(super) fn lists_voids(meta: &crate::io::Metadata) -> bool {
+    meta.extra.contains_key(VOID_RUNS)
+}
+
 /// `r` with its void samples ([`crate::io::nodata`]) filled by pull-push and their runs
 /// kept in [`VOID_RUNS`]; `None` when no sample (or every sample) is void.
 pub(super) fn with_voids_filled(r: &RasterView<'_>) -> Result<Option<Raster>> {

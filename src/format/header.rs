@@ -1,6 +1,6 @@
 //! The `HEAD` chunk: what the data is and how it was coded (formats/MRA.md §4).
 
-use super::{Cursor, LATEST_MINOR, MAJOR, OLDEST_MAJOR};
+use super::{Cursor, LATEST_MINOR, MAJOR, MINOR_VOIDS, OLDEST_MAJOR};
 use crate::io::{DataKind, SampleType};
 use crate::scheme::{Boundary, Scheme};
 use crate::{Error, Result};
@@ -54,6 +54,10 @@ pub struct Header {
     pub max: f64,
     /// Tile extents (equal to `dims`: one tile).
     pub tile: Vec<usize>,
+    /// Whether the `mETA` lists void samples (`extra.nodata.voids`): bit 0 of the flags
+    /// byte of 2.4 and later (false before). A reader refuses a file that says so and
+    /// has no such list.
+    pub voids: bool,
 }
 
 pub const MAX_AXES: usize = 4;
@@ -154,7 +158,15 @@ impl Header {
         for &t in &self.tile {
             b.extend_from_slice(&(t as u32).to_le_bytes());
         }
+        if self.has_flags() {
+            b.push(self.voids as u8);
+        }
         b
+    }
+
+    /// Whether `HEAD` ends with the flags byte (2.4 and later).
+    fn has_flags(&self) -> bool {
+        self.major == MAJOR && self.minor >= MINOR_VOIDS
     }
 
     /// Parse and validate a `HEAD` payload.
@@ -273,6 +285,10 @@ impl Header {
             return Err(bad(format!("{levels} levels"), "at most 32 levels"));
         }
         let step = c.f64()?;
+        if !(step > 0.0 && step.is_finite()) {
+            // every band's step is this one times its ratio
+            return Err(bad(format!("base step Δ {step}"), "a positive finite step"));
+        }
         let delta = c.f64()?;
         let max_error = c.f64()?;
         let min = c.f64()?;
@@ -319,6 +335,14 @@ impl Header {
                 ));
             }
         }
+        let voids = if major == MAJOR && minor >= MINOR_VOIDS {
+            match c.u8()? {
+                f @ 0..=1 => f == 1,
+                f => return Err(bad(format!("HEAD flags {f:#04x}"), "bit 0 alone (voids)")),
+            }
+        } else {
+            false
+        };
         Ok(Header {
             major,
             minor,
@@ -337,6 +361,7 @@ impl Header {
             min,
             max,
             tile,
+            voids,
         })
     }
 }

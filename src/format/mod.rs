@@ -30,9 +30,14 @@ pub const MINOR_COMPACT: u8 = 2;
 /// The minor version from which every band's stream chooses its magnitude classes,
 /// narrow or wide (2.3; mra writes it for lossless files and tiles).
 pub const MINOR_WIDE: u8 = 3;
+/// The minor version from which `HEAD` ends with a flags byte whose bit 0 says the
+/// `mETA` lists void samples (2.4; mra writes it for files with voids, so that a file
+/// whose ancillary `mETA` was dropped is refused rather than decoding its voids as
+/// values).
+pub const MINOR_VOIDS: u8 = 4;
 /// The highest minor version of [`MAJOR`] readers implement; they reject higher ones
 /// (a 2.3 band would decode wrongly as a 2.2 one).
-pub const LATEST_MINOR: u8 = MINOR_WIDE;
+pub const LATEST_MINOR: u8 = MINOR_VOIDS;
 /// Largest chunk payload accepted (1 GiB).
 pub const MAX_CHUNK: u64 = 1 << 30;
 

@@ -39,8 +39,42 @@ fn channel_rank(name: &str) -> (usize, String) {
     (r, name.to_string())
 }
 
-/// Read the first layer of an OpenEXR file as a 2-D raster.
+/// A compressed block inflates at most this many times (ZIP's deflate, the loosest of
+/// OpenEXR's codecs, about 1032×): a header declaring more pixel bytes than this
+/// multiple of the file's length cannot be real.
+const MAX_RATIO: u64 = 1100;
+
+/// Check what the headers of the OpenEXR file at `path` declare before any pixel is
+/// allocated: each flat layer's pixel bytes `P = w · h · bytes per pixel` against the
+/// file's length (`P ≤ 1100 · len`) and `P + w · h · C · 4` (the crate's channels and
+/// the interleaved raster) against the memory budget ([`crate::limits`]).
+fn check_declared(path: &Path) -> Result<()> {
+    let len = std::fs::metadata(path)?.len();
+    let meta = exr::meta::MetaData::read_from_file(path, false).map_err(exr_error)?;
+    for h in meta.headers.iter().filter(|h| !h.deep) {
+        let (w, ht) = (h.layer_size.width() as u64, h.layer_size.height() as u64);
+        let area = w.saturating_mul(ht);
+        let pixel = area.saturating_mul(h.channels.bytes_per_pixel as u64);
+        let most = len.saturating_mul(MAX_RATIO);
+        if pixel > most {
+            return Err(Error::format(
+                format!("OpenEXR header declares {w}x{ht} pixels ({pixel} bytes) but a {len}-byte file holds at most {most}"),
+                "a data window the file can hold",
+            ));
+        }
+        let interleaved = area.saturating_mul(h.channels.list.len() as u64 * 4);
+        crate::limits::check(
+            "decoded image bytes (memory budget MRA_MAX_BYTES)",
+            pixel.saturating_add(interleaved),
+        )?;
+    }
+    Ok(())
+}
+
+/// Read the first layer of an OpenEXR file as a 2-D raster (its declared size checked
+/// first, [`check_declared`]).
 pub fn read(path: &Path) -> Result<Raster> {
+    check_declared(path)?;
     let image = exr::prelude::read()
         .no_deep_data()
         .largest_resolution_level()

@@ -41,11 +41,11 @@ fn tiff_error(e: tiff::TiffError) -> Error {
             what: "TIFF feature",
             value: u.to_string(),
         },
-        tiff::TiffError::LimitsExceeded => Error::LimitsExceeded {
-            what: "TIFF image bytes",
-            requested: 0,
-            limit: 1 << 33,
-        },
+        // the decoder's buffers are capped at the budget ([`open_head`])
+        tiff::TiffError::LimitsExceeded => Error::format(
+            "a TIFF decoder buffer over the memory budget (MRA_MAX_BYTES)",
+            "strips and tiles within the budget",
+        ),
         other => Error::format(format!("invalid TIFF: {other}"), "a valid TIFF file"),
     }
 }
@@ -257,10 +257,13 @@ struct Head {
 /// file (before anything is allocated).
 fn open_head(path: &Path) -> Result<(Decoder<BufReader<File>>, Head)> {
     let file_len = std::fs::metadata(path)?.len();
+    let budget = crate::limits::Limits::from_env()?;
     let mut dec = Decoder::new(BufReader::new(File::open(path)?)).map_err(tiff_error)?;
     let mut limits = Limits::default();
-    limits.decoding_buffer_size = 1 << 33;
-    limits.intermediate_buffer_size = 1 << 33;
+    // the crate's own buffers stay within the budget too (usize: a 32-bit target caps it)
+    let most = usize::try_from(budget.max_bytes).unwrap_or(usize::MAX);
+    limits.decoding_buffer_size = most;
+    limits.intermediate_buffer_size = most;
     limits.ifd_value_size = 64 << 20;
     dec = dec.with_limits(limits);
 
@@ -368,7 +371,14 @@ pub fn read(path: &Path) -> Result<Raster> {
 
     let mut acc: Option<Samples> = None;
     let mut pages = 0usize;
+    // pages may share their strips: the stack, not the file, bounds what they inflate to
+    let page_bytes = (w as u64 * h as u64 * channels as u64 * ct.bit_depth() as u64).div_ceil(8);
     loop {
+        crate::limits::check_elems(
+            "TIFF stack bytes (memory budget MRA_MAX_BYTES)",
+            pages as u64 + 1,
+            page_bytes,
+        )?;
         append(&mut acc, dec.read_image().map_err(tiff_error)?)?;
         pages += 1;
         if !dec.more_images() {

@@ -89,12 +89,97 @@ pub fn subdivide_with_features(
     let mut cur = mesh.clone();
     cur.attributes = Default::default();
     let mut feat = features.clone();
-    for _ in 0..steps {
+    for s in 0..steps {
         let he = HalfEdgeMesh::build(&cur)?;
+        if s == 0 {
+            check_budget(&cur, he.edges.len(), scheme, steps)?;
+        }
         let tags = feat.resolve(&he)?;
         let (next, f) = step(&cur, &he, scheme, &tags)?;
         cur = next;
         feat = f;
     }
     Ok((cur, feat))
+}
+
+/// Vertex, edge, face and corner counts of a mesh.
+#[derive(Clone, Copy, Debug)]
+struct Counts {
+    v: u64,
+    e: u64,
+    f: u64,
+    c: u64,
+}
+
+impl Counts {
+    /// The counts after one step of `scheme`: Loop and Butterfly `V + E, 2E + 3F, 4F, 12F`
+    /// (triangles); Catmull-Clark `V + E + F, 2E + C, C, 4C`; Doo-Sabin `C` vertices, at
+    /// most `F + E + V` faces and `C + 6E` corners, and (bounded by) as many edges as
+    /// corners.
+    fn after(self, scheme: Scheme) -> Counts {
+        let Counts { v, e, f, c } = self;
+        let (a, b) = (u64::saturating_add, u64::saturating_mul);
+        match scheme {
+            Scheme::Loop(_) | Scheme::Butterfly => Counts {
+                v: a(v, e),
+                e: a(b(e, 2), b(f, 3)),
+                f: b(f, 4),
+                c: b(f, 12),
+            },
+            Scheme::CatmullClark => Counts {
+                v: a(a(v, e), f),
+                e: a(b(e, 2), c),
+                f: c,
+                c: b(c, 4),
+            },
+            Scheme::DooSabin => {
+                let c2 = a(c, b(e, 6));
+                Counts {
+                    v: c,
+                    e: c2,
+                    f: a(a(f, e), v),
+                    c: c2,
+                }
+            }
+        }
+    }
+
+    /// Bytes of the mesh: positions (24 a vertex), corner indices and face offsets (4).
+    fn mesh_bytes(self) -> u64 {
+        self.v
+            .saturating_mul(24)
+            .saturating_add(self.c.saturating_add(self.f).saturating_mul(4))
+    }
+
+    /// Bytes of its half-edge structure: six `u32` a half-edge (at most two an edge),
+    /// 20 an edge, 8 a corner, 4 a vertex and a face.
+    fn structure_bytes(self) -> u64 {
+        self.e
+            .saturating_mul(68)
+            .saturating_add(self.c.saturating_mul(8))
+            .saturating_add(self.v.saturating_add(self.f).saturating_mul(4))
+    }
+}
+
+/// Check `steps` steps of `scheme` from `mesh` (of `edges` edges) against the memory
+/// budget ([`crate::limits`]) before the first: the largest of, over the steps, the mesh
+/// a step reads, its half-edge structure and the mesh it makes.
+fn check_budget(mesh: &Mesh, edges: usize, scheme: Scheme, steps: usize) -> Result<()> {
+    let mut cur = Counts {
+        v: mesh.vertex_count() as u64,
+        e: edges as u64,
+        f: mesh.face_count() as u64,
+        c: mesh.corner_count() as u64,
+    };
+    let mut most = 0u64;
+    for _ in 0..steps {
+        let next = cur.after(scheme);
+        let bytes = cur
+            .mesh_bytes()
+            .saturating_add(cur.structure_bytes())
+            .saturating_add(next.mesh_bytes());
+        most = most.max(bytes);
+        cur = next;
+    }
+    crate::limits::check("subdivided mesh bytes (memory budget MRA_MAX_BYTES)", most)
 }

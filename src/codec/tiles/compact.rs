@@ -71,6 +71,7 @@ impl Grid {
 fn tile_header(h: &Header, dims: &[usize]) -> Header {
     let mut t = h.clone();
     t.minor = format::MINOR;
+    t.voids = false;
     t.dims = dims.to_vec();
     t.tile = dims.to_vec();
     t
