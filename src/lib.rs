@@ -15,6 +15,7 @@
 //! src/mesh/           half-edge meshes, I/O, topology, subdivision surfaces
 //! src/solid/          implicit solids, CSG, ray casting, polygonisation
 //! src/cli/            the `mra` command line, a thin shell over the above
+//! src/serve/          `mra serve`: IIIF Image API 3.0 and a deep-zoom viewer (feature `serve`)
 //! ```
 //!
 //! Data flows one way: read → array → transform → (quantize → code → container) → back.
@@ -45,6 +46,8 @@ pub mod points;
 pub mod progress;
 pub mod quantize;
 pub mod scheme;
+#[cfg(feature = "serve")]
+pub mod serve;
 #[cfg(feature = "geometry")]
 pub mod solid;
 pub mod style;

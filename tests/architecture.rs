@@ -19,7 +19,7 @@ const LAYERS: &[(usize, &[&str])] = &[
             "upscale", "terrain", "denoise", "style", "curve", "surface", "mesh", "solid", "points",
         ],
     ),
-    (6, &["cli"]),
+    (6, &["cli", "serve"]),
 ];
 
 /// Imports the map does not allow yet, each with why it stays: `(from, to)` as module
