@@ -35,7 +35,8 @@
 //! 5      src/mesh/         half-edge meshes, I/O, topology, subdivision surfaces
 //! 5      src/solid/        implicit solids, CSG, ray casting, polygonisation
 //! 5      src/points.rs     point lists as text (one point per line)
-//! 6      src/cli/          the `mra` command line, a thin shell over the above
+//! 6      src/serve/        `mra serve`: IIIF Image API 3.0 and a deep-zoom viewer (feature `serve`)
+//! 7      src/cli/          the `mra` command line, a thin shell over the above
 //! ```
 //!
 //! Data flows one way: read → array → transform → (quantize → code → container) → back.
@@ -66,6 +67,8 @@ pub mod points;
 pub mod progress;
 pub mod quantize;
 pub mod scheme;
+#[cfg(feature = "serve")]
+pub mod serve;
 #[cfg(feature = "geometry")]
 pub mod solid;
 pub mod style;

@@ -13,6 +13,8 @@ pub mod mesh;
 pub mod outputs;
 pub mod points;
 pub mod scheme;
+#[cfg(feature = "serve")]
+pub mod serve;
 pub mod solid;
 pub mod subdivide;
 pub mod surface;
@@ -89,6 +91,9 @@ pub enum Command {
     /// Volumes: isosurfaces of CT/MR data.
     #[command(subcommand)]
     Volume(solid::VolumeCommand),
+    /// Serve the .mra files of a folder over HTTP: IIIF Image API 3.0 and a deep-zoom viewer.
+    #[cfg(feature = "serve")]
+    Serve(serve::ServeArgs),
 }
 
 /// A failure on the command line: one line on stderr, exit code 2.
@@ -248,6 +253,8 @@ pub fn main() -> i32 {
         Command::Info(a) => info(a),
         Command::Solid(c) => solid::run(c),
         Command::Volume(c) => solid::run_volume(c),
+        #[cfg(feature = "serve")]
+        Command::Serve(a) => serve::run(a),
     };
     drop(activity);
     match result {

@@ -44,5 +44,5 @@ pub use read::{
     decode, decode_file, decode_file_slabs, decode_seek, decode_stream, header_of, header_of_file,
     SlabDecode, SlabDecoder,
 };
-pub use tiles::default_tile;
+pub use tiles::{default_tile, level_extents};
 pub use write::{encode, encode_stream, encode_tiled, encode_tiled_view, encode_view};

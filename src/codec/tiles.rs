@@ -45,6 +45,16 @@ pub const SEARCH_SAMPLE_TILES: usize = 64;
 /// Default tile extents of a raster of extents `dims` (slowest first): one tile up to
 /// [`ONE_PIECE_POSITIONS`] positions, else [`DEFAULT_TILE_2D`] per axis in 1-D and 2-D
 /// and [`DEFAULT_TILE_3D`] in 3-D and 4-D (each at most the axis extent).
+/// The extents of a file's raster at `level`, slowest axis first: what a decode at that
+/// level returns without a region (a tiled file's tiles each reduced, then stitched).
+pub fn level_extents(h: &Header, level: usize) -> Result<Vec<usize>> {
+    Ok(Stitch::geometry(h, level, None)?
+        .out
+        .iter()
+        .map(|g| g.len())
+        .collect())
+}
+
 pub fn default_tile(dims: &[usize]) -> Vec<usize> {
     let n = dims
         .iter()

@@ -1,0 +1,173 @@
+"""Tile serving speed: `mra serve` against iipsrv (Debian `iipimage-server`, FastCGI behind
+lighttpd) over a pyramid TIFF made by `vips tiffsave --tile --pyramid`, same image, same
+256² IIIF tile requests (a random pan/zoom trace), 8 concurrent clients with keep-alive,
+loopback only. Prints file sizes and PSNR of both codings, then p50/p99 latency and
+throughput of each server, as markdown table rows.
+
+usage: python3 benches/peers/serve_iipsrv.py [--size 8192] [--requests 4000] [--clients 8]
+needs: apt-get install iipimage-server lighttpd libvips-tools; MRA (default target/release/mra)
+"""
+import argparse
+import http.client
+import json
+import os
+import random
+import shutil
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+IIPSRV = "/usr/lib/iipimage-server/iipsrv.fcgi"
+TILE = 256
+
+
+def sh(*args, **kw):
+    return subprocess.run(args, check=True, capture_output=True, text=True, **kw).stdout
+
+
+def trace(size, n, seed):
+    """n IIIF tile requests (region, size) at random levels and places."""
+    rng = random.Random(seed)
+    depth = 0
+    while (size >> depth) > TILE:
+        depth += 1
+    out = []
+    for _ in range(n):
+        k = rng.randint(0, depth)
+        span = TILE << k
+        tiles = -(-size // span)
+        cx, cy = rng.randrange(tiles), rng.randrange(tiles)
+        x, y = cx * span, cy * span
+        w, h = min(span, size - x), min(span, size - y)
+        out.append(f"{x},{y},{w},{h}/{-(-w // (1 << k))},/0/default.jpg")
+    return out
+
+
+def run_clients(host, port, prefix, reqs, clients):
+    """Latencies (s) of every request and the wall time, `clients` threads with keep-alive."""
+    lat = []
+    lock = threading.Lock()
+    errors = []
+    chunks = [reqs[i::clients] for i in range(clients)]
+
+    def worker(chunk):
+        c = http.client.HTTPConnection(host, port, timeout=60)
+        mine = []
+        for r in chunk:
+            t = time.perf_counter()
+            c.request("GET", prefix + r)
+            resp = c.getresponse()
+            body = resp.read()
+            mine.append(time.perf_counter() - t)
+            if resp.status != 200 or len(body) < 100:
+                errors.append((resp.status, r))
+        c.close()
+        with lock:
+            lat.extend(mine)
+
+    threads = [threading.Thread(target=worker, args=(ch,)) for ch in chunks]
+    t0 = time.perf_counter()
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    wall = time.perf_counter() - t0
+    if errors:
+        raise SystemExit(f"{len(errors)} failed requests, first {errors[0]}")
+    return sorted(lat), wall
+
+
+def pct(v, p):
+    return v[min(len(v) - 1, int(p / 100 * len(v)))]
+
+
+def wait_port(port):
+    for _ in range(200):
+        try:
+            http.client.HTTPConnection("127.0.0.1", port, timeout=1).connect()
+            return
+        except OSError:
+            time.sleep(0.05)
+    raise SystemExit(f"nothing listening on {port}")
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--size", type=int, default=8192)
+    ap.add_argument("--requests", type=int, default=4000)
+    ap.add_argument("--clients", type=int, default=8)
+    ap.add_argument("--seed", type=int, default=1)
+    a = ap.parse_args()
+    for tool in ["vips", "lighttpd"]:
+        if not shutil.which(tool):
+            raise SystemExit(f"{tool} missing: apt-get install iipimage-server lighttpd libvips-tools")
+    if not os.path.exists(IIPSRV):
+        raise SystemExit("iipsrv missing: apt-get install iipimage-server")
+    mra = os.environ.get("MRA", os.path.join(ROOT, "target", "release", "mra"))
+    work = tempfile.mkdtemp(prefix="mra-iipsrv-")
+    procs = []
+    try:
+        src = os.path.join(work, "src.png")
+        sh(mra, "generate", "strokes", "-o", src, "--size", str(a.size))
+        tif = os.path.join(work, "img.tif")
+        sh("vips", "tiffsave", src, tif, "--tile", "--pyramid", "--compression", "jpeg",
+           "--Q", "90", "--tile-width", str(TILE), "--tile-height", str(TILE))
+        full = os.path.join(work, "tif_full.png")
+        sh("vips", "copy", tif + "[page=0]", full)
+        cmp_tif = json.loads(sh(mra, "compare", src, full, "--json"))
+        served = os.path.join(work, "served")
+        os.makedirs(served)
+        coded = os.path.join(served, "img.mra")
+        sh(mra, "encode", src, "-o", coded, "--psnr", f"{cmp_tif['psnr']:.2f}")
+        dec = os.path.join(work, "mra_full.png")
+        sh(mra, "decode", coded, "-o", dec)
+        cmp_mra = json.loads(sh(mra, "compare", src, dec, "--json"))
+        print(f"| coding | bytes | PSNR dB |\n|---|---|---|")
+        print(f"| pyramid TIFF (vips, JPEG Q90, 256² tiles) | {os.path.getsize(tif)} | {cmp_tif['psnr']:.2f} |")
+        print(f"| .mra (--psnr {cmp_tif['psnr']:.2f}) | {os.path.getsize(coded)} | {cmp_mra['psnr']:.2f} |")
+
+        port_iip, port_mra = 18950 + a.seed % 50, 0
+        conf = os.path.join(work, "lighttpd.conf")
+        with open(conf, "w") as f:
+            f.write(f"""server.modules = ("mod_fastcgi")
+server.document-root = "{work}"
+server.bind = "127.0.0.1"
+server.port = {port_iip}
+server.max-keep-alive-requests = 100000
+fastcgi.server = ( "/fcgi-bin/iipsrv.fcgi" => ((
+  "socket" => "{work}/iipsrv.sock", "bin-path" => "{IIPSRV}",
+  "max-procs" => {os.cpu_count() or 2},
+  "bin-environment" => ("LOGFILE" => "{work}/iipsrv.log", "VERBOSITY" => "0",
+     "MAX_IMAGE_CACHE_SIZE" => "512", "JPEG_QUALITY" => "90", "MAX_CVT" => "4096")
+)))
+""")
+        procs.append(subprocess.Popen(["lighttpd", "-D", "-f", conf]))
+        wait_port(port_iip)
+        srv = subprocess.Popen([mra, "serve", served, "--bind", "127.0.0.1:0"], stdout=subprocess.PIPE, text=True)
+        procs.append(srv)
+        port_mra = int(srv.stdout.readline().split("http://")[1].strip().rstrip("/").split(":")[1])
+
+        reqs = trace(a.size, a.requests, a.seed)
+        warm = trace(a.size, 200, a.seed + 1000)
+        servers = [
+            ("iipsrv (pyramid TIFF)", port_iip, f"/fcgi-bin/iipsrv.fcgi?IIIF={tif}/"),
+            ("mra serve (.mra)", port_mra, "/iiif/3/img.mra/"),
+        ]
+        print(f"\n{a.requests} tile requests, {a.clients} clients, {a.size}² image\n")
+        print("| server | p50 ms | p99 ms | tiles/s |\n|---|---|---|---|")
+        for name, port, prefix in servers:
+            run_clients("127.0.0.1", port, prefix, warm, a.clients)
+            lat, wall = run_clients("127.0.0.1", port, prefix, reqs, a.clients)
+            print(f"| {name} | {pct(lat, 50) * 1e3:.1f} | {pct(lat, 99) * 1e3:.1f} | {len(lat) / wall:.0f} |")
+    finally:
+        for p in procs:
+            p.terminate()
+            p.wait()
+        shutil.rmtree(work, ignore_errors=True)
+
+
+if __name__ == "__main__":
+    main()

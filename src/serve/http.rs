@@ -1,0 +1,318 @@
+//! The HTTP side: axum routes on tokio, and the limits that keep one client from holding
+//! the server.
+//!
+//! ```text
+//! connections   at most MAX_CONNECTIONS open; a further one is closed at once
+//! headers       read within HEADER_TIMEOUT (slowloris), at most 16 KiB (431 past that)
+//! connection    closed after CONNECTION_LIFETIME whatever it does
+//! requests      at most MAX_IN_FLIGHT handled at once, the others wait; an answer
+//!               not ready within REQUEST_TIMEOUT is 408
+//! decoding      at most `workers` requests decode at once, on blocking threads
+//! URL           at most MAX_URL bytes (414)
+//! ```
+
+use super::cache::LevelCache;
+use super::iiif::ImageRequest;
+use super::ident::{self, IdentError};
+use super::source::Source;
+use super::{info, render, viewer, Config, ServeError};
+use crate::limits::Limits;
+use axum::body::Body;
+use axum::extract::State as AxState;
+use axum::http::{header, HeaderMap, HeaderValue, Method, StatusCode, Uri};
+use axum::response::{IntoResponse, Response};
+use axum::routing::get;
+use axum::Router;
+use std::net::SocketAddr;
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::time::Duration;
+use tokio::sync::Semaphore;
+
+pub const MAX_CONNECTIONS: usize = 512;
+pub const MAX_IN_FLIGHT: usize = 64;
+pub const HEADER_TIMEOUT: Duration = Duration::from_secs(10);
+pub const REQUEST_TIMEOUT: Duration = Duration::from_secs(30);
+pub const CONNECTION_LIFETIME: Duration = Duration::from_secs(300);
+pub const MAX_URL: usize = 4096;
+/// How long a client may keep an answer before asking again (with its `ETag`).
+pub const CACHE_CONTROL: &str = "public, max-age=60";
+
+/// What every request sees.
+pub struct State {
+    pub root: PathBuf,
+    pub addr: SocketAddr,
+    pub cache: LevelCache,
+    pub limits: Limits,
+    pub work: Arc<Semaphore>,
+}
+
+impl State {
+    pub fn new(root: PathBuf, addr: SocketAddr, c: &Config) -> Arc<State> {
+        Arc::new(State {
+            root,
+            addr,
+            cache: LevelCache::new(c.cache_bytes.min(c.limits.max_bytes)),
+            limits: c.limits,
+            work: Arc::new(Semaphore::new(c.workers.max(1))),
+        })
+    }
+}
+
+/// The routes with their layers (CORS outermost, then the timeout, then the bound on
+/// requests in flight).
+pub fn router(state: Arc<State>) -> Router {
+    use tower_http::cors::{Any, CorsLayer};
+    let cors = CorsLayer::new()
+        .allow_origin(Any)
+        .allow_methods([Method::GET, Method::HEAD, Method::OPTIONS])
+        .expose_headers([header::ETAG, header::LINK]);
+    Router::new()
+        .route("/", get(index))
+        .route("/viewer.html", get(|| async { html(viewer::VIEWER.to_string()) }))
+        .route("/assets/{name}", get(asset))
+        .route("/iiif/3/{*rest}", get(iiif))
+        .fallback(|| async { plain(StatusCode::NOT_FOUND, "not found") })
+        .with_state(state)
+        .layer(tower::limit::ConcurrencyLimitLayer::new(MAX_IN_FLIGHT))
+        .layer(tower_http::timeout::TimeoutLayer::with_status_code(
+            StatusCode::REQUEST_TIMEOUT,
+            REQUEST_TIMEOUT,
+        ))
+        .layer(cors)
+}
+
+/// Accept connections until the listener fails for good.
+pub async fn run(listener: tokio::net::TcpListener, state: Arc<State>) -> std::io::Result<()> {
+    use hyper_util::rt::{TokioIo, TokioTimer};
+    use hyper_util::service::TowerToHyperService;
+    let app = router(state);
+    let open = Arc::new(Semaphore::new(MAX_CONNECTIONS));
+    loop {
+        let stream = match listener.accept().await {
+            Ok((s, _)) => s,
+            Err(_) => {
+                // out of descriptors or a connection reset before accept: wait, go on
+                tokio::time::sleep(Duration::from_millis(50)).await;
+                continue;
+            }
+        };
+        let Ok(permit) = open.clone().try_acquire_owned() else {
+            drop(stream);
+            continue;
+        };
+        let svc = TowerToHyperService::new(app.clone());
+        tokio::spawn(async move {
+            let conn = hyper::server::conn::http1::Builder::new()
+                .timer(TokioTimer::new())
+                .header_read_timeout(HEADER_TIMEOUT)
+                .max_buf_size(16 * 1024)
+                .serve_connection(TokioIo::new(stream), svc);
+            let _ = tokio::time::timeout(CONNECTION_LIFETIME, conn).await;
+            drop(permit);
+        });
+    }
+}
+
+fn plain(status: StatusCode, msg: &str) -> Response {
+    (
+        status,
+        [(header::CONTENT_TYPE, "text/plain; charset=utf-8")],
+        format!("{msg}\n"),
+    )
+        .into_response()
+}
+
+fn html(body: String) -> Response {
+    ([(header::CONTENT_TYPE, "text/html; charset=utf-8")], body).into_response()
+}
+
+fn error_response(e: &ServeError) -> Response {
+    let status = match e {
+        ServeError::Bad(_) | ServeError::Limits(_) => StatusCode::BAD_REQUEST,
+        ServeError::NotFound => StatusCode::NOT_FOUND,
+        ServeError::File(_) => StatusCode::INTERNAL_SERVER_ERROR,
+    };
+    plain(status, &one_line(&e.to_string()))
+}
+
+/// A message as one printable line of at most 300 characters.
+fn one_line(m: &str) -> String {
+    m.chars()
+        .map(|c| if c.is_control() { ' ' } else { c })
+        .take(300)
+        .collect()
+}
+
+async fn asset(axum::extract::Path(name): axum::extract::Path<String>) -> Response {
+    match viewer::asset(&name) {
+        Some((mime, bytes)) => (
+            [
+                (header::CONTENT_TYPE, mime),
+                (header::CACHE_CONTROL, "public, max-age=86400"),
+            ],
+            bytes,
+        )
+            .into_response(),
+        None => plain(StatusCode::NOT_FOUND, "not found"),
+    }
+}
+
+async fn index(AxState(st): AxState<Arc<State>>) -> Response {
+    let root = st.root.clone();
+    match tokio::task::spawn_blocking(move || viewer::index(&root)).await {
+        Ok(page) => html(page),
+        Err(_) => plain(StatusCode::INTERNAL_SERVER_ERROR, "listing failed"),
+    }
+}
+
+/// The base URI of an identifier: the request's `Host` when it is a plain host name
+/// or address, else the address bound.
+fn base_uri(st: &State, headers: &HeaderMap, id: &str) -> String {
+    let host = headers
+        .get(header::HOST)
+        .and_then(|h| h.to_str().ok())
+        .filter(|h| {
+            !h.is_empty()
+                && h.len() <= 255
+                && h.bytes()
+                    .all(|b| b.is_ascii_alphanumeric() || b".-:[]".contains(&b))
+        })
+        .map(str::to_string)
+        .unwrap_or_else(|| st.addr.to_string());
+    format!("http://{host}/iiif/3/{id}")
+}
+
+/// The `?window=lo,hi` extension: the sample values shown as 0 and 255.
+fn window_param(uri: &Uri) -> Result<Option<(f64, f64)>, ServeError> {
+    let Some(q) = uri.query() else {
+        return Ok(None);
+    };
+    for kv in q.split('&') {
+        let Some(v) = kv.strip_prefix("window=") else {
+            continue;
+        };
+        const E: &str = "window=lo,hi with finite numbers lo < hi";
+        let v = percent_encoding::percent_decode_str(v).decode_utf8_lossy();
+        let mut it = v.split(',').map(|t| t.trim().parse::<f64>());
+        return match (it.next(), it.next(), it.next()) {
+            (Some(Ok(lo)), Some(Ok(hi)), None) if lo.is_finite() && hi.is_finite() && lo < hi => {
+                Ok(Some((lo, hi)))
+            }
+            _ => Err(ServeError::bad("window", &v, E)),
+        };
+    }
+    Ok(None)
+}
+
+async fn iiif(AxState(st): AxState<Arc<State>>, uri: Uri, headers: HeaderMap) -> Response {
+    if uri.path().len() + uri.query().map_or(0, str::len) > MAX_URL {
+        return plain(StatusCode::URI_TOO_LONG, "URL too long");
+    }
+    let rest = uri.path().strip_prefix("/iiif/3/").unwrap_or("").to_string();
+    let segs: Vec<&str> = rest.split('/').collect();
+    let n = segs.len();
+    let (id, params): (String, Option<[String; 4]>) = match n {
+        _ if segs[n - 1] == "info.json" && n >= 2 => (segs[..n - 1].join("/"), None),
+        5.. => (
+            segs[..n - 4].join("/"),
+            Some([0, 1, 2, 3].map(|i| segs[n - 4 + i].to_string())),
+        ),
+        _ => {
+            // the base URI: to info.json, if it names a file
+            let id = rest.trim_end_matches('/');
+            return match ident::parse(id) {
+                Ok(_) => (
+                    StatusCode::SEE_OTHER,
+                    [(header::LOCATION, format!("/iiif/3/{id}/info.json"))],
+                )
+                    .into_response(),
+                Err(IdentError::Malformed) => plain(StatusCode::BAD_REQUEST, "bad identifier"),
+                Err(IdentError::NotFound) => plain(StatusCode::NOT_FOUND, "no such image"),
+            };
+        }
+    };
+    let window = match window_param(&uri) {
+        Ok(w) => w,
+        Err(e) => return error_response(&e),
+    };
+    let req = match &params {
+        Some([r, s, o, q]) => match ImageRequest::parse(r, s, o, q) {
+            Ok(req) => Some(req),
+            Err(e) => return error_response(&e.into()),
+        },
+        None => None,
+    };
+    let ident = match ident::parse(&id) {
+        Ok(i) => i,
+        Err(IdentError::Malformed) => return plain(StatusCode::BAD_REQUEST, "bad identifier"),
+        Err(IdentError::NotFound) => return plain(StatusCode::NOT_FOUND, "no such image"),
+    };
+    let base = base_uri(&st, &headers, &id);
+    let Ok(permit) = st.work.clone().acquire_owned().await else {
+        return plain(StatusCode::SERVICE_UNAVAILABLE, "shutting down");
+    };
+    let st2 = st.clone();
+    let job = tokio::task::spawn_blocking(move || {
+        let _permit = permit;
+        let path = ident::locate(&st2.root, &ident).map_err(|_| ServeError::NotFound)?;
+        let src = Source::open(&path, ident.slice)?;
+        let etag = src.etag();
+        if headers
+            .get(header::IF_NONE_MATCH)
+            .and_then(|v| v.to_str().ok())
+            .is_some_and(|v| v.split(',').any(|t| t.trim() == etag || t.trim() == "*"))
+        {
+            return Ok((StatusCode::NOT_MODIFIED, etag, None, Vec::new()));
+        }
+        let caps = info::caps(&src, st2.limits.max_bytes);
+        match req {
+            None => {
+                let doc = info::info_json(&src, &base, &caps);
+                let ld = headers
+                    .get(header::ACCEPT)
+                    .and_then(|v| v.to_str().ok())
+                    .is_some_and(|a| a.contains("application/ld+json"));
+                let mime = if ld {
+                    "application/ld+json;profile=\"http://iiif.io/api/image/3/context.json\""
+                } else {
+                    "application/json"
+                };
+                let body = serde_json::to_vec_pretty(&doc).unwrap_or_default();
+                Ok((StatusCode::OK, etag, Some(mime), body))
+            }
+            Some(req) => {
+                let (w, h) = src.size();
+                let r = req.resolve(w, h, &caps)?;
+                let body = render::render(&src, &st2.cache, &st2.limits, &req, &r, window)?;
+                Ok((StatusCode::OK, etag, Some(req.format.mime()), body))
+            }
+        }
+    });
+    let done: Result<_, ServeError> = match job.await {
+        Ok(r) => r,
+        Err(_) => {
+            return plain(StatusCode::INTERNAL_SERVER_ERROR, "the request failed");
+        }
+    };
+    match done {
+        Ok((status, etag, mime, body)) => {
+            let mut resp = Response::new(Body::from(body));
+            *resp.status_mut() = status;
+            let h = resp.headers_mut();
+            if let Some(m) = mime {
+                h.insert(header::CONTENT_TYPE, HeaderValue::from_static(m));
+            }
+            if let Ok(v) = HeaderValue::from_str(&etag) {
+                h.insert(header::ETAG, v);
+            }
+            h.insert(header::CACHE_CONTROL, HeaderValue::from_static(CACHE_CONTROL));
+            h.insert(
+                header::LINK,
+                HeaderValue::from_static("<http://iiif.io/api/image/3/level2.json>;rel=\"profile\""),
+            );
+            resp
+        }
+        Err(e) => error_response(&e),
+    }
+}

@@ -1,0 +1,280 @@
+//! A served file: its header, its levels' extents, the plane an image request reads (a
+//! 2-D raster, or a slice of a volume), and windows of one level read from a cache of
+//! decoded levels or, for a level too large to cache, decoded for the window alone (a
+//! tiled file from the tiles the window meets).
+//!
+//! A window `rows × cols` of level k covers, in full-resolution samples, the box
+//! `⌊r0·d/R⌋ .. ⌈r1·d/R⌉` (extent d, level extent R); the decoder returns the level's
+//! samples `⌊x0·R/d⌋ .. ⌈x1·R/d⌉` of that box, a superset of the window, which is cut out.
+
+use super::cache::{Key, LevelCache};
+use super::ident::Slice;
+use super::ServeError;
+use crate::codec::{self, DecodeOptions};
+use crate::format::Header;
+use crate::io::{Raster, Samples};
+use crate::limits::Limits;
+use std::ops::Range;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::time::UNIX_EPOCH;
+
+/// A window of one level: `h × w` positions of `c` channels, row-major, channels last.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Plane {
+    pub h: usize,
+    pub w: usize,
+    pub c: usize,
+    pub data: Vec<f32>,
+}
+
+/// Bytes a decoder may take per decoded sample beyond the samples themselves (its
+/// coefficient planes in `f32`, the pyramid's scratch): the planning factor of the
+/// memory check before a decode.
+const DECODE_BYTES_PER_SAMPLE: u64 = 12;
+
+/// An opened file.
+#[derive(Clone, Debug)]
+pub struct Source {
+    pub path: PathBuf,
+    /// File length and modification time (ns): the version an `ETag` and the cache name.
+    pub len: u64,
+    pub mtime: u128,
+    pub header: Header,
+    /// Each level's extents, slowest axis first (`levels[0]` is the full resolution).
+    pub levels: Vec<Vec<usize>>,
+    /// The slice of a volume (`None` for a 2-D raster).
+    pub slice: Option<Slice>,
+    /// The axes of the image: rows, then columns (indices into `header.dims`).
+    pub row_axis: usize,
+    pub col_axis: usize,
+}
+
+impl Source {
+    /// Read the header of `path` and plan the image of `slice` (a volume without one is
+    /// shown at its middle z slice).
+    pub fn open(path: &Path, slice: Option<Slice>) -> Result<Source, ServeError> {
+        let md = std::fs::metadata(path).map_err(|_| ServeError::NotFound)?;
+        let mtime = md
+            .modified()
+            .ok()
+            .and_then(|t| t.duration_since(UNIX_EPOCH).ok())
+            .map_or(0, |d| d.as_nanos());
+        let header = codec::header_of_file(path)?;
+        let nd = header.dims.len();
+        let (slice, row_axis, col_axis) = match (nd, slice) {
+            (2, None) => (None, 0, 1),
+            (2, Some(_)) => {
+                return Err(ServeError::bad("identifier", "a slice", "a slice of a 3-D file only"))
+            }
+            (3, s) => {
+                let s = s.unwrap_or(Slice {
+                    axis: 0,
+                    index: header.dims[0] as u64 / 2,
+                });
+                if s.index >= header.dims[s.axis] as u64 {
+                    return Err(ServeError::bad(
+                        "identifier",
+                        &format!("slice {} of {}", s.index, header.dims[s.axis]),
+                        "a slice within the volume",
+                    ));
+                }
+                let rest: Vec<usize> = (0..3).filter(|&a| a != s.axis).collect();
+                (Some(s), rest[0], rest[1])
+            }
+            _ => {
+                return Err(ServeError::bad(
+                    "identifier",
+                    &format!("a {nd}-D file"),
+                    "a 2-D image or heightmap, or a 3-D volume",
+                ))
+            }
+        };
+        let depth = codec::depth_of(&header)?;
+        let levels = (0..=depth)
+            .map(|k| codec::level_extents(&header, k))
+            .collect::<crate::Result<Vec<_>>>()
+            ?;
+        Ok(Source {
+            path: path.to_path_buf(),
+            len: md.len(),
+            mtime,
+            header,
+            levels,
+            slice,
+            row_axis,
+            col_axis,
+        })
+    }
+
+    /// The image's width and height in full-resolution pixels.
+    pub fn size(&self) -> (u64, u64) {
+        (
+            self.header.dims[self.col_axis] as u64,
+            self.header.dims[self.row_axis] as u64,
+        )
+    }
+
+    /// Level `k`'s width and height.
+    pub fn level_size(&self, k: usize) -> (usize, usize) {
+        (self.levels[k][self.col_axis], self.levels[k][self.row_axis])
+    }
+
+    /// The deepest level.
+    pub fn depth(&self) -> usize {
+        self.levels.len() - 1
+    }
+
+    /// The entity tag of this version of the file.
+    pub fn etag(&self) -> String {
+        format!("\"{:x}-{:x}\"", self.len, self.mtime)
+    }
+
+    /// The window `rows × cols` of level `k` (level coordinates, within the level).
+    pub fn window(
+        &self,
+        cache: &LevelCache,
+        limits: &Limits,
+        k: usize,
+        rows: Range<usize>,
+        cols: Range<usize>,
+    ) -> Result<Plane, ServeError> {
+        let h = &self.header;
+        let ext = &self.levels[k];
+        let c = h.channels as u64;
+        let window = (rows.len() as u64).saturating_mul(cols.len() as u64);
+        limits
+            .check_elems("the window of a request", window.saturating_mul(c), 4)
+            ?;
+        let level_samples = ext
+            .iter()
+            .fold(c, |n, &e| n.saturating_mul(e as u64));
+        let level_bytes = level_samples.saturating_mul(h.sample_type.size() as u64);
+        // the level's samples at the slice, and the window's box in the level
+        let mut bx: Vec<Range<usize>> = (0..ext.len()).map(|_| 0..0).collect();
+        bx[self.row_axis] = rows.clone();
+        bx[self.col_axis] = cols.clone();
+        if let Some(s) = self.slice {
+            let lo = level_index(s.index as usize, ext[s.axis], h.dims[s.axis]);
+            bx[s.axis] = lo..lo + 1;
+        }
+        if level_bytes <= cache.entry_limit() {
+            limits
+                .check_elems("a decoded level", level_samples, DECODE_BYTES_PER_SAMPLE)
+                ?;
+            let key = Key {
+                path: self.path.clone(),
+                len: self.len,
+                mtime: self.mtime,
+                level: k,
+            };
+            let path = self.path.clone();
+            let r = cache.get_or_decode(key, level_bytes, move || {
+                let opts = DecodeOptions {
+                    level: k,
+                    ..Default::default()
+                };
+                codec::decode_file(&path, &opts).map(|d| Arc::new(d.raster))
+            });
+            let r = r.map_err(ServeError::File)?;
+            let zero: Vec<usize> = vec![0; ext.len()];
+            return cut(&r, &zero, &bx, self.row_axis, self.col_axis);
+        }
+        // a level too large to cache: a tiled file's tiles the window meets (a file of
+        // one tile is decoded whole and cut, not kept)
+        let full: Vec<Range<usize>> = (0..ext.len())
+            .map(|a| {
+                let (d, r) = (h.dims[a], ext[a]);
+                if Some(a) == self.slice.map(|s| s.axis) {
+                    let s = self.slice.map_or(0, |s| s.index as usize);
+                    return s..s + 1;
+                }
+                let lo = (bx[a].start as u128 * d as u128 / r as u128) as usize;
+                let hi = ((bx[a].end as u128 * d as u128).div_ceil(r as u128) as usize).min(d);
+                lo..hi.max(lo + 1)
+            })
+            .collect();
+        let origin: Vec<usize> = (0..ext.len())
+            .map(|a| level_index(full[a].start, ext[a], h.dims[a]))
+            .collect();
+        let box_samples = full
+            .iter()
+            .zip(ext.iter().zip(&h.dims))
+            .fold(c, |n, (g, (&r, &d))| {
+                n.saturating_mul((g.len() as u64 * r as u64).div_ceil(d as u64) + 1)
+            });
+        // a file of one tile is reconstructed whole before it is cut
+        let planned = if h.is_tiled() { box_samples } else { level_samples };
+        limits.check_elems("the decode of a request", planned, DECODE_BYTES_PER_SAMPLE)?;
+        let opts = DecodeOptions {
+            level: k,
+            region: Some(full.into_iter().rev().collect()),
+            ..Default::default()
+        };
+        let d = codec::decode_file(&self.path, &opts)?;
+        cut(&d.raster, &origin, &bx, self.row_axis, self.col_axis)
+    }
+}
+
+/// The level index of full-resolution index `x` on an axis of extent `d` and level
+/// extent `r`: `⌊x·r/d⌋`, at most `r − 1`.
+pub fn level_index(x: usize, r: usize, d: usize) -> usize {
+    ((x as u128 * r as u128 / d.max(1) as u128) as usize).min(r.saturating_sub(1))
+}
+
+/// The box `bx` (level coordinates) of a raster whose first sample sits at `origin`,
+/// as a plane of rows `row_axis` and columns `col_axis` (the other axis, if any, one
+/// sample thick).
+fn cut(
+    r: &Raster,
+    origin: &[usize],
+    bx: &[Range<usize>],
+    row_axis: usize,
+    col_axis: usize,
+) -> Result<Plane, ServeError> {
+    let nd = r.dims.len();
+    let inside = nd == bx.len()
+        && (0..nd).all(|a| bx[a].start >= origin[a] && bx[a].end <= origin[a] + r.dims[a]);
+    if !inside {
+        return Err(ServeError::from(crate::Error::format(
+            format!("a decoded box of {:?} for a window {bx:?}", r.dims),
+            "the window inside the decoded box",
+        )));
+    }
+    let c = r.channels;
+    // strides of the raster, slowest axis first, in positions
+    let mut stride = vec![1usize; nd];
+    for a in (0..nd.saturating_sub(1)).rev() {
+        stride[a] = stride[a + 1] * r.dims[a + 1];
+    }
+    let base: usize = (0..nd)
+        .filter(|&a| a != row_axis && a != col_axis)
+        .map(|a| (bx[a].start - origin[a]) * stride[a])
+        .sum();
+    let (hh, ww) = (bx[row_axis].len(), bx[col_axis].len());
+    let mut data = Vec::with_capacity(hh * ww * c);
+    for y in 0..hh {
+        let ry = bx[row_axis].start - origin[row_axis] + y;
+        for x in 0..ww {
+            let rx = bx[col_axis].start - origin[col_axis] + x;
+            let p = (base + ry * stride[row_axis] + rx * stride[col_axis]) * c;
+            push_samples(&r.samples, p, c, &mut data);
+        }
+    }
+    Ok(Plane {
+        h: hh,
+        w: ww,
+        c,
+        data,
+    })
+}
+
+/// Samples `p .. p + c` as `f32`, appended.
+fn push_samples(s: &Samples, p: usize, c: usize, out: &mut Vec<f32>) {
+    match s {
+        Samples::U8(v) => out.extend(v[p..p + c].iter().map(|&x| x as f32)),
+        Samples::U16(v) => out.extend(v[p..p + c].iter().map(|&x| x as f32)),
+        Samples::F32(v) => out.extend_from_slice(&v[p..p + c]),
+        _ => out.extend((p..p + c).map(|i| s.get_f64(i) as f32)),
+    }
+}

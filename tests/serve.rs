@@ -1,0 +1,432 @@
+//! `mra serve` end to end: the server started on 127.0.0.1 with an ephemeral port over
+//! files the tests generate, asked over plain HTTP/1.1 (a few lines of std, no client
+//! crate): info.json, served pixels against `mra decode --region --level`, ETags, the
+//! IIIF level-2 checks of the compliance document, and hostile requests.
+#![cfg(feature = "serve")]
+
+use std::io::{BufRead, BufReader, Read, Write};
+use std::net::{SocketAddr, TcpStream};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::time::Duration;
+
+fn mra() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_mra"))
+}
+
+fn run(args: &[&str]) {
+    let out = mra().args(args).output().expect("run mra");
+    assert!(
+        out.status.success(),
+        "mra {args:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+/// A temporary folder removed on drop.
+struct Dir(PathBuf);
+
+impl Dir {
+    fn new(name: &str) -> Dir {
+        let p = std::env::temp_dir().join(format!("mra-serve-{name}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&p);
+        std::fs::create_dir_all(&p).unwrap();
+        Dir(p)
+    }
+    fn join(&self, s: &str) -> PathBuf {
+        self.0.join(s)
+    }
+    fn s(&self, s: &str) -> String {
+        self.join(s).display().to_string()
+    }
+}
+
+impl Drop for Dir {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+/// A running server, killed on drop.
+struct Server {
+    child: Child,
+    addr: SocketAddr,
+}
+
+impl Server {
+    fn start(dir: &Path) -> Server {
+        let mut child = mra()
+            .args(["serve", &dir.display().to_string(), "--bind", "127.0.0.1:0"])
+            .env("MRA_MAX_BYTES", "256M")
+            .stdout(Stdio::piped())
+            .stderr(Stdio::inherit())
+            .spawn()
+            .expect("start mra serve");
+        let mut line = String::new();
+        BufReader::new(child.stdout.take().unwrap())
+            .read_line(&mut line)
+            .unwrap();
+        let addr = line
+            .split("http://")
+            .nth(1)
+            .and_then(|t| t.trim().trim_end_matches('/').parse().ok())
+            .unwrap_or_else(|| panic!("no address in {line:?}"));
+        Server { child, addr }
+    }
+
+    /// GET `path` (sent as given) with extra header lines.
+    fn get_with(&self, path: &str, extra: &str) -> Response {
+        let mut s = TcpStream::connect(self.addr).unwrap();
+        s.set_read_timeout(Some(Duration::from_secs(60))).unwrap();
+        write!(
+            s,
+            "GET {path} HTTP/1.1\r\nHost: {}\r\nConnection: close\r\n{extra}\r\n",
+            self.addr
+        )
+        .unwrap();
+        let mut raw = Vec::new();
+        let _ = s.read_to_end(&mut raw);
+        Response::parse(&raw)
+    }
+
+    fn get(&self, path: &str) -> Response {
+        self.get_with(path, "")
+    }
+}
+
+impl Drop for Server {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+struct Response {
+    status: u16,
+    headers: Vec<(String, String)>,
+    body: Vec<u8>,
+}
+
+impl Response {
+    fn parse(raw: &[u8]) -> Response {
+        let end = raw
+            .windows(4)
+            .position(|w| w == b"\r\n\r\n")
+            .unwrap_or(raw.len());
+        let head = String::from_utf8_lossy(&raw[..end]).to_string();
+        let mut lines = head.lines();
+        let status = lines
+            .next()
+            .and_then(|l| l.split(' ').nth(1))
+            .and_then(|c| c.parse().ok())
+            .unwrap_or(0);
+        let headers: Vec<(String, String)> = lines
+            .filter_map(|l| l.split_once(':'))
+            .map(|(k, v)| (k.trim().to_ascii_lowercase(), v.trim().to_string()))
+            .collect();
+        let mut body = raw[(end + 4).min(raw.len())..].to_vec();
+        let chunked = headers
+            .iter()
+            .any(|(k, v)| k == "transfer-encoding" && v.contains("chunked"));
+        if chunked {
+            body = unchunk(&body);
+        }
+        Response {
+            status,
+            headers,
+            body,
+        }
+    }
+
+    fn header(&self, name: &str) -> Option<&str> {
+        self.headers
+            .iter()
+            .find(|(k, _)| k == name)
+            .map(|(_, v)| v.as_str())
+    }
+
+    fn json(&self) -> serde_json::Value {
+        serde_json::from_slice(&self.body).expect("a JSON body")
+    }
+
+    fn image(&self) -> image::DynamicImage {
+        image::load_from_memory(&self.body).expect("an image body")
+    }
+}
+
+fn unchunk(mut b: &[u8]) -> Vec<u8> {
+    let mut out = Vec::new();
+    loop {
+        let Some(nl) = b.windows(2).position(|w| w == b"\r\n") else {
+            return out;
+        };
+        let n = usize::from_str_radix(String::from_utf8_lossy(&b[..nl]).trim(), 16).unwrap_or(0);
+        if n == 0 {
+            return out;
+        }
+        out.extend_from_slice(&b[nl + 2..nl + 2 + n]);
+        b = &b[nl + 2 + n + 2..];
+    }
+}
+
+/// A folder with a 1024² zone plate coded whole and tiled (256² tiles), a heightmap and
+/// a volume.
+fn corpus(name: &str) -> Dir {
+    let d = Dir::new(name);
+    run(&["generate", "zone-plate", "-o", &d.s("z.png"), "--size", "1024"]);
+    run(&["encode", &d.s("z.png"), "-o", &d.s("z.mra"), "--quality", "60"]);
+    std::fs::create_dir_all(d.join("sub dir")).unwrap();
+    run(&[
+        "encode",
+        &d.s("z.png"),
+        "-o",
+        &d.s("sub dir/tiled.mra"),
+        "--quality",
+        "60",
+        "--tile",
+        "256",
+    ]);
+    run(&["generate", "terrain", "-o", &d.s("t.tif"), "--size", "257"]);
+    run(&["encode", &d.s("t.tif"), "-o", &d.s("t.mra"), "--quality", "60"]);
+    run(&["generate", "phantom", "-o", &d.s("v.nrrd"), "--size", "64"]);
+    run(&["encode", &d.s("v.nrrd"), "-o", &d.s("v.mra"), "--quality", "60"]);
+    d
+}
+
+#[test]
+fn info_json_has_the_level_2_fields_and_the_files_levels() {
+    let d = corpus("info");
+    let s = Server::start(&d.0);
+    let r = s.get("/iiif/3/z.mra/info.json");
+    assert_eq!(r.status, 200);
+    assert_eq!(r.header("access-control-allow-origin"), Some("*"));
+    assert!(r.header("etag").is_some());
+    let j = r.json();
+    assert_eq!(j["@context"], "http://iiif.io/api/image/3/context.json");
+    assert_eq!(j["type"], "ImageService3");
+    assert_eq!(j["protocol"], "http://iiif.io/api/image");
+    assert_eq!(j["profile"], "level2");
+    assert_eq!((j["width"].as_u64(), j["height"].as_u64()), (Some(1024), Some(1024)));
+    assert_eq!(j["id"], format!("http://{}/iiif/3/z.mra", s.addr));
+    let sizes = j["sizes"].as_array().unwrap();
+    assert!(sizes.len() >= 4, "{sizes:?}");
+    assert_eq!(sizes.last().unwrap()["width"], 1024);
+    assert_eq!(sizes[sizes.len() - 2]["width"], 512);
+    let t = &j["tiles"][0];
+    assert_eq!(t["width"], 256);
+    let f = t["scaleFactors"].as_array().unwrap();
+    assert_eq!(f[0], 1);
+    assert_eq!(f[1], 2);
+    // JSON-LD when asked for it
+    let r = s.get_with("/iiif/3/z.mra/info.json", "Accept: application/ld+json\r\n");
+    assert!(r.header("content-type").unwrap().starts_with("application/ld+json"));
+    // the base URI redirects to info.json; a percent-encoded path in a subfolder
+    let r = s.get("/iiif/3/z.mra");
+    assert_eq!(r.status, 303);
+    assert_eq!(r.header("location"), Some("/iiif/3/z.mra/info.json"));
+    assert_eq!(s.get("/iiif/3/sub%20dir%2Ftiled.mra/info.json").status, 200);
+}
+
+/// The samples of a PNG as 8-bit gray.
+fn gray(img: &image::DynamicImage) -> (u32, u32, Vec<u8>) {
+    let g = img.to_luma8();
+    (g.width(), g.height(), g.into_raw())
+}
+
+#[test]
+fn a_served_region_equals_mra_decode_of_the_same_window() {
+    let d = corpus("pixels");
+    let s = Server::start(&d.0);
+    for (id, file) in [("z.mra", "z.mra"), ("sub%20dir%2Ftiled.mra", "sub dir/tiled.mra")] {
+        // (x, y, w, h, level): aligned to 2^level, output w/2^level wide
+        for (x, y, w, h, k) in [
+            (0u32, 0u32, 1024u32, 1024u32, 2u32),
+            (256, 512, 256, 256, 0),
+            (128, 64, 512, 256, 1),
+            (512, 512, 512, 512, 2),
+            (0, 0, 1024, 1024, 3),
+        ] {
+            let ow = w >> k;
+            let path = format!("/iiif/3/{id}/{x},{y},{w},{h}/{ow},/0/default.png");
+            let r = s.get(&path);
+            assert_eq!(r.status, 200, "{path}: {}", String::from_utf8_lossy(&r.body));
+            assert_eq!(r.header("content-type"), Some("image/png"));
+            let served = gray(&r.image());
+            let out = d.s(&format!("ref-{k}-{x}-{y}.png"));
+            run(&[
+                "decode",
+                &d.s(file),
+                "-o",
+                &out,
+                "--level",
+                &k.to_string(),
+                "--region",
+                &format!("{x}:{},{y}:{}", x + w, y + h),
+            ]);
+            let want = gray(&image::open(&out).unwrap());
+            assert_eq!((served.0, served.1), (want.0, want.1), "{path}");
+            assert!(served.2 == want.2, "{path}: pixels differ from mra decode");
+        }
+    }
+}
+
+#[test]
+fn the_etag_changes_when_the_file_is_replaced_and_a_match_is_304() {
+    let d = corpus("etag");
+    let s = Server::start(&d.0);
+    let path = "/iiif/3/z.mra/0,0,256,256/256,/0/default.png";
+    let a = s.get(path);
+    let tag = a.header("etag").unwrap().to_string();
+    assert_eq!(a.header("cache-control"), Some("public, max-age=60"));
+    let same = s.get_with(path, &format!("If-None-Match: {tag}\r\n"));
+    assert_eq!(same.status, 304);
+    // replaced (by rename, as tools write files) with another coding of the image
+    run(&["encode", &d.s("z.png"), "-o", &d.s("z2.mra"), "--quality", "20"]);
+    std::fs::rename(d.join("z2.mra"), d.join("z.mra")).unwrap();
+    let b = s.get_with(path, &format!("If-None-Match: {tag}\r\n"));
+    assert_eq!(b.status, 200);
+    assert_ne!(b.header("etag").unwrap(), tag);
+    assert_ne!(gray(&a.image()).2, gray(&b.image()).2, "the new file's pixels");
+}
+
+#[test]
+fn the_level_2_features_answer_with_their_sizes() {
+    let d = corpus("level2");
+    let s = Server::start(&d.0);
+    let dims = |p: &str| {
+        let r = s.get(&format!("/iiif/3/z.mra/{p}"));
+        assert_eq!(r.status, 200, "{p}: {}", String::from_utf8_lossy(&r.body));
+        let i = r.image();
+        (i.width(), i.height())
+    };
+    assert_eq!(dims("full/max/0/default.jpg"), (1024, 1024));
+    assert_eq!(dims("square/100,/0/default.jpg"), (100, 100));
+    assert_eq!(dims("pct:10,10,50,25/max/0/default.png"), (512, 256));
+    assert_eq!(dims("0,0,600,300/,150/0/default.png"), (300, 150));
+    assert_eq!(dims("0,0,600,300/pct:50/0/default.png"), (300, 150));
+    assert_eq!(dims("0,0,600,300/100,100/0/default.png"), (100, 100));
+    assert_eq!(dims("0,0,600,300/!100,100/0/default.png"), (100, 50));
+    assert_eq!(dims("0,0,600,300/300,/90/default.png"), (150, 300));
+    assert_eq!(dims("0,0,600,300/300,/!180/gray.png"), (300, 150));
+    assert_eq!(dims("0,0,600,300/300,/270/color.png"), (150, 300));
+    assert_eq!(dims("0,0,600,300/300,/0/bitonal.png"), (300, 150));
+    // color is three channels, gray one; 90° turns the picture
+    let c = s.get("/iiif/3/z.mra/0,0,64,32/max/0/color.png").image();
+    assert_eq!(c.color().channel_count(), 3);
+    let a = gray(&s.get("/iiif/3/z.mra/0,0,64,32/max/0/gray.png").image());
+    let b = gray(&s.get("/iiif/3/z.mra/0,0,64,32/max/90/gray.png").image());
+    assert_eq!((b.0, b.1), (32, 64));
+    // output (x, y) of the turn is input (y, 31 − x)... i.e. input (row r, col q) lands
+    // at row q, column 31 − r
+    for (r, q) in [(0usize, 0usize), (5, 40), (31, 63)] {
+        assert_eq!(b.2[q * 32 + (31 - r)], a.2[r * 64 + q]);
+    }
+}
+
+#[test]
+fn heightmaps_are_hillshaded_and_volumes_sliced() {
+    let d = corpus("kinds");
+    let s = Server::start(&d.0);
+    let r = s.get("/iiif/3/t.mra/full/max/0/default.png");
+    assert_eq!(r.status, 200, "{}", String::from_utf8_lossy(&r.body));
+    let (w, h, px) = gray(&r.image());
+    assert_eq!((w, h), (257, 257));
+    let distinct: std::collections::BTreeSet<u8> = px.iter().copied().collect();
+    assert!(distinct.len() > 20, "a shaded relief, not flat");
+    // 16-bit windowing: a window over the data's range differs from the default
+    let v = s.get("/iiif/3/v.mra;z=32/info.json").json();
+    assert_eq!((v["width"].as_u64(), v["height"].as_u64()), (Some(64), Some(64)));
+    let a = s.get("/iiif/3/v.mra;z=32/full/max/0/default.png");
+    assert_eq!(a.status, 200);
+    let b = s.get("/iiif/3/v.mra;z=32/full/max/0/default.png?window=0,100");
+    assert_eq!(b.status, 200);
+    assert_ne!(gray(&a.image()).2, gray(&b.image()).2);
+    assert_eq!(s.get("/iiif/3/v.mra;y=10/full/max/0/default.png").status, 200);
+    assert_eq!(s.get("/iiif/3/v.mra;z=64/info.json").status, 400);
+    assert_eq!(s.get("/iiif/3/v.mra;z=1/full/max/0/default.png?window=5,1").status, 400);
+    assert_eq!(s.get("/iiif/3/z.mra;z=1/info.json").status, 400);
+}
+
+#[test]
+fn hostile_requests_are_refused_with_4xx_and_the_server_goes_on() {
+    let d = corpus("hostile");
+    // a file outside the served folder, and a symlink to it from inside
+    let outside = Dir::new("outside");
+    std::fs::copy(d.join("z.mra"), outside.join("secret.mra")).unwrap();
+    let served = d.join("served");
+    std::fs::create_dir_all(&served).unwrap();
+    std::fs::copy(d.join("z.mra"), served.join("z.mra")).unwrap();
+    #[cfg(unix)]
+    std::os::unix::fs::symlink(outside.join("secret.mra"), served.join("link.mra")).unwrap();
+    let s = Server::start(&served);
+    let long = "9".repeat(3000);
+    let huge = "a".repeat(20_000);
+    let bad: Vec<String> = vec![
+        "/iiif/3/../outside/secret.mra/info.json".into(),
+        "/iiif/3/%2e%2e%2fsecret.mra/info.json".into(),
+        "/iiif/3/..%2fsecret.mra/info.json".into(),
+        "/iiif/3/..%2F..%2F..%2Fetc%2Fpasswd/info.json".into(),
+        format!("/iiif/3/{}/info.json", outside.join("secret.mra").display()),
+        format!("/iiif/3/%2F{}/info.json", outside.join("secret.mra").display()),
+        "/iiif/3/link.mra/info.json".into(),
+        "/iiif/3/link.mra/full/max/0/default.jpg".into(),
+        "/iiif/3/nothere.mra/info.json".into(),
+        "/iiif/3/z.mra/full/99999,/0/default.jpg".into(),
+        "/iiif/3/z.mra/full/1025,/0/default.jpg".into(),
+        "/iiif/3/z.mra/full/^2048,/0/default.jpg".into(),
+        "/iiif/3/z.mra/full/99999999999999999999999,/0/default.jpg".into(),
+        "/iiif/3/z.mra/-10,0,100,100/max/0/default.jpg".into(),
+        "/iiif/3/z.mra/0,0,0,100/max/0/default.jpg".into(),
+        "/iiif/3/z.mra/0,0,100,0/max/0/default.jpg".into(),
+        "/iiif/3/z.mra/5000,0,100,100/max/0/default.jpg".into(),
+        "/iiif/3/z.mra/a,b,c,d/max/0/default.jpg".into(),
+        "/iiif/3/z.mra/full/max/45/default.jpg".into(),
+        "/iiif/3/z.mra/full/max/0/default.gif".into(),
+        "/iiif/3/z.mra/full/max/0/sepia.jpg".into(),
+        "/iiif/3/z.mra/full/0,/0/default.jpg".into(),
+        "/iiif/3/z.mra/full/pct:0/0/default.jpg".into(),
+        format!("/iiif/3/z.mra/{long},0,1,1/max/0/default.jpg"),
+        format!("/iiif/3/z.mra/full/max/0/default.jpg?{long}{long}"),
+        format!("/iiif/3/{huge}/info.json"),
+        "/iiif/3/%ff%fe.mra/info.json".into(),
+        "/iiif/3/z.mra;q=1/info.json".into(),
+        "/nothing".into(),
+        "/assets/..%2f..%2fCargo.toml".into(),
+    ];
+    for (i, p) in bad.iter().enumerate() {
+        let r = s.get(p);
+        let shown: String = p.chars().take(80).collect();
+        assert!(
+            (400..500).contains(&r.status),
+            "{shown}: {} {}",
+            r.status,
+            String::from_utf8_lossy(&r.body)
+        );
+        if i % 8 == 0 {
+            assert_eq!(s.get("/iiif/3/z.mra/0,0,256,256/256,/0/default.jpg").status, 200);
+        }
+    }
+    // a secret's bytes never come back, and a good request still works
+    assert_eq!(s.get("/iiif/3/z.mra/0,0,256,256/256,/0/default.jpg").status, 200);
+    // a request line too long for the buffer is refused without answering 2xx
+    let r = s.get(&format!("/iiif/3/{}/info.json", "b".repeat(70_000)));
+    assert!(r.status == 0 || (400..500).contains(&r.status), "{}", r.status);
+    assert_eq!(s.get("/iiif/3/z.mra/info.json").status, 200);
+}
+
+#[test]
+fn the_viewer_page_lists_the_files_and_embeds_openseadragon() {
+    let d = corpus("viewer");
+    let s = Server::start(&d.0);
+    let r = s.get("/");
+    assert_eq!(r.status, 200);
+    let page = String::from_utf8_lossy(&r.body);
+    assert!(page.contains("viewer.html?id=z.mra"), "{page}");
+    assert!(page.contains("viewer.html?id=sub%20dir%2Ftiled.mra"), "{page}");
+    let v = s.get("/viewer.html");
+    assert!(String::from_utf8_lossy(&v.body).contains("OpenSeadragon("));
+    let js = s.get("/assets/openseadragon.min.js");
+    assert_eq!(js.status, 200);
+    assert!(js.body.len() > 100_000);
+    assert_eq!(s.get("/assets/LICENSE-openseadragon.txt").status, 200);
+}
