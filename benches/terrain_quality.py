@@ -22,8 +22,23 @@ resampled from 30 m to 92.6 m cells):
   seam        mra's seam ratio (second differences on patch borders / elsewhere); <= 1.05
 Speed: a 1024x1024 result (--levels 3) from the first case's 128x128 base, wall time and peak
 memory (ru_maxrss of the child) of one run; targets <= 1 s and <= 10x the output's f32 bytes.
+
+Landforms (issue 49, `--base-scale 16`): a 1024x1024 result from a 128x128 base with `--levels 3
+--base-scale 16`, the example at the output's cell (92.6 m), against a plain cubic upscale of the base:
+  smooth base     a smooth random field (white noise, numpy seed 0, Gaussian sigma 10 cells) scaled
+                  to 300-1500 m, 740.8 m cells
+  real DEM base   N44W072 rows/cols 177-1201 smoothed (Gaussian sigma 1 cell) and block-averaged by 8
+  example         N44W072 rows 0-400, cols 0-344 (400x344; 3.5 % of the real base's area overlaps it)
+  W1 @ s          slope W1 to the example after s x s block means of both (cell s x 92.6 m), s = 1, 2,
+                  4, 8, as a ratio to the cubic upscale's; target <= 0.5 each
+  fidelity 16     PSNR of the result's 16x16 block means against the base's 2x2 block means (peak =
+                  its range); target >= 40 dB
+  drainage        fraction of cells whose D8 drainage area exceeds 64 cells (no pit filling), ratio
+                  to the example's; target 0.75-1.25
+  rough, seam     as above; 0.8-1.25 and <= 1.05
+  time            wall and CPU seconds of the run (process start and TIFF I/O included)
 Run from the repository root:  cargo build --release && python3 benches/terrain_quality.py [--seed N]
-Options after `--` go to every `mra terrain synth`.
+[--landforms-only]. Options after `--` go to every `mra terrain synth`.
 """
 import json, os, subprocess, sys, tempfile, time
 import numpy as np
@@ -122,7 +137,96 @@ def highpass(path, tmp, levels=2):
     return tifffile.imread(hp).astype(np.float64)
 
 
+def block(g, s):
+    h, w = (g.shape[0] // s) * s, (g.shape[1] // s) * s
+    return g[:h, :w].reshape(h // s, s, w // s, s).mean(axis=(1, 3))
+
+
+def d8_fraction(g, area=64):
+    """Fraction of cells whose D8 drainage area (cells, itself included) exceeds `area`: every cell
+    passes its area to the steepest-descent neighbour of its 8 (distance-weighted drop), highest
+    first; pits and edge cells keep theirs (no pit filling)."""
+    h, w = g.shape
+    p = np.pad(g, 1, mode="constant", constant_values=np.inf)
+    best = np.zeros((h, w))
+    rec = np.arange(h * w).reshape(h, w)
+    idx = rec.copy()
+    for dy in (-1, 0, 1):
+        for dx in (-1, 0, 1):
+            if dy == 0 and dx == 0:
+                continue
+            drop = (g - p[1 + dy:1 + dy + h, 1 + dx:1 + dx + w]) / np.hypot(dy, dx)
+            take = drop > best
+            best = np.where(take, drop, best)
+            rec = np.where(take, np.roll(np.roll(idx, -dy, 0), -dx, 1), rec)
+    order = np.argsort(-g.ravel(), kind="stable").tolist()
+    r = rec.ravel().tolist()
+    acc = [1.0] * (h * w)
+    for i in order:
+        j = r[i]
+        if j != i:
+            acc[j] += acc[i]
+    return float(np.mean(np.array(acc) > area))
+
+
+def landform_cases():
+    nh = hgt("N44W072.hgt")
+    example = nh[0:400, 0:344]
+    rng = np.random.default_rng(0)
+    smooth = ndimage.gaussian_filter(rng.standard_normal((128, 128)), 10, mode="wrap")
+    smooth = 300 + 1200 * (smooth - smooth.min()) / (smooth.max() - smooth.min())
+    real = ndimage.gaussian_filter(nh[177:1201, 177:1201], 1.0).reshape(128, 8, 128, 8).mean(axis=(1, 3))
+    yield "smooth base", smooth, example
+    yield "real DEM base", real, example
+
+
+def landforms(tmp):
+    """The issue-49 table: --levels 3 --base-scale 16 against a cubic upscale, per case."""
+    bp, ep, op = (os.path.join(tmp, n) for n in ("lbase.tif", "lex.tif", "lout.tif"))
+    scales = (1, 2, 4, 8)
+    lines = []
+    for name, base, example in landform_cases():
+        tifffile.imwrite(bp, base.astype(np.float32))
+        tifffile.imwrite(ep, example.astype(np.float32))
+        rep, wall, cpu, _ = run(["--base", bp, "--example", ep, "-o", op, "--levels", "3", "--base-scale", "16",
+                                 "--seed", str(SEED), "--json", "--any-units"])
+        g = tifffile.imread(op).astype(np.float64)
+        cub = cubic(base, 8)
+        ref = {"rough": lap_std(example, CELL), "d8": d8_fraction(example)}
+        trusted = block(base, 2)
+        for method, h, seam, t in [("cubic", cub, float("nan"), None), ("synth", g, rep["seam_ratio"], (wall, cpu))]:
+            w1 = []
+            for s in scales:
+                es = slope(block(example, s), s * CELL)
+                w = wasserstein_distance(slope(block(h, s), s * CELL), es)
+                wc = wasserstein_distance(slope(block(cub, s), s * CELL), es)
+                w1.append(w / wc)
+            red = block(h, 16)
+            fid = 10 * np.log10(np.ptp(trusted) ** 2 / np.mean((red - trusted) ** 2))
+            o = {"case": name, "method": method, "W1": w1, "fid16": fid, "d8": d8_fraction(h) / ref["d8"],
+                 "rough": lap_std(h, CELL) / ref["rough"], "seam": seam, "time": t}
+            print(json.dumps(o), file=sys.stderr)
+            lines.append(o)
+    print("\n| case | result | W1 slope ÷ cubic's @ 1 / 2 / 4 / 8 cells | fidelity, 16×16 block means (dB) | "
+          "D8 area > 64 cells ÷ example's | roughness / example | seam ratio | wall / CPU (s) | targets met |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    for o in lines:
+        ok, seam, t = "", "–", "–"
+        if o["method"] == "synth":
+            tg = [all(v <= 0.5 for v in o["W1"]), o["fid16"] >= 40, 0.75 <= o["d8"] <= 1.25,
+                  0.8 <= o["rough"] <= 1.25, o["seam"] <= 1.05]
+            ok = f"{sum(tg)}/5 " + "".join("✓" if v else "✗" for v in tg)
+            seam, t = f"{o['seam']:.3f}", f"{o['time'][0]:.2f} / {o['time'][1]:.2f}"
+        w1 = " / ".join(f"{v:.2f}" for v in o["W1"])
+        print(f"| {o['case']} | {o['method']} | {w1} | {o['fid16']:.1f} | {o['d8']:.2f} | {o['rough']:.2f} | "
+              f"{seam} | {t} | {ok} |")
+
+
 def main():
+    if "--landforms-only" in sys.argv:
+        with tempfile.TemporaryDirectory() as tmp:
+            landforms(tmp)
+        return
     rows, speed = [], None
     with tempfile.TemporaryDirectory() as tmp:
         bp, ep, op = (os.path.join(tmp, n) for n in ("base.tif", "ex.tif", "out.tif"))
@@ -176,6 +280,8 @@ def main():
     t, cpu, mem, dims = speed
     print(f"\nSpeed: {dims[1]}x{dims[0]} from 128x128 (--levels 3): {t:.2f} s wall, {cpu:.2f} s CPU (process "
           f"start and TIFF I/O included), peak memory {mem:.1f}x the output's f32 bytes.")
+    with tempfile.TemporaryDirectory() as tmp:
+        landforms(tmp)
 
 
 if __name__ == "__main__":

@@ -135,6 +135,10 @@ pub struct SynthArgs {
     /// octave is made the example's; 0.5 to 2) or a fixed gain (1: the example's band RMS).
     #[arg(long, default_value = "fit", value_name = "fit|G")]
     pub finest_gain: FinestGain,
+    /// Trust the base only down to 1/S of the output's resolution and synthesize every
+    /// finer level from the example (S: 1, or a power of two from 2^levels to 256).
+    #[arg(long, default_value_t = 1, value_name = "S")]
+    pub base_scale: usize,
     #[command(flatten)]
     pub m: MatchArgs,
 }
@@ -398,6 +402,7 @@ fn synth(a: SynthArgs) -> CliResult {
     }
     let mut o = a.m.options();
     o.finest_gain = a.finest_gain;
+    o.base_scale = a.base_scale;
     if let Some(s) = &a.size {
         o.size = Some(parse_size(s)?);
     }

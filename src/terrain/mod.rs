@@ -12,6 +12,7 @@
 //! grid.rs      Grid: h × w × channels of f64, row-major, held as the engine's Array
 //! resample.rs  Catmull–Rom resampling on affine maps (base to the output lattice)
 //! spectrum.rs  radially averaged power spectra, the finest octave's slope, the gain fit
+//! base_scale.rs  --base-scale S: the base reduced to 1/S of the output, finer levels synthesized
 //! synth.rs     the example's pyramid, coarse-to-fine patch matching, blended detail transfer
 //! finest_gain.rs  the finest level's gain g₁ fitted to the example's spectral slope
 //! seams.rs     the seam ratio: second differences on patch borders against elsewhere
@@ -21,6 +22,7 @@
 //! raster.rs    Raster <-> Grid with units, cell size and nodata checks
 //! ```
 
+pub mod base_scale;
 pub mod demo;
 mod finest_gain;
 pub mod grid;

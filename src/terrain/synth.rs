@@ -110,6 +110,9 @@ pub struct SynthOptions {
     /// Gain `g₁` of the finest details, `F = P C₁ + g₁ Q D₁` ([`synthesize`] only;
     /// [`transfer`] keeps `g₁ = 1`).
     pub finest_gain: FinestGain,
+    /// The base is trusted down to `1/S` of the output's resolution and every finer level
+    /// is synthesized ([`super::base_scale`]); 1 keeps the base at its own resolution.
+    pub base_scale: usize,
 }
 
 /// How the finest details' gain `g₁` is chosen.
@@ -155,6 +158,7 @@ impl Default for SynthOptions {
             example_scale: 1.0,
             relief_cap: 0.0,
             finest_gain: FinestGain::Fitted,
+            base_scale: 1,
         }
     }
 }
@@ -180,6 +184,10 @@ pub struct SynthReport {
     pub finest_gain: f64,
     /// The example's spectral slope (the fit's target) when `g₁` was fitted.
     pub example_spectral_slope: Option<f64>,
+    /// The base is trusted down to `1/base_scale` of the output (1: its own resolution);
+    /// `levels` counts the synthesized levels and `fidelity_psnr` compares the result's
+    /// `base_scale × base_scale` block means with the base reduced to that scale.
+    pub base_scale: usize,
 }
 
 pub(super) const BOUNDARY: Boundary = Boundary::Interpolating;
@@ -833,6 +841,7 @@ fn refine(
         fidelity_psnr: None,
         finest_gain: 1.0,
         example_spectral_slope: None,
+        base_scale: 1,
     };
     let mut parent: Option<Shifts> = None;
     for k in (1..=l).rev() {
@@ -886,6 +895,8 @@ fn refine(
 /// the MRA reduction of [`reduce`]).
 pub fn synthesize(base: &Grid, example: &Grid, o: &SynthOptions) -> Result<(Grid, SynthReport)> {
     check(base, example, o)?;
+    let (base, o) = super::base_scale::trusted_base(base, o)?;
+    let (base, o) = (base.as_ref(), &o);
     let l = o.levels;
     let (h, w) = match o.size {
         Some(s) => s,
@@ -917,6 +928,7 @@ pub fn synthesize(base: &Grid, example: &Grid, o: &SynthOptions) -> Result<(Grid
         &scaled
     };
     let (mut g, mut report) = refine(coarse, &ly, &lx, example, o)?;
+    report.base_scale = o.base_scale;
     let (lo, hi) = base.range();
     let psnr = |back: &Grid| {
         let mse = back
