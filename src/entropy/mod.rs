@@ -7,6 +7,7 @@
 //! and writes format 1. Normative: formats/MRA.md §6 and §9.
 
 pub mod band;
+pub mod block;
 mod golomb;
 pub mod range;
 pub mod v1;

@@ -1,0 +1,201 @@
+//! Coefficient coders on the same real bands: today's (`entropy::band`, format 2) against
+//! the code-block prototype (`entropy::block`), bits and single-thread MB/s.
+//!
+//! The bands are those `mra encode` writes: each input is encoded by the library
+//! (`--bpp 1` for the photographs and the CT, `--lossless` for the 16-bit images), its
+//! bands read back from the file (`coder/bands.rs`); then every coder encodes and
+//! decodes every band on one thread, best total of `MRA_CODER_REPS` (default 3) runs.
+//! MB/s are of raw samples (the input's bytes) per second of coding alone.
+//!
+//! Run: `MRA_CORPUS=/work/shared/corpus cargo bench --bench coder [-- kodak flower ct lossless16]`
+#[path = "coder/bands.rs"]
+mod bands;
+
+use bands::Bands;
+use mra::codec::{encode, EncodeOptions, Rate};
+use mra::entropy::block::{self, Shape};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// A coder under test.
+#[derive(Clone, Copy)]
+enum Coder {
+    Today,
+    Block {
+        plane: Shape,
+        volume: Shape,
+        parent: bool,
+    },
+}
+
+impl Coder {
+    fn name(&self) -> String {
+        match self {
+            Coder::Today => "today (band, format 2)".into(),
+            Coder::Block {
+                plane,
+                volume,
+                parent,
+            } => format!(
+                "quads {}×{} / {}×{}×{}, window 2^{}{}",
+                plane.y,
+                plane.x,
+                volume.z,
+                volume.y,
+                volume.x,
+                plane.limit,
+                if *parent { ", parent" } else { "" }
+            ),
+        }
+    }
+}
+
+fn shape(z: usize, y: usize, x: usize) -> Shape {
+    Shape::new(z, y, x)
+}
+
+fn limited(s: Shape, limit: u8) -> Shape {
+    Shape { limit, ..s }
+}
+
+fn coders() -> Vec<Coder> {
+    let b = |p: Shape, v: Shape, parent| Coder::Block {
+        plane: p,
+        volume: v,
+        parent,
+    };
+    vec![
+        Coder::Today,
+        b(shape(1, 64, 64), shape(16, 32, 32), true),
+        b(shape(1, 64, 64), shape(16, 32, 32), false),
+        b(limited(shape(1, 64, 64), 4), limited(shape(16, 32, 32), 4), false),
+        b(limited(shape(1, 64, 64), 6), limited(shape(16, 32, 32), 6), false),
+        b(shape(1, 32, 32), shape(8, 16, 16), false),
+        b(shape(1, 128, 128), shape(32, 32, 32), false),
+        b(shape(1, 64, 64), shape(4, 64, 64), false),
+    ]
+}
+
+fn corpus() -> PathBuf {
+    std::env::var_os("MRA_CORPUS")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/corpus"))
+}
+
+/// Encode `path` at `rate` with the library's defaults and read its bands back.
+fn bands_of(path: &Path, rate: Rate) -> Bands {
+    let r = mra::io::read(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let bytes = encode(
+        &r,
+        &EncodeOptions {
+            rate,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    Bands::of_file(&bytes).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
+/// Total bytes, encode seconds and decode seconds of `coder` over every band of `set`,
+/// the decode checked against the indices.
+fn run(coder: Coder, set: &[Bands]) -> (usize, f64, f64) {
+    let (mut bytes, mut te, mut td) = (0, 0.0, 0.0);
+    for bs in set {
+        for (i, b) in bs.bands.iter().enumerate() {
+            match coder {
+                Coder::Today => {
+                    let t = Instant::now();
+                    let s = bs.encode_today(i);
+                    te += t.elapsed().as_secs_f64();
+                    let t = Instant::now();
+                    let back = bs.decode_today(i, &s).unwrap();
+                    td += t.elapsed().as_secs_f64();
+                    assert_eq!(s, b.stream, "today's coder re-encodes the file's stream");
+                    assert_eq!(back, b.q);
+                    bytes += s.len();
+                }
+                Coder::Block {
+                    plane,
+                    volume,
+                    parent,
+                } => {
+                    let sh = if b.dims.len() >= 3 { volume } else { plane };
+                    let par = if parent { bs.parent32(i) } else { None };
+                    let t = Instant::now();
+                    let s = block::encode(&b.q32, &b.dims, b.kind, par, sh);
+                    te += t.elapsed().as_secs_f64();
+                    let t = Instant::now();
+                    let back = block::decode(&s, &b.dims, b.kind, par, sh).unwrap();
+                    td += t.elapsed().as_secs_f64();
+                    assert_eq!(back, b.q32);
+                    bytes += s.len();
+                }
+            }
+        }
+    }
+    (bytes, te, td)
+}
+
+fn main() {
+    let args: Vec<String> = std::env::args().skip(1).filter(|a| !a.starts_with('-')).collect();
+    let want = |k: &str| args.is_empty() || args.iter().any(|a| a == k);
+    let reps: usize = std::env::var("MRA_CODER_REPS")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(3);
+    let root = corpus();
+    if !root.is_dir() {
+        eprintln!("skipped: no corpus at {} (set MRA_CORPUS)", root.display());
+        return;
+    }
+    let mut sets: Vec<(&str, Vec<Bands>)> = Vec::new();
+    if want("kodak") {
+        let kodak: Vec<Bands> = (1..=24)
+            .map(|k| root.join(format!("images/kodak/kodim{k:02}.png")))
+            .filter(|p| p.is_file())
+            .map(|p| bands_of(&p, Rate::Bpp(1.0)))
+            .collect();
+        sets.push(("Kodak 1–24, --bpp 1", kodak));
+    }
+    if want("flower") {
+        let p = root.join("images/large/flower_foveon_rgb8.png");
+        sets.push(("flower 2268×1512 RGB, --bpp 1", vec![bands_of(&p, Rate::Bpp(1.0))]));
+    }
+    if want("ct") {
+        let p = root.join("volumes/ct_pancreas_256.nrrd");
+        sets.push(("CT 256×256×134 i16, --bpp 1", vec![bands_of(&p, Rate::Bpp(1.0))]));
+    }
+    if want("lossless16") {
+        let set = ["artificial_gray16.png", "flower_foveon_gray16_linear.png"]
+            .iter()
+            .map(|f| bands_of(&root.join("images/highbit").join(f), Rate::Lossless))
+            .collect();
+        sets.push(("16-bit gray pair, --lossless", set));
+    }
+    println!("| input | coder | bytes | bits vs today | encode MB/s | decode MB/s |");
+    println!("|---|---|---|---|---|---|");
+    for (name, set) in &sets {
+        let raw: usize = set.iter().map(|b| b.raw_bytes).sum();
+        let mb = raw as f64 / 1e6;
+        let mut today = 0;
+        for coder in coders() {
+            let (mut best_e, mut best_d, mut bytes) = (f64::INFINITY, f64::INFINITY, 0);
+            for _ in 0..reps {
+                let (b, te, td) = run(coder, set);
+                bytes = b;
+                best_e = best_e.min(te);
+                best_d = best_d.min(td);
+            }
+            if let Coder::Today = coder {
+                today = bytes;
+            }
+            println!(
+                "| {name} | {} | {bytes} | {:+.2}% | {:.0} | {:.0} |",
+                coder.name(),
+                (bytes as f64 / today as f64 - 1.0) * 100.0,
+                mb / best_e,
+                mb / best_d
+            );
+        }
+    }
+}

@@ -1,0 +1,295 @@
+//! A throughput coder for bands of `i32` indices, cut into independent code-blocks
+//! (a prototype measured against [`super::band`]; no file uses it).
+//!
+//! A band of extents `dims` (walked as planes × rows × columns, the planes split along
+//! the third-last axis as in [`super::band`]) is cut into blocks of at most
+//! [`Shape`] `z × y × x` positions (`y`, `x` even; blocks never straddle two extents of
+//! the axes before the third-last). Each block is coded on its own by [`quad`]: a
+//! 16-symbol adaptive range-coded stream ([`rc`]) and a raw bit stream. The band's bytes
+//! are, block after block in raster order of the blocks, `varint(symbol bytes)`,
+//! `varint(raw bytes)`, the symbol bytes, the raw bytes: a decoder finds every block's
+//! start from the lengths alone and may decode blocks in parallel. The coarsest band is
+//! coded as the residuals of the median predictor `med(W, N, W + N − NW)` (in wrapping
+//! `i32` arithmetic, so every index is exact).
+//!
+//! The parent (one level coarser, same orientation) is a context as in
+//! [`super::band`]: blocks stay independent of each other given the coarser level.
+
+pub mod quad;
+pub mod rc;
+
+use super::walk::{parent_plane, Walk};
+use super::BandKind;
+use crate::format::Cursor;
+use crate::{Error, Result};
+use quad::{Extent, Rows, Scratch};
+
+/// Code-block extents (planes of 3-D and 4-D bands, rows, columns) and the models'
+/// adaptation limit ([`rc::Cdf::uniform`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Shape {
+    pub z: usize,
+    pub y: usize,
+    pub x: usize,
+    pub limit: u8,
+}
+
+impl Shape {
+    /// Blocks of `z × y × x` with the default adaptation limit ([`rc::LIMIT`]).
+    pub fn new(z: usize, y: usize, x: usize) -> Self {
+        Shape {
+            z,
+            y,
+            x,
+            limit: rc::LIMIT,
+        }
+    }
+
+    /// The extents as given, rows and columns rounded up to even, every one at least 1.
+    fn normal(self) -> Shape {
+        Shape {
+            z: self.z.max(1),
+            y: self.y.max(2).next_multiple_of(2),
+            x: self.x.max(2).next_multiple_of(2),
+            limit: self.limit,
+        }
+    }
+}
+
+/// The parent band of a detail band: its indices and extents.
+#[derive(Clone, Copy, Debug)]
+pub struct Parent<'a> {
+    pub data: &'a [i32],
+    pub dims: &'a [usize],
+}
+
+/// A block of a band: its first plane, row and column and its extents.
+#[derive(Clone, Copy, Debug)]
+struct Block {
+    p: usize,
+    y: usize,
+    x: usize,
+    ext: Extent,
+}
+
+/// The blocks of a band of walk `w` in coding order.
+fn blocks(w: Walk, shape: Shape) -> Vec<Block> {
+    let zdim = if w.zdim > 0 { w.zdim } else { w.planes.max(1) };
+    let outer = w.planes / zdim;
+    let mut out = Vec::new();
+    for o in 0..outer {
+        for z in (0..zdim).step_by(shape.z) {
+            for y in (0..w.rows).step_by(shape.y) {
+                for x in (0..w.cols).step_by(shape.x) {
+                    out.push(Block {
+                        p: o * zdim + z,
+                        y,
+                        x,
+                        ext: Extent {
+                            planes: shape.z.min(zdim - z),
+                            rows: shape.y.min(w.rows - y),
+                            cols: shape.x.min(w.cols - x),
+                        },
+                    });
+                }
+            }
+        }
+    }
+    out
+}
+
+/// The band positions and parent magnitudes of one block.
+struct Layout<'a> {
+    w: Walk,
+    b: Block,
+    parent: Option<(&'a [i32], Walk, &'a [usize])>,
+}
+
+impl Rows for Layout<'_> {
+    #[inline(always)]
+    fn row(&self, k: usize, y: usize) -> usize {
+        ((self.b.p + k) * self.w.rows + self.b.y + y) * self.w.cols + self.b.x
+    }
+
+    #[inline(always)]
+    fn parent(&self, k: usize, y: usize, x: usize) -> u32 {
+        match self.parent {
+            Some((data, pw, pbase)) => {
+                let py = ((self.b.y + y) / 2).min(pw.rows - 1);
+                let px = ((self.b.x + x) / 2).min(pw.cols - 1);
+                data[pbase[self.b.p + k] + py * pw.cols + px]
+                    .unsigned_abs()
+                    .min(1 << 20)
+            }
+            None => 0,
+        }
+    }
+}
+
+/// The parent's walk and, for each plane of the band, the offset of its parent plane;
+/// None without a usable parent.
+fn parent_map<'a>(
+    dims: &[usize],
+    w: Walk,
+    parent: Option<Parent<'a>>,
+) -> Option<(&'a [i32], Walk, Vec<usize>)> {
+    let p = parent?;
+    let ok = p.dims.len() == dims.len()
+        && p.dims.iter().all(|&d| d > 0)
+        && p.data.len() == p.dims.iter().product::<usize>();
+    if !ok {
+        return None;
+    }
+    let pw = Walk::new(p.dims);
+    let bases = (0..w.planes)
+        .map(|k| parent_plane(k, dims, p.dims) * pw.rows * pw.cols)
+        .collect();
+    Some((p.data, pw, bases))
+}
+
+/// LOCO-I median prediction of sample `i` at `(y, x)` of a plane of `cols` columns
+/// (as [`super::walk::med`]); always between W and N, so it is an `i32`.
+fn med(v: &[i32], i: usize, y: usize, x: usize, cols: usize) -> i32 {
+    let w = if x > 0 {
+        v[i - 1]
+    } else if y > 0 {
+        v[i - cols]
+    } else {
+        0
+    };
+    let n = if y > 0 { v[i - cols] } else { w };
+    let nw = if x > 0 && y > 0 { v[i - cols - 1] } else { n };
+    let (lo, hi) = if w < n { (w, n) } else { (n, w) };
+    if nw >= hi {
+        lo
+    } else if nw <= lo {
+        hi
+    } else {
+        (w as i64 + n as i64 - nw as i64) as i32
+    }
+}
+
+fn median_residuals(q: &[i32], w: Walk) -> Vec<i32> {
+    let mut r = vec![0; q.len()];
+    for p in 0..w.planes {
+        for y in 0..w.rows {
+            for x in 0..w.cols {
+                let i = (p * w.rows + y) * w.cols + x;
+                r[i] = q[i].wrapping_sub(med(q, i, y, x, w.cols));
+            }
+        }
+    }
+    r
+}
+
+fn undo_median(v: &mut [i32], w: Walk) {
+    for p in 0..w.planes {
+        for y in 0..w.rows {
+            for x in 0..w.cols {
+                let i = (p * w.rows + y) * w.cols + x;
+                v[i] = v[i].wrapping_add(med(v, i, y, x, w.cols));
+            }
+        }
+    }
+}
+
+/// Code a band of indices `q` (raster order, extents `dims`) in code-blocks of `shape`.
+pub fn encode(
+    q: &[i32],
+    dims: &[usize],
+    kind: BandKind,
+    parent: Option<Parent>,
+    shape: Shape,
+) -> Vec<u8> {
+    let w = Walk::new(dims);
+    let shape = shape.normal();
+    let res: Vec<i32>;
+    let (v, parent) = if kind == BandKind::Coarse {
+        res = median_residuals(q, w);
+        (&res[..], None)
+    } else {
+        (q, parent_map(dims, w, parent))
+    };
+    let mut out = Vec::new();
+    let mut scratch: Option<(Extent, Scratch)> = None;
+    for b in blocks(w, shape) {
+        let s = scratch_for(&mut scratch, b.ext);
+        let layout = Layout {
+            w,
+            b,
+            parent: parent.as_ref().map(|(d, pw, bases)| (*d, *pw, &bases[..])),
+        };
+        let mut e = rc::Encoder::new();
+        let mut bits = rc::BitWriter::default();
+        quad::encode(v, b.ext, &layout, s, shape.limit, &mut e, &mut bits);
+        let (sym, raw) = (e.finish(), bits.finish());
+        crate::format::put_varint(&mut out, sym.len() as u64);
+        crate::format::put_varint(&mut out, raw.len() as u64);
+        out.extend_from_slice(&sym);
+        out.extend_from_slice(&raw);
+    }
+    out
+}
+
+/// A scratch for a block of extents `ext`, kept while blocks keep the same extents.
+fn scratch_for(keep: &mut Option<(Extent, Scratch)>, ext: Extent) -> &mut Scratch {
+    let same = matches!(keep, Some((e, _)) if (e.planes, e.rows, e.cols) == (ext.planes, ext.rows, ext.cols));
+    if !same {
+        *keep = Some((ext, Scratch::new(ext)));
+    }
+    &mut keep.as_mut().expect("just set").1
+}
+
+/// Decode a band written by [`encode`] with the same `dims`, `kind`, parent and
+/// `shape`. Fails when a block's declared lengths run past the data.
+pub fn decode(
+    data: &[u8],
+    dims: &[usize],
+    kind: BandKind,
+    parent: Option<Parent>,
+    shape: Shape,
+) -> Result<Vec<i32>> {
+    let w = Walk::new(dims);
+    let shape = shape.normal();
+    let n: usize = dims.iter().product();
+    let mut v = vec![0i32; n];
+    let parent = if kind == BandKind::Coarse {
+        None
+    } else {
+        parent_map(dims, w, parent)
+    };
+    let mut cur = Cursor::new(data, "code-block");
+    let mut scratch: Option<(Extent, Scratch)> = None;
+    for b in blocks(w, shape) {
+        let sym_len = cur.varint()?;
+        let raw_len = cur.varint()?;
+        let left = data.len() as u64 - cur.pos as u64;
+        if sym_len.saturating_add(raw_len) > left {
+            return Err(Error::format(
+                format!("a code-block declaring {sym_len} + {raw_len} bytes, {left} left"),
+                "code-blocks within the band",
+            ));
+        }
+        let sym = cur.take(sym_len as usize)?;
+        let raw = cur.take(raw_len as usize)?;
+        let s = scratch_for(&mut scratch, b.ext);
+        let layout = Layout {
+            w,
+            b,
+            parent: parent.as_ref().map(|(d, pw, bases)| (*d, *pw, &bases[..])),
+        };
+        quad::decode(
+            &mut v,
+            b.ext,
+            &layout,
+            s,
+            shape.limit,
+            &mut rc::Decoder::new(sym),
+            &mut rc::BitReader::new(raw),
+        );
+    }
+    if kind == BandKind::Coarse {
+        undo_median(&mut v, w);
+    }
+    Ok(v)
+}

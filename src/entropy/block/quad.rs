@@ -1,0 +1,277 @@
+//! One code-block coded by quads: the 2×2 significance pattern of each quad as one
+//! 16-symbol [`Cdf`] symbol, then every significant coefficient's magnitude as one
+//! symbol with its low bits and sign raw.
+//!
+//! Within a block of `planes × rows × cols` (positions outside the block count as 0, so
+//! blocks are independent), quads are visited plane by plane in raster order; for the
+//! quad at `(y, x)` (even) with already coded magnitudes (capped at 2^20) NW, N₀, N₁, NE
+//! (row `y − 1`, columns `x − 1 … x + 2`), W₀, W₁ (column `x − 1`), the quad of the
+//! previous plane Z₀…Z₃ and the parent P (the one coefficient at `(y/2, x/2)` all four
+//! share):
+//!
+//! - **pattern** `b₀ + 2b₁ + 4b₂ + 8b₃` (b = coefficient ≠ 0, raster order in the quad):
+//!   context = class of `s = NW + N₀ + N₁ + NE + W₀ + W₁ + ΣZ` (12) × `min(P, 2)`;
+//! - **magnitude** `m ≥ 1` of each significant coefficient, in raster order: with
+//!   `u = 2(W + N + Z) + NW + NE + 2P` (its own neighbours, those of the quad coded
+//!   before it included), class `c = 0` for `u = 0`, else `1 + ⌊log₂ u⌋` (at most
+//!   [`MCLS`] − 1), and shift `k = max(c − KOFF, 0)`: symbol `h = ⌊(m − 1) / 2^k⌋` in
+//!   context `c` when `h < 15`, else 15 and `h − 14 = 2^e + r` as `e` in 6 raw bits and
+//!   `r` in `e` raw bits; then the `k` low bits of `m − 1` and the sign, raw.
+
+use super::rc::{BitReader, BitWriter, Cdf, Decoder, Encoder};
+
+const QCLS: usize = 12;
+const PCLS: usize = 3;
+/// Magnitude classes.
+pub const MCLS: usize = 26;
+/// Classes of `u` below which magnitudes are coded whole (`k = 0`).
+pub const KOFF: usize = 5;
+const CAP: u32 = 1 << 20;
+
+/// Class of the quad activity `s`: 0, 1, 2, 3, 4, 5–6, 7–9, 10–14, 15–22, 23–35, 36–60, more.
+#[inline(always)]
+fn qcls(s: u32) -> usize {
+    const T: [u8; 61] = {
+        let mut t = [0u8; 61];
+        let mut i = 0;
+        while i <= 60 {
+            t[i] = match i {
+                0..=4 => i as u8,
+                5..=6 => 5,
+                7..=9 => 6,
+                10..=14 => 7,
+                15..=22 => 8,
+                23..=35 => 9,
+                _ => 10,
+            };
+            i += 1;
+        }
+        t
+    };
+    if s <= 60 {
+        T[s as usize] as usize
+    } else {
+        11
+    }
+}
+
+#[inline(always)]
+fn mclass(u: u32) -> usize {
+    if u == 0 {
+        0
+    } else {
+        (1 + u.ilog2() as usize).min(MCLS - 1)
+    }
+}
+
+/// The models of one code-block, fresh at its start.
+pub struct Models {
+    pattern: [Cdf; QCLS * PCLS],
+    mag: [Cdf; MCLS],
+}
+
+impl Models {
+    /// Uniform models adapting up to `limit` ([`Cdf::uniform`]).
+    pub fn new(limit: u8) -> Self {
+        Models {
+            pattern: [Cdf::uniform(limit); QCLS * PCLS],
+            mag: [Cdf::uniform(limit); MCLS],
+        }
+    }
+}
+
+/// Where a block lies: its extents and, for each of its positions, where the band
+/// holds it.
+#[derive(Clone, Copy, Debug)]
+pub struct Extent {
+    pub planes: usize,
+    pub rows: usize,
+    pub cols: usize,
+}
+
+/// The magnitudes a block's contexts read, with a zero plane before the first, a zero
+/// row above each plane and a zero column on each side; rows and columns rounded up to
+/// even (the positions past the block stay 0).
+pub struct Scratch {
+    mag: Vec<u32>,
+    rx: usize,
+    plane: usize,
+}
+
+impl Scratch {
+    pub fn new(ext: Extent) -> Self {
+        let ry = ext.rows.next_multiple_of(2) + 1;
+        let rx = ext.cols.next_multiple_of(2) + 2;
+        Scratch {
+            mag: vec![0; (ext.planes + 1) * ry * rx],
+            rx,
+            plane: ry * rx,
+        }
+    }
+
+    /// Index of block position `(k, y, x)`.
+    #[inline(always)]
+    fn at(&self, k: usize, y: usize, x: usize) -> usize {
+        (k + 1) * self.plane + (y + 1) * self.rx + x + 1
+    }
+
+    /// The pattern context of the quad at index `i` with parent magnitude `pm`.
+    #[inline(always)]
+    fn pattern_ctx(&self, i: usize, pm: u32) -> usize {
+        let (m, rx, pl) = (&self.mag, self.rx, self.plane);
+        let s = m[i - rx - 1]
+            + m[i - rx]
+            + m[i - rx + 1]
+            + m[i - rx + 2]
+            + m[i - 1]
+            + m[i + rx - 1]
+            + m[i - pl]
+            + m[i - pl + 1]
+            + m[i - pl + rx]
+            + m[i - pl + rx + 1];
+        qcls(s) * PCLS + pm.min(2) as usize
+    }
+
+    /// The magnitude class of the coefficient at index `i`.
+    #[inline(always)]
+    fn mag_ctx(&self, i: usize, pm: u32) -> usize {
+        let (m, rx, pl) = (&self.mag, self.rx, self.plane);
+        let u = 2 * (m[i - 1] + m[i - rx] + m[i - pl] + pm) + m[i - rx - 1] + m[i - rx + 1];
+        mclass(u)
+    }
+}
+
+/// Offsets of the four positions of a quad from its first, in the scratch.
+#[inline(always)]
+fn quad_offsets(rx: usize) -> [usize; 4] {
+    [0, 1, rx, rx + 1]
+}
+
+/// The bits of a quad's pattern that lie inside the block.
+#[inline(always)]
+fn valid_bits(ext: Extent, y: usize, x: usize) -> usize {
+    let right = x + 1 < ext.cols;
+    let below = y + 1 < ext.rows;
+    1 | (right as usize) << 1 | (below as usize) << 2 | ((right && below) as usize) << 3
+}
+
+/// How a block's positions map to the band: `get(k, y)` = offset in the band of the
+/// block's row `y` of plane `k`; the parent's magnitude of quad `(k, y, x)` by `parent`.
+pub trait Rows {
+    fn row(&self, k: usize, y: usize) -> usize;
+    fn parent(&self, k: usize, y: usize, x: usize) -> u32;
+}
+
+/// Code the block of `band` (indices) laid out by `rows` into `e` and `w`.
+pub fn encode(
+    band: &[i32],
+    ext: Extent,
+    rows: &impl Rows,
+    s: &mut Scratch,
+    limit: u8,
+    e: &mut Encoder,
+    w: &mut BitWriter,
+) {
+    let mut m = Models::new(limit);
+    s.mag.fill(0);
+    let off = quad_offsets(s.rx);
+    for k in 0..ext.planes {
+        for y in (0..ext.rows).step_by(2) {
+            let r0 = rows.row(k, y);
+            let r1 = if y + 1 < ext.rows { rows.row(k, y + 1) } else { r0 };
+            for x in (0..ext.cols).step_by(2) {
+                let valid = valid_bits(ext, y, x);
+                let at = [r0 + x, r0 + x + 1, r1 + x, r1 + x + 1];
+                let mut pattern = 0;
+                for (b, &a) in at.iter().enumerate() {
+                    if valid >> b & 1 == 1 && band[a] != 0 {
+                        pattern |= 1 << b;
+                    }
+                }
+                let i = s.at(k, y, x);
+                let pm = rows.parent(k, y, x);
+                e.symbol(&mut m.pattern[s.pattern_ctx(i, pm)], pattern);
+                for b in 0..4 {
+                    if pattern >> b & 1 == 1 {
+                        let v = band[at[b]];
+                        let c = s.mag_ctx(i + off[b], pm);
+                        let a = v.unsigned_abs();
+                        put_magnitude(e, w, &mut m.mag[c], c, a, v < 0);
+                        s.mag[i + off[b]] = a.min(CAP);
+                    }
+                }
+            }
+        }
+    }
+}
+
+#[inline(always)]
+fn put_magnitude(e: &mut Encoder, w: &mut BitWriter, cdf: &mut Cdf, c: usize, a: u32, neg: bool) {
+    let k = c.saturating_sub(KOFF) as u32;
+    let v = (a - 1) as u64;
+    let h = v >> k;
+    if h < 15 {
+        e.symbol(cdf, h as usize);
+    } else {
+        e.symbol(cdf, 15);
+        let x = h - 14;
+        let nb = x.ilog2();
+        w.put(nb as u64, 6);
+        w.put(x, nb);
+    }
+    w.put(((v & ((1 << k) - 1)) << 1) | neg as u64, k + 1);
+}
+
+/// Decode a block written by [`encode`] into `band`, which holds zeros at the block's
+/// positions (the others are not touched). A damaged stream decodes to some values, never a panic.
+pub fn decode(
+    band: &mut [i32],
+    ext: Extent,
+    rows: &impl Rows,
+    s: &mut Scratch,
+    limit: u8,
+    d: &mut Decoder,
+    r: &mut BitReader,
+) {
+    let mut m = Models::new(limit);
+    s.mag.fill(0);
+    let off = quad_offsets(s.rx);
+    for k in 0..ext.planes {
+        for y in (0..ext.rows).step_by(2) {
+            let r0 = rows.row(k, y);
+            let r1 = if y + 1 < ext.rows { rows.row(k, y + 1) } else { r0 };
+            for x in (0..ext.cols).step_by(2) {
+                let valid = valid_bits(ext, y, x);
+                let at = [r0 + x, r0 + x + 1, r1 + x, r1 + x + 1];
+                let i = s.at(k, y, x);
+                let pm = rows.parent(k, y, x);
+                let pattern = d.symbol(&mut m.pattern[s.pattern_ctx(i, pm)]) & valid;
+                let mut bits = pattern;
+                while bits != 0 {
+                    let b = bits.trailing_zeros() as usize;
+                    bits &= bits - 1;
+                    let c = s.mag_ctx(i + off[b], pm);
+                    let (a, neg) = get_magnitude(d, r, &mut m.mag[c], c);
+                    band[at[b]] = if neg {
+                        (a as u32 as i32).wrapping_neg()
+                    } else {
+                        a as u32 as i32
+                    };
+                    s.mag[i + off[b]] = a.min(CAP as u64) as u32;
+                }
+            }
+        }
+    }
+}
+
+#[inline(always)]
+fn get_magnitude(d: &mut Decoder, r: &mut BitReader, cdf: &mut Cdf, c: usize) -> (u64, bool) {
+    let k = c.saturating_sub(KOFF) as u32;
+    let mut h = d.symbol(cdf) as u64;
+    if h == 15 {
+        let nb = (r.get(6) as u32).min(32);
+        h = ((1u64 << nb) | r.get(nb)) + 14;
+    }
+    let low = r.get(k + 1);
+    (((h << k) | (low >> 1)) + 1, low & 1 == 1)
+}

@@ -1,0 +1,319 @@
+//! A multi-symbol range coder over 16-symbol alphabets with adaptive 15-bit CDFs (the
+//! AV1 / Daala construction), and a raw bit stream beside it.
+//!
+//! Coding symbol `s` with cumulative frequencies `c` (`c[-1] = 0`, `c[15] = 2^15`):
+//! `r = ⌊range / 2^15⌋`, `low += r·c[s−1]`, `range = r·(c[s] − c[s−1])` (the last symbol
+//! takes what is left, `range − r·c[14]`), renormalised a byte at a time when
+//! `range < 2^24`; the carry goes through a cached byte as in LZMA's coder. The decoder
+//! finds `s` by comparing its offset against `r·c[s]`, no division.
+//!
+//! After each symbol the CDF moves towards the one that gives `s` all the mass but one
+//! unit per other symbol: `c[i] += (t[i] − c[i]) >> rate`, `t[i] = i + 1` below `s`,
+//! `2^15 − (15 − i)` from `s` on; `rate = min(⌊log₂(n + 2)⌋, limit)` after `n` symbols
+//! (a running mean at first, as a count-based estimate learns, then a fixed window of
+//! about `2^limit` symbols). Every
+//! symbol keeps a frequency of at least 1 (a convex mix of two CDFs with that property,
+//! and flooring both ends of a frequency loses less than 1).
+
+/// Symbols of every alphabet.
+pub const SYMBOLS: usize = 16;
+const PROB_BITS: u32 = 15;
+const ONE: i32 = 1 << PROB_BITS;
+const TOP: u32 = 1 << 24;
+
+/// An adaptive CDF of 16 symbols: `c[i]` = cumulative frequency up to and including
+/// symbol `i` (`c[15] = 2^15`), the symbols seen (up to 255) and the adaptation limit.
+#[derive(Clone, Copy, Debug)]
+pub struct Cdf {
+    c: [u16; SYMBOLS],
+    count: u8,
+    limit: u8,
+}
+
+/// The default adaptation limit: a window of about 32 symbols.
+pub const LIMIT: u8 = 5;
+
+impl Default for Cdf {
+    fn default() -> Self {
+        Self::uniform(LIMIT)
+    }
+}
+
+impl Cdf {
+    /// Every symbol equally likely, adapting up to `limit` (1 to 14).
+    pub fn uniform(limit: u8) -> Self {
+        let mut c = [0u16; SYMBOLS];
+        for (i, v) in c.iter_mut().enumerate() {
+            *v = ((i as i32 + 1) * ONE / SYMBOLS as i32) as u16;
+        }
+        Cdf {
+            c,
+            count: 0,
+            limit: limit.clamp(1, 14),
+        }
+    }
+
+    /// A CDF starting from the frequencies `f` (each at least 1, any total): the
+    /// cumulative sums scaled to 2^15, every symbol kept at least 1.
+    pub fn from_freqs(f: &[u32; SYMBOLS]) -> Self {
+        let total: u64 = f.iter().map(|&v| v.max(1) as u64).sum();
+        let spare = (ONE as u64) - SYMBOLS as u64;
+        let mut c = [0u16; SYMBOLS];
+        let mut acc = 0u64;
+        for (i, v) in c.iter_mut().enumerate() {
+            acc += f[i].max(1) as u64;
+            *v = (acc * spare / total) as u16 + i as u16 + 1;
+        }
+        c[SYMBOLS - 1] = ONE as u16;
+        Cdf {
+            c,
+            count: 0,
+            limit: LIMIT,
+        }
+    }
+
+    #[inline(always)]
+    fn update(&mut self, s: usize) {
+        let rate = (self.count as u32 + 2).ilog2().min(self.limit as u32);
+        self.count = self.count.saturating_add(1);
+        for i in 0..SYMBOLS - 1 {
+            let t = if i < s {
+                i as i32 + 1
+            } else {
+                ONE - (SYMBOLS - 1 - i) as i32
+            };
+            let c = self.c[i] as i32;
+            self.c[i] = (c + ((t - c) >> rate)) as u16;
+        }
+    }
+
+    /// `−log₂ P(s)` in bits.
+    pub fn cost(&self, s: usize) -> f64 {
+        let lo = if s == 0 { 0.0 } else { self.c[s - 1] as f64 };
+        -((self.c[s] as f64 - lo) / ONE as f64).log2()
+    }
+}
+
+/// Range encoder of [`Cdf`] symbols.
+pub struct Encoder {
+    low: u64,
+    range: u32,
+    cache: u8,
+    pending: u64,
+    out: Vec<u8>,
+}
+
+impl Default for Encoder {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl Encoder {
+    pub fn new() -> Self {
+        Encoder {
+            low: 0,
+            range: u32::MAX,
+            cache: 0,
+            pending: 1,
+            out: Vec::new(),
+        }
+    }
+
+    #[inline(always)]
+    fn shift_low(&mut self) {
+        if (self.low as u32) < 0xFF00_0000 || (self.low >> 32) != 0 {
+            let carry = (self.low >> 32) as u8;
+            let mut byte = self.cache;
+            loop {
+                self.out.push(byte.wrapping_add(carry));
+                byte = 0xFF;
+                self.pending -= 1;
+                if self.pending == 0 {
+                    break;
+                }
+            }
+            self.cache = ((self.low >> 24) & 0xFF) as u8;
+        }
+        self.pending += 1;
+        self.low = (self.low & 0x00FF_FFFF) << 8;
+    }
+
+    /// Code symbol `s` (< 16) with `cdf`, then adapt it.
+    #[inline(always)]
+    pub fn symbol(&mut self, cdf: &mut Cdf, s: usize) {
+        let r = self.range >> PROB_BITS;
+        let lo = if s == 0 { 0 } else { r * cdf.c[s - 1] as u32 };
+        self.low += lo as u64;
+        self.range = if s < SYMBOLS - 1 {
+            r * cdf.c[s] as u32 - lo
+        } else {
+            self.range - lo
+        };
+        cdf.update(s);
+        while self.range < TOP {
+            self.range <<= 8;
+            self.shift_low();
+        }
+    }
+
+    /// Flush with the fewest bytes: the value in `[low, low + range)` with the most
+    /// trailing zero bytes; the always-zero first byte and the trailing zero bytes are
+    /// left out (the decoder reads zeros past the end).
+    pub fn finish(mut self) -> Vec<u8> {
+        let end = self.low + self.range as u64 - 1;
+        for k in [32u32, 24, 16, 8, 0] {
+            let mask = (1u64 << k) - 1;
+            let v = (self.low + mask) & !mask;
+            if v <= end {
+                self.low = v;
+                break;
+            }
+        }
+        for _ in 0..5 {
+            self.shift_low();
+        }
+        let mut out = self.out;
+        while out.last() == Some(&0) {
+            out.pop();
+        }
+        if !out.is_empty() {
+            out.remove(0);
+        }
+        out
+    }
+}
+
+/// Range decoder of what [`Encoder`] wrote; reading past the end yields zero bytes.
+pub struct Decoder<'a> {
+    code: u32,
+    range: u32,
+    data: &'a [u8],
+    pos: usize,
+}
+
+impl<'a> Decoder<'a> {
+    pub fn new(data: &'a [u8]) -> Self {
+        let mut d = Decoder {
+            code: 0,
+            range: u32::MAX,
+            data,
+            pos: 0,
+        };
+        for _ in 0..4 {
+            d.code = (d.code << 8) | d.next() as u32;
+        }
+        d
+    }
+
+    #[inline(always)]
+    fn next(&mut self) -> u8 {
+        let b = self.data.get(self.pos).copied().unwrap_or(0);
+        self.pos += 1;
+        b
+    }
+
+    /// Decode one symbol with `cdf`, then adapt it.
+    #[inline(always)]
+    pub fn symbol(&mut self, cdf: &mut Cdf) -> usize {
+        let r = self.range >> PROB_BITS;
+        let mut s = 0;
+        while s < SYMBOLS - 1 && self.code >= r * cdf.c[s] as u32 {
+            s += 1;
+        }
+        let lo = if s == 0 { 0 } else { r * cdf.c[s - 1] as u32 };
+        // a damaged stream may leave the offset past the last interval's end
+        self.code = self.code.wrapping_sub(lo);
+        self.range = if s < SYMBOLS - 1 {
+            r * cdf.c[s] as u32 - lo
+        } else {
+            self.range - lo
+        };
+        cdf.update(s);
+        while self.range < TOP {
+            self.range <<= 8;
+            self.code = (self.code << 8) | self.next() as u32;
+        }
+        s
+    }
+}
+
+/// Raw bits packed least significant first into bytes.
+#[derive(Default)]
+pub struct BitWriter {
+    acc: u64,
+    n: u32,
+    out: Vec<u8>,
+}
+
+impl BitWriter {
+    /// Append the low `n` bits of `v` (`n` ≤ 32).
+    #[inline(always)]
+    pub fn put(&mut self, v: u64, n: u32) {
+        debug_assert!(n <= 32);
+        self.acc |= (v & ((1u64 << n) - 1)) << self.n;
+        self.n += n;
+        if self.n >= 32 {
+            self.out.extend_from_slice(&(self.acc as u32).to_le_bytes());
+            self.acc >>= 32;
+            self.n -= 32;
+        }
+    }
+
+    pub fn finish(mut self) -> Vec<u8> {
+        while self.n > 0 {
+            self.out.push(self.acc as u8);
+            self.acc >>= 8;
+            self.n = self.n.saturating_sub(8);
+        }
+        self.out
+    }
+}
+
+/// Reader of [`BitWriter`]'s bits; zeros past the end.
+pub struct BitReader<'a> {
+    acc: u64,
+    n: u32,
+    data: &'a [u8],
+    pos: usize,
+}
+
+impl<'a> BitReader<'a> {
+    pub fn new(data: &'a [u8]) -> Self {
+        BitReader {
+            acc: 0,
+            n: 0,
+            data,
+            pos: 0,
+        }
+    }
+
+    #[inline(always)]
+    fn refill(&mut self) {
+        if let Some(b) = self.data.get(self.pos..self.pos + 4) {
+            let w = u32::from_le_bytes([b[0], b[1], b[2], b[3]]);
+            self.acc |= (w as u64) << self.n;
+            self.pos += 4;
+        } else {
+            let mut w = 0u32;
+            for k in 0..4 {
+                w |= (self.data.get(self.pos + k).copied().unwrap_or(0) as u32) << (8 * k);
+            }
+            self.acc |= (w as u64) << self.n;
+            self.pos += 4;
+        }
+        self.n += 32;
+    }
+
+    /// The next `n` bits (`n` ≤ 32).
+    #[inline(always)]
+    pub fn get(&mut self, n: u32) -> u64 {
+        if self.n < n {
+            self.refill();
+        }
+        let v = self.acc & ((1u64 << n) - 1);
+        self.acc >>= n;
+        self.n -= n;
+        v
+    }
+}
