@@ -10,6 +10,7 @@ mod cli;
 mod cli_words;
 mod codec;
 mod codec_bpp;
+mod codec_rate;
 mod container;
 mod curve;
 mod filters;
