@@ -28,6 +28,12 @@ impl ProgressBar {
     fn finish_and_clear(&self) {}
 }
 
+/// The bar of a job whose total is known: its steps, the share done, the time it has run
+/// and indicatif's estimate of the time left (the mean time per step so far times the
+/// steps left).
+pub const BAR_TEMPLATE: &str =
+    "{msg:>12} [{bar:40}] {pos}/{len} {percent:>3}% {elapsed} elapsed, ETA {eta}";
+
 /// How long a job runs before its bar or spinner is drawn.
 pub const REVEAL_AFTER: Duration = Duration::from_secs(1);
 
@@ -63,7 +69,7 @@ impl Progress {
             return Progress::hidden();
         }
         let bar = ProgressBar::with_draw_target(Some(total), ProgressDrawTarget::hidden());
-        let style = ProgressStyle::with_template("{msg:>12} [{bar:40}] {pos}/{len} {elapsed}")
+        let style = ProgressStyle::with_template(BAR_TEMPLATE)
             .unwrap_or_else(|_| ProgressStyle::default_bar())
             .progress_chars("=> ");
         bar.set_style(style);
@@ -130,17 +136,17 @@ pub struct Activity {
 }
 
 impl Activity {
-    /// Start the spinner labelled `label` (nothing off a terminal, nothing without the
-    /// `cli` feature).
+    /// Start the spinner labelled `label` (nothing with `quiet`, off a terminal or
+    /// without the `cli` feature).
     #[cfg(not(feature = "cli"))]
-    pub fn start(_label: &str) -> Activity {
+    pub fn start(_label: &str, _quiet: bool) -> Activity {
         Activity { bar: None }
     }
 
-    /// Start the spinner labelled `label` (nothing off a terminal).
+    /// Start the spinner labelled `label` (nothing with `quiet` or off a terminal).
     #[cfg(feature = "cli")]
-    pub fn start(label: &str) -> Activity {
-        if !drawable(false) {
+    pub fn start(label: &str, quiet: bool) -> Activity {
+        if !drawable(quiet) {
             return Activity { bar: None };
         }
         let bar = ProgressBar::with_draw_target(None, ProgressDrawTarget::hidden());
@@ -188,11 +194,20 @@ mod tests {
         assert!(!p.is_visible());
         p.inc(3);
         p.finish();
+        assert!(Activity::start("job", true).bar.is_none());
         // test runners capture stderr: not a terminal, so hidden even without --quiet
         if !std::io::stderr().is_terminal() {
             assert!(!Progress::new(10, "job", false).is_visible());
-            let a = Activity::start("job");
+            let a = Activity::start("job", false);
             assert!(a.bar.is_none());
         }
+    }
+
+    #[cfg(feature = "cli")]
+    #[test]
+    fn the_bar_shows_the_share_done_and_the_time_left() {
+        assert!(BAR_TEMPLATE.contains("{percent:") && BAR_TEMPLATE.contains("{eta}"));
+        // the template parses (a bad one would fall back to indicatif's default bar)
+        assert!(ProgressStyle::with_template(BAR_TEMPLATE).is_ok());
     }
 }

@@ -18,7 +18,7 @@ use crate::scheme::{Boundary, Scheme};
 pub struct EncodeArgs {
     /// Input file or folder (any format `mra info-file` reads).
     pub input: PathBuf,
-    /// Output `.mra` file.
+    /// Output `.mra` file (`-`: standard output; the summary then goes to standard error).
     #[arg(short, long)]
     pub output: PathBuf,
     /// Scheme: cdf97, linear-wide, linear, chaikin-wide, cubic-wide, haar, chaikin,
@@ -55,7 +55,7 @@ pub struct EncodeArgs {
     /// Every decoded sample within E of the source.
     #[arg(long, group = "rate", value_name = "E")]
     pub max_error: Option<f64>,
-    /// Bit-exact (integer Haar S-transform, YCoCg-R colour).
+    /// Bit-exact (integer 5/3 lifting, YCoCg-R colour).
     #[arg(long, group = "rate")]
     pub lossless: bool,
     /// Tile extents, fastest axis first: `N` (every axis), `X,Y[,Z]`, or `whole` (one
@@ -65,9 +65,13 @@ pub struct EncodeArgs {
     pub tile: Option<String>,
     #[command(flatten)]
     pub raw: RawArgs,
-    /// Print one JSON object (output, bytes, bits per position, shape, seconds).
+    /// Print one JSON object (output, bytes, bits per position, shape, seconds); on
+    /// standard error when `-o -` sends the file to standard output.
     #[arg(long)]
     pub json: bool,
+    /// No spinner or progress bar (they are drawn only on a terminal anyway).
+    #[arg(long)]
+    pub quiet: bool,
 }
 
 /// Decompress an `.mra` file.
@@ -98,6 +102,9 @@ pub struct DecodeArgs {
     /// `-o -` sends the image to standard output.
     #[arg(long)]
     pub json: bool,
+    /// No spinner or progress bar (they are drawn only on a terminal anyway).
+    #[arg(long)]
+    pub quiet: bool,
     /// Format of `-o -` (standard output), as an extension: png, jpg, tif, nrrd, …
     #[arg(long, value_name = "EXT")]
     pub format: Option<String>,
@@ -160,11 +167,19 @@ pub fn encode(a: EncodeArgs) -> CliResult {
             };
             let t = std::time::Instant::now();
             let mut n = 0;
-            crate::fsutil::write_atomic(&a.output, |w| {
-                n = codec::encode_stream(&mut src, &opts, &tile, w)?;
-                Ok::<(), crate::Error>(())
-            })
-            .map_err(|e| Failure::context(a.input.display(), e))?;
+            if super::io_cmds::is_std(&a.output) {
+                // the container seeks back to its index: made in memory, then written
+                let mut w = std::io::Cursor::new(Vec::new());
+                n = codec::encode_stream(&mut src, &opts, &tile, &mut w)
+                    .map_err(|e| Failure::context(a.input.display(), e))?;
+                super::io_cmds::write_stdout(w.get_ref())?;
+            } else {
+                crate::fsutil::write_atomic(&a.output, |w| {
+                    n = codec::encode_stream(&mut src, &opts, &tile, w)?;
+                    Ok::<(), crate::Error>(())
+                })
+                .map_err(|e| Failure::context(a.input.display(), e))?;
+            }
             (shape, tile, n as usize, t.elapsed().as_secs_f64())
         }
         None => {
@@ -177,8 +192,12 @@ pub fn encode(a: EncodeArgs) -> CliResult {
             let bytes = codec::encode_tiled(&r, &opts, &tile)
                 .map_err(|e| Failure::context(a.input.display(), e))?;
             let seconds = t.elapsed().as_secs_f64();
-            crate::fsutil::write_atomic(&a.output, |w| w.write_all(&bytes))
-                .map_err(|e| Failure::context(a.output.display(), e))?;
+            if super::io_cmds::is_std(&a.output) {
+                super::io_cmds::write_stdout(&bytes)?;
+            } else {
+                crate::fsutil::write_atomic(&a.output, |w| w.write_all(&bytes))
+                    .map_err(|e| Failure::context(a.output.display(), e))?;
+            }
             (crate::io::slab::Shape::of(&r), tile, bytes.len(), seconds)
         }
     };
@@ -201,17 +220,20 @@ pub fn encode(a: EncodeArgs) -> CliResult {
             "tile": super::io_cmds::xyz(&tile),
             "seconds": seconds,
         });
-        println!("{v}");
-        return Ok(());
+        return super::io_cmds::report(&a.output, &v.to_string());
     }
-    println!(
+    let line = format!(
         "{}: {} bytes, {:.4} bits per position ({})",
-        a.output.display(),
+        if super::io_cmds::is_std(&a.output) {
+            "standard output".to_string()
+        } else {
+            a.output.display().to_string()
+        },
         bytes,
         bpp,
         crate::io::summary(&shape.dims, shape.channels, shape.sample_type, shape.kind)
     );
-    Ok(())
+    super::io_cmds::report(&a.output, &line)
 }
 
 /// `--tile`: `N`, `X,Y[,Z…]` (fastest axis first) or `whole`, as extents slowest axis

@@ -174,6 +174,23 @@ pub fn report(output: &Path, line: &str) -> CliResult {
     emit(&format!("{line}\n"))
 }
 
+/// The `--json` report of a command that writes one raster (`convert`, `downscale`):
+/// input, output, shape (x, y, z order), sample type, spacing, origin and the seconds
+/// of the command's work.
+pub fn raster_report(input: &Path, output: &Path, r: &io::Raster, seconds: f64) -> serde_json::Value {
+    serde_json::json!({
+        "input": input.display().to_string(),
+        "output": output.display().to_string(),
+        "axis_order": AXIS_ORDER,
+        "dims": xyz(&r.dims),
+        "channels": r.channels,
+        "dtype": r.sample_type().name(),
+        "spacing": r.meta.spacing.as_deref().map(xyz),
+        "origin": r.meta.origin,
+        "seconds": seconds,
+    })
+}
+
 /// [`write_output_q`], `-` writing to standard output in `format` (an extension: png,
 /// jpg, tif, pgm, ppm, exr, nrrd, nii, hgt, asc, r16, r32, raw).
 pub fn write_output_as(
@@ -202,9 +219,14 @@ pub fn write_output_as(
     write_output_q(&f, r, compress, quality)
         .map_err(|e| Failure(e.0.replace(&f.display().to_string(), "standard output")))?;
     let bytes = std::fs::read(&f).map_err(|e| Failure::context(f.display(), e))?;
+    write_stdout(&bytes)
+}
+
+/// Write `bytes` to standard output (`-o -`); a closed pipe is not an error.
+pub fn write_stdout(bytes: &[u8]) -> CliResult {
     use std::io::Write as _;
     let mut out = std::io::stdout().lock();
-    match out.write_all(&bytes).and_then(|_| out.flush()) {
+    match out.write_all(bytes).and_then(|_| out.flush()) {
         Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => {
             Err(Failure::context("standard output", e))
         }
@@ -303,7 +325,7 @@ pub fn info_file(a: InfoFileArgs, stdin: Option<Vec<u8>>) -> CliResult {
             .map_err(|e| Failure::context(a.input.display(), e))?
             .name()
     };
-    let (lo, hi) = r.samples.min_max().unwrap_or((f64::NAN, f64::NAN));
+    let (lo, hi) = data_range(&r);
     let nodata_count = r.meta.nodata.map(|nd| {
         (0..r.samples.len())
             .filter(|&i| r.samples.get_f64(i) == nd)
@@ -335,8 +357,13 @@ pub fn info_file(a: InfoFileArgs, stdin: Option<Vec<u8>>) -> CliResult {
         let _ = writeln!(out, "{}: {} {}", a.input.display(), format, r.summary());
         let _ = writeln!(
             out,
-            "  dims (x, y, z) {:?}, range {lo} … {hi}",
-            xyz(&r.dims)
+            "  dims (x, y, z) {:?}, range {lo} … {hi}{}",
+            xyz(&r.dims),
+            if r.meta.nodata.is_some() {
+                " (nodata excluded)"
+            } else {
+                ""
+            }
         );
         if let Some(s) = &r.meta.spacing {
             let _ = writeln!(
@@ -364,6 +391,27 @@ pub fn info_file(a: InfoFileArgs, stdin: Option<Vec<u8>>) -> CliResult {
         }
     }
     emit(&out)
+}
+
+/// The smallest and largest sample of `r` that is data: the nodata value (−32768 of an
+/// SRTM void, −9999 of an ESRI grid) is not a height; NaN when no sample is data.
+fn data_range(r: &io::Raster) -> (f64, f64) {
+    let Some(nd) = r.meta.nodata else {
+        return r.samples.min_max().unwrap_or((f64::NAN, f64::NAN));
+    };
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for i in 0..r.samples.len() {
+        let v = r.samples.get_f64(i);
+        if v != nd && !v.is_nan() {
+            lo = lo.min(v);
+            hi = hi.max(v);
+        }
+    }
+    if lo > hi {
+        (f64::NAN, f64::NAN)
+    } else {
+        (lo, hi)
+    }
 }
 
 /// `mra info` of a JPEG: its frame header only (size, channels; 8-bit samples), checked
@@ -406,7 +454,8 @@ fn info_jpeg(a: &InfoFileArgs) -> CliResult {
 /// Convert between formats, keeping samples exact (or converting with --dtype-out).
 #[derive(Args, Debug)]
 #[command(
-    after_help = "Example:\n  mra convert ../shared/corpus/terrain/N44W072.hgt -o n44.tif\n  mra convert ct.raw --dims 256x256x64 --dtype u16 -o ct.nrrd --compress\n  mra convert photo.png -o photo.jpg --quality 85\n  cat scan.png | mra convert - -o - --format tif > scan.tif"
+    after_help = "Example:\n  mra convert ../shared/corpus/terrain/N44W072.hgt -o n44.tif\n  mra convert ct.raw --dims 256x256x64 --dtype u16 -o ct.nrrd --compress\n  mra convert photo.png -o photo.jpg --quality 85\n  cat scan.png | mra convert - -o - --format tif > scan.tif
+  mra convert scan.png -o scan.tif --json"
 )]
 pub struct ConvertArgs {
     /// Input file or folder.
@@ -431,10 +480,15 @@ pub struct ConvertArgs {
     /// No progress bar (it is drawn only on a terminal anyway).
     #[arg(long)]
     pub quiet: bool,
+    /// Print one JSON object (output, shape, sample type, spacing, origin, seconds); on
+    /// standard error when `-o -` sends the raster to standard output.
+    #[arg(long)]
+    pub json: bool,
 }
 
 pub fn convert(a: ConvertArgs) -> CliResult {
     let opts = a.raw.options()?;
+    let t = std::time::Instant::now();
     let bar = Progress::new(2, "convert", a.quiet);
     let mut r = read_input(&a.input, &opts)?;
     bar.inc(1);
@@ -450,6 +504,10 @@ pub fn convert(a: ConvertArgs) -> CliResult {
         a.format.as_deref(),
     )?;
     bar.finish();
+    if a.json {
+        let v = raster_report(&a.input, &a.output, &r, t.elapsed().as_secs_f64());
+        report(&a.output, &v.to_string())?;
+    }
     Ok(())
 }
 

@@ -9,6 +9,7 @@ pub mod codec;
 pub mod curve;
 pub mod demo;
 pub mod io_cmds;
+pub mod label;
 pub mod mesh;
 pub mod outputs;
 pub mod points;
@@ -63,7 +64,8 @@ pub enum Command {
     InfoFile(io_cmds::InfoFileArgs),
     /// Convert between image / volume / heightmap formats, keeping samples exact.
     Convert(io_cmds::ConvertArgs),
-    /// Curve subdivision schemes: eigen-analysis of a mask.
+    /// Schemes: which MRA scheme keeps your image best (`keep`), eigen-analysis of a
+    /// subdivision mask (`analyze`).
     #[command(subcommand)]
     Scheme(scheme::Command),
     /// Terrain: synthesis by example (§9.7.4), hillshaded rendering.
@@ -229,7 +231,9 @@ pub fn main() -> i32 {
         eprintln!("mra: {f}");
         return 2;
     }
-    let activity = crate::progress::Activity::start(&name);
+    // `--quiet` of any command also hides the command's spinner
+    let quiet = args.iter().any(|a| a == "--quiet");
+    let activity = crate::progress::Activity::start(&name, quiet);
     let result = match cli.command {
         Command::Demo(a) => demo::run(a),
         Command::Analyze(a) => analyze::run_analyze(a),

@@ -20,8 +20,8 @@ pub enum Command {
     /// PSNR after keeping the largest P% of the details (gain-weighted, no quantization), one
     /// row per MRA scheme: the notes' Figure 9.19 protocol on your own image.
     #[command(after_help = "Examples:\n  \
-        mra scheme keep corpus/kodim23_gray.png                              # every scheme, 1/2/5/10/20%\n  \
-        mra scheme keep photo.png --gray --scheme haar,cdf97,linear --json\n  \
+        mra scheme keep corpus/zone_plate_256.png                            # every scheme, 1/2/5/10/20%\n  \
+        mra scheme keep corpus/noise_rgb_128.png --gray --scheme haar,cdf97,linear --json\n  \
         mra scheme keep dem.tif --percent 0.5,1,2 --levels 6\n\n\
         The details of every band are weighted by the norm of their synthesis function (the\n\
         gain), the largest P% are kept, the rest set to zero, and the image is reconstructed.\n\

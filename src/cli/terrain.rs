@@ -312,7 +312,7 @@ fn scale_to(px: &Raster, h: usize) -> (usize, Vec<u8>) {
 
 /// Base, example and result hillshaded, side by side at the result's height, all lit
 /// with the result's cell size (the base's scaled by the change of lattice), so that
-/// the three share one vertical scale.
+/// the three share one vertical scale; each panel labelled above it.
 fn preview(base: &Grid, example: &Grid, out_r: &Raster, out: &Grid) -> Result<Raster, Failure> {
     let h = out.h().max(example.h());
     let gap = 8;
@@ -335,16 +335,21 @@ fn preview(base: &Grid, example: &Grid, out_r: &Raster, out: &Grid) -> Result<Ra
         })
         .collect::<Result<_, _>>()?;
     let w: usize = pics.iter().map(|p| p.0).sum::<usize>() + gap * (pics.len() - 1);
-    let mut img = vec![255u8; h * w];
+    // a white strip above the panels for their labels
+    let scale = if h >= 256 { 2 } else { 1 };
+    let top = super::label::height(scale) + 2 * scale + 2;
+    let mut img = vec![255u8; (top + h) * w];
     let mut x0 = 0;
-    for (pw, px) in &pics {
+    for ((pw, px), name) in pics.iter().zip(["BASE", "EXAMPLE", "RESULT"]) {
+        super::label::draw(&mut img, w, x0 + 2, scale + 1, name, scale);
         for y in 0..h {
-            img[y * w + x0..y * w + x0 + pw].copy_from_slice(&px[y * pw..(y + 1) * pw]);
+            let row = (top + y) * w + x0;
+            img[row..row + pw].copy_from_slice(&px[y * pw..(y + 1) * pw]);
         }
         x0 += pw + gap;
     }
     Ok(Raster::new(
-        vec![h, w],
+        vec![top + h, w],
         1,
         Samples::U8(img),
         DataKind::Image,
@@ -587,10 +592,16 @@ pub fn denoise(a: DenoiseArgs) -> CliResult {
         if let Some(v) = &voids {
             v.restore(&mut out_data, &v.mask, false);
         }
-        let out = Raster {
-            samples: Samples::from_f64(&out_data, r.sample_type()),
-            ..r
-        };
+        let samples = Samples::from_f64(&out_data, r.sample_type());
+        if samples == r.samples {
+            // a clean input: said, not written silently as if something was removed
+            eprintln!(
+                "mra: {}: noise σ ≈ {:.3} (a clean input): no sample changed (--sigma sets the noise level)",
+                a.input.display(),
+                rep.sigma
+            );
+        }
+        let out = Raster { samples, ..r };
         write_output(&a.output, &out, false)?;
         rep
     };

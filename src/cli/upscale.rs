@@ -73,7 +73,7 @@ pub struct UpscaleArgs {
 #[derive(Args, Debug, Clone)]
 #[command(after_help = "Example:
   mra generate zone-plate -o zp.png && mra downscale zp.png -o zp_quarter.png --levels 2
-  mra downscale ct.raw --dims 256x256x64 --dtype u16 -o ct_half.nrrd")]
+  mra downscale ct.raw --dims 256x256x64 --dtype u16 -o ct_half.nrrd --json")]
 pub struct DownscaleArgs {
     /// Image, volume, heightmap or folder of slices.
     pub input: PathBuf,
@@ -98,6 +98,13 @@ pub struct DownscaleArgs {
     /// Axes to reduce: letters among x, y, z. Default: every spatial axis.
     #[arg(long)]
     pub axes: Option<String>,
+    /// Print one JSON object (output, shape, sample type, spacing, origin, seconds); on
+    /// standard error when `-o -` sends the raster to standard output.
+    #[arg(long)]
+    pub json: bool,
+    /// No spinner (it is drawn only on a terminal anyway).
+    #[arg(long)]
+    pub quiet: bool,
 }
 
 fn parse_size(s: &str) -> Result<Vec<usize>, Failure> {
@@ -194,7 +201,14 @@ pub fn run_downscale(a: DownscaleArgs) -> CliResult {
         Some(s) => upscale::parse_axes(s, nd)?.0,
         None => (0..nd).collect(),
     };
+    let t = std::time::Instant::now();
     let out = upscale::downscale_raster(r, a.scheme, a.boundary, a.levels, &axes)
         .map_err(|e| Failure::context(a.input.display(), e))?;
-    write_output_as(&a.output, &out, false, None, a.format.as_deref())
+    let seconds = t.elapsed().as_secs_f64();
+    write_output_as(&a.output, &out, false, None, a.format.as_deref())?;
+    if a.json {
+        let v = super::io_cmds::raster_report(&a.input, &a.output, &out, seconds);
+        super::io_cmds::report(&a.output, &v.to_string())?;
+    }
+    Ok(())
 }

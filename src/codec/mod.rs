@@ -4,8 +4,9 @@
 //!
 //! Rate modes ([`Rate`]): keep P% of details, threshold, quality, target PSNR, target
 //! bits per position (a search on the step), guaranteed maximum error (lossy base plus
-//! a spatial residual layer quantized with step `2E`), and lossless (integer
-//! S-transform, integer YCoCg-R).//!
+//! a spatial residual layer quantized with step `2E`), and lossless (integer 5/3
+//! lifting, integer YCoCg-R).
+//!
 //! One file per job: [`Rate`] and the options in `options`; the colour transform in
 //! `colour`; the pyramid and bands of a header in `plan`; the lossy transform coded at
 //! a step in `lossy`; the step of each rate mode and its search in `rate`; the residual

@@ -23,7 +23,8 @@ use rayon::prelude::*;
 ///
 /// `lossless()` makes the `--lossless` file: `--bpp` returns it when the budget is near
 /// the lossless cost or above ([`LOSSLESS_SHARE`]) and it fits the budget (no error at
-/// all).
+/// all); `--psnr` and `--quality` near the lossless cost ([`LOSSLESS_STEP`]) return it
+/// when it is no larger than their lossy file.
 pub(super) fn encode_lossy(
     r: &RasterView<'_>,
     opts: &EncodeOptions,
@@ -49,6 +50,7 @@ pub(super) fn encode_prepared(
         p.optimise();
     }
     let range = (p.header.max - p.header.min).max(1e-30);
+    let integer = !p.header.sample_type.is_float();
     let step = match rate {
         Rate::Keep(k) => {
             if !(0.0..=100.0).contains(&k) {
@@ -113,11 +115,14 @@ pub(super) fn encode_prepared(
                 let mse = (errors.squared_error(x.exp()) / n).max(1e-300);
                 10.0 * (peak * peak / mse).log10() - db
             };
-            return search(&p, range, false, 0.02, Some(&model), |step| {
+            let lossy = search(&p, range, false, 0.02, Some(&model), |step| {
                 let dec = p.decoded(step)?;
                 let psnr = crate::metrics::psnr_view(r, &dec.view(), &cmp)?;
                 Ok((psnr.unwrap_or(f64::INFINITY) - db, None))
-            });
+            })?;
+            // the lossless file meets every target (its PSNR is infinite)
+            let near_unit = db >= unit_psnr(peak, LOSSLESS_STEP);
+            return smaller_of(lossy, integer && near_unit, lossless);
         }
         Rate::Bpp(b) => {
             if !(b > 0.0 && b.is_finite()) {
@@ -150,7 +155,39 @@ pub(super) fn encode_prepared(
         }
         _ => unreachable!(),
     };
-    Ok(p.code(step))
+    let lossy = p.code(step);
+    // `--quality` near 100: a step under a few units of integer samples costs more
+    // than the exact file
+    let near_unit = matches!(rate, Rate::Quality(_)) && step <= LOSSLESS_STEP;
+    smaller_of(lossy, integer && near_unit, lossless)
+}
+
+/// The base step (in units of integer samples) at or below which `--psnr` and
+/// `--quality` also make the `--lossless` file and keep the smaller of the two: at a
+/// step of 2 the lossy file's error is about a unit, so the exact file is often smaller.
+const LOSSLESS_STEP: f64 = 2.0;
+
+/// The PSNR of uniform quantization at base step `s` on data of peak-to-peak range
+/// `peak`: MSE ≈ s²/12, so PSNR ≈ 10·log10(12·peak² / s²). A target at or above the
+/// value for [`LOSSLESS_STEP`] is near the lossless cost.
+fn unit_psnr(peak: f64, s: f64) -> f64 {
+    10.0 * (12.0 * peak * peak / (s * s)).log10()
+}
+
+/// `lossy`, or the `--lossless` file when `try_lossless` and it is no larger: an exact
+/// file at no more bytes beats any lossy one.
+fn smaller_of(
+    lossy: Vec<u8>,
+    try_lossless: bool,
+    lossless: &dyn Fn() -> Result<Vec<u8>>,
+) -> Result<Vec<u8>> {
+    if try_lossless {
+        let exact = lossless()?;
+        if exact.len() <= lossy.len() {
+            return Ok(exact);
+        }
+    }
+    Ok(lossy)
 }
 
 /// `--bpp` on integer samples tries the lossless file first when the budget is at least

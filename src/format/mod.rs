@@ -126,9 +126,15 @@ impl<R: Read> ChunkReader<R> {
             ));
         }
         if sig != SIGNATURE {
+            // a file of another format says which (its first 8 bytes are enough for
+            // the formats with a signature there)
+            let found = match crate::io::Format::sniff(&sig) {
+                Some(f) => format!("this is a {} file, not .mra", f.name()),
+                None => format!("signature {:02X?}", sig),
+            };
             return Err(Error::format(
-                format!("signature {:02X?}", sig),
-                "an .mra file (8B 4D 52 41 0D 0A 1A 0A)",
+                found,
+                "an .mra file (8B 4D 52 41 0D 0A 1A 0A; `mra convert` or `mra encode` reads other formats)",
             ));
         }
         Ok(ChunkReader { src, pos: 8, len })

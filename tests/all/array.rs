@@ -10,7 +10,7 @@ use mra::io::{self, ReadOptions, SampleType, Samples};
 use mra::scheme::{Boundary, Scheme};
 use mra::tensor::{Order, PyramidSpec};
 
-mod common;
+use super::common;
 
 fn tmp(name: &str) -> PathBuf {
     let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("array_tests");

@@ -8,7 +8,7 @@ use mra::upscale::{
     refine, upscale_array, upscale_raster, AxisPlan, Clamp, Edge, Geometry, Method, Mode,
 };
 
-mod common;
+use super::common;
 
 fn method(rule: Refinement, clamp: Clamp) -> Method {
     Method {

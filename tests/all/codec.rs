@@ -9,7 +9,7 @@ use mra::scheme::{Boundary, Scheme};
 use mra::ErrorKind;
 use proptest::prelude::*;
 
-mod common;
+use super::common;
 
 const TYPES: [SampleType; 9] = SampleType::ALL;
 

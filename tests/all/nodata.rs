@@ -9,7 +9,7 @@ use std::process::Command;
 
 use mra::io::{self, DataKind, Raster, SampleType, Samples};
 
-mod common;
+use super::common;
 
 const VOID: f64 = -32768.0;
 

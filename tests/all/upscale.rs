@@ -11,7 +11,7 @@ use mra::upscale::{
 };
 use mra::ErrorKind;
 
-mod common;
+use super::common;
 
 const MODES: [Mode; 3] = [Mode::Area, Mode::Interpolate, Mode::Control];
 

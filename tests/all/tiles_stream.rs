@@ -4,7 +4,7 @@
 //! a region, a level) writes what the in-memory decode writes, and the CLI streams
 //! without leaving a partial output behind.
 
-mod common;
+use super::common;
 
 use mra::codec::{self, DecodeOptions, EncodeOptions, Rate};
 use mra::io::slab::{self, Shape, SlabSink, SlabSource};

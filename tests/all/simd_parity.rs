@@ -7,7 +7,7 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-mod common;
+use super::common;
 
 /// The CPU levels compared: a value of `MRA_CPU`, or `None` for the variable unset.
 const LEVELS: [Option<&str>; 3] = [Some("scalar"), Some("avx2"), None];

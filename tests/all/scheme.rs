@@ -6,7 +6,7 @@ use mra::scheme::{
 };
 use proptest::prelude::*;
 
-mod common;
+use super::common;
 
 fn dense_product(t: &TwoScale) -> Vec<Vec<f64>> {
     let a = t.analysis.to_dense();

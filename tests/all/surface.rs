@@ -13,7 +13,7 @@ use mra::surface::{
 use mra::ErrorKind;
 use std::f64::consts::{PI, TAU};
 
-mod common;
+use super::common;
 
 struct Lcg(u64);
 impl Lcg {

@@ -1,4 +1,4 @@
-//! Helpers shared by the integration tests (`mod common;` in a test file).
+//! Helpers shared by the integration tests (`use super::common;` in a test module).
 //!
 //! - [`corpus`]: a file of the shared corpus, or a printed skip. With `MRA_REQUIRE_CORPUS=1`
 //!   a missing corpus or file fails the test instead.
@@ -8,7 +8,8 @@
 //!   one here; a printed skip otherwise, a failure with `MRA_REQUIRE_AVX2=1`.
 //!
 //! Skips are written straight to the process's standard error, past the test harness's
-//! capture, so they show in the log of a passing run.
+//! capture, so they show in the log of a passing run, and appended to `$MRA_SKIP_LOG`
+//! when set (`.ci/run` counts them).
 
 #![allow(dead_code)]
 
@@ -32,9 +33,23 @@ fn test_name() -> String {
         .to_string()
 }
 
-/// One line on the process's standard error, not captured by the test harness.
+/// The variable naming a file to which every skip appends its line (`.ci/run` sets it
+/// and prints how many tests skipped, and which, at the end of the run).
+pub const SKIP_LOG: &str = "MRA_SKIP_LOG";
+
+/// One line on the process's standard error, not captured by the test harness, and
+/// appended to the file `$MRA_SKIP_LOG` when it is set.
 pub fn skip(reason: std::fmt::Arguments<'_>) {
-    let _ = writeln!(std::io::stderr(), "skipped: {}: {reason}", test_name());
+    let line = format!("{}: {reason}", test_name());
+    let _ = writeln!(std::io::stderr(), "skipped: {line}");
+    if let Some(log) = std::env::var_os(SKIP_LOG) {
+        // one write of one line per skip: the lines of parallel tests do not interleave
+        let _ = std::fs::OpenOptions::new()
+            .create(true)
+            .append(true)
+            .open(log)
+            .and_then(|mut f| f.write_all(format!("{line}\n").as_bytes()));
+    }
 }
 
 /// The shared corpus: `$MRA_CORPUS` when set, else `../shared/corpus` beside the repository.

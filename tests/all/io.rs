@@ -9,7 +9,7 @@ use mra::generate::rng::SplitMix64;
 use mra::io::{self, DataKind, Raster, RawSpec, ReadOptions, SampleType, Samples};
 use mra::ErrorKind;
 
-mod common;
+use super::common;
 
 /// `name` in a folder of its own: tests run in parallel, and two of them (or one test
 /// twice) never write the same file.

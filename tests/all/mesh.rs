@@ -17,7 +17,7 @@ const ALL: [Scheme; 5] = [
     Scheme::Butterfly,
 ];
 
-mod common;
+use super::common;
 
 /// The corpus's `meshes` folder (see `common::corpus`).
 fn corpus() -> Option<std::path::PathBuf> {

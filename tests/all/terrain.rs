@@ -5,7 +5,7 @@
 use std::path::PathBuf;
 use std::process::Command;
 
-mod common;
+use super::common;
 
 use mra::denoise::{denoise, DenoiseOptions};
 use mra::generate::terrain::diamond_square;

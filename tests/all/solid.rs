@@ -11,7 +11,7 @@ use mra::solid::{render, tlist, voxel};
 use mra::ErrorKind;
 use std::f64::consts::PI;
 
-mod common;
+use super::common;
 
 /// Small deterministic generator (xorshift) so tests need no extra crate.
 struct Rng(u64);

@@ -4,8 +4,8 @@
 //! and on real bands (the corpus' kodim01 at 1 bpp, when present) the same indices
 //! back as today's coder wrote.
 
-mod common;
-#[path = "../benches/coder/bands.rs"]
+use super::common;
+#[path = "../../benches/coder/bands.rs"]
 mod bands;
 
 use mra::entropy::block::rc::{BitReader, BitWriter, Cdf, Decoder, Encoder, SYMBOLS};

@@ -576,7 +576,7 @@ fn corpus_file(rel: &str) -> Option<PathBuf> {
         "MRA_REQUIRE_CORPUS=1 but {} is missing",
         p.display()
     );
-    println!("skipped: {} not found", p.display());
+    super::common::skip(format_args!("{} not found", p.display()));
     None
 }
 

@@ -1,0 +1,39 @@
+//! The integration tests, one module per area, linked into a single test binary: one
+//! link of the library instead of one per file (`cargo test --release --test all <filter>`
+//! runs a part, e.g. `cli::` or `codec::`).
+
+mod common;
+
+mod architecture;
+mod array;
+mod block_coder;
+mod cli;
+mod cli_words;
+mod codec;
+mod codec_bpp;
+mod codec_rate;
+mod container;
+mod curve;
+mod filters;
+mod hyperpatch;
+mod io;
+mod kernel_tables;
+mod mesh;
+mod metadata;
+mod metrics;
+mod nodata;
+mod raster_view;
+mod robust;
+mod scheme;
+mod serve;
+mod simd_parity;
+mod solid;
+mod solid_cli;
+mod subdivide;
+mod surface;
+mod tensor;
+mod terrain;
+mod tiles;
+mod tiles_stream;
+mod upscale;
+mod upscale_refine;
