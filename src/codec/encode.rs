@@ -37,7 +37,7 @@ pub(super) fn encode_filled(r: &RasterView<'_>, opts: &EncodeOptions) -> Result<
 /// `--bpp`) on integer samples without a nodata value (no voids to fill): the bytes of
 /// [`encode_filled`], with the samples read a slab at a time into the transform's planes
 /// ([`super::lossy::prepare_slabs`]), so that they are never held whole beside them.
-/// `--bpp` and `--quality` near the lossless cost read them again, whole, for the
+/// `--bpp` near the lossless cost and `--quality 100` read them again, whole, for the
 /// lossless file.
 /// `None` for the other rate modes and samples, which need the raster whole.
 pub(super) fn encode_slabs<S: SlabSource + ?Sized>(

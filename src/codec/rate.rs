@@ -23,8 +23,8 @@ use rayon::prelude::*;
 ///
 /// `lossless()` makes the `--lossless` file: `--bpp` returns it when the budget is near
 /// the lossless cost or above ([`LOSSLESS_SHARE`]) and it fits the budget (no error at
-/// all); `--psnr` and `--quality` near the lossless cost ([`LOSSLESS_STEP`]) return it
-/// when it is no larger than their lossy file.
+/// all); `--psnr` near the lossless cost ([`LOSSLESS_STEP`]) and `--quality 100` return
+/// it when it is no larger than their lossy file.
 pub(super) fn encode_lossy(
     r: &RasterView<'_>,
     opts: &EncodeOptions,
@@ -156,14 +156,15 @@ pub(super) fn encode_prepared(
         _ => unreachable!(),
     };
     let lossy = p.code(step);
-    // `--quality` near 100: a step under a few units of integer samples costs more
-    // than the exact file
-    let near_unit = matches!(rate, Rate::Quality(_)) && step <= LOSSLESS_STEP;
+    // `--quality 100` (the finest step the mode has): at a step of a few units of
+    // integer samples or less it costs more than the exact file. Lower qualities keep
+    // the scheme asked for (its coarse levels are what `--level` decodes)
+    let near_unit = matches!(rate, Rate::Quality(q) if q >= 100.0) && step <= LOSSLESS_STEP;
     smaller_of(lossy, integer && near_unit, lossless)
 }
 
 /// The base step (in units of integer samples) at or below which `--psnr` and
-/// `--quality` also make the `--lossless` file and keep the smaller of the two: at a
+/// `--quality 100` also make the `--lossless` file and keep the smaller of the two: at a
 /// step of 2 the lossy file's error is about a unit, so the exact file is often smaller.
 const LOSSLESS_STEP: f64 = 2.0;
 
