@@ -138,14 +138,17 @@ pub fn generate(kind: Kind, dims: &[usize], channels: usize, seed: u64) -> Resul
             },
         ));
     }
-    crate::io::bytes::sample_count(dims, channels.max(1))?;
+    if channels == 0 {
+        return Err(Error::parameter("channels", channels, "at least 1"));
+    }
+    crate::io::bytes::sample_count(dims, channels)?;
     let (h, w) = (dims[dims.len() - 2], dims[dims.len() - 1]);
     Ok(match kind {
         Kind::ZonePlate => images::zone_plate(h, w),
-        Kind::Gradient => images::gradient(h, w, channels.max(1)),
+        Kind::Gradient => images::gradient(h, w, channels),
         Kind::Edges => images::edges(h, w),
         Kind::Strokes => images::strokes(h, w, seed),
-        Kind::Noise => images::noise(h, w, channels.max(1), seed),
+        Kind::Noise => images::noise(h, w, channels, seed),
         Kind::Phantom => phantom::shepp_logan(dims[0], h, w),
         Kind::Terrain => terrain::diamond_square(h, w, seed, 0.55),
     })
