@@ -405,7 +405,14 @@ pub fn denoise(a: &mut Array<f64>, axes: &[usize], o: &DenoiseOptions) -> Result
         return Err(Error::parameter("levels", o.levels, "0 (automatic) to 16"));
     }
     let sigma = match o.sigma {
-        Some(s) => s,
+        Some(s) if s.is_finite() && s >= 0.0 => s,
+        Some(s) => {
+            return Err(Error::parameter(
+                "sigma",
+                s,
+                "a finite noise level ≥ 0 (omit it to estimate)",
+            ))
+        }
         None => estimate_sigma(a, axes, o)?,
     };
     let tries: Vec<usize> = if o.levels == 0 {

@@ -1,6 +1,12 @@
 //! Writing files atomically: into a temporary file beside the target, then renamed,
 //! so a failure never leaves a partial output behind.
 //!
+//! The output path is resolved first ([`resolve_output`]): a symbolic link is followed
+//! (the file it names is written, the link stays); a FIFO or character device (a pipe,
+//! `/dev/null`, a terminal) is written through: the bytes are made in a temporary file
+//! (so formats that seek still can), then copied into it; a block device, socket or
+//! folder is refused.
+//!
 //! Temporary names are unique per call, `.NAME.mra-tmp-PID-COUNTER-RANDOM`, so parallel
 //! writes of one name (threads of one process, or several processes) never share a file.
 //! Every temporary file is registered while it exists; [`remove_temps_on_signals`] (called
@@ -25,40 +31,200 @@ fn live() -> MutexGuard<'static, Vec<PathBuf>> {
     LIVE.lock().unwrap_or_else(|p| p.into_inner())
 }
 
+/// Where an output named `path` is written.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum OutputTarget {
+    /// A regular file (or none yet) at this path, symbolic links followed: written
+    /// atomically beside it.
+    File(PathBuf),
+    /// A FIFO or character device at this path: written through, after the bytes are
+    /// complete.
+    Stream(PathBuf),
+}
+
+/// How an output named `path` is written: symbolic links followed (up to 40, as the
+/// kernel does; a dangling link names the file to create), FIFOs and character devices
+/// written through, block devices, sockets and folders refused (`InvalidInput`).
+pub fn resolve_output(path: &Path) -> std::io::Result<OutputTarget> {
+    let mut p = path.to_path_buf();
+    for _ in 0..40 {
+        let md = match std::fs::symlink_metadata(&p) {
+            Ok(md) => md,
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+                return Ok(OutputTarget::File(p))
+            }
+            Err(e) => return Err(e),
+        };
+        let ft = md.file_type();
+        if ft.is_symlink() {
+            let link = std::fs::read_link(&p)?;
+            p = match p.parent() {
+                Some(dir) if link.is_relative() => dir.join(link),
+                _ => link,
+            };
+            continue;
+        }
+        if ft.is_file() {
+            return Ok(OutputTarget::File(p));
+        }
+        if is_stream(&ft) {
+            return Ok(OutputTarget::Stream(p));
+        }
+        let what = if ft.is_dir() {
+            "a folder"
+        } else {
+            "a block device or socket"
+        };
+        return Err(std::io::Error::new(
+            std::io::ErrorKind::InvalidInput,
+            format!("the output is {what} (expected a file, a FIFO or a character device)"),
+        ));
+    }
+    Err(std::io::Error::new(
+        std::io::ErrorKind::InvalidInput,
+        "too many levels of symbolic links",
+    ))
+}
+
+/// A FIFO or character device (written through).
+#[cfg(unix)]
+fn is_stream(ft: &std::fs::FileType) -> bool {
+    use std::os::unix::fs::FileTypeExt;
+    ft.is_fifo() || ft.is_char_device()
+}
+
+#[cfg(not(unix))]
+fn is_stream(_ft: &std::fs::FileType) -> bool {
+    false
+}
+
 /// Write `path` through `fill`; on any error the temporary file is removed and the
 /// target is left as it was. The writer is a buffered file (seekable, for formats such
-/// as TIFF and EXR that patch offsets).
+/// as TIFF and EXR that patch offsets). See the module doc for symbolic links, FIFOs and
+/// devices.
 pub fn write_atomic<F, E>(path: &Path, fill: F) -> Result<(), E>
 where
     F: FnOnce(&mut BufWriter<File>) -> Result<(), E>,
     E: From<std::io::Error>,
 {
-    let (tmp, file) = create_temp(path)?;
+    let (target, stream) = match resolve_output(path)? {
+        OutputTarget::File(p) => (p, false),
+        OutputTarget::Stream(p) => (p, true),
+    };
+    // a stream's bytes are made in the temporary folder (its own folder, /dev say, may
+    // not be writable), then copied into it
+    let (tmp, file) = if stream {
+        create_temp_in(&std::env::temp_dir(), &target)?
+    } else {
+        create_temp(&target)?
+    };
     let result = (|| {
         let mut w = BufWriter::new(file);
         fill(&mut w)?;
         w.flush()?;
-        let file = w.into_inner().map_err(|e| e.into_error())?;
-        file.sync_all()?;
-        std::fs::rename(&tmp, path)?;
+        let mut file = w.into_inner().map_err(|e| e.into_error())?;
+        if stream {
+            use std::io::Seek;
+            file.seek(std::io::SeekFrom::Start(0))?;
+            let mut out = OpenOptions::new().write(true).open(&target)?;
+            std::io::copy(&mut file, &mut out)?;
+            out.flush()?;
+        } else {
+            file.sync_all()?;
+            std::fs::rename(&tmp, &target)?;
+        }
         Ok(())
     })();
-    if result.is_err() {
+    if result.is_err() || stream {
         let _ = std::fs::remove_file(&tmp);
     }
     forget(&tmp);
     result
 }
 
+/// A writer that remembers whether a write, flush or seek through it failed, so that a
+/// caller can tell a failing output (full disk, file-size limit) from a failing input.
+pub struct Watch<W> {
+    inner: W,
+    failed: bool,
+}
+
+impl<W> Watch<W> {
+    pub fn new(inner: W) -> Self {
+        Watch {
+            inner,
+            failed: false,
+        }
+    }
+
+    /// Did an operation on the output fail?
+    pub fn failed(&self) -> bool {
+        self.failed
+    }
+
+    fn note<T>(&mut self, r: std::io::Result<T>) -> std::io::Result<T> {
+        self.failed |= r.is_err();
+        r
+    }
+}
+
+impl<W: Write> Write for Watch<W> {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        let r = self.inner.write(buf);
+        self.note(r)
+    }
+    fn flush(&mut self) -> std::io::Result<()> {
+        let r = self.inner.flush();
+        self.note(r)
+    }
+}
+
+impl<W: std::io::Seek> std::io::Seek for Watch<W> {
+    fn seek(&mut self, pos: std::io::SeekFrom) -> std::io::Result<u64> {
+        let r = self.inner.seek(pos);
+        self.note(r)
+    }
+}
+
+/// Let a file-size limit (`ulimit -f`, RLIMIT_FSIZE) fail the write that passes it with
+/// `EFBIG` instead of killing the process with SIGXFSZ, so that the usual error path
+/// runs: a one-line message naming the output, and the temporary file removed. Call
+/// once, from the command line's `main`.
+#[cfg(unix)]
+pub fn survive_file_size_limit() -> std::io::Result<()> {
+    // a caught signal (the flag is never read) makes the kernel return EFBIG
+    let flag = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+    signal_hook::flag::register(signal_hook::consts::SIGXFSZ, flag)?;
+    Ok(())
+}
+
+/// Without Unix signals there is nothing to install.
+#[cfg(not(unix))]
+pub fn survive_file_size_limit() -> std::io::Result<()> {
+    Ok(())
+}
+
 /// Create a new temporary file for `path` and register it, under the registry's lock
 /// (so a signal's cleanup sees every file that exists).
 fn create_temp(path: &Path) -> std::io::Result<(PathBuf, File)> {
+    let dir = path.parent().unwrap_or(Path::new(""));
+    create_temp_in(dir, path)
+}
+
+/// [`create_temp`] in folder `dir` instead of beside `path`.
+fn create_temp_in(dir: &Path, path: &Path) -> std::io::Result<(PathBuf, File)> {
     let mut list = live();
     let mut last = None;
     // a name already taken (left by a killed process with the same pid) is skipped
     for _ in 0..8 {
-        let tmp = temp_path(path);
-        match OpenOptions::new().write(true).create_new(true).open(&tmp) {
+        let tmp = dir.join(temp_path(path).file_name().unwrap_or_default());
+        // readable too: a stream's bytes are read back to be copied into it
+        match OpenOptions::new()
+            .read(true)
+            .write(true)
+            .create_new(true)
+            .open(&tmp)
+        {
             Ok(f) => {
                 list.push(tmp.clone());
                 return Ok((tmp, f));

@@ -6,6 +6,8 @@ fn main() {
     // temporary outputs are removed on Ctrl-C and SIGTERM; without the handler (no
     // thread could be started) a signal still kills the process, only less tidily
     let _ = mra::fsutil::remove_temps_on_signals();
+    // past a file-size limit a write fails (EFBIG) and is reported like a full disk
+    let _ = mra::fsutil::survive_file_size_limit();
     std::process::exit(mra::cli::main());
 }
 

@@ -162,6 +162,15 @@ pub fn compare_view(
     opts: &CompareOptions,
 ) -> Result<Comparison> {
     check_shapes(a, b)?;
+    if let Some(r) = opts.data_range {
+        if !(r.is_finite() && r > 0.0) {
+            return Err(Error::parameter(
+                "data range",
+                r,
+                "a finite peak-to-peak range > 0",
+            ));
+        }
+    }
     let cleaned = without_voids(a, b)?;
     let (a, b, n) = match &cleaned {
         Some((x, y, n)) => (x.view(), y.view(), *n),
@@ -204,6 +213,15 @@ pub fn psnr_view(
     opts: &CompareOptions,
 ) -> Result<Option<f64>> {
     check_shapes(a, b)?;
+    if let Some(r) = opts.data_range {
+        if !(r.is_finite() && r > 0.0) {
+            return Err(Error::parameter(
+                "data range",
+                r,
+                "a finite peak-to-peak range > 0",
+            ));
+        }
+    }
     let cleaned = without_voids(a, b)?;
     let (a, b, n) = match &cleaned {
         Some((x, y, n)) => (x.view(), y.view(), *n),

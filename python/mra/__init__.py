@@ -67,6 +67,16 @@ def _bytes(b: Any) -> Union[bytes, np.ndarray]:
     return np.frombuffer(memoryview(b).cast("B"), dtype=np.uint8)
 
 
+def _count(name: str, value: Any) -> int:
+    """``value`` as a non-negative ``int``; a negative one raises :class:`MraError` (a
+    ``ValueError``, as the library's own range errors) rather than the ``OverflowError``
+    of its conversion to an unsigned size."""
+    n = int(value)
+    if n < 0:
+        raise MraError(f"invalid {name}: {n} (expected an integer ≥ 0)")
+    return n
+
+
 def _rate_of(
     *,
     lossless: Optional[bool] = None,
@@ -152,9 +162,9 @@ def encode(
         None if data_range is None else float(data_range),
         scheme,
         boundary,
-        int(levels),
+        _count("levels", levels),
         bool(channels_last),
-        None if tile is None else [int(t) for t in tile],
+        None if tile is None else [_count("tile", t) for t in tile],
     )
 
 
@@ -208,7 +218,7 @@ def decode(
     decodes what a cut file holds.
     """
     data = _bytes(b)
-    level = int(level or 0)
+    level = _count("level", level or 0)
     if region is None:
         return _mra.decode(data, level, bool(allow_truncated))
     if level == 0:
@@ -275,7 +285,9 @@ def analyze(
         a = a.astype(np.float64)
     ax = _axes(axes, a.ndim)
     ax = list(range(a.ndim)) if ax is None else ax
-    coeffs, lengths, raw_blocks = _mra.analyze(a, scheme, boundary, int(levels), ax)
+    coeffs, lengths, raw_blocks = _mra.analyze(
+        a, scheme, boundary, _count("levels", levels), ax
+    )
     depth = max((len(v) - 1 for v in lengths), default=0)
     details: List[Dict[str, np.ndarray]] = [dict() for _ in range(depth)]
     blocks = []
@@ -334,14 +346,14 @@ def upscale(
     nsp = a.ndim - 1 if channels_last else a.ndim
     return _mra.upscale(
         a,
-        None if size is not None else (None if factor is None else int(factor)),
-        None if size is None else [int(n) for n in size],
+        None if size is not None else (None if factor is None else _count("factor", factor)),
+        None if size is None else [_count("size", n) for n in size],
         _axes(axes, nsp),
         scheme,
         mode,
         edge,
         clamp,
-        None if order is None else int(order),
+        None if order is None else _count("order", order),
         bool(channels_last),
     )
 
@@ -361,7 +373,12 @@ def downscale(
     a = _array(a)
     nsp = a.ndim - 1 if channels_last else a.ndim
     return _mra.downscale(
-        a, int(levels), _axes(axes, nsp), scheme, boundary, bool(channels_last)
+        a,
+        _count("levels", levels),
+        _axes(axes, nsp),
+        scheme,
+        boundary,
+        bool(channels_last),
     )
 
 

@@ -168,6 +168,23 @@ def test_rate_keywords_are_exclusive_and_checked():
         mra.encode(a, bpp=1, data_range=255)
 
 
+def test_negative_counts_raise_value_error_not_overflow_error():
+    a = field((16, 16), np.uint8)
+    b = mra.encode(a, lossless=True)
+    calls = [
+        lambda: mra.encode(a, levels=-1),
+        lambda: mra.encode(a, tile=[-8, 8]),
+        lambda: mra.decode(b, level=-1),
+        lambda: mra.analyze(a, levels=-2),
+        lambda: mra.upscale(a, factor=-2),
+        lambda: mra.upscale(a, order=-1),
+        lambda: mra.downscale(a, levels=-1),
+    ]
+    for call in calls:
+        with pytest.raises(ValueError, match=r"invalid \w+: -\d+ \(expected"):
+            call()
+
+
 def test_unsupported_types_and_shapes_raise_with_the_expected_values():
     with pytest.raises(TypeError, match="expected one of uint8"):
         mra.encode(np.zeros((8, 8), np.int64))

@@ -174,11 +174,11 @@ pub fn encode(a: EncodeArgs) -> CliResult {
                     .map_err(|e| Failure::context(a.input.display(), e))?;
                 super::io_cmds::write_stdout(w.get_ref())?;
             } else {
-                crate::fsutil::write_atomic(&a.output, |w| {
+                let input = a.input.display().to_string();
+                super::io_cmds::write_streamed(&a.output, &input, |w| {
                     n = codec::encode_stream(&mut src, &opts, &tile, w)?;
-                    Ok::<(), crate::Error>(())
-                })
-                .map_err(|e| Failure::context(a.input.display(), e))?;
+                    Ok(())
+                })?;
             }
             (shape, tile, n as usize, t.elapsed().as_secs_f64())
         }
@@ -374,7 +374,7 @@ pub fn decode(a: DecodeArgs) -> CliResult {
     {
         // raw, NRRD and TIFF outputs are written a tile-row (or tile-slab) at a time
         let mut got = None;
-        crate::fsutil::write_atomic(&a.output, |w| {
+        super::io_cmds::write_streamed(&a.output, &name, |w| {
             let mut d = codec::SlabDecoder::open(&a.input, &opts)?;
             let shape = d.shape().clone();
             crate::io::stream::write_slabs(&a.output, w, &shape, &mut || d.next_slab())?;
@@ -383,9 +383,8 @@ pub fn decode(a: DecodeArgs) -> CliResult {
                 complete: d.complete(),
                 bytes_read: d.bytes_read(),
             });
-            Ok::<(), crate::Error>(())
-        })
-        .map_err(|e| Failure::context(&name, e))?;
+            Ok(())
+        })?;
         let d = got.expect("set by a successful decode");
         return decode_report(
             &a,

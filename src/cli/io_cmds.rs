@@ -2,12 +2,15 @@
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
+use std::fs::File;
+use std::io::BufWriter;
 
 use clap::{Args, ValueEnum};
 
 use super::{CliResult, Failure};
 use crate::io::{self, RawSpec, ReadOptions, SampleType};
 use crate::metrics::{self, CompareOptions, Convention};
+use crate::fsutil::Watch;
 use crate::progress::Progress;
 
 /// Layout of headerless input (`.raw`, and non-square `.r16` / `.r32`).
@@ -238,6 +241,30 @@ pub fn write_stdout(bytes: &[u8]) -> CliResult {
 pub fn write_output(path: &Path, r: &io::Raster, compress: bool) -> Result<(), Failure> {
     io::write_with(path, r, &io::WriteOptions { compress })
         .map_err(|e| Failure::context(path.display(), e))
+}
+
+/// `fill` written to `output` through [`crate::fsutil::write_atomic`] (a command that
+/// reads its input while it writes); a failure names `output` when writing it failed (a
+/// full disk, a file-size limit, an output that cannot be created), else `input`.
+pub fn write_streamed<F>(output: &Path, input: &str, fill: F) -> CliResult
+where
+    F: FnOnce(&mut Watch<&mut BufWriter<File>>) -> crate::Result<()>,
+{
+    // true unless `fill` fails with its writes intact (the input's fault)
+    let mut output_failed = true;
+    crate::fsutil::write_atomic(output, |w| {
+        let mut w = Watch::new(w);
+        let r = fill(&mut w);
+        output_failed = r.is_ok() || w.failed();
+        r
+    })
+    .map_err(|e: crate::Error| {
+        if output_failed {
+            Failure::context(output.display(), e)
+        } else {
+            Failure::context(input, e)
+        }
+    })
 }
 
 /// [`write_output`], a `.jpg` / `.jpeg` at JPEG `quality` (1–100) when given.

@@ -427,8 +427,13 @@ fn synth(a: SynthArgs) -> CliResult {
     o.example_scale = if a.any_units || br.meta.spacing.is_none() {
         a.example_cell.map_or(1.0, |c| c / out_cell)
     } else {
-        tr::check_compatible(&br, &er, out_w)
-            .map_err(|e| Failure::context(a.example.display(), e))?
+        tr::check_compatible(&br, &er, out_w).map_err(|e| {
+            Failure(format!(
+                "{}: {e}; give --example-cell (the example's cell in the base's unit) \
+                 or --any-units to skip the check",
+                a.example.display()
+            ))
+        })?
     };
     drop(er);
     let (g, report) = terrain::synthesize(&base, &example, &o)?;
@@ -466,12 +471,7 @@ fn render(a: RenderArgs) -> CliResult {
         cell: shading_cell(&r, &g, a.cell),
         colour: a.colour,
     };
-    if !(0.0..=90.0).contains(&a.altitude) {
-        return Err(Failure(format!(
-            "invalid --altitude: {} (expected 0 to 90 degrees)",
-            a.altitude
-        )));
-    }
+    s.validate()?;
     write_output(&a.output, &shade_raster(&g, &s)?, false)
 }
 

@@ -12,12 +12,26 @@ use crate::io::{RasterView, SampleType, Samples};
 use crate::{Error, Result};
 use rayon::prelude::*;
 
+/// The largest bound accepted: the coarsest step coded is `RDO_STEPS`' last × `2E`
+/// (`5E`), which must stay a finite `f64` for the file to decode.
+const MAX_BOUND: f64 = f64::MAX / 8.0;
+
 /// Whether bound `e` on samples of type `t` keeps every sample exact (0, or under 1 on
 /// integer samples), so that the file is lossless; an error for a bound that is not
-/// finite and ≥ 0.
+/// finite, ≥ 0 and at most [`MAX_BOUND`].
 pub(super) fn is_exact(e: f64, t: SampleType) -> Result<bool> {
-    if !(e >= 0.0 && e.is_finite()) {
-        return Err(Error::parameter("max-error", e, "a finite bound ≥ 0"));
+    if !(e >= 0.0 && e <= MAX_BOUND) {
+        // exponent form for the huge values this refuses (1e308 has 309 digits)
+        let shown = if e.abs() >= 1e15 {
+            format!("{e:e}")
+        } else {
+            e.to_string()
+        };
+        return Err(Error::parameter(
+            "max-error",
+            shown,
+            "a bound ≥ 0 and ≤ 2.2e307; larger ones overflow the coded steps",
+        ));
     }
     Ok(e == 0.0 || (!t.is_float() && e < 1.0))
 }

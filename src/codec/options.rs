@@ -36,6 +36,14 @@ pub struct EncodeOptions {
     pub rate: Rate,
 }
 
+impl EncodeOptions {
+    /// Is the file bit-exact (`--lossless`, or `--max-error 0`)? Then every sample keeps
+    /// its bits, NaN payloads included.
+    pub(crate) fn keeps_bits(&self) -> bool {
+        matches!(self.rate, Rate::Lossless) || self.rate == Rate::MaxError(0.0)
+    }
+}
+
 impl Default for EncodeOptions {
     fn default() -> Self {
         EncodeOptions {

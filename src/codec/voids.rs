@@ -2,7 +2,8 @@
 //! transform, their mask kept in the metadata, and marked again after decoding.
 
 use crate::entropy::range::{Decoder, Encoder, Mix};
-use crate::io::{Raster, RasterView, Samples};
+use crate::io::nodata::Value;
+use crate::io::{Raster, RasterView, Samples, SamplesRef};
 use crate::Result;
 use base64::Engine as _;
 
@@ -84,17 +85,30 @@ pub(super) fn lists_voids(meta: &crate::io::Metadata) -> bool {
 }
 
 /// `r` with its void samples ([`crate::io::nodata`]) filled by pull-push and their runs
-/// kept in [`VOID_RUNS`]; `None` when no sample (or every sample) is void.
-pub(super) fn with_voids_filled(r: &RasterView<'_>) -> Result<Option<Raster>> {
+/// kept in [`VOID_RUNS`]; `None` when no sample (or every sample) is void. With `exact`
+/// (a lossless file) a sample is void only when the decoder's marker gives its bits
+/// back ([`restores_exactly`]): a NaN with a payload or a sign, a signalling NaN, or a
+/// NaN in a raster whose nodata value is a number, stays a sample and is coded by its
+/// bits like any other. Every other sample keeps its bits.
+pub(super) fn with_voids_filled(r: &RasterView<'_>, exact: bool) -> Result<Option<Raster>> {
     // integer samples are never NaN: without a nodata value there is nothing to look for
     // (and no whole-raster `f64` copy to make)
     if !r.sample_type().is_float() && r.meta.nodata.is_none() {
         return Ok(None);
     }
     let mut v = r.samples.to_f64();
-    let Some(voids) = crate::io::nodata::Voids::find(&v, r.meta.nodata) else {
+    let Some(mut voids) = crate::io::nodata::Voids::find(&v, r.meta.nodata) else {
         return Ok(None);
     };
+    if exact {
+        let marker = voids.marker;
+        for (i, m) in voids.mask.iter_mut().enumerate() {
+            *m = *m && restores_exactly(&r.samples, i, marker);
+        }
+        if voids.count() == 0 {
+            return Ok(None);
+        }
+    }
     if voids.count() == v.len() {
         return Ok(None);
     }
@@ -102,12 +116,15 @@ pub(super) fn with_voids_filled(r: &RasterView<'_>) -> Result<Option<Raster>> {
     shape.push(r.channels);
     voids.fill(&mut v, &shape, r.dims.len())?;
     let coded = code_mask(&voids.mask, &shape);
-    let mut out = Raster::new(
-        r.dims.to_vec(),
-        r.channels,
-        Samples::from_f64(&v, r.sample_type()),
-        r.kind,
-    )?;
+    // the filled values go in at the voids only: the other samples keep their bits (a
+    // round trip through f64 would quieten signalling NaNs)
+    let mut samples = r.samples.to_owned();
+    crate::io::with_samples!(&mut samples, s => {
+        for (i, _) in voids.mask.iter().enumerate().filter(|(_, &m)| m) {
+            s[i] = Value::from_f64(v[i]);
+        }
+    });
+    let mut out = Raster::new(r.dims.to_vec(), r.channels, samples, r.kind)?;
     out.meta = r.meta.clone();
     let text = format!(
         "{CODED}{}",
@@ -115,6 +132,18 @@ pub(super) fn with_voids_filled(r: &RasterView<'_>) -> Result<Option<Raster>> {
     );
     out.meta.extra.insert(VOID_RUNS.into(), text);
     Ok(Some(out))
+}
+
+/// Does the decoder's void marker (`marker` in the sample type, as
+/// [`crate::io::nodata::Voids::restore`] writes it) have the bits of sample `i`?
+/// Always for integer samples (a void is equal to the nodata value).
+fn restores_exactly(s: &SamplesRef<'_>, i: usize, marker: f64) -> bool {
+    match s {
+        SamplesRef::F16(v) => v[i].to_bits() == <half::f16 as Value>::from_f64(marker).to_bits(),
+        SamplesRef::F32(v) => v[i].to_bits() == <f32 as Value>::from_f64(marker).to_bits(),
+        SamplesRef::F64(v) => v[i].to_bits() == marker.to_bits(),
+        _ => true,
+    }
 }
 
 /// The mask of runs `start:length` (files written before the coded mask); `None` when

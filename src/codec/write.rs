@@ -40,7 +40,7 @@ pub fn encode_tiled_view(
         // voids are filled tile by tile (each tile's file lists its own)
         return super::tiles::encode_tiled(r, opts, tile);
     }
-    match with_voids_filled(r)? {
+    match with_voids_filled(r, opts.keeps_bits())? {
         Some(filled) => encode_filled(&filled.view(), opts),
         None => encode_filled(r, opts),
     }

@@ -55,21 +55,46 @@ pub fn read(path: &Path) -> Result<Raster> {
     }
     let mut ints: Option<Vec<i32>> = Some(Vec::with_capacity(n));
     let mut floats: Vec<f64> = Vec::with_capacity(n);
-    for t in tokens.by_ref().take(n) {
-        let v: f64 = t
-            .parse()
-            .map_err(|_| bad(format!("value {t:?} is not a number")))?;
-        floats.push(v);
-        if let Some(iv) = ints.as_mut() {
-            match t.parse::<i32>() {
-                Ok(i) => iv.push(i),
-                Err(_) => ints = None,
+    // The data must be `nrows` lines of exactly `ncols` values: a row with more or
+    // fewer values would shift every later row, so it is an error, not a re-wrap.
+    let data_start = header_end(text);
+    let mut row = 0usize;
+    for line in text[data_start..].lines() {
+        let mut count = 0usize;
+        for t in line.split_ascii_whitespace() {
+            let v: f64 = t
+                .parse()
+                .map_err(|_| bad(format!("value {t:?} is not a number")))?;
+            count += 1;
+            if row < nrows && count <= ncols {
+                floats.push(v);
+                if let Some(iv) = ints.as_mut() {
+                    match t.parse::<i32>() {
+                        Ok(i) => iv.push(i),
+                        Err(_) => ints = None,
+                    }
+                }
             }
         }
+        if count == 0 {
+            continue;
+        }
+        if row >= nrows {
+            return Err(bad(format!(
+                "more than the {nrows} rows the header declares"
+            )));
+        }
+        if count != ncols {
+            return Err(bad(format!(
+                "data row {} has {count} values, the header declares ncols {ncols}",
+                row + 1
+            )));
+        }
+        row += 1;
     }
     if floats.len() < n {
         return Err(bad(format!(
-            "{} values for {nrows}x{ncols} cells",
+            "{} values for {nrows}x{ncols} cells ({row} rows of {nrows})",
             floats.len()
         )));
     }
@@ -95,6 +120,21 @@ pub fn read(path: &Path) -> Result<Raster> {
         r.meta.spacing = Some(vec![dy, dx]);
     }
     Ok(r)
+}
+
+/// Byte offset of the first data line: past the leading lines whose first token is a
+/// header key (starts with a letter) and any blank lines.
+fn header_end(text: &str) -> usize {
+    let mut pos = 0usize;
+    for line in text.split_inclusive('\n') {
+        match line.split_ascii_whitespace().next() {
+            None => {}
+            Some(t) if t.starts_with(|c: char| c.is_ascii_alphabetic()) => {}
+            Some(_) => break,
+        }
+        pos += line.len();
+    }
+    pos
 }
 
 /// Write a single-channel 2-D raster as an ESRI ASCII grid (integers as integers,

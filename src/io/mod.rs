@@ -22,6 +22,7 @@
 //! slices.rs a folder of 2D slices (TIFF / PNG) as one volume
 //! hgt.rs    SRTM .hgt (big-endian i16, void −32768 kept as nodata)
 //! asc.rs    ESRI ASCII grid
+//! geokeys.rs  GeoTIFF units and position from the GeoKeys, as GDAL reads them
 //! geometry.rs  where samples sit after a resample or crop ([`Metadata::resampled`])
 //! nodata.rs  void samples (NaN, `meta.nodata`) kept out of every filter
 //! raw.rs    headerless raw (.raw with dims/dtype/endian, .r16, .r32)
@@ -81,6 +82,7 @@ pub mod dicom {
     }
 }
 pub mod exr;
+pub mod geokeys;
 pub mod geometry;
 pub mod hgt;
 pub mod jpeg;
@@ -592,6 +594,12 @@ impl Format {
 
     /// The format the first bytes of a file announce, if any (`None` for headerless data).
     pub fn sniff(head: &[u8]) -> Option<Format> {
+        // DICOM first: its 128-byte preamble is free for application use and may itself
+        // look like another format (a TIFF header, for dual-format files); the `DICM`
+        // magic at offset 128 decides.
+        if head.len() >= 132 && &head[128..132] == b"DICM" {
+            return Some(Format::Dicom);
+        }
         if head.starts_with(b"\x89PNG\r\n\x1a\n") {
             return Some(Format::Png);
         }
@@ -610,9 +618,6 @@ impl Format {
         }
         if head.starts_with(b"NRRD000") {
             return Some(Format::Nrrd);
-        }
-        if head.len() >= 132 && &head[128..132] == b"DICM" {
-            return Some(Format::Dicom);
         }
         if head.len() >= 348
             && (&head[344..348] == b"n+1\0" || &head[344..348] == b"ni1\0")

@@ -217,6 +217,9 @@ fn interpret(
             _ => {}
         }
     }
+    if ndims == 2 {
+        georeferenced(meta);
+    }
     if meta.spacing.is_none() {
         if let (Some(xr), Some(yr)) = (xres, yres) {
             let is_imagej = meta
@@ -230,6 +233,26 @@ fn interpret(
                 }
                 meta.spacing = Some(s);
             }
+        }
+    }
+}
+
+/// Units, height unit, origin and directions from the GeoKeys ([`super::geokeys`]),
+/// where mra's own keys did not already give them.
+fn georeferenced(meta: &mut Metadata) {
+    let Some(g) = super::geokeys::georeference(&meta.geotiff) else {
+        return;
+    };
+    if meta.units.is_none() {
+        meta.units = g.units;
+    }
+    if let Some(h) = g.height_units {
+        meta.extra.entry("elevation_units".into()).or_insert(h);
+    }
+    if meta.origin.is_none() && meta.directions.is_none() {
+        if let (Some(o), Some(d)) = (g.origin, g.directions) {
+            meta.origin = Some(o.to_vec());
+            meta.directions = Some(d.iter().map(|v| v.to_vec()).collect());
         }
     }
 }

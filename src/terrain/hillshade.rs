@@ -9,6 +9,7 @@
 //! elevation through a hypsometric tint (green, yellow, brown, white) multiplied by the shade.
 
 use super::Grid;
+use crate::{Error, Result};
 
 /// Lighting and colouring.
 #[derive(Clone, Debug, PartialEq)]
@@ -23,6 +24,40 @@ pub struct Shading {
     pub cell: (f64, f64),
     /// Hypsometric colour ramp (RGB output) instead of gray.
     pub colour: bool,
+}
+
+impl Shading {
+    /// Check the lighting: azimuth finite, altitude 0 to 90°, vertical exaggeration and
+    /// both cell sizes finite and > 0 (a NaN or zero would shade every cell alike).
+    pub fn validate(&self) -> Result<()> {
+        if !self.azimuth.is_finite() {
+            return Err(Error::parameter(
+                "azimuth",
+                self.azimuth,
+                "a finite angle in degrees",
+            ));
+        }
+        if !(0.0..=90.0).contains(&self.altitude) {
+            return Err(Error::parameter(
+                "altitude",
+                self.altitude,
+                "0 to 90 degrees",
+            ));
+        }
+        if !(self.z_factor.is_finite() && self.z_factor > 0.0) {
+            return Err(Error::parameter(
+                "z-factor",
+                self.z_factor,
+                "a finite exaggeration > 0",
+            ));
+        }
+        for c in [self.cell.0, self.cell.1] {
+            if !(c.is_finite() && c > 0.0) {
+                return Err(Error::parameter("cell", c, "a finite cell size > 0"));
+            }
+        }
+        Ok(())
+    }
 }
 
 impl Default for Shading {

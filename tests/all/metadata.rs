@@ -647,3 +647,127 @@ fn corpus_srtm_tile_with_voids_downscales_within_its_valid_range() {
         "{t:?}"
     );
 }
+
+/// A WGS 84 GeoTIFF written with the `tiff` crate as GDAL writes one: 0.000833° pixels
+/// from corner (−122.5, 46.5), GTModelType geographic, PixelIsArea, GeographicType 4326,
+/// angular unit degree, vertical unit metre; 16-bit heights.
+fn wgs84_geotiff(path: &Path, h: usize, w: usize) {
+    use tiff::encoder::{colortype, TiffEncoder};
+    use tiff::tags::Tag;
+    let data: Vec<i16> = (0..h * w)
+        .map(|i| (1000 + (i / w) * 7 + (i % w) * 3) as i16)
+        .collect();
+    let f = std::fs::File::create(path).unwrap();
+    let mut enc = TiffEncoder::new(f).unwrap();
+    let mut img = enc
+        .new_image::<colortype::GrayI16>(w as u32, h as u32)
+        .unwrap();
+    let e = img.encoder();
+    e.write_tag(Tag::Unknown(33550), &[0.000833f64, 0.000833, 0.0][..])
+        .unwrap();
+    e.write_tag(
+        Tag::Unknown(33922),
+        &[0.0f64, 0.0, 0.0, -122.5, 46.5, 0.0][..],
+    )
+    .unwrap();
+    let keys: [u16; 24] = [
+        1, 1, 0, 5, // directory header: 5 keys
+        1024, 0, 1, 2, // GTModelType: geographic
+        1025, 0, 1, 1, // GTRasterType: PixelIsArea
+        2048, 0, 1, 4326, // GeographicType: WGS 84
+        2054, 0, 1, 9102, // GeogAngularUnits: degree
+        4099, 0, 1, 9001, // VerticalUnits: metre
+    ];
+    e.write_tag(Tag::Unknown(34735), &keys[..]).unwrap();
+    img.write_data(&data).unwrap();
+}
+
+#[test]
+fn a_wgs84_geotiff_reads_in_degrees_with_its_origin_and_keeps_them_through_commands() {
+    let d = tmp_dir("geotiff_wgs84");
+    let src = d.join("wgs84.tif");
+    wgs84_geotiff(&src, 40, 60);
+    let r = io::read(&src).unwrap();
+    let px = 0.000833;
+    assert_eq!(r.meta.units.as_deref(), Some("degree"));
+    assert_eq!(r.meta.spacing, Some(vec![px, px]));
+    assert_eq!(r.meta.extra.get("elevation_units").map(String::as_str), Some("m"));
+    // PixelIsArea: the first sample's centre is half a pixel inside the corner
+    let o = r.meta.origin.clone().unwrap();
+    assert!(close(&o, &[-122.5 + px / 2.0, 46.5 - px / 2.0], 1e-12), "{o:?}");
+    assert_eq!(r.meta.directions, Some(vec![vec![px, 0.0], vec![0.0, -px]]));
+    // `mra info` shows the unit and the origin
+    let (code, out, err) = mra(&["info", s(&src), "--json"]);
+    assert_eq!(code, 0, "{err}");
+    let v: serde_json::Value = serde_json::from_str(out.trim()).unwrap();
+    assert_eq!(v["units"], "degree", "{out}");
+    assert!(v["origin"].is_array(), "{out}");
+    // round trip through TIFF: the same metadata, tags verbatim
+    let copy = d.join("copy.tif");
+    ok(&["convert", s(&src), "-o", s(&copy)]);
+    let c = io::read(&copy).unwrap();
+    assert_eq!(c.meta.units, r.meta.units);
+    assert_eq!(c.meta.origin, r.meta.origin);
+    assert_eq!(c.meta.directions, r.meta.directions);
+    assert_eq!(c.meta.geotiff, r.meta.geotiff);
+    // upscaled ×2: the origin stays the one the rewritten tags give
+    let up = d.join("up.tif");
+    ok(&["upscale", s(&src), "-o", s(&up), "--factor", "2"]);
+    let u = io::read(&up).unwrap();
+    assert_eq!(u.meta.units.as_deref(), Some("degree"));
+    let g = io::geokeys::georeference(&u.meta.geotiff).unwrap();
+    let (uo, go) = (u.meta.origin.clone().unwrap(), g.origin.unwrap());
+    assert!(close(&uo, &go, 1e-12), "{uo:?} vs {go:?}");
+    assert!(close(&uo, &[-122.5 + px / 4.0, 46.5 - px / 4.0], 1e-12), "{uo:?}");
+}
+
+#[test]
+fn terrain_synth_with_units_that_differ_names_the_options_that_fix_it() {
+    let d = tmp_dir("geotiff_synth");
+    let base = d.join("base.tif");
+    wgs84_geotiff(&base, 24, 24);
+    // an example in metres, without a unit: its cell cannot be compared with degrees
+    let ex = d.join("example.asc");
+    let mut text = String::from("ncols 32\nnrows 32\nxllcorner 0\nyllcorner 0\ncellsize 30\n");
+    for y in 0..32 {
+        let row: Vec<String> = (0..32).map(|x| ((x * 7 + y * 13) % 50).to_string()).collect();
+        text += &row.join(" ");
+        text.push('\n');
+    }
+    std::fs::write(&ex, text).unwrap();
+    let out = d.join("out.tif");
+    let e = fails(&["terrain", "synth", "--base", s(&base), "--example", s(&ex), "-o", s(&out)]);
+    assert!(
+        e.contains("\"degree\"") && e.contains("--example-cell") && e.contains("--any-units"),
+        "{e}"
+    );
+    assert!(!out.exists());
+    // the fix it names works: the example's cell in degrees
+    ok(&[
+        "terrain", "synth", "--base", s(&base), "--example", s(&ex), "-o", s(&out),
+        "--example-cell", "0.00027",
+    ]);
+    let r = io::read(&out).unwrap();
+    assert_eq!(r.meta.units.as_deref(), Some("degree"));
+}
+
+#[test]
+fn a_dicom_whose_preamble_looks_like_tiff_reads_as_dicom() {
+    let d = tmp_dir("dicom_tiff_preamble");
+    // a dual-format file: the 128-byte preamble holds a little-endian TIFF header
+    let mut b = dicom_slice(5.0, 40, None);
+    b[..8].copy_from_slice(b"II*\0\x08\0\0\0");
+    let p = d.join("ct.dcm");
+    std::fs::write(&p, &b).unwrap();
+    assert_eq!(io::Format::detect(&p).unwrap(), io::Format::Dicom);
+    let r = io::read(&p).unwrap();
+    assert_eq!(r.dims, vec![3, 4]);
+    assert_eq!(r.to_f64(), (40..52).map(f64::from).collect::<Vec<_>>());
+    // its geometry survives a conversion
+    let out = d.join("ct.nrrd");
+    ok(&["convert", s(&p), "-o", s(&out)]);
+    let n = io::read(&out).unwrap();
+    assert_eq!(n.meta.spacing, r.meta.spacing);
+    assert_eq!(n.meta.origin, r.meta.origin);
+    assert_eq!(n.to_f64(), r.to_f64());
+}

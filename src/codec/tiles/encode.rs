@@ -154,10 +154,11 @@ fn cut_tile(grid: &Grid, shape: &Shape, slab: &Samples, row0: usize, i: usize) -
     Ok(t)
 }
 
-/// Tile `i` cut from `slab` (rows from `row0`), its voids filled in the tile.
+/// Tile `i` cut from `slab` (rows from `row0`), its voids filled in the tile (for
+/// measuring: NaN payloads need not be kept).
 fn slab_tile(grid: &Grid, shape: &Shape, slab: &Samples, row0: usize, i: usize) -> Result<Raster> {
     let t = cut_tile(grid, shape, slab, row0, i)?;
-    Ok(with_voids_filled(&t.view())?.unwrap_or(t))
+    Ok(with_voids_filled(&t.view(), false)?.unwrap_or(t))
 }
 
 /// Encode the raster of `src` as tiles of extents `tile` (slowest first) into `out`,
@@ -457,7 +458,7 @@ fn code_tile(
     if measure {
         got.add_range(&t.samples, 0..t.samples.len());
     }
-    let t = with_voids_filled(&t.view())?.unwrap_or(t);
+    let t = with_voids_filled(&t.view(), opts.keeps_bits())?.unwrap_or(t);
     let c = match coding {
         Coding::Own => encode_filled(&t.view(), opts)?,
         Coding::Step { step, rdo } => {
