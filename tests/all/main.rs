@@ -16,6 +16,7 @@ mod container;
 mod curve;
 mod filters;
 mod hyperpatch;
+mod inputs_outputs;
 mod io;
 mod kernel_tables;
 mod mesh;

@@ -10,7 +10,7 @@ use mra::codec::{self, DecodeOptions, EncodeOptions, Rate};
 use mra::io::{self, DataKind, Raster, SampleType, Samples};
 use mra::ErrorKind;
 
-mod common;
+use super::common;
 
 fn mra(args: &[&str]) -> (i32, String, String) {
     let out = Command::new(env!("CARGO_BIN_EXE_mra"))
