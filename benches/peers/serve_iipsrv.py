@@ -138,7 +138,7 @@ server.bind = "127.0.0.1"
 server.port = {port_iip}
 server.max-keep-alive-requests = 100000
 fastcgi.server = ( "/fcgi-bin/iipsrv.fcgi" => ((
-  "socket" => "{work}/iipsrv.sock", "bin-path" => "{IIPSRV}",
+  "socket" => "{work}/iipsrv.sock", "bin-path" => "{IIPSRV}", "check-local" => "disable",
   "max-procs" => {os.cpu_count() or 2},
   "bin-environment" => ("LOGFILE" => "{work}/iipsrv.log", "VERBOSITY" => "0",
      "MAX_IMAGE_CACHE_SIZE" => "512", "JPEG_QUALITY" => "90", "MAX_CVT" => "4096")

@@ -67,8 +67,8 @@ def main():
         png = os.path.join(data, f"zone{a.size}.png")
         t = time.time()
         run(mra, "generate", "zone-plate", "-o", png, "--size", str(a.size))
-        run(mra, "encode", png, "-o", coded + ".part", "--quality", "80")
-        os.replace(coded + ".part", coded)
+        # mra writes to a temporary file and renames it: no partial file is left
+        run(mra, "encode", png, "-o", coded, "--quality", "80")
         os.remove(png)
         print(f"made {name} ({os.path.getsize(coded)} bytes) in {time.time() - t:.1f} s")
     server = subprocess.Popen([mra, "serve", served, "--bind", "127.0.0.1:0"],
