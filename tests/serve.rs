@@ -242,8 +242,8 @@ fn gray(img: &image::DynamicImage) -> (u32, u32, Vec<u8>) {
 #[test]
 fn a_served_region_equals_mra_decode_of_the_same_window() {
     let d = corpus("pixels");
-    // levels kept whole; and with a 1 MiB cache (256 KiB a level), the tiled file's fine
-    // levels are read tile by tile
+    // the untiled file's levels kept whole, the tiled file's tiles one by one; and with a
+    // 1 MiB cache (256 KiB a level) the untiled file's level 0 decoded for each request
     let whole = Server::start(&d.0);
     let by_tile = Server::start_with(&d.0, &["--cache", "1M"]);
     for (s, id, file) in [
