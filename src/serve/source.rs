@@ -1,7 +1,8 @@
 //! A served file: its header, its levels' extents, the plane an image request reads (a
-//! 2-D raster, or a slice of a volume), and windows of one level read from a cache of
-//! decoded levels or, for a level too large to cache, decoded for the window alone (a
-//! tiled file from the tiles the window meets).
+//! 2-D raster, or a slice of a volume), and windows of one level: a tiled file's from the
+//! tiles the window meets, each decoded at the level and kept in the cache; a file of one
+//! tile's from the whole level, decoded once and kept (or, too large to keep, decoded for
+//! the request).
 //!
 //! A window `rows × cols` of level k covers, in full-resolution samples, the box
 //! `⌊r0·d/R⌋ .. ⌈r1·d/R⌉` (extent d, level extent R); the decoder returns the level's
@@ -158,6 +159,11 @@ impl Source {
             let lo = level_index(s.index as usize, ext[s.axis], h.dims[s.axis]);
             bx[s.axis] = lo..lo + 1;
         }
+        // a tiled file is read tile by tile (the first request of a level must not wait
+        // for every tile of it); a file of one tile is decoded whole once and kept
+        if h.is_tiled() {
+            return self.from_tiles(cache, limits, k, &bx);
+        }
         if level_bytes <= cache.entry_limit() {
             limits.check_elems("a decoded level", level_samples, DECODE_BYTES_PER_SAMPLE)?;
             let key = self.key(k, Vec::new());
@@ -166,9 +172,6 @@ impl Source {
                 .map_err(ServeError::File)?;
             let zero: Vec<usize> = vec![0; ext.len()];
             return cut(&r, &zero, &bx, self.row_axis, self.col_axis);
-        }
-        if h.is_tiled() {
-            return self.from_tiles(cache, limits, k, &bx);
         }
         // a file of one tile too large to keep: reconstructed whole for the request, cut
         limits.check_elems("the decode of a request", level_samples, DECODE_BYTES_PER_SAMPLE)?;

@@ -41,7 +41,8 @@ window.viewerReady = false;
 fetch("/iiif/3/" + encodeURIComponent(id) + "/info.json")
   .then(r => { if (!r.ok) throw new Error(r.status + " " + r.statusText); return r.json(); })
   .then(info => {
-    info.tileFormat = format;
+    // the format asked for first (OpenSeadragon takes preferredFormats over tileFormat)
+    info.preferredFormats = [format];
     window.viewer = OpenSeadragon({
       id: "osd", tileSources: info, showNavigationControl: false,
       animationTime: 0, blendTime: 0, immediateRender: false,
