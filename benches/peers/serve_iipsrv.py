@@ -4,7 +4,7 @@ lighttpd) over a pyramid TIFF made by `vips tiffsave --tile --pyramid`, same ima
 loopback only. Prints file sizes and PSNR of both codings, then p50/p99 latency and
 throughput of each server, as markdown table rows.
 
-usage: python3 benches/peers/serve_iipsrv.py [--size 8192] [--requests 4000] [--clients 8]
+usage: python3 benches/peers/serve_iipsrv.py [--size 8192] [--requests 4000] [--clients 8] [--mra-tile 256]
 needs: apt-get install iipimage-server lighttpd libvips-tools; MRA (default target/release/mra)
 """
 import argparse
@@ -100,6 +100,8 @@ def main():
     ap.add_argument("--requests", type=int, default=4000)
     ap.add_argument("--clients", type=int, default=8)
     ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--mra-tile", default="256",
+                    help="tile extent of the .mra file (mra encode --tile; 'default' for mra's own choice)")
     a = ap.parse_args()
     for tool in ["vips", "lighttpd"]:
         if not shutil.which(tool):
@@ -121,13 +123,14 @@ def main():
         served = os.path.join(work, "served")
         os.makedirs(served)
         coded = os.path.join(served, "img.mra")
-        sh(mra, "encode", src, "-o", coded, "--psnr", f"{cmp_tif['psnr']:.2f}")
+        tile = [] if a.mra_tile == "default" else ["--tile", a.mra_tile]
+        sh(mra, "encode", src, "-o", coded, "--psnr", f"{cmp_tif['psnr']:.2f}", *tile)
         dec = os.path.join(work, "mra_full.png")
         sh(mra, "decode", coded, "-o", dec)
         cmp_mra = json.loads(sh(mra, "compare", src, dec, "--json"))
         print(f"| coding | bytes | PSNR dB |\n|---|---|---|")
         print(f"| pyramid TIFF (vips, JPEG Q90, 256² tiles) | {os.path.getsize(tif)} | {cmp_tif['psnr']:.2f} |")
-        print(f"| .mra (--psnr {cmp_tif['psnr']:.2f}) | {os.path.getsize(coded)} | {cmp_mra['psnr']:.2f} |")
+        print(f"| .mra (--psnr {cmp_tif['psnr']:.2f}, --tile {a.mra_tile}) | {os.path.getsize(coded)} | {cmp_mra['psnr']:.2f} |")
 
         port_iip, port_mra = 18950 + a.seed % 50, 0
         conf = os.path.join(work, "lighttpd.conf")
@@ -138,7 +141,7 @@ server.bind = "127.0.0.1"
 server.port = {port_iip}
 server.max-keep-alive-requests = 100000
 fastcgi.server = ( "/fcgi-bin/iipsrv.fcgi" => ((
-  "socket" => "{work}/iipsrv.sock", "bin-path" => "{IIPSRV}",
+  "socket" => "{work}/iipsrv.sock", "bin-path" => "{IIPSRV}", "check-local" => "disable",
   "max-procs" => {os.cpu_count() or 2},
   "bin-environment" => ("LOGFILE" => "{work}/iipsrv.log", "VERBOSITY" => "0",
      "MAX_IMAGE_CACHE_SIZE" => "512", "JPEG_QUALITY" => "90", "MAX_CVT" => "4096")

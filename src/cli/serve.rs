@@ -20,7 +20,8 @@ pub struct ServeArgs {
     /// Bytes of decoded levels kept between requests (e.g. 512M; at most MRA_MAX_BYTES).
     #[arg(long, default_value = "512M")]
     pub cache: String,
-    /// Requests decoding at the same time (default: the number of cores).
+    /// Requests decoding at the same time (default: twice the number of cores, so that
+    /// requests answered from the cache are not held behind a long decode).
     #[arg(long)]
     pub workers: Option<usize>,
 }
@@ -36,7 +37,7 @@ pub fn run(a: ServeArgs) -> CliResult {
         return Err(Failure("invalid --workers: 0 (expected at least 1)".into()));
     }
     let workers = a.workers.unwrap_or_else(|| {
-        std::thread::available_parallelism().map_or(2, |n| n.get())
+        std::thread::available_parallelism().map_or(2, |n| n.get()) * 2
     });
     let config = Config {
         root: a.dir.clone(),

@@ -8,13 +8,15 @@ use crate::{Error, Result};
 use std::path::PathBuf;
 use std::sync::{Arc, Mutex, OnceLock};
 
-/// What names a decoded level: the file, its version, the level.
+/// What names a decoded level (or one tile of it): the file, its version, the level,
+/// the tile's coordinates (empty for the whole level).
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Key {
     pub path: PathBuf,
     pub len: u64,
     pub mtime: u128,
     pub level: usize,
+    pub tile: Vec<usize>,
 }
 
 /// A decode's result, shared by the requests that waited for it.
@@ -119,6 +121,7 @@ mod tests {
             len: 1,
             mtime: 2,
             level,
+            tile: Vec::new(),
         }
     }
 

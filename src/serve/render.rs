@@ -273,7 +273,8 @@ fn orient(p: Plane, mirror: bool, quarters: u8) -> Plane {
     }
 }
 
-/// 8-bit samples (rounded, clamped) encoded as PNG or JPEG.
+/// 8-bit samples (rounded, clamped) encoded as PNG (fast compression) or JPEG
+/// (quality [`JPEG_QUALITY`], at most 65535 pixels a side as the format allows).
 fn encode(p: &Plane, f: Format) -> Result<Vec<u8>, ServeError> {
     use image::ImageEncoder;
     let px: Vec<u8> = p
@@ -281,23 +282,46 @@ fn encode(p: &Plane, f: Format) -> Result<Vec<u8>, ServeError> {
         .iter()
         .map(|&v| v.round().clamp(0.0, 255.0) as u8)
         .collect();
-    let ct = if p.c == 3 {
-        image::ExtendedColorType::Rgb8
-    } else {
-        image::ExtendedColorType::L8
+    let failed = |e: String| {
+        ServeError::from(crate::Error::format(
+            format!("encoding a {}x{} tile: {e}", p.w, p.h),
+            "an encodable tile",
+        ))
     };
     let mut out = Vec::new();
-    let r = match f {
-        Format::Png => image::codecs::png::PngEncoder::new_with_quality(
-            &mut out,
-            image::codecs::png::CompressionType::Fast,
-            image::codecs::png::FilterType::Adaptive,
-        )
-        .write_image(&px, p.w as u32, p.h as u32, ct),
-        Format::Jpg => image::codecs::jpeg::JpegEncoder::new_with_quality(&mut out, JPEG_QUALITY)
-            .write_image(&px, p.w as u32, p.h as u32, ct),
-    };
-    r.map_err(|e| ServeError::from(crate::Error::format(format!("encoding a tile: {e}"), "an encodable tile")))?;
+    match f {
+        Format::Png => {
+            let ct = if p.c == 3 {
+                image::ExtendedColorType::Rgb8
+            } else {
+                image::ExtendedColorType::L8
+            };
+            image::codecs::png::PngEncoder::new_with_quality(
+                &mut out,
+                image::codecs::png::CompressionType::Fast,
+                image::codecs::png::FilterType::Adaptive,
+            )
+            .write_image(&px, p.w as u32, p.h as u32, ct)
+            .map_err(|e| failed(e.to_string()))?;
+        }
+        Format::Jpg => {
+            let (Ok(w), Ok(h)) = (u16::try_from(p.w), u16::try_from(p.h)) else {
+                return Err(ServeError::bad(
+                    "size",
+                    &format!("{}x{}", p.w, p.h),
+                    "at most 65535 pixels a side in JPEG",
+                ));
+            };
+            let ct = if p.c == 3 {
+                jpeg_encoder::ColorType::Rgb
+            } else {
+                jpeg_encoder::ColorType::Luma
+            };
+            jpeg_encoder::Encoder::new(&mut out, JPEG_QUALITY)
+                .encode(&px, w, h, ct)
+                .map_err(|e| failed(e.to_string()))?;
+        }
+    }
     Ok(out)
 }
 

@@ -1,7 +1,8 @@
 //! A served file: its header, its levels' extents, the plane an image request reads (a
-//! 2-D raster, or a slice of a volume), and windows of one level read from a cache of
-//! decoded levels or, for a level too large to cache, decoded for the window alone (a
-//! tiled file from the tiles the window meets).
+//! 2-D raster, or a slice of a volume), and windows of one level: a tiled file's from the
+//! tiles the window meets, each decoded at the level and kept in the cache; a file of one
+//! tile's from the whole level, decoded once and kept (or, too large to keep, decoded for
+//! the request).
 //!
 //! A window `rows × cols` of level k covers, in full-resolution samples, the box
 //! `⌊r0·d/R⌋ .. ⌈r1·d/R⌉` (extent d, level extent R); the decoder returns the level's
@@ -158,61 +159,131 @@ impl Source {
             let lo = level_index(s.index as usize, ext[s.axis], h.dims[s.axis]);
             bx[s.axis] = lo..lo + 1;
         }
+        // a tiled file is read tile by tile (the first request of a level must not wait
+        // for every tile of it); a file of one tile is decoded whole once and kept
+        if h.is_tiled() {
+            return self.from_tiles(cache, limits, k, &bx);
+        }
         if level_bytes <= cache.entry_limit() {
-            limits
-                .check_elems("a decoded level", level_samples, DECODE_BYTES_PER_SAMPLE)
-                ?;
-            let key = Key {
-                path: self.path.clone(),
-                len: self.len,
-                mtime: self.mtime,
-                level: k,
-            };
-            let path = self.path.clone();
-            let r = cache.get_or_decode(key, level_bytes, move || {
-                let opts = DecodeOptions {
-                    level: k,
-                    ..Default::default()
-                };
-                codec::decode_file(&path, &opts).map(|d| Arc::new(d.raster))
-            });
-            let r = r.map_err(ServeError::File)?;
+            limits.check_elems("a decoded level", level_samples, DECODE_BYTES_PER_SAMPLE)?;
+            let key = self.key(k, Vec::new());
+            let r = cache
+                .get_or_decode(key, level_bytes, || self.decode(k, None))
+                .map_err(ServeError::File)?;
             let zero: Vec<usize> = vec![0; ext.len()];
             return cut(&r, &zero, &bx, self.row_axis, self.col_axis);
         }
-        // a level too large to cache: a tiled file's tiles the window meets (a file of
-        // one tile is decoded whole and cut, not kept)
-        let full: Vec<Range<usize>> = (0..ext.len())
-            .map(|a| {
-                let (d, r) = (h.dims[a], ext[a]);
-                if Some(a) == self.slice.map(|s| s.axis) {
-                    let s = self.slice.map_or(0, |s| s.index as usize);
-                    return s..s + 1;
-                }
-                let lo = (bx[a].start as u128 * d as u128 / r as u128) as usize;
-                let hi = ((bx[a].end as u128 * d as u128).div_ceil(r as u128) as usize).min(d);
-                lo..hi.max(lo + 1)
-            })
-            .collect();
-        let origin: Vec<usize> = (0..ext.len())
-            .map(|a| level_index(full[a].start, ext[a], h.dims[a]))
-            .collect();
-        let box_samples = full
-            .iter()
-            .zip(ext.iter().zip(&h.dims))
-            .fold(c, |n, (g, (&r, &d))| {
-                n.saturating_mul((g.len() as u64 * r as u64).div_ceil(d as u64) + 1)
-            });
-        // a file of one tile is reconstructed whole before it is cut
-        let planned = if h.is_tiled() { box_samples } else { level_samples };
-        limits.check_elems("the decode of a request", planned, DECODE_BYTES_PER_SAMPLE)?;
+        // a file of one tile too large to keep: reconstructed whole for the request, cut
+        limits.check_elems("the decode of a request", level_samples, DECODE_BYTES_PER_SAMPLE)?;
+        let r = self.decode(k, None)?;
+        let zero: Vec<usize> = vec![0; ext.len()];
+        cut(&r, &zero, &bx, self.row_axis, self.col_axis)
+    }
+
+    fn key(&self, level: usize, tile: Vec<usize>) -> Key {
+        Key {
+            path: self.path.clone(),
+            len: self.len,
+            mtime: self.mtime,
+            level,
+            tile,
+        }
+    }
+
+    /// Level `k` of the file, or of the full-resolution box `region` (slowest axis first).
+    fn decode(&self, k: usize, region: Option<Vec<Range<usize>>>) -> crate::Result<Arc<Raster>> {
         let opts = DecodeOptions {
             level: k,
-            region: Some(full.into_iter().rev().collect()),
+            region: region.map(|r| r.into_iter().rev().collect()),
             ..Default::default()
         };
-        let d = codec::decode_file(&self.path, &opts)?;
-        cut(&d.raster, &origin, &bx, self.row_axis, self.col_axis)
+        codec::decode_file(&self.path, &opts).map(|d| Arc::new(d.raster))
+    }
+
+    /// The window `bx` of level `k` of a tiled file from the tiles it meets, each decoded
+    /// at level k and kept in the cache. Tile `j` (full-resolution `j·T .. (j+1)·T` on
+    /// an axis) holds the level samples `⌊j·T·R/d⌋ .. ⌈(j+1)·T·R/d⌉`.
+    fn from_tiles(
+        &self,
+        cache: &LevelCache,
+        limits: &Limits,
+        k: usize,
+        bx: &[Range<usize>],
+    ) -> Result<Plane, ServeError> {
+        let h = &self.header;
+        let ext = &self.levels[k];
+        let nd = ext.len();
+        let level_box = |a: usize, j: usize| -> Range<usize> {
+            let (d, r, t) = (h.dims[a] as u128, ext[a] as u128, h.tile[a] as u128);
+            let j = j as u128;
+            let lo = (j * t * r / d) as usize;
+            let hi = (((j + 1) * t).min(d) * r).div_ceil(d) as usize;
+            lo..hi.min(ext[a]).max(lo + 1)
+        };
+        // per axis, the tiles whose level box meets the window
+        let mut meets: Vec<Vec<usize>> = Vec::with_capacity(nd);
+        for a in 0..nd {
+            let n = h.dims[a].div_ceil(h.tile[a].max(1));
+            meets.push(
+                (0..n)
+                    .filter(|&j| {
+                        let g = level_box(a, j);
+                        g.start < bx[a].end && g.end > bx[a].start
+                    })
+                    .collect(),
+            );
+        }
+        if meets.iter().any(|m| m.is_empty()) {
+            return Err(ServeError::from(crate::Error::format(
+                format!("no tile meets the window {bx:?} of level {k}"),
+                "a window within the level",
+            )));
+        }
+        let c = h.channels;
+        let (oh, ow) = (bx[self.row_axis].len(), bx[self.col_axis].len());
+        let mut out = Plane {
+            h: oh,
+            w: ow,
+            c,
+            data: vec![0.0; oh * ow * c],
+        };
+        let mut at = vec![0usize; nd];
+        'tiles: loop {
+            let coords: Vec<usize> = (0..nd).map(|a| meets[a][at[a]]).collect();
+            let region: Vec<Range<usize>> = (0..nd)
+                .map(|a| coords[a] * h.tile[a]..((coords[a] + 1) * h.tile[a]).min(h.dims[a]))
+                .collect();
+            let boxes: Vec<Range<usize>> = (0..nd).map(|a| level_box(a, coords[a])).collect();
+            let samples = boxes.iter().fold(c as u64, |n, g| n * g.len() as u64);
+            limits.check_elems("a decoded tile", samples, DECODE_BYTES_PER_SAMPLE)?;
+            let bytes = samples * h.sample_type.size() as u64;
+            let r = cache
+                .get_or_decode(self.key(k, coords), bytes, || self.decode(k, Some(region)))
+                .map_err(ServeError::File)?;
+            let origin: Vec<usize> = boxes.iter().map(|g| g.start).collect();
+            let part: Vec<Range<usize>> = (0..nd)
+                .map(|a| bx[a].start.max(boxes[a].start)..bx[a].end.min(boxes[a].end))
+                .collect();
+            let p = cut(&r, &origin, &part, self.row_axis, self.col_axis)?;
+            let (y0, x0) = (
+                part[self.row_axis].start - bx[self.row_axis].start,
+                part[self.col_axis].start - bx[self.col_axis].start,
+            );
+            for y in 0..p.h {
+                let dst = ((y0 + y) * ow + x0) * c;
+                out.data[dst..dst + p.w * c].copy_from_slice(&p.data[y * p.w * c..(y + 1) * p.w * c]);
+            }
+            // the next tile, last axis fastest
+            for a in (0..nd).rev() {
+                at[a] += 1;
+                if at[a] < meets[a].len() {
+                    continue 'tiles;
+                }
+                at[a] = 0;
+            }
+            break;
+        }
+        Ok(out)
     }
 }
 

@@ -41,11 +41,16 @@ window.viewerReady = false;
 fetch("/iiif/3/" + encodeURIComponent(id) + "/info.json")
   .then(r => { if (!r.ok) throw new Error(r.status + " " + r.statusText); return r.json(); })
   .then(info => {
-    info.tileFormat = format;
+    // the format asked for first (OpenSeadragon takes preferredFormats over tileFormat)
+    info.preferredFormats = [format];
     window.viewer = OpenSeadragon({
       id: "osd", tileSources: info, showNavigationControl: false,
       animationTime: 0, blendTime: 0, immediateRender: false,
-      maxZoomPixelRatio: 1, minZoomImageRatio: 0.5, crossOriginPolicy: "Anonymous",
+      // a level is drawn from 0.9 screen pixels per level sample (OpenSeadragon's 0.5
+      // would draw the next finer level shrunk by the canvas): at a level's own zoom the
+      // screen shows that level's samples one to one
+      minPixelRatio: 0.9, maxZoomPixelRatio: 1, minZoomImageRatio: 0.5,
+      crossOriginPolicy: "Anonymous",
       imageSmoothingEnabled: false,
     });
     window.viewer.addHandler("open", () => { window.viewerReady = true; });

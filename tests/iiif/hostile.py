@@ -40,39 +40,47 @@ def request(addr, target, timeout=30.0):
 
 
 def hostile(rng):
-    num = lambda: rng.choice(["-1", "0", "-99999", "99999999999999999999", "1e9", "nan", "inf",
-                              "abc", "", "1.5", "0x10", "%00", "9" * rng.randint(20, 3000)])
+    """One request target that is malformed, unsatisfiable or outside the folder (each
+    list holds only values the IIIF grammar or the server's limits refuse)."""
+    num = lambda: rng.choice(["-1", "-99999", "99999999999999999999", "1e9", "nan", "inf",
+                              "abc", "", "0x10", "%00", "+5", "9" * rng.randint(13, 3000)])
     n = str(rng.randint(0, 2000))
     region = rng.choice([
         f"{num()},{n},{n},{n}", f"{n},{num()},{n},{n}", f"{n},{n},{num()},{n}", f"{n},{n},{n},{num()}",
-        f"pct:{num()},0,10,10", "5000,5000,10,10", "0,0,0,0", "full,", "square/", "%2e%2e",
+        f"pct:{num()},0,10,10", "5000,5000,10,10", "0,0,0,0", f"{n},{n},0,{n}", "full,", "%2e%2e",
+        "pct:100,0,5,5", "1,2,3", "1,2,3,4,5",
     ])
-    size = rng.choice([f"{num()},", f",{num()}", f"!{num()},{n}", f"pct:{num()}", "^max",
-                       "99999,99999", "1025,", "max,", "!0,0", f"{n},{n},{n}"])
-    rot = rng.choice(["0", "45", "-90", "!", "!!90", "90.5", num()])
-    qf = rng.choice(["default.jpg", "default.gif", "sepia.png", "default", ".jpg", "default.jpg.png"])
-    ident = rng.choice([
-        "z.mra", "..%2fz.mra", "%2e%2e%2fz.mra", "..%2F..%2F..%2Fetc%2Fpasswd", "%2Fetc%2Fpasswd",
+    size = rng.choice([f"{num()},", f",{num()}", f"!{num()},{n}", f"pct:{num()}", "^max", "^1000,",
+                       "99999,99999", "2049,", ",2049", "pct:101", "max,", "!0,0", f"{n},{n},{n}", "0,"])
+    rot = rng.choice(["45", "-90", "!", "!!90", "90.5", "360.1", num()])
+    qf = rng.choice(["default.gif", "sepia.png", "default", ".jpg", "default.jpg.png", "color.tif",
+                     "gray.webp", "default.JPG"])
+    bad_ident = rng.choice([
+        "..%2fz.mra", "%2e%2e%2fz.mra", "..%2F..%2F..%2Fetc%2Fpasswd", "%2Fetc%2Fpasswd",
         "/etc/passwd", "../z.mra", "z.mra%00", "%ff%fe", "z.mra;z=1", "z.mra;q=9", "nothere.mra",
-        "link.mra", "a" * rng.randint(1, 8000),
+        "link.mra", "a" * rng.randint(1, 8000), "sub%2F..%2F..%2Fz.mra", "%2e%2e/z.mra",
     ])
     shape = rng.randrange(6)
     if shape == 0:
         # a good identifier with one bad part
         parts = ["full", "max", "0", "default.jpg"]
-        parts[rng.randrange(4)] = [region, size, rot, qf][rng.randrange(4)]
+        i = rng.randrange(4)
+        parts[i] = [region, size, rot, qf][i]
         return ("/iiif/3/z.mra/" + "/".join(parts)).encode()
     if shape == 1:
-        return f"/iiif/3/{ident}/info.json".encode()
+        return f"/iiif/3/{bad_ident}/info.json".encode()
     if shape == 2:
-        return f"/iiif/3/{ident}/{region}/{size}/{rot}/{qf}".encode()
+        return f"/iiif/3/{bad_ident}/full/max/0/default.jpg".encode()
     if shape == 3:
-        return b"/iiif/3/" + bytes(rng.randrange(33, 127) for _ in range(rng.randint(1, 300)))
+        # random printable bytes after the prefix, never a valid request
+        junk = bytes(rng.randrange(33, 127) for _ in range(rng.randint(1, 300))).replace(b".mra", b"")
+        return b"/iiif/3/" + junk
     if shape == 4:
-        return ("/iiif/3/z.mra/full/max/0/default.jpg?window=" + num() + "," + num()).encode()
+        w = rng.choice(["5,1", "1,1", "abc,2", "1", "1,2,3", "nan,1", "1,inf", "-inf,0", ",", ""])
+        return ("/iiif/3/z.mra/full/max/0/default.jpg?window=" + w).encode()
     return rng.choice([b"/iiif/3/z.mra/full/max/0/default.jpg?" + b"x" * 20000,
                        b"/assets/..%2f..%2fCargo.toml", b"/iiif/3/", b"/iiif/3//info.json",
-                       b"/" + b"a/" * 3000])
+                       b"/" + b"a/" * 3000, b"/iiif/3/z.mra/full/max/0/default.jpg/extra"])
 
 
 def slowloris(addr, stop):

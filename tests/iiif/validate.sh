@@ -26,4 +26,8 @@ server=$!
 for _ in $(seq 100); do grep -q "http://" "$work/serve.log" && break; sleep 0.1; done
 addr="$(sed -n 's#.*http://\([^/]*\)/.*#\1#p' "$work/serve.log" | head -1)"
 [ -n "$addr" ] || { echo "mra serve did not start"; exit 1; }
+# every level-2 test of Image API 3.0 (the validator exits with the number of failures)
 "$venv/bin/iiif-validate.py" -s "$addr" -p iiif/3 -i "$id" --version=3.0 --level=2 -v
+# and the optional features the server lists in extraFeatures: mirroring
+"$venv/bin/iiif-validate.py" -s "$addr" -p iiif/3 -i "$id" --version=3.0 -v \
+    --test rot_mirror --test rot_mirror_180 --test linkheader_profile
