@@ -15,14 +15,14 @@ fn grid_of(h: usize, w: usize, seed: u64, rough: f64, scale: f64) -> Grid {
     Grid::new(h, w, 1, f.data().iter().map(|v| v * scale).collect()).unwrap()
 }
 
-/// A smooth base: a few broad hills (a sketch), `n × n`.
+/// A smooth base: a few broad, gentle hills (a sketch, flatter than the example), `n × n`.
 fn sketch(n: usize) -> Grid {
     let mut g = Grid::zeros(n, n, 1);
     let t = std::f64::consts::TAU / n as f64;
     for y in 0..n {
         for x in 0..n {
             let (fy, fx) = (y as f64 * t, x as f64 * t);
-            *g.at_mut(y, x, 0) = 500.0 + 300.0 * (fx.sin() * (0.5 * fy).cos()) + 150.0 * (fy + fx).cos();
+            *g.at_mut(y, x, 0) = 500.0 + 60.0 * (fx.sin() * (0.5 * fy).cos()) + 30.0 * (fy + fx).cos();
         }
     }
     g
