@@ -22,7 +22,8 @@ fn sketch(n: usize) -> Grid {
     for y in 0..n {
         for x in 0..n {
             let (fy, fx) = (y as f64 * t, x as f64 * t);
-            *g.at_mut(y, x, 0) = 500.0 + 60.0 * (fx.sin() * (0.5 * fy).cos()) + 30.0 * (fy + fx).cos();
+            *g.at_mut(y, x, 0) =
+                500.0 + 60.0 * (fx.sin() * (0.5 * fy).cos()) + 30.0 * (fy + fx).cos();
         }
     }
     g
@@ -73,7 +74,15 @@ fn base_scale_is_deterministic_and_its_own_scale_is_the_default() {
     assert_eq!((a.h(), a.w()), (128, 128));
     assert_eq!((rep.levels, rep.base_scale), (4, 16));
     assert_eq!(rep.level_gains.len(), 4);
-    let (c, _) = synthesize(&base, &ex, &SynthOptions { seed: 4, ..opts(16) }).unwrap();
+    let (c, _) = synthesize(
+        &base,
+        &ex,
+        &SynthOptions {
+            seed: 4,
+            ..opts(16)
+        },
+    )
+    .unwrap();
     assert_ne!(a.data(), c.data());
     // S = 2^L is the base's own scale: the same bytes as the default S = 1
     let (d, _) = synthesize(&base, &ex, &opts(1)).unwrap();
@@ -115,9 +124,16 @@ fn a_bad_base_scale_is_refused() {
     let odd = sketch(33);
     let e = synthesize(&odd, &ex, &opts(8)).unwrap_err().to_string();
     assert!(e.contains("base scale"), "{e}");
-    let e = synthesize(&base, &ex, &SynthOptions { size: Some((100, 100)), ..opts(8) })
-        .unwrap_err()
-        .to_string();
+    let e = synthesize(
+        &base,
+        &ex,
+        &SynthOptions {
+            size: Some((100, 100)),
+            ..opts(8)
+        },
+    )
+    .unwrap_err()
+    .to_string();
     assert!(e.contains("base scale"), "{e}");
 }
 
@@ -127,7 +143,9 @@ fn cli_base_scale_error_is_one_line_with_no_output() {
     let (base, ex, out) = (d.join("base.tif"), d.join("ex.tif"), d.join("out.tif"));
     for (p, size, seed) in [(&base, "32x32", "3"), (&ex, "256x256", "9")] {
         let o = Command::new(env!("CARGO_BIN_EXE_mra"))
-            .args(["generate", "terrain", "--size", size, "--seed", seed, "--dtype", "f32", "-o"])
+            .args([
+                "generate", "terrain", "--size", size, "--seed", seed, "--dtype", "f32", "-o",
+            ])
             .arg(p)
             .output()
             .unwrap();

@@ -49,7 +49,12 @@ pub fn trusted_base<'a>(
     if base.h() % r != 0 || base.w() % r != 0 {
         return Err(Error::parameter(
             "base scale",
-            format!("{s} for a {}x{} base with {} levels", base.w(), base.h(), o.levels),
+            format!(
+                "{s} for a {}x{} base with {} levels",
+                base.w(),
+                base.h(),
+                o.levels
+            ),
             "base sides that are multiples of base scale / 2^levels",
         ));
     }

@@ -65,7 +65,16 @@ pub(super) fn fill_shallow(g: &mut Grid, depth: f64) -> usize {
     let mut raised = 0;
     while let Some(Cell(zi, i)) = heap.pop() {
         let (y, x) = ((i / w) as i64, (i % w) as i64);
-        for (dy, dx) in [(-1, -1), (-1, 0), (-1, 1), (0, -1), (0, 1), (1, -1), (1, 0), (1, 1)] {
+        for (dy, dx) in [
+            (-1, -1),
+            (-1, 0),
+            (-1, 1),
+            (0, -1),
+            (0, 1),
+            (1, -1),
+            (1, 0),
+            (1, 1),
+        ] {
             let (yy, xx) = (y + dy, x + dx);
             if yy < 0 || xx < 0 || yy >= h as i64 || xx >= w as i64 {
                 continue;

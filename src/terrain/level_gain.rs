@@ -35,7 +35,11 @@ pub(super) fn mean_gradient2(g: &Grid, smooth: bool) -> f64 {
     let m: Vec<f64> = (0..g.h() * g.w())
         .map(|i| g.mean_at(i / g.w(), i % g.w()))
         .collect();
-    let m = if smooth { smooth141(&m, g.h(), g.w()) } else { m };
+    let m = if smooth {
+        smooth141(&m, g.h(), g.w())
+    } else {
+        m
+    };
     moments_of(&m, &m, (g.h(), g.w(), g.w())).0
 }
 

@@ -277,10 +277,7 @@ impl ExamplePyramid {
             g = packed.crop(ny, nx);
             blocks.push((packed, ny, nx));
         }
-        Ok(ExamplePyramid {
-            blocks,
-            grad2: g2,
-        })
+        Ok(ExamplePyramid { blocks, grad2: g2 })
     }
 }
 
