@@ -20,8 +20,8 @@ use crate::{Error, Result};
 /// The largest base scale, `2^8` (8 levels of synthesis at most).
 pub const MAX_BASE_SCALE: usize = 256;
 
-/// The base at the trusted scale and the options that synthesize from it: `(base, o)`
-/// unchanged when `o.base_scale` is 1 or `2^L`; else the base's `r × r` block means
+/// The base at the trusted scale and the options that synthesize from it: the base
+/// itself and `o` with `base_scale` 1 when `o.base_scale` is 1 or `2^L`; else the base's `r × r` block means
 /// (`r = S/2^L`) and `K = log2 S` levels. Errors: `S` not a power of two in
 /// `[2^L, 256]`, a base side not a multiple of `r`, or an output size other than
 /// base × 2^L.
@@ -32,7 +32,11 @@ pub fn trusted_base<'a>(
     let s = o.base_scale;
     let own = 1usize.checked_shl(o.levels as u32).unwrap_or(usize::MAX);
     if s == 1 || s == own {
-        return Ok((std::borrow::Cow::Borrowed(base), o.clone()));
+        let same = SynthOptions {
+            base_scale: 1,
+            ..o.clone()
+        };
+        return Ok((std::borrow::Cow::Borrowed(base), same));
     }
     if !s.is_power_of_two() || s < own || s > MAX_BASE_SCALE {
         return Err(Error::parameter(
@@ -45,7 +49,12 @@ pub fn trusted_base<'a>(
     if base.h() % r != 0 || base.w() % r != 0 {
         return Err(Error::parameter(
             "base scale",
-            format!("{s} for a {}x{} base with {} levels", base.w(), base.h(), o.levels),
+            format!(
+                "{s} for a {}x{} base with {} levels",
+                base.w(),
+                base.h(),
+                o.levels
+            ),
             "base sides that are multiples of base scale / 2^levels",
         ));
     }

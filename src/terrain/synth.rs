@@ -43,9 +43,11 @@
 
 use rayon::prelude::*;
 
+use super::drainage::{fill_shallow, rms_step, FILL_STEPS};
 use super::finest_gain::{example_slope, fit_finest_gain, scale_details};
 #[cfg(test)]
 use super::finest_gain::{sub_axis, sub_block};
+use super::level_gain::{fit_level_gain, mean_gradient2};
 use super::matching::{distance, Tables, LEN};
 use super::resample::{resample_add, resample_map, Map};
 pub use super::seams::seam_ratio;
@@ -188,6 +190,12 @@ pub struct SynthReport {
     /// `levels` counts the synthesized levels and `fidelity_psnr` compares the result's
     /// `base_scale × base_scale` block means with the base reduced to that scale.
     pub base_scale: usize,
+    /// The slope gains `g_k` of levels `K … 1`, coarsest first ([`super::level_gain`];
+    /// empty at the base's own scale, where the finest gain is fitted instead).
+    pub level_gains: Vec<f64>,
+    /// Cells raised by the shallow-depression fill ([`super::drainage`]; with a base
+    /// scale above the base's own only).
+    pub filled: usize,
 }
 
 pub(super) const BOUNDARY: Boundary = Boundary::Interpolating;
@@ -245,18 +253,31 @@ fn synthesize_one(packed: Grid, scheme: Scheme, planner: &Planner) -> Result<Gri
 /// The example's one-level blocks, finest first (`levels[k-1]` = level k).
 struct ExamplePyramid {
     blocks: Vec<(Grid, usize, usize)>,
+    /// Mean squared gradient of the example's grid at each level `k − 1` (`grad2[k-1]`,
+    /// the slope gains' targets), when asked for.
+    grad2: Vec<f64>,
 }
 
 impl ExamplePyramid {
-    fn new(example: &Grid, scheme: Scheme, levels: usize, planner: &Planner) -> Result<Self> {
+    fn new(
+        example: &Grid,
+        scheme: Scheme,
+        levels: usize,
+        planner: &Planner,
+        grad2: bool,
+    ) -> Result<Self> {
         let mut blocks = Vec::with_capacity(levels);
+        let mut g2 = Vec::new();
         let mut g = example.clone();
         for _ in 0..levels {
+            if grad2 {
+                g2.push(mean_gradient2(&g, !blocks.is_empty()));
+            }
             let (packed, ny, nx) = analyze_one(g, scheme, planner)?;
             g = packed.crop(ny, nx);
             blocks.push((packed, ny, nx));
         }
-        Ok(ExamplePyramid { blocks })
+        Ok(ExamplePyramid { blocks, grad2: g2 })
     }
 }
 
@@ -829,7 +850,8 @@ fn refine(
         _ => None,
     };
     let planner = Planner::new();
-    let mut pyr = ExamplePyramid::new(example, o.scheme, l, &planner)?;
+    let slope_gains = o.base_scale > 1 && o.details == Details::Matched;
+    let mut pyr = ExamplePyramid::new(example, o.scheme, l, &planner, slope_gains)?;
     let mut t = coarse;
     let mut report = SynthReport {
         dims: [ly[0], lx[0]],
@@ -842,6 +864,8 @@ fn refine(
         finest_gain: 1.0,
         example_spectral_slope: None,
         base_scale: 1,
+        level_gains: Vec::new(),
+        filled: 0,
     };
     let mut parent: Option<Shifts> = None;
     for k in (1..=l).rev() {
@@ -857,7 +881,18 @@ fn refine(
         drop(t);
         // the example's block of this level is not used again
         pyr.blocks.truncate(k - 1);
-        if k == 1 && o.details != Details::None {
+        if slope_gains {
+            let g = fit_level_gain(
+                &packed,
+                (n_y, n_x),
+                (pyr.grad2[k - 1], k),
+                (o.scheme, BOUNDARY),
+                |g| synthesize_one(g, o.scheme, &planner),
+            )?;
+            scale_details(&mut packed, (n_y, n_x), g);
+            report.level_gains.push(g);
+        }
+        if k == 1 && o.details != Details::None && !slope_gains {
             let g = match (o.finest_gain, target) {
                 (FinestGain::Fixed(g), _) => g,
                 (FinestGain::Fitted, Some(target)) => {
@@ -940,6 +975,9 @@ pub fn synthesize(base: &Grid, example: &Grid, o: &SynthOptions) -> Result<(Grid
             / base.data().len() as f64;
         10.0 * ((hi - lo).max(1e-12).powi(2) / mse.max(1e-300)).log10()
     };
+    if o.base_scale > 1 && o.details == Details::Matched {
+        report.filled = fill_shallow(&mut g, FILL_STEPS * rms_step(example));
+    }
     let blocks = (h % base.h() == 0 && w % base.w() == 0).then(|| (h / base.h(), w / base.w()));
     report.fidelity_psnr = Some(match blocks {
         Some(f) => {

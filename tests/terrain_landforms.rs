@@ -1,0 +1,175 @@
+//! `--base-scale S` (issue 49): the base trusted down to 1/S of the output, every finer
+//! level synthesized from the example. Determinism, fidelity at the trusted scale,
+//! landforms from the example below it, and one-line errors for a bad S.
+
+use std::process::Command;
+
+mod common;
+
+use mra::generate::terrain::diamond_square;
+use mra::terrain::synth::block_means;
+use mra::terrain::{synthesize, Grid, SynthOptions};
+
+fn grid_of(h: usize, w: usize, seed: u64, rough: f64, scale: f64) -> Grid {
+    let f = diamond_square(h, w, seed, rough);
+    Grid::new(h, w, 1, f.data().iter().map(|v| v * scale).collect()).unwrap()
+}
+
+/// A smooth base: a few broad, gentle hills (a sketch, flatter than the example), `n × n`.
+fn sketch(n: usize) -> Grid {
+    let mut g = Grid::zeros(n, n, 1);
+    let t = std::f64::consts::TAU / n as f64;
+    for y in 0..n {
+        for x in 0..n {
+            let (fy, fx) = (y as f64 * t, x as f64 * t);
+            *g.at_mut(y, x, 0) =
+                500.0 + 60.0 * (fx.sin() * (0.5 * fy).cos()) + 30.0 * (fy + fx).cos();
+        }
+    }
+    g
+}
+
+fn opts(scale: usize) -> SynthOptions {
+    SynthOptions {
+        levels: 2,
+        seed: 3,
+        base_scale: scale,
+        ..SynthOptions::default()
+    }
+}
+
+fn psnr(a: &Grid, b: &Grid) -> f64 {
+    let (lo, hi) = b.range();
+    let mse = a
+        .data()
+        .iter()
+        .zip(b.data())
+        .map(|(x, y)| (x - y).powi(2))
+        .sum::<f64>()
+        / a.data().len() as f64;
+    10.0 * ((hi - lo).powi(2) / mse).log10()
+}
+
+/// Mean slope magnitude (central differences inside) of `g`'s `s × s` block means.
+fn mean_slope_at(g: &Grid, s: usize) -> f64 {
+    let b = block_means(g, g.h() / s, g.w() / s, (s, s));
+    let (mut t, mut n) = (0.0, 0usize);
+    for y in 1..b.h() - 1 {
+        for x in 1..b.w() - 1 {
+            let gy = (b.at(y + 1, x, 0) - b.at(y - 1, x, 0)) / (2 * s) as f64;
+            let gx = (b.at(y, x + 1, 0) - b.at(y, x - 1, 0)) / (2 * s) as f64;
+            t += gy.hypot(gx);
+            n += 1;
+        }
+    }
+    t / n as f64
+}
+
+#[test]
+fn base_scale_is_deterministic_and_its_own_scale_is_the_default() {
+    let (base, ex) = (sketch(32), grid_of(256, 256, 9, 0.6, 1000.0));
+    let (a, rep) = synthesize(&base, &ex, &opts(16)).unwrap();
+    let (b, _) = synthesize(&base, &ex, &opts(16)).unwrap();
+    assert_eq!(a.data(), b.data());
+    assert_eq!((a.h(), a.w()), (128, 128));
+    assert_eq!((rep.levels, rep.base_scale), (4, 16));
+    assert_eq!(rep.level_gains.len(), 4);
+    let (c, _) = synthesize(
+        &base,
+        &ex,
+        &SynthOptions {
+            seed: 4,
+            ..opts(16)
+        },
+    )
+    .unwrap();
+    assert_ne!(a.data(), c.data());
+    // S = 2^L is the base's own scale: the same bytes as the default S = 1
+    let (d, _) = synthesize(&base, &ex, &opts(1)).unwrap();
+    let (e, _) = synthesize(&base, &ex, &opts(4)).unwrap();
+    assert_eq!(d.data(), e.data());
+}
+
+#[test]
+fn the_trusted_scale_keeps_the_base_and_the_example_supplies_the_landforms_below_it() {
+    let (base, ex) = (sketch(32), grid_of(256, 256, 9, 0.6, 1000.0));
+    let (g, rep) = synthesize(&base, &ex, &opts(8)).unwrap();
+    // the base at 1/8 of the output (its 2x2 block means) against the result's 8x8 ones
+    let trusted = block_means(&base, 16, 16, (2, 2));
+    let p = psnr(&block_means(&g, 16, 16, (8, 8)), &trusted);
+    assert!(p >= 40.0, "16x16 block-mean PSNR {p:.1} dB");
+    assert!((rep.fidelity_psnr.unwrap() - p).abs() < 1e-6);
+    // at 4 output cells, below the trusted scale, the slopes come from the example: the
+    // result is far closer to the example's mean slope than the default synthesis is
+    let (def, _) = synthesize(&base, &ex, &opts(1)).unwrap();
+    let (want, got, old) = (
+        mean_slope_at(&ex, 4),
+        mean_slope_at(&g, 4),
+        mean_slope_at(&def, 4),
+    );
+    assert!(
+        (got - want).abs() < 0.5 * (old - want).abs(),
+        "mean slope at 4 cells: example {want:.3}, base scale 8 {got:.3}, default {old:.3}"
+    );
+}
+
+#[test]
+fn a_bad_base_scale_is_refused() {
+    let (base, ex) = (sketch(32), grid_of(256, 256, 9, 0.6, 1000.0));
+    for s in [0, 2, 3, 12, 512] {
+        let e = synthesize(&base, &ex, &opts(s)).unwrap_err().to_string();
+        assert!(e.contains("base scale") && !e.contains('\n'), "{s}: {e}");
+    }
+    // the base's sides must be multiples of S / 2^L
+    let odd = sketch(33);
+    let e = synthesize(&odd, &ex, &opts(8)).unwrap_err().to_string();
+    assert!(e.contains("base scale"), "{e}");
+    let e = synthesize(
+        &base,
+        &ex,
+        &SynthOptions {
+            size: Some((100, 100)),
+            ..opts(8)
+        },
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("base scale"), "{e}");
+}
+
+#[test]
+fn cli_base_scale_error_is_one_line_with_no_output() {
+    let d = common::scratch_dir("landforms-cli");
+    let (base, ex, out) = (d.join("base.tif"), d.join("ex.tif"), d.join("out.tif"));
+    for (p, size, seed) in [(&base, "32x32", "3"), (&ex, "256x256", "9")] {
+        let o = Command::new(env!("CARGO_BIN_EXE_mra"))
+            .args([
+                "generate", "terrain", "--size", size, "--seed", seed, "--dtype", "f32", "-o",
+            ])
+            .arg(p)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    }
+    let run = |s: &str| {
+        Command::new(env!("CARGO_BIN_EXE_mra"))
+            .args(["terrain", "synth", "--base"])
+            .arg(&base)
+            .arg("--example")
+            .arg(&ex)
+            .arg("-o")
+            .arg(&out)
+            .args(["--levels", "2", "--base-scale", s])
+            .output()
+            .unwrap()
+    };
+    let o = run("3");
+    assert_eq!(o.status.code(), Some(2));
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(e.trim_end().lines().count(), 1, "{e}");
+    assert!(e.contains("base scale"), "{e}");
+    assert!(!out.exists());
+    let o = run("8");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(out.exists());
+}
