@@ -71,7 +71,7 @@ pub(super) fn header_for(
     };
     let mut header = shape.header(opts, mode, colour)?;
     (header.min, header.max) = finite_range(r.samples);
-    if super::voids::lists_voids(&r.meta) {
+    if super::voids::lists_voids(r.meta) {
         // 2.4: the header says the mETA lists voids, so a file without it is refused
         header.voids = true;
         header.minor = header.minor.max(format::MINOR_VOIDS);

@@ -394,12 +394,14 @@ pub fn read(path: &Path) -> Result<Raster> {
 
     let mut acc: Option<Samples> = None;
     let mut pages = 0usize;
-    // pages may share their strips: the stack, not the file, bounds what they inflate to
+    // pages may share their strips: the stack, not the file, bounds what they inflate
+    // to. Before page p is read: the p pages held, the page as decoded and, from the
+    // second page on, its copy appended to the stack, `(p + 1 + [p > 0]) · page` bytes
     let page_bytes = (w as u64 * h as u64 * channels as u64 * ct.bit_depth() as u64).div_ceil(8);
     loop {
         crate::limits::check_elems(
             "TIFF stack bytes (memory budget MRA_MAX_BYTES)",
-            pages as u64 + 1,
+            pages as u64 + 1 + u64::from(pages > 0),
             page_bytes,
         )?;
         append(&mut acc, dec.read_image().map_err(tiff_error)?)?;
