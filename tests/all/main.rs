@@ -34,6 +34,7 @@ mod subdivide;
 mod surface;
 mod tensor;
 mod terrain;
+mod terrain_landforms;
 mod tiles;
 mod tiles_stream;
 mod upscale;

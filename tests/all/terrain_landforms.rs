@@ -4,7 +4,7 @@
 
 use std::process::Command;
 
-mod common;
+use super::common;
 
 use mra::generate::terrain::diamond_square;
 use mra::terrain::synth::block_means;
