@@ -229,7 +229,7 @@ mod tests {
         assert_eq!(key(32610, None).as_deref(), Some("m"));
         assert_eq!(key(2227, Some(9003)).as_deref(), Some("US survey ft"));
         assert_eq!(key(2227, None), None);
-        // a unit in GeoDoubleParams is not a short: unknown
+        // a projected model with neither a unit key nor a known system: unknown
         let d = [1, 1, 0, 1, 1024, 0, 1, 1];
         assert_eq!(georeference(&[shorts(&d)]).unwrap().units, None);
     }

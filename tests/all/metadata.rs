@@ -728,9 +728,12 @@ fn terrain_synth_with_units_that_differ_names_the_options_that_fix_it() {
     wgs84_geotiff(&base, 24, 24);
     // an example in metres, without a unit: its cell cannot be compared with degrees
     let ex = d.join("example.asc");
-    let mut text = String::from("ncols 32\nnrows 32\nxllcorner 0\nyllcorner 0\ncellsize 30\n");
-    for y in 0..32 {
-        let row: Vec<String> = (0..32).map(|x| ((x * 7 + y * 13) % 50).to_string()).collect();
+    let n = 128;
+    let mut text = format!("ncols {n}\nnrows {n}\nxllcorner 0\nyllcorner 0\ncellsize 30\n");
+    for y in 0..n {
+        let row: Vec<String> = (0..n)
+            .map(|x| ((x * 7 + y * 13) % 50 + (x * y) % 11).to_string())
+            .collect();
         text += &row.join(" ");
         text.push('\n');
     }
@@ -745,7 +748,7 @@ fn terrain_synth_with_units_that_differ_names_the_options_that_fix_it() {
     // the fix it names works: the example's cell in degrees
     ok(&[
         "terrain", "synth", "--base", s(&base), "--example", s(&ex), "-o", s(&out),
-        "--example-cell", "0.00027",
+        "--example-cell", "0.0002",
     ]);
     let r = io::read(&out).unwrap();
     assert_eq!(r.meta.units.as_deref(), Some("degree"));
