@@ -77,7 +77,7 @@ proptest! {
 #[test]
 fn truncated_bands_fail_cleanly() {
     let dims = [20usize, 30];
-    let q: Vec<i32> = (0..600).map(|i| ((i * 7919) % 23) as i32 - 11).collect();
+    let q: Vec<i32> = (0..600).map(|i: i32| (i * 7919) % 23 - 11).collect();
     let shape = Shape::new(1, 8, 8);
     let bytes = block::encode(&q, &dims, BandKind::Detail, None, shape);
     assert_eq!(

@@ -245,8 +245,7 @@ pub fn encode_counting(
             s,
             (shape.limit, shape.trained),
             counts.as_deref_mut(),
-            &mut e,
-            &mut bits,
+            (&mut e, &mut bits),
         );
         let (sym, raw) = (e.finish(), bits.finish());
         crate::format::put_varint(&mut out, sym.len() as u64);

@@ -196,8 +196,7 @@ pub fn encode(
     s: &mut Scratch,
     (limit, trained): (u8, bool),
     mut counts: Option<&mut Counts>,
-    e: &mut Encoder,
-    w: &mut BitWriter,
+    (e, w): (&mut Encoder, &mut BitWriter),
 ) {
     let mut m = Models::new(limit, trained);
     s.mag.fill(0);
