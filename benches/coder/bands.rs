@@ -113,7 +113,10 @@ impl Bands {
                     };
                     let q32 = q
                         .iter()
-                        .map(|&v| i32::try_from(v).map_err(|_| Error::format("an index over i32", "i32 indices")))
+                        .map(|&v| {
+                            i32::try_from(v)
+                                .map_err(|_| Error::format("an index over i32", "i32 indices"))
+                        })
                         .collect::<Result<Vec<i32>>>()?;
                     bands[j * ch + c] = Some(Band {
                         level,

@@ -43,11 +43,11 @@ proptest! {
     fn bands_round_trip_exactly(
         (dims, q) in dims().prop_flat_map(band_of),
         pseed in prop::collection::vec(index(), 0..200),
-        z in 1usize..=5, y in 1usize..=9, x in 1usize..=9, limit in 1u8..=8,
+        z in 1usize..=5, y in 1usize..=9, x in 1usize..=9, limit in 1u8..=8, trained in any::<bool>(),
         with_parent in any::<bool>(),
         coarse in any::<bool>(),
     ) {
-        let shape = Shape { z, y, x, limit };
+        let shape = Shape { z, y, x, limit, trained };
         let pdims: Vec<usize> = dims.iter().map(|d| d.div_ceil(2)).collect();
         let pn: usize = pdims.iter().product();
         let pq: Vec<i32> = (0..pn).map(|i| pseed.get(i % pseed.len().max(1)).copied().unwrap_or(0)).collect();
@@ -77,7 +77,7 @@ proptest! {
 #[test]
 fn truncated_bands_fail_cleanly() {
     let dims = [20usize, 30];
-    let q: Vec<i32> = (0..600).map(|i| ((i * 7919) % 23) as i32 - 11).collect();
+    let q: Vec<i32> = (0..600).map(|i: i32| (i * 7919) % 23 - 11).collect();
     let shape = Shape::new(1, 8, 8);
     let bytes = block::encode(&q, &dims, BandKind::Detail, None, shape);
     assert_eq!(
@@ -87,7 +87,14 @@ fn truncated_bands_fail_cleanly() {
     for cut in 0..bytes.len() {
         let _ = block::decode(&bytes[..cut], &dims, BandKind::Detail, None, shape);
     }
-    assert!(block::decode(&bytes[..bytes.len() - 1], &dims, BandKind::Detail, None, shape).is_err());
+    assert!(block::decode(
+        &bytes[..bytes.len() - 1],
+        &dims,
+        BandKind::Detail,
+        None,
+        shape
+    )
+    .is_err());
 }
 
 /// Skewed symbols in several adaptive contexts and raw fields of 0 to 32 bits, coded

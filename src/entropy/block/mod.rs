@@ -15,6 +15,7 @@
 //! The parent (one level coarser, same orientation) is a context as in
 //! [`super::band`]: blocks stay independent of each other given the coarser level.
 
+pub mod prior;
 pub mod quad;
 pub mod rc;
 
@@ -32,6 +33,8 @@ pub struct Shape {
     pub y: usize,
     pub x: usize,
     pub limit: u8,
+    /// Start from the trained priors ([`prior`]) instead of uniform models.
+    pub trained: bool,
 }
 
 impl Shape {
@@ -42,6 +45,7 @@ impl Shape {
             y,
             x,
             limit: rc::LIMIT,
+            trained: false,
         }
     }
 
@@ -52,6 +56,7 @@ impl Shape {
             y: self.y.max(2).next_multiple_of(2),
             x: self.x.max(2).next_multiple_of(2),
             limit: self.limit,
+            trained: self.trained,
         }
     }
 }
@@ -201,6 +206,18 @@ pub fn encode(
     parent: Option<Parent>,
     shape: Shape,
 ) -> Vec<u8> {
+    encode_counting(q, dims, kind, parent, shape, None)
+}
+
+/// [`encode`], adding every coded symbol to `counts` (for training [`prior`]).
+pub fn encode_counting(
+    q: &[i32],
+    dims: &[usize],
+    kind: BandKind,
+    parent: Option<Parent>,
+    shape: Shape,
+    mut counts: Option<&mut quad::Counts>,
+) -> Vec<u8> {
     let w = Walk::new(dims);
     let shape = shape.normal();
     let res: Vec<i32>;
@@ -221,7 +238,15 @@ pub fn encode(
         };
         let mut e = rc::Encoder::new();
         let mut bits = rc::BitWriter::default();
-        quad::encode(v, b.ext, &layout, s, shape.limit, &mut e, &mut bits);
+        quad::encode(
+            v,
+            b.ext,
+            &layout,
+            s,
+            (shape.limit, shape.trained),
+            counts.as_deref_mut(),
+            (&mut e, &mut bits),
+        );
         let (sym, raw) = (e.finish(), bits.finish());
         crate::format::put_varint(&mut out, sym.len() as u64);
         crate::format::put_varint(&mut out, raw.len() as u64);
@@ -283,7 +308,7 @@ pub fn decode(
             b.ext,
             &layout,
             s,
-            shape.limit,
+            (shape.limit, shape.trained),
             &mut rc::Decoder::new(sym),
             &mut rc::BitReader::new(raw),
         );

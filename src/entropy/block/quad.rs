@@ -18,10 +18,13 @@
 //!   context `c` when `h < 15`, else 15 and `h − 14 = 2^e + r` as `e` in 6 raw bits and
 //!   `r` in `e` raw bits; then the `k` low bits of `m − 1` and the sign, raw.
 
+use super::prior;
 use super::rc::{BitReader, BitWriter, Cdf, Decoder, Encoder};
 
 const QCLS: usize = 12;
 const PCLS: usize = 3;
+/// Pattern contexts.
+pub const PATTERNS: usize = QCLS * PCLS;
 /// Magnitude classes.
 pub const MCLS: usize = 26;
 /// Classes of `u` below which magnitudes are coded whole (`k = 0`).
@@ -71,11 +74,34 @@ pub struct Models {
 }
 
 impl Models {
-    /// Uniform models adapting up to `limit` ([`Cdf::uniform`]).
-    pub fn new(limit: u8) -> Self {
+    /// Models adapting up to `limit` ([`Cdf::uniform`]), from the trained priors
+    /// ([`prior`]) when `trained`, else uniform.
+    pub fn new(limit: u8, trained: bool) -> Self {
+        if !trained || prior::WEIGHT == 0 {
+            return Models {
+                pattern: [Cdf::uniform(limit); PATTERNS],
+                mag: [Cdf::uniform(limit); MCLS],
+            };
+        }
+        let from = |c: &[u16; 16]| Cdf::from_cumulative(*c, prior::WEIGHT, limit);
         Models {
-            pattern: [Cdf::uniform(limit); QCLS * PCLS],
-            mag: [Cdf::uniform(limit); MCLS],
+            pattern: std::array::from_fn(|i| from(&prior::PATTERN[i])),
+            mag: std::array::from_fn(|i| from(&prior::MAGNITUDE[i])),
+        }
+    }
+}
+
+/// Symbol counts per context, for training the priors.
+pub struct Counts {
+    pub pattern: [[u32; 16]; PATTERNS],
+    pub magnitude: [[u32; 16]; MCLS],
+}
+
+impl Default for Counts {
+    fn default() -> Self {
+        Counts {
+            pattern: [[0; 16]; PATTERNS],
+            magnitude: [[0; 16]; MCLS],
         }
     }
 }
@@ -168,17 +194,21 @@ pub fn encode(
     ext: Extent,
     rows: &impl Rows,
     s: &mut Scratch,
-    limit: u8,
-    e: &mut Encoder,
-    w: &mut BitWriter,
+    (limit, trained): (u8, bool),
+    mut counts: Option<&mut Counts>,
+    (e, w): (&mut Encoder, &mut BitWriter),
 ) {
-    let mut m = Models::new(limit);
+    let mut m = Models::new(limit, trained);
     s.mag.fill(0);
     let off = quad_offsets(s.rx);
     for k in 0..ext.planes {
         for y in (0..ext.rows).step_by(2) {
             let r0 = rows.row(k, y);
-            let r1 = if y + 1 < ext.rows { rows.row(k, y + 1) } else { r0 };
+            let r1 = if y + 1 < ext.rows {
+                rows.row(k, y + 1)
+            } else {
+                r0
+            };
             for x in (0..ext.cols).step_by(2) {
                 let valid = valid_bits(ext, y, x);
                 let at = [r0 + x, r0 + x + 1, r1 + x, r1 + x + 1];
@@ -190,12 +220,20 @@ pub fn encode(
                 }
                 let i = s.at(k, y, x);
                 let pm = rows.parent(k, y, x);
-                e.symbol(&mut m.pattern[s.pattern_ctx(i, pm)], pattern);
+                let pc = s.pattern_ctx(i, pm);
+                e.symbol(&mut m.pattern[pc], pattern);
+                if let Some(n) = counts.as_deref_mut() {
+                    n.pattern[pc][pattern] += 1;
+                }
                 for b in 0..4 {
                     if pattern >> b & 1 == 1 {
                         let v = band[at[b]];
                         let c = s.mag_ctx(i + off[b], pm);
                         let a = v.unsigned_abs();
+                        if let Some(n) = counts.as_deref_mut() {
+                            let k = c.saturating_sub(KOFF) as u32;
+                            n.magnitude[c][(((a - 1) as u64 >> k).min(15)) as usize] += 1;
+                        }
                         put_magnitude(e, w, &mut m.mag[c], c, a, v < 0);
                         s.mag[i + off[b]] = a.min(CAP);
                     }
@@ -229,17 +267,21 @@ pub fn decode(
     ext: Extent,
     rows: &impl Rows,
     s: &mut Scratch,
-    limit: u8,
+    (limit, trained): (u8, bool),
     d: &mut Decoder,
     r: &mut BitReader,
 ) {
-    let mut m = Models::new(limit);
+    let mut m = Models::new(limit, trained);
     s.mag.fill(0);
     let off = quad_offsets(s.rx);
     for k in 0..ext.planes {
         for y in (0..ext.rows).step_by(2) {
             let r0 = rows.row(k, y);
-            let r1 = if y + 1 < ext.rows { rows.row(k, y + 1) } else { r0 };
+            let r1 = if y + 1 < ext.rows {
+                rows.row(k, y + 1)
+            } else {
+                r0
+            };
             for x in (0..ext.cols).step_by(2) {
                 let valid = valid_bits(ext, y, x);
                 let at = [r0 + x, r0 + x + 1, r1 + x, r1 + x + 1];

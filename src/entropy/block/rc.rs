@@ -53,6 +53,21 @@ impl Cdf {
         }
     }
 
+    /// A CDF from cumulative frequencies `c` (`c[15] = 2^15`, increasing), counted as
+    /// `seen` symbols, adapting up to `limit`.
+    pub fn from_cumulative(c: [u16; SYMBOLS], seen: u8, limit: u8) -> Self {
+        Cdf {
+            c,
+            count: seen,
+            limit: limit.clamp(1, 14),
+        }
+    }
+
+    /// The cumulative frequencies.
+    pub fn cumulative(&self) -> [u16; SYMBOLS] {
+        self.c
+    }
+
     /// A CDF starting from the frequencies `f` (each at least 1, any total): the
     /// cumulative sums scaled to 2^15, every symbol kept at least 1.
     pub fn from_freqs(f: &[u32; SYMBOLS]) -> Self {
