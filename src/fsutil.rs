@@ -50,9 +50,7 @@ pub fn resolve_output(path: &Path) -> std::io::Result<OutputTarget> {
     for _ in 0..40 {
         let md = match std::fs::symlink_metadata(&p) {
             Ok(md) => md,
-            Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
-                return Ok(OutputTarget::File(p))
-            }
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(OutputTarget::File(p)),
             Err(e) => return Err(e),
         };
         let ft = md.file_type();

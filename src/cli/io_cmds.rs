@@ -1,16 +1,16 @@
 //! `mra info-file`, `mra convert`, `mra compare`, `mra generate`: data in and out.
 
 use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
 use std::fs::File;
 use std::io::BufWriter;
+use std::path::{Path, PathBuf};
 
 use clap::{Args, ValueEnum};
 
 use super::{CliResult, Failure};
+use crate::fsutil::Watch;
 use crate::io::{self, RawSpec, ReadOptions, SampleType};
 use crate::metrics::{self, CompareOptions, Convention};
-use crate::fsutil::Watch;
 use crate::progress::Progress;
 
 /// Layout of headerless input (`.raw`, and non-square `.r16` / `.r32`).
@@ -180,7 +180,12 @@ pub fn report(output: &Path, line: &str) -> CliResult {
 /// The `--json` report of a command that writes one raster (`convert`, `downscale`):
 /// input, output, shape (x, y, z order), sample type, spacing, origin and the seconds
 /// of the command's work.
-pub fn raster_report(input: &Path, output: &Path, r: &io::Raster, seconds: f64) -> serde_json::Value {
+pub fn raster_report(
+    input: &Path,
+    output: &Path,
+    r: &io::Raster,
+    seconds: f64,
+) -> serde_json::Value {
     serde_json::json!({
         "input": input.display().to_string(),
         "output": output.display().to_string(),

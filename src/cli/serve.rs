@@ -7,7 +7,9 @@ use clap::Args;
 use std::path::PathBuf;
 
 #[derive(Args, Debug)]
-#[command(after_help = "Example:\n  mra generate zone-plate -o z.png --size 4096 && mra encode z.png -o pics/z.mra\n  mra serve pics            # then open http://127.0.0.1:8182/\n\nURLs: /iiif/3/{identifier}/info.json and /iiif/3/{identifier}/{region}/{size}/{rotation}/{quality}.{format};\nthe identifier is the file's path under DIR, percent-encoded; a volume slice is `vol.mra;z=12`\n(also ;y= and ;x=); 16-bit and float data take ?window=lo,hi. See docs/serve.md.")]
+#[command(
+    after_help = "Example:\n  mra generate zone-plate -o z.png --size 4096 && mra encode z.png -o pics/z.mra\n  mra serve pics            # then open http://127.0.0.1:8182/\n\nURLs: /iiif/3/{identifier}/info.json and /iiif/3/{identifier}/{region}/{size}/{rotation}/{quality}.{format};\nthe identifier is the file's path under DIR, percent-encoded; a volume slice is `vol.mra;z=12`\n(also ;y= and ;x=); 16-bit and float data take ?window=lo,hi. See docs/serve.md."
+)]
 pub struct ServeArgs {
     /// The folder whose .mra files are served (nothing outside it is).
     pub dir: PathBuf,
@@ -36,9 +38,9 @@ pub fn run(a: ServeArgs) -> CliResult {
     if a.workers == Some(0) {
         return Err(Failure("invalid --workers: 0 (expected at least 1)".into()));
     }
-    let workers = a.workers.unwrap_or_else(|| {
-        std::thread::available_parallelism().map_or(2, |n| n.get()) * 2
-    });
+    let workers = a
+        .workers
+        .unwrap_or_else(|| std::thread::available_parallelism().map_or(2, |n| n.get()) * 2);
     let config = Config {
         root: a.dir.clone(),
         bind: a.bind,

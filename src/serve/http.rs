@@ -12,8 +12,8 @@
 //! ```
 
 use super::cache::LevelCache;
-use super::iiif::ImageRequest;
 use super::ident::{self, IdentError};
+use super::iiif::ImageRequest;
 use super::source::Source;
 use super::{info, render, viewer, Config, ServeError};
 use crate::limits::Limits;
@@ -69,7 +69,10 @@ pub fn router(state: Arc<State>) -> Router {
         .expose_headers([header::ETAG, header::LINK]);
     Router::new()
         .route("/", get(index))
-        .route("/viewer.html", get(|| async { html(viewer::VIEWER.to_string()) }))
+        .route(
+            "/viewer.html",
+            get(|| async { html(viewer::VIEWER.to_string()) }),
+        )
         .route("/assets/{name}", get(asset))
         .route("/iiif/3/{*rest}", get(iiif))
         .fallback(|| async { plain(StatusCode::NOT_FOUND, "not found") })
@@ -209,7 +212,11 @@ async fn iiif(AxState(st): AxState<Arc<State>>, uri: Uri, headers: HeaderMap) ->
     if uri.path().len() + uri.query().map_or(0, str::len) > MAX_URL {
         return plain(StatusCode::URI_TOO_LONG, "URL too long");
     }
-    let rest = uri.path().strip_prefix("/iiif/3/").unwrap_or("").to_string();
+    let rest = uri
+        .path()
+        .strip_prefix("/iiif/3/")
+        .unwrap_or("")
+        .to_string();
     let segs: Vec<&str> = rest.split('/').collect();
     let n = segs.len();
     let (id, params): (String, Option<[String; 4]>) = match n {
@@ -306,10 +313,15 @@ async fn iiif(AxState(st): AxState<Arc<State>>, uri: Uri, headers: HeaderMap) ->
             if let Ok(v) = HeaderValue::from_str(&etag) {
                 h.insert(header::ETAG, v);
             }
-            h.insert(header::CACHE_CONTROL, HeaderValue::from_static(CACHE_CONTROL));
+            h.insert(
+                header::CACHE_CONTROL,
+                HeaderValue::from_static(CACHE_CONTROL),
+            );
             h.insert(
                 header::LINK,
-                HeaderValue::from_static("<http://iiif.io/api/image/3/level2.json>;rel=\"profile\""),
+                HeaderValue::from_static(
+                    "<http://iiif.io/api/image/3/level2.json>;rel=\"profile\"",
+                ),
             );
             resp
         }

@@ -152,7 +152,14 @@ mod tests {
         ] {
             assert_eq!(parse(s), Err(IdentError::NotFound), "{s}");
         }
-        for s in ["", "%ff.mra", "a.mra;w=1", "a.mra;z=", "a.mra;z=-1", "a.mra;z"] {
+        for s in [
+            "",
+            "%ff.mra",
+            "a.mra;w=1",
+            "a.mra;z=",
+            "a.mra;z=-1",
+            "a.mra;z",
+        ] {
             assert_eq!(parse(s), Err(IdentError::Malformed), "{s}");
         }
         assert_eq!(parse(&"a".repeat(5000)), Err(IdentError::Malformed));

@@ -31,7 +31,11 @@ impl fmt::Display for BadRequest {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         // the value quoted is cut: a hostile request may be long
         let v: String = self.value.chars().take(80).collect();
-        write!(f, "invalid {}: {v:?} (expected {})", self.part, self.expected)
+        write!(
+            f,
+            "invalid {}: {v:?} (expected {})",
+            self.part, self.expected
+        )
     }
 }
 
@@ -248,7 +252,11 @@ impl ImageRequest {
     /// Parse the four path segments after the identifier (`quality.format` is the last).
     pub fn parse(region: &str, size: &str, rotation: &str, qf: &str) -> Result<Self, BadRequest> {
         let Some((q, f)) = qf.rsplit_once('.') else {
-            return Err(bad("quality.format", qf, "quality.format, e.g. default.jpg"));
+            return Err(bad(
+                "quality.format",
+                qf,
+                "quality.format, e.g. default.jpg",
+            ));
         };
         let quality = match q {
             "default" => Quality::Default,
@@ -391,13 +399,31 @@ mod tests {
 
     #[test]
     fn regions_resolve_as_the_specification_defines_them() {
-        assert_eq!(wh(req("full", "max").unwrap()), [0, 0, 1000, 600, 1000, 600]);
-        assert_eq!(wh(req("square", "max").unwrap()), [200, 0, 600, 600, 600, 600]);
-        assert_eq!(wh(req("10,20,30,40", "max").unwrap()), [10, 20, 30, 40, 30, 40]);
+        assert_eq!(
+            wh(req("full", "max").unwrap()),
+            [0, 0, 1000, 600, 1000, 600]
+        );
+        assert_eq!(
+            wh(req("square", "max").unwrap()),
+            [200, 0, 600, 600, 600, 600]
+        );
+        assert_eq!(
+            wh(req("10,20,30,40", "max").unwrap()),
+            [10, 20, 30, 40, 30, 40]
+        );
         // cropped at the image's edge
-        assert_eq!(wh(req("900,500,300,300", "max").unwrap()), [900, 500, 100, 100, 100, 100]);
-        assert_eq!(wh(req("pct:10,50,20,50", "max").unwrap()), [100, 300, 200, 300, 200, 300]);
-        assert_eq!(wh(req("pct:0.5,0,99.5,100", "max").unwrap())[..4], [5, 0, 995, 600]);
+        assert_eq!(
+            wh(req("900,500,300,300", "max").unwrap()),
+            [900, 500, 100, 100, 100, 100]
+        );
+        assert_eq!(
+            wh(req("pct:10,50,20,50", "max").unwrap()),
+            [100, 300, 200, 300, 200, 300]
+        );
+        assert_eq!(
+            wh(req("pct:0.5,0,99.5,100", "max").unwrap())[..4],
+            [5, 0, 995, 600]
+        );
     }
 
     #[test]
@@ -496,7 +522,14 @@ mod tests {
     fn qualities_and_formats_parse_and_others_are_refused() {
         let r = ImageRequest::parse("full", "max", "0", "gray.png").unwrap();
         assert_eq!((r.quality, r.format), (Quality::Gray, Format::Png));
-        for qf in ["default", "default.gif", "grey.jpg", "default.jpg.png", ".jpg", "color."] {
+        for qf in [
+            "default",
+            "default.gif",
+            "grey.jpg",
+            "default.jpg.png",
+            ".jpg",
+            "color.",
+        ] {
             assert!(ImageRequest::parse("full", "max", "0", qf).is_err(), "{qf}");
         }
     }

@@ -46,7 +46,13 @@ pub fn choose_level(src: &Source, r: &Resolved) -> usize {
 /// A fractional interval `[a, b)` of one axis of a level, snapped to whole samples
 /// within 1e-9.
 fn span(start: u64, len: u64, level: usize, full: u64) -> (f64, f64) {
-    let snap = |v: f64| if (v - v.round()).abs() < 1e-9 { v.round() } else { v };
+    let snap = |v: f64| {
+        if (v - v.round()).abs() < 1e-9 {
+            v.round()
+        } else {
+            v
+        }
+    };
     let s = level as f64 / full as f64;
     (snap(start as f64 * s), snap((start + len) as f64 * s))
 }
@@ -60,7 +66,11 @@ pub fn render(
     r: &Resolved,
     window: Option<(f64, f64)>,
 ) -> Result<Vec<u8>, ServeError> {
-    limits.check_elems("the output of a request", r.out_w.saturating_mul(r.out_h), 3 * 8)?;
+    limits.check_elems(
+        "the output of a request",
+        r.out_w.saturating_mul(r.out_h),
+        3 * 8,
+    )?;
     let k = choose_level(src, r);
     let (fw, fh) = src.size();
     let (lw, lh) = src.level_size(k);
@@ -71,7 +81,11 @@ pub fn render(
     let shown = if src.header.kind == DataKind::Heightmap {
         shaded(src, cache, limits, k, rows.clone(), cols.clone())?
     } else {
-        display(src, src.window(cache, limits, k, rows.clone(), cols.clone())?, window)
+        display(
+            src,
+            src.window(cache, limits, k, rows.clone(), cols.clone())?,
+            window,
+        )
     };
     let (ow, oh) = (r.out_w as usize, r.out_h as usize);
     let out = resample(
@@ -371,8 +385,14 @@ mod tests {
         let r = orient(p.clone(), false, 1);
         assert_eq!((r.h, r.w), (3, 2));
         assert_eq!(r.data, vec![3.0, 0.0, 4.0, 1.0, 5.0, 2.0]);
-        assert_eq!(orient(p.clone(), false, 2).data, vec![5.0, 4.0, 3.0, 2.0, 1.0, 0.0]);
-        assert_eq!(orient(p.clone(), false, 3).data, vec![2.0, 5.0, 1.0, 4.0, 0.0, 3.0]);
+        assert_eq!(
+            orient(p.clone(), false, 2).data,
+            vec![5.0, 4.0, 3.0, 2.0, 1.0, 0.0]
+        );
+        assert_eq!(
+            orient(p.clone(), false, 3).data,
+            vec![2.0, 5.0, 1.0, 4.0, 0.0, 3.0]
+        );
         assert_eq!(orient(p, true, 0).data, vec![2.0, 1.0, 0.0, 5.0, 4.0, 3.0]);
     }
 

@@ -66,7 +66,11 @@ impl Source {
         let (slice, row_axis, col_axis) = match (nd, slice) {
             (2, None) => (None, 0, 1),
             (2, Some(_)) => {
-                return Err(ServeError::bad("identifier", "a slice", "a slice of a 3-D file only"))
+                return Err(ServeError::bad(
+                    "identifier",
+                    "a slice",
+                    "a slice of a 3-D file only",
+                ))
             }
             (3, s) => {
                 let s = s.unwrap_or(Slice {
@@ -94,8 +98,7 @@ impl Source {
         let depth = codec::depth_of(&header)?;
         let levels = (0..=depth)
             .map(|k| codec::level_extents(&header, k))
-            .collect::<crate::Result<Vec<_>>>()
-            ?;
+            .collect::<crate::Result<Vec<_>>>()?;
         Ok(Source {
             path: path.to_path_buf(),
             len: md.len(),
@@ -144,12 +147,8 @@ impl Source {
         let ext = &self.levels[k];
         let c = h.channels as u64;
         let window = (rows.len() as u64).saturating_mul(cols.len() as u64);
-        limits
-            .check_elems("the window of a request", window.saturating_mul(c), 4)
-            ?;
-        let level_samples = ext
-            .iter()
-            .fold(c, |n, &e| n.saturating_mul(e as u64));
+        limits.check_elems("the window of a request", window.saturating_mul(c), 4)?;
+        let level_samples = ext.iter().fold(c, |n, &e| n.saturating_mul(e as u64));
         let level_bytes = level_samples.saturating_mul(h.sample_type.size() as u64);
         // the level's samples at the slice, and the window's box in the level
         let mut bx: Vec<Range<usize>> = (0..ext.len()).map(|_| 0..0).collect();
@@ -174,7 +173,11 @@ impl Source {
             return cut(&r, &zero, &bx, self.row_axis, self.col_axis);
         }
         // a file of one tile too large to keep: reconstructed whole for the request, cut
-        limits.check_elems("the decode of a request", level_samples, DECODE_BYTES_PER_SAMPLE)?;
+        limits.check_elems(
+            "the decode of a request",
+            level_samples,
+            DECODE_BYTES_PER_SAMPLE,
+        )?;
         let r = self.decode(k, None)?;
         let zero: Vec<usize> = vec![0; ext.len()];
         cut(&r, &zero, &bx, self.row_axis, self.col_axis)
@@ -271,7 +274,8 @@ impl Source {
             );
             for y in 0..p.h {
                 let dst = ((y0 + y) * ow + x0) * c;
-                out.data[dst..dst + p.w * c].copy_from_slice(&p.data[y * p.w * c..(y + 1) * p.w * c]);
+                out.data[dst..dst + p.w * c]
+                    .copy_from_slice(&p.data[y * p.w * c..(y + 1) * p.w * c]);
             }
             // the next tile, last axis fastest
             for a in (0..nd).rev() {

@@ -13,7 +13,7 @@
 //! `S = 1` (the default) keeps the base at its own resolution (the same bytes as
 //! before); `S = 2^L` is the same synthesis.
 
-use super::synth::block_means;
+use super::grid::block_means;
 use super::{Grid, SynthOptions};
 use crate::{Error, Result};
 

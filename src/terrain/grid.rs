@@ -3,6 +3,8 @@
 //! [`Array`] (shape `[h, w]`, or `[h, w, c]` when `c > 1`), so that it goes to the
 //! transforms and back by move.
 
+use rayon::prelude::*;
+
 use crate::tensor::Array;
 use crate::{Error, Result};
 
@@ -156,4 +158,24 @@ impl Grid {
                 (l.min(v), u.max(v))
             })
     }
+}
+
+/// Means of the `f_y × f_x` blocks of `g` (`n_y·f_y × n_x·f_x`).
+pub fn block_means(g: &Grid, n_y: usize, n_x: usize, (f_y, f_x): (usize, usize)) -> Grid {
+    let c = g.c();
+    let inv = 1.0 / (f_y * f_x) as f64;
+    let mut out = Grid::zeros(n_y, n_x, c);
+    out.data_mut()
+        .par_chunks_mut(n_x * c)
+        .enumerate()
+        .for_each(|(by, orow)| {
+            for y in by * f_y..(by + 1) * f_y {
+                let row = &g.data()[y * g.w() * c..(y + 1) * g.w() * c];
+                for (x, v) in row[..n_x * f_x * c].chunks_exact(c).enumerate() {
+                    let o = &mut orow[(x / f_x) * c..(x / f_x + 1) * c];
+                    o.iter_mut().zip(v).for_each(|(o, v)| *o += v * inv);
+                }
+            }
+        });
+    out
 }

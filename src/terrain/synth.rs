@@ -1021,29 +1021,11 @@ fn span_inverse(n: usize, m: usize, mc: usize) -> Map {
     }
 }
 
+pub use super::grid::block_means;
+
 /// Back-projection steps of [`synthesize`] (68–75 dB block-mean PSNR after 3 on the
 /// bench's DEMs).
 const BACK_PROJECTIONS: usize = 3;
-
-/// Means of the `f_y × f_x` blocks of `g` (`n_y·f_y × n_x·f_x`).
-pub fn block_means(g: &Grid, n_y: usize, n_x: usize, (f_y, f_x): (usize, usize)) -> Grid {
-    let c = g.c();
-    let inv = 1.0 / (f_y * f_x) as f64;
-    let mut out = Grid::zeros(n_y, n_x, c);
-    out.data_mut()
-        .par_chunks_mut(n_x * c)
-        .enumerate()
-        .for_each(|(by, orow)| {
-            for y in by * f_y..(by + 1) * f_y {
-                let row = &g.data()[y * g.w() * c..(y + 1) * g.w() * c];
-                for (x, v) in row[..n_x * f_x * c].chunks_exact(c).enumerate() {
-                    let o = &mut orow[(x / f_x) * c..(x / f_x + 1) * c];
-                    o.iter_mut().zip(v).for_each(|(o, v)| *o += v * inv);
-                }
-            }
-        });
-    out
-}
 
 /// One back-projection step `F ← F + P_c (base − B F)`, with `P_c` the cell-centred
 /// Catmull–Rom resampling from the base's cells to the output's (a correction as smooth as

@@ -61,6 +61,11 @@ const SAME_LAYER: &[(&str, &str, &str)] = &[
     ),
     ("codec", "quantize", "the codec quantizes bands"),
     (
+        "entropy",
+        "format",
+        "code-block stream lengths as the container's varints",
+    ),
+    (
         "codec",
         "format",
         "the codec writes and reads the container",

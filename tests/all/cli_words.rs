@@ -64,7 +64,10 @@ fn encode_to_standard_output_pipes_into_decode() {
     let enc = mra_in(&dir, &["encode", "z.png", "-o", "-", "--psnr", "40"], b"");
     ok(&enc);
     // the .mra bytes on standard output, the summary on standard error, no file `-`
-    assert!(enc.stdout.starts_with(&mra::format::SIGNATURE), "stdout is not .mra");
+    assert!(
+        enc.stdout.starts_with(&mra::format::SIGNATURE),
+        "stdout is not .mra"
+    );
     assert!(
         err(&enc).contains("standard output:") && err(&enc).contains("bytes"),
         "{}",
@@ -72,7 +75,11 @@ fn encode_to_standard_output_pipes_into_decode() {
     );
     assert_eq!(names(&dir), vec!["z.png".to_string()]);
     // mra encode x.png -o - | mra decode - -o - --format png
-    let dec = mra_in(&dir, &["decode", "-", "-o", "-", "--format", "png"], &enc.stdout);
+    let dec = mra_in(
+        &dir,
+        &["decode", "-", "-o", "-", "--format", "png"],
+        &enc.stdout,
+    );
     ok(&dec);
     assert!(dec.stdout.starts_with(b"\x89PNG\r\n\x1a\n"));
     let back = dir.join("back.png");
@@ -84,12 +91,22 @@ fn encode_to_standard_output_pipes_into_decode() {
     assert!(m.psnr.is_none_or(|p| p >= 40.0), "{:?} dB", m.psnr);
     // standard input to standard output, the --json report on standard error
     let png_bytes = std::fs::read(&png).unwrap();
-    let enc2 = mra_in(&dir, &["encode", "-", "-o", "-", "--psnr", "40", "--json"], &png_bytes);
+    let enc2 = mra_in(
+        &dir,
+        &["encode", "-", "-o", "-", "--psnr", "40", "--json"],
+        &png_bytes,
+    );
     ok(&enc2);
-    assert_eq!(enc2.stdout, enc.stdout, "the same file from a pipe as from the file");
+    assert_eq!(
+        enc2.stdout, enc.stdout,
+        "the same file from a pipe as from the file"
+    );
     let v: serde_json::Value = serde_json::from_str(err(&enc2).trim()).unwrap();
     assert_eq!(v["bytes"].as_u64(), Some(enc.stdout.len() as u64));
-    assert_eq!(names(&dir), vec!["back.png".to_string(), "z.png".to_string()]);
+    assert_eq!(
+        names(&dir),
+        vec!["back.png".to_string(), "z.png".to_string()]
+    );
 }
 
 #[test]
@@ -99,8 +116,16 @@ fn quiet_is_accepted_by_encode_decode_and_downscale() {
     let o = mra_in(&dir, &["encode", "z.png", "-o", "z.mra", "--quiet"], b"");
     ok(&o);
     assert!(err(&o).is_empty(), "{}", err(&o));
-    ok(&mra_in(&dir, &["decode", "z.mra", "-o", "d.png", "--quiet"], b""));
-    ok(&mra_in(&dir, &["downscale", "z.png", "-o", "h.png", "--quiet"], b""));
+    ok(&mra_in(
+        &dir,
+        &["decode", "z.mra", "-o", "d.png", "--quiet"],
+        b"",
+    ));
+    ok(&mra_in(
+        &dir,
+        &["downscale", "z.png", "-o", "h.png", "--quiet"],
+        b"",
+    ));
     assert!(dir.join("d.png").is_file() && dir.join("h.png").is_file());
 }
 
@@ -110,7 +135,15 @@ fn downscale_and_convert_print_json() {
     zone_plate(&dir);
     let out = ok(&mra_in(
         &dir,
-        &["downscale", "z.png", "-o", "h.png", "--levels", "2", "--json"],
+        &[
+            "downscale",
+            "z.png",
+            "-o",
+            "h.png",
+            "--levels",
+            "2",
+            "--json",
+        ],
         b"",
     ));
     let v: serde_json::Value = serde_json::from_str(out.trim()).unwrap();
@@ -118,7 +151,11 @@ fn downscale_and_convert_print_json() {
     assert_eq!(v["output"], "h.png");
     assert_eq!(v["dtype"], "u8");
     assert!(v["seconds"].as_f64().is_some_and(|s| s >= 0.0));
-    let out = ok(&mra_in(&dir, &["convert", "z.png", "-o", "z.tif", "--json"], b""));
+    let out = ok(&mra_in(
+        &dir,
+        &["convert", "z.png", "-o", "z.tif", "--json"],
+        b"",
+    ));
     let v: serde_json::Value = serde_json::from_str(out.trim()).unwrap();
     assert_eq!(v["dims"], serde_json::json!([64, 64]));
     assert_eq!(v["output"], "z.tif");
@@ -141,7 +178,10 @@ fn a_png_decoded_as_mra_is_named_a_png() {
     let o = mra_in(&dir, &["decode", "z.png", "-o", "d.png"], b"");
     assert_eq!(o.status.code(), Some(2));
     let e = err(&o);
-    assert!(e.contains("z.png") && e.contains("this is a PNG file"), "{e}");
+    assert!(
+        e.contains("z.png") && e.contains("this is a PNG file"),
+        "{e}"
+    );
     assert!(!e.contains("[89, 50"), "{e}");
     assert!(!dir.join("d.png").exists());
 }
@@ -195,15 +235,25 @@ fn terrain_preview_panels_are_labelled_and_the_demo_shows_before_after() {
     for (name, size, seed) in [("base.png", "48x48", "3"), ("ex.png", "192x192", "9")] {
         ok(&mra_in(
             &dir,
-            &["generate", "terrain", "--size", size, "--seed", seed, "-o", name],
+            &[
+                "generate", "terrain", "--size", size, "--seed", seed, "-o", name,
+            ],
             b"",
         ));
     }
     ok(&mra_in(
         &dir,
         &[
-            "terrain", "synth", "--base", "base.png", "--example", "ex.png", "-o", "out.tif",
-            "--preview", "prev.png",
+            "terrain",
+            "synth",
+            "--base",
+            "base.png",
+            "--example",
+            "ex.png",
+            "-o",
+            "out.tif",
+            "--preview",
+            "prev.png",
         ],
         b"",
     ));
@@ -214,14 +264,20 @@ fn terrain_preview_panels_are_labelled_and_the_demo_shows_before_after() {
     let top = h - out.dims[0];
     assert!(top >= 7, "{:?} over {:?}", prev.dims, out.dims);
     let px = |y: usize, x: usize| prev.samples.get_f64(y * w + x);
-    let dark: Vec<usize> = (0..w).filter(|&x| (0..top).any(|y| px(y, x) == 0.0)).collect();
+    let dark: Vec<usize> = (0..w)
+        .filter(|&x| (0..top).any(|y| px(y, x) == 0.0))
+        .collect();
     // three labels: dark pixels in the strip, starting near each panel's left edge
     assert!(dark.first().is_some_and(|&x| x < 8), "{dark:?}");
     assert!(dark.iter().any(|&x| x > w / 2), "{dark:?}");
     assert!((0..w).all(|x| px(0, x) == 255.0), "the first row is margin");
 
     let demo = dir.join("demo");
-    let o = ok(&mra_in(&dir, &["demo", "--json", "--out", demo.to_str().unwrap()], b""));
+    let o = ok(&mra_in(
+        &dir,
+        &["demo", "--json", "--out", demo.to_str().unwrap()],
+        b"",
+    ));
     let rows: serde_json::Value = serde_json::from_str(&o).unwrap();
     let pic = rows
         .as_array()
@@ -229,7 +285,10 @@ fn terrain_preview_panels_are_labelled_and_the_demo_shows_before_after() {
         .iter()
         .find(|r| r["job"] == "before/after")
         .expect("a before/after row");
-    assert_eq!(pic["output"], demo.join("zone_plate_before_after.png").to_str().unwrap());
+    assert_eq!(
+        pic["output"],
+        demo.join("zone_plate_before_after.png").to_str().unwrap()
+    );
     let ba = mra::io::read(&demo.join("zone_plate_before_after.png")).unwrap();
     assert_eq!(ba.dims[0], 512);
     assert!(ba.dims[1] > 2 * 512, "{:?}", ba.dims);

@@ -59,7 +59,11 @@ fn asc_rows_with_more_or_fewer_values_than_ncols_are_refused() {
     let cases = [
         ("long_row.asc", "1 2 3 4\n5 6\n", "data row 1 has 4 values"),
         ("short_row.asc", "1 2\n3 4 5 6\n", "data row 1 has 2 values"),
-        ("extra_row.asc", "1 2 3\n4 5 6\n7 8 9\n", "more than the 2 rows"),
+        (
+            "extra_row.asc",
+            "1 2 3\n4 5 6\n7 8 9\n",
+            "more than the 2 rows",
+        ),
         ("missing_row.asc", "1 2 3\n", "3 values for 2x3 cells"),
         ("empty.asc", "", "0 values for 2x3 cells"),
     ];
@@ -164,27 +168,56 @@ fn the_command_line_refuses_nonsense_arguments_before_writing() {
     let v = |a: &[&str]| a.iter().map(|x| x.to_string()).collect::<Vec<_>>();
     for flag in ["--z-factor", "--cell", "--azimuth"] {
         for value in ["NaN", "inf", "-inf"] {
-            cases.push(v(&["terrain", "render", &png, "-o", &o, &format!("{flag}={value}")]));
+            cases.push(v(&[
+                "terrain",
+                "render",
+                &png,
+                "-o",
+                &o,
+                &format!("{flag}={value}"),
+            ]));
         }
     }
     for flag in ["--z-factor", "--cell"] {
         for value in ["-1", "0"] {
-            cases.push(v(&["terrain", "render", &png, "-o", &o, &format!("{flag}={value}")]));
+            cases.push(v(&[
+                "terrain",
+                "render",
+                &png,
+                "-o",
+                &o,
+                &format!("{flag}={value}"),
+            ]));
         }
     }
     for value in ["0", "-1", "NaN"] {
-        cases.push(v(&["compare", &png, &png, &format!("--data-range={value}")]));
+        cases.push(v(&[
+            "compare",
+            &png,
+            &png,
+            &format!("--data-range={value}"),
+        ]));
     }
     for value in ["NaN", "-1"] {
         cases.push(v(&["denoise", &png, "-o", &o, &format!("--sigma={value}")]));
     }
     cases.push(v(&["generate", "noise", "--channels", "0", "-o", &o]));
     let mra_out = dir.join("out.mra");
-    cases.push(v(&["encode", &png, "--max-error", "1e308", "-o", &s(&mra_out)]));
+    cases.push(v(&[
+        "encode",
+        &png,
+        "--max-error",
+        "1e308",
+        "-o",
+        &s(&mra_out),
+    ]));
     for args in &cases {
         let a: Vec<&str> = args.iter().map(String::as_str).collect();
         let err = refused(&a, &out_png);
-        assert!(err.contains("invalid") && err.contains("expected"), "{args:?}: {err}");
+        assert!(
+            err.contains("invalid") && err.contains("expected"),
+            "{args:?}: {err}"
+        );
         assert!(!mra_out.exists());
     }
     // a large finite bound still makes a file that decodes
@@ -312,7 +345,11 @@ fn encode_lossless_then_decode_keeps_nan_bits_through_the_command_line() {
         assert_eq!(code, 0, "{err}");
         let (code, _, err) = mra(&["decode", &s(&m), "-o", &s(&back)]);
         assert_eq!(code, 0, "{err}");
-        assert_eq!(bits(&io::read(&back).unwrap().samples), bits(&r.samples), "{name}");
+        assert_eq!(
+            bits(&io::read(&back).unwrap().samples),
+            bits(&r.samples),
+            "{name}"
+        );
     }
 }
 
@@ -340,14 +377,20 @@ mod unix_outputs {
         symlink("real.tif", &link).unwrap();
         let (code, _, err) = mra(&["convert", &s(&src), "-o", &s(&link)]);
         assert_eq!(code, 0, "{err}");
-        assert!(std::fs::symlink_metadata(&link).unwrap().file_type().is_symlink());
+        assert!(std::fs::symlink_metadata(&link)
+            .unwrap()
+            .file_type()
+            .is_symlink());
         assert_eq!(io::read(&target).unwrap().samples, r.samples);
         // a dangling link names the file to create
         let link2 = dir.join("new.png");
         symlink("made.png", &link2).unwrap();
         let (code, _, err) = mra(&["convert", &s(&src), "-o", &s(&link2)]);
         assert_eq!(code, 0, "{err}");
-        assert!(std::fs::symlink_metadata(&link2).unwrap().file_type().is_symlink());
+        assert!(std::fs::symlink_metadata(&link2)
+            .unwrap()
+            .file_type()
+            .is_symlink());
         assert_eq!(io::read(&dir.join("made.png")).unwrap().samples, r.samples);
         assert!(mra::fsutil::leftover_temps(&target).is_empty());
     }
@@ -386,7 +429,10 @@ mod unix_outputs {
         symlink("/dev/null", &null).unwrap();
         let (code, _, err) = mra(&["convert", &s(&src), "-o", &s(&null)]);
         assert_eq!(code, 0, "{err}");
-        assert!(std::fs::metadata("/dev/null").unwrap().file_type().is_char_device());
+        assert!(std::fs::metadata("/dev/null")
+            .unwrap()
+            .file_type()
+            .is_char_device());
         let sock = dir.join("sock.png");
         let _listener = std::os::unix::net::UnixListener::bind(&sock).unwrap();
         let (code, _, err) = mra(&["convert", &s(&src), "-o", &s(&sock)]);
@@ -432,8 +478,14 @@ mod unix_outputs {
         assert_eq!(code, 0, "{err}");
         let cases: Vec<(Vec<String>, PathBuf)> = vec![
             (vec!["convert".into(), s(&raw)], dir.join("c.tif")),
-            (vec!["encode".into(), s(&raw), "--lossless".into()], dir.join("e.mra")),
-            (vec!["encode".into(), s(&raw), "--quality=90".into()], dir.join("q.mra")),
+            (
+                vec!["encode".into(), s(&raw), "--lossless".into()],
+                dir.join("e.mra"),
+            ),
+            (
+                vec!["encode".into(), s(&raw), "--quality=90".into()],
+                dir.join("q.mra"),
+            ),
             (vec!["decode".into(), s(&m)], dir.join("d.nrrd")),
             (vec!["decode".into(), s(&m)], dir.join("d.tif")),
             (vec!["decode".into(), s(&m)], dir.join("d.png")),

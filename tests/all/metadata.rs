@@ -691,10 +691,16 @@ fn a_wgs84_geotiff_reads_in_degrees_with_its_origin_and_keeps_them_through_comma
     let px = 0.000833;
     assert_eq!(r.meta.units.as_deref(), Some("degree"));
     assert_eq!(r.meta.spacing, Some(vec![px, px]));
-    assert_eq!(r.meta.extra.get("elevation_units").map(String::as_str), Some("m"));
+    assert_eq!(
+        r.meta.extra.get("elevation_units").map(String::as_str),
+        Some("m")
+    );
     // PixelIsArea: the first sample's centre is half a pixel inside the corner
     let o = r.meta.origin.clone().unwrap();
-    assert!(close(&o, &[-122.5 + px / 2.0, 46.5 - px / 2.0], 1e-12), "{o:?}");
+    assert!(
+        close(&o, &[-122.5 + px / 2.0, 46.5 - px / 2.0], 1e-12),
+        "{o:?}"
+    );
     assert_eq!(r.meta.directions, Some(vec![vec![px, 0.0], vec![0.0, -px]]));
     // `mra info` shows the unit and the origin
     let (code, out, err) = mra(&["info", s(&src), "--json"]);
@@ -718,7 +724,10 @@ fn a_wgs84_geotiff_reads_in_degrees_with_its_origin_and_keeps_them_through_comma
     let g = io::geokeys::georeference(&u.meta.geotiff).unwrap();
     let (uo, go) = (u.meta.origin.clone().unwrap(), g.origin.unwrap());
     assert!(close(&uo, &go, 1e-12), "{uo:?} vs {go:?}");
-    assert!(close(&uo, &[-122.5 + px / 4.0, 46.5 - px / 4.0], 1e-12), "{uo:?}");
+    assert!(
+        close(&uo, &[-122.5 + px / 4.0, 46.5 - px / 4.0], 1e-12),
+        "{uo:?}"
+    );
 }
 
 #[test]
@@ -739,7 +748,16 @@ fn terrain_synth_with_units_that_differ_names_the_options_that_fix_it() {
     }
     std::fs::write(&ex, text).unwrap();
     let out = d.join("out.tif");
-    let e = fails(&["terrain", "synth", "--base", s(&base), "--example", s(&ex), "-o", s(&out)]);
+    let e = fails(&[
+        "terrain",
+        "synth",
+        "--base",
+        s(&base),
+        "--example",
+        s(&ex),
+        "-o",
+        s(&out),
+    ]);
     assert!(
         e.contains("\"degree\"") && e.contains("--example-cell") && e.contains("--any-units"),
         "{e}"
@@ -747,8 +765,16 @@ fn terrain_synth_with_units_that_differ_names_the_options_that_fix_it() {
     assert!(!out.exists());
     // the fix it names works: the example's cell in degrees
     ok(&[
-        "terrain", "synth", "--base", s(&base), "--example", s(&ex), "-o", s(&out),
-        "--example-cell", "0.0002",
+        "terrain",
+        "synth",
+        "--base",
+        s(&base),
+        "--example",
+        s(&ex),
+        "-o",
+        s(&out),
+        "--example-cell",
+        "0.0002",
     ]);
     let r = io::read(&out).unwrap();
     assert_eq!(r.meta.units.as_deref(), Some("degree"));

@@ -178,8 +178,22 @@ fn unchunk(mut b: &[u8]) -> Vec<u8> {
 /// a volume.
 fn corpus(name: &str) -> Dir {
     let d = Dir::new(name);
-    run(&["generate", "zone-plate", "-o", &d.s("z.png"), "--size", "1024"]);
-    run(&["encode", &d.s("z.png"), "-o", &d.s("z.mra"), "--quality", "60"]);
+    run(&[
+        "generate",
+        "zone-plate",
+        "-o",
+        &d.s("z.png"),
+        "--size",
+        "1024",
+    ]);
+    run(&[
+        "encode",
+        &d.s("z.png"),
+        "-o",
+        &d.s("z.mra"),
+        "--quality",
+        "60",
+    ]);
     std::fs::create_dir_all(d.join("sub dir")).unwrap();
     run(&[
         "encode",
@@ -192,10 +206,33 @@ fn corpus(name: &str) -> Dir {
         "256",
     ]);
     // a float TIFF of one channel reads as a heightmap
-    run(&["generate", "terrain", "-o", &d.s("t.tif"), "--size", "257", "--dtype", "f32"]);
-    run(&["encode", &d.s("t.tif"), "-o", &d.s("t.mra"), "--quality", "60"]);
+    run(&[
+        "generate",
+        "terrain",
+        "-o",
+        &d.s("t.tif"),
+        "--size",
+        "257",
+        "--dtype",
+        "f32",
+    ]);
+    run(&[
+        "encode",
+        &d.s("t.tif"),
+        "-o",
+        &d.s("t.mra"),
+        "--quality",
+        "60",
+    ]);
     run(&["generate", "phantom", "-o", &d.s("v.nrrd"), "--size", "64"]);
-    run(&["encode", &d.s("v.nrrd"), "-o", &d.s("v.mra"), "--quality", "60"]);
+    run(&[
+        "encode",
+        &d.s("v.nrrd"),
+        "-o",
+        &d.s("v.mra"),
+        "--quality",
+        "60",
+    ]);
     d
 }
 
@@ -212,7 +249,10 @@ fn info_json_has_the_level_2_fields_and_the_files_levels() {
     assert_eq!(j["type"], "ImageService3");
     assert_eq!(j["protocol"], "http://iiif.io/api/image");
     assert_eq!(j["profile"], "level2");
-    assert_eq!((j["width"].as_u64(), j["height"].as_u64()), (Some(1024), Some(1024)));
+    assert_eq!(
+        (j["width"].as_u64(), j["height"].as_u64()),
+        (Some(1024), Some(1024))
+    );
     assert_eq!(j["id"], format!("http://{}/iiif/3/z.mra", s.addr));
     let sizes = j["sizes"].as_array().unwrap();
     assert!(sizes.len() >= 4, "{sizes:?}");
@@ -225,7 +265,10 @@ fn info_json_has_the_level_2_fields_and_the_files_levels() {
     assert_eq!(f[1], 2);
     // JSON-LD when asked for it
     let r = s.get_with("/iiif/3/z.mra/info.json", "Accept: application/ld+json\r\n");
-    assert!(r.header("content-type").unwrap().starts_with("application/ld+json"));
+    assert!(r
+        .header("content-type")
+        .unwrap()
+        .starts_with("application/ld+json"));
     // the base URI redirects to info.json; a percent-encoded path in a subfolder
     let r = s.get("/iiif/3/z.mra");
     assert_eq!(r.status, 303);
@@ -264,7 +307,12 @@ fn a_served_region_equals_mra_decode_of_the_same_window() {
             let ow = w >> k;
             let path = format!("/iiif/3/{id}/{x},{y},{w},{h}/{ow},/0/default.png");
             let r = s.get(&path);
-            assert_eq!(r.status, 200, "{path}: {}", String::from_utf8_lossy(&r.body));
+            assert_eq!(
+                r.status,
+                200,
+                "{path}: {}",
+                String::from_utf8_lossy(&r.body)
+            );
             assert_eq!(r.header("content-type"), Some("image/png"));
             let served = gray(&r.image());
             let out = d.s(&format!("ref-{k}-{x}-{y}-{}.png", s.addr.port()));
@@ -296,12 +344,23 @@ fn the_etag_changes_when_the_file_is_replaced_and_a_match_is_304() {
     let same = s.get_with(path, &format!("If-None-Match: {tag}\r\n"));
     assert_eq!(same.status, 304);
     // replaced (by rename, as tools write files) with another coding of the image
-    run(&["encode", &d.s("z.png"), "-o", &d.s("z2.mra"), "--quality", "20"]);
+    run(&[
+        "encode",
+        &d.s("z.png"),
+        "-o",
+        &d.s("z2.mra"),
+        "--quality",
+        "20",
+    ]);
     std::fs::rename(d.join("z2.mra"), d.join("z.mra")).unwrap();
     let b = s.get_with(path, &format!("If-None-Match: {tag}\r\n"));
     assert_eq!(b.status, 200);
     assert_ne!(b.header("etag").unwrap(), tag);
-    assert_ne!(gray(&a.image()).2, gray(&b.image()).2, "the new file's pixels");
+    assert_ne!(
+        gray(&a.image()).2,
+        gray(&b.image()).2,
+        "the new file's pixels"
+    );
 }
 
 #[test]
@@ -350,15 +409,25 @@ fn heightmaps_are_hillshaded_and_volumes_sliced() {
     assert!(distinct.len() > 20, "a shaded relief, not flat");
     // 16-bit windowing: a window over the data's range differs from the default
     let v = s.get("/iiif/3/v.mra;z=32/info.json").json();
-    assert_eq!((v["width"].as_u64(), v["height"].as_u64()), (Some(64), Some(64)));
+    assert_eq!(
+        (v["width"].as_u64(), v["height"].as_u64()),
+        (Some(64), Some(64))
+    );
     let a = s.get("/iiif/3/v.mra;z=32/full/max/0/default.png");
     assert_eq!(a.status, 200);
     let b = s.get("/iiif/3/v.mra;z=32/full/max/0/default.png?window=0,100");
     assert_eq!(b.status, 200);
     assert_ne!(gray(&a.image()).2, gray(&b.image()).2);
-    assert_eq!(s.get("/iiif/3/v.mra;y=10/full/max/0/default.png").status, 200);
+    assert_eq!(
+        s.get("/iiif/3/v.mra;y=10/full/max/0/default.png").status,
+        200
+    );
     assert_eq!(s.get("/iiif/3/v.mra;z=64/info.json").status, 400);
-    assert_eq!(s.get("/iiif/3/v.mra;z=1/full/max/0/default.png?window=5,1").status, 400);
+    assert_eq!(
+        s.get("/iiif/3/v.mra;z=1/full/max/0/default.png?window=5,1")
+            .status,
+        400
+    );
     assert_eq!(s.get("/iiif/3/z.mra;z=1/info.json").status, 400);
 }
 
@@ -382,7 +451,10 @@ fn hostile_requests_are_refused_with_4xx_and_the_server_goes_on() {
         "/iiif/3/..%2fsecret.mra/info.json".into(),
         "/iiif/3/..%2F..%2F..%2Fetc%2Fpasswd/info.json".into(),
         format!("/iiif/3/{}/info.json", outside.join("secret.mra").display()),
-        format!("/iiif/3/%2F{}/info.json", outside.join("secret.mra").display()),
+        format!(
+            "/iiif/3/%2F{}/info.json",
+            outside.join("secret.mra").display()
+        ),
         "/iiif/3/link.mra/info.json".into(),
         "/iiif/3/link.mra/full/max/0/default.jpg".into(),
         "/iiif/3/nothere.mra/info.json".into(),
@@ -417,16 +489,29 @@ fn hostile_requests_are_refused_with_4xx_and_the_server_goes_on() {
             String::from_utf8_lossy(&r.body)
         );
         if i % 8 == 0 {
-            assert_eq!(s.get("/iiif/3/z.mra/0,0,256,256/256,/0/default.jpg").status, 200);
+            assert_eq!(
+                s.get("/iiif/3/z.mra/0,0,256,256/256,/0/default.jpg").status,
+                200
+            );
         }
     }
     // a secret's bytes never come back, and a good request still works
-    assert_eq!(s.get("/iiif/3/z.mra/0,0,256,256/256,/0/default.jpg").status, 200);
+    assert_eq!(
+        s.get("/iiif/3/z.mra/0,0,256,256/256,/0/default.jpg").status,
+        200
+    );
     // a request line too long for the server's buffer is refused (431) or the connection
     // closed (the client may see the reset before the answer), never answered 2xx
-    for p in [format!("/iiif/3/{huge}/info.json"), format!("/iiif/3/{}/info.json", "b".repeat(70_000))] {
+    for p in [
+        format!("/iiif/3/{huge}/info.json"),
+        format!("/iiif/3/{}/info.json", "b".repeat(70_000)),
+    ] {
         let r = s.get(&p);
-        assert!(r.status == 0 || (400..500).contains(&r.status), "{}", r.status);
+        assert!(
+            r.status == 0 || (400..500).contains(&r.status),
+            "{}",
+            r.status
+        );
     }
     assert_eq!(s.get("/iiif/3/z.mra/info.json").status, 200);
 }
@@ -439,7 +524,10 @@ fn the_viewer_page_lists_the_files_and_embeds_openseadragon() {
     assert_eq!(r.status, 200);
     let page = String::from_utf8_lossy(&r.body);
     assert!(page.contains("viewer.html?id=z.mra"), "{page}");
-    assert!(page.contains("viewer.html?id=sub%20dir%2Ftiled.mra"), "{page}");
+    assert!(
+        page.contains("viewer.html?id=sub%20dir%2Ftiled.mra"),
+        "{page}"
+    );
     let v = s.get("/viewer.html");
     assert!(String::from_utf8_lossy(&v.body).contains("OpenSeadragon("));
     let js = s.get("/assets/openseadragon.min.js");
