@@ -20,7 +20,7 @@ const MAX_BOUND: f64 = f64::MAX / 8.0;
 /// integer samples), so that the file is lossless; an error for a bound that is not
 /// finite, ≥ 0 and at most [`MAX_BOUND`].
 pub(super) fn is_exact(e: f64, t: SampleType) -> Result<bool> {
-    if !(e >= 0.0 && e <= MAX_BOUND) {
+    if !(0.0..=MAX_BOUND).contains(&e) {
         // exponent form for the huge values this refuses (1e308 has 309 digits)
         let shown = if e.abs() >= 1e15 {
             format!("{e:e}")

@@ -49,7 +49,7 @@ enum KeyValue {
     Ascii(String),
 }
 
-fn tag<'a>(tags: &'a [GeoTag], id: u16) -> Option<&'a GeoValue> {
+fn tag(tags: &[GeoTag], id: u16) -> Option<&GeoValue> {
     tags.iter().find(|t| t.tag == id).map(|t| &t.value)
 }
 

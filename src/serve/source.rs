@@ -161,7 +161,7 @@ impl Source {
         // a tiled file is read tile by tile (the first request of a level must not wait
         // for every tile of it); a file of one tile is decoded whole once and kept
         if h.is_tiled() {
-            return self.from_tiles(cache, limits, k, &bx);
+            return self.window_from_tiles(cache, limits, k, &bx);
         }
         if level_bytes <= cache.entry_limit() {
             limits.check_elems("a decoded level", level_samples, DECODE_BYTES_PER_SAMPLE)?;
@@ -206,7 +206,7 @@ impl Source {
     /// The window `bx` of level `k` of a tiled file from the tiles it meets, each decoded
     /// at level k and kept in the cache. Tile `j` (full-resolution `j·T .. (j+1)·T` on
     /// an axis) holds the level samples `⌊j·T·R/d⌋ .. ⌈(j+1)·T·R/d⌉`.
-    fn from_tiles(
+    fn window_from_tiles(
         &self,
         cache: &LevelCache,
         limits: &Limits,
@@ -223,8 +223,10 @@ impl Source {
             let hi = (((j + 1) * t).min(d) * r).div_ceil(d) as usize;
             lo..hi.min(ext[a]).max(lo + 1)
         };
-        // per axis, the tiles whose level box meets the window
+        // per axis, the tiles whose level box meets the window (the axis indexes the
+        // header, the level and the window alike)
         let mut meets: Vec<Vec<usize>> = Vec::with_capacity(nd);
+        #[allow(clippy::needless_range_loop)]
         for a in 0..nd {
             let n = h.dims[a].div_ceil(h.tile[a].max(1));
             meets.push(

@@ -46,7 +46,7 @@ pub fn trusted_base<'a>(
         ));
     }
     let r = s / own;
-    if base.h() % r != 0 || base.w() % r != 0 {
+    if !base.h().is_multiple_of(r) || !base.w().is_multiple_of(r) {
         return Err(Error::parameter(
             "base scale",
             format!(

@@ -46,6 +46,8 @@ pub(super) fn rms_step(g: &Grid) -> f64 {
 /// Fill the depressions of `g` (single channel; others are left alone) whose step below
 /// the spill level is at most `depth`; returns the number of cells raised.
 pub(super) fn fill_shallow(g: &mut Grid, depth: f64) -> usize {
+    // `!(depth > 0.0)` also refuses a NaN depth
+    #[allow(clippy::neg_cmp_op_on_partial_ord)]
     if g.c() != 1 || !(depth > 0.0) || g.h() < 3 || g.w() < 3 {
         return 0;
     }

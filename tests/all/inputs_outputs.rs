@@ -266,7 +266,7 @@ fn with_nans(ty: SampleType, seed: usize) -> Raster {
         .map(|i| ((i * 7919 + seed) % 1000) as f64 * 0.37 - 100.0)
         .collect();
     let mut r = Raster::new(vec![h, w], 1, Samples::from_f64(&v, ty), DataKind::Image).unwrap();
-    let places = (0..h * w).filter(|i| (i + seed) % 7 == 0);
+    let places = (0..h * w).filter(|i| (i + seed).is_multiple_of(7));
     match &mut r.samples {
         Samples::F32(x) => {
             let n = nan_bits_f32();
