@@ -22,21 +22,21 @@
 //! 3      src/metrics.rs    MSE, PSNR, SSIM
 //! 3      src/generate/     the test rasters and volumes of `mra generate`
 //! 3      src/demo.rs       the demo table's rows and the generated data they run on
-//! 4      src/format/       the .mra container's header, chunks and checksums
-//! 4      src/quantize/     quantizers and rate–distortion choices
-//! 4      src/entropy/      the coefficient coders
-//! 4      src/codec/        encode and decode of .mra files (one file per job)
-//! 5      src/upscale/      upscaling by the pyramid's details
-//! 5      src/terrain/      terrain synthesis by example, rendering
-//! 5      src/denoise.rs    wavelet denoising
-//! 5      src/style.rs      curve style transfer
-//! 5      src/curve/        Bézier, B-spline (de Boor), NURBS, knot insertion
-//! 5      src/surface/      patches, Coons, revolution, sweep, blends
-//! 5      src/mesh/         half-edge meshes, I/O, topology, subdivision surfaces
-//! 5      src/solid/        implicit solids, CSG, ray casting, polygonisation
-//! 5      src/points.rs     point lists as text (one point per line)
-//! 6      src/serve/        `mra serve`: IIIF Image API 3.0 and a deep-zoom viewer (feature `serve`)
-//! 7      src/cli/          the `mra` command line, a thin shell over the above
+//! 4      src/format/       the .mra file grammar: versions, chunk tags, payload parsers, CRCs
+//! 5      src/quantize/     quantizers and rate–distortion choices
+//! 5      src/entropy/      the coefficient coders
+//! 5      src/codec/        encode and decode of .mra files (one file per job)
+//! 6      src/upscale/      upscaling by the pyramid's details
+//! 6      src/terrain/      terrain synthesis by example, rendering
+//! 6      src/denoise.rs    wavelet denoising
+//! 6      src/style.rs      curve style transfer
+//! 6      src/curve/        Bézier, B-spline (de Boor), NURBS, knot insertion
+//! 6      src/surface/      patches, Coons, revolution, sweep, blends
+//! 6      src/mesh/         half-edge meshes, I/O, topology, subdivision surfaces
+//! 6      src/solid/        implicit solids, CSG, ray casting, polygonisation
+//! 6      src/points.rs     point lists as text (one point per line)
+//! 7      src/serve/        `mra serve`: IIIF Image API 3.0 and a deep-zoom viewer (feature `serve`)
+//! 8      src/cli/          the `mra` command line, a thin shell over the above
 //! ```
 //!
 //! Data flows one way: read → array → transform → (quantize → code → container) → back.
@@ -79,4 +79,4 @@ pub mod terrain;
 pub mod tuning;
 pub mod upscale;
 
-pub use error::{Error, ErrorKind, Result};
+pub use error::{Error, ErrorKind, FormatError, Result};

@@ -48,13 +48,13 @@ impl Bands {
             _ => return Err(Error::format("no HEAD chunk first", "an .mra file")),
         };
         let header = Header::parse(&head.payload)?;
-        if header.major != 2 || header.tile != header.dims {
+        if header.version.major != 2 || header.tile != header.dims {
             return Err(Error::format(
                 "a tiled or format 1 file",
                 "a one-piece format 2 file",
             ));
         }
-        let coding = if header.minor >= mra::format::MINOR_WIDE {
+        let coding = if header.version.has_chosen_coding() {
             Coding::Chosen
         } else {
             Coding::Narrow

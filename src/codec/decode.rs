@@ -28,7 +28,7 @@ fn decode_band(
     kind: BandKind,
     parent: Option<Parent>,
 ) -> Result<Vec<i64>> {
-    if h.major >= 2 {
+    if h.version.has_levels() {
         let coding = super::plan::coding_of(h);
         entropy::band::decode(&mut Decoder::new_short(data), dims, kind, parent, coding)
     } else {
@@ -135,7 +135,7 @@ fn decode_channel_into(p: &Parsed, c: usize, k: usize, plane: &mut [f32]) -> Res
                 let failed = |e: Error| {
                     Error::format(format!("band {j} of channel {c}: {e}"), "a valid band")
                 };
-                if h.major < 2 || level == 0 || has_children[j] {
+                if !h.version.has_levels() || level == 0 || has_children[j] {
                     let kind = if level == 0 {
                         BandKind::Coarse
                     } else {

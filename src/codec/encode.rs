@@ -2,13 +2,13 @@
 //! for `--max-error`, or the integer transform of `--lossless`).
 
 use super::colour::map3;
-use super::container::{HEAD, MEND, META};
 use super::levels::{BandInput, Choice};
 use super::lossy::header_for;
 use super::options::{EncodeOptions, Rate};
 use super::plan::Plan;
 use super::{layout, lossless, max_error, meta, rate};
 use crate::format::header::Colour;
+use crate::format::tag::{HEAD, MEND, META};
 use crate::format::{self, put_chunk, Mode};
 use crate::io::slab::SlabSource;
 use crate::io::{RasterView, SampleType, SamplesRef};

@@ -1,8 +1,9 @@
 //! What `mra info` reports of a file: its header, sizes by level, and chunk table.
 
-use super::container::{read_chunks, read_head, ChunkInfo};
+use super::container::{read_chunks, read_head};
 use super::plan::Plan;
 use super::tiles::read_tiled_info;
+use crate::format::body::ChunkInfo;
 use crate::format::header::Colour;
 use crate::format::Mode;
 use crate::io::DataKind;
@@ -60,7 +61,11 @@ pub fn info(bytes: &[u8]) -> Result<Info> {
             };
             for (l, b, _) in fi.levels_bytes {
                 let k = streams.iter().find(|s| s.0 == l).map_or(0, |s| s.1);
-                let framing = if *compact { 12 + 2 + 4 * k } else { 0 };
+                let framing = if *compact {
+                    crate::format::bands::level_framing(k)
+                } else {
+                    0
+                };
                 *lv.entry(l).or_default() += b.saturating_sub(framing);
             }
         }
@@ -86,7 +91,7 @@ pub fn info(bytes: &[u8]) -> Result<Info> {
         .collect();
     levels_bytes.sort_by_key(|&(l, _, _)| if l == 0 { 0 } else { usize::MAX - l });
     Ok(Info {
-        version: format!("{}.{}", h.major, h.minor),
+        version: h.version.to_string(),
         kind: format!("{:?}", h.kind).to_lowercase(),
         dims: h.dims.clone(),
         channels: h.channels,

@@ -1,7 +1,8 @@
 //! Format 2 band layout: one `LEVL` chunk per level (the coarse block first, then the
 //! detail levels from the coarsest down), holding for every band of the level and every
 //! channel the band's step as a ratio to the header's base step, the length of its
-//! range-coded stream and the stream (formats/MRA.md §8).
+//! range-coded stream and the stream (formats/MRA.md §8; the payload's grammar is
+//! [`crate::format::bands`]'s).
 //!
 //! Coding goes channel by channel (in parallel), level after level (a band's context is
 //! its parent band, one level coarser), the bands of a level in parallel; every band has
@@ -11,12 +12,9 @@ use super::layout;
 use super::plan::Plan;
 use crate::entropy::range::Encoder;
 use crate::entropy::{band, BandKind, Parent};
-use crate::format::{put_chunk, put_varint, Cursor};
-use crate::{Error, Result};
+use crate::format::bands::level_payload;
+use crate::format::{put_chunk, Tag};
 use rayon::prelude::*;
-
-/// The chunk type of a level's bands.
-pub(super) const LEVL: &[u8; 4] = b"LEVL";
 
 /// One band of one channel, coded: its indices (the context of its children) and stream.
 pub(super) struct CodedBand {
@@ -182,17 +180,15 @@ impl Plan {
         coded: &[Vec<CodedBand>],
         ratio: impl Fn(usize, usize) -> f32,
     ) {
+        let ratio = &ratio;
         for (level, js) in self.level_groups() {
-            let mut p = Vec::new();
-            p.extend_from_slice(&(level as u16).to_le_bytes());
-            for &j in &js {
-                for (c, bands) in coded.iter().enumerate() {
-                    p.extend_from_slice(&ratio(c, j).to_le_bytes());
-                    put_varint(&mut p, bands[j].stream.len() as u64);
-                    p.extend_from_slice(&bands[j].stream);
-                }
-            }
-            put_chunk(out, LEVL, &p);
+            let streams = js.iter().flat_map(|&j| {
+                coded
+                    .iter()
+                    .enumerate()
+                    .map(move |(c, bands)| (ratio(c, j), &bands[j].stream[..]))
+            });
+            put_chunk(out, Tag::Levl.bytes(), &level_payload(level, streams));
         }
     }
 }
@@ -219,69 +215,4 @@ fn round_index(v: f32) -> i64 {
     } else {
         a
     }
-}
-
-/// `(band, channel, its step ratio and stream)` of one band of a `LEVL` chunk.
-pub(super) type BandOfLevel = (usize, usize, LevelBand);
-
-/// One band of one channel as read from a `LEVL` chunk.
-pub(super) struct LevelBand {
-    pub(super) ratio: f32,
-    pub(super) data: Vec<u8>,
-}
-
-/// Parse the payload of a `LEVL` chunk of a file with `channels` channels: its level
-/// and, for each band `js` of that level and each channel, the band's step ratio and
-/// stream.
-pub(super) fn parse_level(
-    payload: &[u8],
-    plan: &Plan,
-    channels: usize,
-) -> Result<(usize, Vec<BandOfLevel>)> {
-    let mut cur = Cursor::new(payload, "LEVL");
-    let level = cur.u16()? as usize;
-    let groups = plan.level_groups();
-    let Some((_, js)) = groups.iter().find(|(l, _)| *l == level) else {
-        return Err(Error::format(
-            format!(
-                "LEVL chunk for level {level} (the pyramid has levels 0 to {})",
-                groups.iter().map(|g| g.0).max().unwrap_or(0)
-            ),
-            "a level of the file's pyramid",
-        ));
-    };
-    let mut bands = Vec::with_capacity(js.len() * channels);
-    for &j in js {
-        for c in 0..channels {
-            let ratio = cur.f32()?;
-            if !(ratio > 0.0 && ratio.is_finite()) {
-                return Err(Error::format(
-                    format!("LEVL {level}: band {j} of channel {c} with step ratio {ratio}"),
-                    "a positive finite ratio",
-                ));
-            }
-            let len = cur.varint()?;
-            let left = (cur.data.len() - cur.pos) as u64;
-            if len > left {
-                return Err(Error::format(
-                    format!(
-                        "LEVL {level}: band {j} of channel {c} declaring {len} bytes, {left} left"
-                    ),
-                    "streams within the chunk",
-                ));
-            }
-            let data = cur.take(len as usize)?.to_vec();
-            bands.push((j, c, LevelBand { ratio, data }));
-        }
-    }
-    if cur.pos != cur.data.len() {
-        return Err(Error::format(
-            format!(
-                "LEVL {level} with {} bytes after its last band",
-                cur.data.len() - cur.pos
-            ),
-            "a chunk that ends with its last band",
-        ));
-    }
-    Ok((level, bands))
 }

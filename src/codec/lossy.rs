@@ -2,12 +2,12 @@
 //! ([`Prepared`]), then quantized and coded at any base step.
 
 use super::colour::{channel_weights, planes_f32};
-use super::container::{HEAD, MEND, META};
 use super::levels::{BandInput, Choice, CodedBand};
 use super::options::EncodeOptions;
 use super::plan::{band_rho, dequantize_into, lossy_values, Plan};
 use super::{layout, meta};
 use crate::format::header::Colour;
+use crate::format::tag::{HEAD, MEND, META};
 use crate::format::{self, put_chunk, Header, Mode};
 use crate::io::slab::SlabSource;
 use crate::io::{Raster, RasterView, SamplesRef};
@@ -74,7 +74,7 @@ pub(super) fn header_for(
     if super::voids::lists_voids(r.meta) {
         // 2.4: the header says the mETA lists voids, so a file without it is refused
         header.voids = true;
-        header.minor = header.minor.max(format::MINOR_VOIDS);
+        header.version = format::Version::for_file(mode == Mode::Lossless, true);
     }
     Ok(header)
 }
@@ -113,12 +113,7 @@ impl Frame<'_> {
             return Err(Error::parameter("levels", opts.levels, "0 to 32"));
         }
         Ok(Header {
-            major: format::MAJOR,
-            minor: if mode == Mode::Lossless {
-                format::MINOR_WIDE
-            } else {
-                format::MINOR
-            },
+            version: format::Version::for_file(mode == Mode::Lossless, false),
             kind: self.kind,
             sample_type: self.sample_type,
             dims: dims.to_vec(),

@@ -1,12 +1,13 @@
 //! `--max-error E`: every decoded sample within E of the source, as a lossy base plus
 //! a spatial residual layer (one `RESI` chunk per channel).
 
-use super::container::{MEND, RESI};
 use super::decode::decode_untiled;
 use super::lossy::{prepare, Prepared};
 use super::options::{DecodeOptions, EncodeOptions};
 use super::voids::void_mask;
 use crate::entropy::{band, BandKind};
+use crate::format::bands::residual_payload;
+use crate::format::tag::{MEND, RESI};
 use crate::format::{put_chunk, Mode};
 use crate::io::{RasterView, SampleType, Samples};
 use crate::{Error, Result};
@@ -113,16 +114,7 @@ fn with_residual(
         .map(|k| {
             let (q, exc) = residual(r, &dec.samples, k, s, e, voids);
             let coded = band::encode_stream(&q, r.dims, BandKind::Detail, None, coding);
-            let mut pl = Vec::new();
-            pl.extend_from_slice(&(k as u16).to_le_bytes());
-            pl.extend_from_slice(&s.to_le_bytes());
-            pl.extend_from_slice(&(exc.len() as u32).to_le_bytes());
-            for (i, v) in exc {
-                pl.extend_from_slice(&i.to_le_bytes());
-                pl.extend_from_slice(&v.to_le_bytes());
-            }
-            pl.extend_from_slice(&coded);
-            pl
+            residual_payload(k, s, &exc, &coded)
         })
         .collect();
     for ch in chunks {

@@ -26,7 +26,7 @@ mod levels;
 pub mod lossless;
 mod lossy;
 mod max_error;
-pub mod meta;
+pub use crate::format::meta;
 mod options;
 mod plan;
 mod rate;
@@ -35,7 +35,7 @@ pub mod tiles;
 mod voids;
 mod write;
 
-pub use container::ChunkInfo;
+pub use crate::format::body::ChunkInfo;
 pub use decode::coarse_offset;
 pub use frames::frames;
 pub use info::{depth_of, info, kind_name, Info};

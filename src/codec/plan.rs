@@ -16,7 +16,7 @@ use rayon::prelude::*;
 /// The coefficient coding of a file of header `h`: from format 2.3 on each band
 /// chooses its magnitude classes (formats/MRA.md §9).
 pub(super) fn coding_of(h: &Header) -> Coding {
-    if h.major == 2 && h.minor >= crate::format::MINOR_WIDE {
+    if h.version.has_chosen_coding() {
         Coding::Chosen
     } else {
         Coding::Narrow

@@ -12,25 +12,22 @@
 //! Tiles are coded and decoded in parallel (rayon); each tile's bytes depend on the tile
 //! alone, so the file is the same whatever the thread count.
 
-use super::container::{meta_chunk, read_head, truncated, MEND};
+use super::container::read_head;
 use super::decode::{coarse_maps_of, decode_untiled};
 use super::layout;
 use super::options::{DecodeOptions, Decoded, EncodeOptions};
 use super::plan::Plan;
 #[cfg(doc)]
 use super::voids::with_voids_filled;
-use crate::format::{self, Chunk, ChunkReader, Cursor, Header};
+use crate::format::body::{meta_chunk, truncated};
+use crate::format::{ChunkReader, Header, Tag};
 use crate::io::slab::{MemorySlabs, Shape};
 use crate::io::{AxisMap, Metadata, Raster, RasterView, Samples};
 use crate::{Error, Result};
 use rayon::prelude::*;
-use std::io::{Read, Seek, SeekFrom};
+use std::io::{Read, Seek};
 use std::ops::Range;
 
-/// The chunk type of the tile index.
-pub(super) const TIDX: &[u8; 4] = b"TIDX";
-/// The chunk type of one tile.
-pub(super) const TILE: &[u8; 4] = b"TILE";
 /// Most tiles a file may have.
 pub const MAX_TILES: u64 = 1 << 24;
 /// Rasters of at most this many positions are one tile by default.
@@ -439,7 +436,7 @@ impl Stitch {
         .map_err(|e| Error::format(format!("tile {i}: {e}"), "a valid tile"))?;
         let (h, t) = (&self.header, &d.header);
         let want = self.grid.tile_dims(i);
-        if t.major != h.major
+        if t.version.major != h.version.major
             || t.sample_type != h.sample_type
             || t.channels != h.channels
             || t.colour != h.colour
@@ -652,32 +649,36 @@ pub(super) fn decode_sequential<R: Read>(
             }
         };
         last = ch.name();
-        if matches!(&ch.kind, b"TRAT" | b"TIDX" | b"TILE") && first_data.is_none() {
+        let tag = ch.tag();
+        if matches!(tag, Some(Tag::Trat | Tag::Tidx | Tag::Tile)) && first_data.is_none() {
             first_data = Some(ch.offset);
         }
-        match &ch.kind {
-            b"mETA" => meta = meta_chunk(&ch, &mut meta_seen, first_data)?,
-            b"TRAT" if header.minor >= format::MINOR_COMPACT && !index_seen => {
+        match tag {
+            Some(Tag::Meta) => meta = meta_chunk(&ch, &mut meta_seen, first_data)?,
+            Some(Tag::Trat) if header.version.has_compact_tiles() && !index_seen => {
                 let g = Grid::new(&header.dims, &header.tile)?;
                 st.ratios = Some(std::sync::Arc::new(Ratios::parse(&ch, &header, &g)?));
             }
-            b"TIDX" => {
+            Some(Tag::Tidx) => {
                 if index_seen {
-                    return Err(Error::format("a second TIDX chunk", "one TIDX chunk"));
+                    return Err(crate::FormatError::duplicate(
+                        "a second TIDX chunk",
+                        "one TIDX chunk",
+                    ));
                 }
                 parse_index(&ch, n, len)?;
                 index_seen = true;
             }
-            b"TILE" => {
+            Some(Tag::Tile) => {
                 if !index_seen {
-                    return Err(Error::format(
+                    return Err(crate::FormatError::order(
                         format!("TILE chunk at byte {} before the TIDX chunk", ch.offset),
                         "TIDX before the tiles",
                     ));
                 }
                 let (i, inner) = tile_payload(&ch, n)?;
                 if std::mem::replace(&mut seen[i], true) {
-                    return Err(Error::format(
+                    return Err(crate::FormatError::duplicate(
                         format!("a second TILE chunk for tile {i} (byte {})", ch.offset),
                         "each tile once",
                     ));
@@ -689,17 +690,19 @@ pub(super) fn decode_sequential<R: Read>(
                     }
                 }
             }
-            b"MEND" => {
+            Some(Tag::Mend) => {
                 ended = true;
                 break;
             }
-            b"HEAD" => return Err(Error::format("a second HEAD chunk", "one HEAD chunk")),
-            k => {
-                if k[0].is_ascii_uppercase() {
-                    return Err(Error::Unsupported {
-                        what: "critical chunk",
-                        value: ch.name(),
-                    });
+            Some(Tag::Head) => {
+                return Err(crate::FormatError::duplicate(
+                    "a second HEAD chunk",
+                    "one HEAD chunk",
+                ))
+            }
+            _ => {
+                if Tag::is_critical(&ch.kind) {
+                    return Err(crate::FormatError::UnknownChunk(ch.name()).into());
                 }
             }
         }
@@ -707,7 +710,7 @@ pub(super) fn decode_sequential<R: Read>(
     decode_batch(&mut st, &mut batch, opts.allow_truncated, &mut complete)?;
     if let Some(i) = seen.iter().position(|&s| !s) {
         if !opts.allow_truncated {
-            return Err(Error::format(
+            return Err(crate::FormatError::missing(
                 format!(
                     "TILE chunk of tile {i} missing ({})",
                     if ended { "MEND reached" } else { "file ends" }

@@ -7,10 +7,9 @@ use crate::io::{Raster, RasterView, Samples, SamplesRef};
 use crate::Result;
 use base64::Engine as _;
 
-/// The `meta.extra` key holding the void mask of an encoded raster: `m1:` then the
-/// base64 of the mask range-coded by [`code_mask`]; files written before the coded mask
-/// list runs `start:length` (sample indices, channels interleaved) instead.
-const VOID_RUNS: &str = "nodata.voids";
+// the `meta.extra` key holding the void mask of an encoded raster: `m1:` then the
+// base64 of the mask range-coded by `code_mask` (the container's key, §5.1)
+use crate::format::meta::VOID_RUNS;
 /// The prefix of a coded mask.
 const CODED: &str = "m1:";
 
@@ -81,7 +80,7 @@ fn decode_mask(data: &[u8], n: usize, shape: &[usize]) -> Vec<bool> {
 
 /// Whether `meta` lists void samples (a filled raster's, or a decoded file's `mETA`).
 pub(super) fn lists_voids(meta: &crate::io::Metadata) -> bool {
-    meta.extra.contains_key(VOID_RUNS)
+    crate::format::meta::lists_voids(meta)
 }
 
 /// `r` with its void samples ([`crate::io::nodata`]) filled by pull-push and their runs

@@ -1,9 +1,9 @@
 //! The `HEAD` chunk: what the data is and how it was coded (formats/MRA.md §4).
 
-use super::{Cursor, LATEST_MINOR, MAJOR, MINOR_VOIDS, OLDEST_MAJOR};
+use super::{Cursor, Version};
 use crate::io::{DataKind, SampleType};
 use crate::scheme::{Boundary, Scheme};
-use crate::{Error, Result};
+use crate::{Error, FormatError, Result};
 
 /// How the coefficients were produced.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -29,8 +29,8 @@ pub enum Colour {
 /// Everything the `HEAD` chunk holds.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Header {
-    pub major: u8,
-    pub minor: u8,
+    /// The format version (its capabilities: [`Version`]).
+    pub version: Version,
     pub kind: DataKind,
     pub sample_type: SampleType,
     /// Spatial extents, slowest first (1 to 4 axes).
@@ -65,25 +65,95 @@ pub const MAX_CHANNELS: usize = 256;
 pub const MAX_LEVELS: usize = 32;
 
 /// The mode byte: lossless files whose float samples are coded as integer multiples of
-/// the quantum δ > 0 get their own code (3), which readers before it reject instead of
-/// reading the integers as float bit patterns.
-fn mode_code(m: Mode, delta: f64) -> u8 {
+/// the quantum δ > 0 get their own code (3, `scaled`), which readers before it reject
+/// instead of reading the integers as float bit patterns.
+pub fn mode_code(m: Mode, scaled: bool) -> u8 {
     match m {
-        Mode::Lossless if delta > 0.0 => 3,
+        Mode::Lossless if scaled => 3,
         m => m as u8,
     }
 }
 
-fn kind_code(k: DataKind) -> u8 {
-    match k {
-        DataKind::Image => 0,
-        DataKind::Volume => 1,
-        DataKind::Heightmap => 2,
-        DataKind::Sequence => 3,
+/// The mode of a mode byte and whether it is the scaled lossless code (3).
+pub fn mode_of(code: u8) -> Option<(Mode, bool)> {
+    Some(match code {
+        0 => (Mode::Lossy, false),
+        1 => (Mode::Lossless, false),
+        2 => (Mode::MaxError, false),
+        3 => (Mode::Lossless, true),
+        _ => return None,
+    })
+}
+
+/// The name of a mode byte's meaning (formats/MRA.md §4.1).
+pub fn mode_name(m: Mode, scaled: bool) -> &'static str {
+    match (m, scaled) {
+        (Mode::Lossy, _) => "lossy",
+        (Mode::Lossless, false) => "lossless",
+        (Mode::Lossless, true) => "lossless-scaled",
+        (Mode::MaxError, _) => "max-error",
     }
 }
 
-const TYPES: [SampleType; 9] = [
+impl Mode {
+    pub const ALL: [Mode; 3] = [Mode::Lossy, Mode::Lossless, Mode::MaxError];
+}
+
+impl Colour {
+    pub const ALL: [Colour; 3] = [Colour::None, Colour::YCoCg, Colour::YCoCgR];
+
+    /// The colour byte.
+    pub fn code(self) -> u8 {
+        self as u8
+    }
+
+    /// The colour transform of a colour byte.
+    pub fn of(code: u8) -> Option<Colour> {
+        Colour::ALL.into_iter().find(|c| c.code() == code)
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Colour::None => "none",
+            Colour::YCoCg => "ycocg",
+            Colour::YCoCgR => "ycocg-r",
+        }
+    }
+}
+
+/// The data kinds in code order.
+pub const KINDS: [DataKind; 4] = [
+    DataKind::Image,
+    DataKind::Volume,
+    DataKind::Heightmap,
+    DataKind::Sequence,
+];
+
+/// The kind byte.
+pub fn kind_code(k: DataKind) -> u8 {
+    KINDS
+        .iter()
+        .position(|&x| x == k)
+        .expect("every kind has a code") as u8
+}
+
+/// The data kind of a kind byte.
+pub fn kind_of(code: u8) -> Option<DataKind> {
+    KINDS.get(code as usize).copied()
+}
+
+/// The name of a data kind.
+pub fn kind_name(k: DataKind) -> &'static str {
+    match k {
+        DataKind::Image => "image",
+        DataKind::Volume => "volume",
+        DataKind::Heightmap => "heightmap",
+        DataKind::Sequence => "sequence",
+    }
+}
+
+/// The sample types in code order.
+pub const TYPES: [SampleType; 9] = [
     SampleType::U8,
     SampleType::I8,
     SampleType::U16,
@@ -95,7 +165,21 @@ const TYPES: [SampleType; 9] = [
     SampleType::F64,
 ];
 
-fn scheme_code(s: Scheme) -> u8 {
+/// The sample-type byte.
+pub fn sample_type_code(t: SampleType) -> u8 {
+    TYPES
+        .iter()
+        .position(|&x| x == t)
+        .expect("every type has a code") as u8
+}
+
+/// The sample type of a sample-type byte.
+pub fn sample_type_of(code: u8) -> Option<SampleType> {
+    TYPES.get(code as usize).copied()
+}
+
+/// The scheme byte.
+pub fn scheme_code(s: Scheme) -> u8 {
     match s {
         Scheme::Haar => 0,
         Scheme::Chaikin => 1,
@@ -108,7 +192,13 @@ fn scheme_code(s: Scheme) -> u8 {
     }
 }
 
-fn boundary_code(b: Boundary) -> u8 {
+/// The scheme of a scheme byte.
+pub fn scheme_of(code: u8) -> Option<Scheme> {
+    Scheme::ALL.into_iter().find(|&s| scheme_code(s) == code)
+}
+
+/// The boundary byte.
+pub fn boundary_code(b: Boundary) -> u8 {
     match b {
         Boundary::Interpolating => 0,
         Boundary::Periodic => 1,
@@ -116,8 +206,15 @@ fn boundary_code(b: Boundary) -> u8 {
     }
 }
 
+/// The boundary of a boundary byte.
+pub fn boundary_of(code: u8) -> Option<Boundary> {
+    Boundary::ALL
+        .into_iter()
+        .find(|&b| boundary_code(b) == code)
+}
+
 fn bad(what: String, expected: &'static str) -> Error {
-    Error::format(what, expected)
+    FormatError::invalid(what, expected)
 }
 
 impl Header {
@@ -125,10 +222,8 @@ impl Header {
     pub fn samples(&self) -> Result<u64> {
         let mut n = self.channels as u64;
         for &d in &self.dims {
-            n = n.checked_mul(d as u64).ok_or(Error::LimitsExceeded {
-                what: "sample count",
-                requested: u64::MAX,
-                limit: crate::io::MAX_SAMPLES,
+            n = n.checked_mul(d as u64).ok_or_else(|| {
+                FormatError::budget("sample count", u64::MAX, crate::io::MAX_SAMPLES)
             })?;
         }
         Ok(n)
@@ -140,15 +235,15 @@ impl Header {
     }
 
     pub fn to_bytes(&self) -> Vec<u8> {
-        let mut b = vec![self.major, self.minor, kind_code(self.kind)];
-        b.push(TYPES.iter().position(|&t| t == self.sample_type).unwrap() as u8);
+        let mut b = vec![self.version.major, self.version.minor, kind_code(self.kind)];
+        b.push(sample_type_code(self.sample_type));
         b.push(self.dims.len() as u8);
         for &d in &self.dims {
             b.extend_from_slice(&(d as u32).to_le_bytes());
         }
         b.extend_from_slice(&(self.channels as u16).to_le_bytes());
-        b.push(self.colour as u8);
-        b.push(mode_code(self.mode, self.delta));
+        b.push(self.colour.code());
+        b.push(mode_code(self.mode, self.delta > 0.0));
         b.push(scheme_code(self.scheme));
         b.push(boundary_code(self.boundary));
         b.push(self.levels as u8);
@@ -158,52 +253,25 @@ impl Header {
         for &t in &self.tile {
             b.extend_from_slice(&(t as u32).to_le_bytes());
         }
-        if self.has_flags() {
+        if self.version.has_head_flags() {
             b.push(self.voids as u8);
         }
         b
     }
 
-    /// Whether `HEAD` ends with the flags byte (2.4 and later).
-    fn has_flags(&self) -> bool {
-        self.major == MAJOR && self.minor >= MINOR_VOIDS
-    }
-
     /// Parse and validate a `HEAD` payload.
     pub fn parse(payload: &[u8]) -> Result<Header> {
         let mut c = Cursor::new(payload, "HEAD");
-        let major = c.u8()?;
-        let minor = c.u8()?;
-        if !(OLDEST_MAJOR..=MAJOR).contains(&major) {
-            return Err(Error::Unsupported {
-                what: "format version",
-                value: format!(
-                    "{major}.{minor} (this reader implements {OLDEST_MAJOR}.x to {MAJOR}.x)"
-                ),
-            });
-        }
-        if major == MAJOR && minor > LATEST_MINOR {
-            return Err(Error::Unsupported {
-                what: "format version",
-                value: format!(
-                    "{major}.{minor} (this reader implements {MAJOR}.0 to {MAJOR}.{LATEST_MINOR})"
-                ),
-            });
-        }
-        let kind = match c.u8()? {
-            0 => DataKind::Image,
-            1 => DataKind::Volume,
-            2 => DataKind::Heightmap,
-            3 => DataKind::Sequence,
-            k => {
-                return Err(bad(
-                    format!("data kind {k}"),
-                    "0 image, 1 volume, 2 heightmap, 3 sequence",
-                ))
-            }
-        };
+        let version = Version::new(c.u8()?, c.u8()?).check()?;
+        let k = c.u8()?;
+        let kind = kind_of(k).ok_or_else(|| {
+            bad(
+                format!("data kind {k}"),
+                "0 image, 1 volume, 2 heightmap, 3 sequence",
+            )
+        })?;
         let t = c.u8()? as usize;
-        let sample_type = *TYPES.get(t).ok_or_else(|| {
+        let sample_type = sample_type_of(t as u8).ok_or_else(|| {
             bad(
                 format!("sample type code {t}"),
                 "0..8 (u8 i8 u16 i16 u32 i32 f16 f32 f64)",
@@ -225,17 +293,13 @@ impl Header {
         if channels == 0 || channels > MAX_CHANNELS {
             return Err(bad(format!("{channels} channels"), "1 to 256 channels"));
         }
-        let colour = match c.u8()? {
-            0 => Colour::None,
-            1 => Colour::YCoCg,
-            2 => Colour::YCoCgR,
-            k => {
-                return Err(bad(
-                    format!("colour transform {k}"),
-                    "0 none, 1 YCoCg, 2 YCoCg-R",
-                ))
-            }
-        };
+        let k = c.u8()?;
+        let colour = Colour::of(k).ok_or_else(|| {
+            bad(
+                format!("colour transform {k}"),
+                "0 none, 1 YCoCg, 2 YCoCg-R",
+            )
+        })?;
         if colour != Colour::None && channels < 3 {
             return Err(bad(
                 format!("colour transform on {channels} channels"),
@@ -243,43 +307,26 @@ impl Header {
             ));
         }
         let code = c.u8()?;
-        let mode = match code {
-            0 => Mode::Lossy,
-            1 | 3 => Mode::Lossless,
-            2 => Mode::MaxError,
-            k => {
-                return Err(bad(
-                    format!("mode {k}"),
-                    "0 lossy, 1 lossless, 2 max-error, 3 lossless scaled floats",
-                ))
-            }
-        };
-        let scheme =
-            match c.u8()? {
-                0 => Scheme::Haar,
-                1 => Scheme::Chaikin,
-                2 => Scheme::Cubic,
-                3 => Scheme::Linear,
-                4 => Scheme::ChaikinWide,
-                5 => Scheme::CubicWide,
-                6 => Scheme::Cdf97,
-            7 => Scheme::LinearWide,
-                k => return Err(bad(
-                    format!("scheme {k}"),
-                    "0 haar, 1 chaikin, 2 cubic, 3 linear, 4 chaikin-wide, 5 cubic-wide, 6 cdf97, 7 linear-wide",
-                )),
-            };
-        let boundary = match c.u8()? {
-            0 => Boundary::Interpolating,
-            1 => Boundary::Periodic,
-            2 => Boundary::Symmetric,
-            k => {
-                return Err(bad(
-                    format!("boundary {k}"),
-                    "0 interpolating, 1 periodic, 2 symmetric",
-                ))
-            }
-        };
+        let (mode, _) = mode_of(code).ok_or_else(|| {
+            bad(
+                format!("mode {code}"),
+                "0 lossy, 1 lossless, 2 max-error, 3 lossless scaled floats",
+            )
+        })?;
+        let k = c.u8()?;
+        let scheme = scheme_of(k).ok_or_else(|| {
+            bad(
+                format!("scheme {k}"),
+                "0 haar, 1 chaikin, 2 cubic, 3 linear, 4 chaikin-wide, 5 cubic-wide, 6 cdf97, 7 linear-wide",
+            )
+        })?;
+        let k = c.u8()?;
+        let boundary = boundary_of(k).ok_or_else(|| {
+            bad(
+                format!("boundary {k}"),
+                "0 interpolating, 1 periodic, 2 symmetric",
+            )
+        })?;
         let levels = c.u8()? as usize;
         if levels > MAX_LEVELS {
             return Err(bad(format!("{levels} levels"), "at most 32 levels"));
@@ -320,11 +367,12 @@ impl Header {
             tile.push(c.u32()? as usize);
         }
         if tile != dims {
-            if major < 2 || minor < 1 {
+            if !version.has_tiles() {
                 return Err(Error::Unsupported {
                     what: "tile grid",
                     value: format!(
-                        "tiles {tile:?} of {dims:?} in a {major}.{minor} file (tiles need 2.1)"
+                        "tiles {tile:?} of {dims:?} in a {version} file (tiles need {})",
+                        Version::TILED
                     ),
                 });
             }
@@ -335,7 +383,7 @@ impl Header {
                 ));
             }
         }
-        let voids = if major == MAJOR && minor >= MINOR_VOIDS {
+        let voids = if version.has_head_flags() {
             match c.u8()? {
                 f @ 0..=1 => f == 1,
                 f => return Err(bad(format!("HEAD flags {f:#04x}"), "bit 0 alone (voids)")),
@@ -344,8 +392,7 @@ impl Header {
             false
         };
         Ok(Header {
-            major,
-            minor,
+            version,
             kind,
             sample_type,
             dims,

@@ -4,40 +4,26 @@
 //! in between in coarse-to-fine order. Unknown chunks whose type starts with a
 //! lowercase letter are skipped; unknown uppercase (critical) chunks are rejected.
 
+pub mod bands;
+pub mod body;
 pub mod crc;
 pub mod header;
+pub mod meta;
 pub mod sha256;
+pub mod tag;
+pub mod tiles;
+pub mod version;
 
+pub use bands::Residual;
 pub use header::{Header, Mode};
+pub use tag::Tag;
+pub use version::Version;
 
-use crate::{Error, Result};
+use crate::{FormatError, Result};
 use std::io::Read;
 
 /// The file signature (PNG-style: a high byte, the name, CR LF, ^Z, LF).
 pub const SIGNATURE: [u8; 8] = [0x8B, b'M', b'R', b'A', 0x0D, 0x0A, 0x1A, 0x0A];
-/// The major version written (2: level chunks, format-2 coefficient coding); readers
-/// decode majors [`OLDEST_MAJOR`] to this one and reject others.
-pub const MAJOR: u8 = 2;
-/// The oldest major version readers still decode.
-pub const OLDEST_MAJOR: u8 = 1;
-/// The minor version written for a file with neither tiles nor format 2.3's coding.
-pub const MINOR: u8 = 0;
-/// The minor version of a file split into tiles (`TIDX` and `TILE` chunks, 2.1).
-pub const MINOR_TILED: u8 = 1;
-/// The minor version of a lossy tiled file whose tiles may be compact (a `TRAT` chunk
-/// of step ratios per tile class, a form byte in each `TILE`, 2.2).
-pub const MINOR_COMPACT: u8 = 2;
-/// The minor version from which every band's stream chooses its magnitude classes,
-/// narrow or wide (2.3; mra writes it for lossless files and tiles).
-pub const MINOR_WIDE: u8 = 3;
-/// The minor version from which `HEAD` ends with a flags byte whose bit 0 says the
-/// `mETA` lists void samples (2.4; mra writes it for files with voids, so that a file
-/// whose ancillary `mETA` was dropped is refused rather than decoding its voids as
-/// values).
-pub const MINOR_VOIDS: u8 = 4;
-/// The highest minor version of [`MAJOR`] readers implement; they reject higher ones
-/// (a 2.3 band would decode wrongly as a 2.2 one).
-pub const LATEST_MINOR: u8 = MINOR_VOIDS;
 /// Largest chunk payload accepted (1 GiB).
 pub const MAX_CHUNK: u64 = 1 << 30;
 
@@ -90,6 +76,11 @@ pub struct Chunk {
 }
 
 impl Chunk {
+    /// The chunk's type if this crate knows it.
+    pub fn tag(&self) -> Option<Tag> {
+        Tag::of(&self.kind)
+    }
+
     pub fn name(&self) -> String {
         self.kind
             .iter()
@@ -120,7 +111,7 @@ impl<R: Read> ChunkReader<R> {
     pub fn new(mut src: R, len: u64) -> Result<Self> {
         let mut sig = [0u8; 8];
         if len < 8 || read_full(&mut src, &mut sig)? < 8 {
-            return Err(Error::format(
+            return Err(FormatError::signature(
                 format!("file of {len} bytes is too short for an .mra signature"),
                 "an .mra file (8-byte signature 8B 4D 52 41 0D 0A 1A 0A)",
             ));
@@ -132,7 +123,7 @@ impl<R: Read> ChunkReader<R> {
                 Some(f) => format!("this is a {} file, not .mra", f.name()),
                 None => format!("signature {:02X?}", sig),
             };
-            return Err(Error::format(
+            return Err(FormatError::signature(
                 found,
                 "an .mra file (8B 4D 52 41 0D 0A 1A 0A; `mra convert` or `mra encode` reads other formats)",
             ));
@@ -174,11 +165,7 @@ impl<R: Read> ChunkReader<R> {
         let n = u32::from_le_bytes(head[..4].try_into().unwrap()) as u64;
         let kind: [u8; 4] = head[4..].try_into().unwrap();
         if n > MAX_CHUNK {
-            return Err(Error::LimitsExceeded {
-                what: "chunk length",
-                requested: n,
-                limit: MAX_CHUNK,
-            });
+            return Err(FormatError::budget("chunk length", n, MAX_CHUNK));
         }
         if n + 12 > self.len - self.pos {
             return Ok(Err(ChunkEnd::Truncated { offset }));
@@ -199,13 +186,13 @@ impl<R: Read> ChunkReader<R> {
         let want = u32::from_le_bytes(crc4);
         let got = c.finish();
         if want != got {
-            return Err(Error::format(
-                format!(
-                    "CRC-32C mismatch in chunk {} at byte {offset} (stored {want:08x}, computed {got:08x})",
-                    chunk.name()
-                ),
-                "an undamaged file",
-            ));
+            return Err(FormatError::Crc {
+                chunk: chunk.name(),
+                offset,
+                stored: want,
+                computed: got,
+            }
+            .into());
         }
         Ok(Ok(chunk))
     }
@@ -237,7 +224,7 @@ impl<'a> Cursor<'a> {
     }
     pub fn take(&mut self, n: usize) -> Result<&'a [u8]> {
         if self.data.len() - self.pos < n {
-            return Err(Error::format(
+            return Err(FormatError::truncated(
                 format!(
                     "{} chunk ends at byte {} of {}",
                     self.what,
@@ -281,7 +268,7 @@ impl<'a> Cursor<'a> {
                 return Ok(v);
             }
         }
-        Err(Error::format(
+        Err(FormatError::invalid(
             format!(
                 "{} chunk: an integer over 64 bits at byte {}",
                 self.what, self.pos

@@ -60,16 +60,6 @@ const SAME_LAYER: &[(&str, &str, &str)] = &[
         "the codec codes bands with the coefficient coders",
     ),
     ("codec", "quantize", "the codec quantizes bands"),
-    (
-        "entropy",
-        "format",
-        "code-block stream lengths as the container's varints",
-    ),
-    (
-        "codec",
-        "format",
-        "the codec writes and reads the container",
-    ),
     ("surface", "curve", "surfaces are built from curves"),
     ("surface", "mesh", "surfaces are tessellated into meshes"),
     ("solid", "curve", "swept and revolved solids follow curves"),

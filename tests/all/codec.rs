@@ -636,7 +636,7 @@ fn absurd_dimensions_wrong_magic_and_version_are_rejected() {
     let e = codec::decode(&b, &DecodeOptions::default()).unwrap_err();
     assert!(e.to_string().contains("signature"), "{e}");
     let mut b = bytes.clone();
-    b[16] = mra::format::MAJOR + 1;
+    b[16] = mra::format::Version::LATEST.major + 1;
     recrc(&mut b);
     let e = codec::decode(&b, &DecodeOptions::default()).unwrap_err();
     assert_eq!(e.kind(), ErrorKind::Unsupported, "{e}");
@@ -654,8 +654,8 @@ fn absurd_dimensions_wrong_magic_and_version_are_rejected() {
     // that ends HEAD)
     let (s, e) = head_of(&bytes);
     let mut head = bytes[s..e].to_vec();
-    head[1] = mra::format::LATEST_MINOR;
-    if mra::format::LATEST_MINOR >= mra::format::MINOR_VOIDS {
+    head[1] = mra::format::Version::LATEST.minor;
+    if mra::format::Version::LATEST.has_head_flags() {
         head.push(0);
     }
     let mut b = bytes[..s - 8].to_vec();
@@ -735,7 +735,10 @@ fn test_vectors_decode_to_their_digests() {
     // formats/vectors: the current format; formats/vectors/v1: format 1 files, which
     // readers still decode to the same samples
     let root = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("formats/vectors");
-    for (dir, major) in [(root.clone(), mra::format::MAJOR), (root.join("v1"), 1)] {
+    for (dir, major) in [
+        (root.clone(), mra::format::Version::LATEST.major),
+        (root.join("v1"), 1),
+    ] {
         let manifest: serde_json::Value =
             serde_json::from_str(&std::fs::read_to_string(dir.join("manifest.json")).unwrap())
                 .unwrap();

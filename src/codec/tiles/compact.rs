@@ -13,20 +13,12 @@
 
 use super::Grid;
 use crate::codec::colour::channel_weights;
-use crate::codec::container::{HEAD, MEND};
-use crate::codec::levels::LEVL;
 use crate::codec::plan::Plan;
-use crate::format::{self, put_chunk, put_varint, Chunk, Cursor, Header, Mode};
+use crate::format::tiles::{self as grammar, TileForm};
+use crate::format::{self, Chunk, Header, Mode};
 use crate::quantize;
-use crate::{Error, Result};
+use crate::Result;
 use std::borrow::Cow;
-
-/// The chunk type of the step ratios of each tile class.
-pub(crate) const TRAT: &[u8; 4] = b"TRAT";
-
-/// `TILE` payload forms of a 2.2 file (the byte after the tile index).
-const FORM_CHUNKS: u8 = 0;
-const FORM_COMPACT: u8 = 1;
 
 impl Grid {
     /// Axes (bits, axis `a` → bit `a`) whose last tile is shorter than the others.
@@ -70,7 +62,7 @@ impl Grid {
 /// The `HEAD` of the one-tile file of a tile of extents `dims` in a file of header `h`.
 fn tile_header(h: &Header, dims: &[usize]) -> Header {
     let mut t = h.clone();
-    t.minor = format::MINOR;
+    t.version = format::Version::of_compact_tile();
     t.voids = false;
     t.dims = dims.to_vec();
     t.tile = dims.to_vec();
@@ -108,64 +100,29 @@ impl Ratios {
 
     /// The `TRAT` payload: the classes' ratios in class order, f32 LE.
     pub(in crate::codec) fn to_bytes(&self) -> Vec<u8> {
-        self.by_class
-            .iter()
-            .flatten()
-            .flat_map(|r| r.iter().flat_map(|x| x.to_le_bytes()))
-            .collect()
+        grammar::ratios_payload(&self.by_class)
     }
 
     /// Parse a `TRAT` chunk of a file of header `h` and grid `grid`: the ratios of each
     /// class, as many as its bands and channels, each positive and finite.
     pub(in crate::codec) fn parse(ch: &Chunk, h: &Header, grid: &Grid) -> Result<Ratios> {
-        let mut by_class = vec![None; 1 << grid.dims.len()];
-        let mut cur = Cursor::new(&ch.payload, "TRAT");
+        let mut classes = Vec::new();
         for m in grid.classes() {
             let plan = Plan::new(&tile_header(h, &grid.class_dims(m)))?;
-            let n = plan.bands.len() * h.channels;
-            if (ch.payload.len() - cur.pos) < 4 * n {
-                return Err(Error::format(
-                    format!(
-                        "TRAT chunk of {} bytes, short at tile class {m}",
-                        ch.payload.len()
-                    ),
-                    "4 bytes per band and channel of every tile class",
-                ));
-            }
-            let mut r = Vec::with_capacity(n);
-            for _ in 0..n {
-                let x = cur.f32()?;
-                if !(x > 0.0 && x.is_finite()) {
-                    return Err(Error::format(
-                        format!("TRAT step ratio {x} for tile class {m}"),
-                        "positive finite ratios",
-                    ));
-                }
-                r.push(x);
-            }
-            by_class[m] = Some(r);
+            classes.push((m, plan.bands.len() * h.channels));
         }
-        if cur.pos != ch.payload.len() {
-            return Err(Error::format(
-                format!(
-                    "TRAT chunk of {} bytes with {} after the last tile class",
-                    ch.payload.len(),
-                    ch.payload.len() - cur.pos
-                ),
-                "4 bytes per band and channel of every tile class",
-            ));
-        }
+        let by_class = grammar::parse_ratios(&ch.payload, &classes, 1 << grid.dims.len())?;
         Ok(Ratios { by_class })
     }
 }
 
-/// One chunk of a file made by this crate: `(type, payload)` and the rest.
-fn split_chunk(b: &[u8]) -> Option<(&[u8], &[u8], &[u8])> {
-    let len = u32::from_le_bytes(b.get(..4)?.try_into().ok()?) as usize;
-    let kind = b.get(4..8)?;
-    let payload = b.get(8..8 + len)?;
-    let rest = b.get(8 + len + 4..)?;
-    Some((kind, payload, rest))
+/// The streams of each level of a plan's one-tile file of `channels` channels:
+/// `(level, bands of the level × channels)` in file order.
+fn level_streams(plan: &Plan, channels: usize) -> Vec<(usize, usize)> {
+    plan.level_groups()
+        .into_iter()
+        .map(|(l, js)| (l, js.len() * channels))
+        .collect()
 }
 
 /// The `TILE` payload after the tile index of tile `i` in a 2.2 file of header `h`,
@@ -179,94 +136,23 @@ pub(in crate::codec) fn tile_body(
     ratios: &Ratios,
     i: usize,
 ) -> Vec<u8> {
-    compact(f, h, grid, ratios, i).unwrap_or_else(|| {
-        let mut v = Vec::with_capacity(f.len() - 7);
-        v.push(FORM_CHUNKS);
-        v.extend_from_slice(&f[8..]);
-        v
-    })
+    compact(f, h, grid, ratios, i).unwrap_or_else(|| grammar::chunks_body(f))
 }
 
 fn compact(f: &[u8], h: &Header, grid: &Grid, ratios: &Ratios, i: usize) -> Option<Vec<u8>> {
     if h.mode != Mode::Lossy {
         return None;
     }
-    let (kind, head, mut rest) = split_chunk(f.get(8..)?)?;
-    if kind != HEAD {
-        return None;
-    }
-    let t = Header::parse(head).ok()?;
-    let mut same = tile_header(h, &grid.tile_dims(i));
-    (same.min, same.max) = (t.min, t.max);
-    if t != same {
-        return None;
-    }
+    let same = tile_header(h, &grid.tile_dims(i));
     let r = ratios.by_class.get(grid.class(i))?.as_ref()?;
-    let plan = Plan::new(&t).ok()?;
-    let mut out = vec![FORM_COMPACT];
-    out.extend_from_slice(&t.min.to_le_bytes());
-    out.extend_from_slice(&t.max.to_le_bytes());
-    let mut k = 0;
-    for (level, js) in plan.level_groups() {
-        let (kind, p, more) = split_chunk(rest)?;
-        rest = more;
-        let mut cur = Cursor::new(p, "LEVL");
-        if kind != LEVL || cur.u16().ok()? as usize != level {
-            return None;
-        }
-        for _ in 0..js.len() * h.channels {
-            if cur.f32().ok()?.to_bits() != r.get(k)?.to_bits() {
-                return None;
-            }
-            k += 1;
-            let len = cur.varint().ok()?;
-            put_varint(&mut out, len);
-            out.extend_from_slice(cur.take(len as usize).ok()?);
-        }
-        if cur.pos != p.len() {
-            return None;
-        }
-    }
-    let (kind, p, rest) = split_chunk(rest)?;
-    (kind == MEND && p.is_empty() && rest.is_empty() && k == r.len()).then_some(out)
+    let plan = Plan::new(&same).ok()?;
+    grammar::compact_body(f, &same, &level_streams(&plan, h.channels), r)
 }
 
-/// Bytes of the compact form of a lossy one-tile file `f` (signature included): the
-/// form byte, the range, and each `LEVL` payload less its level and its ratios (for the
-/// `--bpp` search, before the file's `HEAD` is known); `f`'s chunks and the form byte
-/// when `f` is not `HEAD`, `LEVL`…, `MEND`.
+/// Bytes of the compact form of a lossy one-tile file `f` (signature included), as
+/// [`grammar::compact_len`] counts them.
 pub(in crate::codec) fn compact_len(f: &[u8]) -> usize {
-    let whole = f.len() - 7;
-    let Some((kind, _, mut rest)) = split_chunk(&f[8..]) else {
-        return whole;
-    };
-    if kind != HEAD {
-        return whole;
-    }
-    let mut n = 1 + 16;
-    while let Some((kind, p, more)) = split_chunk(rest) {
-        rest = more;
-        if kind == MEND {
-            return if rest.is_empty() { n } else { whole };
-        }
-        if kind != LEVL {
-            return whole;
-        }
-        let mut cur = Cursor::new(p, "LEVL");
-        if cur.u16().is_err() {
-            return whole;
-        }
-        let mut streams = 0;
-        while cur.pos < p.len() {
-            let stream = cur.f32().and_then(|_| cur.varint());
-            match stream.and_then(|len| cur.take(len as usize).map(|_| ())) {
-                Ok(()) => streams += 1,
-                Err(_) => return whole,
-            }
-        }
-        n += p.len() - 2 - 4 * streams;
-    }
-    whole
+    grammar::compact_len(f)
 }
 
 /// The one-tile file (signature included) of tile `i` of a tiled file of header `h`
@@ -279,72 +165,25 @@ pub(in crate::codec) fn tile_file<'a>(
     i: usize,
     inner: &'a [u8],
 ) -> Result<Cow<'a, [u8]>> {
-    let with_signature = |chunks: &[u8]| {
-        let mut f = format::SIGNATURE.to_vec();
-        f.extend_from_slice(chunks);
-        Cow::Owned(f)
+    let (min, max, streams) = match TileForm::parse(inner, h.version.has_compact_tiles(), i)? {
+        TileForm::Chunks(chunks) => return Ok(Cow::Owned(grammar::chunks_file(chunks))),
+        TileForm::Compact { min, max, streams } => (min, max, streams),
     };
-    if h.minor < format::MINOR_COMPACT {
-        return Ok(with_signature(inner));
-    }
-    let mut cur = Cursor::new(inner, "TILE");
-    match cur.u8()? {
-        FORM_CHUNKS => return Ok(with_signature(cur.rest())),
-        FORM_COMPACT => {}
-        f => {
-            return Err(Error::format(
-                format!("TILE of tile {i} in form {f}"),
-                "form 0 (chunks) or 1 (compact)",
-            ))
-        }
-    }
     let Some(r) = ratios.and_then(|r| r.by_class.get(grid.class(i))?.as_ref()) else {
-        return Err(Error::format(
+        return Err(crate::FormatError::order(
             format!("a compact TILE of tile {i} without the TRAT chunk before it"),
             "TRAT before the tiles of a 2.2 file",
         ));
     };
     if h.mode != Mode::Lossy {
-        return Err(Error::format(
+        return Err(crate::FormatError::invalid(
             format!("a compact TILE of tile {i} in a file of mode {:?}", h.mode),
             "compact tiles in lossy files only",
         ));
     }
     let mut t = tile_header(h, &grid.tile_dims(i));
-    t.min = cur.f64()?;
-    t.max = cur.f64()?;
+    (t.min, t.max) = (min, max);
     let plan = Plan::new(&t)?;
-    let mut f = format::SIGNATURE.to_vec();
-    f.reserve(inner.len() + 256);
-    put_chunk(&mut f, HEAD, &t.to_bytes());
-    let mut k = 0;
-    for (level, js) in plan.level_groups() {
-        let mut p = (level as u16).to_le_bytes().to_vec();
-        for _ in 0..js.len() * h.channels {
-            let len = cur.varint()?;
-            let left = (inner.len() - cur.pos) as u64;
-            if len > left {
-                return Err(Error::format(
-                    format!("compact TILE of tile {i}: a stream of {len} bytes, {left} left"),
-                    "streams within the chunk",
-                ));
-            }
-            p.extend_from_slice(&r[k].to_le_bytes());
-            put_varint(&mut p, len);
-            p.extend_from_slice(cur.take(len as usize)?);
-            k += 1;
-        }
-        put_chunk(&mut f, LEVL, &p);
-    }
-    if cur.pos != inner.len() {
-        return Err(Error::format(
-            format!(
-                "compact TILE of tile {i} with {} bytes after its last stream",
-                inner.len() - cur.pos
-            ),
-            "a payload that ends with its last stream",
-        ));
-    }
-    put_chunk(&mut f, MEND, &[]);
+    let f = grammar::compact_file(&t, &level_streams(&plan, h.channels), r, streams, i)?;
     Ok(Cow::Owned(f))
 }

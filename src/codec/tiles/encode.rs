@@ -12,10 +12,9 @@
 //! all of them up to 64 tiles): `--keep`'s threshold is that of the sample's details,
 //! the `--psnr` / `--bpp` search measures the sample.
 
-use super::compact::{self, Ratios, TRAT};
+use super::compact::{self, Ratios};
 use super::feed::{self, Feed};
-use super::{crop_samples, Grid, SEARCH_SAMPLE_TILES, TIDX, TILE};
-use crate::codec::container::{HEAD, MEND, META};
+use super::{crop_samples, Grid, SEARCH_SAMPLE_TILES};
 use crate::codec::encode::encode_filled;
 #[cfg(doc)]
 use crate::codec::lossy::finite_range;
@@ -23,6 +22,8 @@ use crate::codec::lossy::{prepare, Prepared};
 use crate::codec::meta;
 use crate::codec::options::{EncodeOptions, Rate};
 use crate::codec::voids::with_voids_filled;
+use crate::format::tag::{HEAD, MEND, META, TIDX, TILE, TRAT};
+use crate::format::tiles::{head_of, put_index_entry, tile_prefix};
 use crate::format::{self, write_chunk, Header, Mode};
 use crate::io::slab::{Shape, SlabSource};
 use crate::io::{Raster, Samples};
@@ -398,13 +399,8 @@ impl TileWriter<'_> {
         let (grid, n) = (self.grid, self.grid.len());
         if self.head.is_none() {
             // the tiles' common fields from the first tile's HEAD (after the signature)
-            let hl = u32::from_le_bytes(c[8..12].try_into().unwrap()) as usize;
-            let mut h = Header::parse(&c[16..16 + hl])?;
-            h.minor = if h.mode == Mode::Lossy {
-                format::MINOR_COMPACT
-            } else {
-                format::MINOR_TILED
-            };
+            let mut h = head_of(c)?;
+            h.version = format::Version::for_tiled(h.mode == Mode::Lossy);
             h.dims = self.shape.dims.clone();
             h.tile = grid.tile.clone();
             let head_at = self.at;
@@ -425,11 +421,10 @@ impl TileWriter<'_> {
         let h = &self.head.as_ref().expect("the head is written first").1;
         let body = match &self.ratios {
             Some(r) => std::borrow::Cow::Owned(compact::tile_body(c, h, grid, r, i)),
-            None => std::borrow::Cow::Borrowed(&c[8..]),
+            None => std::borrow::Cow::Borrowed(&c[format::SIGNATURE.len()..]),
         };
-        let bytes = write_chunk(out, TILE, &[&(i as u32).to_le_bytes(), &body])?;
-        self.index.extend_from_slice(&self.at.to_le_bytes());
-        self.index.extend_from_slice(&bytes.to_le_bytes());
+        let bytes = write_chunk(out, TILE, &[&tile_prefix(i), &body])?;
+        put_index_entry(&mut self.index, self.at, bytes);
         self.at += bytes;
         Ok(())
     }

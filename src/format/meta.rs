@@ -3,6 +3,17 @@
 
 use crate::io::{GeoTag, GeoValue, Metadata};
 
+/// The `meta.extra` key holding the void mask of an encoded raster (§5.1): `m1:` then
+/// the base64 of the mask range-coded by the codec's void coder; files written before
+/// the coded mask list runs `start:length` (sample indices, channels interleaved)
+/// instead.
+pub const VOID_RUNS: &str = "nodata.voids";
+
+/// Whether `meta` lists void samples (a filled raster's, or a decoded file's `mETA`).
+pub fn lists_voids(meta: &Metadata) -> bool {
+    meta.extra.contains_key(VOID_RUNS)
+}
+
 fn nums(v: &[f64]) -> String {
     v.iter()
         .map(|x| format!("{x:?}"))

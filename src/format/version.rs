@@ -1,0 +1,168 @@
+//! The format version of a file (`HEAD`'s first two bytes) and every rule that depends
+//! on it: which versions a reader decodes, which chunks and codings each one has, and
+//! which version the writer gives a file (formats/MRA.md §3). The codec asks a
+//! [`Version`]; no other module compares version numbers.
+
+use crate::{FormatError, Result};
+use std::fmt;
+
+/// A format version `major.minor`. Minor versions of one major add to it: a reader of
+/// `2.m` decodes every `2.k` with `k ≤ m` and refuses `2.k` with `k > m` (a 2.3 band
+/// would decode wrongly as a 2.2 one).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub struct Version {
+    pub major: u8,
+    pub minor: u8,
+}
+
+impl Version {
+    /// Format 1: one `BAND` chunk per band and channel, the adaptive coefficient coding
+    /// of [`crate::entropy::v1`] (read only).
+    pub const V1: Version = Version::new(1, 0);
+    /// 2.0: one `LEVL` chunk per level, the format-2 coefficient coding with narrow
+    /// magnitude classes.
+    pub const V2_0: Version = Version::new(2, 0);
+    /// 2.1: the raster split into tiles (`TIDX` and `TILE` chunks).
+    pub const TILED: Version = Version::new(2, 1);
+    /// 2.2: a lossy tiled file whose tiles may be compact (a `TRAT` chunk of step ratios
+    /// per tile class, a form byte in each `TILE`).
+    pub const COMPACT_TILES: Version = Version::new(2, 2);
+    /// 2.3: every band's stream chooses its magnitude classes, narrow or wide.
+    pub const CHOSEN_CODING: Version = Version::new(2, 3);
+    /// 2.4: `HEAD` ends with a flags byte whose bit 0 says the `mETA` lists void samples
+    /// (so that a file whose ancillary `mETA` was dropped is refused rather than decoding
+    /// its voids as values).
+    pub const HEAD_FLAGS: Version = Version::new(2, 4);
+    /// The latest version this reader implements: it refuses later minors of its major.
+    pub const LATEST: Version = Version::HEAD_FLAGS;
+    /// Every version this reader decodes, oldest first.
+    pub const ALL: [Version; 6] = [
+        Version::V1,
+        Version::V2_0,
+        Version::TILED,
+        Version::COMPACT_TILES,
+        Version::CHOSEN_CODING,
+        Version::HEAD_FLAGS,
+    ];
+    /// The oldest major version readers still decode.
+    pub const OLDEST_MAJOR: u8 = 1;
+
+    pub const fn new(major: u8, minor: u8) -> Version {
+        Version { major, minor }
+    }
+
+    /// `Ok` when a reader of [`Version::LATEST`] decodes files of this version; else an
+    /// unsupported-version error naming the versions it reads.
+    pub fn check(self) -> Result<Version> {
+        let (major, minor) = (self.major, self.minor);
+        let (latest, oldest) = (Version::LATEST, Version::OLDEST_MAJOR);
+        if !(oldest..=latest.major).contains(&major) {
+            return Err(FormatError::Version {
+                major,
+                minor,
+                reads: format!("this reader implements {oldest}.x to {}.x", latest.major),
+            }
+            .into());
+        }
+        if major == latest.major && minor > latest.minor {
+            return Err(FormatError::Version {
+                major,
+                minor,
+                reads: format!("this reader implements {}.0 to {latest}", latest.major),
+            }
+            .into());
+        }
+        Ok(self)
+    }
+
+    fn at_least(self, v: Version) -> bool {
+        self.major == v.major && self.minor >= v.minor
+    }
+
+    /// Whether the bands come in `LEVL` chunks (one per level) coded by the format-2
+    /// coefficient coding (major 2); else in format 1's `BAND` chunks.
+    pub fn has_levels(self) -> bool {
+        self.major >= 2
+    }
+
+    /// Whether `HEAD` may declare tiles smaller than the raster (2.1 and later).
+    pub fn has_tiles(self) -> bool {
+        self.at_least(Version::TILED)
+    }
+
+    /// Whether a tiled file may hold a `TRAT` chunk and compact `TILE` payloads, each
+    /// `TILE` payload starting with its form byte (2.2 and later).
+    pub fn has_compact_tiles(self) -> bool {
+        self.at_least(Version::COMPACT_TILES)
+    }
+
+    /// Whether every band's stream chooses its magnitude classes (2.3 and later); else
+    /// the classes are the narrow ones.
+    pub fn has_chosen_coding(self) -> bool {
+        self.at_least(Version::CHOSEN_CODING)
+    }
+
+    /// Whether `HEAD` ends with the flags byte (2.4 and later).
+    pub fn has_head_flags(self) -> bool {
+        self.at_least(Version::HEAD_FLAGS)
+    }
+
+    /// The version the writer gives a file of one tile: 2.3 when lossless (each band
+    /// chooses its classes), 2.0 else; 2.4 at least when the `HEAD` says the file has
+    /// voids.
+    pub fn for_file(lossless: bool, voids: bool) -> Version {
+        let v = if lossless {
+            Version::CHOSEN_CODING
+        } else {
+            Version::V2_0
+        };
+        if voids {
+            v.max(Version::HEAD_FLAGS)
+        } else {
+            v
+        }
+    }
+
+    /// The version of a tiled file's `HEAD` (its tiles' one-tile files keep their own):
+    /// 2.2 when lossy (compact tiles), 2.1 else.
+    pub fn for_tiled(lossy: bool) -> Version {
+        if lossy {
+            Version::COMPACT_TILES
+        } else {
+            Version::TILED
+        }
+    }
+
+    /// The version of the one-tile file a compact tile stands for (2.0: narrow classes,
+    /// no flags byte).
+    pub fn of_compact_tile() -> Version {
+        Version::V2_0
+    }
+}
+
+impl fmt::Display for Version {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}.{}", self.major, self.minor)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn capabilities_follow_the_minor_versions() {
+        for v in Version::ALL {
+            assert!(v.check().is_ok(), "{v}");
+            assert_eq!(v.has_levels(), v.major == 2);
+            assert_eq!(v.has_tiles(), v.major == 2 && v.minor >= 1, "{v}");
+            assert_eq!(v.has_compact_tiles(), v.major == 2 && v.minor >= 2, "{v}");
+            assert_eq!(v.has_chosen_coding(), v.major == 2 && v.minor >= 3, "{v}");
+            assert_eq!(v.has_head_flags(), v.major == 2 && v.minor >= 4, "{v}");
+        }
+        // format 1 has none of format 2's minors, whatever its minor byte
+        assert!(!Version::new(1, 9).has_tiles() && !Version::new(1, 9).has_head_flags());
+        assert!(Version::new(2, Version::LATEST.minor + 1).check().is_err());
+        assert!(Version::new(3, 0).check().is_err() && Version::new(0, 0).check().is_err());
+    }
+}
