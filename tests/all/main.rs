@@ -15,6 +15,7 @@ mod codec_rate;
 mod container;
 mod curve;
 mod filters;
+mod format_spec;
 mod hyperpatch;
 mod inputs_outputs;
 mod io;
