@@ -30,6 +30,7 @@ mod serve;
 mod simd_parity;
 mod solid;
 mod solid_cli;
+mod stdio;
 mod subdivide;
 mod surface;
 mod tensor;
