@@ -335,10 +335,10 @@ fn decode<'py>(
             let opts = DecodeOptions {
                 level,
                 allow_truncated,
-                // the library takes the fastest axis first
+                // slowest axis first, as NumPy and the library
                 region: region
                     .as_ref()
-                    .map(|r| r.iter().rev().map(|&(a, b)| a..b).collect()),
+                    .map(|r| r.iter().map(|&(a, b)| a..b).collect()),
             };
             Ok(codec::decode(bytes, &opts)?.raster)
         })
