@@ -324,25 +324,7 @@ pub fn decode(a: DecodeArgs) -> CliResult {
     } else {
         None
     };
-    if a.level > 0 {
-        // a level the file does not hold is an error, not a silent clamp
-        // the header alone tells (a file is not read whole)
-        let levels = match &stdin {
-            Some(bytes) => codec::info(bytes).map(|i| i.levels),
-            None => codec::header_of_file(&a.input).and_then(|h| codec::depth_of(&h)),
-        }
-        .map_err(|e| Failure::context(&name, e))?;
-        if a.level > levels {
-            return Err(Failure::context(
-                &name,
-                crate::Error::parameter(
-                    "--level",
-                    format!("{} of a file with levels 0 to {levels}", a.level),
-                    "one of the levels the file holds",
-                ),
-            ));
-        }
-    }
+    // a level the file does not hold is the library's error (crate::Error::Level)
     let mut range = a.frames.as_deref().map(frame_range).transpose()?;
     let mut region = a.region.as_deref().map(region_ranges).transpose()?;
     if let (Some((f0, f1)), 0) = (range, a.level) {

@@ -58,7 +58,8 @@ impl Default for EncodeOptions {
 /// Decoder settings.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct DecodeOptions {
-    /// Reconstruct at 1/2^level resolution, reading only the chunks needed.
+    /// Reconstruct at 1/2^level resolution, reading only the chunks needed; a level the
+    /// file does not hold (over its depth) is [`crate::Error::Level`].
     pub level: usize,
     /// Decode what a truncated file holds instead of failing.
     pub allow_truncated: bool,

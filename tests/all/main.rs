@@ -19,6 +19,7 @@ mod hyperpatch;
 mod inputs_outputs;
 mod io;
 mod kernel_tables;
+mod library_rules;
 mod mesh;
 mod metadata;
 mod metrics;
