@@ -1,6 +1,7 @@
 //! What the jobs of `mra demo` share: the table's row and the generated data they run
 //! on. Each application adds its rows (`codec::demo`, `upscale::demo_rows`,
-//! `terrain::demo_rows`); the command line gathers them with its own (`cli/demo.rs`).
+//! `terrain::demo_rows`, built with the `cli` feature only); the command line gathers
+//! them with its own (`cli/demo.rs`).
 
 use std::path::PathBuf;
 

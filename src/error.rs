@@ -24,6 +24,10 @@ pub enum Error {
     /// The input is valid but uses a feature this crate does not implement.
     #[error("unsupported {what}: {value}")]
     Unsupported { what: &'static str, value: String },
+    /// A decode asked for a resolution level the file does not hold (levels `0..=levels`;
+    /// a [`ErrorKind::Parameter`] error: the caller's to fix, never clamped).
+    #[error("invalid level: {level} of a file with levels 0 to {levels} (expected one of the levels the file holds)")]
+    Level { level: usize, levels: usize },
     /// A size declared by the input exceeds what it can hold or what we allow.
     #[error("{what} of {requested} exceeds the limit of {limit}")]
     LimitsExceeded {
@@ -194,7 +198,7 @@ pub enum ErrorKind {
 impl Error {
     pub fn kind(&self) -> ErrorKind {
         match self {
-            Error::Parameter { .. } => ErrorKind::Parameter,
+            Error::Parameter { .. } | Error::Level { .. } => ErrorKind::Parameter,
             Error::Format { .. } => ErrorKind::Format,
             Error::Unsupported { .. } => ErrorKind::Unsupported,
             Error::LimitsExceeded { .. } => ErrorKind::LimitsExceeded,

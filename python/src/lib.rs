@@ -321,24 +321,14 @@ fn decode<'py>(
 ) -> PyResult<Bound<'py, PyAny>> {
     let r = with_bytes(data, |bytes| {
         run(py, "decode", || {
-            if level > 0 {
-                // a level the file does not hold is an error, not a silent clamp
-                let i = codec::info(bytes)?;
-                if level > i.levels {
-                    return Err(Error::parameter(
-                        "level",
-                        format!("{level} of a file with levels 0 to {}", i.levels),
-                        "one of the levels the file holds",
-                    ));
-                }
-            }
+            // a level the file does not hold is the library's error (Error::Level)
             let opts = DecodeOptions {
                 level,
                 allow_truncated,
-                // the library takes the fastest axis first
+                // slowest axis first, as NumPy and the library
                 region: region
                     .as_ref()
-                    .map(|r| r.iter().rev().map(|&(a, b)| a..b).collect()),
+                    .map(|r| r.iter().map(|&(a, b)| a..b).collect()),
             };
             Ok(codec::decode(bytes, &opts)?.raster)
         })
@@ -461,25 +451,6 @@ fn synthesize<'py>(
     })
 }
 
-/// Refuse an output over the memory budget (`MRA_MAX_BYTES`, default 8 GiB) before
-/// anything is allocated: its samples in f32 (the working type) plus its stored type.
-fn check_budget(r: &RasterView<'_>, plans: &[up::AxisPlan]) -> mra::Result<()> {
-    let samples = (0..r.dims.len())
-        .map(|a| {
-            plans
-                .iter()
-                .find(|p| p.axis == a)
-                .map_or(r.dims[a], |p| p.len) as u64
-        })
-        .try_fold(r.channels as u64, |acc, d| acc.checked_mul(d))
-        .unwrap_or(u64::MAX);
-    mra::limits::Limits::from_env()?.check_elems(
-        "upscaled output bytes",
-        samples,
-        4 + r.sample_type().size() as u64,
-    )
-}
-
 /// Upscale by `factor` along `axes` (or to `size`, one length per spatial axis).
 #[pyfunction]
 #[pyo3(signature = (a, factor, size, axes, scheme, mode, edge, clamp, order, channels_last))]
@@ -516,7 +487,7 @@ fn upscale<'py>(
             let r = view(&input, &dims, channels, &meta)?;
             let axes = axes.unwrap_or_else(|| (0..r.dims.len()).collect());
             let plans = up::plan_raster(r.dims, &axes, factor, size.as_deref(), false)?;
-            check_budget(&r, &plans)?;
+            // the library checks the memory budget before anything is allocated
             up::upscale_view(&r, &method, &plans, &Progress::hidden())
         })
     })?;

@@ -17,9 +17,12 @@ use std::path::{Path, PathBuf};
 pub struct AnalyzeArgs {
     /// A point list (CSV, one point per line; `-` for standard input), or an image, volume or heightmap.
     pub input: PathBuf,
-    /// Where to write (standard output for point lists when absent).
+    /// Where to write (standard output for point lists when absent; `-`: standard output).
     #[arg(short, long)]
     pub output: Option<PathBuf>,
+    /// Format of `-o -` for an array's pyramid: tif (2-D), nrrd (3-D); png with --visual.
+    #[arg(long, value_name = "EXT")]
+    pub format: Option<String>,
     /// haar, chaikin or cubic.
     #[arg(long, default_value = "chaikin")]
     pub scheme: Scheme,
@@ -47,9 +50,12 @@ pub struct AnalyzeArgs {
 pub struct SynthesizeArgs {
     /// A tagged point list written by `mra analyze`, or a pyramid file written by it.
     pub input: PathBuf,
-    /// Where to write (standard output for point lists when absent).
+    /// Where to write (standard output for point lists when absent; `-`: standard output).
     #[arg(short, long)]
     pub output: Option<PathBuf>,
+    /// Format of `-o -` for an array: png, tif, exr, nrrd, … (as an extension).
+    #[arg(long, value_name = "EXT")]
+    pub format: Option<String>,
     /// The scheme used by `analyze` (point lists; arrays record it in the file).
     #[arg(long, default_value = "chaikin")]
     pub scheme: Scheme,
@@ -113,11 +119,23 @@ fn analyze_array(a: &AnalyzeArgs) -> CliResult {
         read: ReadOptions::default(),
         quiet: false,
     };
-    analyze_path(&a.input, &output, &o)
+    super::stdio::output(
+        &output,
+        a.format.as_deref(),
+        a.visual.then_some("png"),
+        "tif for an image, nrrd for a volume",
+        |p| analyze_path(&a.input, p, &o),
+    )
 }
 
 /// `mra synthesize PYRAMID -o OUT` (the arguments as options).
 fn synthesize_array(a: &SynthesizeArgs) -> CliResult {
     let output = required_output(&a.output, &a.input)?;
-    synthesize_path(&a.input, &output, false)
+    super::stdio::output(
+        &output,
+        a.format.as_deref(),
+        None,
+        "png, tif, exr, nrrd, nii, …",
+        |p| synthesize_path(&a.input, p, false),
+    )
 }

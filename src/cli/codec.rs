@@ -94,8 +94,9 @@ pub struct DecodeArgs {
     /// Keep frames a..b (end excluded) of a sequence (or slices of a volume).
     #[arg(long, value_name = "A..B")]
     pub frames: Option<String>,
-    /// Decode only the box x0:x1,y0:y1[,z0:z1] (ends excluded, full-resolution samples,
-    /// fastest axis first); a tiled file is read only where its tiles meet the box.
+    /// Decode only the box x0:x1,y0:y1[,z0:z1] (ends excluded, full-resolution samples):
+    /// x first, the fastest axis, as every vector mra prints (the library takes the
+    /// ranges slowest first); a tiled file is read only where its tiles meet the box.
     #[arg(long, value_name = "X0:X1,Y0:Y1")]
     pub region: Option<String>,
     /// Print one JSON object (output, shape, complete, seconds); on standard error when
@@ -265,8 +266,9 @@ fn tile_extents(s: &str, dims: &[usize]) -> Result<Vec<usize>, Failure> {
         .collect())
 }
 
-/// `--region x0:x1,y0:y1[,…]` (ends excluded, fastest axis first) as ranges.
-fn region_ranges(s: &str) -> Result<Vec<std::ops::Range<usize>>, Failure> {
+/// `--region x0:x1,y0:y1[,…]` (ends excluded, x first: the fastest axis) as the
+/// library's ranges, slowest axis first.
+pub fn region_ranges(s: &str) -> Result<Vec<std::ops::Range<usize>>, Failure> {
     let bad = || {
         Failure(format!(
             "--region {s}: expected x0:x1,y0:y1[,z0:z1], whole numbers with x0 < x1"
@@ -284,7 +286,11 @@ fn region_ranges(s: &str) -> Result<Vec<std::ops::Range<usize>>, Failure> {
             }
             Ok(a..b)
         })
-        .collect()
+        .collect::<Result<Vec<_>, _>>()
+        .map(|mut r| {
+            r.reverse();
+            r
+        })
 }
 
 /// `A..B` (end excluded) as a pair.
@@ -318,25 +324,7 @@ pub fn decode(a: DecodeArgs) -> CliResult {
     } else {
         None
     };
-    if a.level > 0 {
-        // a level the file does not hold is an error, not a silent clamp
-        // the header alone tells (a file is not read whole)
-        let levels = match &stdin {
-            Some(bytes) => codec::info(bytes).map(|i| i.levels),
-            None => codec::header_of_file(&a.input).and_then(|h| codec::depth_of(&h)),
-        }
-        .map_err(|e| Failure::context(&name, e))?;
-        if a.level > levels {
-            return Err(Failure::context(
-                &name,
-                crate::Error::parameter(
-                    "--level",
-                    format!("{} of a file with levels 0 to {levels}", a.level),
-                    "one of the levels the file holds",
-                ),
-            ));
-        }
-    }
+    // a level the file does not hold is the library's error (crate::Error::Level)
     let mut range = a.frames.as_deref().map(frame_range).transpose()?;
     let mut region = a.region.as_deref().map(region_ranges).transpose()?;
     if let (Some((f0, f1)), 0) = (range, a.level) {
@@ -350,10 +338,9 @@ pub fn decode(a: DecodeArgs) -> CliResult {
         if head.len() >= 2 && f1 <= head[0] {
             let mut reg = region
                 .take()
-                .unwrap_or_else(|| head.iter().rev().map(|&d| 0..d).collect());
+                .unwrap_or_else(|| head.iter().map(|&d| 0..d).collect());
             if reg.len() == head.len() {
-                let last = reg.len() - 1;
-                reg[last] = f0..f1;
+                reg[0] = f0..f1;
                 region = Some(reg);
                 range = None;
             } else {

@@ -7,14 +7,13 @@ use crate::curve::plot::{self, PlotData};
 use crate::curve::{geometry, knot, BSpline, Bezier, Curve, KnotVector, Nurbs};
 use crate::{Error, Result};
 use clap::{Args, Subcommand, ValueEnum};
-use std::io::Write;
 use std::path::{Path, PathBuf};
 
 #[derive(Subcommand, Debug)]
 pub enum Command {
     /// Curve style transfer (§9.7.1): a stroke's details, in its local tangent/normal
     /// frame, added to a new base curve.
-    Style(super::terrain::StyleArgs),
+    Style(super::style::StyleArgs),
     /// Evaluate points or derivatives: one point per line (parameter first with --with-u).
     #[command(after_help = "Examples:\n  \
         mra curve eval --kind bezier --at 0.5 corpus/curves/example24.csv        # 3.5,1.5 (Example 2.4)\n  \
@@ -62,7 +61,8 @@ pub enum Kind {
 
 #[derive(Args, Debug, Clone)]
 pub struct CurveSpec {
-    /// Control points: CSV, one point per line; a header naming a `w` column gives NURBS weights.
+    /// Control points: CSV, one point per line; a header naming a `w` column gives NURBS
+    /// weights (`-`: standard input).
     pub input: PathBuf,
     /// Curve representation.
     #[arg(long, value_enum, default_value = "bspline")]
@@ -148,9 +148,12 @@ pub struct InsertArgs {
 pub struct PlotArgs {
     #[command(flatten)]
     pub spec: CurveSpec,
-    /// Output picture: .svg or .png.
+    /// Output picture: .svg or .png (`-`: standard output, with --format).
     #[arg(short, long)]
     pub output: PathBuf,
+    /// Format of `-o -` (standard output): svg or png.
+    #[arg(long, value_name = "EXT")]
+    pub format: Option<String>,
     /// Curve samples.
     #[arg(long, default_value_t = 400)]
     pub samples: usize,
@@ -195,8 +198,9 @@ impl Loaded {
     }
 }
 
+/// A text file, or standard input for `-`.
 pub(crate) fn read_text(path: &Path) -> std::result::Result<String, Failure> {
-    std::fs::read_to_string(path).map_err(|e| Failure::context(path.display(), e))
+    super::stdio::read_text(path)
 }
 
 pub(crate) fn read_table(path: &Path) -> std::result::Result<PointTable, Failure> {
@@ -309,10 +313,9 @@ pub fn sample_params((a, b): (f64, f64), n: usize) -> Vec<f64> {
 }
 
 /// Write `bytes` to `path` through a temporary file in the same folder, then rename (never a
-/// partial output file; `crate::fsutil`).
+/// partial output file; `crate::fsutil`); `-`: standard output.
 pub(crate) fn write_atomic(path: &Path, bytes: &[u8]) -> std::result::Result<(), Failure> {
-    crate::fsutil::write_atomic(path, |w| w.write_all(bytes))
-        .map_err(|e| Failure::context(path.display(), e))
+    super::stdio::write_bytes(path, bytes)
 }
 
 /// Print to standard output or write atomically to `out`.
@@ -339,7 +342,7 @@ pub fn run(c: Command) -> CliResult {
         Command::Elevate(a) => elevate(a),
         Command::InsertKnot(a) => insert_knot(a),
         Command::Plot(a) => plot_cmd(a),
-        Command::Style(a) => super::terrain::style(a),
+        Command::Style(a) => super::style::style(a),
     }
 }
 
@@ -546,12 +549,15 @@ fn plot_cmd(a: PlotArgs) -> CliResult {
     for u in loaded.range_knots() {
         d.knots.push(xy(&c.point(u)?));
     }
-    let ext = a
-        .output
-        .extension()
-        .and_then(|e| e.to_str())
-        .unwrap_or("")
-        .to_ascii_lowercase();
+    let ext = if super::stdio::is_std(&a.output) {
+        super::stdio::std_format(a.format.as_deref(), None, "svg, png")?
+    } else {
+        a.output
+            .extension()
+            .and_then(|e| e.to_str())
+            .unwrap_or("")
+            .to_ascii_lowercase()
+    };
     let bytes = match ext.as_str() {
         "svg" => plot::svg(&d, w, h).into_bytes(),
         "png" => plot::png(&d, w, h)?,

@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 
 use clap::{Args, ValueEnum};
 
-use super::{CliResult, Failure};
+use super::{stdio, CliResult, Failure};
 use crate::fsutil::Watch;
 use crate::io::{self, RawSpec, ReadOptions, SampleType};
 use crate::metrics::{self, CompareOptions, Convention};
@@ -95,60 +95,14 @@ pub fn emit(text: &str) -> CliResult {
     }
 }
 
-/// Whether a file argument is `-`: standard input (or output).
-pub fn is_std(path: &Path) -> bool {
-    path.as_os_str() == "-"
-}
-
-/// A fresh private folder through which standard input or output passes as a file
-/// (readers and writers work on files: seeking TIFF, atomic renames); removed on drop.
-struct StdTemp(PathBuf);
-
-impl StdTemp {
-    fn new() -> Result<StdTemp, Failure> {
-        use std::sync::atomic::{AtomicUsize, Ordering};
-        static N: AtomicUsize = AtomicUsize::new(0);
-        let d = std::env::temp_dir().join(format!(
-            "mra-std-{}-{}",
-            std::process::id(),
-            N.fetch_add(1, Ordering::Relaxed)
-        ));
-        std::fs::create_dir_all(&d).map_err(|e| Failure::context(d.display(), e))?;
-        Ok(StdTemp(d))
-    }
-}
-
-impl Drop for StdTemp {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
-}
-
-/// Standard input, whole, read with a bound: at most the memory budget
-/// ([`crate::limits`], `MRA_MAX_BYTES`); more is refused before it is kept.
-pub fn stdin_bytes() -> Result<Vec<u8>, Failure> {
-    use std::io::Read as _;
-    let budget = crate::limits::Limits::from_env()?;
-    let mut bytes = Vec::new();
-    std::io::stdin()
-        .lock()
-        .take(budget.max_bytes.saturating_add(1))
-        .read_to_end(&mut bytes)
-        .map_err(|e| Failure::context("standard input", e))?;
-    budget
-        .check(
-            "bytes of standard input (memory budget MRA_MAX_BYTES)",
-            bytes.len() as u64,
-        )
-        .map_err(|e| Failure::context("standard input", e))?;
-    Ok(bytes)
-}
+pub use super::stdio::{is_std, stdin_bytes, write_stdout};
+use super::stdio::StdTemp;
 
 /// The raster in `bytes` read from standard input: its format recognised by its
 /// signature, or raw with `--dims`.
-fn read_std_bytes(bytes: Vec<u8>, opts: &ReadOptions) -> Result<io::Raster, Failure> {
+pub fn read_std_bytes(bytes: Vec<u8>, opts: &ReadOptions) -> Result<io::Raster, Failure> {
     let t = StdTemp::new()?;
-    let f = t.0.join(if opts.raw.is_some() {
+    let f = t.join(if opts.raw.is_some() {
         "stdin.raw"
     } else {
         "stdin"
@@ -218,7 +172,7 @@ pub fn write_output_as(
         ));
     };
     let t = StdTemp::new()?;
-    let f = t.0.join(format!("stdout.{}", ext.trim_start_matches('.')));
+    let f = t.join(&format!("stdout.{}", ext.trim_start_matches('.')));
     if io::Format::from_extension(&f).is_none() {
         return Err(Failure(format!(
             "invalid --format: {ext} (expected png, jpg, tif, pgm, ppm, pam, exr, nrrd, nii, hgt, asc, r16, r32 or raw)"
@@ -230,17 +184,50 @@ pub fn write_output_as(
     write_stdout(&bytes)
 }
 
-/// Write `bytes` to standard output (`-o -`); a closed pipe is not an error.
-pub fn write_stdout(bytes: &[u8]) -> CliResult {
-    use std::io::Write as _;
-    let mut out = std::io::stdout().lock();
-    match out.write_all(bytes).and_then(|_| out.flush()) {
-        Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => {
-            Err(Failure::context("standard output", e))
-        }
-        _ => Ok(()),
+/// The name whose extension says what `path` is written as: `path`, or for `-` (standard
+/// output) `stdout.FORMAT`.
+pub fn format_name(path: &Path, format: Option<&str>) -> PathBuf {
+    match format {
+        Some(f) if stdio::is_std(path) => PathBuf::from(format!("stdout.{}", f.trim_start_matches('.'))),
+        _ => path.to_path_buf(),
     }
 }
+
+/// Write a raster result to `path`, or to standard output for `-` in `format`.
+pub fn write_result(path: &Path, r: &io::Raster, format: Option<&str>) -> CliResult {
+    write_output_as(path, r, false, None, format)
+}
+
+/// A report as one JSON line ([`json_line`]), on standard error when the data goes to standard output (`-o -`).
+pub fn report_json(output: &Path, v: &impl serde::Serialize) {
+    if stdio::is_std(output) {
+        eprintln!("{}", json_line(v));
+    } else {
+        println!("{}", json_line(v));
+    }
+}
+
+/// A report as one JSON object in the axis order of every other command: `dims`
+/// and `coarse` fastest axis first (x, y, z; the reports hold them slowest first), and
+/// `axis_order` saying so.
+pub fn json_line(v: &impl serde::Serialize) -> String {
+    let mut j = serde_json::to_value(v).unwrap_or_default();
+    if let Some(o) = j.as_object_mut() {
+        for key in ["dims", "coarse"] {
+            if let Some(serde_json::Value::Array(a)) = o.get_mut(key) {
+                a.reverse();
+            }
+        }
+        if o.contains_key("dims") {
+            o.insert(
+                "axis_order".into(),
+                serde_json::Value::from("x, y, z (fastest first)"),
+            );
+        }
+    }
+    j.to_string()
+}
+
 
 /// Write a file atomically, naming it in any error.
 pub fn write_output(path: &Path, r: &io::Raster, compress: bool) -> Result<(), Failure> {
@@ -653,9 +640,12 @@ pub struct GenerateArgs {
     /// What to generate.
     #[arg(value_enum)]
     pub kind: KindArg,
-    /// Output file; the extension picks the format.
+    /// Output file; the extension picks the format (`-`: standard output, with --format).
     #[arg(short, long)]
     pub output: PathBuf,
+    /// Format of `-o -` (standard output), as an extension: png, tif, nrrd, …
+    #[arg(long, value_name = "EXT")]
+    pub format: Option<String>,
     /// Size: N (square / cube) or WxH / WxHxD.
     #[arg(long)]
     pub size: Option<String>,
@@ -701,5 +691,5 @@ pub fn generate(a: GenerateArgs) -> CliResult {
     };
     let field = crate::generate::generate(kind, &dims, channels, a.seed)?;
     let r = field.to_raster(ty)?;
-    write_output(&a.output, &r, a.compress)
+    write_output_as(&a.output, &r, a.compress, None, a.format.as_deref())
 }

@@ -1,7 +1,7 @@
 //! `mra mesh …`: information, subdivision, smoothing, simplification, normals, conversion,
 //! orientation, rendering and subdivision-matrix analysis. A thin shell over `crate::mesh`.
 
-use super::{CliResult, Failure};
+use super::{stdio, CliResult, Failure};
 use crate::mesh::{self, io, Features, HalfEdgeMesh, Mesh};
 use clap::{Args, Subcommand};
 use std::path::{Path, PathBuf};
@@ -12,7 +12,7 @@ pub enum Command {
     ///
     /// Example: mra mesh info ../shared/corpus/meshes/bunny.ply --json
     Info {
-        /// Input mesh: OBJ, PLY or OFF.
+        /// Input mesh: OBJ, PLY or OFF (`-`: standard input, told by its first bytes).
         input: PathBuf,
         /// Print JSON instead of text.
         #[arg(long)]
@@ -33,11 +33,14 @@ pub enum Command {
     ///
     /// Example: mra mesh simplify ../shared/corpus/meshes/bunny.ply -o small.ply --faces 1000
     Simplify {
-        /// Input mesh: OBJ, PLY or OFF.
+        /// Input mesh: OBJ, PLY or OFF (`-`: standard input, told by its first bytes).
         input: PathBuf,
-        /// Output mesh: OBJ, PLY or OFF, by extension.
+        /// Output mesh: OBJ, PLY or OFF, by extension (`-`: standard output, with --format).
         #[arg(short, long)]
         output: PathBuf,
+        /// Format of `-o -` (standard output): obj, ply or off.
+        #[arg(long, value_name = "EXT")]
+        format: Option<String>,
         /// Target number of faces.
         #[arg(long)]
         faces: usize,
@@ -46,11 +49,14 @@ pub enum Command {
     ///
     /// Example: mra mesh normals ../shared/corpus/meshes/bunny.ply -o bunny_n.ply --weighting angle
     Normals {
-        /// Input mesh: OBJ, PLY or OFF.
+        /// Input mesh: OBJ, PLY or OFF (`-`: standard input, told by its first bytes).
         input: PathBuf,
-        /// Output mesh: OBJ, PLY or OFF, by extension.
+        /// Output mesh: OBJ, PLY or OFF, by extension (`-`: standard output, with --format).
         #[arg(short, long)]
         output: PathBuf,
+        /// Format of `-o -` (standard output): obj, ply or off.
+        #[arg(long, value_name = "EXT")]
+        format: Option<String>,
         /// uniform, area or angle.
         #[arg(long, default_value = "angle")]
         weighting: String,
@@ -59,11 +65,14 @@ pub enum Command {
     ///
     /// Example: mra mesh convert ../shared/corpus/meshes/bunny.ply -o bunny.obj
     Convert {
-        /// Input mesh: OBJ, PLY or OFF.
+        /// Input mesh: OBJ, PLY or OFF (`-`: standard input, told by its first bytes).
         input: PathBuf,
-        /// Output mesh: OBJ, PLY or OFF, by extension.
+        /// Output mesh: OBJ, PLY or OFF, by extension (`-`: standard output, with --format).
         #[arg(short, long)]
         output: PathBuf,
+        /// Format of `-o -` (standard output): obj, ply or off.
+        #[arg(long, value_name = "EXT")]
+        format: Option<String>,
         /// Write PLY as ASCII.
         #[arg(long)]
         ascii: bool,
@@ -75,19 +84,22 @@ pub enum Command {
     ///
     /// Example: mra mesh orient ../shared/corpus/meshes/penguin.off -o oriented.obj
     Orient {
-        /// Input mesh: OBJ, PLY or OFF.
+        /// Input mesh: OBJ, PLY or OFF (`-`: standard input, told by its first bytes).
         input: PathBuf,
-        /// Output mesh: OBJ, PLY or OFF, by extension.
+        /// Output mesh: OBJ, PLY or OFF, by extension (`-`: standard output, with --format).
         #[arg(short, long)]
         output: PathBuf,
+        /// Format of `-o -` (standard output): obj, ply or off.
+        #[arg(long, value_name = "EXT")]
+        format: Option<String>,
     },
     /// Render a shaded PNG picture (z-buffer, optional wireframe).
     ///
     /// Example: mra mesh render ../shared/corpus/meshes/bunny.ply -o bunny.png --size 800x600 --view 30,20 --wireframe
     Render {
-        /// Input mesh: OBJ, PLY or OFF.
+        /// Input mesh: OBJ, PLY or OFF (`-`: standard input, told by its first bytes).
         input: PathBuf,
-        /// Output PNG.
+        /// Output PNG (`-`: standard output).
         #[arg(short, long)]
         output: PathBuf,
         /// Width x height in pixels.
@@ -112,11 +124,14 @@ pub enum Command {
     /// Example: mra solid polygonize corpus/scenes/sphere.json -o ball.obj --resolution 48 &&
     /// mra mesh deform ball.obj -o bulged.obj --lattice corpus/lattices/bulge.json
     Deform {
-        /// Input mesh: OBJ, PLY or OFF.
+        /// Input mesh: OBJ, PLY or OFF (`-`: standard input, told by its first bytes).
         input: PathBuf,
-        /// Output mesh: OBJ, PLY or OFF, by extension.
+        /// Output mesh: OBJ, PLY or OFF, by extension (`-`: standard output, with --format).
         #[arg(short, long)]
         output: PathBuf,
+        /// Format of `-o -` (standard output): obj, ply or off.
+        #[arg(long, value_name = "EXT")]
+        format: Option<String>,
         /// Lattice file (JSON).
         #[arg(long)]
         lattice: PathBuf,
@@ -137,11 +152,14 @@ pub enum Command {
 
 #[derive(Args, Debug)]
 pub struct SubdivideArgs {
-    /// Input mesh: OBJ, PLY or OFF.
+    /// Input mesh: OBJ, PLY or OFF (`-`: standard input, told by its first bytes).
     input: PathBuf,
-    /// Output mesh: OBJ, PLY or OFF, by extension.
+    /// Output mesh: OBJ, PLY or OFF, by extension (`-`: standard output, with --format).
     #[arg(short, long)]
     output: PathBuf,
+    /// Format of `-o -` (standard output): obj, ply or off.
+    #[arg(long, value_name = "EXT")]
+    format: Option<String>,
     /// loop, loop-warren, catmull-clark, doo-sabin or butterfly.
     #[arg(long)]
     scheme: String,
@@ -171,11 +189,14 @@ pub struct SubdivideArgs {
 
 #[derive(Args, Debug)]
 pub struct SmoothArgs {
-    /// Input mesh: OBJ, PLY or OFF.
+    /// Input mesh: OBJ, PLY or OFF (`-`: standard input, told by its first bytes).
     input: PathBuf,
-    /// Output mesh: OBJ, PLY or OFF, by extension.
+    /// Output mesh: OBJ, PLY or OFF, by extension (`-`: standard output, with --format).
     #[arg(short, long)]
     output: PathBuf,
+    /// Format of `-o -` (standard output): obj, ply or off.
+    #[arg(long, value_name = "EXT")]
+    format: Option<String>,
     /// uniform or cotangent.
     #[arg(long, default_value = "uniform")]
     laplacian: String,
@@ -191,12 +212,22 @@ pub struct SmoothArgs {
     fix_boundary: bool,
 }
 
+/// A mesh file, or standard input for `-` (its format told by its first bytes).
 fn read(path: &Path) -> Result<Mesh, Failure> {
-    io::read(path).map_err(|e| Failure::context(path.display(), e))
+    stdio::input(path, stdio::mesh_ext, |p| {
+        io::read(p).map_err(|e| Failure::context(p.display(), e))
+    })
 }
 
-fn write(path: &Path, m: &Mesh) -> CliResult {
-    io::write(path, m).map_err(|e| Failure::context(path.display(), e))
+/// The formats a mesh is written in, for the error of `-o -` without `--format`.
+const MESH_FORMATS: &str = "obj, ply, off";
+
+/// Write a mesh to `path` (its extension picks the format), or to standard output for `-`
+/// in `format`.
+fn write(path: &Path, format: Option<&str>, m: &Mesh) -> CliResult {
+    stdio::output(path, format, None, MESH_FORMATS, |p| {
+        io::write(p, m).map_err(|e| Failure::context(p.display(), e))
+    })
 }
 
 fn floats(s: &str, n: usize, what: &'static str) -> Result<Vec<f64>, Failure> {
@@ -247,20 +278,22 @@ pub fn run(c: Command) -> CliResult {
             };
             let out =
                 mesh::laplacian::smooth(&m, kind, method, a.lambda, a.iterations, a.fix_boundary)?;
-            write(&a.output, &out)
+            write(&a.output, a.format.as_deref(), &out)
         }
         Command::Simplify {
             input,
             output,
+            format,
             faces,
         } => {
             let m = read(&input)?;
             let out = mesh::simplify::simplify(&m, faces)?;
-            write(&output, &out)
+            write(&output, format.as_deref(), &out)
         }
         Command::Normals {
             input,
             output,
+            format,
             weighting,
         } => {
             let mut m = read(&input)?;
@@ -272,32 +305,39 @@ pub fn run(c: Command) -> CliResult {
             m.attributes.normals.clear();
             m.attributes.corner_normal.clear();
             m.attributes.vertex_normals = Some(n);
-            write(&output, &m)
+            write(&output, format.as_deref(), &m)
         }
         Command::Convert {
             input,
             output,
+            format,
             ascii,
             big_endian,
         } => {
             let m = read(&input)?;
-            let mut fmt = io::Format::from_path(&output)
-                .map_err(|e| Failure::context(output.display(), e))?;
-            if let io::Format::Ply(_) = fmt {
-                fmt = io::Format::Ply(if ascii {
-                    io::ply::Encoding::Ascii
-                } else if big_endian {
-                    io::ply::Encoding::BinaryBigEndian
-                } else {
-                    io::ply::Encoding::BinaryLittleEndian
-                });
-            }
-            io::write_as(&output, &m, fmt).map_err(|e| Failure::context(output.display(), e))
+            stdio::output(&output, format.as_deref(), None, MESH_FORMATS, |p| {
+                let mut fmt =
+                    io::Format::from_path(p).map_err(|e| Failure::context(p.display(), e))?;
+                if let io::Format::Ply(_) = fmt {
+                    fmt = io::Format::Ply(if ascii {
+                        io::ply::Encoding::Ascii
+                    } else if big_endian {
+                        io::ply::Encoding::BinaryBigEndian
+                    } else {
+                        io::ply::Encoding::BinaryLittleEndian
+                    });
+                }
+                io::write_as(p, &m, fmt).map_err(|e| Failure::context(p.display(), e))
+            })
         }
-        Command::Orient { input, output } => {
+        Command::Orient {
+            input,
+            output,
+            format,
+        } => {
             let m = read(&input)?;
             let out = mesh::topology::orient(&m)?;
-            write(&output, &out)
+            write(&output, format.as_deref(), &out)
         }
         Command::Render {
             input,
@@ -325,21 +365,21 @@ pub fn run(c: Command) -> CliResult {
                 ..Default::default()
             };
             let png = mesh::render::render_png(&m, &opts)?;
-            io::write_atomic(&output, &png).map_err(|e| Failure::context(output.display(), e))
+            stdio::write_bytes(&output, &png)
         }
         Command::Deform {
             input,
             output,
+            format,
             lattice,
         } => {
             let m = read(&input)?;
-            let text = std::fs::read_to_string(&lattice)
-                .map_err(|e| Failure::context(lattice.display(), e))?;
+            let text = stdio::read_text(&lattice)?;
             let bbox =
                 crate::solid::ffd::bounds(&m).map_err(|e| Failure::context(input.display(), e))?;
             let lat = crate::solid::ffd::Lattice::parse(&text, bbox)
                 .map_err(|e| Failure::context(lattice.display(), e))?;
-            write(&output, &lat.deform(&m))
+            write(&output, format.as_deref(), &lat.deform(&m))
         }
         Command::Analyze {
             scheme,
@@ -353,8 +393,7 @@ fn subdivide(a: SubdivideArgs) -> CliResult {
     let m = read(&a.input)?;
     let scheme = mesh::subdivide::Scheme::parse(&a.scheme)?;
     let features = if let Some(path) = &a.creases {
-        let text =
-            std::fs::read_to_string(path).map_err(|e| Failure::context(path.display(), e))?;
+        let text = stdio::read_text(path)?;
         Features::parse(&text).map_err(|e| Failure::context(path.display(), e))?
     } else if let Some(deg) = a.crease_angle {
         let he = HalfEdgeMesh::build(&m).map_err(|e| Failure::context(a.input.display(), e))?;
@@ -395,7 +434,7 @@ fn subdivide(a: SubdivideArgs) -> CliResult {
         None => mesh::subdivide::subdivide(&m, scheme, a.steps, &features),
     }
     .map_err(|e| Failure::context(a.input.display(), e))?;
-    write(&a.output, &out)
+    write(&a.output, a.format.as_deref(), &out)
 }
 
 fn print_info(path: &Path, r: &mesh::topology::Report) {

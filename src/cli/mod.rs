@@ -8,6 +8,7 @@ pub mod array;
 pub mod codec;
 pub mod curve;
 pub mod demo;
+pub mod denoise;
 pub mod io_cmds;
 pub mod label;
 pub mod mesh;
@@ -17,9 +18,12 @@ pub mod scheme;
 #[cfg(feature = "serve")]
 pub mod serve;
 pub mod solid;
+pub mod stdio;
+pub mod style;
 pub mod subdivide;
 pub mod surface;
 pub mod terrain;
+pub mod transfer;
 pub mod upscale;
 
 /// Multiresolution codec, upscaler and terrain synthesis for images, volumes and heightmaps.
@@ -72,9 +76,9 @@ pub enum Command {
     #[command(subcommand)]
     Terrain(terrain::TerrainCommand),
     /// Give an image, heightmap or volume the fine details of an example (detail transfer).
-    Transfer(terrain::TransferArgs),
+    Transfer(transfer::TransferArgs),
     /// Remove noise by thresholded details (§9.7.2): curves, images, volumes, heightmaps.
-    Denoise(terrain::DenoiseArgs),
+    Denoise(denoise::DenoiseArgs),
 
     /// Upscale images, volumes, heightmaps by subdivision / B-spline interpolation (§7.7).
     Upscale(upscale::UpscaleArgs),
@@ -248,8 +252,8 @@ pub fn main() -> i32 {
         Command::Convert(a) => io_cmds::convert(a),
         Command::Scheme(c) => scheme::run(c),
         Command::Terrain(c) => terrain::run(c),
-        Command::Transfer(a) => terrain::transfer(a),
-        Command::Denoise(a) => terrain::denoise(a),
+        Command::Transfer(a) => transfer::transfer(a),
+        Command::Denoise(a) => denoise::denoise(a),
         Command::Upscale(a) => upscale::run_upscale(a),
         Command::Downscale(a) => upscale::run_downscale(a),
         Command::Encode(a) => codec::encode(a),

@@ -35,6 +35,7 @@ fn expected(command: &str, subcommand: &str, input: Option<&Path>) -> Option<Wri
             "decode" | "convert" | "upscale" | "downscale" | "transfer" | "terrain" | "generate",
             _,
         ) => Writes::Raster,
+        ("denoise", _) if input.is_some_and(super::stdio::is_std) => return None,
         ("denoise", _) if input.is_some_and(super::analyze::is_point_list) => {
             Writes::Extensions(POINTS)
         }
@@ -102,6 +103,86 @@ fn split(args: &[OsString]) -> (Option<String>, Option<PathBuf>, Vec<PathBuf>) {
     (command, output, rest)
 }
 
+/// The one format a command writes to `-o -` when `--format` is not given (pictures).
+fn std_default(command: &str, subcommand: &str) -> Option<&'static str> {
+    match (command, subcommand) {
+        ("terrain", "render") | ("mesh", "render") => Some("png"),
+        _ => None,
+    }
+}
+
+/// The value of `--format` in `args`.
+fn format_arg(args: &[OsString]) -> Option<String> {
+    let mut it = args.iter().map(|a| a.to_string_lossy());
+    while let Some(a) = it.next() {
+        if a == "--format" {
+            return it.next().map(|v| v.into_owned());
+        }
+        if let Some(v) = a.strip_prefix("--format=") {
+            return Some(v.to_string());
+        }
+    }
+    None
+}
+
+/// Check `-o -` (standard output) before the command runs: a command whose output
+/// format is chosen by the extension needs `--format`, and the format must be one the
+/// command writes; a point list is text whatever its extension.
+fn check_std(args: &[OsString], command: &str, rest: &[PathBuf]) -> Result<(), Failure> {
+    let subcommand = rest
+        .first()
+        .map(|p| p.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let input = match command {
+        "denoise" => rest.first().map(PathBuf::as_path),
+        _ => None,
+    };
+    // the commands whose file outputs are not checked by name still need a format here
+    let writes = match (command, subcommand.as_str()) {
+        ("solid", "polygonize") | ("volume", _) => Writes::Extensions(MESHES),
+        ("solid", "voxelize") => Writes::Raster,
+        ("solid" | "surface", "render") => Writes::Extensions(&["png"]),
+        ("surface", _) => Writes::Extensions(MESHES),
+        _ => match expected(command, &subcommand, input) {
+            Some(w) => w,
+            None => return Ok(()),
+        },
+    };
+    let name = if matches!(command, "mesh" | "curve" | "solid" | "surface" | "volume") {
+        format!("{command} {subcommand}")
+    } else {
+        command.to_string()
+    };
+    let format = format_arg(args).or_else(|| std_default(command, &subcommand).map(String::from));
+    let want = match writes {
+        Writes::Extensions(exts) if exts == POINTS => return Ok(()),
+        Writes::Extensions([_]) if format.is_none() => return Ok(()),
+        Writes::Extensions(exts) => {
+            let want: Vec<&str> = exts.to_vec();
+            match &format {
+                Some(f) if exts.contains(&f.trim_start_matches('.').to_ascii_lowercase().as_str()) => {
+                    return Ok(())
+                }
+                _ => want.join(", "),
+            }
+        }
+        Writes::Raster => {
+            let fine = format.as_ref().is_some_and(|f| {
+                Format::from_extension(Path::new(&format!("stdout.{}", f.trim_start_matches('.'))))
+                    .is_some_and(writable)
+            });
+            if fine {
+                return Ok(());
+            }
+            RASTER_OUT.replace(" .", ", ").trim_start_matches('.').to_string()
+        }
+    };
+    Err(Failure(match format {
+        None => format!("standard output: -o - needs --format for {name} ({want})"),
+        Some(f) => format!("invalid --format: {f} for {name} (expected {want})"),
+    }))
+}
+
 /// Check the output of the command line `args` (without the program name).
 pub fn check(args: &[OsString]) -> Result<(), Failure> {
     let (command, output, rest) = split(args);
@@ -109,7 +190,7 @@ pub fn check(args: &[OsString]) -> Result<(), Failure> {
         return Ok(());
     };
     if out.as_os_str() == "-" {
-        return Ok(());
+        return check_std(args, command.as_deref().unwrap_or_default(), &rest);
     }
     for input in rest.iter().filter(|p| p.exists()) {
         if out.exists() && same_file(&out, input) {

@@ -1,10 +1,9 @@
 //! `mra solid …` (implicit models and CSG scenes) and `mra volume isosurface` (surfaces out of
 //! CT/MR volumes). A thin shell over `crate::solid`.
 
-use super::{CliResult, Failure};
+use super::{stdio, CliResult, Failure};
 use crate::solid::{mc, render, scene::Scene, tlist, voxel};
 use clap::{Args, Subcommand};
-use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -14,9 +13,10 @@ pub enum Command {
     ///
     /// Example: mra solid render corpus/scenes/csg20.json -o csg.png --size 512
     Render {
-        /// Scene file (JSON: primitives, CSG operations, blends; examples in corpus/scenes).
+        /// Scene file (JSON: primitives, CSG operations, blends; examples in corpus/scenes;
+        /// `-`: standard input).
         scene: PathBuf,
-        /// Output PNG.
+        /// Output PNG (`-`: standard output).
         #[arg(short, long)]
         output: PathBuf,
         /// Image width and height in pixels.
@@ -27,11 +27,15 @@ pub enum Command {
     ///
     /// Example: mra solid polygonize corpus/scenes/blend.json -o blend.obj --resolution 128 --normals
     Polygonize {
-        /// Scene file (JSON: primitives, CSG operations, blends; examples in corpus/scenes).
+        /// Scene file (JSON: primitives, CSG operations, blends; examples in corpus/scenes;
+        /// `-`: standard input).
         scene: PathBuf,
-        /// Output mesh: OBJ, PLY or OFF, by extension.
+        /// Output mesh: OBJ, PLY or OFF, by extension (`-`: standard output, with --format).
         #[arg(short, long)]
         output: PathBuf,
+        /// Format of `-o -` (standard output): obj, ply or off.
+        #[arg(long, value_name = "EXT")]
+        format: Option<String>,
         /// Cells along the longest side of the model.
         #[arg(long, default_value_t = 128)]
         resolution: usize,
@@ -44,11 +48,16 @@ pub enum Command {
     ///
     /// Example: mra solid voxelize corpus/scenes/box_minus_cylinder.json -o part.nrrd --size 128 --occupancy
     Voxelize {
-        /// Scene file (JSON: primitives, CSG operations, blends; examples in corpus/scenes).
+        /// Scene file (JSON: primitives, CSG operations, blends; examples in corpus/scenes;
+        /// `-`: standard input).
         scene: PathBuf,
-        /// Output volume: NRRD, NIfTI, raw or TIFF, by extension.
+        /// Output volume: NRRD, NIfTI, raw or TIFF, by extension (`-`: standard output, with
+        /// --format).
         #[arg(short, long)]
         output: PathBuf,
+        /// Format of `-o -` (standard output): nrrd, nii, tif or raw.
+        #[arg(long, value_name = "EXT")]
+        format: Option<String>,
         /// Cells along the longest side of the model.
         #[arg(long, default_value_t = 128)]
         size: usize,
@@ -60,7 +69,8 @@ pub enum Command {
     ///
     /// Example: mra solid volume corpus/scenes/sphere_and_box.json --rays 512
     Volume {
-        /// Scene file (JSON: primitives, CSG operations, blends; examples in corpus/scenes).
+        /// Scene file (JSON: primitives, CSG operations, blends; examples in corpus/scenes;
+        /// `-`: standard input).
         scene: PathBuf,
         /// Rays per side of the grid of parallel rays (1 to 16384).
         #[arg(long, default_value_t = tlist::DEFAULT_RAYS, value_parser = parse_rays)]
@@ -93,9 +103,12 @@ pub enum VolumeCommand {
 pub struct IsoArgs {
     /// A volume (any format `mra info-file` reads: NRRD, NIfTI, DICOM folder, TIFF stack, raw).
     pub input: PathBuf,
-    /// Output mesh: OBJ, PLY or OFF, by extension.
+    /// Output mesh: OBJ, PLY or OFF, by extension (`-`: standard output, with --format).
     #[arg(short, long)]
     pub output: PathBuf,
+    /// Format of `-o -` (standard output): obj, ply or off.
+    #[arg(long, value_name = "EXT")]
+    pub format: Option<String>,
     /// Iso value (inside is above it).
     #[arg(long)]
     pub level: f64,
@@ -118,29 +131,43 @@ pub struct IsoArgs {
 }
 
 fn scene(path: &Path) -> Result<Scene, Failure> {
-    Scene::read(path).map_err(|e| Failure::context(path.display(), e))
+    stdio::input(
+        path,
+        |_| "json",
+        |p| Scene::read(p).map_err(|e| Failure::context(p.display(), e)),
+    )
 }
 
-fn write_mesh(path: &Path, iso: mc::Isosurface) -> CliResult {
-    write_mesh_as(path, iso, None)
+fn write_mesh(path: &Path, format: Option<&str>, iso: mc::Isosurface) -> CliResult {
+    write_mesh_as(path, format, iso, None)
 }
 
 /// [`write_mesh`] with the PLY position type (`float` for volume isosurfaces, as
 /// scikit-image and VTK write them; `double` by default).
 fn write_mesh_as(
     path: &Path,
+    format: Option<&str>,
     iso: mc::Isosurface,
     position: Option<crate::mesh::attributes::ScalarType>,
 ) -> CliResult {
     let mut m = iso.mesh;
     m.attributes.position_type = position;
     m.attributes.vertex_normals = iso.normals;
-    crate::mesh::io::write(path, &m).map_err(|e| Failure::context(path.display(), e))
+    stdio::output(path, format, None, "obj, ply, off", |p| {
+        crate::mesh::io::write(p, &m).map_err(|e| Failure::context(p.display(), e))
+    })
 }
 
 /// Print what was made: counts, area, enclosed volume and time; with `check`, the
 /// topology too (closed, manifold, oriented, χ); as text or one JSON object.
-fn report(iso: &mc::Isosurface, secs: f64, check: bool, json: bool) -> CliResult {
+/// On standard error when `output` is standard output.
+fn report(
+    output: &Path,
+    iso: &mc::Isosurface,
+    secs: f64,
+    check: bool,
+    json: bool,
+) -> CliResult {
     let topo = check.then(|| crate::mesh::topology::analyze(&iso.mesh));
     let (area, vol) = mc::area_volume(&iso.mesh);
     let (nv, nf) = (iso.mesh.vertex_count(), iso.mesh.face_count());
@@ -156,7 +183,7 @@ fn report(iso: &mc::Isosurface, secs: f64, check: bool, json: bool) -> CliResult
             "oriented": topo.as_ref().map(|r| r.oriented),
             "euler": topo.as_ref().map(|r| r.euler),
         });
-        format!("{v}\n")
+        v.to_string()
     } else {
         let t = topo
             .map(|r| {
@@ -166,9 +193,9 @@ fn report(iso: &mc::Isosurface, secs: f64, check: bool, json: bool) -> CliResult
                 )
             })
             .unwrap_or_default();
-        format!("{nv} vertices, {nf} triangles{t}, area {area:.6}, volume {vol:.6}, {secs:.3} s\n")
+        format!("{nv} vertices, {nf} triangles{t}, area {area:.6}, volume {vol:.6}, {secs:.3} s")
     };
-    super::io_cmds::emit(&text)
+    super::io_cmds::report(output, &text)
 }
 
 pub fn run(c: Command) -> CliResult {
@@ -183,20 +210,22 @@ pub fn run(c: Command) -> CliResult {
             let img = render::render(&sc, size, size)?;
             let secs = t.elapsed().as_secs_f64();
             let bytes = render::png_bytes(&img)?;
-            crate::fsutil::write_atomic(&output, |w| w.write_all(&bytes))
-                .map_err(|e| Failure::context(output.display(), e))?;
-            println!(
-                "{}x{} image of {} primitives in {:.3} s",
-                size,
-                size,
-                sc.root.leaf_count(),
-                secs
-            );
-            Ok(())
+            stdio::write_bytes(&output, &bytes)?;
+            super::io_cmds::report(
+                &output,
+                &format!(
+                    "{}x{} image of {} primitives in {:.3} s",
+                    size,
+                    size,
+                    sc.root.leaf_count(),
+                    secs
+                ),
+            )
         }
         Command::Polygonize {
             scene: s,
             output,
+            format,
             resolution,
             normals,
         } => {
@@ -204,12 +233,13 @@ pub fn run(c: Command) -> CliResult {
             let t = Instant::now();
             let sampled = voxel::sample(&sc.root, resolution)?;
             let iso = mc::polygonize(&sampled.grid(), 0.0, normals)?;
-            report(&iso, t.elapsed().as_secs_f64(), true, false)?;
-            write_mesh(&output, iso)
+            report(&output, &iso, t.elapsed().as_secs_f64(), true, false)?;
+            write_mesh(&output, format.as_deref(), iso)
         }
         Command::Voxelize {
             scene: s,
             output,
+            format,
             size,
             occupancy,
         } => {
@@ -221,12 +251,14 @@ pub fn run(c: Command) -> CliResult {
                 voxel::VoxelMode::Field
             };
             let r = voxel::to_raster(&sampled, mode)?;
-            crate::io::write(&output, &r).map_err(|e| Failure::context(output.display(), e))?;
-            println!(
-                "{} x {} x {} samples, spacing {:.6}",
-                sampled.dims[0], sampled.dims[1], sampled.dims[2], sampled.spacing[0]
-            );
-            Ok(())
+            super::io_cmds::write_output_as(&output, &r, false, None, format.as_deref())?;
+            super::io_cmds::report(
+                &output,
+                &format!(
+                    "{} x {} x {} samples, spacing {:.6}",
+                    sampled.dims[0], sampled.dims[1], sampled.dims[2], sampled.spacing[0]
+                ),
+            )
         }
         Command::Volume { scene: s, rays } => {
             let sc = scene(&s)?;
@@ -332,8 +364,7 @@ pub fn run_volume(c: VolumeCommand) -> CliResult {
     match c {
         VolumeCommand::Isosurface(a) => {
             crate::tuning::use_allocator(crate::tuning::Allocator::ReuseFreed);
-            let r =
-                crate::io::read(&a.input).map_err(|e| Failure::context(a.input.display(), e))?;
+            let r = super::io_cmds::read_input(&a.input, &crate::io::ReadOptions::default())?;
             let t = Instant::now();
             let (values, dims, spacing, origin) = into_volume_grid(r, !a.open)?;
             let grid = mc::Grid {
@@ -344,9 +375,9 @@ pub fn run_volume(c: VolumeCommand) -> CliResult {
             };
             let iso = mc::polygonize(&grid, a.level, a.normals)?;
             drop(values);
-            report(&iso, t.elapsed().as_secs_f64(), a.check, a.json)?;
+            report(&a.output, &iso, t.elapsed().as_secs_f64(), a.check, a.json)?;
             let float = (!a.double).then_some(crate::mesh::attributes::ScalarType::F32);
-            write_mesh_as(&a.output, iso, float)
+            write_mesh_as(&a.output, a.format.as_deref(), iso, float)
         }
     }
 }

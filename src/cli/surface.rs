@@ -68,9 +68,13 @@ pub enum Command {
 /// Output mesh options shared by every surface command.
 #[derive(Args, Debug, Clone)]
 pub struct MeshOut {
-    /// Output mesh: .obj, .ply (ASCII) or .off (OFF carries no normals).
+    /// Output mesh: .obj, .ply (ASCII) or .off (OFF carries no normals); `-`: standard
+    /// output, with --format.
     #[arg(short, long)]
     pub output: PathBuf,
+    /// Format of `-o -` (standard output): obj, ply or off.
+    #[arg(long, value_name = "EXT")]
+    pub format: Option<String>,
     /// Samples along u and v, "U,V".
     #[arg(long, default_value = "48,48")]
     pub resolution: String,
@@ -246,9 +250,9 @@ pub struct CrossArgs {
 
 #[derive(Args, Debug)]
 pub struct RenderArgs {
-    /// Mesh to draw (OBJ, PLY or OFF).
+    /// Mesh to draw (OBJ, PLY or OFF; `-`: standard input, told by its first bytes).
     pub input: PathBuf,
-    /// Output PNG.
+    /// Output PNG (`-`: standard output).
     #[arg(short, long)]
     pub output: PathBuf,
     /// Picture size, WIDTHxHEIGHT.
@@ -325,7 +329,9 @@ pub fn run(c: Command) -> CliResult {
             write_mesh(&s, &a.mesh)
         }
         Command::Render(a) => {
-            let m = mesh_io::read(&a.input).map_err(|e| Failure::context(a.input.display(), e))?;
+            let m = super::stdio::input(&a.input, super::stdio::mesh_ext, |p| {
+                mesh_io::read(p).map_err(|e| Failure::context(p.display(), e))
+            })?;
             let (width, height) = parse_size(&a.size)?;
             let png = render_png(
                 &m,
@@ -372,13 +378,15 @@ fn write_mesh(s: &dyn Surface, o: &MeshOut) -> CliResult {
     } else {
         FaceKind::Triangles
     };
-    let format = match Format::from_path(&o.output)? {
-        // ASCII keeps tessellated surfaces readable as text
-        Format::Ply(_) => Format::Ply(Encoding::Ascii),
-        f => f,
-    };
     let m = tessellate(s, ru, rv, kind)?;
-    mesh_io::write_as(&o.output, &m, format).map_err(|e| Failure::context(o.output.display(), e))
+    super::stdio::output(&o.output, o.format.as_deref(), None, "obj, ply, off", |p| {
+        let format = match Format::from_path(p).map_err(|e| Failure::context(p.display(), e))? {
+            // ASCII keeps tessellated surfaces readable as text
+            Format::Ply(_) => Format::Ply(Encoding::Ascii),
+            f => f,
+        };
+        mesh_io::write_as(p, &m, format).map_err(|e| Failure::context(p.display(), e))
+    })
 }
 
 fn patch(a: PatchArgs) -> CliResult {

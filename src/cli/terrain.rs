@@ -1,16 +1,15 @@
-//! `mra terrain synth|render`, `mra transfer`, `mra denoise` and `mra curve style`: thin
-//! shells over [`crate::terrain`], [`crate::denoise`] and the curve style transfer.
+//! `mra terrain synth|render|highpass`: thin shells over [`crate::terrain`]. (`transfer`,
+//! `denoise` and `curve style` have their own files.)
 
 use std::path::{Path, PathBuf};
 
 use clap::{Args, Subcommand};
 
-use super::io_cmds::{read_input, write_output};
+use super::io_cmds::{format_name, read_input, report_json, write_result};
+use super::stdio;
 use super::{CliResult, Failure};
-use crate::denoise::{self, DenoiseOptions, Mode, Rule};
-use crate::io::{self, DataKind, Format, Raster, ReadOptions, SampleType, Samples};
-use crate::scheme::{Boundary, Scheme};
-use crate::tensor::Array;
+use crate::io::{DataKind, Format, Raster, ReadOptions, SampleType, Samples};
+use crate::scheme::Scheme;
 use crate::terrain::synth::Details;
 use crate::terrain::{self, raster as tr, FinestGain, Grid, Shading, SynthOptions};
 
@@ -31,9 +30,13 @@ pub enum TerrainCommand {
 pub struct HighpassArgs {
     /// A heightmap or image.
     pub input: PathBuf,
-    /// Output heightmap (the fine details); the extension picks the format.
+    /// Output heightmap (the fine details); the extension picks the format (`-`:
+    /// standard output, with --format).
     #[arg(short, long)]
     pub output: PathBuf,
+    /// Format of `-o -` (standard output), as an extension: png, tif, exr, nrrd, …
+    #[arg(long, value_name = "EXT")]
+    pub format: Option<String>,
     /// Levels removed (the coarse part left out).
     #[arg(long, default_value_t = 2)]
     pub levels: usize,
@@ -81,7 +84,7 @@ pub struct MatchArgs {
 }
 
 impl MatchArgs {
-    fn options(&self) -> SynthOptions {
+    pub(super) fn options(&self) -> SynthOptions {
         SynthOptions {
             levels: self.levels,
             scheme: self.scheme,
@@ -112,13 +115,18 @@ pub struct SynthArgs {
     /// The detailed example heightmap (same height unit).
     #[arg(long)]
     pub example: PathBuf,
-    /// Output heightmap; the extension picks the format.
+    /// Output heightmap; the extension picks the format (`-`: standard output, with
+    /// --format).
     #[arg(short, long)]
     pub output: PathBuf,
+    /// Format of `-o -` (standard output), as an extension: png, tif, exr, nrrd, …
+    #[arg(long, value_name = "EXT")]
+    pub format: Option<String>,
     /// Output size WxH (default: base × 2^L).
     #[arg(long, value_name = "WxH")]
     pub size: Option<String>,
-    /// Also write base, example and result side by side, hillshaded, as a PNG.
+    /// Also write base, example and result side by side, hillshaded, as a PNG (`-`:
+    /// standard output, when -o is a file).
     #[arg(long)]
     pub preview: Option<PathBuf>,
     /// The example's cell size in the base's horizontal unit (e.g. 0.000278 for a 30 m
@@ -149,9 +157,12 @@ pub struct SynthArgs {
 pub struct RenderArgs {
     /// A heightmap.
     pub input: PathBuf,
-    /// Output PNG.
+    /// Output PNG (`-`: standard output).
     #[arg(short, long)]
     pub output: PathBuf,
+    /// Format of `-o -` (standard output), as an extension (default png).
+    #[arg(long, value_name = "EXT")]
+    pub format: Option<String>,
     /// Sun azimuth in degrees clockwise from north.
     #[arg(long, default_value_t = 315.0)]
     pub azimuth: f64,
@@ -167,68 +178,6 @@ pub struct RenderArgs {
     /// Hypsometric colour ramp by elevation.
     #[arg(long, alias = "color")]
     pub colour: bool,
-}
-
-#[derive(Args, Debug)]
-#[command(after_help = "Example:
-  mra generate terrain --size 257 --seed 3 -o smooth.png
-  mra generate terrain --size 257 --seed 9 -o rough.png
-  mra transfer --from rough.png --to smooth.png --levels 2 -o out.png
-  mra transfer --from ../shared/corpus/volumes/ct_pancreas_256.nrrd --to blurred.nrrd -o ct.nrrd")]
-pub struct TransferArgs {
-    /// The example whose fine details are transferred.
-    #[arg(long)]
-    pub from: PathBuf,
-    /// The image, heightmap or volume that receives them (its own details are replaced).
-    #[arg(long)]
-    pub to: PathBuf,
-    /// Output file; the extension picks the format.
-    #[arg(short, long)]
-    pub output: PathBuf,
-    #[command(flatten)]
-    pub m: MatchArgs,
-}
-
-#[derive(Args, Debug)]
-#[command(after_help = "Examples:
-  mra denoise noisy.png -o clean.png
-  mra denoise ../shared/corpus/volumes/ct_pancreas_256.nrrd --mode hard --levels 3 -o ct.nrrd
-  mra denoise stroke.csv --scheme chaikin -o smooth.csv")]
-pub struct DenoiseArgs {
-    /// An image, volume or heightmap, or a point list (.csv / .txt).
-    pub input: PathBuf,
-    /// Output file; the extension picks the format (a point list for point-list input).
-    #[arg(short, long)]
-    pub output: PathBuf,
-    /// Levels (default: 4 for haar; for chaikin/cubic chosen among 1–4 by the smallest
-    /// SURE risk; 0 = that choice for any scheme).
-    #[arg(long)]
-    pub levels: Option<usize>,
-    /// Cycle spinning: average over shifts 0..N along every axis (N^d transforms;
-    /// default 2; 1 = one decimated transform).
-    #[arg(long, default_value_t = 2)]
-    pub shifts: usize,
-    /// haar (best measured), chaikin or cubic.
-    #[arg(long, default_value = "haar")]
-    pub scheme: Scheme,
-    /// Boundary (default: symmetric for arrays, interpolating for point lists).
-    #[arg(long)]
-    pub boundary: Option<Boundary>,
-    /// A fixed threshold in sample units (default: BayesShrink per band).
-    #[arg(long)]
-    pub threshold: Option<f64>,
-    /// Use the universal threshold σ√(2 ln N) instead of BayesShrink.
-    #[arg(long, conflicts_with = "threshold")]
-    pub universal: bool,
-    /// The noise σ in sample units (default: estimated from the finest band's MAD).
-    #[arg(long)]
-    pub sigma: Option<f64>,
-    /// Thresholding: soft (shrink toward zero) or hard (keep or zero).
-    #[arg(long, default_value = "soft")]
-    pub mode: Mode,
-    /// Print what was done as one JSON object.
-    #[arg(long)]
-    pub json: bool,
 }
 
 fn parse_size(s: &str) -> Result<(usize, usize), Failure> {
@@ -356,27 +305,6 @@ fn preview(base: &Grid, example: &Grid, out_r: &Raster, out: &Grid) -> Result<Ra
     )?)
 }
 
-/// Print a report as one JSON object in the axis order of every other command: `dims`
-/// and `coarse` fastest axis first (x, y, z; the reports hold them slowest first), and
-/// `axis_order` saying so.
-fn print_json(v: &impl serde::Serialize) {
-    let mut j = serde_json::to_value(v).unwrap_or_default();
-    if let Some(o) = j.as_object_mut() {
-        for key in ["dims", "coarse"] {
-            if let Some(serde_json::Value::Array(a)) = o.get_mut(key) {
-                a.reverse();
-            }
-        }
-        if o.contains_key("dims") {
-            o.insert(
-                "axis_order".into(),
-                serde_json::Value::from("x, y, z (fastest first)"),
-            );
-        }
-    }
-    println!("{j}");
-}
-
 pub fn run(c: TerrainCommand) -> CliResult {
     match c {
         TerrainCommand::Synth(a) => synth(a),
@@ -390,10 +318,15 @@ fn highpass(a: HighpassArgs) -> CliResult {
     let h = terrain::highpass(&g, a.scheme, a.levels)
         .map_err(|e| Failure::context(a.input.display(), e))?;
     let out = tr::from_grid(&h, &r, SampleType::F32)?;
-    write_output(&a.output, &out, false)
+    write_result(&a.output, &out, a.format.as_deref())
 }
 
 fn synth(a: SynthArgs) -> CliResult {
+    if stdio::is_std(&a.output) && a.preview.as_deref().is_some_and(stdio::is_std) {
+        return Err(Failure(
+            "standard output: both -o and --preview are - (expected a file for one of them)".into(),
+        ));
+    }
     let (br, base) = load_grid(&a.base)?;
     let (mut er, example) = load_grid(&a.example)?;
     if let Some(c) = a.example_cell {
@@ -437,14 +370,19 @@ fn synth(a: SynthArgs) -> CliResult {
     };
     drop(er);
     let (g, report) = terrain::synthesize(&base, &example, &o)?;
-    let out = tr::from_grid(&g, &br, output_type(&a.output, br.sample_type()))?;
-    write_output(&a.output, &out, false)?;
+    let fmt = a.format.as_deref();
+    let out = tr::from_grid(
+        &g,
+        &br,
+        output_type(&format_name(&a.output, fmt), br.sample_type()),
+    )?;
+    write_result(&a.output, &out, fmt)?;
     if let Some(p) = &a.preview {
         let pic = preview(&base, &example, &out, &g)?;
-        write_output(p, &pic, false)?;
+        write_result(p, &pic, Some("png"))?;
     }
     if a.m.json {
-        print_json(&report);
+        report_json(&a.output, &report);
     } else {
         eprintln!(
             "{}: {}x{} from base {}x{} (coarse lattice {}x{}), {} levels, seam ratio {:.3}",
@@ -472,186 +410,10 @@ fn render(a: RenderArgs) -> CliResult {
         colour: a.colour,
     };
     s.validate()?;
-    write_output(&a.output, &shade_raster(&g, &s)?, false)
+    write_result(
+        &a.output,
+        &shade_raster(&g, &s)?,
+        Some(a.format.as_deref().unwrap_or("png")),
+    )
 }
 
-/// A volume transfer: both inputs 3-D (NRRD, NIfTI, raw, slice folders…), output with
-/// the base's size, metadata and sample type.
-fn transfer_volume(a: &TransferArgs, br: Raster, er: Raster) -> CliResult {
-    if er.dims.len() != 3 {
-        return Err(Failure(format!(
-            "{}: {}-D data (expected a volume, like --to)",
-            a.from.display(),
-            er.dims.len()
-        )));
-    }
-    // voids are filled (pull-push) before synthesis, as the 2-D path fills them
-    let vol = |r: &Raster, p: &Path| {
-        let mut data = r.to_f64();
-        let mut shape = r.dims.clone();
-        shape.push(r.channels);
-        if let Some(v) = io::nodata::Voids::find(&data, r.meta.nodata) {
-            v.fill(&mut data, &shape, 3)
-                .map_err(|e| Failure::context(p.display(), e))?;
-        }
-        terrain::Volume::new([r.dims[0], r.dims[1], r.dims[2]], r.channels, data)
-            .map_err(|e| Failure::context(p.display(), e))
-    };
-    let (base, example) = (vol(&br, &a.to)?, vol(&er, &a.from)?);
-    let o = SynthOptions {
-        candidates: a.m.candidates.unwrap_or(4096),
-        ..a.m.options()
-    };
-    let (v, report) = terrain::transfer_volume(&base, &example, &o)?;
-    let ty = br.sample_type();
-    let mut out = Raster {
-        samples: Samples::from_f64(v.data(), ty),
-        ..br
-    };
-    out.meta.nodata = None;
-    write_output(&a.output, &out, false)?;
-    if a.m.json {
-        print_json(&report);
-    }
-    Ok(())
-}
-
-pub fn transfer(a: TransferArgs) -> CliResult {
-    let br = read_input(&a.to, &ReadOptions::default())?;
-    if br.dims.len() == 3 {
-        let er = read_input(&a.from, &ReadOptions::default())?;
-        return transfer_volume(&a, br, er);
-    }
-    let (br, base) = load_grid(&a.to)?;
-    let (er, example) = load_grid(&a.from)?;
-    let scale = tr::check_compatible(&br, &er, base.w())
-        .map_err(|e| Failure::context(a.from.display(), e))?;
-    let o = SynthOptions {
-        example_scale: scale,
-        ..a.m.options()
-    };
-    let (g, report) = terrain::transfer(&base, &example, &o)?;
-    let out = tr::from_grid(&g, &br, br.sample_type())?;
-    write_output(&a.output, &out, false)?;
-    if a.m.json {
-        print_json(&report);
-    }
-    Ok(())
-}
-
-pub fn denoise(a: DenoiseArgs) -> CliResult {
-    let rule = match (a.threshold, a.universal) {
-        (Some(t), _) => Rule::Fixed(t),
-        (None, true) => Rule::Universal,
-        _ => Rule::Bayes,
-    };
-    let is_points = super::analyze::is_point_list(&a.input);
-    let o = DenoiseOptions {
-        scheme: a.scheme,
-        boundary: a.boundary.unwrap_or(if is_points {
-            Boundary::Interpolating
-        } else {
-            Boundary::Symmetric
-        }),
-        levels: a
-            .levels
-            .unwrap_or(if a.scheme == Scheme::Haar { 4 } else { 0 }),
-        mode: a.mode,
-        rule,
-        sigma: a.sigma,
-        shifts: a.shifts,
-    };
-    let report = if is_points {
-        let text = std::fs::read_to_string(&a.input)
-            .map_err(|e| Failure::context(a.input.display(), e))?;
-        let pts =
-            crate::points::parse(&text).map_err(|e| Failure::context(a.input.display(), e))?;
-        let (n, d) = (pts.len(), pts.dim);
-        let mut arr = Array::from_shape_vec(&[n, d], pts.data)?;
-        let r = denoise::denoise(&mut arr, &[0], &o)
-            .map_err(|e| Failure::context(a.input.display(), e))?;
-        crate::fsutil::write_atomic(&a.output, |w| crate::points::write(d, arr.data(), w))
-            .map_err(|e| Failure::context(a.output.display(), e))?;
-        r
-    } else {
-        let r = read_input(&a.input, &ReadOptions::default())?;
-        let (shape, axes) = io::array::array_shape(&r.dims, r.channels);
-        // voids never enter the filter: filled for it, marked again after
-        let mut data = r.to_f64();
-        let voids = io::nodata::Voids::find(&data, r.meta.nodata);
-        if let Some(v) = &voids {
-            let mut grid = r.dims.clone();
-            grid.push(r.channels);
-            v.fill(&mut data, &grid, r.dims.len())
-                .map_err(|e| Failure::context(a.input.display(), e))?;
-        }
-        let mut arr = Array::from_shape_vec(&shape, data)?;
-        let rep = denoise::denoise(&mut arr, &axes, &o)
-            .map_err(|e| Failure::context(a.input.display(), e))?;
-        let mut out_data = arr.into_data();
-        if let Some(v) = &voids {
-            v.restore(&mut out_data, &v.mask, false);
-        }
-        let samples = Samples::from_f64(&out_data, r.sample_type());
-        if samples == r.samples {
-            // a clean input: said, not written silently as if something was removed
-            eprintln!(
-                "mra: {}: noise σ ≈ {:.3} (a clean input): no sample changed (--sigma sets the noise level)",
-                a.input.display(),
-                rep.sigma
-            );
-        }
-        let out = Raster { samples, ..r };
-        write_output(&a.output, &out, false)?;
-        rep
-    };
-    if a.json {
-        print_json(&report);
-    }
-    Ok(())
-}
-
-#[derive(Args, Debug)]
-#[command(after_help = "Example:
-  mra curve style --style corpus/curves/zigzag.csv --base corpus/curves/arc.csv --levels 3 -o styled.csv")]
-pub struct StyleArgs {
-    /// The style stroke: a 2-D point list whose fine details are the style.
-    #[arg(long)]
-    pub style: PathBuf,
-    /// The new base curve: a 2-D point list (resampled by arc length).
-    #[arg(long)]
-    pub base: PathBuf,
-    /// Output point list (CSV).
-    #[arg(short, long)]
-    pub output: PathBuf,
-    /// Levels of detail carried over from the style curve.
-    #[arg(long, default_value_t = 3)]
-    pub levels: usize,
-    /// chaikin (the notes' Figure 9.18) or cubic.
-    #[arg(long, default_value = "chaikin")]
-    pub scheme: Scheme,
-    /// Treat both curves as closed (periodic boundary).
-    #[arg(long)]
-    pub closed: bool,
-}
-
-fn read_points(p: &Path) -> Result<crate::points::Points, Failure> {
-    let text = std::fs::read_to_string(p).map_err(|e| Failure::context(p.display(), e))?;
-    let pts = crate::points::parse(&text).map_err(|e| Failure::context(p.display(), e))?;
-    if pts.dim != 2 {
-        return Err(Failure(format!(
-            "{}: points of dimension {} (expected 2-D points)",
-            p.display(),
-            pts.dim
-        )));
-    }
-    Ok(pts)
-}
-
-pub fn style(a: StyleArgs) -> CliResult {
-    let s = read_points(&a.style)?;
-    let b = read_points(&a.base)?;
-    let out = crate::style::transfer_style(&s.data, &b.data, a.scheme, a.levels, a.closed)?;
-    crate::fsutil::write_atomic(&a.output, |w| crate::points::write(2, &out, w))
-        .map_err(|e| Failure::context(a.output.display(), e))
-}

@@ -123,39 +123,6 @@ fn parse_size(s: &str) -> Result<Vec<usize>, Failure> {
     }
 }
 
-/// Refuse an output that cannot fit the memory budget before anything is allocated: the
-/// output's samples in f32 (the working type) plus the output in its stored type.
-fn check_budget(
-    input: &std::path::Path,
-    r: &crate::io::Raster,
-    plans: &[upscale::AxisPlan],
-) -> Result<(), Failure> {
-    let budget = crate::limits::Limits::from_env()?;
-    let dims: Vec<u64> = (0..r.dims.len())
-        .map(|a| {
-            plans
-                .iter()
-                .find(|p| p.axis == a)
-                .map_or(r.dims[a], |p| p.len) as u64
-        })
-        .collect();
-    let samples = dims
-        .iter()
-        .try_fold(r.channels as u64, |acc, &d| acc.checked_mul(d))
-        .unwrap_or(u64::MAX);
-    let bytes = samples.saturating_mul(4 + r.sample_type().size() as u64);
-    if bytes > budget.max_bytes {
-        let size: Vec<String> = dims.iter().rev().map(|d| d.to_string()).collect();
-        return Err(Failure(format!(
-            "{}: output {} needs {bytes} bytes, over the memory budget of {} bytes (expected at most that; MRA_MAX_BYTES raises it)",
-            input.display(),
-            size.join("x"),
-            budget.max_bytes
-        )));
-    }
-    Ok(())
-}
-
 pub fn run_upscale(a: UpscaleArgs) -> CliResult {
     crate::tuning::use_allocator(crate::tuning::Allocator::KeepFreed);
     let r = read_input(&a.input, &a.raw.options()?)?;
@@ -173,11 +140,22 @@ pub fn run_upscale(a: UpscaleArgs) -> CliResult {
         order: a.order.map(usize::from),
         clamp: a.clamp,
     };
-    check_budget(&a.input, &r, &plans)?;
+    // the library checks the memory budget; an output over it is named by its size
+    let size: Vec<String> = upscale::output_dims(&r.dims, &plans)
+        .iter()
+        .rev()
+        .map(|d| d.to_string())
+        .collect();
     let bar = Progress::new(plans.len() as u64 + 1, "upscale", a.quiet);
     let t = std::time::Instant::now();
-    let out = upscale::upscale_raster(r, &method, &plans, &bar)
-        .map_err(|e| Failure::context(a.input.display(), e))?;
+    let out = upscale::upscale_raster(r, &method, &plans, &bar).map_err(|e| match e.kind() {
+        crate::ErrorKind::LimitsExceeded => Failure(format!(
+            "{}: output {}: {e} (MRA_MAX_BYTES raises the budget)",
+            a.input.display(),
+            size.join("x")
+        )),
+        _ => Failure::context(a.input.display(), e),
+    })?;
     let seconds = t.elapsed().as_secs_f64();
     bar.finish();
     write_output_as(&a.output, &out, false, None, a.format.as_deref())?;

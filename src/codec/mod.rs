@@ -17,6 +17,8 @@
 mod colour;
 mod container;
 mod decode;
+// `mra demo`'s rows: built with the command line only
+#[cfg(feature = "cli")]
 pub mod demo;
 mod encode;
 mod frames;

@@ -58,14 +58,16 @@ impl Default for EncodeOptions {
 /// Decoder settings.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct DecodeOptions {
-    /// Reconstruct at 1/2^level resolution, reading only the chunks needed.
+    /// Reconstruct at 1/2^level resolution, reading only the chunks needed; a level the
+    /// file does not hold (over its depth) is [`crate::Error::Level`].
     pub level: usize,
     /// Decode what a truncated file holds instead of failing.
     pub allow_truncated: bool,
-    /// Decode only this box, a range per spatial axis, fastest axis first (x, y, z), in
-    /// full-resolution samples; at `level` k the output holds the level's samples whose
-    /// cells meet it (`⌊x0·R/d⌋ .. ⌈x1·R/d⌉` on an axis of extent d and R at level k).
-    /// A tiled file is read only where its tiles meet the box.
+    /// Decode only this box, a range per spatial axis, slowest axis first (as `dims` and
+    /// every dimension list of the library: z, y, x), in full-resolution samples; at
+    /// `level` k the output holds the level's samples whose cells meet it
+    /// (`⌊g0·R/d⌋ .. ⌈g1·R/d⌉` on an axis of extent d and R at level k). A tiled file is
+    /// read only where its tiles meet the box.
     pub region: Option<Vec<std::ops::Range<usize>>>,
 }
 

@@ -13,10 +13,24 @@ use crate::Result;
 use std::io::{Read, Seek, SeekFrom};
 use std::path::Path;
 
+/// `level` is one the file of `header` holds (`0 ..= depth`, [`super::depth_of`]): a
+/// deeper level is [`crate::Error::Level`], never clamped to the coarsest.
+fn check_level(header: &Header, level: usize) -> Result<()> {
+    if level == 0 {
+        return Ok(());
+    }
+    let levels = super::depth_of(header)?;
+    if level > levels {
+        return Err(crate::Error::Level { level, levels });
+    }
+    Ok(())
+}
+
 /// Decode from a stream of `len` bytes, read in order (a tiled file's tiles as they
 /// come; [`decode_seek`] reads only those a region needs).
 pub fn decode_stream<R: Read>(src: R, len: u64, opts: &DecodeOptions) -> Result<Decoded> {
     let (rd, first, header) = read_head(src, len)?;
+    check_level(&header, opts.level)?;
     if header.is_tiled() {
         return tiles::decode_sequential(rd, header, opts);
     }
@@ -45,6 +59,7 @@ fn one_tile(p: Parsed, opts: &DecodeOptions) -> Result<Decoded> {
 pub fn decode_seek<R: Read + Seek>(mut src: R, len: u64, opts: &DecodeOptions) -> Result<Decoded> {
     src.seek(SeekFrom::Start(0))?;
     let (rd, first, header) = read_head(&mut src, len)?;
+    check_level(&header, opts.level)?;
     if header.is_tiled() {
         let at = rd.position();
         return tiles::decode_seek(&mut src, len, at, header, opts);
@@ -136,6 +151,7 @@ impl SlabDecoder {
             count: count.clone(),
         };
         let (rd, first, header) = read_head(&mut src, len)?;
+        check_level(&header, opts.level)?;
         if header.is_tiled() {
             let at = rd.position();
             let t = tiles::TiledSlabs::new(src, len, at, header, opts)?;

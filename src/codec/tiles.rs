@@ -354,8 +354,8 @@ impl Stitch {
                 }
                 (0..nd)
                     .map(|a| {
-                        // fastest axis first in the option, slowest first here
-                        let g = &reg[nd - 1 - a];
+                        // slowest first, in the option as here
+                        let g = &reg[a];
                         let d = h.dims[a];
                         if g.start >= g.end || g.end > d {
                             return Err(Error::parameter(

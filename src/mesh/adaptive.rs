@@ -76,7 +76,11 @@ fn is_loop(s: Scheme) -> bool {
     matches!(s, Scheme::Loop(_))
 }
 
-/// `steps` levels of adaptive subdivision of the faces `selection` (Loop or Catmull-Clark).
+/// `steps` levels of adaptive subdivision of the faces `selection` (Loop or Catmull-Clark),
+/// within the memory budget ([`crate::limits`]): before each level, the bytes of the
+/// patches made so far plus one uniform step of the last patch
+/// ([`super::subdivide::step_bytes`]) must fit, else [`Error::LimitsExceeded`] before
+/// anything of that level is allocated.
 pub fn subdivide(
     mesh: &Mesh,
     scheme: Scheme,
@@ -138,7 +142,17 @@ pub fn subdivide(
         selected,
     }];
     let mut steps_done: Vec<Step> = Vec::new();
+    // every patch is kept until the assembly: before each level, the patches held plus
+    // one uniform step of the last (a bound of its region's refinement) must fit the budget
+    let budget = crate::limits::Limits::from_env()?;
+    let mut held = 0u64;
     for _ in 0..steps {
+        let last = &patches.last().unwrap().mesh;
+        held = held.saturating_add(super::subdivide::mesh_bytes(last));
+        budget.check(
+            "adaptively subdivided mesh bytes (memory budget MRA_MAX_BYTES)",
+            held.saturating_add(super::subdivide::step_bytes(last, scheme)),
+        )?;
         let (next, step) = refine(patches.last().unwrap(), scheme, weights)?;
         patches.push(next);
         steps_done.push(step);

@@ -167,16 +167,38 @@ impl Counts {
 /// Catmull-Clark.
 const STEP_OVERHEAD: f64 = 2.5;
 
-/// Check `steps` steps of `scheme` from `mesh` (of `edges` edges) against the memory
-/// budget ([`crate::limits`]) before the first: [`STEP_OVERHEAD`] times the largest of,
-/// over the steps, the mesh a step reads, its half-edge structure and the mesh it makes.
-fn check_budget(mesh: &Mesh, edges: usize, scheme: Scheme, steps: usize) -> Result<()> {
-    let mut cur = Counts {
+/// Bytes of `mesh` as [`check_budget`] counts them: positions (24 a vertex), corner
+/// indices and face offsets (4).
+pub(super) fn mesh_bytes(mesh: &Mesh) -> u64 {
+    counts(mesh, 0).mesh_bytes()
+}
+
+/// The most bytes one step of `scheme` from `mesh` holds, as [`check_budget`] counts
+/// them: [`STEP_OVERHEAD`] × (the mesh read + its half-edge structure + the mesh made),
+/// its edges bounded by its corners (every edge borders a face).
+pub(super) fn step_bytes(mesh: &Mesh, scheme: Scheme) -> u64 {
+    let cur = counts(mesh, mesh.corner_count());
+    let bytes = cur
+        .mesh_bytes()
+        .saturating_add(cur.structure_bytes())
+        .saturating_add(cur.after(scheme).mesh_bytes());
+    (bytes as f64 * STEP_OVERHEAD).min(u64::MAX as f64) as u64
+}
+
+fn counts(mesh: &Mesh, edges: usize) -> Counts {
+    Counts {
         v: mesh.vertex_count() as u64,
         e: edges as u64,
         f: mesh.face_count() as u64,
         c: mesh.corner_count() as u64,
-    };
+    }
+}
+
+/// Check `steps` steps of `scheme` from `mesh` (of `edges` edges) against the memory
+/// budget ([`crate::limits`]) before the first: [`STEP_OVERHEAD`] times the largest of,
+/// over the steps, the mesh a step reads, its half-edge structure and the mesh it makes.
+fn check_budget(mesh: &Mesh, edges: usize, scheme: Scheme, steps: usize) -> Result<()> {
+    let mut cur = counts(mesh, edges);
     let mut most = 0u64;
     for _ in 0..steps {
         let next = cur.after(scheme);

@@ -197,7 +197,7 @@ impl Source {
     fn decode(&self, k: usize, region: Option<Vec<Range<usize>>>) -> crate::Result<Arc<Raster>> {
         let opts = DecodeOptions {
             level: k,
-            region: region.map(|r| r.into_iter().rev().collect()),
+            region,
             ..Default::default()
         };
         codec::decode_file(&self.path, &opts).map(|d| Arc::new(d.raster))

@@ -25,6 +25,8 @@
 //! ```
 
 pub mod base_scale;
+// `mra demo`'s rows: built with the command line only
+#[cfg(feature = "cli")]
 pub mod demo;
 mod drainage;
 mod finest_gain;
@@ -39,6 +41,7 @@ pub mod spectrum;
 pub mod synth;
 pub mod volume;
 
+#[cfg(feature = "cli")]
 pub use demo::demo_rows;
 pub use grid::Grid;
 pub use hillshade::{hillshade, Shading};

@@ -386,17 +386,50 @@ macro_rules! store_int {
     };
 }
 
+/// The extents of the output of `plans` from a raster of extents `dims` (`dims` order).
+pub fn output_dims(dims: &[usize], plans: &[AxisPlan]) -> Vec<usize> {
+    (0..dims.len())
+        .map(|a| plans.iter().find(|p| p.axis == a).map_or(dims[a], |p| p.len))
+        .collect()
+}
+
+/// The memory budget of an upscale ([`crate::limits`], `MRA_MAX_BYTES`), checked by
+/// [`upscale_raster`] and [`upscale_view`] before anything is allocated:
+///
+/// ```text
+/// bytes = C · Π output_dims · (4 + s)
+/// ```
+/// the output's samples in f32 (the working type) plus in the stored type of `s` bytes.
+pub fn check_budget(
+    dims: &[usize],
+    channels: usize,
+    ty: crate::io::SampleType,
+    plans: &[AxisPlan],
+) -> Result<()> {
+    let samples = output_dims(dims, plans)
+        .iter()
+        .try_fold(channels as u64, |acc, &d| acc.checked_mul(d as u64))
+        .unwrap_or(u64::MAX);
+    crate::limits::check_elems(
+        "upscaled output bytes (memory budget MRA_MAX_BYTES)",
+        samples,
+        4 + ty.size() as u64,
+    )
+}
+
 /// Upscale a raster (consumed: its samples are freed once converted to f32). Channels
 /// are never resampled; the result has the input's sample type. Void samples
 /// (`meta.nodata`, NaN) are filled by pull-push for the computation; an output sample
 /// whose footprint is all void is void again and the others stay within the valid
-/// input range ([`crate::io::nodata`]).
+/// input range ([`crate::io::nodata`]). An output over the memory budget is refused
+/// first ([`check_budget`]).
 pub fn upscale_raster(
     r: Raster,
     method: &Method,
     plans: &[AxisPlan],
     bar: &Progress,
 ) -> Result<Raster> {
+    check_budget(&r.dims, r.channels, r.sample_type(), plans)?;
     let Raster {
         dims,
         channels,
@@ -420,6 +453,7 @@ pub fn upscale_view(
     plans: &[AxisPlan],
     bar: &Progress,
 ) -> Result<Raster> {
+    check_budget(r.dims, r.channels, r.sample_type(), plans)?;
     let data = r.samples.to_f32();
     let (dims, meta) = (r.dims.to_vec(), r.meta.clone());
     let ty = r.sample_type();
@@ -753,7 +787,8 @@ pub fn is_sequence(r: &Raster) -> bool {
 
 /// `mra demo` rows: a generated 512² fractal terrain (8-bit scale) halved by 2×2 block
 /// means, upscaled back ×2 in each mode; PSNR against the original (8-bit peak). Writes
-/// the area-mode result.
+/// the area-mode result. Built with the command line only (feature `cli`).
+#[cfg(feature = "cli")]
 pub fn demo_rows(out: &std::path::Path) -> Result<Vec<crate::demo::DemoRow>> {
     let n = 512;
     let img: Vec<f32> = crate::generate::terrain::diamond_square(n, n, 7, 0.6)

@@ -994,6 +994,45 @@ fn tiff_generate_and_mesh_subdivide_keep_to_the_budget() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
 }
 
+/// Adaptive subdivision keeps to the budget too: under 64 KiB the 4,802-triangle grid is
+/// refused before the first level (one line naming MRA_MAX_BYTES, exit 2, no output);
+/// 8 adaptive Loop steps of one face fit 256 MB where 8 uniform steps do not (the bound
+/// follows the refined patches, not the whole mesh).
+#[test]
+fn adaptive_mesh_subdivision_keeps_to_the_budget() {
+    let d = folder("budget-adaptive");
+    let mut obj = String::new();
+    for y in 0..50 {
+        for x in 0..50 {
+            obj += &format!("v {x} {y} {}\n", ((x * y) % 7) as f64 * 0.1);
+        }
+    }
+    for y in 0..49 {
+        for x in 0..49 {
+            let v = |dx: usize, dy: usize| (y + dy) * 50 + x + dx + 1;
+            obj += &format!("f {} {} {}\n", v(0, 0), v(1, 0), v(1, 1));
+            obj += &format!("f {} {} {}\n", v(0, 0), v(1, 1), v(0, 1));
+        }
+    }
+    write(&d, "grid.obj", obj.as_bytes());
+    let args = [
+        "mesh", "subdivide", "grid.obj", "-o", "out.obj", "--scheme", "loop", "--steps", "2",
+        "--adaptive", "0",
+    ];
+    let o = run_env(&d, &args, &[("MRA_MAX_BYTES", "64K")]);
+    assert_refused(&d, &o, "grid.obj", "out.obj", "adaptive Loop under 64 KiB");
+    assert!(String::from_utf8_lossy(&o.stderr).contains("MRA_MAX_BYTES"));
+    let mut eight = args;
+    eight[8] = "8";
+    let o = run_env(&d, &eight, &[("MRA_MAX_BYTES", "256M")]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(d.join("out.obj").exists());
+    std::fs::remove_file(d.join("out.obj")).unwrap();
+    let uniform = &eight[..9];
+    let o = run_env(&d, uniform, &[("MRA_MAX_BYTES", "256M")]);
+    assert_refused(&d, &o, "grid.obj", "out.obj", "8 uniform Loop steps under 256 MB");
+}
+
 #[test]
 fn exr_declaring_100000_squared_is_refused_by_info_convert_and_encode() {
     let d = folder("exr-100k");

@@ -333,6 +333,46 @@ fn a_served_region_equals_mra_decode_of_the_same_window() {
     }
 }
 
+/// The IIIF region `x,y,w,h` is columns `x..x+w` and rows `y..y+h`: on a 300 × 200 tiled
+/// image the served window equals the library's decode of the box `[y..y+h, x..x+w]`
+/// (slowest axis first), a window that would not fit the image with its axes swapped.
+#[test]
+fn a_served_window_of_a_non_square_image_is_the_library_box_rows_first() {
+    let d = Dir::new("serve-axes");
+    run(&["generate", "zone-plate", "-o", &d.s("w.png"), "--size", "300x200"]);
+    run(&[
+        "encode",
+        &d.s("w.png"),
+        "-o",
+        &d.s("w.mra"),
+        "--quality",
+        "60",
+        "--tile",
+        "64",
+    ]);
+    let s = Server::start(&d.0);
+    let (x, y, w, h) = (200usize, 20usize, 90usize, 150usize);
+    let path = format!("/iiif/3/w.mra/{x},{y},{w},{h}/{w},/0/default.png");
+    let r = s.get(&path);
+    assert_eq!(r.status, 200, "{path}: {}", String::from_utf8_lossy(&r.body));
+    let served = gray(&r.image());
+    let want = mra::codec::decode_file(
+        &d.join("w.mra"),
+        &mra::codec::DecodeOptions {
+            region: Some(vec![y..y + h, x..x + w]),
+            ..Default::default()
+        },
+    )
+    .unwrap()
+    .raster;
+    assert_eq!(want.dims, vec![h, w]);
+    assert_eq!((served.0 as usize, served.1 as usize), (w, h), "{path}");
+    let mra::io::Samples::U8(px) = want.samples else {
+        panic!("expected u8 samples")
+    };
+    assert!(served.2 == px, "{path}: pixels differ from the library's box");
+}
+
 #[test]
 fn the_etag_changes_when_the_file_is_replaced_and_a_match_is_304() {
     let d = corpus("etag");

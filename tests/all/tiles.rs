@@ -228,9 +228,9 @@ fn levels_decode_tiled_to_the_one_piece_extents() {
 fn a_region_decodes_to_the_cut_of_the_whole() {
     let r = field(&[50, 70], 1, SampleType::U16, DataKind::Image);
     let regions = [
-        vec![5..37, 12..20],
-        vec![0..70, 49..50],
-        vec![33..34, 0..50],
+        vec![12..20, 5..37],
+        vec![49..50, 0..70],
+        vec![0..50, 33..34],
     ];
     for tile in [vec![50, 70], vec![16, 16]] {
         for rate in [Rate::Quality(55.0), Rate::Lossless] {
@@ -239,8 +239,9 @@ fn a_region_decodes_to_the_cut_of_the_whole() {
                 let whole = dec(&bytes, k, None).unwrap().raster;
                 for reg in &regions {
                     let part = dec(&bytes, k, Some(reg.clone())).unwrap().raster;
-                    // the level's samples whose cells meet the box (x fastest in the option)
-                    let (x, y) = (&reg[0], &reg[1]);
+                    // the level's samples whose cells meet the box (slowest axis first in
+                    // the option, as `dims`)
+                    let (y, x) = (&reg[0], &reg[1]);
                     let (h, w) = (whole.dims[0], whole.dims[1]);
                     let ys = y.start * h / 50..(y.end * h).div_ceil(50);
                     let xs = x.start * w / 70..(x.end * w).div_ceil(70);
@@ -291,7 +292,7 @@ fn a_region_reads_only_the_tiles_it_meets() {
         inner: std::io::Cursor::new(&bytes),
         read: 0,
     };
-    // one tile of the 32 (x, y, z)
+    // one tile of the 32 (z, y, x)
     let reg = vec![16..32, 0..16, 16..32];
     let d = codec::decode_seek(
         &mut src,
@@ -336,7 +337,8 @@ fn metadata_survives_tiles_levels_and_regions() {
     let bytes = codec::encode_tiled(&r, &opts(Rate::Lossless), &[16, 16]).unwrap();
     let d = dec(&bytes, 0, None).unwrap().raster;
     assert_eq!(d.meta, r.meta);
-    let part = dec(&bytes, 0, Some(vec![10..20, 4..8])).unwrap().raster;
+    // rows 4..8, columns 10..20 (slowest axis first); the origin is x, y
+    let part = dec(&bytes, 0, Some(vec![4..8, 10..20])).unwrap().raster;
     assert_eq!(part.meta.spacing, r.meta.spacing);
     assert_eq!(
         part.meta.origin,
@@ -509,7 +511,7 @@ fn compact_tiles_decode_as_the_chunks_they_stand_for_and_save_the_headers() {
         old.len()
     );
     for level in [0, 1, 2] {
-        for region in [None, Some(vec![3..11, 9..10])] {
+        for region in [None, Some(vec![9..10, 3..11])] {
             let a = dec(&old, level, region.clone()).unwrap().raster;
             let b = dec(&new, level, region.clone()).unwrap().raster;
             assert_eq!(a.samples, b.samples, "level {level} {region:?}");

@@ -295,9 +295,9 @@ fn a_decode_in_slabs_equals_the_decode_whole_for_regions_and_levels() {
         (0, None, 3),
         (1, None, 3),
         (2, None, 3),
-        (0, Some(vec![3..20, 17..18, 10..33]), 3),
-        (2, Some(vec![3..20, 17..18, 20..30]), 1),
-        (1, Some(vec![0..36, 0..50, 33..40]), 1),
+        (0, Some(vec![10..33, 17..18, 3..20]), 3),
+        (2, Some(vec![20..30, 17..18, 3..20]), 1),
+        (1, Some(vec![33..40, 0..50, 0..36]), 1),
     ];
     for (level, region, slabs) in cases {
         let o = DecodeOptions {
@@ -585,7 +585,8 @@ fn a_tiff_written_in_slabs_reads_back_with_its_samples_and_tags() {
         &DecodeOptions {
             level: 1,
             allow_truncated: false,
-            region: Some(vec![3..30, 10..40]),
+            // `--region` is x first, the library slowest first
+            region: Some(vec![10..40, 3..30]),
         },
     )
     .unwrap()
