@@ -174,6 +174,206 @@ fn decode_channel_into(p: &Parsed, c: usize, k: usize, plane: &mut [f32]) -> Res
     Ok(())
 }
 
+/// Decode one channel's bands of a lossless file of 8- or 16-bit samples straight into
+/// its `i32` plane (laid out as the pyramid's shape, zeroed; absent bands stay 0), level
+/// by level from the coarse block down, as [`decode_channel`] decodes them. A band's
+/// parent is copied out of the plane while the band is decoded (the bands of a level go
+/// a pool's width at a time, so that only that many parents are held); a band without
+/// children is decoded a row at a time ([`entropy::band::decode_rows`]). False when an
+/// index does not fit 32 bits (the plane then holds garbage).
+fn decode_channel_narrow(p: &Parsed, c: usize, k: usize, plane: &mut [i32]) -> Result<bool> {
+    let (h, plan) = (&p.header, &p.plan);
+    let nb = plan.bands.len();
+    let has_children: Vec<bool> = (0..nb).map(|j| plan.parents.contains(&Some(j))).collect();
+    let width = rayon::current_num_threads().max(1);
+    let mut fits = true;
+    for (level, js) in plan.level_groups() {
+        if k > 0 && level >= 1 && level <= k {
+            continue;
+        }
+        for js in js.chunks(width) {
+            // the parents of these bands, from the plane (one level coarser: decoded)
+            let parents: Vec<Option<Vec<i64>>> = js
+                .iter()
+                .map(|&j| {
+                    let pj = plan.parents[j]?;
+                    p.bands[c][pj].as_ref()?;
+                    Some(widened(plane, &plan.pyr.shape, &plan.bands[pj].ranges))
+                })
+                .collect();
+            let rows = band_rows(plan, js, plane);
+            let decoded: Vec<Result<bool>> = js
+                .par_iter()
+                .zip(rows)
+                .zip(&parents)
+                .map(|((&j, mut rows), pq)| {
+                    let Some(bc) = &p.bands[c][j] else {
+                        return Ok(true);
+                    };
+                    let parent = match plan.parents[j] {
+                        Some(pj) => match pq {
+                            Some(v) => Some(Parent {
+                                data: v,
+                                dims: &plan.dims[pj],
+                            }),
+                            None => {
+                                return Err(Error::format(
+                                    format!("band {j} of channel {c} without its parent"),
+                                    "complete parents",
+                                ))
+                            }
+                        },
+                        None => None,
+                    };
+                    let dims = &plan.dims[j];
+                    let failed = |e: Error| {
+                        Error::format(format!("band {j} of channel {c}: {e}"), "a valid band")
+                    };
+                    let mut ok = true;
+                    if h.major < 2 || level == 0 || has_children[j] {
+                        let kind = if level == 0 {
+                            BandKind::Coarse
+                        } else {
+                            BandKind::Detail
+                        };
+                        let v = decode_band(h, &bc.data, dims, kind, parent).map_err(failed)?;
+                        let cols = dims.last().copied().unwrap_or(1).max(1);
+                        for (r, out) in v.chunks(cols).zip(rows.iter_mut()) {
+                            ok &= narrow_row(r, out);
+                        }
+                        return Ok(ok);
+                    }
+                    let mut d = Decoder::new_short(&bc.data);
+                    let mut at_row = 0;
+                    entropy::band::decode_rows(&mut d, dims, parent, plan.coding, |_, r| {
+                        ok &= narrow_row(r, rows[at_row]);
+                        at_row += 1;
+                    })
+                    .map_err(failed)?;
+                    Ok(ok)
+                })
+                .collect();
+            // the first failing band in file order, as one at a time would report it
+            for v in decoded {
+                fits &= v?;
+            }
+            if !fits {
+                return Ok(false);
+            }
+        }
+    }
+    Ok(fits)
+}
+
+/// The block `ranges` of an `i32` plane, packed and widened to `i64`.
+fn widened(plane: &[i32], shape: &[usize], ranges: &[std::ops::Range<usize>]) -> Vec<i64> {
+    let mut out = Vec::with_capacity(ranges.iter().map(|r| r.len()).product());
+    layout::rows(shape, ranges, |off, run, _| {
+        out.extend(plane[off..off + run].iter().map(|&v| v as i64))
+    });
+    out
+}
+
+/// `out = q` as `i32`; false when a value does not fit.
+fn narrow_row(q: &[i64], out: &mut [i32]) -> bool {
+    let mut ok = true;
+    for (o, &v) in out.iter_mut().zip(q) {
+        *o = v as i32;
+        ok &= *o as i64 == v;
+    }
+    ok
+}
+
+/// A lossless file of 8- or 16-bit samples ([`lossless::narrow`]) decoded at level `k`
+/// in `i32` planes ([`decode_channel_narrow`], [`lossless::inverse`]), and taken to the
+/// sample type as the `i64` path does (YCoCg-R undone, clamped to the type's range)
+/// while the planes are consumed from their ends ([`narrow_samples`]); `None` when a
+/// value does not fit 32 bits (the `i64` path then decodes the file).
+fn lossless_narrow(p: &Parsed, k: usize) -> Result<Option<Samples>> {
+    let (h, plan) = (&p.header, &p.plan);
+    let region = plan.region(k);
+    let npos: usize = region.iter().product();
+    let planes = (0..h.channels)
+        .into_par_iter()
+        .map(|ch| {
+            let mut plane = vec![0i32; plan.pyr.shape.iter().product()];
+            if !decode_channel_narrow(p, ch, k, &mut plane)?
+                || !lossless::inverse(&mut plane[..], &plan.pyr, k)
+            {
+                return Ok(None);
+            }
+            Ok(Some(if k == 0 {
+                plane
+            } else {
+                let full: Vec<std::ops::Range<usize>> = region.iter().map(|&e| 0..e).collect();
+                layout::gather(&plane, &plan.pyr.shape, &full)
+            }))
+        })
+        .collect::<Result<Vec<Option<Vec<i32>>>>>()?;
+    let Some(planes) = planes.into_iter().collect::<Option<Vec<_>>>() else {
+        return Ok(None);
+    };
+    Ok(Some(narrow_samples(
+        planes,
+        npos,
+        h.colour == Colour::YCoCgR,
+        h.sample_type,
+    )))
+}
+
+/// Interleaved samples of the 8- or 16-bit type `ty` from `planes` (`npos` values
+/// each; the first three taken back from YCoCg-R when `ycocg`), clamped to the type's
+/// range, as `Samples::from_f64` makes them from the values. The planes are consumed
+/// from their ends ([`super::plan::to_samples`]'s way), so that the samples and the
+/// planes are not both held whole.
+fn narrow_samples(mut planes: Vec<Vec<i32>>, npos: usize, ycocg: bool, ty: SampleType) -> Samples {
+    let c = planes.len();
+    let mut out = Samples::zeros(ty, npos * c);
+    let (lo, hi) = ty.range();
+    let (lo, hi) = (lo as i64, hi as i64);
+    let mut end = npos;
+    while end > 0 {
+        let start = end.saturating_sub(super::plan::TAIL);
+        macro_rules! fill {
+            ($v:expr, $t:ty) => {{
+                let out = &mut $v[start * c..end * c];
+                for (i, px) in out.chunks_exact_mut(c).enumerate() {
+                    let at = start + i;
+                    let first = if ycocg && c >= 3 {
+                        let (r, g, b) = lossless::ycocg_r_inv(
+                            planes[0][at] as i64,
+                            planes[1][at] as i64,
+                            planes[2][at] as i64,
+                        );
+                        px[0] = r.clamp(lo, hi) as $t;
+                        px[1] = g.clamp(lo, hi) as $t;
+                        px[2] = b.clamp(lo, hi) as $t;
+                        3
+                    } else {
+                        0
+                    };
+                    for (o, p) in px[first..].iter_mut().zip(&planes[first..]) {
+                        *o = (p[at] as i64).clamp(lo, hi) as $t;
+                    }
+                }
+            }};
+        }
+        match &mut out {
+            Samples::U8(v) => fill!(v, u8),
+            Samples::I8(v) => fill!(v, i8),
+            Samples::U16(v) => fill!(v, u16),
+            Samples::I16(v) => fill!(v, i16),
+            _ => unreachable!("narrow_samples of a type over 16 bits"),
+        }
+        for p in &mut planes {
+            p.truncate(start);
+            p.shrink_to_fit();
+        }
+        end = start;
+    }
+    out
+}
+
 /// The most bytes [`reconstruct`] holds at once for level `k`, checked against the memory
 /// budget ([`crate::limits`]) before anything is allocated:
 ///
@@ -181,10 +381,11 @@ fn decode_channel_into(p: &Parsed, c: usize, k: usize, plane: &mut [f32]) -> Res
 /// bytes = C · Π shape · w  +  C · Π R_k · (s + x)
 /// ```
 /// with `shape` the full pyramid (every channel's plane is as large whatever the level),
-/// `w` its bytes per coefficient (8: `i64` in lossless files, 4: `f32` otherwise),
-/// `R_k` the level's extents, `s` the sample type's bytes, and `x` = 8 where the
-/// samples also pass through `f64` (lossless, and the residual layer of mode 2).
-fn check_budget(p: &Parsed, k: usize) -> Result<()> {
+/// `w` its bytes per coefficient (`wide`: 8, the `i64` planes of a lossless file of
+/// samples over 16 bits; else 4: `i32` planes of 8- and 16-bit samples, or `f32`), `R_k`
+/// the level's extents, `s` the sample type's bytes, and `x` = 8 where the samples also
+/// pass through `f64` (the `i64` lossless path).
+fn check_budget(p: &Parsed, k: usize, wide: bool) -> Result<()> {
     let (h, plan) = (&p.header, &p.plan);
     let c = h.channels as u64;
     let full = plan
@@ -196,9 +397,7 @@ fn check_budget(p: &Parsed, k: usize) -> Result<()> {
         .region(k)
         .iter()
         .fold(c, |n, &e| n.saturating_mul(e as u64));
-    let wide = h.mode == Mode::Lossless || (h.mode == Mode::MaxError && k == 0);
-    let w = if h.mode == Mode::Lossless { 8 } else { 4 };
-    let x = if wide { 8 } else { 0 };
+    let (w, x) = if wide { (8, 8) } else { (4, 0) };
     let bytes = full
         .saturating_mul(w)
         .saturating_add(out.saturating_mul(h.sample_type.size() as u64 + x));
@@ -209,96 +408,182 @@ pub(super) fn reconstruct(p: &Parsed, k: usize) -> Result<Raster> {
     let h = &p.header;
     let plan = &p.plan;
     let k = k.min(plan.pyr.depth());
-    check_budget(p, k)?;
+    let lossless = h.mode == Mode::Lossless;
+    let narrow = lossless && lossless::narrow(h.sample_type);
+    check_budget(p, k, lossless && !narrow)?;
     let region = plan.region(k);
-    let npos: usize = region.iter().product();
-    let c = h.channels;
-    let ty = h.sample_type;
-    if h.mode == Mode::Lossless {
-        let planes = (0..c)
-            .into_par_iter()
-            .map(|ch| {
-                let q = decode_channel(p, ch, k)?;
-                let mut plane = vec![0i64; plan.pyr.shape.iter().product()];
-                for (j, b) in q.iter().enumerate() {
-                    if let Some(b) = b {
-                        layout::scatter(&mut plane, &plan.pyr.shape, &plan.bands[j].ranges, b);
-                    }
-                }
-                lossless::inverse(&mut plane, &plan.pyr, k);
-                let full: Vec<std::ops::Range<usize>> = region.iter().map(|&e| 0..e).collect();
-                Ok(layout::gather(&plane, &plan.pyr.shape, &full))
-            })
-            .collect::<Result<Vec<_>>>()?;
-        let mut planes = planes;
-        if h.colour == Colour::YCoCgR {
-            map3(&mut planes, lossless::ycocg_r_inv);
+    if narrow {
+        if let Some(samples) = lossless_narrow(p, k)? {
+            return finish(p, region, samples, k);
         }
-        let samples = match ty {
-            SampleType::F16 | SampleType::F32 | SampleType::F64 if h.delta > 0.0 => {
-                // mode 3: integer multiples of the quantum δ, exact in the sample type
-                let values: Vec<f64> = (0..npos * c)
-                    .map(|i| planes[i % c][i / c] as f64 * h.delta)
-                    .collect();
-                Samples::from_f64(&values, ty)
-            }
-            SampleType::F16 | SampleType::F32 | SampleType::F64 => {
-                let w = (ty.size() * 8) as u32;
-                let bits: Vec<u64> = (0..npos * c)
-                    .map(|i| lossless::int_to_float_bits(planes[i % c][i / c], w))
-                    .collect();
-                match ty {
-                    SampleType::F16 => Samples::F16(
-                        bits.iter()
-                            .map(|&b| half::f16::from_bits(b as u16))
-                            .collect(),
-                    ),
-                    SampleType::F32 => {
-                        Samples::F32(bits.iter().map(|&b| f32::from_bits(b as u32)).collect())
-                    }
-                    _ => Samples::F64(bits.iter().map(|&b| f64::from_bits(b)).collect()),
-                }
-            }
-            _ => {
-                let values: Vec<f64> = (0..npos * c).map(|i| planes[i % c][i / c] as f64).collect();
-                Samples::from_f64(&values, ty)
-            }
-        };
-        return finish(p, region, samples, k);
+        // a value past 32 bits (no encoder's file of 8- or 16-bit samples): i64 planes
+        check_budget(p, k, true)?;
+    }
+    if lossless {
+        return finish(p, region, lossless_wide(p, k)?, k);
     }
     let mut samples = lossy_values(h, plan, k, |ch, plane| decode_channel_into(p, ch, k, plane))?;
     if k == 0 && h.mode == Mode::MaxError {
-        let mut values = samples.to_f64();
-        for (ch, r) in p.resi.iter().enumerate() {
-            let Some(r) = r else { continue };
-            let q = decode_band(h, &r.data, &h.dims, BandKind::Detail, None).map_err(|e| {
-                Error::format(format!("RESI of channel {ch}: {e}"), "a valid residual")
-            })?;
-            for i in 0..npos {
-                values[i * c + ch] = samples.get_f64(i * c + ch) + q[i] as f64 * r.step;
+        add_residuals(p, &mut samples)?;
+    }
+    finish(p, region, samples, k)
+}
+
+/// A lossless file decoded at level `k` in `i64` planes: every sample type (floats as
+/// their mapped bit patterns or multiples of the quantum).
+fn lossless_wide(p: &Parsed, k: usize) -> Result<Samples> {
+    let (h, plan) = (&p.header, &p.plan);
+    let region = plan.region(k);
+    let npos: usize = region.iter().product();
+    let (c, ty) = (h.channels, h.sample_type);
+    let planes = (0..c)
+        .into_par_iter()
+        .map(|ch| {
+            let q = decode_channel(p, ch, k)?;
+            let mut plane = vec![0i64; plan.pyr.shape.iter().product()];
+            for (j, b) in q.iter().enumerate() {
+                if let Some(b) = b {
+                    layout::scatter(&mut plane, &plan.pyr.shape, &plan.bands[j].ranges, b);
+                }
             }
-            let _ = ch;
+            lossless::inverse(&mut plane[..], &plan.pyr, k);
+            let full: Vec<std::ops::Range<usize>> = region.iter().map(|&e| 0..e).collect();
+            Ok(layout::gather(&plane, &plan.pyr.shape, &full))
+        })
+        .collect::<Result<Vec<_>>>()?;
+    let mut planes = planes;
+    if h.colour == Colour::YCoCgR {
+        map3(&mut planes, lossless::ycocg_r_inv);
+    }
+    let samples = match ty {
+        SampleType::F16 | SampleType::F32 | SampleType::F64 if h.delta > 0.0 => {
+            // mode 3: integer multiples of the quantum δ, exact in the sample type
+            let values: Vec<f64> = (0..npos * c)
+                .map(|i| planes[i % c][i / c] as f64 * h.delta)
+                .collect();
+            Samples::from_f64(&values, ty)
         }
-        samples = Samples::from_f64(&values, ty);
-        let mut all: Vec<(usize, f64)> = Vec::new();
-        for (ch, r) in p.resi.iter().enumerate() {
-            if let Some(r) = r {
-                for &(i, v) in &r.exceptions {
-                    if (i as usize) < npos {
-                        all.push((i as usize * c + ch, v));
-                    }
+        SampleType::F16 | SampleType::F32 | SampleType::F64 => {
+            let w = (ty.size() * 8) as u32;
+            let bits: Vec<u64> = (0..npos * c)
+                .map(|i| lossless::int_to_float_bits(planes[i % c][i / c], w))
+                .collect();
+            match ty {
+                SampleType::F16 => Samples::F16(
+                    bits.iter()
+                        .map(|&b| half::f16::from_bits(b as u16))
+                        .collect(),
+                ),
+                SampleType::F32 => {
+                    Samples::F32(bits.iter().map(|&b| f32::from_bits(b as u32)).collect())
+                }
+                _ => Samples::F64(bits.iter().map(|&b| f64::from_bits(b)).collect()),
+            }
+        }
+        _ => {
+            let values: Vec<f64> = (0..npos * c).map(|i| planes[i % c][i / c] as f64).collect();
+            Samples::from_f64(&values, ty)
+        }
+    };
+    Ok(samples)
+}
+
+/// The residual layer of a `--max-error` file added to its decoded base `samples` in
+/// place: each channel's `RESI` indices decoded a row at a time and every sample set to
+/// `x̂ + q·s` taken to the sample type (as `Samples::from_f64` does: integers rounded and
+/// clamped), the samples of a channel without one to `x̂` so taken; then, if there are
+/// exceptions, every sample so taken again and the exceptions written.
+fn add_residuals(p: &Parsed, samples: &mut Samples) -> Result<()> {
+    let h = &p.header;
+    let c = h.channels;
+    let npos = samples.len() / c.max(1);
+    for ch in 0..c {
+        let failed =
+            |e: Error| Error::format(format!("RESI of channel {ch}: {e}"), "a valid residual");
+        match p.resi.get(ch).and_then(|r| r.as_ref()) {
+            Some(r) if h.major >= 2 => {
+                let mut d = Decoder::new_short(&r.data);
+                let coding = super::plan::coding_of(h);
+                entropy::band::decode_rows(&mut d, &h.dims, None, coding, |at, q| {
+                    add_row(samples, c, ch, at, q, r.step)
+                })
+                .map_err(failed)?;
+            }
+            Some(r) => {
+                let q = decode_band(h, &r.data, &h.dims, BandKind::Detail, None).map_err(failed)?;
+                add_row(samples, c, ch, 0, &q[..npos.min(q.len())], r.step);
+            }
+            None => add_row(samples, c, ch, 0, &[], 0.0),
+        }
+    }
+    let mut all: Vec<(usize, f64)> = Vec::new();
+    for (ch, r) in p.resi.iter().enumerate() {
+        if let Some(r) = r {
+            for &(i, v) in &r.exceptions {
+                if (i as usize) < npos {
+                    all.push((i as usize * c + ch, v));
                 }
             }
         }
-        if !all.is_empty() {
-            let mut v = samples.to_f64();
-            for (i, x) in all {
-                v[i] = x;
-            }
-            samples = Samples::from_f64(&v, ty);
+    }
+    if !all.is_empty() {
+        for ch in 0..c {
+            add_row(samples, c, ch, 0, &[], 0.0);
+        }
+        for (i, x) in all {
+            set_sample(samples, i, x);
         }
     }
-    finish(p, region, samples, k)
+    Ok(())
+}
+
+/// `s[(at + t)·c + ch] = x̂ + q[t]·step` taken to the sample type, for `t` over `q`; for
+/// every position of channel `ch` (`x̂` alone) when `q` is empty.
+fn add_row(s: &mut Samples, c: usize, ch: usize, at: usize, q: &[i64], step: f64) {
+    let (lo, hi) = s.sample_type().range();
+    macro_rules! go {
+        ($v:expr, $conv:expr) => {{
+            let conv = $conv;
+            let v = $v;
+            if q.is_empty() {
+                for x in v.iter_mut().skip(ch).step_by(c) {
+                    *x = conv(to_f64(*x));
+                }
+            } else {
+                for (x, &qi) in v[(at * c + ch)..].iter_mut().step_by(c).zip(q) {
+                    *x = conv(to_f64(*x) + qi as f64 * step);
+                }
+            }
+        }};
+    }
+    fn to_f64<T: Into<f64>>(x: T) -> f64 {
+        x.into()
+    }
+    let int = |x: f64| {
+        if x.is_nan() {
+            0.0
+        } else {
+            x.round().clamp(lo, hi)
+        }
+    };
+    match s {
+        Samples::U8(v) => go!(v, |x: f64| int(x) as u8),
+        Samples::I8(v) => go!(v, |x: f64| int(x) as i8),
+        Samples::U16(v) => go!(v, |x: f64| int(x) as u16),
+        Samples::I16(v) => go!(v, |x: f64| int(x) as i16),
+        Samples::U32(v) => go!(v, |x: f64| int(x) as u32),
+        Samples::I32(v) => go!(v, |x: f64| int(x) as i32),
+        Samples::F16(v) => go!(v, half::f16::from_f64),
+        Samples::F32(v) => go!(v, |x: f64| x as f32),
+        Samples::F64(v) => go!(v, |x: f64| x),
+    }
+}
+
+/// `s[i] = x` taken to the sample type (as `Samples::from_f64` does).
+fn set_sample(s: &mut Samples, i: usize, x: f64) {
+    let ty = s.sample_type();
+    let one = Samples::from_f64(&[x], ty);
+    s.copy_from(i, &one, 0, 1).expect("same type, in range");
 }
 
 fn finish(p: &Parsed, region: Vec<usize>, samples: Samples, k: usize) -> Result<Raster> {
@@ -380,4 +665,43 @@ pub(super) fn decode_untiled<R: Read>(src: R, len: u64, opts: &DecodeOptions) ->
         header: p.header,
         complete: p.complete,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::codec::container::read_chunks;
+    use crate::codec::encode::tests::raster;
+    use crate::codec::options::{EncodeOptions, Rate};
+    use crate::scheme::Boundary;
+
+    /// A lossless file of narrow samples decodes in `i32` planes to the samples of the
+    /// `i64` planes at every level.
+    #[test]
+    fn narrow_planes_decode_the_samples_of_wide_ones() {
+        let cases: [(&[usize], usize, SampleType); 4] = [
+            (&[33, 47], 3, SampleType::U8),
+            (&[40, 31], 1, SampleType::I8),
+            (&[9, 20, 17], 1, SampleType::U16),
+            (&[12, 13], 2, SampleType::I16),
+        ];
+        for (dims, c, ty) in cases {
+            let r = raster(dims, c, ty, 3);
+            let opts = EncodeOptions {
+                scheme: Scheme::Linear,
+                boundary: Boundary::Symmetric,
+                levels: 4,
+                rate: Rate::Lossless,
+            };
+            let file = crate::codec::encode(&r, &opts).unwrap();
+            for k in 0..3 {
+                let p = read_chunks(&file[..], file.len() as u64, k, false).unwrap();
+                let narrow = lossless_narrow(&p, k).unwrap().expect("16-bit values fit");
+                assert_eq!(narrow, lossless_wide(&p, k).unwrap(), "{dims:?} {ty} level {k}");
+                if k == 0 {
+                    assert_eq!(narrow, r.samples);
+                }
+            }
+        }
+    }
 }

@@ -14,6 +14,15 @@ pub fn supports(scheme: Scheme) -> bool {
     matches!(scheme, Scheme::Linear | Scheme::Haar)
 }
 
+/// Sample types whose lossless planes are `i32` ([`Store`]): 8 and 16 bits. The 5/3
+/// lifting's gain keeps every value of a real raster far below 2^31; the transforms
+/// check each value they store, and the codec falls back to `i64` planes (the same
+/// file, the same samples) when one does not fit.
+pub fn narrow(t: crate::io::SampleType) -> bool {
+    use crate::io::SampleType as T;
+    matches!(t, T::U8 | T::I8 | T::U16 | T::I16)
+}
+
 /// Plan of an integer pyramid of `scheme` ([`supports`]): lane lengths halve (rounding
 /// up) while ≥ 2.
 pub fn plan(dims: &[usize], levels: usize, scheme: Scheme) -> Pyramid {
@@ -45,14 +54,46 @@ pub fn plan(dims: &[usize], levels: usize, scheme: Scheme) -> Pyramid {
     }
 }
 
-/// Apply `f` to every lane along `axis` inside `region` (extents from the origin).
-fn lanes(
-    data: &mut [i64],
+/// Storage of an integer plane: `i64`, or `i32` for samples of 8 and 16 bits, whose
+/// transform is computed in `i64` a lane at a time and stored back only when it fits.
+pub trait Store: Copy + Default + Send + Sync {
+    fn wide(self) -> i64;
+    /// `v` stored, `None` when it does not fit.
+    fn narrow(v: i64) -> Option<Self>;
+}
+
+impl Store for i64 {
+    #[inline(always)]
+    fn wide(self) -> i64 {
+        self
+    }
+    #[inline(always)]
+    fn narrow(v: i64) -> Option<Self> {
+        Some(v)
+    }
+}
+
+impl Store for i32 {
+    #[inline(always)]
+    fn wide(self) -> i64 {
+        self as i64
+    }
+    #[inline(always)]
+    fn narrow(v: i64) -> Option<Self> {
+        i32::try_from(v).ok()
+    }
+}
+
+/// Apply `f` to every lane along `axis` inside `region` (extents from the origin), each
+/// lane taken to `i64`; false when a result does not fit the storage (the plane then
+/// holds garbage).
+fn lanes<T: Store>(
+    data: &mut [T],
     shape: &[usize],
     region: &[usize],
     axis: usize,
     f: &mut dyn FnMut(&mut [i64]),
-) {
+) -> bool {
     let nd = shape.len();
     let mut strides = vec![1usize; nd];
     for k in (0..nd.saturating_sub(1)).rev() {
@@ -61,6 +102,7 @@ fn lanes(
     let n = region[axis];
     let mut buf = vec![0i64; n];
     let mut idx = vec![0usize; nd];
+    let mut fits = true;
     let total: usize = region
         .iter()
         .enumerate()
@@ -70,11 +112,14 @@ fn lanes(
     for _ in 0..total {
         let base: usize = idx.iter().zip(&strides).map(|(i, s)| i * s).sum();
         for (j, b) in buf.iter_mut().enumerate() {
-            *b = data[base + j * strides[axis]];
+            *b = data[base + j * strides[axis]].wide();
         }
         f(&mut buf);
         for (j, b) in buf.iter().enumerate() {
-            data[base + j * strides[axis]] = *b;
+            match T::narrow(*b) {
+                Some(v) => data[base + j * strides[axis]] = v,
+                None => fits = false,
+            }
         }
         // next index, skipping `axis`
         for k in (0..nd).rev() {
@@ -88,6 +133,7 @@ fn lanes(
             idx[k] = 0;
         }
     }
+    fits
 }
 
 /// One S-transform level on a lane: pairs `(a, b)` → `h = a − b`, `l = b + ⌊h/2⌋`
@@ -150,24 +196,31 @@ fn level_inverse(scheme: Scheme) -> impl FnMut(&mut [i64]) {
     }
 }
 
-/// Forward integer pyramid of `plan` in place.
-pub fn forward(data: &mut [i64], pyr: &Pyramid) {
+/// Forward integer pyramid of `plan` in place; false when an intermediate value did
+/// not fit the storage `T` (never for `i64`: the arithmetic wraps), the plane then
+/// holding garbage.
+pub fn forward<T: Store>(data: &mut [T], pyr: &Pyramid) -> bool {
     let mut f = level_forward(pyr.spec.scheme);
     let mut region = pyr.shape.clone();
+    let mut fits = true;
     for l in 0..pyr.depth() {
         let before = region.clone();
         for (i, &a) in pyr.spec.axes.iter().enumerate() {
             if l < pyr.axis_levels(i) {
-                lanes(data, &pyr.shape, &before, a, &mut f);
+                fits &= lanes(data, &pyr.shape, &before, a, &mut f);
+                if !fits {
+                    return false;
+                }
                 region[a] = pyr.lengths[i][l + 1];
             }
         }
     }
+    fits
 }
 
 /// Inverse of [`forward`], stopping `skip` levels early (the result then holds the
-/// coarse block of level `skip` at the origin).
-pub fn inverse(data: &mut [i64], pyr: &Pyramid, skip: usize) {
+/// coarse block of level `skip` at the origin); false as [`forward`].
+pub fn inverse<T: Store>(data: &mut [T], pyr: &Pyramid, skip: usize) -> bool {
     let mut f = level_inverse(pyr.spec.scheme);
     let mut regions = vec![pyr.shape.clone()];
     for l in 0..pyr.depth() {
@@ -181,11 +234,12 @@ pub fn inverse(data: &mut [i64], pyr: &Pyramid, skip: usize) {
     }
     for l in (skip..pyr.depth()).rev() {
         for (i, &a) in pyr.spec.axes.iter().enumerate().rev() {
-            if l < pyr.axis_levels(i) {
-                lanes(data, &pyr.shape, &regions[l], a, &mut f);
+            if l < pyr.axis_levels(i) && !lanes(data, &pyr.shape, &regions[l], a, &mut f) {
+                return false;
             }
         }
     }
+    true
 }
 
 /// YCoCg-R forward lifting on one pixel: `Co = R − B`, `t = B + ⌊Co/2⌋`, `Cg = G − t`,
@@ -284,14 +338,54 @@ mod tests {
                 }
                 let orig = v.clone();
                 let p = plan(&dims, 5, scheme);
-                forward(&mut v, &p);
+                forward(&mut v[..], &p);
                 if n > 3 {
                     assert_ne!(v, orig, "{scheme:?} {dims:?} did nothing");
                 }
-                inverse(&mut v, &p, 0);
+                inverse(&mut v[..], &p, 0);
                 assert_eq!(v, orig, "{scheme:?} {dims:?}");
             }
         }
+    }
+
+    /// On 16-bit samples the `i32` planes hold the very values of the `i64` ones, every
+    /// level and the inverse included; a value past 32 bits is reported, not wrapped.
+    #[test]
+    fn narrow_planes_hold_the_values_of_wide_ones_or_say_they_cannot() {
+        for scheme in [Scheme::Haar, Scheme::Linear] {
+            for dims in [vec![37usize], vec![19, 23], vec![9, 8, 13], vec![2, 3, 4, 5]] {
+                let n: usize = dims.iter().product();
+                let mut s = 7u64;
+                let wide: Vec<i64> = (0..n)
+                    .map(|i| {
+                        s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+                        // noise over the full 16-bit range, and its extremes
+                        match i % 5 {
+                            0 => 65535,
+                            1 => 0,
+                            _ => (s >> 48) as i64,
+                        }
+                    })
+                    .collect();
+                let p = plan(&dims, 6, scheme);
+                let mut w = wide.clone();
+                let mut q: Vec<i32> = wide.iter().map(|&v| v as i32).collect();
+                assert!(forward(&mut w[..], &p));
+                assert!(forward(&mut q[..], &p), "{scheme:?} {dims:?}");
+                assert!(q.iter().zip(&w).all(|(&a, &b)| a as i64 == b));
+                for skip in [0, 1] {
+                    let (mut w2, mut q2) = (w.clone(), q.clone());
+                    assert!(inverse(&mut w2[..], &p, skip));
+                    assert!(inverse(&mut q2[..], &p, skip));
+                    assert!(q2.iter().zip(&w2).all(|(&a, &b)| a as i64 == b));
+                }
+                let mut q3 = q.clone();
+                assert!(inverse(&mut q3[..], &p, 0));
+                assert!(q3.iter().zip(&wide).all(|(&a, &b)| a as i64 == b));
+            }
+        }
+        let mut big = vec![i32::MAX, i32::MIN, i32::MAX, i32::MIN, 0, 5];
+        assert!(!forward(&mut big[..], &plan(&[6], 2, Scheme::Linear)));
     }
 
     /// On a smooth ramp the 5/3 details vanish (two zeros at π: it predicts lines
@@ -300,10 +394,10 @@ mod tests {
     fn the_5_3_lifting_predicts_lines() {
         let mut v: Vec<i64> = (0..16).map(|i| 3 * i + 5).collect();
         let p = plan(&[16], 1, Scheme::Linear);
-        forward(&mut v, &p);
+        forward(&mut v[..], &p);
         assert!(v[8..15].iter().all(|&d| d == 0), "{v:?}");
         let mut h: Vec<i64> = (0..16).map(|i| 3 * i + 5).collect();
-        forward(&mut h, &plan(&[16], 1, Scheme::Haar));
+        forward(&mut h[..], &plan(&[16], 1, Scheme::Haar));
         assert!(h[8..].iter().all(|&d| d == -3), "{h:?}");
     }
 

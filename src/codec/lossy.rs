@@ -69,9 +69,23 @@ pub(super) fn header_for(
         sample_type: r.sample_type(),
         kind: r.kind,
     };
-    let mut header = shape.header(opts, mode, colour)?;
-    (header.min, header.max) = finite_range(r.samples);
-    if super::voids::lists_voids(r.meta) {
+    header_with(&shape, opts, mode, colour, finite_range(r.samples), r.meta)
+}
+
+/// The header of a raster of `frame` whose least and greatest finite samples are
+/// `range` ([`finite_range`]), with metadata `meta` (a list of voids makes the file
+/// 2.4).
+pub(super) fn header_with(
+    frame: &Frame<'_>,
+    opts: &EncodeOptions,
+    mode: Mode,
+    colour: Colour,
+    range: (f64, f64),
+    meta: &crate::io::Metadata,
+) -> Result<Header> {
+    let mut header = frame.header(opts, mode, colour)?;
+    (header.min, header.max) = range;
+    if super::voids::lists_voids(meta) {
         // 2.4: the header says the mETA lists voids, so a file without it is refused
         header.voids = true;
         header.version = format::Version::for_file(mode == Mode::Lossless, true);
@@ -90,7 +104,12 @@ pub(super) struct Frame<'a> {
 impl Frame<'_> {
     /// The header of a raster of this frame, its extents and channels checked; `min` and
     /// `max` are left at 0 for the caller.
-    fn header(&self, opts: &EncodeOptions, mode: Mode, colour: Colour) -> Result<Header> {
+    fn header(
+        &self,
+        opts: &EncodeOptions,
+        mode: Mode,
+        colour: Colour,
+    ) -> Result<Header> {
         let (dims, channels) = (self.dims, self.channels);
         if dims.is_empty() || dims.len() > format::header::MAX_AXES {
             return Err(Error::parameter(
@@ -169,7 +188,8 @@ pub(super) fn prepare_slabs<S: SlabSource + ?Sized>(
         sample_type: shape.sample_type,
         kind: shape.kind,
     };
-    let mut header = frame.header(opts, mode, colour)?;
+    // the extents checked before the slabs are read
+    frame.header(opts, mode, colour)?;
     let n = shape.positions();
     let row = n / shape.dims[0];
     // about 2^20 positions a slab
@@ -188,7 +208,7 @@ pub(super) fn prepare_slabs<S: SlabSource + ?Sized>(
             plane.extend_from_slice(&part);
         }
     }
-    (header.min, header.max) = (min, max);
+    let header = header_with(&frame, opts, mode, colour, (min, max), &shape.meta)?;
     analysed(header, planes, meta::to_bytes(&shape.meta))
 }
 

@@ -2,13 +2,14 @@
 //! a spatial residual layer (one `RESI` chunk per channel).
 
 use super::decode::decode_untiled;
-use super::lossy::{prepare, Prepared};
+use super::lossy::{prepare, prepare_slabs, Prepared};
 use super::options::{DecodeOptions, EncodeOptions};
 use super::voids::void_mask;
-use crate::entropy::{band, BandKind};
+use crate::entropy::band;
 use crate::format::bands::residual_payload;
 use crate::format::tag::{MEND, RESI};
 use crate::format::{put_chunk, Mode};
+use crate::io::slab::SlabSource;
 use crate::io::{RasterView, SampleType, Samples};
 use crate::{Error, Result};
 use rayon::prelude::*;
@@ -56,27 +57,66 @@ pub(super) fn encode_max_error(
     opts: &EncodeOptions,
     e: f64,
 ) -> Result<Vec<u8>> {
-    let ty = r.sample_type();
-    let s = residual_step(e, ty);
-    let mut p = prepare(r, opts, Mode::MaxError)?;
+    let bases = bases(prepare(r, opts, Mode::MaxError)?, e, r.sample_type());
+    let voids = void_mask(r);
+    shortest(&bases, |base| {
+        with_residual(r, base, e, voids.as_deref())
+    })
+}
+
+/// [`encode_max_error`] of integer samples without voids that `src` hands out in
+/// slabs: the transform's planes filled a slab at a time
+/// ([`super::lossy::prepare_slabs`]) and dropped once the bases are coded, then the
+/// samples read whole for the residuals. The same bytes; the samples, the planes and a
+/// decoded base are never all held at once.
+pub(super) fn encode_max_error_slabs<S: SlabSource + ?Sized>(
+    src: &mut S,
+    opts: &EncodeOptions,
+    e: f64,
+) -> Result<Vec<u8>> {
+    let ty = src.shape().sample_type;
+    let bases = bases(prepare_slabs(src, opts, Mode::MaxError)?, e, ty);
+    let shape = src.shape().clone();
+    let mut raster = None;
+    shortest(&bases, |base| {
+        // the base decoded before the samples are read (its planes are the peak)
+        let dec = decode_base(base)?;
+        if raster.is_none() {
+            raster = Some(shape.raster(shape.dims.clone(), src.read_rows(0..shape.dims[0])?)?);
+        }
+        let r = raster.as_ref().expect("read above");
+        residual_file(&r.view(), base, dec, e, None)
+    })
+}
+
+/// The base files of `p` at every step of [`RDO_STEPS`] (its indices rate–distortion
+/// optimised, λ = 0.1, δ = 0); `p` is dropped once they are coded.
+fn bases(mut p: Prepared, e: f64, ty: SampleType) -> Vec<Vec<u8>> {
     p.header.max_error = e;
     // the base's indices are chosen by rate–distortion optimisation (λ = 0.1, δ = 0) at
     // steps coarser than the residual's cell (2E, or 2⌊E⌋ + 1 on integers) by the
     // factors of RDO_STEPS, and the shortest file is kept: the residual corrects what
     // the base leaves, so a coarser base spending fewer bits wins, the more so at small
     // E (figures in docs/codec.md)
-    let step = s.max(2.0 * e);
+    let step = residual_step(e, ty).max(2.0 * e);
     p.optimise();
-    let voids = void_mask(r);
-    let voids = voids.as_deref();
-    let mut best = with_residual(r, &p, e, s, step * RDO_STEPS[0], voids)?;
-    for m in &RDO_STEPS[1..] {
-        let file = with_residual(r, &p, e, s, step * m, voids)?;
-        if file.len() < best.len() {
-            best = file;
+    RDO_STEPS.iter().map(|m| p.code(step * m)).collect()
+}
+
+/// The shortest of the files `file(base)` makes of `bases` (the first of equal ones).
+fn shortest(
+    bases: &[Vec<u8>],
+    mut file: impl FnMut(&[u8]) -> Result<Vec<u8>>,
+) -> Result<Vec<u8>> {
+    let mut best: Option<Vec<u8>> = None;
+    for base in bases {
+        let f = file(base)?;
+        match &best {
+            Some(b) if f.len() >= b.len() => {}
+            _ => best = Some(f),
         }
     }
-    Ok(best)
+    Ok(best.expect("RDO_STEPS is not empty"))
 }
 
 /// The base steps over the residual's step tried with rate–distortion optimised indices.
@@ -84,20 +124,10 @@ pub(super) fn encode_max_error(
 /// than dead-zone indices at the residual's step; the coarser one wins at small bounds.
 const RDO_STEPS: [f64; 2] = [1.2, 2.5];
 
-/// The file of `p`'s base coded at `step`, then the residual layer of bound `e` with
-/// step `s` and its exceptions.
-fn with_residual(
-    r: &RasterView<'_>,
-    p: &Prepared,
-    e: f64,
-    s: f64,
-    step: f64,
-    voids: Option<&[bool]>,
-) -> Result<Vec<u8>> {
-    let base = p.code(step);
-    // the base alone: its header commits to the RESI chunks written below
-    let dec = decode_untiled(
-        &base[..],
+/// A base file decoded alone (its header commits to the `RESI` chunks that follow it).
+fn decode_base(base: &[u8]) -> Result<Samples> {
+    Ok(decode_untiled(
+        base,
         base.len() as u64,
         &DecodeOptions {
             level: 0,
@@ -105,18 +135,51 @@ fn with_residual(
             ..Default::default()
         },
     )?
-    .raster;
+    .raster
+    .samples)
+}
+
+/// The file of `base` (a base coded with `r`'s `--max-error` header) and the residual
+/// layer of bound `e` that brings `r` back within it.
+fn with_residual(
+    r: &RasterView<'_>,
+    base: &[u8],
+    e: f64,
+    voids: Option<&[bool]>,
+) -> Result<Vec<u8>> {
+    let dec = decode_base(base)?;
+    residual_file(r, base, dec, e, voids)
+}
+
+/// The file of `base` followed, per channel, by the `RESI` chunk of the residual of
+/// `r` to the decoded base `dec` (step [`residual_step`]) and its exceptions. Each
+/// channel's indices are computed a row at a time as they are coded
+/// ([`band::encode_stream_rows`]), never held whole.
+fn residual_file(
+    r: &RasterView<'_>,
+    base: &[u8],
+    dec: Samples,
+    e: f64,
+    voids: Option<&[bool]>,
+) -> Result<Vec<u8>> {
     let c = r.channels;
-    let coding = p.plan.coding;
-    let mut out = base[..base.len() - 12].to_vec(); // drop MEND
+    let s = residual_step(e, r.sample_type());
+    let coding = super::plan::coding_of(&crate::codec::header_of(base)?);
+    let cols = r.dims.last().copied().unwrap_or(1).max(1);
     let chunks: Vec<Vec<u8>> = (0..c)
         .into_par_iter()
         .map(|k| {
-            let (q, exc) = residual(r, &dec.samples, k, s, e, voids);
-            let coded = band::encode_stream(&q, r.dims, BandKind::Detail, None, coding);
+            let exc = exceptions(r, &dec, k, s, e, voids);
+            let coded = band::encode_stream_rows(r.dims, None, coding, |g, out| {
+                for (t, o) in out.iter_mut().enumerate() {
+                    *o = residual_index(r, &dec, (g * cols + t) * c + k, s, voids);
+                }
+            });
             residual_payload(k, s, &exc, &coded)
         })
         .collect();
+    drop(dec);
+    let mut out = base[..base.len() - 12].to_vec(); // drop MEND
     for ch in chunks {
         put_chunk(&mut out, RESI, &ch);
     }
@@ -124,49 +187,69 @@ fn with_residual(
     Ok(out)
 }
 
-/// Channel `k`'s residual layer over the decoded base `dec` (channels interleaved): the
-/// indices `round((x − x̂)/s)` and the samples (index, value) still outside the bound
-/// `e`. Void samples (`voids`, filled before the transform) are marked again after
-/// decoding, so their index is 0 and they are no exceptions: the decoded base holds the
-/// void marker there, and coding the distance from it to the fill cost the N22W160 tile
-/// an index of about 3000 at each of its 4279 voids.
-fn residual(
+/// The residual index `round((x − x̂)/s)` of sample `i` (channels interleaved) over
+/// the decoded base `dec`: 0 for a void sample (`voids`, filled before the transform
+/// and marked again after decoding: the decoded base holds the void marker there, and
+/// coding the distance from it to the fill cost the N22W160 tile an index of about 3000
+/// at each of its 4279 voids) and for a sample that is not finite.
+#[inline]
+fn residual_index(r: &RasterView<'_>, dec: &Samples, i: usize, s: f64, voids: Option<&[bool]>) -> i64 {
+    if voids.is_some_and(|m| m[i]) {
+        return 0;
+    }
+    let x = r.samples.get_f64(i);
+    let xh = dec.get_f64(i);
+    let d = if x.is_finite() { x - xh } else { 0.0 };
+    (d / s).round() as i64
+}
+
+/// Channel `k`'s samples (index, value) that the residual layer over the decoded base
+/// `dec` leaves outside the bound `e`: `x̂ + q·s` taken to the sample type (as
+/// `Samples::from_f64` does) further than `e` from `x` (NaN for NaN is within). Void
+/// samples are no exceptions.
+fn exceptions(
     r: &RasterView<'_>,
     dec: &Samples,
     k: usize,
     s: f64,
     e: f64,
     voids: Option<&[bool]>,
-) -> (Vec<i64>, Vec<(u64, f64)>) {
+) -> Vec<(u64, f64)> {
     let (c, n) = (r.channels, r.positions());
-    let is_void = |i: usize| voids.is_some_and(|m| m[i * c + k]);
-    let mut q = vec![0i64; n];
-    let mut fixed = vec![0f64; n];
-    for i in 0..n {
-        if is_void(i) {
-            continue;
-        }
-        let x = r.samples.get_f64(i * c + k);
-        let xh = dec.get_f64(i * c + k);
-        let d = if x.is_finite() { x - xh } else { 0.0 };
-        q[i] = (d / s).round() as i64;
-        fixed[i] = xh + q[i] as f64 * s;
-    }
-    let back = Samples::from_f64(&fixed, r.sample_type());
+    let ty = r.sample_type();
     let mut exc = Vec::new();
     for i in 0..n {
-        if is_void(i) {
+        let at = i * c + k;
+        if voids.is_some_and(|m| m[at]) {
             continue;
         }
-        let x = r.samples.get_f64(i * c + k);
-        let y = back.get_f64(i);
+        let q = residual_index(r, dec, at, s, voids);
+        let y = as_type(dec.get_f64(at) + q as f64 * s, ty);
+        let x = r.samples.get_f64(at);
         // NaN differences are outside the bound, except NaN for NaN
         let within = (x - y).abs() <= e || (x.is_nan() && y.is_nan());
         if !within {
             exc.push((i as u64, x));
         }
     }
-    (q, exc)
+    exc
+}
+
+/// `x` taken to the sample type `ty` and back to `f64`: integers rounded half away from
+/// zero and clamped to the type (NaN → 0), floats rounded to the type (what
+/// `Samples::from_f64` then `get_f64` make of it).
+#[inline]
+fn as_type(x: f64, ty: SampleType) -> f64 {
+    match ty {
+        SampleType::F16 => half::f16::from_f64(x).to_f64(),
+        SampleType::F32 => x as f32 as f64,
+        SampleType::F64 => x,
+        _ if x.is_nan() => 0.0,
+        _ => {
+            let (lo, hi) = ty.range();
+            x.round().clamp(lo, hi)
+        }
+    }
 }
 
 #[cfg(test)]
@@ -175,6 +258,27 @@ mod tests {
     use crate::codec::options::Rate;
     use crate::io::{DataKind, Raster};
     use crate::scheme::{Boundary, Scheme};
+
+    /// Channel `k`'s residual indices over `dec` and its exceptions.
+    fn residual(
+        r: &RasterView<'_>,
+        dec: &Samples,
+        k: usize,
+        s: f64,
+        e: f64,
+        voids: Option<&[bool]>,
+    ) -> (Vec<i64>, Vec<(u64, f64)>) {
+        let c = r.channels;
+        let q = (0..r.positions())
+            .map(|i| residual_index(r, dec, i * c + k, s, voids))
+            .collect();
+        (q, exceptions(r, dec, k, s, e, voids))
+    }
+
+    /// The file of `p`'s base at `step` and its residual layer.
+    fn file_at(r: &RasterView<'_>, p: &Prepared, e: f64, step: f64) -> Vec<u8> {
+        with_residual(r, &p.code(step), e, None).unwrap()
+    }
 
     /// A DEM-like raster: sea at exactly 0 on most of it, rough land in one corner.
     fn island(h: usize, w: usize) -> Raster {
@@ -240,11 +344,11 @@ mod tests {
             let s = residual_step(e, SampleType::I16);
             let mut p = prepare(&r.view(), &opts, Mode::MaxError).unwrap();
             p.header.max_error = e;
-            let dead_zone = with_residual(&r.view(), &p, e, s, s, None).unwrap();
+            let dead_zone = file_at(&r.view(), &p, e, s);
             p.optimise();
             let tried: Vec<Vec<u8>> = RDO_STEPS
                 .iter()
-                .map(|m| with_residual(&r.view(), &p, e, s, s * m, None).unwrap())
+                .map(|m| file_at(&r.view(), &p, e, s * m))
                 .collect();
             let optimised = tried.iter().map(|f| f.len()).min().unwrap();
             let kept = encode_max_error(&r.view(), &opts, e).unwrap();

@@ -149,11 +149,11 @@ pub(super) fn dequantize_row(q: &[i64], step: f64, delta: f64, out: &mut [f32]) 
 /// disjoint slices: for each band, its rows in raster order (the band's row `r` is
 /// `out[i][r]`, as long as the band's last extent). The bands of one level can so be
 /// written in parallel.
-pub(super) fn band_rows<'p>(
+pub(super) fn band_rows<'p, T>(
     plan: &Plan,
     js: &[usize],
-    plane: &'p mut [f32],
-) -> Vec<Vec<&'p mut [f32]>> {
+    plane: &'p mut [T],
+) -> Vec<Vec<&'p mut [T]>> {
     // (offset, length, band) of every row, in plane order
     let mut runs: Vec<(usize, usize, usize)> = Vec::new();
     for (i, &j) in js.iter().enumerate() {
@@ -162,7 +162,7 @@ pub(super) fn band_rows<'p>(
         });
     }
     runs.sort_unstable();
-    let mut out: Vec<Vec<&'p mut [f32]>> = js.iter().map(|_| Vec::new()).collect();
+    let mut out: Vec<Vec<&'p mut [T]>> = js.iter().map(|_| Vec::new()).collect();
     let mut rest = plane;
     let mut at = 0;
     for (off, run, i) in runs {
@@ -305,7 +305,7 @@ pub(super) fn to_samples(
 
 /// Positions [`to_samples`] converts before it shortens the planes (4 MB of one `f32`
 /// plane).
-const TAIL: usize = 1 << 20;
+pub(super) const TAIL: usize = 1 << 20;
 
 /// `round(x)` half away from zero, clamped to `lo..=hi`, NaN → 0: what
 /// [`Samples::from_iter_f64`] makes of `x` for an integer type of range `lo..=hi` (a

@@ -216,6 +216,63 @@ pub fn encode_stream(
     }
 }
 
+/// [`encode_stream`] of a detail band whose indices are handed over a row at a time:
+/// `row(g, out)` fills `out` with row `g` (raster order over the planes' rows). Only
+/// the rows the contexts read are held ([`Window`]), not the whole band; the bytes are
+/// those of [`encode_stream`] of the whole band (in [`Coding::Chosen`] each coding asks
+/// for every row once).
+pub fn encode_stream_rows(
+    dims: &[usize],
+    parent: Option<Parent>,
+    coding: Coding,
+    row: impl Fn(usize, &mut [i64]) + Sync,
+) -> Vec<u8> {
+    let code = |classes: Classes| {
+        let mut e = Encoder::new();
+        open(&mut e, coding, classes);
+        encode_rows(&mut e, dims, parent, classes, &row);
+        e.finish_short()
+    };
+    if coding == Coding::Narrow {
+        return code(Classes::Narrow);
+    }
+    let (narrow, wide) = rayon::join(|| code(Classes::Narrow), || code(Classes::Wide));
+    if wide.len() < narrow.len() {
+        wide
+    } else {
+        narrow
+    }
+}
+
+/// [`encode`] of a detail band handed over a row at a time (see [`encode_stream_rows`]).
+fn encode_rows(
+    e: &mut Encoder,
+    dims: &[usize],
+    parent: Option<Parent>,
+    classes: Classes,
+    row: impl Fn(usize, &mut [i64]),
+) {
+    let ctx = Ctx::new(dims, parent);
+    let mut m = Models::new(classes);
+    let w = ctx.walk;
+    let mut r = Row::new(w.cols, classes);
+    let mut q = Window::new(w, false);
+    for p in 0..w.planes {
+        let pbase = ctx.parent_base(p, dims);
+        for y in 0..w.rows {
+            let g = p * w.rows + y;
+            row(g, q.row_mut(g));
+            ctx.prepare(&mut r, q.neighbours(&ctx, p, y, g), y, pbase);
+            let (mut w1, mut w2) = (0, 0);
+            for (x, &v) in q.row(g).iter().enumerate() {
+                encode_value(e, &mut m, v, r.context(x, w1, w2));
+                w2 = w1;
+                w1 = v;
+            }
+        }
+    }
+}
+
 #[inline(always)]
 fn cls3(m: u64) -> usize {
     m.min(2) as usize
@@ -847,6 +904,44 @@ mod tests {
     /// and as the chosen indices coded whole, and [`decode_rows`] hands back the same
     /// rows as [`decode`]: 1-D to 4-D bands with a parent, planes along one and two
     /// outer axes.
+    /// A band handed over a row at a time codes to the stream of the whole band, in
+    /// both codings, with and without a parent, large indices included (the wide
+    /// classes win on those).
+    #[test]
+    fn bands_handed_over_by_rows_code_as_whole_bands() {
+        for dims in [
+            vec![9usize],
+            vec![1, 5],
+            vec![11, 6],
+            vec![5, 4, 6],
+            vec![3, 1, 5],
+            vec![2, 3, 2, 5],
+        ] {
+            let n: usize = dims.iter().product();
+            let cols = *dims.last().unwrap();
+            let pdims: Vec<usize> = dims.iter().map(|d| d.div_ceil(2)).collect();
+            let pq = sample(pdims.iter().product(), 5, 4);
+            for spread in [3, 5000] {
+                let q = sample(n, n as u64 + spread as u64, spread);
+                for parent in [
+                    None,
+                    Some(Parent {
+                        data: &pq,
+                        dims: &pdims,
+                    }),
+                ] {
+                    for coding in [Coding::Narrow, Coding::Chosen] {
+                        let whole = encode_stream(&q, &dims, BandKind::Detail, parent, coding);
+                        let rows = encode_stream_rows(&dims, parent, coding, |g, out| {
+                            out.copy_from_slice(&q[g * cols..(g + 1) * cols])
+                        });
+                        assert_eq!(rows, whole, "{dims:?} {spread} {coding:?}");
+                    }
+                }
+            }
+        }
+    }
+
     #[test]
     fn row_windows_code_and_decode_as_whole_bands() {
         let shapes = [
