@@ -230,7 +230,7 @@ fn decode_channel_narrow(p: &Parsed, c: usize, k: usize, plane: &mut [i32]) -> R
                         Error::format(format!("band {j} of channel {c}: {e}"), "a valid band")
                     };
                     let mut ok = true;
-                    if h.major < 2 || level == 0 || has_children[j] {
+                    if !h.version.has_levels() || level == 0 || has_children[j] {
                         let kind = if level == 0 {
                             BandKind::Coarse
                         } else {
@@ -501,7 +501,7 @@ fn add_residuals(p: &Parsed, samples: &mut Samples) -> Result<()> {
         let failed =
             |e: Error| Error::format(format!("RESI of channel {ch}: {e}"), "a valid residual");
         match p.resi.get(ch).and_then(|r| r.as_ref()) {
-            Some(r) if h.major >= 2 => {
+            Some(r) if h.version.has_levels() => {
                 let mut d = Decoder::new_short(&r.data);
                 let coding = super::plan::coding_of(h);
                 entropy::band::decode_rows(&mut d, &h.dims, None, coding, |at, q| {
