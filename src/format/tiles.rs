@@ -26,6 +26,26 @@ pub fn tile_prefix(i: usize) -> [u8; 4] {
     (i as u32).to_le_bytes()
 }
 
+/// The bytes of a 2.2 tiled file outside its tiles' compact bodies: the signature, `HEAD`
+/// (of `axes` axes, no flags byte), `mETA` (its payload `meta` bytes, absent when 0),
+/// `TRAT` (`ratios` ratios), `TIDX` and the framing and index of `tiles` `TILE`
+/// chunks, `MEND`.
+pub fn outside_bytes(axes: usize, meta: usize, ratios: usize, tiles: usize) -> usize {
+    let frame = 12;
+    let meta = if meta > 0 { frame + meta } else { 0 };
+    SIGNATURE.len()
+        + frame
+        + 52
+        + 8 * axes
+        + meta
+        + frame
+        + 4 * ratios
+        + frame
+        + 16 * tiles
+        + (frame + 4) * tiles
+        + frame
+}
+
 /// The tile index of a `TILE` chunk of a grid of `n` tiles and the rest of its payload.
 pub fn tile_payload(ch: &Chunk, n: usize) -> Result<(usize, &[u8])> {
     let mut c = Cursor::new(&ch.payload, "TILE");

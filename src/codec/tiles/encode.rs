@@ -494,25 +494,12 @@ fn search_step(
     // the bytes outside the tiles' compact bodies (signature, HEAD, mETA, TRAT, TIDX,
     // TILE framing and index, MEND), the sample's share of them
     let bands = prepared.first().map_or(0, |p| p.1.plan.bands.len());
-    let ratios = 4 * grid.classes().len() * bands * shape.channels;
-    let outside = 8
-        + 12
-        + 52
-        + 8 * shape.dims.len()
-        + {
-            let m = meta::to_bytes(&shape.meta).len();
-            if m > 0 {
-                12 + m
-            } else {
-                0
-            }
-        }
-        + 12
-        + ratios
-        + 12
-        + 16 * n
-        + (12 + 4) * n
-        + 12;
+    let outside = format::tiles::outside_bytes(
+        shape.dims.len(),
+        meta::to_bytes(&shape.meta).len(),
+        grid.classes().len() * bands * shape.channels,
+        n,
+    );
     let outside = outside as f64 * positions / shape.positions() as f64;
     match opts.rate {
         Rate::Bpp(b) => {
