@@ -196,6 +196,24 @@ pub fn use_allocator(policy: Allocator) {
     let _ = policy;
 }
 
+/// Gives the pages of freed memory inside the allocator's heaps back to the system
+/// (glibc's `malloc_trim(0)`: whole free pages of every arena), for a command about to
+/// make its largest buffers after freeing many small ones (the `--max-error` encoder
+/// between its bases and residuals); nothing elsewhere.
+pub fn release_freed() {
+    #[cfg(all(target_os = "linux", target_env = "gnu"))]
+    {
+        extern "C" {
+            fn malloc_trim(pad: usize) -> i32;
+        }
+        // SAFETY: malloc_trim only returns free pages of the allocator's own heaps to
+        // the system; live allocations are untouched.
+        unsafe {
+            malloc_trim(0);
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

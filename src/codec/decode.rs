@@ -93,38 +93,70 @@ fn decode_channel(p: &Parsed, c: usize, k: usize) -> Result<Vec<Option<Vec<i64>>
 }
 
 /// Decode one channel's bands of a lossy file straight into its `plane` (laid out as the
-/// pyramid's shape, zeroed; absent bands stay 0), dequantized as they are decoded, level
-/// by level from the coarse block down, the bands of a level in parallel. Only the
-/// indices of the level that is the next one's context are held (a band with children,
-/// until they are decoded); a band without children is decoded a row at a time
-/// ([`entropy::band::decode_rows`]) straight into the plane.
+/// pyramid's shape, zeroed; absent bands stay 0), dequantized as they are decoded. The
+/// bands go chain by chain ([`Plan::chains`]: an orientation's bands from the coarsest
+/// level down, each the context of the next), the chains in parallel, so that only the
+/// indices of the bands in flight and their parents are held, not those of a whole
+/// level; a band without children is decoded a row at a time
+/// ([`entropy::band::decode_rows`]) straight into the plane. Of several failing bands
+/// the first in file order is reported, as a decoder going level by level would.
 fn decode_channel_into(p: &Parsed, c: usize, k: usize, plane: &mut [f32]) -> Result<()> {
     let (h, plan) = (&p.header, &p.plan);
     let nb = plan.bands.len();
     let has_children: Vec<bool> = (0..nb).map(|j| plan.parents.contains(&Some(j))).collect();
-    let mut q: Vec<Option<Vec<i64>>> = (0..nb).map(|_| None).collect();
-    for (level, js) in plan.level_groups() {
-        if k > 0 && level >= 1 && level <= k {
-            continue;
-        }
-        let rows = band_rows(plan, &js, plane);
-        let decoded: Vec<Result<Option<Vec<i64>>>> = js
-            .par_iter()
-            .zip(rows)
-            .map(|(&j, mut rows)| {
+    let skipped = |j: usize| {
+        let level = plan.bands[j].level;
+        k > 0 && level >= 1 && level <= k
+    };
+    let chains: Vec<Vec<usize>> = plan
+        .chains()
+        .into_iter()
+        .map(|ch| ch.into_iter().filter(|&j| !skipped(j)).collect::<Vec<_>>())
+        .filter(|ch| !ch.is_empty())
+        .collect();
+    let all: Vec<usize> = chains.iter().flatten().copied().collect();
+    let mut rows = band_rows(plan, &all, plane).into_iter();
+    let work: Vec<(&Vec<usize>, Vec<Vec<&mut [f32]>>)> = chains
+        .iter()
+        .map(|ch| (ch, rows.by_ref().take(ch.len()).collect()))
+        .collect();
+    // position of each band in the file: the levels' order, then the bands'
+    let mut order = vec![0usize; nb];
+    for (i, j) in plan
+        .level_groups()
+        .into_iter()
+        .flat_map(|(_, js)| js)
+        .enumerate()
+    {
+        order[j] = i;
+    }
+    let failures: Vec<(usize, Error)> = work
+        .into_par_iter()
+        .filter_map(|(chain, band_rows)| {
+            // the indices of the band before in the chain, when it has children
+            let mut prev: Option<(usize, Vec<i64>)> = None;
+            for (&j, mut rows) in chain.iter().zip(band_rows) {
+                let failed = |e: Error| {
+                    Error::format(format!("band {j} of channel {c}: {e}"), "a valid band")
+                };
+                let level = plan.bands[j].level;
                 let Some(bc) = &p.bands[c][j] else {
-                    return Ok(None);
+                    prev = None;
+                    continue;
                 };
                 let parent = match plan.parents[j] {
-                    Some(pj) => match &q[pj] {
-                        Some(v) => Some(Parent {
+                    Some(pj) => match &prev {
+                        Some((at, v)) if *at == pj => Some(Parent {
                             data: v,
                             dims: &plan.dims[pj],
                         }),
-                        None => {
-                            return Err(Error::format(
-                                format!("band {j} of channel {c} without its parent"),
-                                "complete parents",
+                        _ => {
+                            return Some((
+                                j,
+                                Error::format(
+                                    format!("band {j} of channel {c} without its parent"),
+                                    "complete parents",
+                                ),
                             ))
                         }
                     },
@@ -132,46 +164,41 @@ fn decode_channel_into(p: &Parsed, c: usize, k: usize, plane: &mut [f32]) -> Res
                 };
                 let (step, delta) = (bc.step, band_delta(h, plan, j));
                 let dims = &plan.dims[j];
-                let failed = |e: Error| {
-                    Error::format(format!("band {j} of channel {c}: {e}"), "a valid band")
-                };
                 if !h.version.has_levels() || level == 0 || has_children[j] {
                     let kind = if level == 0 {
                         BandKind::Coarse
                     } else {
                         BandKind::Detail
                     };
-                    let v = decode_band(h, &bc.data, dims, kind, parent).map_err(failed)?;
+                    let v = match decode_band(h, &bc.data, dims, kind, parent) {
+                        Ok(v) => v,
+                        Err(e) => return Some((j, failed(e))),
+                    };
                     let cols = dims.last().copied().unwrap_or(1).max(1);
                     for (r, out) in v.chunks(cols).zip(rows.iter_mut()) {
                         dequantize_row(r, step, delta, out);
                     }
-                    return Ok(has_children[j].then_some(v));
+                    prev = has_children[j].then_some((j, v));
+                    continue;
                 }
                 let mut d = Decoder::new_short(&bc.data);
                 let mut at_row = 0;
-                entropy::band::decode_rows(&mut d, dims, parent, plan.coding, |_, r| {
+                let done = entropy::band::decode_rows(&mut d, dims, parent, plan.coding, |_, r| {
                     dequantize_row(r, step, delta, rows[at_row]);
                     at_row += 1;
-                })
-                .map_err(failed)?;
-                Ok(None)
-            })
-            .collect();
-        // the first failing band in file order, as one at a time would report it
-        for (&j, v) in js.iter().zip(decoded) {
-            q[j] = v?;
-        }
-        if level > 0 {
-            // the bands of the level above have no other children
-            for (v, b) in q.iter_mut().zip(&plan.bands) {
-                if b.level == level + 1 {
-                    *v = None;
+                });
+                if let Err(e) = done {
+                    return Some((j, failed(e)));
                 }
+                prev = None;
             }
-        }
+            None
+        })
+        .collect();
+    match failures.into_iter().min_by_key(|(j, _)| order[*j]) {
+        Some((_, e)) => Err(e),
+        None => Ok(()),
     }
-    Ok(())
 }
 
 /// Decode one channel's bands of a lossless file of 8- or 16-bit samples straight into

@@ -58,9 +58,33 @@ impl Plan {
         self.code_levels_with(channels, choice, true, input)
     }
 
+    /// The bands in chains along which each band is the context of the next: the
+    /// coarse block alone, then for each orientation (the high-pass axes) its bands from
+    /// the coarsest level to the finest. A band's parent, one level coarser with the same
+    /// orientation, is the one before it in its chain, and it has no other child.
+    pub(super) fn chains(&self) -> Vec<Vec<usize>> {
+        let mut chains: Vec<Vec<usize>> = Vec::new();
+        for (_, js) in self.level_groups() {
+            for j in js {
+                match chains
+                    .iter_mut()
+                    .find(|ch| self.bands[ch[0]].high == self.bands[j].high)
+                {
+                    Some(ch) => ch.push(j),
+                    None => chains.push(vec![j]),
+                }
+            }
+        }
+        chains
+    }
+
     /// [`Plan::code_levels`], keeping each band's indices only while its children are
     /// coded when `keep_indices` is false (the returned [`CodedBand::q`] are then empty):
-    /// the indices of a whole image (8 bytes a sample) are never held at once.
+    /// the indices of a whole image (8 bytes a sample) are never held at once. The bands
+    /// are coded chain by chain ([`Plan::chains`], the chains in parallel), so that only
+    /// the indices of the bands in flight and their parents are held, not those of a
+    /// whole level; each band's stream depends only on its indices and its parent's, so
+    /// the streams are those of any order.
     pub(super) fn code_levels_with<'a>(
         &self,
         channels: usize,
@@ -68,99 +92,109 @@ impl Plan {
         keep_indices: bool,
         input: impl Fn(usize, usize) -> BandInput<'a> + Sync,
     ) -> Vec<Vec<CodedBand>> {
-        let groups = self.level_groups();
+        let chains = self.chains();
         (0..channels)
             .into_par_iter()
             .map(|c| {
-                let mut out: Vec<Option<CodedBand>> = (0..self.bands.len()).map(|_| None).collect();
-                for (level, js) in &groups {
-                    let coded: Vec<CodedBand> = js
-                        .par_iter()
-                        .map(|&j| {
-                            let parent = self.parents[j].map(|p| Parent {
-                                data: &out[p].as_ref().expect("parents coded first").q,
-                                dims: &self.dims[p],
+                let coded: Vec<Vec<(usize, CodedBand)>> = chains
+                    .par_iter()
+                    .map(|chain| {
+                        let mut done: Vec<(usize, CodedBand)> = Vec::with_capacity(chain.len());
+                        for &j in chain {
+                            let parent = self.parents[j].map(|p| {
+                                let (pj, pb) = done.last().expect("a parent comes first");
+                                debug_assert_eq!(*pj, p);
+                                Parent {
+                                    data: &pb.q,
+                                    dims: &self.dims[p],
+                                }
                             });
-                            let dims = &self.dims[j];
-                            let stream: Vec<u8>;
-                            // a band without children (the finest level) is nobody's
-                            // context: unless asked for, its indices are not kept
-                            let childless = !self.parents.contains(&Some(j));
-                            let keep = keep_indices || !childless;
-                            let kind = if *level == 0 {
-                                BandKind::Coarse
-                            } else {
-                                BandKind::Detail
-                            };
-                            let q = match (input(c, j), choice) {
-                                (BandInput::Indices(q), _) => {
-                                    stream =
-                                        band::encode_stream(&q, dims, kind, parent, self.coding);
-                                    q
-                                }
-                                (BandInput::Coefficients { plane, step }, Choice::Rdo(lambda))
-                                    if *level > 0 =>
-                                {
-                                    let offs = self.row_offsets(j);
-                                    let cols = dims.last().copied().unwrap_or(1);
-                                    let mut e = Encoder::new();
-                                    let q = band::encode_rdo_with(
-                                        &mut e,
-                                        dims,
-                                        parent,
-                                        lambda,
-                                        self.coding,
-                                        keep,
-                                        |g, out| {
-                                            let row = &plane[offs[g]..offs[g] + cols];
-                                            for (o, &x) in out.iter_mut().zip(row) {
-                                                *o = (x as f64 / step) as f32;
-                                            }
-                                        },
-                                    )
-                                    .unwrap_or_default();
-                                    stream = e.finish_short();
-                                    q
-                                }
-                                (BandInput::Coefficients { plane, step }, _) => {
-                                    let q: Vec<i64> = layout::gather(
-                                        plane,
-                                        &self.pyr.shape,
-                                        &self.bands[j].ranges,
-                                    )
-                                    .into_iter()
-                                    .map(|x| round_index((x as f64 / step) as f32))
-                                    .collect();
-                                    stream =
-                                        band::encode_stream(&q, dims, kind, parent, self.coding);
-                                    q
-                                }
-                            };
-                            CodedBand {
-                                q: if keep { q } else { Vec::new() },
-                                stream,
-                            }
-                        })
-                        .collect();
-                    for (&j, cb) in js.iter().zip(coded) {
-                        out[j] = Some(cb);
-                    }
-                    if !keep_indices && *level > 0 {
-                        // the parents of this level have no other children
-                        for (p, b) in out.iter_mut().zip(&self.bands) {
-                            if b.level == level + 1 {
-                                if let Some(cb) = p {
-                                    cb.q = Vec::new();
+                            let cb = self.code_band(c, j, choice, keep_indices, parent, &input);
+                            if !keep_indices {
+                                // the parent has no other child
+                                if let Some((_, pb)) = done.last_mut() {
+                                    pb.q = Vec::new();
                                 }
                             }
+                            done.push((j, cb));
                         }
-                    }
+                        done
+                    })
+                    .collect();
+                let mut out: Vec<Option<CodedBand>> = (0..self.bands.len()).map(|_| None).collect();
+                for (j, cb) in coded.into_iter().flatten() {
+                    out[j] = Some(cb);
                 }
                 out.into_iter()
                     .map(|b| b.expect("every band coded"))
                     .collect()
             })
             .collect()
+    }
+
+    /// Band `j` of channel `c` coded ([`Plan::code_levels_with`]) with context `parent`;
+    /// its indices kept when `keep_indices` or when it has children.
+    fn code_band<'a>(
+        &self,
+        c: usize,
+        j: usize,
+        choice: Choice,
+        keep_indices: bool,
+        parent: Option<Parent>,
+        input: &impl Fn(usize, usize) -> BandInput<'a>,
+    ) -> CodedBand {
+        let level = self.bands[j].level;
+        let dims = &self.dims[j];
+        let stream: Vec<u8>;
+        // a band without children (the finest level) is nobody's
+        // context: unless asked for, its indices are not kept
+        let childless = !self.parents.contains(&Some(j));
+        let keep = keep_indices || !childless;
+        let kind = if level == 0 {
+            BandKind::Coarse
+        } else {
+            BandKind::Detail
+        };
+        let q = match (input(c, j), choice) {
+            (BandInput::Indices(q), _) => {
+                stream = band::encode_stream(&q, dims, kind, parent, self.coding);
+                q
+            }
+            (BandInput::Coefficients { plane, step }, Choice::Rdo(lambda)) if level > 0 => {
+                let offs = self.row_offsets(j);
+                let cols = dims.last().copied().unwrap_or(1);
+                let mut e = Encoder::new();
+                let q = band::encode_rdo_with(
+                    &mut e,
+                    dims,
+                    parent,
+                    lambda,
+                    self.coding,
+                    keep,
+                    |g, out| {
+                        let row = &plane[offs[g]..offs[g] + cols];
+                        for (o, &x) in out.iter_mut().zip(row) {
+                            *o = (x as f64 / step) as f32;
+                        }
+                    },
+                )
+                .unwrap_or_default();
+                stream = e.finish_short();
+                q
+            }
+            (BandInput::Coefficients { plane, step }, _) => {
+                let q: Vec<i64> = layout::gather(plane, &self.pyr.shape, &self.bands[j].ranges)
+                    .into_iter()
+                    .map(|x| round_index((x as f64 / step) as f32))
+                    .collect();
+                stream = band::encode_stream(&q, dims, kind, parent, self.coding);
+                q
+            }
+        };
+        CodedBand {
+            q: if keep { q } else { Vec::new() },
+            stream,
+        }
     }
 
     /// The offset in the pyramid's plane of every row of band `j` (raster order).

@@ -59,16 +59,15 @@ pub(super) fn encode_max_error(
 ) -> Result<Vec<u8>> {
     let bases = bases(prepare(r, opts, Mode::MaxError)?, e, r.sample_type());
     let voids = void_mask(r);
-    shortest(&bases, |base| {
-        with_residual(r, base, e, voids.as_deref())
-    })
+    shortest(bases, |base| with_residual(r, base, e, voids.as_deref()))
 }
 
 /// [`encode_max_error`] of integer samples without voids that `src` hands out in
 /// slabs: the transform's planes filled a slab at a time
-/// ([`super::lossy::prepare_slabs`]) and dropped once the bases are coded, then the
-/// samples read whole for the residuals. The same bytes; the samples, the planes and a
-/// decoded base are never all held at once.
+/// ([`super::lossy::prepare_slabs`]) and dropped once the bases are coded, then for
+/// each base the samples read whole for its residual once the base is decoded. The same
+/// bytes; the samples are never held beside the planes of the transform or of a base's
+/// decode.
 pub(super) fn encode_max_error_slabs<S: SlabSource + ?Sized>(
     src: &mut S,
     opts: &EncodeOptions,
@@ -77,14 +76,11 @@ pub(super) fn encode_max_error_slabs<S: SlabSource + ?Sized>(
     let ty = src.shape().sample_type;
     let bases = bases(prepare_slabs(src, opts, Mode::MaxError)?, e, ty);
     let shape = src.shape().clone();
-    let mut raster = None;
-    shortest(&bases, |base| {
-        // the base decoded before the samples are read (its planes are the peak)
-        let dec = decode_base(base)?;
-        if raster.is_none() {
-            raster = Some(shape.raster(shape.dims.clone(), src.read_rows(0..shape.dims[0])?)?);
-        }
-        let r = raster.as_ref().expect("read above");
+    shortest(bases, |base| {
+        // the base decoded before the samples are read (its planes are the peak), the
+        // samples read again for each base
+        let dec = decode_base(&base)?;
+        let r = shape.raster(shape.dims.clone(), src.read_rows(0..shape.dims[0])?)?;
         residual_file(&r.view(), base, dec, e, None)
     })
 }
@@ -100,17 +96,22 @@ fn bases(mut p: Prepared, e: f64, ty: SampleType) -> Vec<Vec<u8>> {
     // E (figures in docs/codec.md)
     let step = residual_step(e, ty).max(2.0 * e);
     p.optimise();
-    RDO_STEPS.iter().map(|m| p.code(step * m)).collect()
+    let bases = RDO_STEPS.iter().map(|m| p.code(step * m)).collect();
+    drop(p);
+    crate::tuning::release_freed();
+    bases
 }
 
-/// The shortest of the files `file(base)` makes of `bases` (the first of equal ones).
+/// The shortest of the files `file(base)` makes of `bases` (the first of equal ones),
+/// each base handed over (and so freed) as its turn comes.
 fn shortest(
-    bases: &[Vec<u8>],
-    mut file: impl FnMut(&[u8]) -> Result<Vec<u8>>,
+    bases: Vec<Vec<u8>>,
+    mut file: impl FnMut(Vec<u8>) -> Result<Vec<u8>>,
 ) -> Result<Vec<u8>> {
     let mut best: Option<Vec<u8>> = None;
     for base in bases {
         let f = file(base)?;
+        crate::tuning::release_freed();
         match &best {
             Some(b) if f.len() >= b.len() => {}
             _ => best = Some(f),
@@ -143,11 +144,11 @@ fn decode_base(base: &[u8]) -> Result<Samples> {
 /// layer of bound `e` that brings `r` back within it.
 fn with_residual(
     r: &RasterView<'_>,
-    base: &[u8],
+    base: Vec<u8>,
     e: f64,
     voids: Option<&[bool]>,
 ) -> Result<Vec<u8>> {
-    let dec = decode_base(base)?;
+    let dec = decode_base(&base)?;
     residual_file(r, base, dec, e, voids)
 }
 
@@ -157,14 +158,14 @@ fn with_residual(
 /// ([`band::encode_stream_rows`]), never held whole.
 fn residual_file(
     r: &RasterView<'_>,
-    base: &[u8],
+    base: Vec<u8>,
     dec: Samples,
     e: f64,
     voids: Option<&[bool]>,
 ) -> Result<Vec<u8>> {
     let c = r.channels;
     let s = residual_step(e, r.sample_type());
-    let coding = super::plan::coding_of(&crate::codec::header_of(base)?);
+    let coding = super::plan::coding_of(&crate::codec::header_of(&base)?);
     let cols = r.dims.last().copied().unwrap_or(1).max(1);
     let chunks: Vec<Vec<u8>> = (0..c)
         .into_par_iter()
@@ -179,7 +180,8 @@ fn residual_file(
         })
         .collect();
     drop(dec);
-    let mut out = base[..base.len() - 12].to_vec(); // drop MEND
+    let mut out = base;
+    out.truncate(out.len() - 12); // drop MEND
     for ch in chunks {
         put_chunk(&mut out, RESI, &ch);
     }
@@ -277,7 +279,7 @@ mod tests {
 
     /// The file of `p`'s base at `step` and its residual layer.
     fn file_at(r: &RasterView<'_>, p: &Prepared, e: f64, step: f64) -> Vec<u8> {
-        with_residual(r, &p.code(step), e, None).unwrap()
+        with_residual(r, p.code(step), e, None).unwrap()
     }
 
     /// A DEM-like raster: sea at exactly 0 on most of it, rough land in one corner.
