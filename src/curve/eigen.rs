@@ -186,30 +186,7 @@ fn hqr(a: &mut [Vec<f64>]) -> Result<Vec<Eigenvalue>> {
             }
             its += 1;
             // form the shift and look for two consecutive small subdiagonal elements
-            let mut m = nu - 2;
-            let mut z;
-            let (mut p, mut q, mut r);
-            loop {
-                z = a[m][m];
-                let r0 = x - z;
-                let s0 = y - z;
-                p = (r0 * s0 - w) / a[m + 1][m] + a[m][m + 1];
-                q = a[m + 1][m + 1] - z - r0 - s0;
-                r = a[m + 2][m + 1];
-                let s = p.abs() + q.abs() + r.abs();
-                p /= s;
-                q /= s;
-                r /= s;
-                if m == l {
-                    break;
-                }
-                let u = a[m][m - 1].abs() * (q.abs() + r.abs());
-                let v = p.abs() * (a[m - 1][m - 1].abs() + z.abs() + a[m + 1][m + 1].abs());
-                if u + v == v {
-                    break;
-                }
-                m -= 1;
-            }
+            let (m, [p, q, r]) = shift_start(a, [l, nu], [x, y, w]);
             for i in m + 2..=nu {
                 a[i][i - 2] = 0.0;
                 if i != m + 2 {
@@ -217,59 +194,7 @@ fn hqr(a: &mut [Vec<f64>]) -> Result<Vec<Eigenvalue>> {
                 }
             }
             // double QR step on rows l..nn and columns m..nn
-            let mut k = m;
-            while k < nu {
-                if k != m {
-                    p = a[k][k - 1];
-                    q = a[k + 1][k - 1];
-                    r = 0.0;
-                    if k != nu - 1 {
-                        r = a[k + 2][k - 1];
-                    }
-                    x = p.abs() + q.abs() + r.abs();
-                    if x != 0.0 {
-                        p /= x;
-                        q /= x;
-                        r /= x;
-                    }
-                }
-                let s = sign((p * p + q * q + r * r).sqrt(), p);
-                if s != 0.0 {
-                    if k == m {
-                        if l != m {
-                            a[k][k - 1] = -a[k][k - 1];
-                        }
-                    } else {
-                        a[k][k - 1] = -s * x;
-                    }
-                    p += s;
-                    x = p / s;
-                    y = q / s;
-                    z = r / s;
-                    q /= p;
-                    r /= p;
-                    for j in k..=nu {
-                        let mut pp = a[k][j] + q * a[k + 1][j];
-                        if k != nu - 1 {
-                            pp += r * a[k + 2][j];
-                            a[k + 2][j] -= pp * z;
-                        }
-                        a[k + 1][j] -= pp * y;
-                        a[k][j] -= pp * x;
-                    }
-                    let mmin = if nu < k + 3 { nu } else { k + 3 };
-                    for row in a.iter_mut().take(mmin + 1).skip(l) {
-                        let mut pp = x * row[k] + y * row[k + 1];
-                        if k != nu - 1 {
-                            pp += z * row[k + 2];
-                            row[k + 2] -= pp * r;
-                        }
-                        row[k + 1] -= pp * q;
-                        row[k] -= pp;
-                    }
-                }
-                k += 1;
-            }
+            double_qr_step(a, [l, m, nu], [p, q, r]);
         }
     }
     Ok(wr
@@ -277,4 +202,94 @@ fn hqr(a: &mut [Vec<f64>]) -> Result<Vec<Eigenvalue>> {
         .zip(wi)
         .map(|(re, im)| Eigenvalue { re, im })
         .collect())
+}
+
+/// The row `m ≥ l` where the double shift of `[x, y, w]` starts (two consecutive small
+/// subdiagonal elements, or `l`), and the shift's first column `[p, q, r]` there, scaled.
+fn shift_start(a: &[Vec<f64>], [l, nu]: [usize; 2], [x, y, w]: [f64; 3]) -> (usize, [f64; 3]) {
+    let mut m = nu - 2;
+    let mut z;
+    let (mut p, mut q, mut r);
+    loop {
+        z = a[m][m];
+        let r0 = x - z;
+        let s0 = y - z;
+        p = (r0 * s0 - w) / a[m + 1][m] + a[m][m + 1];
+        q = a[m + 1][m + 1] - z - r0 - s0;
+        r = a[m + 2][m + 1];
+        let s = p.abs() + q.abs() + r.abs();
+        p /= s;
+        q /= s;
+        r /= s;
+        if m == l {
+            break;
+        }
+        let u = a[m][m - 1].abs() * (q.abs() + r.abs());
+        let v = p.abs() * (a[m - 1][m - 1].abs() + z.abs() + a[m + 1][m + 1].abs());
+        if u + v == v {
+            break;
+        }
+        m -= 1;
+    }
+    (m, [p, q, r])
+}
+
+/// One Francis double-shift QR step on rows `l..=nu` and columns `m..=nu` of `a`, from the
+/// shift's first column `[p, q, r]` at row `m`.
+fn double_qr_step(a: &mut [Vec<f64>], [l, m, nu]: [usize; 3], [p, q, r]: [f64; 3]) {
+    let (mut p, mut q, mut r) = (p, q, r);
+    let mut x = 0.0;
+    let mut k = m;
+    while k < nu {
+        if k != m {
+            p = a[k][k - 1];
+            q = a[k + 1][k - 1];
+            r = 0.0;
+            if k != nu - 1 {
+                r = a[k + 2][k - 1];
+            }
+            x = p.abs() + q.abs() + r.abs();
+            if x != 0.0 {
+                p /= x;
+                q /= x;
+                r /= x;
+            }
+        }
+        let s = sign((p * p + q * q + r * r).sqrt(), p);
+        if s != 0.0 {
+            if k == m {
+                if l != m {
+                    a[k][k - 1] = -a[k][k - 1];
+                }
+            } else {
+                a[k][k - 1] = -s * x;
+            }
+            p += s;
+            x = p / s;
+            let y = q / s;
+            let z = r / s;
+            q /= p;
+            r /= p;
+            for j in k..=nu {
+                let mut pp = a[k][j] + q * a[k + 1][j];
+                if k != nu - 1 {
+                    pp += r * a[k + 2][j];
+                    a[k + 2][j] -= pp * z;
+                }
+                a[k + 1][j] -= pp * y;
+                a[k][j] -= pp * x;
+            }
+            let mmin = if nu < k + 3 { nu } else { k + 3 };
+            for row in a.iter_mut().take(mmin + 1).skip(l) {
+                let mut pp = x * row[k] + y * row[k + 1];
+                if k != nu - 1 {
+                    pp += z * row[k + 2];
+                    row[k + 2] -= pp * r;
+                }
+                row[k + 1] -= pp * q;
+                row[k] -= pp;
+            }
+        }
+        k += 1;
+    }
 }

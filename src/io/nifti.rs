@@ -95,6 +95,112 @@ fn read_up_to(src: &mut dyn Read, n: u64, out: &mut Vec<u8>) -> Result<()> {
     Ok(())
 }
 
+/// The 348 bytes of a NIfTI-1 header, `big`-endian or not.
+struct Hdr<'a> {
+    b: &'a [u8],
+    big: bool,
+}
+
+impl Hdr<'_> {
+    fn i16_at(&self, o: usize) -> i16 {
+        if self.big {
+            BigEndian::read_i16(&self.b[o..])
+        } else {
+            LittleEndian::read_i16(&self.b[o..])
+        }
+    }
+
+    fn f32_at(&self, o: usize) -> f32 {
+        if self.big {
+            BigEndian::read_f32(&self.b[o..])
+        } else {
+            LittleEndian::read_f32(&self.b[o..])
+        }
+    }
+
+    /// The axis sizes, fastest first (`dim[1..=dim[0]]`), trailing unit axes folded away;
+    /// at most 3.
+    fn sizes(&self) -> Result<Vec<usize>> {
+        let ndim = self.i16_at(40);
+        if !(1..=7).contains(&ndim) {
+            return Err(bad(format!("dim[0] = {ndim} (expected 1..7)")));
+        }
+        let mut sizes = Vec::new();
+        for i in 1..=ndim as usize {
+            let d = self.i16_at(40 + 2 * i);
+            if d < 1 {
+                return Err(bad(format!("dim[{i}] = {d} (expected ≥ 1)")));
+            }
+            sizes.push(d as usize);
+        }
+        // fold trailing unit dims (t = 1) away, keep at least x
+        while sizes.len() > 1 && *sizes.last().unwrap() == 1 {
+            sizes.pop();
+        }
+        if sizes.len() > 3 {
+            return Err(Error::Unsupported {
+                what: "NIfTI dimensions",
+                value: format!("{} (expected at most 3 spatial axes)", sizes.len()),
+            });
+        }
+        Ok(sizes)
+    }
+
+    /// The voxel-to-world affine: the sform where its code is set, else the qform
+    /// (quaternion, offsets, `pixdim` scales with `qfac`), else the `pixdim` diagonal.
+    #[allow(clippy::needless_range_loop)]
+    fn affine(&self, pixdim: &[f64]) -> [[f64; 4]; 3] {
+        let (qform, sform) = (self.i16_at(252), self.i16_at(254));
+        let f32_at = |o: usize| self.f32_at(o);
+        if sform > 0 {
+            let mut a = [[0.0; 4]; 3];
+            for (r, row) in a.iter_mut().enumerate() {
+                for (c, v) in row.iter_mut().enumerate() {
+                    *v = f32_at(280 + 16 * r + 4 * c) as f64;
+                }
+            }
+            a
+        } else if qform > 0 {
+            let (qb, qc, qd) = (f32_at(256) as f64, f32_at(260) as f64, f32_at(264) as f64);
+            let qa = (1.0 - (qb * qb + qc * qc + qd * qd)).max(0.0).sqrt();
+            let qfac = if pixdim[0] < 0.0 { -1.0 } else { 1.0 };
+            let r = [
+                [
+                    qa * qa + qb * qb - qc * qc - qd * qd,
+                    2.0 * (qb * qc - qa * qd),
+                    2.0 * (qb * qd + qa * qc),
+                ],
+                [
+                    2.0 * (qb * qc + qa * qd),
+                    qa * qa + qc * qc - qb * qb - qd * qd,
+                    2.0 * (qc * qd - qa * qb),
+                ],
+                [
+                    2.0 * (qb * qd - qa * qc),
+                    2.0 * (qc * qd + qa * qb),
+                    qa * qa + qd * qd - qc * qc - qb * qb,
+                ],
+            ];
+            let s = [pixdim[1], pixdim[2], qfac * pixdim[3]];
+            let o = [f32_at(268) as f64, f32_at(272) as f64, f32_at(276) as f64];
+            let mut a = [[0.0; 4]; 3];
+            for i in 0..3 {
+                for j in 0..3 {
+                    a[i][j] = r[i][j] * s[j];
+                }
+                a[i][3] = o[i];
+            }
+            a
+        } else {
+            [
+                [pixdim[1], 0.0, 0.0, 0.0],
+                [0.0, pixdim[2], 0.0, 0.0],
+                [0.0, 0.0, pixdim[3], 0.0],
+            ]
+        }
+    }
+}
+
 /// Read a `.nii` / `.nii.gz` file.
 pub fn read(path: &Path) -> Result<Raster> {
     // the header first; then only as many bytes as it declares (a stream that inflates
@@ -121,42 +227,9 @@ pub fn read(path: &Path) -> Result<Raster> {
             value: "header/image pair (.hdr/.img) or NIfTI-2".into(),
         });
     }
-    let i16_at = |o: usize| {
-        if big {
-            BigEndian::read_i16(&b[o..])
-        } else {
-            LittleEndian::read_i16(&b[o..])
-        }
-    };
-    let f32_at = |o: usize| {
-        if big {
-            BigEndian::read_f32(&b[o..])
-        } else {
-            LittleEndian::read_f32(&b[o..])
-        }
-    };
-    let ndim = i16_at(40);
-    if !(1..=7).contains(&ndim) {
-        return Err(bad(format!("dim[0] = {ndim} (expected 1..7)")));
-    }
-    let mut sizes = Vec::new();
-    for i in 1..=ndim as usize {
-        let d = i16_at(40 + 2 * i);
-        if d < 1 {
-            return Err(bad(format!("dim[{i}] = {d} (expected ≥ 1)")));
-        }
-        sizes.push(d as usize);
-    }
-    // fold trailing unit dims (t = 1) away, keep at least x
-    while sizes.len() > 1 && *sizes.last().unwrap() == 1 {
-        sizes.pop();
-    }
-    if sizes.len() > 3 {
-        return Err(Error::Unsupported {
-            what: "NIfTI dimensions",
-            value: format!("{} (expected at most 3 spatial axes)", sizes.len()),
-        });
-    }
+    let h = Hdr { b: &b, big };
+    let (i16_at, f32_at) = (|o: usize| h.i16_at(o), |o: usize| h.f32_at(o));
+    let sizes = h.sizes()?;
     let (ty, channels) = datatype(i16_at(70))?;
     let vox_offset = f32_at(108);
     if vox_offset.is_nan() || vox_offset < HDR as f32 {
@@ -191,52 +264,7 @@ pub fn read(path: &Path) -> Result<Raster> {
     spacing.reverse();
     let qform = i16_at(252);
     let sform = i16_at(254);
-    let affine = if sform > 0 {
-        let mut a = [[0.0; 4]; 3];
-        for (r, row) in a.iter_mut().enumerate() {
-            for (c, v) in row.iter_mut().enumerate() {
-                *v = f32_at(280 + 16 * r + 4 * c) as f64;
-            }
-        }
-        a
-    } else if qform > 0 {
-        let (qb, qc, qd) = (f32_at(256) as f64, f32_at(260) as f64, f32_at(264) as f64);
-        let qa = (1.0 - (qb * qb + qc * qc + qd * qd)).max(0.0).sqrt();
-        let qfac = if pixdim[0] < 0.0 { -1.0 } else { 1.0 };
-        let r = [
-            [
-                qa * qa + qb * qb - qc * qc - qd * qd,
-                2.0 * (qb * qc - qa * qd),
-                2.0 * (qb * qd + qa * qc),
-            ],
-            [
-                2.0 * (qb * qc + qa * qd),
-                qa * qa + qc * qc - qb * qb - qd * qd,
-                2.0 * (qc * qd - qa * qb),
-            ],
-            [
-                2.0 * (qb * qd - qa * qc),
-                2.0 * (qc * qd + qa * qb),
-                qa * qa + qd * qd - qc * qc - qb * qb,
-            ],
-        ];
-        let s = [pixdim[1], pixdim[2], qfac * pixdim[3]];
-        let o = [f32_at(268) as f64, f32_at(272) as f64, f32_at(276) as f64];
-        let mut a = [[0.0; 4]; 3];
-        for i in 0..3 {
-            for j in 0..3 {
-                a[i][j] = r[i][j] * s[j];
-            }
-            a[i][3] = o[i];
-        }
-        a
-    } else {
-        [
-            [pixdim[1], 0.0, 0.0, 0.0],
-            [0.0, pixdim[2], 0.0, 0.0],
-            [0.0, 0.0, pixdim[3], 0.0],
-        ]
-    };
+    let affine = h.affine(&pixdim);
     let kind = match dims.len() {
         1 => DataKind::Sequence,
         2 => DataKind::Image,

@@ -146,7 +146,6 @@ pub fn subdivide(
     Ok(assemble(&patches, &steps_done, is_loop(scheme)))
 }
 
-#[allow(clippy::needless_range_loop)] // several arrays indexed by face / vertex
 /// Refine the region of one patch; returns the next patch and the bookkeeping.
 fn refine(
     p: &Patch,
@@ -154,240 +153,38 @@ fn refine(
     weights: Option<super::loop_subdivision::LoopWeights>,
 ) -> Result<(Patch, Step)> {
     let m = &p.mesh;
-    let nv = m.vertex_count();
     let nf = m.face_count();
     let edges = Edges::build(m);
-    // complete vertices: every patch-border edge at them is a true boundary edge
-    let mut complete = vec![true; nv];
-    for e in 0..edges.len() {
-        let [a, b] = edges.verts[e];
-        if edges.uses[e] == 1 && !p.boundary.contains_key(&pair_key(a, b)) {
-            complete[a as usize] = false;
-            complete[b as usize] = false;
-        }
-    }
-    // region: faces sharing a vertex with the selection, all vertices complete
-    let mut touches = vec![false; nv];
-    for f in 0..nf {
-        if p.selected[f] {
-            for &v in m.face(f) {
-                touches[v as usize] = true;
-            }
-        }
-    }
-    let region: Vec<bool> = (0..nf)
-        .map(|f| {
-            let face = m.face(f);
-            face.iter().any(|&v| touches[v as usize]) && face.iter().all(|&v| complete[v as usize])
-        })
-        .collect();
-    // per-vertex incident edges (CSR) and incident corners
-    let mut vstart = vec![0u32; nv + 1];
-    for &[a, b] in &edges.verts {
-        vstart[a as usize + 1] += 1;
-        vstart[b as usize + 1] += 1;
-    }
-    for v in 0..nv {
-        vstart[v + 1] += vstart[v];
-    }
-    let mut fill = vstart.clone();
-    let mut vedges = vec![0u32; vstart[nv] as usize];
-    for (e, &[a, b]) in edges.verts.iter().enumerate() {
-        vedges[fill[a as usize] as usize] = e as u32;
-        fill[a as usize] += 1;
-        vedges[fill[b as usize] as usize] = e as u32;
-        fill[b as usize] += 1;
-    }
-    let pos = &m.positions;
-    let is_sharp = |e: usize| {
-        let [a, b] = edges.verts[e];
-        edges.uses[e] == 1 || p.sharp.contains_key(&pair_key(a, b))
-    };
-    let face_point = |f: usize| {
-        let face = m.face(f);
-        let mut s = [0.0; 3];
-        for &v in face {
-            for k in 0..3 {
-                s[k] += pos[v as usize][k];
-            }
-        }
-        s.map(|x| x / face.len() as f64)
+    let region = region_of(p, &edges);
+    let (vstart, vedges) = vertex_edges(&edges, m.vertex_count());
+    let r = Refining {
+        p,
+        edges: &edges,
+        vstart: &vstart,
+        vedges: &vedges,
     };
     // new numbering: vertex points, edge points, face points (CC)
     let mut new_pos: Vec<[f64; 3]> = Vec::new();
-    let mut vertex_point = vec![NONE; nv];
     let mut new_corner = Vec::new();
-    for f in 0..nf {
-        if !region[f] {
-            continue;
-        }
-        for &v in m.face(f) {
-            let v = v as usize;
-            if vertex_point[v] != NONE {
-                continue;
-            }
-            vertex_point[v] = new_pos.len() as u32;
-            new_corner.push(p.corner[v]);
-            let pv = pos[v];
-            let ring = &vedges[vstart[v] as usize..vstart[v + 1] as usize];
-            let other = |e: u32| {
-                let [a, b] = edges.verts[e as usize];
-                if a as usize == v {
-                    b
-                } else {
-                    a
-                }
-            };
-            let sharp_nb: Vec<u32> = ring
-                .iter()
-                .filter(|&&e| is_sharp(e as usize))
-                .map(|&e| other(e))
-                .collect();
-            let q = if p.corner[v] || sharp_nb.len() > 2 {
-                pv
-            } else if sharp_nb.len() == 2 {
-                let (a, b) = (pos[sharp_nb[0] as usize], pos[sharp_nb[1] as usize]);
-                std::array::from_fn(|k| 0.75 * pv[k] + 0.125 * (a[k] + b[k]))
-            } else {
-                let n = ring.len();
-                let mut s = [0.0; 3];
-                for &e in ring {
-                    let o = pos[other(e) as usize];
-                    for k in 0..3 {
-                        s[k] += o[k];
-                    }
-                }
-                match weights {
-                    Some(w) => {
-                        let b = super::loop_subdivision::beta(n, w);
-                        std::array::from_fn(|k| (1.0 - n as f64 * b) * pv[k] + b * s[k])
-                    }
-                    None => {
-                        // Σ face points of the faces at v (all in the patch: v is complete)
-                        let mut fs = [0.0; 3];
-                        let nn = n as f64;
-                        for &e in ring {
-                            for &c in &edges.corners[e as usize] {
-                                if c != NONE && m.indices[c as usize] as usize == v {
-                                    let fp = face_point(edges.corner_face[c as usize] as usize);
-                                    for k in 0..3 {
-                                        fs[k] += fp[k];
-                                    }
-                                }
-                            }
-                        }
-                        std::array::from_fn(|k| {
-                            (nn - 2.0) / nn * pv[k] + (s[k] + fs[k]) / (nn * nn)
-                        })
-                    }
-                }
-            };
-            new_pos.push(q);
-        }
-    }
-    let mut edge_point: PairMap<u32> = PairMap::default();
+    let vertex_point = r.vertex_points(&region, weights, &mut new_pos, &mut new_corner);
+    let edge_point = r.edge_points(&region, scheme, &mut new_pos, &mut new_corner);
     let mut face_first = vec![NONE; nf];
-    for f in 0..nf {
-        if !region[f] {
-            continue;
-        }
-        let (s, e) = (m.offsets[f] as usize, m.offsets[f + 1] as usize);
-        for c in s..e {
-            let ed = edges.corner_edge[c] as usize;
-            let [a, b] = edges.verts[ed];
-            let key = pair_key(a, b);
-            if edge_point.contains_key(&key) {
-                continue;
-            }
-            edge_point.insert(key, new_pos.len() as u32);
-            let (pa, pb) = (pos[a as usize], pos[b as usize]);
-            let q = if is_sharp(ed) {
-                std::array::from_fn(|k| 0.5 * (pa[k] + pb[k]))
-            } else {
-                let [c0, c1] = edges.corners[ed];
-                if is_loop(scheme) {
-                    let opp = |c: u32| {
-                        let f = edges.corner_face[c as usize] as usize;
-                        let (s, e) = (m.offsets[f], m.offsets[f + 1]);
-                        let prev = if c == s { e - 1 } else { c - 1 };
-                        pos[m.indices[prev as usize] as usize]
-                    };
-                    let (pc, pd) = (opp(c0), opp(c1));
-                    std::array::from_fn(|k| 0.375 * (pa[k] + pb[k]) + 0.125 * (pc[k] + pd[k]))
-                } else {
-                    let f0 = face_point(edges.corner_face[c0 as usize] as usize);
-                    let f1 = face_point(edges.corner_face[c1 as usize] as usize);
-                    std::array::from_fn(|k| 0.25 * (pa[k] + pb[k] + f0[k] + f1[k]))
-                }
-            };
-            new_pos.push(q);
-            new_corner.push(false);
-        }
-    }
     if !is_loop(scheme) {
         for f in 0..nf {
             if region[f] {
                 face_first[f] = new_pos.len() as u32;
-                new_pos.push(face_point(f));
+                new_pos.push(r.face_point(f));
                 new_corner.push(false);
             }
         }
     }
-    // children, their selection flags, and inherited tags
-    let mut offsets = vec![0u32];
-    let mut indices = Vec::new();
-    let mut selected = Vec::new();
-    let ep = |a: u32, b: u32| edge_point[&pair_key(a, b)];
-    for f in 0..nf {
-        if !region[f] {
-            continue;
-        }
-        let face = m.face(f);
-        let k = face.len();
-        let vp = |i: usize| vertex_point[face[i % k] as usize];
-        if is_loop(scheme) {
-            let (a, b, c) = (vp(0), vp(1), vp(2));
-            let (ab, bc, ca) = (
-                ep(face[0], face[1]),
-                ep(face[1], face[2]),
-                ep(face[2], face[0]),
-            );
-            for t in [[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]] {
-                indices.extend_from_slice(&t);
-                offsets.push(indices.len() as u32);
-                selected.push(p.selected[f]);
-            }
-        } else {
-            for i in 0..k {
-                let q = [
-                    vp(i),
-                    ep(face[i], face[(i + 1) % k]),
-                    face_first[f],
-                    ep(face[(i + k - 1) % k], face[i]),
-                ];
-                indices.extend_from_slice(&q);
-                offsets.push(indices.len() as u32);
-                selected.push(p.selected[f]);
-            }
-        }
-    }
-    let mut sharp = PairMap::default();
-    let mut boundary = PairMap::default();
-    for e in 0..edges.len() {
-        let [a, b] = edges.verts[e];
-        let Some(&mid) = edge_point.get(&pair_key(a, b)) else {
-            continue;
-        };
-        let (va, vb) = (vertex_point[a as usize], vertex_point[b as usize]);
-        if p.sharp.contains_key(&pair_key(a, b)) {
-            sharp.insert(pair_key(va, mid), ());
-            sharp.insert(pair_key(mid, vb), ());
-        }
-        if p.boundary.contains_key(&pair_key(a, b)) {
-            boundary.insert(pair_key(va, mid), ());
-            boundary.insert(pair_key(mid, vb), ());
-        }
-    }
+    let points = Points {
+        vertex: &vertex_point,
+        edge: &edge_point,
+        face_first: &face_first,
+    };
+    let (offsets, indices, selected) = children(p, &region, scheme, &points);
+    let (sharp, boundary) = inherited_tags(p, &edges, &points);
     let next = Patch {
         mesh: Mesh {
             positions: new_pos,
@@ -408,6 +205,315 @@ fn refine(
             edge_point,
         },
     ))
+}
+
+/// The faces of a patch that a step refines: those sharing a vertex with the selection
+/// whose vertices are all complete (every patch-border edge at them a true boundary
+/// edge).
+fn region_of(p: &Patch, edges: &Edges) -> Vec<bool> {
+    let m = &p.mesh;
+    let (nv, nf) = (m.vertex_count(), m.face_count());
+    // complete vertices: every patch-border edge at them is a true boundary edge
+    let mut complete = vec![true; nv];
+    for e in 0..edges.len() {
+        let [a, b] = edges.verts[e];
+        if edges.uses[e] == 1 && !p.boundary.contains_key(&pair_key(a, b)) {
+            complete[a as usize] = false;
+            complete[b as usize] = false;
+        }
+    }
+    // region: faces sharing a vertex with the selection, all vertices complete
+    let mut touches = vec![false; nv];
+    for f in 0..nf {
+        if p.selected[f] {
+            for &v in m.face(f) {
+                touches[v as usize] = true;
+            }
+        }
+    }
+    (0..nf)
+        .map(|f| {
+            let face = m.face(f);
+            face.iter().any(|&v| touches[v as usize]) && face.iter().all(|&v| complete[v as usize])
+        })
+        .collect()
+}
+
+/// Per-vertex incident edges as CSR: vertex `v`'s edges are
+/// `vedges[vstart[v]..vstart[v + 1]]`.
+fn vertex_edges(edges: &Edges, nv: usize) -> (Vec<u32>, Vec<u32>) {
+    let mut vstart = vec![0u32; nv + 1];
+    for &[a, b] in &edges.verts {
+        vstart[a as usize + 1] += 1;
+        vstart[b as usize + 1] += 1;
+    }
+    for v in 0..nv {
+        vstart[v + 1] += vstart[v];
+    }
+    let mut fill = vstart.clone();
+    let mut vedges = vec![0u32; vstart[nv] as usize];
+    for (e, &[a, b]) in edges.verts.iter().enumerate() {
+        vedges[fill[a as usize] as usize] = e as u32;
+        fill[a as usize] += 1;
+        vedges[fill[b as usize] as usize] = e as u32;
+        fill[b as usize] += 1;
+    }
+    (vstart, vedges)
+}
+
+/// One patch being refined: its edges and each vertex's incident edges.
+struct Refining<'a> {
+    p: &'a Patch,
+    edges: &'a Edges,
+    vstart: &'a [u32],
+    vedges: &'a [u32],
+}
+
+#[allow(clippy::needless_range_loop)] // several arrays indexed by face / vertex
+impl Refining<'_> {
+    /// A true boundary edge, or one tagged sharp.
+    fn is_sharp(&self, e: usize) -> bool {
+        let [a, b] = self.edges.verts[e];
+        self.edges.uses[e] == 1 || self.p.sharp.contains_key(&pair_key(a, b))
+    }
+
+    /// The centroid of face `f`.
+    fn face_point(&self, f: usize) -> [f64; 3] {
+        let m = &self.p.mesh;
+        let face = m.face(f);
+        let mut s = [0.0; 3];
+        for &v in face {
+            for k in 0..3 {
+                s[k] += m.positions[v as usize][k];
+            }
+        }
+        s.map(|x| x / face.len() as f64)
+    }
+
+    /// The vertex points of the region's vertices, numbered from `new_pos.len()` in
+    /// face order (pushed with their corner tags); `NONE` elsewhere.
+    fn vertex_points(
+        &self,
+        region: &[bool],
+        weights: Option<super::loop_subdivision::LoopWeights>,
+        new_pos: &mut Vec<[f64; 3]>,
+        new_corner: &mut Vec<bool>,
+    ) -> Vec<u32> {
+        let m = &self.p.mesh;
+        let mut vertex_point = vec![NONE; m.vertex_count()];
+        for f in 0..m.face_count() {
+            if !region[f] {
+                continue;
+            }
+            for &v in m.face(f) {
+                let v = v as usize;
+                if vertex_point[v] != NONE {
+                    continue;
+                }
+                vertex_point[v] = new_pos.len() as u32;
+                new_corner.push(self.p.corner[v]);
+                new_pos.push(self.vertex_point(v, weights));
+            }
+        }
+        vertex_point
+    }
+
+    /// The vertex point of vertex `v`: kept at a corner or where more than two sharp
+    /// edges meet, the crease rule `¾v + ⅛(a + b)` on two, else Loop's
+    /// `(1 − nβ)v + βΣ` (with `weights`) or Catmull–Clark's `(n−2)/n·v + (Σe + Σf)/n²`.
+    fn vertex_point(
+        &self,
+        v: usize,
+        weights: Option<super::loop_subdivision::LoopWeights>,
+    ) -> [f64; 3] {
+        let (p, edges) = (self.p, self.edges);
+        let m = &p.mesh;
+        let pos = &m.positions;
+        let pv = pos[v];
+        let ring = &self.vedges[self.vstart[v] as usize..self.vstart[v + 1] as usize];
+        let other = |e: u32| {
+            let [a, b] = edges.verts[e as usize];
+            if a as usize == v {
+                b
+            } else {
+                a
+            }
+        };
+        let sharp_nb: Vec<u32> = ring
+            .iter()
+            .filter(|&&e| self.is_sharp(e as usize))
+            .map(|&e| other(e))
+            .collect();
+        if p.corner[v] || sharp_nb.len() > 2 {
+            return pv;
+        }
+        if sharp_nb.len() == 2 {
+            let (a, b) = (pos[sharp_nb[0] as usize], pos[sharp_nb[1] as usize]);
+            return std::array::from_fn(|k| 0.75 * pv[k] + 0.125 * (a[k] + b[k]));
+        }
+        let n = ring.len();
+        let mut s = [0.0; 3];
+        for &e in ring {
+            let o = pos[other(e) as usize];
+            for k in 0..3 {
+                s[k] += o[k];
+            }
+        }
+        match weights {
+            Some(w) => {
+                let b = super::loop_subdivision::beta(n, w);
+                std::array::from_fn(|k| (1.0 - n as f64 * b) * pv[k] + b * s[k])
+            }
+            None => {
+                // Σ face points of the faces at v (all in the patch: v is complete)
+                let mut fs = [0.0; 3];
+                let nn = n as f64;
+                for &e in ring {
+                    for &c in &edges.corners[e as usize] {
+                        if c != NONE && m.indices[c as usize] as usize == v {
+                            let fp = self.face_point(edges.corner_face[c as usize] as usize);
+                            for k in 0..3 {
+                                fs[k] += fp[k];
+                            }
+                        }
+                    }
+                }
+                std::array::from_fn(|k| (nn - 2.0) / nn * pv[k] + (s[k] + fs[k]) / (nn * nn))
+            }
+        }
+    }
+
+    /// The edge points of the region's edges, numbered from `new_pos.len()` in corner
+    /// order: the midpoint of a sharp edge, Loop's `⅜(a + b) + ⅛(c + d)` or
+    /// Catmull–Clark's `¼(a + b + f₀ + f₁)`.
+    fn edge_points(
+        &self,
+        region: &[bool],
+        scheme: Scheme,
+        new_pos: &mut Vec<[f64; 3]>,
+        new_corner: &mut Vec<bool>,
+    ) -> PairMap<u32> {
+        let (m, edges) = (&self.p.mesh, self.edges);
+        let pos = &m.positions;
+        let mut edge_point: PairMap<u32> = PairMap::default();
+        for f in 0..m.face_count() {
+            if !region[f] {
+                continue;
+            }
+            let (s, e) = (m.offsets[f] as usize, m.offsets[f + 1] as usize);
+            for c in s..e {
+                let ed = edges.corner_edge[c] as usize;
+                let [a, b] = edges.verts[ed];
+                let key = pair_key(a, b);
+                if edge_point.contains_key(&key) {
+                    continue;
+                }
+                edge_point.insert(key, new_pos.len() as u32);
+                let (pa, pb) = (pos[a as usize], pos[b as usize]);
+                let q = if self.is_sharp(ed) {
+                    std::array::from_fn(|k| 0.5 * (pa[k] + pb[k]))
+                } else {
+                    let [c0, c1] = edges.corners[ed];
+                    if is_loop(scheme) {
+                        let opp = |c: u32| {
+                            let f = edges.corner_face[c as usize] as usize;
+                            let (s, e) = (m.offsets[f], m.offsets[f + 1]);
+                            let prev = if c == s { e - 1 } else { c - 1 };
+                            pos[m.indices[prev as usize] as usize]
+                        };
+                        let (pc, pd) = (opp(c0), opp(c1));
+                        std::array::from_fn(|k| 0.375 * (pa[k] + pb[k]) + 0.125 * (pc[k] + pd[k]))
+                    } else {
+                        let f0 = self.face_point(edges.corner_face[c0 as usize] as usize);
+                        let f1 = self.face_point(edges.corner_face[c1 as usize] as usize);
+                        std::array::from_fn(|k| 0.25 * (pa[k] + pb[k] + f0[k] + f1[k]))
+                    }
+                };
+                new_pos.push(q);
+                new_corner.push(false);
+            }
+        }
+        edge_point
+    }
+}
+
+/// The new points of one step: each vertex's vertex point, each edge's edge point (by
+/// its end vertices), each face's face point (Catmull–Clark).
+struct Points<'a> {
+    vertex: &'a [u32],
+    edge: &'a PairMap<u32>,
+    face_first: &'a [u32],
+}
+
+/// The children of the region's faces (offsets, indices) and their selection flags.
+#[allow(clippy::needless_range_loop)] // several arrays indexed by face
+fn children(
+    p: &Patch,
+    region: &[bool],
+    scheme: Scheme,
+    points: &Points,
+) -> (Vec<u32>, Vec<u32>, Vec<bool>) {
+    let m = &p.mesh;
+    let mut offsets = vec![0u32];
+    let mut indices = Vec::new();
+    let mut selected = Vec::new();
+    let ep = |a: u32, b: u32| points.edge[&pair_key(a, b)];
+    for f in 0..m.face_count() {
+        if !region[f] {
+            continue;
+        }
+        let face = m.face(f);
+        let k = face.len();
+        let vp = |i: usize| points.vertex[face[i % k] as usize];
+        if is_loop(scheme) {
+            let (a, b, c) = (vp(0), vp(1), vp(2));
+            let (ab, bc, ca) = (
+                ep(face[0], face[1]),
+                ep(face[1], face[2]),
+                ep(face[2], face[0]),
+            );
+            for t in [[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]] {
+                indices.extend_from_slice(&t);
+                offsets.push(indices.len() as u32);
+                selected.push(p.selected[f]);
+            }
+        } else {
+            for i in 0..k {
+                let q = [
+                    vp(i),
+                    ep(face[i], face[(i + 1) % k]),
+                    points.face_first[f],
+                    ep(face[(i + k - 1) % k], face[i]),
+                ];
+                indices.extend_from_slice(&q);
+                offsets.push(indices.len() as u32);
+                selected.push(p.selected[f]);
+            }
+        }
+    }
+    (offsets, indices, selected)
+}
+
+/// The sharp and boundary tags of the split edges' halves.
+fn inherited_tags(p: &Patch, edges: &Edges, points: &Points) -> (PairMap<()>, PairMap<()>) {
+    let mut sharp = PairMap::default();
+    let mut boundary = PairMap::default();
+    for e in 0..edges.len() {
+        let [a, b] = edges.verts[e];
+        let Some(&mid) = points.edge.get(&pair_key(a, b)) else {
+            continue;
+        };
+        let (va, vb) = (points.vertex[a as usize], points.vertex[b as usize]);
+        if p.sharp.contains_key(&pair_key(a, b)) {
+            sharp.insert(pair_key(va, mid), ());
+            sharp.insert(pair_key(mid, vb), ());
+        }
+        if p.boundary.contains_key(&pair_key(a, b)) {
+            boundary.insert(pair_key(va, mid), ());
+            boundary.insert(pair_key(mid, vb), ());
+        }
+    }
+    (sharp, boundary)
 }
 
 /// Build the conforming output from the patches, finest first.

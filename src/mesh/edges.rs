@@ -62,6 +62,124 @@ pub struct Edges {
     pub corner_face: Vec<u32>,
 }
 
+/// Vertices per parallel block of the bucket passes of [`Edges::build`].
+const BUCKET_CHUNK: usize = 2048;
+
+/// The corners bucketed by their smaller vertex: vertex `v`'s corners are
+/// `bucket[start[v]..start[v + 1]]`, each bucket sorted by (larger vertex, corner);
+/// `first_edge[v]` is the id of the first edge at `v`.
+#[derive(Clone, Copy)]
+struct Buckets<'a> {
+    start: &'a [u32],
+    bucket: &'a [u32],
+    first_edge: &'a [u32],
+}
+
+/// Each corner's face and the head vertex of its edge (the next corner's vertex), in
+/// parallel over blocks of faces.
+#[allow(clippy::type_complexity)]
+fn corner_faces_and_heads(mesh: &Mesh) -> (Vec<u32>, Vec<u32>) {
+    use rayon::prelude::*;
+    let nc = mesh.indices.len();
+    let mut corner_face = vec![0u32; nc];
+    let mut head_of = vec![0u32; nc];
+    let fo = &mesh.offsets;
+    let idx = &mesh.indices;
+    let nf = mesh.face_count();
+    let block = 4096;
+    let mut cf: Vec<(usize, &mut [u32], &mut [u32])> = Vec::new();
+    let (mut rest_f, mut rest_h): (&mut [u32], &mut [u32]) = (&mut corner_face, &mut head_of);
+    let mut f = 0;
+    while f < nf {
+        let g = (f + block).min(nf);
+        let len = (fo[g] - fo[f]) as usize;
+        let (a, b) = std::mem::take(&mut rest_f).split_at_mut(len);
+        let (c, d) = std::mem::take(&mut rest_h).split_at_mut(len);
+        cf.push((f, a, c));
+        rest_f = b;
+        rest_h = d;
+        f = g;
+    }
+    cf.into_par_iter().for_each(|(f0, cfs, heads)| {
+        let base = fo[f0] as usize;
+        let mut f = f0;
+        let mut c = base;
+        while c - base < cfs.len() {
+            let (s, e) = (fo[f] as usize, fo[f + 1] as usize);
+            for k in s..e {
+                cfs[k - base] = f as u32;
+                heads[k - base] = idx[if k + 1 == e { s } else { k + 1 }];
+            }
+            c = e;
+            f += 1;
+        }
+    });
+    (corner_face, head_of)
+}
+
+/// The corners bucketed by their smaller vertex (a counting sort): `(start, bucket)`.
+#[allow(clippy::needless_range_loop)]
+fn buckets(mesh: &Mesh, head_of: &[u32]) -> (Vec<u32>, Vec<u32>) {
+    let nc = mesh.indices.len();
+    let nv = mesh.positions.len();
+    let mut start = vec![0u32; nv + 1];
+    for c in 0..nc {
+        let lo = mesh.indices[c].min(head_of[c]);
+        start[lo as usize + 1] += 1;
+    }
+    for v in 0..nv {
+        start[v + 1] += start[v];
+    }
+    let mut fill = start.clone();
+    let mut bucket = vec![0u32; nc];
+    for c in 0..nc {
+        let lo = mesh.indices[c].min(head_of[c]) as usize;
+        bucket[fill[lo] as usize] = c as u32;
+        fill[lo] += 1;
+    }
+    (start, bucket)
+}
+
+/// Each bucket sorted by (larger vertex `hi_of(c)`, corner), and the count of its
+/// distinct pairs (the edges at its vertex), per block of vertices in parallel.
+#[allow(clippy::needless_range_loop, clippy::type_complexity)]
+fn sort_buckets(start: &[u32], bucket: &mut [u32], hi_of: impl Fn(u32) -> u32 + Sync) -> Vec<u32> {
+    use rayon::prelude::*;
+    let nv = start.len() - 1;
+    let chunk = BUCKET_CHUNK;
+    let mut counts = vec![0u32; nv];
+    // split `bucket` at vertex boundaries into blocks of `chunk` vertices
+    let mut parts: Vec<(usize, &mut [u32], &mut [u32])> = Vec::new();
+    let (mut rest_b, mut rest_c): (&mut [u32], &mut [u32]) = (bucket, &mut counts);
+    let mut v = 0;
+    while v < nv {
+        let w = (v + chunk).min(nv);
+        let len = (start[w] - start[v]) as usize;
+        let (a, b) = std::mem::take(&mut rest_b).split_at_mut(len);
+        let (c, d) = std::mem::take(&mut rest_c).split_at_mut(w - v);
+        parts.push((v, a, c));
+        rest_b = b;
+        rest_c = d;
+        v = w;
+    }
+    parts.into_par_iter().for_each(|(v0, b, cnt)| {
+        let base = start[v0] as usize;
+        for (i, n) in cnt.iter_mut().enumerate() {
+            let v = v0 + i;
+            let s = &mut b[start[v] as usize - base..start[v + 1] as usize - base];
+            s.sort_unstable_by_key(|&c| ((hi_of(c) as u64) << 32) | c as u64);
+            let mut k = 0;
+            for j in 0..s.len() {
+                if j == 0 || hi_of(s[j]) != hi_of(s[j - 1]) {
+                    k += 1;
+                }
+            }
+            *n = k;
+        }
+    });
+    counts
+}
+
 impl Edges {
     /// Build the table of `mesh` in O(n) (O(n log n) if one vertex has a huge valence):
     /// corners are bucketed by their smaller vertex
@@ -70,168 +188,96 @@ impl Edges {
     /// map keyed by the pair does the same job but its random accesses into a table of
     /// millions of entries made it ~5× slower on 10⁶-face meshes.) Edge ids are ordered by
     /// (smaller vertex, larger vertex).
-    #[allow(clippy::needless_range_loop, clippy::type_complexity)]
     pub fn build(mesh: &Mesh) -> Edges {
-        use rayon::prelude::*;
         let nc = mesh.indices.len();
         let nv = mesh.positions.len();
-        let mut corner_face = vec![0u32; nc];
-        let mut head_of = vec![0u32; nc];
-        // corner → face and the head vertex of its edge, in parallel over blocks of faces
-        {
-            let fo = &mesh.offsets;
-            let idx = &mesh.indices;
-            let nf = mesh.face_count();
-            let block = 4096;
-            let mut cf: Vec<(usize, &mut [u32], &mut [u32])> = Vec::new();
-            let (mut rest_f, mut rest_h): (&mut [u32], &mut [u32]) =
-                (&mut corner_face, &mut head_of);
-            let mut f = 0;
-            while f < nf {
-                let g = (f + block).min(nf);
-                let len = (fo[g] - fo[f]) as usize;
-                let (a, b) = std::mem::take(&mut rest_f).split_at_mut(len);
-                let (c, d) = std::mem::take(&mut rest_h).split_at_mut(len);
-                cf.push((f, a, c));
-                rest_f = b;
-                rest_h = d;
-                f = g;
-            }
-            cf.into_par_iter().for_each(|(f0, cfs, heads)| {
-                let base = fo[f0] as usize;
-                let mut f = f0;
-                let mut c = base;
-                while c - base < cfs.len() {
-                    let (s, e) = (fo[f] as usize, fo[f + 1] as usize);
-                    for k in s..e {
-                        cfs[k - base] = f as u32;
-                        heads[k - base] = idx[if k + 1 == e { s } else { k + 1 }];
-                    }
-                    c = e;
-                    f += 1;
-                }
-            });
-        }
-        // bucket corners by their smaller vertex
-        let mut start = vec![0u32; nv + 1];
-        for c in 0..nc {
-            let lo = mesh.indices[c].min(head_of[c]);
-            start[lo as usize + 1] += 1;
-        }
-        for v in 0..nv {
-            start[v + 1] += start[v];
-        }
-        let mut fill = start.clone();
-        let mut bucket = vec![0u32; nc];
-        for c in 0..nc {
-            let lo = mesh.indices[c].min(head_of[c]) as usize;
-            bucket[fill[lo] as usize] = c as u32;
-            fill[lo] += 1;
-        }
-        drop(fill);
-        // sort each bucket by (larger vertex, corner) and count its distinct pairs
+        let (corner_face, head_of) = corner_faces_and_heads(mesh);
+        let (start, mut bucket) = buckets(mesh, &head_of);
         let hi_of = |c: u32| mesh.indices[c as usize].max(head_of[c as usize]);
-        let chunk = 2048;
-        let mut counts = vec![0u32; nv];
-        {
-            // split `bucket` at vertex boundaries into blocks of `chunk` vertices
-            let mut parts: Vec<(usize, &mut [u32], &mut [u32])> = Vec::new();
-            let (mut rest_b, mut rest_c): (&mut [u32], &mut [u32]) = (&mut bucket, &mut counts);
-            let mut v = 0;
-            while v < nv {
-                let w = (v + chunk).min(nv);
-                let len = (start[w] - start[v]) as usize;
-                let (a, b) = std::mem::take(&mut rest_b).split_at_mut(len);
-                let (c, d) = std::mem::take(&mut rest_c).split_at_mut(w - v);
-                parts.push((v, a, c));
-                rest_b = b;
-                rest_c = d;
-                v = w;
-            }
-            parts.into_par_iter().for_each(|(v0, b, cnt)| {
-                let base = start[v0] as usize;
-                for (i, n) in cnt.iter_mut().enumerate() {
-                    let v = v0 + i;
-                    let s = &mut b[start[v] as usize - base..start[v + 1] as usize - base];
-                    s.sort_unstable_by_key(|&c| ((hi_of(c) as u64) << 32) | c as u64);
-                    let mut k = 0;
-                    for j in 0..s.len() {
-                        if j == 0 || hi_of(s[j]) != hi_of(s[j - 1]) {
-                            k += 1;
-                        }
-                    }
-                    *n = k;
-                }
-            });
-        }
+        let counts = sort_buckets(&start, &mut bucket, hi_of);
         let mut first_edge = vec![0u32; nv + 1];
         for v in 0..nv {
             first_edge[v + 1] = first_edge[v] + counts[v];
         }
         drop(counts);
         let ne = first_edge[nv] as usize;
-        let mut verts = vec![[0u32; 2]; ne];
-        let mut corners = vec![[NONE; 2]; ne];
-        let mut uses = vec![0u32; ne];
-        let mut corner_edge = vec![0u32; nc];
-        {
-            // fill edges per block of vertices; corner_edge is written through the shared
-            // pointer of `tensor::par` since each corner belongs to exactly one bucket
-            // (disjoint writes)
-            let ce = crate::tensor::par::SharedMut(corner_edge.as_mut_ptr());
-            let ce = &ce;
-            let mut parts: Vec<(usize, &mut [[u32; 2]], &mut [[u32; 2]], &mut [u32])> = Vec::new();
-            let (mut rv, mut rc, mut ru): (&mut [[u32; 2]], &mut [[u32; 2]], &mut [u32]) =
-                (&mut verts, &mut corners, &mut uses);
-            let mut v = 0;
-            while v < nv {
-                let w = (v + chunk).min(nv);
-                let len = (first_edge[w] - first_edge[v]) as usize;
-                let (a, b) = std::mem::take(&mut rv).split_at_mut(len);
-                let (c, d) = std::mem::take(&mut rc).split_at_mut(len);
-                let (e, g) = std::mem::take(&mut ru).split_at_mut(len);
-                parts.push((v, a, c, e));
-                rv = b;
-                rc = d;
-                ru = g;
-                v = w;
-            }
-            let bucket = &bucket;
-            parts.into_par_iter().for_each(|(v0, pv, pc, pu)| {
-                let ebase = first_edge[v0] as usize;
-                let w = (v0 + chunk).min(nv);
-                let mut e = ebase;
-                for v in v0..w {
-                    let s = &bucket[start[v] as usize..start[v + 1] as usize];
-                    for j in 0..s.len() {
-                        let c = s[j];
-                        if j > 0 && hi_of(c) == hi_of(s[j - 1]) {
-                            let k = e - 1 - ebase;
-                            if pu[k] == 1 {
-                                pc[k][1] = c;
-                            }
-                            pu[k] += 1;
-                        } else {
-                            let k = e - ebase;
-                            pv[k] = [mesh.indices[c as usize], head_of[c as usize]];
-                            pc[k] = [c, NONE];
-                            pu[k] = 1;
-                            e += 1;
-                        }
-                        // SAFETY: every corner appears in exactly one bucket, so each index
-                        // of corner_edge is written by exactly one task.
-                        unsafe { ce.write(c as usize, (e - 1) as u32) };
-                    }
-                }
-            });
-        }
-        Edges {
-            verts,
-            corners,
-            uses,
-            corner_edge,
+        let mut edges = Edges {
+            verts: vec![[0u32; 2]; ne],
+            corners: vec![[NONE; 2]; ne],
+            uses: vec![0u32; ne],
+            corner_edge: vec![0u32; nc],
             corner_face,
+        };
+        let table = Buckets {
+            start: &start,
+            bucket: &bucket,
+            first_edge: &first_edge,
+        };
+        edges.fill(mesh, &head_of, &table);
+        edges
+    }
+
+    /// The edges, their corners and uses, and each corner's edge from the sorted
+    /// buckets, per block of [`BUCKET_CHUNK`] vertices in parallel.
+    #[allow(clippy::needless_range_loop, clippy::type_complexity)]
+    fn fill(&mut self, mesh: &Mesh, head_of: &[u32], table: &Buckets) {
+        use rayon::prelude::*;
+        let Buckets {
+            start,
+            bucket,
+            first_edge,
+        } = *table;
+        let chunk = BUCKET_CHUNK;
+        let nv = start.len() - 1;
+        let hi_of = |c: u32| mesh.indices[c as usize].max(head_of[c as usize]);
+        // fill edges per block of vertices; corner_edge is written through the shared
+        // pointer of `tensor::par` since each corner belongs to exactly one bucket
+        // (disjoint writes)
+        let ce = crate::tensor::par::SharedMut(self.corner_edge.as_mut_ptr());
+        let ce = &ce;
+        let mut parts: Vec<(usize, &mut [[u32; 2]], &mut [[u32; 2]], &mut [u32])> = Vec::new();
+        let (mut rv, mut rc, mut ru): (&mut [[u32; 2]], &mut [[u32; 2]], &mut [u32]) =
+            (&mut self.verts, &mut self.corners, &mut self.uses);
+        let mut v = 0;
+        while v < nv {
+            let w = (v + chunk).min(nv);
+            let len = (first_edge[w] - first_edge[v]) as usize;
+            let (a, b) = std::mem::take(&mut rv).split_at_mut(len);
+            let (c, d) = std::mem::take(&mut rc).split_at_mut(len);
+            let (e, g) = std::mem::take(&mut ru).split_at_mut(len);
+            parts.push((v, a, c, e));
+            rv = b;
+            rc = d;
+            ru = g;
+            v = w;
         }
+        parts.into_par_iter().for_each(|(v0, pv, pc, pu)| {
+            let ebase = first_edge[v0] as usize;
+            let w = (v0 + chunk).min(nv);
+            let mut e = ebase;
+            for v in v0..w {
+                let s = &bucket[start[v] as usize..start[v + 1] as usize];
+                for j in 0..s.len() {
+                    let c = s[j];
+                    if j > 0 && hi_of(c) == hi_of(s[j - 1]) {
+                        let k = e - 1 - ebase;
+                        if pu[k] == 1 {
+                            pc[k][1] = c;
+                        }
+                        pu[k] += 1;
+                    } else {
+                        let k = e - ebase;
+                        pv[k] = [mesh.indices[c as usize], head_of[c as usize]];
+                        pc[k] = [c, NONE];
+                        pu[k] = 1;
+                        e += 1;
+                    }
+                    // SAFETY: every corner appears in exactly one bucket, so each index
+                    // of corner_edge is written by exactly one task.
+                    unsafe { ce.write(c as usize, (e - 1) as u32) };
+                }
+            }
+        });
     }
 
     pub fn len(&self) -> usize {

@@ -226,145 +226,18 @@ pub fn parse(bytes: &[u8]) -> Result<Mesh> {
         match el.name.as_str() {
             "vertex" => {
                 seen_vertex = true;
-                let mut xyz = [usize::MAX; 3];
-                for (i, p) in el.props.iter().enumerate() {
-                    let k = match p.name.as_str() {
-                        "x" => 0,
-                        "y" => 1,
-                        "z" => 2,
-                        _ => {
-                            if let PropKind::Scalar(ty) = p.kind {
-                                attributes.vertex.push(Property {
-                                    name: p.name.clone(),
-                                    ty,
-                                    values: Vec::with_capacity(el.count),
-                                });
-                            }
-                            continue;
-                        }
-                    };
-                    match p.kind {
-                        PropKind::Scalar(ty) => {
-                            xyz[k] = i;
-                            attributes.position_type = Some(ty);
-                        }
-                        PropKind::List(..) => {
-                            return Err(bad("vertex coordinate declared as a list"))
-                        }
-                    }
-                }
-                if xyz.contains(&usize::MAX) {
-                    return Err(bad("vertex element without x, y and z"));
-                }
-                positions.reserve(el.count);
-                // fast path: binary with only x y z of one type
-                for _ in 0..el.count {
-                    let mut p = [0.0; 3];
-                    let mut extra = 0;
-                    for (i, pd) in el.props.iter().enumerate() {
-                        match pd.kind {
-                            PropKind::Scalar(ty) => {
-                                let x = b.value(ty)?;
-                                if let Some(k) = xyz.iter().position(|&j| j == i) {
-                                    p[k] = x;
-                                } else {
-                                    attributes.vertex[extra].values.push(x);
-                                    extra += 1;
-                                }
-                            }
-                            PropKind::List(ct, it) => {
-                                let n = b.value(ct)? as usize;
-                                for _ in 0..n {
-                                    b.value(it)?;
-                                }
-                            }
-                        }
-                    }
-                    positions.push(p);
-                }
+                read_vertices(el, &mut b, &mut attributes, &mut positions)?;
             }
             "face" => {
                 seen_face = true;
-                let list = el
-                    .props
-                    .iter()
-                    .position(|p| {
-                        matches!(p.kind, PropKind::List(..))
-                            && (p.name == "vertex_indices" || p.name == "vertex_index")
-                    })
-                    .ok_or_else(|| bad("face element without a vertex_indices list"))?;
-                if let PropKind::List(ct, it) = el.props[list].kind {
-                    attributes.face_list_types = Some((ct, it));
-                }
-                attributes.face_list_name = Some(el.props[list].name.clone());
-                for (i, p) in el.props.iter().enumerate() {
-                    if let (PropKind::Scalar(ty), true) = (&p.kind, i != list) {
-                        attributes.face.push(Property {
-                            name: p.name.clone(),
-                            ty: *ty,
-                            values: Vec::with_capacity(el.count),
-                        });
-                    }
-                }
-                offsets.reserve(el.count);
-                indices.reserve(el.count.saturating_mul(3).min(remaining));
-                for f in 0..el.count {
-                    let mut extra = 0;
-                    for (i, pd) in el.props.iter().enumerate() {
-                        match pd.kind {
-                            PropKind::Scalar(ty) => {
-                                let x = b.value(ty)?;
-                                attributes.face[extra].values.push(x);
-                                extra += 1;
-                            }
-                            PropKind::List(ct, it) => {
-                                let n = b.value(ct)?;
-                                if !(0.0..=1e6).contains(&n) || n.fract() != 0.0 {
-                                    return Err(bad(format!("face {f} has a list length of {n}")));
-                                }
-                                for _ in 0..n as usize {
-                                    let x = b.value(it)?;
-                                    if i == list {
-                                        if !(0.0..4294967295.0).contains(&x) || x.fract() != 0.0 {
-                                            return Err(Error::format(
-                                                format!("face {f} refers to vertex {x}"),
-                                                "vertex indices in range",
-                                            ));
-                                        }
-                                        indices.push(x as u32);
-                                    }
-                                }
-                                if i == list {
-                                    offsets.push(indices.len() as u32);
-                                }
-                            }
-                        }
-                    }
-                }
+                let faces = Faces {
+                    offsets: &mut offsets,
+                    indices: &mut indices,
+                    attributes: &mut attributes,
+                };
+                read_faces(el, &mut b, faces, remaining)?;
             }
-            _ => {
-                for _ in 0..el.count {
-                    for pd in &el.props {
-                        match pd.kind {
-                            PropKind::Scalar(ty) => {
-                                b.value(ty)?;
-                            }
-                            PropKind::List(ct, it) => {
-                                let n = b.value(ct)?;
-                                if !(0.0..=1e6).contains(&n) {
-                                    return Err(bad(format!(
-                                        "list length {n} in element {}",
-                                        el.name
-                                    )));
-                                }
-                                for _ in 0..n as usize {
-                                    b.value(it)?;
-                                }
-                            }
-                        }
-                    }
-                }
-            }
+            _ => skip_element(el, &mut b)?,
         }
     }
     if !seen_vertex {
@@ -384,6 +257,168 @@ pub fn parse(bytes: &[u8]) -> Result<Mesh> {
     };
     mesh.validate()?;
     Ok(mesh)
+}
+
+/// The vertices of element `el`: positions (x, y, z) and the other scalar properties as
+/// vertex attributes (lists skipped).
+fn read_vertices(
+    el: &ElementDecl,
+    b: &mut Body,
+    attributes: &mut Attributes,
+    positions: &mut Vec<[f64; 3]>,
+) -> Result<()> {
+    let mut xyz = [usize::MAX; 3];
+    for (i, p) in el.props.iter().enumerate() {
+        let k = match p.name.as_str() {
+            "x" => 0,
+            "y" => 1,
+            "z" => 2,
+            _ => {
+                if let PropKind::Scalar(ty) = p.kind {
+                    attributes.vertex.push(Property {
+                        name: p.name.clone(),
+                        ty,
+                        values: Vec::with_capacity(el.count),
+                    });
+                }
+                continue;
+            }
+        };
+        match p.kind {
+            PropKind::Scalar(ty) => {
+                xyz[k] = i;
+                attributes.position_type = Some(ty);
+            }
+            PropKind::List(..) => return Err(bad("vertex coordinate declared as a list")),
+        }
+    }
+    if xyz.contains(&usize::MAX) {
+        return Err(bad("vertex element without x, y and z"));
+    }
+    positions.reserve(el.count);
+    // fast path: binary with only x y z of one type
+    for _ in 0..el.count {
+        let mut p = [0.0; 3];
+        let mut extra = 0;
+        for (i, pd) in el.props.iter().enumerate() {
+            match pd.kind {
+                PropKind::Scalar(ty) => {
+                    let x = b.value(ty)?;
+                    if let Some(k) = xyz.iter().position(|&j| j == i) {
+                        p[k] = x;
+                    } else {
+                        attributes.vertex[extra].values.push(x);
+                        extra += 1;
+                    }
+                }
+                PropKind::List(ct, it) => {
+                    let n = b.value(ct)? as usize;
+                    for _ in 0..n {
+                        b.value(it)?;
+                    }
+                }
+            }
+        }
+        positions.push(p);
+    }
+    Ok(())
+}
+
+/// Where the faces go: the polygons (offsets, indices) and the face attributes.
+struct Faces<'a> {
+    offsets: &'a mut Vec<u32>,
+    indices: &'a mut Vec<u32>,
+    attributes: &'a mut Attributes,
+}
+
+/// The faces of element `el` (`remaining`: the bytes after the header, which bound the
+/// indices reserved).
+fn read_faces(el: &ElementDecl, b: &mut Body, faces: Faces, remaining: usize) -> Result<()> {
+    let Faces {
+        offsets,
+        indices,
+        attributes,
+    } = faces;
+    let list = el
+        .props
+        .iter()
+        .position(|p| {
+            matches!(p.kind, PropKind::List(..))
+                && (p.name == "vertex_indices" || p.name == "vertex_index")
+        })
+        .ok_or_else(|| bad("face element without a vertex_indices list"))?;
+    if let PropKind::List(ct, it) = el.props[list].kind {
+        attributes.face_list_types = Some((ct, it));
+    }
+    attributes.face_list_name = Some(el.props[list].name.clone());
+    for (i, p) in el.props.iter().enumerate() {
+        if let (PropKind::Scalar(ty), true) = (&p.kind, i != list) {
+            attributes.face.push(Property {
+                name: p.name.clone(),
+                ty: *ty,
+                values: Vec::with_capacity(el.count),
+            });
+        }
+    }
+    offsets.reserve(el.count);
+    indices.reserve(el.count.saturating_mul(3).min(remaining));
+    for f in 0..el.count {
+        let mut extra = 0;
+        for (i, pd) in el.props.iter().enumerate() {
+            match pd.kind {
+                PropKind::Scalar(ty) => {
+                    let x = b.value(ty)?;
+                    attributes.face[extra].values.push(x);
+                    extra += 1;
+                }
+                PropKind::List(ct, it) => {
+                    let n = b.value(ct)?;
+                    if !(0.0..=1e6).contains(&n) || n.fract() != 0.0 {
+                        return Err(bad(format!("face {f} has a list length of {n}")));
+                    }
+                    for _ in 0..n as usize {
+                        let x = b.value(it)?;
+                        if i == list {
+                            if !(0.0..4294967295.0).contains(&x) || x.fract() != 0.0 {
+                                return Err(Error::format(
+                                    format!("face {f} refers to vertex {x}"),
+                                    "vertex indices in range",
+                                ));
+                            }
+                            indices.push(x as u32);
+                        }
+                    }
+                    if i == list {
+                        offsets.push(indices.len() as u32);
+                    }
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Element `el` read past (neither vertices nor faces).
+fn skip_element(el: &ElementDecl, b: &mut Body) -> Result<()> {
+    for _ in 0..el.count {
+        for pd in &el.props {
+            match pd.kind {
+                PropKind::Scalar(ty) => {
+                    b.value(ty)?;
+                }
+                PropKind::List(ct, it) => {
+                    let n = b.value(ct)?;
+                    if !(0.0..=1e6).contains(&n) {
+                        return Err(bad(format!("list length {n} in element {}", el.name)));
+                    }
+                    for _ in 0..n as usize {
+                        b.value(it)?;
+                    }
+                }
+            }
+        }
+    }
+    Ok(())
 }
 
 fn put(out: &mut Vec<u8>, enc: Encoding, ty: ScalarType, x: f64) {
