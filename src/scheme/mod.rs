@@ -21,7 +21,7 @@ pub mod subdivide;
 mod two_scale;
 
 pub use lane::{analyze_lane, synthesize_lane, LanePyramid};
-pub use sample::Sample;
+pub use sample::{Build, Sample};
 pub use two_scale::{max_levels, LevelKind, TwoScale};
 
 use crate::Error;

@@ -8,6 +8,7 @@
 //!   while the others go on.
 
 use super::array::Array;
+use super::boxes::{strided, strided_mut};
 use super::cascade;
 use super::fused::{fused_level, fused_level_strided, AxisOp, Writes};
 use super::par::{for_each_task, SharedMut};
@@ -447,10 +448,8 @@ fn run<T: Sample>(
         let at = compact_at(buf, cst[0] * box_[0]);
         copy_region(array.data(), st, &mut buf[at..], &cst, box_, e);
         fused_level_strided(
-            &buf[at..],
-            &cst,
-            array.data_mut(),
-            st,
+            strided(&buf[at..], &cst),
+            strided_mut(array.data_mut(), st),
             box_,
             e,
             &axis_ops,
