@@ -22,7 +22,7 @@ mod two_scale;
 
 pub use lane::{analyze_lane, synthesize_lane, LanePyramid};
 pub use sample::{Build, Sample};
-pub use two_scale::{max_levels, LevelKind, TwoScale};
+pub use two_scale::{lane_levels, max_levels, narrow_of, LevelKind, TwoScale};
 
 use crate::Error;
 use std::fmt;

@@ -2,7 +2,8 @@
 //! length, the filter rows as written in the notes, worked examples.
 
 use mra::scheme::{
-    analyze_lane, max_levels, synthesize_lane, Boundary, LevelKind, Scheme, TwoScale,
+    analyze_lane, lane_levels, max_levels, narrow_of, synthesize_lane, Boundary, LevelKind, Scheme,
+    TwoScale,
 };
 use proptest::prelude::*;
 
@@ -99,11 +100,11 @@ fn lcg(seed: u64, n: usize) -> Vec<f64> {
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(400))]
     #[test]
-    fn every_lane_reconstructs(len in 1usize..=300, dim in 1usize..=3, s in 0usize..3, b in 0usize..3, seed in any::<u64>(), lv in 0usize..8) {
+    fn every_lane_reconstructs(len in 1usize..=300, dim in 1usize..=3, s in 0usize..Scheme::ALL.len(), b in 0usize..3, seed in any::<u64>(), lv in 0usize..8) {
         let scheme = Scheme::ALL[s];
         let boundary = Boundary::ALL[b];
         let data = lcg(seed, len * dim);
-        let levels = lv.min(max_levels(scheme, boundary, len));
+        let levels = lv.min(lane_levels(scheme, boundary, len));
         let (packed, plan) = analyze_lane(&data, dim, scheme, boundary, levels).unwrap();
         let back = synthesize_lane(&packed, dim, &plan).unwrap();
         let scale = data.iter().fold(1.0f64, |a, &x| a.max(x.abs()));
@@ -318,6 +319,84 @@ fn max_levels_follow_the_coarse_lengths() {
     assert_eq!(max_levels(Scheme::Chaikin, Boundary::Interpolating, 7), 0);
 
     assert_eq!(max_levels(Scheme::Cubic, Boundary::Periodic, 4096), 10); // 4096 → … → 8 → 4
+}
+
+/// The wide schemes take every lane of points of 1 ..= 64 samples in every boundary mode,
+/// at every level down to one sample, and reconstruct it: where their own ends do not fit,
+/// a level is the narrow scheme's (the same operators), and where they fit it is their
+/// own (native or carried, as before the fallback). The lanes the issue found refused (16
+/// points at one level with interpolating ends, cubic-wide's 31 at three and 16 periodic)
+/// are taken.
+#[test]
+fn wide_schemes_take_every_length_and_reconstruct() {
+    use Boundary::*;
+    for scheme in [Scheme::LinearWide, Scheme::ChaikinWide, Scheme::CubicWide] {
+        let narrow = narrow_of(scheme).expect("a wide scheme has a narrow one");
+        for boundary in Boundary::ALL {
+            for m in 1..=64usize {
+                let most = lane_levels(scheme, boundary, m);
+                assert!(
+                    most >= max_levels(scheme, boundary, m),
+                    "{scheme} {boundary} {m}"
+                );
+                let mut n = m;
+                for _ in 0..most {
+                    n = TwoScale::coarse_len(scheme, boundary, n);
+                }
+                assert_eq!(n, 1, "{scheme} {boundary} m={m}: {most} levels end at {n}");
+                for levels in 0..=most {
+                    for dim in [1usize, 2] {
+                        let data = lcg((m * 131 + levels * 7 + dim) as u64, m * dim);
+                        let (packed, plan) =
+                            analyze_lane(&data, dim, scheme, boundary, levels).unwrap();
+                        let back = synthesize_lane(&packed, dim, &plan).unwrap();
+                        let scale = data.iter().fold(1.0f64, |a, &x| a.max(x.abs()));
+                        for (i, (x, y)) in data.iter().zip(&back).enumerate() {
+                            assert!(
+                                (x - y).abs() <= 1e-12 * scale,
+                                "{scheme} {boundary} m={m} levels {levels} dim {dim} at {i}: {x} vs {y}"
+                            );
+                        }
+                    }
+                }
+                assert!(
+                    analyze_lane(&vec![0.0; m], 1, scheme, boundary, most + 1).is_err(),
+                    "{scheme} {boundary} m={m}: a level past one sample"
+                );
+                let t = TwoScale::new(scheme, boundary, m);
+                if max_levels(scheme, boundary, m) >= 1 {
+                    // its own filters, as without the fallback
+                    assert!(
+                        matches!(t.kind, LevelKind::Native | LevelKind::Carry),
+                        "{scheme} {boundary} m={m}: {:?}",
+                        t.kind
+                    );
+                } else if m >= 2 {
+                    let u = TwoScale::new(narrow, boundary, m);
+                    assert!(matches!(
+                        t.kind,
+                        LevelKind::Narrow | LevelKind::HaarFallback
+                    ));
+                    assert_eq!(t.coarse, u.coarse, "{scheme} {boundary} m={m}");
+                    assert_eq!(t.analysis.to_dense(), u.analysis.to_dense());
+                    assert_eq!(t.synthesis.to_dense(), u.synthesis.to_dense());
+                }
+            }
+        }
+    }
+    for (scheme, boundary, m, levels) in [
+        (Scheme::LinearWide, Interpolating, 16, 1),
+        (Scheme::ChaikinWide, Interpolating, 16, 1),
+        (Scheme::CubicWide, Interpolating, 16, 1),
+        (Scheme::CubicWide, Interpolating, 31, 3),
+        (Scheme::CubicWide, Periodic, 16, 1),
+    ] {
+        assert!(
+            lane_levels(scheme, boundary, m) >= levels,
+            "{scheme} {boundary} {m}"
+        );
+        assert!(analyze_lane(&lcg(3, m), 1, scheme, boundary, levels).is_ok());
+    }
 }
 
 #[test]
