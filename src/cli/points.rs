@@ -4,7 +4,7 @@ use super::{CliResult, Failure};
 use crate::points::{self, Tagged};
 use crate::scheme::subdivide::{refine_steps, Ends, Refinement};
 use crate::scheme::{
-    analyze_lane, max_levels, synthesize_lane, Boundary, LanePyramid, Scheme, TwoScale,
+    analyze_lane, lane_levels, synthesize_lane, Boundary, LanePyramid, Scheme, TwoScale,
 };
 use std::io::Read;
 use std::path::{Path, PathBuf};
@@ -49,7 +49,7 @@ pub fn analyze(
     let text = read_text(input)?;
     let pts = points::parse(&text).map_err(|e| Failure::context(input.display(), e))?;
     let n = pts.len();
-    let max = max_levels(scheme, boundary, n);
+    let max = lane_levels(scheme, boundary, n);
     let levels = levels.unwrap_or(max);
     if levels > max {
         return Err(Failure(format!(

@@ -50,33 +50,31 @@ pub(crate) fn combine_terms<T: Sample>(
     let len = out.len();
     #[cfg(target_arch = "x86_64")]
     if k.avx2() && src.len() <= 32 {
-        use std::any::TypeId;
         let p: [*const T; 32] =
             std::array::from_fn(|k| src.get(k).map_or(std::ptr::null(), |s| s.as_ptr()));
-        let wide = k.avx512();
+        let (n, wide) = (src.len(), k.avx512());
+        let (o, wp) = (out.as_mut_ptr(), w.as_ptr().cast_mut());
         macro_rules! arm {
-            ($t:ty, $wide_from:expr, $narrow:ident, $wide:ident) => {
-                if TypeId::of::<T>() == TypeId::of::<$t>() {
-                    let n = src.len();
-                    let o = out.as_mut_ptr() as *mut $t;
-                    let (p, w) = (
-                        std::slice::from_raw_parts(p.as_ptr() as *const *const $t, n),
-                        std::slice::from_raw_parts(w.as_ptr() as *const $t, n),
-                    );
+            ($as:ident, $wide_from:expr, $narrow:ident, $wide:ident) => {
+                // (`Some` for the type named only: `Sample::f32_ptr`, `f64_ptr`)
+                if let (Some(o), Some(wp)) = (T::$as(o), T::$as(wp)) {
+                    let p = p
+                        .map(|q| T::$as(q.cast_mut()).map_or(std::ptr::null(), |q| q.cast_const()));
+                    let w = std::slice::from_raw_parts(wp.cast_const(), n);
                     if wide && len >= $wide_from {
-                        $wide(o, len, p, w, partner);
+                        $wide(o, len, &p[..n], w, partner);
                     } else {
-                        $narrow(o, len, p, w, partner);
+                        $narrow(o, len, &p[..n], w, partner);
                     }
                     return;
                 }
             };
         }
         // SAFETY (both arms): AVX2 with FMA is present, AVX-512F when `wide`; every
-        // source holds `len` samples (checked by `combine`); T is the type named.
+        // source holds `len` samples (checked by `combine`), `w` holds `n` weights.
         unsafe {
-            arm!(f32, 16, terms_avx2_f32, terms_avx512_f32);
-            arm!(f64, 8, terms_avx2_f64, terms_avx512_f64);
+            arm!(f32_ptr, 16, terms_avx2_f32, terms_avx512_f32);
+            arm!(f64_ptr, 8, terms_avx2_f64, terms_avx512_f64);
         }
     }
     let _ = k;
@@ -101,11 +99,15 @@ pub fn combine_rows<T: Sample>(
     assert!(rows.end <= op.rows() && op.cols() * len <= src.len());
     assert!(rows.len() * len <= dst.len());
     #[cfg(target_arch = "x86_64")]
-    if std::any::TypeId::of::<T>() == std::any::TypeId::of::<f32>() && k.avx2() {
-        let (ps, pd) = (src.as_ptr() as *const f32, dst.as_mut_ptr() as *mut f32);
-        // SAFETY: AVX2 is present; T is f32; every column of `op` is below `op.cols()`,
-        // so each source row is inside `src`, and each output row inside `dst` (asserted).
-        return unsafe { combine_rows_avx2_f32(k, op, ps, len, rows, pd) };
+    if let (true, Some(ps), Some(pd)) = (
+        k.avx2(),
+        T::f32_ptr(src.as_ptr().cast_mut()),
+        T::f32_ptr(dst.as_mut_ptr()),
+    ) {
+        // SAFETY: AVX2 is present; the samples are f32; every column of `op` is below
+        // `op.cols()`, so each source row is inside `src`, and each output row inside
+        // `dst` (asserted).
+        return unsafe { combine_rows_avx2_f32(k, op, ps.cast_const(), len, rows, pd) };
     }
     for (i, r) in rows.enumerate() {
         let (cols, ws) = op.row_slices(r);

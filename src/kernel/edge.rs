@@ -194,14 +194,17 @@ impl EdgeGroup {
 /// (nothing written) otherwise.
 pub fn edge_rows<T: Sample>(k: Kernels, groups: &[EdgeGroup], x: &[T], y: &mut [T]) -> bool {
     #[cfg(target_arch = "x86_64")]
-    if std::any::TypeId::of::<T>() == std::any::TypeId::of::<f32>() && k.avx2() {
+    if let (true, Some(px), Some(py)) = (
+        k.avx2(),
+        T::f32_ptr(x.as_ptr().cast_mut()),
+        T::f32_ptr(y.as_mut_ptr()),
+    ) {
         for g in groups {
             assert!(g.last < x.len() && g.r0 + g.n <= y.len());
         }
-        let (px, py) = (x.as_ptr() as *const f32, y.as_mut_ptr() as *mut f32);
-        // SAFETY: AVX2 is present (a table holds no build the CPU lacks); T is f32; every group's samples and outputs lie inside
-        // `x` and `y` (asserted).
-        unsafe { edge_rows_avx2_f32(groups, px, x.len(), py) };
+        // SAFETY: AVX2 is present (a table holds no build the CPU lacks); the samples are
+        // f32; every group's samples and outputs lie inside `x` and `y` (asserted).
+        unsafe { edge_rows_avx2_f32(groups, px.cast_const(), x.len(), py) };
         return true;
     }
     let _ = (k, groups, x, y);

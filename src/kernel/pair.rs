@@ -1,110 +1,156 @@
 //! Two rows of an operator combined in one pass over the inputs they share.
+//!
+//! A job is described by types rather than loose arguments, as zfp's `zfp_field`
+//! describes an array: [`PairRows`] (each row's weights and mask over the shared inputs,
+//! and the pair kernel that serves them, looked up once), [`PairOut`] (where one step's
+//! two outputs go) and [`PairGrid`] (many steps: lanes, or whole rows of a plane, with a
+//! [`PairOutput`] layout). One entry per job: [`combine_pair`] (one step),
+//! [`combine_pair_grid`] (many) and [`combine_pair_taps`] (two sparse rows).
 
 use super::*;
 
-/// Two [`combine`]s over one set of inputs: `o1[i] = Σ_{k ∈ m1} w1[k]·src[k][i]` and
-/// `o2[i] = Σ_{k ∈ m2} w2[k]·src[k][i]`, where bit `k` of a mask says that input `k` is
-/// one of that output's taps. Each output sums its taps in increasing `k`, the first
-/// assigning, so the bits are those of one [`combine`] per output over its own taps;
-/// each input is loaded once for both outputs (e.g. a coarse and a detail row, or an even
-/// and an odd fine row, which read the same stretch of their lane: the loads, not the
-/// multiplies, bound the single combines).
+/// The two rows of a pair over the same `u` inputs: each one's weight per input (`w1`,
+/// `w2`, `u` each) and the mask of the inputs it reads (bit `k`: input `k`; non-empty,
+/// within the inputs), and `entry`, the pair kernel's table entry ([`pair_entry`] of the
+/// rows where the build has the pair kernels, `None` for one output at a time).
 ///
-/// Every `src[k]` must hold at least `o1.len()` samples; `o2` as long as `o1`; both masks
-/// non-empty and within `src`. The build is `k`'s.
-#[cfg(any(test, feature = "testing"))]
-#[allow(clippy::too_many_arguments)]
-pub fn combine_pair<T: Sample>(
-    k: Kernels,
-    o1: &mut [T],
-    o2: &mut [T],
-    src: &[&[T]],
-    w1: &[T],
-    m1: u32,
-    w2: &[T],
-    m2: u32,
-) {
-    let entry = if k.avx2() {
-        pair_entry(w1, m1, w2, m2)
-    } else {
-        None
-    };
-    combine_pair_at(k, entry, o1, o2, src, w1, m1, w2, m2, false)
-}
-
-/// [`combine_pair`] with the pair's [`pair_entry`] looked up before (`entry` must be it,
-/// or `None` for one output at a time); `split`: each output split into its even
-/// samples, then its odd ones, as [`deinterleave`] places them (the same bits).
-#[allow(clippy::too_many_arguments)]
-pub fn combine_pair_at<T: Sample>(
-    k: Kernels,
-    entry: Option<u8>,
-    o1: &mut [T],
-    o2: &mut [T],
-    src: &[&[T]],
-    w1: &[T],
-    m1: u32,
-    w2: &[T],
-    m2: u32,
-    split: bool,
-) {
-    let u = src.len();
-    check_pair(u, w1, m1, w2, m2);
-    assert!(o1.len() == o2.len() && src.iter().all(|s| s.len() >= o1.len()));
-    #[cfg(target_arch = "x86_64")]
-    if let (true, Some(entry)) = (k.avx2(), entry) {
-        let p = input_ptrs(src);
-        let o = [o1.as_mut_ptr(), o2.as_mut_ptr()];
-        // SAFETY: AVX2 (and AVX-512 at that level) present; lengths and masks checked
-        // above; one step.
-        if unsafe {
-            pair_avx2_at(
-                entry,
-                PairRows { w1, m1, w2, m2 },
-                &PairSteps::one(o, o1.len(), &p[..u], PairOutput::apart_or_split(split)),
-                k.level(),
-            )
-        } {
-            return;
-        }
-    }
-    let _ = entry;
-    pair_by_parts(k, o1, o2, src, w1, m1, w2, m2);
-    if split {
-        for o in [o1, o2] {
-            let whole = o.to_vec();
-            deinterleave(k, &whole, 1, o);
-        }
-    }
-}
-
-/// The two rows of a pair over the same inputs: each one's weight per input and the mask
-/// of the inputs it reads (bit `k`: input `k`).
+/// Each output sums its taps in increasing `k`, the first assigning, so the bits are
+/// those of one [`combine`] per output over its own taps; each input is loaded once for
+/// both outputs (e.g. a coarse and a detail row, or an even and an odd fine row, which
+/// read the same stretch of their lane: the loads, not the multiplies, bound the single
+/// combines).
 #[derive(Clone, Copy, Debug)]
-pub(crate) struct PairRows<'a, T> {
+pub struct PairRows<'a, T> {
     pub w1: &'a [T],
     pub m1: u32,
     pub w2: &'a [T],
     pub m2: u32,
+    pub entry: Option<u8>,
 }
 
-/// How a pair's two outputs are written.
+impl<'a, T: Sample> PairRows<'a, T> {
+    /// The pair `(w1, m1)`, `(w2, m2)`, its entry looked up for the build of `k` (callers
+    /// that apply one pair many times look it up once: [`super::polyphase::Pair`] holds
+    /// its entries, [`PairMemo`] remembers the last).
+    pub fn new(k: Kernels, (w1, m1): (&'a [T], u32), (w2, m2): (&'a [T], u32)) -> Self {
+        let entry = if k.avx2() {
+            pair_entry(w1, m1, w2, m2)
+        } else {
+            None
+        };
+        PairRows {
+            w1,
+            m1,
+            w2,
+            m2,
+            entry,
+        }
+    }
+
+    /// The weights and masks over `u` inputs ([`check_pair`]).
+    fn check(&self, u: usize) {
+        check_pair(u, self.w1, self.m1, self.w2, self.m2)
+    }
+}
+
+/// How a pair's two outputs are written, step by step.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) enum PairOutput {
-    /// Each at its own pointer, samples in order.
+pub enum PairOutput {
+    /// Each at its own place, samples in order.
     Apart,
-    /// Each at its own pointer, its even samples, then its odd ones ([`deinterleave`]).
+    /// Each at its own place, its even samples, then its odd ones, as [`deinterleave`]
+    /// places them (for a next axis that reads them so: the same bits, without a pass of
+    /// its own).
     Split,
-    /// Interleaved at the first pointer, `(a0 b0 a1 b1 …)`, twice as long.
+    /// Interleaved at the first place, `(a0 b0 a1 b1 …)`, twice as long (the even and
+    /// the odd fine samples of synthesis, without a pass through two buffers and
+    /// [`interleave`]).
     Merged,
 }
 
-impl PairOutput {
-    pub(crate) fn apart_or_split(split: bool) -> PairOutput {
-        if split {
-            PairOutput::Split
-        } else {
-            PairOutput::Apart
+/// Where one step of a pair writes: the two outputs in the layout of [`PairOutput`] (the
+/// inputs hold at least as many samples as each output).
+#[derive(Debug)]
+pub enum PairOut<'o, T> {
+    /// [`PairOutput::Apart`]: the first output, the second (as long).
+    Apart(&'o mut [T], &'o mut [T]),
+    /// [`PairOutput::Split`]: the first output, the second (as long).
+    Split(&'o mut [T], &'o mut [T]),
+    /// [`PairOutput::Merged`]: both (an even length); written only where the pair has a
+    /// vector build.
+    Merged(&'o mut [T]),
+}
+
+/// One step of `pair` over the inputs `src` into `out`:
+/// `o1[i] = Σ_{k ∈ m1} w1[k]·src[k][i]` and `o2[i] = Σ_{k ∈ m2} w2[k]·src[k][i]`, in
+/// the layout of `out`. Every `src[k]` holds at least as many samples as each output.
+/// Whether it wrote: always, but for [`PairOut::Merged`] without a vector build for the
+/// pair or the type. The build is `k`'s; the bits every build's.
+pub fn combine_pair<T: Sample>(
+    k: Kernels,
+    pair: &PairRows<T>,
+    src: &[&[T]],
+    out: PairOut<'_, T>,
+) -> bool {
+    let u = src.len();
+    pair.check(u);
+    let split = matches!(out, PairOut::Split(..));
+    match out {
+        PairOut::Apart(o1, o2) | PairOut::Split(o1, o2) => {
+            assert!(o1.len() == o2.len() && src.iter().all(|s| s.len() >= o1.len()));
+            #[cfg(target_arch = "x86_64")]
+            if let (true, Some(entry)) = (k.avx2(), pair.entry) {
+                let p = input_ptrs(src);
+                let o = [o1.as_mut_ptr(), o2.as_mut_ptr()];
+                let output = if split {
+                    PairOutput::Split
+                } else {
+                    PairOutput::Apart
+                };
+                // SAFETY: AVX2 (and AVX-512 at that level) present; lengths and masks
+                // checked above; one step.
+                if unsafe {
+                    pair_avx2_at(
+                        entry,
+                        pair,
+                        &PairSteps::one(o, o1.len(), &p[..u], output),
+                        k.level(),
+                    )
+                } {
+                    return true;
+                }
+            }
+            pair_by_parts(k, o1, o2, src, pair);
+            if split {
+                for o in [o1, o2] {
+                    let whole = o.to_vec();
+                    deinterleave(k, &whole, 1, o);
+                }
+            }
+            true
+        }
+        PairOut::Merged(out) => {
+            assert!(out.len().is_multiple_of(2));
+            let len = out.len() / 2;
+            assert!(src.iter().all(|s| s.len() >= len));
+            #[cfg(target_arch = "x86_64")]
+            if let (true, Some(entry)) = (k.avx2(), pair.entry) {
+                let p = input_ptrs(src);
+                let o = [out.as_mut_ptr(), out.as_mut_ptr()];
+                // SAFETY: AVX2 is present, AVX-512F at the table's level; `out` holds
+                // 2·len samples, every input len; one step, the merged output written
+                // through the first pointer only.
+                return unsafe {
+                    pair_avx2_at(
+                        entry,
+                        pair,
+                        &PairSteps::one(o, len, &p[..u], PairOutput::Merged),
+                        k.level(),
+                    )
+                };
+            }
+            let _ = out;
+            false
         }
     }
 }
@@ -139,25 +185,21 @@ impl<'a, T> PairSteps<'a, T> {
 }
 
 /// [`combine_pair`] over two sparse rows (`(columns, weights)`, columns increasing) and
-/// the inputs `tap(c)` of their columns: `o1` the first row, `o2` the second, each input
-/// they share read once. `false` (nothing written) when the rows share no column, read
-/// more than [`PAIR_INPUTS`] inputs together or have no vector build of the pair kernels
-/// at this CPU level (then two [`combine_taps`] do the same).
+/// the inputs `tap(c)` of their columns: the first row to `out`'s first output, the
+/// second to its second, each input they share read once. `false` (nothing written) when
+/// the rows share no column, read more than [`PAIR_INPUTS`] inputs together or have no
+/// vector build of the pair kernels at this CPU level (then two [`combine_taps`] do the
+/// same).
 ///
-/// `memo` remembers the last pair's pattern (the regular row pairs repeat one); `split`
-/// writes each output as its even samples, then its odd ones ([`combine_pair_at`]).
-#[allow(clippy::too_many_arguments)]
+/// `memo` remembers the last pair's pattern (the regular row pairs repeat one).
 pub fn combine_pair_taps<'t, T: Sample + 't>(
     k: Kernels,
     memo: &mut PairMemo<T>,
-    split: bool,
-    o1: &mut [T],
-    o2: &mut [T],
-    row1: (&[u32], &[f64]),
-    row2: (&[u32], &[f64]),
+    rows: [(&[u32], &[f64]); 2],
+    out: PairOut<'_, T>,
     tap: impl Fn(u32) -> &'t [T],
 ) -> bool {
-    let ((c1, w1), (c2, w2)) = (row1, row2);
+    let [(c1, w1), (c2, w2)] = rows;
     let Some((cols, n, m1, m2)) = pair_columns(c1, c2) else {
         return false;
     };
@@ -186,8 +228,14 @@ pub fn combine_pair_taps<'t, T: Sample + 't>(
     if entry.is_none() {
         return false;
     }
-    combine_pair_at(k, entry, o1, o2, &src[..n], &a[..n], m1, &b[..n], m2, split);
-    true
+    let pair = PairRows {
+        w1: &a[..n],
+        m1,
+        w2: &b[..n],
+        m2,
+        entry,
+    };
+    combine_pair(k, &pair, &src[..n], out)
 }
 
 /// Most inputs two rows combined together by [`combine_pair_taps`] may read.
@@ -249,17 +297,14 @@ pub(crate) fn input_ptrs<T>(src: &[&[T]]) -> [*const T; 32] {
 
 /// [`combine_pair`] as one [`combine`] per output (the patterns without an AVX2 build,
 /// and the reference the tests compare with).
-#[allow(clippy::too_many_arguments)]
 pub(crate) fn pair_by_parts<T: Sample>(
     k: Kernels,
     o1: &mut [T],
     o2: &mut [T],
     src: &[&[T]],
-    w1: &[T],
-    m1: u32,
-    w2: &[T],
-    m2: u32,
+    pair: &PairRows<T>,
 ) {
+    let PairRows { w1, m1, w2, m2, .. } = *pair;
     for (o, w, m) in [(o1, w1, m1), (o2, w2, m2)] {
         let mut s: [&[T]; 32] = [&[]; 32];
         let mut wk = [T::default(); 32];
@@ -442,309 +487,130 @@ pub fn combine_pair_has_build<T: Sample>(w1: &[T], m1: u32, w2: &[T], m2: u32) -
     pair_entry(w1, m1, w2, m2).is_some()
 }
 
-/// [`combine_pair`] with its two outputs interleaved into `out`: `out[2i]` the first,
-/// `out[2i + 1]` the second (the even and the odd fine samples of synthesis, without a
-/// pass through two buffers and [`interleave`]). The same bits; `false` (nothing written)
-/// where there is no AVX2 build for the pattern or the type.
-#[cfg(any(test, feature = "testing"))]
-pub fn combine_pair_merged<T: Sample>(
-    k: Kernels,
-    out: &mut [T],
-    src: &[&[T]],
-    w1: &[T],
-    m1: u32,
-    w2: &[T],
-    m2: u32,
-) -> bool {
-    combine_pair_merged_at(k, pair_entry(w1, m1, w2, m2), out, src, w1, m1, w2, m2)
+/// What the positions of a [`PairGrid`] count.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum GridUnit {
+    /// Samples: the steps are lanes (e.g. every row of a volume's plane along its last
+    /// axis, the weights kept in registers).
+    Samples,
+    /// Rows of `len` samples: the elements of a lane are whole rows (e.g. the lanes of a
+    /// volume's plane along another axis).
+    Rows,
 }
 
-/// [`combine_pair_merged`] with the pair's [`pair_entry`] looked up before (`entry` must
-/// be it).
-#[allow(clippy::too_many_arguments)]
-pub fn combine_pair_merged_at<T: Sample>(
-    k: Kernels,
-    entry: Option<u8>,
-    out: &mut [T],
-    src: &[&[T]],
-    w1: &[T],
-    m1: u32,
-    w2: &[T],
-    m2: u32,
-) -> bool {
-    let u = src.len();
-    check_pair(u, w1, m1, w2, m2);
-    assert!(out.len().is_multiple_of(2));
-    let len = out.len() / 2;
-    assert!(src.iter().all(|s| s.len() >= len));
-    #[cfg(target_arch = "x86_64")]
-    if let (true, Some(entry)) = (k.avx2(), entry) {
-        let p = input_ptrs(src);
-        let o = [out.as_mut_ptr(), out.as_mut_ptr()];
-        // SAFETY: AVX2 is present, AVX-512F at the table's level; `out` holds 2·len
-        // samples, every input len; one step, the merged output written through the
-        // first pointer only.
-        return unsafe {
-            pair_avx2_at(
-                entry,
-                PairRows { w1, m1, w2, m2 },
-                &PairSteps::one(o, len, &p[..u], PairOutput::Merged),
-                k.level(),
-            )
-        };
-    }
-    let _ = entry;
-    false
+/// The steps of a pair job: step `t` reads input `k` at `src[off[k] + in_step·t ..]`
+/// and writes output `j` at `dst[out[j] + out_step[j]·t ..]`, `len` samples each
+/// (positions in `unit`s), in the layout `output` ([`PairOutput::Merged`]: both outputs
+/// interleaved at `out[0]`, `2·len` samples). No two outputs of any steps may overlap.
+#[derive(Clone, Copy, Debug)]
+pub struct PairGrid<'a> {
+    pub off: &'a [usize],
+    pub in_step: usize,
+    pub out: [usize; 2],
+    pub out_step: [usize; 2],
+    pub len: usize,
+    pub count: usize,
+    pub unit: GridUnit,
+    pub output: PairOutput,
 }
 
-/// [`combine_pair`] for `count` pairs of rows of `len` samples (the elements of a lane are
-/// whole rows, e.g. the lanes of a volume's plane): pair `t` reads the rows
-/// `cols[k] + in_step·t` of `src` and writes the rows `rows[j] + out_step[j]·t` of `dst`
-/// (`j` = 0 for the first output, 1 for the second). The same bits as [`combine_pair`] pair
-/// by pair; one dispatch for all of them.
-// the engine calls the `_at` forms with the entry its plan holds: this form and the
-// other lookups of their own (`lookup`, `combine_pair_rows_split`, `combine_pair_lanes`)
-// serve the tests (feature `testing`)
-#[cfg(feature = "testing")]
-#[allow(clippy::too_many_arguments)]
-pub fn combine_pair_rows<T: Sample>(
+/// [`combine_pair`] for every step of `grid`, in one dispatch: the same bits as
+/// [`combine_pair`] step by step (`pair.entry` as [`PairRows`] says).
+pub fn combine_pair_grid<T: Sample>(
     k: Kernels,
+    pair: &PairRows<T>,
     src: &[T],
-    len: usize,
-    cols: &[usize],
-    in_step: usize,
-    w1: (&[T], u32),
-    w2: (&[T], u32),
     dst: &mut [T],
-    rows: [usize; 2],
-    out_step: [usize; 2],
-    count: usize,
+    grid: &PairGrid,
 ) {
-    let entry = lookup(k, w1, w2);
-    pair_rows(
-        k, entry, src, len, cols, in_step, w1, w2, dst, rows, out_step, count, false,
-    )
-}
-
-/// [`combine_pair_rows`] with every output row split into its even samples, then its
-/// odd ones (as [`deinterleave`] makes them, for a next axis that reads them so): the
-/// same bits, placed as `deinterleave` places them, without a pass of its own.
-#[cfg(feature = "testing")]
-#[allow(clippy::too_many_arguments)]
-pub fn combine_pair_rows_split<T: Sample>(
-    k: Kernels,
-    src: &[T],
-    len: usize,
-    cols: &[usize],
-    in_step: usize,
-    w1: (&[T], u32),
-    w2: (&[T], u32),
-    dst: &mut [T],
-    rows: [usize; 2],
-    out_step: [usize; 2],
-    count: usize,
-) {
-    let entry = lookup(k, w1, w2);
-    pair_rows(
-        k, entry, src, len, cols, in_step, w1, w2, dst, rows, out_step, count, true,
-    )
-}
-
-/// [`pair_entry`] of a pair where the build has the pair kernels (`None` elsewhere).
-#[cfg(feature = "testing")]
-fn lookup<T: Sample>(k: Kernels, (w1, m1): (&[T], u32), (w2, m2): (&[T], u32)) -> Option<u8> {
-    if k.avx2() {
-        pair_entry(w1, m1, w2, m2)
-    } else {
-        None
-    }
-}
-
-/// [`combine_pair_rows`] (`split`: [`combine_pair_rows_split`]) with the pair's
-/// [`pair_entry`] looked up before (`entry` must be it, or `None` for one output at a
-/// time): for callers that apply one pair many times ([`super::polyphase::Pair`] holds
-/// its entries).
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn pair_rows<T: Sample>(
-    k: Kernels,
-    entry: Option<u8>,
-    src: &[T],
-    len: usize,
-    cols: &[usize],
-    in_step: usize,
-    (w1, m1): (&[T], u32),
-    (w2, m2): (&[T], u32),
-    dst: &mut [T],
-    rows: [usize; 2],
-    out_step: [usize; 2],
-    count: usize,
-    split: bool,
-) {
-    let u = cols.len();
-    check_pair(u, w1, m1, w2, m2);
+    let u = grid.off.len();
+    pair.check(u);
+    let (len, count) = (grid.len, grid.count);
     if count == 0 || len == 0 {
         return;
     }
-    let last = count - 1;
-    assert!(cols
-        .iter()
-        .all(|&c| (c + in_step * last + 1) * len <= src.len()));
-    for j in 0..2 {
-        assert!((rows[j] + out_step[j] * last + 1) * len <= dst.len());
-    }
-    // the two outputs' rows never meet (a pair's rows are different rows of an operator)
-    let row = |j: usize, t: usize| rows[j] + out_step[j] * t;
-    let apart = rows[0].abs_diff(rows[1]);
-    let disjoint = if out_step[0] == out_step[1] && out_step[0] > 0 {
-        !apart.is_multiple_of(out_step[0]) || apart >= out_step[0] * count
-    } else {
-        row(0, last).max(rows[0]) < rows[1].min(row(1, last))
-            || row(1, last).max(rows[1]) < rows[0].min(row(0, last))
+    let unit = match grid.unit {
+        GridUnit::Samples => 1,
+        GridUnit::Rows => len,
     };
-    assert!(disjoint, "combine_pair_rows: the two outputs share a row");
-    let mut off = [0usize; 32];
-    for (o, &c) in off.iter_mut().zip(cols) {
-        *o = c * len;
-    }
-    let out = [rows[0] * len, rows[1] * len];
-    let steps = [out_step[0] * len, out_step[1] * len];
-    let (w1, w2) = ((w1, m1), (w2, m2));
-    // SAFETY: every input and output row is inside its slice and the output rows are
-    // distinct (asserted above).
-    unsafe {
-        pair_steps(
-            k,
-            entry,
-            src,
-            &off[..u],
-            in_step * len,
-            w1,
-            w2,
-            dst,
-            out,
-            steps,
-            len,
-            count,
-            PairOutput::apart_or_split(split),
-        )
-    }
-}
-
-/// [`combine_pair`] on `count` lanes at once, `len` samples of each output per lane: lane
-/// `t` reads input `k` at `src[off[k] + in_step·t ..][..len]` and writes its first output
-/// at `dst[out[0] + out_step·t ..][..len]`, its second at `dst[out[1] + out_step·t ..]`
-/// — or, when `merge`, both interleaved at `dst[out[0] + out_step·t ..][..2·len]` (the
-/// even and the odd fine samples). Each lane's two outputs must lie within its `out_step`
-/// samples and apart. One dispatch for all the lanes (e.g. every row of a volume's plane
-/// along its last axis, the weights kept in registers); the same bits as
-/// [`combine_pair`] lane by lane.
-#[cfg(feature = "testing")]
-#[allow(clippy::too_many_arguments)]
-pub fn combine_pair_lanes<T: Sample>(
-    k: Kernels,
-    src: &[T],
-    off: &[usize],
-    in_step: usize,
-    w1: (&[T], u32),
-    w2: (&[T], u32),
-    dst: &mut [T],
-    out: [usize; 2],
-    out_step: usize,
-    len: usize,
-    count: usize,
-    merge: bool,
-) {
-    let entry = lookup(k, w1, w2);
-    combine_pair_lanes_at(
-        k, entry, src, off, in_step, w1, w2, dst, out, out_step, len, count, merge,
-    )
-}
-
-/// [`combine_pair_lanes`] with the pair's [`pair_entry`] looked up before (`entry` must
-/// be it, or `None` for one output at a time).
-#[allow(clippy::too_many_arguments)]
-pub fn combine_pair_lanes_at<T: Sample>(
-    k: Kernels,
-    entry: Option<u8>,
-    src: &[T],
-    off: &[usize],
-    in_step: usize,
-    (w1, m1): (&[T], u32),
-    (w2, m2): (&[T], u32),
-    dst: &mut [T],
-    out: [usize; 2],
-    out_step: usize,
-    len: usize,
-    count: usize,
-    merge: bool,
-) {
-    let u = off.len();
-    check_pair(u, w1, m1, w2, m2);
-    if count == 0 || len == 0 {
-        return;
-    }
+    let merge = grid.output == PairOutput::Merged;
+    let width = if merge { 2 * len } else { len };
     let last = count - 1;
-    assert!(off.iter().all(|&o| o + in_step * last + len <= src.len()));
-    // each lane's outputs inside its own stretch of `out_step` samples, apart
-    let (lo, hi) = (out[0].min(out[1]), out[0].max(out[1]));
-    let reach = if merge { out[0] + 2 * len } else { hi + len };
+    let mut off = [0usize; 32];
+    for (o, &c) in off.iter_mut().zip(grid.off) {
+        *o = c * unit;
+    }
+    let g = PairGrid {
+        off: &off[..u],
+        in_step: grid.in_step * unit,
+        out: grid.out.map(|o| o * unit),
+        out_step: grid.out_step.map(|s| s * unit),
+        unit: GridUnit::Samples,
+        ..*grid
+    };
+    assert!(g
+        .off
+        .iter()
+        .all(|&o| o + g.in_step * last + len <= src.len()));
+    let outputs = if merge { 1 } else { 2 };
+    for j in 0..outputs {
+        assert!(g.out[j] + g.out_step[j] * last + width <= dst.len());
+        assert!(
+            count == 1 || g.out_step[j] >= width,
+            "a pair output overlaps itself"
+        );
+    }
     assert!(
-        merge || hi >= lo + len,
-        "combine_pair_lanes: the two outputs overlap"
+        merge || outputs_apart(&g, width),
+        "the two outputs of a pair overlap"
     );
-    assert!(reach - if merge { out[0] } else { lo } <= out_step);
-    assert!(reach + out_step * last <= dst.len());
-    let steps = [out_step, out_step];
-    let (w1, w2) = ((w1, m1), (w2, m2));
-    // SAFETY: every input and output stretch is inside its slice, and each lane's outputs
-    // lie apart within its own `out_step` samples (asserted above).
-    unsafe {
-        pair_steps(
-            k,
-            entry,
-            src,
-            off,
-            in_step,
-            w1,
-            w2,
-            dst,
-            out,
-            steps,
-            len,
-            count,
-            if merge {
-                PairOutput::Merged
-            } else {
-                PairOutput::Apart
-            },
-        )
+    // SAFETY: every input and output stretch is inside its slice, and no two outputs of
+    // any steps overlap (asserted above).
+    unsafe { pair_steps(k, pair, src, dst, &g) }
+}
+
+/// Whether no step's first output (`width` samples) meets any step's second, the
+/// positions of `g` in samples.
+fn outputs_apart(g: &PairGrid, width: usize) -> bool {
+    let last = g.count as i128 - 1;
+    let (a, b) = (g.out[0] as i128, g.out[1] as i128);
+    let (s0, s1, w) = (g.out_step[0] as i128, g.out_step[1] as i128, width as i128);
+    if s0 == s1 && s0 > 0 {
+        // |b − a + s·n| ≥ w for every n = t' − t in −last ..= last: the nearest n to
+        // (a − b)/s decides (|d + s·n| falls, then rises)
+        let d = b - a;
+        let f = (-d).div_euclid(s0);
+        [f, f + 1]
+            .iter()
+            .all(|&n| (d + s0 * n.clamp(-last, last)).abs() >= w)
+    } else {
+        let (end0, end1) = (a + s0 * last + w, b + s1 * last + w);
+        end0 <= b || end1 <= a
     }
 }
 
-/// The steps of [`combine_pair_rows`] and [`combine_pair_lanes`]: step `t` reads input
-/// `k` at `src[off[k] + in_step·t ..][..len]` and writes output `j` at
-/// `dst[out[j] + out_step[j]·t ..][..len]` (`merge`: both interleaved at `out[0]`, twice
-/// as long).
+/// The steps of [`combine_pair_grid`], `g`'s positions in samples.
 ///
 /// # Safety
 /// Every input and output stretch of every step inside its slice, and no two outputs of
 /// any steps overlapping; weights and masks as [`check_pair`] checks them.
-#[allow(clippy::too_many_arguments)]
-pub(crate) unsafe fn pair_steps<T: Sample>(
+unsafe fn pair_steps<T: Sample>(
     k: Kernels,
-    entry: Option<u8>,
+    pair: &PairRows<T>,
     src: &[T],
-    off: &[usize],
-    in_step: usize,
-    (w1, m1): (&[T], u32),
-    (w2, m2): (&[T], u32),
     dst: &mut [T],
-    out: [usize; 2],
-    out_step: [usize; 2],
-    len: usize,
-    count: usize,
-    output: PairOutput,
+    g: &PairGrid,
 ) {
+    let PairGrid {
+        off,
+        in_step,
+        out,
+        out_step,
+        len,
+        count,
+        output,
+        ..
+    } = *g;
     let u = off.len();
     let p = input_ptrs_at(src, off);
     let merge = output == PairOutput::Merged;
@@ -755,7 +621,7 @@ pub(crate) unsafe fn pair_steps<T: Sample>(
         // input and output stretch lies inside its slice and the outputs of all steps are
         // disjoint (the caller's contract), and `src`, `dst` are distinct slices
         // (borrowed shared and exclusive).
-        let done = entry.is_some_and(|entry| unsafe {
+        let done = pair.entry.is_some_and(|entry| unsafe {
             // (merged: both through the first pointer)
             let o = [d.add(out[0]), d.add(if merge { out[0] } else { out[1] })];
             let at = PairSteps {
@@ -767,20 +633,20 @@ pub(crate) unsafe fn pair_steps<T: Sample>(
                 out_step,
                 output,
             };
-            pair_avx2_at(entry, PairRows { w1, m1, w2, m2 }, &at, k.level())
+            pair_avx2_at(entry, pair, &at, k.level())
         });
         if done {
             return;
         }
     }
-    let _ = (p, entry);
+    let _ = p;
     let (mut a, mut b) = (vec![T::default(); len], vec![T::default(); len]);
     for t in 0..count {
         let mut s: [&[T]; 32] = [&[]; 32];
         for (k, &o) in off.iter().enumerate() {
             s[k] = &src[o + in_step * t..][..len];
         }
-        pair_by_parts(k, &mut a, &mut b, &s[..u], w1, m1, w2, m2);
+        pair_by_parts(k, &mut a, &mut b, &s[..u], pair);
         let at = [out[0] + out_step[0] * t, out[1] + out_step[1] * t];
         if merge {
             let o = &mut dst[at[0]..][..2 * len];

@@ -15,11 +15,11 @@
 //! the contiguous slice starting at element `cols[k] / 2` of one half.
 
 use crate::kernel::{
-    self, combine, combine_pair_at, combine_pair_merged_at, deinterleave, edge_rows, interleave,
-    EdgeGroup, Kernels,
+    self, combine, combine_pair, deinterleave, edge_rows, interleave, EdgeGroup, Kernels, PairOut,
+    PairRows,
 };
 use crate::scheme::sparse::Csr;
-use crate::scheme::Sample;
+use crate::scheme::{Build, Sample};
 
 /// Shortest run worth a vector pass; shorter stretches stay boundary rows.
 const MIN_RUN: usize = 4;
@@ -104,13 +104,23 @@ impl Pair {
 
     /// [`kernel::pair_entry`] of the pair for samples of type `T`.
     pub fn entry<T: Sample>(&self) -> Option<u8> {
-        use std::any::TypeId;
-        if TypeId::of::<T>() == TypeId::of::<f32>() {
-            self.entries[0]
-        } else if TypeId::of::<T>() == TypeId::of::<f64>() {
-            self.entries[1]
-        } else {
-            None // (the kernels are built for f32 and f64)
+        match T::BUILD {
+            Build::F32 => self.entries[0],
+            Build::F64 => self.entries[1],
+            Build::Plain => None, // (the kernels are built for f32 and f64)
+        }
+    }
+
+    /// The pair's [`PairRows`] over its weights `w0`, `w1` as samples, its entry where
+    /// the build of `k` has the pair kernels.
+    pub fn rows<'a, T: Sample>(&self, k: Kernels, w0: &'a [T], w1: &'a [T]) -> PairRows<'a, T> {
+        let [m0, m1] = self.masks;
+        PairRows {
+            w1: w0,
+            m1: m0,
+            w2: w1,
+            m2: m1,
+            entry: if k.avx2() { self.entry::<T>() } else { None },
         }
     }
 
@@ -371,7 +381,14 @@ impl Polyphase {
                 // samples (not wider elements) straight into place where there is a build
                 if e > 1 || !pair_merged(k, pair, x, out) {
                     let (t0, t1) = scratch[..2 * n * e].split_at_mut(n * e);
-                    pair_part(k, pair, 1, ne, x, &[], e, t0, t1);
+                    let lane = LaneIn {
+                        x,
+                        halves: &[],
+                        e,
+                        col_step: 1,
+                        ne,
+                    };
+                    pair_part(k, pair, &lane, t0, t1);
                     interleave(k, t0, t1, e, out);
                 }
             } else {
@@ -418,7 +435,14 @@ impl Polyphase {
         let (lo, hi) = y.split_at_mut(r1.row0 * e);
         let o0 = &mut lo[(r0.row0 + f[0]) * e..(r0.row0 + f[0] + n) * e];
         let o1 = &mut hi[f[1] * e..(f[1] + n) * e];
-        pair_part(self.kernels, pair, 2, ne, x, halves, e, o0, o1);
+        let lane = LaneIn {
+            x,
+            halves,
+            e,
+            col_step: 2,
+            ne,
+        };
+        pair_part(self.kernels, pair, &lane, o0, o1);
     }
 
     /// The runs but the `paired` ones, and the rows near the ends (`halves`: the lane
@@ -433,24 +457,20 @@ impl Polyphase {
         paired: [usize; 2],
     ) {
         let (ne, k) = (self.rows.div_ceil(2), self.kernels);
+        let lane = LaneIn {
+            x,
+            halves,
+            e,
+            col_step: self.col_step,
+            ne,
+        };
         for (ri, run) in self.runs.iter().enumerate() {
             if paired.contains(&ri) {
                 continue;
             }
             if run.row_step == 1 && run.cols.len() <= RUN_MOST {
                 let len = run.count * e;
-                run_part(
-                    k,
-                    self.col_step,
-                    ne,
-                    run,
-                    0,
-                    run.count,
-                    x,
-                    halves,
-                    e,
-                    &mut y[run.row0 * e..run.row0 * e + len],
-                );
+                run_part(k, run, &lane, &mut y[run.row0 * e..run.row0 * e + len]);
             } else {
                 op_rows_run(k, op, run, x, y, e);
             }
@@ -531,85 +551,63 @@ fn op_rows_run<T: Sample>(k: Kernels, op: &Csr, run: &Run, x: &[T], y: &mut [T],
     }
 }
 
-/// Rows `i0 .. i0 + count` of `run` into `out` (contiguous): every tap is one slice of
-/// the lane (`col_step` 1) or of its even/odd halves in `halves` (`col_step` 2, even
-/// half `ne` elements long).
-#[allow(clippy::too_many_arguments)]
-#[inline]
-fn run_part<T: Sample>(
-    k: Kernels,
+/// Where a lane's taps are read: the lane `x` of elements of `e` samples (`col_step`
+/// 1), or its even/odd halves `halves` (`col_step` 2, even half `ne` elements long).
+#[derive(Clone, Copy)]
+struct LaneIn<'a, T> {
+    x: &'a [T],
+    halves: &'a [T],
+    e: usize,
     col_step: usize,
     ne: usize,
-    run: &Run,
-    i0: usize,
-    count: usize,
-    x: &[T],
-    halves: &[T],
-    e: usize,
-    out: &mut [T],
-) {
+}
+
+impl<'a, T> LaneIn<'a, T> {
+    /// The `len` samples of column `c` onwards (of the lane, or of its half).
+    #[inline]
+    fn tap(&self, c: usize, len: usize) -> &'a [T] {
+        let e = self.e;
+        if self.col_step == 2 {
+            let start = (c % 2) * self.ne * e + (c / 2) * e;
+            &self.halves[start..start + len]
+        } else {
+            &self.x[c * e..c * e + len]
+        }
+    }
+}
+
+/// The rows of `run` into `out` (contiguous): every tap is one slice of the lane.
+#[inline]
+fn run_part<T: Sample>(k: Kernels, run: &Run, lane: &LaneIn<T>, out: &mut [T]) {
     let mut src: [&[T]; RUN_MOST] = [&[]; RUN_MOST];
     let mut w = [T::default(); RUN_MOST];
     let taps = run.cols.len();
-    let len = count * e;
+    let len = run.count * lane.e;
     for (k, (&c, &wk)) in run.cols.iter().zip(&run.weights).enumerate() {
-        src[k] = if col_step == 2 {
-            let start = (c % 2) * ne * e + (c / 2 + i0) * e;
-            &halves[start..start + len]
-        } else {
-            let start = (c + i0) * e;
-            &x[start..start + len]
-        };
+        src[k] = lane.tap(c, len);
         w[k] = T::from_f64(wk);
     }
     combine(k, &mut out[..len], &src[..taps], &w[..taps]);
 }
 
-/// The rows of `pair` into `o0` and `o1` (contiguous) with [`kernel::combine_pair`]: every input is
-/// one slice of the lane (`col_step` 1) or of its even/odd halves (`col_step` 2).
-#[allow(clippy::too_many_arguments)]
+/// The rows of `pair` into `o0` and `o1` (contiguous) with [`kernel::combine_pair`]:
+/// every input is one slice of the lane.
 #[inline]
-fn pair_part<T: Sample>(
-    k: Kernels,
-    pair: &Pair,
-    col_step: usize,
-    ne: usize,
-    x: &[T],
-    halves: &[T],
-    e: usize,
-    o0: &mut [T],
-    o1: &mut [T],
-) {
+fn pair_part<T: Sample>(k: Kernels, pair: &Pair, lane: &LaneIn<T>, o0: &mut [T], o1: &mut [T]) {
     let mut src: [&[T]; PAIR_MOST] = [&[]; PAIR_MOST];
     let [w0, w1] = pair.sample_weights::<T>();
-    let len = pair.count * e;
+    let len = pair.count * lane.e;
     let u = pair.cols.len();
     for (k, &c) in pair.cols.iter().enumerate() {
-        src[k] = if col_step == 2 {
-            let start = (c % 2) * ne * e + (c / 2) * e;
-            &halves[start..start + len]
-        } else {
-            &x[c * e..c * e + len]
-        };
+        src[k] = lane.tap(c, len);
     }
-    let [m0, m1] = pair.masks;
-    let entry = if k.avx2() { pair.entry::<T>() } else { None };
-    combine_pair_at(
-        k,
-        entry,
-        &mut o0[..len],
-        &mut o1[..len],
-        &src[..u],
-        &w0[..u],
-        m0,
-        &w1[..u],
-        m1,
-        false,
-    );
+    let rows = pair.rows(k, &w0[..u], &w1[..u]);
+    let out = PairOut::Apart(&mut o0[..len], &mut o1[..len]);
+    combine_pair(k, &rows, &src[..u], out);
 }
 
 /// The rows of a synthesis `pair` (even and odd fine samples) straight into `out`,
-/// interleaved ([`combine_pair_merged`]); `false` (nothing written) where that has no
+/// interleaved ([`PairOut::Merged`]); `false` (nothing written) where that has no
 /// build.
 fn pair_merged<T: Sample>(k: Kernels, pair: &Pair, x: &[T], out: &mut [T]) -> bool {
     let mut src: [&[T]; PAIR_MOST] = [&[]; PAIR_MOST];
@@ -619,17 +617,8 @@ fn pair_merged<T: Sample>(k: Kernels, pair: &Pair, x: &[T], out: &mut [T]) -> bo
     for (k, &c) in pair.cols.iter().enumerate() {
         src[k] = &x[c..c + n];
     }
-    let [m0, m1] = pair.masks;
-    combine_pair_merged_at(
-        k,
-        pair.entry::<T>(),
-        &mut out[..2 * n],
-        &src[..u],
-        &w0[..u],
-        m0,
-        &w1[..u],
-        m1,
-    )
+    let rows = pair.rows(k, &w0[..u], &w1[..u]);
+    combine_pair(k, &rows, &src[..u], PairOut::Merged(&mut out[..2 * n]))
 }
 
 #[cfg(test)]
@@ -745,15 +734,24 @@ mod tests {
                 let src: Vec<&[T]> = (0..u).map(|k| &x[k..k + len]).collect();
                 let (mut e1, mut e2) = (vec![T::default(); len], vec![T::default(); len]);
                 let s = Kernels::scalar();
-                kernel::pair_by_parts(s, &mut e1, &mut e2, &src, &w1, m[0], &w2, m[1]);
+                let rows = PairRows::new(s, (&w1, m[0]), (&w2, m[1]));
+                kernel::pair_by_parts(s, &mut e1, &mut e2, &src, &rows);
                 let bits = |v: &[T]| v.iter().map(|x| x.to_f64().to_bits()).collect::<Vec<_>>();
                 for level in CpuLevel::available() {
                     let k = Kernels::new(level);
                     let entry = if k.avx2() { entry } else { None };
                     for split in [false, true] {
                         let (mut a, mut b) = (vec![T::default(); len], vec![T::default(); len]);
-                        let (w1, w2) = (&w1[..], &w2[..]);
-                        combine_pair_at(k, entry, &mut a, &mut b, &src, w1, m[0], w2, m[1], split);
+                        let rows = PairRows {
+                            entry,
+                            ..PairRows::new(s, (&w1, m[0]), (&w2, m[1]))
+                        };
+                        let out = if split {
+                            PairOut::Split(&mut a, &mut b)
+                        } else {
+                            PairOut::Apart(&mut a, &mut b)
+                        };
+                        combine_pair(k, &rows, &src, out);
                         let (mut f1, mut f2) = (e1.clone(), e2.clone());
                         if split {
                             deinterleave(s, &e1, 1, &mut f1);
@@ -766,7 +764,11 @@ mod tests {
                 }
                 let mut merged = vec![T::default(); 2 * len];
                 let k = Kernels::detected();
-                if combine_pair_merged_at(k, entry, &mut merged, &src, &w1, m[0], &w2, m[1]) {
+                let rows = PairRows {
+                    entry,
+                    ..PairRows::new(s, (&w1, m[0]), (&w2, m[1]))
+                };
+                if combine_pair(k, &rows, &src, PairOut::Merged(&mut merged)) {
                     let want: Vec<T> = (0..2 * len)
                         .map(|i| if i % 2 == 0 { e1[i / 2] } else { e2[i / 2] })
                         .collect();

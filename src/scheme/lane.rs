@@ -2,7 +2,7 @@
 //! FIND-DETAILS repeated on the coarse part. The packed layout after `L` levels is
 //! `[C_L | D_L | D_{L−1} | … | D_1]`, coarsest first.
 
-use super::{max_levels, Boundary, Sample, Scheme, TwoScale};
+use super::{lane_levels, Boundary, Sample, Scheme, TwoScale};
 use crate::{Error, Result};
 
 /// Sizes of a lane's pyramid: `lengths[0]` is the fine length, `lengths[l]` the coarse
@@ -15,17 +15,17 @@ pub struct LanePyramid {
 }
 
 impl LanePyramid {
-    /// Plan `levels` levels for a lane of `m` elements; at most [`max_levels`].
+    /// Plan `levels` levels for a lane of `m` elements; at most [`lane_levels`].
     pub fn plan(scheme: Scheme, boundary: Boundary, m: usize, levels: usize) -> Result<Self> {
         if m == 0 {
             return Err(Error::parameter("lane length", 0, "at least 1"));
         }
-        let max = max_levels(scheme, boundary, m);
+        let max = lane_levels(scheme, boundary, m);
         if levels > max {
             return Err(Error::Parameter {
                 name: "levels",
                 value: levels.to_string(),
-                expected: "at most the levels the lane length allows (see max_levels)",
+                expected: "at most the levels the lane length allows (see lane_levels)",
             });
         }
         let mut lengths = vec![m];

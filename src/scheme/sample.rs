@@ -4,6 +4,15 @@
 
 use std::ops::{Add, AddAssign, Mul, Sub};
 
+/// Which vector build of the kernels serves a sample type.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Build {
+    F32,
+    F64,
+    /// The plain loops only.
+    Plain,
+}
+
 /// A floating-point sample type the kernels run on.
 pub trait Sample:
     Copy
@@ -23,9 +32,33 @@ pub trait Sample:
     /// `self · a + b` rounded once (IEEE 754 fusedMultiplyAdd: the FMA instruction
     /// where the build has it, a correctly rounded software routine otherwise).
     fn fused_mul_add(self, a: Self, b: Self) -> Self;
+
+    /// Which vector build of the kernels serves the type (chosen at compile time: each
+    /// kernel entry matches on it instead of comparing type ids).
+    const BUILD: Build = Build::Plain;
+
+    /// `p` as a pointer to `f32`: `Some` only for `f32` itself, so that the vector
+    /// builds view samples as their own type without a cast taken on trust.
+    #[inline(always)]
+    fn f32_ptr(p: *mut Self) -> Option<*mut f32> {
+        let _ = p;
+        None
+    }
+
+    /// `p` as a pointer to `f64`: `Some` only for `f64` itself.
+    #[inline(always)]
+    fn f64_ptr(p: *mut Self) -> Option<*mut f64> {
+        let _ = p;
+        None
+    }
 }
 
 impl Sample for f32 {
+    const BUILD: Build = Build::F32;
+    #[inline(always)]
+    fn f32_ptr(p: *mut Self) -> Option<*mut f32> {
+        Some(p)
+    }
     #[inline(always)]
     fn from_f64(v: f64) -> Self {
         v as f32
@@ -41,6 +74,11 @@ impl Sample for f32 {
 }
 
 impl Sample for f64 {
+    const BUILD: Build = Build::F64;
+    #[inline(always)]
+    fn f64_ptr(p: *mut Self) -> Option<*mut f64> {
+        Some(p)
+    }
     #[inline(always)]
     fn from_f64(v: f64) -> Self {
         v

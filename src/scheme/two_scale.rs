@@ -21,6 +21,15 @@
 //! lengths); a lane of length 1 is its own coarse part. Every length ≥ 1 therefore
 //! reconstructs exactly. [`max_levels`] counts the levels done with the scheme's own
 //! filters: a multilevel decomposition stops there.
+//!
+//! **Wide schemes on short lanes.** A lane too short for the ends of `linear-wide`,
+//! `chaikin-wide` or `cubic-wide` (neither native nor carried) takes the level of the
+//! narrow scheme of the same refinement (`linear`, `chaikin`, `cubic`): its own ends,
+//! its carry, or its Haar fallback ([`LevelKind::Narrow`], [`LevelKind::HaarFallback`]).
+//! So a lane of points takes every level down to one sample with a wide scheme
+//! ([`lane_levels`]); the lengths their own filters take build the same levels as
+//! without the fallback, and the axes of an array's pyramid still stop at
+//! [`max_levels`].
 
 use super::regular::{self, LevelTriplets};
 use super::sparse::{Csr, Triplets};
@@ -38,6 +47,9 @@ pub enum LevelKind {
     Carry,
     /// The lane was too short for the scheme: Haar (with carry for odd lengths).
     HaarFallback,
+    /// The lane was too short for a wide scheme's ends: the narrow scheme's level
+    /// ([`narrow_of`]), native or carried.
+    Narrow,
     /// `m = 1`: nothing to reduce.
     Identity,
 }
@@ -111,6 +123,18 @@ fn native(scheme: Scheme, boundary: Boundary, m: usize) -> Option<LevelTriplets>
     })
 }
 
+/// The narrow scheme whose level a wide scheme takes on a lane too short for its own
+/// ends: `linear` for `linear-wide`, `chaikin` for `chaikin-wide`, `cubic` for
+/// `cubic-wide` (the same refinement, shorter end blocks); `None` for the others.
+pub fn narrow_of(scheme: Scheme) -> Option<Scheme> {
+    match scheme {
+        Scheme::LinearWide => Some(Scheme::Linear),
+        Scheme::ChaikinWide => Some(Scheme::Chaikin),
+        Scheme::CubicWide => Some(Scheme::Cubic),
+        _ => None,
+    }
+}
+
 /// Whether the scheme's own filters reduce a lane of length `m` (natively or by carry).
 pub fn reducible(scheme: Scheme, boundary: Boundary, m: usize) -> bool {
     m >= 2
@@ -120,9 +144,20 @@ pub fn reducible(scheme: Scheme, boundary: Boundary, m: usize) -> bool {
 
 /// How many levels the scheme's own filters can take a lane of length `m` down.
 pub fn max_levels(scheme: Scheme, boundary: Boundary, m: usize) -> usize {
+    levels_down(scheme, boundary, m, |m| reducible(scheme, boundary, m))
+}
+
+/// The levels from a lane of `m` while `reduces` says its length is reduced (and the
+/// coarse length falls).
+fn levels_down(
+    scheme: Scheme,
+    boundary: Boundary,
+    m: usize,
+    reduces: impl Fn(usize) -> bool,
+) -> usize {
     let mut m = m;
     let mut levels = 0;
-    while reducible(scheme, boundary, m) {
+    while reduces(m) {
         let n = TwoScale::coarse_len(scheme, boundary, m);
         if n >= m {
             break;
@@ -131,6 +166,17 @@ pub fn max_levels(scheme: Scheme, boundary: Boundary, m: usize) -> usize {
         levels += 1;
     }
     levels
+}
+
+/// How many levels a lane of points of length `m` takes: for a wide scheme, every level
+/// down to one sample (its narrow scheme's levels where its own ends do not fit,
+/// [`narrow_of`]); for the others, [`max_levels`]. The axes of an array's pyramid stop
+/// at [`max_levels`] (the rule the file format's level lengths follow).
+pub fn lane_levels(scheme: Scheme, boundary: Boundary, m: usize) -> usize {
+    if narrow_of(scheme).is_none() {
+        return max_levels(scheme, boundary, m);
+    }
+    levels_down(scheme, boundary, m, |m| m >= 2)
 }
 
 /// Carry the last sample of a lane of `m` past a level built for `m − 1`.
@@ -162,6 +208,13 @@ impl TwoScale {
         } else if let Some(t) = native(scheme, boundary, m - 1) {
             let (n, an, sy) = carry(t, m);
             (LevelKind::Carry, n, an, sy)
+        } else if let Some(narrow) = narrow_of(scheme) {
+            let t = TwoScale::new(narrow, boundary, m);
+            let kind = match t.kind {
+                LevelKind::Native | LevelKind::Carry => LevelKind::Narrow,
+                other => other,
+            };
+            return TwoScale { kind, ..t };
         } else if m.is_multiple_of(2) {
             let t = haar::level(m);
             (LevelKind::HaarFallback, t.n, t.analysis, t.synthesis)
@@ -186,6 +239,8 @@ impl TwoScale {
             n
         } else if let Some(n) = native_len(scheme, boundary, m - 1) {
             n + 1
+        } else if let Some(narrow) = narrow_of(scheme) {
+            TwoScale::coarse_len(narrow, boundary, m)
         } else {
             m.div_ceil(2)
         }

@@ -700,6 +700,13 @@ struct Out<'a> {
     tris: &'a mut [u32],
 }
 
+/// The centre vertices of one slab, with normals if asked, numbered from `first`.
+struct Centres<'a> {
+    pos: &'a mut [[f64; 3]],
+    nrm: Option<&'a mut [[f64; 3]]>,
+    first: u32,
+}
+
 /// Pass 3 for plane `k`: its vertices (x, y, z crossings of each row, in index order), then the
 /// triangles of slab `k`. Only cells with a sign change are visited; their case selects
 /// precomputed triangles, or the general linking with the asymptotic decider.
@@ -715,7 +722,12 @@ fn emit_plane(g: &Grid, level: f64, bits: &Bits, k: usize, out: Out<'_>) {
     } = out;
     emit_vertices(g, level, bits, k, pos, nrm);
     if k + 1 < g.dims[2] {
-        emit_triangles(g, level, bits, k, extra_pos, extra_nrm, extra_first, tris);
+        let centres = Centres {
+            pos: extra_pos,
+            nrm: extra_nrm,
+            first: extra_first,
+        };
+        emit_triangles(g, level, bits, k, centres, tris);
     }
 }
 
@@ -767,17 +779,19 @@ fn emit_vertices(
 /// a case's precomputed triangles, or the general loops fanned from a vertex or from a
 /// centre vertex of their own (`extra_pos`, numbered from `extra_first`).
 #[inline(always)]
-#[allow(clippy::too_many_arguments)]
 fn emit_triangles(
     g: &Grid,
     level: f64,
     bits: &Bits,
     k: usize,
-    extra_pos: &mut [[f64; 3]],
-    mut extra_nrm: Option<&mut [[f64; 3]]>,
-    extra_first: u32,
+    centres: Centres<'_>,
     tris: &mut [u32],
 ) {
+    let Centres {
+        pos: extra_pos,
+        nrm: mut extra_nrm,
+        first: extra_first,
+    } = centres;
     let ny = g.dims[1];
     let table = case_table();
     let mut ranks = RowRanks::new(bits.w);

@@ -4,6 +4,31 @@
 use crate::kernel::{stream_copy_unfenced, Kernels};
 use crate::scheme::Sample;
 
+/// Samples laid out by nested `strides` (slowest axis first, in samples): a box of an
+/// array, or a compact copy of one.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Strided<'a, T> {
+    pub data: &'a [T],
+    pub strides: &'a [usize],
+}
+
+/// [`Strided`] for writing.
+#[derive(Debug)]
+pub(super) struct StridedMut<'a, T> {
+    pub data: &'a mut [T],
+    pub strides: &'a [usize],
+}
+
+/// `data` laid out by `strides`.
+pub(super) fn strided<'a, T>(data: &'a [T], strides: &'a [usize]) -> Strided<'a, T> {
+    Strided { data, strides }
+}
+
+/// `data` laid out by `strides`, for writing.
+pub(super) fn strided_mut<'a, T>(data: &'a mut [T], strides: &'a [usize]) -> StridedMut<'a, T> {
+    StridedMut { data, strides }
+}
+
 /// Lines of a box `bx` (axes `1..k`, the last of `e`-sample elements): calls
 /// `f(line offset in a, line offset in b, line index)` for every line.
 fn for_lines(
@@ -32,19 +57,25 @@ fn for_lines(
     }
 }
 
-/// Copy the box `bx` without the box `inner` from `a` (strides `a_st`) to `b` (strides
-/// `b_st`), with non-temporal stores (in the build of the table) when `stream` has one.
-#[allow(clippy::too_many_arguments)]
+/// Copy the box `bx` without the box `inner` from `a` to `b` (elements of `e` samples),
+/// with non-temporal stores (in the build of the table) when `stream` has one.
 pub(super) fn copy_box_outside<T: Sample>(
-    a: &[T],
-    a_st: &[usize],
-    b: &mut [T],
-    b_st: &[usize],
-    bx: &[usize],
-    inner: &[usize],
+    a: Strided<'_, T>,
+    b: StridedMut<'_, T>,
+    (bx, inner): (&[usize], &[usize]),
     e: usize,
     stream: Option<Kernels>,
 ) {
+    let (
+        Strided {
+            data: a,
+            strides: a_st,
+        },
+        StridedMut {
+            data: b,
+            strides: b_st,
+        },
+    ) = (a, b);
     let m = bx.len();
     let run = bx[m - 1] * e;
     let mut copy = |ao: usize, bo: usize, len: usize| {

@@ -30,11 +30,11 @@
 //! [`MAX_HALO`] of the work.
 
 use super::aligned::Aligned;
-use super::boxes::copy_box_outside;
+use super::boxes::{copy_box_outside, strided, strided_mut};
 use super::fused::{AxisOp, Ctx, STREAM_BYTES};
 use super::par::SharedMut;
 use super::ring::Ring;
-use crate::kernel::{combine_pair_taps, combine_taps, stream_fence, Kernels, PairMemo};
+use crate::kernel::{combine_pair_taps, combine_taps, stream_fence, Kernels, PairMemo, PairOut};
 use crate::scheme::sparse::Csr;
 use crate::scheme::Sample;
 use rayon::prelude::*;
@@ -884,7 +884,7 @@ impl<'p, 'a, T: Sample> Part<'p, 'a, T> {
                 let paired = with.is_some_and(|n| {
                     let (a, b) = (&mut st.scratch[0], &mut st.next_slab);
                     let (a, b) = (&mut a[..row_len], &mut b[..row_len]);
-                    step.combine_pair(&mut st.memo, split_ok, &n, a, b, 0..row_len, tap)
+                    step.combine_pair((&mut st.memo, split_ok), &n, [a, b], 0..row_len, tap)
                 });
                 if paired {
                     st.pending = Some(step.pos + 1);
@@ -928,12 +928,9 @@ impl<'p, 'a, T: Sample> Part<'p, 'a, T> {
             // the coarse box to the next level's ring
             local.finish_row(slab, &mut st.out, cs, rest);
             copy_box_outside(
-                &st.out,
-                &cs[1..],
-                slot,
-                &self.ctxs[l + 1].cs()[1..],
-                &next[1..],
-                whole(next.len() - 1),
+                strided(&st.out, &cs[1..]),
+                strided_mut(slot, &self.ctxs[l + 1].cs()[1..]),
+                (&next[1..], whole(next.len() - 1)),
                 plan.e,
                 None,
             );
@@ -942,12 +939,9 @@ impl<'p, 'a, T: Sample> Part<'p, 'a, T> {
         // the rest (details) to the array
         if let Some(out) = out_row {
             copy_box_outside(
-                whole,
-                &cs[1..],
-                out,
-                &strides[1..],
-                &plan.regions[l][1..],
-                &next[1..],
+                strided(whole, &cs[1..]),
+                strided_mut(out, &strides[1..]),
+                (&plan.regions[l][1..], &next[1..]),
                 plan.e,
                 ctx.stream.then_some(ctx.k),
             );
@@ -978,12 +972,9 @@ impl<'p, 'a, T: Sample> Part<'p, 'a, T> {
         let cs = &self.ctxs[l].cs()[1..];
         let slot = self.levels[l].ring.put(c);
         copy_box_outside(
-            from,
-            &self.strides[1..],
-            slot,
-            cs,
-            &plan.regions[l][1..],
-            whole(plan.regions[l].len() - 1),
+            strided(from, &self.strides[1..]),
+            strided_mut(slot, cs),
+            (&plan.regions[l][1..], whole(plan.regions[l].len() - 1)),
             plan.e,
             None,
         );
@@ -1061,10 +1052,11 @@ impl<'p, 'a, T: Sample> Part<'p, 'a, T> {
                 let memo = &mut st.memo;
                 let paired = with.is_some_and(|n| {
                     if plan.lines {
-                        (w1 == 0 || step.combine_pair(memo, false, &n, a, b, 0..w1, coarse))
-                            && step.combine_pair(memo, false, &n, a, b, w1..row_len, array)
+                        let slabs = [&mut a[..], &mut b[..]];
+                        (w1 == 0 || step.combine_pair((memo, false), &n, slabs, 0..w1, coarse))
+                            && step.combine_pair((memo, false), &n, [a, b], w1..row_len, array)
                     } else {
-                        step.combine_pair(memo, false, &n, a, b, 0..row_len, held)
+                        step.combine_pair((memo, false), &n, [a, b], 0..row_len, held)
                     }
                 });
                 if paired {
@@ -1103,12 +1095,9 @@ impl<'p, 'a, T: Sample> Part<'p, 'a, T> {
         }
         local.finish_row(slab, slot, fcs, rest);
         copy_box_outside(
-            &src[r * s0..],
-            &strides[1..],
-            slot,
-            &fcs[1..],
-            &plan.regions[l - 1][1..],
-            &plan.regions[l][1..],
+            strided(&src[r * s0..], &strides[1..]),
+            strided_mut(slot, &fcs[1..]),
+            (&plan.regions[l - 1][1..], &plan.regions[l][1..]),
             plan.e,
             None,
         );
@@ -1153,19 +1142,21 @@ impl Step<'_> {
     /// This row into `slab` and `other` into `slab2` over samples `range`, the inputs the
     /// two rows share read once ([`combine_pair_taps`]; `split`: each written as its
     /// even samples, then its odd ones); `false` (nothing written) when they do not pair.
-    #[allow(clippy::too_many_arguments)]
     fn combine_pair<'t, T: Sample + 't>(
         &self,
-        memo: &mut PairMemo<T>,
-        split: bool,
+        (memo, split): (&mut PairMemo<T>, bool),
         other: &Step,
-        slab: &mut [T],
-        slab2: &mut [T],
+        [slab, slab2]: [&mut [T]; 2],
         range: std::ops::Range<usize>,
         tap: impl Fn(u32) -> &'t [T],
     ) -> bool {
         let (a, b) = (&mut slab[range.clone()], &mut slab2[range.clone()]);
-        combine_pair_taps(self.k, memo, split, a, b, self.taps, other.taps, |c| {
+        let out = if split {
+            PairOut::Split(a, b)
+        } else {
+            PairOut::Apart(a, b)
+        };
+        combine_pair_taps(self.k, memo, [self.taps, other.taps], out, |c| {
             &tap(c)[range.clone()]
         })
     }

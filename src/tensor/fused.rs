@@ -13,11 +13,12 @@
 //! form the elements (`e` samples, e.g. the channels of an image).
 
 use super::aligned::Aligned;
+use super::boxes::{strided, strided_mut, Strided, StridedMut};
 use super::par::{for_each_part, SharedMut};
 use crate::kernel::polyphase::{Polyphase, PAIR_MOST};
 use crate::kernel::{
     self, combine_pair_taps, combine_taps, stream_copy, stream_copy_unfenced, stream_fence,
-    transpose, Kernels, LaneTaps, PairMemo,
+    transpose, GridUnit, Kernels, LaneTaps, PairGrid, PairMemo, PairOut, PairOutput,
 };
 use crate::scheme::sparse::Csr;
 use crate::scheme::Sample;
@@ -66,22 +67,30 @@ pub fn fused_level<T: Sample>(
     ops: &[AxisOp],
     writes: Writes,
 ) {
-    fused_level_strided(src, strides, dst, strides, region, e, ops, writes)
+    let (src, dst) = (strided(src, strides), strided_mut(dst, strides));
+    fused_level_strided(src, dst, region, e, ops, writes)
 }
 
-/// [`fused_level`] with the source and the destination laid out differently: `src_st`
-/// and `dst_st` their strides (both nested, the last equal to `e`).
-#[allow(clippy::too_many_arguments)]
-pub fn fused_level_strided<T: Sample>(
-    src: &[T],
-    src_st: &[usize],
-    dst: &mut [T],
-    dst_st: &[usize],
+/// [`fused_level`] with the source and the destination laid out differently (their
+/// strides both nested, the last equal to `e`).
+pub(super) fn fused_level_strided<T: Sample>(
+    src: Strided<'_, T>,
+    dst: StridedMut<'_, T>,
     region: &[usize],
     e: usize,
     ops: &[AxisOp],
     writes: Writes,
 ) {
+    let (
+        Strided {
+            data: src,
+            strides: src_st,
+        },
+        StridedMut {
+            data: dst,
+            strides: dst_st,
+        },
+    ) = (src, dst);
     let k = ops.len();
     assert!(k >= 1 && region.len() == k && src_st.len() == k && dst_st.len() == k);
     for st in [src_st, dst_st] {
@@ -128,12 +137,14 @@ pub fn fused_level_strided<T: Sample>(
         while i < rows.len() {
             if let [r1, r2, ..] = rows[i..] {
                 let outs = [out_row(r1), out_row(r2)];
-                if ctx.row_pair([r1, r2], src, src_st, outs, dst_st, scratch, slab2) {
+                let from = strided(src, src_st);
+                if ctx.row_pair([r1, r2], from, outs, dst_st, scratch, slab2) {
                     i += 2;
                     continue;
                 }
             }
-            ctx.row(0, rows[i], src, src_st, out_row(rows[i]), dst_st, scratch);
+            let (from, to) = (strided(src, src_st), strided_mut(out_row(rows[i]), dst_st));
+            ctx.row(0, rows[i], from, to, scratch);
             i += 1;
         }
         if ctx.stream {
@@ -293,19 +304,26 @@ impl<'a> Ctx<'a> {
         }
     }
 
-    /// Output row `r` along axis `d`: `out` starts at that row's slab in the destination
-    /// (`dst_st` its strides), `src` at the input's origin for axes `d..` (`src_st`).
-    #[allow(clippy::too_many_arguments)]
+    /// Output row `r` along axis `d`: `out` starts at that row's slab in the destination,
+    /// `src` at the input's origin for axes `d..`.
     fn row<T: Sample>(
         &self,
         d: usize,
         r: usize,
-        src: &[T],
-        src_st: &[usize],
-        out: &mut [T],
-        dst_st: &[usize],
+        src: Strided<'_, T>,
+        out: StridedMut<'_, T>,
         scratch: &mut [Aligned<T>],
     ) {
+        let (
+            Strided {
+                data: src,
+                strides: src_st,
+            },
+            StridedMut {
+                data: out,
+                strides: dst_st,
+            },
+        ) = (src, out);
         let k = self.ops.len();
         let e = self.e;
         if d == k - 1 {
@@ -353,17 +371,19 @@ impl<'a> Ctx<'a> {
     /// slabs combined together ([`combine_pair_taps`]: the input slabs the two rows share
     /// are read once; the second slab goes to `slab2`). `false` (nothing written) when
     /// the two rows do not pair.
-    #[allow(clippy::too_many_arguments)]
     pub(super) fn row_pair<T: Sample>(
         &self,
         r: [usize; 2],
-        src: &[T],
-        src_st: &[usize],
+        src: Strided<'_, T>,
         outs: [&mut [T]; 2],
         dst_st: &[usize],
         scratch: &mut [Aligned<T>],
         slab2: &mut [T],
     ) -> bool {
+        let Strided {
+            data: src,
+            strides: src_st,
+        } = src;
         let k = self.ops.len();
         if k < 2 {
             return false;
@@ -389,7 +409,7 @@ impl<'a> Ctx<'a> {
             let at = |c: u32| c as usize * src_st[0] + so;
             let (a, b) = (&mut slab[co..co + run], &mut slab2[co..co + run]);
             let tap = |c| &src[at(c)..at(c) + run];
-            if !combine_pair_taps(self.k, &mut memo, false, a, b, rows[0], rows[1], tap) {
+            if !combine_pair_taps(self.k, &mut memo, rows, PairOut::Apart(a, b), tap) {
                 debug_assert_eq!(line, 0, "the same rows pair on every line");
                 return false;
             }
@@ -443,7 +463,13 @@ impl<'a> Ctx<'a> {
         for &r in self.ops[d].order {
             let at = r * dst_st[d];
             let o = &mut out[at..];
-            self.row(d, r, slab, &self.cs, o, dst_st, scratch);
+            self.row(
+                d,
+                r,
+                strided(slab, &self.cs),
+                strided_mut(o, dst_st),
+                scratch,
+            );
         }
     }
 
@@ -512,7 +538,7 @@ impl<'a> Ctx<'a> {
 
     /// Whether [`Ctx::plane_lanes`] runs the last axis (after axis `d`) on lanes split
     /// into their even and odd samples: then axis `d` writes its rows split
-    /// ([`kernel::combine_pair_rows_split`]), which saves the split's pass over the plane.
+    /// ([`kernel::combine_pair_grid`]), which saves the split's pass over the plane.
     fn lanes_split(&self, d: usize) -> bool {
         self.ops[d + 1].plan.col_step == 2 && self.by_lanes(d)
     }
@@ -555,7 +581,10 @@ impl<'a> Ctx<'a> {
         }
         let split = a.plan.col_step == 2;
         let taps = self.lane_taps.as_ref().expect("made for planes by lanes");
-        let lanes = |x: &[T], y: &mut [T], ys: usize| lanes(a, taps, x, split, h, w, y, ys);
+        let lanes = |x: &[T], y: &mut [T], ys: usize| {
+            let x = Lanes { x, h, w, split };
+            lanes(a, taps, x, y, ys)
+        };
         if split && !presplit {
             for (x, y) in pa.chunks_exact(w).zip(pb.chunks_exact_mut(w)) {
                 kernel::deinterleave(self.k, x, 1, y);
@@ -610,21 +639,20 @@ fn stream_rows<T: Sample>(k: Kernels, src: &[T], w: usize, h: usize, dst: &mut [
 /// (`examples/pyramid_timing`).
 const LANES_MOST_UNPAIRED: usize = 20;
 
-/// The operator of `a` on the `h` lanes of `w` samples of `x` (lane `t` at `x[t·w..]`),
-/// into `y` (lane `t` at `y[t·ys..]`): the rows of its pair with
-/// [`kernel::combine_pair_lanes`], the others sample by sample. `split`: each lane of `x`
-/// holds its even samples, then its odd ones ([`kernel::deinterleave`]).
-#[allow(clippy::too_many_arguments)]
-fn lanes<T: Sample>(
-    a: &AxisOp,
-    taps: &LaneTaps,
-    x: &[T],
-    split: bool,
+/// `h` lanes of `w` samples, lane `t` at `x[t·w..]`; `split`: each lane holds its even
+/// samples, then its odd ones ([`kernel::deinterleave`]).
+#[derive(Clone, Copy)]
+struct Lanes<'a, T> {
+    x: &'a [T],
     h: usize,
     w: usize,
-    y: &mut [T],
-    ys: usize,
-) {
+    split: bool,
+}
+
+/// The operator of `a` on the lanes `x` into `y` (lane `t` at `y[t·ys..]`): the rows of
+/// its pair with [`kernel::combine_pair_grid`], the others sample by sample.
+fn lanes<T: Sample>(a: &AxisOp, taps: &LaneTaps, x: Lanes<'_, T>, y: &mut [T], ys: usize) {
+    let Lanes { x, h, w, split } = x;
     let plan = a.plan;
     let at = |c: usize| lane_at(split, w, c);
     if let Some(pair) = &plan.pair {
@@ -636,35 +664,26 @@ fn lanes<T: Sample>(
             *o = at(c);
         }
         let [w0, w1] = pair.sample_weights::<T>();
-        let [m0, m1] = pair.masks;
         // analysis: the coarse and the detail rows; synthesis: the even and the odd fine
         // samples, interleaved (as `Polyphase::apply_lane` places them)
-        let (out, merge) = if split {
-            ([r0.row0 + f[0], r1.row0 + f[1]], false)
+        let (out, output) = if split {
+            ([r0.row0 + f[0], r1.row0 + f[1]], PairOutput::Apart)
         } else {
             let p0 = r0.row0 / 2 + f[0];
-            ([2 * p0, 2 * p0], true)
+            ([2 * p0, 2 * p0], PairOutput::Merged)
         };
-        let entry = if plan.kernels.avx2() {
-            pair.entry::<T>()
-        } else {
-            None
-        };
-        kernel::combine_pair_lanes_at(
-            plan.kernels,
-            entry,
-            x,
-            &off[..u],
-            w,
-            (&w0[..u], m0),
-            (&w1[..u], m1),
-            y,
+        let grid = PairGrid {
+            off: &off[..u],
+            in_step: w,
             out,
-            ys,
-            n,
-            h,
-            merge,
-        );
+            out_step: [ys, ys],
+            len: n,
+            count: h,
+            unit: GridUnit::Samples,
+            output,
+        };
+        let rows = pair.rows(plan.kernels, &w0[..u], &w1[..u]);
+        kernel::combine_pair_grid(plan.kernels, &rows, x, y, &grid);
     }
     // the other rows (near the ends of the lanes)
     kernel::combine_lane_taps_with(plan.kernels, taps, x, h, y, ys);
@@ -719,7 +738,7 @@ fn plane_path(k: usize, region: &[usize], e: usize) -> bool {
 }
 
 /// `dst[r] = Σ_c W_rc · src[c]` for every row `r` of `a.op`, rows of `len` samples: the
-/// rows of the operator's pair ([`crate::kernel::polyphase::Pair`]) two at a time ([`kernel::combine_pair_rows`]: the input
+/// rows of the operator's pair ([`crate::kernel::polyphase::Pair`]) two at a time ([`kernel::combine_pair_grid`]: the input
 /// rows they share read once), the others one by one ([`kernel::combine_rows`]).
 ///
 /// With `split` (a lane's room), every output row is written split into its even
@@ -750,24 +769,23 @@ fn combine_rows<T: Sample>(
     let steps = [runs[0].row_step, runs[1].row_step];
     let u = pair.cols.len();
     let w = pair.sample_weights::<T>();
-    let [m0, m1] = pair.masks;
     // (the pair's entry of the pair kernels, looked up when the plan was made)
-    let entry = if k.avx2() { pair.entry::<T>() } else { None };
-    kernel::pair_rows(
-        k,
-        entry,
-        src,
+    let rows = pair.rows(k, &w[0][..u], &w[1][..u]);
+    let grid = PairGrid {
+        off: &pair.cols,
+        in_step: runs[0].col_step,
+        out: first,
+        out_step: steps,
         len,
-        &pair.cols,
-        runs[0].col_step,
-        (&w[0][..u], m0),
-        (&w[1][..u], m1),
-        dst,
-        first,
-        steps,
-        pair.count,
-        split.is_some(),
-    );
+        count: pair.count,
+        unit: GridUnit::Rows,
+        output: if split.is_some() {
+            PairOutput::Split
+        } else {
+            PairOutput::Apart
+        },
+    };
+    kernel::combine_pair_grid(k, &rows, src, dst, &grid);
     match split {
         Some(row) => {
             for r in &plan.unpaired {

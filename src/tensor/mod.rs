@@ -22,6 +22,6 @@ pub use pyramid::{
     analyze, analyze_in, analyze_with, synthesize, synthesize_in, synthesize_with, Engine, Order,
     Pyramid, PyramidSpec, Subband,
 };
-pub use resample::{map_lanes, resample_axis, resample_axis_with};
+pub use resample::{map_lanes, resample_axis, resample_axis_in, resample_axis_with};
 pub use transform::{transform_axis, transform_axis_with};
 pub use workspace::Planner;

@@ -10,6 +10,8 @@
 //! worker, never per lane.
 
 use super::par::{for_each_task, SharedMut};
+use super::workspace::Planner;
+use crate::kernel::Kernels;
 use crate::scheme::sparse::Csr;
 use crate::scheme::Sample;
 
@@ -41,8 +43,24 @@ pub fn resample_axis<T: Sample, U: Copy + Send + Sync>(
 }
 
 /// [`resample_axis`] with every result `x` put into its destination sample `d` by
-/// `put(d, x)` (e.g. `*d += x` to add the resampled lane to what `dst` holds).
+/// `put(d, x)` (e.g. `*d += x` to add the resampled lane to what `dst` holds), in the
+/// kernels of the shared planner ([`Planner::shared`]).
 pub fn resample_axis_with<T: Sample, U: Copy + Send + Sync>(
+    src: &[T],
+    shape: &[usize],
+    axis: usize,
+    op: &Csr,
+    dst: &mut [U],
+    put: impl Fn(&mut U, T) + Sync + Send,
+) {
+    let k = Planner::shared().kernels();
+    resample_axis_in(k, src, shape, axis, op, dst, put)
+}
+
+/// [`resample_axis_with`] in the kernel table `k` (a planner's,
+/// [`Planner::kernels`]).
+pub fn resample_axis_in<T: Sample, U: Copy + Send + Sync>(
+    k: Kernels,
     src: &[T],
     shape: &[usize],
     axis: usize,
@@ -57,8 +75,6 @@ pub fn resample_axis_with<T: Sample, U: Copy + Send + Sync>(
     assert_eq!(op.cols(), n);
     assert_eq!(dst.len(), outer * m * inner);
     let out = SharedMut(dst.as_mut_ptr());
-    // the plan of this call: the kernels of the level `tuning` allows
-    let k = crate::kernel::Kernels::detected();
     if inner >= ROW_MIN {
         let strips = inner.div_ceil(STRIP);
         let sw_max = inner.div_ceil(strips);

@@ -11,6 +11,7 @@
 
 use super::array::strides;
 use super::par::{for_each_task, SharedMut};
+use super::workspace::Planner;
 use crate::kernel::Kernels;
 use crate::scheme::sparse::Csr;
 use crate::scheme::Sample;
@@ -44,8 +45,8 @@ fn lane_bases(shape: &[usize], region: &[usize], skip: usize, skip_last: bool) -
 }
 
 /// Apply `op` (`region[axis]` × `region[axis]`, an analysis `[A;B]` or synthesis `[P|Q]`
-/// level) to every lane along `axis` inside `region`, with the kernels of
-/// [`Kernels::detected`].
+/// level) to every lane along `axis` inside `region`, with the kernels of the shared
+/// planner ([`Planner::shared`]).
 pub fn transform_axis<T: Sample>(
     data: &mut [T],
     shape: &[usize],
@@ -53,7 +54,7 @@ pub fn transform_axis<T: Sample>(
     axis: usize,
     op: &Csr,
 ) {
-    transform_axis_with(Kernels::detected(), data, shape, region, axis, op)
+    transform_axis_with(Planner::shared().kernels(), data, shape, region, axis, op)
 }
 
 /// [`transform_axis`] with the kernel table `k` (a plan's).

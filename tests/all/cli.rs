@@ -85,6 +85,49 @@ fn analyze_then_synthesize_returns_the_points_for_every_scheme_and_boundary() {
     }
 }
 
+/// The wide schemes take the short lanes they once refused ("16 points allow at most 0"):
+/// 16 points at one level with interpolating ends, cubic-wide's 31 points at three and 16
+/// periodic, each analysed and synthesized back.
+#[test]
+fn wide_schemes_analyze_short_point_lists() {
+    for (scheme, boundary, n, levels) in [
+        ("linear-wide", "interpolating", 16, "1"),
+        ("chaikin-wide", "interpolating", 16, "1"),
+        ("cubic-wide", "interpolating", 16, "1"),
+        ("cubic-wide", "interpolating", 31, "3"),
+        ("cubic-wide", "periodic", 16, "1"),
+    ] {
+        let pts: String = (0..n)
+            .map(|i| format!("{},{}\n", (i as f64 * 0.4).sin(), i as f64 * 0.25))
+            .collect();
+        let args = ["--scheme", scheme, "--boundary", boundary];
+        let a = mra(
+            &[&["analyze"], &args[..], &["--levels", levels, "-"]].concat(),
+            &pts,
+        );
+        assert!(
+            a.status.success(),
+            "{scheme} {boundary} {n}: {}",
+            text(&a.stderr)
+        );
+        let s = mra(
+            &[&["synthesize"], &args[..], &["-"]].concat(),
+            &text(&a.stdout),
+        );
+        assert!(
+            s.status.success(),
+            "{scheme} {boundary} {n}: {}",
+            text(&s.stderr)
+        );
+        let want = mra::points::parse(&pts).unwrap();
+        let got = mra::points::parse(&text(&s.stdout)).unwrap();
+        assert_eq!(got.data.len(), want.data.len());
+        for (x, y) in want.data.iter().zip(&got.data) {
+            assert!((x - y).abs() < 1e-12, "{scheme} {boundary} {n}: {x} vs {y}");
+        }
+    }
+}
+
 #[test]
 fn synthesize_with_the_wrong_scheme_is_an_error() {
     let pts: String = (0..20).map(|i| format!("{i}\n")).collect();

@@ -2,7 +2,8 @@
 //! length, the filter rows as written in the notes, worked examples.
 
 use mra::scheme::{
-    analyze_lane, max_levels, synthesize_lane, Boundary, LevelKind, Scheme, TwoScale,
+    analyze_lane, lane_levels, max_levels, narrow_of, synthesize_lane, Boundary, LevelKind, Scheme,
+    TwoScale,
 };
 use proptest::prelude::*;
 
@@ -99,11 +100,11 @@ fn lcg(seed: u64, n: usize) -> Vec<f64> {
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(400))]
     #[test]
-    fn every_lane_reconstructs(len in 1usize..=300, dim in 1usize..=3, s in 0usize..3, b in 0usize..3, seed in any::<u64>(), lv in 0usize..8) {
+    fn every_lane_reconstructs(len in 1usize..=300, dim in 1usize..=3, s in 0usize..Scheme::ALL.len(), b in 0usize..3, seed in any::<u64>(), lv in 0usize..8) {
         let scheme = Scheme::ALL[s];
         let boundary = Boundary::ALL[b];
         let data = lcg(seed, len * dim);
-        let levels = lv.min(max_levels(scheme, boundary, len));
+        let levels = lv.min(lane_levels(scheme, boundary, len));
         let (packed, plan) = analyze_lane(&data, dim, scheme, boundary, levels).unwrap();
         let back = synthesize_lane(&packed, dim, &plan).unwrap();
         let scale = data.iter().fold(1.0f64, |a, &x| a.max(x.abs()));
@@ -320,6 +321,84 @@ fn max_levels_follow_the_coarse_lengths() {
     assert_eq!(max_levels(Scheme::Cubic, Boundary::Periodic, 4096), 10); // 4096 → … → 8 → 4
 }
 
+/// The wide schemes take every lane of points of 1 ..= 64 samples in every boundary mode,
+/// at every level down to one sample, and reconstruct it: where their own ends do not fit,
+/// a level is the narrow scheme's (the same operators), and where they fit it is their
+/// own (native or carried, as before the fallback). The lanes the issue found refused (16
+/// points at one level with interpolating ends, cubic-wide's 31 at three and 16 periodic)
+/// are taken.
+#[test]
+fn wide_schemes_take_every_length_and_reconstruct() {
+    use Boundary::*;
+    for scheme in [Scheme::LinearWide, Scheme::ChaikinWide, Scheme::CubicWide] {
+        let narrow = narrow_of(scheme).expect("a wide scheme has a narrow one");
+        for boundary in Boundary::ALL {
+            for m in 1..=64usize {
+                let most = lane_levels(scheme, boundary, m);
+                assert!(
+                    most >= max_levels(scheme, boundary, m),
+                    "{scheme} {boundary} {m}"
+                );
+                let mut n = m;
+                for _ in 0..most {
+                    n = TwoScale::coarse_len(scheme, boundary, n);
+                }
+                assert_eq!(n, 1, "{scheme} {boundary} m={m}: {most} levels end at {n}");
+                for levels in 0..=most {
+                    for dim in [1usize, 2] {
+                        let data = lcg((m * 131 + levels * 7 + dim) as u64, m * dim);
+                        let (packed, plan) =
+                            analyze_lane(&data, dim, scheme, boundary, levels).unwrap();
+                        let back = synthesize_lane(&packed, dim, &plan).unwrap();
+                        let scale = data.iter().fold(1.0f64, |a, &x| a.max(x.abs()));
+                        for (i, (x, y)) in data.iter().zip(&back).enumerate() {
+                            assert!(
+                                (x - y).abs() <= 1e-12 * scale,
+                                "{scheme} {boundary} m={m} levels {levels} dim {dim} at {i}: {x} vs {y}"
+                            );
+                        }
+                    }
+                }
+                assert!(
+                    analyze_lane(&vec![0.0; m], 1, scheme, boundary, most + 1).is_err(),
+                    "{scheme} {boundary} m={m}: a level past one sample"
+                );
+                let t = TwoScale::new(scheme, boundary, m);
+                if max_levels(scheme, boundary, m) >= 1 {
+                    // its own filters, as without the fallback
+                    assert!(
+                        matches!(t.kind, LevelKind::Native | LevelKind::Carry),
+                        "{scheme} {boundary} m={m}: {:?}",
+                        t.kind
+                    );
+                } else if m >= 2 {
+                    let u = TwoScale::new(narrow, boundary, m);
+                    assert!(matches!(
+                        t.kind,
+                        LevelKind::Narrow | LevelKind::HaarFallback
+                    ));
+                    assert_eq!(t.coarse, u.coarse, "{scheme} {boundary} m={m}");
+                    assert_eq!(t.analysis.to_dense(), u.analysis.to_dense());
+                    assert_eq!(t.synthesis.to_dense(), u.synthesis.to_dense());
+                }
+            }
+        }
+    }
+    for (scheme, boundary, m, levels) in [
+        (Scheme::LinearWide, Interpolating, 16, 1),
+        (Scheme::ChaikinWide, Interpolating, 16, 1),
+        (Scheme::CubicWide, Interpolating, 16, 1),
+        (Scheme::CubicWide, Interpolating, 31, 3),
+        (Scheme::CubicWide, Periodic, 16, 1),
+    ] {
+        assert!(
+            lane_levels(scheme, boundary, m) >= levels,
+            "{scheme} {boundary} {m}"
+        );
+        assert!(analyze_lane(&lcg(3, m), 1, scheme, boundary, levels).is_ok());
+    }
+}
+
 #[test]
 fn every_cpu_level_of_the_kernel_gives_the_same_bits() {
     // the scalar build is checked below in any case; the others where the CPU has them
@@ -532,7 +611,7 @@ fn pair_case<T: mra::scheme::Sample>(x: &[T], u: usize, len: usize) -> (Vec<&[T]
 fn combine_pair_gives_the_bits_of_two_combines() {
     // the scalar build is checked below in any case; the others where the CPU has them
     common::vector_builds();
-    use mra::kernel::{combine, combine_pair};
+    use mra::kernel::{combine, combine_pair, PairOut, PairRows};
     // `units`: the taps of weight +1 and −1 of each output (P1, N1, P2, N2), which the
     // kernels add or subtract instead of multiplying
     fn check<T: mra::scheme::Sample + Into<f64>>(
@@ -556,7 +635,12 @@ fn combine_pair_gives_the_bits_of_two_combines() {
         }
         for simd in CpuLevel::available() {
             let (mut a1, mut a2) = (vec![T::default(); len], vec![T::default(); len]);
-            combine_pair(Kernels::new(simd), &mut a1, &mut a2, &src, &w1, m1, &w2, m2);
+            combine_pair(
+                Kernels::new(simd),
+                &PairRows::new(Kernels::new(simd), (&w1[..], m1), (&w2[..], m2)),
+                &src,
+                PairOut::Apart(&mut a1, &mut a2),
+            );
             for (m, w, a) in [(m1, &w1, &a1), (m2, &w2, &a2)] {
                 let ks: Vec<usize> = (0..u).filter(|&k| m >> k & 1 == 1).collect();
                 let s: Vec<&[T]> = ks.iter().map(|&k| src[k]).collect();
@@ -616,20 +700,30 @@ fn combine_pair_gives_the_bits_of_two_combines() {
     }
 }
 
-/// `combine_pair_merged` (the two outputs interleaved, as synthesis writes even and odd
+/// `combine_pair` merged (the two outputs interleaved, as synthesis writes even and odd
 /// samples) gives the bits of `combine_pair` where it has a build, and writes nothing
 /// where it has none.
 #[test]
 fn combine_pair_merged_interleaves_the_bits_of_combine_pair() {
-    use mra::kernel::{combine_pair, combine_pair_merged};
+    use mra::kernel::{combine_pair, PairOut, PairRows};
     fn check<T: mra::scheme::Sample + Into<f64>>(x: &[T], u: usize, m1: u32, m2: u32, len: usize) {
         let (src, w1, w2) = pair_case(x, u, len);
         let (mut a, mut b) = (vec![T::default(); len], vec![T::default(); len]);
-        combine_pair(Kernels::scalar(), &mut a, &mut b, &src, &w1, m1, &w2, m2);
+        combine_pair(
+            Kernels::scalar(),
+            &PairRows::new(Kernels::scalar(), (&w1[..], m1), (&w2[..], m2)),
+            &src,
+            PairOut::Apart(&mut a, &mut b),
+        );
         for k in tables() {
             let sentinel = T::from_f64(12345.0);
             let mut out = vec![sentinel; 2 * len];
-            if combine_pair_merged(k, &mut out, &src, &w1, m1, &w2, m2) {
+            if combine_pair(
+                k,
+                &PairRows::new(k, (&w1[..], m1), (&w2[..], m2)),
+                &src,
+                PairOut::Merged(&mut out),
+            ) {
                 for i in 0..len {
                     let (p, q): (f64, f64) = (out[2 * i].into(), out[2 * i + 1].into());
                     let (r, t): (f64, f64) = (a[i].into(), b[i].into());
@@ -659,13 +753,15 @@ fn combine_pair_merged_interleaves_the_bits_of_combine_pair() {
     }
 }
 
-/// `combine_pair_rows` (pairs of rows of `len` samples, stepping through an operator)
+/// `combine_pair_grid` over rows (pairs of rows of `len` samples, stepping through an operator)
 /// gives the bits of `combine_pair` pair by pair: analysis-like steps (rows side by side)
 /// and synthesis-like ones (even and odd rows), f32, a pattern with and one without an
 /// AVX2 build.
 #[test]
 fn combine_pair_rows_gives_the_bits_of_combine_pair() {
-    use mra::kernel::{combine_pair, combine_pair_rows};
+    use mra::kernel::{
+        combine_pair, combine_pair_grid, GridUnit, PairGrid, PairOut, PairOutput, PairRows,
+    };
     for (u, m1, m2) in [(7usize, 0b1111111u32, 0b1111100u32), (3, 0b011, 0b110)] {
         for (len, count, in_step, rows, steps) in [
             (5usize, 9usize, 2usize, [0usize, 9usize], [1usize, 1usize]),
@@ -683,26 +779,30 @@ fn combine_pair_rows_gives_the_bits_of_combine_pair() {
             let n_out = (0..2).map(|j| rows[j] + steps[j] * count).max().unwrap();
             for k in tables() {
                 let mut got = vec![0f32; n_out * len];
-                combine_pair_rows(
-                    k,
-                    &src,
-                    len,
-                    &cols,
+                let grid = PairGrid {
+                    off: &cols,
                     in_step,
-                    (&w1, m1),
-                    (&w2, m2),
-                    &mut got,
-                    rows,
-                    steps,
+                    out: rows,
+                    out_step: steps,
+                    len,
                     count,
-                );
+                    unit: GridUnit::Rows,
+                    output: PairOutput::Apart,
+                };
+                let pair = PairRows::new(k, (&w1[..], m1), (&w2[..], m2));
+                combine_pair_grid(k, &pair, &src, &mut got, &grid);
                 for t in 0..count {
                     let inputs: Vec<&[f32]> = cols
                         .iter()
                         .map(|&c| &src[(c + in_step * t) * len..][..len])
                         .collect();
                     let (mut a, mut b) = (vec![0f32; len], vec![0f32; len]);
-                    combine_pair(Kernels::scalar(), &mut a, &mut b, &inputs, &w1, m1, &w2, m2);
+                    combine_pair(
+                        Kernels::scalar(),
+                        &PairRows::new(Kernels::scalar(), (&w1[..], m1), (&w2[..], m2)),
+                        &inputs,
+                        PairOut::Apart(&mut a, &mut b),
+                    );
                     for (j, want) in [(0, &a), (1, &b)] {
                         let r = rows[j] + steps[j] * t;
                         let row = &got[r * len..][..len];
@@ -767,12 +867,14 @@ fn f32_combine_and_transpose_match_plain_loops() {
     }
 }
 
-/// `combine_pair_lanes` gives, lane by lane, the bits of `combine_pair` (and, merged, of
+/// `combine_pair_grid` over lanes gives, lane by lane, the bits of `combine_pair` (and, merged, of
 /// its two outputs interleaved): the regular patterns and one without a vector build,
 /// lengths around the vector widths, lanes a stride apart, f32 and f64.
 #[test]
 fn combine_pair_lanes_gives_the_bits_of_combine_pair_per_lane() {
-    use mra::kernel::{combine_pair, combine_pair_lanes};
+    use mra::kernel::{
+        combine_pair, combine_pair_grid, GridUnit, PairGrid, PairOut, PairOutput, PairRows,
+    };
     fn check<T: mra::scheme::Sample + Into<f64>>(x: &[T]) {
         // (inputs, mask 1, mask 2): patterns with a build, and one without
         for (u, m1, m2) in [
@@ -791,25 +893,32 @@ fn combine_pair_lanes_gives_the_bits_of_combine_pair_per_lane() {
                 {
                     let out = if merge { [4, 4] } else { [len + 6, 2] };
                     let mut got = vec![T::default(); stride * count];
-                    combine_pair_lanes(
-                        k,
-                        x,
-                        &off,
-                        stride,
-                        (&w1[..], m1),
-                        (&w2[..], m2),
-                        &mut got,
+                    let grid = PairGrid {
+                        off: &off,
+                        in_step: stride,
                         out,
-                        stride,
+                        out_step: [stride, stride],
                         len,
                         count,
-                        merge,
-                    );
+                        unit: GridUnit::Samples,
+                        output: if merge {
+                            PairOutput::Merged
+                        } else {
+                            PairOutput::Apart
+                        },
+                    };
+                    let pair = PairRows::new(k, (&w1[..], m1), (&w2[..], m2));
+                    combine_pair_grid(k, &pair, x, &mut got, &grid);
                     for t in 0..count {
                         let src: Vec<&[T]> =
                             off.iter().map(|&o| &x[o + stride * t..][..len]).collect();
                         let (mut a, mut b) = (vec![T::default(); len], vec![T::default(); len]);
-                        combine_pair(Kernels::scalar(), &mut a, &mut b, &src, &w1, m1, &w2, m2);
+                        combine_pair(
+                            Kernels::scalar(),
+                            &PairRows::new(Kernels::scalar(), (&w1[..], m1), (&w2[..], m2)),
+                            &src,
+                            PairOut::Apart(&mut a, &mut b),
+                        );
                         let row = &got[stride * t..];
                         for i in 0..len {
                             let (ga, gb): (f64, f64) = if merge {
@@ -840,12 +949,12 @@ fn combine_pair_lanes_gives_the_bits_of_combine_pair_per_lane() {
     check(&x32);
 }
 
-/// `combine_pair_rows_split` gives the bits of `combine_pair_rows` with every output row
+/// `combine_pair_grid` into split rows gives the bits of apart rows with every output row
 /// then split by `deinterleave`: the regular patterns and one without a vector build, row
 /// lengths around two vectors (odd ones too), f32 and f64.
 #[test]
 fn combine_pair_rows_split_gives_the_bits_of_a_split_after() {
-    use mra::kernel::{combine_pair_rows, combine_pair_rows_split, deinterleave};
+    use mra::kernel::{combine_pair_grid, deinterleave, GridUnit, PairGrid, PairOutput, PairRows};
     fn check<T: mra::scheme::Sample + Into<f64>>(x: &[T]) {
         for (u, m1, m2) in [
             (4usize, 0b1111u32, 0b1111u32),
@@ -867,32 +976,21 @@ fn combine_pair_rows_split_gives_the_bits_of_a_split_after() {
                     vec![T::default(); 2 * count * len],
                 );
                 let src = &x[..(u + 2 * count) * len];
-                combine_pair_rows(
-                    Kernels::scalar(),
-                    src,
+                let grid = |output| PairGrid {
+                    off: &cols,
+                    in_step: 2,
+                    out: rows,
+                    out_step: [1, 1],
                     len,
-                    &cols,
-                    2,
-                    (&w1[..], m1),
-                    (&w2[..], m2),
-                    &mut plain,
-                    rows,
-                    [1, 1],
                     count,
-                );
-                combine_pair_rows_split(
-                    k,
-                    src,
-                    len,
-                    &cols,
-                    2,
-                    (&w1[..], m1),
-                    (&w2[..], m2),
-                    &mut split,
-                    rows,
-                    [1, 1],
-                    count,
-                );
+                    unit: GridUnit::Rows,
+                    output,
+                };
+                let (s, pairs) = (Kernels::scalar(), ((&w1[..], m1), (&w2[..], m2)));
+                let plain_pair = PairRows::new(s, pairs.0, pairs.1);
+                combine_pair_grid(s, &plain_pair, src, &mut plain, &grid(PairOutput::Apart));
+                let pair = PairRows::new(k, pairs.0, pairs.1);
+                combine_pair_grid(k, &pair, src, &mut split, &grid(PairOutput::Split));
                 for r in 0..2 * count {
                     let mut want = vec![T::default(); len];
                     deinterleave(k, &plain[r * len..r * len + len], 1, &mut want);
@@ -1051,8 +1149,8 @@ fn combine_rows_matches_combine_row_by_row() {
 // the CPU has, bit for bit.
 
 use mra::kernel::{
-    combine, combine_lane_taps, combine_pair, combine_pair_has_build, combine_pair_merged,
-    pair_taps, row_sum, SECOND,
+    combine, combine_lane_taps, combine_pair, combine_pair_has_build, pair_taps, row_sum, PairOut,
+    PairRows, SECOND,
 };
 use mra::scheme::Sample;
 
@@ -1236,7 +1334,12 @@ fn pair_kernels_on_the_schemes_rows_give_the_bits_of_the_rule() {
         let (e1, e2) = (want(m1, w1), want(m2, w2));
         for simd in CpuLevel::available() {
             let (mut a, mut b) = (vec![T::default(); len], vec![T::default(); len]);
-            combine_pair(Kernels::new(simd), &mut a, &mut b, &src, w1, m1, w2, m2);
+            combine_pair(
+                Kernels::new(simd),
+                &PairRows::new(Kernels::new(simd), (w1, m1), (w2, m2)),
+                &src,
+                PairOut::Apart(&mut a, &mut b),
+            );
             for i in 0..len {
                 assert!(
                     same(a[i], e1[i]) && same(b[i], e2[i]),
@@ -1246,7 +1349,12 @@ fn pair_kernels_on_the_schemes_rows_give_the_bits_of_the_rule() {
         }
         for k in tables() {
             let mut merged = vec![T::default(); 2 * len];
-            if combine_pair_merged(k, &mut merged, &src, w1, m1, w2, m2) {
+            if combine_pair(
+                k,
+                &PairRows::new(k, (w1, m1), (w2, m2)),
+                &src,
+                PairOut::Merged(&mut merged),
+            ) {
                 for i in 0..len {
                     assert!(same(merged[2 * i], e1[i]) && same(merged[2 * i + 1], e2[i]));
                 }

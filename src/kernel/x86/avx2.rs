@@ -42,38 +42,38 @@ pub(crate) unsafe fn taps_avx2<T: Sample, const N: usize>(
     w: &[T],
     wide: bool,
 ) {
-    use std::any::TypeId;
     let len = out.len();
     debug_assert!(src.len() == N && src.iter().all(|s| s.len() >= len));
-    if TypeId::of::<T>() == TypeId::of::<f32>() {
+    let o = out.as_mut_ptr();
+    if let Some(o) = T::f32_ptr(o) {
         let mut p = [std::ptr::null::<f32>(); N];
         let mut ws = [0f32; N];
         for k in 0..N {
-            p[k] = src[k].as_ptr() as *const f32;
+            p[k] = T::f32_ptr(src[k].as_ptr().cast_mut()).map_or(p[k], |q| q.cast_const());
             ws[k] = w[k].to_f64() as f32;
         }
         // SAFETY: AVX2 is present, AVX-512F when `wide`; every source holds `len` samples (checked by
-        // `combine`); T is f32.
+        // `combine`); the samples are f32.
         unsafe {
             if wide && len >= 16 {
-                taps_avx512_f32::<N>(out.as_mut_ptr() as *mut f32, len, &p, &ws)
+                taps_avx512_f32::<N>(o, len, &p, &ws)
             } else {
-                taps_avx2_f32::<N>(out.as_mut_ptr() as *mut f32, len, &p, &ws)
+                taps_avx2_f32::<N>(o, len, &p, &ws)
             }
         }
-    } else if TypeId::of::<T>() == TypeId::of::<f64>() {
+    } else if let Some(o) = T::f64_ptr(o) {
         let mut p = [std::ptr::null::<f64>(); N];
         let mut ws = [0f64; N];
         for k in 0..N {
-            p[k] = src[k].as_ptr() as *const f64;
+            p[k] = T::f64_ptr(src[k].as_ptr().cast_mut()).map_or(p[k], |q| q.cast_const());
             ws[k] = w[k].to_f64();
         }
-        // SAFETY: as above; T is f64.
+        // SAFETY: as above; the samples are f64.
         unsafe {
             if wide && len >= 8 {
-                taps_avx512_f64::<N>(out.as_mut_ptr() as *mut f64, len, &p, &ws)
+                taps_avx512_f64::<N>(o, len, &p, &ws)
             } else {
-                taps_avx2_f64::<N>(out.as_mut_ptr() as *mut f64, len, &p, &ws)
+                taps_avx2_f64::<N>(o, len, &p, &ws)
             }
         }
     } else {

@@ -1,6 +1,7 @@
 //! AVX2 and AVX-512 builds of the pair kernels, one per pattern of `patterns.rs`.
 
 use crate::kernel::*;
+use crate::scheme::Build;
 
 /// Dispatch of [`combine_pair`] to [`pair_avx2_f32`] / [`pair_avx2_f64`] (or their
 /// AVX-512 builds at [`CpuLevel::Avx512`]): the kernel of table entry `entry`
@@ -15,11 +16,11 @@ use crate::kernel::*;
 #[target_feature(enable = "avx2")]
 pub(crate) unsafe fn pair_avx2_at<T: Sample>(
     entry: u8,
-    rows: PairRows<'_, T>,
+    rows: &PairRows<'_, T>,
     at: &PairSteps<'_, T>,
     level: CpuLevel,
 ) -> bool {
-    let PairRows { w1, m1, w2, m2 } = rows;
+    let PairRows { w1, m1, w2, m2, .. } = *rows;
     let PairSteps {
         o,
         len,
@@ -31,29 +32,36 @@ pub(crate) unsafe fn pair_avx2_at<T: Sample>(
     } = *at;
     let (merge, split) = (output == PairOutput::Merged, output == PairOutput::Split);
     let wide = level == CpuLevel::Avx512;
-    use std::any::TypeId;
     let u = src.len();
     if u > PAIR_KERNEL_MOST || w1.len() != u || w2.len() != u {
         return false;
     }
     debug_assert_eq!(pair_entry(w1, m1, w2, m2), Some(entry));
     macro_rules! go {
-        ($t:ty, $f:ident, $g:ident, $U:literal, $M1:literal, $M2:literal, $P1:literal, $N1:literal, $P2:literal, $N2:literal, $R1:expr, $R2:expr) => {{
+        ($t:ty, $as:ident, $f:ident, $g:ident, $U:literal, $M1:literal, $M2:literal, $P1:literal, $N1:literal, $P2:literal, $N2:literal, $R1:expr, $R2:expr) => {{
             let wide = wide && len >= 64 / std::mem::size_of::<$t>();
             // (plain loops: the closures of `array::from_fn` were not inlined here)
             let (mut a, mut b) = ([0.0 as $t; $U], [0.0 as $t; $U]);
             for k in 0..$U {
                 (a[k], b[k]) = (w1[k].to_f64() as $t, w2[k].to_f64() as $t);
             }
+            // the pointers as $t's (`Some` for that type only: `Sample::f32_ptr`, `f64_ptr`)
+            let (Some(o0), Some(o1)) = (T::$as(o[0]), T::$as(o[1])) else {
+                return false;
+            };
+            let mut base = [std::ptr::null::<$t>(); $U];
+            for k in 0..$U {
+                base[k] = T::$as(src[k].cast_mut()).map_or(base[k], |q| q.cast_const());
+            }
             for t in 0..count {
-                // SAFETY: the caller's bounds; T is $t.
+                // SAFETY: the caller's bounds.
                 unsafe {
                     let mut p = [std::ptr::null::<$t>(); $U];
                     for k in 0..$U {
-                        p[k] = src[k].add(t * in_step) as *const $t;
+                        p[k] = base[k].add(t * in_step);
                     }
-                    let q1 = o[0].add(t * out_step[0]) as *mut $t;
-                    let q2 = o[1].add(t * out_step[1]) as *mut $t;
+                    let q1 = o0.add(t * out_step[0]);
+                    let q2 = o1.add(t * out_step[1]);
                     match (wide, merge, split) {
                         (true, true, _) => {
                             $g::<$U, $M1, $M2, $P1, $N1, $P2, $N2, { $R1 }, { $R2 }, true, false>(
@@ -97,10 +105,10 @@ pub(crate) unsafe fn pair_avx2_at<T: Sample>(
             let mut idx = 0u8;
             $(
                 if entry == idx && (u, m1, m2) == ($U, $M1, $M2) {
-                    if TypeId::of::<T>() == TypeId::of::<f32>() {
-                        go!(f32, pair_avx2_f32, pair_avx512_f32, $U, $M1, $M2, $P1, $N1, $P2, $N2, $R1, $R2)
-                    } else if TypeId::of::<T>() == TypeId::of::<f64>() {
-                        go!(f64, pair_avx2_f64, pair_avx512_f64, $U, $M1, $M2, $P1, $N1, $P2, $N2, $R1, $R2)
+                    match T::BUILD {
+                        Build::F32 => go!(f32, f32_ptr, pair_avx2_f32, pair_avx512_f32, $U, $M1, $M2, $P1, $N1, $P2, $N2, $R1, $R2),
+                        Build::F64 => go!(f64, f64_ptr, pair_avx2_f64, pair_avx512_f64, $U, $M1, $M2, $P1, $N1, $P2, $N2, $R1, $R2),
+                        Build::Plain => {}
                     }
                 }
                 idx += 1;
