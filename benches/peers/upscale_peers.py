@@ -1,11 +1,21 @@
 #!/usr/bin/env python3
 """Upscaling quality and speed: mra against OpenImageIO, scikit-image, SciPy and Pillow.
 
-For every data set: crop to a multiple of F, downscale by exact block mean (F = 2, 4),
-upscale back with every method, round/clip to the original sample type, and report
-PSNR and SSIM against the original plus the time of the upscale alone.
+For every data set: crop to a multiple of F, make the low-resolution input by one of two
+protocols, upscale back ×F with every method, round/clip to the original sample type, and
+report PSNR and SSIM against the original plus the time of the upscale alone.
 
-  - mra: `mra upscale LOW -o OUT --factor F --mode M [--clamp C] --report` (the compute time it
+  - block: the exact F×F(×F) block mean (what the area mode assumes)
+  - filtered: OpenImageIO's resize with its lanczos3 filter widened to the reduction (its own
+    default when shrinking), a properly filtered downscale; 2-D data only (images, DEMs)
+
+`--edges` adds the staircase measure: straight edges at six angles (each pixel the mean of
+16×16 sub-samples of a half-plane, 40 / 220), made small by both protocols, upscaled ×4; the
+along-edge ripple is the RMS of the result minus its mean at the same distance to the edge
+(1/16-pixel bins, pixels within 3 px of the edge): a result that depends only on the
+distance to the edge has none, a staircase of notches is all ripple.
+
+  - mra: `mra upscale LOW -o OUT --factor F --mode M [--clamp C] --json` (the compute time it
     prints excludes file I/O; the wall time of the whole process is listed too)
   - OpenImageIO ImageBufAlgo.resize: lanczos3, catmull-rom, bspline (images, DEMs)
   - scikit-image transform.resize(order=3) (mode 'reflect', no anti-aliasing)
@@ -15,6 +25,7 @@ PSNR and SSIM against the original plus the time of the upscale alone.
 
 Usage (from the repository root, after `cargo build --release`):
   python3 benches/peers/upscale_peers.py [--kodak N] [--json out.json] [--quick]
+      [--protocols block,filtered] [--large] [--edges]
 Needs: pip install OpenImageIO scikit-image scipy pillow tifffile pynrrd
 """
 import argparse, json, os, subprocess, sys, tempfile, time
@@ -24,7 +35,7 @@ ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)
 CORPUS = os.environ.get("MRA_CORPUS", os.path.join(ROOT, "..", "shared", "corpus"))
 if not os.path.isdir(CORPUS):
     CORPUS = "/work/shared/corpus"
-MRA = os.path.join(ROOT, "target", "release", "mra")
+MRA = os.environ.get("MRA_BIN") or os.path.join(os.environ.get("CARGO_TARGET_DIR", os.path.join(ROOT, "target")), "release", "mra")
 
 import tifffile, nrrd
 from skimage.metrics import peak_signal_noise_ratio, structural_similarity
@@ -46,6 +57,18 @@ def block_mean(x, f, spatial):
     y = x.reshape(shp)
     axes = tuple(2 * a + 1 for a in range(spatial))
     return x, y.mean(axis=axes).astype(np.float32)
+
+
+def filtered(x, f):
+    """The filtered protocol: OpenImageIO resize (lanczos3, widened by the reduction) of the
+    crop to a multiple of f; returns the crop (float64) and the low-resolution input."""
+    h, w = (x.shape[0] // f) * f, (x.shape[1] // f) * f
+    x = x[:h, :w].astype(np.float64)
+    c = 1 if x.ndim == 2 else x.shape[2]
+    buf = oiio.ImageBuf(oiio.ImageSpec(w, h, c, "float"))
+    buf.set_pixels(oiio.ROI(), np.ascontiguousarray(x.reshape(h, w, c), dtype=np.float32))
+    out = oiio.ImageBufAlgo.resize(buf, filtername="lanczos3", roi=oiio.ROI(0, w // f, 0, h // f, 0, 1, 0, c))
+    return x, out.get_pixels(oiio.FLOAT).reshape((h // f, w // f) + x.shape[2:])
 
 
 def to_type(y, dtype):
@@ -82,7 +105,7 @@ def mra_upscale(low, f, mode, scheme, tmp, spatial, extra=()):
         write_nrrd_f32(src, low)
     else:
         tifffile.imwrite(src, low)
-    cmd = [MRA, "upscale", src, "-o", dst, "--factor", str(f), "--mode", mode, "--scheme", scheme, "--report", "--quiet", *extra]
+    cmd = [MRA, "upscale", src, "-o", dst, "--factor", str(f), "--mode", mode, "--scheme", scheme, "--json", "--quiet", *extra]
     t = time.perf_counter()
     r = subprocess.run(cmd, capture_output=True, text=True)
     wall = time.perf_counter() - t
@@ -129,7 +152,7 @@ def pil(low, f):
 # ---------- data -----------------------------------------------------------------------
 
 def datasets(args):
-    only = set(args.only.split(",")) if args.only else {"image", "volume", "heightmap"}
+    only = set(args.only.split(",")) if args.only else {"image", "photo", "volume", "heightmap"}
     for item in _datasets(args):
         if item[0] in only:
             yield item
@@ -139,6 +162,10 @@ def _datasets(args):
     kodak = sorted(os.listdir(os.path.join(CORPUS, "images", "kodak")))[: args.kodak]
     for name in kodak:
         yield "image", name, np.asarray(Image.open(os.path.join(CORPUS, "images", "kodak", name)).convert("RGB")), 2
+    if args.large:
+        # photographs never used to tune mra (2268×1512 RGB, 3008×2000 gray)
+        for name in ["flower_foveon_rgb8.png", "leaves_iso_1600_gray8.png"]:
+            yield "photo", name, np.asarray(Image.open(os.path.join(CORPUS, "images", "large", name))), 2
     if args.quick:
         return
     v, _ = nrrd.read(os.path.join(CORPUS, "volumes", "ct_pancreas_256.nrrd"), index_order="C")
@@ -170,10 +197,14 @@ def main():
     ap.add_argument("--mra", default="chaikin:area,chaikin:area:off,cubic:area:off,cubic:interpolate,cubic:control",
                     help="comma-separated scheme:mode[:clamp] to run with mra (clamp: auto, the default, on, off)")
     ap.add_argument("--no-peers", action="store_true", help="mra only")
-    ap.add_argument("--only", help="comma-separated kinds: image, volume, heightmap")
+    ap.add_argument("--only", help="comma-separated kinds: image (Kodak), photo (--large), volume, heightmap")
     ap.add_argument("--no-speed", action="store_true", help="skip the 256³ speed case")
     ap.add_argument("--speed-only", action="store_true", help="only the 256³ speed case")
     ap.add_argument("--summarize", nargs="+", help="print the summary of JSON-lines logs of earlier runs")
+    ap.add_argument("--protocols", default="block,filtered",
+                    help="comma-separated low-resolution protocols: block (block mean), filtered (OpenImageIO lanczos3)")
+    ap.add_argument("--large", action="store_true", help="add the two large corpus photographs")
+    ap.add_argument("--edges", action="store_true", help="add the along-edge ripple (staircase) measure on straight edges")
     args = ap.parse_args()
     if args.summarize:
         rows = []
@@ -187,8 +218,10 @@ def main():
     with tempfile.TemporaryDirectory() as tmp:
         for kind, name, x, spatial in ([] if args.speed_only else datasets(args)):
             channel = x.ndim > spatial
-            for f in [int(s) for s in args.factors.split(",")]:
-                ref, low = block_mean(x, f, spatial)
+            for f, protocol in [(int(s), p) for s in args.factors.split(",") for p in args.protocols.split(",")]:
+                if protocol == "filtered" and spatial != 2:
+                    continue
+                ref, low = block_mean(x, f, spatial) if protocol == "block" else filtered(x, f)
                 methods = {}
                 for pair in args.mra.split(","):
                     scheme, mode, *clamp = pair.split(":")
@@ -218,9 +251,11 @@ def main():
                     else:
                         out, secs = timed(lambda: pil(low, f), reps)
                     psnr, ssim = metrics(ref, out, x.dtype, channel)
-                    row = dict(kind=kind, data=name, factor=f, method=label, psnr=psnr, ssim=ssim, seconds=secs, wall=wall)
+                    row = dict(kind=kind, protocol=protocol, data=name, factor=f, method=label, psnr=psnr, ssim=ssim, seconds=secs, wall=wall)
                     rows.append(row)
                     print(json.dumps(row), flush=True)
+    if args.edges and not args.speed_only:
+        rows += edge_rows(args)
     # speed: a 256³ float32 volume ×2 (mra compute time vs SciPy zoom order 3)
     if not args.quick and not args.no_peers and not args.no_speed:
         with tempfile.TemporaryDirectory() as tmp:
@@ -238,14 +273,75 @@ def main():
             json.dump(rows, fh, indent=1)
 
 
+EDGE_N, EDGE_F, EDGE_ANGLES = 256, 4, [20, 30, 37, 53, 60, 70]
+
+
+def edge_image(angle):
+    """A half-plane through the centre, normal at `angle`: 16×16 sub-samples per pixel."""
+    n, ss = EDGE_N, 16
+    nx, ny = np.cos(np.deg2rad(angle)), np.sin(np.deg2rad(angle))
+    g = (np.arange(n * ss) + 0.5) / ss - n / 2
+    yy, xx = np.meshgrid(g, g, indexing="ij")
+    cover = ((xx * nx + yy * ny) > 0).reshape(n, ss, n, ss).mean(axis=(1, 3))
+    c = np.arange(n) + 0.5 - n / 2
+    y, x = np.meshgrid(c, c, indexing="ij")
+    return 40.0 + 180.0 * cover, x * nx + y * ny
+
+
+def ripple(u, d, band=3.0, margin=16, width=1 / 16):
+    """Along-edge ripple: RMS of u minus its mean over the same distance bin."""
+    m = np.zeros_like(d, bool)
+    m[margin:-margin, margin:-margin] = True
+    m &= np.abs(d) <= band
+    k = np.floor((d[m] + band) / width).astype(int)
+    v = u[m].astype(np.float64)
+    prof = np.bincount(k, v) / np.maximum(np.bincount(k), 1)
+    return float(np.sqrt(np.mean((v - prof[k]) ** 2)))
+
+
+def edge_rows(args):
+    """Ripple and PSNR of every method on straight edges ×4, both protocols."""
+    rows, f = [], EDGE_F
+    with tempfile.TemporaryDirectory() as tmp:
+        for protocol in args.protocols.split(","):
+            for angle in EDGE_ANGLES:
+                x, d = edge_image(angle)
+                ref, low = block_mean(x, f, 2) if protocol == "block" else filtered(x, f)
+                methods = {}
+                for pair in args.mra.split(","):
+                    scheme, mode, *clamp = pair.split(":")
+                    label = f"mra {scheme} {mode}" + (f" clamp={clamp[0]}" if clamp else "")
+                    methods[label] = lambda s=scheme, m=mode, c=clamp: mra_upscale(low, f, m, s, tmp, 2, ("--clamp", c[0]) if c else ())[0]
+                if not args.no_peers:
+                    for filt in ["lanczos3", "catmull-rom"]:
+                        methods[f"oiio {filt}"] = lambda filt=filt: oiio_resize(low, f, filt)
+                    methods["skimage order 3"] = lambda: sk(low, f, 2)
+                for label, fn in methods.items():
+                    out = to_type(fn(), np.uint8).astype(np.float64)
+                    psnr = peak_signal_noise_ratio(ref, out, data_range=255.0)
+                    row = dict(kind="edges", protocol=protocol, data=f"edge {angle}°", factor=f, method=label,
+                               ripple=ripple(out, d), psnr=psnr)
+                    rows.append(row)
+                    print(json.dumps(row), flush=True)
+    return rows
+
+
 def summarize(rows):
-    """Mean per kind × factor × method, and the speed rows."""
-    print("\n| kind | factor | method | mean PSNR dB | mean SSIM | mean time s |")
-    print("|---|---|---|---|---|---|")
-    keys = sorted({(r["kind"], r["factor"], r["method"]) for r in rows if "psnr" in r})
+    """Mean per kind × protocol × factor × method, the edge ripple, and the speed rows."""
+    print("\n| kind | protocol | factor | method | mean PSNR dB | mean SSIM | mean time s |")
+    print("|---|---|---|---|---|---|---|")
+    prot = lambda r: r.get("protocol", "block")
+    keys = sorted({(r["kind"], prot(r), r["factor"], r["method"]) for r in rows if "ssim" in r})
     for k in keys:
-        sel = [r for r in rows if (r["kind"], r["factor"], r["method"]) == k]
-        print(f"| {k[0]} | ×{k[1]} | {k[2]} | {np.mean([r['psnr'] for r in sel]):.3f} | {np.mean([r['ssim'] for r in sel]):.4f} | {np.mean([r['seconds'] for r in sel]):.4f} |")
+        sel = [r for r in rows if (r["kind"], prot(r), r["factor"], r["method"]) == k]
+        print(f"| {k[0]} | {k[1]} | ×{k[2]} | {k[3]} | {np.mean([r['psnr'] for r in sel]):.3f} | {np.mean([r['ssim'] for r in sel]):.4f} | {np.mean([r['seconds'] for r in sel]):.4f} |")
+    edges = [r for r in rows if r["kind"] == "edges"]
+    if edges:
+        print("\n| edges ×4 | protocol | method | mean along-edge ripple | mean PSNR dB |")
+        print("|---|---|---|---|---|")
+        for k in sorted({(prot(r), r["method"]) for r in edges}):
+            sel = [r for r in edges if (prot(r), r["method"]) == k]
+            print(f"| | {k[0]} | {k[1]} | {np.mean([r['ripple'] for r in sel]):.3f} | {np.mean([r['psnr'] for r in sel]):.2f} |")
     for r in rows:
         if r["kind"] == "speed":
             print(f"\nspeed {r['data']} ×2: mra {r['seconds']:.2f} s (process wall {r['wall']:.2f} s), "

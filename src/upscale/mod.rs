@@ -23,6 +23,7 @@
 //!
 //! Measured on Kodak, CT and DEM data in `docs/upscale.md`.
 
+mod along;
 pub mod basis;
 mod cells;
 pub mod lane;

@@ -27,6 +27,7 @@
 //! `docs/upscale.md`.
 
 pub use super::cells::ITERATIONS;
+use super::along;
 use super::cells::{area, block_mean, pair_gather};
 use super::slab::{self, Planes};
 use super::{upscale_array, AxisPlan, Edge, Geometry, Method, Mode, Prepared};
@@ -770,6 +771,13 @@ pub(crate) fn upscale_refined_into<U: Copy + Default + Send + Sync + 'static>(
     f: &[(usize, usize)],
     store: impl Fn(f32) -> U + Sync + Send,
 ) -> Result<(Vec<U>, Vec<usize>)> {
+    if let Some(g) = along::applies(shape, f) {
+        // images: smoothed along edges ([`along`]), then stored
+        let s = data.clone();
+        let (u, fine) = upscale_refined_with(data, shape, method, f, |x| x, true)?;
+        let u = along::refine(u, &fine, &s, shape, method, g)?;
+        return Ok((u.into_par_iter().map(store).collect(), fine));
+    }
     upscale_refined_with(data, shape, method, f, store, true)
 }
 

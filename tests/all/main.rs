@@ -41,4 +41,5 @@ mod terrain_landforms;
 mod tiles;
 mod tiles_stream;
 mod upscale;
+mod upscale_edges;
 mod upscale_refine;
