@@ -1,8 +1,8 @@
 //! Bézier curves (notes ch. 2): `Q(u) = Σ_{i=0}^{d} B_{i,d}(u) P_i`, `0 ≤ u ≤ 1`, with the
 //! Bernstein polynomials `B_{i,d}(u) = C(d,i) u^i (1 − u)^{d−i}` (§2.1).
 
-use super::{check_points, check_range, Curve};
-use crate::{Error, Result};
+use super::{check_out, check_points, check_range, Curve};
+use crate::Result;
 
 /// A Bézier curve of degree `d` with `d + 1` control points of dimension `dim`.
 #[derive(Debug, Clone, PartialEq)]
@@ -170,13 +170,7 @@ impl Curve for Bezier {
     }
     fn eval_derivative_into(&self, u: f64, d: usize, out: &mut [f64]) -> Result<()> {
         check_range(u, (0.0, 1.0))?;
-        if out.len() != self.dim {
-            return Err(Error::parameter(
-                "output length",
-                out.len(),
-                "the point dimension",
-            ));
-        }
+        check_out(out, self.dim, "the point dimension")?;
         let mut c = self.clone();
         for _ in 0..d {
             c = c.hodograph();

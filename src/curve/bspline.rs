@@ -5,7 +5,7 @@
 #![allow(clippy::needless_range_loop)]
 
 use super::basis::{self, basis_brute, basis_derivs, basis_funs, span, DerivWork, KnotVector};
-use super::{check_points, check_range, Curve};
+use super::{check_out, check_points, check_range, Curve};
 use crate::{Error, Result};
 
 /// A B-spline curve of order `k` with `n = m + 1` control points of dimension `dim`.
@@ -186,13 +186,7 @@ impl BSpline {
     /// values are computed once per point; no allocation per point.
     pub fn eval_many_de_boor(&self, params: &[f64], out: &mut [f64]) -> Result<()> {
         let (k, dim, n) = (self.order, self.dim, self.len());
-        if out.len() != params.len() * dim {
-            return Err(Error::parameter(
-                "output length",
-                out.len(),
-                "params.len() × dim",
-            ));
-        }
+        check_out(out, params.len() * dim, "params.len() × dim")?;
         let range = self.range();
         let t = &self.knots;
         let mut nb = vec![0.0; k];
@@ -266,13 +260,7 @@ impl Curve for BSpline {
         self.range()
     }
     fn eval_derivative_into(&self, u: f64, d: usize, out: &mut [f64]) -> Result<()> {
-        if out.len() != self.dim {
-            return Err(Error::parameter(
-                "output length",
-                out.len(),
-                "the point dimension",
-            ));
-        }
+        check_out(out, self.dim, "the point dimension")?;
         if d == 0 {
             check_range(u, self.range())?;
             let mut work = vec![0.0; self.order * self.dim];

@@ -93,6 +93,15 @@ pub(crate) fn check_points(points: &[f64], dim: usize, min: usize) -> Result<usi
     Ok(n)
 }
 
+/// Check that an output buffer holds `want` values (`what`: how they count, e.g.
+/// "the point dimension").
+pub(crate) fn check_out(out: &[f64], want: usize, what: &'static str) -> Result<()> {
+    if out.len() != want {
+        return Err(Error::parameter("output length", out.len(), what));
+    }
+    Ok(())
+}
+
 /// Check that `u` lies in `[a, b]` (a clear [`Error::Parameter`] otherwise).
 pub(crate) fn check_range(u: f64, (a, b): (f64, f64)) -> Result<()> {
     if !(u >= a && u <= b) {

@@ -5,7 +5,7 @@
 //! and the result is projected by dividing by its last coordinate.
 
 use super::bezier::binomial;
-use super::{check_points, BSpline, Curve};
+use super::{check_out, check_points, BSpline, Curve};
 use crate::{Error, Result};
 
 /// A rational B-spline curve: a B-spline in homogeneous coordinates.
@@ -174,13 +174,7 @@ impl Nurbs {
     /// Evaluate at many parameters (lift–project on [`BSpline::eval_many`]).
     pub fn eval_many(&self, params: &[f64], out: &mut [f64]) -> Result<()> {
         let d1 = self.dim + 1;
-        if out.len() != params.len() * self.dim {
-            return Err(Error::parameter(
-                "output length",
-                out.len(),
-                "params.len() × dim",
-            ));
-        }
+        check_out(out, params.len() * self.dim, "params.len() × dim")?;
         if params.len() >= 8 * self.len() {
             return super::poly::PiecewisePoly::from_bspline(&self.hom)
                 .eval_many_projected(params, out);
@@ -264,13 +258,7 @@ impl Curve for Nurbs {
         self.range()
     }
     fn eval_derivative_into(&self, u: f64, d: usize, out: &mut [f64]) -> Result<()> {
-        if out.len() != self.dim {
-            return Err(Error::parameter(
-                "output length",
-                out.len(),
-                "the point dimension",
-            ));
-        }
+        check_out(out, self.dim, "the point dimension")?;
         let mut all = vec![0.0; (d + 1) * self.dim];
         self.derivs_into(u, d, &mut all)?;
         out.copy_from_slice(&all[d * self.dim..]);

@@ -11,7 +11,7 @@
 #![allow(clippy::needless_range_loop)]
 
 use super::basis::{basis_derivs, DerivWork};
-use super::BSpline;
+use super::{check_out, BSpline};
 use crate::{Error, Result};
 
 /// The spans of a B-spline as polynomials in power form.
@@ -66,13 +66,7 @@ impl PiecewisePoly {
 
     /// Evaluate at `params` (any order; sorted input is fastest) into `out` (`dim` per point).
     pub fn eval_many(&self, params: &[f64], out: &mut [f64]) -> Result<()> {
-        if out.len() != params.len() * self.dim {
-            return Err(Error::parameter(
-                "output length",
-                out.len(),
-                "params.len() × dim",
-            ));
-        }
+        check_out(out, params.len() * self.dim, "params.len() × dim")?;
         match (self.k, self.dim) {
             (4, 3) => self.run::<4, 3>(params, out),
             (4, 2) => self.run::<4, 2>(params, out),

@@ -59,25 +59,7 @@ pub const Q: [f64; 12] = [
     45.0 / 2432.0,
 ];
 
-/// The regular filters placed as in the comment above.
-pub const REGULAR: RegularFilters = RegularFilters {
-    a: Taps { w: &A, first: -6 },
-    b: Taps { w: &B, first: 0 },
-    p: Taps { w: &P, first: -2 },
-    q: Taps { w: &Q, first: -4 },
-};
-
-/// Interpolating ends: the open quadratic B-spline `P` with derived start blocks.
-pub const OPEN: OpenEnds = OpenEnds {
-    spline: &open_ends::QUADRATIC,
-    a: &A,
-    b: &B,
-    q: &Q,
-    a_start: A_START,
-    b_start: B_START,
-    q_start: Q_START,
-    min_len: MIN_INTERPOLATING,
-};
+regular_and_open!([-6, 0, -2, -4], QUADRATIC, "quadratic");
 
 // Start blocks derived by `tools/derive_open_ends.py` (printed by `python3 tools/derive_open_ends.py
 // rust`); the end blocks are their mirror images.

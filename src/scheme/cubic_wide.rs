@@ -73,25 +73,7 @@ pub const Q: [f64; 19] = [
     -125973.0 / 21411712.0,
 ];
 
-/// The regular filters placed as in the comment above.
-pub const REGULAR: RegularFilters = RegularFilters {
-    a: Taps { w: &A, first: -9 },
-    b: Taps { w: &B, first: -1 },
-    p: Taps { w: &P, first: -2 },
-    q: Taps { w: &Q, first: -8 },
-};
-
-/// Interpolating ends: the open cubic B-spline `P` with derived start blocks.
-pub const OPEN: OpenEnds = OpenEnds {
-    spline: &open_ends::CUBIC,
-    a: &A,
-    b: &B,
-    q: &Q,
-    a_start: A_START,
-    b_start: B_START,
-    q_start: Q_START,
-    min_len: MIN_INTERPOLATING,
-};
+regular_and_open!([-9, -1, -2, -8], CUBIC, "cubic");
 
 // Start blocks derived by `tools/derive_open_ends.py` (printed by `python3 tools/derive_open_ends.py
 // rust`); the end blocks are their mirror images.

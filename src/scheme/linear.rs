@@ -34,25 +34,7 @@ pub const B: [f64; 3] = [-1.0 / 2.0, 1.0, -1.0 / 2.0];
 pub const P: [f64; 3] = [1.0 / 2.0, 1.0, 1.0 / 2.0];
 pub const Q: [f64; 5] = [-1.0 / 8.0, -1.0 / 4.0, 3.0 / 4.0, -1.0 / 4.0, -1.0 / 8.0];
 
-/// The regular filters placed as in the comment above.
-pub const REGULAR: RegularFilters = RegularFilters {
-    a: Taps { w: &A, first: -2 },
-    b: Taps { w: &B, first: 0 },
-    p: Taps { w: &P, first: -1 },
-    q: Taps { w: &Q, first: -1 },
-};
-
-/// Interpolating ends: the open linear B-spline `P` with derived start blocks.
-pub const OPEN: OpenEnds = OpenEnds {
-    spline: &open_ends::LINEAR,
-    a: &A,
-    b: &B,
-    q: &Q,
-    a_start: A_START,
-    b_start: B_START,
-    q_start: Q_START,
-    min_len: MIN_INTERPOLATING,
-};
+regular_and_open!([-2, 0, -1, -1], LINEAR, "linear");
 
 // Start blocks derived by `tools/derive_open_ends.py` (printed by `python3 tools/derive_open_ends.py
 // rust`); the end blocks are their mirror images.

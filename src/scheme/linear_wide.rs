@@ -50,25 +50,7 @@ pub const Q: [f64; 9] = [
     3.0 / 128.0,
 ];
 
-/// The regular filters placed as in the comment above.
-pub const REGULAR: RegularFilters = RegularFilters {
-    a: Taps { w: &A, first: -4 },
-    b: Taps { w: &B, first: 0 },
-    p: Taps { w: &P, first: -1 },
-    q: Taps { w: &Q, first: -3 },
-};
-
-/// Interpolating ends: the open linear B-spline `P` with derived start blocks.
-pub const OPEN: OpenEnds = OpenEnds {
-    spline: &open_ends::LINEAR,
-    a: &A,
-    b: &B,
-    q: &Q,
-    a_start: A_START,
-    b_start: B_START,
-    q_start: Q_START,
-    min_len: MIN_INTERPOLATING,
-};
+regular_and_open!([-4, 0, -1, -3], LINEAR, "linear");
 
 // Start blocks derived by `tools/derive_open_ends.py` (printed by `python3 tools/derive_open_ends.py
 // rust`); the end blocks are their mirror images.

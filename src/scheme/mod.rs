@@ -4,6 +4,35 @@
 //! `m − n` details (`C = A F`, `D = B F`) and back (`F = P C + Q D`), for any length
 //! `m ≥ 1` and any element width (scalars, points, whole rows).
 
+/// A scheme module's `REGULAR` (its filters `A`, `B`, `P`, `Q` placed at the first taps
+/// `[a, b, p, q]`, as the module's comment shows) and `OPEN` (interpolating ends: the
+/// open B-spline `open_ends::$spline` (`$name`) as `P`, with the module's derived start
+/// blocks `A_START`, `B_START`, `Q_START` and its `MIN_INTERPOLATING`). Defined before
+/// the scheme modules, which see it by textual scope.
+macro_rules! regular_and_open {
+    ([$a:expr, $b:expr, $p:expr, $q:expr], $spline:ident, $name:literal) => {
+        /// The regular filters placed as in the comment above.
+        pub const REGULAR: RegularFilters = RegularFilters {
+            a: Taps { w: &A, first: $a },
+            b: Taps { w: &B, first: $b },
+            p: Taps { w: &P, first: $p },
+            q: Taps { w: &Q, first: $q },
+        };
+
+        #[doc = concat!("Interpolating ends: the open ", $name, " B-spline `P` with derived start blocks.")]
+        pub const OPEN: OpenEnds = OpenEnds {
+            spline: &open_ends::$spline,
+            a: &A,
+            b: &B,
+            q: &Q,
+            a_start: A_START,
+            b_start: B_START,
+            q_start: Q_START,
+            min_len: MIN_INTERPOLATING,
+        };
+    };
+}
+
 pub mod cdf97;
 pub mod chaikin;
 pub mod chaikin_wide;

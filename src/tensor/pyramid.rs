@@ -9,7 +9,7 @@
 
 use super::array::Array;
 use super::boxes::{strided, strided_mut};
-use super::cascade;
+use super::cascade::{self, Way};
 use super::fused::{fused_level, fused_level_strided, AxisOp, Writes};
 use super::par::{for_each_task, SharedMut};
 use super::transform::transform_axis_with;
@@ -290,7 +290,7 @@ pub fn analyze_in<T: Sample>(
     engine: Engine,
 ) -> Result<Pyramid> {
     let pyr = Pyramid::plan(array.shape(), spec)?;
-    run(planner, array, &pyr, Direction::Analysis, engine);
+    run(planner, array, &pyr, Way::Analysis, engine);
     Ok(pyr)
 }
 
@@ -317,14 +317,8 @@ pub fn synthesize_in<T: Sample>(
             "the shape the pyramid was computed for",
         ));
     }
-    run(planner, array, pyr, Direction::Synthesis, engine);
+    run(planner, array, pyr, Way::Synthesis, engine);
     Ok(())
-}
-
-#[derive(Clone, Copy, PartialEq, Eq)]
-enum Direction {
-    Analysis,
-    Synthesis,
 }
 
 /// The levels of `pyr` in the direction asked. With [`Engine::Fused`], a non-standard
@@ -334,7 +328,7 @@ fn run<T: Sample>(
     planner: &Planner,
     array: &mut Array<T>,
     pyr: &Pyramid,
-    dir: Direction,
+    dir: Way,
     engine: Engine,
 ) {
     let shape = array.shape().to_vec();
@@ -344,14 +338,14 @@ fn run<T: Sample>(
     let step = |data: &mut [T], i: usize, l: usize, region: &[usize]| {
         let o = ops(i, l);
         let op = match dir {
-            Direction::Analysis => &o.two_scale.analysis,
-            Direction::Synthesis => &o.two_scale.synthesis,
+            Way::Analysis => &o.two_scale.analysis,
+            Way::Synthesis => &o.two_scale.synthesis,
         };
         transform_axis_with(k, data, &shape, region, spec.axes[i], op);
     };
     if spec.order == Order::Standard {
         let mut steps = pyr.steps();
-        if dir == Direction::Synthesis {
+        if dir == Way::Synthesis {
             steps.reverse();
         }
         for (i, l, region) in steps {
@@ -360,7 +354,7 @@ fn run<T: Sample>(
         return;
     }
     let mut levels: Vec<usize> = (0..pyr.depth()).collect();
-    if dir == Direction::Synthesis {
+    if dir == Way::Synthesis {
         levels.reverse();
     }
     // how each level runs: fused over its `k` leading axes, or axis by axis
@@ -428,8 +422,8 @@ fn run<T: Sample>(
         let e: usize = shape[k..].iter().product();
         let buf = scratch.get_or_insert_with(|| planner.take_scratch(array.len()));
         let writes = match dir {
-            Direction::Analysis => Writes::StreamLarge,
-            Direction::Synthesis => Writes::Cached,
+            Way::Analysis => Writes::StreamLarge,
+            Way::Synthesis => Writes::Cached,
         };
         let box_ = &region[..k];
         if region == shape {
@@ -462,15 +456,15 @@ fn run<T: Sample>(
 }
 
 /// One axis' operator of a level in the direction asked.
-fn axis_op(o: &workspace::LevelOps, dir: Direction) -> AxisOp<'_> {
+fn axis_op(o: &workspace::LevelOps, dir: Way) -> AxisOp<'_> {
     match dir {
-        Direction::Analysis => AxisOp {
+        Way::Analysis => AxisOp {
             op: &o.two_scale.analysis,
             plan: &o.analysis,
             order: &o.analysis_order,
             parts: &o.analysis_parts,
         },
-        Direction::Synthesis => AxisOp {
+        Way::Synthesis => AxisOp {
             op: &o.two_scale.synthesis,
             plan: &o.synthesis,
             order: &o.synthesis_order,
@@ -486,7 +480,7 @@ fn cascade<T: Sample>(
     planner: &Planner,
     array: &mut Array<T>,
     pyr: &Pyramid,
-    dir: Direction,
+    dir: Way,
     k: usize,
     parts: usize,
     forced: bool,
@@ -525,11 +519,7 @@ fn cascade<T: Sample>(
         })
         .collect();
     let e: usize = shape[k..].iter().product();
-    let way = match dir {
-        Direction::Analysis => cascade::Way::Analysis,
-        Direction::Synthesis => cascade::Way::Synthesis,
-    };
-    let Some(plan) = cascade::Plan::new(way, regions, &ops, e, parts, forced) else {
+    let Some(plan) = cascade::Plan::new(dir, regions, &ops, e, parts, forced) else {
         return false;
     };
     let strides = array.strides();
