@@ -33,7 +33,11 @@ pub(super) fn rms_step(g: &Grid) -> f64 {
 /// lowest first under `Reverse`.
 fn key(z: f64, i: usize) -> Reverse<u64> {
     let b = (z as f32).to_bits();
-    let o = if b & 0x8000_0000 != 0 { !b } else { b | 0x8000_0000 };
+    let o = if b & 0x8000_0000 != 0 {
+        !b
+    } else {
+        b | 0x8000_0000
+    };
     Reverse(((o as u64) << 32) | i as u64)
 }
 
@@ -65,7 +69,8 @@ pub(super) fn drain(g: &mut Grid, depth: f64) -> usize {
 pub(super) fn breach(g: &mut Grid, depth: f64) -> Vec<bool> {
     let mut lowered = vec![false; g.data().len()];
     #[allow(clippy::neg_cmp_op_on_partial_ord)]
-    if g.c() != 1 || g.h() < 3 || g.w() < 3 || !(depth > 0.0) || g.data().len() > u32::MAX as usize {
+    if g.c() != 1 || g.h() < 3 || g.w() < 3 || !(depth > 0.0) || g.data().len() > u32::MAX as usize
+    {
         return lowered;
     }
     let (h, w) = (g.h(), g.w());
@@ -179,16 +184,16 @@ const N8: [(i64, i64); 8] = [
 mod tests {
     use super::*;
 
-    /// Whether a cell not on the border has no lower 8-neighbour.
+    /// The number of cells off the border with no lower 8-neighbour.
     fn pits(g: &Grid) -> usize {
         let (h, w) = (g.h(), g.w());
         let mut n = 0;
         for y in 1..h - 1 {
             for x in 1..w - 1 {
                 let z = g.at(y, x, 0);
-                let lower = N8
-                    .iter()
-                    .any(|&(dy, dx)| g.at((y as i64 + dy) as usize, (x as i64 + dx) as usize, 0) < z);
+                let lower = N8.iter().any(|&(dy, dx)| {
+                    g.at((y as i64 + dy) as usize, (x as i64 + dx) as usize, 0) < z
+                });
                 n += usize::from(!lower);
             }
         }

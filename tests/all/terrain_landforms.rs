@@ -239,6 +239,9 @@ fn the_result_keeps_only_basins_deeper_than_the_breaching_depth() {
     let shallow = |d: &[f64]| d.iter().filter(|&&v| v <= 0.99 * depth).count();
     let (before, after) = (shallow(&pit_depths(&def)), shallow(&pit_depths(&g)));
     assert!(rep.drained > 0 && before > 0);
-    assert!(4 * after <= before, "shallow pits: {after} against {before} by default");
+    assert!(
+        4 * after <= before,
+        "shallow pits: {after} against {before} by default"
+    );
     assert!(rep.fidelity_psnr.unwrap() >= 40.0);
 }
