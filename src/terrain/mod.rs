@@ -13,7 +13,7 @@
 //! resample.rs  Catmull–Rom resampling on affine maps (base to the output lattice)
 //! spectrum.rs  radially averaged power spectra, the finest octave's slope, the gain fit
 //! base_scale.rs  --base-scale S: the base reduced to 1/S of the output, finer levels synthesized
-//! drainage.rs  with --base-scale: shallow depressions filled (priority flood) so valleys drain
+//! drainage.rs  with --base-scale: depressions breached (priority flood) so valleys drain
 //! synth.rs     the example's pyramid, coarse-to-fine patch matching, blended detail transfer
 //! finest_gain.rs  the finest level's gain g₁ fitted to the example's spectral slope
 //! level_gain.rs  with --base-scale: each synthesized level's gain fitted to the example's slope
