@@ -92,6 +92,9 @@ fn decode_channel(p: &Parsed, c: usize, k: usize) -> Result<Vec<Option<Vec<i64>>
     Ok(q)
 }
 
+/// A chain of bands ([`Plan::chains`]) and the rows of each in a plane.
+type ChainRows<'a, 'p> = (&'a Vec<usize>, Vec<Vec<&'p mut [f32]>>);
+
 /// Decode one channel's bands of a lossy file straight into its `plane` (laid out as the
 /// pyramid's shape, zeroed; absent bands stay 0), dequantized as they are decoded. The
 /// bands go chain by chain ([`Plan::chains`]: an orientation's bands from the coarsest
@@ -116,7 +119,8 @@ fn decode_channel_into(p: &Parsed, c: usize, k: usize, plane: &mut [f32]) -> Res
         .collect();
     let all: Vec<usize> = chains.iter().flatten().copied().collect();
     let mut rows = band_rows(plan, &all, plane).into_iter();
-    let work: Vec<(&Vec<usize>, Vec<Vec<&mut [f32]>>)> = chains
+    // each chain with the row slices of its bands
+    let work: Vec<ChainRows> = chains
         .iter()
         .map(|ch| (ch, rows.by_ref().take(ch.len()).collect()))
         .collect();
@@ -316,7 +320,7 @@ fn narrow_row(q: &[i64], out: &mut [i32]) -> bool {
 /// sample type as the `i64` path does (YCoCg-R undone, clamped to the type's range)
 /// while the planes are consumed from their ends ([`narrow_samples`]); `None` when a
 /// value does not fit 32 bits (the `i64` path then decodes the file).
-fn lossless_narrow(p: &Parsed, k: usize) -> Result<Option<Samples>> {
+pub(super) fn lossless_narrow(p: &Parsed, k: usize) -> Result<Option<Samples>> {
     let (h, plan) = (&p.header, &p.plan);
     let region = plan.region(k);
     let npos: usize = region.iter().product();
@@ -458,7 +462,7 @@ pub(super) fn reconstruct(p: &Parsed, k: usize) -> Result<Raster> {
 
 /// A lossless file decoded at level `k` in `i64` planes: every sample type (floats as
 /// their mapped bit patterns or multiples of the quantum).
-fn lossless_wide(p: &Parsed, k: usize) -> Result<Samples> {
+pub(super) fn lossless_wide(p: &Parsed, k: usize) -> Result<Samples> {
     let (h, plan) = (&p.header, &p.plan);
     let region = plan.region(k);
     let npos: usize = region.iter().product();
@@ -692,43 +696,4 @@ pub(super) fn decode_untiled<R: Read>(src: R, len: u64, opts: &DecodeOptions) ->
         header: p.header,
         complete: p.complete,
     })
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::codec::container::read_chunks;
-    use crate::codec::encode::tests::raster;
-    use crate::codec::options::{EncodeOptions, Rate};
-    use crate::scheme::Boundary;
-
-    /// A lossless file of narrow samples decodes in `i32` planes to the samples of the
-    /// `i64` planes at every level.
-    #[test]
-    fn narrow_planes_decode_the_samples_of_wide_ones() {
-        let cases: [(&[usize], usize, SampleType); 4] = [
-            (&[33, 47], 3, SampleType::U8),
-            (&[40, 31], 1, SampleType::I8),
-            (&[9, 20, 17], 1, SampleType::U16),
-            (&[12, 13], 2, SampleType::I16),
-        ];
-        for (dims, c, ty) in cases {
-            let r = raster(dims, c, ty, 3);
-            let opts = EncodeOptions {
-                scheme: Scheme::Linear,
-                boundary: Boundary::Symmetric,
-                levels: 4,
-                rate: Rate::Lossless,
-            };
-            let file = crate::codec::encode(&r, &opts).unwrap();
-            for k in 0..3 {
-                let p = read_chunks(&file[..], file.len() as u64, k, false).unwrap();
-                let narrow = lossless_narrow(&p, k).unwrap().expect("16-bit values fit");
-                assert_eq!(narrow, lossless_wide(&p, k).unwrap(), "{dims:?} {ty} level {k}");
-                if k == 0 {
-                    assert_eq!(narrow, r.samples);
-                }
-            }
-        }
-    }
 }

@@ -120,11 +120,7 @@ fn encode_lossless_narrow<S: SlabSource + ?Sized>(
 ) -> Result<Option<Vec<u8>>> {
     let shape = src.shape().clone();
     let c = shape.channels;
-    let colour = if c >= 3 {
-        Colour::YCoCgR
-    } else {
-        Colour::None
-    };
+    let colour = if c >= 3 { Colour::YCoCgR } else { Colour::None };
     let frame = Frame {
         dims: &shape.dims,
         channels: c,
@@ -360,16 +356,21 @@ fn encode_lossless_wide(r: &RasterView<'_>, opts: &EncodeOptions) -> Result<Vec<
         ))
     });
     drop(planes);
-    Ok(lossless_file(&header, &plan, &coded, &meta::to_bytes(r.meta)))
+    Ok(lossless_file(
+        &header,
+        &plan,
+        &coded,
+        &meta::to_bytes(r.meta),
+    ))
 }
 
 #[cfg(test)]
-pub(super) mod tests {
+mod tests {
     use super::*;
     use crate::io::{DataKind, Raster};
 
     /// A raster of `ty` over its whole range: smooth, noisy, and its extremes.
-    pub(crate) fn raster(dims: &[usize], c: usize, ty: SampleType, seed: u64) -> Raster {
+    fn raster(dims: &[usize], c: usize, ty: SampleType, seed: u64) -> Raster {
         let (lo, hi) = ty.range();
         let n: usize = dims.iter().product::<usize>() * c;
         let mut s = seed;
@@ -422,6 +423,44 @@ pub(super) mod tests {
                 .expect("16-bit values fit");
             assert!(narrow == wide, "{dims:?} {c} {ty}");
             assert!(encode_lossless(&r.view(), &opts).unwrap() == wide);
+        }
+    }
+
+    /// A lossless file of narrow samples decodes in `i32` planes to the samples of the
+    /// `i64` planes at every level.
+    #[test]
+    fn narrow_planes_decode_the_samples_of_wide_ones() {
+        let cases: [(&[usize], usize, SampleType); 4] = [
+            (&[33, 47], 3, SampleType::U8),
+            (&[40, 31], 1, SampleType::I8),
+            (&[9, 20, 17], 1, SampleType::U16),
+            (&[12, 13], 2, SampleType::I16),
+        ];
+        for (dims, c, ty) in cases {
+            let r = raster(dims, c, ty, 3);
+            let opts = EncodeOptions {
+                scheme: Scheme::Linear,
+                boundary: Boundary::Symmetric,
+                levels: 4,
+                rate: Rate::Lossless,
+            };
+            let file = crate::codec::encode(&r, &opts).unwrap();
+            for k in 0..3 {
+                let p =
+                    crate::codec::container::read_chunks(&file[..], file.len() as u64, k, false)
+                        .unwrap();
+                let narrow = super::super::decode::lossless_narrow(&p, k)
+                    .unwrap()
+                    .expect("16-bit values fit");
+                assert_eq!(
+                    narrow,
+                    super::super::decode::lossless_wide(&p, k).unwrap(),
+                    "{dims:?} {ty} level {k}"
+                );
+                if k == 0 {
+                    assert_eq!(narrow, r.samples);
+                }
+            }
         }
     }
 }

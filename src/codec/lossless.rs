@@ -353,12 +353,19 @@ mod tests {
     #[test]
     fn narrow_planes_hold_the_values_of_wide_ones_or_say_they_cannot() {
         for scheme in [Scheme::Haar, Scheme::Linear] {
-            for dims in [vec![37usize], vec![19, 23], vec![9, 8, 13], vec![2, 3, 4, 5]] {
+            for dims in [
+                vec![37usize],
+                vec![19, 23],
+                vec![9, 8, 13],
+                vec![2, 3, 4, 5],
+            ] {
                 let n: usize = dims.iter().product();
                 let mut s = 7u64;
                 let wide: Vec<i64> = (0..n)
                     .map(|i| {
-                        s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+                        s = s
+                            .wrapping_mul(6364136223846793005)
+                            .wrapping_add(1442695040888963407);
                         // noise over the full 16-bit range, and its extremes
                         match i % 5 {
                             0 => 65535,
@@ -384,7 +391,7 @@ mod tests {
                 assert!(q3.iter().zip(&wide).all(|(&a, &b)| a as i64 == b));
             }
         }
-        let mut big = vec![i32::MAX, i32::MIN, i32::MAX, i32::MIN, 0, 5];
+        let mut big = [i32::MAX, i32::MIN, i32::MAX, i32::MIN, 0, 5];
         assert!(!forward(&mut big[..], &plan(&[6], 2, Scheme::Linear)));
     }
 

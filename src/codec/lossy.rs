@@ -104,12 +104,7 @@ pub(super) struct Frame<'a> {
 impl Frame<'_> {
     /// The header of a raster of this frame, its extents and channels checked; `min` and
     /// `max` are left at 0 for the caller.
-    fn header(
-        &self,
-        opts: &EncodeOptions,
-        mode: Mode,
-        colour: Colour,
-    ) -> Result<Header> {
+    fn header(&self, opts: &EncodeOptions, mode: Mode, colour: Colour) -> Result<Header> {
         let (dims, channels) = (self.dims, self.channels);
         if dims.is_empty() || dims.len() > format::header::MAX_AXES {
             return Err(Error::parameter(

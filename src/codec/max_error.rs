@@ -195,7 +195,13 @@ fn residual_file(
 /// coding the distance from it to the fill cost the N22W160 tile an index of about 3000
 /// at each of its 4279 voids) and for a sample that is not finite.
 #[inline]
-fn residual_index(r: &RasterView<'_>, dec: &Samples, i: usize, s: f64, voids: Option<&[bool]>) -> i64 {
+fn residual_index(
+    r: &RasterView<'_>,
+    dec: &Samples,
+    i: usize,
+    s: f64,
+    voids: Option<&[bool]>,
+) -> i64 {
     if voids.is_some_and(|m| m[i]) {
         return 0;
     }

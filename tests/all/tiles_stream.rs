@@ -199,11 +199,17 @@ fn a_16_bit_volume_read_in_slabs_round_trips_exact_or_within_the_bound() {
         let (lo, hi) = ty.range();
         if let Samples::U16(s) = &mut v.samples {
             s.iter_mut().step_by(101).for_each(|x| *x = hi as u16);
-            s.iter_mut().skip(50).step_by(101).for_each(|x| *x = lo as u16);
+            s.iter_mut()
+                .skip(50)
+                .step_by(101)
+                .for_each(|x| *x = lo as u16);
         }
         if let Samples::I16(s) = &mut v.samples {
             s.iter_mut().step_by(101).for_each(|x| *x = hi as i16);
-            s.iter_mut().skip(50).step_by(101).for_each(|x| *x = lo as i16);
+            s.iter_mut()
+                .skip(50)
+                .step_by(101)
+                .for_each(|x| *x = lo as i16);
         }
         let whole = v.dims.clone();
         for (rate, bound) in [
@@ -214,7 +220,10 @@ fn a_16_bit_volume_read_in_slabs_round_trips_exact_or_within_the_bound() {
         ] {
             let o = opts(rate);
             let s = streamed(&mut slab::MemorySlabs::new(&v), &o, &whole);
-            assert!(s == codec::encode(&v, &o).unwrap(), "{ty} {rate:?}: bytes differ");
+            assert!(
+                s == codec::encode(&v, &o).unwrap(),
+                "{ty} {rate:?}: bytes differ"
+            );
             let d = codec::decode(&s, &DecodeOptions::default()).unwrap().raster;
             assert_eq!(d.samples.sample_type(), ty);
             let worst = (0..v.samples.len())
