@@ -93,8 +93,9 @@ pub fn denoise(a: DenoiseArgs) -> CliResult {
     };
     let report = if is_points {
         let text = match stdin {
-            Some(b) => String::from_utf8(b)
-                .map_err(|_| Failure("standard input: not a raster mra reads nor a point list".into()))?,
+            Some(b) => String::from_utf8(b).map_err(|_| {
+                Failure("standard input: not a raster mra reads nor a point list".into())
+            })?,
             None => std::fs::read_to_string(&a.input)
                 .map_err(|e| Failure::context(a.input.display(), e))?,
         };
@@ -149,4 +150,3 @@ pub fn denoise(a: DenoiseArgs) -> CliResult {
     }
     Ok(())
 }
-

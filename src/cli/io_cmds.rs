@@ -95,8 +95,8 @@ pub fn emit(text: &str) -> CliResult {
     }
 }
 
-pub use super::stdio::{is_std, stdin_bytes, write_stdout};
 use super::stdio::StdTemp;
+pub use super::stdio::{is_std, stdin_bytes, write_stdout};
 
 /// The raster in `bytes` read from standard input: its format recognised by its
 /// signature, or raw with `--dims`.
@@ -188,7 +188,9 @@ pub fn write_output_as(
 /// output) `stdout.FORMAT`.
 pub fn format_name(path: &Path, format: Option<&str>) -> PathBuf {
     match format {
-        Some(f) if stdio::is_std(path) => PathBuf::from(format!("stdout.{}", f.trim_start_matches('.'))),
+        Some(f) if stdio::is_std(path) => {
+            PathBuf::from(format!("stdout.{}", f.trim_start_matches('.')))
+        }
         _ => path.to_path_buf(),
     }
 }
@@ -227,7 +229,6 @@ pub fn json_line(v: &impl serde::Serialize) -> String {
     }
     j.to_string()
 }
-
 
 /// Write a file atomically, naming it in any error.
 pub fn write_output(path: &Path, r: &io::Raster, compress: bool) -> Result<(), Failure> {

@@ -160,7 +160,9 @@ fn check_std(args: &[OsString], command: &str, rest: &[PathBuf]) -> Result<(), F
         Writes::Extensions(exts) => {
             let want: Vec<&str> = exts.to_vec();
             match &format {
-                Some(f) if exts.contains(&f.trim_start_matches('.').to_ascii_lowercase().as_str()) => {
+                Some(f)
+                    if exts.contains(&f.trim_start_matches('.').to_ascii_lowercase().as_str()) =>
+                {
                     return Ok(())
                 }
                 _ => want.join(", "),
@@ -174,7 +176,10 @@ fn check_std(args: &[OsString], command: &str, rest: &[PathBuf]) -> Result<(), F
             if fine {
                 return Ok(());
             }
-            RASTER_OUT.replace(" .", ", ").trim_start_matches('.').to_string()
+            RASTER_OUT
+                .replace(" .", ", ")
+                .trim_start_matches('.')
+                .to_string()
         }
     };
     Err(Failure(match format {

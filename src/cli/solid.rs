@@ -161,13 +161,7 @@ fn write_mesh_as(
 /// Print what was made: counts, area, enclosed volume and time; with `check`, the
 /// topology too (closed, manifold, oriented, χ); as text or one JSON object.
 /// On standard error when `output` is standard output.
-fn report(
-    output: &Path,
-    iso: &mc::Isosurface,
-    secs: f64,
-    check: bool,
-    json: bool,
-) -> CliResult {
+fn report(output: &Path, iso: &mc::Isosurface, secs: f64, check: bool, json: bool) -> CliResult {
     let topo = check.then(|| crate::mesh::topology::analyze(&iso.mesh));
     let (area, vol) = mc::area_volume(&iso.mesh);
     let (nv, nf) = (iso.mesh.vertex_count(), iso.mesh.face_count());

@@ -100,7 +100,11 @@ pub fn write_bytes(path: &Path, bytes: &[u8]) -> CliResult {
 /// The extension `-o -` is written as: `format` (`--format`, with or without its dot),
 /// else `only` (the one format the command writes); `None` with a one-line error when
 /// neither is given. `choices` lists the formats in that error.
-pub fn std_format(format: Option<&str>, only: Option<&str>, choices: &str) -> Result<String, Failure> {
+pub fn std_format(
+    format: Option<&str>,
+    only: Option<&str>,
+    choices: &str,
+) -> Result<String, Failure> {
     match (format, only) {
         (Some(f), _) => Ok(f.trim_start_matches('.').to_ascii_lowercase()),
         (None, Some(o)) => Ok(o.to_string()),
@@ -188,6 +192,9 @@ mod tests {
         assert_eq!(std_format(Some(".PNG"), None, "").unwrap(), "png");
         assert_eq!(std_format(None, Some("png"), "").unwrap(), "png");
         let e = std_format(None, None, "obj, ply, off").unwrap_err();
-        assert!(e.0.contains("--format") && e.0.contains("obj, ply, off"), "{e}");
+        assert!(
+            e.0.contains("--format") && e.0.contains("obj, ply, off"),
+            "{e}"
+        );
     }
 }

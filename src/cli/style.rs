@@ -50,6 +50,7 @@ pub fn style(a: StyleArgs) -> CliResult {
     let b = read_points(&a.base)?;
     let out = crate::style::transfer_style(&s.data, &b.data, a.scheme, a.levels, a.closed)?;
     let mut text = Vec::new();
-    crate::points::write(2, &out, &mut text).map_err(|e| Failure::context(a.output.display(), e))?;
+    crate::points::write(2, &out, &mut text)
+        .map_err(|e| Failure::context(a.output.display(), e))?;
     stdio::write_bytes(&a.output, &text)
 }

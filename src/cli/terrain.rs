@@ -416,4 +416,3 @@ fn render(a: RenderArgs) -> CliResult {
         Some(a.format.as_deref().unwrap_or("png")),
     )
 }
-

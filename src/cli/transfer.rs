@@ -98,4 +98,3 @@ pub fn transfer(a: TransferArgs) -> CliResult {
     }
     Ok(())
 }
-

@@ -214,7 +214,10 @@ fn smooth(u: &[f32], fh: usize, fw: usize, ch: usize, f: &Field, taps: &[f32]) -
                 let (o10, o11) = ((y1 * fw + x0) * ch, (y1 * fw + x1) * ch);
                 for (m, a) in acc[..ch].iter_mut().enumerate() {
                     *a += wk
-                        * (w00 * u[o00 + m] + w01 * u[o01 + m] + w10 * u[o10 + m] + w11 * u[o11 + m]);
+                        * (w00 * u[o00 + m]
+                            + w01 * u[o01 + m]
+                            + w10 * u[o10 + m]
+                            + w11 * u[o11 + m]);
                 }
             }
             for (m, a) in acc[..ch].iter().enumerate() {

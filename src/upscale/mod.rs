@@ -390,7 +390,12 @@ macro_rules! store_int {
 /// The extents of the output of `plans` from a raster of extents `dims` (`dims` order).
 pub fn output_dims(dims: &[usize], plans: &[AxisPlan]) -> Vec<usize> {
     (0..dims.len())
-        .map(|a| plans.iter().find(|p| p.axis == a).map_or(dims[a], |p| p.len))
+        .map(|a| {
+            plans
+                .iter()
+                .find(|p| p.axis == a)
+                .map_or(dims[a], |p| p.len)
+        })
         .collect()
 }
 

@@ -26,8 +26,8 @@
 //! (ridges: the spline's overshoot is real) learn a smaller `t`. Measured in
 //! `docs/upscale.md`.
 
-pub use super::cells::ITERATIONS;
 use super::along;
+pub use super::cells::ITERATIONS;
 use super::cells::{area, block_mean, pair_gather};
 use super::slab::{self, Planes};
 use super::{upscale_array, AxisPlan, Edge, Geometry, Method, Mode, Prepared};

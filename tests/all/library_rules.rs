@@ -72,7 +72,10 @@ fn an_upscale_over_the_budget_is_refused_by_the_library_before_allocating() {
     }
     let r = image(1000, 1000);
     let plans = upscale::plan_raster(&r.dims, &[0, 1], Some(100), None, false).unwrap();
-    assert_eq!(upscale::output_dims(&r.dims, &plans), vec![100_000, 100_000]);
+    assert_eq!(
+        upscale::output_dims(&r.dims, &plans),
+        vec![100_000, 100_000]
+    );
     let m = Method::default();
     let bar = mra::progress::Progress::hidden();
     let e = upscale::upscale_view(&r.view(), &m, &plans, &bar).unwrap_err();

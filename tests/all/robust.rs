@@ -1016,8 +1016,17 @@ fn adaptive_mesh_subdivision_keeps_to_the_budget() {
     }
     write(&d, "grid.obj", obj.as_bytes());
     let args = [
-        "mesh", "subdivide", "grid.obj", "-o", "out.obj", "--scheme", "loop", "--steps", "2",
-        "--adaptive", "0",
+        "mesh",
+        "subdivide",
+        "grid.obj",
+        "-o",
+        "out.obj",
+        "--scheme",
+        "loop",
+        "--steps",
+        "2",
+        "--adaptive",
+        "0",
     ];
     let o = run_env(&d, &args, &[("MRA_MAX_BYTES", "64K")]);
     assert_refused(&d, &o, "grid.obj", "out.obj", "adaptive Loop under 64 KiB");
@@ -1030,7 +1039,13 @@ fn adaptive_mesh_subdivision_keeps_to_the_budget() {
     std::fs::remove_file(d.join("out.obj")).unwrap();
     let uniform = &eight[..9];
     let o = run_env(&d, uniform, &[("MRA_MAX_BYTES", "256M")]);
-    assert_refused(&d, &o, "grid.obj", "out.obj", "8 uniform Loop steps under 256 MB");
+    assert_refused(
+        &d,
+        &o,
+        "grid.obj",
+        "out.obj",
+        "8 uniform Loop steps under 256 MB",
+    );
 }
 
 #[test]

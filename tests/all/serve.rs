@@ -339,7 +339,14 @@ fn a_served_region_equals_mra_decode_of_the_same_window() {
 #[test]
 fn a_served_window_of_a_non_square_image_is_the_library_box_rows_first() {
     let d = Dir::new("serve-axes");
-    run(&["generate", "zone-plate", "-o", &d.s("w.png"), "--size", "300x200"]);
+    run(&[
+        "generate",
+        "zone-plate",
+        "-o",
+        &d.s("w.png"),
+        "--size",
+        "300x200",
+    ]);
     run(&[
         "encode",
         &d.s("w.png"),
@@ -354,7 +361,12 @@ fn a_served_window_of_a_non_square_image_is_the_library_box_rows_first() {
     let (x, y, w, h) = (200usize, 20usize, 90usize, 150usize);
     let path = format!("/iiif/3/w.mra/{x},{y},{w},{h}/{w},/0/default.png");
     let r = s.get(&path);
-    assert_eq!(r.status, 200, "{path}: {}", String::from_utf8_lossy(&r.body));
+    assert_eq!(
+        r.status,
+        200,
+        "{path}: {}",
+        String::from_utf8_lossy(&r.body)
+    );
     let served = gray(&r.image());
     let want = mra::codec::decode_file(
         &d.join("w.mra"),
@@ -370,7 +382,10 @@ fn a_served_window_of_a_non_square_image_is_the_library_box_rows_first() {
     let mra::io::Samples::U8(px) = want.samples else {
         panic!("expected u8 samples")
     };
-    assert!(served.2 == px, "{path}: pixels differ from the library's box");
+    assert!(
+        served.2 == px,
+        "{path}: pixels differ from the library's box"
+    );
 }
 
 #[test]

@@ -61,7 +61,10 @@ fn ripple(u: &[f32], dist: &[f64]) -> f64 {
         sum[b] += v;
         cnt[b] += 1.0;
     }
-    let sq: f64 = pts.iter().map(|&(b, v)| (v - sum[b] / cnt[b]).powi(2)).sum();
+    let sq: f64 = pts
+        .iter()
+        .map(|&(b, v)| (v - sum[b] / cnt[b]).powi(2))
+        .sum();
     (sq / pts.len() as f64).sqrt()
 }
 
@@ -104,9 +107,15 @@ fn slanted_edges_leave_no_staircase_and_keep_the_psnr_lead() {
         let angles = [20.0, 30.0, 37.0, 53.0, 60.0, 70.0];
         for a in angles {
             let (img, dist) = edge(a);
-            let (low, ls) =
-                downscale_array(img.clone(), &[N, N], scheme, Boundary::Symmetric, 2, &[0, 1])
-                    .unwrap();
+            let (low, ls) = downscale_array(
+                img.clone(),
+                &[N, N],
+                scheme,
+                Boundary::Symmetric,
+                2,
+                &[0, 1],
+            )
+            .unwrap();
             assert_eq!(ls, vec![N / F, N / F]);
             let u = up(low.clone(), &Method::default());
             let c = up(low, &cubic);
