@@ -25,6 +25,7 @@
 // Index loops over the three axes follow the formulas (several arrays indexed together).
 #![allow(clippy::needless_range_loop)]
 use super::hyperpatch::{checked_count, greville, HyperPatch};
+use super::scene::finite3;
 use crate::curve::KnotVector;
 use crate::mesh::vec3::cross;
 use crate::mesh::Mesh;
@@ -232,38 +233,7 @@ impl Lattice {
                 ));
             }
         }
-        let dims_v = o
-            .get("dims")
-            .ok_or_else(|| err("lattice", "no \"dims\" field"))?;
-        let dims = uints3(dims_v, "lattice.dims")?;
-        for (d, &n) in dims.iter().enumerate() {
-            if !(2..=256).contains(&n) {
-                return Err(err(
-                    &format!("lattice.dims[{d}]"),
-                    format!("{n} control points is outside 2..=256"),
-                ));
-            }
-        }
-        let degrees = match o.get("degree") {
-            None => dims.map(|n| (n - 1).min(3)),
-            Some(Value::Array(_)) => uints3(&o["degree"], "lattice.degree")?,
-            Some(x) => {
-                let d = uint(x, "lattice.degree")?;
-                [d; 3]
-            }
-        };
-        for d in 0..3 {
-            if degrees[d] == 0 || degrees[d] >= dims[d] {
-                return Err(err(
-                    "lattice.degree",
-                    format!(
-                        "{} along axis {d} is outside 1..={} (dims[{d}] − 1)",
-                        degrees[d],
-                        dims[d] - 1
-                    ),
-                ));
-            }
-        }
+        let (dims, degrees) = dims_and_degrees(o)?;
         let (lo, hi) = match o.get("box") {
             None => mesh_box,
             Some(b) => {
@@ -283,32 +253,7 @@ impl Lattice {
             (Some(_), Some(_)) => {
                 return Err(err("lattice", "both \"moves\" and \"points\" (give one)"))
             }
-            (Some(m), None) => {
-                let list = m
-                    .as_array()
-                    .ok_or_else(|| err("lattice.moves", "not an array"))?;
-                for (n, mv) in list.iter().enumerate() {
-                    let place = format!("lattice.moves[{n}]");
-                    let mo = mv
-                        .as_object()
-                        .ok_or_else(|| err(&place, "not an object with index and offset"))?;
-                    let idx_v = mo.get("index").ok_or_else(|| err(&place, "no \"index\""))?;
-                    let idx = uints3(idx_v, &format!("{place}.index"))?;
-                    for d in 0..3 {
-                        if idx[d] >= dims[d] {
-                            return Err(err(
-                                &format!("{place}.index"),
-                                format!("{} is outside 0..{} (dims[{d}])", idx[d], dims[d]),
-                            ));
-                        }
-                    }
-                    let off = vec3(mo, "offset", &place)?;
-                    let p = lat.point_mut(idx)?;
-                    for d in 0..3 {
-                        p[d] += off[d];
-                    }
-                }
-            }
+            (Some(m), None) => apply_moves(&mut lat, m, dims)?,
             (None, Some(p)) => {
                 let list = p
                     .as_array()
@@ -331,6 +276,73 @@ impl Lattice {
         }
         Ok(lat)
     }
+}
+
+/// `dims` (2..=256 control points per axis) and `degree` (one number or three; default
+/// `min(dims − 1, 3)`, each in `1..=dims − 1`) of a lattice object.
+fn dims_and_degrees(o: &Map<String, Value>) -> Result<([usize; 3], [usize; 3])> {
+    let dims_v = o
+        .get("dims")
+        .ok_or_else(|| err("lattice", "no \"dims\" field"))?;
+    let dims = uints3(dims_v, "lattice.dims")?;
+    for (d, &n) in dims.iter().enumerate() {
+        if !(2..=256).contains(&n) {
+            return Err(err(
+                &format!("lattice.dims[{d}]"),
+                format!("{n} control points is outside 2..=256"),
+            ));
+        }
+    }
+    let degrees = match o.get("degree") {
+        None => dims.map(|n| (n - 1).min(3)),
+        Some(Value::Array(_)) => uints3(&o["degree"], "lattice.degree")?,
+        Some(x) => {
+            let d = uint(x, "lattice.degree")?;
+            [d; 3]
+        }
+    };
+    for d in 0..3 {
+        if degrees[d] == 0 || degrees[d] >= dims[d] {
+            return Err(err(
+                "lattice.degree",
+                format!(
+                    "{} along axis {d} is outside 1..={} (dims[{d}] − 1)",
+                    degrees[d],
+                    dims[d] - 1
+                ),
+            ));
+        }
+    }
+    Ok((dims, degrees))
+}
+
+/// Add each of `moves`' offsets to its control point.
+fn apply_moves(lat: &mut Lattice, moves: &Value, dims: [usize; 3]) -> Result<()> {
+    let list = moves
+        .as_array()
+        .ok_or_else(|| err("lattice.moves", "not an array"))?;
+    for (n, mv) in list.iter().enumerate() {
+        let place = format!("lattice.moves[{n}]");
+        let mo = mv
+            .as_object()
+            .ok_or_else(|| err(&place, "not an object with index and offset"))?;
+        let idx_v = mo.get("index").ok_or_else(|| err(&place, "no \"index\""))?;
+        let idx = uints3(idx_v, &format!("{place}.index"))?;
+        for d in 0..3 {
+            if idx[d] >= dims[d] {
+                return Err(err(
+                    &format!("{place}.index"),
+                    format!("{} is outside 0..{} (dims[{d}])", idx[d], dims[d]),
+                ));
+            }
+        }
+        let off = vec3(mo, "offset", &place)?;
+        let p = lat.point_mut(idx)?;
+        for d in 0..3 {
+            p[d] += off[d];
+        }
+    }
+    Ok(())
 }
 
 const IDENTITY: [[f64; 3]; 3] = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
@@ -377,20 +389,13 @@ fn uints3(v: &Value, place: &str) -> Result<[usize; 3]> {
 }
 
 fn to_vec3(v: &Value, place: &str) -> Result<[f64; 3]> {
-    let a = v
-        .as_array()
-        .filter(|a| a.len() == 3)
-        .ok_or_else(|| err(place, "not an array of three numbers"))?;
-    let mut out = [0.0; 3];
-    for d in 0..3 {
-        out[d] = a[d].as_f64().filter(|x| x.is_finite()).ok_or_else(|| {
-            err(
-                &format!("{place}[{d}]"),
-                format!("{} is not a number", a[d]),
-            )
-        })?;
-    }
-    Ok(out)
+    finite3(v).map_err(|e| match e {
+        None => err(place, "not an array of three numbers"),
+        Some(d) => err(
+            &format!("{place}[{d}]"),
+            format!("{} is not a number", v[d]),
+        ),
+    })
 }
 
 fn vec3(o: &Map<String, Value>, key: &str, place: &str) -> Result<[f64; 3]> {

@@ -33,6 +33,9 @@ use crate::tensor::zeroed_vec;
 use crate::{Error, Result};
 use rayon::prelude::*;
 
+mod case;
+use case::{case_table, for_each_loop, link, safe_fan, EDGES};
+
 /// A scalar grid, `x` fastest: `values[(k·ny + j)·nx + i]` sits at
 /// `origin + (i·sx, j·sy, k·sz)`.
 #[derive(Clone, Copy, Debug)]
@@ -50,84 +53,6 @@ pub struct Isosurface {
     /// Unit outward normals from the grid gradient (central differences), when asked.
     pub normals: Option<Vec<[f64; 3]>>,
 }
-
-// corner c has offset (c & 1, c >> 1 & 1, c >> 2 & 1)
-/// Edges as (lower corner, axis); the upper corner is lower + axis bit.
-const EDGES: [(u8, u8); 12] = [
-    (0, 0),
-    (2, 0),
-    (4, 0),
-    (6, 0),
-    (0, 1),
-    (1, 1),
-    (4, 1),
-    (5, 1),
-    (0, 2),
-    (1, 2),
-    (2, 2),
-    (3, 2),
-];
-
-/// Faces as corners in counter-clockwise order seen from outside the cell.
-const FACES: [[u8; 4]; 6] = [
-    [0, 4, 6, 2],
-    [1, 3, 7, 5],
-    [0, 1, 5, 4],
-    [2, 6, 7, 3],
-    [0, 2, 3, 1],
-    [4, 5, 7, 6],
-];
-
-const fn edge_of(a: u8, b: u8) -> u8 {
-    let (lo, hi) = if a < b { (a, b) } else { (b, a) };
-    let axis = match hi ^ lo {
-        1 => 0,
-        2 => 1,
-        _ => 2,
-    };
-    let mut e = 0;
-    while e < 12 {
-        if EDGES[e].0 == lo && EDGES[e].1 == axis {
-            return e as u8;
-        }
-        e += 1;
-    }
-    255
-}
-
-/// For each face, the cell edge between corner i and corner i+1.
-const FACE_EDGES: [[u8; 4]; 6] = {
-    let mut t = [[0u8; 4]; 6];
-    let mut f = 0;
-    while f < 6 {
-        let mut i = 0;
-        while i < 4 {
-            t[f][i] = edge_of(FACES[f][i], FACES[f][(i + 1) % 4]);
-            i += 1;
-        }
-        f += 1;
-    }
-    t
-};
-
-/// For each cell edge, the bit set of cell edges lying on a common cube face with it.
-const SHARE: [u16; 12] = {
-    let mut t = [0u16; 12];
-    let mut f = 0;
-    while f < 6 {
-        let mut a = 0;
-        while a < 4 {
-            let mut b = 0;
-            while b < 4 {
-                t[FACE_EDGES[f][a] as usize] |= 1 << FACE_EDGES[f][b];
-                b += 1;
-            }
-            a += 1;
-        }
-        f += 1;
-    }
-    t
-};
 
 impl Grid<'_> {
     fn check(&self) -> Result<()> {
@@ -162,140 +87,6 @@ impl Grid<'_> {
         }
         Ok(())
     }
-}
-
-/// Where a cell's triangles come from: a precomputed list for a case without ambiguous faces
-/// (the linking then depends on the signs alone), or the general path.
-#[derive(Clone, Copy)]
-struct CaseEntry {
-    /// Triangles as triples of cell edges.
-    tris: [[u8; 3]; 10],
-    count: u8,
-    /// Ambiguous face or a loop that needs a centre vertex: link this cell from its values.
-    general: bool,
-}
-
-/// The 256 cases, built once from the same face-by-face linking as the general path.
-fn case_table() -> &'static [CaseEntry; 256] {
-    static TABLE: std::sync::OnceLock<[CaseEntry; 256]> = std::sync::OnceLock::new();
-    TABLE.get_or_init(|| {
-        let mut t = [CaseEntry {
-            tris: [[0; 3]; 10],
-            count: 0,
-            general: false,
-        }; 256];
-        for case in 1..255usize {
-            let e = &mut t[case];
-            let (next, ambiguous) = link(case as u8, None);
-            if ambiguous {
-                e.general = true;
-                continue;
-            }
-            let mut n = 0;
-            let ok = for_each_loop(&next, |lp| match safe_fan(lp) {
-                Some(s) => {
-                    let m = lp.len();
-                    for o in 1..m - 1 {
-                        e.tris[n] = [lp[s], lp[(s + o) % m], lp[(s + o + 1) % m]];
-                        n += 1;
-                    }
-                    true
-                }
-                None => false,
-            });
-            e.count = n as u8;
-            e.general = !ok;
-        }
-        t
-    })
-}
-
-/// Link a cell's crossings face by face (`next[e]` = the crossing after `e` in its loop, 255
-/// for edges without a crossing). Ambiguous faces use the asymptotic decider on `val`
-/// (corner values minus level); with `val = None` the second result reports that the case
-/// has an ambiguous face (and `next` is incomplete).
-fn link(case: u8, val: Option<&[f64; 8]>) -> ([u8; 12], bool) {
-    let inside = |c: u8| case >> c & 1 == 1;
-    let mut next = [255u8; 12];
-    let mut ambiguous = false;
-    for f in 0..6 {
-        let q = FACES[f];
-        let ins = [inside(q[0]), inside(q[1]), inside(q[2]), inside(q[3])];
-        let fe = FACE_EDGES[f];
-        let mut enter = [0usize; 2];
-        let mut leave = [0usize; 2];
-        let (mut ne, mut nl) = (0, 0);
-        for i in 0..4 {
-            let (a, bb) = (ins[i], ins[(i + 1) % 4]);
-            if !a && bb {
-                enter[ne] = i;
-                ne += 1;
-            } else if a && !bb {
-                leave[nl] = i;
-                nl += 1;
-            }
-        }
-        if ne == 1 {
-            next[fe[enter[0]] as usize] = fe[leave[0]];
-        } else if ne == 2 {
-            ambiguous = true;
-            let Some(val) = val else { continue };
-            // asymptotic decider: inside corners joined iff their product exceeds the other pair's
-            let (p_in, p_out) = if ins[0] {
-                (
-                    val[q[0] as usize] * val[q[2] as usize],
-                    val[q[1] as usize] * val[q[3] as usize],
-                )
-            } else {
-                (
-                    val[q[1] as usize] * val[q[3] as usize],
-                    val[q[0] as usize] * val[q[2] as usize],
-                )
-            };
-            let joined = p_in > p_out;
-            for &e in &enter {
-                // separated: pair with the next edge (around one inside corner);
-                // joined: with the previous edge (around one outside corner)
-                let partner = if joined { (e + 3) % 4 } else { (e + 1) % 4 };
-                next[fe[e] as usize] = fe[partner];
-            }
-        }
-    }
-    (next, ambiguous)
-}
-
-/// Call `f` on every loop of `next` (in order of its smallest edge); stops and returns false
-/// as soon as `f` does.
-fn for_each_loop(next: &[u8; 12], mut f: impl FnMut(&[u8]) -> bool) -> bool {
-    let mut seen = 0u16;
-    for start in 0..12u8 {
-        if next[start as usize] == 255 || seen >> start & 1 == 1 {
-            continue;
-        }
-        let mut lp = [0u8; 12];
-        let mut n = 0;
-        let mut cur = start;
-        loop {
-            seen |= 1 << cur;
-            lp[n] = cur;
-            n += 1;
-            cur = next[cur as usize];
-            if cur == start || n == 12 {
-                break;
-            }
-        }
-        if !f(&lp[..n]) {
-            return false;
-        }
-    }
-    true
-}
-
-/// A fan from `lp[s]` is safe when none of its diagonals joins two vertices of one cube face
-/// (a neighbour could draw the same diagonal: non-manifold edge).
-fn safe_fan(lp: &[u8]) -> Option<usize> {
-    let n = lp.len();
-    (0..n).find(|&s| (2..n - 1).all(|o| SHARE[lp[s] as usize] >> lp[(s + o) % n] & 1 == 0))
 }
 
 /// The largest `f32` `t` with `t ≤ level`: for every `f32` sample `v`,
@@ -644,16 +435,19 @@ fn general_loops(
     });
 }
 
+/// What every plane of passes 2 and 3 reads: the grid, the level and the inside bits.
+#[derive(Clone, Copy)]
+struct Pass<'a> {
+    g: &'a Grid<'a>,
+    level: f64,
+    bits: &'a Bits,
+}
+
 /// Pass 2 for plane `k`: crossings per row and axis into `counts`; triangles and centre
 /// vertices of slab `k` (0 for the last plane).
 #[inline(always)]
-fn count_plane(
-    g: &Grid,
-    level: f64,
-    bits: &Bits,
-    k: usize,
-    counts: &mut [[u32; 3]],
-) -> (usize, usize) {
+fn count_plane(pass: &Pass, k: usize, counts: &mut [[u32; 3]]) -> (usize, usize) {
+    let Pass { g, level, bits } = *pass;
     let [_, ny, nz] = g.dims;
     for (j, c) in counts.iter_mut().enumerate() {
         for axis in 0..3 {
@@ -711,7 +505,8 @@ struct Centres<'a> {
 /// triangles of slab `k`. Only cells with a sign change are visited; their case selects
 /// precomputed triangles, or the general linking with the asymptotic decider.
 #[inline(always)]
-fn emit_plane(g: &Grid, level: f64, bits: &Bits, k: usize, out: Out<'_>) {
+fn emit_plane(pass: &Pass, k: usize, out: Out<'_>) {
+    let Pass { g, level, bits } = *pass;
     let Out {
         pos,
         nrm,
@@ -896,43 +691,31 @@ mod popcnt {
     /// # Safety
     /// The CPU must support popcnt.
     #[target_feature(enable = "popcnt")]
-    unsafe fn count(
-        g: &Grid,
-        level: f64,
-        bits: &Bits,
-        k: usize,
-        c: &mut [[u32; 3]],
-    ) -> (usize, usize) {
-        count_plane(g, level, bits, k, c)
+    unsafe fn count(pass: &Pass, k: usize, c: &mut [[u32; 3]]) -> (usize, usize) {
+        count_plane(pass, k, c)
     }
 
     /// # Safety
     /// The CPU must support popcnt.
     #[target_feature(enable = "popcnt")]
-    unsafe fn emit(g: &Grid, level: f64, bits: &Bits, k: usize, out: Out<'_>) {
-        emit_plane(g, level, bits, k, out)
+    unsafe fn emit(pass: &Pass, k: usize, out: Out<'_>) {
+        emit_plane(pass, k, out)
     }
 
-    pub(super) fn count_fast(
-        g: &Grid,
-        level: f64,
-        bits: &Bits,
-        k: usize,
-        c: &mut [[u32; 3]],
-    ) -> (usize, usize) {
+    pub(super) fn count_fast(pass: &Pass, k: usize, c: &mut [[u32; 3]]) -> (usize, usize) {
         if std::is_x86_feature_detected!("popcnt") {
             // SAFETY: the CPU supports popcnt (checked just above).
-            return unsafe { count(g, level, bits, k, c) };
+            return unsafe { count(pass, k, c) };
         }
-        count_plane(g, level, bits, k, c)
+        count_plane(pass, k, c)
     }
 
-    pub(super) fn emit_fast(g: &Grid, level: f64, bits: &Bits, k: usize, out: Out<'_>) {
+    pub(super) fn emit_fast(pass: &Pass, k: usize, out: Out<'_>) {
         if std::is_x86_feature_detected!("popcnt") {
             // SAFETY: the CPU supports popcnt (checked just above).
-            return unsafe { emit(g, level, bits, k, out) };
+            return unsafe { emit(pass, k, out) };
         }
-        emit_plane(g, level, bits, k, out)
+        emit_plane(pass, k, out)
     }
 }
 #[cfg(target_arch = "x86_64")]
@@ -957,45 +740,27 @@ pub fn polygonize(grid: &Grid, level: f64, normals: bool) -> Result<Isosurface> 
     if !level.is_finite() {
         return Err(Error::parameter("level", level, "a finite number"));
     }
-    let [nx, ny, nz] = grid.dims;
-    let w = nx.div_ceil(64);
-    let t = f32_threshold(level);
+    let [_, ny, nz] = grid.dims;
 
     // pass 1: inside bits
-    let mut inside = vec![0u64; nz * ny * w];
-    inside
-        .par_chunks_mut(ny * w)
-        .enumerate()
-        .for_each(|(k, out)| inside_plane(grid, t, k, w, out));
-    let mut bits = Bits {
-        dims: grid.dims,
-        w,
-        inside,
-        first: Vec::new(),
-    };
+    let mut bits = inside_bits(grid, f32_threshold(level));
 
     // pass 2: vertices per row and axis, triangles and centre vertices per slab
     let mut counts = vec![[0u32; 3]; nz * ny];
-    let per_slab: Vec<(usize, usize)> = counts
-        .par_chunks_mut(ny)
-        .enumerate()
-        .map(|(k, c)| count_fast(grid, level, &bits, k, c))
-        .collect();
-
-    // numbering: rows in order, x then y then z crossings, increasing i; then centre vertices
-    // slab by slab
-    let mut first = vec![0u32; 3 * nz * ny];
-    let mut plane_len = vec![0usize; nz];
-    let mut next = 0u32;
-    for (r, c) in counts.iter().enumerate() {
-        for axis in 0..3 {
-            first[3 * r + axis] = next;
-            next += c[axis];
-        }
-        plane_len[r / ny] += (c[0] + c[1] + c[2]) as usize;
-    }
+    let per_slab: Vec<(usize, usize)> = {
+        let pass = Pass {
+            g: grid,
+            level,
+            bits: &bits,
+        };
+        counts
+            .par_chunks_mut(ny)
+            .enumerate()
+            .map(|(k, c)| count_fast(&pass, k, c))
+            .collect()
+    };
+    let (first, plane_len, nv) = number_rows(&counts, ny, nz);
     bits.first = first;
-    let nv = next as usize;
     let n_extra: usize = per_slab.iter().map(|p| p.1).sum();
     let n_tris: usize = per_slab.iter().map(|p| p.0).sum();
     if nv + n_extra > u32::MAX as usize || 3 * n_tris > u32::MAX as usize {
@@ -1016,51 +781,131 @@ pub fn polygonize(grid: &Grid, level: f64, normals: bool) -> Result<Isosurface> 
         Vec::new()
     };
     let mut indices: Vec<u32> = zeroed_vec(3 * n_tris);
-    {
-        let (grid_pos, extra_pos) = positions.split_at_mut(nv);
-        let pos_parts = split_lengths(grid_pos, plane_len.iter().copied());
-        let extra_parts = split_lengths(extra_pos, per_slab.iter().map(|p| p.1));
-        let (mut nrm_parts, mut extra_nrm_parts): (Vec<_>, Vec<_>) = if normals {
-            let (a, b) = nrm_all.split_at_mut(nv);
-            (
-                split_lengths(a, plane_len.iter().copied())
-                    .into_iter()
-                    .map(Some)
-                    .collect(),
-                split_lengths(b, per_slab.iter().map(|p| p.1))
-                    .into_iter()
-                    .map(Some)
-                    .collect(),
-            )
-        } else {
-            (
-                (0..nz).map(|_| None).collect(),
-                (0..nz).map(|_| None).collect(),
-            )
-        };
-        let tri_parts = split_lengths(&mut indices, per_slab.iter().map(|p| 3 * p.0));
-        let mut extra_first = nv as u32;
-        let mut outs = Vec::with_capacity(nz);
-        for (k, ((pos, extra_pos), tris)) in pos_parts
-            .into_iter()
-            .zip(extra_parts)
-            .zip(tri_parts)
-            .enumerate()
-        {
-            outs.push(Out {
-                pos,
-                nrm: nrm_parts[k].take(),
-                extra_pos,
-                extra_nrm: extra_nrm_parts[k].take(),
-                extra_first,
-                tris,
-            });
-            extra_first += per_slab[k].1 as u32;
-        }
-        outs.into_par_iter()
-            .enumerate()
-            .for_each(|(k, out)| emit_fast(grid, level, &bits, k, out));
+    let sizes = SlabSizes {
+        nv,
+        plane_len: &plane_len,
+        per_slab: &per_slab,
+    };
+    let nrm = normals.then_some(&mut nrm_all[..]);
+    let pass = Pass {
+        g: grid,
+        level,
+        bits: &bits,
+    };
+    slab_outputs(&sizes, &mut positions, nrm, &mut indices)
+        .into_par_iter()
+        .enumerate()
+        .for_each(|(k, out)| emit_fast(&pass, k, out));
+    let mesh = Mesh {
+        positions,
+        offsets: triangle_offsets(n_tris),
+        indices,
+        attributes: Default::default(),
+    };
+    Ok(Isosurface {
+        mesh,
+        normals: normals.then_some(nrm_all),
+    })
+}
+
+/// Pass 1: one bit per sample, `value > t`, packed in 64-bit words per row.
+fn inside_bits(grid: &Grid, t: f32) -> Bits {
+    let [nx, ny, nz] = grid.dims;
+    let w = nx.div_ceil(64);
+    let mut inside = vec![0u64; nz * ny * w];
+    inside
+        .par_chunks_mut(ny * w)
+        .enumerate()
+        .for_each(|(k, out)| inside_plane(grid, t, k, w, out));
+    Bits {
+        dims: grid.dims,
+        w,
+        inside,
+        first: Vec::new(),
     }
+}
+
+/// Vertex numbering: rows in order, x then y then z crossings, increasing i (centre vertices
+/// follow slab by slab). Returns the first index per row and axis, the vertex count per plane
+/// and the number of grid-edge vertices.
+fn number_rows(counts: &[[u32; 3]], ny: usize, nz: usize) -> (Vec<u32>, Vec<usize>, usize) {
+    let mut first = vec![0u32; 3 * nz * ny];
+    let mut plane_len = vec![0usize; nz];
+    let mut next = 0u32;
+    for (r, c) in counts.iter().enumerate() {
+        for axis in 0..3 {
+            first[3 * r + axis] = next;
+            next += c[axis];
+        }
+        plane_len[r / ny] += (c[0] + c[1] + c[2]) as usize;
+    }
+    (first, plane_len, next as usize)
+}
+
+/// How the output arrays divide between planes and slabs.
+struct SlabSizes<'a> {
+    /// Grid-edge vertices (centre vertices follow them).
+    nv: usize,
+    /// Grid-edge vertices per plane.
+    plane_len: &'a [usize],
+    /// (triangles, centre vertices) per slab.
+    per_slab: &'a [(usize, usize)],
+}
+
+/// Split the output arrays into one disjoint [`Out`] per slab.
+fn slab_outputs<'a>(
+    sizes: &SlabSizes,
+    positions: &'a mut [[f64; 3]],
+    normals: Option<&'a mut [[f64; 3]]>,
+    indices: &'a mut [u32],
+) -> Vec<Out<'a>> {
+    let nz = sizes.plane_len.len();
+    let per_slab = sizes.per_slab;
+    let split = |v: &'a mut [[f64; 3]]| {
+        let (a, b) = v.split_at_mut(sizes.nv);
+        (
+            split_lengths(a, sizes.plane_len.iter().copied()),
+            split_lengths(b, per_slab.iter().map(|p| p.1)),
+        )
+    };
+    let (pos_parts, extra_parts) = split(positions);
+    let (mut nrm_parts, mut extra_nrm_parts): (Vec<_>, Vec<_>) = match normals {
+        Some(n) => {
+            let (a, b) = split(n);
+            (
+                a.into_iter().map(Some).collect(),
+                b.into_iter().map(Some).collect(),
+            )
+        }
+        None => (
+            (0..nz).map(|_| None).collect(),
+            (0..nz).map(|_| None).collect(),
+        ),
+    };
+    let tri_parts = split_lengths(indices, per_slab.iter().map(|p| 3 * p.0));
+    let mut extra_first = sizes.nv as u32;
+    let mut outs = Vec::with_capacity(nz);
+    for (k, ((pos, extra_pos), tris)) in pos_parts
+        .into_iter()
+        .zip(extra_parts)
+        .zip(tri_parts)
+        .enumerate()
+    {
+        outs.push(Out {
+            pos,
+            nrm: nrm_parts[k].take(),
+            extra_pos,
+            extra_nrm: extra_nrm_parts[k].take(),
+            extra_first,
+            tris,
+        });
+        extra_first += per_slab[k].1 as u32;
+    }
+    outs
+}
+
+/// Face offsets of an all-triangle mesh: `offsets[f] = 3·f`.
+fn triangle_offsets(n_tris: usize) -> Vec<u32> {
     let mut offsets: Vec<u32> = zeroed_vec(n_tris + 1);
     offsets
         .par_chunks_mut(1 << 16)
@@ -1070,16 +915,7 @@ pub fn polygonize(grid: &Grid, level: f64, normals: bool) -> Result<Isosurface> 
                 *x = 3 * ((c << 16) + n) as u32;
             }
         });
-    let mesh = Mesh {
-        positions,
-        offsets,
-        indices,
-        attributes: Default::default(),
-    };
-    Ok(Isosurface {
-        mesh,
-        normals: normals.then_some(nrm_all),
-    })
+    offsets
 }
 
 /// Area and enclosed (signed) volume of a triangle mesh (divergence theorem; positive when

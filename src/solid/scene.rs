@@ -113,19 +113,19 @@ struct Parser<'a> {
     done: HashMap<String, Node>,
 }
 
-fn to_vec3(v: &Value, place: &str) -> Result<[f64; 3]> {
-    let a = v
-        .as_array()
-        .filter(|a| a.len() == 3)
-        .ok_or_else(|| err(place, "not an array of three numbers"))?;
+/// A JSON array of three finite numbers; the error is `None` when `v` is not an array of
+/// three, `Some(d)` when element `d` is not a finite number.
+pub(crate) fn finite3(v: &Value) -> std::result::Result<[f64; 3], Option<usize>> {
+    let a = v.as_array().filter(|a| a.len() == 3).ok_or(None)?;
     let mut out = [0.0; 3];
-    for (i, x) in a.iter().enumerate() {
-        out[i] = x
-            .as_f64()
-            .filter(|x| x.is_finite())
-            .ok_or_else(|| err(place, "not an array of three numbers"))?;
+    for (d, x) in a.iter().enumerate() {
+        out[d] = x.as_f64().filter(|x| x.is_finite()).ok_or(Some(d))?;
     }
     Ok(out)
+}
+
+fn to_vec3(v: &Value, place: &str) -> Result<[f64; 3]> {
+    finite3(v).map_err(|_| err(place, "not an array of three numbers"))
 }
 
 fn opt_vec3(o: &Map<String, Value>, key: &str, place: &str) -> Result<Option<[f64; 3]>> {
@@ -171,137 +171,155 @@ impl Parser<'_> {
             .as_object()
             .ok_or_else(|| err(place, "a node must be a JSON object"))?;
         if let Some(r) = o.get("ref") {
-            let name = r
-                .as_str()
-                .ok_or_else(|| err(place, "\"ref\" must be a name"))?;
-            if let Some(n) = self.done.get(name) {
-                return Ok(n.clone());
-            }
-            if self.stack.iter().any(|s| s == name) {
-                let mut cycle = self.stack.clone();
-                cycle.push(name.to_string());
-                return Err(err(
-                    place,
-                    format!("cyclic reference {}", cycle.join(" -> ")),
-                ));
-            }
-            let def = self
-                .defs
-                .get(name)
-                .ok_or_else(|| err(place, format!("unknown reference \"{name}\"")))?;
-            self.stack.push(name.to_string());
-            let n = self.node(def, &format!("defs.{name}"))?;
-            self.stack.pop();
-            self.done.insert(name.to_string(), n.clone());
-            return Ok(n);
+            return self.reference(r, place);
         }
         let ty = o
             .get("type")
             .and_then(Value::as_str)
             .ok_or_else(|| err(place, "missing \"type\" (or \"ref\")"))?;
         Ok(match ty {
-            "sphere" => Node::Sphere {
-                center: opt_vec3(o, "center", place)?.unwrap_or([0.0; 3]),
-                radius: positive(o, "radius", place)?,
-            },
-            "box" => {
-                let (min, max) = if o.contains_key("min") {
-                    (vec3(o, "min", place)?, vec3(o, "max", place)?)
-                } else {
-                    let c = opt_vec3(o, "center", place)?.unwrap_or([0.0; 3]);
-                    let s = vec3(o, "size", place)?;
-                    (
-                        [c[0] - s[0] / 2.0, c[1] - s[1] / 2.0, c[2] - s[2] / 2.0],
-                        [c[0] + s[0] / 2.0, c[1] + s[1] / 2.0, c[2] + s[2] / 2.0],
-                    )
-                };
-                if (0..3).any(|i| max[i] <= min[i]) {
-                    return Err(err(place, "box with max ≤ min on some axis"));
-                }
-                Node::Box { min, max }
-            }
-            "cylinder" => {
-                let (a, b) = (vec3(o, "a", place)?, vec3(o, "b", place)?);
-                distinct(a, b, place)?;
-                Node::Cylinder {
-                    a,
-                    b,
-                    radius: positive(o, "radius", place)?,
-                }
-            }
-            "cone" => {
-                let (a, b) = (vec3(o, "a", place)?, vec3(o, "b", place)?);
-                distinct(a, b, place)?;
-                let ra = num(o, "ra", place)?;
-                let rb = num(o, "rb", place)?;
-                if ra < 0.0 || rb < 0.0 || ra + rb <= 0.0 {
-                    return Err(err(place, "cone radii must be ≥ 0 and not both 0"));
-                }
-                Node::Cone { a, b, ra, rb }
-            }
-            "torus" => {
-                let major = positive(o, "major", place)?;
-                let minor = positive(o, "minor", place)?;
-                let axis = opt_vec3(o, "axis", place)?.unwrap_or([0.0, 0.0, 1.0]);
-                if axis == [0.0; 3] {
-                    return Err(err(&format!("{place}.axis"), "zero vector"));
-                }
-                Node::Torus {
-                    center: opt_vec3(o, "center", place)?.unwrap_or([0.0; 3]),
-                    axis,
-                    major,
-                    minor,
-                }
-            }
-            "plane" => {
-                let n = vec3(o, "normal", place)?;
-                let l = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
-                if l == 0.0 {
-                    return Err(err(&format!("{place}.normal"), "zero vector"));
-                }
-                Node::Plane {
-                    normal: [n[0] / l, n[1] / l, n[2] / l],
-                    offset: opt_num(o, "offset", place)?.unwrap_or(0.0) / l,
-                }
-            }
-            "blend" => {
-                let items = o
-                    .get("items")
-                    .and_then(Value::as_array)
-                    .ok_or_else(|| err(place, "missing \"items\" array"))?;
-                if items.is_empty() {
-                    return Err(err(place, "empty blend"));
-                }
-                let mut out = Vec::new();
-                for (i, it) in items.iter().enumerate() {
-                    out.push(skeleton(it, &format!("{place}.items[{i}]"))?);
-                }
-                Node::Blend {
-                    threshold: num(o, "threshold", place)?,
-                    items: out,
-                }
-            }
-            "union" | "intersection" | "difference" => {
-                let ch = o
-                    .get("children")
-                    .and_then(Value::as_array)
-                    .ok_or_else(|| err(place, "missing \"children\" array"))?;
-                if ch.is_empty() {
-                    return Err(err(place, format!("empty {ty}")));
-                }
-                let mut out = Vec::new();
-                for (i, c) in ch.iter().enumerate() {
-                    out.push(self.node(c, &format!("{place}.children[{i}]"))?);
-                }
-                match ty {
-                    "union" => Node::Union(out),
-                    "intersection" => Node::Intersection(out),
-                    _ => Node::Difference(out),
-                }
-            }
-            other => return Err(err(place, format!("unknown primitive \"{other}\""))),
+            "blend" => blend(o, place)?,
+            "union" | "intersection" | "difference" => self.csg(o, ty, place)?,
+            _ => primitive(o, ty, place)?,
         })
     }
+
+    /// A `{"ref": name}` node: the definition parsed once, cycles refused.
+    fn reference(&mut self, r: &Value, place: &str) -> Result<Node> {
+        let name = r
+            .as_str()
+            .ok_or_else(|| err(place, "\"ref\" must be a name"))?;
+        if let Some(n) = self.done.get(name) {
+            return Ok(n.clone());
+        }
+        if self.stack.iter().any(|s| s == name) {
+            let mut cycle = self.stack.clone();
+            cycle.push(name.to_string());
+            return Err(err(
+                place,
+                format!("cyclic reference {}", cycle.join(" -> ")),
+            ));
+        }
+        let def = self
+            .defs
+            .get(name)
+            .ok_or_else(|| err(place, format!("unknown reference \"{name}\"")))?;
+        self.stack.push(name.to_string());
+        let n = self.node(def, &format!("defs.{name}"))?;
+        self.stack.pop();
+        self.done.insert(name.to_string(), n.clone());
+        Ok(n)
+    }
+
+    /// A Boolean node over its `children`.
+    fn csg(&mut self, o: &Map<String, Value>, ty: &str, place: &str) -> Result<Node> {
+        let ch = o
+            .get("children")
+            .and_then(Value::as_array)
+            .ok_or_else(|| err(place, "missing \"children\" array"))?;
+        if ch.is_empty() {
+            return Err(err(place, format!("empty {ty}")));
+        }
+        let mut out = Vec::new();
+        for (i, c) in ch.iter().enumerate() {
+            out.push(self.node(c, &format!("{place}.children[{i}]"))?);
+        }
+        Ok(match ty {
+            "union" => Node::Union(out),
+            "intersection" => Node::Intersection(out),
+            _ => Node::Difference(out),
+        })
+    }
+}
+
+/// A primitive node of type `ty`.
+fn primitive(o: &Map<String, Value>, ty: &str, place: &str) -> Result<Node> {
+    Ok(match ty {
+        "sphere" => Node::Sphere {
+            center: opt_vec3(o, "center", place)?.unwrap_or([0.0; 3]),
+            radius: positive(o, "radius", place)?,
+        },
+        "box" => {
+            let (min, max) = if o.contains_key("min") {
+                (vec3(o, "min", place)?, vec3(o, "max", place)?)
+            } else {
+                let c = opt_vec3(o, "center", place)?.unwrap_or([0.0; 3]);
+                let s = vec3(o, "size", place)?;
+                (
+                    [c[0] - s[0] / 2.0, c[1] - s[1] / 2.0, c[2] - s[2] / 2.0],
+                    [c[0] + s[0] / 2.0, c[1] + s[1] / 2.0, c[2] + s[2] / 2.0],
+                )
+            };
+            if (0..3).any(|i| max[i] <= min[i]) {
+                return Err(err(place, "box with max ≤ min on some axis"));
+            }
+            Node::Box { min, max }
+        }
+        "cylinder" => {
+            let (a, b) = (vec3(o, "a", place)?, vec3(o, "b", place)?);
+            distinct(a, b, place)?;
+            Node::Cylinder {
+                a,
+                b,
+                radius: positive(o, "radius", place)?,
+            }
+        }
+        "cone" => {
+            let (a, b) = (vec3(o, "a", place)?, vec3(o, "b", place)?);
+            distinct(a, b, place)?;
+            let ra = num(o, "ra", place)?;
+            let rb = num(o, "rb", place)?;
+            if ra < 0.0 || rb < 0.0 || ra + rb <= 0.0 {
+                return Err(err(place, "cone radii must be ≥ 0 and not both 0"));
+            }
+            Node::Cone { a, b, ra, rb }
+        }
+        "torus" => {
+            let major = positive(o, "major", place)?;
+            let minor = positive(o, "minor", place)?;
+            let axis = opt_vec3(o, "axis", place)?.unwrap_or([0.0, 0.0, 1.0]);
+            if axis == [0.0; 3] {
+                return Err(err(&format!("{place}.axis"), "zero vector"));
+            }
+            Node::Torus {
+                center: opt_vec3(o, "center", place)?.unwrap_or([0.0; 3]),
+                axis,
+                major,
+                minor,
+            }
+        }
+        "plane" => {
+            let n = vec3(o, "normal", place)?;
+            let l = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+            if l == 0.0 {
+                return Err(err(&format!("{place}.normal"), "zero vector"));
+            }
+            Node::Plane {
+                normal: [n[0] / l, n[1] / l, n[2] / l],
+                offset: opt_num(o, "offset", place)?.unwrap_or(0.0) / l,
+            }
+        }
+        other => return Err(err(place, format!("unknown primitive \"{other}\""))),
+    })
+}
+
+/// A blend of skeletal fields (§10.5) minus a threshold.
+fn blend(o: &Map<String, Value>, place: &str) -> Result<Node> {
+    let items = o
+        .get("items")
+        .and_then(Value::as_array)
+        .ok_or_else(|| err(place, "missing \"items\" array"))?;
+    if items.is_empty() {
+        return Err(err(place, "empty blend"));
+    }
+    let mut out = Vec::new();
+    for (i, it) in items.iter().enumerate() {
+        out.push(skeleton(it, &format!("{place}.items[{i}]"))?);
+    }
+    Ok(Node::Blend {
+        threshold: num(o, "threshold", place)?,
+        items: out,
+    })
 }
 
 fn distinct(a: [f64; 3], b: [f64; 3], place: &str) -> Result<()> {
