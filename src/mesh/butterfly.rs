@@ -18,6 +18,7 @@
 //! The valence-6 test and the stencils match VTK's `vtkButterflySubdivisionFilter` on closed
 //! meshes (where valence = number of faces at the vertex).
 
+use super::catmull_clark::edge_points;
 use super::features::{Features, Tags, VertexRule};
 use super::halfedge::{HalfEdgeMesh, VertexId};
 use super::loop_subdivision::{quadrisect, GRAIN};
@@ -86,80 +87,74 @@ pub fn step(mesh: &Mesh, he: &HalfEdgeMesh, tags: &Tags) -> Result<(Mesh, Featur
         .collect();
     let mut out = vec![[0.0f64; 3]; nv + ne];
     out[..nv].copy_from_slice(p);
-    out[nv..]
-        .par_iter_mut()
-        .with_min_len(GRAIN)
-        .enumerate()
-        .for_each(|(e, o)| {
-            let [c0, c1] = he.edges.corners[e];
-            let [a, b] = he.edges.verts[e];
-            let (pa, pb) = (p[a as usize], p[b as usize]);
-            let mut acc = [0.0; 3];
-            if tags.sharp[e] {
-                // 4-point rule along the boundary / crease
-                let far = |v: u32, other: u32| match tags.rule(he, v) {
-                    VertexRule::Crease(x, y) => Some(if x == other { y } else { x }),
-                    _ => None,
-                };
-                match (far(a, b), far(b, a)) {
-                    (Some(a2), Some(b2)) => {
-                        let (qa, qb) = (p[a2 as usize], p[b2 as usize]);
-                        for d in 0..3 {
-                            acc[d] = 9.0 / 16.0 * (pa[d] + pb[d]) - 1.0 / 16.0 * (qa[d] + qb[d]);
-                        }
-                    }
-                    _ => acc = std::array::from_fn(|d| 0.5 * (pa[d] + pb[d])),
-                }
-            } else {
-                let (ba, bb) = (boundary[a as usize], boundary[b as usize]);
-                let (ka, kb) = (valence[a as usize] as usize, valence[b as usize] as usize);
-                // half-edges a→b and b→a
-                let (hab, hba) = if he.from[c0 as usize] == a {
-                    (c0, c1)
-                } else {
-                    (c1, c0)
-                };
-                let pc = p[he.from[he.prev[hab as usize] as usize] as usize];
-                let pd = p[he.from[he.prev[hba as usize] as usize] as usize];
-                if ba && bb {
+    edge_points(&mut out[nv..], p, he, |e, [c0, c1], pa, pb| {
+        let [a, b] = he.edges.verts[e];
+        let mut acc = [0.0; 3];
+        if tags.sharp[e] {
+            // 4-point rule along the boundary / crease
+            let far = |v: u32, other: u32| match tags.rule(he, v) {
+                VertexRule::Crease(x, y) => Some(if x == other { y } else { x }),
+                _ => None,
+            };
+            match (far(a, b), far(b, a)) {
+                (Some(a2), Some(b2)) => {
+                    let (qa, qb) = (p[a2 as usize], p[b2 as usize]);
                     for d in 0..3 {
-                        acc[d] = 0.375 * (pa[d] + pb[d]) + 0.125 * (pc[d] + pd[d]);
+                        acc[d] = 9.0 / 16.0 * (pa[d] + pb[d]) - 1.0 / 16.0 * (qa[d] + qb[d]);
                     }
-                } else if ba {
-                    stencil(mesh, he, hba, kb, &mut acc, 1.0);
-                } else if bb {
-                    stencil(mesh, he, hab, ka, &mut acc, 1.0);
-                } else if ka == 6 && kb == 6 {
-                    // wings: across (b,c), (c,a) in a→b's face and (a,d), (d,b) in b→a's face
-                    let n_ab = he.next[hab as usize];
-                    let p_ab = he.prev[hab as usize];
-                    let n_ba = he.next[hba as usize];
-                    let p_ba = he.prev[hba as usize];
-                    let ws = [
-                        wing(he, n_ab),
-                        wing(he, p_ab),
-                        wing(he, n_ba),
-                        wing(he, p_ba),
-                    ];
-                    for d in 0..3 {
-                        acc[d] = 0.5 * (pa[d] + pb[d]) + 0.125 * (pc[d] + pd[d]);
-                    }
-                    for w in ws.into_iter().flatten() {
-                        let q = p[w as usize];
-                        for d in 0..3 {
-                            acc[d] -= q[d] / 16.0;
-                        }
-                    }
-                } else if ka == 6 {
-                    stencil(mesh, he, hba, kb, &mut acc, 1.0);
-                } else if kb == 6 {
-                    stencil(mesh, he, hab, ka, &mut acc, 1.0);
-                } else {
-                    stencil(mesh, he, hab, ka, &mut acc, 0.5);
-                    stencil(mesh, he, hba, kb, &mut acc, 0.5);
                 }
+                _ => acc = std::array::from_fn(|d| 0.5 * (pa[d] + pb[d])),
             }
-            *o = acc;
-        });
+        } else {
+            let (ba, bb) = (boundary[a as usize], boundary[b as usize]);
+            let (ka, kb) = (valence[a as usize] as usize, valence[b as usize] as usize);
+            // half-edges a→b and b→a
+            let (hab, hba) = if he.from[c0 as usize] == a {
+                (c0, c1)
+            } else {
+                (c1, c0)
+            };
+            let pc = p[he.from[he.prev[hab as usize] as usize] as usize];
+            let pd = p[he.from[he.prev[hba as usize] as usize] as usize];
+            if ba && bb {
+                for d in 0..3 {
+                    acc[d] = 0.375 * (pa[d] + pb[d]) + 0.125 * (pc[d] + pd[d]);
+                }
+            } else if ba {
+                stencil(mesh, he, hba, kb, &mut acc, 1.0);
+            } else if bb {
+                stencil(mesh, he, hab, ka, &mut acc, 1.0);
+            } else if ka == 6 && kb == 6 {
+                // wings: across (b,c), (c,a) in a→b's face and (a,d), (d,b) in b→a's face
+                let n_ab = he.next[hab as usize];
+                let p_ab = he.prev[hab as usize];
+                let n_ba = he.next[hba as usize];
+                let p_ba = he.prev[hba as usize];
+                let ws = [
+                    wing(he, n_ab),
+                    wing(he, p_ab),
+                    wing(he, n_ba),
+                    wing(he, p_ba),
+                ];
+                for d in 0..3 {
+                    acc[d] = 0.5 * (pa[d] + pb[d]) + 0.125 * (pc[d] + pd[d]);
+                }
+                for w in ws.into_iter().flatten() {
+                    let q = p[w as usize];
+                    for d in 0..3 {
+                        acc[d] -= q[d] / 16.0;
+                    }
+                }
+            } else if ka == 6 {
+                stencil(mesh, he, hba, kb, &mut acc, 1.0);
+            } else if kb == 6 {
+                stencil(mesh, he, hab, ka, &mut acc, 1.0);
+            } else {
+                stencil(mesh, he, hab, ka, &mut acc, 0.5);
+                stencil(mesh, he, hba, kb, &mut acc, 0.5);
+            }
+        }
+        acc
+    });
     quadrisect(mesh, he, tags, out)
 }

@@ -56,6 +56,60 @@ pub(crate) fn check_size(vertices: usize, indices: usize) -> Result<()> {
     Ok(())
 }
 
+/// The new point of every edge `e`, in parallel: `out[e] = rule(e, [c0, c1], a, b)` with
+/// `c0, c1` the edge's two corners (half-edges) and `a, b` the positions of its end points.
+pub(crate) fn edge_points(
+    out: &mut [[f64; 3]],
+    p: &[[f64; 3]],
+    he: &HalfEdgeMesh,
+    rule: impl Fn(usize, [u32; 2], [f64; 3], [f64; 3]) -> [f64; 3] + Sync,
+) {
+    out.par_iter_mut()
+        .with_min_len(GRAIN)
+        .enumerate()
+        .for_each(|(e, o)| {
+            let [a, b] = he.edges.verts[e];
+            *o = rule(e, he.edges.corners[e], p[a as usize], p[b as usize]);
+        });
+}
+
+/// The new point of every old vertex `v`, in parallel: the tagged rule's point on a crease,
+/// boundary or corner; else `smooth(v, s, n)` with `s = Σ ring(h)` over the `n` outgoing
+/// half-edges `h` of `v`; an isolated vertex stays.
+pub(crate) fn vertex_points(
+    out: &mut [[f64; 3]],
+    p: &[[f64; 3]],
+    he: &HalfEdgeMesh,
+    tags: &Tags,
+    ring: impl Fn(usize) -> [f64; 3] + Sync,
+    smooth: impl Fn([f64; 3], [f64; 3], usize) -> [f64; 3] + Sync,
+) {
+    out.par_iter_mut()
+        .with_min_len(GRAIN)
+        .enumerate()
+        .for_each(|(v, o)| {
+            *o = match tags.rule(he, v as u32).sharp_point(p, v) {
+                Some(q) => q,
+                None => {
+                    let mut s = [0.0; 3];
+                    let mut n = 0usize;
+                    for h in he.outgoing(VertexId(v as u32)) {
+                        let q = ring(h.idx());
+                        for k in 0..3 {
+                            s[k] += q[k];
+                        }
+                        n += 1;
+                    }
+                    if n == 0 {
+                        p[v]
+                    } else {
+                        smooth(p[v], s, n)
+                    }
+                }
+            };
+        });
+}
+
 /// Face centroids, in parallel.
 pub fn face_points(mesh: &Mesh) -> Vec<[f64; 3]> {
     let p = &mesh.positions;
@@ -90,52 +144,27 @@ pub fn step(mesh: &Mesh, he: &HalfEdgeMesh, tags: &Tags) -> Result<(Mesh, Featur
     let (epart, fpart) = rest.split_at_mut(ne);
     fpart.copy_from_slice(&face_points(mesh));
     let fp: &[[f64; 3]] = fpart;
-    epart
-        .par_iter_mut()
-        .with_min_len(GRAIN)
-        .enumerate()
-        .for_each(|(e, o)| {
-            let [a, b] = he.edges.verts[e];
-            let (pa, pb) = (p[a as usize], p[b as usize]);
-            *o = if tags.sharp[e] {
-                sharp_edge_point(pa, pb)
-            } else {
-                let [c0, c1] = he.edges.corners[e];
-                let f0 = fp[he.face[c0 as usize] as usize];
-                let f1 = fp[he.face[c1 as usize] as usize];
-                std::array::from_fn(|k| 0.25 * (pa[k] + pb[k] + f0[k] + f1[k]))
-            };
-        });
-    vpart
-        .par_iter_mut()
-        .with_min_len(GRAIN)
-        .enumerate()
-        .for_each(|(v, o)| {
-            let pv = p[v];
-            *o = match tags.rule(he, v as u32).sharp_point(p, v) {
-                Some(q) => q,
-                None => {
-                    let mut s = [0.0; 3];
-                    let mut n = 0usize;
-                    for h in he.outgoing(VertexId(v as u32)) {
-                        let q = p[he.from[he.twin[h.idx()] as usize] as usize];
-                        let f = fp[he.face[h.idx()] as usize];
-                        for k in 0..3 {
-                            s[k] += q[k] + f[k];
-                        }
-                        n += 1;
-                    }
-                    if n == 0 {
-                        pv
-                    } else {
-                        let nn = n as f64;
-                        let w = (nn - 2.0) / nn;
-                        let u = 1.0 / (nn * nn);
-                        std::array::from_fn(|k| w * pv[k] + u * s[k])
-                    }
-                }
-            };
-        });
+    edge_points(epart, p, he, |e, [c0, c1], pa, pb| {
+        if tags.sharp[e] {
+            sharp_edge_point(pa, pb)
+        } else {
+            let f0 = fp[he.face[c0 as usize] as usize];
+            let f1 = fp[he.face[c1 as usize] as usize];
+            std::array::from_fn(|k| 0.25 * (pa[k] + pb[k] + f0[k] + f1[k]))
+        }
+    });
+    // each ring step adds the far end of the edge and the point of the face on its left
+    let ring = |h: usize| {
+        let q = p[he.from[he.twin[h] as usize] as usize];
+        let f = fp[he.face[h] as usize];
+        std::array::from_fn(|k| q[k] + f[k])
+    };
+    vertex_points(vpart, p, he, tags, ring, |pv, s, n| {
+        let nn = n as f64;
+        let w = (nn - 2.0) / nn;
+        let u = 1.0 / (nn * nn);
+        std::array::from_fn(|k| w * pv[k] + u * s[k])
+    });
     let mut indices = vec![0u32; 4 * nc];
     let ce = &he.edges.corner_edge;
     let (vb, fb) = (nv as u32, (nv + ne) as u32);

@@ -65,6 +65,33 @@ pub struct Edges {
 /// Vertices per parallel block of the bucket passes of [`Edges::build`].
 const BUCKET_CHUNK: usize = 2048;
 
+/// Cut two arrays into matching pieces, one per block of `block` items out of `n`: items
+/// `f..g` own `len.0(f, g)` entries of the first array and `len.1(f, g)` of the second.
+/// Returns `(f, piece of the first, piece of the second)` per block, for parallel work.
+#[allow(clippy::type_complexity)]
+fn split_blocks<'a>(
+    n: usize,
+    block: usize,
+    (mut rest_a, mut rest_b): (&'a mut [u32], &'a mut [u32]),
+    len: (
+        impl Fn(usize, usize) -> usize,
+        impl Fn(usize, usize) -> usize,
+    ),
+) -> Vec<(usize, &'a mut [u32], &'a mut [u32])> {
+    let mut out = Vec::new();
+    let mut f = 0;
+    while f < n {
+        let g = (f + block).min(n);
+        let (a, b) = std::mem::take(&mut rest_a).split_at_mut(len.0(f, g));
+        let (c, d) = std::mem::take(&mut rest_b).split_at_mut(len.1(f, g));
+        out.push((f, a, c));
+        rest_a = b;
+        rest_b = d;
+        f = g;
+    }
+    out
+}
+
 /// The corners bucketed by their smaller vertex: vertex `v`'s corners are
 /// `bucket[start[v]..start[v + 1]]`, each bucket sorted by (larger vertex, corner);
 /// `first_edge[v]` is the id of the first edge at `v`.
@@ -87,19 +114,13 @@ fn corner_faces_and_heads(mesh: &Mesh) -> (Vec<u32>, Vec<u32>) {
     let idx = &mesh.indices;
     let nf = mesh.face_count();
     let block = 4096;
-    let mut cf: Vec<(usize, &mut [u32], &mut [u32])> = Vec::new();
-    let (mut rest_f, mut rest_h): (&mut [u32], &mut [u32]) = (&mut corner_face, &mut head_of);
-    let mut f = 0;
-    while f < nf {
-        let g = (f + block).min(nf);
-        let len = (fo[g] - fo[f]) as usize;
-        let (a, b) = std::mem::take(&mut rest_f).split_at_mut(len);
-        let (c, d) = std::mem::take(&mut rest_h).split_at_mut(len);
-        cf.push((f, a, c));
-        rest_f = b;
-        rest_h = d;
-        f = g;
-    }
+    let corners = |f: usize, g: usize| (fo[g] - fo[f]) as usize;
+    let cf = split_blocks(
+        nf,
+        block,
+        (&mut corner_face, &mut head_of),
+        (corners, corners),
+    );
     cf.into_par_iter().for_each(|(f0, cfs, heads)| {
         let base = fo[f0] as usize;
         let mut f = f0;
@@ -149,19 +170,8 @@ fn sort_buckets(start: &[u32], bucket: &mut [u32], hi_of: impl Fn(u32) -> u32 + 
     let chunk = BUCKET_CHUNK;
     let mut counts = vec![0u32; nv];
     // split `bucket` at vertex boundaries into blocks of `chunk` vertices
-    let mut parts: Vec<(usize, &mut [u32], &mut [u32])> = Vec::new();
-    let (mut rest_b, mut rest_c): (&mut [u32], &mut [u32]) = (bucket, &mut counts);
-    let mut v = 0;
-    while v < nv {
-        let w = (v + chunk).min(nv);
-        let len = (start[w] - start[v]) as usize;
-        let (a, b) = std::mem::take(&mut rest_b).split_at_mut(len);
-        let (c, d) = std::mem::take(&mut rest_c).split_at_mut(w - v);
-        parts.push((v, a, c));
-        rest_b = b;
-        rest_c = d;
-        v = w;
-    }
+    let in_bucket = |v: usize, w: usize| (start[w] - start[v]) as usize;
+    let parts = split_blocks(nv, chunk, (bucket, &mut counts), (in_bucket, |v, w| w - v));
     parts.into_par_iter().for_each(|(v0, b, cnt)| {
         let base = start[v0] as usize;
         for (i, n) in cnt.iter_mut().enumerate() {

@@ -81,31 +81,7 @@ impl HalfEdgeMesh {
     pub fn from_edges(mesh: &Mesh, edges: Edges) -> Result<HalfEdgeMesh> {
         let nc = mesh.indices.len();
         let nv = mesh.positions.len();
-        let mut nb = 0usize;
-        for e in 0..edges.len() {
-            let [a, b] = edges.verts[e];
-            match edges.uses[e] {
-                1 => nb += 1,
-                2 => {
-                    let [c0, c1] = edges.corners[e];
-                    if mesh.indices[c0 as usize] == mesh.indices[c1 as usize] {
-                        return Err(Error::format(
-                            format!(
-                                "edge ({a}, {b}) is traversed in the same direction by faces {} and {}",
-                                edges.corner_face[c0 as usize], edges.corner_face[c1 as usize]
-                            ),
-                            "consistently oriented faces (try `mra mesh orient`)",
-                        ));
-                    }
-                }
-                n => {
-                    return Err(Error::format(
-                        format!("non-manifold edge ({a}, {b}): used by {n} faces"),
-                        "a manifold mesh (each edge in one or two faces)",
-                    ))
-                }
-            }
-        }
+        let nb = boundary_edges(mesh, &edges)?;
         let nh = nc + nb;
         let mut from = Vec::with_capacity(nh);
         from.extend_from_slice(&mesh.indices);
@@ -329,6 +305,37 @@ impl HalfEdgeMesh {
         }
         loops
     }
+}
+
+/// The number of boundary edges; an error on an edge in more than two faces or traversed in
+/// the same direction by both of its faces.
+fn boundary_edges(mesh: &Mesh, edges: &Edges) -> Result<usize> {
+    let mut nb = 0usize;
+    for e in 0..edges.len() {
+        let [a, b] = edges.verts[e];
+        match edges.uses[e] {
+            1 => nb += 1,
+            2 => {
+                let [c0, c1] = edges.corners[e];
+                if mesh.indices[c0 as usize] == mesh.indices[c1 as usize] {
+                    return Err(Error::format(
+                        format!(
+                            "edge ({a}, {b}) is traversed in the same direction by faces {} and {}",
+                            edges.corner_face[c0 as usize], edges.corner_face[c1 as usize]
+                        ),
+                        "consistently oriented faces (try `mra mesh orient`)",
+                    ));
+                }
+            }
+            n => {
+                return Err(Error::format(
+                    format!("non-manifold edge ({a}, {b}): used by {n} faces"),
+                    "a manifold mesh (each edge in one or two faces)",
+                ))
+            }
+        }
+    }
+    Ok(nb)
 }
 
 /// Iterator over the outgoing half-edges of a vertex.

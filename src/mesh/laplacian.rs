@@ -143,61 +143,8 @@ pub fn smooth(
         };
         let x = out.positions.clone();
         let new = match method {
-            Method::Explicit => {
-                let mut lx = vec![[0.0; 3]; nv];
-                l.mul3(&x, &mut lx);
-                let d = l.diagonal();
-                (0..nv)
-                    .map(|i| {
-                        if d[i] == 0.0 {
-                            x[i]
-                        } else {
-                            std::array::from_fn(|k| x[i][k] + lambda * lx[i][k] / -d[i])
-                        }
-                    })
-                    .collect::<Vec<_>>()
-            }
-            Method::Implicit => {
-                let mass = match kind {
-                    Kind::Uniform => vec![1.0; nv],
-                    Kind::Cotangent => barycentric_areas(&out),
-                };
-                // scale λ by the mean mass so the step size does not depend on the mesh's units
-                let mean = mass.iter().sum::<f64>() / nv.max(1) as f64;
-                let lam = lambda * if kind == Kind::Cotangent { mean } else { 1.0 };
-                let mut t = Vec::with_capacity(l.val.len() + nv);
-                for i in 0..nv {
-                    if fixed[i] {
-                        t.push((i as u32, i as u32, 1.0));
-                        continue;
-                    }
-                    t.push((i as u32, i as u32, mass[i]));
-                    for k in l.row_start[i]..l.row_start[i + 1] {
-                        let j = l.col[k] as usize;
-                        if fixed[j] && j != i {
-                            continue; // moved to the right-hand side below
-                        }
-                        t.push((i as u32, j as u32, -lam * l.val[k]));
-                    }
-                }
-                let a = Csr::from_triplets(nv, t);
-                let b: Vec<[f64; 3]> = (0..nv)
-                    .map(|i| {
-                        if fixed[i] {
-                            return x[i];
-                        }
-                        let mut r = vec3::scale(x[i], mass[i]);
-                        for k in l.row_start[i]..l.row_start[i + 1] {
-                            let j = l.col[k] as usize;
-                            if fixed[j] && j != i {
-                                vec3::axpy(&mut r, lam * l.val[k], x[j]);
-                            }
-                        }
-                        r
-                    })
-                    .collect();
-                conjugate_gradient(&a, &b, &x, 1e-10, 10 * nv + 100)?
-            }
+            Method::Explicit => explicit_step(&l, &x, lambda),
+            Method::Implicit => implicit_step(&l, &x, &out, kind, lambda, &fixed)?,
         };
         for i in 0..nv {
             if !fixed[i] {
@@ -206,4 +153,75 @@ pub fn smooth(
         }
     }
     Ok(out)
+}
+
+/// One explicit step: `x_i + λ (L x)_i / (−L_ii)` (rows without a diagonal stay).
+fn explicit_step(l: &Csr, x: &[[f64; 3]], lambda: f64) -> Vec<[f64; 3]> {
+    let nv = x.len();
+    let mut lx = vec![[0.0; 3]; nv];
+    l.mul3(x, &mut lx);
+    let d = l.diagonal();
+    (0..nv)
+        .map(|i| {
+            if d[i] == 0.0 {
+                x[i]
+            } else {
+                std::array::from_fn(|k| x[i][k] + lambda * lx[i][k] / -d[i])
+            }
+        })
+        .collect::<Vec<_>>()
+}
+
+/// One implicit step: solve `(M − λ' L) x' = M x` by conjugate gradients, with `M` the mass
+/// (1, or the barycentric areas for the cotangent Laplacian), `λ' = λ·mean(M)` for the
+/// cotangent kind (λ otherwise), and fixed vertices kept (their columns moved to the
+/// right-hand side).
+fn implicit_step(
+    l: &Csr,
+    x: &[[f64; 3]],
+    mesh: &Mesh,
+    kind: Kind,
+    lambda: f64,
+    fixed: &[bool],
+) -> Result<Vec<[f64; 3]>> {
+    let nv = x.len();
+    let mass = match kind {
+        Kind::Uniform => vec![1.0; nv],
+        Kind::Cotangent => barycentric_areas(mesh),
+    };
+    // scale λ by the mean mass so the step size does not depend on the mesh's units
+    let mean = mass.iter().sum::<f64>() / nv.max(1) as f64;
+    let lam = lambda * if kind == Kind::Cotangent { mean } else { 1.0 };
+    let mut t = Vec::with_capacity(l.val.len() + nv);
+    for i in 0..nv {
+        if fixed[i] {
+            t.push((i as u32, i as u32, 1.0));
+            continue;
+        }
+        t.push((i as u32, i as u32, mass[i]));
+        for k in l.row_start[i]..l.row_start[i + 1] {
+            let j = l.col[k] as usize;
+            if fixed[j] && j != i {
+                continue; // moved to the right-hand side below
+            }
+            t.push((i as u32, j as u32, -lam * l.val[k]));
+        }
+    }
+    let a = Csr::from_triplets(nv, t);
+    let b: Vec<[f64; 3]> = (0..nv)
+        .map(|i| {
+            if fixed[i] {
+                return x[i];
+            }
+            let mut r = vec3::scale(x[i], mass[i]);
+            for k in l.row_start[i]..l.row_start[i + 1] {
+                let j = l.col[k] as usize;
+                if fixed[j] && j != i {
+                    vec3::axpy(&mut r, lam * l.val[k], x[j]);
+                }
+            }
+            r
+        })
+        .collect();
+    conjugate_gradient(&a, &b, x, 1e-10, 10 * nv + 100)
 }

@@ -15,8 +15,9 @@
 //! triangle `(a, b, c)` with edge points `ab, bc, ca` becomes
 //! `(a, ab, ca) (b, bc, ab) (c, ca, bc) (ab, bc, ca)`, so face `f`'s children are `4f .. 4f+4`.
 
+use super::catmull_clark::{edge_points, vertex_points};
 use super::features::{sharp_edge_point, Features, Tags};
-use super::halfedge::{HalfEdgeMesh, VertexId};
+use super::halfedge::HalfEdgeMesh;
 use super::{Attributes, Mesh};
 use crate::Result;
 use rayon::prelude::*;
@@ -73,55 +74,26 @@ pub fn step(
         .collect();
     let mut out = vec![[0.0f64; 3]; nv + ne];
     let (vpart, epart) = out.split_at_mut(nv);
-    vpart
-        .par_iter_mut()
-        .with_min_len(GRAIN)
-        .enumerate()
-        .for_each(|(v, o)| {
-            let pv = p[v];
-            *o = match tags.rule(he, v as u32).sharp_point(p, v) {
-                Some(q) => q,
-                None => {
-                    let mut s = [0.0; 3];
-                    let mut n = 0usize;
-                    for h in he.outgoing(VertexId(v as u32)) {
-                        let q = p[he.from[he.twin[h.idx()] as usize] as usize];
-                        s[0] += q[0];
-                        s[1] += q[1];
-                        s[2] += q[2];
-                        n += 1;
-                    }
-                    if n == 0 {
-                        pv
-                    } else {
-                        let b = if n < 64 {
-                            beta_table[n]
-                        } else {
-                            beta(n, weights)
-                        };
-                        let w = 1.0 - n as f64 * b;
-                        std::array::from_fn(|k| w * pv[k] + b * s[k])
-                    }
-                }
-            };
-        });
-    epart
-        .par_iter_mut()
-        .with_min_len(GRAIN)
-        .enumerate()
-        .for_each(|(e, o)| {
-            let [c0, c1] = he.edges.corners[e];
-            let [a, b] = he.edges.verts[e];
-            let (pa, pb) = (p[a as usize], p[b as usize]);
-            *o = if tags.sharp[e] {
-                sharp_edge_point(pa, pb)
-            } else {
-                // the vertex opposite corner c's edge is the tail of prev(c)
-                let pc = p[he.from[he.prev[c0 as usize] as usize] as usize];
-                let pd = p[he.from[he.prev[c1 as usize] as usize] as usize];
-                std::array::from_fn(|k| 0.375 * (pa[k] + pb[k]) + 0.125 * (pc[k] + pd[k]))
-            };
-        });
+    let ring = |h: usize| p[he.from[he.twin[h] as usize] as usize];
+    vertex_points(vpart, p, he, tags, ring, |pv, s, n| {
+        let b = if n < 64 {
+            beta_table[n]
+        } else {
+            beta(n, weights)
+        };
+        let w = 1.0 - n as f64 * b;
+        std::array::from_fn(|k| w * pv[k] + b * s[k])
+    });
+    edge_points(epart, p, he, |e, [c0, c1], pa, pb| {
+        if tags.sharp[e] {
+            sharp_edge_point(pa, pb)
+        } else {
+            // the vertex opposite corner c's edge is the tail of prev(c)
+            let pc = p[he.from[he.prev[c0 as usize] as usize] as usize];
+            let pd = p[he.from[he.prev[c1 as usize] as usize] as usize];
+            std::array::from_fn(|k| 0.375 * (pa[k] + pb[k]) + 0.125 * (pc[k] + pd[k]))
+        }
+    });
     quadrisect(mesh, he, tags, out)
 }
 

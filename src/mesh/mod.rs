@@ -141,11 +141,21 @@ impl Mesh {
                 (indices, offsets)
             }
         };
+        Mesh::checked(positions, offsets, indices, Attributes::default())
+    }
+
+    /// A mesh from its parts, after [`Mesh::validate`].
+    pub fn checked(
+        positions: Vec<[f64; 3]>,
+        offsets: Vec<u32>,
+        indices: Vec<u32>,
+        attributes: Attributes,
+    ) -> Result<Mesh> {
         let mesh = Mesh {
             positions,
             offsets,
             indices,
-            attributes: Attributes::default(),
+            attributes,
         };
         mesh.validate()?;
         Ok(mesh)

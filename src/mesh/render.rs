@@ -59,37 +59,10 @@ pub struct Image {
 
 /// Render `mesh` to an RGB image.
 pub fn render(mesh: &Mesh, o: &Options) -> Result<Image> {
-    if o.width == 0 || o.height == 0 || o.width > 16384 || o.height > 16384 {
-        return Err(Error::parameter(
-            "image size",
-            format!("{}x{}", o.width, o.height),
-            "1 to 16384 pixels per side",
-        ));
-    }
-    if !(o.azimuth.is_finite() && o.elevation.is_finite()) {
-        return Err(Error::parameter(
-            "view",
-            format!("{},{}", o.azimuth, o.elevation),
-            "finite angles",
-        ));
-    }
-    if !(1..=4).contains(&o.supersample) {
-        return Err(Error::parameter("supersample", o.supersample, "1 to 4"));
-    }
-    let (w, h) = (o.width * o.supersample, o.height * o.supersample);
-    if w > 16384 || h > 16384 {
-        return Err(Error::parameter(
-            "supersampled image size",
-            format!("{w}x{h}"),
-            "at most 16384 pixels per side",
-        ));
-    }
-    let mut rgb = vec![0u8; w * h * 3];
-    for px in rgb.chunks_mut(3) {
-        px.copy_from_slice(&BACKGROUND);
-    }
+    let (w, h) = check(o)?;
+    let mut cv = Canvas::new(w, h);
     let Some((lo, hi)) = mesh.bounding_box() else {
-        return Ok(downsample(w, h, rgb, o.supersample));
+        return Ok(downsample(w, h, cv.rgb, o.supersample));
     };
     let centre: [f64; 3] = std::array::from_fn(|k| 0.5 * (lo[k] + hi[k]));
     let radius = 0.5 * vec3::norm(vec3::sub(hi, lo)).max(1e-300);
@@ -129,34 +102,95 @@ pub fn render(mesh: &Mesh, o: &Options) -> Result<Image> {
         let l = vec3::dot(n, eye).abs();
         0.25 + 0.75 * l
     };
-    let mut zbuf = vec![f64::NEG_INFINITY; w * h];
     let rgb_f = |c: [u8; 3]| c.map(|x| x as f64);
     let front_base = rgb_f(FRONT_COLOR);
     let back_base = o.back_color.map(rgb_f).unwrap_or(front_base);
     let tri = mesh.triangulated();
     for t in tri.faces() {
-        let (a, b, c) = (
-            screen[t[0] as usize],
-            screen[t[1] as usize],
-            screen[t[2] as usize],
-        );
-        let (sa, sb, sc) = (
-            shade(normals[t[0] as usize]),
-            shade(normals[t[1] as usize]),
-            shade(normals[t[2] as usize]),
-        );
-        let area = (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
-        if area.abs() < 1e-12 {
-            continue;
-        }
+        let v = [0, 1, 2].map(|k| t[k] as usize);
         // facing: is the geometric normal (b − a) × (c − a) towards the eye?
-        let p = |k: usize| mesh.positions[t[k] as usize];
+        let p = |k: usize| mesh.positions[v[k]];
         let gn = vec3::cross(vec3::sub(p(1), p(0)), vec3::sub(p(2), p(0)));
         let base = if vec3::dot(gn, eye) >= 0.0 {
             front_base
         } else {
             back_base
         };
+        cv.fill_triangle(v.map(|i| screen[i]), v.map(|i| shade(normals[i])), base);
+    }
+    if o.wireframe {
+        let bias = 1e-3 * radius;
+        for f in mesh.faces() {
+            for i in 0..f.len() {
+                let (p, q) = (screen[f[i] as usize], screen[f[(i + 1) % f.len()] as usize]);
+                cv.line(p, q, bias);
+            }
+        }
+    }
+    Ok(downsample(w, h, cv.rgb, o.supersample))
+}
+
+/// Check the picture options; the size drawn (supersampled).
+fn check(o: &Options) -> Result<(usize, usize)> {
+    if o.width == 0 || o.height == 0 || o.width > 16384 || o.height > 16384 {
+        return Err(Error::parameter(
+            "image size",
+            format!("{}x{}", o.width, o.height),
+            "1 to 16384 pixels per side",
+        ));
+    }
+    if !(o.azimuth.is_finite() && o.elevation.is_finite()) {
+        return Err(Error::parameter(
+            "view",
+            format!("{},{}", o.azimuth, o.elevation),
+            "finite angles",
+        ));
+    }
+    if !(1..=4).contains(&o.supersample) {
+        return Err(Error::parameter("supersample", o.supersample, "1 to 4"));
+    }
+    let (w, h) = (o.width * o.supersample, o.height * o.supersample);
+    if w > 16384 || h > 16384 {
+        return Err(Error::parameter(
+            "supersampled image size",
+            format!("{w}x{h}"),
+            "at most 16384 pixels per side",
+        ));
+    }
+    Ok((w, h))
+}
+
+/// The picture being drawn: RGB over the background and a z-buffer (larger z = nearer).
+struct Canvas {
+    w: usize,
+    h: usize,
+    rgb: Vec<u8>,
+    zbuf: Vec<f64>,
+}
+
+impl Canvas {
+    fn new(w: usize, h: usize) -> Canvas {
+        let mut rgb = vec![0u8; w * h * 3];
+        for px in rgb.chunks_mut(3) {
+            px.copy_from_slice(&BACKGROUND);
+        }
+        Canvas {
+            w,
+            h,
+            rgb,
+            zbuf: vec![f64::NEG_INFINITY; w * h],
+        }
+    }
+
+    /// Fill the screen triangle `[a, b, c]` (x, y, z) at pixel centres, Gouraud-shading
+    /// `base` by the corner shades `s` with barycentric weights `l0, l1, l2` (`l0` at `a`),
+    /// where nearer than the z-buffer.
+    fn fill_triangle(&mut self, [a, b, c]: [[f64; 3]; 3], s: [f64; 3], base: [f64; 3]) {
+        let (w, h) = (self.w, self.h);
+        let area = (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
+        if area.abs() < 1e-12 {
+            return;
+        }
         let x0 = a[0].min(b[0]).min(c[0]).floor().max(0.0) as usize;
         let x1 = (a[0].max(b[0]).max(c[0]).ceil() as usize).min(w - 1);
         let y0 = a[1].min(b[1]).min(c[1]).floor().max(0.0) as usize;
@@ -173,39 +207,35 @@ pub fn render(mesh: &Mesh, o: &Options) -> Result<Image> {
                 }
                 let z = l0 * a[2] + l1 * b[2] + l2 * c[2];
                 let i = y * w + x;
-                if z > zbuf[i] {
-                    zbuf[i] = z;
-                    let s = l0 * sa + l1 * sb + l2 * sc;
+                if z > self.zbuf[i] {
+                    self.zbuf[i] = z;
+                    let sh = l0 * s[0] + l1 * s[1] + l2 * s[2];
                     for k in 0..3 {
-                        rgb[3 * i + k] = (base[k] * s).clamp(0.0, 255.0) as u8;
+                        self.rgb[3 * i + k] = (base[k] * sh).clamp(0.0, 255.0) as u8;
                     }
                 }
             }
         }
     }
-    if o.wireframe {
-        let bias = 1e-3 * radius;
-        for f in mesh.faces() {
-            for i in 0..f.len() {
-                let (p, q) = (screen[f[i] as usize], screen[f[(i + 1) % f.len()] as usize]);
-                let steps = ((q[0] - p[0]).abs().max((q[1] - p[1]).abs()).ceil() as usize).max(1);
-                for s in 0..=steps {
-                    let t = s as f64 / steps as f64;
-                    let x = p[0] + t * (q[0] - p[0]);
-                    let y = p[1] + t * (q[1] - p[1]);
-                    let z = p[2] + t * (q[2] - p[2]);
-                    if x < 0.0 || y < 0.0 || x >= w as f64 || y >= h as f64 {
-                        continue;
-                    }
-                    let i = y as usize * w + x as usize;
-                    if z + bias >= zbuf[i] {
-                        rgb[3 * i..3 * i + 3].copy_from_slice(&[40, 40, 60]);
-                    }
-                }
+
+    /// Draw the edge `p → q` in dark ink where it is within `bias` of the nearest surface.
+    fn line(&mut self, p: [f64; 3], q: [f64; 3], bias: f64) {
+        let (w, h) = (self.w, self.h);
+        let steps = ((q[0] - p[0]).abs().max((q[1] - p[1]).abs()).ceil() as usize).max(1);
+        for s in 0..=steps {
+            let t = s as f64 / steps as f64;
+            let x = p[0] + t * (q[0] - p[0]);
+            let y = p[1] + t * (q[1] - p[1]);
+            let z = p[2] + t * (q[2] - p[2]);
+            if x < 0.0 || y < 0.0 || x >= w as f64 || y >= h as f64 {
+                continue;
+            }
+            let i = y as usize * w + x as usize;
+            if z + bias >= self.zbuf[i] {
+                self.rgb[3 * i..3 * i + 3].copy_from_slice(&[40, 40, 60]);
             }
         }
     }
-    Ok(downsample(w, h, rgb, o.supersample))
 }
 
 /// Average `k × k` blocks of a `w × h` RGB picture into one pixel (box filter).

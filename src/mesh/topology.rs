@@ -224,43 +224,7 @@ pub fn analyze_with(mesh: &Mesh, edges: &Edges) -> Report {
     for f in 0..nf {
         *face_degrees.entry(mesh.face_degree(f)).or_insert(0) += 1;
     }
-    // components: vertices joined by faces
-    let mut uf = UnionFind::new(nv);
-    for f in mesh.faces() {
-        for w in 1..f.len() {
-            uf.union(f[0], f[w]);
-        }
-    }
-    let mut used = vec![false; nv];
-    for &v in &mesh.indices {
-        used[v as usize] = true;
-    }
-    let mut comp_of_root = vec![NONE; nv];
-    let mut comps: Vec<Component> = Vec::new();
-    let mut vcomp = vec![NONE; nv];
-    for v in 0..nv {
-        if !used[v] {
-            continue;
-        }
-        let r = uf.find(v as u32) as usize;
-        if comp_of_root[r] == NONE {
-            comp_of_root[r] = comps.len() as u32;
-            comps.push(Component {
-                vertices: 0,
-                edges: 0,
-                faces: 0,
-                boundary_loops: 0,
-                euler: 0,
-                orientable: true,
-                genus: None,
-            });
-        }
-        vcomp[v] = comp_of_root[r];
-        comps[vcomp[v] as usize].vertices += 1;
-    }
-    for f in mesh.faces() {
-        comps[vcomp[f[0] as usize] as usize].faces += 1;
-    }
+    let (mut comps, vcomp, used) = components(mesh);
     let mut boundary_edges = 0;
     let mut non_manifold_edges = Vec::new();
     // boundary loops: components of the graph of boundary edges
@@ -303,20 +267,7 @@ pub fn analyze_with(mesh: &Mesh, edges: &Edges) -> Report {
         }
     };
     let non_manifold_vertices = non_manifold_vertices(mesh, edges);
-    let mut genus_sum = Some(0i64);
-    for c in comps.iter_mut() {
-        c.euler = c.vertices as i64 - c.edges as i64 + c.faces as i64;
-        c.genus = if c.orientable {
-            let twice = 2 - c.euler - c.boundary_loops as i64;
-            (twice >= 0 && twice % 2 == 0).then_some(twice / 2)
-        } else {
-            None
-        };
-        genus_sum = match (genus_sum, c.genus) {
-            (Some(a), Some(b)) => Some(a + b),
-            _ => None,
-        };
-    }
+    let genus_sum = euler_and_genus(&mut comps);
     let manifold = non_manifold_edges.is_empty() && non_manifold_vertices.is_empty();
     Report {
         vertices: nv,
@@ -337,4 +288,67 @@ pub fn analyze_with(mesh: &Mesh, edges: &Edges) -> Report {
         closed: boundary_edges == 0,
         bounding_box: mesh.bounding_box(),
     }
+}
+
+/// Components of `mesh` (vertices joined by faces; unused vertices in none), with their vertex
+/// and face counts; the component of each vertex (`NONE` when unused) and which vertices are used.
+fn components(mesh: &Mesh) -> (Vec<Component>, Vec<u32>, Vec<bool>) {
+    let nv = mesh.vertex_count();
+    let mut uf = UnionFind::new(nv);
+    for f in mesh.faces() {
+        for w in 1..f.len() {
+            uf.union(f[0], f[w]);
+        }
+    }
+    let mut used = vec![false; nv];
+    for &v in &mesh.indices {
+        used[v as usize] = true;
+    }
+    let mut comp_of_root = vec![NONE; nv];
+    let mut comps: Vec<Component> = Vec::new();
+    let mut vcomp = vec![NONE; nv];
+    for v in 0..nv {
+        if !used[v] {
+            continue;
+        }
+        let r = uf.find(v as u32) as usize;
+        if comp_of_root[r] == NONE {
+            comp_of_root[r] = comps.len() as u32;
+            comps.push(Component {
+                vertices: 0,
+                edges: 0,
+                faces: 0,
+                boundary_loops: 0,
+                euler: 0,
+                orientable: true,
+                genus: None,
+            });
+        }
+        vcomp[v] = comp_of_root[r];
+        comps[vcomp[v] as usize].vertices += 1;
+    }
+    for f in mesh.faces() {
+        comps[vcomp[f[0] as usize] as usize].faces += 1;
+    }
+    (comps, vcomp, used)
+}
+
+/// Fill each component's Euler characteristic `χ = V − E + F` and, when orientable, its genus
+/// `g = (2 − χ − b)/2` (b boundary loops); the sum of the genera when every one is known.
+fn euler_and_genus(comps: &mut [Component]) -> Option<i64> {
+    let mut genus_sum = Some(0i64);
+    for c in comps.iter_mut() {
+        c.euler = c.vertices as i64 - c.edges as i64 + c.faces as i64;
+        c.genus = if c.orientable {
+            let twice = 2 - c.euler - c.boundary_loops as i64;
+            (twice >= 0 && twice % 2 == 0).then_some(twice / 2)
+        } else {
+            None
+        };
+        genus_sum = match (genus_sum, c.genus) {
+            (Some(a), Some(b)) => Some(a + b),
+            _ => None,
+        };
+    }
+    genus_sum
 }

@@ -51,20 +51,6 @@ fn parse_chunk(bytes: &[u8]) -> Result<Chunk> {
     let n = bytes.len();
     let mut i = 0;
     let mut line = 0;
-    #[inline]
-    fn skip_blank(b: &[u8], mut i: usize) -> usize {
-        while i < b.len() && (b[i] == b' ' || b[i] == b'\t' || b[i] == b'\r') {
-            i += 1;
-        }
-        i
-    }
-    #[inline]
-    fn token_end(b: &[u8], mut i: usize) -> usize {
-        while i < b.len() && !b[i].is_ascii_whitespace() && b[i] != b'#' {
-            i += 1;
-        }
-        i
-    }
     while i < n {
         line += 1;
         let eol = match memchr_nl(&bytes[i..]) {
@@ -77,91 +63,115 @@ fn parse_chunk(bytes: &[u8]) -> Result<Chunk> {
         let kw = &l[j..ke];
         j = ke;
         match kw {
-            b"v" | b"vn" | b"vt" => {
-                let mut p = [0.0; 3];
-                let mut k = 0;
-                loop {
-                    j = skip_blank(l, j);
-                    if j >= eol || l[j] == b'#' || k == 3 {
-                        break;
-                    }
-                    let e = token_end(l, j);
-                    p[k] = parse_f64(&l[j..e], line)?;
-                    k += 1;
-                    j = e;
-                }
-                match kw {
-                    b"vt" => {
-                        if k == 0 {
-                            return Err(Error::format(
-                                format!("line {line}: empty vt"),
-                                "vt u [v [w]]",
-                            ));
-                        }
-                        c.vt_dim = c.vt_dim.max(k.max(2));
-                        c.vt.push(p);
-                    }
-                    _ => {
-                        if k < 3 {
-                            return Err(Error::format(
-                                format!("line {line}: fewer than 3 coordinates"),
-                                "x y z",
-                            ));
-                        }
-                        if !p.iter().all(|x| x.is_finite()) {
-                            return Err(Error::format(
-                                format!("line {line}: coordinates {p:?}"),
-                                "finite numbers",
-                            ));
-                        }
-                        if kw == b"v" {
-                            c.v.push(p)
-                        } else {
-                            c.vn.push(p)
-                        }
-                    }
-                }
-            }
-            b"f" => {
-                let mut deg = 0u32;
-                loop {
-                    j = skip_blank(l, j);
-                    if j >= eol || l[j] == b'#' {
-                        break;
-                    }
-                    let e = token_end(l, j);
-                    let t = &l[j..e];
-                    j = e;
-                    let mut parts = t.split(|&b| b == b'/');
-                    let v = parts.next().unwrap_or(b"");
-                    c.fv.push(index(v, c.v.len(), line)?);
-                    let vt = parts.next().unwrap_or(b"");
-                    c.ft.push(if vt.is_empty() {
-                        ABSENT
-                    } else {
-                        index(vt, c.vt.len(), line)?
-                    });
-                    let vn = parts.next().unwrap_or(b"");
-                    c.fn_.push(if vn.is_empty() {
-                        ABSENT
-                    } else {
-                        index(vn, c.vn.len(), line)?
-                    });
-                    deg += 1;
-                }
-                if deg < 3 {
-                    return Err(Error::format(
-                        format!("line {line}: face with {deg} vertices"),
-                        "at least 3 vertices per face",
-                    ));
-                }
-                c.degrees.push(deg);
-            }
+            b"v" | b"vn" | b"vt" => vertex_line(&mut c, kw, l, j, line)?,
+            b"f" => face_line(&mut c, l, j, line)?,
             _ => {}
         }
         i = eol + 1;
     }
     Ok(c)
+}
+
+#[inline]
+fn skip_blank(b: &[u8], mut i: usize) -> usize {
+    while i < b.len() && (b[i] == b' ' || b[i] == b'\t' || b[i] == b'\r') {
+        i += 1;
+    }
+    i
+}
+
+#[inline]
+fn token_end(b: &[u8], mut i: usize) -> usize {
+    while i < b.len() && !b[i].is_ascii_whitespace() && b[i] != b'#' {
+        i += 1;
+    }
+    i
+}
+
+/// A `v`, `vn` or `vt` line `l` (up to its end of line) from `j`, after the keyword `kw`.
+fn vertex_line(c: &mut Chunk, kw: &[u8], l: &[u8], mut j: usize, line: usize) -> Result<()> {
+    let mut p = [0.0; 3];
+    let mut k = 0;
+    loop {
+        j = skip_blank(l, j);
+        if j >= l.len() || l[j] == b'#' || k == 3 {
+            break;
+        }
+        let e = token_end(l, j);
+        p[k] = parse_f64(&l[j..e], line)?;
+        k += 1;
+        j = e;
+    }
+    match kw {
+        b"vt" => {
+            if k == 0 {
+                return Err(Error::format(
+                    format!("line {line}: empty vt"),
+                    "vt u [v [w]]",
+                ));
+            }
+            c.vt_dim = c.vt_dim.max(k.max(2));
+            c.vt.push(p);
+        }
+        _ => {
+            if k < 3 {
+                return Err(Error::format(
+                    format!("line {line}: fewer than 3 coordinates"),
+                    "x y z",
+                ));
+            }
+            if !p.iter().all(|x| x.is_finite()) {
+                return Err(Error::format(
+                    format!("line {line}: coordinates {p:?}"),
+                    "finite numbers",
+                ));
+            }
+            if kw == b"v" {
+                c.v.push(p)
+            } else {
+                c.vn.push(p)
+            }
+        }
+    }
+    Ok(())
+}
+
+/// An `f` line `l` (up to its end of line) from `j`: `v[/vt[/vn]]` per corner, at least 3.
+fn face_line(c: &mut Chunk, l: &[u8], mut j: usize, line: usize) -> Result<()> {
+    let mut deg = 0u32;
+    loop {
+        j = skip_blank(l, j);
+        if j >= l.len() || l[j] == b'#' {
+            break;
+        }
+        let e = token_end(l, j);
+        let t = &l[j..e];
+        j = e;
+        let mut parts = t.split(|&b| b == b'/');
+        let v = parts.next().unwrap_or(b"");
+        c.fv.push(index(v, c.v.len(), line)?);
+        let vt = parts.next().unwrap_or(b"");
+        c.ft.push(if vt.is_empty() {
+            ABSENT
+        } else {
+            index(vt, c.vt.len(), line)?
+        });
+        let vn = parts.next().unwrap_or(b"");
+        c.fn_.push(if vn.is_empty() {
+            ABSENT
+        } else {
+            index(vn, c.vn.len(), line)?
+        });
+        deg += 1;
+    }
+    if deg < 3 {
+        return Err(Error::format(
+            format!("line {line}: face with {deg} vertices"),
+            "at least 3 vertices per face",
+        ));
+    }
+    c.degrees.push(deg);
+    Ok(())
 }
 
 /// Position of the next line break (word-at-a-time scan).
@@ -210,6 +220,42 @@ fn resolve(x: i64, base: usize, total: usize, what: &str) -> Result<u32> {
     Ok(i as u32)
 }
 
+/// A chunk's corner indices made global: vertices, texture coordinates, normals.
+type Resolved = (Vec<u32>, Vec<u32>, Vec<u32>);
+
+/// Resolve chunk `c`'s corner indices against the counts before it (`bases`) and in all
+/// (`totals`), each as (vertex, texture, normal); absent corners become `NONE`, and a kind
+/// no face uses (`has_t`, `has_n` false) stays empty.
+fn resolve_chunk(
+    c: &Chunk,
+    (bv, bt, bn): (usize, usize, usize),
+    [nv, nt, nn]: [usize; 3],
+    has_t: bool,
+    has_n: bool,
+) -> Result<Resolved> {
+    let v =
+        c.fv.iter()
+            .map(|&x| resolve(x, bv, nv, "vertex"))
+            .collect::<Result<Vec<_>>>()?;
+    let optional = |list: &[i64], has: bool, base: usize, total: usize, what: &str| {
+        if !has {
+            return Ok(Vec::new());
+        }
+        list.iter()
+            .map(|&x| {
+                if x == ABSENT {
+                    Ok(NONE)
+                } else {
+                    resolve(x, base, total, what)
+                }
+            })
+            .collect::<Result<Vec<_>>>()
+    };
+    let t = optional(&c.ft, has_t, bt, nt, "texture")?;
+    let n = optional(&c.fn_, has_n, bn, nn, "normal")?;
+    Ok((v, t, n))
+}
+
 /// Parse an OBJ file.
 pub fn parse(bytes: &[u8]) -> Result<Mesh> {
     let pieces = if bytes.len() < 1 << 20 {
@@ -256,44 +302,11 @@ pub fn parse(bytes: &[u8]) -> Result<Mesh> {
         bt += c.vt.len();
         bn += c.vn.len();
     }
-    type Resolved = (Vec<u32>, Vec<u32>, Vec<u32>);
+    let totals = [nv, nt, nn];
     let resolved: Vec<Resolved> = chunks
         .par_iter()
         .zip(bases.par_iter())
-        .map(|(c, &(bv, bt, bn))| -> Result<Resolved> {
-            let v =
-                c.fv.iter()
-                    .map(|&x| resolve(x, bv, nv, "vertex"))
-                    .collect::<Result<Vec<_>>>()?;
-            let t = if has_t {
-                c.ft.iter()
-                    .map(|&x| {
-                        if x == ABSENT {
-                            Ok(NONE)
-                        } else {
-                            resolve(x, bt, nt, "texture")
-                        }
-                    })
-                    .collect::<Result<Vec<_>>>()?
-            } else {
-                Vec::new()
-            };
-            let n = if has_n {
-                c.fn_
-                    .iter()
-                    .map(|&x| {
-                        if x == ABSENT {
-                            Ok(NONE)
-                        } else {
-                            resolve(x, bn, nn, "normal")
-                        }
-                    })
-                    .collect::<Result<Vec<_>>>()?
-            } else {
-                Vec::new()
-            };
-            Ok((v, t, n))
-        })
+        .map(|(c, &bases)| resolve_chunk(c, bases, totals, has_t, has_n))
         .collect::<Result<Vec<_>>>()?;
     let mut positions = Vec::with_capacity(nv);
     let mut attributes = Attributes::default();
@@ -314,14 +327,7 @@ pub fn parse(bytes: &[u8]) -> Result<Mesh> {
         attributes.corner_texcoord.extend_from_slice(&t);
         attributes.corner_normal.extend_from_slice(&n);
     }
-    let mesh = Mesh {
-        positions,
-        offsets,
-        indices,
-        attributes,
-    };
-    mesh.validate()?;
-    Ok(mesh)
+    Mesh::checked(positions, offsets, indices, attributes)
 }
 
 /// Serialise as OBJ. Numbers are written in shortest round-trip form.

@@ -89,14 +89,7 @@ pub fn parse(bytes: &[u8]) -> Result<Mesh> {
         }
         offsets.push(indices.len() as u32);
     }
-    let mesh = Mesh {
-        positions,
-        offsets,
-        indices,
-        attributes: Attributes::default(),
-    };
-    mesh.validate()?;
-    Ok(mesh)
+    Mesh::checked(positions, offsets, indices, Attributes::default())
 }
 
 /// Serialise as OFF (numbers in shortest round-trip form).

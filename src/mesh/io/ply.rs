@@ -249,14 +249,7 @@ pub fn parse(bytes: &[u8]) -> Result<Mesh> {
     if !seen_face {
         attributes.face_list_types = None;
     }
-    let mesh = Mesh {
-        positions,
-        offsets,
-        indices,
-        attributes,
-    };
-    mesh.validate()?;
-    Ok(mesh)
+    Mesh::checked(positions, offsets, indices, attributes)
 }
 
 /// The vertices of element `el`: positions (x, y, z) and the other scalar properties as
@@ -422,32 +415,17 @@ fn skip_element(el: &ElementDecl, b: &mut Body) -> Result<()> {
 }
 
 fn put(out: &mut Vec<u8>, enc: Encoding, ty: ScalarType, x: f64) {
-    macro_rules! wr {
-        ($t:ty) => {{
-            let v = x as $t;
-            if enc == Encoding::BinaryLittleEndian {
-                out.extend_from_slice(&v.to_le_bytes())
-            } else {
-                out.extend_from_slice(&v.to_be_bytes())
-            }
-        }};
-    }
     match enc {
         Encoding::Ascii => {
             let mut s = String::new();
             let _ = write!(s, "{x}");
             out.extend_from_slice(s.as_bytes());
         }
-        _ => match ty {
-            ScalarType::I8 => wr!(i8),
-            ScalarType::U8 => wr!(u8),
-            ScalarType::I16 => wr!(i16),
-            ScalarType::U16 => wr!(u16),
-            ScalarType::I32 => wr!(i32),
-            ScalarType::U32 => wr!(u32),
-            ScalarType::F32 => wr!(f32),
-            ScalarType::F64 => wr!(f64),
-        },
+        _ => {
+            let mut b = [0u8; 8];
+            let n = put_bin(&mut b, enc == Encoding::BinaryLittleEndian, ty, x);
+            out.extend_from_slice(&b[..n]);
+        }
     }
 }
 
@@ -501,6 +479,25 @@ pub fn to_bytes(mesh: &Mesh, enc: Encoding) -> Result<Vec<u8>> {
         }
     }
     let mut out = Vec::with_capacity(mesh.vertex_count() * 24 + mesh.indices.len() * 4 + 256);
+    out.extend_from_slice(header(mesh, enc, pty, (ct, it), &vprops).as_bytes());
+    if enc != Encoding::Ascii {
+        binary_body(mesh, enc, pty, (ct, it), &vprops, &mut out);
+        return Ok(out);
+    }
+    ascii_body(mesh, pty, (ct, it), &vprops, &mut out);
+    Ok(out)
+}
+
+/// The PLY header: format, the vertex element (x, y, z as `pty`, then `vprops`), the face
+/// element (count and index list types, then the face properties).
+fn header(
+    mesh: &Mesh,
+    enc: Encoding,
+    pty: ScalarType,
+    (ct, it): (ScalarType, ScalarType),
+    vprops: &[(&str, ScalarType, &[f64])],
+) -> String {
+    let a = &mesh.attributes;
     let mut h = String::new();
     let fmt = match enc {
         Encoding::Ascii => "ascii",
@@ -512,7 +509,7 @@ pub fn to_bytes(mesh: &Mesh, enc: Encoding) -> Result<Vec<u8>> {
     for c in ["x", "y", "z"] {
         let _ = writeln!(h, "property {} {c}", pty.ply_name());
     }
-    for (name, ty, _) in &vprops {
+    for (name, ty, _) in vprops {
         let _ = writeln!(h, "property {} {name}", ty.ply_name());
     }
     let _ = writeln!(h, "element face {}", mesh.face_count());
@@ -527,49 +524,44 @@ pub fn to_bytes(mesh: &Mesh, enc: Encoding) -> Result<Vec<u8>> {
         let _ = writeln!(h, "property {} {}", p.ty.ply_name(), p.name);
     }
     h.push_str("end_header\n");
-    out.extend_from_slice(h.as_bytes());
-    if enc != Encoding::Ascii {
-        binary_body(mesh, enc, pty, (ct, it), &vprops, &mut out);
-        return Ok(out);
-    }
-    let ascii = enc == Encoding::Ascii;
+    h
+}
+
+/// The ASCII body: one line per vertex, then one per face.
+fn ascii_body(
+    mesh: &Mesh,
+    pty: ScalarType,
+    (ct, it): (ScalarType, ScalarType),
+    vprops: &[(&str, ScalarType, &[f64])],
+    out: &mut Vec<u8>,
+) {
+    let a = &mesh.attributes;
     for (v, p) in mesh.positions.iter().enumerate() {
         for (k, &x) in p.iter().enumerate() {
-            if ascii && k > 0 {
+            if k > 0 {
                 out.push(b' ');
             }
-            put(&mut out, enc, pty, x);
+            put(out, Encoding::Ascii, pty, x);
         }
-        for (_, ty, vals) in &vprops {
-            if ascii {
-                out.push(b' ');
-            }
-            put(&mut out, enc, *ty, vals[v]);
+        for (_, ty, vals) in vprops {
+            out.push(b' ');
+            put(out, Encoding::Ascii, *ty, vals[v]);
         }
-        if ascii {
-            out.push(b'\n');
-        }
+        out.push(b'\n');
     }
     for f in 0..mesh.face_count() {
         let face = mesh.face(f);
-        put(&mut out, enc, ct, face.len() as f64);
+        put(out, Encoding::Ascii, ct, face.len() as f64);
         for &i in face {
-            if ascii {
-                out.push(b' ');
-            }
-            put(&mut out, enc, it, i as f64);
+            out.push(b' ');
+            put(out, Encoding::Ascii, it, i as f64);
         }
         for p in &a.face {
-            if ascii {
-                out.push(b' ');
-            }
-            put(&mut out, enc, p.ty, p.values[f]);
+            out.push(b' ');
+            put(out, Encoding::Ascii, p.ty, p.values[f]);
         }
-        if ascii {
-            out.push(b'\n');
-        }
+        out.push(b'\n');
     }
-    Ok(out)
 }
 
 /// `x` as `ty` into the front of `dst` (binary encodings); returns the bytes written.
