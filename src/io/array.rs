@@ -28,21 +28,16 @@ pub fn array_shape(dims: &[usize], channels: usize) -> (Vec<usize>, Vec<usize>) 
 /// boundary, levels and order over all spatial axes (`spec.axes` is replaced). Returns
 /// the pyramid container (f32 coefficients, source type and metadata, pyramid keys) and
 /// the plan.
-pub fn analyze_raster(r: Raster, spec: &PyramidSpec) -> Result<(Raster, Pyramid)> {
-    let Raster {
-        dims,
-        channels,
-        samples,
-        kind,
-        meta,
-    } = r;
-    if dims.is_empty() {
+pub fn analyze_raster(mut r: Raster, spec: &PyramidSpec) -> Result<(Raster, Pyramid)> {
+    if r.dims.is_empty() {
         return Err(Error::parameter("dims", "[]", "at least one spatial axis"));
     }
+    // the samples leave `r`, which stays as the shell the container is made from
+    let samples = std::mem::replace(&mut r.samples, Samples::F32(Vec::new()));
     let source_type = samples.sample_type();
     let data = samples.to_f32();
     drop(samples);
-    let (shape, axes) = array_shape(&dims, channels);
+    let (shape, axes) = array_shape(&r.dims, r.channels);
     let spec = PyramidSpec {
         axes,
         ..spec.clone()
@@ -56,17 +51,10 @@ pub fn analyze_raster(r: Raster, spec: &PyramidSpec) -> Result<(Raster, Pyramid)
         order: spec.order.to_string(),
         axes: spec.axes.clone(),
         source_type,
-        source_kind: kind,
+        source_kind: r.kind,
     };
     // the container takes the coefficients without copying
-    let shell = Raster {
-        dims,
-        channels,
-        samples: Samples::F32(Vec::new()),
-        kind,
-        meta,
-    };
-    let container = pyramid_file::container(&shell, array.into_data(), &info)?;
+    let container = pyramid_file::container(&r, array.into_data(), &info)?;
     Ok((container, pyr))
 }
 
@@ -82,39 +70,27 @@ pub fn spec_of(info: &PyramidInfo) -> Result<PyramidSpec> {
 }
 
 /// Invert [`analyze_raster`]: the container (consumed) back to the source raster.
-pub fn synthesize_raster(container: Raster, info: &PyramidInfo) -> Result<Raster> {
+pub fn synthesize_raster(mut container: Raster, info: &PyramidInfo) -> Result<Raster> {
     let spec = spec_of(info)?;
-    let Raster {
-        dims,
-        channels,
-        samples,
-        kind,
-        meta,
-    } = container;
-    let Samples::F32(data) = samples else {
+    // the coefficients leave the container, which stays as the shell to restore from
+    let Samples::F32(data) = std::mem::replace(&mut container.samples, Samples::F32(Vec::new()))
+    else {
         return Err(Error::format(
             "coefficients are not float32",
             "a pyramid written by mra analyze",
         ));
     };
-    let (shape, axes) = array_shape(&dims, channels);
+    let (shape, axes) = array_shape(&container.dims, container.channels);
     if axes != spec.axes {
         return Err(Error::format(
-            format!("mra.axes {:?} for dims {:?}", spec.axes, dims),
+            format!("mra.axes {:?} for dims {:?}", spec.axes, container.dims),
             "all spatial axes",
         ));
     }
     let mut array = Array::from_shape_vec(&shape, data)?;
     let pyr = Pyramid::plan(&shape, &spec)?;
     tensor::synthesize(&mut array, &pyr)?;
-    let shell = Raster {
-        dims,
-        channels,
-        samples: Samples::F32(Vec::new()),
-        kind,
-        meta,
-    };
-    pyramid_file::restore(&shell, array.data(), info)
+    pyramid_file::restore(&container, array.data(), info)
 }
 
 /// The blocks of a pyramid over the spatial axes (`ndims` of them), coarse block marked.

@@ -53,13 +53,37 @@ pub fn read(path: &Path) -> Result<Raster> {
             raw.len()
         )));
     }
+    let samples = read_values(&text[header_end(text)..], nrows, ncols)?;
+    let mut r = Raster::new(vec![nrows, ncols], 1, samples, DataKind::Heightmap)?;
+    for (k, v) in &header {
+        if k != "ncols" && k != "nrows" {
+            r.meta.extra.insert(format!("asc.{k}"), v.clone());
+        }
+    }
+    if let Some(nd) = get("nodata_value") {
+        r.meta.nodata = nd.parse().ok();
+    }
+    if let Some(cs) = get("cellsize").and_then(|c| c.parse::<f64>().ok()) {
+        r.meta.spacing = Some(vec![cs, cs]);
+    } else if let (Some(dx), Some(dy)) = (
+        get("dx").and_then(|c| c.parse::<f64>().ok()),
+        get("dy").and_then(|c| c.parse::<f64>().ok()),
+    ) {
+        r.meta.spacing = Some(vec![dy, dx]);
+    }
+    Ok(r)
+}
+
+/// The data lines: exactly `nrows` rows of `ncols` numbers (blank lines skipped), as i32 when
+/// every value is an integer, else f64.
+fn read_values(data: &str, nrows: usize, ncols: usize) -> Result<Samples> {
+    let n = nrows * ncols;
     let mut ints: Option<Vec<i32>> = Some(Vec::with_capacity(n));
     let mut floats: Vec<f64> = Vec::with_capacity(n);
     // The data must be `nrows` lines of exactly `ncols` values: a row with more or
     // fewer values would shift every later row, so it is an error, not a re-wrap.
-    let data_start = header_end(text);
     let mut row = 0usize;
-    for line in text[data_start..].lines() {
+    for line in data.lines() {
         let mut count = 0usize;
         for t in line.split_ascii_whitespace() {
             let v: f64 = t
@@ -98,28 +122,10 @@ pub fn read(path: &Path) -> Result<Raster> {
             floats.len()
         )));
     }
-    let samples = match ints {
+    Ok(match ints {
         Some(v) => Samples::I32(v),
         None => Samples::F64(floats),
-    };
-    let mut r = Raster::new(vec![nrows, ncols], 1, samples, DataKind::Heightmap)?;
-    for (k, v) in &header {
-        if k != "ncols" && k != "nrows" {
-            r.meta.extra.insert(format!("asc.{k}"), v.clone());
-        }
-    }
-    if let Some(nd) = get("nodata_value") {
-        r.meta.nodata = nd.parse().ok();
-    }
-    if let Some(cs) = get("cellsize").and_then(|c| c.parse::<f64>().ok()) {
-        r.meta.spacing = Some(vec![cs, cs]);
-    } else if let (Some(dx), Some(dy)) = (
-        get("dx").and_then(|c| c.parse::<f64>().ok()),
-        get("dy").and_then(|c| c.parse::<f64>().ok()),
-    ) {
-        r.meta.spacing = Some(vec![dy, dx]);
-    }
-    Ok(r)
+    })
 }
 
 /// Byte offset of the first data line: past the leading lines whose first token is a

@@ -110,44 +110,89 @@ pub fn decode(bytes: &[u8], ty: SampleType, big_endian: bool) -> Samples {
 /// buffer in between: a decoded volume costs one array, not two). A stream ending
 /// before `n` samples is `UnexpectedEof`. The caller checks `n` against the budget.
 pub fn read_samples<R: std::io::Read>(
-    mut r: R,
+    r: R,
     n: usize,
     ty: SampleType,
     big_endian: bool,
 ) -> std::io::Result<Samples> {
-    use byteorder::ReadBytesExt;
-    macro_rules! typed {
-        ($t:ty, $read:ident) => {{
-            let mut v: Vec<$t> = crate::tensor::zeroed_vec(n);
-            if big_endian {
-                r.$read::<BigEndian>(&mut v)?;
-            } else {
-                r.$read::<LittleEndian>(&mut v)?;
+    struct Stream<R>(R, bool);
+    impl<R: Read> FillSamples for Stream<R> {
+        type Error = std::io::Error;
+        fn fill<T: ReadInto>(&mut self, v: &mut [T]) -> std::io::Result<()> {
+            T::read_into(&mut self.0, self.1, v)
+        }
+    }
+    typed_samples(ty, n, &mut Stream(r, big_endian))
+}
+
+/// A sample element read from a byte stream in either byte order.
+pub(crate) trait ReadInto: Copy + Default + Send + Sync + 'static {
+    fn read_into<R: Read>(r: &mut R, big_endian: bool, v: &mut [Self]) -> std::io::Result<()>;
+}
+
+impl ReadInto for u8 {
+    fn read_into<R: Read>(r: &mut R, _: bool, v: &mut [u8]) -> std::io::Result<()> {
+        r.read_exact(v)
+    }
+}
+
+impl ReadInto for i8 {
+    fn read_into<R: Read>(r: &mut R, _: bool, v: &mut [i8]) -> std::io::Result<()> {
+        byteorder::ReadBytesExt::read_i8_into(r, v)
+    }
+}
+
+macro_rules! read_into {
+    ($($t:ty: $read:ident),*) => {$(
+        impl ReadInto for $t {
+            fn read_into<R: Read>(r: &mut R, big_endian: bool, v: &mut [$t]) -> std::io::Result<()> {
+                use byteorder::ReadBytesExt;
+                if big_endian {
+                    r.$read::<BigEndian>(v)
+                } else {
+                    r.$read::<LittleEndian>(v)
+                }
             }
-            v
-        }};
+        }
+    )*};
+}
+read_into!(u16: read_u16_into, i16: read_i16_into, u32: read_u32_into, i32: read_i32_into,
+    f32: read_f32_into, f64: read_f64_into);
+
+/// How a reader fills a typed sample buffer (one stream, or pieces read in parallel).
+pub(crate) trait FillSamples {
+    type Error;
+    fn fill<T: ReadInto>(&mut self, v: &mut [T]) -> std::result::Result<(), Self::Error>;
+}
+
+/// `n` samples of type `ty`, their buffer (zeroed, on huge pages where allowed) filled by `f`;
+/// `f16` is read as its bits.
+pub(crate) fn typed_samples<F: FillSamples>(
+    ty: SampleType,
+    n: usize,
+    f: &mut F,
+) -> std::result::Result<Samples, F::Error> {
+    fn buf<T: ReadInto, F: FillSamples>(
+        n: usize,
+        f: &mut F,
+    ) -> std::result::Result<Vec<T>, F::Error> {
+        let mut v: Vec<T> = crate::tensor::zeroed_vec(n);
+        f.fill(&mut v)?;
+        Ok(v)
     }
     Ok(match ty {
-        SampleType::U8 => {
-            let mut v: Vec<u8> = crate::tensor::zeroed_vec(n);
-            r.read_exact(&mut v)?;
-            Samples::U8(v)
-        }
-        SampleType::I8 => {
-            let mut v: Vec<i8> = crate::tensor::zeroed_vec(n);
-            r.read_i8_into(&mut v)?;
-            Samples::I8(v)
-        }
-        SampleType::U16 => Samples::U16(typed!(u16, read_u16_into)),
-        SampleType::I16 => Samples::I16(typed!(i16, read_i16_into)),
-        SampleType::U32 => Samples::U32(typed!(u32, read_u32_into)),
-        SampleType::I32 => Samples::I32(typed!(i32, read_i32_into)),
+        SampleType::U8 => Samples::U8(buf(n, f)?),
+        SampleType::I8 => Samples::I8(buf(n, f)?),
+        SampleType::U16 => Samples::U16(buf(n, f)?),
+        SampleType::I16 => Samples::I16(buf(n, f)?),
+        SampleType::U32 => Samples::U32(buf(n, f)?),
+        SampleType::I32 => Samples::I32(buf(n, f)?),
         SampleType::F16 => {
-            let bits: Vec<u16> = typed!(u16, read_u16_into);
+            let bits: Vec<u16> = buf(n, f)?;
             Samples::F16(bits.into_iter().map(half::f16::from_bits).collect())
         }
-        SampleType::F32 => Samples::F32(typed!(f32, read_f32_into)),
-        SampleType::F64 => Samples::F64(typed!(f64, read_f64_into)),
+        SampleType::F32 => Samples::F32(buf(n, f)?),
+        SampleType::F64 => Samples::F64(buf(n, f)?),
     })
 }
 

@@ -22,7 +22,7 @@
 //! element declaring more bytes than the file holds, or a PixelData whose length is not
 //! `Rows × Columns × BitsAllocated / 8`, is rejected before anything is allocated.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use dicom_object::{open_file, DefaultDicomObject, Tag};
 
@@ -281,34 +281,7 @@ fn load_slice(path: &Path) -> Result<Slice> {
         }
         _ => {}
     }
-    let elem = obj
-        .element(PIXEL_DATA)
-        .map_err(|_| bad(path, "no PixelData"))?;
-    let prim = elem.value().primitive().ok_or_else(|| Error::Unsupported {
-        what: "DICOM pixel data",
-        value: "encapsulated (compressed) fragments".into(),
-    })?;
-    use dicom_core::value::PrimitiveValue as P;
-    let raw: Vec<i64> = match (alloc, prim) {
-        (16, P::U16(v)) => v.iter().map(|&x| x as i64).collect(),
-        (16, P::I16(v)) => v.iter().map(|&x| x as u16 as i64).collect(),
-        (16, P::U8(b)) => b
-            .chunks_exact(2)
-            .map(|c| u16::from_le_bytes([c[0], c[1]]) as i64)
-            .collect(),
-        (8, P::U8(b)) => b.iter().map(|&x| x as i64).collect(),
-        (8, P::U16(v)) => v
-            .iter()
-            .flat_map(|x| x.to_le_bytes())
-            .map(|x| x as i64)
-            .collect(),
-        (a, _) => {
-            return Err(Error::Unsupported {
-                what: "DICOM BitsAllocated",
-                value: format!("{a} (expected 8 or 16)"),
-            })
-        }
-    };
+    let raw = pixel_values(&obj, alloc, path)?;
     if raw.len() < n {
         return Err(bad(
             path,
@@ -351,6 +324,39 @@ fn load_slice(path: &Path) -> Result<Slice> {
         series: text(&obj, SERIES_UID),
         modality: text(&obj, MODALITY),
         stored_type,
+    })
+}
+
+/// The pixel data as raw stored words (before masking to BitsAllocated), for 8 or 16 bits
+/// allocated; encapsulated (compressed) data is refused.
+fn pixel_values(obj: &DefaultDicomObject, alloc: i64, path: &Path) -> Result<Vec<i64>> {
+    let elem = obj
+        .element(PIXEL_DATA)
+        .map_err(|_| bad(path, "no PixelData"))?;
+    let prim = elem.value().primitive().ok_or_else(|| Error::Unsupported {
+        what: "DICOM pixel data",
+        value: "encapsulated (compressed) fragments".into(),
+    })?;
+    use dicom_core::value::PrimitiveValue as P;
+    Ok(match (alloc, prim) {
+        (16, P::U16(v)) => v.iter().map(|&x| x as i64).collect(),
+        (16, P::I16(v)) => v.iter().map(|&x| x as u16 as i64).collect(),
+        (16, P::U8(b)) => b
+            .chunks_exact(2)
+            .map(|c| u16::from_le_bytes([c[0], c[1]]) as i64)
+            .collect(),
+        (8, P::U8(b)) => b.iter().map(|&x| x as i64).collect(),
+        (8, P::U16(v)) => v
+            .iter()
+            .flat_map(|x| x.to_le_bytes())
+            .map(|x| x as i64)
+            .collect(),
+        (a, _) => {
+            return Err(Error::Unsupported {
+                what: "DICOM BitsAllocated",
+                value: format!("{a} (expected 8 or 16)"),
+            })
+        }
     })
 }
 
@@ -426,20 +432,66 @@ pub fn read_file(path: &Path) -> Result<Raster> {
     Ok(r)
 }
 
-/// Does the file start with the DICOM preamble + `DICM`?
-pub fn is_dicom(path: &Path) -> bool {
-    let mut head = [0u8; 132];
-    matches!(super::bytes::read_head(path, &mut head), Ok(132)) && &head[128..132] == b"DICM"
+pub use super::dicom_scan::{dicom_files, is_dicom};
+
+/// Whether the sorted slice `positions` are evenly spaced: every step positive and within
+/// 1 % of the median step. Uneven (or repeated) positions are an error unless `uneven_ok`.
+fn even_steps(positions: &[f64], uneven_ok: bool) -> Result<bool> {
+    let depth = positions.len();
+    let mut steps: Vec<f64> = positions.windows(2).map(|w| w[1] - w[0]).collect();
+    steps.sort_by(f64::total_cmp);
+    let median = steps.get(steps.len() / 2).copied().unwrap_or(0.0);
+    let even = steps
+        .iter()
+        .all(|&d| d > 0.0 && (d - median).abs() <= 0.01 * median);
+    if depth > 1 && !even && !uneven_ok {
+        let shown: Vec<String> = positions.iter().map(|p| format!("{p}")).collect();
+        let what = if steps
+            .iter()
+            .any(|&d| d.abs() <= 0.01 * median.abs().max(1e-6))
+        {
+            "repeated"
+        } else {
+            "unevenly spaced"
+        };
+        return Err(Error::format(
+            format!(
+                "{what} slice positions {} mm along the slice normal of the series",
+                shown.join(" / ")
+            ),
+            "distinct, evenly spaced slices (or --allow-uneven-slices)",
+        ));
+    }
+    Ok(even)
 }
 
-/// The DICOM files of a folder, by name.
-pub fn dicom_files(dir: &Path) -> Result<Vec<PathBuf>> {
-    let mut files: Vec<PathBuf> = std::fs::read_dir(dir)?
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| p.is_file() && is_dicom(p))
-        .collect();
-    files.sort();
-    Ok(files)
+/// The slices' samples in order, rescaled together when they share slope and intercept,
+/// else each by its own into `f32`.
+fn stack_samples(slices: &[Slice]) -> Samples {
+    let depth = slices.len();
+    let (rows, cols) = (slices[0].rows, slices[0].cols);
+    let (slope, intercept) = (slices[0].slope, slices[0].intercept);
+    let same_rescale = slices
+        .iter()
+        .all(|s| s.slope == slope && s.intercept == intercept);
+    let stored_type = slices[0].stored_type;
+    if same_rescale {
+        let mut all = Vec::with_capacity(depth * rows * cols);
+        for s in slices {
+            all.extend_from_slice(&s.stored);
+        }
+        rescale(all, slope, intercept, stored_type)
+    } else {
+        let mut all = Vec::with_capacity(depth * rows * cols);
+        for s in slices {
+            all.extend(
+                s.stored
+                    .iter()
+                    .map(|&x| (x as f64 * s.slope + s.intercept) as f32),
+            );
+        }
+        Samples::F32(all)
+    }
 }
 
 /// Read a folder holding one DICOM series as a volume `[slices, rows, columns]`;
@@ -487,30 +539,7 @@ pub fn read_series(dir: &Path, uneven_ok: bool) -> Result<Raster> {
     slices.sort_by(|a, b| key(a).total_cmp(&key(b)));
     let positions: Vec<f64> = slices.iter().map(key).collect();
     let depth = slices.len();
-    let mut steps: Vec<f64> = positions.windows(2).map(|w| w[1] - w[0]).collect();
-    steps.sort_by(f64::total_cmp);
-    let median = steps.get(steps.len() / 2).copied().unwrap_or(0.0);
-    let even = steps
-        .iter()
-        .all(|&d| d > 0.0 && (d - median).abs() <= 0.01 * median);
-    if depth > 1 && !even && !uneven_ok {
-        let shown: Vec<String> = positions.iter().map(|p| format!("{p}")).collect();
-        let what = if steps
-            .iter()
-            .any(|&d| d.abs() <= 0.01 * median.abs().max(1e-6))
-        {
-            "repeated"
-        } else {
-            "unevenly spaced"
-        };
-        return Err(Error::format(
-            format!(
-                "{what} slice positions {} mm along the slice normal of the series",
-                shown.join(" / ")
-            ),
-            "distinct, evenly spaced slices (or --allow-uneven-slices)",
-        ));
-    }
+    let even = even_steps(&positions, uneven_ok)?;
     // the slice vector: first to last over the steps between them (mean step)
     let step = if depth > 1 {
         match (slices[0].position, slices[depth - 1].position) {
@@ -527,28 +556,7 @@ pub fn read_series(dir: &Path, uneven_ok: bool) -> Result<Raster> {
         let t = slices[0].thickness.unwrap_or(1.0);
         [normal[0] * t, normal[1] * t, normal[2] * t]
     };
-    let (slope, intercept) = (slices[0].slope, slices[0].intercept);
-    let same_rescale = slices
-        .iter()
-        .all(|s| s.slope == slope && s.intercept == intercept);
-    let stored_type = slices[0].stored_type;
-    let samples = if same_rescale {
-        let mut all = Vec::with_capacity(depth * rows * cols);
-        for s in &slices {
-            all.extend_from_slice(&s.stored);
-        }
-        rescale(all, slope, intercept, stored_type)
-    } else {
-        let mut all = Vec::with_capacity(depth * rows * cols);
-        for s in &slices {
-            all.extend(
-                s.stored
-                    .iter()
-                    .map(|&x| (x as f64 * s.slope + s.intercept) as f32),
-            );
-        }
-        Samples::F32(all)
-    };
+    let samples = stack_samples(&slices);
     let mut r = Raster::new(vec![depth, rows, cols], 1, samples, DataKind::Volume)?;
     set_meta(&mut r, &slices[0], Some(step));
     if !even {

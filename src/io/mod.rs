@@ -19,6 +19,7 @@
 //! nrrd.rs   NRRD raw / gzip / ascii, both byte orders, detached .nhdr
 //! nifti.rs  NIfTI-1 .nii / .nii.gz (348-byte header, affine)
 //! dicom.rs  DICOM files and series (uncompressed), rescale applied, spacing kept
+//! dicom_scan.rs  finding DICOM files by their preamble (built without the feature too)
 //! slices.rs a folder of 2D slices (TIFF / PNG) as one volume
 //! hgt.rs    SRTM .hgt (big-endian i16, void −32768 kept as nodata)
 //! asc.rs    ESRI ASCII grid
@@ -52,7 +53,7 @@ pub mod dicom;
 pub mod dicom {
     use super::Raster;
     use crate::{Error, Result};
-    use std::path::{Path, PathBuf};
+    use std::path::Path;
 
     fn not_built(path: &Path) -> Error {
         Error::Unsupported {
@@ -66,21 +67,9 @@ pub mod dicom {
     pub fn read_series(dir: &Path, _uneven_ok: bool) -> Result<Raster> {
         Err(not_built(dir))
     }
-    /// Does the file start with the DICOM preamble + `DICM`?
-    pub fn is_dicom(path: &Path) -> bool {
-        let mut head = [0u8; 132];
-        matches!(super::bytes::read_head(path, &mut head), Ok(132)) && &head[128..132] == b"DICM"
-    }
-    /// The DICOM files of a folder, by name.
-    pub fn dicom_files(dir: &Path) -> Result<Vec<PathBuf>> {
-        let mut files: Vec<PathBuf> = std::fs::read_dir(dir)?
-            .filter_map(|e| e.ok().map(|e| e.path()))
-            .filter(|p| p.is_file() && is_dicom(p))
-            .collect();
-        files.sort();
-        Ok(files)
-    }
+    pub use super::dicom_scan::{dicom_files, is_dicom};
 }
+mod dicom_scan;
 pub mod exr;
 pub mod geokeys;
 pub mod geometry;

@@ -227,7 +227,35 @@ fn parse_header(text: &str) -> Result<Header> {
     if !h.kinds.is_empty() && h.kinds.len() != dim {
         return Err(bad(format!("dimension {dim} but {} kinds", h.kinds.len())));
     }
-    // spatial axes: all but a channel axis in first position
+    set_spacing(&mut h, dim, directions, spacings);
+    Ok(h)
+}
+
+impl Header {
+    /// Channels and spatial dims (slowest first): a channel axis is a first axis of a
+    /// channel kind (in a header of two or more dimensions).
+    fn layout(&self) -> (usize, Vec<usize>) {
+        let h = self;
+        let dim = h.sizes.len();
+        let chan_axis = dim >= 2 && h.kinds.first().is_some_and(|k| is_channel_kind(k));
+        let (channels, spatial) = if chan_axis {
+            (h.sizes[0], &h.sizes[1..])
+        } else {
+            (1, &h.sizes[..])
+        };
+        (channels, spatial.iter().rev().copied().collect())
+    }
+}
+
+/// Spacing (slowest axis first) and directions from `space directions` (spacing = each
+/// vector's length) or else `spacings`, over the spatial axes (all but a channel axis in
+/// first position); left unset when they do not match the dimension.
+fn set_spacing(
+    h: &mut Header,
+    dim: usize,
+    directions: Option<Vec<String>>,
+    spacings: Option<Vec<String>>,
+) {
     let chan_axis = dim >= 2 && h.kinds.first().is_some_and(|k| is_channel_kind(k));
     let first = usize::from(chan_axis);
     if let Some(dirs) = directions {
@@ -255,82 +283,32 @@ fn parse_header(text: &str) -> Result<Header> {
             }
         }
     }
-    Ok(h)
 }
 
-/// Read an attached (`.nrrd`) or detached (`.nhdr`) NRRD file.
-pub fn read(path: &Path) -> Result<Raster> {
-    let file = bytes::read_all(path)?;
-    // header ends at the first empty line (attached) or at the end of the file (detached)
-    let (head_end, data_start) = match find_blank_line(&file) {
-        Some((a, b)) => (a, b),
-        None => (file.len(), file.len()),
-    };
-    let text = std::str::from_utf8(&file[..head_end]).map_err(|_| bad("header is not text"))?;
-    let h = parse_header(text)?;
+/// The samples of `payload` (after line skips) by the header's encoding and byte skip.
+fn decode_payload(
+    h: &Header,
+    mut payload: &[u8],
+    dims: &[usize],
+    channels: usize,
+) -> Result<Samples> {
+    let n = sample_count(dims, channels)?;
     let ty = h.sample_type.expect("checked");
-    let dim = h.sizes.len();
-    let chan_axis = dim >= 2 && h.kinds.first().is_some_and(|k| is_channel_kind(k));
-    let (channels, spatial) = if chan_axis {
-        (h.sizes[0], &h.sizes[1..])
-    } else {
-        (1, &h.sizes[..])
-    };
-    let dims: Vec<usize> = spatial.iter().rev().copied().collect();
-
-    // the decoded size, checked against the memory budget before any data is read
-    let budget = crate::limits::Limits::from_env()?;
-    let need_bytes = (sample_count(&dims, channels)? as u64).saturating_mul(ty.size() as u64);
-    budget.check("NRRD data bytes (memory budget MRA_MAX_BYTES)", need_bytes)?;
-
-    // the bytes holding the (possibly encoded) data
-    let detached;
-    let payload: &[u8] = match &h.data_file {
-        Some(name) if name != "LIST" && !name.contains('%') => {
-            let p: PathBuf = path.parent().unwrap_or(Path::new(".")).join(name);
-            // raw data at a known offset: exactly the bytes the header needs
-            let exact = (h.encoding == "raw" && h.byte_skip >= 0 && h.line_skip == 0)
-                .then(|| need_bytes.saturating_add(h.byte_skip as u64));
-            detached = read_data_file(&p, exact, budget.max_bytes)?;
-            &detached
-        }
-        Some(other) => {
-            return Err(Error::Unsupported {
-                what: "NRRD data file",
-                value: other.clone(),
-            })
-        }
-        None => {
-            if data_start >= file.len() && head_end == file.len() {
-                return Err(bad("no blank line after the header and no 'data file'"));
-            }
-            &file[data_start..]
-        }
-    };
-    let mut payload = payload;
-    for _ in 0..h.line_skip {
-        match payload.iter().position(|&b| b == b'\n') {
-            Some(i) => payload = &payload[i + 1..],
-            None => return Err(bad("line skip beyond the end of the data")),
-        }
-    }
-
-    let n = sample_count(&dims, channels)?;
-    let samples = match h.encoding.as_str() {
+    Ok(match h.encoding.as_str() {
         "raw" => {
             let need = if h.byte_skip == -1 {
-                let need = checked_bytes(&dims, channels, ty, payload.len() as u64)?;
+                let need = checked_bytes(dims, channels, ty, payload.len() as u64)?;
                 payload = &payload[payload.len() - need..];
                 need
             } else {
                 let skip = h.byte_skip.max(0) as usize;
                 payload = payload.get(skip..).unwrap_or(&[]);
-                checked_bytes(&dims, channels, ty, payload.len() as u64)?
+                checked_bytes(dims, channels, ty, payload.len() as u64)?
             };
             bytes::decode(&payload[..need], ty, h.big_endian)
         }
         "gzip" | "gz" => {
-            let need = checked_bytes(&dims, channels, ty, u64::MAX)?;
+            let need = checked_bytes(dims, channels, ty, u64::MAX)?;
             let skip = h.byte_skip.max(0) as usize;
             if skip > 0 {
                 return Err(Error::Unsupported {
@@ -385,7 +363,60 @@ pub fn read(path: &Path) -> Result<Raster> {
                 value: other.to_string(),
             })
         }
+    })
+}
+
+/// Read an attached (`.nrrd`) or detached (`.nhdr`) NRRD file.
+pub fn read(path: &Path) -> Result<Raster> {
+    let file = bytes::read_all(path)?;
+    // header ends at the first empty line (attached) or at the end of the file (detached)
+    let (head_end, data_start) = match find_blank_line(&file) {
+        Some((a, b)) => (a, b),
+        None => (file.len(), file.len()),
     };
+    let text = std::str::from_utf8(&file[..head_end]).map_err(|_| bad("header is not text"))?;
+    let h = parse_header(text)?;
+    let ty = h.sample_type.expect("checked");
+    let (channels, dims) = h.layout();
+
+    // the decoded size, checked against the memory budget before any data is read
+    let budget = crate::limits::Limits::from_env()?;
+    let need_bytes = (sample_count(&dims, channels)? as u64).saturating_mul(ty.size() as u64);
+    budget.check("NRRD data bytes (memory budget MRA_MAX_BYTES)", need_bytes)?;
+
+    // the bytes holding the (possibly encoded) data
+    let detached;
+    let payload: &[u8] = match &h.data_file {
+        Some(name) if name != "LIST" && !name.contains('%') => {
+            let p: PathBuf = path.parent().unwrap_or(Path::new(".")).join(name);
+            // raw data at a known offset: exactly the bytes the header needs
+            let exact = (h.encoding == "raw" && h.byte_skip >= 0 && h.line_skip == 0)
+                .then(|| need_bytes.saturating_add(h.byte_skip as u64));
+            detached = read_data_file(&p, exact, budget.max_bytes)?;
+            &detached
+        }
+        Some(other) => {
+            return Err(Error::Unsupported {
+                what: "NRRD data file",
+                value: other.clone(),
+            })
+        }
+        None => {
+            if data_start >= file.len() && head_end == file.len() {
+                return Err(bad("no blank line after the header and no 'data file'"));
+            }
+            &file[data_start..]
+        }
+    };
+    let mut payload = payload;
+    for _ in 0..h.line_skip {
+        match payload.iter().position(|&b| b == b'\n') {
+            Some(i) => payload = &payload[i + 1..],
+            None => return Err(bad("line skip beyond the end of the data")),
+        }
+    }
+
+    let samples = decode_payload(&h, payload, &dims, channels)?;
     let kind = match dims.len() {
         1 => DataKind::Sequence,
         2 => DataKind::Image,
@@ -418,14 +449,7 @@ pub fn open_slabs(path: &Path) -> Result<Option<FileSlabs>> {
         return Ok(None);
     }
     let ty = h.sample_type.expect("checked");
-    let dim = h.sizes.len();
-    let chan_axis = dim >= 2 && h.kinds.first().is_some_and(|k| is_channel_kind(k));
-    let (channels, spatial) = if chan_axis {
-        (h.sizes[0], &h.sizes[1..])
-    } else {
-        (1, &h.sizes[..])
-    };
-    let dims: Vec<usize> = spatial.iter().rev().copied().collect();
+    let (channels, dims) = h.layout();
     let (data, start) = match &h.data_file {
         None if data_start == head_end && head_end as u64 == len => {
             return Err(bad("no blank line after the header and no 'data file'"))

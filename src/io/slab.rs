@@ -175,67 +175,19 @@ impl SlabSource for FileSlabs {
 
     #[cfg(unix)]
     fn read_rows_parallel(&mut self, rows: Range<usize>) -> Result<Samples> {
-        use byteorder::{BigEndian, LittleEndian, ReadBytesExt};
-        use rayon::prelude::*;
         check_rows(&self.shape, &rows)?;
         let per = self.shape.row_samples();
         let ty = self.shape.sample_type;
         let size = ty.size();
         let at = self.offset + (rows.start * per * size) as u64;
         let n = rows.len() * per;
-        // pieces of 2^20 samples, each read at its own offset (`pread`) by a thread of
-        // the pool
-        const PIECE: usize = 1 << 20;
-        let file = &self.file;
-        let big = self.big_endian;
-        let reader = |k: usize| At {
-            file,
-            pos: at + (k * PIECE * size) as u64,
+        let mut pieces = Pieces {
+            file: &self.file,
+            at,
+            size,
+            big_endian: self.big_endian,
         };
-        macro_rules! typed {
-            ($t:ty, $read:ident) => {{
-                let mut v: Vec<$t> = crate::tensor::zeroed_vec(n);
-                v.par_chunks_mut(PIECE)
-                    .enumerate()
-                    .try_for_each(|(k, c)| {
-                        if big {
-                            reader(k).$read::<BigEndian>(c)
-                        } else {
-                            reader(k).$read::<LittleEndian>(c)
-                        }
-                    })
-                    .map_err(|e| self.read_error(e, &rows))?;
-                v
-            }};
-        }
-        Ok(match ty {
-            SampleType::U8 => {
-                let mut v: Vec<u8> = crate::tensor::zeroed_vec(n);
-                v.par_chunks_mut(PIECE)
-                    .enumerate()
-                    .try_for_each(|(k, c)| reader(k).read_exact(c))
-                    .map_err(|e| self.read_error(e, &rows))?;
-                Samples::U8(v)
-            }
-            SampleType::I8 => {
-                let mut v: Vec<i8> = crate::tensor::zeroed_vec(n);
-                v.par_chunks_mut(PIECE)
-                    .enumerate()
-                    .try_for_each(|(k, c)| reader(k).read_i8_into(c))
-                    .map_err(|e| self.read_error(e, &rows))?;
-                Samples::I8(v)
-            }
-            SampleType::U16 => Samples::U16(typed!(u16, read_u16_into)),
-            SampleType::I16 => Samples::I16(typed!(i16, read_i16_into)),
-            SampleType::U32 => Samples::U32(typed!(u32, read_u32_into)),
-            SampleType::I32 => Samples::I32(typed!(i32, read_i32_into)),
-            SampleType::F16 => {
-                let bits: Vec<u16> = typed!(u16, read_u16_into);
-                Samples::F16(bits.into_iter().map(half::f16::from_bits).collect())
-            }
-            SampleType::F32 => Samples::F32(typed!(f32, read_f32_into)),
-            SampleType::F64 => Samples::F64(typed!(f64, read_f64_into)),
-        })
+        bytes::typed_samples(ty, n, &mut pieces).map_err(|e| self.read_error(e, &rows))
     }
 }
 
@@ -254,6 +206,36 @@ impl FileSlabs {
             ),
             _ => e.into(),
         }
+    }
+}
+
+/// Samples read in pieces of [`PIECE`], each at its own offset (`pread`) by a thread of the
+/// pool: piece `k` starts at byte `at + k·PIECE·size`.
+#[cfg(unix)]
+struct Pieces<'a> {
+    file: &'a File,
+    at: u64,
+    size: usize,
+    big_endian: bool,
+}
+
+/// Samples per parallel piece.
+#[cfg(unix)]
+const PIECE: usize = 1 << 20;
+
+#[cfg(unix)]
+impl bytes::FillSamples for Pieces<'_> {
+    type Error = std::io::Error;
+    fn fill<T: bytes::ReadInto>(&mut self, v: &mut [T]) -> std::io::Result<()> {
+        use rayon::prelude::*;
+        let (file, at, size, big) = (self.file, self.at, self.size, self.big_endian);
+        v.par_chunks_mut(PIECE).enumerate().try_for_each(|(k, c)| {
+            let mut r = At {
+                file,
+                pos: at + (k * PIECE * size) as u64,
+            };
+            T::read_into(&mut r, big, c)
+        })
     }
 }
 
