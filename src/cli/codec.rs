@@ -125,26 +125,7 @@ pub struct InfoArgs {
 }
 
 pub fn encode(a: EncodeArgs) -> CliResult {
-    let rate = if let Some(p) = a.keep {
-        Rate::Keep(p)
-    } else if let Some(t) = a.threshold {
-        Rate::Threshold(t)
-    } else if let Some(q) = a.quality {
-        Rate::Quality(q)
-    } else if let Some(d) = a.psnr {
-        match a.data_range {
-            Some(r) => Rate::PsnrRange(d, r),
-            None => Rate::Psnr(d),
-        }
-    } else if let Some(b) = a.bpp {
-        Rate::Bpp(b)
-    } else if let Some(e) = a.max_error {
-        Rate::MaxError(e)
-    } else if a.lossless {
-        Rate::Lossless
-    } else {
-        Rate::Quality(50.0)
-    };
+    let rate = a.rate();
     let opts = EncodeOptions {
         scheme: a.scheme,
         boundary: a.boundary,
@@ -160,47 +141,8 @@ pub fn encode(a: EncodeArgs) -> CliResult {
             .map_err(|e| Failure::context(a.input.display(), e))?
     };
     let (shape, tile, bytes, seconds) = match slabs {
-        Some(mut src) => {
-            let shape = crate::io::slab::SlabSource::shape(&src).clone();
-            let tile = match a.tile.as_deref() {
-                None => codec::default_tile(&shape.dims),
-                Some(s) => tile_extents(s, &shape.dims)?,
-            };
-            let t = std::time::Instant::now();
-            let mut n = 0;
-            if super::io_cmds::is_std(&a.output) {
-                // the container seeks back to its index: made in memory, then written
-                let mut w = std::io::Cursor::new(Vec::new());
-                n = codec::encode_stream(&mut src, &opts, &tile, &mut w)
-                    .map_err(|e| Failure::context(a.input.display(), e))?;
-                super::io_cmds::write_stdout(w.get_ref())?;
-            } else {
-                let input = a.input.display().to_string();
-                super::io_cmds::write_streamed(&a.output, &input, |w| {
-                    n = codec::encode_stream(&mut src, &opts, &tile, w)?;
-                    Ok(())
-                })?;
-            }
-            (shape, tile, n as usize, t.elapsed().as_secs_f64())
-        }
-        None => {
-            let r = read_input(&a.input, &read_opts)?;
-            let tile = match a.tile.as_deref() {
-                None => codec::default_tile(&r.dims),
-                Some(s) => tile_extents(s, &r.dims)?,
-            };
-            let t = std::time::Instant::now();
-            let bytes = codec::encode_tiled(&r, &opts, &tile)
-                .map_err(|e| Failure::context(a.input.display(), e))?;
-            let seconds = t.elapsed().as_secs_f64();
-            if super::io_cmds::is_std(&a.output) {
-                super::io_cmds::write_stdout(&bytes)?;
-            } else {
-                crate::fsutil::write_atomic(&a.output, |w| w.write_all(&bytes))
-                    .map_err(|e| Failure::context(a.output.display(), e))?;
-            }
-            (crate::io::slab::Shape::of(&r), tile, bytes.len(), seconds)
-        }
+        Some(mut src) => encode_slabs(&a, &mut src, &opts)?,
+        None => encode_whole(&a, &read_opts, &opts)?,
     };
     let positions = shape.positions();
     let bpp = bytes as f64 * 8.0 / positions as f64;
@@ -235,6 +177,89 @@ pub fn encode(a: EncodeArgs) -> CliResult {
         crate::io::summary(&shape.dims, shape.channels, shape.sample_type, shape.kind)
     );
     super::io_cmds::report(&a.output, &line)
+}
+
+/// What an encode produced: the shape coded, the tile extents, the file's bytes and the
+/// seconds spent coding.
+type Encoded = (crate::io::slab::Shape, Vec<usize>, usize, f64);
+
+/// Encode a source read a slab of tiles at a time.
+fn encode_slabs(
+    a: &EncodeArgs,
+    src: &mut crate::io::stream::Slabs,
+    opts: &EncodeOptions,
+) -> Result<Encoded, Failure> {
+    let shape = crate::io::slab::SlabSource::shape(src).clone();
+    let tile = match a.tile.as_deref() {
+        None => codec::default_tile(&shape.dims),
+        Some(s) => tile_extents(s, &shape.dims)?,
+    };
+    let t = std::time::Instant::now();
+    let mut n = 0;
+    if super::io_cmds::is_std(&a.output) {
+        // the container seeks back to its index: made in memory, then written
+        let mut w = std::io::Cursor::new(Vec::new());
+        n = codec::encode_stream(src, opts, &tile, &mut w)
+            .map_err(|e| Failure::context(a.input.display(), e))?;
+        super::io_cmds::write_stdout(w.get_ref())?;
+    } else {
+        let input = a.input.display().to_string();
+        super::io_cmds::write_streamed(&a.output, &input, |w| {
+            n = codec::encode_stream(src, opts, &tile, w)?;
+            Ok(())
+        })?;
+    }
+    Ok((shape, tile, n as usize, t.elapsed().as_secs_f64()))
+}
+
+/// Encode a raster read whole.
+fn encode_whole(
+    a: &EncodeArgs,
+    read_opts: &crate::io::ReadOptions,
+    opts: &EncodeOptions,
+) -> Result<Encoded, Failure> {
+    let r = read_input(&a.input, read_opts)?;
+    let tile = match a.tile.as_deref() {
+        None => codec::default_tile(&r.dims),
+        Some(s) => tile_extents(s, &r.dims)?,
+    };
+    let t = std::time::Instant::now();
+    let bytes =
+        codec::encode_tiled(&r, opts, &tile).map_err(|e| Failure::context(a.input.display(), e))?;
+    let seconds = t.elapsed().as_secs_f64();
+    if super::io_cmds::is_std(&a.output) {
+        super::io_cmds::write_stdout(&bytes)?;
+    } else {
+        crate::fsutil::write_atomic(&a.output, |w| w.write_all(&bytes))
+            .map_err(|e| Failure::context(a.output.display(), e))?;
+    }
+    Ok((crate::io::slab::Shape::of(&r), tile, bytes.len(), seconds))
+}
+
+impl EncodeArgs {
+    /// The rate control chosen (quality 50 when none is).
+    fn rate(&self) -> Rate {
+        if let Some(p) = self.keep {
+            Rate::Keep(p)
+        } else if let Some(t) = self.threshold {
+            Rate::Threshold(t)
+        } else if let Some(q) = self.quality {
+            Rate::Quality(q)
+        } else if let Some(d) = self.psnr {
+            match self.data_range {
+                Some(r) => Rate::PsnrRange(d, r),
+                None => Rate::Psnr(d),
+            }
+        } else if let Some(b) = self.bpp {
+            Rate::Bpp(b)
+        } else if let Some(e) = self.max_error {
+            Rate::MaxError(e)
+        } else if self.lossless {
+            Rate::Lossless
+        } else {
+            Rate::Quality(50.0)
+        }
+    }
 }
 
 /// `--tile`: `N`, `X,Y[,Z…]` (fastest axis first) or `whole`, as extents slowest axis

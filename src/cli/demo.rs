@@ -49,9 +49,17 @@ pub fn run(a: DemoArgs) -> CliResult {
 /// Run every demo job, writing outputs under `out`.
 pub fn rows(out: &Path) -> Result<Vec<DemoRow>> {
     std::fs::create_dir_all(out)?;
-    let mut rows = Vec::new();
+    let mut rows = vec![curve_row(out)?, subdivide_row(out)?];
+    rows.extend(image_rows()?);
+    rows.push(volume_row()?);
+    rows.extend(crate::terrain::demo_rows(out)?);
+    rows.extend(crate::upscale::demo_rows(out)?);
+    rows.extend(crate::codec::demo::rows(out)?);
+    Ok(rows)
+}
 
-    // 1. curve: decompose a stroke, keep the coarse curve, reconstruct
+/// Decompose a stroke, keep the coarse curve, reconstruct.
+fn curve_row(out: &Path) -> Result<DemoRow> {
     let curve = zigzag_circle(256);
     let t = Instant::now();
     let (packed, plan) = analyze_lane(&curve, 2, Scheme::Chaikin, Boundary::Periodic, 4)?;
@@ -62,7 +70,7 @@ pub fn rows(out: &Path) -> Result<Vec<DemoRow>> {
     crate::fsutil::write_atomic(&coarse_path, |w| {
         crate::points::write(2, &packed[..2 * n], w)
     })?;
-    rows.push(DemoRow {
+    Ok(DemoRow {
         job: "analyze+synthesize curve".into(),
         data: "zig-zag circle, 256 points 2D, chaikin periodic, 4 levels".into(),
         result: format!(
@@ -71,16 +79,18 @@ pub fn rows(out: &Path) -> Result<Vec<DemoRow>> {
         ),
         seconds: secs,
         output: Some(coarse_path),
-    });
+    })
+}
 
-    // 2. subdivision of a square with the interpolating 4-point scheme
+/// Subdivision of a square with the interpolating 4-point scheme.
+fn subdivide_row(out: &Path) -> Result<DemoRow> {
     let square = [0.0, 0.0, 1.0, 0.0, 1.0, 1.0, 0.0, 1.0];
     let t = Instant::now();
     let smooth = refine_steps(&square, 2, Refinement::FourPoint, Ends::Closed, 5)?;
     let secs = t.elapsed().as_secs_f64();
     let sub_path = out.join("square_four_point.csv");
     crate::fsutil::write_atomic(&sub_path, |w| crate::points::write(2, &smooth, w))?;
-    rows.push(DemoRow {
+    Ok(DemoRow {
         job: "subdivide".into(),
         data: "unit square, Dyn-Levin 4-point, closed, 5 steps".into(),
         result: format!(
@@ -90,9 +100,12 @@ pub fn rows(out: &Path) -> Result<Vec<DemoRow>> {
         ),
         seconds: secs,
         output: Some(sub_path),
-    });
+    })
+}
 
-    // 3. image pyramid
+/// Image pyramid forward and inverse, every scheme.
+fn image_rows() -> Result<Vec<DemoRow>> {
+    let mut rows = Vec::new();
     let (h, w) = (1024, 1024);
     let img = zone_plate(h, w);
     for scheme in Scheme::ALL {
@@ -126,8 +139,11 @@ pub fn rows(out: &Path) -> Result<Vec<DemoRow>> {
             output: None,
         });
     }
+    Ok(rows)
+}
 
-    // 4. volume pyramid
+/// Volume pyramid forward and inverse.
+fn volume_row() -> Result<DemoRow> {
     let n = 128;
     let vol = blob_volume(n);
     let mut a = Array::from_shape_vec(&[n, n, n], vol.clone())?;
@@ -148,7 +164,7 @@ pub fn rows(out: &Path) -> Result<Vec<DemoRow>> {
         .join("x");
     synthesize(&mut a, &pyr)?;
     let secs = t.elapsed().as_secs_f64();
-    rows.push(DemoRow {
+    Ok(DemoRow {
         job: "volume pyramid forward+inverse".into(),
         data: format!("Shepp-Logan phantom {n}^3 f32, cubic interpolating, 3 levels"),
         result: format!(
@@ -157,9 +173,5 @@ pub fn rows(out: &Path) -> Result<Vec<DemoRow>> {
         ),
         seconds: secs,
         output: None,
-    });
-    rows.extend(crate::terrain::demo_rows(out)?);
-    rows.extend(crate::upscale::demo_rows(out)?);
-    rows.extend(crate::codec::demo::rows(out)?);
-    Ok(rows)
+    })
 }

@@ -33,14 +33,8 @@ pub enum Command {
     ///
     /// Example: mra mesh simplify ../shared/corpus/meshes/bunny.ply -o small.ply --faces 1000
     Simplify {
-        /// Input mesh: OBJ, PLY or OFF (`-`: standard input, told by its first bytes).
-        input: PathBuf,
-        /// Output mesh: OBJ, PLY or OFF, by extension (`-`: standard output, with --format).
-        #[arg(short, long)]
-        output: PathBuf,
-        /// Format of `-o -` (standard output): obj, ply or off.
-        #[arg(long, value_name = "EXT")]
-        format: Option<String>,
+        #[command(flatten)]
+        files: MeshInOut,
         /// Target number of faces.
         #[arg(long)]
         faces: usize,
@@ -49,14 +43,8 @@ pub enum Command {
     ///
     /// Example: mra mesh normals ../shared/corpus/meshes/bunny.ply -o bunny_n.ply --weighting angle
     Normals {
-        /// Input mesh: OBJ, PLY or OFF (`-`: standard input, told by its first bytes).
-        input: PathBuf,
-        /// Output mesh: OBJ, PLY or OFF, by extension (`-`: standard output, with --format).
-        #[arg(short, long)]
-        output: PathBuf,
-        /// Format of `-o -` (standard output): obj, ply or off.
-        #[arg(long, value_name = "EXT")]
-        format: Option<String>,
+        #[command(flatten)]
+        files: MeshInOut,
         /// uniform, area or angle.
         #[arg(long, default_value = "angle")]
         weighting: String,
@@ -65,14 +53,8 @@ pub enum Command {
     ///
     /// Example: mra mesh convert ../shared/corpus/meshes/bunny.ply -o bunny.obj
     Convert {
-        /// Input mesh: OBJ, PLY or OFF (`-`: standard input, told by its first bytes).
-        input: PathBuf,
-        /// Output mesh: OBJ, PLY or OFF, by extension (`-`: standard output, with --format).
-        #[arg(short, long)]
-        output: PathBuf,
-        /// Format of `-o -` (standard output): obj, ply or off.
-        #[arg(long, value_name = "EXT")]
-        format: Option<String>,
+        #[command(flatten)]
+        files: MeshInOut,
         /// Write PLY as ASCII.
         #[arg(long)]
         ascii: bool,
@@ -84,14 +66,8 @@ pub enum Command {
     ///
     /// Example: mra mesh orient ../shared/corpus/meshes/penguin.off -o oriented.obj
     Orient {
-        /// Input mesh: OBJ, PLY or OFF (`-`: standard input, told by its first bytes).
-        input: PathBuf,
-        /// Output mesh: OBJ, PLY or OFF, by extension (`-`: standard output, with --format).
-        #[arg(short, long)]
-        output: PathBuf,
-        /// Format of `-o -` (standard output): obj, ply or off.
-        #[arg(long, value_name = "EXT")]
-        format: Option<String>,
+        #[command(flatten)]
+        files: MeshInOut,
     },
     /// Render a shaded PNG picture (z-buffer, optional wireframe).
     ///
@@ -124,14 +100,8 @@ pub enum Command {
     /// Example: mra solid polygonize corpus/scenes/sphere.json -o ball.obj --resolution 48 &&
     /// mra mesh deform ball.obj -o bulged.obj --lattice corpus/lattices/bulge.json
     Deform {
-        /// Input mesh: OBJ, PLY or OFF (`-`: standard input, told by its first bytes).
-        input: PathBuf,
-        /// Output mesh: OBJ, PLY or OFF, by extension (`-`: standard output, with --format).
-        #[arg(short, long)]
-        output: PathBuf,
-        /// Format of `-o -` (standard output): obj, ply or off.
-        #[arg(long, value_name = "EXT")]
-        format: Option<String>,
+        #[command(flatten)]
+        files: MeshInOut,
         /// Lattice file (JSON).
         #[arg(long)]
         lattice: PathBuf,
@@ -152,14 +122,8 @@ pub enum Command {
 
 #[derive(Args, Debug)]
 pub struct SubdivideArgs {
-    /// Input mesh: OBJ, PLY or OFF (`-`: standard input, told by its first bytes).
-    input: PathBuf,
-    /// Output mesh: OBJ, PLY or OFF, by extension (`-`: standard output, with --format).
-    #[arg(short, long)]
-    output: PathBuf,
-    /// Format of `-o -` (standard output): obj, ply or off.
-    #[arg(long, value_name = "EXT")]
-    format: Option<String>,
+    #[command(flatten)]
+    files: MeshInOut,
     /// loop, loop-warren, catmull-clark, doo-sabin or butterfly.
     #[arg(long)]
     scheme: String,
@@ -189,14 +153,8 @@ pub struct SubdivideArgs {
 
 #[derive(Args, Debug)]
 pub struct SmoothArgs {
-    /// Input mesh: OBJ, PLY or OFF (`-`: standard input, told by its first bytes).
-    input: PathBuf,
-    /// Output mesh: OBJ, PLY or OFF, by extension (`-`: standard output, with --format).
-    #[arg(short, long)]
-    output: PathBuf,
-    /// Format of `-o -` (standard output): obj, ply or off.
-    #[arg(long, value_name = "EXT")]
-    format: Option<String>,
+    #[command(flatten)]
+    files: MeshInOut,
     /// uniform or cotangent.
     #[arg(long, default_value = "uniform")]
     laplacian: String,
@@ -210,6 +168,36 @@ pub struct SmoothArgs {
     /// Keep boundary vertices fixed.
     #[arg(long)]
     fix_boundary: bool,
+}
+
+/// Where a mesh goes: a file whose extension picks the format, or standard output.
+#[derive(Args, Debug)]
+pub struct MeshOut {
+    /// Output mesh: OBJ, PLY or OFF, by extension (`-`: standard output, with --format).
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Format of `-o -` (standard output): obj, ply or off.
+    #[arg(long, value_name = "EXT")]
+    pub format: Option<String>,
+}
+
+/// A mesh in and a mesh out: the arguments of most mesh commands.
+#[derive(Args, Debug)]
+pub struct MeshInOut {
+    /// Input mesh: OBJ, PLY or OFF (`-`: standard input, told by its first bytes).
+    input: PathBuf,
+    #[command(flatten)]
+    out: MeshOut,
+}
+
+impl MeshInOut {
+    fn read(&self) -> Result<Mesh, Failure> {
+        read(&self.input)
+    }
+
+    fn write(&self, m: &Mesh) -> CliResult {
+        write(&self.out.output, self.out.format.as_deref(), m)
+    }
 }
 
 /// A mesh file, or standard input for `-` (its format told by its first bytes).
@@ -264,39 +252,12 @@ pub fn run(c: Command) -> CliResult {
             Ok(())
         }
         Command::Subdivide(a) => subdivide(a),
-        Command::Smooth(a) => {
-            let m = read(&a.input)?;
-            let kind = mesh::laplacian::Kind::parse(&a.laplacian)?;
-            let method = match a.method.as_str() {
-                "explicit" => mesh::laplacian::Method::Explicit,
-                "implicit" => mesh::laplacian::Method::Implicit,
-                other => {
-                    return Err(Failure(format!(
-                        "invalid method: {other} (expected explicit or implicit)"
-                    )))
-                }
-            };
-            let out =
-                mesh::laplacian::smooth(&m, kind, method, a.lambda, a.iterations, a.fix_boundary)?;
-            write(&a.output, a.format.as_deref(), &out)
+        Command::Smooth(a) => smooth(a),
+        Command::Simplify { files, faces } => {
+            files.write(&mesh::simplify::simplify(&files.read()?, faces)?)
         }
-        Command::Simplify {
-            input,
-            output,
-            format,
-            faces,
-        } => {
-            let m = read(&input)?;
-            let out = mesh::simplify::simplify(&m, faces)?;
-            write(&output, format.as_deref(), &out)
-        }
-        Command::Normals {
-            input,
-            output,
-            format,
-            weighting,
-        } => {
-            let mut m = read(&input)?;
+        Command::Normals { files, weighting } => {
+            let mut m = files.read()?;
             let w = mesh::normals::Weighting::parse(&weighting)?;
             let n = mesh::normals::vertex_normals(&m, w);
             m.attributes
@@ -305,40 +266,14 @@ pub fn run(c: Command) -> CliResult {
             m.attributes.normals.clear();
             m.attributes.corner_normal.clear();
             m.attributes.vertex_normals = Some(n);
-            write(&output, format.as_deref(), &m)
+            files.write(&m)
         }
         Command::Convert {
-            input,
-            output,
-            format,
+            files,
             ascii,
             big_endian,
-        } => {
-            let m = read(&input)?;
-            stdio::output(&output, format.as_deref(), None, MESH_FORMATS, |p| {
-                let mut fmt =
-                    io::Format::from_path(p).map_err(|e| Failure::context(p.display(), e))?;
-                if let io::Format::Ply(_) = fmt {
-                    fmt = io::Format::Ply(if ascii {
-                        io::ply::Encoding::Ascii
-                    } else if big_endian {
-                        io::ply::Encoding::BinaryBigEndian
-                    } else {
-                        io::ply::Encoding::BinaryLittleEndian
-                    });
-                }
-                io::write_as(p, &m, fmt).map_err(|e| Failure::context(p.display(), e))
-            })
-        }
-        Command::Orient {
-            input,
-            output,
-            format,
-        } => {
-            let m = read(&input)?;
-            let out = mesh::topology::orient(&m)?;
-            write(&output, format.as_deref(), &out)
-        }
+        } => convert(&files, ascii, big_endian),
+        Command::Orient { files } => files.write(&mesh::topology::orient(&files.read()?)?),
         Command::Render {
             input,
             output,
@@ -346,40 +281,15 @@ pub fn run(c: Command) -> CliResult {
             view,
             wireframe,
             z_up,
-        } => {
-            let m = read(&input)?;
-            let (w, h) = size
-                .split_once('x')
-                .and_then(|(w, h)| Some((w.parse::<usize>().ok()?, h.parse::<usize>().ok()?)))
-                .ok_or_else(|| {
-                    Failure(format!("invalid size: {size:?} (expected WIDTHxHEIGHT)"))
-                })?;
-            let v = floats(&view, 2, "view")?;
-            let opts = mesh::render::Options {
-                width: w,
-                height: h,
-                azimuth: v[0],
-                elevation: v[1],
-                wireframe,
-                z_up,
-                ..Default::default()
-            };
-            let png = mesh::render::render_png(&m, &opts)?;
-            stdio::write_bytes(&output, &png)
-        }
-        Command::Deform {
-            input,
-            output,
-            format,
-            lattice,
-        } => {
-            let m = read(&input)?;
+        } => render(&input, &output, &size, &view, wireframe, z_up),
+        Command::Deform { files, lattice } => {
+            let m = files.read()?;
             let text = stdio::read_text(&lattice)?;
-            let bbox =
-                crate::solid::ffd::bounds(&m).map_err(|e| Failure::context(input.display(), e))?;
+            let bbox = crate::solid::ffd::bounds(&m)
+                .map_err(|e| Failure::context(files.input.display(), e))?;
             let lat = crate::solid::ffd::Lattice::parse(&text, bbox)
                 .map_err(|e| Failure::context(lattice.display(), e))?;
-            write(&output, format.as_deref(), &lat.deform(&m))
+            files.write(&lat.deform(&m))
         }
         Command::Analyze {
             scheme,
@@ -389,14 +299,83 @@ pub fn run(c: Command) -> CliResult {
     }
 }
 
+fn smooth(a: SmoothArgs) -> CliResult {
+    let m = a.files.read()?;
+    let kind = mesh::laplacian::Kind::parse(&a.laplacian)?;
+    let method = match a.method.as_str() {
+        "explicit" => mesh::laplacian::Method::Explicit,
+        "implicit" => mesh::laplacian::Method::Implicit,
+        other => {
+            return Err(Failure(format!(
+                "invalid method: {other} (expected explicit or implicit)"
+            )))
+        }
+    };
+    let out = mesh::laplacian::smooth(&m, kind, method, a.lambda, a.iterations, a.fix_boundary)?;
+    a.files.write(&out)
+}
+
+/// Write the mesh in the output's format (PLY binary little endian unless `ascii` or
+/// `big_endian`).
+fn convert(files: &MeshInOut, ascii: bool, big_endian: bool) -> CliResult {
+    let m = files.read()?;
+    stdio::output(
+        &files.out.output,
+        files.out.format.as_deref(),
+        None,
+        MESH_FORMATS,
+        |p| {
+            let mut fmt = io::Format::from_path(p).map_err(|e| Failure::context(p.display(), e))?;
+            if let io::Format::Ply(_) = fmt {
+                fmt = io::Format::Ply(if ascii {
+                    io::ply::Encoding::Ascii
+                } else if big_endian {
+                    io::ply::Encoding::BinaryBigEndian
+                } else {
+                    io::ply::Encoding::BinaryLittleEndian
+                });
+            }
+            io::write_as(p, &m, fmt).map_err(|e| Failure::context(p.display(), e))
+        },
+    )
+}
+
+fn render(
+    input: &Path,
+    output: &Path,
+    size: &str,
+    view: &str,
+    wireframe: bool,
+    z_up: bool,
+) -> CliResult {
+    let m = read(input)?;
+    let (w, h) = size
+        .split_once('x')
+        .and_then(|(w, h)| Some((w.parse::<usize>().ok()?, h.parse::<usize>().ok()?)))
+        .ok_or_else(|| Failure(format!("invalid size: {size:?} (expected WIDTHxHEIGHT)")))?;
+    let v = floats(view, 2, "view")?;
+    let opts = mesh::render::Options {
+        width: w,
+        height: h,
+        azimuth: v[0],
+        elevation: v[1],
+        wireframe,
+        z_up,
+        ..Default::default()
+    };
+    let png = mesh::render::render_png(&m, &opts)?;
+    stdio::write_bytes(output, &png)
+}
+
 fn subdivide(a: SubdivideArgs) -> CliResult {
-    let m = read(&a.input)?;
+    let m = a.files.read()?;
     let scheme = mesh::subdivide::Scheme::parse(&a.scheme)?;
     let features = if let Some(path) = &a.creases {
         let text = stdio::read_text(path)?;
         Features::parse(&text).map_err(|e| Failure::context(path.display(), e))?
     } else if let Some(deg) = a.crease_angle {
-        let he = HalfEdgeMesh::build(&m).map_err(|e| Failure::context(a.input.display(), e))?;
+        let he =
+            HalfEdgeMesh::build(&m).map_err(|e| Failure::context(a.files.input.display(), e))?;
         Features::from_crease_angle(&m, &he, deg)?
     } else {
         Features::default()
@@ -433,8 +412,8 @@ fn subdivide(a: SubdivideArgs) -> CliResult {
         Some(sel) => mesh::adaptive::subdivide(&m, scheme, a.steps, &sel, &features),
         None => mesh::subdivide::subdivide(&m, scheme, a.steps, &features),
     }
-    .map_err(|e| Failure::context(a.input.display(), e))?;
-    write(&a.output, a.format.as_deref(), &out)
+    .map_err(|e| Failure::context(a.files.input.display(), e))?;
+    a.files.write(&out)
 }
 
 fn print_info(path: &Path, r: &mesh::topology::Report) {

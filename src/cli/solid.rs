@@ -1,6 +1,7 @@
 //! `mra solid …` (implicit models and CSG scenes) and `mra volume isosurface` (surfaces out of
 //! CT/MR volumes). A thin shell over `crate::solid`.
 
+use super::mesh::MeshOut;
 use super::{stdio, CliResult, Failure};
 use crate::solid::{mc, render, scene::Scene, tlist, voxel};
 use clap::{Args, Subcommand};
@@ -13,9 +14,8 @@ pub enum Command {
     ///
     /// Example: mra solid render corpus/scenes/csg20.json -o csg.png --size 512
     Render {
-        /// Scene file (JSON: primitives, CSG operations, blends; examples in corpus/scenes;
-        /// `-`: standard input).
-        scene: PathBuf,
+        #[command(flatten)]
+        scene: SceneFile,
         /// Output PNG (`-`: standard output).
         #[arg(short, long)]
         output: PathBuf,
@@ -27,15 +27,10 @@ pub enum Command {
     ///
     /// Example: mra solid polygonize corpus/scenes/blend.json -o blend.obj --resolution 128 --normals
     Polygonize {
-        /// Scene file (JSON: primitives, CSG operations, blends; examples in corpus/scenes;
-        /// `-`: standard input).
-        scene: PathBuf,
-        /// Output mesh: OBJ, PLY or OFF, by extension (`-`: standard output, with --format).
-        #[arg(short, long)]
-        output: PathBuf,
-        /// Format of `-o -` (standard output): obj, ply or off.
-        #[arg(long, value_name = "EXT")]
-        format: Option<String>,
+        #[command(flatten)]
+        scene: SceneFile,
+        #[command(flatten)]
+        out: MeshOut,
         /// Cells along the longest side of the model.
         #[arg(long, default_value_t = 128)]
         resolution: usize,
@@ -48,9 +43,8 @@ pub enum Command {
     ///
     /// Example: mra solid voxelize corpus/scenes/box_minus_cylinder.json -o part.nrrd --size 128 --occupancy
     Voxelize {
-        /// Scene file (JSON: primitives, CSG operations, blends; examples in corpus/scenes;
-        /// `-`: standard input).
-        scene: PathBuf,
+        #[command(flatten)]
+        scene: SceneFile,
         /// Output volume: NRRD, NIfTI, raw or TIFF, by extension (`-`: standard output, with
         /// --format).
         #[arg(short, long)]
@@ -69,13 +63,20 @@ pub enum Command {
     ///
     /// Example: mra solid volume corpus/scenes/sphere_and_box.json --rays 512
     Volume {
-        /// Scene file (JSON: primitives, CSG operations, blends; examples in corpus/scenes;
-        /// `-`: standard input).
-        scene: PathBuf,
+        #[command(flatten)]
+        scene: SceneFile,
         /// Rays per side of the grid of parallel rays (1 to 16384).
         #[arg(long, default_value_t = tlist::DEFAULT_RAYS, value_parser = parse_rays)]
         rays: usize,
     },
+}
+
+/// The scene a solid command reads.
+#[derive(Args, Debug)]
+pub struct SceneFile {
+    /// Scene file (JSON: primitives, CSG operations, blends; examples in corpus/scenes;
+    /// `-`: standard input).
+    scene: PathBuf,
 }
 
 /// Most rays per side of `solid volume` (16384² ≈ 2.7 × 10⁸ rays).
@@ -103,12 +104,8 @@ pub enum VolumeCommand {
 pub struct IsoArgs {
     /// A volume (any format `mra info-file` reads: NRRD, NIfTI, DICOM folder, TIFF stack, raw).
     pub input: PathBuf,
-    /// Output mesh: OBJ, PLY or OFF, by extension (`-`: standard output, with --format).
-    #[arg(short, long)]
-    pub output: PathBuf,
-    /// Format of `-o -` (standard output): obj, ply or off.
-    #[arg(long, value_name = "EXT")]
-    pub format: Option<String>,
+    #[command(flatten)]
+    pub out: MeshOut,
     /// Iso value (inside is above it).
     #[arg(long)]
     pub level: f64,
@@ -199,7 +196,7 @@ pub fn run(c: Command) -> CliResult {
             output,
             size,
         } => {
-            let sc = scene(&s)?;
+            let sc = scene(&s.scene)?;
             let t = Instant::now();
             let img = render::render(&sc, size, size)?;
             let secs = t.elapsed().as_secs_f64();
@@ -218,17 +215,16 @@ pub fn run(c: Command) -> CliResult {
         }
         Command::Polygonize {
             scene: s,
-            output,
-            format,
+            out,
             resolution,
             normals,
         } => {
-            let sc = scene(&s)?;
+            let sc = scene(&s.scene)?;
             let t = Instant::now();
             let sampled = voxel::sample(&sc.root, resolution)?;
             let iso = mc::polygonize(&sampled.grid(), 0.0, normals)?;
-            report(&output, &iso, t.elapsed().as_secs_f64(), true, false)?;
-            write_mesh(&output, format.as_deref(), iso)
+            report(&out.output, &iso, t.elapsed().as_secs_f64(), true, false)?;
+            write_mesh(&out.output, out.format.as_deref(), iso)
         }
         Command::Voxelize {
             scene: s,
@@ -237,7 +233,7 @@ pub fn run(c: Command) -> CliResult {
             size,
             occupancy,
         } => {
-            let sc = scene(&s)?;
+            let sc = scene(&s.scene)?;
             let sampled = voxel::sample(&sc.root, size)?;
             let mode = if occupancy {
                 voxel::VoxelMode::Occupancy
@@ -255,7 +251,7 @@ pub fn run(c: Command) -> CliResult {
             )
         }
         Command::Volume { scene: s, rays } => {
-            let sc = scene(&s)?;
+            let sc = scene(&s.scene)?;
             let t = Instant::now();
             let bar = crate::progress::Progress::new(rays as u64, "rays", false);
             let v = tlist::volume_with(&sc.root, rays, tlist::DEFAULT_STEPS, &bar)?;
@@ -369,9 +365,15 @@ pub fn run_volume(c: VolumeCommand) -> CliResult {
             };
             let iso = mc::polygonize(&grid, a.level, a.normals)?;
             drop(values);
-            report(&a.output, &iso, t.elapsed().as_secs_f64(), a.check, a.json)?;
+            report(
+                &a.out.output,
+                &iso,
+                t.elapsed().as_secs_f64(),
+                a.check,
+                a.json,
+            )?;
             let float = (!a.double).then_some(crate::mesh::attributes::ScalarType::F32);
-            write_mesh_as(&a.output, a.format.as_deref(), iso, float)
+            write_mesh_as(&a.out.output, a.out.format.as_deref(), iso, float)
         }
     }
 }

@@ -10,6 +10,21 @@ use crate::upscale::{self, Clamp, Edge, Method, Mode};
 use clap::Args;
 use std::path::PathBuf;
 
+/// The raster in and out of `upscale` and `downscale`.
+#[derive(Args, Debug, Clone)]
+pub struct Files {
+    /// Image, volume, heightmap or folder of slices.
+    pub input: PathBuf,
+    /// Output file (format from its extension; sample type of the input).
+    #[arg(short, long)]
+    pub output: PathBuf,
+    #[command(flatten)]
+    pub raw: RawArgs,
+    /// Format of `-o -` (standard output), as an extension: png, jpg, tif, nrrd, …
+    #[arg(long, value_name = "EXT")]
+    pub format: Option<String>,
+}
+
 #[derive(Args, Debug, Clone)]
 #[command(after_help = "Examples:
   mra generate zone-plate -o zp.png && mra upscale zp.png -o zp4.png --factor 4
@@ -24,16 +39,8 @@ use std::path::PathBuf;
 
 With -o - the raster alone goes to standard output; --json then prints on standard error.")]
 pub struct UpscaleArgs {
-    /// Image, volume, heightmap or folder of slices.
-    pub input: PathBuf,
-    /// Output file (format from its extension; sample type of the input).
-    #[arg(short, long)]
-    pub output: PathBuf,
     #[command(flatten)]
-    pub raw: RawArgs,
-    /// Format of `-o -` (standard output), as an extension: png, jpg, tif, nrrd, …
-    #[arg(long, value_name = "EXT")]
-    pub format: Option<String>,
+    pub files: Files,
     /// Integer factor along every chosen axis (2, 4, 8, … or any integer ≥ 2).
     #[arg(long, conflicts_with = "size")]
     pub factor: Option<usize>,
@@ -75,16 +82,8 @@ pub struct UpscaleArgs {
   mra generate zone-plate -o zp.png && mra downscale zp.png -o zp_quarter.png --levels 2
   mra downscale ct.raw --dims 256x256x64 --dtype u16 -o ct_half.nrrd --json")]
 pub struct DownscaleArgs {
-    /// Image, volume, heightmap or folder of slices.
-    pub input: PathBuf,
-    /// Output file (format from its extension; sample type of the input).
-    #[arg(short, long)]
-    pub output: PathBuf,
     #[command(flatten)]
-    pub raw: RawArgs,
-    /// Format of `-o -` (standard output), as an extension: png, jpg, tif, nrrd, …
-    #[arg(long, value_name = "EXT")]
-    pub format: Option<String>,
+    pub files: Files,
     /// Levels of REDUCE-RESOLUTION (each about halves every chosen axis).
     #[arg(long, default_value_t = 1)]
     pub levels: usize,
@@ -125,7 +124,7 @@ fn parse_size(s: &str) -> Result<Vec<usize>, Failure> {
 
 pub fn run_upscale(a: UpscaleArgs) -> CliResult {
     crate::tuning::use_allocator(crate::tuning::Allocator::KeepFreed);
-    let r = read_input(&a.input, &a.raw.options()?)?;
+    let r = read_input(&a.files.input, &a.files.raw.options()?)?;
     let nd = r.dims.len();
     let (axes, time) = match &a.axes {
         Some(s) => upscale::parse_axes(s, nd)?,
@@ -151,14 +150,20 @@ pub fn run_upscale(a: UpscaleArgs) -> CliResult {
     let out = upscale::upscale_raster(r, &method, &plans, &bar).map_err(|e| match e.kind() {
         crate::ErrorKind::LimitsExceeded => Failure(format!(
             "{}: output {}: {e} (MRA_MAX_BYTES raises the budget)",
-            a.input.display(),
+            a.files.input.display(),
             size.join("x")
         )),
-        _ => Failure::context(a.input.display(), e),
+        _ => Failure::context(a.files.input.display(), e),
     })?;
     let seconds = t.elapsed().as_secs_f64();
     bar.finish();
-    write_output_as(&a.output, &out, false, None, a.format.as_deref())?;
+    write_output_as(
+        &a.files.output,
+        &out,
+        false,
+        None,
+        a.files.format.as_deref(),
+    )?;
     if a.json {
         let v = serde_json::json!({
             "compute_seconds": seconds,
@@ -167,13 +172,13 @@ pub fn run_upscale(a: UpscaleArgs) -> CliResult {
             "spacing": out.meta.spacing.as_deref().map(super::io_cmds::xyz),
             "origin": out.meta.origin,
         });
-        super::io_cmds::report(&a.output, &v.to_string())?;
+        super::io_cmds::report(&a.files.output, &v.to_string())?;
     }
     Ok(())
 }
 
 pub fn run_downscale(a: DownscaleArgs) -> CliResult {
-    let r = read_input(&a.input, &a.raw.options()?)?;
+    let r = read_input(&a.files.input, &a.files.raw.options()?)?;
     let nd = r.dims.len();
     let axes = match &a.axes {
         Some(s) => upscale::parse_axes(s, nd)?.0,
@@ -181,12 +186,18 @@ pub fn run_downscale(a: DownscaleArgs) -> CliResult {
     };
     let t = std::time::Instant::now();
     let out = upscale::downscale_raster(r, a.scheme, a.boundary, a.levels, &axes)
-        .map_err(|e| Failure::context(a.input.display(), e))?;
+        .map_err(|e| Failure::context(a.files.input.display(), e))?;
     let seconds = t.elapsed().as_secs_f64();
-    write_output_as(&a.output, &out, false, None, a.format.as_deref())?;
+    write_output_as(
+        &a.files.output,
+        &out,
+        false,
+        None,
+        a.files.format.as_deref(),
+    )?;
     if a.json {
-        let v = super::io_cmds::raster_report(&a.input, &a.output, &out, seconds);
-        super::io_cmds::report(&a.output, &v.to_string())?;
+        let v = super::io_cmds::raster_report(&a.files.input, &a.files.output, &out, seconds);
+        super::io_cmds::report(&a.files.output, &v.to_string())?;
     }
     Ok(())
 }
