@@ -161,16 +161,7 @@ pub fn compare_view(
     b: &RasterView<'_>,
     opts: &CompareOptions,
 ) -> Result<Comparison> {
-    check_shapes(a, b)?;
-    if let Some(r) = opts.data_range {
-        if !(r.is_finite() && r > 0.0) {
-            return Err(Error::parameter(
-                "data range",
-                r,
-                "a finite peak-to-peak range > 0",
-            ));
-        }
-    }
+    check_inputs(a, b, opts)?;
     let cleaned = without_voids(a, b)?;
     let (a, b, n) = match &cleaned {
         Some((x, y, n)) => (x.view(), y.view(), *n),
@@ -200,6 +191,21 @@ pub fn compare_view(
     })
 }
 
+/// Equal shapes, and a data range (when given) finite and positive.
+fn check_inputs(a: &RasterView<'_>, b: &RasterView<'_>, opts: &CompareOptions) -> Result<()> {
+    check_shapes(a, b)?;
+    if let Some(r) = opts.data_range {
+        if !(r.is_finite() && r > 0.0) {
+            return Err(Error::parameter(
+                "data range",
+                r,
+                "a finite peak-to-peak range > 0",
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// The PSNR of `b` against the reference `a`, exactly as [`compare`] reports it (`None`
 /// when identical), without the SSIM: what the encoder's `--psnr` search measures.
 pub fn psnr(a: &Raster, b: &Raster, opts: &CompareOptions) -> Result<Option<f64>> {
@@ -212,16 +218,7 @@ pub fn psnr_view(
     b: &RasterView<'_>,
     opts: &CompareOptions,
 ) -> Result<Option<f64>> {
-    check_shapes(a, b)?;
-    if let Some(r) = opts.data_range {
-        if !(r.is_finite() && r > 0.0) {
-            return Err(Error::parameter(
-                "data range",
-                r,
-                "a finite peak-to-peak range > 0",
-            ));
-        }
-    }
+    check_inputs(a, b, opts)?;
     let cleaned = without_voids(a, b)?;
     let (a, b, n) = match &cleaned {
         Some((x, y, n)) => (x.view(), y.view(), *n),

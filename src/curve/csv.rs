@@ -117,6 +117,17 @@ fn parse_net(text: &str, rows_on_blank: bool) -> Result<PointTable> {
             "at least one line of coordinates",
         ));
     }
+    table(header.as_deref(), &rows, width, total)
+}
+
+/// The point table of the parsed `rows` (lines of `width` values, `total` in all): rows of
+/// equal length, the column named `w` (if the header has one) split off as the weights.
+fn table(
+    header: Option<&[String]>,
+    rows: &[Vec<Vec<f64>>],
+    width: usize,
+    total: usize,
+) -> Result<PointTable> {
     let cols = rows[0].len();
     if let Some((i, r)) = rows.iter().enumerate().find(|(_, r)| r.len() != cols) {
         return Err(Error::format(
@@ -129,9 +140,7 @@ fn parse_net(text: &str, rows_on_blank: bool) -> Result<PointTable> {
             "rows of equal length separated by blank lines",
         ));
     }
-    let wcol = header
-        .as_ref()
-        .and_then(|h| h.iter().position(|c| c == "w"));
+    let wcol = header.and_then(|h| h.iter().position(|c| c == "w"));
     let dim = width - wcol.is_some() as usize;
     if dim == 0 {
         return Err(Error::format(
@@ -141,7 +150,7 @@ fn parse_net(text: &str, rows_on_blank: bool) -> Result<PointTable> {
     }
     let mut points = Vec::with_capacity(total * dim);
     let mut weights = wcol.map(|_| Vec::with_capacity(total));
-    for r in &rows {
+    for r in rows {
         for p in r {
             for (j, v) in p.iter().enumerate() {
                 if Some(j) == wcol {

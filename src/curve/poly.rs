@@ -115,21 +115,27 @@ impl PiecewisePoly {
         let mut s = 0usize;
         for (u, o) in params.iter().zip(out.chunks_exact_mut(D - 1)) {
             self.locate(*u, &mut s)?;
-            let x = u - self.breaks[s];
-            let c = &self.coeffs[s * K * D..(s + 1) * K * D];
-            let mut acc = [0.0; D];
-            acc.copy_from_slice(&c[(K - 1) * D..]);
-            for j in (0..K - 1).rev() {
-                for d in 0..D {
-                    acc[d] = acc[d] * x + c[j * D + d];
-                }
-            }
+            let acc = self.horner::<K, D>(s, u - self.breaks[s]);
             let inv = 1.0 / acc[D - 1];
             for d in 0..D - 1 {
                 o[d] = acc[d] * inv;
             }
         }
         Ok(())
+    }
+
+    /// Piece `s` at local variable `x` by Horner's rule: `Σ_j c_j x^j`, `D` coordinates.
+    #[inline(always)]
+    fn horner<const K: usize, const D: usize>(&self, s: usize, x: f64) -> [f64; D] {
+        let c = &self.coeffs[s * K * D..(s + 1) * K * D];
+        let mut acc = [0.0; D];
+        acc.copy_from_slice(&c[(K - 1) * D..]);
+        for j in (0..K - 1).rev() {
+            for d in 0..D {
+                acc[d] = acc[d] * x + c[j * D + d];
+            }
+        }
+        acc
     }
 
     #[inline]
@@ -165,15 +171,7 @@ impl PiecewisePoly {
         let mut s = 0usize;
         for (u, o) in params.iter().zip(out.chunks_exact_mut(D)) {
             self.locate(*u, &mut s)?;
-            let x = u - self.breaks[s];
-            let c = &self.coeffs[s * K * D..(s + 1) * K * D];
-            let mut acc = [0.0; D];
-            acc.copy_from_slice(&c[(K - 1) * D..]);
-            for j in (0..K - 1).rev() {
-                for d in 0..D {
-                    acc[d] = acc[d] * x + c[j * D + d];
-                }
-            }
+            let acc = self.horner::<K, D>(s, u - self.breaks[s]);
             o.copy_from_slice(&acc);
         }
         Ok(())

@@ -192,13 +192,7 @@ fn closed(rule: Refinement, n: usize, t: &mut Triplets) {
 }
 
 fn open(rule: Refinement, n: usize, m: usize, t: &mut Triplets) {
-    // `start` rows are written for the first points and mirrored for the last ones.
-    let both = |t: &mut Triplets, i: usize, row: &[(usize, f64)]| {
-        for &(c, w) in row {
-            t.add(i, c, w);
-            t.add(m - 1 - i, n - 1 - c, w);
-        }
-    };
+    let both = |t: &mut Triplets, i: usize, row: &[(usize, f64)]| both_ends(t, n, m, i, row);
     match rule {
         Refinement::Box => {
             for j in 0..n {
@@ -227,52 +221,8 @@ fn open(rule: Refinement, n: usize, m: usize, t: &mut Triplets) {
         }
         Refinement::Cubic if n < 6 => clamped_midpoints(4, n, t),
         Refinement::Quartic if n < 8 => clamped_midpoints(5, n, t),
-        Refinement::Cubic => {
-            let start: [&[(usize, f64)]; 4] = [
-                &[(0, 1.0)],
-                &[(0, 0.5), (1, 0.5)],
-                &[(1, 0.75), (2, 0.25)],
-                &[(1, 3.0 / 16.0), (2, 11.0 / 16.0), (3, 0.125)],
-            ];
-            for (i, row) in start.iter().enumerate() {
-                both(t, i, row);
-            }
-            for i in 4..m - 4 {
-                if i % 2 == 0 {
-                    t.add(i, i / 2, 0.5);
-                    t.add(i, i / 2 + 1, 0.5);
-                } else {
-                    let v = i.div_ceil(2);
-                    t.add(i, v - 1, 0.125);
-                    t.add(i, v, 0.75);
-                    t.add(i, v + 1, 0.125);
-                }
-            }
-        }
-        Refinement::Quartic => {
-            let start: [&[(usize, f64)]; 6] = [
-                &[(0, 1.0)],
-                &[(0, 0.5), (1, 0.5)],
-                &[(1, 0.75), (2, 0.25)],
-                &[(1, 3.0 / 16.0), (2, 11.0 / 16.0), (3, 0.125)],
-                &[(2, 5.0 / 12.0), (3, 25.0 / 48.0), (4, 1.0 / 16.0)],
-                &[(2, 1.0 / 12.0), (3, 29.0 / 48.0), (4, 5.0 / 16.0)],
-            ];
-            for (i, row) in start.iter().enumerate() {
-                both(t, i, row);
-            }
-            for i in 6..m - 6 {
-                let j = i / 2;
-                let w = if i % 2 == 0 {
-                    [5.0 / 16.0, 0.625, 1.0 / 16.0]
-                } else {
-                    [1.0 / 16.0, 0.625, 5.0 / 16.0]
-                };
-                for (d, &x) in w.iter().enumerate() {
-                    t.add(i, j + d, x);
-                }
-            }
-        }
+        Refinement::Cubic => open_cubic(n, m, t),
+        Refinement::Quartic => open_quartic(n, m, t),
         Refinement::FourPoint => {
             for j in 0..n {
                 t.add(2 * j, j, 1.0);
@@ -297,6 +247,68 @@ fn open(rule: Refinement, n: usize, m: usize, t: &mut Triplets) {
                     t.add(2 * j + 1, j - 1 + d, w);
                 }
             }
+        }
+    }
+}
+
+/// Row `i` (weights on old points) and its mirror image `m − 1 − i` (on `n − 1 − c`): the
+/// `start` rows of an open rule are written for the first points and mirrored for the last.
+fn both_ends(t: &mut Triplets, n: usize, m: usize, i: usize, row: &[(usize, f64)]) {
+    for &(c, w) in row {
+        t.add(i, c, w);
+        t.add(m - 1 - i, n - 1 - c, w);
+    }
+}
+
+/// Open cubic B-spline refinement (`n ≥ 6`): clamped end rows, then `½ ½` and `⅛ ¾ ⅛`.
+fn open_cubic(n: usize, m: usize, t: &mut Triplets) {
+    let both = |t: &mut Triplets, i: usize, row: &[(usize, f64)]| both_ends(t, n, m, i, row);
+    let start: [&[(usize, f64)]; 4] = [
+        &[(0, 1.0)],
+        &[(0, 0.5), (1, 0.5)],
+        &[(1, 0.75), (2, 0.25)],
+        &[(1, 3.0 / 16.0), (2, 11.0 / 16.0), (3, 0.125)],
+    ];
+    for (i, row) in start.iter().enumerate() {
+        both(t, i, row);
+    }
+    for i in 4..m - 4 {
+        if i % 2 == 0 {
+            t.add(i, i / 2, 0.5);
+            t.add(i, i / 2 + 1, 0.5);
+        } else {
+            let v = i.div_ceil(2);
+            t.add(i, v - 1, 0.125);
+            t.add(i, v, 0.75);
+            t.add(i, v + 1, 0.125);
+        }
+    }
+}
+
+/// Open quartic B-spline refinement (`n ≥ 8`): clamped end rows, then `5/16 ⅝ 1/16` and
+/// its mirror image.
+fn open_quartic(n: usize, m: usize, t: &mut Triplets) {
+    let both = |t: &mut Triplets, i: usize, row: &[(usize, f64)]| both_ends(t, n, m, i, row);
+    let start: [&[(usize, f64)]; 6] = [
+        &[(0, 1.0)],
+        &[(0, 0.5), (1, 0.5)],
+        &[(1, 0.75), (2, 0.25)],
+        &[(1, 3.0 / 16.0), (2, 11.0 / 16.0), (3, 0.125)],
+        &[(2, 5.0 / 12.0), (3, 25.0 / 48.0), (4, 1.0 / 16.0)],
+        &[(2, 1.0 / 12.0), (3, 29.0 / 48.0), (4, 5.0 / 16.0)],
+    ];
+    for (i, row) in start.iter().enumerate() {
+        both(t, i, row);
+    }
+    for i in 6..m - 6 {
+        let j = i / 2;
+        let w = if i % 2 == 0 {
+            [5.0 / 16.0, 0.625, 1.0 / 16.0]
+        } else {
+            [1.0 / 16.0, 0.625, 5.0 / 16.0]
+        };
+        for (d, &x) in w.iter().enumerate() {
+            t.add(i, j + d, x);
         }
     }
 }

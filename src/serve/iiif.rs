@@ -399,27 +399,17 @@ mod tests {
 
     #[test]
     fn regions_resolve_as_the_specification_defines_them() {
-        assert_eq!(
-            wh(req("full", "max").unwrap()),
-            [0, 0, 1000, 600, 1000, 600]
-        );
-        assert_eq!(
-            wh(req("square", "max").unwrap()),
-            [200, 0, 600, 600, 600, 600]
-        );
-        assert_eq!(
-            wh(req("10,20,30,40", "max").unwrap()),
-            [10, 20, 30, 40, 30, 40]
-        );
-        // cropped at the image's edge
-        assert_eq!(
-            wh(req("900,500,300,300", "max").unwrap()),
-            [900, 500, 100, 100, 100, 100]
-        );
-        assert_eq!(
-            wh(req("pct:10,50,20,50", "max").unwrap()),
-            [100, 300, 200, 300, 200, 300]
-        );
+        // x, y, w, h of the region and the output size at "max"
+        for (region, want) in [
+            ("full", [0, 0, 1000, 600, 1000, 600]),
+            ("square", [200, 0, 600, 600, 600, 600]),
+            ("10,20,30,40", [10, 20, 30, 40, 30, 40]),
+            // cropped at the image's edge
+            ("900,500,300,300", [900, 500, 100, 100, 100, 100]),
+            ("pct:10,50,20,50", [100, 300, 200, 300, 200, 300]),
+        ] {
+            assert_eq!(wh(req(region, "max").unwrap()), want, "{region}");
+        }
         assert_eq!(
             wh(req("pct:0.5,0,99.5,100", "max").unwrap())[..4],
             [5, 0, 995, 600]

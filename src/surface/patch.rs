@@ -200,16 +200,48 @@ impl TensorPatch {
         )
     }
 
-    /// `Q(u, v)` (any dimension): `Σ_i Σ_j N_i(u) N_j(v) P_{ij}`, only the `ku × kv` non-zero terms.
-    pub fn eval(&self, u: f64, v: f64) -> Result<Vec<f64>> {
+    /// The knot spans holding `(u, v)`, after checking both are in range.
+    fn spans_at(&self, u: f64, v: f64) -> Result<(usize, usize)> {
         let (ru, rv) = self.ranges();
         check_range(u, ru)?;
         check_range(v, rv)?;
-        let cd = self.cdim();
-        let (su, sv) = (
+        Ok((
             span(&self.tu, self.nu, self.ku, u),
             span(&self.tv, self.nv, self.kv, v),
-        );
+        ))
+    }
+
+    /// Per non-empty v-span: its knot index, its start knot `t` and the `kv × kv` Taylor
+    /// matrix `M[j][r] = N_r^{(j)}(t)/j!` (all matrices in one array).
+    fn v_span_taylor(&self) -> (Vec<usize>, Vec<f64>, Vec<f64>) {
+        let (kv, nv) = (self.kv, self.nv);
+        let mut spans = Vec::new();
+        let mut starts = Vec::new();
+        let mut mats = Vec::new();
+        let mut w = DerivWork::new(kv);
+        let mut d = vec![0.0; kv * kv];
+        for sp in kv - 1..nv {
+            if self.tv[sp] >= self.tv[sp + 1] {
+                continue;
+            }
+            basis_derivs(&self.tv, sp, self.tv[sp], kv - 1, &mut w, &mut d);
+            let mut fact = 1.0;
+            for j in 0..kv {
+                if j > 0 {
+                    fact *= j as f64;
+                }
+                mats.extend(d[j * kv..(j + 1) * kv].iter().map(|x| x / fact));
+            }
+            spans.push(sp);
+            starts.push(self.tv[sp]);
+        }
+        (spans, starts, mats)
+    }
+
+    /// `Q(u, v)` (any dimension): `Σ_i Σ_j N_i(u) N_j(v) P_{ij}`, only the `ku × kv` non-zero terms.
+    pub fn eval(&self, u: f64, v: f64) -> Result<Vec<f64>> {
+        let cd = self.cdim();
+        let (su, sv) = self.spans_at(u, v)?;
         let mut bu = vec![0.0; self.ku];
         let mut bv = vec![0.0; self.kv];
         let k = self.ku.max(self.kv);
@@ -239,14 +271,8 @@ impl TensorPatch {
     /// `Q`, `∂Q/∂u`, `∂Q/∂v` at `(u, v)` from first basis derivatives; rational patches by the
     /// quotient rule `Q_u = (A_u − w_u Q)/w`.
     pub fn eval_partials(&self, u: f64, v: f64) -> Result<[Vec<f64>; 3]> {
-        let (ru, rv) = self.ranges();
-        check_range(u, ru)?;
-        check_range(v, rv)?;
         let cd = self.cdim();
-        let (su, sv) = (
-            span(&self.tu, self.nu, self.ku, u),
-            span(&self.tv, self.nv, self.kv, v),
-        );
+        let (su, sv) = self.spans_at(u, v)?;
         let mut du = vec![0.0; 2 * self.ku];
         let mut dv = vec![0.0; 2 * self.kv];
         basis_derivs(&self.tu, su, u, 1, &mut DerivWork::new(self.ku), &mut du);
@@ -296,27 +322,7 @@ impl TensorPatch {
                 "us.len() × vs.len() × dim",
             ));
         }
-        // per non-empty v-span: start knot index and the k×k Taylor matrix M[j][r] = N_r^{(j)}(t)/j!
-        let mut spans = Vec::new();
-        let mut starts = Vec::new();
-        let mut mats = Vec::new();
-        let mut w = DerivWork::new(kv);
-        let mut d = vec![0.0; kv * kv];
-        for sp in kv - 1..nv {
-            if self.tv[sp] >= self.tv[sp + 1] {
-                continue;
-            }
-            basis_derivs(&self.tv, sp, self.tv[sp], kv - 1, &mut w, &mut d);
-            let mut fact = 1.0;
-            for j in 0..kv {
-                if j > 0 {
-                    fact *= j as f64;
-                }
-                mats.extend(d[j * kv..(j + 1) * kv].iter().map(|x| x / fact));
-            }
-            spans.push(sp);
-            starts.push(self.tv[sp]);
-        }
+        let (spans, starts, mats) = self.v_span_taylor();
         // per v: which span (index into `spans`) and the local variable
         let mut vsig = Vec::with_capacity(vs.len());
         let mut vx = Vec::with_capacity(vs.len());
