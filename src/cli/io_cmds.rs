@@ -606,33 +606,16 @@ pub fn compare(a: CompareArgs) -> CliResult {
     emit(&out)
 }
 
-#[derive(ValueEnum, Debug, Clone, Copy, PartialEq, Eq)]
-pub enum KindArg {
-    ZonePlate,
-    Gradient,
-    Edges,
-    Strokes,
-    Noise,
-    Phantom,
-    Terrain,
-}
-
-impl KindArg {
-    fn kind(self) -> crate::generate::Kind {
-        use crate::generate::Kind;
-        match self {
-            KindArg::ZonePlate => Kind::ZonePlate,
-            KindArg::Gradient => Kind::Gradient,
-            KindArg::Edges => Kind::Edges,
-            KindArg::Strokes => Kind::Strokes,
-            KindArg::Noise => Kind::Noise,
-            KindArg::Phantom => Kind::Phantom,
-            KindArg::Terrain => Kind::Terrain,
-        }
+/// `mra generate`'s kinds are the library's, by their names.
+impl ValueEnum for crate::generate::Kind {
+    fn value_variants<'a>() -> &'a [Self] {
+        &crate::generate::Kind::ALL
+    }
+    fn to_possible_value(&self) -> Option<clap::builder::PossibleValue> {
+        Some(clap::builder::PossibleValue::new(self.name()))
     }
 }
 
-/// Generate deterministic test data: images, a CT phantom, fractal terrain.
 #[derive(Args, Debug)]
 #[command(
     after_help = "Defaults: images 256x256 u8, phantom 64x64x64 u16, terrain 257x257 u16.\n\nExample:\n  mra generate zone-plate -o zone.png --size 256\n  mra generate phantom -o phantom.nrrd --size 64 --compress\n  mra generate terrain -o terrain.tif --size 257 --seed 7 --dtype f32"
@@ -640,7 +623,7 @@ impl KindArg {
 pub struct GenerateArgs {
     /// What to generate.
     #[arg(value_enum)]
-    pub kind: KindArg,
+    pub kind: crate::generate::Kind,
     /// Output file; the extension picks the format (`-`: standard output, with --format).
     #[arg(short, long)]
     pub output: PathBuf,
@@ -665,7 +648,7 @@ pub struct GenerateArgs {
 }
 
 pub fn generate(a: GenerateArgs) -> CliResult {
-    let kind = a.kind.kind();
+    let kind = a.kind;
     let ndims = kind.default_dims().len();
     let dims = match &a.size {
         None => kind.default_dims(),

@@ -25,6 +25,13 @@ pub struct Files {
     pub format: Option<String>,
 }
 
+impl Files {
+    /// Write `r` to the output (its extension, or `--format` for `-`, picks the format).
+    fn write(&self, r: &crate::io::Raster) -> CliResult {
+        write_output_as(&self.output, r, false, None, self.format.as_deref())
+    }
+}
+
 #[derive(Args, Debug, Clone)]
 #[command(after_help = "Examples:
   mra generate zone-plate -o zp.png && mra upscale zp.png -o zp4.png --factor 4
@@ -157,13 +164,7 @@ pub fn run_upscale(a: UpscaleArgs) -> CliResult {
     })?;
     let seconds = t.elapsed().as_secs_f64();
     bar.finish();
-    write_output_as(
-        &a.files.output,
-        &out,
-        false,
-        None,
-        a.files.format.as_deref(),
-    )?;
+    a.files.write(&out)?;
     if a.json {
         let v = serde_json::json!({
             "compute_seconds": seconds,
@@ -188,13 +189,7 @@ pub fn run_downscale(a: DownscaleArgs) -> CliResult {
     let out = upscale::downscale_raster(r, a.scheme, a.boundary, a.levels, &axes)
         .map_err(|e| Failure::context(a.files.input.display(), e))?;
     let seconds = t.elapsed().as_secs_f64();
-    write_output_as(
-        &a.files.output,
-        &out,
-        false,
-        None,
-        a.files.format.as_deref(),
-    )?;
+    a.files.write(&out)?;
     if a.json {
         let v = super::io_cmds::raster_report(&a.files.input, &a.files.output, &out, seconds);
         super::io_cmds::report(&a.files.output, &v.to_string())?;

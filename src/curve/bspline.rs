@@ -5,7 +5,7 @@
 #![allow(clippy::needless_range_loop)]
 
 use super::basis::{self, basis_brute, basis_derivs, basis_funs, span, DerivWork, KnotVector};
-use super::{check_out, check_points, check_range, Curve};
+use super::{check_out, check_points, check_range, nth_derivative, Curve};
 use crate::{Error, Result};
 
 /// A B-spline curve of order `k` with `n = m + 1` control points of dimension `dim`.
@@ -260,16 +260,13 @@ impl Curve for BSpline {
         self.range()
     }
     fn eval_derivative_into(&self, u: f64, d: usize, out: &mut [f64]) -> Result<()> {
-        check_out(out, self.dim, "the point dimension")?;
-        if d == 0 {
-            check_range(u, self.range())?;
-            let mut work = vec![0.0; self.order * self.dim];
-            self.de_boor(u, &mut work, out);
-            return Ok(());
+        if d > 0 {
+            return nth_derivative(self.dim, d, out, |all| self.derivs_into(u, d, all));
         }
-        let mut all = vec![0.0; (d + 1) * self.dim];
-        self.derivs_into(u, d, &mut all)?;
-        out.copy_from_slice(&all[d * self.dim..]);
+        check_out(out, self.dim, "the point dimension")?;
+        check_range(u, self.range())?;
+        let mut work = vec![0.0; self.order * self.dim];
+        self.de_boor(u, &mut work, out);
         Ok(())
     }
 }

@@ -63,6 +63,21 @@ pub trait Curve {
     }
 }
 
+/// The `d`-th derivative into `out` (`dim` values) from `derivs`, which writes the
+/// derivatives `0..=d` (each `dim` values) into the buffer it is given.
+pub(crate) fn nth_derivative(
+    dim: usize,
+    d: usize,
+    out: &mut [f64],
+    derivs: impl FnOnce(&mut [f64]) -> Result<()>,
+) -> Result<()> {
+    check_out(out, dim, "the point dimension")?;
+    let mut all = vec![0.0; (d + 1) * dim];
+    derivs(&mut all)?;
+    out.copy_from_slice(&all[d * dim..]);
+    Ok(())
+}
+
 /// Check that a flat point list holds whole points and at least `min` of them.
 pub(crate) fn check_points(points: &[f64], dim: usize, min: usize) -> Result<usize> {
     if dim == 0 {

@@ -5,7 +5,7 @@
 //! and the result is projected by dividing by its last coordinate.
 
 use super::bezier::binomial;
-use super::{check_out, check_points, BSpline, Curve};
+use super::{check_out, check_points, nth_derivative, BSpline, Curve};
 use crate::{Error, Result};
 
 /// A rational B-spline curve: a B-spline in homogeneous coordinates.
@@ -258,10 +258,6 @@ impl Curve for Nurbs {
         self.range()
     }
     fn eval_derivative_into(&self, u: f64, d: usize, out: &mut [f64]) -> Result<()> {
-        check_out(out, self.dim, "the point dimension")?;
-        let mut all = vec![0.0; (d + 1) * self.dim];
-        self.derivs_into(u, d, &mut all)?;
-        out.copy_from_slice(&all[d * self.dim..]);
-        Ok(())
+        nth_derivative(self.dim, d, out, |all| self.derivs_into(u, d, all))
     }
 }

@@ -16,7 +16,7 @@
 use super::features::{sharp_edge_point, Features, Tags};
 use super::halfedge::{HalfEdgeMesh, VertexId};
 use super::loop_subdivision::GRAIN;
-use super::{Attributes, Mesh};
+use super::Mesh;
 use crate::{Error, Result};
 use rayon::prelude::*;
 
@@ -201,18 +201,15 @@ pub fn step(mesh: &Mesh, he: &HalfEdgeMesh, tags: &Tags) -> Result<(Mesh, Featur
             f += 1;
         }
     });
-    let children = if tags.any_interior_sharp || tags.corner.iter().any(|&c| c) {
+    Ok((Mesh::of_degree(out, indices, 4), child_tags(tags, he, nv)))
+}
+
+/// The tags of a refined mesh's old vertices and edge halves: none unless some interior
+/// edge is sharp or some vertex a corner.
+pub(crate) fn child_tags(tags: &Tags, he: &HalfEdgeMesh, nv: usize) -> Features {
+    if tags.any_interior_sharp || tags.corner.iter().any(|&c| c) {
         tags.children(he, nv as u32)
     } else {
         Features::default()
-    };
-    Ok((
-        Mesh {
-            positions: out,
-            offsets: (0..=nc as u32).map(|i| 4 * i).collect(),
-            indices,
-            attributes: Attributes::default(),
-        },
-        children,
-    ))
+    }
 }

@@ -15,10 +15,10 @@
 //! triangle `(a, b, c)` with edge points `ab, bc, ca` becomes
 //! `(a, ab, ca) (b, bc, ab) (c, ca, bc) (ab, bc, ca)`, so face `f`'s children are `4f .. 4f+4`.
 
-use super::catmull_clark::{edge_points, vertex_points};
+use super::catmull_clark::{child_tags, edge_points, vertex_points};
 use super::features::{sharp_edge_point, Features, Tags};
 use super::halfedge::HalfEdgeMesh;
-use super::{Attributes, Mesh};
+use super::Mesh;
 use crate::Result;
 use rayon::prelude::*;
 use std::f64::consts::PI;
@@ -123,18 +123,5 @@ pub(crate) fn quadrisect(
             let (ab, bc, ca) = (base + ce[c], base + ce[c + 1], base + ce[c + 2]);
             t.copy_from_slice(&[a, ab, ca, b, bc, ab, cc, ca, bc, ab, bc, ca]);
         });
-    let children = if tags.any_interior_sharp || tags.corner.iter().any(|&c| c) {
-        tags.children(he, nv as u32)
-    } else {
-        Features::default()
-    };
-    Ok((
-        Mesh {
-            positions: out,
-            offsets: (0..=4 * nf as u32).map(|i| 3 * i).collect(),
-            indices,
-            attributes: Attributes::default(),
-        },
-        children,
-    ))
+    Ok((Mesh::of_degree(out, indices, 3), child_tags(tags, he, nv)))
 }

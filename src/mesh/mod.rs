@@ -144,6 +144,18 @@ impl Mesh {
         Mesh::checked(positions, offsets, indices, Attributes::default())
     }
 
+    /// A mesh whose faces all have `degree` corners: face `f` is
+    /// `indices[degree·f .. degree·(f+1)]`.
+    pub fn of_degree(positions: Vec<[f64; 3]>, indices: Vec<u32>, degree: u32) -> Mesh {
+        let faces = indices.len() as u32 / degree;
+        Mesh {
+            positions,
+            offsets: (0..=faces).map(|f| degree * f).collect(),
+            indices,
+            attributes: Attributes::default(),
+        }
+    }
+
     /// A mesh from its parts, after [`Mesh::validate`].
     pub fn checked(
         positions: Vec<[f64; 3]>,
