@@ -883,38 +883,33 @@ pub fn point_triangle_distance(p: [f64; 3], a: [f64; 3], b: [f64; 3], c: [f64; 3
     use vec3::{dot, norm, sub};
     let ab = sub(b, a);
     let ac = sub(c, a);
-    let ap = sub(p, a);
-    let d1 = dot(ab, ap);
-    let d2 = dot(ac, ap);
+    // (ab · (p − q), ac · (p − q)) for q = a, b, c
+    let [(d1, d2), (d3, d4), (d5, d6)] = [a, b, c].map(|q| {
+        let qp = sub(p, q);
+        (dot(ab, qp), dot(ac, qp))
+    });
+    // distance to the point `q + t·e` of an edge
+    let to_edge = |q: [f64; 3], e: [f64; 3], t: f64| norm(sub(p, vec3::add(q, vec3::scale(e, t))));
     if d1 <= 0.0 && d2 <= 0.0 {
-        return norm(ap);
+        return norm(sub(p, a));
     }
-    let bp = sub(p, b);
-    let d3 = dot(ab, bp);
-    let d4 = dot(ac, bp);
     if d3 >= 0.0 && d4 <= d3 {
-        return norm(bp);
+        return norm(sub(p, b));
     }
     let vc = d1 * d4 - d3 * d2;
     if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
-        let v = d1 / (d1 - d3);
-        return norm(sub(p, vec3::add(a, vec3::scale(ab, v))));
+        return to_edge(a, ab, d1 / (d1 - d3));
     }
-    let cp = sub(p, c);
-    let d5 = dot(ab, cp);
-    let d6 = dot(ac, cp);
     if d6 >= 0.0 && d5 <= d6 {
-        return norm(cp);
+        return norm(sub(p, c));
     }
     let vb = d5 * d2 - d1 * d6;
     if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
-        let w = d2 / (d2 - d6);
-        return norm(sub(p, vec3::add(a, vec3::scale(ac, w))));
+        return to_edge(a, ac, d2 / (d2 - d6));
     }
     let va = d3 * d6 - d5 * d4;
     if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
-        let w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
-        return norm(sub(p, vec3::add(b, vec3::scale(sub(c, b), w))));
+        return to_edge(b, sub(c, b), (d4 - d3) / ((d4 - d3) + (d5 - d6)));
     }
     let denom = 1.0 / (va + vb + vc);
     let v = vb * denom;

@@ -3,17 +3,10 @@
 use std::io::Write;
 use std::process::{Command, Output, Stdio};
 
+use super::common;
+
 fn mra(args: &[&str], stdin: &str) -> Output {
-    let mut child = Command::new(env!("CARGO_BIN_EXE_mra"))
-        .args(args)
-        .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    // the child may exit (on bad arguments) before reading: a broken pipe is fine here
-    let _ = child.stdin.take().unwrap().write_all(stdin.as_bytes());
-    child.wait_with_output().unwrap()
+    common::mra_with_stdin(None, args, stdin.as_bytes())
 }
 
 fn text(b: &[u8]) -> String {
@@ -743,21 +736,7 @@ fn terrain_synth_takes_an_explicit_example_cell_past_a_unit_mismatch() {
 }
 
 fn mra_bytes(args: &[&str], stdin: &[u8]) -> Output {
-    let mut child = Command::new(env!("CARGO_BIN_EXE_mra"))
-        .args(args)
-        .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let mut input = child.stdin.take().unwrap();
-    let bytes = stdin.to_vec();
-    let feed = std::thread::spawn(move || {
-        let _ = input.write_all(&bytes);
-    });
-    let o = child.wait_with_output().unwrap();
-    let _ = feed.join();
-    o
+    common::mra_with_stdin(None, args, stdin)
 }
 
 /// `-` reads a raster from standard input (format by signature) and writes one to

@@ -9,17 +9,7 @@ use super::common;
 
 /// `mra ARGS` run in `dir` with `stdin` on its standard input.
 fn mra_in(dir: &Path, args: &[&str], stdin: &[u8]) -> Output {
-    let mut child = Command::new(env!("CARGO_BIN_EXE_mra"))
-        .args(args)
-        .current_dir(dir)
-        .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    // the child may exit before reading: a broken pipe is fine here
-    let _ = child.stdin.take().unwrap().write_all(stdin);
-    child.wait_with_output().unwrap()
+    common::mra_with_stdin(Some(dir), args, stdin)
 }
 
 fn ok(o: &Output) -> String {

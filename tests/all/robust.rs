@@ -9,6 +9,8 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 
+use super::common;
+
 const BIN: &str = env!("CARGO_BIN_EXE_mra");
 
 /// Address-space cap for every run (`ulimit -v`, KiB): 1 GiB, far below the 4 GB the
@@ -953,20 +955,7 @@ fn tiff_generate_and_mesh_subdivide_keep_to_the_budget() {
     assert!(err.contains("MRA_MAX_BYTES"), "{err}");
     assert!(!d.join("g.png").exists());
     // a 50 × 50 grid of 4,802 triangles: 8 Loop steps make 315 million
-    let mut obj = String::new();
-    for y in 0..50 {
-        for x in 0..50 {
-            obj += &format!("v {x} {y} {}\n", ((x * y) % 7) as f64 * 0.1);
-        }
-    }
-    for y in 0..49 {
-        for x in 0..49 {
-            let v = |dx: usize, dy: usize| (y + dy) * 50 + x + dx + 1;
-            obj += &format!("f {} {} {}\n", v(0, 0), v(1, 0), v(1, 1));
-            obj += &format!("f {} {} {}\n", v(0, 0), v(1, 1), v(0, 1));
-        }
-    }
-    write(&d, "grid.obj", obj.as_bytes());
+    write(&d, "grid.obj", common::grid_obj(50, 7, 0.1).as_bytes());
     let args = [
         "mesh",
         "subdivide",
@@ -1001,20 +990,7 @@ fn tiff_generate_and_mesh_subdivide_keep_to_the_budget() {
 #[test]
 fn adaptive_mesh_subdivision_keeps_to_the_budget() {
     let d = folder("budget-adaptive");
-    let mut obj = String::new();
-    for y in 0..50 {
-        for x in 0..50 {
-            obj += &format!("v {x} {y} {}\n", ((x * y) % 7) as f64 * 0.1);
-        }
-    }
-    for y in 0..49 {
-        for x in 0..49 {
-            let v = |dx: usize, dy: usize| (y + dy) * 50 + x + dx + 1;
-            obj += &format!("f {} {} {}\n", v(0, 0), v(1, 0), v(1, 1));
-            obj += &format!("f {} {} {}\n", v(0, 0), v(1, 1), v(0, 1));
-        }
-    }
-    write(&d, "grid.obj", obj.as_bytes());
+    write(&d, "grid.obj", common::grid_obj(50, 7, 0.1).as_bytes());
     let args = [
         "mesh",
         "subdivide",

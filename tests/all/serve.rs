@@ -23,6 +23,20 @@ fn run(args: &[&str]) {
     );
 }
 
+/// `mra generate kind -o dir/out extra…`.
+fn generate(d: &Dir, kind: &str, out: &str, extra: &[&str]) {
+    run(&[&["generate", kind, "-o", &d.s(out)], extra].concat());
+}
+
+/// `mra encode dir/src -o dir/out --quality 60 extra…`.
+fn encode(d: &Dir, src: &str, out: &str, extra: &[&str]) {
+    run(&[
+        &["encode", &d.s(src), "-o", &d.s(out), "--quality", "60"],
+        extra,
+    ]
+    .concat());
+}
+
 /// A temporary folder removed on drop.
 struct Dir(PathBuf);
 
@@ -92,6 +106,18 @@ impl Server {
         let mut raw = Vec::new();
         let _ = s.read_to_end(&mut raw);
         Response::parse(&raw)
+    }
+
+    /// GET `path`, which must answer 200 (the body shown otherwise).
+    fn get_ok(&self, path: &str) -> Response {
+        let r = self.get(path);
+        assert_eq!(
+            r.status,
+            200,
+            "{path}: {}",
+            String::from_utf8_lossy(&r.body)
+        );
+        r
     }
 
     fn get(&self, path: &str) -> Response {
@@ -178,61 +204,15 @@ fn unchunk(mut b: &[u8]) -> Vec<u8> {
 /// a volume.
 fn corpus(name: &str) -> Dir {
     let d = Dir::new(name);
-    run(&[
-        "generate",
-        "zone-plate",
-        "-o",
-        &d.s("z.png"),
-        "--size",
-        "1024",
-    ]);
-    run(&[
-        "encode",
-        &d.s("z.png"),
-        "-o",
-        &d.s("z.mra"),
-        "--quality",
-        "60",
-    ]);
+    generate(&d, "zone-plate", "z.png", &["--size", "1024"]);
+    encode(&d, "z.png", "z.mra", &[]);
     std::fs::create_dir_all(d.join("sub dir")).unwrap();
-    run(&[
-        "encode",
-        &d.s("z.png"),
-        "-o",
-        &d.s("sub dir/tiled.mra"),
-        "--quality",
-        "60",
-        "--tile",
-        "256",
-    ]);
+    encode(&d, "z.png", "sub dir/tiled.mra", &["--tile", "256"]);
     // a float TIFF of one channel reads as a heightmap
-    run(&[
-        "generate",
-        "terrain",
-        "-o",
-        &d.s("t.tif"),
-        "--size",
-        "257",
-        "--dtype",
-        "f32",
-    ]);
-    run(&[
-        "encode",
-        &d.s("t.tif"),
-        "-o",
-        &d.s("t.mra"),
-        "--quality",
-        "60",
-    ]);
-    run(&["generate", "phantom", "-o", &d.s("v.nrrd"), "--size", "64"]);
-    run(&[
-        "encode",
-        &d.s("v.nrrd"),
-        "-o",
-        &d.s("v.mra"),
-        "--quality",
-        "60",
-    ]);
+    generate(&d, "terrain", "t.tif", &["--size", "257", "--dtype", "f32"]);
+    encode(&d, "t.tif", "t.mra", &[]);
+    generate(&d, "phantom", "v.nrrd", &["--size", "64"]);
+    encode(&d, "v.nrrd", "v.mra", &[]);
     d
 }
 
@@ -306,13 +286,7 @@ fn a_served_region_equals_mra_decode_of_the_same_window() {
         ] {
             let ow = w >> k;
             let path = format!("/iiif/3/{id}/{x},{y},{w},{h}/{ow},/0/default.png");
-            let r = s.get(&path);
-            assert_eq!(
-                r.status,
-                200,
-                "{path}: {}",
-                String::from_utf8_lossy(&r.body)
-            );
+            let r = s.get_ok(&path);
             assert_eq!(r.header("content-type"), Some("image/png"));
             let served = gray(&r.image());
             let out = d.s(&format!("ref-{k}-{x}-{y}-{}.png", s.addr.port()));
@@ -339,34 +313,12 @@ fn a_served_region_equals_mra_decode_of_the_same_window() {
 #[test]
 fn a_served_window_of_a_non_square_image_is_the_library_box_rows_first() {
     let d = Dir::new("serve-axes");
-    run(&[
-        "generate",
-        "zone-plate",
-        "-o",
-        &d.s("w.png"),
-        "--size",
-        "300x200",
-    ]);
-    run(&[
-        "encode",
-        &d.s("w.png"),
-        "-o",
-        &d.s("w.mra"),
-        "--quality",
-        "60",
-        "--tile",
-        "64",
-    ]);
+    generate(&d, "zone-plate", "w.png", &["--size", "300x200"]);
+    encode(&d, "w.png", "w.mra", &["--tile", "64"]);
     let s = Server::start(&d.0);
     let (x, y, w, h) = (200usize, 20usize, 90usize, 150usize);
     let path = format!("/iiif/3/w.mra/{x},{y},{w},{h}/{w},/0/default.png");
-    let r = s.get(&path);
-    assert_eq!(
-        r.status,
-        200,
-        "{path}: {}",
-        String::from_utf8_lossy(&r.body)
-    );
+    let r = s.get_ok(&path);
     let served = gray(&r.image());
     let want = mra::codec::decode_file(
         &d.join("w.mra"),

@@ -6,6 +6,8 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 
+use super::common;
+
 fn dir(name: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("mra-stdio-{name}-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&d);
@@ -15,22 +17,7 @@ fn dir(name: &str) -> PathBuf {
 
 /// `mra args` in `dir` with `stdin` fed from a thread.
 fn run(dir: &Path, args: &[&str], stdin: &[u8]) -> Output {
-    let mut child = Command::new(env!("CARGO_BIN_EXE_mra"))
-        .args(args)
-        .current_dir(dir)
-        .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let mut input = child.stdin.take().unwrap();
-    let bytes = stdin.to_vec();
-    let feed = std::thread::spawn(move || {
-        let _ = input.write_all(&bytes);
-    });
-    let o = child.wait_with_output().unwrap();
-    let _ = feed.join();
-    o
+    common::mra_with_stdin(Some(dir), args, stdin)
 }
 
 fn ok(dir: &Path, args: &[&str], stdin: &[u8]) -> Vec<u8> {
@@ -69,22 +56,9 @@ fn same_as_file(dir: &Path, args: &[&str], name: &str, format: Option<&str>) {
     assert!(piped == file, "{args:?}: -o - differs from -o {name}");
 }
 
-/// A 6 × 6 grid of 50 triangles as OBJ text.
+/// An `n × n` grid of triangles as OBJ text.
 fn grid_obj(n: usize) -> String {
-    let mut obj = String::new();
-    for y in 0..n {
-        for x in 0..n {
-            obj += &format!("v {x} {y} {}\n", ((x * y) % 5) as f64 * 0.2);
-        }
-    }
-    for y in 0..n - 1 {
-        for x in 0..n - 1 {
-            let v = |dx: usize, dy: usize| (y + dy) * n + x + dx + 1;
-            obj += &format!("f {} {} {}\n", v(0, 0), v(1, 0), v(1, 1));
-            obj += &format!("f {} {} {}\n", v(0, 0), v(1, 1), v(0, 1));
-        }
-    }
-    obj
+    common::grid_obj(n, 5, 0.2)
 }
 
 /// `mra generate … -o - | mra encode - -o - | mra decode - -o - --format png`, as three

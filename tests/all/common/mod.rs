@@ -4,6 +4,8 @@
 //!   a missing corpus or file fails the test instead.
 //! - [`scratch_dir`] and [`scratch_file`]: a fresh directory per call, so tests running in
 //!   parallel never share a file.
+//! - [`mra_with_stdin`]: the `mra` binary run with bytes on its standard input.
+//! - [`grid_obj`]: a bumpy grid of triangles as OBJ text.
 //! - [`vector_builds`]: whether the kernels' AVX2 builds can be compared with the scalar
 //!   one here; a printed skip otherwise, a failure with `MRA_REQUIRE_AVX2=1`.
 //!
@@ -198,4 +200,47 @@ pub fn cpu_has_avx2() -> bool {
         skip(format_args!("this CPU has no AVX2 with FMA"));
     }
     has
+}
+
+/// `mra args` (in `dir` when given) with `stdin` fed from a thread, so a large input
+/// cannot block against a full output pipe; the child may exit before reading it all
+/// (on bad arguments): the broken pipe is ignored.
+pub fn mra_with_stdin(dir: Option<&Path>, args: &[&str], stdin: &[u8]) -> std::process::Output {
+    use std::process::{Command, Stdio};
+    let mut c = Command::new(env!("CARGO_BIN_EXE_mra"));
+    c.args(args)
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped());
+    if let Some(d) = dir {
+        c.current_dir(d);
+    }
+    let mut child = c.spawn().unwrap();
+    let mut input = child.stdin.take().unwrap();
+    let bytes = stdin.to_vec();
+    let feed = std::thread::spawn(move || {
+        let _ = input.write_all(&bytes);
+    });
+    let o = child.wait_with_output().unwrap();
+    let _ = feed.join();
+    o
+}
+
+/// An `n × n` grid of `2 (n − 1)²` triangles as OBJ text, vertex `(x, y)` at height
+/// `((x·y) mod bumps)·step`.
+pub fn grid_obj(n: usize, bumps: usize, step: f64) -> String {
+    let mut obj = String::new();
+    for y in 0..n {
+        for x in 0..n {
+            obj += &format!("v {x} {y} {}\n", ((x * y) % bumps) as f64 * step);
+        }
+    }
+    for y in 0..n - 1 {
+        for x in 0..n - 1 {
+            let v = |dx: usize, dy: usize| (y + dy) * n + x + dx + 1;
+            obj += &format!("f {} {} {}\n", v(0, 0), v(1, 0), v(1, 1));
+            obj += &format!("f {} {} {}\n", v(0, 0), v(1, 1), v(0, 1));
+        }
+    }
+    obj
 }
