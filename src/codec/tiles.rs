@@ -20,7 +20,7 @@ use super::plan::Plan;
 #[cfg(doc)]
 use super::voids::with_voids_filled;
 use crate::format::body::{meta_chunk, truncated};
-use crate::format::{ChunkReader, Header, Tag};
+use crate::format::{Chunk, ChunkReader, Header, Tag};
 use crate::io::slab::{MemorySlabs, Shape};
 use crate::io::{AxisMap, Metadata, Raster, RasterView, Samples};
 use crate::{Error, Result};
@@ -670,19 +670,7 @@ pub(super) fn decode_sequential<R: Read>(
                 index_seen = true;
             }
             Some(Tag::Tile) => {
-                if !index_seen {
-                    return Err(crate::FormatError::order(
-                        format!("TILE chunk at byte {} before the TIDX chunk", ch.offset),
-                        "TIDX before the tiles",
-                    ));
-                }
-                let (i, inner) = tile_payload(&ch, n)?;
-                if std::mem::replace(&mut seen[i], true) {
-                    return Err(crate::FormatError::duplicate(
-                        format!("a second TILE chunk for tile {i} (byte {})", ch.offset),
-                        "each tile once",
-                    ));
-                }
+                let (i, inner) = tile_in_order(&ch, index_seen, &mut seen)?;
                 if st.wanted(i) {
                     batch.push((i, inner.to_vec()));
                     if batch.len() >= batch_size() {
@@ -708,25 +696,53 @@ pub(super) fn decode_sequential<R: Read>(
         }
     }
     decode_batch(&mut st, &mut batch, opts.allow_truncated, &mut complete)?;
-    if let Some(i) = seen.iter().position(|&s| !s) {
-        if !opts.allow_truncated {
-            return Err(crate::FormatError::missing(
-                format!(
-                    "TILE chunk of tile {i} missing ({})",
-                    if ended { "MEND reached" } else { "file ends" }
-                ),
-                "every tile of the grid (or --allow-truncated)",
-            ));
-        }
-        complete = false;
-    }
-    complete &= ended;
+    complete &= every_tile(&seen, ended, opts.allow_truncated)? && ended;
     let raster = st.finish(&meta)?;
     Ok(Decoded {
         raster,
         header,
         complete,
     })
+}
+
+/// The tile number and payload of the `TILE` chunk `ch` read in order, marked in `seen`
+/// (one flag a tile of the grid); an error when the index has not come yet or the tile
+/// came before.
+fn tile_in_order<'c>(
+    ch: &'c Chunk,
+    index_seen: bool,
+    seen: &mut [bool],
+) -> Result<(usize, &'c [u8])> {
+    if !index_seen {
+        return Err(crate::FormatError::order(
+            format!("TILE chunk at byte {} before the TIDX chunk", ch.offset),
+            "TIDX before the tiles",
+        ));
+    }
+    let (i, inner) = tile_payload(ch, seen.len())?;
+    if std::mem::replace(&mut seen[i], true) {
+        return Err(crate::FormatError::duplicate(
+            format!("a second TILE chunk for tile {i} (byte {})", ch.offset),
+            "each tile once",
+        ));
+    }
+    Ok((i, inner))
+}
+
+/// Whether every tile was `seen`; a missing tile is an error unless `allow_truncated`
+/// (`ended`: the file reached `MEND`).
+fn every_tile(seen: &[bool], ended: bool, allow_truncated: bool) -> Result<bool> {
+    match seen.iter().position(|&s| !s) {
+        None => Ok(true),
+        Some(_) if allow_truncated => Ok(false),
+        Some(i) => Err(crate::FormatError::missing(
+            format!(
+                "TILE chunk of tile {i} missing ({})",
+                if ended { "MEND reached" } else { "file ends" }
+            ),
+            "every tile of the grid (or --allow-truncated)",
+        )),
+    }
 }
 
 /// Decode a tiled file from a seekable stream of `len` bytes whose `HEAD` has been read
