@@ -2,6 +2,37 @@
 
 use rayon::prelude::*;
 
+/// `width` columns cut into `count` strips of `max` columns (the last one narrower).
+#[derive(Clone, Copy)]
+pub(crate) struct Strips {
+    pub count: usize,
+    pub max: usize,
+    width: usize,
+}
+
+impl Strips {
+    /// Strips of at most `target` columns, of even widths.
+    pub(crate) fn new(width: usize, target: usize) -> Self {
+        Strips::of(width, width.div_ceil(target))
+    }
+
+    /// `width` cut into `count` strips of even widths.
+    pub(crate) fn of(width: usize, count: usize) -> Self {
+        Strips {
+            count,
+            max: width.div_ceil(count),
+            width,
+        }
+    }
+
+    /// Strip `s`: its first column and its width.
+    #[inline]
+    pub(crate) fn get(self, s: usize) -> (usize, usize) {
+        let off = s * self.max;
+        (off, self.max.min(self.width - off))
+    }
+}
+
 /// A raw pointer to an array that tasks write at disjoint places.
 #[derive(Clone, Copy)]
 pub(crate) struct SharedMut<T>(pub *mut T);
