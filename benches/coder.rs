@@ -177,16 +177,16 @@ fn train(set: &[Bands]) {
                 .all(|(i, f)| (i % step == 0 && i < end) || !seen(f)),
             "a context seen off every {step}-th"
         );
-        let kept: String = rows[..end]
+        let kept: Vec<String> = rows[..end]
             .iter()
             .step_by(step)
             .map(|f| {
                 let c = block::rc::Cdf::from_freqs(f).cumulative();
                 let v: Vec<String> = c.iter().map(|x| x.to_string()).collect();
-                format!("        [{}],\n", v.join(", "))
+                format!("[{}]", v.join(", "))
             })
             .collect();
-        format!("spread(\n    &[\n{kept}    ],\n    {step},\n)")
+        format!("spread(&[{}], {step})", kept.join(", "))
     };
     let text = format!(
         "//! Initial CDFs of the quad coder's contexts ([`super::quad`]), and how many symbols\n\
@@ -198,8 +198,10 @@ fn train(set: &[Bands]) {
          /// The symbols a prior counts as seen (the adaptation starts at the rate they give).\n\
          pub const WEIGHT: u8 = 14;\n\n\
          /// Pattern contexts.\n\
+         #[rustfmt::skip]\n\
          pub const PATTERN: [[u16; 16]; {}] = {};\n\n\
          /// Magnitude contexts.\n\
+         #[rustfmt::skip]\n\
          pub const MAGNITUDE: [[u16; 16]; {}] = {};\n",
         n.pattern.len(),
         table(&n.pattern, block::quad::PCLS),

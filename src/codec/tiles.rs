@@ -23,6 +23,7 @@ use crate::format::body::{meta_chunk, truncated};
 use crate::format::{Chunk, ChunkReader, Header, Tag};
 use crate::io::slab::{MemorySlabs, Shape};
 use crate::io::{AxisMap, Metadata, Raster, RasterView, Samples};
+use crate::tensor::par::{receive, Feed, Job, StopOnDrop};
 use crate::{Error, Result};
 use rayon::prelude::*;
 use std::io::{Read, Seek};
@@ -253,7 +254,6 @@ pub(super) fn crop_raster(r: &Raster, ranges: &[Range<usize>]) -> Result<Raster>
 
 mod compact;
 mod encode;
-mod feed;
 mod index;
 use compact::{tile_file, Ratios};
 pub(crate) use encode::encode_slabs;
@@ -590,30 +590,6 @@ fn decode_batch(
     Ok(())
 }
 
-/// The next message of `rx`, `None` when every sender is gone. On a thread of the pool
-/// (a caller inside `ThreadPool::install`) the wait runs the pool's pending jobs, so that
-/// the jobs it waits for run even when it is the pool's only thread.
-pub(super) fn receive<T>(rx: &std::sync::mpsc::Receiver<T>) -> Option<T> {
-    use std::sync::mpsc::RecvTimeoutError;
-    if rayon::current_thread_index().is_none() {
-        return rx.recv().ok();
-    }
-    loop {
-        match rx.try_recv() {
-            Ok(v) => return Some(v),
-            Err(std::sync::mpsc::TryRecvError::Disconnected) => return None,
-            Err(std::sync::mpsc::TryRecvError::Empty) => {}
-        }
-        if rayon::yield_now() != Some(rayon::Yield::Executed) {
-            match rx.recv_timeout(std::time::Duration::from_millis(1)) {
-                Ok(v) => return Some(v),
-                Err(RecvTimeoutError::Disconnected) => return None,
-                Err(RecvTimeoutError::Timeout) => {}
-            }
-        }
-    }
-}
-
 /// Tiles fetched before they are decoded together: enough to keep every thread busy
 /// (each is placed as soon as it is decoded, so this bounds the coded bytes held).
 fn batch_size() -> usize {
@@ -876,8 +852,8 @@ pub(super) struct TiledSlabs<R> {
     complete: bool,
     ended: bool,
     /// The tiles queued for the pool (dropped with the decoder).
-    feed: std::sync::Arc<feed::Feed>,
-    _stop: feed::StopOnDrop,
+    feed: std::sync::Arc<Feed>,
+    _stop: StopOnDrop,
 }
 
 impl<R: Read + Seek> TiledSlabs<R> {
@@ -893,7 +869,7 @@ impl<R: Read + Seek> TiledSlabs<R> {
         let (meta, index, ratios) = read_index(&mut src, len, after_head, &st)?;
         st.ratios = ratios;
         let shape = st.out_shape(&meta)?;
-        let feed = feed::Feed::new();
+        let feed = Feed::new();
         Ok(TiledSlabs {
             src,
             len,
@@ -970,7 +946,7 @@ impl<R: Read + Seek> TiledSlabs<R> {
         }
         self.feed.push(batch.into_iter().map(|(i, inner)| {
             let job = job.clone();
-            Box::new(move || job.tile(i, &inner, allow)) as feed::Job
+            Box::new(move || job.tile(i, &inner, allow)) as Job
         }));
         self.pending.push_back(rx);
         Ok(())

@@ -13,7 +13,6 @@
 //! the `--psnr` / `--bpp` search measures the sample.
 
 use super::compact::{self, Ratios};
-use super::feed::{self, Feed};
 use super::{crop_samples, Grid, SEARCH_SAMPLE_TILES};
 use crate::codec::encode::encode_filled;
 #[cfg(doc)]
@@ -28,6 +27,7 @@ use crate::format::tiles::{head_of, put_index_entry, tile_prefix};
 use crate::format::{self, write_chunk, Header, Mode};
 use crate::io::slab::{Shape, SlabSource};
 use crate::io::{Raster, Samples};
+use crate::tensor::par::{caught, receive, Feed, Job};
 use crate::{Error, Result};
 use rayon::prelude::*;
 use std::io::{Seek, SeekFrom, Write};
@@ -334,7 +334,7 @@ fn write_tiles<S: SlabSource + ?Sized, W: Write + Seek>(
             let c = match early.remove(&written) {
                 Some(c) => c,
                 None => {
-                    let (i, r) = super::receive(&rx).ok_or_else(stopped)?;
+                    let (i, r) = receive(&rx).ok_or_else(stopped)?;
                     let (c, got) = r?;
                     rn.merge(&got);
                     if i != written {
@@ -357,13 +357,11 @@ fn write_tiles<S: SlabSource + ?Sized, W: Write + Seek>(
             let (tx, slab, common) = (tx.clone(), slab.clone(), common.clone());
             Box::new(move || {
                 let (grid, shape, opts) = &*common;
-                let got = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-                    code_tile(grid, shape, &slab, row0, i, coding, opts, measure)
-                }));
+                let got = caught(|| code_tile(grid, shape, &slab, row0, i, coding, opts, measure));
                 drop(slab);
                 // the receiver is gone when writing failed
-                let _ = tx.send((i, got.unwrap_or_else(|_| Err(stopped()))));
-            }) as feed::Job
+                let _ = tx.send((i, got.unwrap_or_else(|| Err(stopped()))));
+            }) as Job
         }));
         drop(slab);
         let upto = if ahead {

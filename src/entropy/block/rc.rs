@@ -171,12 +171,17 @@ impl<'a> Decoder<'a> {
 }
 
 /// Range encoder of [`Cdf`] symbols.
-#[derive(Default)]
 pub struct Encoder(Writer);
+
+impl Default for Encoder {
+    fn default() -> Self {
+        Self::new()
+    }
+}
 
 impl Encoder {
     pub fn new() -> Self {
-        Self::default()
+        Encoder(Writer::default())
     }
 
     /// Code symbol `s` (< 16) with `cdf`, then adapt it.
@@ -275,5 +280,20 @@ impl<'a> BitReader<'a> {
         self.acc >>= n;
         self.n -= n;
         v
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The contexts [`spread`] fills are the uniform CDF, and the listed ones land every
+    /// `step`-th.
+    #[test]
+    fn spread_puts_the_seen_contexts_every_step_among_uniform_ones() {
+        let seen = [[7u16; 16], [9u16; 16]];
+        let t: [[u16; 16]; 5] = spread(&seen, 2);
+        let uniform = Cdf::uniform(LIMIT).cumulative();
+        assert_eq!(t, [seen[0], uniform, seen[1], uniform, uniform]);
     }
 }
