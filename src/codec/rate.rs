@@ -34,6 +34,55 @@ pub(super) fn encode_lossy(
     encode_prepared(prepare(r, opts, Mode::Lossy)?, rate, Some(r), lossless)
 }
 
+/// Check the rate mode's number: a quality from 1 to 100, a keep percentage from 0 to
+/// 100, a positive threshold and bpp, a PSNR target between 0 and 400 dB and a positive,
+/// finite data range.
+pub(crate) fn check_rate(rate: Rate) -> Result<()> {
+    match rate {
+        Rate::Quality(q) if !(1.0..=100.0).contains(&q) => {
+            Err(Error::parameter("quality", q, "1 to 100"))
+        }
+        Rate::Keep(k) if !(0.0..=100.0).contains(&k) => {
+            Err(Error::parameter("keep", k, "a percentage from 0 to 100"))
+        }
+        Rate::Threshold(t) if !(t > 0.0 && t.is_finite()) => {
+            Err(Error::parameter("threshold", t, "a positive number"))
+        }
+        Rate::Bpp(b) if !(b > 0.0 && b.is_finite()) => Err(Error::parameter(
+            "bpp",
+            b,
+            "a positive number of bits per position",
+        )),
+        Rate::Psnr(db) | Rate::PsnrRange(db, _) if !(db > 0.0 && db < 400.0) => Err(
+            Error::parameter("psnr", db, "a target in dB between 0 and 400"),
+        ),
+        Rate::PsnrRange(_, p) if !(p.is_finite() && p > 0.0) => Err(Error::parameter(
+            "data range",
+            p,
+            "a positive, finite peak-to-peak range",
+        )),
+        _ => Ok(()),
+    }
+}
+
+/// The base step of `--quality q` on data of peak-to-peak range `range`:
+/// `range · 2^(−q/10)`.
+pub(crate) fn quality_step(q: f64, range: f64) -> f64 {
+    range * (2f64).powf(-q / 10.0)
+}
+
+/// The base step of `--keep k`: the threshold `t` of the largest `k`% of the weighted
+/// details `w`, as `t / (1 − ρ)` (at least `range · 10⁻⁹`; `range · 10⁶` when nothing is
+/// kept).
+pub(crate) fn keep_step(w: &mut [f32], k: f64, range: f64) -> f64 {
+    let t = quantize::keep_threshold(w, k);
+    if t.is_infinite() {
+        range * 1e6
+    } else {
+        (t / (1.0 - RHO)).max(range * 1e-9)
+    }
+}
+
 /// [`encode_lossy`] of a transform already prepared; `r` is the raster, needed by
 /// `--psnr` alone (its candidates are compared with it): without it `--psnr` is an
 /// error.
@@ -43,6 +92,7 @@ pub(super) fn encode_prepared(
     r: Option<&RasterView<'_>>,
     lossless: &dyn Fn() -> Result<Vec<u8>>,
 ) -> Result<Vec<u8>> {
+    check_rate(rate)?;
     if matches!(
         rate,
         Rate::Quality(_) | Rate::Psnr(_) | Rate::PsnrRange(..) | Rate::Bpp(_)
@@ -52,47 +102,10 @@ pub(super) fn encode_prepared(
     let range = (p.header.max - p.header.min).max(1e-30);
     let integer = !p.header.sample_type.is_float();
     let step = match rate {
-        Rate::Keep(k) => {
-            if !(0.0..=100.0).contains(&k) {
-                return Err(Error::parameter("keep", k, "a percentage from 0 to 100"));
-            }
-            let mut w = p.weighted_details();
-            let t = quantize::keep_threshold(&mut w, k);
-            if t.is_infinite() {
-                range * 1e6
-            } else {
-                (t / (1.0 - RHO)).max(range * 1e-9)
-            }
-        }
-        Rate::Threshold(t) => {
-            if !(t > 0.0 && t.is_finite()) {
-                return Err(Error::parameter("threshold", t, "a positive number"));
-            }
-            t / (1.0 - RHO)
-        }
-        Rate::Quality(q) => {
-            if !(1.0..=100.0).contains(&q) {
-                return Err(Error::parameter("quality", q, "1 to 100"));
-            }
-            range * (2f64).powf(-q / 10.0)
-        }
+        Rate::Keep(k) => keep_step(&mut p.weighted_details(), k, range),
+        Rate::Threshold(t) => t / (1.0 - RHO),
+        Rate::Quality(q) => quality_step(q, range),
         Rate::Psnr(db) | Rate::PsnrRange(db, _) => {
-            if let Rate::PsnrRange(_, r) = rate {
-                if !(r.is_finite() && r > 0.0) {
-                    return Err(Error::parameter(
-                        "data range",
-                        r,
-                        "a positive, finite peak-to-peak range",
-                    ));
-                }
-            }
-            if !(db > 0.0 && db < 400.0) {
-                return Err(Error::parameter(
-                    "psnr",
-                    db,
-                    "a target in dB between 0 and 400",
-                ));
-            }
             let Some(r) = r else {
                 return Err(Error::parameter(
                     "psnr",
@@ -100,59 +113,9 @@ pub(super) fn encode_prepared(
                     "a raster in memory to compare the candidates with",
                 ));
             };
-            // each candidate decoded from its quantized bands, coded only once chosen;
-            // the data range `mra compare` would use, found once
-            let cmp = crate::metrics::CompareOptions {
-                data_range: Some(match rate {
-                    Rate::PsnrRange(_, range) => range,
-                    _ => crate::metrics::skimage_data_range(r.samples),
-                }),
-                ..Default::default()
-            };
-            let (errors, peak) = (p.rate_model(), cmp.data_range.unwrap_or(range));
-            let n = (r.positions() * r.channels) as f64;
-            let model = |x: f64| {
-                let mse = (errors.squared_error(x.exp()) / n).max(1e-300);
-                10.0 * (peak * peak / mse).log10() - db
-            };
-            let lossy = search(&p, range, false, 0.02, Some(&model), |step| {
-                let dec = p.decoded(step)?;
-                let psnr = crate::metrics::psnr_view(r, &dec.view(), &cmp)?;
-                Ok((psnr.unwrap_or(f64::INFINITY) - db, None))
-            })?;
-            // the lossless file meets every target (its PSNR is infinite)
-            let near_unit = db >= unit_psnr(peak, LOSSLESS_STEP);
-            return smaller_of(lossy, integer && near_unit, lossless);
+            return encode_psnr(&p, rate, db, r, lossless);
         }
-        Rate::Bpp(b) => {
-            if !(b > 0.0 && b.is_finite()) {
-                return Err(Error::parameter(
-                    "bpp",
-                    b,
-                    "a positive number of bits per position",
-                ));
-            }
-            let pos = p.header.dims.iter().product::<usize>() as f64;
-            // v = ln b − ln bpp: met when the file is within the budget, within
-            // 1% under it at −ln 0.99; the log of the size is close to a line in
-            // ln(step), where the size itself bends (10 candidates at 1 bpp on
-            // kodim01 against 5)
-            let sizes = p.rate_model();
-            let model = |x: f64| b.ln() - (sizes.bits(x.exp()) / pos).ln();
-            if !p.header.sample_type.is_float() && b * pos >= LOSSLESS_SHARE * sizes.bits(1.0) {
-                let bytes = lossless()?;
-                if bytes.len() as f64 * 8.0 <= b * pos {
-                    return Ok(bytes);
-                }
-            }
-            if let Some(bytes) = calibrated_bpp(&p, range, b * pos, &model) {
-                return Ok(bytes);
-            }
-            return search(&p, range, true, -(0.99f64.ln()), Some(&model), |step| {
-                let bytes = p.code(step);
-                Ok((b.ln() - (bytes.len() as f64 * 8.0 / pos).ln(), Some(bytes)))
-            });
-        }
+        Rate::Bpp(b) => return encode_bpp(&p, b, lossless),
         _ => unreachable!(),
     };
     let lossy = p.code(step);
@@ -161,6 +124,69 @@ pub(super) fn encode_prepared(
     // the scheme asked for (its coarse levels are what `--level` decodes)
     let near_unit = matches!(rate, Rate::Quality(q) if q >= 100.0) && step <= LOSSLESS_STEP;
     smaller_of(lossy, integer && near_unit, lossless)
+}
+
+/// `--psnr db` of the prepared transform `p` of the raster `r`: the step searched on
+/// the decoded candidates' PSNR, or the lossless file when it is no larger near the
+/// lossless cost.
+fn encode_psnr(
+    p: &Prepared,
+    rate: Rate,
+    db: f64,
+    r: &RasterView<'_>,
+    lossless: &dyn Fn() -> Result<Vec<u8>>,
+) -> Result<Vec<u8>> {
+    let range = (p.header.max - p.header.min).max(1e-30);
+    let integer = !p.header.sample_type.is_float();
+    // each candidate decoded from its quantized bands, coded only once chosen;
+    // the data range `mra compare` would use, found once
+    let cmp = crate::metrics::CompareOptions {
+        data_range: Some(match rate {
+            Rate::PsnrRange(_, range) => range,
+            _ => crate::metrics::skimage_data_range(r.samples),
+        }),
+        ..Default::default()
+    };
+    let (errors, peak) = (p.rate_model(), cmp.data_range.unwrap_or(range));
+    let n = (r.positions() * r.channels) as f64;
+    let model = |x: f64| {
+        let mse = (errors.squared_error(x.exp()) / n).max(1e-300);
+        10.0 * (peak * peak / mse).log10() - db
+    };
+    let lossy = search(p, range, false, 0.02, Some(&model), |step| {
+        let dec = p.decoded(step)?;
+        let psnr = crate::metrics::psnr_view(r, &dec.view(), &cmp)?;
+        Ok((psnr.unwrap_or(f64::INFINITY) - db, None))
+    })?;
+    // the lossless file meets every target (its PSNR is infinite)
+    let near_unit = db >= unit_psnr(peak, LOSSLESS_STEP);
+    smaller_of(lossy, integer && near_unit, lossless)
+}
+
+/// `--bpp b` of the prepared transform `p`: the lossless file when it fits the budget
+/// near the lossless cost, else the calibrated or searched step.
+fn encode_bpp(p: &Prepared, b: f64, lossless: &dyn Fn() -> Result<Vec<u8>>) -> Result<Vec<u8>> {
+    let range = (p.header.max - p.header.min).max(1e-30);
+    let pos = p.header.dims.iter().product::<usize>() as f64;
+    // v = ln b − ln bpp: met when the file is within the budget, within
+    // 1% under it at −ln 0.99; the log of the size is close to a line in
+    // ln(step), where the size itself bends (10 candidates at 1 bpp on
+    // kodim01 against 5)
+    let sizes = p.rate_model();
+    let model = |x: f64| b.ln() - (sizes.bits(x.exp()) / pos).ln();
+    if !p.header.sample_type.is_float() && b * pos >= LOSSLESS_SHARE * sizes.bits(1.0) {
+        let bytes = lossless()?;
+        if bytes.len() as f64 * 8.0 <= b * pos {
+            return Ok(bytes);
+        }
+    }
+    if let Some(bytes) = calibrated_bpp(p, range, b * pos, &model) {
+        return Ok(bytes);
+    }
+    search(p, range, true, -(0.99f64.ln()), Some(&model), |step| {
+        let bytes = p.code(step);
+        Ok((b.ln() - (bytes.len() as f64 * 8.0 / pos).ln(), Some(bytes)))
+    })
 }
 
 /// The base step (in units of integer samples) at or below which `--psnr` and

@@ -20,9 +20,10 @@ use super::plan::Plan;
 #[cfg(doc)]
 use super::voids::with_voids_filled;
 use crate::format::body::{meta_chunk, truncated};
-use crate::format::{ChunkReader, Header, Tag};
+use crate::format::{Chunk, ChunkReader, Header, Tag};
 use crate::io::slab::{MemorySlabs, Shape};
 use crate::io::{AxisMap, Metadata, Raster, RasterView, Samples};
+use crate::tensor::par::{receive, Feed, Job, StopOnDrop};
 use crate::{Error, Result};
 use rayon::prelude::*;
 use std::io::{Read, Seek};
@@ -253,7 +254,6 @@ pub(super) fn crop_raster(r: &Raster, ranges: &[Range<usize>]) -> Result<Raster>
 
 mod compact;
 mod encode;
-mod feed;
 mod index;
 use compact::{tile_file, Ratios};
 pub(crate) use encode::encode_slabs;
@@ -590,30 +590,6 @@ fn decode_batch(
     Ok(())
 }
 
-/// The next message of `rx`, `None` when every sender is gone. On a thread of the pool
-/// (a caller inside `ThreadPool::install`) the wait runs the pool's pending jobs, so that
-/// the jobs it waits for run even when it is the pool's only thread.
-pub(super) fn receive<T>(rx: &std::sync::mpsc::Receiver<T>) -> Option<T> {
-    use std::sync::mpsc::RecvTimeoutError;
-    if rayon::current_thread_index().is_none() {
-        return rx.recv().ok();
-    }
-    loop {
-        match rx.try_recv() {
-            Ok(v) => return Some(v),
-            Err(std::sync::mpsc::TryRecvError::Disconnected) => return None,
-            Err(std::sync::mpsc::TryRecvError::Empty) => {}
-        }
-        if rayon::yield_now() != Some(rayon::Yield::Executed) {
-            match rx.recv_timeout(std::time::Duration::from_millis(1)) {
-                Ok(v) => return Some(v),
-                Err(RecvTimeoutError::Disconnected) => return None,
-                Err(RecvTimeoutError::Timeout) => {}
-            }
-        }
-    }
-}
-
 /// Tiles fetched before they are decoded together: enough to keep every thread busy
 /// (each is placed as soon as it is decoded, so this bounds the coded bytes held).
 fn batch_size() -> usize {
@@ -670,19 +646,7 @@ pub(super) fn decode_sequential<R: Read>(
                 index_seen = true;
             }
             Some(Tag::Tile) => {
-                if !index_seen {
-                    return Err(crate::FormatError::order(
-                        format!("TILE chunk at byte {} before the TIDX chunk", ch.offset),
-                        "TIDX before the tiles",
-                    ));
-                }
-                let (i, inner) = tile_payload(&ch, n)?;
-                if std::mem::replace(&mut seen[i], true) {
-                    return Err(crate::FormatError::duplicate(
-                        format!("a second TILE chunk for tile {i} (byte {})", ch.offset),
-                        "each tile once",
-                    ));
-                }
+                let (i, inner) = tile_in_order(&ch, index_seen, &mut seen)?;
                 if st.wanted(i) {
                     batch.push((i, inner.to_vec()));
                     if batch.len() >= batch_size() {
@@ -708,25 +672,53 @@ pub(super) fn decode_sequential<R: Read>(
         }
     }
     decode_batch(&mut st, &mut batch, opts.allow_truncated, &mut complete)?;
-    if let Some(i) = seen.iter().position(|&s| !s) {
-        if !opts.allow_truncated {
-            return Err(crate::FormatError::missing(
-                format!(
-                    "TILE chunk of tile {i} missing ({})",
-                    if ended { "MEND reached" } else { "file ends" }
-                ),
-                "every tile of the grid (or --allow-truncated)",
-            ));
-        }
-        complete = false;
-    }
-    complete &= ended;
+    complete &= every_tile(&seen, ended, opts.allow_truncated)? && ended;
     let raster = st.finish(&meta)?;
     Ok(Decoded {
         raster,
         header,
         complete,
     })
+}
+
+/// The tile number and payload of the `TILE` chunk `ch` read in order, marked in `seen`
+/// (one flag a tile of the grid); an error when the index has not come yet or the tile
+/// came before.
+fn tile_in_order<'c>(
+    ch: &'c Chunk,
+    index_seen: bool,
+    seen: &mut [bool],
+) -> Result<(usize, &'c [u8])> {
+    if !index_seen {
+        return Err(crate::FormatError::order(
+            format!("TILE chunk at byte {} before the TIDX chunk", ch.offset),
+            "TIDX before the tiles",
+        ));
+    }
+    let (i, inner) = tile_payload(ch, seen.len())?;
+    if std::mem::replace(&mut seen[i], true) {
+        return Err(crate::FormatError::duplicate(
+            format!("a second TILE chunk for tile {i} (byte {})", ch.offset),
+            "each tile once",
+        ));
+    }
+    Ok((i, inner))
+}
+
+/// Whether every tile was `seen`; a missing tile is an error unless `allow_truncated`
+/// (`ended`: the file reached `MEND`).
+fn every_tile(seen: &[bool], ended: bool, allow_truncated: bool) -> Result<bool> {
+    match seen.iter().position(|&s| !s) {
+        None => Ok(true),
+        Some(_) if allow_truncated => Ok(false),
+        Some(i) => Err(crate::FormatError::missing(
+            format!(
+                "TILE chunk of tile {i} missing ({})",
+                if ended { "MEND reached" } else { "file ends" }
+            ),
+            "every tile of the grid (or --allow-truncated)",
+        )),
+    }
 }
 
 /// Decode a tiled file from a seekable stream of `len` bytes whose `HEAD` has been read
@@ -860,8 +852,8 @@ pub(super) struct TiledSlabs<R> {
     complete: bool,
     ended: bool,
     /// The tiles queued for the pool (dropped with the decoder).
-    feed: std::sync::Arc<feed::Feed>,
-    _stop: feed::StopOnDrop,
+    feed: std::sync::Arc<Feed>,
+    _stop: StopOnDrop,
 }
 
 impl<R: Read + Seek> TiledSlabs<R> {
@@ -877,7 +869,7 @@ impl<R: Read + Seek> TiledSlabs<R> {
         let (meta, index, ratios) = read_index(&mut src, len, after_head, &st)?;
         st.ratios = ratios;
         let shape = st.out_shape(&meta)?;
-        let feed = feed::Feed::new();
+        let feed = Feed::new();
         Ok(TiledSlabs {
             src,
             len,
@@ -954,7 +946,7 @@ impl<R: Read + Seek> TiledSlabs<R> {
         }
         self.feed.push(batch.into_iter().map(|(i, inner)| {
             let job = job.clone();
-            Box::new(move || job.tile(i, &inner, allow)) as feed::Job
+            Box::new(move || job.tile(i, &inner, allow)) as Job
         }));
         self.pending.push_back(rx);
         Ok(())

@@ -45,3 +45,14 @@ pub fn decode<M: Model>(d: &mut Decoder, prefix: &mut [M], top: &mut [M]) -> Res
     }
     Ok(v)
 }
+
+/// The index of magnitude `a` and sign `neg`: `−a` (wrapping, so `a = 2^63` gives
+/// `i64::MIN`) or `a`.
+#[inline(always)]
+pub fn signed(a: u64, neg: bool) -> i64 {
+    if neg {
+        0u64.wrapping_sub(a) as i64
+    } else {
+        a as i64
+    }
+}

@@ -11,6 +11,8 @@ const PROB_MAX: u32 = PROB_ONE - 32;
 const TOP: u32 = 1 << 24;
 /// Adaptation shift reached after enough symbols.
 const RATE_MAX: u8 = 7;
+/// A model's first estimate: `P(0) = ½`.
+const HALF: u16 = (PROB_ONE / 2) as u16;
 
 /// An adaptive binary model: the probability of a 0 it predicts and its update.
 pub trait Model {
@@ -55,8 +57,8 @@ pub struct Mix {
 impl Default for Mix {
     fn default() -> Self {
         Mix {
-            fast: (PROB_ONE / 2) as u16,
-            slow: (PROB_ONE / 2) as u16,
+            fast: HALF,
+            slow: HALF,
             n: 0,
         }
     }
@@ -76,18 +78,23 @@ impl Model for Mix {
         if self.n < 8 {
             self.n += 1;
         }
-        let step = |p: u16, shift: u32| {
-            let p = p as u32;
-            let p = if bit {
-                p - (p >> shift)
-            } else {
-                p + ((PROB_ONE - p) >> shift)
-            };
-            p.clamp(PROB_MIN, PROB_MAX) as u16
-        };
-        self.fast = step(self.fast, (1 + n).min(4));
-        self.slow = step(self.slow, (1 + n).min(6));
+        self.fast = adapt(self.fast, bit, (1 + n).min(4));
+        self.slow = adapt(self.slow, bit, (1 + n).min(6));
     }
+}
+
+/// The estimate `p` of `P(0) · 2^16` moved towards the coded `bit` by `2^−shift` of the
+/// distance: `p − p·2^−shift` after a 1, `p + (2^16 − p)·2^−shift` after a 0, kept within
+/// `[32, 2^16 − 32]`.
+#[inline(always)]
+fn adapt(p: u16, bit: bool, shift: u32) -> u16 {
+    let p = p as u32;
+    let p = if bit {
+        p - (p >> shift)
+    } else {
+        p + ((PROB_ONE - p) >> shift)
+    };
+    p.clamp(PROB_MIN, PROB_MAX) as u16
 }
 
 /// One adaptive binary model: P(0) and a symbol count that sets the adaptation rate
@@ -100,10 +107,7 @@ pub struct Bit {
 
 impl Default for Bit {
     fn default() -> Self {
-        Bit {
-            p: (PROB_ONE / 2) as u16,
-            n: 0,
-        }
+        Bit { p: HALF, n: 0 }
     }
 }
 
@@ -119,96 +123,74 @@ impl Model for Bit {
         if self.n < 2 * RATE_MAX {
             self.n += 1;
         }
-        let p = self.p as u32;
-        let p = if bit {
-            p - (p >> shift)
-        } else {
-            p + ((PROB_ONE - p) >> shift)
-        };
-        self.p = p.clamp(PROB_MIN, PROB_MAX) as u16;
+        self.p = adapt(self.p, bit, shift);
     }
 }
 
-/// Range encoder writing into a byte vector.
-pub struct Encoder {
-    low: u64,
-    range: u32,
+/// A range encoder's interval `[low, low + range)` and the bytes it has settled, the
+/// carry propagated through a cached byte (LZMA's `shift_low`): a byte leaves once no
+/// carry can change it; the cached byte and the `0xFF` bytes after it wait (`pending`).
+pub(crate) struct Writer {
+    pub(crate) low: u64,
+    pub(crate) range: u32,
     cache: u8,
-    cache_size: u64,
+    pending: u64,
     out: Vec<u8>,
 }
 
-impl Default for Encoder {
+impl Default for Writer {
     fn default() -> Self {
-        Self::new()
-    }
-}
-
-impl Encoder {
-    pub fn new() -> Self {
-        Encoder {
+        Writer {
             low: 0,
             range: u32::MAX,
             cache: 0,
-            cache_size: 1,
+            pending: 1,
             out: Vec::new(),
         }
     }
+}
 
+impl Writer {
     #[inline(always)]
-    fn shift_low(&mut self) {
+    fn shift(&mut self) {
         if (self.low as u32) < 0xFF00_0000 || (self.low >> 32) != 0 {
             let carry = (self.low >> 32) as u8;
-            let mut temp = self.cache;
+            let mut byte = self.cache;
             loop {
-                self.out.push(temp.wrapping_add(carry));
-                temp = 0xFF;
-                self.cache_size -= 1;
-                if self.cache_size == 0 {
+                self.out.push(byte.wrapping_add(carry));
+                byte = 0xFF;
+                self.pending -= 1;
+                if self.pending == 0 {
                     break;
                 }
             }
             self.cache = ((self.low >> 24) & 0xFF) as u8;
         }
-        self.cache_size += 1;
+        self.pending += 1;
         self.low = (self.low & 0x00FF_FFFF) << 8;
     }
 
-    /// Code `bit` with the adaptive model `m`, then update `m`.
+    /// Renormalise: while `range < 2^24`, `range ·= 2^8` and a byte of `low` moves out.
     #[inline(always)]
-    pub fn bit<M: Model>(&mut self, m: &mut M, bit: bool) {
-        let bound = (self.range >> PROB_BITS) * m.p0();
-        if bit {
-            self.low += bound as u64;
-            self.range -= bound;
-        } else {
-            self.range = bound;
-        }
-        m.update(bit);
+    pub(crate) fn renormalise(&mut self) {
         while self.range < TOP {
             self.range <<= 8;
-            self.shift_low();
+            self.shift();
         }
     }
 
-    /// Code `bit` with probability ½ (no model).
-    #[inline(always)]
-    pub fn raw(&mut self, bit: bool) {
-        self.range >>= 1;
-        if bit {
-            self.low += self.range as u64;
+    /// Flush and return the coded bytes.
+    pub(crate) fn finish(mut self) -> Vec<u8> {
+        for _ in 0..5 {
+            self.shift();
         }
-        while self.range < TOP {
-            self.range <<= 8;
-            self.shift_low();
-        }
+        self.out
     }
 
-    /// Flush as briefly as the stream allows (format 2): the final value is the one in
-    /// `[low, low + range)` with the most trailing zero bytes, the always-zero first
-    /// byte is left out, and so are the trailing zero bytes (a decoder reads zeros past
-    /// the end). Decode with [`Decoder::new_short`].
-    pub fn finish_short(mut self) -> Vec<u8> {
+    /// Flush with the fewest bytes: the value in `[low, low + range)` with the most
+    /// trailing zero bytes; the always-zero first byte and the trailing zero bytes are
+    /// left out (the decoder reads zeros past the end).
+    pub(crate) fn finish_short(mut self) -> Vec<u8> {
         let end = self.low + self.range as u64 - 1;
         for k in [32u32, 24, 16, 8, 0] {
             let mask = (1u64 << k) - 1;
@@ -228,36 +210,30 @@ impl Encoder {
         }
         out
     }
-
-    /// Flush and return the coded bytes.
-    pub fn finish(mut self) -> Vec<u8> {
-        for _ in 0..5 {
-            self.shift_low();
-        }
-        self.out
-    }
 }
 
-/// Range decoder over a byte slice; reading past the end yields zero bytes (never panics).
-pub struct Decoder<'a> {
-    code: u32,
-    range: u32,
+/// A range decoder's offset `code` into its interval of width `range`, and its input:
+/// the bytes, then zeros past the end.
+pub(crate) struct Reader<'a> {
+    pub(crate) code: u32,
+    pub(crate) range: u32,
     data: &'a [u8],
     pos: usize,
 }
 
-impl<'a> Decoder<'a> {
-    pub fn new(data: &'a [u8]) -> Self {
-        let mut d = Decoder {
+impl<'a> Reader<'a> {
+    /// The reader of `data` whose code starts with its first `n` bytes (big-endian).
+    pub(crate) fn new(data: &'a [u8], n: usize) -> Self {
+        let mut r = Reader {
             code: 0,
             range: u32::MAX,
             data,
             pos: 0,
         };
-        for _ in 0..5 {
-            d.code = (d.code << 8) | d.next() as u32;
+        for _ in 0..n {
+            r.code = (r.code << 8) | r.next() as u32;
         }
-        d
+        r
     }
 
     #[inline(always)]
@@ -267,57 +243,116 @@ impl<'a> Decoder<'a> {
         b
     }
 
-    /// A decoder of a stream written by [`Encoder::finish_short`].
-    pub fn new_short(data: &'a [u8]) -> Self {
-        let mut d = Decoder {
-            code: 0,
-            range: u32::MAX,
-            data,
-            pos: 0,
-        };
-        for _ in 0..4 {
-            d.code = (d.code << 8) | d.next() as u32;
-        }
-        d
-    }
-
-    /// Bytes consumed beyond the end of the input (a sign of a damaged stream).
-    pub fn overrun(&self) -> usize {
-        self.pos.saturating_sub(self.data.len())
-    }
-
+    /// Renormalise: while `range < 2^24`, `range ·= 2^8` and the next byte enters `code`.
     #[inline(always)]
-    pub fn bit<M: Model>(&mut self, m: &mut M) -> bool {
-        let bound = (self.range >> PROB_BITS) * m.p0();
-        let bit = if self.code < bound {
-            self.range = bound;
-            false
-        } else {
-            self.code = self.code.wrapping_sub(bound);
-            self.range -= bound;
-            true
-        };
-        m.update(bit);
+    pub(crate) fn renormalise(&mut self) {
         while self.range < TOP {
             self.range <<= 8;
             self.code = (self.code << 8) | self.next() as u32;
         }
+    }
+
+    /// Bytes consumed beyond the end of the input (a sign of a damaged stream).
+    pub(crate) fn overrun(&self) -> usize {
+        self.pos.saturating_sub(self.data.len())
+    }
+}
+
+/// Range encoder writing into a byte vector.
+#[derive(Default)]
+pub struct Encoder(Writer);
+
+impl Encoder {
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Code `bit` with the adaptive model `m`, then update `m`.
+    #[inline(always)]
+    pub fn bit<M: Model>(&mut self, m: &mut M, bit: bool) {
+        let w = &mut self.0;
+        let bound = (w.range >> PROB_BITS) * m.p0();
+        if bit {
+            w.low += bound as u64;
+            w.range -= bound;
+        } else {
+            w.range = bound;
+        }
+        m.update(bit);
+        w.renormalise();
+    }
+
+    /// Code `bit` with probability ½ (no model).
+    #[inline(always)]
+    pub fn raw(&mut self, bit: bool) {
+        let w = &mut self.0;
+        w.range >>= 1;
+        if bit {
+            w.low += w.range as u64;
+        }
+        w.renormalise();
+    }
+
+    /// Flush as briefly as the stream allows (format 2): the final value is the one in
+    /// `[low, low + range)` with the most trailing zero bytes, the always-zero first
+    /// byte is left out, and so are the trailing zero bytes (a decoder reads zeros past
+    /// the end). Decode with [`Decoder::new_short`].
+    pub fn finish_short(self) -> Vec<u8> {
+        self.0.finish_short()
+    }
+
+    /// Flush and return the coded bytes.
+    pub fn finish(self) -> Vec<u8> {
+        self.0.finish()
+    }
+}
+
+/// Range decoder over a byte slice; reading past the end yields zero bytes (never panics).
+pub struct Decoder<'a>(Reader<'a>);
+
+impl<'a> Decoder<'a> {
+    pub fn new(data: &'a [u8]) -> Self {
+        Decoder(Reader::new(data, 5))
+    }
+
+    /// A decoder of a stream written by [`Encoder::finish_short`].
+    pub fn new_short(data: &'a [u8]) -> Self {
+        Decoder(Reader::new(data, 4))
+    }
+
+    /// Bytes consumed beyond the end of the input (a sign of a damaged stream).
+    pub fn overrun(&self) -> usize {
+        self.0.overrun()
+    }
+
+    #[inline(always)]
+    pub fn bit<M: Model>(&mut self, m: &mut M) -> bool {
+        let r = &mut self.0;
+        let bound = (r.range >> PROB_BITS) * m.p0();
+        let bit = if r.code < bound {
+            r.range = bound;
+            false
+        } else {
+            r.code = r.code.wrapping_sub(bound);
+            r.range -= bound;
+            true
+        };
+        m.update(bit);
+        r.renormalise();
         bit
     }
 
     #[inline(always)]
     pub fn raw(&mut self) -> bool {
-        self.range >>= 1;
-        let bit = if self.code >= self.range {
-            self.code = self.code.wrapping_sub(self.range);
+        let r = &mut self.0;
+        r.range >>= 1;
+        let bit = if r.code >= r.range {
+            r.code = r.code.wrapping_sub(r.range);
             true
         } else {
             false
         };
-        while self.range < TOP {
-            self.range <<= 8;
-            self.code = (self.code << 8) | self.next() as u32;
-        }
+        r.renormalise();
         bit
     }
 }

@@ -18,7 +18,7 @@
 
 use super::golomb;
 use super::range::{Bit, Decoder, Encoder};
-use super::walk::{median_residuals, parent_plane, undo_median, Walk};
+use super::walk::{classes, median_residuals, parent_fits, parent_plane, undo_median, Walk};
 use super::{BandKind, Parent};
 use crate::{Error, Result};
 
@@ -54,21 +54,7 @@ fn mag(v: i64) -> u64 {
 /// Neighbour class of an activity `s`: 0, 1–2, 3–4, 5–8, 9–16, 17–40, more.
 #[inline(always)]
 fn ncls(s: u64) -> usize {
-    const CLS: [u8; 41] = {
-        let mut t = [0u8; 41];
-        let mut s = 1;
-        while s <= 40 {
-            t[s] = match s {
-                1..=2 => 1,
-                3..=4 => 2,
-                5..=8 => 3,
-                9..=16 => 4,
-                _ => 5,
-            };
-            s += 1;
-        }
-        t
-    };
+    const CLS: [u8; 41] = classes(&[0, 2, 4, 8, 16]);
     if s <= 40 {
         CLS[s as usize] as usize
     } else {
@@ -88,14 +74,18 @@ struct Ctx<'a> {
 
 impl<'a> Ctx<'a> {
     fn new(dims: &'a [usize], parent: Option<Parent<'a>>) -> Self {
-        let parent = parent.filter(|p| {
-            p.dims.len() == dims.len()
-                && p.dims.iter().all(|&d| d > 0)
-                && p.data.len() == p.dims.iter().product::<usize>()
-        });
+        let parent = parent.filter(|p| parent_fits(p.data, p.dims, dims));
         Ctx {
             walk: Walk::new(dims),
             parent: parent.map(|p| (p, Walk::new(p.dims))),
+        }
+    }
+
+    /// The offset of the parent's plane of plane `p` (0 without a parent).
+    fn parent_base(&self, p: usize, dims: &[usize]) -> usize {
+        match &self.parent {
+            Some((par, pw)) => parent_plane(p, dims, par.dims) * pw.rows * pw.cols,
+            None => 0,
         }
     }
 
@@ -228,23 +218,12 @@ fn decode_value(d: &mut Decoder, m: &mut Models, ctx: (usize, usize, usize, usiz
         let pre = &mut m.prefix[cg * PREFIX..(cg + 1) * PREFIX];
         golomb::decode(d, pre, &mut m.top)? - 1 + 2
     };
-    Ok(if neg {
-        0u64.wrapping_sub(a) as i64
-    } else {
-        a as i64
-    })
+    Ok(golomb::signed(a, neg))
 }
 
 /// Code one band of quantized coefficients `q` with extents `dims` (raster order).
 pub fn encode_band(q: &[i64], dims: &[usize], kind: BandKind, parent: Option<Parent>) -> Vec<u8> {
-    let ctx = Ctx::new(
-        dims,
-        if kind == BandKind::Coarse {
-            None
-        } else {
-            parent
-        },
-    );
+    let ctx = Ctx::new(dims, parent.filter(|_| kind == BandKind::Detail));
     let mut m = Models::new();
     let mut e = Encoder::new();
     let (planes, rows, cols) = (ctx.walk.planes, ctx.walk.rows, ctx.walk.cols);
@@ -258,10 +237,7 @@ pub fn encode_band(q: &[i64], dims: &[usize], kind: BandKind, parent: Option<Par
         q
     };
     for p in 0..planes {
-        let pbase = match &ctx.parent {
-            Some((par, pw)) => parent_plane(p, dims, par.dims) * pw.rows * pw.cols,
-            None => 0,
-        };
+        let pbase = ctx.parent_base(p, dims);
         for y in 0..rows {
             let at = (p * rows + y) * cols;
             ctx.prepare(&mut row, v, at, p, y, pbase);
@@ -283,14 +259,7 @@ pub fn decode_band(
     kind: BandKind,
     parent: Option<Parent>,
 ) -> Result<Vec<i64>> {
-    let ctx = Ctx::new(
-        dims,
-        if kind == BandKind::Coarse {
-            None
-        } else {
-            parent
-        },
-    );
+    let ctx = Ctx::new(dims, parent.filter(|_| kind == BandKind::Detail));
     let n: usize = dims.iter().product();
     let mut v = vec![0i64; n];
     let mut m = Models::new();
@@ -298,10 +267,7 @@ pub fn decode_band(
     let (planes, rows, cols) = (ctx.walk.planes, ctx.walk.rows, ctx.walk.cols);
     let mut row = Row::new(cols);
     for p in 0..planes {
-        let pbase = match &ctx.parent {
-            Some((par, pw)) => parent_plane(p, dims, par.dims) * pw.rows * pw.cols,
-            None => 0,
-        };
+        let pbase = ctx.parent_base(p, dims);
         for y in 0..rows {
             let at = (p * rows + y) * cols;
             ctx.prepare(&mut row, &v, at, p, y, pbase);
@@ -323,48 +289,17 @@ pub fn decode_band(
 
 #[cfg(test)]
 mod tests {
+    use super::super::walk::testing::{bands, sample};
     use super::*;
-
-    fn sample(n: usize, seed: u64, spread: i64) -> Vec<i64> {
-        let mut x = seed;
-        (0..n)
-            .map(|_| {
-                x = x
-                    .wrapping_mul(6364136223846793005)
-                    .wrapping_add(1442695040888963407);
-                let r = (x >> 33) as i64;
-                if r % 3 == 0 {
-                    (r % (2 * spread + 1)) - spread
-                } else {
-                    0
-                }
-            })
-            .collect()
-    }
 
     #[test]
     fn bands_round_trip_in_1d_2d_3d_with_parents_and_extremes() {
-        for dims in [
-            vec![1usize],
-            vec![7],
-            vec![5, 9],
-            vec![1, 1],
-            vec![3, 4, 5],
-            vec![2, 2, 3, 3],
-        ] {
-            let n: usize = dims.iter().product();
-            let mut q = sample(n, n as u64, 300);
-            q[0] = i64::MIN;
-            if n > 1 {
-                q[n - 1] = i64::MAX;
-            }
-            let pdims: Vec<usize> = dims.iter().map(|d| d.div_ceil(2)).collect();
-            let pq = sample(pdims.iter().product(), 9, 3);
+        for (dims, q, pdims, pq) in bands() {
+            let parent = Parent {
+                data: &pq,
+                dims: &pdims,
+            };
             for kind in [BandKind::Coarse, BandKind::Detail] {
-                let parent = Parent {
-                    data: &pq,
-                    dims: &pdims,
-                };
                 let bytes = encode_band(&q, &dims, kind, Some(parent));
                 let back = decode_band(&bytes, &dims, kind, Some(parent)).unwrap();
                 assert_eq!(back, q, "{dims:?} {kind:?}");

@@ -86,28 +86,43 @@ impl EdgeGroup {
             pair_taps(&wf, &mut vec![0; wf.len()])
         });
         if !paired {
-            let mut cols: Vec<usize> = rows
-                .iter()
-                .flat_map(|(c, _)| c.iter().map(|&c| c as usize))
-                .collect();
-            cols.sort_unstable();
-            cols.dedup();
-            let u = cols.len();
-            (g.weights, g.first, g.add) = (vec![[0.0; 8]; u], vec![[0; 8]; u], vec![[0; 8]; u]);
-            for (i, (cs, ws)) in rows.iter().enumerate() {
-                for (k, (&c, &w)) in cs.iter().zip(ws.iter()).enumerate() {
-                    let j = cols.binary_search(&(c as usize)).expect("in the union");
-                    g.weights[j][i] = w as f32;
-                    if k == 0 {
-                        g.first[j][i] = u32::MAX;
-                    } else {
-                        g.add[j][i] = u32::MAX;
-                    }
-                }
-            }
-            g.cols = cols;
+            g.fill_samples(rows);
             return Some(g);
         }
+        g.fill_steps(rows, lo);
+        g.window = g.find_window();
+        Some(g)
+    }
+
+    /// Rows without pairs: the union of their columns (increasing), and per column the
+    /// rows' weights and whether the row starts its sum there or adds to it.
+    fn fill_samples(&mut self, rows: &[(&[u32], &[f64])]) {
+        let mut cols: Vec<usize> = rows
+            .iter()
+            .flat_map(|(c, _)| c.iter().map(|&c| c as usize))
+            .collect();
+        cols.sort_unstable();
+        cols.dedup();
+        let u = cols.len();
+        (self.weights, self.first, self.add) =
+            (vec![[0.0; 8]; u], vec![[0; 8]; u], vec![[0; 8]; u]);
+        for (i, (cs, ws)) in rows.iter().enumerate() {
+            for (k, (&c, &w)) in cs.iter().zip(ws.iter()).enumerate() {
+                let j = cols.binary_search(&(c as usize)).expect("in the union");
+                self.weights[j][i] = w as f32;
+                if k == 0 {
+                    self.first[j][i] = u32::MAX;
+                } else {
+                    self.add[j][i] = u32::MAX;
+                }
+            }
+        }
+        self.cols = cols;
+    }
+
+    /// Rows with pairs: step `s` holds the `s`-th term of every row's [`pair_taps`]
+    /// terms (rows with fewer terms read sample `lo` with weight 0 there).
+    fn fill_steps(&mut self, rows: &[(&[u32], &[f64])], lo: usize) {
         let empty = EdgeStep {
             a: [lo as i32; 8],
             b: [lo as i32; 8],
@@ -129,10 +144,10 @@ impl EdgeGroup {
                 if q == SECOND {
                     continue;
                 }
-                if g.steps.len() == s {
-                    g.steps.push(empty.clone());
+                if self.steps.len() == s {
+                    self.steps.push(empty.clone());
                 }
-                let st = &mut g.steps[s];
+                let st = &mut self.steps[s];
                 st.a[i] = cs[k] as i32;
                 st.b[i] = cs[k] as i32;
                 if q != k {
@@ -150,8 +165,14 @@ impl EdgeGroup {
                 s += 1;
             }
         }
-        // the stretches of 8 samples that hold the inputs, from the last input down
-        let mut used: Vec<usize> = g
+    }
+
+    /// The stretches of 8 samples that hold the steps' inputs (from the last input
+    /// down) when there are at most 4, with each step's inputs set as places in them
+    /// ([`EdgeStep::la`], [`EdgeStep::lb`]); `None` otherwise.
+    fn find_window(&mut self) -> Option<([usize; 4], usize)> {
+        let n = self.n;
+        let mut used: Vec<usize> = self
             .steps
             .iter()
             .flat_map(|st| st.a[..n].iter().chain(&st.b[..n]))
@@ -164,28 +185,28 @@ impl EdgeGroup {
                 bases.push(c.saturating_sub(7));
             }
         }
-        if (1..=4).contains(&bases.len()) {
-            let local = |c: i32| {
-                let c = c as usize;
-                let v = bases.iter().position(|&b| (b..b + 8).contains(&c));
-                let v = v.expect("every input in a stretch");
-                (8 * v + c - bases[v]) as i32
-            };
-            for st in &mut g.steps {
-                for i in 0..8 {
-                    // (the lanes past `n` read input 0 of the first stretch)
-                    (st.la[i], st.lb[i]) = if i < n {
-                        (local(st.a[i]), local(st.b[i]))
-                    } else {
-                        (0, 0)
-                    };
-                }
-            }
-            let mut starts = [0; 4];
-            starts[..bases.len()].copy_from_slice(&bases);
-            g.window = Some((starts, bases.len()));
+        if !(1..=4).contains(&bases.len()) {
+            return None;
         }
-        Some(g)
+        let local = |c: i32| {
+            let c = c as usize;
+            let v = bases.iter().position(|&b| (b..b + 8).contains(&c));
+            let v = v.expect("every input in a stretch");
+            (8 * v + c - bases[v]) as i32
+        };
+        for st in &mut self.steps {
+            for i in 0..8 {
+                // (the lanes past `n` read input 0 of the first stretch)
+                (st.la[i], st.lb[i]) = if i < n {
+                    (local(st.a[i]), local(st.b[i]))
+                } else {
+                    (0, 0)
+                };
+            }
+        }
+        let mut starts = [0; 4];
+        starts[..bases.len()].copy_from_slice(&bases);
+        Some((starts, bases.len()))
     }
 }
 

@@ -108,39 +108,56 @@ pub fn apply<T: Sample>(
 ) {
     assert!(op.cols() == 0 || (op.cols() - 1) * src_stride + width <= src.len());
     assert!(op.rows() == 0 || (op.rows() - 1) * dst_stride + width <= dst.len());
-    let (s, d) = (src.as_ptr(), dst.as_mut_ptr());
+    let lanes = RawLanes {
+        src: src.as_ptr(),
+        src_stride,
+        dst: dst.as_mut_ptr(),
+        dst_stride,
+        width,
+    };
     // SAFETY: the asserts bound every element read and written; `src` and `dst` are
     // distinct borrows.
-    unsafe { apply_raw(k, op, s, src_stride, d, dst_stride, width) }
+    unsafe { apply_raw(k, op, lanes) }
 }
+
+/// Lanes of a raw array for [`apply_raw`]: element `e` of the source is
+/// `src + e·src_stride .. + width`, likewise for the destination.
+#[derive(Debug)]
+pub struct RawLanes<T> {
+    pub src: *const T,
+    pub src_stride: usize,
+    pub dst: *mut T,
+    pub dst_stride: usize,
+    pub width: usize,
+}
+
+impl<T> Clone for RawLanes<T> {
+    fn clone(&self) -> Self {
+        *self
+    }
+}
+
+impl<T> Copy for RawLanes<T> {}
 
 /// [`apply`] on raw element pointers, for lanes that live inside a larger array other
 /// threads are writing elsewhere. Only the elements this call reads
-/// (`src + c*src_stride .. + width` for the columns it uses) and writes
-/// (`dst + r*dst_stride .. + width`) are turned into slices.
+/// (`src + c·src_stride .. + width` for the columns it uses) and writes
+/// (`dst + r·dst_stride .. + width`) are turned into slices.
 ///
 /// # Safety
 /// Every element read must be valid for reads and not written concurrently, every
 /// element written must be valid for writes and touched by no other thread, and the
 /// two sets must not overlap.
 #[inline]
-pub unsafe fn apply_raw<T: Sample>(
-    k: Kernels,
-    op: &Csr,
-    src: *const T,
-    src_stride: usize,
-    dst: *mut T,
-    dst_stride: usize,
-    width: usize,
-) {
+pub unsafe fn apply_raw<T: Sample>(k: Kernels, op: &Csr, lanes: RawLanes<T>) {
     #[cfg(target_arch = "x86_64")]
     if k.avx2() {
         // SAFETY: AVX2 with FMA is present (a table holds no build the CPU lacks); the
         // caller's guarantees pass through.
-        return unsafe { apply_avx2(op, src, src_stride, dst, dst_stride, width) };
+        return unsafe { apply_avx2(op, lanes) };
     }
     // SAFETY: the caller's guarantees.
-    unsafe { apply_scalar(op, src, src_stride, dst, dst_stride, width) }
+    unsafe { apply_scalar(op, lanes) }
 }
 
 #[cfg(test)]

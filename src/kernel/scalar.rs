@@ -118,14 +118,14 @@ pub(crate) fn transpose_generic<T: Sample>(
 /// # Safety
 /// As [`super::apply_raw`].
 #[inline(always)]
-pub(crate) unsafe fn apply_scalar<T: Sample>(
-    op: &Csr,
-    src: *const T,
-    src_stride: usize,
-    dst: *mut T,
-    dst_stride: usize,
-    width: usize,
-) {
+pub(crate) unsafe fn apply_scalar<T: Sample>(op: &Csr, lanes: RawLanes<T>) {
+    let RawLanes {
+        src,
+        src_stride,
+        dst,
+        dst_stride,
+        width,
+    } = lanes;
     // the rows' weights and pairs (on the stack up to 32 taps, the schemes' rows)
     let (mut ws_stack, mut partner_stack) = ([T::default(); 32], [0usize; 32]);
     let (mut ws_heap, mut partner_heap): (Vec<T>, Vec<usize>) = (Vec::new(), Vec::new());

@@ -397,6 +397,18 @@ impl Levels<'_, '_> {
     }
 }
 
+/// What [`Plan::new`] asks of [`Plan::build`]: the direction, the samples per position,
+/// the parts, whether they are forced, and whether rows reaching across the lane read
+/// ghosts.
+#[derive(Clone, Copy)]
+struct Ask {
+    way: Way,
+    e: usize,
+    parts: usize,
+    forced: bool,
+    ghosts: bool,
+}
+
 impl<'a> Plan<'a> {
     /// Plan `ops.len()` levels (at least 2) whose regions are `regions` (one more than
     /// levels), with up to `parts` parts; `None` when the cascade does not apply (row
@@ -415,10 +427,21 @@ impl<'a> Plan<'a> {
         parts: usize,
         forced: bool,
     ) -> Option<Self> {
-        Self::build(way, regions.clone(), ops, e, parts, forced, false).or_else(|| {
+        let ask = Ask {
+            way,
+            e,
+            parts,
+            forced,
+            ghosts: false,
+        };
+        Self::build(regions.clone(), ops, ask).or_else(|| {
             // images with periodic ends: the rows that reach across the lane read ghosts
+            let ask = Ask {
+                ghosts: true,
+                ..ask
+            };
             (regions[0].len() == 2)
-                .then(|| Self::build(way, regions, ops, e, parts, forced, true))
+                .then(|| Self::build(regions, ops, ask))
                 .flatten()
         })
     }
@@ -426,15 +449,14 @@ impl<'a> Plan<'a> {
     /// [`Plan::new`], with ghosts for the rows that reach across the lane when `ghosts`:
     /// the rows' orders, the rings' sizes, the parts and their ghosts, then the checks of
     /// memory and halos.
-    fn build(
-        way: Way,
-        regions: Vec<Vec<usize>>,
-        ops: &'a [Vec<AxisOp<'a>>],
-        e: usize,
-        parts: usize,
-        forced: bool,
-        ghosts: bool,
-    ) -> Option<Self> {
+    fn build(regions: Vec<Vec<usize>>, ops: &'a [Vec<AxisOp<'a>>], ask: Ask) -> Option<Self> {
+        let Ask {
+            way,
+            e,
+            parts,
+            forced,
+            ghosts,
+        } = ask;
         let levels = ops.len();
         if levels < 2
             || regions.len() != levels + 1

@@ -1,6 +1,7 @@
 //! Tensor-product engine: N-d arrays, one level along any axis, multilevel pyramids in
 //! the standard and the non-standard (Mallat) order. `par.rs` holds the
-//! engine's own parallel helpers (other modules call rayon directly where they split work).
+//! engine's own parallel helpers and the one job queue of the pool, the tiled codec's
+//! (other modules call rayon directly where they split work).
 
 mod aligned;
 mod array;

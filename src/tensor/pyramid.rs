@@ -357,22 +357,7 @@ fn run<T: Sample>(
     if dir == Way::Synthesis {
         levels.reverse();
     }
-    // how each level runs: fused over its `k` leading axes, or axis by axis
-    let fused_k: Vec<Option<usize>> = (0..pyr.depth())
-        .map(|l| {
-            let region = pyr.region_before(l);
-            let active: Vec<usize> = (0..spec.axes.len())
-                .filter(|&i| l < pyr.axis_levels(i))
-                .collect();
-            let k = active.len();
-            // fused when the active axes are exactly 0..k and the rest of the array is whole
-            let fusable = engine != Engine::AxisByAxis
-                && k > 0
-                && (0..k).all(|d| active.iter().any(|&i| spec.axes[i] == d))
-                && (k..shape.len()).all(|d| region[d] == shape[d]);
-            fusable.then_some(k)
-        })
-        .collect();
+    let fused_k = fused_axes(pyr, &shape, engine);
     // every level fused over the same axes and inside the array: the cascade may run
     // them all in one sweep
     let cascadable = fused_k.len() >= 2
@@ -411,48 +396,88 @@ fn run<T: Sample>(
             }
             continue;
         };
-        let mut by_axis = vec![usize::MAX; shape.len()];
-        for i in (0..spec.axes.len()).filter(|&i| l < pyr.axis_levels(i)) {
-            by_axis[spec.axes[i]] = i;
-        }
-        let level_ops: Vec<_> = (0..k).map(|d| ops(by_axis[d], l)).collect();
-        let axis_ops: Vec<AxisOp> = level_ops.iter().map(|o| axis_op(o, dir)).collect();
-        let strides = array.strides();
-        let st = &strides[..k];
-        let e: usize = shape[k..].iter().product();
         let buf = scratch.get_or_insert_with(|| planner.take_scratch(array.len()));
-        let writes = match dir {
-            Way::Analysis => Writes::StreamLarge,
-            Way::Synthesis => Writes::Cached,
-        };
-        let box_ = &region[..k];
-        if region == shape {
-            fused_level(array.data(), buf, st, box_, e, &axis_ops, writes);
-            array.swap_data(buf);
-            continue;
-        }
-        // A level inside the array: its box copied compactly to the end of the scratch
-        // (the level's one read of the box from memory), then the level from that copy,
-        // in the caches, back into the box. The box's lines come back to the caches
-        // with the copy, so the level's stores find them there. 256³ cubic, three
-        // levels, forward + inverse (best of 7 warm runs, three interleaved rounds):
-        // 30.4–30.8 → 28.4–29.0 ms against levels that alternated between the array
-        // and the scratch, reading each box from memory and copying its details back.
-        let cst: Vec<usize> = super::array::strides(box_).iter().map(|s| s * e).collect();
-        let at = compact_at(buf, cst[0] * box_[0]);
-        copy_region(array.data(), st, &mut buf[at..], &cst, box_, e);
-        fused_level_strided(
-            strided(&buf[at..], &cst),
-            strided_mut(array.data_mut(), st),
-            box_,
-            e,
-            &axis_ops,
-            writes,
-        );
+        fused_step(planner, array, pyr, dir, l, k, buf);
     }
     if let Some(s) = scratch {
         planner.give_scratch(s);
     }
+}
+
+/// How each level of `pyr` runs: `Some(k)`, fused over its `k` leading axes (the
+/// active axes are exactly `0..k` and the rest of the array is whole), or `None`, axis
+/// by axis.
+fn fused_axes(pyr: &Pyramid, shape: &[usize], engine: Engine) -> Vec<Option<usize>> {
+    let spec = &pyr.spec;
+    (0..pyr.depth())
+        .map(|l| {
+            let region = pyr.region_before(l);
+            let active: Vec<usize> = (0..spec.axes.len())
+                .filter(|&i| l < pyr.axis_levels(i))
+                .collect();
+            let k = active.len();
+            let fusable = engine != Engine::AxisByAxis
+                && k > 0
+                && (0..k).all(|d| active.iter().any(|&i| spec.axes[i] == d))
+                && (k..shape.len()).all(|d| region[d] == shape[d]);
+            fusable.then_some(k)
+        })
+        .collect()
+}
+
+/// Level `l` of `pyr` fused over the `k` leading axes, with the scratch `buf` (the
+/// array's length): out of place and swapped in when the level covers the array, else
+/// through a compact copy of its box.
+fn fused_step<T: Sample>(
+    planner: &Planner,
+    array: &mut Array<T>,
+    pyr: &Pyramid,
+    dir: Way,
+    l: usize,
+    k: usize,
+    buf: &mut Vec<T>,
+) {
+    let shape = array.shape().to_vec();
+    let spec = &pyr.spec;
+    let region = pyr.region_before(l);
+    let mut by_axis = vec![usize::MAX; shape.len()];
+    for i in (0..spec.axes.len()).filter(|&i| l < pyr.axis_levels(i)) {
+        by_axis[spec.axes[i]] = i;
+    }
+    let level_ops: Vec<_> = (0..k)
+        .map(|d| planner.level_ops(spec.scheme, spec.boundary, pyr.lengths[by_axis[d]][l]))
+        .collect();
+    let axis_ops: Vec<AxisOp> = level_ops.iter().map(|o| axis_op(o, dir)).collect();
+    let strides = array.strides();
+    let st = &strides[..k];
+    let e: usize = shape[k..].iter().product();
+    let writes = match dir {
+        Way::Analysis => Writes::StreamLarge,
+        Way::Synthesis => Writes::Cached,
+    };
+    let box_ = &region[..k];
+    if region == shape {
+        fused_level(array.data(), buf, st, box_, e, &axis_ops, writes);
+        array.swap_data(buf);
+        return;
+    }
+    // A level inside the array: its box copied compactly to the end of the scratch
+    // (the level's one read of the box from memory), then the level from that copy,
+    // in the caches, back into the box. The box's lines come back to the caches
+    // with the copy, so the level's stores find them there (faster than levels that
+    // alternate between the array and the scratch, reading each box from memory and
+    // copying its details back).
+    let cst: Vec<usize> = super::array::strides(box_).iter().map(|s| s * e).collect();
+    let at = compact_at(buf, cst[0] * box_[0]);
+    copy_region(array.data(), st, &mut buf[at..], &cst, box_, e);
+    fused_level_strided(
+        strided(&buf[at..], &cst),
+        strided_mut(array.data_mut(), st),
+        box_,
+        e,
+        &axis_ops,
+        writes,
+    );
 }
 
 /// One axis' operator of a level in the direction asked.

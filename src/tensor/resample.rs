@@ -9,7 +9,7 @@
 //! wide, so the inner loop always runs over ≥ 32 contiguous samples. Scratch is per
 //! worker, never per lane.
 
-use super::par::{for_each_task, SharedMut};
+use super::par::{for_each_task, SharedMut, Strips};
 use super::workspace::Planner;
 use crate::kernel::Kernels;
 use crate::scheme::sparse::Csr;
@@ -54,17 +54,17 @@ pub fn resample_axis_with<T: Sample, U: Copy + Send + Sync>(
     put: impl Fn(&mut U, T) + Sync + Send,
 ) {
     let k = Planner::shared().kernels();
-    resample_axis_in(k, src, shape, axis, op, dst, put)
+    resample_axis_in(k, op, src, shape, axis, dst, put)
 }
 
 /// [`resample_axis_with`] in the kernel table `k` (a planner's,
-/// [`Planner::kernels`]).
+/// [`Planner::kernels`]), the operator first as in [`crate::kernel::apply`].
 pub fn resample_axis_in<T: Sample, U: Copy + Send + Sync>(
     k: Kernels,
+    op: &Csr,
     src: &[T],
     shape: &[usize],
     axis: usize,
-    op: &Csr,
     dst: &mut [U],
     put: impl Fn(&mut U, T) + Sync + Send,
 ) {
@@ -76,16 +76,14 @@ pub fn resample_axis_in<T: Sample, U: Copy + Send + Sync>(
     assert_eq!(dst.len(), outer * m * inner);
     let out = SharedMut(dst.as_mut_ptr());
     if inner >= ROW_MIN {
-        let strips = inner.div_ceil(STRIP);
-        let sw_max = inner.div_ceil(strips);
+        let strips = Strips::new(inner, STRIP);
         for_each_task(
-            outer * strips,
-            m * sw_max,
-            || vec![T::default(); m * sw_max],
+            outer * strips.count,
+            m * strips.max,
+            || vec![T::default(); m * strips.max],
             |task, scratch| {
-                let (o, s) = (task / strips, task % strips);
-                let off = s * sw_max;
-                let sw = sw_max.min(inner - off);
+                let o = task / strips.count;
+                let (off, sw) = strips.get(task % strips.count);
                 let base = &src[o * n * inner + off..];
                 crate::kernel::apply(k, op, base, inner, scratch, sw, sw);
                 let p = out;
@@ -146,23 +144,20 @@ pub fn map_lanes<T: Sample>(
     let ptr = SharedMut(data.as_mut_ptr());
     // every task gathers a block of `lanes` lanes × columns `off..off+sw` of the element
     let (g, strips) = if inner >= ROW_MIN {
-        (1, inner.div_ceil(STRIP))
+        (1, Strips::new(inner, STRIP))
     } else {
-        (GATHER.div_ceil(inner).clamp(1, outer), 1)
+        (GATHER.div_ceil(inner).clamp(1, outer), Strips::of(inner, 1))
     };
-    let sw_max = inner.div_ceil(strips);
     let groups = outer.div_ceil(g);
-    let gw = g * sw_max;
+    let gw = g * strips.max;
     for_each_task(
-        groups * strips,
+        groups * strips.count,
         n * gw,
         || vec![T::default(); n * gw],
         |task, scratch| {
-            let (grp, s) = (task / strips, task % strips);
-            let first = grp * g;
+            let first = task / strips.count * g;
             let lanes = g.min(outer - first);
-            let off = s * sw_max;
-            let sw = sw_max.min(inner - off);
+            let (off, sw) = strips.get(task % strips.count);
             let cw = lanes * sw;
             let p = ptr;
             for l in 0..lanes {

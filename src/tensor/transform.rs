@@ -10,7 +10,7 @@
 //!   scattered back — the transpose that lets the contiguous axis vectorise too.
 
 use super::array::strides;
-use super::par::{for_each_task, SharedMut};
+use super::par::{for_each_task, SharedMut, Strips};
 use super::workspace::Planner;
 use crate::kernel::Kernels;
 use crate::scheme::sparse::Csr;
@@ -83,30 +83,27 @@ pub fn transform_axis_with<T: Sample>(
     if axis != last && region[last] >= ROW_MIN {
         let w = region[last];
         let bases = lane_bases(shape, region, axis, true);
-        let strips = w.div_ceil(STRIP);
-        let sw_max = w.div_ceil(strips);
+        let strips = Strips::new(w, STRIP);
         for_each_task(
-            bases.len() * strips,
-            len * sw_max,
-            || vec![T::default(); len * sw_max],
+            bases.len() * strips.count,
+            len * strips.max,
+            || vec![T::default(); len * strips.max],
             |task, scratch| {
-                let (b, s) = (bases[task / strips], task % strips);
-                let off = s * sw_max;
-                let sw = sw_max.min(w - off);
+                let b = bases[task / strips.count];
+                let (off, sw) = strips.get(task % strips.count);
                 let p = ptr;
                 // SAFETY: this task reads and writes only columns off..off+sw of the
                 // elements of lane set `b`, which no other task touches.
                 unsafe {
                     let base = p.0.add(b + off);
-                    crate::kernel::apply_raw(
-                        k,
-                        op,
-                        base as *const T,
-                        es,
-                        scratch.as_mut_ptr(),
-                        sw,
-                        sw,
-                    );
+                    let lanes = crate::kernel::RawLanes {
+                        src: base as *const T,
+                        src_stride: es,
+                        dst: scratch.as_mut_ptr(),
+                        dst_stride: sw,
+                        width: sw,
+                    };
+                    crate::kernel::apply_raw(k, op, lanes);
                     for i in 0..len {
                         std::ptr::copy_nonoverlapping(
                             scratch.as_ptr().add(i * sw),

@@ -278,13 +278,22 @@ fn pair_lane(
 /// compact pair form of [`pair_lane`] (`(w + 1) · inner` each) and the rows they are
 /// made of.
 struct Bounds {
-    lo: [Vec<f32>; 2],
-    hi: [Vec<f32>; 2],
+    lo: Pair,
+    hi: Pair,
+    work: Work,
+    /// Vertical (or horizontal) pair means of the block mean.
+    half: Vec<f32>,
+}
+
+/// The bounds of two fine rows.
+type Pair = [Vec<f32>; 2];
+
+/// What the bounds of two fine rows are made of: three rows, their pair and the
+/// extended lane of [`pair_lane`].
+struct Work {
     rows: [Vec<f32>; 3],
     pair: Vec<f32>,
     ext: Vec<f32>,
-    /// Vertical (or horizontal) pair means of the block mean.
-    half: Vec<f32>,
 }
 
 impl Bounds {
@@ -293,9 +302,11 @@ impl Bounds {
         Bounds {
             lo: [compact.clone(), compact.clone()],
             hi: [compact.clone(), compact.clone()],
-            rows: [compact.clone(), compact.clone(), compact.clone()],
-            pair: compact,
-            ext: vec![0f32; row + 2 * inner],
+            work: Work {
+                rows: [compact.clone(), compact.clone(), compact.clone()],
+                pair: compact,
+                ext: vec![0f32; row + 2 * inner],
+            },
             half: vec![0f32; 2 * row],
         }
     }
@@ -323,13 +334,13 @@ impl Bounds {
             i,
             edge,
         };
-        let (rows, pair, ext) = (&mut self.rows, &mut self.pair, &mut self.ext);
+        let w = &mut self.work;
         if rows_first {
-            g.rows_first(|x: f32, y: f32| x.min(y), rows, pair, ext, &mut self.lo);
-            g.rows_first(|x: f32, y: f32| x.max(y), rows, pair, ext, &mut self.hi);
+            g.rows_first(|x: f32, y: f32| x.min(y), w, &mut self.lo);
+            g.rows_first(|x: f32, y: f32| x.max(y), w, &mut self.hi);
         } else {
-            g.cols_first(|x: f32, y: f32| x.min(y), rows, pair, ext, &mut self.lo);
-            g.cols_first(|x: f32, y: f32| x.max(y), rows, pair, ext, &mut self.hi);
+            g.cols_first(|x: f32, y: f32| x.min(y), w, &mut self.lo);
+            g.cols_first(|x: f32, y: f32| x.max(y), w, &mut self.hi);
         }
     }
 }
@@ -351,14 +362,8 @@ impl Geom<'_> {
     }
 
     /// Along axis 0 first (on the input rows), then along axis 1.
-    fn rows_first(
-        &self,
-        op: impl Fn(f32, f32) -> f32 + Copy,
-        rows: &mut [Vec<f32>; 3],
-        pair: &mut [f32],
-        ext: &mut [f32],
-        out: &mut [Vec<f32>; 2],
-    ) {
+    fn rows_first(&self, op: impl Fn(f32, f32) -> f32 + Copy, w: &mut Work, out: &mut Pair) {
+        let Work { rows, pair, ext } = w;
         let (h, row) = (self.h, self.w * self.inner);
         for (k, dst) in rows.iter_mut().enumerate() {
             // input row i − 1 + k, beyond the ends by the edge rule
@@ -392,14 +397,8 @@ impl Geom<'_> {
     }
 
     /// Along axis 1 first (every input row, compact), then along axis 0.
-    fn cols_first(
-        &self,
-        op: impl Fn(f32, f32) -> f32 + Copy,
-        rows: &mut [Vec<f32>; 3],
-        pair: &mut [f32],
-        ext: &mut [f32],
-        out: &mut [Vec<f32>; 2],
-    ) {
+    fn cols_first(&self, op: impl Fn(f32, f32) -> f32 + Copy, w: &mut Work, out: &mut Pair) {
+        let Work { rows, pair, ext } = w;
         let (h, i, edge) = (self.h, self.i, self.edge);
         let mut g = |r: usize, dst: &mut [f32]| {
             pair_lane(self.coarse(r), self.w, self.inner, edge, op, ext, dst)
@@ -796,38 +795,7 @@ fn upscale_refined_with<U: Copy + Default + Send + Sync + 'static>(
         Clamp::Auto => learn_weight_with(&data, shape, method, f, slabs)?.unwrap_or(0.0),
     };
     if let Some(p) = planes(shape, method, f)?.filter(|_| slabs) {
-        // plane by plane: the control points of s and of the residuals at the input's
-        // size, a few fine planes, and the typed output
-        let mut fine = shape.to_vec();
-        for &(a, g) in f {
-            fine[a] *= g;
-        }
-        let mut out = vec![U::default(); fine.iter().product()];
-        let fl = p.fine_len();
-        let tf = t as f32;
-        p.run(&data, t > 0.0, |i, b, r| {
-            let o = &mut out[i * fl..(i + 1) * fl];
-            match r {
-                Some(r) if t >= 1.0 => o
-                    .par_iter_mut()
-                    .zip(r.par_iter())
-                    .for_each(|(o, &r)| *o = store(r)),
-                Some(r) => o
-                    .par_iter_mut()
-                    .zip(b.par_iter().zip(r.par_iter()))
-                    .for_each(|(o, (&b, &r))| {
-                        let mut x = b;
-                        x += tf * (r - x);
-                        *o = store(x);
-                    }),
-                None => o
-                    .par_iter_mut()
-                    .zip(b.par_iter())
-                    .for_each(|(o, &b)| *o = store(b)),
-            }
-        });
-        drop(data);
-        return Ok((out, fine));
+        return Ok(by_planes(&p, data, shape, f, t, store));
     }
     if t <= 0.0 {
         let up = Prepared::new(&area(method), shape, &plans_for(shape, f))?;
@@ -884,6 +852,49 @@ fn upscale_refined_with<U: Copy + Default + Send + Sync + 'static>(
         ),
     };
     Ok((out, st.shape))
+}
+
+/// [`upscale_refined_with`] plane by plane with `p`: the control points of s and of the
+/// residuals at the input's size, a few fine planes, and the typed output
+/// `b + t·(r − b)` of the plain upscale `b` and the refined one `r`.
+fn by_planes<U: Copy + Default + Send + Sync + 'static>(
+    p: &Planes,
+    data: Vec<f32>,
+    shape: &[usize],
+    f: &[(usize, usize)],
+    t: f64,
+    store: impl Fn(f32) -> U + Sync + Send,
+) -> (Vec<U>, Vec<usize>) {
+    let mut fine = shape.to_vec();
+    for &(a, g) in f {
+        fine[a] *= g;
+    }
+    let mut out = vec![U::default(); fine.iter().product()];
+    let fl = p.fine_len();
+    let tf = t as f32;
+    p.run(&data, t > 0.0, |i, b, r| {
+        let o = &mut out[i * fl..(i + 1) * fl];
+        match r {
+            Some(r) if t >= 1.0 => o
+                .par_iter_mut()
+                .zip(r.par_iter())
+                .for_each(|(o, &r)| *o = store(r)),
+            Some(r) => o
+                .par_iter_mut()
+                .zip(b.par_iter().zip(r.par_iter()))
+                .for_each(|(o, (&b, &r))| {
+                    let mut x = b;
+                    x += tf * (r - x);
+                    *o = store(x);
+                }),
+            None => o
+                .par_iter_mut()
+                .zip(b.par_iter())
+                .for_each(|(o, &b)| *o = store(b)),
+        }
+    });
+    drop(data);
+    (out, fine)
 }
 
 /// Samples per chunk of the final pass.

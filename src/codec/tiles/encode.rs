@@ -13,7 +13,6 @@
 //! the `--psnr` / `--bpp` search measures the sample.
 
 use super::compact::{self, Ratios};
-use super::feed::{self, Feed};
 use super::{crop_samples, Grid, SEARCH_SAMPLE_TILES};
 use crate::codec::encode::encode_filled;
 #[cfg(doc)]
@@ -21,13 +20,14 @@ use crate::codec::lossy::finite_range;
 use crate::codec::lossy::{prepare, Prepared};
 use crate::codec::meta;
 use crate::codec::options::{EncodeOptions, Rate};
+use crate::codec::rate::{check_rate, keep_step, quality_step};
 use crate::codec::voids::with_voids_filled;
 use crate::format::tag::{HEAD, MEND, META, TIDX, TILE, TRAT};
 use crate::format::tiles::{head_of, put_index_entry, tile_prefix};
 use crate::format::{self, write_chunk, Header, Mode};
 use crate::io::slab::{Shape, SlabSource};
 use crate::io::{Raster, Samples};
-use crate::quantize::{self, RHO};
+use crate::tensor::par::{caught, receive, Feed, Job};
 use crate::{Error, Result};
 use rayon::prelude::*;
 use std::io::{Seek, SeekFrom, Write};
@@ -171,116 +171,20 @@ pub(crate) fn encode_slabs<S: SlabSource + ?Sized, W: Write + Seek>(
     tile: &[usize],
     out: &mut W,
 ) -> Result<u64> {
+    check_rate(opts.rate)?;
     let shape = src.shape().clone();
     let grid = Grid::new(&shape.dims, tile)?;
-    let n = grid.len();
-    let rows = grid.counts[0];
-    let per_row = n / rows;
-    let rows_of = |g0: usize| g0 * grid.tile[0]..g0 * grid.tile[0] + grid.extent(0, g0);
-    match opts.rate {
-        Rate::Quality(q) if !(1.0..=100.0).contains(&q) => {
-            return Err(Error::parameter("quality", q, "1 to 100"))
-        }
-        Rate::Keep(k) if !(0.0..=100.0).contains(&k) => {
-            return Err(Error::parameter("keep", k, "a percentage from 0 to 100"))
-        }
-        Rate::Bpp(b) if !(b > 0.0 && b.is_finite()) => {
-            return Err(Error::parameter(
-                "bpp",
-                b,
-                "a positive number of bits per position",
-            ))
-        }
-        Rate::Psnr(db) | Rate::PsnrRange(db, _) if !(db > 0.0 && db < 400.0) => {
-            return Err(Error::parameter(
-                "psnr",
-                db,
-                "a target in dB between 0 and 400",
-            ))
-        }
-        Rate::PsnrRange(_, p) if !(p.is_finite() && p > 0.0) => {
-            return Err(Error::parameter(
-                "data range",
-                p,
-                "a positive, finite peak-to-peak range",
-            ))
-        }
-        _ => {}
-    }
     let sampled = matches!(
         opts.rate,
         Rate::Keep(_) | Rate::Psnr(_) | Rate::PsnrRange(..) | Rate::Bpp(_)
     );
     let first_pass = sampled || matches!(opts.rate, Rate::Quality(_));
-    let every = n.div_ceil(SEARCH_SAMPLE_TILES).max(1);
-    let mut ranges = Ranges::new();
-    let mut sample: Vec<Raster> = Vec::new();
-    // with more than one thread the next slab is read while this one is coded
-    let ahead = rayon::current_num_threads() > 1;
-    if first_pass {
-        // the pool has nothing else to do: each slab is read on all its threads, then
-        // measured
-        for g0 in 0..rows {
-            let r = rows_of(g0);
-            let slab = src.read_rows_parallel(r.clone())?;
-            ranges.add(&slab);
-            let mine: Vec<usize> = (g0 * per_row..(g0 + 1) * per_row)
-                .filter(|i| sampled && i % every == 0)
-                .collect();
-            let tiles: Vec<Raster> = mine
-                .par_iter()
-                .map(|&i| slab_tile(&grid, &shape, &slab, r.start, i))
-                .collect::<Result<_>>()?;
-            sample.extend(tiles);
-        }
-    }
-    let (lo, hi) = ranges.finite();
-    let range = (hi - lo).max(1e-30);
-    let coding = match opts.rate {
-        Rate::Lossless | Rate::MaxError(_) | Rate::Threshold(_) => Coding::Own,
-        Rate::Quality(q) => Coding::Step {
-            step: range * (2f64).powf(-q / 10.0),
-            rdo: true,
-        },
-        Rate::Keep(k) => {
-            // the threshold of the largest k% over the sampled tiles' details
-            let mut w: Vec<f32> = sample
-                .par_iter()
-                .map(|t| Ok(prepare(&t.view(), opts, Mode::Lossy)?.weighted_details()))
-                .collect::<Result<Vec<_>>>()?
-                .concat();
-            let t = quantize::keep_threshold(&mut w, k);
-            let step = if t.is_infinite() {
-                range * 1e6
-            } else {
-                (t / (1.0 - RHO)).max(range * 1e-9)
-            };
-            Coding::Step { step, rdo: false }
-        }
-        Rate::Psnr(_) | Rate::PsnrRange(..) | Rate::Bpp(_) => {
-            let peak = match (opts.rate, ranges.all) {
-                (Rate::PsnrRange(_, p), _) => p,
-                (_, all) => {
-                    // the whole raster's default peak, from its extremes
-                    let (a, b) = all.unwrap_or((0.0, 0.0));
-                    crate::metrics::skimage_data_range(
-                        Samples::from_f64(&[a, b], shape.sample_type).view(),
-                    )
-                }
-            };
-            let step = search_step(
-                &shape,
-                &grid,
-                n,
-                std::mem::take(&mut sample),
-                opts,
-                range,
-                peak,
-            )?;
-            Coding::Step { step, rdo: true }
-        }
+    let (ranges, sample) = if first_pass {
+        measure_slabs(src, &grid, &shape, sampled)?
+    } else {
+        (Ranges::new(), Vec::new())
     };
-    drop(sample);
+    let coding = choose_coding(&grid, &shape, opts, &ranges, sample)?;
 
     // HEAD, mETA and TIDX are reserved when the first tile is written, and rewritten
     // at the end with the raster's range and the tiles' places
@@ -292,73 +196,10 @@ pub(crate) fn encode_slabs<S: SlabSource + ?Sized, W: Write + Seek>(
         head: None,
         ratios: None,
         index_at: 0,
-        index: Vec::with_capacity(16 * n),
+        index: Vec::with_capacity(16 * grid.len()),
         at: start + 8,
     };
-    let mut ranges_now = Ranges::new();
-    let measure = !first_pass;
-    // The tiles are coded one pool job each and written in tile order as they come.
-    // With more than one thread the slabs are pipelined: the tiles of slab g are queued
-    // behind those of slab g − 1 (the pool goes from one slab's last tiles to the next
-    // slab's without waiting), and slab g + 1 is read while slab g is coded, once the
-    // tiles of slab g − 1 are written (memory holds two slabs and a tile per thread).
-    // With one thread each slab is coded and written before the next is read.
-    let feed = Feed::new();
-    let _stop = feed.stop_on_drop();
-    let common = std::sync::Arc::new((grid.clone(), shape.clone(), opts.clone()));
-    let (tx, rx) = std::sync::mpsc::channel::<(usize, Result<(Vec<u8>, Ranges)>)>();
-    // coded tiles that came before their turn to be written
-    let mut early = std::collections::BTreeMap::new();
-    let mut written = 0usize;
-    let mut drain = |upto: usize, w: &mut TileWriter, out: &mut W, rn: &mut Ranges| {
-        while written < upto {
-            let c = match early.remove(&written) {
-                Some(c) => c,
-                None => {
-                    let (i, r) = super::receive(&rx).ok_or_else(stopped)?;
-                    let (c, got) = r?;
-                    rn.merge(&got);
-                    if i != written {
-                        early.insert(i, c);
-                        continue;
-                    }
-                    c
-                }
-            };
-            w.put(out, written, &c)?;
-            written += 1;
-        }
-        Ok::<(), Error>(())
-    };
-    let mut next = Some(src.read_rows(rows_of(0))?);
-    for g0 in 0..rows {
-        let row0 = rows_of(g0).start;
-        let slab = std::sync::Arc::new(next.take().expect("read before its turn"));
-        feed.push((g0 * per_row..(g0 + 1) * per_row).map(|i| {
-            let (tx, slab, common) = (tx.clone(), slab.clone(), common.clone());
-            Box::new(move || {
-                let (grid, shape, opts) = &*common;
-                let got = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-                    code_tile(grid, shape, &slab, row0, i, coding, opts, measure)
-                }));
-                drop(slab);
-                // the receiver is gone when writing failed
-                let _ = tx.send((i, got.unwrap_or_else(|_| Err(stopped()))));
-            }) as feed::Job
-        }));
-        drop(slab);
-        let upto = if ahead {
-            g0 * per_row
-        } else {
-            (g0 + 1) * per_row
-        };
-        drain(upto, &mut w, &mut *out, &mut ranges_now)?;
-        if g0 + 1 < rows {
-            next = Some(src.read_rows(rows_of(g0 + 1))?);
-        }
-    }
-    drop(tx);
-    drain(n, &mut w, &mut *out, &mut ranges_now)?;
+    let ranges_now = write_tiles(src, opts, coding, !first_pass, &mut w, out)?;
     w.at += write_chunk(out, MEND, &[])?;
     let at = w.at;
     let (head_at, mut h) = w
@@ -376,6 +217,166 @@ pub(crate) fn encode_slabs<S: SlabSource + ?Sized, W: Write + Seek>(
     out.seek(SeekFrom::Start(at))?;
     out.flush()?;
     Ok(at - start)
+}
+
+/// The rows of the raster in tile row `g0` of `grid`.
+fn rows_of(grid: &Grid, g0: usize) -> std::ops::Range<usize> {
+    g0 * grid.tile[0]..g0 * grid.tile[0] + grid.extent(0, g0)
+}
+
+/// The first pass over the raster: its ranges and, when `sampled`, every ⌈n/64⌉-th
+/// tile (voids filled). The pool has nothing else to do: each slab is read on all its
+/// threads, then measured.
+fn measure_slabs<S: SlabSource + ?Sized>(
+    src: &mut S,
+    grid: &Grid,
+    shape: &Shape,
+    sampled: bool,
+) -> Result<(Ranges, Vec<Raster>)> {
+    let n = grid.len();
+    let per_row = n / grid.counts[0];
+    let every = n.div_ceil(SEARCH_SAMPLE_TILES).max(1);
+    let mut ranges = Ranges::new();
+    let mut sample: Vec<Raster> = Vec::new();
+    for g0 in 0..grid.counts[0] {
+        let r = rows_of(grid, g0);
+        let slab = src.read_rows_parallel(r.clone())?;
+        ranges.add(&slab);
+        let mine: Vec<usize> = (g0 * per_row..(g0 + 1) * per_row)
+            .filter(|i| sampled && i % every == 0)
+            .collect();
+        let tiles: Vec<Raster> = mine
+            .par_iter()
+            .map(|&i| slab_tile(grid, shape, &slab, r.start, i))
+            .collect::<Result<_>>()?;
+        sample.extend(tiles);
+    }
+    Ok((ranges, sample))
+}
+
+/// How every tile is coded: by its own rate mode, or at the base step the rate mode
+/// asks of the whole raster (from its `ranges` and the sampled tiles).
+fn choose_coding(
+    grid: &Grid,
+    shape: &Shape,
+    opts: &EncodeOptions,
+    ranges: &Ranges,
+    sample: Vec<Raster>,
+) -> Result<Coding> {
+    let (lo, hi) = ranges.finite();
+    let range = (hi - lo).max(1e-30);
+    Ok(match opts.rate {
+        Rate::Quality(q) => Coding::Step {
+            step: quality_step(q, range),
+            rdo: true,
+        },
+        Rate::Keep(k) => {
+            // the threshold of the largest k% over the sampled tiles' details
+            let mut w: Vec<f32> = sample
+                .par_iter()
+                .map(|t| Ok(prepare(&t.view(), opts, Mode::Lossy)?.weighted_details()))
+                .collect::<Result<Vec<_>>>()?
+                .concat();
+            let step = keep_step(&mut w, k, range);
+            Coding::Step { step, rdo: false }
+        }
+        Rate::Psnr(_) | Rate::PsnrRange(..) | Rate::Bpp(_) => {
+            let peak = match (opts.rate, ranges.all) {
+                (Rate::PsnrRange(_, p), _) => p,
+                (_, all) => {
+                    // the whole raster's default peak, from its extremes
+                    let (a, b) = all.unwrap_or((0.0, 0.0));
+                    crate::metrics::skimage_data_range(
+                        Samples::from_f64(&[a, b], shape.sample_type).view(),
+                    )
+                }
+            };
+            let step = search_step(shape, grid, grid.len(), sample, opts, range, peak)?;
+            Coding::Step { step, rdo: true }
+        }
+        _ => Coding::Own,
+    })
+}
+
+/// Code every tile of `src` and write it with `w` in tile order; returns the range of
+/// the samples when `measure`.
+///
+/// The tiles are coded one pool job each and written in tile order as they come.
+/// With more than one thread the slabs are pipelined: the tiles of slab g are queued
+/// behind those of slab g − 1 (the pool goes from one slab's last tiles to the next
+/// slab's without waiting), and slab g + 1 is read while slab g is coded, once the
+/// tiles of slab g − 1 are written (memory holds two slabs and a tile per thread).
+/// With one thread each slab is coded and written before the next is read.
+fn write_tiles<S: SlabSource + ?Sized, W: Write + Seek>(
+    src: &mut S,
+    opts: &EncodeOptions,
+    coding: Coding,
+    measure: bool,
+    w: &mut TileWriter,
+    out: &mut W,
+) -> Result<Ranges> {
+    let (grid, shape) = (w.grid, w.shape);
+    let n = grid.len();
+    let rows = grid.counts[0];
+    let per_row = n / rows;
+    // with more than one thread the next slab is read while this one is coded
+    let ahead = rayon::current_num_threads() > 1;
+    let mut ranges_now = Ranges::new();
+    let feed = Feed::new();
+    let _stop = feed.stop_on_drop();
+    let common = std::sync::Arc::new((grid.clone(), shape.clone(), opts.clone()));
+    let (tx, rx) = std::sync::mpsc::channel::<(usize, Result<(Vec<u8>, Ranges)>)>();
+    // coded tiles that came before their turn to be written
+    let mut early = std::collections::BTreeMap::new();
+    let mut written = 0usize;
+    let mut drain = |upto: usize, w: &mut TileWriter, out: &mut W, rn: &mut Ranges| {
+        while written < upto {
+            let c = match early.remove(&written) {
+                Some(c) => c,
+                None => {
+                    let (i, r) = receive(&rx).ok_or_else(stopped)?;
+                    let (c, got) = r?;
+                    rn.merge(&got);
+                    if i != written {
+                        early.insert(i, c);
+                        continue;
+                    }
+                    c
+                }
+            };
+            w.put(out, written, &c)?;
+            written += 1;
+        }
+        Ok::<(), Error>(())
+    };
+    let mut next = Some(src.read_rows(rows_of(grid, 0))?);
+    for g0 in 0..rows {
+        let row0 = rows_of(grid, g0).start;
+        let slab = std::sync::Arc::new(next.take().expect("read before its turn"));
+        feed.push((g0 * per_row..(g0 + 1) * per_row).map(|i| {
+            let (tx, slab, common) = (tx.clone(), slab.clone(), common.clone());
+            Box::new(move || {
+                let (grid, shape, opts) = &*common;
+                let got = caught(|| code_tile(grid, shape, &slab, row0, i, coding, opts, measure));
+                drop(slab);
+                // the receiver is gone when writing failed
+                let _ = tx.send((i, got.unwrap_or_else(|| Err(stopped()))));
+            }) as Job
+        }));
+        drop(slab);
+        let upto = if ahead {
+            g0 * per_row
+        } else {
+            (g0 + 1) * per_row
+        };
+        drain(upto, w, &mut *out, &mut ranges_now)?;
+        if g0 + 1 < rows {
+            next = Some(src.read_rows(rows_of(grid, g0 + 1))?);
+        }
+    }
+    drop(tx);
+    drain(n, w, &mut *out, &mut ranges_now)?;
+    Ok(ranges_now)
 }
 
 /// The chunks of a tiled file written in order: `HEAD`, `mETA`, `TRAT` and `TIDX`

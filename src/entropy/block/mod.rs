@@ -19,7 +19,7 @@ pub mod prior;
 pub mod quad;
 pub mod rc;
 
-use super::walk::{parent_plane, Walk};
+use super::walk::{median_residuals, parent_fits, parent_plane, undo_median, Walk};
 use super::BandKind;
 use crate::format::Cursor;
 use crate::{Error, Result};
@@ -139,10 +139,7 @@ fn parent_map<'a>(
     parent: Option<Parent<'a>>,
 ) -> Option<(&'a [i32], Walk, Vec<usize>)> {
     let p = parent?;
-    let ok = p.dims.len() == dims.len()
-        && p.dims.iter().all(|&d| d > 0)
-        && p.data.len() == p.dims.iter().product::<usize>();
-    if !ok {
+    if !parent_fits(p.data, p.dims, dims) {
         return None;
     }
     let pw = Walk::new(p.dims);
@@ -150,52 +147,6 @@ fn parent_map<'a>(
         .map(|k| parent_plane(k, dims, p.dims) * pw.rows * pw.cols)
         .collect();
     Some((p.data, pw, bases))
-}
-
-/// LOCO-I median prediction of sample `i` at `(y, x)` of a plane of `cols` columns
-/// (as [`super::walk::med`]); always between W and N, so it is an `i32`.
-fn med(v: &[i32], i: usize, y: usize, x: usize, cols: usize) -> i32 {
-    let w = if x > 0 {
-        v[i - 1]
-    } else if y > 0 {
-        v[i - cols]
-    } else {
-        0
-    };
-    let n = if y > 0 { v[i - cols] } else { w };
-    let nw = if x > 0 && y > 0 { v[i - cols - 1] } else { n };
-    let (lo, hi) = if w < n { (w, n) } else { (n, w) };
-    if nw >= hi {
-        lo
-    } else if nw <= lo {
-        hi
-    } else {
-        (w as i64 + n as i64 - nw as i64) as i32
-    }
-}
-
-fn median_residuals(q: &[i32], w: Walk) -> Vec<i32> {
-    let mut r = vec![0; q.len()];
-    for p in 0..w.planes {
-        for y in 0..w.rows {
-            for x in 0..w.cols {
-                let i = (p * w.rows + y) * w.cols + x;
-                r[i] = q[i].wrapping_sub(med(q, i, y, x, w.cols));
-            }
-        }
-    }
-    r
-}
-
-fn undo_median(v: &mut [i32], w: Walk) {
-    for p in 0..w.planes {
-        for y in 0..w.rows {
-            for x in 0..w.cols {
-                let i = (p * w.rows + y) * w.cols + x;
-                v[i] = v[i].wrapping_add(med(v, i, y, x, w.cols));
-            }
-        }
-    }
 }
 
 /// Code a band of indices `q` (raster order, extents `dims`) in code-blocks of `shape`.

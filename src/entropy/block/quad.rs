@@ -20,9 +20,10 @@
 
 use super::prior;
 use super::rc::{BitReader, BitWriter, Cdf, Decoder, Encoder};
+use crate::entropy::walk::classes;
 
 const QCLS: usize = 12;
-const PCLS: usize = 3;
+pub const PCLS: usize = 3;
 /// Pattern contexts.
 pub const PATTERNS: usize = QCLS * PCLS;
 /// Magnitude classes.
@@ -34,23 +35,7 @@ const CAP: u32 = 1 << 20;
 /// Class of the quad activity `s`: 0, 1, 2, 3, 4, 5–6, 7–9, 10–14, 15–22, 23–35, 36–60, more.
 #[inline(always)]
 fn qcls(s: u32) -> usize {
-    const T: [u8; 61] = {
-        let mut t = [0u8; 61];
-        let mut i = 0;
-        while i <= 60 {
-            t[i] = match i {
-                0..=4 => i as u8,
-                5..=6 => 5,
-                7..=9 => 6,
-                10..=14 => 7,
-                15..=22 => 8,
-                23..=35 => 9,
-                _ => 10,
-            };
-            i += 1;
-        }
-        t
-    };
+    const T: [u8; 61] = classes(&[0, 1, 2, 3, 4, 6, 9, 14, 22, 35]);
     if s <= 60 {
         T[s as usize] as usize
     } else {
@@ -181,6 +166,32 @@ fn valid_bits(ext: Extent, y: usize, x: usize) -> usize {
     1 | (right as usize) << 1 | (below as usize) << 2 | ((right && below) as usize) << 3
 }
 
+/// Call `f(k, y, x, valid, at)` for every quad of the block in raster order: plane `k`,
+/// first row `y` and column `x`, the pattern bits inside the block ([`valid_bits`]) and
+/// the offsets in the band of its four positions (the bottom row repeats the top one
+/// past the block's last row).
+#[inline(always)]
+fn each_quad(
+    ext: Extent,
+    rows: &impl Rows,
+    mut f: impl FnMut(usize, usize, usize, usize, [usize; 4]),
+) {
+    for k in 0..ext.planes {
+        for y in (0..ext.rows).step_by(2) {
+            let r0 = rows.row(k, y);
+            let r1 = if y + 1 < ext.rows {
+                rows.row(k, y + 1)
+            } else {
+                r0
+            };
+            for x in (0..ext.cols).step_by(2) {
+                let at = [r0 + x, r0 + x + 1, r1 + x, r1 + x + 1];
+                f(k, y, x, valid_bits(ext, y, x), at);
+            }
+        }
+    }
+}
+
 /// How a block's positions map to the band: `get(k, y)` = offset in the band of the
 /// block's row `y` of plane `k`; the parent's magnitude of quad `(k, y, x)` by `parent`.
 pub trait Rows {
@@ -201,46 +212,34 @@ pub fn encode(
     let mut m = Models::new(limit, trained);
     s.mag.fill(0);
     let off = quad_offsets(s.rx);
-    for k in 0..ext.planes {
-        for y in (0..ext.rows).step_by(2) {
-            let r0 = rows.row(k, y);
-            let r1 = if y + 1 < ext.rows {
-                rows.row(k, y + 1)
-            } else {
-                r0
-            };
-            for x in (0..ext.cols).step_by(2) {
-                let valid = valid_bits(ext, y, x);
-                let at = [r0 + x, r0 + x + 1, r1 + x, r1 + x + 1];
-                let mut pattern = 0;
-                for (b, &a) in at.iter().enumerate() {
-                    if valid >> b & 1 == 1 && band[a] != 0 {
-                        pattern |= 1 << b;
-                    }
-                }
-                let i = s.at(k, y, x);
-                let pm = rows.parent(k, y, x);
-                let pc = s.pattern_ctx(i, pm);
-                e.symbol(&mut m.pattern[pc], pattern);
-                if let Some(n) = counts.as_deref_mut() {
-                    n.pattern[pc][pattern] += 1;
-                }
-                for b in 0..4 {
-                    if pattern >> b & 1 == 1 {
-                        let v = band[at[b]];
-                        let c = s.mag_ctx(i + off[b], pm);
-                        let a = v.unsigned_abs();
-                        if let Some(n) = counts.as_deref_mut() {
-                            let k = c.saturating_sub(KOFF) as u32;
-                            n.magnitude[c][(((a - 1) as u64 >> k).min(15)) as usize] += 1;
-                        }
-                        put_magnitude(e, w, &mut m.mag[c], c, a, v < 0);
-                        s.mag[i + off[b]] = a.min(CAP);
-                    }
-                }
+    each_quad(ext, rows, |k, y, x, valid, at| {
+        let mut pattern = 0;
+        for (b, &a) in at.iter().enumerate() {
+            if valid >> b & 1 == 1 && band[a] != 0 {
+                pattern |= 1 << b;
             }
         }
-    }
+        let i = s.at(k, y, x);
+        let pm = rows.parent(k, y, x);
+        let pc = s.pattern_ctx(i, pm);
+        e.symbol(&mut m.pattern[pc], pattern);
+        if let Some(n) = counts.as_deref_mut() {
+            n.pattern[pc][pattern] += 1;
+        }
+        for b in 0..4 {
+            if pattern >> b & 1 == 1 {
+                let v = band[at[b]];
+                let c = s.mag_ctx(i + off[b], pm);
+                let a = v.unsigned_abs();
+                if let Some(n) = counts.as_deref_mut() {
+                    let k = c.saturating_sub(KOFF) as u32;
+                    n.magnitude[c][(((a - 1) as u64 >> k).min(15)) as usize] += 1;
+                }
+                put_magnitude(e, w, &mut m.mag[c], c, a, v < 0);
+                s.mag[i + off[b]] = a.min(CAP);
+            }
+        }
+    });
 }
 
 #[inline(always)]
@@ -274,36 +273,24 @@ pub fn decode(
     let mut m = Models::new(limit, trained);
     s.mag.fill(0);
     let off = quad_offsets(s.rx);
-    for k in 0..ext.planes {
-        for y in (0..ext.rows).step_by(2) {
-            let r0 = rows.row(k, y);
-            let r1 = if y + 1 < ext.rows {
-                rows.row(k, y + 1)
+    each_quad(ext, rows, |k, y, x, valid, at| {
+        let i = s.at(k, y, x);
+        let pm = rows.parent(k, y, x);
+        let pattern = d.symbol(&mut m.pattern[s.pattern_ctx(i, pm)]) & valid;
+        let mut bits = pattern;
+        while bits != 0 {
+            let b = bits.trailing_zeros() as usize;
+            bits &= bits - 1;
+            let c = s.mag_ctx(i + off[b], pm);
+            let (a, neg) = get_magnitude(d, r, &mut m.mag[c], c);
+            band[at[b]] = if neg {
+                (a as u32 as i32).wrapping_neg()
             } else {
-                r0
+                a as u32 as i32
             };
-            for x in (0..ext.cols).step_by(2) {
-                let valid = valid_bits(ext, y, x);
-                let at = [r0 + x, r0 + x + 1, r1 + x, r1 + x + 1];
-                let i = s.at(k, y, x);
-                let pm = rows.parent(k, y, x);
-                let pattern = d.symbol(&mut m.pattern[s.pattern_ctx(i, pm)]) & valid;
-                let mut bits = pattern;
-                while bits != 0 {
-                    let b = bits.trailing_zeros() as usize;
-                    bits &= bits - 1;
-                    let c = s.mag_ctx(i + off[b], pm);
-                    let (a, neg) = get_magnitude(d, r, &mut m.mag[c], c);
-                    band[at[b]] = if neg {
-                        (a as u32 as i32).wrapping_neg()
-                    } else {
-                        a as u32 as i32
-                    };
-                    s.mag[i + off[b]] = a.min(CAP as u64) as u32;
-                }
-            }
+            s.mag[i + off[b]] = a.min(CAP as u64) as u32;
         }
-    }
+    });
 }
 
 #[inline(always)]

@@ -15,11 +15,12 @@
 //! symbol keeps a frequency of at least 1 (a convex mix of two CDFs with that property,
 //! and flooring both ends of a frequency loses less than 1).
 
+use crate::entropy::range::{Reader, Writer};
+
 /// Symbols of every alphabet.
 pub const SYMBOLS: usize = 16;
 const PROB_BITS: u32 = 15;
 const ONE: i32 = 1 << PROB_BITS;
-const TOP: u32 = 1 << 24;
 
 /// An adaptive CDF of 16 symbols: `c[i]` = cumulative frequency up to and including
 /// symbol `i` (`c[15] = 2^15`), the symbols seen (up to 255) and the adaptation limit.
@@ -102,6 +103,20 @@ impl Cdf {
         }
     }
 
+    /// Symbol `s`'s part of an interval of width `range`: its start `r·c[s−1]` and width
+    /// `r·(c[s] − c[s−1])`, `r = ⌊range / 2^15⌋` (the last symbol takes what is left).
+    #[inline(always)]
+    fn interval(&self, range: u32, s: usize) -> (u32, u32) {
+        let r = range >> PROB_BITS;
+        let lo = if s == 0 { 0 } else { r * self.c[s - 1] as u32 };
+        let width = if s < SYMBOLS - 1 {
+            r * self.c[s] as u32 - lo
+        } else {
+            range - lo
+        };
+        (lo, width)
+    }
+
     /// `−log₂ P(s)` in bits.
     pub fn cost(&self, s: usize) -> f64 {
         let lo = if s == 0 { 0.0 } else { self.c[s - 1] as f64 };
@@ -109,14 +124,54 @@ impl Cdf {
     }
 }
 
-/// Range encoder of [`Cdf`] symbols.
-pub struct Encoder {
-    low: u64,
-    range: u32,
-    cache: u8,
-    pending: u64,
-    out: Vec<u8>,
+/// `N` CDFs: `seen[k]` at context `k·step`, every other context uniform
+/// (`c[i] = 2^11·(i + 1)`, the CDF of a context without counts).
+pub const fn spread<const N: usize>(seen: &[[u16; 16]], step: usize) -> [[u16; 16]; N] {
+    let mut uniform = [0u16; 16];
+    let mut i = 0;
+    while i < 16 {
+        uniform[i] = 2048 * (i as u16 + 1);
+        i += 1;
+    }
+    let mut t = [uniform; N];
+    let mut k = 0;
+    while k < seen.len() {
+        t[k * step] = seen[k];
+        k += 1;
+    }
+    t
 }
+
+/// Range decoder of what [`Encoder`] wrote (its code starts with 4 bytes); reading past
+/// the end yields zero bytes.
+pub struct Decoder<'a>(Reader<'a>);
+
+impl<'a> Decoder<'a> {
+    pub fn new(data: &'a [u8]) -> Self {
+        Decoder(Reader::new(data, 4))
+    }
+
+    /// Decode one symbol with `cdf`, then adapt it.
+    #[inline(always)]
+    pub fn symbol(&mut self, cdf: &mut Cdf) -> usize {
+        let d = &mut self.0;
+        let r = d.range >> PROB_BITS;
+        let mut s = 0;
+        while s < SYMBOLS - 1 && d.code >= r * cdf.c[s] as u32 {
+            s += 1;
+        }
+        let lo;
+        (lo, d.range) = cdf.interval(d.range, s);
+        // a damaged stream may leave the offset past the last interval's end
+        d.code = d.code.wrapping_sub(lo);
+        cdf.update(s);
+        d.renormalise();
+        s
+    }
+}
+
+/// Range encoder of [`Cdf`] symbols.
+pub struct Encoder(Writer);
 
 impl Default for Encoder {
     fn default() -> Self {
@@ -126,130 +181,25 @@ impl Default for Encoder {
 
 impl Encoder {
     pub fn new() -> Self {
-        Encoder {
-            low: 0,
-            range: u32::MAX,
-            cache: 0,
-            pending: 1,
-            out: Vec::new(),
-        }
-    }
-
-    #[inline(always)]
-    fn shift_low(&mut self) {
-        if (self.low as u32) < 0xFF00_0000 || (self.low >> 32) != 0 {
-            let carry = (self.low >> 32) as u8;
-            let mut byte = self.cache;
-            loop {
-                self.out.push(byte.wrapping_add(carry));
-                byte = 0xFF;
-                self.pending -= 1;
-                if self.pending == 0 {
-                    break;
-                }
-            }
-            self.cache = ((self.low >> 24) & 0xFF) as u8;
-        }
-        self.pending += 1;
-        self.low = (self.low & 0x00FF_FFFF) << 8;
+        Encoder(Writer::default())
     }
 
     /// Code symbol `s` (< 16) with `cdf`, then adapt it.
     #[inline(always)]
     pub fn symbol(&mut self, cdf: &mut Cdf, s: usize) {
-        let r = self.range >> PROB_BITS;
-        let lo = if s == 0 { 0 } else { r * cdf.c[s - 1] as u32 };
-        self.low += lo as u64;
-        self.range = if s < SYMBOLS - 1 {
-            r * cdf.c[s] as u32 - lo
-        } else {
-            self.range - lo
-        };
+        let w = &mut self.0;
+        let lo;
+        (lo, w.range) = cdf.interval(w.range, s);
+        w.low += lo as u64;
         cdf.update(s);
-        while self.range < TOP {
-            self.range <<= 8;
-            self.shift_low();
-        }
+        w.renormalise();
     }
 
     /// Flush with the fewest bytes: the value in `[low, low + range)` with the most
     /// trailing zero bytes; the always-zero first byte and the trailing zero bytes are
     /// left out (the decoder reads zeros past the end).
-    pub fn finish(mut self) -> Vec<u8> {
-        let end = self.low + self.range as u64 - 1;
-        for k in [32u32, 24, 16, 8, 0] {
-            let mask = (1u64 << k) - 1;
-            let v = (self.low + mask) & !mask;
-            if v <= end {
-                self.low = v;
-                break;
-            }
-        }
-        for _ in 0..5 {
-            self.shift_low();
-        }
-        let mut out = self.out;
-        while out.last() == Some(&0) {
-            out.pop();
-        }
-        if !out.is_empty() {
-            out.remove(0);
-        }
-        out
-    }
-}
-
-/// Range decoder of what [`Encoder`] wrote; reading past the end yields zero bytes.
-pub struct Decoder<'a> {
-    code: u32,
-    range: u32,
-    data: &'a [u8],
-    pos: usize,
-}
-
-impl<'a> Decoder<'a> {
-    pub fn new(data: &'a [u8]) -> Self {
-        let mut d = Decoder {
-            code: 0,
-            range: u32::MAX,
-            data,
-            pos: 0,
-        };
-        for _ in 0..4 {
-            d.code = (d.code << 8) | d.next() as u32;
-        }
-        d
-    }
-
-    #[inline(always)]
-    fn next(&mut self) -> u8 {
-        let b = self.data.get(self.pos).copied().unwrap_or(0);
-        self.pos += 1;
-        b
-    }
-
-    /// Decode one symbol with `cdf`, then adapt it.
-    #[inline(always)]
-    pub fn symbol(&mut self, cdf: &mut Cdf) -> usize {
-        let r = self.range >> PROB_BITS;
-        let mut s = 0;
-        while s < SYMBOLS - 1 && self.code >= r * cdf.c[s] as u32 {
-            s += 1;
-        }
-        let lo = if s == 0 { 0 } else { r * cdf.c[s - 1] as u32 };
-        // a damaged stream may leave the offset past the last interval's end
-        self.code = self.code.wrapping_sub(lo);
-        self.range = if s < SYMBOLS - 1 {
-            r * cdf.c[s] as u32 - lo
-        } else {
-            self.range - lo
-        };
-        cdf.update(s);
-        while self.range < TOP {
-            self.range <<= 8;
-            self.code = (self.code << 8) | self.next() as u32;
-        }
-        s
+    pub fn finish(self) -> Vec<u8> {
+        self.0.finish_short()
     }
 }
 
@@ -330,5 +280,20 @@ impl<'a> BitReader<'a> {
         self.acc >>= n;
         self.n -= n;
         v
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The contexts [`spread`] fills are the uniform CDF, and the listed ones land every
+    /// `step`-th.
+    #[test]
+    fn spread_puts_the_seen_contexts_every_step_among_uniform_ones() {
+        let seen = [[7u16; 16], [9u16; 16]];
+        let t: [[u16; 16]; 5] = spread(&seen, 2);
+        let uniform = Cdf::uniform(LIMIT).cumulative();
+        assert_eq!(t, [seen[0], uniform, seen[1], uniform, uniform]);
     }
 }

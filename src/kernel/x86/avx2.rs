@@ -448,32 +448,10 @@ pub(crate) unsafe fn transpose_avx2_32<T: Sample>(
         // cb..cb+8 at stride, columns rb..rb+8 <= rows <= stride (checked by the caller).
         unsafe {
             let l = |i: usize| _mm256_loadu_ps(ps.add((rb + i) * cols + cb));
-            let (a0, a1, a2, a3, a4, a5, a6, a7) = (l(0), l(1), l(2), l(3), l(4), l(5), l(6), l(7));
-            let t0 = _mm256_unpacklo_ps(a0, a1);
-            let t1 = _mm256_unpackhi_ps(a0, a1);
-            let t2 = _mm256_unpacklo_ps(a2, a3);
-            let t3 = _mm256_unpackhi_ps(a2, a3);
-            let t4 = _mm256_unpacklo_ps(a4, a5);
-            let t5 = _mm256_unpackhi_ps(a4, a5);
-            let t6 = _mm256_unpacklo_ps(a6, a7);
-            let t7 = _mm256_unpackhi_ps(a6, a7);
-            let u0 = _mm256_shuffle_ps(t0, t2, 0x44);
-            let u1 = _mm256_shuffle_ps(t0, t2, 0xEE);
-            let u2 = _mm256_shuffle_ps(t1, t3, 0x44);
-            let u3 = _mm256_shuffle_ps(t1, t3, 0xEE);
-            let u4 = _mm256_shuffle_ps(t4, t6, 0x44);
-            let u5 = _mm256_shuffle_ps(t4, t6, 0xEE);
-            let u6 = _mm256_shuffle_ps(t5, t7, 0x44);
-            let u7 = _mm256_shuffle_ps(t5, t7, 0xEE);
-            let s = |i: usize, v: __m256| _mm256_storeu_ps(pd.add((cb + i) * stride + rb), v);
-            s(0, _mm256_permute2f128_ps(u0, u4, 0x20));
-            s(1, _mm256_permute2f128_ps(u1, u5, 0x20));
-            s(2, _mm256_permute2f128_ps(u2, u6, 0x20));
-            s(3, _mm256_permute2f128_ps(u3, u7, 0x20));
-            s(4, _mm256_permute2f128_ps(u0, u4, 0x31));
-            s(5, _mm256_permute2f128_ps(u1, u5, 0x31));
-            s(6, _mm256_permute2f128_ps(u2, u6, 0x31));
-            s(7, _mm256_permute2f128_ps(u3, u7, 0x31));
+            let t = transpose8_ps([l(0), l(1), l(2), l(3), l(4), l(5), l(6), l(7)]);
+            for (i, v) in t.into_iter().enumerate() {
+                _mm256_storeu_ps(pd.add((cb + i) * stride + rb), v);
+            }
         }
     };
     // 16 × 16 blocks: 64 bytes of every source row and of every destination row, whole
@@ -807,14 +785,7 @@ pub(crate) unsafe fn transpose8_ps(
 /// # Safety
 /// AVX2 with FMA present; as [`crate::kernel::apply_raw`].
 #[target_feature(enable = "avx2,fma")]
-pub(crate) unsafe fn apply_avx2<T: Sample>(
-    op: &Csr,
-    src: *const T,
-    ss: usize,
-    dst: *mut T,
-    ds: usize,
-    width: usize,
-) {
+pub(crate) unsafe fn apply_avx2<T: Sample>(op: &Csr, lanes: RawLanes<T>) {
     // SAFETY: the caller's guarantees pass through.
-    unsafe { apply_scalar(op, src, ss, dst, ds, width) }
+    unsafe { apply_scalar(op, lanes) }
 }
