@@ -210,8 +210,8 @@ impl Canvas {
                 if z > self.zbuf[i] {
                     self.zbuf[i] = z;
                     let sh = l0 * s[0] + l1 * s[1] + l2 * s[2];
-                    for k in 0..3 {
-                        self.rgb[3 * i + k] = (base[k] * sh).clamp(0.0, 255.0) as u8;
+                    for (o, b) in self.rgb[3 * i..3 * i + 3].iter_mut().zip(base) {
+                        *o = (b * sh).clamp(0.0, 255.0) as u8;
                     }
                 }
             }

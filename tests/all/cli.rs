@@ -1,7 +1,6 @@
 //! The `mra` binary on point lists: outputs, round trips, and one-line errors with exit 2.
 
-use std::io::Write;
-use std::process::{Command, Output, Stdio};
+use std::process::Output;
 
 use super::common;
 

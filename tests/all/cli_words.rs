@@ -1,9 +1,8 @@
 //! The `mra` binary as a new user meets it: `-` as standard input and output for the
 //! codec, `--quiet` and `--json` where they were missing, and what help and messages say.
 
-use std::io::Write;
 use std::path::Path;
-use std::process::{Command, Output, Stdio};
+use std::process::Output;
 
 use super::common;
 

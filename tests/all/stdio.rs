@@ -2,7 +2,6 @@
 //! and standard output, piped between commands, `-o -` giving the bytes `-o FILE` writes,
 //! and `-o -` of a format the name cannot tell refused in one line naming `--format`.
 
-use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 
