@@ -173,9 +173,12 @@ pub(crate) mod testing {
             .collect()
     }
 
+    /// A test band and its parent: `(dims, values, parent dims, parent values)`.
+    pub(crate) type Band = (Vec<usize>, Vec<i64>, Vec<usize>, Vec<i64>);
+
     /// Bands of 1 to 4 axes (single positions among them) with `i64::MIN` first and
-    /// `i64::MAX` last, and their parents: `(dims, values, parent dims, parent values)`.
-    pub(crate) fn bands() -> Vec<(Vec<usize>, Vec<i64>, Vec<usize>, Vec<i64>)> {
+    /// `i64::MAX` last, and their parents.
+    pub(crate) fn bands() -> Vec<Band> {
         let shapes = [
             vec![1usize],
             vec![7],
