@@ -21,7 +21,15 @@
 //! both points lie inside the image, so a linear function is kept exactly; `U` the
 //! plain area upscale ×F, `D` the F×F block mean, `D U = I`.) Across an edge nothing
 //! moves; along it the notches average out; in texture without one direction `c ≈ 0`.
-//! [`ROUNDS`] rounds; the last leaves `D u = s` exactly. Measured in `docs/upscale.md`.
+//! [`ROUNDS`] rounds ([`ROUNDS_X2`] at ×2); the last leaves `D u = s` exactly.
+//!
+//! **How.** `τ` is rounded to the nearest of [`BUCKETS`] directions, and each
+//! direction's `2r + 1` bilinear taps are merged once into a stencil of whole-pixel
+//! offsets and weights (entries below [`MIN_WEIGHT`] dropped, the rest rescaled to sum
+//! 1), applied without index clamps `r + 1` pixels or more from the border; nearer the
+//! border the taps are summed pairwise as above. A pass runs over input rows in parallel
+//! and also writes its row's residual `s − D v`; every value depends only on the previous
+//! round, so the bits do not depend on the thread count. Measured in `docs/upscale.md`.
 
 use super::cells::area;
 use super::{AxisPlan, Geometry, Method, Prepared};
@@ -29,8 +37,21 @@ use crate::progress::Progress;
 use crate::Result;
 use rayon::prelude::*;
 
-/// Smooth-then-project rounds (1: the back-projection brings back part of the notches).
+/// Smooth-then-project rounds at ×4 and above (1: the back-projection brings back part
+/// of the notches); [`ROUNDS_X2`] at ×2.
 pub const ROUNDS: usize = 2;
+
+/// Smooth-then-project rounds at ×2 (a second round adds little there, see `docs/upscale.md`).
+pub const ROUNDS_X2: usize = 1;
+
+/// The rounds at factor `g`.
+fn rounds(g: usize) -> usize {
+    if g == 2 {
+        ROUNDS_X2
+    } else {
+        ROUNDS
+    }
+}
 
 /// The tangential Gaussian's σ in input cells (σ·F output pixels).
 pub const SIGMA: f32 = 0.5;
@@ -64,17 +85,9 @@ pub const BUCKETS: usize = 32;
 /// is negligible there).
 pub const MIN_COHERENCE: f32 = 1e-4;
 
-// TEMP tuning
-fn min_c() -> f32 {
-    static V: std::sync::OnceLock<f32> = std::sync::OnceLock::new();
-    *V.get_or_init(|| std::env::var("MRA_ALONG_CMIN").ok().and_then(|v| v.parse().ok()).unwrap_or(MIN_COHERENCE))
-}
-fn tlog(what: &str, t: &mut std::time::Instant) {
-    if std::env::var_os("MRA_ALONG_T").is_some() {
-        eprintln!("along {what}: {:.2} ms", t.elapsed().as_secs_f64() * 1e3);
-    }
-    *t = std::time::Instant::now();
-}
+/// A direction's stencil drops the pixels whose weight is below this (about a quarter
+/// of its pixels, 1–4 % of its weight) and rescales the rest to sum 1.
+pub const MIN_WEIGHT: f32 = 0.01;
 
 /// Per output pixel: the coherence `c` (0: left as it is) and the bucket of the edge
 /// direction `τ`.
@@ -181,7 +194,8 @@ fn atan2(y: f32, x: f32) -> f32 {
 /// so bucket `round((2φ + π) B / 2π) mod B`.
 fn bucket(a: f32, b: f32, e: f32) -> u8 {
     let t = atan2(2.0 * b, a - e) + std::f32::consts::PI;
-    ((t * (BUCKETS as f32 / std::f32::consts::TAU)).round() as usize % BUCKETS) as u8
+    // t ≥ 0, so `+ 0.5` then truncation rounds
+    ((t * (BUCKETS as f32 / std::f32::consts::TAU) + 0.5) as usize % BUCKETS) as u8
 }
 
 /// The direction `(τ_y, τ_x)` of bucket `k`.
@@ -229,7 +243,7 @@ fn field(s: &[f32], coarse: &[usize], g: usize) -> Field {
                         continue;
                     }
                     let coh = (det / tr).min(1.0);
-                    if coh >= min_c() {
+                    if coh >= MIN_COHERENCE {
                         *cx = coh;
                         *bx = bucket(a, b, e);
                     }
@@ -251,7 +265,7 @@ struct Stencils {
 }
 
 impl Stencils {
-    fn new(taps: Vec<f32>, fw: usize, ch: usize) -> Stencils {
+    fn new(taps: Vec<f32>, fw: usize, ch: usize, min_weight: f32) -> Stencils {
         let r = (taps.len() / 2) as isize;
         let lin = (0..BUCKETS)
             .map(|b| {
@@ -277,6 +291,12 @@ impl Stencils {
                             None => acc.push((at, wk * wt)),
                         }
                     }
+                }
+                // drop the corners of least weight, keep the sum 1
+                acc.retain(|&(_, w)| w >= min_weight);
+                let total: f32 = acc.iter().map(|&(_, w)| w).sum();
+                for (_, w) in acc.iter_mut() {
+                    *w /= total;
                 }
                 acc.sort_by_key(|&(o, _)| o);
                 acc.into_iter()
@@ -364,9 +384,10 @@ fn smooth_band<const CH: usize>(
                 let base = ((y * fw + x) * CH) as isize;
                 let mut acc = [0f32; CH];
                 for &(off, wt) in &st.lin[b as usize] {
-                    let q = (base + off) as usize;
-                    for (a, &v) in acc.iter_mut().zip(&u[q..q + CH]) {
-                        *a += wt * v;
+                    if let Some(px) = u[(base + off) as usize..].first_chunk::<CH>() {
+                        for (a, &v) in acc.iter_mut().zip(px) {
+                            *a += wt * v;
+                        }
                     }
                 }
                 acc
@@ -441,26 +462,20 @@ pub(crate) fn refine(
             geometry: Geometry::Centre,
         })
         .collect();
-    let mut t0 = std::time::Instant::now();
     let up = Prepared::new(&area(method), coarse, &plans)?;
-    tlog("prepare", &mut t0);
     let field = field(s, coarse, g);
-    tlog("field", &mut t0);
     let sigma = SIGMA * g as f32;
-    let st = Stencils::new(gaussian(sigma, (2.0 * sigma).ceil() as usize), fw, ch);
+    let st = Stencils::new(gaussian(sigma, (2.0 * sigma).ceil() as usize), fw, ch, MIN_WEIGHT);
     let hidden = Progress::hidden();
     let mut v = vec![0f32; u.len()];
-    tlog("alloc", &mut t0);
-    for _ in 0..ROUNDS {
+    for _ in 0..rounds(g) {
         let r = match ch {
             1 => smooth::<1>(&u, &mut v, (fh, fw), g, &field, &st, s),
             2 => smooth::<2>(&u, &mut v, (fh, fw), g, &field, &st, s),
             3 => smooth::<3>(&u, &mut v, (fh, fw), g, &field, &st, s),
             _ => smooth::<4>(&u, &mut v, (fh, fw), g, &field, &st, s),
         };
-        tlog("smooth", &mut t0);
         up.run_put(r, &hidden, &mut v, |d, x| *d += x);
-        tlog("project", &mut t0);
         std::mem::swap(&mut u, &mut v);
     }
     Ok(u)
@@ -543,7 +558,7 @@ mod tests {
                 (0.3 * x + 0.2 * y * (m as f32 + 1.0)).sin() * 50.0 + x * y * 0.1
             })
             .collect();
-        let st = Stencils::new(gaussian(2.0, 4), fw, 3);
+        let st = Stencils::new(gaussian(2.0, 4), fw, 3, 0.0);
         let (y, x) = (20, 21);
         for b in 0..BUCKETS {
             let slow = border::<3>(&u, (fh, fw), (y, x), direction(b), &st.taps);
