@@ -111,19 +111,21 @@ fn blur(a: &[f32], h: usize, w: usize, rho: f32) -> Vec<f32> {
     let r = (3.0 * rho).ceil() as usize;
     let g = gaussian(rho, r);
     let mut t = vec![0f32; h * w];
-    t.par_chunks_mut(w)
-        .zip(a.par_chunks(w))
-        .for_each_init(
-            || vec![0f32; w + 2 * r],
-            |pad, (row, src)| {
-                pad[..r].fill(src[0]);
-                pad[r..r + w].copy_from_slice(src);
-                pad[r + w..].fill(src[w - 1]);
-                for (j, d) in row.iter_mut().enumerate() {
-                    *d = g.iter().zip(&pad[j..j + 2 * r + 1]).map(|(g, a)| g * a).sum();
-                }
-            },
-        );
+    t.par_chunks_mut(w).zip(a.par_chunks(w)).for_each_init(
+        || vec![0f32; w + 2 * r],
+        |pad, (row, src)| {
+            pad[..r].fill(src[0]);
+            pad[r..r + w].copy_from_slice(src);
+            pad[r + w..].fill(src[w - 1]);
+            for (j, d) in row.iter_mut().enumerate() {
+                *d = g
+                    .iter()
+                    .zip(&pad[j..j + 2 * r + 1])
+                    .map(|(g, a)| g * a)
+                    .sum();
+            }
+        },
+    );
     let mut out = vec![0f32; h * w];
     out.par_chunks_mut(w).enumerate().for_each(|(i, row)| {
         for (k, &gk) in g.iter().enumerate() {
@@ -173,9 +175,10 @@ fn atan2(y: f32, x: f32) -> f32 {
     let t = lo / hi;
     let t2 = t * t;
     let mut a = t
-        * (0.999_977_26
-            + t2 * (-0.332_623_47
-                + t2 * (0.193_543_46 + t2 * (-0.116_432_87 + t2 * (0.052_653_32 - 0.011_721_2 * t2)))));
+        * (0.999_977_23
+            + t2 * (-0.332_623_48
+                + t2 * (0.193_543_46
+                    + t2 * (-0.116_432_87 + t2 * (0.052_653_32 - 0.011_721_2 * t2)))));
     if ay > ax {
         a = FRAC_PI_2 - a;
     }
@@ -400,7 +403,11 @@ fn smooth_band<const CH: usize>(
         }
     }
     let norm = 1.0 / (g * g) as f32;
-    for (j, (r, s)) in r_row.chunks_exact_mut(CH).zip(s_row.chunks_exact(CH)).enumerate() {
+    for (j, (r, s)) in r_row
+        .chunks_exact_mut(CH)
+        .zip(s_row.chunks_exact(CH))
+        .enumerate()
+    {
         let mut sum = [0f32; CH];
         for dy in 0..g {
             let cells = &band[(dy * fw + j * g) * CH..(dy * fw + (j + 1) * g) * CH];
@@ -465,7 +472,12 @@ pub(crate) fn refine(
     let up = Prepared::new(&area(method), coarse, &plans)?;
     let field = field(s, coarse, g);
     let sigma = SIGMA * g as f32;
-    let st = Stencils::new(gaussian(sigma, (2.0 * sigma).ceil() as usize), fw, ch, MIN_WEIGHT);
+    let st = Stencils::new(
+        gaussian(sigma, (2.0 * sigma).ceil() as usize),
+        fw,
+        ch,
+        MIN_WEIGHT,
+    );
     let hidden = Progress::hidden();
     let mut v = vec![0f32; u.len()];
     for _ in 0..rounds(g) {
@@ -526,7 +538,12 @@ mod tests {
                 let d = (atan2(y, x) - y.atan2(x)).abs();
                 // ±π are the same angle
                 let d = d.min((d - std::f32::consts::TAU).abs());
-                assert!(d < 1e-5, "atan2({y}, {x}): {} vs {}", atan2(y, x), y.atan2(x));
+                assert!(
+                    d < 1e-5,
+                    "atan2({y}, {x}): {} vs {}",
+                    atan2(y, x),
+                    y.atan2(x)
+                );
             }
         }
         assert_eq!(atan2(0.0, 0.0), 0.0);
@@ -564,13 +581,19 @@ mod tests {
             let slow = border::<3>(&u, (fh, fw), (y, x), direction(b), &st.taps);
             let base = ((y * fw + x) * 3) as isize;
             let total: f32 = st.lin[b].iter().map(|&(_, w)| w).sum();
-            assert!((total - 1.0).abs() < 1e-5, "bucket {b}: weights sum to {total}");
+            assert!(
+                (total - 1.0).abs() < 1e-5,
+                "bucket {b}: weights sum to {total}"
+            );
             for (m, s) in slow.iter().enumerate() {
                 let fast: f32 = st.lin[b]
                     .iter()
                     .map(|&(o, w)| w * u[(base + o) as usize + m])
                     .sum();
-                assert!((fast - s).abs() < 1e-3, "bucket {b} channel {m}: {fast} vs {s}");
+                assert!(
+                    (fast - s).abs() < 1e-3,
+                    "bucket {b} channel {m}: {fast} vs {s}"
+                );
             }
         }
     }

@@ -145,11 +145,20 @@ fn scene(h: usize, w: usize) -> Vec<f32> {
     for y in 0..h {
         for x in 0..w {
             let (fy, fx) = (y as f32, x as f32);
-            let edge = if 0.8 * fx + 0.45 * fy > 0.5 * w as f32 { 200.0 } else { 30.0 };
+            let edge = if 0.8 * fx + 0.45 * fy > 0.5 * w as f32 {
+                200.0
+            } else {
+                30.0
+            };
             let (dy, dx) = (fy - 0.6 * h as f32, fx - 0.3 * w as f32);
-            let ring = if (dy * dy + dx * dx).sqrt() % 9.0 < 4.0 { 60.0 } else { 0.0 };
+            let ring = if (dy * dy + dx * dx).sqrt() % 9.0 < 4.0 {
+                60.0
+            } else {
+                0.0
+            };
             for m in 0..3u32 {
-                let hash = (y as u32 * 7919 + x as u32 * 104_729 + m * 31).wrapping_mul(2_654_435_761);
+                let hash =
+                    (y as u32 * 7919 + x as u32 * 104_729 + m * 31).wrapping_mul(2_654_435_761);
                 let noise = (hash >> 24) as f32 / 32.0;
                 out.push(edge * (1.0 - 0.2 * m as f32) + ring + noise);
             }
@@ -182,7 +191,10 @@ fn the_smoothing_along_edges_gives_the_same_bits_on_any_thread_count() {
         let (one, shape) = run(1);
         assert_eq!(shape, vec![h * f, w * f, 3]);
         let (three, _) = run(3);
-        let same = one.iter().zip(&three).all(|(a, b)| a.to_bits() == b.to_bits());
+        let same = one
+            .iter()
+            .zip(&three)
+            .all(|(a, b)| a.to_bits() == b.to_bits());
         assert!(same, "×{f}: 1 and 3 threads differ");
     }
 }
