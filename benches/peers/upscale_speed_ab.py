@@ -10,6 +10,7 @@ from PIL import Image
 files = sorted(glob.glob(os.path.join(os.environ.get("MRA_CORPUS", "../shared/corpus"), "images/kodak/*.png")))[::4]
 res = {}
 AFTER = P.MRA
+load0 = os.getloadavg()[0]
 with tempfile.TemporaryDirectory() as tmp:
     for f in (2, 4):
         for fn in files:
@@ -25,3 +26,9 @@ with tempfile.TemporaryDirectory() as tmp:
                 res.setdefault((f, filt), []).append(t)
 for k, v in res.items():
     print(k, "mean %.4f s over %d" % (np.mean(v), len(v)))
+for f in (2, 4):
+    cr = np.mean(res[(f, "catmull-rom")])
+    print("x%d: before %.2fx, after %.2fx OpenImageIO catmull-rom's time (after / before %.2fx)"
+          % (f, np.mean(res[(f, "before")]) / cr, np.mean(res[(f, "after")]) / cr,
+             np.mean(res[(f, "after")]) / np.mean(res[(f, "before")])))
+print("load average %.2f -> %.2f" % (load0, os.getloadavg()[0]))

@@ -138,3 +138,63 @@ fn slanted_edges_leave_no_staircase_and_keep_the_psnr_lead() {
         );
     }
 }
+
+/// An RGB image with slanted edges, a ring and noise (a hash), `h × w × 3`.
+fn scene(h: usize, w: usize) -> Vec<f32> {
+    let mut out = Vec::with_capacity(h * w * 3);
+    for y in 0..h {
+        for x in 0..w {
+            let (fy, fx) = (y as f32, x as f32);
+            let edge = if 0.8 * fx + 0.45 * fy > 0.5 * w as f32 {
+                200.0
+            } else {
+                30.0
+            };
+            let (dy, dx) = (fy - 0.6 * h as f32, fx - 0.3 * w as f32);
+            let ring = if (dy * dy + dx * dx).sqrt() % 9.0 < 4.0 {
+                60.0
+            } else {
+                0.0
+            };
+            for m in 0..3u32 {
+                let hash =
+                    (y as u32 * 7919 + x as u32 * 104_729 + m * 31).wrapping_mul(2_654_435_761);
+                let noise = (hash >> 24) as f32 / 32.0;
+                out.push(edge * (1.0 - 0.2 * m as f32) + ring + noise);
+            }
+        }
+    }
+    out
+}
+
+#[test]
+fn the_smoothing_along_edges_gives_the_same_bits_on_any_thread_count() {
+    let (h, w) = (61, 90);
+    for f in [2, 4] {
+        let plans: Vec<AxisPlan> = [h, w]
+            .iter()
+            .enumerate()
+            .map(|(axis, &n)| AxisPlan {
+                axis,
+                len: n * f,
+                geometry: Geometry::Centre,
+            })
+            .collect();
+        let run = |threads: usize| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            pool.install(|| upscale_array(scene(h, w), &[h, w, 3], &Method::default(), &plans))
+                .unwrap()
+        };
+        let (one, shape) = run(1);
+        assert_eq!(shape, vec![h * f, w * f, 3]);
+        let (three, _) = run(3);
+        let same = one
+            .iter()
+            .zip(&three)
+            .all(|(a, b)| a.to_bits() == b.to_bits());
+        assert!(same, "×{f}: 1 and 3 threads differ");
+    }
+}
