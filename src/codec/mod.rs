@@ -33,6 +33,7 @@ mod options;
 mod plan;
 mod rate;
 mod read;
+mod reblock;
 pub mod tiles;
 mod voids;
 mod write;
@@ -43,6 +44,7 @@ pub use frames::frames;
 pub use info::{depth_of, info, kind_name, Info};
 pub use options::{DecodeOptions, Decoded, EncodeOptions, Rate};
 pub use rate::keep_psnr;
+pub use reblock::to_blocks;
 pub use read::{
     decode, decode_file, decode_file_slabs, decode_seek, decode_stream, header_of, header_of_file,
     SlabDecode, SlabDecoder,

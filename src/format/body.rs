@@ -392,3 +392,37 @@ fn first_missing(
     }
     None
 }
+
+/// The file `file` (one tile, every chunk read and checked) written again with `HEAD`'s
+/// payload `head` and every band entry of its `LEVL` chunks replaced by
+/// `entry(band, channel, ratio)` (its ratio kept); every other chunk copied as it is.
+/// `groups` and `channels` are those of the file's header.
+pub fn with_band_entries(
+    file: &[u8],
+    head: &[u8],
+    groups: &LevelGroups,
+    channels: usize,
+    entry: impl Fn(usize, usize) -> Vec<u8>,
+) -> Result<Vec<u8>> {
+    let mut rd = ChunkReader::new(file, file.len() as u64)?;
+    let mut out = super::SIGNATURE.to_vec();
+    while let Ok(ch) = rd.next_chunk()? {
+        match ch.tag() {
+            Some(Tag::Head) => super::put_chunk(&mut out, &ch.kind, head),
+            Some(Tag::Levl) => {
+                let (level, got) = parse_level(&ch.payload, groups, channels)?;
+                let entries: Vec<(f32, Vec<u8>)> = got
+                    .into_iter()
+                    .map(|(j, c, lb)| (lb.ratio, entry(j, c)))
+                    .collect();
+                let payload = super::bands::level_payload(
+                    level,
+                    entries.iter().map(|(r, e)| (*r, e.as_slice())),
+                );
+                super::put_chunk(&mut out, &ch.kind, &payload);
+            }
+            _ => super::put_chunk(&mut out, &ch.kind, &ch.payload),
+        }
+    }
+    Ok(out)
+}

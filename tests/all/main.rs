@@ -10,6 +10,7 @@ mod block_coder;
 mod cli;
 mod cli_words;
 mod codec;
+mod codeblocks;
 mod codec_bpp;
 mod codec_rate;
 mod container;
