@@ -177,12 +177,12 @@ fn main() {
             Rate::Quality(50.0),
             0,
         ),
-        // format 3.0: the bands in code-blocks (64×64, volumes 16×32×32), several
-        // blocks in the finer bands
+        // format 3.0: the bands in code-blocks (256×256, volumes 32×64×64), two
+        // blocks across the finest bands
         (
             "blocks30_rgb8_bpp1",
-            "150x131 RGB u8, cdf97 symmetric, --bpp 1, format 3.0 (code-blocks)",
-            raster(&[131, 150], 3, SampleType::U8, DataKind::Image),
+            "530x40 RGB u8, cdf97 symmetric, --bpp 1, format 3.0 (code-blocks)",
+            raster(&[40, 530], 3, SampleType::U8, DataKind::Image),
             Scheme::Cdf97,
             Boundary::Symmetric,
             Rate::Bpp(1.0),
@@ -191,7 +191,7 @@ fn main() {
         (
             "blocks30_rgb8_bpp1_level1",
             "the previous file decoded with --level 1",
-            raster(&[131, 150], 3, SampleType::U8, DataKind::Image),
+            raster(&[40, 530], 3, SampleType::U8, DataKind::Image),
             Scheme::Cdf97,
             Boundary::Symmetric,
             Rate::Bpp(1.0),
@@ -199,8 +199,8 @@ fn main() {
         ),
         (
             "blocks30_gray16_lossless",
-            "132x16 gray u16 over most of the range, lossless, format 3.0 (code-blocks)",
-            raster_wide(&[16, 132], 1, DataKind::Image),
+            "520x8 gray u16, lossless, format 3.0 (code-blocks)",
+            raster(&[8, 520], 1, SampleType::U16, DataKind::Image),
             Scheme::Haar,
             Boundary::Symmetric,
             Rate::Lossless,
@@ -208,8 +208,8 @@ fn main() {
         ),
         (
             "blocks30_vol_u8_q40",
-            "70x21x12 volume u8, cdf97 symmetric, quality 40, format 3.0 (code-blocks)",
-            raster(&[12, 21, 70], 1, SampleType::U8, DataKind::Volume),
+            "140x10x12 volume u8, cdf97 symmetric, quality 40, format 3.0 (code-blocks)",
+            raster(&[12, 10, 140], 1, SampleType::U8, DataKind::Volume),
             Scheme::Cdf97,
             Boundary::Symmetric,
             Rate::Quality(40.0),

@@ -63,8 +63,9 @@ pub struct EncodeArgs {
     /// 128 in 3-D. Each tile is coded on its own at the step of the whole raster.
     #[arg(long, value_name = "T")]
     pub tile: Option<String>,
-    /// Write format 3.0: every band cut into independent code-blocks (64×64, volumes
-    /// 16×32×32) decoded in parallel (formats/MRA.md §15). One-piece files only.
+    /// Write format 3.0: every band cut into independent code-blocks (256×256, volumes
+    /// 32×64×64), decoded in parallel, and only those a `--region` needs
+    /// (formats/MRA.md §15). One-piece files only.
     #[arg(long)]
     pub blocks: bool,
     #[command(flatten)]

@@ -51,8 +51,9 @@ fn decode_blocks(
     parent: Option<Parent>,
     window: Option<&[Range<usize>]>,
 ) -> Result<Vec<i64>> {
-    let set = crate::format::bands::parse_blocks(data, dims)?;
-    let grid = Grid::new(dims, &set.block);
+    let block = h.block_extents();
+    let set = crate::format::bands::parse_blocks(data, dims, &block)?;
+    let grid = Grid::new(dims, &block);
     let which: Vec<usize> = match window {
         Some(w) => grid.touching(w),
         None => (0..grid.len()).collect(),
@@ -67,25 +68,52 @@ fn decode_blocks(
     Ok(v)
 }
 
+/// The parent of band `j` of channel `c` from `held` (a band number and its indices):
+/// none for a band without one, an error when `held` is not its parent.
+fn parent_of<'a>(
+    plan: &'a Plan,
+    j: usize,
+    c: usize,
+    held: Option<(usize, &'a [i64])>,
+) -> Result<Option<Parent<'a>>> {
+    let Some(pj) = plan.parents[j] else {
+        return Ok(None);
+    };
+    match held {
+        Some((at, v)) if at == pj => Ok(Some(Parent {
+            data: v,
+            dims: &plan.dims[pj],
+        })),
+        _ => Err(Error::format(
+            format!("band {j} of channel {c} without its parent"),
+            "complete parents",
+        )),
+    }
+}
+
 /// Band samples added on each side of a region's span in a band when choosing its
 /// code-blocks: more than the synthesis support of every scheme summed over the
 /// coarser levels (the longest synthesis filter reaches 4 samples a level, and
 /// `4·(1 + ½ + ¼ + …) < 8`).
 const SUPPORT: usize = 16;
 
-/// The box of each band of channel `c` (in the band's coordinates) whose code-blocks a
-/// decode of `p.window` needs (`None`: every block): the window's span in the band
+/// The box of each band (in the band's coordinates) whose code-blocks a decode of
+/// `p.window` needs (`None`: every block): the window's span in the band
 /// widened by [`SUPPORT`], joined with the parent boxes of the blocks its child band
 /// needs (a band's only child is the next one in its chain, [`Plan::chains`]). Every
 /// block is needed without a window, in files before format 3 and with periodic ends
 /// (whose synthesis wraps around).
-fn band_windows(p: &Parsed, c: usize) -> Vec<Option<Vec<Range<usize>>>> {
+fn band_windows(p: &Parsed) -> Vec<Option<Vec<Range<usize>>>> {
     let (h, plan) = (&p.header, &p.plan);
     let nb = plan.bands.len();
     let win = match &p.window {
         Some(w) if h.version.has_blocks() && h.boundary != Boundary::Periodic => w,
         _ => return vec![None; nb],
     };
+    let block = h.block_extents();
+    if block.len() != h.dims.len() {
+        return vec![None; nb];
+    }
     let mut out = vec![None; nb];
     for chain in plan.chains() {
         // the block-aligned box the band after in the chain decodes
@@ -108,16 +136,13 @@ fn band_windows(p: &Parsed, c: usize) -> Vec<Option<Vec<Range<usize>>>> {
                     *a = a.start.min(pb.start)..a.end.max(pb.end);
                 }
             }
-            child = p.bands[c][j]
-                .as_ref()
-                .and_then(|bc| crate::format::bands::parse_blocks(&bc.data, bd).ok())
-                .map(|set| {
-                    w.iter()
-                        .zip(&set.block)
-                        .zip(bd)
-                        .map(|((r, &b), &e)| (r.start / b * b)..r.end.div_ceil(b).saturating_mul(b).min(e))
-                        .collect()
-                });
+            child = Some(
+                w.iter()
+                    .zip(&block)
+                    .zip(bd)
+                    .map(|((r, &b), &e)| (r.start / b * b)..r.end.div_ceil(b).saturating_mul(b).min(e))
+                    .collect(),
+            );
             out[j] = Some(w);
         }
     }
@@ -129,7 +154,7 @@ fn band_windows(p: &Parsed, c: usize) -> Vec<Option<Vec<Range<usize>>>> {
 /// in parallel, level after level from the coarse block down.
 pub(super) fn decode_channel(p: &Parsed, c: usize, k: usize) -> Result<Vec<Option<Vec<i64>>>> {
     let plan = &p.plan;
-    let wins = band_windows(p, c);
+    let wins = band_windows(p);
     let nb = plan.bands.len();
     let mut q: Vec<Option<Vec<i64>>> = (0..nb).map(|_| None).collect();
     let mut levels: Vec<usize> = plan.bands.iter().map(|b| b.level).collect();
@@ -151,21 +176,8 @@ pub(super) fn decode_channel(p: &Parsed, c: usize, k: usize) -> Result<Vec<Optio
                 } else {
                     BandKind::Detail
                 };
-                let parent = match plan.parents[j] {
-                    Some(pj) => match &q[pj] {
-                        Some(v) => Some(Parent {
-                            data: v,
-                            dims: &plan.dims[pj],
-                        }),
-                        None => {
-                            return Err(Error::format(
-                                format!("band {j} of channel {c} without its parent"),
-                                "complete parents",
-                            ))
-                        }
-                    },
-                    None => None,
-                };
+                let held = plan.parents[j].and_then(|pj| q[pj].as_deref().map(|v| (pj, v)));
+                let parent = parent_of(plan, j, c, held)?;
                 decode_band(&p.header, &bc.data, &plan.dims[j], kind, parent, wins[j].as_deref())
                     .map(Some)
                     .map_err(|e| {
@@ -194,7 +206,7 @@ type ChainRows<'a, 'p> = (&'a Vec<usize>, Vec<Vec<&'p mut [f32]>>);
 /// the first in file order is reported, as a decoder going level by level would.
 fn decode_channel_into(p: &Parsed, c: usize, k: usize, plane: &mut [f32]) -> Result<()> {
     let (h, plan) = (&p.header, &p.plan);
-    let wins = band_windows(p, c);
+    let wins = band_windows(p);
     let nb = plan.bands.len();
     let has_children: Vec<bool> = (0..nb).map(|j| plan.parents.contains(&Some(j))).collect();
     let skipped = |j: usize| {
@@ -238,23 +250,10 @@ fn decode_channel_into(p: &Parsed, c: usize, k: usize, plane: &mut [f32]) -> Res
                     prev = None;
                     continue;
                 };
-                let parent = match plan.parents[j] {
-                    Some(pj) => match &prev {
-                        Some((at, v)) if *at == pj => Some(Parent {
-                            data: v,
-                            dims: &plan.dims[pj],
-                        }),
-                        _ => {
-                            return Some((
-                                j,
-                                Error::format(
-                                    format!("band {j} of channel {c} without its parent"),
-                                    "complete parents",
-                                ),
-                            ))
-                        }
-                    },
-                    None => None,
+                let held = prev.as_ref().map(|(at, v)| (*at, v.as_slice()));
+                let parent = match parent_of(plan, j, c, held) {
+                    Ok(p) => p,
+                    Err(e) => return Some((j, e)),
                 };
                 let (step, delta) = (bc.step, band_delta(h, plan, j));
                 let dims = &plan.dims[j];
@@ -304,7 +303,7 @@ fn decode_channel_into(p: &Parsed, c: usize, k: usize, plane: &mut [f32]) -> Res
 /// index does not fit 32 bits (the plane then holds garbage).
 fn decode_channel_narrow(p: &Parsed, c: usize, k: usize, plane: &mut [i32]) -> Result<bool> {
     let (h, plan) = (&p.header, &p.plan);
-    let wins = band_windows(p, c);
+    let wins = band_windows(p);
     let nb = plan.bands.len();
     let has_children: Vec<bool> = (0..nb).map(|j| plan.parents.contains(&Some(j))).collect();
     let width = rayon::current_num_threads().max(1);
@@ -332,21 +331,8 @@ fn decode_channel_narrow(p: &Parsed, c: usize, k: usize, plane: &mut [i32]) -> R
                     let Some(bc) = &p.bands[c][j] else {
                         return Ok(true);
                     };
-                    let parent = match plan.parents[j] {
-                        Some(pj) => match pq {
-                            Some(v) => Some(Parent {
-                                data: v,
-                                dims: &plan.dims[pj],
-                            }),
-                            None => {
-                                return Err(Error::format(
-                                    format!("band {j} of channel {c} without its parent"),
-                                    "complete parents",
-                                ))
-                            }
-                        },
-                        None => None,
-                    };
+                    let held = plan.parents[j].and_then(|pj| pq.as_deref().map(|v| (pj, v)));
+                    let parent = parent_of(plan, j, c, held)?;
                     let dims = &plan.dims[j];
                     let failed = |e: Error| {
                         Error::format(format!("band {j} of channel {c}: {e}"), "a valid band")

@@ -15,12 +15,13 @@ use crate::format::Version;
 use crate::{Error, Result};
 use rayon::prelude::*;
 
-/// The side of the code-blocks of 2-D bands (and `SIDE²` samples of 1-D bands).
-pub const SIDE: usize = 64;
-/// The code-blocks of bands of three axes or more (Z, Y, X; 1 on any axis before).
-pub const VOLUME: [usize; 3] = [16, 32, 32];
+/// The side of the code-blocks of 2-D rasters (and `SIDE²` samples of 1-D ones), chosen
+/// by `benches/coder.rs` (docs/codec.md, "Code-blocks").
+pub const SIDE: usize = 256;
+/// The code-blocks of rasters of three axes or more (Z, Y, X; 1 on any axis before).
+pub const VOLUME: [usize; 3] = [32, 64, 64];
 
-/// The block extents of a band of `nd` axes, as the exponents the index stores.
+/// The block extents of a raster of `nd` axes, as the exponents `HEAD` stores.
 fn exponents(nd: usize) -> Vec<u8> {
     codeblocks::block_shape(nd, SIDE, VOLUME)
         .iter()
@@ -48,14 +49,15 @@ pub fn to_blocks(bytes: &[u8]) -> Result<Vec<u8>> {
         .map(|c| decode_channel(&p, c, 0))
         .collect::<Result<_>>()?;
     let nb = plan.bands.len();
+    let mut h3 = h.clone();
+    h3.version = Version::BLOCKS;
+    h3.blocks = exponents(h.dims.len());
+    let block = h3.block_extents();
     let entries: Vec<Vec<u8>> = (0..h.channels * nb)
         .into_par_iter()
         .map(|i| {
             let (c, j) = (i / nb, i % nb);
-            let dims = &plan.dims[j];
-            let exps = exponents(dims.len());
-            let block: Vec<usize> = exps.iter().map(|&e| 1usize << e).collect();
-            let grid = Grid::new(dims, &block);
+            let grid = Grid::new(&plan.dims[j], &block);
             let kind = if plan.bands[j].level == 0 {
                 BandKind::Coarse
             } else {
@@ -69,11 +71,9 @@ pub fn to_blocks(bytes: &[u8]) -> Result<Vec<u8>> {
             });
             let band = q[c][j].as_deref().unwrap_or(&[]);
             let streams = codeblocks::encode_blocks(band, &grid, kind, parent, Coding::Chosen);
-            blocks_payload(&exps, &streams)
+            blocks_payload(&streams)
         })
         .collect();
-    let mut h3 = h.clone();
-    h3.version = Version::BLOCKS;
     with_band_entries(
         bytes,
         &h3.to_bytes(),

@@ -101,25 +101,17 @@ pub fn parse_level(
     Ok((level, bands))
 }
 
-/// The most code-blocks one band may declare (a 2^32-sample band in blocks of one).
-const MAX_BLOCKS: u64 = 1 << 32;
-
-/// The code-blocks of one band of a format 3 file (§15), as read from its `LEVL` band
-/// entry: the block extents, and where each block's stream sits in the entry (block
-/// order: raster order of the block grid).
+/// The code-blocks of one band of a format 3 file (§15): where each block's stream
+/// sits in the band's `LEVL` entry (block order: raster order of the block grid).
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct BlockSet {
-    /// The block extents, one per axis of the band (powers of two).
-    pub block: Vec<usize>,
-    /// Each block's stream as a byte range of the band entry.
     pub streams: Vec<std::ops::Range<usize>>,
 }
 
-/// The band entry of a format 3 `LEVL` chunk (§15) of a band of `nd` axes cut into
-/// blocks of extents `2^exps[k]`: `exps` (a byte per axis), the block count, each
-/// block's length (LEB128), then the blocks.
-pub fn blocks_payload(exps: &[u8], streams: &[Vec<u8>]) -> Vec<u8> {
-    let mut p = exps.to_vec();
+/// The band entry of a format 3 `LEVL` chunk (§15): the block count, each block's
+/// length (LEB128), then the blocks.
+pub fn blocks_payload(streams: &[Vec<u8>]) -> Vec<u8> {
+    let mut p = Vec::new();
     put_varint(&mut p, streams.len() as u64);
     for s in streams {
         put_varint(&mut p, s.len() as u64);
@@ -131,33 +123,23 @@ pub fn blocks_payload(exps: &[u8], streams: &[Vec<u8>]) -> Vec<u8> {
 }
 
 /// Parse the band entry `data` of a format 3 `LEVL` chunk for a band of extents `dims`
-/// (§15): the block extents (each `2^e`, `e ≤ 31`), a block count that must be the
-/// band's grid's, and block lengths that must tile the rest of the entry exactly (no
-/// block outside the entry, none overlapping, no byte left over).
-pub fn parse_blocks(data: &[u8], dims: &[usize]) -> Result<BlockSet> {
+/// in code-blocks of extents `block` (§15): a block count that must be the band's
+/// grid's, and block lengths that must tile the rest of the entry exactly (no block
+/// outside the entry, none overlapping, no byte left over).
+pub fn parse_blocks(data: &[u8], dims: &[usize], block: &[usize]) -> Result<BlockSet> {
     let mut cur = Cursor::new(data, "code-block index");
-    let mut block = Vec::with_capacity(dims.len());
-    let mut count: u64 = 1;
-    for &d in dims {
-        let e = cur.u8()?;
-        if e > 31 {
-            return Err(FormatError::out_of_range(
-                format!("code-block extent 2^{e}"),
-                "block extents 2^0 to 2^31",
-            ));
-        }
-        let b = 1usize << e;
-        block.push(b);
-        count = count.saturating_mul(d.div_ceil(b) as u64);
-    }
+    let count = dims
+        .iter()
+        .zip(block)
+        .fold(1u64, |n, (&d, &b)| n.saturating_mul(d.div_ceil(b.max(1)) as u64));
     let n = cur.varint()?;
-    if n != count {
+    if n != count || dims.len() != block.len() {
         return Err(FormatError::invalid(
             format!("{n} code-blocks declared for a band of {dims:?} in blocks of {block:?}"),
             "the band's block count",
         ));
     }
-    if n > MAX_BLOCKS || n > (data.len() - cur.pos) as u64 {
+    if n > (data.len() - cur.pos) as u64 {
         return Err(FormatError::out_of_range(
             format!("{n} code-blocks in an entry of {} bytes", data.len()),
             "at least one index byte per block",
@@ -191,7 +173,7 @@ pub fn parse_blocks(data: &[u8], dims: &[usize]) -> Result<BlockSet> {
             "blocks that fill the band's entry exactly",
         ));
     }
-    Ok(BlockSet { block, streams })
+    Ok(BlockSet { streams })
 }
 
 /// A format 1 `BAND` chunk: `channel u16 | band u16 | step f64 | stream`.

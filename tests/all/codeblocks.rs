@@ -106,7 +106,7 @@ fn code_blocks_decode_as_the_format_2_file() {
 /// The bytes of a 3.0 file are the same on one thread and on two.
 #[test]
 fn code_blocks_do_not_depend_on_the_thread_count() {
-    let r = field(&[300, 260], 3, SampleType::U8, 11, 255.0);
+    let r = field(&[600, 530], 3, SampleType::U8, 11, 255.0);
     let two = encode(&r, Rate::Bpp(1.5), 5);
     let on = |threads: usize| {
         let pool = rayon::ThreadPoolBuilder::new()
@@ -124,8 +124,8 @@ fn code_blocks_do_not_depend_on_the_thread_count() {
 }
 
 /// The file with the first band entry of its first `LEVL` chunk (a gray image: the
-/// coarse block) rebuilt by `edit(exps, count, lengths, blocks)`.
-fn forge(bytes: &[u8], nd: usize, edit: impl Fn(&mut u64, &mut Vec<u64>)) -> Vec<u8> {
+/// coarse block) rebuilt with its block count and lengths changed by `edit`.
+fn forge(bytes: &[u8], edit: impl Fn(&mut u64, &mut Vec<u64>)) -> Vec<u8> {
     let mut rd = ChunkReader::new(bytes, bytes.len() as u64).unwrap();
     let mut out = mra::format::SIGNATURE.to_vec();
     let mut done = false;
@@ -142,12 +142,11 @@ fn forge(bytes: &[u8], nd: usize, edit: impl Fn(&mut u64, &mut Vec<u64>)) -> Vec
         let entry = cur.take(len).unwrap();
         let rest = cur.take(ch.payload.len() - cur.pos).unwrap();
         let mut e = Cursor::new(entry, "entry");
-        let exps = e.take(nd).unwrap().to_vec();
         let mut n = e.varint().unwrap();
         let mut lens: Vec<u64> = (0..n).map(|_| e.varint().unwrap()).collect();
         let blocks = e.take(entry.len() - e.pos).unwrap().to_vec();
         edit(&mut n, &mut lens);
-        let mut ne = exps;
+        let mut ne = Vec::new();
         put_varint(&mut ne, n);
         for &l in &lens {
             put_varint(&mut ne, l);
@@ -168,9 +167,9 @@ fn forge(bytes: &[u8], nd: usize, edit: impl Fn(&mut u64, &mut Vec<u64>)) -> Vec
 /// and writes nothing.
 #[test]
 fn damaged_block_indices_are_one_line_errors() {
-    // a coarse block of 40×36 (bands over 64 wide need several blocks: 3 levels of 300)
+    // a coarse block of 9×8 in one code-block (3 levels of 300×290 … 5 levels)
     let r = field(&[300, 290], 1, SampleType::U8, 13, 255.0);
-    let three = codec::to_blocks(&encode(&r, Rate::Bpp(2.0), 3)).unwrap();
+    let three = codec::to_blocks(&encode(&r, Rate::Bpp(2.0), 5)).unwrap();
     let dir = std::env::temp_dir().join(format!("mra-codeblocks-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let cases: Vec<(&str, Box<dyn Fn(&mut u64, &mut Vec<u64>)>)> = vec![
@@ -186,7 +185,7 @@ fn damaged_block_indices_are_one_line_errors() {
         ),
     ];
     for (name, edit) in cases {
-        let bad = forge(&three, 2, edit);
+        let bad = forge(&three, edit);
         assert!(codec::decode(&bad, &DecodeOptions::default()).is_err(), "{name}");
         let input = dir.join(format!("{name}.mra"));
         let output = dir.join(format!("{name}.png"));
