@@ -107,7 +107,13 @@ fn band_windows(p: &Parsed) -> Vec<Option<Vec<Range<usize>>>> {
     let (h, plan) = (&p.header, &p.plan);
     let nb = plan.bands.len();
     let win = match &p.window {
-        Some(w) if h.version.has_blocks() && h.boundary != Boundary::Periodic => w,
+        Some(w)
+            if h.version.has_blocks()
+                && h.boundary != Boundary::Periodic
+                && w.len() == h.dims.len() =>
+        {
+            w
+        }
         _ => return vec![None; nb],
     };
     let block = h.block_extents();

@@ -6,10 +6,11 @@
 
 use super::container::read_chunks;
 use super::decode::decode_channel;
-use crate::entropy::band::Coding;
+use crate::entropy::band::{self, Coding};
+use crate::entropy::range::Decoder;
 use crate::entropy::codeblocks::{self, Grid};
 use crate::entropy::{BandKind, Parent};
-use crate::format::bands::blocks_payload;
+use crate::format::bands::{blocks_payload, residual_payload};
 use crate::format::body::with_band_entries;
 use crate::format::Version;
 use crate::{Error, Result};
@@ -74,11 +75,29 @@ pub fn to_blocks(bytes: &[u8]) -> Result<Vec<u8>> {
             blocks_payload(&streams)
         })
         .collect();
+    // 3.0's residual streams open with the class bit (§9.1): those of an older coding
+    // are coded again
+    let positions: usize = h.dims.iter().product();
+    let from = plan.coding;
+    let resi: Vec<Option<Vec<u8>>> = p
+        .resi
+        .par_iter()
+        .map(|r| -> Result<Option<Vec<u8>>> {
+            let Some(r) = r.as_ref().filter(|_| from != Coding::Chosen) else {
+                return Ok(None);
+            };
+            let mut d = Decoder::new_short(&r.data);
+            let q = band::decode(&mut d, &h.dims, BandKind::Detail, None, from)?;
+            let s = band::encode_stream(&q, &h.dims, BandKind::Detail, None, Coding::Chosen);
+            Ok(Some(residual_payload(r.channel, r.step, &r.exceptions, &s)))
+        })
+        .collect::<Result<_>>()?;
     with_band_entries(
         bytes,
         &h3.to_bytes(),
         &plan.level_groups(),
-        h.channels,
+        (h.channels, positions as u64),
         |j, c| entries[c * nb + j].clone(),
+        &resi,
     )
 }

@@ -79,8 +79,12 @@ impl Grid {
         out
     }
 
-    /// The blocks (ascending) whose box meets `window` (one range per axis).
+    /// The blocks (ascending) whose box meets `window` (one range per axis; every
+    /// block when it has not one per axis).
     pub fn touching(&self, window: &[Range<usize>]) -> Vec<usize> {
+        if window.len() != self.dims.len() {
+            return (0..self.len()).collect();
+        }
         let spans: Vec<Range<usize>> = (0..self.dims.len())
             .map(|k| {
                 let w = &window[k];

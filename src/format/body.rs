@@ -439,15 +439,17 @@ fn first_missing(
 }
 
 /// The file `file` (one tile, every chunk read and checked) written again with `HEAD`'s
-/// payload `head` and every band entry of its `LEVL` chunks replaced by
-/// `entry(band, channel, ratio)` (its ratio kept); every other chunk copied as it is.
-/// `groups` and `channels` are those of the file's header.
+/// payload `head`, every band entry of its `LEVL` chunks replaced by
+/// `entry(band, channel)` (its ratio kept) and the `RESI` chunk of channel `c` by
+/// `resi[c]` where that is given; every other chunk copied as it is. `groups`,
+/// `channels` and `positions` are those of the file's header.
 pub fn with_band_entries(
     file: &[u8],
     head: &[u8],
     groups: &LevelGroups,
-    channels: usize,
+    (channels, positions): (usize, u64),
     entry: impl Fn(usize, usize) -> Vec<u8>,
+    resi: &[Option<Vec<u8>>],
 ) -> Result<Vec<u8>> {
     let mut rd = ChunkReader::new(file, file.len() as u64)?;
     let mut out = super::SIGNATURE.to_vec();
@@ -465,6 +467,13 @@ pub fn with_band_entries(
                     entries.iter().map(|(r, e)| (*r, e.as_slice())),
                 );
                 super::put_chunk(&mut out, &ch.kind, &payload);
+            }
+            Some(Tag::Resi) => {
+                let c = parse_residual(&ch.payload, channels, positions)?.channel;
+                match resi.get(c).and_then(|r| r.as_ref()) {
+                    Some(p) => super::put_chunk(&mut out, &ch.kind, p),
+                    None => super::put_chunk(&mut out, &ch.kind, &ch.payload),
+                }
             }
             _ => super::put_chunk(&mut out, &ch.kind, &ch.payload),
         }
