@@ -208,8 +208,8 @@ fn main() {
         ),
         (
             "blocks30_vol_u8_q40",
-            "140x10x12 volume u8, cdf97 symmetric, quality 40, format 3.0 (code-blocks)",
-            raster(&[12, 10, 140], 1, SampleType::U8, DataKind::Volume),
+            "140x8x8 volume u8, cdf97 symmetric, quality 40, format 3.0 (code-blocks)",
+            raster(&[8, 8, 140], 1, SampleType::U8, DataKind::Volume),
             Scheme::Cdf97,
             Boundary::Symmetric,
             Rate::Quality(40.0),

@@ -363,12 +363,8 @@ mod tests {
                     let b = grid.bounds(i);
                     insert(&mut mask, &dims, &b, &vec![true; box_dims(&b).iter().product()]);
                 }
-                for j in 0..n {
-                    if mask[j] {
-                        assert_eq!(part[j], q[j]);
-                    } else {
-                        assert_eq!(part[j], i64::MIN);
-                    }
+                for ((&m, &got), &want) in mask.iter().zip(&part).zip(&q) {
+                    assert_eq!(got, if m { want } else { i64::MIN });
                 }
                 // every position of the window is in a touching block
                 let mut inwin = vec![false; n];

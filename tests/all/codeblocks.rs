@@ -123,6 +123,9 @@ fn code_blocks_do_not_depend_on_the_thread_count() {
     );
 }
 
+/// A change to a block count and its lengths.
+type Edit = dyn Fn(&mut u64, &mut Vec<u64>);
+
 /// The file with the first band entry of its first `LEVL` chunk (a gray image: the
 /// coarse block) rebuilt with its block count and lengths changed by `edit`.
 fn forge(bytes: &[u8], edit: impl Fn(&mut u64, &mut Vec<u64>)) -> Vec<u8> {
@@ -172,7 +175,7 @@ fn damaged_block_indices_are_one_line_errors() {
     let three = codec::to_blocks(&encode(&r, Rate::Bpp(2.0), 5)).unwrap();
     let dir = std::env::temp_dir().join(format!("mra-codeblocks-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    let cases: Vec<(&str, Box<dyn Fn(&mut u64, &mut Vec<u64>)>)> = vec![
+    let cases: Vec<(&str, Box<Edit>)> = vec![
         ("outside", Box::new(|_, l| l[0] += 100_000)),
         ("overlap", Box::new(|_, l| l[0] += 1)),
         ("missing", Box::new(|_, l| l[0] -= 1)),
