@@ -16,8 +16,8 @@ mod bands;
 
 use bands::Bands;
 use mra::codec::{encode, EncodeOptions, Rate};
-use mra::entropy::block::{self, Shape};
 use mra::entropy::band::Coding;
+use mra::entropy::block::{self, Shape};
 use mra::entropy::codeblocks;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -28,7 +28,10 @@ enum Coder {
     Today,
     /// today's coder per code-block (fresh models, block-local neighbours and parent
     /// box), 2-D side and volume block (Z, Y, X)
-    TodayBlocks { side: usize, vol: [usize; 3] },
+    TodayBlocks {
+        side: usize,
+        vol: [usize; 3],
+    },
     Block {
         plane: Shape,
         volume: Shape,
@@ -172,7 +175,13 @@ fn run(coder: Coder, set: &[Bands]) -> (usize, f64, f64) {
                     let mut back = vec![0i64; b.q.len()];
                     let t = Instant::now();
                     codeblocks::decode_blocks(
-                        &mut back, &grid, &all, &refs, b.kind, par, Coding::Chosen,
+                        &mut back,
+                        &grid,
+                        &all,
+                        &refs,
+                        b.kind,
+                        par,
+                        Coding::Chosen,
                     )
                     .unwrap();
                     td += t.elapsed().as_secs_f64();

@@ -198,8 +198,8 @@ pub fn encode(a: EncodeArgs) -> CliResult {
             let mut bytes = codec::encode_tiled(&r, &opts, &tile)
                 .map_err(|e| Failure::context(a.input.display(), e))?;
             if a.blocks {
-                bytes = codec::to_blocks(&bytes)
-                    .map_err(|e| Failure::context(a.input.display(), e))?;
+                bytes =
+                    codec::to_blocks(&bytes).map_err(|e| Failure::context(a.input.display(), e))?;
             }
             let seconds = t.elapsed().as_secs_f64();
             if super::io_cmds::is_std(&a.output) {

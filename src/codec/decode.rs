@@ -17,10 +17,10 @@ use crate::format::Header;
 use crate::format::Mode;
 use crate::io::{Raster, SampleType, Samples};
 use crate::scheme::{Boundary, Scheme};
-use std::ops::Range;
 use crate::{Error, Result};
 use rayon::prelude::*;
 use std::io::Read;
+use std::ops::Range;
 
 /// One band's indices from its coded bytes, by the coding of the file of header `h`.
 fn decode_band(
@@ -146,7 +146,9 @@ fn band_windows(p: &Parsed) -> Vec<Option<Vec<Range<usize>>>> {
                 w.iter()
                     .zip(&block)
                     .zip(bd)
-                    .map(|((r, &b), &e)| (r.start / b * b)..r.end.div_ceil(b).saturating_mul(b).min(e))
+                    .map(|((r, &b), &e)| {
+                        (r.start / b * b)..r.end.div_ceil(b).saturating_mul(b).min(e)
+                    })
                     .collect(),
             );
             out[j] = Some(w);
@@ -184,11 +186,16 @@ pub(super) fn decode_channel(p: &Parsed, c: usize, k: usize) -> Result<Vec<Optio
                 };
                 let held = plan.parents[j].and_then(|pj| q[pj].as_deref().map(|v| (pj, v)));
                 let parent = parent_of(plan, j, c, held)?;
-                decode_band(&p.header, &bc.data, &plan.dims[j], kind, parent, wins[j].as_deref())
-                    .map(Some)
-                    .map_err(|e| {
-                        Error::format(format!("band {j} of channel {c}: {e}"), "a valid band")
-                    })
+                decode_band(
+                    &p.header,
+                    &bc.data,
+                    &plan.dims[j],
+                    kind,
+                    parent,
+                    wins[j].as_deref(),
+                )
+                .map(Some)
+                .map_err(|e| Error::format(format!("band {j} of channel {c}: {e}"), "a valid band"))
             })
             .collect();
         // the first failing band in file order, as one at a time would report it
@@ -263,7 +270,11 @@ fn decode_channel_into(p: &Parsed, c: usize, k: usize, plane: &mut [f32]) -> Res
                 };
                 let (step, delta) = (bc.step, band_delta(h, plan, j));
                 let dims = &plan.dims[j];
-                if !h.version.has_levels() || h.version.has_blocks() || level == 0 || has_children[j] {
+                if !h.version.has_levels()
+                    || h.version.has_blocks()
+                    || level == 0
+                    || has_children[j]
+                {
                     let kind = if level == 0 {
                         BandKind::Coarse
                     } else {
@@ -344,7 +355,11 @@ fn decode_channel_narrow(p: &Parsed, c: usize, k: usize, plane: &mut [i32]) -> R
                         Error::format(format!("band {j} of channel {c}: {e}"), "a valid band")
                     };
                     let mut ok = true;
-                    if !h.version.has_levels() || h.version.has_blocks() || level == 0 || has_children[j] {
+                    if !h.version.has_levels()
+                        || h.version.has_blocks()
+                        || level == 0
+                        || has_children[j]
+                    {
                         let kind = if level == 0 {
                             BandKind::Coarse
                         } else {

@@ -44,10 +44,10 @@ pub use frames::frames;
 pub use info::{depth_of, info, kind_name, Info};
 pub use options::{DecodeOptions, Decoded, EncodeOptions, Rate};
 pub use rate::keep_psnr;
-pub use reblock::to_blocks;
 pub use read::{
     decode, decode_file, decode_file_slabs, decode_seek, decode_stream, header_of, header_of_file,
     SlabDecode, SlabDecoder,
 };
+pub use reblock::to_blocks;
 pub use tiles::{default_tile, level_extents};
 pub use write::{encode, encode_stream, encode_tiled, encode_tiled_view, encode_view};

@@ -7,8 +7,8 @@
 use super::container::read_chunks;
 use super::decode::decode_channel;
 use crate::entropy::band::{self, Coding};
-use crate::entropy::range::Decoder;
 use crate::entropy::codeblocks::{self, Grid};
+use crate::entropy::range::Decoder;
 use crate::entropy::{BandKind, Parent};
 use crate::format::bands::{blocks_payload, residual_payload};
 use crate::format::body::with_band_entries;

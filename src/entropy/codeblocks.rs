@@ -348,8 +348,7 @@ mod tests {
                 let all: Vec<usize> = (0..grid.len()).collect();
                 let refs: Vec<&[u8]> = s.iter().map(|v| v.as_slice()).collect();
                 let mut out = vec![0i64; n];
-                decode_blocks(&mut out, &grid, &all, &refs, kind, parent, Coding::Chosen)
-                    .unwrap();
+                decode_blocks(&mut out, &grid, &all, &refs, kind, parent, Coding::Chosen).unwrap();
                 assert_eq!(out, q, "{dims:?} {kind:?}");
                 let win: Vec<Range<usize>> = dims.iter().map(|&d| d / 3..d / 2 + 1).collect();
                 let some = grid.touching(&win);
@@ -361,7 +360,12 @@ mod tests {
                 let mut mask = vec![false; n];
                 for &i in &some {
                     let b = grid.bounds(i);
-                    insert(&mut mask, &dims, &b, &vec![true; box_dims(&b).iter().product()]);
+                    insert(
+                        &mut mask,
+                        &dims,
+                        &b,
+                        &vec![true; box_dims(&b).iter().product()],
+                    );
                 }
                 for ((&m, &got), &want) in mask.iter().zip(&part).zip(&q) {
                     assert_eq!(got, if m { want } else { i64::MIN });

@@ -128,10 +128,9 @@ pub fn blocks_payload(streams: &[Vec<u8>]) -> Vec<u8> {
 /// outside the entry, none overlapping, no byte left over).
 pub fn parse_blocks(data: &[u8], dims: &[usize], block: &[usize]) -> Result<BlockSet> {
     let mut cur = Cursor::new(data, "code-block index");
-    let count = dims
-        .iter()
-        .zip(block)
-        .fold(1u64, |n, (&d, &b)| n.saturating_mul(d.div_ceil(b.max(1)) as u64));
+    let count = dims.iter().zip(block).fold(1u64, |n, (&d, &b)| {
+        n.saturating_mul(d.div_ceil(b.max(1)) as u64)
+    });
     let n = cur.varint()?;
     if n != count || dims.len() != block.len() {
         return Err(FormatError::invalid(
@@ -145,9 +144,7 @@ pub fn parse_blocks(data: &[u8], dims: &[usize], block: &[usize]) -> Result<Bloc
             "at least one index byte per block",
         ));
     }
-    let lens = (0..n)
-        .map(|_| cur.varint())
-        .collect::<Result<Vec<u64>>>()?;
+    let lens = (0..n).map(|_| cur.varint()).collect::<Result<Vec<u64>>>()?;
     let mut at = cur.pos as u64;
     let mut streams = Vec::with_capacity(lens.len());
     for (i, &l) in lens.iter().enumerate() {

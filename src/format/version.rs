@@ -71,7 +71,11 @@ impl Version {
             }
             .into());
         }
-        let top = if major == 2 { Version::LATEST_2 } else { latest };
+        let top = if major == 2 {
+            Version::LATEST_2
+        } else {
+            latest
+        };
         if major >= 2 && major == top.major && minor > top.minor {
             return Err(FormatError::Version {
                 major,
@@ -181,7 +185,9 @@ mod tests {
         }
         // format 1 has none of format 2's minors, whatever its minor byte
         assert!(!Version::new(1, 9).has_tiles() && !Version::new(1, 9).has_head_flags());
-        assert!(Version::new(2, Version::LATEST_2.minor + 1).check().is_err());
+        assert!(Version::new(2, Version::LATEST_2.minor + 1)
+            .check()
+            .is_err());
         assert!(Version::new(3, 1).check().is_err() && Version::new(4, 0).check().is_err());
         assert!(Version::new(0, 0).check().is_err());
     }

@@ -63,19 +63,47 @@ fn decoded(bytes: &[u8], level: usize, region: Option<Vec<std::ops::Range<usize>
 #[test]
 fn code_blocks_decode_as_the_format_2_file() {
     let cases: Vec<(Raster, Rate, usize)> = vec![
-        (field(&[149, 203], 3, SampleType::U8, 3, 255.0), Rate::Bpp(1.0), 4),
-        (field(&[130, 67], 1, SampleType::U16, 5, 60000.0), Rate::Lossless, 3),
-        (field(&[37, 41, 35], 1, SampleType::I16, 7, 3000.0), Rate::Quality(60.0), 3),
-        (field(&[21, 9, 70], 1, SampleType::U8, 9, 255.0), Rate::MaxError(2.0), 2),
-        (field(&[517, 389], 1, SampleType::U8, 15, 255.0), Rate::Bpp(0.8), 5),
-        (field(&[45, 99, 131], 1, SampleType::U16, 17, 4000.0), Rate::Bpp(0.5), 3),
+        (
+            field(&[149, 203], 3, SampleType::U8, 3, 255.0),
+            Rate::Bpp(1.0),
+            4,
+        ),
+        (
+            field(&[130, 67], 1, SampleType::U16, 5, 60000.0),
+            Rate::Lossless,
+            3,
+        ),
+        (
+            field(&[37, 41, 35], 1, SampleType::I16, 7, 3000.0),
+            Rate::Quality(60.0),
+            3,
+        ),
+        (
+            field(&[21, 9, 70], 1, SampleType::U8, 9, 255.0),
+            Rate::MaxError(2.0),
+            2,
+        ),
+        (
+            field(&[517, 389], 1, SampleType::U8, 15, 255.0),
+            Rate::Bpp(0.8),
+            5,
+        ),
+        (
+            field(&[45, 99, 131], 1, SampleType::U16, 17, 4000.0),
+            Rate::Bpp(0.5),
+            3,
+        ),
     ];
     for (r, rate, levels) in cases {
         let two = encode(&r, rate, levels);
         let three = codec::to_blocks(&two).unwrap();
         assert_eq!(header(&two).version.major, 2);
         assert_eq!(header(&three).version, mra::format::Version::BLOCKS);
-        assert_eq!(codec::to_blocks(&three).unwrap(), three, "3.0 stays as it is");
+        assert_eq!(
+            codec::to_blocks(&three).unwrap(),
+            three,
+            "3.0 stays as it is"
+        );
         for level in 0..=levels {
             let a = decoded(&two, level, None);
             let b = decoded(&three, level, None);
@@ -189,12 +217,20 @@ fn damaged_block_indices_are_one_line_errors() {
     ];
     for (name, edit) in cases {
         let bad = forge(&three, edit);
-        assert!(codec::decode(&bad, &DecodeOptions::default()).is_err(), "{name}");
+        assert!(
+            codec::decode(&bad, &DecodeOptions::default()).is_err(),
+            "{name}"
+        );
         let input = dir.join(format!("{name}.mra"));
         let output = dir.join(format!("{name}.png"));
         std::fs::write(&input, &bad).unwrap();
         let o = Command::new(env!("CARGO_BIN_EXE_mra"))
-            .args(["decode", input.to_str().unwrap(), "-o", output.to_str().unwrap()])
+            .args([
+                "decode",
+                input.to_str().unwrap(),
+                "-o",
+                output.to_str().unwrap(),
+            ])
             .output()
             .unwrap();
         let err = String::from_utf8_lossy(&o.stderr);

@@ -735,10 +735,7 @@ fn test_vectors_decode_to_their_digests() {
     // formats/vectors: the current format; formats/vectors/v1: format 1 files, which
     // readers still decode to the same samples
     let root = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("formats/vectors");
-    for (dir, major) in [
-        (root.clone(), 2),
-        (root.join("v1"), 1),
-    ] {
+    for (dir, major) in [(root.clone(), 2), (root.join("v1"), 1)] {
         let manifest: serde_json::Value =
             serde_json::from_str(&std::fs::read_to_string(dir.join("manifest.json")).unwrap())
                 .unwrap();
@@ -748,7 +745,11 @@ fn test_vectors_decode_to_their_digests() {
             let bytes = std::fs::read(dir.join(v["file"].as_str().unwrap())).unwrap();
             // format 3 vectors (code-blocks) sit beside the format 2 ones
             let name = v["name"].as_str().unwrap();
-            let want = if name.starts_with("blocks30_") { 3 } else { major };
+            let want = if name.starts_with("blocks30_") {
+                3
+            } else {
+                major
+            };
             assert_eq!(bytes[16], want, "{name} is not a format {want} file");
             let level = v["level"].as_u64().unwrap() as usize;
             let d = codec::decode(
