@@ -1,5 +1,8 @@
-//! Coefficient coders on the same real bands: today's (`entropy::band`, format 2) against
-//! the code-block prototype (`entropy::block`), bits and single-thread MB/s.
+//! Coefficient coders on the same real bands: today's (`entropy::band`, format 2) over
+//! whole bands against the same coder per code-block (`entropy::codeblocks`, format 3.0:
+//! blocks of 64², 128², 256² and their volume sizes, block index counted) and, with
+//! `MRA_CODER_QUADS=1`, the quad-coder prototype (`entropy::block`); bits and MB/s
+//! (run with `RAYON_NUM_THREADS=1` for single-thread figures).
 //!
 //! The bands are those `mra encode` writes: each input is encoded by the library
 //! (`--bpp 1` for the photographs and the CT, `--lossless` for the 16-bit images), its
@@ -13,7 +16,9 @@ mod bands;
 
 use bands::Bands;
 use mra::codec::{encode, EncodeOptions, Rate};
+use mra::entropy::band::Coding;
 use mra::entropy::block::{self, Shape};
+use mra::entropy::codeblocks;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -21,6 +26,12 @@ use std::time::Instant;
 #[derive(Clone, Copy)]
 enum Coder {
     Today,
+    /// today's coder per code-block (fresh models, block-local neighbours and parent
+    /// box), 2-D side and volume block (Z, Y, X)
+    TodayBlocks {
+        side: usize,
+        vol: [usize; 3],
+    },
     Block {
         plane: Shape,
         volume: Shape,
@@ -32,6 +43,10 @@ impl Coder {
     fn name(&self) -> String {
         match self {
             Coder::Today => "today (band, format 2)".into(),
+            Coder::TodayBlocks { side, vol } => format!(
+                "today's coder in code-blocks {side}×{side} / {}×{}×{} (+ index)",
+                vol[0], vol[1], vol[2]
+            ),
             Coder::Block {
                 plane,
                 volume,
@@ -76,8 +91,17 @@ fn coders() -> Vec<Coder> {
             false,
         )
     };
-    vec![
+    let tb = |side, vol| Coder::TodayBlocks { side, vol };
+    let mut v = vec![
         Coder::Today,
+        tb(64, [16, 32, 32]),
+        tb(128, [32, 32, 32]),
+        tb(256, [32, 64, 64]),
+    ];
+    if std::env::var_os("MRA_CODER_QUADS").is_none() {
+        return v;
+    }
+    v.extend([
         b(
             limited(shape(1, 64, 64), 6),
             limited(shape(16, 32, 32), 6),
@@ -89,7 +113,13 @@ fn coders() -> Vec<Coder> {
         t(shape(1, 32, 32), shape(8, 16, 16), 6),
         t(shape(1, 128, 128), shape(32, 32, 32), 6),
         t(shape(1, 64, 64), shape(4, 64, 64), 6),
-    ]
+    ]);
+    v
+}
+
+/// Bytes of the LEB128 form of `n`.
+fn leb_len(n: usize) -> usize {
+    (usize::BITS - n.max(1).leading_zeros()).div_ceil(7) as usize
 }
 
 fn corpus() -> PathBuf {
@@ -128,7 +158,36 @@ fn run(coder: Coder, set: &[Bands]) -> (usize, f64, f64) {
                     td += t.elapsed().as_secs_f64();
                     assert_eq!(s, b.stream, "today's coder re-encodes the file's stream");
                     assert_eq!(back, b.q);
-                    bytes += s.len();
+                    bytes += s.len() + leb_len(s.len());
+                }
+                Coder::TodayBlocks { side, vol } => {
+                    let grid = codeblocks::Grid::new(
+                        &b.dims,
+                        &codeblocks::block_shape(b.dims.len(), side, vol),
+                    );
+                    let par = bs.parent(i);
+                    let t = Instant::now();
+                    // format 3.0 codes every block with the chosen classes (§9.1)
+                    let s = codeblocks::encode_blocks(&b.q, &grid, b.kind, par, Coding::Chosen);
+                    te += t.elapsed().as_secs_f64();
+                    let refs: Vec<&[u8]> = s.iter().map(|v| v.as_slice()).collect();
+                    let all: Vec<usize> = (0..grid.len()).collect();
+                    let mut back = vec![0i64; b.q.len()];
+                    let t = Instant::now();
+                    codeblocks::decode_blocks(
+                        &mut back,
+                        &grid,
+                        &all,
+                        &refs,
+                        b.kind,
+                        par,
+                        Coding::Chosen,
+                    )
+                    .unwrap();
+                    td += t.elapsed().as_secs_f64();
+                    assert_eq!(back, b.q);
+                    bytes += s.iter().map(|v| v.len() + leb_len(v.len())).sum::<usize>()
+                        + leb_len(s.len());
                 }
                 Coder::Block {
                     plane,

@@ -177,6 +177,44 @@ fn main() {
             Rate::Quality(50.0),
             0,
         ),
+        // format 3.0: the bands in code-blocks (256×256, volumes 32×64×64), two
+        // blocks across the finest bands
+        (
+            "blocks30_rgb8_bpp1",
+            "530x40 RGB u8, cdf97 symmetric, --bpp 1, format 3.0 (code-blocks)",
+            raster(&[40, 530], 3, SampleType::U8, DataKind::Image),
+            Scheme::Cdf97,
+            Boundary::Symmetric,
+            Rate::Bpp(1.0),
+            0,
+        ),
+        (
+            "blocks30_rgb8_bpp1_level1",
+            "the previous file decoded with --level 1",
+            raster(&[40, 530], 3, SampleType::U8, DataKind::Image),
+            Scheme::Cdf97,
+            Boundary::Symmetric,
+            Rate::Bpp(1.0),
+            1,
+        ),
+        (
+            "blocks30_gray16_lossless",
+            "520x8 gray u16, lossless, format 3.0 (code-blocks)",
+            raster(&[8, 520], 1, SampleType::U16, DataKind::Image),
+            Scheme::Haar,
+            Boundary::Symmetric,
+            Rate::Lossless,
+            0,
+        ),
+        (
+            "blocks30_vol_u8_q40",
+            "140x8x8 volume u8, cdf97 symmetric, quality 40, format 3.0 (code-blocks)",
+            raster(&[8, 8, 140], 1, SampleType::U8, DataKind::Volume),
+            Scheme::Cdf97,
+            Boundary::Symmetric,
+            Rate::Quality(40.0),
+            0,
+        ),
     ];
     // format 2.1: tiles (extents slowest axis first); the lossy one is kept as a 2.1
     // encoder wrote it (today's encoder writes lossy tiles compact, 2.2)
@@ -288,6 +326,11 @@ fn main() {
                 &tile,
             )
             .unwrap();
+            let bytes = if name.starts_with("blocks30_") {
+                codec::to_blocks(&bytes).unwrap()
+            } else {
+                bytes
+            };
             std::fs::write(dir.join(&file), &bytes).unwrap();
             bytes
         };

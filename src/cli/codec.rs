@@ -63,6 +63,11 @@ pub struct EncodeArgs {
     /// 128 in 3-D. Each tile is coded on its own at the step of the whole raster.
     #[arg(long, value_name = "T")]
     pub tile: Option<String>,
+    /// Write format 3.0: every band cut into independent code-blocks (256×256, volumes
+    /// 32×64×64), decoded in parallel, and only those a `--region` needs
+    /// (formats/MRA.md §15). One-piece files only.
+    #[arg(long)]
+    pub blocks: bool,
     #[command(flatten)]
     pub raw: RawArgs,
     /// Print one JSON object (output, bytes, bits per position, shape, seconds); on
@@ -134,7 +139,7 @@ pub fn encode(a: EncodeArgs) -> CliResult {
     };
     let read_opts = a.raw.options()?;
     // a raw volume or raw NRRD cut into tiles is read a slab of tiles at a time
-    let slabs = if super::io_cmds::is_std(&a.input) {
+    let slabs = if super::io_cmds::is_std(&a.input) || a.blocks {
         None
     } else {
         crate::io::stream::open(&a.input, &read_opts)
@@ -224,8 +229,11 @@ fn encode_whole(
         Some(s) => tile_extents(s, &r.dims)?,
     };
     let t = std::time::Instant::now();
-    let bytes =
+    let mut bytes =
         codec::encode_tiled(&r, opts, &tile).map_err(|e| Failure::context(a.input.display(), e))?;
+    if a.blocks {
+        bytes = codec::to_blocks(&bytes).map_err(|e| Failure::context(a.input.display(), e))?;
+    }
     let seconds = t.elapsed().as_secs_f64();
     if super::io_cmds::is_std(&a.output) {
         super::io_cmds::write_stdout(&bytes)?;

@@ -19,6 +19,9 @@ pub(super) struct Parsed {
     pub(super) resi: Vec<Option<Residual>>,
     pub(super) complete: bool,
     pub(super) chunks: Vec<ChunkInfo>,
+    /// The full-resolution box a decode needs (its region): a format 3 file decodes
+    /// only the code-blocks its support meets; `None`: every block.
+    pub(super) window: Option<Vec<std::ops::Range<usize>>>,
 }
 
 pub(super) fn read_chunks<R: Read>(
@@ -66,5 +69,6 @@ pub(super) fn read_rest<R: Read>(
         resi: b.resi,
         complete: b.complete,
         chunks: b.chunks,
+        window: None,
     })
 }

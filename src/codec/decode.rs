@@ -9,16 +9,18 @@ use super::plan::Plan;
 use super::plan::{band_delta, band_rows, dequantize_row, lossy_values};
 use super::voids::mark_voids;
 use super::{layout, lossless};
+use crate::entropy::codeblocks::{parent_box, Grid};
 use crate::entropy::range::Decoder;
 use crate::entropy::{self, BandKind, Parent};
 use crate::format::header::Colour;
 use crate::format::Header;
 use crate::format::Mode;
 use crate::io::{Raster, SampleType, Samples};
-use crate::scheme::Scheme;
+use crate::scheme::{Boundary, Scheme};
 use crate::{Error, Result};
 use rayon::prelude::*;
 use std::io::Read;
+use std::ops::Range;
 
 /// One band's indices from its coded bytes, by the coding of the file of header `h`.
 fn decode_band(
@@ -27,8 +29,11 @@ fn decode_band(
     dims: &[usize],
     kind: BandKind,
     parent: Option<Parent>,
+    window: Option<&[Range<usize>]>,
 ) -> Result<Vec<i64>> {
-    if h.version.has_levels() {
+    if h.version.has_blocks() {
+        decode_blocks(h, data, dims, kind, parent, window)
+    } else if h.version.has_levels() {
         let coding = super::plan::coding_of(h);
         entropy::band::decode(&mut Decoder::new_short(data), dims, kind, parent, coding)
     } else {
@@ -36,11 +41,128 @@ fn decode_band(
     }
 }
 
+/// One band's indices from its format 3 entry (formats/MRA.md §15): the code-block
+/// index parsed, every block decoded (in parallel) into its box of the band.
+fn decode_blocks(
+    h: &Header,
+    data: &[u8],
+    dims: &[usize],
+    kind: BandKind,
+    parent: Option<Parent>,
+    window: Option<&[Range<usize>]>,
+) -> Result<Vec<i64>> {
+    let block = h.block_extents();
+    let set = crate::format::bands::parse_blocks(data, dims, &block)?;
+    let grid = Grid::new(dims, &block);
+    let which: Vec<usize> = match window {
+        Some(w) => grid.touching(w),
+        None => (0..grid.len()).collect(),
+    };
+    let streams: Vec<&[u8]> = which
+        .iter()
+        .map(|&i| &data[set.streams[i].clone()])
+        .collect();
+    let mut v = vec![0i64; dims.iter().product()];
+    let coding = super::plan::coding_of(h);
+    entropy::codeblocks::decode_blocks(&mut v, &grid, &which, &streams, kind, parent, coding)?;
+    Ok(v)
+}
+
+/// The parent of band `j` of channel `c` from `held` (a band number and its indices):
+/// none for a band without one, an error when `held` is not its parent.
+fn parent_of<'a>(
+    plan: &'a Plan,
+    j: usize,
+    c: usize,
+    held: Option<(usize, &'a [i64])>,
+) -> Result<Option<Parent<'a>>> {
+    let Some(pj) = plan.parents[j] else {
+        return Ok(None);
+    };
+    match held {
+        Some((at, v)) if at == pj => Ok(Some(Parent {
+            data: v,
+            dims: &plan.dims[pj],
+        })),
+        _ => Err(Error::format(
+            format!("band {j} of channel {c} without its parent"),
+            "complete parents",
+        )),
+    }
+}
+
+/// Band samples added on each side of a region's span in a band when choosing its
+/// code-blocks: more than the synthesis support of every scheme summed over the
+/// coarser levels (the longest synthesis filter reaches 4 samples a level, and
+/// `4·(1 + ½ + ¼ + …) < 8`).
+const SUPPORT: usize = 16;
+
+/// The box of each band (in the band's coordinates) whose code-blocks a decode of
+/// `p.window` needs (`None`: every block): the window's span in the band
+/// widened by [`SUPPORT`], joined with the parent boxes of the blocks its child band
+/// needs (a band's only child is the next one in its chain, [`Plan::chains`]). Every
+/// block is needed without a window, in files before format 3 and with periodic ends
+/// (whose synthesis wraps around).
+fn band_windows(p: &Parsed) -> Vec<Option<Vec<Range<usize>>>> {
+    let (h, plan) = (&p.header, &p.plan);
+    let nb = plan.bands.len();
+    let win = match &p.window {
+        Some(w)
+            if h.version.has_blocks()
+                && h.boundary != Boundary::Periodic
+                && w.len() == h.dims.len() =>
+        {
+            w
+        }
+        _ => return vec![None; nb],
+    };
+    let block = h.block_extents();
+    if block.len() != h.dims.len() {
+        return vec![None; nb];
+    }
+    let mut out = vec![None; nb];
+    for chain in plan.chains() {
+        // the block-aligned box the band after in the chain decodes
+        let mut child: Option<Vec<Range<usize>>> = None;
+        for &j in chain.iter().rev() {
+            let bd = &plan.dims[j];
+            let mut w: Vec<Range<usize>> = bd
+                .iter()
+                .zip(&h.dims)
+                .zip(win)
+                .map(|((&b, &d), r)| {
+                    let (b, d) = (b as u128, d.max(1) as u128);
+                    let lo = (r.start as u128 * b / d) as usize;
+                    let hi = (r.end as u128 * b).div_ceil(d) as usize;
+                    lo.saturating_sub(SUPPORT)..hi.saturating_add(SUPPORT).min(b as usize)
+                })
+                .collect();
+            if let Some(cw) = &child {
+                for (a, pb) in w.iter_mut().zip(parent_box(cw, bd)) {
+                    *a = a.start.min(pb.start)..a.end.max(pb.end);
+                }
+            }
+            child = Some(
+                w.iter()
+                    .zip(&block)
+                    .zip(bd)
+                    .map(|((r, &b), &e)| {
+                        (r.start / b * b)..r.end.div_ceil(b).saturating_mul(b).min(e)
+                    })
+                    .collect(),
+            );
+            out[j] = Some(w);
+        }
+    }
+    out
+}
+
 /// Decode one channel's bands into its coefficient indices (None = absent). A band's
 /// context is its parent band (one level coarser), so the bands of one level decode
 /// in parallel, level after level from the coarse block down.
-fn decode_channel(p: &Parsed, c: usize, k: usize) -> Result<Vec<Option<Vec<i64>>>> {
+pub(super) fn decode_channel(p: &Parsed, c: usize, k: usize) -> Result<Vec<Option<Vec<i64>>>> {
     let plan = &p.plan;
+    let wins = band_windows(p);
     let nb = plan.bands.len();
     let mut q: Vec<Option<Vec<i64>>> = (0..nb).map(|_| None).collect();
     let mut levels: Vec<usize> = plan.bands.iter().map(|b| b.level).collect();
@@ -62,26 +184,18 @@ fn decode_channel(p: &Parsed, c: usize, k: usize) -> Result<Vec<Option<Vec<i64>>
                 } else {
                     BandKind::Detail
                 };
-                let parent = match plan.parents[j] {
-                    Some(pj) => match &q[pj] {
-                        Some(v) => Some(Parent {
-                            data: v,
-                            dims: &plan.dims[pj],
-                        }),
-                        None => {
-                            return Err(Error::format(
-                                format!("band {j} of channel {c} without its parent"),
-                                "complete parents",
-                            ))
-                        }
-                    },
-                    None => None,
-                };
-                decode_band(&p.header, &bc.data, &plan.dims[j], kind, parent)
-                    .map(Some)
-                    .map_err(|e| {
-                        Error::format(format!("band {j} of channel {c}: {e}"), "a valid band")
-                    })
+                let held = plan.parents[j].and_then(|pj| q[pj].as_deref().map(|v| (pj, v)));
+                let parent = parent_of(plan, j, c, held)?;
+                decode_band(
+                    &p.header,
+                    &bc.data,
+                    &plan.dims[j],
+                    kind,
+                    parent,
+                    wins[j].as_deref(),
+                )
+                .map(Some)
+                .map_err(|e| Error::format(format!("band {j} of channel {c}: {e}"), "a valid band"))
             })
             .collect();
         // the first failing band in file order, as one at a time would report it
@@ -105,6 +219,7 @@ type ChainRows<'a, 'p> = (&'a Vec<usize>, Vec<Vec<&'p mut [f32]>>);
 /// the first in file order is reported, as a decoder going level by level would.
 fn decode_channel_into(p: &Parsed, c: usize, k: usize, plane: &mut [f32]) -> Result<()> {
     let (h, plan) = (&p.header, &p.plan);
+    let wins = band_windows(p);
     let nb = plan.bands.len();
     let has_children: Vec<bool> = (0..nb).map(|j| plan.parents.contains(&Some(j))).collect();
     let skipped = |j: usize| {
@@ -148,33 +263,24 @@ fn decode_channel_into(p: &Parsed, c: usize, k: usize, plane: &mut [f32]) -> Res
                     prev = None;
                     continue;
                 };
-                let parent = match plan.parents[j] {
-                    Some(pj) => match &prev {
-                        Some((at, v)) if *at == pj => Some(Parent {
-                            data: v,
-                            dims: &plan.dims[pj],
-                        }),
-                        _ => {
-                            return Some((
-                                j,
-                                Error::format(
-                                    format!("band {j} of channel {c} without its parent"),
-                                    "complete parents",
-                                ),
-                            ))
-                        }
-                    },
-                    None => None,
+                let held = prev.as_ref().map(|(at, v)| (*at, v.as_slice()));
+                let parent = match parent_of(plan, j, c, held) {
+                    Ok(p) => p,
+                    Err(e) => return Some((j, e)),
                 };
                 let (step, delta) = (bc.step, band_delta(h, plan, j));
                 let dims = &plan.dims[j];
-                if !h.version.has_levels() || level == 0 || has_children[j] {
+                if !h.version.has_levels()
+                    || h.version.has_blocks()
+                    || level == 0
+                    || has_children[j]
+                {
                     let kind = if level == 0 {
                         BandKind::Coarse
                     } else {
                         BandKind::Detail
                     };
-                    let v = match decode_band(h, &bc.data, dims, kind, parent) {
+                    let v = match decode_band(h, &bc.data, dims, kind, parent, wins[j].as_deref()) {
                         Ok(v) => v,
                         Err(e) => return Some((j, failed(e))),
                     };
@@ -214,6 +320,7 @@ fn decode_channel_into(p: &Parsed, c: usize, k: usize, plane: &mut [f32]) -> Res
 /// index does not fit 32 bits (the plane then holds garbage).
 fn decode_channel_narrow(p: &Parsed, c: usize, k: usize, plane: &mut [i32]) -> Result<bool> {
     let (h, plan) = (&p.header, &p.plan);
+    let wins = band_windows(p);
     let nb = plan.bands.len();
     let has_children: Vec<bool> = (0..nb).map(|j| plan.parents.contains(&Some(j))).collect();
     let width = rayon::current_num_threads().max(1);
@@ -241,33 +348,25 @@ fn decode_channel_narrow(p: &Parsed, c: usize, k: usize, plane: &mut [i32]) -> R
                     let Some(bc) = &p.bands[c][j] else {
                         return Ok(true);
                     };
-                    let parent = match plan.parents[j] {
-                        Some(pj) => match pq {
-                            Some(v) => Some(Parent {
-                                data: v,
-                                dims: &plan.dims[pj],
-                            }),
-                            None => {
-                                return Err(Error::format(
-                                    format!("band {j} of channel {c} without its parent"),
-                                    "complete parents",
-                                ))
-                            }
-                        },
-                        None => None,
-                    };
+                    let held = plan.parents[j].and_then(|pj| pq.as_deref().map(|v| (pj, v)));
+                    let parent = parent_of(plan, j, c, held)?;
                     let dims = &plan.dims[j];
                     let failed = |e: Error| {
                         Error::format(format!("band {j} of channel {c}: {e}"), "a valid band")
                     };
                     let mut ok = true;
-                    if !h.version.has_levels() || level == 0 || has_children[j] {
+                    if !h.version.has_levels()
+                        || h.version.has_blocks()
+                        || level == 0
+                        || has_children[j]
+                    {
                         let kind = if level == 0 {
                             BandKind::Coarse
                         } else {
                             BandKind::Detail
                         };
-                        let v = decode_band(h, &bc.data, dims, kind, parent).map_err(failed)?;
+                        let v = decode_band(h, &bc.data, dims, kind, parent, wins[j].as_deref())
+                            .map_err(failed)?;
                         let cols = dims.last().copied().unwrap_or(1).max(1);
                         for (r, out) in v.chunks(cols).zip(rows.iter_mut()) {
                             ok &= narrow_row(r, out);
@@ -541,7 +640,8 @@ fn add_residuals(p: &Parsed, samples: &mut Samples) -> Result<()> {
                 .map_err(failed)?;
             }
             Some(r) => {
-                let q = decode_band(h, &r.data, &h.dims, BandKind::Detail, None).map_err(failed)?;
+                let q = decode_band(h, &r.data, &h.dims, BandKind::Detail, None, None)
+                    .map_err(failed)?;
                 add_row(samples, c, ch, 0, &q[..npos.min(q.len())], r.step);
             }
             None => add_row(samples, c, ch, 0, &[], 0.0),

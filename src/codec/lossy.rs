@@ -144,6 +144,7 @@ impl Frame<'_> {
             max: 0.0,
             tile: dims.to_vec(),
             voids: false,
+            blocks: Vec::new(),
         })
     }
 }

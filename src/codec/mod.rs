@@ -33,6 +33,7 @@ mod options;
 mod plan;
 mod rate;
 mod read;
+mod reblock;
 pub mod tiles;
 mod voids;
 mod write;
@@ -47,5 +48,6 @@ pub use read::{
     decode, decode_file, decode_file_slabs, decode_seek, decode_stream, header_of, header_of_file,
     SlabDecode, SlabDecoder,
 };
+pub use reblock::to_blocks;
 pub use tiles::{default_tile, level_extents};
 pub use write::{encode, encode_stream, encode_tiled, encode_tiled_view, encode_view};

@@ -41,10 +41,15 @@ pub fn decode_stream<R: Read>(src: R, len: u64, opts: &DecodeOptions) -> Result<
 }
 
 /// A one-tile file's chunks reconstructed, and cut to the region asked for.
-fn one_tile(p: Parsed, opts: &DecodeOptions) -> Result<Decoded> {
+fn one_tile(mut p: Parsed, opts: &DecodeOptions) -> Result<Decoded> {
+    let stitch = match &opts.region {
+        Some(region) => Some(tiles::Stitch::new(&p.header, opts.level, Some(region))?),
+        None => None,
+    };
+    // a format 3 file decodes only the code-blocks the region needs
+    p.window = opts.region.clone();
     let mut raster = reconstruct(&p, opts.level)?;
-    if let Some(region) = &opts.region {
-        let st = tiles::Stitch::new(&p.header, opts.level, Some(region))?;
+    if let Some(st) = stitch {
         raster = tiles::crop_raster(&raster, st.out_box())?;
     }
     Ok(Decoded {

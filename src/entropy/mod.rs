@@ -3,11 +3,13 @@
 //! are zero, and zeros cluster where the picture is smooth, at every scale).
 //!
 //! [`band`] is the coefficient coding of format 2 (two-rate models, a wider
-//! neighbourhood, rate–distortion optimised quantization in the encoder); [`v1`] reads
+//! neighbourhood, rate–distortion optimised quantization in the encoder), cut into
+//! independent code-blocks in format 3 ([`codeblocks`]); [`v1`] reads
 //! and writes format 1. Normative: formats/MRA.md §6 and §9.
 
 pub mod band;
 pub mod block;
+pub mod codeblocks;
 mod golomb;
 pub mod range;
 pub mod v1;

@@ -101,6 +101,78 @@ pub fn parse_level(
     Ok((level, bands))
 }
 
+/// The code-blocks of one band of a format 3 file (§15): where each block's stream
+/// sits in the band's `LEVL` entry (block order: raster order of the block grid).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct BlockSet {
+    pub streams: Vec<std::ops::Range<usize>>,
+}
+
+/// The band entry of a format 3 `LEVL` chunk (§15): the block count, each block's
+/// length (LEB128), then the blocks.
+pub fn blocks_payload(streams: &[Vec<u8>]) -> Vec<u8> {
+    let mut p = Vec::new();
+    put_varint(&mut p, streams.len() as u64);
+    for s in streams {
+        put_varint(&mut p, s.len() as u64);
+    }
+    for s in streams {
+        p.extend_from_slice(s);
+    }
+    p
+}
+
+/// Parse the band entry `data` of a format 3 `LEVL` chunk for a band of extents `dims`
+/// in code-blocks of extents `block` (§15): a block count that must be the band's
+/// grid's, and block lengths that must tile the rest of the entry exactly (no block
+/// outside the entry, none overlapping, no byte left over).
+pub fn parse_blocks(data: &[u8], dims: &[usize], block: &[usize]) -> Result<BlockSet> {
+    let mut cur = Cursor::new(data, "code-block index");
+    let count = dims.iter().zip(block).fold(1u64, |n, (&d, &b)| {
+        n.saturating_mul(d.div_ceil(b.max(1)) as u64)
+    });
+    let n = cur.varint()?;
+    if n != count || dims.len() != block.len() {
+        return Err(FormatError::invalid(
+            format!("{n} code-blocks declared for a band of {dims:?} in blocks of {block:?}"),
+            "the band's block count",
+        ));
+    }
+    if n > (data.len() - cur.pos) as u64 {
+        return Err(FormatError::out_of_range(
+            format!("{n} code-blocks in an entry of {} bytes", data.len()),
+            "at least one index byte per block",
+        ));
+    }
+    let lens = (0..n).map(|_| cur.varint()).collect::<Result<Vec<u64>>>()?;
+    let mut at = cur.pos as u64;
+    let mut streams = Vec::with_capacity(lens.len());
+    for (i, &l) in lens.iter().enumerate() {
+        let end = at.saturating_add(l);
+        if end > data.len() as u64 {
+            return Err(FormatError::out_of_range(
+                format!(
+                    "code-block {i} at bytes {at}..{end} of an entry of {} bytes",
+                    data.len()
+                ),
+                "blocks within the band's entry",
+            ));
+        }
+        streams.push(at as usize..end as usize);
+        at = end;
+    }
+    if at != data.len() as u64 {
+        return Err(FormatError::invalid(
+            format!(
+                "code-blocks ending at byte {at} of an entry of {} bytes",
+                data.len()
+            ),
+            "blocks that fill the band's entry exactly",
+        ));
+    }
+    Ok(BlockSet { streams })
+}
+
 /// A format 1 `BAND` chunk: `channel u16 | band u16 | step f64 | stream`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct BandPayload {

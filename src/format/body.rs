@@ -133,15 +133,23 @@ pub fn read_body<R: Read>(
 ) -> Result<Body> {
     let len = rd.total();
     let nb = layout.levels.len();
-    let mut bands: Vec<Vec<Option<BandChunk>>> = (0..header.channels)
-        .map(|_| (0..nb).map(|_| None).collect())
-        .collect();
-    let mut resi: Vec<Option<Residual>> = (0..header.channels).map(|_| None).collect();
-    let mut meta = Metadata::default();
-    let mut chunks = vec![ChunkInfo::of(first, None)];
-    let mut complete = false;
+    let mut b = Body {
+        meta: Metadata::default(),
+        bands: (0..header.channels)
+            .map(|_| (0..nb).map(|_| None).collect())
+            .collect(),
+        resi: (0..header.channels).map(|_| None).collect(),
+        complete: false,
+        chunks: vec![ChunkInfo::of(first, None)],
+    };
     let mut last = "HEAD".to_string();
     let (mut meta_seen, mut first_band) = (false, None);
+    let reading = Reading {
+        header,
+        layout,
+        stop_level,
+        allow_truncated,
+    };
     loop {
         let ch = match rd.next_chunk()? {
             Ok(c) => c,
@@ -158,46 +166,116 @@ pub fn read_body<R: Read>(
         if matches!(tag, Some(Tag::Levl | Tag::Band | Tag::Resi)) && first_band.is_none() {
             first_band = Some(ch.offset);
         }
+        let stop = match tag {
+            Some(Tag::Levl | Tag::Band) => reading.band_chunk(&ch, &mut b, &mut info)?,
+            Some(Tag::Resi) => {
+                reading.resi_chunk(&ch, &mut b.resi, &mut info)?;
+                None
+            }
+            Some(Tag::Mend) => {
+                b.chunks.push(info);
+                match first_missing(header, layout, &b.bands, &b.resi, 0) {
+                    Some(missing) if !allow_truncated => {
+                        return Err(FormatError::missing(
+                            format!("{missing} missing (MEND at byte {})", ch.offset),
+                            "every chunk the header commits to (or --allow-truncated)",
+                        ));
+                    }
+                    Some(_) => break,
+                    None => {
+                        b.complete = true;
+                        break;
+                    }
+                }
+            }
+            Some(Tag::Meta) => {
+                b.meta = meta_chunk(&ch, &mut meta_seen, first_band)?;
+                None
+            }
+            Some(Tag::Head) => {
+                return Err(FormatError::duplicate(
+                    "a second HEAD chunk",
+                    "one HEAD chunk",
+                ))
+            }
+            _ if Tag::is_critical(&ch.kind) => {
+                return Err(FormatError::UnknownChunk(ch.name()).into());
+            }
+            _ => None,
+        };
+        if let Some(complete) = stop {
+            b.complete = complete;
+            break;
+        }
+        b.chunks.push(info);
+    }
+    if header.voids && first_band.is_some() && !meta::lists_voids(&b.meta) {
+        // past where the mETA must be, without the void list the header promises
+        return Err(FormatError::missing(
+            "no void list in mETA, though the header says the file has voids",
+            "the mETA chunk with extra.nodata.voids (format 2.4 HEAD flag)",
+        ));
+    }
+    Ok(b)
+}
+
+/// What [`read_body`] reads against.
+struct Reading<'a> {
+    header: &'a Header,
+    layout: &'a BandLayout<'a>,
+    stop_level: usize,
+    allow_truncated: bool,
+}
+
+impl Reading<'_> {
+    /// Whether a decode stopping at `stop_level` stops at a chunk of `level` (byte
+    /// `at`): `Some(complete)` when it does ([`coarse_present`]), `None` to go on.
+    fn stops_at(
+        &self,
+        bands: &[Vec<Option<BandChunk>>],
+        level: usize,
+        at: u64,
+    ) -> Result<Option<bool>> {
+        let k = self.stop_level;
+        if k == 0 || level == 0 || level > k {
+            return Ok(None);
+        }
+        let (h, l) = (self.header, self.layout);
+        coarse_present(h, l, bands, k, at, self.allow_truncated).map(Some)
+    }
+
+    /// A `LEVL` (format 2 and 3) or `BAND` (format 1) chunk read into `b`: `Some(complete)`
+    /// when the decode stops there ([`Reading::stops_at`]).
+    fn band_chunk(&self, ch: &Chunk, b: &mut Body, info: &mut ChunkInfo) -> Result<Option<bool>> {
+        let (header, layout) = (self.header, self.layout);
         let has_levels = header.version.has_levels();
-        match tag {
-            Some(Tag::Band) if has_levels => {
-                return Err(FormatError::invalid(
-                    format!(
-                        "BAND chunk at byte {} in a format {} file",
-                        ch.offset, header.version.major
-                    ),
-                    "LEVL chunks (BAND belongs to format 1)",
-                ));
-            }
-            Some(Tag::Levl) if !has_levels => {
-                return Err(FormatError::invalid(
-                    format!("LEVL chunk at byte {} in a format 1 file", ch.offset),
-                    "BAND chunks",
-                ));
-            }
+        match ch.tag() {
+            Some(Tag::Band) if has_levels => Err(FormatError::invalid(
+                format!(
+                    "BAND chunk at byte {} in a format {} file",
+                    ch.offset, header.version.major
+                ),
+                "LEVL chunks (BAND belongs to format 1)",
+            )),
+            Some(Tag::Levl) if !has_levels => Err(FormatError::invalid(
+                format!("LEVL chunk at byte {} in a format 1 file", ch.offset),
+                "BAND chunks",
+            )),
             Some(Tag::Levl) => {
                 let (level, got) = parse_level(&ch.payload, layout.groups, header.channels)?;
-                if stop_level > 0 && level >= 1 && level <= stop_level {
-                    complete = coarse_present(
-                        header,
-                        layout,
-                        &bands,
-                        stop_level,
-                        ch.offset,
-                        allow_truncated,
-                    )?;
-                    break;
+                if let Some(complete) = self.stops_at(&b.bands, level, ch.offset)? {
+                    return Ok(Some(complete));
                 }
-                let first = got.first().map(|b| b.0).unwrap_or(0);
+                let first = got.first().map(|g| g.0).unwrap_or(0);
                 if let Some(pj) = layout.parents[first] {
-                    if bands[0][pj].is_none() {
+                    if b.bands[0][pj].is_none() {
                         return Err(FormatError::order(
                             format!("LEVL {level} before the level of its parent bands"),
                             "levels in coarse-to-fine order",
                         ));
                     }
                 }
-                if bands[0][first].is_some() {
+                if b.bands[0][first].is_some() {
                     return Err(FormatError::duplicate(
                         format!("a second LEVL chunk for level {level} (byte {})", ch.offset),
                         "each level once",
@@ -206,112 +284,79 @@ pub fn read_body<R: Read>(
                 info.level = Some(level);
                 info.coefficients = Some(got.iter().map(|(j, _, _)| layout.coefficients[*j]).sum());
                 for (j, c, lb) in got {
-                    bands[c][j] = Some(BandChunk {
+                    b.bands[c][j] = Some(BandChunk {
                         step: header.step * lb.ratio as f64,
                         data: lb.data,
                     });
                 }
+                Ok(None)
             }
-            Some(Tag::Band) => {
-                let b = parse_band(&ch.payload, ch.offset, header.channels, nb)?;
-                let (channel, band) = (b.channel, b.band);
-                let level = layout.levels[band];
-                if stop_level > 0 && level >= 1 && level <= stop_level {
-                    complete = coarse_present(
-                        header,
-                        layout,
-                        &bands,
-                        stop_level,
-                        ch.offset,
-                        allow_truncated,
-                    )?;
-                    break;
-                }
-                if bands[channel][band].is_some() {
-                    return Err(FormatError::duplicate(
-                        format!(
-                            "a second BAND chunk for band {band} of channel {channel} (byte {})",
-                            ch.offset
-                        ),
-                        "each band once",
-                    ));
-                }
-                if let Some(p) = layout.parents[band] {
-                    if bands[channel][p].is_none() {
-                        return Err(FormatError::order(
-                            format!("BAND {band} of channel {channel} before its parent band {p}"),
-                            "bands in coarse-to-fine order",
-                        ));
-                    }
-                }
-                info.channel = Some(channel);
-                info.band = Some(band);
-                info.level = Some(level);
-                info.coefficients = Some(layout.coefficients[band]);
-                bands[channel][band] = Some(BandChunk {
-                    step: b.step,
-                    data: b.data,
-                });
-            }
-            Some(Tag::Resi) => {
-                let positions: u64 = header.dims.iter().map(|&d| d as u64).product();
-                let r = parse_residual(&ch.payload, header.channels, positions)?;
-                let channel = r.channel;
-                if resi[channel].is_some() {
-                    return Err(FormatError::duplicate(
-                        format!(
-                            "a second RESI chunk for channel {channel} (byte {})",
-                            ch.offset
-                        ),
-                        "one RESI chunk per channel",
-                    ));
-                }
-                info.channel = Some(channel);
-                resi[channel] = Some(r);
-            }
-            Some(Tag::Mend) => {
-                chunks.push(info);
-                if let Some(missing) = first_missing(header, layout, &bands, &resi, 0) {
-                    if !allow_truncated {
-                        return Err(FormatError::missing(
-                            format!("{missing} missing (MEND at byte {})", ch.offset),
-                            "every chunk the header commits to (or --allow-truncated)",
-                        ));
-                    }
-                    break;
-                }
-                complete = true;
-                break;
-            }
-            Some(Tag::Meta) => meta = meta_chunk(&ch, &mut meta_seen, first_band)?,
-            Some(Tag::Head) => {
-                return Err(FormatError::duplicate(
-                    "a second HEAD chunk",
-                    "one HEAD chunk",
-                ))
-            }
-            _ => {
-                if Tag::is_critical(&ch.kind) {
-                    return Err(FormatError::UnknownChunk(ch.name()).into());
-                }
+            _ => self.format1_band(ch, b, info),
+        }
+    }
+
+    /// A format 1 `BAND` chunk read into `b` (see [`Reading::band_chunk`]).
+    fn format1_band(&self, ch: &Chunk, b: &mut Body, info: &mut ChunkInfo) -> Result<Option<bool>> {
+        let (header, layout) = (self.header, self.layout);
+        let nb = layout.levels.len();
+        let bp = parse_band(&ch.payload, ch.offset, header.channels, nb)?;
+        let (channel, band) = (bp.channel, bp.band);
+        let level = layout.levels[band];
+        if let Some(complete) = self.stops_at(&b.bands, level, ch.offset)? {
+            return Ok(Some(complete));
+        }
+        if b.bands[channel][band].is_some() {
+            return Err(FormatError::duplicate(
+                format!(
+                    "a second BAND chunk for band {band} of channel {channel} (byte {})",
+                    ch.offset
+                ),
+                "each band once",
+            ));
+        }
+        if let Some(p) = layout.parents[band] {
+            if b.bands[channel][p].is_none() {
+                return Err(FormatError::order(
+                    format!("BAND {band} of channel {channel} before its parent band {p}"),
+                    "bands in coarse-to-fine order",
+                ));
             }
         }
-        chunks.push(info);
+        info.channel = Some(channel);
+        info.band = Some(band);
+        info.level = Some(level);
+        info.coefficients = Some(layout.coefficients[band]);
+        b.bands[channel][band] = Some(BandChunk {
+            step: bp.step,
+            data: bp.data,
+        });
+        Ok(None)
     }
-    if header.voids && first_band.is_some() && !meta::lists_voids(&meta) {
-        // past where the mETA must be, without the void list the header promises
-        return Err(FormatError::missing(
-            "no void list in mETA, though the header says the file has voids",
-            "the mETA chunk with extra.nodata.voids (format 2.4 HEAD flag)",
-        ));
+
+    /// A `RESI` chunk read into `resi`.
+    fn resi_chunk(
+        &self,
+        ch: &Chunk,
+        resi: &mut [Option<Residual>],
+        info: &mut ChunkInfo,
+    ) -> Result<()> {
+        let header = self.header;
+        let positions: u64 = header.dims.iter().map(|&d| d as u64).product();
+        let r = parse_residual(&ch.payload, header.channels, positions)?;
+        let channel = r.channel;
+        if resi[channel].is_some() {
+            return Err(FormatError::duplicate(
+                format!(
+                    "a second RESI chunk for channel {channel} (byte {})",
+                    ch.offset
+                ),
+                "one RESI chunk per channel",
+            ));
+        }
+        info.channel = Some(channel);
+        resi[channel] = Some(r);
+        Ok(())
     }
-    Ok(Body {
-        meta,
-        bands,
-        resi,
-        complete,
-        chunks,
-    })
 }
 
 /// A `mETA` chunk's metadata: at most one, before the first band chunk (or `TIDX` in a
@@ -391,4 +436,47 @@ fn first_missing(
         }
     }
     None
+}
+
+/// The file `file` (one tile, every chunk read and checked) written again with `HEAD`'s
+/// payload `head`, every band entry of its `LEVL` chunks replaced by
+/// `entry(band, channel)` (its ratio kept) and the `RESI` chunk of channel `c` by
+/// `resi[c]` where that is given; every other chunk copied as it is. `groups`,
+/// `channels` and `positions` are those of the file's header.
+pub fn with_band_entries(
+    file: &[u8],
+    head: &[u8],
+    groups: &LevelGroups,
+    (channels, positions): (usize, u64),
+    entry: impl Fn(usize, usize) -> Vec<u8>,
+    resi: &[Option<Vec<u8>>],
+) -> Result<Vec<u8>> {
+    let mut rd = ChunkReader::new(file, file.len() as u64)?;
+    let mut out = super::SIGNATURE.to_vec();
+    while let Ok(ch) = rd.next_chunk()? {
+        match ch.tag() {
+            Some(Tag::Head) => super::put_chunk(&mut out, &ch.kind, head),
+            Some(Tag::Levl) => {
+                let (level, got) = parse_level(&ch.payload, groups, channels)?;
+                let entries: Vec<(f32, Vec<u8>)> = got
+                    .into_iter()
+                    .map(|(j, c, lb)| (lb.ratio, entry(j, c)))
+                    .collect();
+                let payload = super::bands::level_payload(
+                    level,
+                    entries.iter().map(|(r, e)| (*r, e.as_slice())),
+                );
+                super::put_chunk(&mut out, &ch.kind, &payload);
+            }
+            Some(Tag::Resi) => {
+                let c = parse_residual(&ch.payload, channels, positions)?.channel;
+                match resi.get(c).and_then(|r| r.as_ref()) {
+                    Some(p) => super::put_chunk(&mut out, &ch.kind, p),
+                    None => super::put_chunk(&mut out, &ch.kind, &ch.payload),
+                }
+            }
+            _ => super::put_chunk(&mut out, &ch.kind, &ch.payload),
+        }
+    }
+    Ok(out)
 }

@@ -58,6 +58,9 @@ pub struct Header {
     /// byte of 2.4 and later (false before). A reader refuses a file that says so and
     /// has no such list.
     pub voids: bool,
+    /// Format 3.0: the code-block extents, `2^x[k]` on axis `k` of every band (the
+    /// `HEAD`'s last `N` bytes, §15); empty before 3.0.
+    pub blocks: Vec<u8>,
 }
 
 pub const MAX_AXES: usize = 4;
@@ -256,7 +259,15 @@ impl Header {
         if self.version.has_head_flags() {
             b.push(self.voids as u8);
         }
+        if self.version.has_blocks() {
+            b.extend_from_slice(&self.blocks);
+        }
         b
+    }
+
+    /// The code-block extents of a format 3.0 file (`2^x[k]` per axis), empty before.
+    pub fn block_extents(&self) -> Vec<usize> {
+        self.blocks.iter().map(|&x| 1usize << x.min(31)).collect()
     }
 
     /// Parse and validate a `HEAD` payload.
@@ -277,18 +288,7 @@ impl Header {
                 "0..8 (u8 i8 u16 i16 u32 i32 f16 f32 f64)",
             )
         })?;
-        let nd = c.u8()? as usize;
-        if nd == 0 || nd > MAX_AXES {
-            return Err(bad(format!("{nd} axes"), "1 to 4 axes"));
-        }
-        let mut dims = Vec::with_capacity(nd);
-        for _ in 0..nd {
-            let d = c.u32()? as usize;
-            if d == 0 {
-                return Err(bad("an axis of extent 0".into(), "extents ≥ 1"));
-            }
-            dims.push(d);
-        }
+        let dims = extents(&mut c)?;
         let channels = c.u16()? as usize;
         if channels == 0 || channels > MAX_CHANNELS {
             return Err(bad(format!("{channels} channels"), "1 to 256 channels"));
@@ -331,58 +331,8 @@ impl Header {
         if levels > MAX_LEVELS {
             return Err(bad(format!("{levels} levels"), "at most 32 levels"));
         }
-        let step = c.f64()?;
-        if !(step > 0.0 && step.is_finite()) {
-            // every band's step is this one times its ratio
-            return Err(bad(format!("base step Δ {step}"), "a positive finite step"));
-        }
-        let delta = c.f64()?;
-        let max_error = c.f64()?;
-        let min = c.f64()?;
-        let max = c.f64()?;
-        if !(min.is_finite()
-            && max.is_finite()
-            && min <= max
-            && delta.is_finite()
-            && max_error.is_finite()
-            && max_error >= 0.0)
-        {
-            return Err(bad(
-                format!("range {min}..{max}, δ {delta}, bound {max_error}"),
-                "finite values with min ≤ max",
-            ));
-        }
-        // mode 3: float samples, δ the quantum (a power of two); mode 1: δ = 0
-        if mode == Mode::Lossless {
-            let quantum = delta > 0.0 && delta.log2().fract() == 0.0 && sample_type.is_float();
-            if (code == 3) != quantum || (code == 1 && delta != 0.0) {
-                return Err(bad(
-                    format!("lossless mode {code} with δ {delta} on {sample_type:?} samples"),
-                    "mode 1 with δ = 0, or mode 3 with float samples and δ a power of two",
-                ));
-            }
-        }
-        let mut tile = Vec::with_capacity(nd);
-        for _ in 0..nd {
-            tile.push(c.u32()? as usize);
-        }
-        if tile != dims {
-            if !version.has_tiles() {
-                return Err(Error::Unsupported {
-                    what: "tile grid",
-                    value: format!(
-                        "tiles {tile:?} of {dims:?} in a {version} file (tiles need {})",
-                        Version::TILED
-                    ),
-                });
-            }
-            if let Some(k) = (0..nd).find(|&k| tile[k] == 0 || tile[k] > dims[k]) {
-                return Err(bad(
-                    format!("tile extent {} on axis {k} of extent {}", tile[k], dims[k]),
-                    "tile extents from 1 to the axis extent",
-                ));
-            }
-        }
+        let [step, delta, max_error, min, max] = reals(&mut c, mode, code, sample_type)?;
+        let tile = tiles(&mut c, version, &dims)?;
         let voids = if version.has_head_flags() {
             match c.u8()? {
                 f @ 0..=1 => f == 1,
@@ -390,6 +340,11 @@ impl Header {
             }
         } else {
             false
+        };
+        let blocks = if version.has_blocks() {
+            block_exponents(&mut c, dims.len())?
+        } else {
+            Vec::new()
         };
         Ok(Header {
             version,
@@ -409,6 +364,100 @@ impl Header {
             max,
             tile,
             voids,
+            blocks,
         })
     }
+}
+
+/// The code-block exponents of a 3.0 `HEAD`: one byte per axis, each at most 31.
+fn block_exponents(c: &mut Cursor, nd: usize) -> Result<Vec<u8>> {
+    let x = c.take(nd)?.to_vec();
+    if let Some(&e) = x.iter().find(|&&e| e > 31) {
+        return Err(bad(
+            format!("code-block extent 2^{e}"),
+            "block extents 2^0 to 2^31",
+        ));
+    }
+    Ok(x)
+}
+
+/// The axis count and extents of `HEAD`: 1 to 4 axes, each extent ≥ 1.
+fn extents(c: &mut Cursor) -> Result<Vec<usize>> {
+    let nd = c.u8()? as usize;
+    if nd == 0 || nd > MAX_AXES {
+        return Err(bad(format!("{nd} axes"), "1 to 4 axes"));
+    }
+    let mut dims = Vec::with_capacity(nd);
+    for _ in 0..nd {
+        let d = c.u32()? as usize;
+        if d == 0 {
+            return Err(bad("an axis of extent 0".into(), "extents ≥ 1"));
+        }
+        dims.push(d);
+    }
+    Ok(dims)
+}
+
+/// The five reals of `HEAD` (base step, δ, error bound, min, max), checked: a positive
+/// finite step, finite values with `min ≤ max` and a bound ≥ 0, and the δ of the
+/// lossless modes (mode 1: 0; mode 3: float samples, δ the quantum, a power of two).
+fn reals(c: &mut Cursor, mode: Mode, code: u8, sample_type: SampleType) -> Result<[f64; 5]> {
+    let step = c.f64()?;
+    if !(step > 0.0 && step.is_finite()) {
+        // every band's step is this one times its ratio
+        return Err(bad(format!("base step Δ {step}"), "a positive finite step"));
+    }
+    let delta = c.f64()?;
+    let max_error = c.f64()?;
+    let min = c.f64()?;
+    let max = c.f64()?;
+    if !(min.is_finite()
+        && max.is_finite()
+        && min <= max
+        && delta.is_finite()
+        && max_error.is_finite()
+        && max_error >= 0.0)
+    {
+        return Err(bad(
+            format!("range {min}..{max}, δ {delta}, bound {max_error}"),
+            "finite values with min ≤ max",
+        ));
+    }
+    if mode == Mode::Lossless {
+        let quantum = delta > 0.0 && delta.log2().fract() == 0.0 && sample_type.is_float();
+        if (code == 3) != quantum || (code == 1 && delta != 0.0) {
+            return Err(bad(
+                format!("lossless mode {code} with δ {delta} on {sample_type:?} samples"),
+                "mode 1 with δ = 0, or mode 3 with float samples and δ a power of two",
+            ));
+        }
+    }
+    Ok([step, delta, max_error, min, max])
+}
+
+/// The tile extents of `HEAD` for a raster of `dims`, checked: the raster's own (one
+/// tile), or from 1 to each axis extent in a version with tiles.
+fn tiles(c: &mut Cursor, version: Version, dims: &[usize]) -> Result<Vec<usize>> {
+    let nd = dims.len();
+    let mut tile = Vec::with_capacity(nd);
+    for _ in 0..nd {
+        tile.push(c.u32()? as usize);
+    }
+    if tile != dims {
+        if !version.has_tiles() {
+            return Err(Error::Unsupported {
+                what: "tile grid",
+                value: format!(
+                    "tiles {tile:?} of {dims:?} in a {version} file (tiles need 2.1 to 2.x)"
+                ),
+            });
+        }
+        if let Some(k) = (0..nd).find(|&k| tile[k] == 0 || tile[k] > dims[k]) {
+            return Err(bad(
+                format!("tile extent {} on axis {k} of extent {}", tile[k], dims[k]),
+                "tile extents from 1 to the axis extent",
+            ));
+        }
+    }
+    Ok(tile)
 }

@@ -33,16 +33,23 @@ impl Version {
     /// (so that a file whose ancillary `mETA` was dropped is refused rather than decoding
     /// its voids as values).
     pub const HEAD_FLAGS: Version = Version::new(2, 4);
+    /// 3.0: every band of a one-piece file cut into independent code-blocks, each
+    /// `LEVL` band entry an index of block lengths and the blocks (§15); the chosen
+    /// coding of 2.3 and the flags byte of 2.4. Tiled files stay 2.x.
+    pub const BLOCKS: Version = Version::new(3, 0);
     /// The latest version this reader implements: it refuses later minors of its major.
-    pub const LATEST: Version = Version::HEAD_FLAGS;
+    pub const LATEST: Version = Version::BLOCKS;
+    /// The latest minor of format 2 this reader implements.
+    pub const LATEST_2: Version = Version::HEAD_FLAGS;
     /// Every version this reader decodes, oldest first.
-    pub const ALL: [Version; 6] = [
+    pub const ALL: [Version; 7] = [
         Version::V1,
         Version::V2_0,
         Version::TILED,
         Version::COMPACT_TILES,
         Version::CHOSEN_CODING,
         Version::HEAD_FLAGS,
+        Version::BLOCKS,
     ];
     /// The oldest major version readers still decode.
     pub const OLDEST_MAJOR: u8 = 1;
@@ -64,19 +71,26 @@ impl Version {
             }
             .into());
         }
-        if major == latest.major && minor > latest.minor {
+        let top = if major == 2 {
+            Version::LATEST_2
+        } else {
+            latest
+        };
+        if major >= 2 && major == top.major && minor > top.minor {
             return Err(FormatError::Version {
                 major,
                 minor,
-                reads: format!("this reader implements {}.0 to {latest}", latest.major),
+                reads: format!("this reader implements {}.0 to {top}", top.major),
             }
             .into());
         }
         Ok(self)
     }
 
+    /// Whether this is a format 2 version of minor `v.minor` or later, or format 3
+    /// (which keeps every format 2 capability it lists as its own).
     fn at_least(self, v: Version) -> bool {
-        self.major == v.major && self.minor >= v.minor
+        (self.major == v.major && self.minor >= v.minor) || self.major == 3
     }
 
     /// Whether the bands come in `LEVL` chunks (one per level) coded by the format-2
@@ -85,31 +99,37 @@ impl Version {
         self.major >= 2
     }
 
-    /// Whether `HEAD` may declare tiles smaller than the raster (2.1 and later).
+    /// Whether `HEAD` may declare tiles smaller than the raster (2.1 to 2.x; not 3).
     pub fn has_tiles(self) -> bool {
-        self.at_least(Version::TILED)
+        self.major == 2 && self.at_least(Version::TILED)
     }
 
     /// Whether a tiled file may hold a `TRAT` chunk and compact `TILE` payloads, each
-    /// `TILE` payload starting with its form byte (2.2 and later).
+    /// `TILE` payload starting with its form byte (2.2 to 2.x; not 3).
     pub fn has_compact_tiles(self) -> bool {
-        self.at_least(Version::COMPACT_TILES)
+        self.major == 2 && self.at_least(Version::COMPACT_TILES)
     }
 
-    /// Whether every band's stream chooses its magnitude classes (2.3 and later); else
-    /// the classes are the narrow ones.
+    /// Whether each band entry of a `LEVL` chunk is a code-block index and its blocks
+    /// (3.0, formats/MRA.md §15); else one stream per band.
+    pub fn has_blocks(self) -> bool {
+        self.major == 3
+    }
+
+    /// Whether every band's stream (every code-block's in 3.0) chooses its magnitude
+    /// classes (2.3 and later); else the classes are the narrow ones.
     pub fn has_chosen_coding(self) -> bool {
         self.at_least(Version::CHOSEN_CODING)
     }
 
-    /// Whether `HEAD` ends with the flags byte (2.4 and later).
+    /// Whether `HEAD` ends with the flags byte (2.4 and later, 3.0).
     pub fn has_head_flags(self) -> bool {
         self.at_least(Version::HEAD_FLAGS)
     }
 
     /// The version the writer gives a file of one tile: 2.3 when lossless (each band
     /// chooses its classes), 2.0 else; 2.4 at least when the `HEAD` says the file has
-    /// voids.
+    /// voids. (A file cut into code-blocks is [`Version::BLOCKS`].)
     pub fn for_file(lossless: bool, voids: bool) -> Version {
         let v = if lossless {
             Version::CHOSEN_CODING
@@ -154,15 +174,21 @@ mod tests {
     fn capabilities_follow_the_minor_versions() {
         for v in Version::ALL {
             assert!(v.check().is_ok(), "{v}");
-            assert_eq!(v.has_levels(), v.major == 2);
+            let three = v.major == 3;
+            assert_eq!(v.has_levels(), v.major >= 2);
             assert_eq!(v.has_tiles(), v.major == 2 && v.minor >= 1, "{v}");
             assert_eq!(v.has_compact_tiles(), v.major == 2 && v.minor >= 2, "{v}");
-            assert_eq!(v.has_chosen_coding(), v.major == 2 && v.minor >= 3, "{v}");
-            assert_eq!(v.has_head_flags(), v.major == 2 && v.minor >= 4, "{v}");
+            let two = |m| v.major == 2 && v.minor >= m;
+            assert_eq!(v.has_chosen_coding(), two(3) || three, "{v}");
+            assert_eq!(v.has_head_flags(), two(4) || three, "{v}");
+            assert_eq!(v.has_blocks(), three, "{v}");
         }
         // format 1 has none of format 2's minors, whatever its minor byte
         assert!(!Version::new(1, 9).has_tiles() && !Version::new(1, 9).has_head_flags());
-        assert!(Version::new(2, Version::LATEST.minor + 1).check().is_err());
-        assert!(Version::new(3, 0).check().is_err() && Version::new(0, 0).check().is_err());
+        assert!(Version::new(2, Version::LATEST_2.minor + 1)
+            .check()
+            .is_err());
+        assert!(Version::new(3, 1).check().is_err() && Version::new(4, 0).check().is_err());
+        assert!(Version::new(0, 0).check().is_err());
     }
 }

@@ -9,6 +9,7 @@ mod array;
 mod block_coder;
 mod cli;
 mod cli_words;
+mod codeblocks;
 mod codec;
 mod codec_bpp;
 mod codec_rate;

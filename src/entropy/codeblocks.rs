@@ -1,0 +1,385 @@
+//! Code-blocks of format 3 (formats/MRA.md §15): a band cut into independent boxes,
+//! each coded by [`super::band`] as a band of its own (fresh models, positions outside
+//! the box read as 0, a coarse band's LOCO-I prediction within the box), so that blocks
+//! code and decode in parallel and a region decodes only the blocks it needs.
+//!
+//! A block of a detail band reads its parent context from the **parent box**: on each
+//! axis, the block's range `[lo, hi)` maps to `[min(lo/2, P−1), min(⌈hi/2⌉, P))` of the
+//! parent band of extent `P` (block extents are even, so the parent of a position in
+//! the box is the parent of the same position in the band, clamped as in §9).
+
+use super::band::{self, Coding};
+use super::range::Decoder;
+use super::{BandKind, Parent};
+use crate::Result;
+use rayon::prelude::*;
+use std::ops::Range;
+
+/// The block extents of a band of `nd` axes for a 2-D block side `side2` and a volume
+/// block `vol` (Z, Y, X): 1-D bands `side2²`, 2-D bands `side2 × side2`, bands of three
+/// axes or more `vol` on the last three and 1 on the others.
+pub fn block_shape(nd: usize, side2: usize, vol: [usize; 3]) -> Vec<usize> {
+    match nd {
+        0 => vec![],
+        1 => vec![side2 * side2],
+        2 => vec![side2, side2],
+        _ => {
+            let mut b = vec![1; nd - 3];
+            b.extend_from_slice(&vol);
+            b
+        }
+    }
+}
+
+/// The grid of code-blocks of one band: blocks of `block` extents (the last ones cut
+/// by the band's edge), numbered in raster order of their grid coordinates.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Grid {
+    pub dims: Vec<usize>,
+    pub block: Vec<usize>,
+    /// blocks per axis
+    pub counts: Vec<usize>,
+}
+
+impl Grid {
+    /// The grid of a band of extents `dims` (every extent of `block` ≥ 1).
+    pub fn new(dims: &[usize], block: &[usize]) -> Grid {
+        debug_assert_eq!(dims.len(), block.len());
+        let counts = dims
+            .iter()
+            .zip(block)
+            .map(|(&d, &b)| d.div_ceil(b.max(1)))
+            .collect();
+        Grid {
+            dims: dims.to_vec(),
+            block: block.iter().map(|&b| b.max(1)).collect(),
+            counts,
+        }
+    }
+
+    /// The number of blocks (0 for an empty band).
+    pub fn len(&self) -> usize {
+        self.counts.iter().product()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// The box of block `i`.
+    pub fn bounds(&self, i: usize) -> Vec<Range<usize>> {
+        let mut rem = i;
+        let mut out = vec![0..0; self.dims.len()];
+        for k in (0..self.dims.len()).rev() {
+            let c = rem % self.counts[k];
+            rem /= self.counts[k];
+            let lo = c * self.block[k];
+            out[k] = lo..(lo + self.block[k]).min(self.dims[k]);
+        }
+        out
+    }
+
+    /// The blocks (ascending) whose box meets `window` (one range per axis; every
+    /// block when it has not one per axis).
+    pub fn touching(&self, window: &[Range<usize>]) -> Vec<usize> {
+        if window.len() != self.dims.len() {
+            return (0..self.len()).collect();
+        }
+        let spans: Vec<Range<usize>> = (0..self.dims.len())
+            .map(|k| {
+                let w = &window[k];
+                let hi = w.end.min(self.dims[k]);
+                if w.start >= hi {
+                    0..0
+                } else {
+                    w.start / self.block[k]..hi.div_ceil(self.block[k])
+                }
+            })
+            .collect();
+        let mut out = Vec::new();
+        if spans.iter().any(|s| s.is_empty()) {
+            return out;
+        }
+        let mut c: Vec<usize> = spans.iter().map(|s| s.start).collect();
+        loop {
+            out.push(c.iter().zip(&self.counts).fold(0, |a, (&x, &n)| a * n + x));
+            let mut k = c.len();
+            loop {
+                if k == 0 {
+                    return out;
+                }
+                k -= 1;
+                c[k] += 1;
+                if c[k] < spans[k].end {
+                    break;
+                }
+                c[k] = spans[k].start;
+            }
+        }
+    }
+}
+
+/// The parent box of a block box `b` in a parent band of extents `pdims` (module doc).
+pub fn parent_box(b: &[Range<usize>], pdims: &[usize]) -> Vec<Range<usize>> {
+    b.iter()
+        .zip(pdims)
+        .map(|(r, &p)| {
+            let last = p.saturating_sub(1);
+            (r.start / 2).min(last)..r.end.div_ceil(2).min(p)
+        })
+        .collect()
+}
+
+/// The values of box `b` of an array of extents `dims` (raster order).
+pub fn extract<T: Copy + Default>(v: &[T], dims: &[usize], b: &[Range<usize>]) -> Vec<T> {
+    let n: usize = b.iter().map(|r| r.len()).product();
+    let mut out = Vec::with_capacity(n);
+    each_row(dims, b, |at, len| out.extend_from_slice(&v[at..at + len]));
+    out
+}
+
+/// Write `src` (raster order over box `b`) into an array of extents `dims`.
+pub fn insert<T: Copy>(v: &mut [T], dims: &[usize], b: &[Range<usize>], src: &[T]) {
+    let mut from = 0;
+    each_row(dims, b, |at, len| {
+        v[at..at + len].copy_from_slice(&src[from..from + len]);
+        from += len;
+    });
+}
+
+/// Call `f(offset, len)` for every row (last axis) of box `b` in raster order.
+fn each_row(dims: &[usize], b: &[Range<usize>], mut f: impl FnMut(usize, usize)) {
+    let nd = dims.len();
+    if nd == 0 || b.iter().any(|r| r.is_empty()) {
+        return;
+    }
+    let len = b[nd - 1].len();
+    let mut c: Vec<usize> = b[..nd - 1].iter().map(|r| r.start).collect();
+    loop {
+        let mut at = 0;
+        for k in 0..nd - 1 {
+            at = at * dims[k] + c[k];
+        }
+        f(at * dims[nd - 1] + b[nd - 1].start, len);
+        let mut k = nd - 1;
+        loop {
+            if k == 0 {
+                return;
+            }
+            k -= 1;
+            c[k] += 1;
+            if c[k] < b[k].end {
+                break;
+            }
+            c[k] = b[k].start;
+        }
+    }
+}
+
+/// The dims of a box.
+pub fn box_dims(b: &[Range<usize>]) -> Vec<usize> {
+    b.iter().map(|r| r.len()).collect()
+}
+
+/// The parent of block box `b` as its own band (values of the parent box).
+fn parent_of(b: &[Range<usize>], parent: Option<Parent>) -> Option<(Vec<i64>, Vec<usize>)> {
+    let p = parent?;
+    if p.dims.len() != b.len() || p.dims.contains(&0) {
+        return None;
+    }
+    let pb = parent_box(b, p.dims);
+    Some((extract(p.data, p.dims, &pb), box_dims(&pb)))
+}
+
+/// Code every block of band `q` (extents `grid.dims`) in parallel: one stream per block
+/// in block order ([`band::encode_stream`] of the block's values).
+pub fn encode_blocks(
+    q: &[i64],
+    grid: &Grid,
+    kind: BandKind,
+    parent: Option<Parent>,
+    coding: Coding,
+) -> Vec<Vec<u8>> {
+    (0..grid.len())
+        .into_par_iter()
+        .map(|i| {
+            let b = grid.bounds(i);
+            let d = box_dims(&b);
+            let v = extract(q, &grid.dims, &b);
+            let par = if kind == BandKind::Coarse {
+                None
+            } else {
+                parent_of(&b, parent)
+            };
+            let pp = par.as_ref().map(|(data, dims)| Parent { data, dims });
+            band::encode_stream(&v, &d, kind, pp, coding)
+        })
+        .collect()
+}
+
+/// Choose (rate–distortion optimised, [`band::encode_rdo`]) and code the indices of
+/// every block of a detail band whose values divided by the step are `x`, in parallel:
+/// the streams in block order and the band's indices.
+pub fn encode_blocks_rdo(
+    x: &[f32],
+    grid: &Grid,
+    parent: Option<Parent>,
+    lambda: f32,
+    coding: Coding,
+) -> (Vec<Vec<u8>>, Vec<i64>) {
+    let coded: Vec<(Vec<u8>, Vec<i64>)> = (0..grid.len())
+        .into_par_iter()
+        .map(|i| {
+            let b = grid.bounds(i);
+            let d = box_dims(&b);
+            let v = extract(x, &grid.dims, &b);
+            let par = parent_of(&b, parent);
+            let pp = par.as_ref().map(|(data, dims)| Parent { data, dims });
+            let mut e = super::range::Encoder::new();
+            let q = band::encode_rdo(&mut e, &v, &d, pp, lambda, coding);
+            (e.finish_short(), q)
+        })
+        .collect();
+    let mut q = vec![0i64; grid.dims.iter().product()];
+    let mut streams = Vec::with_capacity(coded.len());
+    for (i, (s, qb)) in coded.into_iter().enumerate() {
+        insert(&mut q, &grid.dims, &grid.bounds(i), &qb);
+        streams.push(s);
+    }
+    (streams, q)
+}
+
+/// Decode blocks `which` (ascending block numbers; their streams `streams[k]` for
+/// `which[k]`) of a band into `out` (extents `grid.dims`; the other positions are left
+/// as they are), in parallel. The parent band must hold the parent boxes of those blocks.
+pub fn decode_blocks(
+    out: &mut [i64],
+    grid: &Grid,
+    which: &[usize],
+    streams: &[&[u8]],
+    kind: BandKind,
+    parent: Option<Parent>,
+    coding: Coding,
+) -> Result<()> {
+    let decoded: Vec<Vec<i64>> = which
+        .par_iter()
+        .zip(streams.par_iter())
+        .map(|(&i, s)| {
+            let b = grid.bounds(i);
+            let d = box_dims(&b);
+            let par = if kind == BandKind::Coarse {
+                None
+            } else {
+                parent_of(&b, parent)
+            };
+            let pp = par.as_ref().map(|(data, dims)| Parent { data, dims });
+            band::decode(&mut Decoder::new_short(s), &d, kind, pp, coding)
+        })
+        .collect::<Result<_>>()?;
+    for (&i, v) in which.iter().zip(&decoded) {
+        insert(out, &grid.dims, &grid.bounds(i), v);
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sample(n: usize, seed: u64, spread: i64) -> Vec<i64> {
+        let mut x = seed;
+        (0..n)
+            .map(|_| {
+                x = x
+                    .wrapping_mul(6364136223846793005)
+                    .wrapping_add(1442695040888963407);
+                let r = (x >> 33) as i64;
+                if r % 3 == 0 {
+                    (r % (2 * spread + 1)) - spread
+                } else {
+                    0
+                }
+            })
+            .collect()
+    }
+
+    /// A block's parent box gives every position of the block the parent value the
+    /// whole band's clamped mapping gives (§9), on odd and uneven extents.
+    #[test]
+    fn parent_box_maps_as_the_whole_band() {
+        for (n, p, blk) in [(9, 5, 4), (5, 2, 4), (10, 4, 2), (7, 4, 6), (3, 1, 2)] {
+            let g = Grid::new(&[n], &[blk]);
+            for i in 0..g.len() {
+                let b = g.bounds(i);
+                let pb = parent_box(&b, &[p]);
+                let len = pb[0].len();
+                assert!(len >= 1);
+                for y in b[0].clone() {
+                    let local = ((y - b[0].start) / 2).min(len - 1);
+                    assert_eq!(pb[0].start + local, (y / 2).min(p - 1), "{n} {p} {blk} {y}");
+                }
+            }
+        }
+    }
+
+    /// Blocks of 1- to 4-D bands, coarse and detail, with a parent, decode to the band;
+    /// decoding a subset fills exactly those boxes; `touching` finds the blocks a
+    /// window meets.
+    #[test]
+    fn blocks_round_trip_and_subsets_fill_their_boxes() {
+        for (dims, block) in [
+            (vec![37usize], vec![8usize]),
+            (vec![13, 17], vec![4, 6]),
+            (vec![5, 9, 7], vec![2, 4, 4]),
+            (vec![2, 3, 5, 6], vec![1, 2, 2, 4]),
+        ] {
+            let n: usize = dims.iter().product();
+            let q = sample(n, n as u64, 40);
+            let pdims: Vec<usize> = dims.iter().map(|d| d.div_ceil(2)).collect();
+            let pq = sample(pdims.iter().product(), 3, 3);
+            let parent = Some(Parent {
+                data: &pq,
+                dims: &pdims,
+            });
+            let grid = Grid::new(&dims, &block);
+            for kind in [BandKind::Coarse, BandKind::Detail] {
+                let s = encode_blocks(&q, &grid, kind, parent, Coding::Chosen);
+                assert_eq!(s.len(), grid.len());
+                let all: Vec<usize> = (0..grid.len()).collect();
+                let refs: Vec<&[u8]> = s.iter().map(|v| v.as_slice()).collect();
+                let mut out = vec![0i64; n];
+                decode_blocks(&mut out, &grid, &all, &refs, kind, parent, Coding::Chosen).unwrap();
+                assert_eq!(out, q, "{dims:?} {kind:?}");
+                let win: Vec<Range<usize>> = dims.iter().map(|&d| d / 3..d / 2 + 1).collect();
+                let some = grid.touching(&win);
+                assert!(!some.is_empty());
+                let refs: Vec<&[u8]> = some.iter().map(|&i| s[i].as_slice()).collect();
+                let mut part = vec![i64::MIN; n];
+                decode_blocks(&mut part, &grid, &some, &refs, kind, parent, Coding::Chosen)
+                    .unwrap();
+                let mut mask = vec![false; n];
+                for &i in &some {
+                    let b = grid.bounds(i);
+                    insert(
+                        &mut mask,
+                        &dims,
+                        &b,
+                        &vec![true; box_dims(&b).iter().product()],
+                    );
+                }
+                for ((&m, &got), &want) in mask.iter().zip(&part).zip(&q) {
+                    assert_eq!(got, if m { want } else { i64::MIN });
+                }
+                // every position of the window is in a touching block
+                let mut inwin = vec![false; n];
+                insert(
+                    &mut inwin,
+                    &dims,
+                    &win,
+                    &vec![true; box_dims(&win).iter().product()],
+                );
+                assert!(inwin.iter().zip(&mask).all(|(&w, &m)| !w || m));
+            }
+        }
+    }
+}

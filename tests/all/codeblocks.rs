@@ -1,0 +1,243 @@
+//! Format 3.0 code-blocks (formats/MRA.md §15): a one-piece format 2 file cut into
+//! code-blocks decodes to the same samples at every level, 2-D and 3-D, lossy and
+//! lossless, odd sizes; the bytes do not depend on the thread count; a damaged block
+//! index is a one-line error, exit 2, no output.
+
+use mra::codec::{self, DecodeOptions, EncodeOptions, Rate};
+use mra::format::{put_chunk, put_varint, ChunkReader, Cursor, Header};
+use mra::io::{DataKind, Raster, SampleType, Samples};
+use std::process::Command;
+
+/// A smooth field with texture (xorshift), `channels` channels of type `ty`.
+fn field(dims: &[usize], channels: usize, ty: SampleType, seed: u64, hi: f64) -> Raster {
+    let n: usize = dims.iter().product::<usize>() * channels;
+    let w = *dims.last().unwrap();
+    let mut x = seed | 1;
+    let v: Vec<f64> = (0..n)
+        .map(|i| {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            let p = i / channels;
+            let (px, py) = ((p % w) as f64, (p / w) as f64);
+            let s = 0.5 + 0.35 * (px * 0.13 + (i % channels) as f64).sin() * (py * 0.07).cos();
+            hi * (s + 0.08 * ((x >> 40) as f64 / (1u64 << 24) as f64 - 0.5)).clamp(0.0, 1.0)
+        })
+        .collect();
+    let kind = if dims.len() == 3 {
+        DataKind::Volume
+    } else {
+        DataKind::Image
+    };
+    Raster::new(dims.to_vec(), channels, Samples::from_f64(&v, ty), kind).unwrap()
+}
+
+fn encode(r: &Raster, rate: Rate, levels: usize) -> Vec<u8> {
+    let o = EncodeOptions {
+        rate,
+        levels,
+        ..Default::default()
+    };
+    codec::encode_tiled(r, &o, &r.dims).unwrap()
+}
+
+fn header(bytes: &[u8]) -> Header {
+    let mut rd = ChunkReader::new(bytes, bytes.len() as u64).unwrap();
+    let head = rd.next_chunk().unwrap().unwrap();
+    Header::parse(&head.payload).unwrap()
+}
+
+/// The samples of a decode at `level` (whole raster, or `region`).
+fn decoded(bytes: &[u8], level: usize, region: Option<Vec<std::ops::Range<usize>>>) -> Raster {
+    let o = DecodeOptions {
+        level,
+        region,
+        ..Default::default()
+    };
+    codec::decode(bytes, &o).unwrap().raster
+}
+
+/// Cut into code-blocks, 2-D RGB and gray, a 3-D volume, lossy and lossless, odd sizes
+/// and bands both smaller and larger than a block: version 3.0, and every level (and a
+/// region) decodes to the samples of the format 2 file.
+#[test]
+fn code_blocks_decode_as_the_format_2_file() {
+    let cases: Vec<(Raster, Rate, usize)> = vec![
+        (
+            field(&[149, 203], 3, SampleType::U8, 3, 255.0),
+            Rate::Bpp(1.0),
+            4,
+        ),
+        (
+            field(&[130, 67], 1, SampleType::U16, 5, 60000.0),
+            Rate::Lossless,
+            3,
+        ),
+        (
+            field(&[37, 41, 35], 1, SampleType::I16, 7, 3000.0),
+            Rate::Quality(60.0),
+            3,
+        ),
+        (
+            field(&[21, 9, 70], 1, SampleType::U8, 9, 255.0),
+            Rate::MaxError(2.0),
+            2,
+        ),
+        (
+            field(&[517, 389], 1, SampleType::U8, 15, 255.0),
+            Rate::Bpp(0.8),
+            5,
+        ),
+        (
+            field(&[45, 99, 131], 1, SampleType::U16, 17, 4000.0),
+            Rate::Bpp(0.5),
+            3,
+        ),
+    ];
+    for (r, rate, levels) in cases {
+        let two = encode(&r, rate, levels);
+        let three = codec::to_blocks(&two).unwrap();
+        assert_eq!(header(&two).version.major, 2);
+        assert_eq!(header(&three).version, mra::format::Version::BLOCKS);
+        assert_eq!(
+            codec::to_blocks(&three).unwrap(),
+            three,
+            "3.0 stays as it is"
+        );
+        for level in 0..=levels {
+            let a = decoded(&two, level, None);
+            let b = decoded(&three, level, None);
+            assert_eq!(a.dims, b.dims, "{:?} level {level}", r.dims);
+            assert_eq!(a.samples, b.samples, "{:?} {rate:?} level {level}", r.dims);
+        }
+        // a 3.0 region decodes only the blocks its support meets: the samples of the
+        // whole decode cut to the region (the 2.x decode of a region is that)
+        let wins: Vec<Vec<std::ops::Range<usize>>> = vec![
+            r.dims.iter().map(|&d| d / 3..d / 3 + d / 4 + 1).collect(),
+            r.dims.iter().map(|&d| 0..d / 5 + 1).collect(),
+            r.dims.iter().map(|&d| d - d / 6 - 1..d).collect(),
+        ];
+        for win in wins {
+            for level in 0..=levels.min(2) {
+                let a = decoded(&two, level, Some(win.clone()));
+                let b = decoded(&three, level, Some(win.clone()));
+                assert_eq!(a.dims, b.dims);
+                assert_eq!(a.samples, b.samples, "{:?} {win:?} level {level}", r.dims);
+            }
+        }
+        if rate == Rate::Lossless {
+            assert_eq!(decoded(&three, 0, None).samples, r.samples);
+        }
+    }
+}
+
+/// The bytes of a 3.0 file are the same on one thread and on two.
+#[test]
+fn code_blocks_do_not_depend_on_the_thread_count() {
+    let r = field(&[600, 530], 3, SampleType::U8, 11, 255.0);
+    let two = encode(&r, Rate::Bpp(1.5), 5);
+    let on = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        pool.install(|| codec::to_blocks(&two).unwrap())
+    };
+    let one = on(1);
+    assert_eq!(one, on(2));
+    assert_eq!(
+        decoded(&one, 0, None).samples,
+        decoded(&two, 0, None).samples
+    );
+}
+
+/// A change to a block count and its lengths.
+type Edit = dyn Fn(&mut u64, &mut Vec<u64>);
+
+/// The file with the first band entry of its first `LEVL` chunk (a gray image: the
+/// coarse block) rebuilt with its block count and lengths changed by `edit`.
+fn forge(bytes: &[u8], edit: impl Fn(&mut u64, &mut Vec<u64>)) -> Vec<u8> {
+    let mut rd = ChunkReader::new(bytes, bytes.len() as u64).unwrap();
+    let mut out = mra::format::SIGNATURE.to_vec();
+    let mut done = false;
+    while let Ok(ch) = rd.next_chunk().unwrap() {
+        if &ch.kind != b"LEVL" || done {
+            put_chunk(&mut out, &ch.kind, &ch.payload);
+            continue;
+        }
+        done = true;
+        let mut cur = Cursor::new(&ch.payload, "LEVL");
+        let level = cur.u16().unwrap();
+        let ratio = cur.f32().unwrap();
+        let len = cur.varint().unwrap() as usize;
+        let entry = cur.take(len).unwrap();
+        let rest = cur.take(ch.payload.len() - cur.pos).unwrap();
+        let mut e = Cursor::new(entry, "entry");
+        let mut n = e.varint().unwrap();
+        let mut lens: Vec<u64> = (0..n).map(|_| e.varint().unwrap()).collect();
+        let blocks = e.take(entry.len() - e.pos).unwrap().to_vec();
+        edit(&mut n, &mut lens);
+        let mut ne = Vec::new();
+        put_varint(&mut ne, n);
+        for &l in &lens {
+            put_varint(&mut ne, l);
+        }
+        ne.extend_from_slice(&blocks);
+        let mut p = level.to_le_bytes().to_vec();
+        p.extend_from_slice(&ratio.to_le_bytes());
+        put_varint(&mut p, ne.len() as u64);
+        p.extend_from_slice(&ne);
+        p.extend_from_slice(rest);
+        put_chunk(&mut out, &ch.kind, &p);
+    }
+    out
+}
+
+/// A block index pointing outside its entry, blocks overlapping or missing, a block
+/// count that is not the band's: `mra decode` exits 2 with one line naming the file,
+/// and writes nothing.
+#[test]
+fn damaged_block_indices_are_one_line_errors() {
+    // a coarse block of 9×8 in one code-block (3 levels of 300×290 … 5 levels)
+    let r = field(&[300, 290], 1, SampleType::U8, 13, 255.0);
+    let three = codec::to_blocks(&encode(&r, Rate::Bpp(2.0), 5)).unwrap();
+    let dir = std::env::temp_dir().join(format!("mra-codeblocks-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let cases: Vec<(&str, Box<Edit>)> = vec![
+        ("outside", Box::new(|_, l| l[0] += 100_000)),
+        ("overlap", Box::new(|_, l| l[0] += 1)),
+        ("missing", Box::new(|_, l| l[0] -= 1)),
+        (
+            "count",
+            Box::new(|n, l| {
+                *n += 1;
+                l.push(0)
+            }),
+        ),
+    ];
+    for (name, edit) in cases {
+        let bad = forge(&three, edit);
+        assert!(
+            codec::decode(&bad, &DecodeOptions::default()).is_err(),
+            "{name}"
+        );
+        let input = dir.join(format!("{name}.mra"));
+        let output = dir.join(format!("{name}.png"));
+        std::fs::write(&input, &bad).unwrap();
+        let o = Command::new(env!("CARGO_BIN_EXE_mra"))
+            .args([
+                "decode",
+                input.to_str().unwrap(),
+                "-o",
+                output.to_str().unwrap(),
+            ])
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{name}: {err}");
+        assert_eq!(err.trim_end().lines().count(), 1, "{name}: {err}");
+        assert!(err.contains(&format!("{name}.mra")), "{name}: {err}");
+        assert!(!output.exists(), "{name}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
