@@ -1003,13 +1003,7 @@ pub fn collapse_edge(mesh: &Mesh, a: u32, b: u32, position: [f64; 3]) -> Result<
         }
         indices.extend(f.iter().map(|&v| map(v)));
     }
-    let n = indices.len() / 3;
-    Ok(Mesh {
-        positions,
-        offsets: (0..=n as u32).map(|i| 3 * i).collect(),
-        indices,
-        attributes: Attributes::default(),
-    })
+    Ok(Mesh::of_degree(positions, indices, 3))
 }
 
 /// Remove an interior vertex of a triangle mesh and fill its hole with a fan of triangles from
@@ -1076,13 +1070,7 @@ pub fn remove_vertex(mesh: &Mesh, v: u32) -> Result<Mesh> {
     }
     let mut positions = mesh.positions.clone();
     positions.remove(v as usize);
-    let n = indices.len() / 3;
-    Ok(Mesh {
-        positions,
-        offsets: (0..=n as u32).map(|i| 3 * i).collect(),
-        indices,
-        attributes: Attributes::default(),
-    })
+    Ok(Mesh::of_degree(positions, indices, 3))
 }
 
 #[cfg(test)]
