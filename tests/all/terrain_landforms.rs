@@ -231,7 +231,7 @@ fn the_result_keeps_only_basins_deeper_than_the_breaching_depth() {
             n += 2;
         }
     }
-    let depth = 3.0 * (s / n as f64).sqrt();
+    let depth = 3.3 * (s / n as f64).sqrt();
     // the default synthesis leaves shallow hollows; breaching removes most of them
     // (a channel or its widening may lower the rim of a kept basin), and the block
     // means stay within 40 dB of the base
