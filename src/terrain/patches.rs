@@ -17,7 +17,7 @@
 use rayon::prelude::*;
 
 use super::matching::{distance, Tables, LEN};
-use super::synth::{Details, SynthOptions};
+use super::options::{Details, SynthOptions};
 use super::Grid;
 use crate::generate::rng::SplitMix64;
 use crate::{Error, Result};
