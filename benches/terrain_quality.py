@@ -49,7 +49,7 @@ from scipy.stats import wasserstein_distance
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 CORPUS = os.environ.get("MRA_CORPUS", os.path.join(ROOT, "..", "shared", "corpus"))
-MRA = os.path.join(ROOT, "target", "release", "mra")
+MRA = os.environ.get("MRA_BIN", os.path.join(ROOT, "target", "release", "mra"))
 EXTRA = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []  # more mra options
 SEED = int(sys.argv[sys.argv.index("--seed") + 1]) if "--seed" in sys.argv else 1
 CELL = 92.6  # SRTM3 cell N-S, metres; the bases' output cell
@@ -143,10 +143,10 @@ def block(g, s):
     return g[:h, :w].reshape(h // s, s, w // s, s).mean(axis=(1, 3))
 
 
-def d8_fraction(g, area=64):
-    """Fraction of cells whose D8 drainage area (cells, itself included) exceeds `area`: every cell
-    passes its area to the steepest-descent neighbour of its 8 (distance-weighted drop), highest
-    first; pits and edge cells keep theirs (no pit filling)."""
+def d8_area(g):
+    """D8 drainage area (cells, itself included) of every cell: each cell passes its area to the
+    steepest-descent neighbour of its 8 (distance-weighted drop), highest first; pits and edge
+    cells keep theirs (no pit filling)."""
     h, w = g.shape
     p = np.pad(g, 1, mode="constant", constant_values=np.inf)
     best = np.zeros((h, w))
@@ -167,7 +167,30 @@ def d8_fraction(g, area=64):
         j = r[i]
         if j != i:
             acc[j] += acc[i]
-    return float(np.mean(np.array(acc) > area))
+    return np.array(acc).reshape(h, w)
+
+
+def d8_fraction(g, area=64):
+    """Fraction of cells whose D8 drainage area ([`d8_area`]) exceeds `area`."""
+    return float(np.mean(d8_area(g) > area))
+
+
+def valley_length(g, shape, area=64, sigma=2.0):
+    """The look of the valleys: the cell-weighted mean size (cells) of the connected runs of
+    channel cells (D8 area > `area`) that lie in a valley (Laplacian of the heights smoothed by a
+    Gaussian of `sigma` cells > 0), 8-connected: long branching valleys give long runs, short
+    hollows joined by narrow channels through bumps give short ones. Taken on each tile of `shape`
+    (the example's) and averaged over tiles, so that results and example are measured on the same
+    extent."""
+    sizes = []
+    for y in range(0, g.shape[0] - shape[0] + 1, shape[0]):
+        for x in range(0, g.shape[1] - shape[1] + 1, shape[1]):
+            t = g[y:y + shape[0], x:x + shape[1]]
+            mask = (d8_area(t) > area) & (ndimage.gaussian_laplace(t, sigma) > 0)
+            lab, n = ndimage.label(mask, structure=np.ones((3, 3)))
+            s = np.bincount(lab.ravel())[1:].astype(np.float64)
+            sizes.append(float((s ** 2).sum() / max(s.sum(), 1)))
+    return float(np.mean(sizes))
 
 
 def landform_cases():
@@ -193,7 +216,8 @@ def landforms(tmp):
                                  "--seed", str(SEED), "--json", "--any-units"])
         g = tifffile.imread(op).astype(np.float64)
         cub = cubic(base, 8)
-        ref = {"rough": lap_std(example, CELL), "d8": d8_fraction(example)}
+        ref = {"rough": lap_std(example, CELL), "d8": d8_fraction(example),
+               "valley": valley_length(example, example.shape)}
         trusted = block(base, 2)
         for method, h, seam, t in [("cubic", cub, float("nan"), None), ("synth", g, rep["seam_ratio"], (wall, cpu))]:
             w1 = []
@@ -205,12 +229,13 @@ def landforms(tmp):
             red = block(h, 16)
             fid = 10 * np.log10(np.ptp(trusted) ** 2 / np.mean((red - trusted) ** 2))
             o = {"case": name, "method": method, "W1": w1, "fid16": fid, "d8": d8_fraction(h) / ref["d8"],
-                 "rough": lap_std(h, CELL) / ref["rough"], "seam": seam, "time": t}
+                 "rough": lap_std(h, CELL) / ref["rough"], "seam": seam, "time": t,
+                 "valley": valley_length(h, example.shape) / ref["valley"]}
             print(json.dumps(o), file=sys.stderr)
             lines.append(o)
     print("\n| case | result | W1 slope ÷ cubic's @ 1 / 2 / 4 / 8 cells | fidelity, 16×16 block means (dB) | "
-          "D8 area > 64 cells ÷ example's | roughness / example | seam ratio | wall / CPU (s) | targets met |")
-    print("|---|---|---|---|---|---|---|---|---|")
+          "D8 area > 64 cells ÷ example's | valley length ÷ example's | roughness / example | seam ratio | wall / CPU (s) | targets met |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
     for o in lines:
         ok, seam, t = "", "–", "–"
         if o["method"] == "synth":
@@ -219,7 +244,8 @@ def landforms(tmp):
             ok = f"{sum(tg)}/5 " + "".join("✓" if v else "✗" for v in tg)
             seam, t = f"{o['seam']:.3f}", f"{o['time'][0]:.2f} / {o['time'][1]:.2f}"
         w1 = " / ".join(f"{v:.2f}" for v in o["W1"])
-        print(f"| {o['case']} | {o['method']} | {w1} | {o['fid16']:.1f} | {o['d8']:.2f} | {o['rough']:.2f} | "
+        print(f"| {o['case']} | {o['method']} | {w1} | {o['fid16']:.1f} | {o['d8']:.2f} | {o['valley']:.2f} | "
+              f"{o['rough']:.2f} | "
               f"{seam} | {t} | {ok} |")
 
 

@@ -37,15 +37,8 @@ pub fn demo_rows(out: &Path) -> Result<Vec<DemoRow>> {
     let (g, report) = synthesize(&base, &example, &o)?;
     let secs = t.elapsed().as_secs_f64();
     let back = reduce(&g, n, n, o.scheme, l)?;
+    let psnr = super::grid::psnr(&back, &base);
     let (lo, hi) = base.range();
-    let mse = back
-        .data()
-        .iter()
-        .zip(base.data())
-        .map(|(a, b)| (a - b).powi(2))
-        .sum::<f64>()
-        / base.data().len() as f64;
-    let psnr = 10.0 * ((hi - lo).powi(2) / mse).log10();
     let c = (hi - lo) / (0.25 * g.w() as f64);
     let px = hillshade(
         &g,

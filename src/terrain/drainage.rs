@@ -91,13 +91,7 @@ pub(super) fn breach(g: &mut Grid, depth: f64) -> Vec<bool> {
     }
     while let Some(Reverse(k)) = heap.pop() {
         let i = (k & 0xFFFF_FFFF) as usize;
-        let (y, x) = ((i / w) as i64, (i % w) as i64);
-        for (dy, dx) in N8 {
-            let (yy, xx) = (y + dy, x + dx);
-            if yy < 0 || xx < 0 || yy >= h as i64 || xx >= w as i64 {
-                continue;
-            }
-            let j = yy as usize * w + xx as usize;
+        for j in neighbours(i, h, w) {
             if done[j] {
                 continue;
             }
@@ -144,18 +138,9 @@ pub(super) fn widen(g: &mut Grid, taken: &mut [bool], gains: &[f64]) -> usize {
             if taken[i] {
                 continue;
             }
-            let (y, x) = ((i / w) as i64, (i % w) as i64);
-            let mut m = f64::INFINITY;
-            for (dy, dx) in N8 {
-                let (yy, xx) = (y + dy, x + dx);
-                if yy < 0 || xx < 0 || yy >= h as i64 || xx >= w as i64 {
-                    continue;
-                }
-                let j = yy as usize * w + xx as usize;
-                if taken[j] {
-                    m = m.min(z[j]);
-                }
-            }
+            let m = neighbours(i, h, w)
+                .filter(|&j| taken[j])
+                .fold(f64::INFINITY, |m, j| m.min(z[j]));
             if m < z[i] {
                 next.push((i, m + a * (z[i] - m)));
             }
@@ -167,6 +152,17 @@ pub(super) fn widen(g: &mut Grid, taken: &mut [bool], gains: &[f64]) -> usize {
         moved += next.len();
     }
     moved
+}
+
+/// The indices of the (up to 8) neighbours of cell `i` of an `h × w` grid, in [`N8`]'s
+/// order.
+fn neighbours(i: usize, h: usize, w: usize) -> impl Iterator<Item = usize> {
+    let (y, x) = ((i / w) as i64, (i % w) as i64);
+    N8.iter().filter_map(move |&(dy, dx)| {
+        let (yy, xx) = (y + dy, x + dx);
+        (yy >= 0 && xx >= 0 && yy < h as i64 && xx < w as i64)
+            .then(|| yy as usize * w + xx as usize)
+    })
 }
 
 const N8: [(i64, i64); 8] = [

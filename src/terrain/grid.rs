@@ -8,6 +8,30 @@ use rayon::prelude::*;
 use crate::tensor::Array;
 use crate::{Error, Result};
 
+/// The sample accessors of a type that holds its samples as `values: Array<f64>`
+/// (row-major, channels last): `data`, `data_mut`, `into_data`.
+macro_rules! samples_access {
+    () => {
+        /// The samples, row-major, channels last.
+        #[inline]
+        pub fn data(&self) -> &[f64] {
+            self.values.data()
+        }
+
+        /// The samples, mutable.
+        #[inline]
+        pub fn data_mut(&mut self) -> &mut [f64] {
+            self.values.data_mut()
+        }
+
+        /// The samples by move.
+        pub fn into_data(self) -> Vec<f64> {
+            self.values.into_data()
+        }
+    };
+}
+pub(super) use samples_access;
+
 /// `h × w × c` samples, row-major, channels last.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Grid {
@@ -63,22 +87,7 @@ impl Grid {
         self.values.shape().get(2).copied().unwrap_or(1)
     }
 
-    /// The samples, row-major, channels last.
-    #[inline]
-    pub fn data(&self) -> &[f64] {
-        self.values.data()
-    }
-
-    /// The samples, mutable.
-    #[inline]
-    pub fn data_mut(&mut self) -> &mut [f64] {
-        self.values.data_mut()
-    }
-
-    /// The samples by move.
-    pub fn into_data(self) -> Vec<f64> {
-        self.values.into_data()
-    }
+    samples_access!();
 
     #[inline]
     pub fn at(&self, y: usize, x: usize, k: usize) -> f64 {
@@ -178,4 +187,18 @@ pub fn block_means(g: &Grid, n_y: usize, n_x: usize, (f_y, f_x): (usize, usize))
             }
         });
     out
+}
+
+/// PSNR (dB) of `g` against `reference` (the same size), the reference's range as peak:
+/// `10 log₁₀(range² / mean (g − r)²)`.
+pub fn psnr(g: &Grid, reference: &Grid) -> f64 {
+    let (lo, hi) = reference.range();
+    let mse = g
+        .data()
+        .iter()
+        .zip(reference.data())
+        .map(|(a, b)| (a - b).powi(2))
+        .sum::<f64>()
+        / reference.data().len() as f64;
+    10.0 * ((hi - lo).max(1e-12).powi(2) / mse.max(1e-300)).log10()
 }

@@ -14,7 +14,9 @@
 //! spectrum.rs  radially averaged power spectra, the finest octave's slope, the gain fit
 //! base_scale.rs  --base-scale S: the base reduced to 1/S of the output, finer levels synthesized
 //! drainage.rs  with --base-scale: depressions breached (priority flood) so valleys drain
-//! synth.rs     the example's pyramid, coarse-to-fine patch matching, blended detail transfer
+//! synth.rs     options, the example's pyramid, the coarse-to-fine loop, back-projection
+//! options.rs   SynthOptions, Details, FinestGain
+//! patches.rs   one level's patches: candidate search, sources, blended detail bands
 //! finest_gain.rs  the finest level's gain g₁ fitted to the example's spectral slope
 //! level_gain.rs  with --base-scale: each synthesized level's gain fitted to the example's slope
 //! seams.rs     the seam ratio: second differences on patch borders against elsewhere
@@ -34,6 +36,8 @@ pub mod grid;
 pub mod hillshade;
 mod level_gain;
 pub mod matching;
+mod options;
+mod patches;
 pub mod raster;
 pub mod resample;
 mod seams;

@@ -9,7 +9,7 @@
 //!   so a patch is copied by one integer shift of band-local indices;
 //! * feature of a `q³` window (`q = p + 2o`), sampled every other voxel: heights
 //!   normalised for offset and scale, plus the mean gradient magnitude; distance
-//!   `synth::distance_below` (cut short once it exceeds the k-th best); the best `choices` of at most `candidates` windows,
+//!   `patches::distance_below` (cut short once it exceeds the k-th best); the best `choices` of at most `candidates` windows,
 //!   one picked by a generator seeded with (seed, level, patch);
 //! * separable ramps over `2o` voxels, blend `Σ wᵢDᵢ / √Σwᵢ²`, then each band scaled to
 //!   the example's band RMS at that level (matched details only);
@@ -18,9 +18,8 @@
 
 use rayon::prelude::*;
 
-use super::synth::{
-    check_options, lengths_down, mix, origins, pick_match, ramp, Details, SynthOptions, BOUNDARY,
-};
+use super::patches::{mix, origins, pick_match, ramp};
+use super::synth::{check_options, lengths_down, Details, SynthOptions, BOUNDARY};
 use crate::scheme::{Scheme, TwoScale};
 use crate::tensor::{self, Array, Order, Pyramid, PyramidSpec};
 use crate::{Error, Result};
@@ -77,22 +76,7 @@ impl Volume {
         self.values.shape().get(3).copied().unwrap_or(1)
     }
 
-    /// The samples, row-major, channel fastest.
-    #[inline]
-    pub fn data(&self) -> &[f64] {
-        self.values.data()
-    }
-
-    /// The samples, mutable.
-    #[inline]
-    pub fn data_mut(&mut self) -> &mut [f64] {
-        self.values.data_mut()
-    }
-
-    /// The samples by move.
-    pub fn into_data(self) -> Vec<f64> {
-        self.values.into_data()
-    }
+    super::grid::samples_access!();
 
     /// The engine's array, borrowed.
     pub fn array(&self) -> &Array<f64> {
@@ -224,7 +208,8 @@ fn bands() -> impl Iterator<Item = [bool; 3]> {
     (1..8).map(|b| [b & 4 != 0, b & 2 != 0, b & 1 != 0])
 }
 
-/// The details of one level: the Mallat block of `m` whose coarse part is `t`.
+/// The details of one level: the Mallat block of `m` whose coarse part is `t`, the number
+/// of patches and the mean matching distance.
 fn level_details(
     t: &Volume,
     (e, ne): &(Volume, [usize; 3]),
@@ -235,34 +220,11 @@ fn level_details(
     let (n, c) = (t.dims(), t.c());
     let (p, ov) = (o.patch, o.overlap);
     let q = p + 2 * ov;
-    let de = [0, 1, 2].map(|a| e.dims()[a] - ne[a]);
-    let ce = e.crop(*ne);
-    let mut count = [0usize; 3];
-    for a in 0..3 {
-        let hi = ne[a].min(de[a]) as i64 - (p + ov) as i64;
-        if hi < ov as i64 {
-            return Err(Error::parameter(
-                "example",
-                format!("{:?} coefficients at level {level}", e.dims()),
-                "an example whose coarse grid holds at least one patch window at every level",
-            ));
-        }
-        count[a] = (hi - ov as i64 + 1) as usize;
-    }
-    let total: usize = count.iter().product();
-    let stride = ((total as f64 / o.candidates.max(1) as f64).cbrt().ceil() as usize).max(1);
-    let mut rng = mix(o.seed, level, usize::MAX);
-    let off = [0, 1, 2].map(|a| ((rng.next_u64() % stride as u64) as usize).min(count[a] - 1));
-    let mut cands = Vec::new();
-    for z in (off[0]..count[0]).step_by(stride) {
-        for y in (off[1]..count[1]).step_by(stride) {
-            for x in (off[2]..count[2]).step_by(stride) {
-                cands.push([z + ov, y + ov, x + ov]);
-            }
-        }
-    }
+    let count = window_counts(e, *ne, p, ov, level)?;
+    let cands = candidate_grid(count, o, level);
     let back = |p: [usize; 3]| p.map(|v| v as i64 - ov as i64);
     let feats: Vec<Vec<f32>> = if o.details == Details::Matched {
+        let ce = e.crop(*ne);
         cands
             .par_iter()
             .map(|&cp| {
@@ -275,14 +237,14 @@ fn level_details(
         Vec::new()
     };
     let os = n.map(|v| origins(v, p));
-    let mut patches = Vec::new();
-    for &z in &os[0] {
-        for &y in &os[1] {
-            for &x in &os[2] {
-                patches.push([z, y, x]);
-            }
-        }
-    }
+    let (oy, ox) = (&os[1], &os[2]);
+    let patches: Vec<[usize; 3]> = os[0]
+        .iter()
+        .flat_map(|&z| {
+            oy.iter()
+                .flat_map(move |&y| ox.iter().map(move |&x| [z, y, x]))
+        })
+        .collect();
     let chosen: Vec<([usize; 3], f64)> = patches
         .par_iter()
         .enumerate()
@@ -297,57 +259,114 @@ fn level_details(
         })
         .collect();
     let mean_d = chosen.iter().map(|c| c.1).sum::<f64>() / chosen.len().max(1) as f64;
-    let d = [0, 1, 2].map(|a| m[a] - n[a]);
     let mut acc = Volume::zeros(m, c);
-    let mut w2 = vec![0.0f64; m.iter().product()];
     if o.details != Details::None {
-        for (&tp, &(cp, _)) in patches.iter().zip(&chosen) {
-            let first = [0, 1, 2].map(|a| tp[a] == 0);
-            let last = [0, 1, 2].map(|a| tp[a] + p >= n[a]);
-            for hb in bands() {
-                // per axis: (output index, example index, weight) of every covered sample
-                let axis = |a: usize| -> Vec<(usize, usize, f64)> {
-                    let len = if hb[a] { d[a] } else { n[a] };
-                    let elen = if hb[a] { de[a] } else { ne[a] };
-                    (tp[a].saturating_sub(ov)..(tp[a] + p + ov).min(len))
-                        .filter_map(|i| {
-                            let w = ramp(i, tp[a], p, ov, first[a], last[a]);
-                            let j = ((i + cp[a]) as i64 - tp[a] as i64).clamp(0, elen as i64 - 1)
-                                as usize;
-                            let (po, pe) = if hb[a] { (n[a] + i, ne[a] + j) } else { (i, j) };
-                            (w > 0.0).then_some((po, pe, w))
-                        })
-                        .collect()
-                };
-                let (az, ay, ax) = (axis(0), axis(1), axis(2));
-                for &(oz, ez, wz) in &az {
-                    for &(oy, ey, wy) in &ay {
-                        for &(ox, ex, wx) in &ax {
-                            let w = wz * wy * wx;
-                            let (io, ie) = (acc.idx([oz, oy, ox]), e.idx([ez, ey, ex]));
-                            for k in 0..c {
-                                acc.data_mut()[io + k] += w * e.data()[ie + k];
-                            }
-                            w2[io / c] += w * w;
-                        }
-                    }
-                }
-            }
-        }
-        for (i, &s) in w2.iter().enumerate() {
-            if s > 0.0 {
-                let inv = 1.0 / s.sqrt();
-                acc.data_mut()[i * c..(i + 1) * c]
-                    .iter_mut()
-                    .for_each(|v| *v *= inv);
-            }
-        }
+        let sources: Vec<[usize; 3]> = chosen.iter().map(|c| c.0).collect();
+        blend(&mut acc, n, (e, *ne), (&patches, &sources), (p, ov));
         if o.details == Details::Matched {
             match_band_rms(&mut acc, n, e, *ne);
         }
     }
     acc.paste(t);
     Ok((acc, patches.len(), mean_d))
+}
+
+/// Window origins per axis in the example's level block (coarse part `ne`): windows of
+/// `p + 2·ov` inside the coarse grid and the detail bands; an error when not one fits.
+fn window_counts(
+    e: &Volume,
+    ne: [usize; 3],
+    p: usize,
+    ov: usize,
+    level: usize,
+) -> Result<[usize; 3]> {
+    let mut count = [0usize; 3];
+    for a in 0..3 {
+        let hi = ne[a].min(e.dims()[a] - ne[a]) as i64 - (p + ov) as i64;
+        if hi < ov as i64 {
+            return Err(Error::parameter(
+                "example",
+                format!("{:?} coefficients at level {level}", e.dims()),
+                "an example whose coarse grid holds at least one patch window at every level",
+            ));
+        }
+        count[a] = (hi - ov as i64 + 1) as usize;
+    }
+    Ok(count)
+}
+
+/// At most `o.candidates` core origins on a cubic stride offset by the seed.
+fn candidate_grid(count: [usize; 3], o: &SynthOptions, level: usize) -> Vec<[usize; 3]> {
+    let ov = o.overlap;
+    let total: usize = count.iter().product();
+    let stride = ((total as f64 / o.candidates.max(1) as f64).cbrt().ceil() as usize).max(1);
+    let mut rng = mix(o.seed, level, usize::MAX);
+    let off = [0, 1, 2].map(|a| ((rng.next_u64() % stride as u64) as usize).min(count[a] - 1));
+    let mut cands = Vec::new();
+    for z in (off[0]..count[0]).step_by(stride) {
+        for y in (off[1]..count[1]).step_by(stride) {
+            for x in (off[2]..count[2]).step_by(stride) {
+                cands.push([z + ov, y + ov, x + ov]);
+            }
+        }
+    }
+    cands
+}
+
+/// Accumulate every patch's seven detail bands from its source core `cp` in the example
+/// block `e` (coarse part `ne`) with separable ramps `w`, then divide by `√Σw²`.
+fn blend(
+    acc: &mut Volume,
+    n: [usize; 3],
+    (e, ne): (&Volume, [usize; 3]),
+    (patches, sources): (&[[usize; 3]], &[[usize; 3]]),
+    (p, ov): (usize, usize),
+) {
+    let (m, c) = (acc.dims(), acc.c());
+    let d = [0, 1, 2].map(|a| m[a] - n[a]);
+    let de = [0, 1, 2].map(|a| e.dims()[a] - ne[a]);
+    let mut w2 = vec![0.0f64; m.iter().product()];
+    for (&tp, &cp) in patches.iter().zip(sources) {
+        let first = [0, 1, 2].map(|a| tp[a] == 0);
+        let last = [0, 1, 2].map(|a| tp[a] + p >= n[a]);
+        for hb in bands() {
+            // per axis: (output index, example index, weight) of every covered sample
+            let axis = |a: usize| -> Vec<(usize, usize, f64)> {
+                let len = if hb[a] { d[a] } else { n[a] };
+                let elen = if hb[a] { de[a] } else { ne[a] };
+                (tp[a].saturating_sub(ov)..(tp[a] + p + ov).min(len))
+                    .filter_map(|i| {
+                        let w = ramp(i, tp[a], p, ov, first[a], last[a]);
+                        let j =
+                            ((i + cp[a]) as i64 - tp[a] as i64).clamp(0, elen as i64 - 1) as usize;
+                        let (po, pe) = if hb[a] { (n[a] + i, ne[a] + j) } else { (i, j) };
+                        (w > 0.0).then_some((po, pe, w))
+                    })
+                    .collect()
+            };
+            let (az, ay, ax) = (axis(0), axis(1), axis(2));
+            for &(oz, ez, wz) in &az {
+                for &(oy, ey, wy) in &ay {
+                    for &(ox, ex, wx) in &ax {
+                        let w = wz * wy * wx;
+                        let (io, ie) = (acc.idx([oz, oy, ox]), e.idx([ez, ey, ex]));
+                        for k in 0..c {
+                            acc.data_mut()[io + k] += w * e.data()[ie + k];
+                        }
+                        w2[io / c] += w * w;
+                    }
+                }
+            }
+        }
+    }
+    for (i, &s) in w2.iter().enumerate() {
+        if s > 0.0 {
+            let inv = 1.0 / s.sqrt();
+            acc.data_mut()[i * c..(i + 1) * c]
+                .iter_mut()
+                .for_each(|v| *v *= inv);
+        }
+    }
 }
 
 /// Index ranges of band `hb` of a block of `dims` whose coarse part is `n`.

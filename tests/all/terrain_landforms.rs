@@ -39,15 +39,7 @@ fn opts(scale: usize) -> SynthOptions {
 }
 
 fn psnr(a: &Grid, b: &Grid) -> f64 {
-    let (lo, hi) = b.range();
-    let mse = a
-        .data()
-        .iter()
-        .zip(b.data())
-        .map(|(x, y)| (x - y).powi(2))
-        .sum::<f64>()
-        / a.data().len() as f64;
-    10.0 * ((hi - lo).powi(2) / mse).log10()
+    mra::terrain::grid::psnr(a, b)
 }
 
 /// Mean slope magnitude (central differences inside) of `g`'s `s × s` block means.
@@ -244,4 +236,34 @@ fn the_result_keeps_only_basins_deeper_than_the_breaching_depth() {
         "shallow pits: {after} against {before} by default"
     );
     assert!(rep.fidelity_psnr.unwrap() >= 40.0);
+}
+
+#[test]
+fn psnr_is_the_references_range_over_the_rms_error_in_decibels() {
+    let b = sketch(16);
+    let (lo, hi) = b.range();
+    let off = Grid::new(
+        16,
+        16,
+        1,
+        b.data().iter().map(|v| v + 0.01 * (hi - lo)).collect(),
+    )
+    .unwrap();
+    assert!((psnr(&off, &b) - 40.0).abs() < 1e-9, "{}", psnr(&off, &b));
+}
+
+#[test]
+fn level_gains_stay_within_their_range_on_a_smooth_sketch() {
+    // a smooth base leaves the coarsest level's slope to its details alone: each level's
+    // gain is solved for the example's slope and clamped
+    let (base, ex) = (sketch(32), grid_of(256, 256, 9, 0.6, 1000.0));
+    let (_, rep) = synthesize(&base, &ex, &opts(16)).unwrap();
+    // the range of src/terrain/level_gain.rs (GAIN_RANGE)
+    let (lo, hi) = (0.5, 4.0);
+    assert_eq!(rep.level_gains.len(), 4);
+    assert!(
+        rep.level_gains.iter().all(|g| (lo..=hi).contains(g)),
+        "{:?}",
+        rep.level_gains
+    );
 }
