@@ -130,6 +130,12 @@ pub struct InfoArgs {
 }
 
 pub fn encode(a: EncodeArgs) -> CliResult {
+    if let Some(t) = a.tile.as_deref().filter(|t| a.blocks && t.trim() != "whole") {
+        return Err(Failure(format!(
+            "--blocks --tile {t}: code-blocks (format 3.0) are written in one-piece files only: \
+             leave out --tile or give --tile whole"
+        )));
+    }
     let rate = a.rate();
     let opts = EncodeOptions {
         scheme: a.scheme,
@@ -225,6 +231,7 @@ fn encode_whole(
 ) -> Result<Encoded, Failure> {
     let r = read_input(&a.input, read_opts)?;
     let tile = match a.tile.as_deref() {
+        None if a.blocks => r.dims.clone(),
         None => codec::default_tile(&r.dims),
         Some(s) => tile_extents(s, &r.dims)?,
     };

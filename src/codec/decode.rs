@@ -22,6 +22,22 @@ use rayon::prelude::*;
 use std::io::Read;
 use std::ops::Range;
 
+/// Whether a band is decoded whole into a buffer before dequantizing: every band of a
+/// format 1 file and of a code-block file, the coarse block, and a band whose values are
+/// a finer band's parent context; the others are dequantized row by row as they decode.
+fn decoded_whole(h: &Header, level: usize, is_parent: bool) -> bool {
+    !h.version.has_levels() || h.version.has_blocks() || level == 0 || is_parent
+}
+
+/// The band kind of a level: the coarse block at level 0, details above.
+fn kind_of(level: usize) -> BandKind {
+    if level == 0 {
+        BandKind::Coarse
+    } else {
+        BandKind::Detail
+    }
+}
+
 /// One band's indices from its coded bytes, by the coding of the file of header `h`.
 fn decode_band(
     h: &Header,
@@ -270,17 +286,15 @@ fn decode_channel_into(p: &Parsed, c: usize, k: usize, plane: &mut [f32]) -> Res
                 };
                 let (step, delta) = (bc.step, band_delta(h, plan, j));
                 let dims = &plan.dims[j];
-                if !h.version.has_levels()
-                    || h.version.has_blocks()
-                    || level == 0
-                    || has_children[j]
-                {
-                    let kind = if level == 0 {
-                        BandKind::Coarse
-                    } else {
-                        BandKind::Detail
-                    };
-                    let v = match decode_band(h, &bc.data, dims, kind, parent, wins[j].as_deref()) {
+                if decoded_whole(h, level, has_children[j]) {
+                    let v = match decode_band(
+                        h,
+                        &bc.data,
+                        dims,
+                        kind_of(level),
+                        parent,
+                        wins[j].as_deref(),
+                    ) {
                         Ok(v) => v,
                         Err(e) => return Some((j, failed(e))),
                     };
@@ -355,18 +369,16 @@ fn decode_channel_narrow(p: &Parsed, c: usize, k: usize, plane: &mut [i32]) -> R
                         Error::format(format!("band {j} of channel {c}: {e}"), "a valid band")
                     };
                     let mut ok = true;
-                    if !h.version.has_levels()
-                        || h.version.has_blocks()
-                        || level == 0
-                        || has_children[j]
-                    {
-                        let kind = if level == 0 {
-                            BandKind::Coarse
-                        } else {
-                            BandKind::Detail
-                        };
-                        let v = decode_band(h, &bc.data, dims, kind, parent, wins[j].as_deref())
-                            .map_err(failed)?;
+                    if decoded_whole(h, level, has_children[j]) {
+                        let v = decode_band(
+                            h,
+                            &bc.data,
+                            dims,
+                            kind_of(level),
+                            parent,
+                            wins[j].as_deref(),
+                        )
+                        .map_err(failed)?;
                         let cols = dims.last().copied().unwrap_or(1).max(1);
                         for (r, out) in v.chunks(cols).zip(rows.iter_mut()) {
                             ok &= narrow_row(r, out);

@@ -376,9 +376,7 @@ mod tests {
         let mut s = seed;
         let v: Vec<f64> = (0..n)
             .map(|i| {
-                s = s
-                    .wrapping_mul(6364136223846793005)
-                    .wrapping_add(1442695040888963407);
+                crate::entropy::testing::lcg(&mut s);
                 let t = (i as f64 * 0.013).sin() * 0.4 + 0.5 + ((s >> 40) % 64) as f64 / 640.0;
                 match i % 97 {
                     0 => lo,

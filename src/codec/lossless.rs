@@ -363,9 +363,7 @@ mod tests {
                 let mut s = 7u64;
                 let wide: Vec<i64> = (0..n)
                     .map(|i| {
-                        s = s
-                            .wrapping_mul(6364136223846793005)
-                            .wrapping_add(1442695040888963407);
+                        crate::entropy::testing::lcg(&mut s);
                         // noise over the full 16-bit range, and its extremes
                         match i % 5 {
                             0 => 65535,

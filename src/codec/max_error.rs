@@ -298,9 +298,7 @@ mod tests {
                 if d > 14.0 {
                     return 0.0;
                 }
-                s = s
-                    .wrapping_mul(6364136223846793005)
-                    .wrapping_add(1442695040888963407);
+                crate::entropy::testing::lcg(&mut s);
                 (14.0 - d) * 40.0 + ((s >> 40) % 60) as f64
             })
             .collect();

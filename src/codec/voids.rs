@@ -224,9 +224,7 @@ mod tests {
             for density in [0u64, 3, 50, 100] {
                 let mask: Vec<bool> = (0..n)
                     .map(|_| {
-                        seed = seed
-                            .wrapping_mul(6364136223846793005)
-                            .wrapping_add(1442695040888963407);
+                        crate::entropy::testing::lcg(&mut seed);
                         (seed >> 33) % 100 < density
                     })
                     .collect();

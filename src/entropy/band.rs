@@ -28,7 +28,7 @@
 
 use super::golomb;
 use super::range::{Decoder, Encoder, Mix, Model};
-use super::walk::{median_residuals, parent_plane, undo_median, Walk};
+use super::walk::{class_in, classes, median_residuals, parent_plane, undo_median, Walk};
 use super::{BandKind, Parent};
 use crate::Result;
 
@@ -83,56 +83,15 @@ fn sgn(v: i64) -> usize {
 /// Class of the activity `t`: 0, 1, 2, 3, 4, 5–6, 7–8, 9–12, 13–18, 19–28, 29–48, more.
 #[inline(always)]
 fn zcls(t: u64) -> usize {
-    const T: [u8; 49] = {
-        let mut t = [0u8; 49];
-        let mut s = 0;
-        while s <= 48 {
-            t[s] = match s {
-                0..=4 => s as u8,
-                5..=6 => 5,
-                7..=8 => 6,
-                9..=12 => 7,
-                13..=18 => 8,
-                19..=28 => 9,
-                _ => 10,
-            };
-            s += 1;
-        }
-        t
-    };
-    if t <= 48 {
-        T[t as usize] as usize
-    } else {
-        11
-    }
+    const T: [u8; 49] = classes(&[0, 1, 2, 3, 4, 6, 8, 12, 18, 28]);
+    class_in(&T, t, 11)
 }
 
 /// Class of the magnitude context `u`: 0–1, 2–3, 4–6, 7–10, 11–18, 19–34, 35–66, 67–130, more.
 #[inline(always)]
 fn mcls(u: u64) -> usize {
-    const T: [u8; 131] = {
-        let mut t = [0u8; 131];
-        let mut s = 0;
-        while s <= 130 {
-            t[s] = match s {
-                0..=1 => 0,
-                2..=3 => 1,
-                4..=6 => 2,
-                7..=10 => 3,
-                11..=18 => 4,
-                19..=34 => 5,
-                35..=66 => 6,
-                _ => 7,
-            };
-            s += 1;
-        }
-        t
-    };
-    if u <= 130 {
-        T[u as usize] as usize
-    } else {
-        8
-    }
+    const T: [u8; 131] = classes(&[1, 3, 6, 10, 18, 34, 66]);
+    class_in(&T, u, 8)
 }
 
 /// Class of `u` in [`Classes::Wide`]: [`mcls`] up to 130, then `8 + ⌊log₂(u / 131)⌋`
@@ -205,6 +164,12 @@ pub fn encode_stream(
         encode(&mut e, q, dims, kind, parent, classes);
         e.finish_short()
     };
+    chosen(coding, code)
+}
+
+/// The stream `code` writes in the classes `coding` asks for: the narrow ones, or in
+/// [`Coding::Chosen`] the shorter of both (coded side by side).
+fn chosen(coding: Coding, code: impl Fn(Classes) -> Vec<u8> + Sync) -> Vec<u8> {
     if coding == Coding::Narrow {
         return code(Classes::Narrow);
     }
@@ -233,15 +198,7 @@ pub fn encode_stream_rows(
         encode_rows(&mut e, dims, parent, classes, &row);
         e.finish_short()
     };
-    if coding == Coding::Narrow {
-        return code(Classes::Narrow);
-    }
-    let (narrow, wide) = rayon::join(|| code(Classes::Narrow), || code(Classes::Wide));
-    if wide.len() < narrow.len() {
-        wide
-    } else {
-        narrow
-    }
+    chosen(coding, code)
 }
 
 /// [`encode`] of a detail band handed over a row at a time (see [`encode_stream_rows`]).
@@ -797,35 +754,13 @@ pub fn decode_rows(
 mod tests {
     use super::*;
 
-    fn sample(n: usize, seed: u64, spread: i64) -> Vec<i64> {
-        let mut x = seed;
-        (0..n)
-            .map(|_| {
-                x = x
-                    .wrapping_mul(6364136223846793005)
-                    .wrapping_add(1442695040888963407);
-                let r = (x >> 33) as i64;
-                if r % 3 == 0 {
-                    (r % (2 * spread + 1)) - spread
-                } else {
-                    0
-                }
-            })
-            .collect()
-    }
+    use crate::entropy::walk::testing::sample;
 
     /// Several bands of 1 to 4 axes, with parents and extreme values, share one stream
     /// and come back exactly, in the order written.
     #[test]
     fn bands_sharing_a_stream_round_trip() {
-        let shapes = [
-            vec![1usize],
-            vec![7],
-            vec![5, 9],
-            vec![1, 1],
-            vec![3, 4, 5],
-            vec![2, 2, 3, 3],
-        ];
+        let shapes = crate::entropy::walk::testing::shapes();
         let mut e = Encoder::new();
         let mut written = Vec::new();
         for dims in &shapes {
@@ -868,9 +803,7 @@ mod tests {
         let mut s = 7u64;
         let x: Vec<f32> = (0..n)
             .map(|i| {
-                s = s
-                    .wrapping_mul(6364136223846793005)
-                    .wrapping_add(1442695040888963407);
+                crate::entropy::walk::testing::lcg(&mut s);
                 let u = ((s >> 40) as f32 / (1u64 << 24) as f32) - 0.5;
                 // Laplacian-like: mostly small, some large, smooth in places
                 let mag = (-(u.abs() + 1e-3).ln()) * if i % 7 == 0 { 4.0 } else { 0.6 };
@@ -1036,9 +969,7 @@ mod tests {
         let mut s = 5u64;
         let big: Vec<i64> = (0..n)
             .map(|i| {
-                s = s
-                    .wrapping_mul(6364136223846793005)
-                    .wrapping_add(1442695040888963407);
+                crate::entropy::walk::testing::lcg(&mut s);
                 let r = (s >> 33) as i64;
                 let scale = 1i64 << ((i % 64) / 6);
                 (r % 9 - 4) * scale + r % 3

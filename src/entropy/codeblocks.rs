@@ -286,22 +286,7 @@ pub fn decode_blocks(
 mod tests {
     use super::*;
 
-    fn sample(n: usize, seed: u64, spread: i64) -> Vec<i64> {
-        let mut x = seed;
-        (0..n)
-            .map(|_| {
-                x = x
-                    .wrapping_mul(6364136223846793005)
-                    .wrapping_add(1442695040888963407);
-                let r = (x >> 33) as i64;
-                if r % 3 == 0 {
-                    (r % (2 * spread + 1)) - spread
-                } else {
-                    0
-                }
-            })
-            .collect()
-    }
+    use crate::entropy::walk::testing::sample;
 
     /// A block's parent box gives every position of the block the parent value the
     /// whole band's clamped mapping gives (§9), on odd and uneven extents.

@@ -15,6 +15,10 @@ pub mod range;
 pub mod v1;
 mod walk;
 
+/// Test data shared by the coders' and the codec's tests.
+#[cfg(test)]
+pub(crate) use walk::testing;
+
 pub use v1::{decode_band, encode_band};
 
 /// The parent band of a detail band: its values and extents (same number of axes).

@@ -135,6 +135,16 @@ pub fn parent_fits<T>(data: &[T], pdims: &[usize], dims: &[usize]) -> bool {
         && data.len() == pdims.iter().product::<usize>()
 }
 
+/// The class of `s` in the table `t` of [`classes`]: `t[s]` for `s < N`, else `above`.
+#[inline(always)]
+pub fn class_in<const N: usize>(t: &[u8; N], s: u64, above: usize) -> usize {
+    if s < N as u64 {
+        t[s as usize] as usize
+    } else {
+        above
+    }
+}
+
 /// The class table `t[s]` of `s < N`: the number of `ends` (increasing, the last
 /// value of each class) below `s`.
 pub const fn classes<const N: usize>(ends: &[usize]) -> [u8; N] {
@@ -154,15 +164,22 @@ pub const fn classes<const N: usize>(ends: &[usize]) -> [u8; N] {
 /// Test data shared by the band coders' tests.
 #[cfg(test)]
 pub(crate) mod testing {
+    /// The tests' linear congruential generator (Knuth's MMIX constants): `s` moved to
+    /// its next state `6364136223846793005·s + 1442695040888963407 (mod 2^64)`.
+    pub(crate) fn lcg(s: &mut u64) -> u64 {
+        *s = s
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        *s
+    }
+
     /// `n` values, a third of them nonzero in `−spread..=spread`, from an LCG seeded by
     /// `seed`.
     pub(crate) fn sample(n: usize, seed: u64, spread: i64) -> Vec<i64> {
         let mut x = seed;
         (0..n)
             .map(|_| {
-                x = x
-                    .wrapping_mul(6364136223846793005)
-                    .wrapping_add(1442695040888963407);
+                lcg(&mut x);
                 let r = (x >> 33) as i64;
                 if r % 3 == 0 {
                     (r % (2 * spread + 1)) - spread
@@ -176,18 +193,22 @@ pub(crate) mod testing {
     /// A test band and its parent: `(dims, values, parent dims, parent values)`.
     pub(crate) type Band = (Vec<usize>, Vec<i64>, Vec<usize>, Vec<i64>);
 
-    /// Bands of 1 to 4 axes (single positions among them) with `i64::MIN` first and
-    /// `i64::MAX` last, and their parents.
-    pub(crate) fn bands() -> Vec<Band> {
-        let shapes = [
+    /// Band extents of 1 to 4 axes, single positions among them.
+    pub(crate) fn shapes() -> [Vec<usize>; 6] {
+        [
             vec![1usize],
             vec![7],
             vec![5, 9],
             vec![1, 1],
             vec![3, 4, 5],
             vec![2, 2, 3, 3],
-        ];
-        shapes
+        ]
+    }
+
+    /// Bands of 1 to 4 axes (single positions among them) with `i64::MIN` first and
+    /// `i64::MAX` last, and their parents.
+    pub(crate) fn bands() -> Vec<Band> {
+        shapes()
             .into_iter()
             .map(|dims| {
                 let n: usize = dims.iter().product();

@@ -155,18 +155,9 @@ pub fn kind_name(k: DataKind) -> &'static str {
     }
 }
 
-/// The sample types in code order.
-pub const TYPES: [SampleType; 9] = [
-    SampleType::U8,
-    SampleType::I8,
-    SampleType::U16,
-    SampleType::I16,
-    SampleType::U32,
-    SampleType::I32,
-    SampleType::F16,
-    SampleType::F32,
-    SampleType::F64,
-];
+/// The sample types in code order: `SampleType::ALL` lists them in that order
+/// (`format_spec::spec_tables_match_the_code` checks the codes against the spec).
+pub const TYPES: [SampleType; 9] = SampleType::ALL;
 
 /// The sample-type byte.
 pub fn sample_type_code(t: SampleType) -> u8 {

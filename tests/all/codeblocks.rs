@@ -241,3 +241,45 @@ fn damaged_block_indices_are_one_line_errors() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `--blocks` writes one-piece files: with a tile grid it stops before reading the input,
+/// with one line naming both options (exit 2, no output); without `--tile` it writes a
+/// 3.0 file of one piece.
+#[test]
+fn blocks_refuse_a_tile_grid_and_write_one_piece() {
+    let dir = std::env::temp_dir().join(format!("mra-codeblocks-tile-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let input = dir.join("in.pgm");
+    let r = field(&[70, 90], 1, SampleType::U8, 3, 255.0);
+    mra::io::write(&input, &r).unwrap();
+    let run = |extra: &[&str], out: &std::path::Path| {
+        let mut args = vec![
+            "encode",
+            input.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+            "--bpp",
+            "2",
+            "--blocks",
+        ];
+        args.extend_from_slice(extra);
+        Command::new(env!("CARGO_BIN_EXE_mra"))
+            .args(&args)
+            .output()
+            .unwrap()
+    };
+    let tiled = dir.join("tiled.mra");
+    let o = run(&["--tile", "32"], &tiled);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+    assert!(err.contains("--blocks") && err.contains("--tile"), "{err}");
+    assert!(!tiled.exists());
+    let one = dir.join("one.mra");
+    let o = run(&[], &one);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let h = header(&std::fs::read(&one).unwrap());
+    assert!(h.version.has_blocks(), "{:?}", h.version);
+    assert_eq!(h.tile, h.dims);
+    let _ = std::fs::remove_dir_all(&dir);
+}

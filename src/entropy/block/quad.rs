@@ -20,7 +20,7 @@
 
 use super::prior;
 use super::rc::{BitReader, BitWriter, Cdf, Decoder, Encoder};
-use crate::entropy::walk::classes;
+use crate::entropy::walk::{class_in, classes};
 
 const QCLS: usize = 12;
 pub const PCLS: usize = 3;
@@ -36,11 +36,7 @@ const CAP: u32 = 1 << 20;
 #[inline(always)]
 fn qcls(s: u32) -> usize {
     const T: [u8; 61] = classes(&[0, 1, 2, 3, 4, 6, 9, 14, 22, 35]);
-    if s <= 60 {
-        T[s as usize] as usize
-    } else {
-        11
-    }
+    class_in(&T, s as u64, 11)
 }
 
 #[inline(always)]
