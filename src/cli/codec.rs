@@ -130,7 +130,11 @@ pub struct InfoArgs {
 }
 
 pub fn encode(a: EncodeArgs) -> CliResult {
-    if let Some(t) = a.tile.as_deref().filter(|t| a.blocks && t.trim() != "whole") {
+    if let Some(t) = a
+        .tile
+        .as_deref()
+        .filter(|t| a.blocks && t.trim() != "whole")
+    {
         return Err(Failure(format!(
             "--blocks --tile {t}: code-blocks (format 3.0) are written in one-piece files only: \
              leave out --tile or give --tile whole"
