@@ -38,7 +38,9 @@ fn kind_of(level: usize) -> BandKind {
     }
 }
 
-/// One band's indices from its coded bytes, by the coding of the file of header `h`.
+/// One band's indices from its coded bytes, by the coding of the file of header `h`. In
+/// format 3 (formats/MRA.md §15) the code-block index is parsed and the blocks `window`
+/// meets (every block without one) are decoded, in parallel, into their boxes of the band.
 fn decode_band(
     h: &Header,
     data: &[u8],
@@ -47,26 +49,13 @@ fn decode_band(
     parent: Option<Parent>,
     window: Option<&[Range<usize>]>,
 ) -> Result<Vec<i64>> {
-    if h.version.has_blocks() {
-        decode_blocks(h, data, dims, kind, parent, window)
-    } else if h.version.has_levels() {
-        let coding = super::plan::coding_of(h);
-        entropy::band::decode(&mut Decoder::new_short(data), dims, kind, parent, coding)
-    } else {
-        entropy::decode_band(data, dims, kind, parent)
+    let coding = super::plan::coding_of(h);
+    if !h.version.has_blocks() && h.version.has_levels() {
+        return entropy::band::decode(&mut Decoder::new_short(data), dims, kind, parent, coding);
     }
-}
-
-/// One band's indices from its format 3 entry (formats/MRA.md §15): the code-block
-/// index parsed, every block decoded (in parallel) into its box of the band.
-fn decode_blocks(
-    h: &Header,
-    data: &[u8],
-    dims: &[usize],
-    kind: BandKind,
-    parent: Option<Parent>,
-    window: Option<&[Range<usize>]>,
-) -> Result<Vec<i64>> {
+    if !h.version.has_blocks() {
+        return entropy::decode_band(data, dims, kind, parent);
+    }
     let block = h.block_extents();
     let set = crate::format::bands::parse_blocks(data, dims, &block)?;
     let grid = Grid::new(dims, &block);
@@ -79,7 +68,6 @@ fn decode_blocks(
         .map(|&i| &data[set.streams[i].clone()])
         .collect();
     let mut v = vec![0i64; dims.iter().product()];
-    let coding = super::plan::coding_of(h);
     entropy::codeblocks::decode_blocks(&mut v, &grid, &which, &streams, kind, parent, coding)?;
     Ok(v)
 }

@@ -41,9 +41,8 @@ pub fn stream_copy<T: Sample>(k: Kernels, src: &[T], dst: &mut [T]) {
 
 /// [`stream_copy`] without its store fence, for many short copies in a row (the rows of
 /// an image): the caller fences once after the last ([`stream_fence`]), before anything
-/// another thread may read them. A fence per 16 KB row of a 4096² image cost about 5% of
-/// the CPU time of a cubic pyramid forward and back (one thread, 38.6–39.5 →
-/// 36.7–37.5 ms symmetric, 41.1–41.5 → 38.9–39.1 ms periodic).
+/// another thread may read them. A fence per 16 KB row of a 4096² image costs about 5% of
+/// the CPU time of a cubic pyramid forward and back (one thread).
 #[inline]
 pub fn stream_copy_unfenced<T: Sample>(k: Kernels, src: &[T], dst: &mut [T]) {
     assert_eq!(src.len(), dst.len());
