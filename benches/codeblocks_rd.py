@@ -1,0 +1,51 @@
+#!/usr/bin/env python3
+"""Usage: python3 benches/codeblocks_rd.py MRA_BINARY CORPUS_DIR
+
+Kodak 13-24: mra encode --bpp B (format 2, --tile whole) vs the same with --blocks (3.0).
+Same indices -> same PSNR; prints bytes per rate, BD-rate and BD-PSNR (Bjontegaard,
+cubic in log rate, over the common range) of the mean curves."""
+import json, os, subprocess, sys, math
+MRA = sys.argv[1]
+CORPUS = sys.argv[2]
+OUT = os.path.join(os.environ.get("TMPDIR", "/tmp"), "mra_codeblocks_rd")
+os.makedirs(OUT, exist_ok=True)
+RATES = [0.25, 0.5, 1.0, 2.0]
+def run(*a):
+    return subprocess.run([MRA, *a], check=True, capture_output=True, text=True).stdout
+rows = {}
+for b in RATES:
+    ra = rb = 0; ps = 0; n = 0
+    for k in range(13, 25):
+        src = f"{CORPUS}/images/kodak/kodim{k:02}.png"
+        a = f"{OUT}/a{k}_{b}.mra"; c = f"{OUT}/b{k}_{b}.mra"
+        run("encode", src, "-o", a, "--bpp", str(b), "--tile", "whole", "--quiet")
+        run("encode", src, "-o", c, "--bpp", str(b), "--tile", "whole", "--blocks", "--quiet")
+        run("decode", a, "-o", f"{OUT}/a.png", "--quiet"); run("decode", c, "-o", f"{OUT}/b.png", "--quiet")
+        if open(f"{OUT}/a.png", "rb").read() != open(f"{OUT}/b.png", "rb").read():
+            print("DIFFERENT DECODE", k, b)
+        p = json.loads(run("compare", src, f"{OUT}/a.png", "--json", "--quiet"))["psnr"]
+        npx = 768 * 512
+        ra += os.path.getsize(a) * 8 / npx; rb += os.path.getsize(c) * 8 / npx; ps += p; n += 1
+    rows[b] = (ra / n, rb / n, ps / n)
+    print(f"bpp {b}: format 2 {ra/n:.4f} bpp, 3.0 {rb/n:.4f} bpp ({(rb/ra-1)*100:+.2f}%), PSNR {ps/n:.3f} dB", flush=True)
+def fit(xs, ys):
+    # cubic through 4 points: solve Vandermonde
+    n = len(xs); A = [[x ** j for j in range(n)] + [y] for x, y in zip(xs, ys)]
+    for i in range(n):
+        piv = max(range(i, n), key=lambda r: abs(A[r][i])); A[i], A[piv] = A[piv], A[i]
+        for r in range(n):
+            if r != i:
+                f = A[r][i] / A[i][i]
+                A[r] = [u - f * v for u, v in zip(A[r], A[i])]
+    return [A[i][n] / A[i][i] for i in range(n)]
+def integ(c, lo, hi):
+    return sum(cj * (hi ** (j + 1) - lo ** (j + 1)) / (j + 1) for j, cj in enumerate(c))
+la = [math.log10(rows[b][0]) for b in RATES]; lb = [math.log10(rows[b][1]) for b in RATES]
+p = [rows[b][2] for b in RATES]
+lo, hi = max(min(la), min(lb)), min(max(la), max(lb))
+ca, cb = fit(la, p), fit(lb, p)
+bd_psnr = (integ(cb, lo, hi) - integ(ca, lo, hi)) / (hi - lo)
+plo, phi = max(min(p), min(p)), min(max(p), max(p))
+ra_, rb_ = fit(p, la), fit(p, lb)
+bd_rate = (10 ** ((integ(rb_, plo, phi) - integ(ra_, plo, phi)) / (phi - plo)) - 1) * 100
+print(f"BD-PSNR of 3.0 vs format 2: {bd_psnr:+.4f} dB; BD-rate {bd_rate:+.3f}%")
