@@ -322,6 +322,8 @@ fn main() {
                     boundary,
                     levels: 3,
                     rate,
+                    // the 2.x vectors stay 2.x; the 3.0 ones are cut from them
+                    format: codec::Format::Bands,
                 },
                 &tile,
             )

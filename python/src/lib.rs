@@ -257,6 +257,7 @@ fn encode<'py>(
         boundary: parse::<Boundary>(boundary)?,
         levels,
         rate: rate(rate_kind, value, data_range)?,
+        format: Default::default(),
     };
     let bytes = with_input(a, |input, shape| {
         run(py, "encode", || {

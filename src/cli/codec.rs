@@ -7,7 +7,7 @@ use clap::Args;
 
 use super::io_cmds::{read_input, write_output_as, RawArgs};
 use super::{CliResult, Failure};
-use crate::codec::{self, DecodeOptions, EncodeOptions, Rate};
+use crate::codec::{self, DecodeOptions, EncodeOptions, Format, Rate};
 use crate::scheme::{Boundary, Scheme};
 
 /// Compress an image, volume or heightmap into an `.mra` file.
@@ -63,10 +63,16 @@ pub struct EncodeArgs {
     /// 128 in 3-D. Each tile is coded on its own at the step of the whole raster.
     #[arg(long, value_name = "T")]
     pub tile: Option<String>,
-    /// Write format 3.0: every band cut into independent code-blocks (256×256, volumes
-    /// 32×64×64), decoded in parallel, and only those a `--region` needs
-    /// (formats/MRA.md §15). One-piece files only.
-    #[arg(long)]
+    /// Format of a one-piece file: 3 (the default: every band cut into independent
+    /// code-blocks, 256×256, volumes 32×64×64, decoded in parallel and only those a
+    /// `--region` needs; formats/MRA.md §15) or 2 (one stream per band, for readers
+    /// older than format 3). Tiled files are format 2 either way.
+    #[arg(long, value_name = "V", default_value_t = 3,
+          value_parser = clap::value_parser!(u8).range(2..=3))]
+    pub format: u8,
+    /// Format 3.0 in one piece whatever the size (without it, rasters over 2^24
+    /// positions are cut into format 2 tiles). Format 3.0 itself is the default.
+    #[arg(long, conflicts_with = "format")]
     pub blocks: bool,
     #[command(flatten)]
     pub raw: RawArgs,
@@ -146,10 +152,15 @@ pub fn encode(a: EncodeArgs) -> CliResult {
         boundary: a.boundary,
         levels: a.levels,
         rate,
+        format: if a.format == 2 {
+            Format::Bands
+        } else {
+            Format::Blocks
+        },
     };
     let read_opts = a.raw.options()?;
     // a raw volume or raw NRRD cut into tiles is read a slab of tiles at a time
-    let slabs = if super::io_cmds::is_std(&a.input) || a.blocks {
+    let slabs = if super::io_cmds::is_std(&a.input) {
         None
     } else {
         crate::io::stream::open(&a.input, &read_opts)
@@ -206,6 +217,7 @@ fn encode_slabs(
 ) -> Result<Encoded, Failure> {
     let shape = crate::io::slab::SlabSource::shape(src).clone();
     let tile = match a.tile.as_deref() {
+        None if a.blocks => shape.dims.clone(),
         None => codec::default_tile(&shape.dims),
         Some(s) => tile_extents(s, &shape.dims)?,
     };
@@ -240,11 +252,8 @@ fn encode_whole(
         Some(s) => tile_extents(s, &r.dims)?,
     };
     let t = std::time::Instant::now();
-    let mut bytes =
+    let bytes =
         codec::encode_tiled(&r, opts, &tile).map_err(|e| Failure::context(a.input.display(), e))?;
-    if a.blocks {
-        bytes = codec::to_blocks(&bytes).map_err(|e| Failure::context(a.input.display(), e))?;
-    }
     let seconds = t.elapsed().as_secs_f64();
     if super::io_cmds::is_std(&a.output) {
         super::io_cmds::write_stdout(&bytes)?;

@@ -7,7 +7,8 @@ use super::lossy::{finite_range, header_for, header_with, Frame};
 use super::options::{EncodeOptions, Rate};
 use super::plan::Plan;
 use super::{layout, lossless, max_error, meta, rate};
-use crate::entropy::{band, BandKind, Parent};
+use crate::entropy::{band, codeblocks, BandKind, Parent};
+use crate::format::bands::blocks_payload;
 use crate::format::header::Colour;
 use crate::format::tag::{HEAD, MEND, META};
 use crate::format::{self, put_chunk, Header, Mode};
@@ -272,13 +273,22 @@ fn code_plane_band(plan: &Plan, plane: &[i32], j: usize) -> Vec<u8> {
         } else {
             BandKind::Detail
         };
-        return band::encode_stream(&wide(ranges), dims, kind, None, plan.coding);
+        return plan.code_indices(&wide(ranges), j, kind, None);
     }
     let pq = plan.parents[j].map(|p| wide(&plan.bands[p].ranges));
     let parent = plan.parents[j].zip(pq.as_deref()).map(|(p, data)| Parent {
         data,
         dims: &plan.dims[p],
     });
+    if let Some(g) = plan.grid(j) {
+        let blocks = codeblocks::encode_blocks_by(&g, BandKind::Detail, parent, plan.coding, |b| {
+            layout::gather(plane, shape, &plan.in_plane(j, b))
+                .into_iter()
+                .map(i64::from)
+                .collect()
+        });
+        return blocks_payload(&blocks);
+    }
     let offs = plan.row_offsets(j);
     let cols = dims.last().copied().unwrap_or(1);
     band::encode_stream_rows(dims, parent, plan.coding, |g, out| {
@@ -414,6 +424,7 @@ mod tests {
                 boundary: Boundary::Periodic,
                 levels: 5,
                 rate: Rate::Lossless,
+                format: Default::default(),
             };
             let wide = encode_lossless_wide(&r.view(), &opts).unwrap();
             let narrow = encode_lossless_narrow(&mut MemorySlabs::new(&r), &opts)
@@ -441,6 +452,7 @@ mod tests {
                 boundary: Boundary::Symmetric,
                 levels: 4,
                 rate: Rate::Lossless,
+                format: Default::default(),
             };
             let file = crate::codec::encode(&r, &opts).unwrap();
             for k in 0..3 {

@@ -10,9 +10,11 @@
 
 use super::layout;
 use super::plan::Plan;
+use crate::entropy::codeblocks::{self, Grid};
 use crate::entropy::range::Encoder;
 use crate::entropy::{band, BandKind, Parent};
-use crate::format::bands::level_payload;
+use crate::format::bands::{blocks_payload, level_payload};
+use std::ops::Range;
 use crate::format::{put_chunk, Tag};
 use rayon::prelude::*;
 
@@ -155,10 +157,25 @@ impl Plan {
         } else {
             BandKind::Detail
         };
+        let grid = self.grid(j);
         let q = match (input(c, j), choice) {
             (BandInput::Indices(q), _) => {
-                stream = band::encode_stream(&q, dims, kind, parent, self.coding);
+                stream = self.code_indices(&q, j, kind, parent);
                 q
+            }
+            (BandInput::Coefficients { plane, step }, Choice::Rdo(lambda))
+                if level > 0 && grid.is_some() =>
+            {
+                let g = grid.expect("a block grid");
+                let (streams, q) =
+                    codeblocks::encode_blocks_rdo_by(&g, parent, lambda, self.coding, keep, |b| {
+                        layout::gather(plane, &self.pyr.shape, &self.in_plane(j, b))
+                            .into_iter()
+                            .map(|x| (x as f64 / step) as f32)
+                            .collect()
+                    });
+                stream = blocks_payload(&streams);
+                q.unwrap_or_default()
             }
             (BandInput::Coefficients { plane, step }, Choice::Rdo(lambda)) if level > 0 => {
                 let offs = self.row_offsets(j);
@@ -187,7 +204,7 @@ impl Plan {
                     .into_iter()
                     .map(|x| round_index((x as f64 / step) as f32))
                     .collect();
-                stream = band::encode_stream(&q, dims, kind, parent, self.coding);
+                stream = self.code_indices(&q, j, kind, parent);
                 q
             }
         };
@@ -195,6 +212,42 @@ impl Plan {
             q: if keep { q } else { Vec::new() },
             stream,
         }
+    }
+
+    /// The entry of band `j` of indices `q`: its stream, or in a format 3 file its
+    /// code-blocks' index and streams ([`codeblocks::encode_blocks`]).
+    pub(super) fn code_indices(
+        &self,
+        q: &[i64],
+        j: usize,
+        kind: BandKind,
+        parent: Option<Parent>,
+    ) -> Vec<u8> {
+        match self.grid(j) {
+            Some(g) => blocks_payload(&codeblocks::encode_blocks(
+                q,
+                &g,
+                kind,
+                parent,
+                self.coding,
+            )),
+            None => band::encode_stream(q, &self.dims[j], kind, parent, self.coding),
+        }
+    }
+
+    /// The code-block grid of band `j` in a format 3 file; `None` before.
+    pub(super) fn grid(&self, j: usize) -> Option<Grid> {
+        self.blocks.as_ref().map(|b| Grid::new(&self.dims[j], b))
+    }
+
+    /// Box `b` of band `j` (in the band's coordinates) as a box of the pyramid's plane.
+    pub(super) fn in_plane(&self, j: usize, b: &[Range<usize>]) -> Vec<Range<usize>> {
+        self.bands[j]
+            .ranges
+            .iter()
+            .zip(b)
+            .map(|(r, x)| r.start + x.start..r.start + x.end)
+            .collect()
     }
 
     /// The offset in the pyramid's plane of every row of band `j` (raster order).

@@ -3,7 +3,7 @@
 
 use super::colour::{channel_weights, planes_f32};
 use super::levels::{BandInput, Choice, CodedBand};
-use super::options::EncodeOptions;
+use super::options::{EncodeOptions, Format};
 use super::plan::{band_rho, dequantize_into, lossy_values, Plan};
 use super::{layout, meta};
 use crate::format::header::Colour;
@@ -88,7 +88,8 @@ pub(super) fn header_with(
     if super::voids::lists_voids(meta) {
         // 2.4: the header says the mETA lists voids, so a file without it is refused
         header.voids = true;
-        header.version = format::Version::for_file(mode == Mode::Lossless, true);
+        let blocks = header.version.has_blocks();
+        header.version = format::Version::for_file(mode == Mode::Lossless, true, blocks);
     }
     Ok(header)
 }
@@ -126,8 +127,9 @@ impl Frame<'_> {
         if opts.levels > format::header::MAX_LEVELS {
             return Err(Error::parameter("levels", opts.levels, "0 to 32"));
         }
+        let blocks = opts.format == Format::Blocks;
         Ok(Header {
-            version: format::Version::for_file(mode == Mode::Lossless, false),
+            version: format::Version::for_file(mode == Mode::Lossless, false, blocks),
             kind: self.kind,
             sample_type: self.sample_type,
             dims: dims.to_vec(),
@@ -144,7 +146,11 @@ impl Frame<'_> {
             max: 0.0,
             tile: dims.to_vec(),
             voids: false,
-            blocks: Vec::new(),
+            blocks: if blocks {
+                super::reblock::exponents(dims.len())
+            } else {
+                Vec::new()
+            },
         })
     }
 }
@@ -394,6 +400,7 @@ mod tests {
                     boundary: Boundary::Symmetric,
                     levels: 4,
                     rate: Rate::Quality(50.0),
+                    format: Default::default(),
                 };
                 let p = prepare(&r.view(), &opts, Mode::Lossy).unwrap();
                 let range = p.header.max - p.header.min;

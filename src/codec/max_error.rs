@@ -346,6 +346,7 @@ mod tests {
                 boundary: Boundary::Symmetric,
                 levels: 6,
                 rate: Rate::MaxError(e),
+                format: Default::default(),
             };
             let s = residual_step(e, SampleType::I16);
             let mut p = prepare(&r.view(), &opts, Mode::MaxError).unwrap();

@@ -27,6 +27,18 @@ pub enum Rate {
     Lossless,
 }
 
+/// The layout a one-piece file is written in (formats/MRA.md §3). Tiled files are
+/// format 2 whatever this says.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Format {
+    /// Format 3.0: every band cut into independent code-blocks (§15), coded and decoded
+    /// in parallel, a region decoding only the blocks it meets. The default.
+    #[default]
+    Blocks,
+    /// Format 2.x: one stream per band, for readers that predate format 3.
+    Bands,
+}
+
 /// Encoder settings.
 #[derive(Clone, Debug, PartialEq)]
 pub struct EncodeOptions {
@@ -34,6 +46,8 @@ pub struct EncodeOptions {
     pub boundary: Boundary,
     pub levels: usize,
     pub rate: Rate,
+    /// The layout of a one-piece file.
+    pub format: Format,
 }
 
 impl EncodeOptions {
@@ -41,6 +55,15 @@ impl EncodeOptions {
     /// its bits, NaN payloads included.
     pub(crate) fn keeps_bits(&self) -> bool {
         matches!(self.rate, Rate::Lossless) || self.rate == Rate::MaxError(0.0)
+    }
+
+    /// These options with one-piece files written as format 2 (what every tile of a
+    /// tiled file is).
+    pub(crate) fn in_bands(&self) -> EncodeOptions {
+        EncodeOptions {
+            format: Format::Bands,
+            ..self.clone()
+        }
     }
 }
 
@@ -51,6 +74,7 @@ impl Default for EncodeOptions {
             boundary: Boundary::Symmetric,
             levels: 6,
             rate: Rate::Quality(50.0),
+            format: Format::Blocks,
         }
     }
 }

@@ -31,6 +31,9 @@ pub(super) struct Plan {
     pub(super) dims: Vec<Vec<usize>>,
     /// The coefficient coding (format 2.3 and later: each band's classes chosen).
     pub(super) coding: Coding,
+    /// The code-block extents of a format 3 file (every band cut into them, §15);
+    /// `None` before.
+    pub(super) blocks: Option<Vec<usize>>,
 }
 
 impl Plan {
@@ -75,6 +78,7 @@ impl Plan {
             parents,
             dims,
             coding: coding_of(h),
+            blocks: h.version.has_blocks().then(|| h.block_extents()),
         })
     }
 

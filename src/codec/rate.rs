@@ -651,6 +651,7 @@ pub fn keep_psnr(
         boundary,
         levels,
         rate: Rate::Keep(keep),
+        format: Default::default(),
     };
     let mut p = prepare(&r.view(), &opts, Mode::Lossy)?;
     if !weighted {

@@ -23,7 +23,7 @@ pub const SIDE: usize = 256;
 pub const VOLUME: [usize; 3] = [32, 64, 64];
 
 /// The block extents of a raster of `nd` axes, as the exponents `HEAD` stores.
-fn exponents(nd: usize) -> Vec<u8> {
+pub(super) fn exponents(nd: usize) -> Vec<u8> {
     codeblocks::block_shape(nd, SIDE, VOLUME)
         .iter()
         .map(|b| b.trailing_zeros() as u8)

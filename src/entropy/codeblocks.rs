@@ -200,12 +200,24 @@ pub fn encode_blocks(
     parent: Option<Parent>,
     coding: Coding,
 ) -> Vec<Vec<u8>> {
+    encode_blocks_by(grid, kind, parent, coding, |b| extract(q, &grid.dims, b))
+}
+
+/// [`encode_blocks`] with the values of the block of box `b` (raster order over the
+/// box) given by `values(b)`, so that the band is never copied whole.
+pub fn encode_blocks_by(
+    grid: &Grid,
+    kind: BandKind,
+    parent: Option<Parent>,
+    coding: Coding,
+    values: impl Fn(&[Range<usize>]) -> Vec<i64> + Sync,
+) -> Vec<Vec<u8>> {
     (0..grid.len())
         .into_par_iter()
         .map(|i| {
             let b = grid.bounds(i);
             let d = box_dims(&b);
-            let v = extract(q, &grid.dims, &b);
+            let v = values(&b);
             let par = if kind == BandKind::Coarse {
                 None
             } else {
@@ -227,23 +239,45 @@ pub fn encode_blocks_rdo(
     lambda: f32,
     coding: Coding,
 ) -> (Vec<Vec<u8>>, Vec<i64>) {
+    let (streams, q) = encode_blocks_rdo_by(grid, parent, lambda, coding, true, |b| {
+        extract(x, &grid.dims, b)
+    });
+    (streams, q.unwrap_or_default())
+}
+
+/// [`encode_blocks_rdo`] with the values (over the step) of the block of box `b` given
+/// by `values(b)`; the band's indices only when `keep` (a band no other band reads as
+/// its parent need not hold them).
+pub fn encode_blocks_rdo_by(
+    grid: &Grid,
+    parent: Option<Parent>,
+    lambda: f32,
+    coding: Coding,
+    keep: bool,
+    values: impl Fn(&[Range<usize>]) -> Vec<f32> + Sync,
+) -> (Vec<Vec<u8>>, Option<Vec<i64>>) {
     let coded: Vec<(Vec<u8>, Vec<i64>)> = (0..grid.len())
         .into_par_iter()
         .map(|i| {
             let b = grid.bounds(i);
             let d = box_dims(&b);
-            let v = extract(x, &grid.dims, &b);
+            let v = values(&b);
             let par = parent_of(&b, parent);
             let pp = par.as_ref().map(|(data, dims)| Parent { data, dims });
             let mut e = super::range::Encoder::new();
-            let q = band::encode_rdo(&mut e, &v, &d, pp, lambda, coding);
-            (e.finish_short(), q)
+            let cols = d.last().copied().unwrap_or(1);
+            let q = band::encode_rdo_with(&mut e, &d, pp, lambda, coding, keep, |g, out| {
+                out.copy_from_slice(&v[g * cols..(g + 1) * cols])
+            });
+            (e.finish_short(), q.unwrap_or_default())
         })
         .collect();
-    let mut q = vec![0i64; grid.dims.iter().product()];
+    let mut q = keep.then(|| vec![0i64; grid.dims.iter().product()]);
     let mut streams = Vec::with_capacity(coded.len());
     for (i, (s, qb)) in coded.into_iter().enumerate() {
-        insert(&mut q, &grid.dims, &grid.bounds(i), &qb);
+        if let Some(q) = q.as_mut() {
+            insert(q, &grid.dims, &grid.bounds(i), &qb);
+        }
         streams.push(s);
     }
     (streams, q)

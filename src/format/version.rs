@@ -127,10 +127,14 @@ impl Version {
         self.at_least(Version::HEAD_FLAGS)
     }
 
-    /// The version the writer gives a file of one tile: 2.3 when lossless (each band
-    /// chooses its classes), 2.0 else; 2.4 at least when the `HEAD` says the file has
-    /// voids. (A file cut into code-blocks is [`Version::BLOCKS`].)
-    pub fn for_file(lossless: bool, voids: bool) -> Version {
+    /// The version the writer gives a one-piece file: 3.0 when cut into code-blocks
+    /// (`blocks`); else 2.3 when lossless (each band chooses its classes), 2.0 when
+    /// lossy, 2.4 at least when the `HEAD` says the file has voids. (The one-tile files
+    /// inside a tiled file are never cut into code-blocks.)
+    pub fn for_file(lossless: bool, voids: bool, blocks: bool) -> Version {
+        if blocks {
+            return Version::BLOCKS;
+        }
         let v = if lossless {
             Version::CHOSEN_CODING
         } else {

@@ -41,6 +41,7 @@ fn opts(rate: Rate) -> EncodeOptions {
         boundary: Boundary::Symmetric,
         levels: 4,
         rate,
+        format: Default::default(),
     }
 }
 

@@ -172,6 +172,8 @@ pub(crate) fn encode_slabs<S: SlabSource + ?Sized, W: Write + Seek>(
     out: &mut W,
 ) -> Result<u64> {
     check_rate(opts.rate)?;
+    // every tile is a format 2 one-tile file (§14)
+    let opts = &opts.in_bands();
     let shape = src.shape().clone();
     let grid = Grid::new(&shape.dims, tile)?;
     let sampled = matches!(
