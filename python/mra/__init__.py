@@ -130,6 +130,7 @@ def encode(
     levels: int = 6,
     channels_last: bool = False,
     tile: Optional[Sequence[int]] = None,
+    format: int = 3,
 ) -> bytes:
     """Encode ``a`` into the bytes of an ``.mra`` file (the ``mra encode`` format).
 
@@ -143,6 +144,10 @@ def encode(
     order), each coded on its own at one quality for the whole array, so that
     ``decode(..., region=)`` reads only the tiles a block meets. Without it, arrays up
     to 2^24 positions are one tile, larger ones tiles of 1024² (2-D) or 128³ (3-D).
+
+    ``format`` is that of a one-piece file: 3 (the default, every band cut into
+    independent code-blocks) or 2 (one stream per band, for readers older than format
+    3). Tiled files are format 2 either way.
     """
     mode, value = _rate_of(
         lossless=lossless,
@@ -165,6 +170,7 @@ def encode(
         _count("levels", levels),
         bool(channels_last),
         None if tile is None else [_count("tile", t) for t in tile],
+        _count("format", format),
     )
 
 

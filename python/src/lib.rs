@@ -238,7 +238,7 @@ fn rate(kind: &str, value: f64, data_range: Option<f64>) -> PyResult<Rate> {
 
 /// Encode an array into the bytes of an `.mra` file.
 #[pyfunction]
-#[pyo3(signature = (a, rate_kind, value, data_range, scheme, boundary, levels, channels_last, tile=None))]
+#[pyo3(signature = (a, rate_kind, value, data_range, scheme, boundary, levels, channels_last, tile=None, format=3))]
 #[allow(clippy::too_many_arguments)]
 fn encode<'py>(
     py: Python<'py>,
@@ -251,13 +251,14 @@ fn encode<'py>(
     levels: usize,
     channels_last: bool,
     tile: Option<Vec<usize>>,
+    format: usize,
 ) -> PyResult<Bound<'py, PyBytes>> {
     let opts = EncodeOptions {
         scheme: parse::<Scheme>(scheme)?,
         boundary: parse::<Boundary>(boundary)?,
         levels,
         rate: rate(rate_kind, value, data_range)?,
-        format: Default::default(),
+        format: codec::Format::of_major(format).map_err(py_err)?,
     };
     let bytes = with_input(a, |input, shape| {
         run(py, "encode", || {

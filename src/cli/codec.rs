@@ -152,11 +152,7 @@ pub fn encode(a: EncodeArgs) -> CliResult {
         boundary: a.boundary,
         levels: a.levels,
         rate,
-        format: if a.format == 2 {
-            Format::Bands
-        } else {
-            Format::Blocks
-        },
+        format: Format::of_major(a.format as usize).map_err(|e| Failure(e.to_string()))?,
     };
     let read_opts = a.raw.options()?;
     // a raw volume or raw NRRD cut into tiles is read a slab of tiles at a time

@@ -39,6 +39,21 @@ pub enum Format {
     Bands,
 }
 
+impl Format {
+    /// The layout of major format version `major` (2 or 3).
+    pub fn of_major(major: usize) -> crate::Result<Format> {
+        match major {
+            3 => Ok(Format::Blocks),
+            2 => Ok(Format::Bands),
+            _ => Err(crate::Error::parameter(
+                "format",
+                major,
+                "2 (one stream per band) or 3 (code-blocks)",
+            )),
+        }
+    }
+}
+
 /// Encoder settings.
 #[derive(Clone, Debug, PartialEq)]
 pub struct EncodeOptions {

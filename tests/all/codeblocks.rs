@@ -32,10 +32,12 @@ fn field(dims: &[usize], channels: usize, ty: SampleType, seed: u64, hi: f64) ->
     Raster::new(dims.to_vec(), channels, Samples::from_f64(&v, ty), kind).unwrap()
 }
 
+/// The one-piece format 2 file of `r` (what `to_blocks` cuts).
 fn encode(r: &Raster, rate: Rate, levels: usize) -> Vec<u8> {
     let o = EncodeOptions {
         rate,
         levels,
+        format: codec::Format::Bands,
         ..Default::default()
     };
     codec::encode_tiled(r, &o, &r.dims).unwrap()

@@ -198,12 +198,12 @@ fn lossless_is_bit_exact_for_every_type_and_shape_including_nan() {
     }
 }
 
-/// Lossless files are format 2.3 (each band chooses its magnitude classes), lossy ones
-/// stay 2.0; 16-bit samples over the whole range with sharp steps (details in the
+/// One-piece files are format 3.0 by default; with `Format::Bands` lossless files are
+/// format 2.3 (each band chooses its magnitude classes) and lossy ones 2.0; 16-bit samples over the whole range with sharp steps (details in the
 /// thousands, where bands take the wide classes) come back bit-exact, and decode at
 /// reduced levels to the halved extents.
 #[test]
-fn lossless_files_are_format_2_3_and_exact_on_wide_16_bit_data() {
+fn files_are_format_3_0_or_2_x_and_exact_on_wide_16_bit_data() {
     let (h, w) = (37usize, 53usize);
     let v: Vec<f64> = (0..h * w)
         .map(|i| {
@@ -224,7 +224,14 @@ fn lossless_files_are_format_2_3_and_exact_on_wide_16_bit_data() {
     )
     .unwrap();
     let bytes = codec::encode(&r, &opts(Rate::Lossless)).unwrap();
-    assert_eq!(codec::info(&bytes).unwrap().version, "2.3");
+    assert_eq!(codec::info(&bytes).unwrap().version, "3.0");
+    let bands = EncodeOptions {
+        format: codec::Format::Bands,
+        ..opts(Rate::Lossless)
+    };
+    let two = codec::encode(&r, &bands).unwrap();
+    assert_eq!(codec::info(&two).unwrap().version, "2.3");
+    assert!(codec::decode(&two, &DecodeOptions::default()).unwrap().raster.samples == r.samples);
     let d = codec::decode(&bytes, &DecodeOptions::default()).unwrap();
     assert!(d.complete);
     assert!(d.raster.samples == r.samples, "not bit-exact");
@@ -243,7 +250,12 @@ fn lossless_files_are_format_2_3_and_exact_on_wide_16_bit_data() {
         );
     }
     let lossy = codec::encode(&r, &opts(Rate::Quality(50.0))).unwrap();
-    assert_eq!(codec::info(&lossy).unwrap().version, "2.0");
+    assert_eq!(codec::info(&lossy).unwrap().version, "3.0");
+    let bands = EncodeOptions {
+        format: codec::Format::Bands,
+        ..opts(Rate::Quality(50.0))
+    };
+    assert_eq!(codec::info(&codec::encode(&r, &bands).unwrap()).unwrap().version, "2.0");
 }
 
 /// Bands and channels are coded in parallel, each into its own stream: the file, and

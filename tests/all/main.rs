@@ -10,6 +10,7 @@ mod block_coder;
 mod cli;
 mod cli_words;
 mod codeblocks;
+mod codeblocks_default;
 mod codec;
 mod codec_bpp;
 mod codec_rate;
