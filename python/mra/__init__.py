@@ -143,7 +143,8 @@ def encode(
     ``tile`` cuts the array into tiles of these extents (one per spatial axis, NumPy
     order), each coded on its own at one quality for the whole array, so that
     ``decode(..., region=)`` reads only the tiles a block meets. Without it, arrays up
-    to 2^24 positions are one tile, larger ones tiles of 1024² (2-D) or 128³ (3-D).
+    to 2^24 positions or 2^26 samples are one tile, larger ones tiles of 1024² (2-D)
+    or 128³ (3-D).
 
     ``format`` is that of a one-piece file: 3 (the default, every band cut into
     independent code-blocks) or 2 (one stream per band, for readers older than format

@@ -59,8 +59,9 @@ pub struct EncodeArgs {
     #[arg(long, group = "rate")]
     pub lossless: bool,
     /// Tile extents, fastest axis first: `N` (every axis), `X,Y[,Z]`, or `whole` (one
-    /// tile). Default: one tile up to 2^24 positions, else 1024 per axis in 2-D and
-    /// 128 in 3-D. Each tile is coded on its own at the step of the whole raster.
+    /// tile). Default: one tile up to 2^24 positions or 2^26 samples (positions ×
+    /// channels), else 1024 per axis in 2-D and 128 in 3-D. Each tile is coded on its
+    /// own at the step of the whole raster.
     #[arg(long, value_name = "T")]
     pub tile: Option<String>,
     /// Format of a one-piece file: 3 (the default: every band cut into independent
@@ -70,8 +71,9 @@ pub struct EncodeArgs {
     #[arg(long, value_name = "V", default_value_t = 3,
           value_parser = clap::value_parser!(u8).range(2..=3))]
     pub format: u8,
-    /// Format 3.0 in one piece whatever the size (without it, rasters over 2^24
-    /// positions are cut into format 2 tiles). Format 3.0 itself is the default.
+    /// Format 3.0 in one piece whatever the size (without it, rasters over the
+    /// one-piece limit of `--tile` are cut into format 2 tiles). Format 3.0 itself is
+    /// the default.
     #[arg(long, conflicts_with = "format")]
     pub blocks: bool,
     #[command(flatten)]
@@ -214,7 +216,7 @@ fn encode_slabs(
     let shape = crate::io::slab::SlabSource::shape(src).clone();
     let tile = match a.tile.as_deref() {
         None if a.blocks => shape.dims.clone(),
-        None => codec::default_tile(&shape.dims),
+        None => codec::default_tile(&shape.dims, shape.channels),
         Some(s) => tile_extents(s, &shape.dims)?,
     };
     let t = std::time::Instant::now();
@@ -244,7 +246,7 @@ fn encode_whole(
     let r = read_input(&a.input, read_opts)?;
     let tile = match a.tile.as_deref() {
         None if a.blocks => r.dims.clone(),
-        None => codec::default_tile(&r.dims),
+        None => codec::default_tile(&r.dims, r.channels),
         Some(s) => tile_extents(s, &r.dims)?,
     };
     let t = std::time::Instant::now();

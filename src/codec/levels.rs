@@ -14,9 +14,9 @@ use crate::entropy::codeblocks::{self, Grid};
 use crate::entropy::range::Encoder;
 use crate::entropy::{band, BandKind, Parent};
 use crate::format::bands::{blocks_payload, level_payload};
-use std::ops::Range;
 use crate::format::{put_chunk, Tag};
 use rayon::prelude::*;
+use std::ops::Range;
 
 /// One band of one channel, coded: its indices (the context of its children) and stream.
 pub(super) struct CodedBand {
@@ -224,13 +224,7 @@ impl Plan {
         parent: Option<Parent>,
     ) -> Vec<u8> {
         match self.grid(j) {
-            Some(g) => blocks_payload(&codeblocks::encode_blocks(
-                q,
-                &g,
-                kind,
-                parent,
-                self.coding,
-            )),
+            Some(g) => blocks_payload(&codeblocks::encode_blocks(q, &g, kind, parent, self.coding)),
             None => band::encode_stream(q, &self.dims[j], kind, parent, self.coding),
         }
     }

@@ -31,8 +31,13 @@ use std::ops::Range;
 
 /// Most tiles a file may have.
 pub const MAX_TILES: u64 = 1 << 24;
-/// Rasters of at most this many positions are one tile by default.
+/// Rasters of at most this many positions are one tile by default, whatever their
+/// channels.
 pub const ONE_PIECE_POSITIONS: u64 = 1 << 24;
+/// Rasters of at most this many samples (positions × channels) are one tile by default:
+/// a 6000² u16 image or a 512×512×256 u16 volume encodes and decodes in one piece (no
+/// seams) within about 560 MiB (docs/codec.md, "Code-blocks").
+pub const ONE_PIECE_SAMPLES: u64 = 1 << 26;
 /// Default tile extent of 1-D and 2-D rasters over [`ONE_PIECE_POSITIONS`].
 pub const DEFAULT_TILE_2D: usize = 1024;
 /// Default tile extent of 3-D and 4-D rasters over [`ONE_PIECE_POSITIONS`].
@@ -40,9 +45,6 @@ pub const DEFAULT_TILE_3D: usize = 128;
 /// Tiles sampled by the `--psnr` and `--bpp` searches on rasters of more tiles.
 pub const SEARCH_SAMPLE_TILES: usize = 64;
 
-/// Default tile extents of a raster of extents `dims` (slowest first): one tile up to
-/// [`ONE_PIECE_POSITIONS`] positions, else [`DEFAULT_TILE_2D`] per axis in 1-D and 2-D
-/// and [`DEFAULT_TILE_3D`] in 3-D and 4-D (each at most the axis extent).
 /// The extents of a file's raster at `level`, slowest axis first: what a decode at that
 /// level returns without a region (a tiled file's tiles each reduced, then stitched).
 pub fn level_extents(h: &Header, level: usize) -> Result<Vec<usize>> {
@@ -53,12 +55,16 @@ pub fn level_extents(h: &Header, level: usize) -> Result<Vec<usize>> {
         .collect())
 }
 
-pub fn default_tile(dims: &[usize]) -> Vec<usize> {
+/// Default tile extents of a raster of extents `dims` (slowest first) and `channels`
+/// channels: one tile up to [`ONE_PIECE_POSITIONS`] positions or
+/// [`ONE_PIECE_SAMPLES`] samples, else [`DEFAULT_TILE_2D`] per axis in 1-D and 2-D and
+/// [`DEFAULT_TILE_3D`] in 3-D and 4-D (each at most the axis extent).
+pub fn default_tile(dims: &[usize], channels: usize) -> Vec<usize> {
     let n = dims
         .iter()
         .try_fold(1u64, |a, &d| a.checked_mul(d as u64))
         .unwrap_or(u64::MAX);
-    if n <= ONE_PIECE_POSITIONS {
+    if n <= ONE_PIECE_POSITIONS || n.saturating_mul(channels.max(1) as u64) <= ONE_PIECE_SAMPLES {
         return dims.to_vec();
     }
     let t = if dims.len() >= 3 {

@@ -19,7 +19,7 @@ pub fn encode(r: &Raster, opts: &EncodeOptions) -> Result<Vec<u8>> {
 /// [`encode`] of a borrowed raster (samples read where they are, e.g. in a NumPy array).
 pub fn encode_view(r: &RasterView<'_>, opts: &EncodeOptions) -> Result<Vec<u8>> {
     check_count(r)?;
-    encode_tiled_view(r, opts, &super::tiles::default_tile(r.dims))
+    encode_tiled_view(r, opts, &super::tiles::default_tile(r.dims, r.channels))
 }
 
 /// [`encode`] with the raster cut into tiles of extents `tile` (slowest axis first,

@@ -106,7 +106,11 @@ fn every_mode_writes_3_0_by_default_and_round_trips() {
             assert_eq!(d3.dims, r.dims, "{what}");
             assert_eq!(d3.sample_type(), ty, "{what}");
             let (a, b) = (r.samples.to_f64(), d3.samples.to_f64());
-            let err = a.iter().zip(&b).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max);
+            let err = a
+                .iter()
+                .zip(&b)
+                .map(|(x, y)| (x - y).abs())
+                .fold(0.0, f64::max);
             match rate {
                 _ if rate == Rate::Lossless || rate == Rate::MaxError(0.0) => {
                     assert!(d3.samples == r.samples, "{what}: not exact")
@@ -205,7 +209,12 @@ fn the_cli_writes_3_0_by_default_and_2_x_with_format_2() {
     let input = dir.join("in.pgm");
     mra::io::write(&input, &field(&[70, 90], 1, SampleType::U8, 3, 255.0)).unwrap();
     let run = |extra: &[&str], out: &std::path::Path| {
-        let mut args = vec!["encode", input.to_str().unwrap(), "-o", out.to_str().unwrap()];
+        let mut args = vec![
+            "encode",
+            input.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+        ];
         args.extend_from_slice(extra);
         Command::new(env!("CARGO_BIN_EXE_mra"))
             .args(&args)
@@ -221,7 +230,11 @@ fn the_cli_writes_3_0_by_default_and_2_x_with_format_2() {
     ] {
         let out = dir.join("o.mra");
         let o = run(extra, &out);
-        assert!(o.status.success(), "{extra:?}: {}", String::from_utf8_lossy(&o.stderr));
+        assert!(
+            o.status.success(),
+            "{extra:?}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
         assert_eq!(version(&std::fs::read(&out).unwrap()), want, "{extra:?}");
     }
     let bad = dir.join("bad.mra");

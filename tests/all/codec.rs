@@ -231,7 +231,13 @@ fn files_are_format_3_0_or_2_x_and_exact_on_wide_16_bit_data() {
     };
     let two = codec::encode(&r, &bands).unwrap();
     assert_eq!(codec::info(&two).unwrap().version, "2.3");
-    assert!(codec::decode(&two, &DecodeOptions::default()).unwrap().raster.samples == r.samples);
+    assert!(
+        codec::decode(&two, &DecodeOptions::default())
+            .unwrap()
+            .raster
+            .samples
+            == r.samples
+    );
     let d = codec::decode(&bytes, &DecodeOptions::default()).unwrap();
     assert!(d.complete);
     assert!(d.raster.samples == r.samples, "not bit-exact");
@@ -255,7 +261,12 @@ fn files_are_format_3_0_or_2_x_and_exact_on_wide_16_bit_data() {
         format: codec::Format::Bands,
         ..opts(Rate::Quality(50.0))
     };
-    assert_eq!(codec::info(&codec::encode(&r, &bands).unwrap()).unwrap().version, "2.0");
+    assert_eq!(
+        codec::info(&codec::encode(&r, &bands).unwrap())
+            .unwrap()
+            .version,
+        "2.0"
+    );
 }
 
 /// Bands and channels are coded in parallel, each into its own stream: the file, and

@@ -121,17 +121,28 @@ fn lossless_tiles_decode_bit_exact_for_every_type_and_odd_grid() {
 #[test]
 fn one_tile_is_the_format_2_0_file_of_before() {
     let r = field(&[40, 60], 3, SampleType::U8, DataKind::Image);
-    let o = opts(Rate::Quality(50.0));
+    let o = EncodeOptions {
+        format: codec::Format::Bands,
+        ..opts(Rate::Quality(50.0))
+    };
     let a = codec::encode(&r, &o).unwrap();
     let b = codec::encode_tiled(&r, &o, &[40, 60]).unwrap();
     assert_eq!(a, b);
     assert_eq!((a[16], a[17]), (2, 0));
-    assert_eq!(codec::default_tile(&[512, 768]), vec![512, 768]);
-    assert_eq!(codec::default_tile(&[16384, 16384]), vec![1024, 1024]);
+    assert_eq!(codec::default_tile(&[512, 768], 3), vec![512, 768]);
+    assert_eq!(codec::default_tile(&[16384, 16384], 1), vec![1024, 1024]);
     assert_eq!(
-        codec::default_tile(&[1024, 1024, 1024]),
+        codec::default_tile(&[1024, 1024, 1024], 1),
         vec![128, 128, 128]
     );
+    // up to 2^26 samples in one piece: the seams' sizes of issue 52
+    assert_eq!(codec::default_tile(&[6000, 6000], 1), vec![6000, 6000]);
+    assert_eq!(
+        codec::default_tile(&[256, 512, 512], 1),
+        vec![256, 512, 512]
+    );
+    assert_eq!(codec::default_tile(&[6000, 6000], 3), vec![1024, 1024]);
+    assert_eq!(codec::default_tile(&[4096, 4096], 4), vec![4096, 4096]);
 }
 
 #[test]
