@@ -593,6 +593,10 @@ impl Prepared {
                 };
                 bytes as f64 * 8.0 * total as f64 / x.len() as f64
             })
+            .collect::<Vec<f64>>()
+            // summed in band order: the same estimate, and so the same file, on any
+            // number of threads
+            .into_iter()
             .sum()
     }
 

@@ -167,6 +167,8 @@ fn real_bands_round_trip_in_both_coders() {
         &r,
         &mra::codec::EncodeOptions {
             rate: mra::codec::Rate::Bpp(1.0),
+            // one stream per band, as `Bands::of_file` reads them
+            format: mra::codec::Format::Bands,
             ..Default::default()
         },
     )
