@@ -2,11 +2,11 @@
 //! ([`super::decode`]) and cut to a region, or a tiled file's tiles read in order or
 //! only those a region meets ([`super::tiles`]).
 
-use super::container::{read_head, read_rest, Parsed};
-use super::decode::reconstruct;
+use super::container::{read_head, read_region, read_rest, Parsed};
+use super::decode::{reconstruct, reconstruct_window};
 use super::options::{DecodeOptions, Decoded};
 use super::tiles;
-use crate::format::Header;
+use crate::format::{Chunk, ChunkReader, Header};
 use crate::io::slab::{Shape, SlabSink};
 use crate::io::Samples;
 use crate::Result;
@@ -48,6 +48,15 @@ fn one_tile(mut p: Parsed, opts: &DecodeOptions) -> Result<Decoded> {
     };
     // a format 3 file decodes only the code-blocks the region needs
     p.window = opts.region.clone();
+    if let Some(st) = &stitch {
+        if let Some(raster) = reconstruct_window(&p, opts.level, st.out_box())? {
+            return Ok(Decoded {
+                raster,
+                header: p.header,
+                complete: p.complete,
+            });
+        }
+    }
     let mut raster = reconstruct(&p, opts.level)?;
     if let Some(st) = stitch {
         raster = tiles::crop_raster(&raster, st.out_box())?;
@@ -65,10 +74,33 @@ pub fn decode_seek<R: Read + Seek>(mut src: R, len: u64, opts: &DecodeOptions) -
     src.seek(SeekFrom::Start(0))?;
     let (rd, first, header) = read_head(&mut src, len)?;
     check_level(&header, opts.level)?;
+    let at = rd.position();
     if header.is_tiled() {
-        let at = rd.position();
         return tiles::decode_seek(&mut src, len, at, header, opts);
     }
+    one_piece(&mut src, at, len, first, header, opts)
+}
+
+/// A one-tile file decoded from a seekable stream whose `HEAD` (`first`) has been read
+/// (the next chunk at byte `at`): a 3.0 file's region from only the code-blocks it needs
+/// ([`read_region`]), anything else read whole ([`read_rest`]).
+fn one_piece<R: Read + Seek>(
+    src: &mut R,
+    at: u64,
+    len: u64,
+    first: Chunk,
+    header: Header,
+    opts: &DecodeOptions,
+) -> Result<Decoded> {
+    if let Some(region) = &opts.region {
+        if header.version.has_blocks() && !opts.allow_truncated {
+            if let Some(p) = read_region(src, at, len, header.clone(), opts.level, region)? {
+                return one_tile(p, opts);
+            }
+        }
+    }
+    src.seek(SeekFrom::Start(at))?;
+    let rd = ChunkReader::at(src, at, len);
     one_tile(
         read_rest(rd, first, header, opts.level, opts.allow_truncated)?,
         opts,
@@ -168,10 +200,8 @@ impl SlabDecoder {
                 count,
             });
         }
-        let d = one_tile(
-            read_rest(rd, first, header, opts.level, opts.allow_truncated)?,
-            opts,
-        )?;
+        let at = rd.position();
+        let d = one_piece(&mut src, at, len, first, header, opts)?;
         Ok(SlabDecoder {
             shape: Shape::of(&d.raster),
             tiled: None,
