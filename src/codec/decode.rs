@@ -286,7 +286,13 @@ fn decode_channel_into(p: &Parsed, c: usize, k: usize, plane: &mut [f32]) -> Res
                         Ok(v) => v,
                         Err(e) => return Some((j, failed(e))),
                     };
-                    dequantize_band(&v, dims, decoded_box(h, dims, wins[j].as_deref()), (step, delta), &mut rows);
+                    dequantize_band(
+                        &v,
+                        dims,
+                        decoded_box(h, dims, wins[j].as_deref()),
+                        (step, delta),
+                        &mut rows,
+                    );
                     prev = has_children[j].then_some((j, v));
                     continue;
                 }
@@ -312,7 +318,11 @@ fn decode_channel_into(p: &Parsed, c: usize, k: usize, plane: &mut [f32]) -> Res
 
 /// The box of a band of extents `dims` that a decode of its window `w` fills: the
 /// code-blocks `w` meets ([`band_windows`]), `None` for the whole band.
-fn decoded_box(h: &Header, dims: &[usize], w: Option<&[Range<usize>]>) -> Option<Vec<Range<usize>>> {
+fn decoded_box(
+    h: &Header,
+    dims: &[usize],
+    w: Option<&[Range<usize>]>,
+) -> Option<Vec<Range<usize>>> {
     let w = w?;
     let block = h.block_extents();
     (w.len() == dims.len() && block.len() == dims.len()).then(|| {
@@ -641,7 +651,10 @@ pub(super) fn reconstruct_window(
     } else {
         p.meta.clone()
     };
-    let crop: Vec<crate::io::AxisMap> = out.iter().map(|g| crate::io::AxisMap::crop(g.start)).collect();
+    let crop: Vec<crate::io::AxisMap> = out
+        .iter()
+        .map(|g| crate::io::AxisMap::crop(g.start))
+        .collect();
     r.meta = meta.resampled(&region, &dims, &crop);
     Ok(Some(r))
 }

@@ -135,7 +135,9 @@ pub fn parent_box(b: &[Range<usize>], pdims: &[usize]) -> Vec<Range<usize>> {
 pub fn extract<T: Copy + Default>(v: &[T], dims: &[usize], b: &[Range<usize>]) -> Vec<T> {
     let n: usize = b.iter().map(|r| r.len()).product();
     let mut out = Vec::with_capacity(n);
-    for_each_run(dims, b, |at, len, _| out.extend_from_slice(&v[at..at + len]));
+    for_each_run(dims, b, |at, len, _| {
+        out.extend_from_slice(&v[at..at + len])
+    });
     out
 }
 

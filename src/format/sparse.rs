@@ -155,6 +155,8 @@ pub fn read_body_sparse<R: Read + Seek>(
                     ));
                 }
                 for &j in js {
+                    // `ch` indexes both the bands and their entries
+                    #[allow(clippy::needless_range_loop)]
                     for ch in 0..c {
                         let ratio = f32::from_le_bytes(r.bytes::<4>("a step ratio")?);
                         if !(ratio > 0.0 && ratio.is_finite()) {
@@ -207,7 +209,10 @@ pub fn read_body_sparse<R: Read + Seek>(
                 }
                 if r.pos != r.end {
                     return Err(FormatError::invalid(
-                        format!("LEVL {level} with {} bytes after its last band", r.end - r.pos),
+                        format!(
+                            "LEVL {level} with {} bytes after its last band",
+                            r.end - r.pos
+                        ),
                         "a chunk that ends with its last band",
                     ));
                 }
@@ -233,11 +238,7 @@ pub fn read_body_sparse<R: Read + Seek>(
                 match tag {
                     Some(Tag::Mend) => {
                         if let Some(missing) = super::body::first_missing(
-                            header,
-                            layout,
-                            &b.bands,
-                            &b.resi,
-                            stop_level,
+                            header, layout, &b.bands, &b.resi, stop_level,
                         ) {
                             return Err(FormatError::missing(
                                 format!("{missing} missing (MEND at byte {pos})"),

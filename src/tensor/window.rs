@@ -226,12 +226,18 @@ mod tests {
     fn window_is_the_box_of_the_whole_synthesis() {
         let mut seed = 7u64;
         let mut rnd = move || {
-            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             ((seed >> 33) % 1000) as f32 / 7.0 - 60.0
         };
         for shape in [vec![37usize], vec![23, 19], vec![9, 13, 11]] {
             for scheme in Scheme::ALL {
-                for boundary in [Boundary::Symmetric, Boundary::Periodic, Boundary::Interpolating] {
+                for boundary in [
+                    Boundary::Symmetric,
+                    Boundary::Periodic,
+                    Boundary::Interpolating,
+                ] {
                     for levels in 0..=3 {
                         let spec = PyramidSpec {
                             scheme,

@@ -153,7 +153,6 @@ fn regions_of_code_blocks_are_windows_of_the_whole_decode() {
                     levels,
                     scheme,
                     boundary,
-                    ..Default::default()
                 };
                 let two = codec::encode_tiled(&r, &o, &r.dims).unwrap();
                 let three = codec::to_blocks(&two).unwrap();
@@ -376,7 +375,9 @@ fn a_region_reads_only_its_code_blocks() {
         three.len()
     );
     let win = vec![600..700, 700..800];
-    let whole = codec::decode_file(&input, &DecodeOptions::default()).unwrap().raster;
+    let whole = codec::decode_file(&input, &DecodeOptions::default())
+        .unwrap()
+        .raster;
     let part = codec::decode_file(
         &input,
         &DecodeOptions {
