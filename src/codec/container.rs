@@ -6,8 +6,7 @@ use super::plan::Plan;
 use crate::format::body::{self, BandChunk, BandLayout, ChunkInfo};
 use crate::format::{Chunk, ChunkReader, Header, Residual};
 use crate::{Error, Result};
-use std::io::{Read, Seek, SeekFrom};
-use std::ops::Range;
+use std::io::Read;
 
 pub(super) use crate::format::body::read_head;
 
@@ -72,79 +71,4 @@ pub(super) fn read_rest<R: Read>(
         chunks: b.chunks,
         window: None,
     })
-}
-
-/// The chunks after `HEAD` (the next at byte `at` of `len`) of a one-piece 3.0 file read
-/// for the full-resolution box `region` at level `stop_level`: the heads, `mETA` and
-/// code-block indices ([`crate::format::sparse`]), then by positioned reads only the
-/// code-blocks each band's decode needs ([`super::decode::band_windows`]; runs of
-/// neighbouring blocks in one read). `None` for a file left to the whole read.
-pub(super) fn read_region<R: Read + Seek>(
-    src: &mut R,
-    at: u64,
-    len: u64,
-    header: Header,
-    stop_level: usize,
-    region: &[Range<usize>],
-) -> Result<Option<Parsed>> {
-    let plan = Plan::new(&header)?;
-    let groups = plan.level_groups();
-    let layout = BandLayout {
-        groups: &groups,
-        levels: plan.bands.iter().map(|b| b.level).collect(),
-        parents: &plan.parents,
-        coefficients: plan
-            .dims
-            .iter()
-            .map(|d| d.iter().product::<usize>() as u64)
-            .collect(),
-    };
-    let Some(sb) =
-        crate::format::sparse::read_body_sparse(src, at, len, &header, &layout, stop_level)?
-    else {
-        return Ok(None);
-    };
-    let b = sb.body;
-    let mut p = Parsed {
-        header,
-        meta: b.meta,
-        plan,
-        bands: b.bands,
-        resi: b.resi,
-        complete: b.complete,
-        chunks: b.chunks,
-        window: Some(region.to_vec()),
-    };
-    let wins = super::decode::band_windows(&p);
-    let block = p.header.block_extents();
-    for (c, bands) in p.bands.iter_mut().enumerate() {
-        for (j, bc) in bands.iter_mut().enumerate() {
-            let (Some(bc), Some(off)) = (bc.as_mut(), sb.entries[c][j]) else {
-                continue;
-            };
-            let dims = &p.plan.dims[j];
-            let set = crate::format::bands::parse_blocks(&bc.data, dims, &block).map_err(|e| {
-                Error::format(format!("band {j} of channel {c}: {e}"), "a valid band")
-            })?;
-            let grid = crate::entropy::codeblocks::Grid::new(dims, &block);
-            let which = match &wins[j] {
-                Some(w) => grid.touching(w),
-                None => (0..grid.len()).collect(),
-            };
-            // runs of blocks that follow one another in the entry, one read each
-            let mut runs: Vec<Range<usize>> = Vec::new();
-            for i in which {
-                let r = set.streams[i].clone();
-                match runs.last_mut() {
-                    Some(last) if last.end == r.start => last.end = r.end,
-                    _ => runs.push(r),
-                }
-            }
-            for r in runs {
-                src.seek(SeekFrom::Start(off + r.start as u64))?;
-                src.read_exact(&mut bc.data[r])?;
-            }
-        }
-    }
-    Ok(Some(p))
 }
