@@ -107,7 +107,7 @@ const SUPPORT: usize = 16;
 /// needs (a band's only child is the next one in its chain, [`Plan::chains`]). Every
 /// block is needed without a window, in files before format 3 and with periodic ends
 /// (whose synthesis wraps around).
-fn band_windows(p: &Parsed) -> Vec<Option<Vec<Range<usize>>>> {
+pub(super) fn band_windows(p: &Parsed) -> Vec<Option<Vec<Range<usize>>>> {
     let (h, plan) = (&p.header, &p.plan);
     let nb = plan.bands.len();
     let win = match &p.window {
@@ -286,10 +286,13 @@ fn decode_channel_into(p: &Parsed, c: usize, k: usize, plane: &mut [f32]) -> Res
                         Ok(v) => v,
                         Err(e) => return Some((j, failed(e))),
                     };
-                    let cols = dims.last().copied().unwrap_or(1).max(1);
-                    for (r, out) in v.chunks(cols).zip(rows.iter_mut()) {
-                        dequantize_row(r, step, delta, out);
-                    }
+                    dequantize_band(
+                        &v,
+                        dims,
+                        decoded_box(h, dims, wins[j].as_deref()),
+                        (step, delta),
+                        &mut rows,
+                    );
                     prev = has_children[j].then_some((j, v));
                     continue;
                 }
@@ -310,6 +313,51 @@ fn decode_channel_into(p: &Parsed, c: usize, k: usize, plane: &mut [f32]) -> Res
     match failures.into_iter().min_by_key(|(j, _)| order[*j]) {
         Some((_, e)) => Err(e),
         None => Ok(()),
+    }
+}
+
+/// The box of a band of extents `dims` that a decode of its window `w` fills: the
+/// code-blocks `w` meets ([`band_windows`]), `None` for the whole band.
+fn decoded_box(
+    h: &Header,
+    dims: &[usize],
+    w: Option<&[Range<usize>]>,
+) -> Option<Vec<Range<usize>>> {
+    let w = w?;
+    let block = h.block_extents();
+    (w.len() == dims.len() && block.len() == dims.len()).then(|| {
+        w.iter()
+            .zip(&block)
+            .zip(dims)
+            .map(|((r, &b), &e)| {
+                let b = b.max(1);
+                (r.start / b * b).min(e)..r.end.div_ceil(b).saturating_mul(b).min(e)
+            })
+            .collect()
+    })
+}
+
+/// The indices `v` of a band of extents `dims` dequantized into its `rows` of a plane
+/// (`x = dequantize(q, step, δ)`), only over the box `bx` when given (the positions
+/// outside stay as they are).
+fn dequantize_band(
+    v: &[i64],
+    dims: &[usize],
+    bx: Option<Vec<Range<usize>>>,
+    (step, delta): (f64, f64),
+    rows: &mut [&mut [f32]],
+) {
+    let cols = dims.last().copied().unwrap_or(1).max(1);
+    match bx {
+        Some(bx) => layout::rows(dims, &bx, |at, len, _| {
+            let (g, c0) = (at / cols, at % cols);
+            dequantize_row(&v[at..at + len], step, delta, &mut rows[g][c0..c0 + len]);
+        }),
+        None => {
+            for (r, out) in v.chunks(cols).zip(rows.iter_mut()) {
+                dequantize_row(r, step, delta, out);
+            }
+        }
     }
 }
 
@@ -557,6 +605,58 @@ pub(super) fn reconstruct(p: &Parsed, k: usize) -> Result<Raster> {
         add_residuals(p, &mut samples)?;
     }
     finish(p, region, samples, k)
+}
+
+/// A lossy file (no residual layer, no voids) of non-standard pyramid decoded at level
+/// `k` over the box `out` of the level's raster alone: each channel's bands decoded
+/// over the code-blocks the window needs ([`band_windows`]) into a plane whose other
+/// pages are never written, then only the window's support synthesized level by level
+/// ([`crate::tensor::WindowPlan`]). The samples are those of the same box of a whole
+/// decode. `None` where this does not apply (the caller then decodes whole).
+pub(super) fn reconstruct_window(
+    p: &Parsed,
+    k: usize,
+    out: &[Range<usize>],
+) -> Result<Option<Raster>> {
+    let (h, plan) = (&p.header, &p.plan);
+    let k = k.min(plan.pyr.depth());
+    if h.mode == Mode::Lossless || h.mode == Mode::MaxError || h.voids || p.window.is_none() {
+        return Ok(None);
+    }
+    let Some(wp) = crate::tensor::WindowPlan::new(&plan.sub(k), out) else {
+        return Ok(None);
+    };
+    check_budget(p, k, false)?;
+    let dims: Vec<usize> = out.iter().map(|r| r.len()).collect();
+    let npos: usize = dims.iter().product();
+    let planes = (0..h.channels)
+        .into_par_iter()
+        .map(|ch| {
+            let mut plane = vec![0f32; plan.pyr.shape.iter().product()];
+            decode_channel_into(p, ch, k, &mut plane)?;
+            Ok(wp.synthesize(&plane, &plan.pyr.shape))
+        })
+        .collect::<Result<Vec<_>>>()?;
+    let samples = super::plan::to_samples(
+        planes,
+        npos,
+        h.colour == Colour::YCoCg,
+        (h.min, h.max),
+        h.sample_type,
+    );
+    let region = plan.region(k);
+    let mut r = Raster::new(dims.clone(), h.channels, samples, h.kind)?;
+    let meta = if k > 0 {
+        p.meta.resampled(&h.dims, &region, &coarse_maps(p, k))
+    } else {
+        p.meta.clone()
+    };
+    let crop: Vec<crate::io::AxisMap> = out
+        .iter()
+        .map(|g| crate::io::AxisMap::crop(g.start))
+        .collect();
+    r.meta = meta.resampled(&region, &dims, &crop);
+    Ok(Some(r))
 }
 
 /// A lossless file decoded at level `k` in `i64` planes: every sample type (floats as

@@ -2,41 +2,9 @@
 
 use std::ops::Range;
 
-/// Call `f(flat_offset, run_length, band_offset)` for every row of the block `ranges`.
-pub fn rows(shape: &[usize], ranges: &[Range<usize>], mut f: impl FnMut(usize, usize, usize)) {
-    let nd = shape.len();
-    let last = ranges[nd - 1].clone();
-    let run = last.len();
-    if run == 0 || ranges.iter().any(|r| r.is_empty()) {
-        return;
-    }
-    let mut strides = vec![1usize; nd];
-    for k in (0..nd - 1).rev() {
-        strides[k] = strides[k + 1] * shape[k + 1];
-    }
-    let mut idx: Vec<usize> = ranges[..nd - 1].iter().map(|r| r.start).collect();
-    let mut band = 0;
-    loop {
-        let base: usize = idx.iter().zip(&strides).map(|(i, s)| i * s).sum::<usize>() + last.start;
-        f(base, run, band);
-        band += run;
-        let mut k = nd - 1;
-        loop {
-            if k == 0 {
-                return;
-            }
-            k -= 1;
-            idx[k] += 1;
-            if idx[k] < ranges[k].end {
-                break;
-            }
-            idx[k] = ranges[k].start;
-            if k == 0 {
-                return;
-            }
-        }
-    }
-}
+/// Call `f(flat_offset, run_length, band_offset)` for every row of the block `ranges`
+/// ([`crate::tensor::for_each_run`]).
+pub use crate::tensor::for_each_run as rows;
 
 /// Copy the block `ranges` of `plane` out into a packed vector.
 pub fn gather<T: Copy + Default>(plane: &[T], shape: &[usize], ranges: &[Range<usize>]) -> Vec<T> {

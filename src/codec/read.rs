@@ -3,14 +3,15 @@
 //! only those a region meets ([`super::tiles`]).
 
 use super::container::{read_head, read_rest, Parsed};
-use super::decode::reconstruct;
+use super::decode::{reconstruct, reconstruct_window};
 use super::options::{DecodeOptions, Decoded};
 use super::tiles;
-use crate::format::Header;
+use crate::format::{Chunk, ChunkReader, Header};
 use crate::io::slab::{Shape, SlabSink};
 use crate::io::Samples;
 use crate::Result;
 use std::io::{Read, Seek, SeekFrom};
+use std::ops::Range;
 use std::path::Path;
 
 /// `level` is one the file of `header` holds (`0 ..= depth`, [`super::depth_of`]): a
@@ -48,6 +49,15 @@ fn one_tile(mut p: Parsed, opts: &DecodeOptions) -> Result<Decoded> {
     };
     // a format 3 file decodes only the code-blocks the region needs
     p.window = opts.region.clone();
+    if let Some(st) = &stitch {
+        if let Some(raster) = reconstruct_window(&p, opts.level, st.out_box())? {
+            return Ok(Decoded {
+                raster,
+                header: p.header,
+                complete: p.complete,
+            });
+        }
+    }
     let mut raster = reconstruct(&p, opts.level)?;
     if let Some(st) = stitch {
         raster = tiles::crop_raster(&raster, st.out_box())?;
@@ -65,14 +75,112 @@ pub fn decode_seek<R: Read + Seek>(mut src: R, len: u64, opts: &DecodeOptions) -
     src.seek(SeekFrom::Start(0))?;
     let (rd, first, header) = read_head(&mut src, len)?;
     check_level(&header, opts.level)?;
+    let at = rd.position();
     if header.is_tiled() {
-        let at = rd.position();
         return tiles::decode_seek(&mut src, len, at, header, opts);
     }
+    one_piece(&mut src, at, len, first, header, opts)
+}
+
+/// A one-tile file decoded from a seekable stream whose `HEAD` (`first`) has been read
+/// (the next chunk at byte `at`): a 3.0 file's region from only the code-blocks it needs
+/// ([`read_region`]), anything else read whole ([`read_rest`]).
+fn one_piece<R: Read + Seek>(
+    src: &mut R,
+    at: u64,
+    len: u64,
+    first: Chunk,
+    header: Header,
+    opts: &DecodeOptions,
+) -> Result<Decoded> {
+    if let Some(region) = &opts.region {
+        if header.version.has_blocks() && !opts.allow_truncated {
+            if let Some(p) = read_region(src, at, len, header.clone(), opts.level, region)? {
+                return one_tile(p, opts);
+            }
+        }
+    }
+    src.seek(SeekFrom::Start(at))?;
+    let rd = ChunkReader::at(src, at, len);
     one_tile(
         read_rest(rd, first, header, opts.level, opts.allow_truncated)?,
         opts,
     )
+}
+
+/// The chunks after `HEAD` (the next at byte `at` of `len`) of a one-piece 3.0 file read
+/// for the full-resolution box `region` at level `stop_level`: the heads, `mETA` and
+/// code-block indices ([`crate::format::sparse`]), then by positioned reads only the
+/// code-blocks each band's decode needs ([`super::decode::band_windows`]; runs of
+/// neighbouring blocks in one read). `None` for a file left to the whole read.
+fn read_region<R: Read + Seek>(
+    src: &mut R,
+    at: u64,
+    len: u64,
+    header: Header,
+    stop_level: usize,
+    region: &[Range<usize>],
+) -> Result<Option<Parsed>> {
+    let plan = super::plan::Plan::new(&header)?;
+    let groups = plan.level_groups();
+    let layout = crate::format::body::BandLayout {
+        groups: &groups,
+        levels: plan.bands.iter().map(|b| b.level).collect(),
+        parents: &plan.parents,
+        coefficients: plan
+            .dims
+            .iter()
+            .map(|d| d.iter().product::<usize>() as u64)
+            .collect(),
+    };
+    let Some(sb) =
+        crate::format::sparse::read_body_sparse(src, at, len, &header, &layout, stop_level)?
+    else {
+        return Ok(None);
+    };
+    let b = sb.body;
+    let mut p = Parsed {
+        header,
+        meta: b.meta,
+        plan,
+        bands: b.bands,
+        resi: b.resi,
+        complete: b.complete,
+        chunks: b.chunks,
+        window: Some(region.to_vec()),
+    };
+    let wins = super::decode::band_windows(&p);
+    let block = p.header.block_extents();
+    for (c, bands) in p.bands.iter_mut().enumerate() {
+        for (j, bc) in bands.iter_mut().enumerate() {
+            let (Some(bc), Some(off)) = (bc.as_mut(), sb.entries[c][j]) else {
+                continue;
+            };
+            let dims = &p.plan.dims[j];
+            let set = crate::format::bands::parse_blocks(&bc.data, dims, &block).map_err(|e| {
+                crate::Error::format(format!("band {j} of channel {c}: {e}"), "a valid band")
+            })?;
+            let grid = crate::entropy::codeblocks::Grid::new(dims, &block);
+            let which = match &wins[j] {
+                Some(w) => grid.touching(w),
+                None => (0..grid.len()).collect(),
+            };
+            // runs of blocks that follow one another in the entry, one read each
+            let mut runs: Vec<Range<usize>> = Vec::new();
+            for i in which {
+                let r = set.streams[i].clone();
+                match runs.last_mut() {
+                    Some(last) if last.end == r.start => last.end = r.end,
+                    _ => runs.push(r),
+                }
+            }
+            for r in runs {
+                src.seek(SeekFrom::Start(off + r.start as u64))?;
+                src.read_exact(&mut bc.data[r])?;
+            }
+        }
+    }
+    Ok(Some(p))
 }
 
 /// The `HEAD` of an `.mra` file, read alone.
@@ -168,10 +276,8 @@ impl SlabDecoder {
                 count,
             });
         }
-        let d = one_tile(
-            read_rest(rd, first, header, opts.level, opts.allow_truncated)?,
-            opts,
-        )?;
+        let at = rd.position();
+        let d = one_piece(&mut src, at, len, first, header, opts)?;
         Ok(SlabDecoder {
             shape: Shape::of(&d.raster),
             tiled: None,

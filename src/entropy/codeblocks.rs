@@ -11,6 +11,7 @@
 use super::band::{self, Coding};
 use super::range::Decoder;
 use super::{BandKind, Parent};
+use crate::tensor::for_each_run;
 use crate::Result;
 use rayon::prelude::*;
 use std::ops::Range;
@@ -134,46 +135,19 @@ pub fn parent_box(b: &[Range<usize>], pdims: &[usize]) -> Vec<Range<usize>> {
 pub fn extract<T: Copy + Default>(v: &[T], dims: &[usize], b: &[Range<usize>]) -> Vec<T> {
     let n: usize = b.iter().map(|r| r.len()).product();
     let mut out = Vec::with_capacity(n);
-    each_row(dims, b, |at, len| out.extend_from_slice(&v[at..at + len]));
+    for_each_run(dims, b, |at, len, _| {
+        out.extend_from_slice(&v[at..at + len])
+    });
     out
 }
 
 /// Write `src` (raster order over box `b`) into an array of extents `dims`.
 pub fn insert<T: Copy>(v: &mut [T], dims: &[usize], b: &[Range<usize>], src: &[T]) {
     let mut from = 0;
-    each_row(dims, b, |at, len| {
+    for_each_run(dims, b, |at, len, _| {
         v[at..at + len].copy_from_slice(&src[from..from + len]);
         from += len;
     });
-}
-
-/// Call `f(offset, len)` for every row (last axis) of box `b` in raster order.
-fn each_row(dims: &[usize], b: &[Range<usize>], mut f: impl FnMut(usize, usize)) {
-    let nd = dims.len();
-    if nd == 0 || b.iter().any(|r| r.is_empty()) {
-        return;
-    }
-    let len = b[nd - 1].len();
-    let mut c: Vec<usize> = b[..nd - 1].iter().map(|r| r.start).collect();
-    loop {
-        let mut at = 0;
-        for k in 0..nd - 1 {
-            at = at * dims[k] + c[k];
-        }
-        f(at * dims[nd - 1] + b[nd - 1].start, len);
-        let mut k = nd - 1;
-        loop {
-            if k == 0 {
-                return;
-            }
-            k -= 1;
-            c[k] += 1;
-            if c[k] < b[k].end {
-                break;
-            }
-            c[k] = b[k].start;
-        }
-    }
 }
 
 /// The dims of a box.
@@ -284,8 +258,12 @@ pub fn encode_blocks_rdo_by(
 }
 
 /// Decode blocks `which` (ascending block numbers; their streams `streams[k]` for
-/// `which[k]`) of a band into `out` (extents `grid.dims`; the other positions are left
-/// as they are), in parallel. The parent band must hold the parent boxes of those blocks.
+/// `which[k]`) of a band straight into `out` (extents `grid.dims`; the other positions
+/// are left as they are). The band is cut into slabs of `block[0]` along its first
+/// axis, each its own part of `out`: the slabs decode in parallel, the blocks of a slab
+/// one after another, a detail block a row at a time ([`band::decode_rows`]) into its
+/// rows of the band (a coarse block whole, its LOCO-I prediction undone over the box).
+/// The parent band must hold the parent boxes of those blocks.
 pub fn decode_blocks(
     out: &mut [i64],
     grid: &Grid,
@@ -295,25 +273,59 @@ pub fn decode_blocks(
     parent: Option<Parent>,
     coding: Coding,
 ) -> Result<()> {
-    let decoded: Vec<Vec<i64>> = which
-        .par_iter()
-        .zip(streams.par_iter())
-        .map(|(&i, s)| {
-            let b = grid.bounds(i);
-            let d = box_dims(&b);
-            let par = if kind == BandKind::Coarse {
-                None
-            } else {
-                parent_of(&b, parent)
-            };
-            let pp = par.as_ref().map(|(data, dims)| Parent { data, dims });
-            band::decode(&mut Decoder::new_short(s), &d, kind, pp, coding)
-        })
-        .collect::<Result<_>>()?;
-    for (&i, v) in which.iter().zip(&decoded) {
-        insert(out, &grid.dims, &grid.bounds(i), v);
+    let nd = grid.dims.len();
+    if nd == 0 || out.len() != grid.dims.iter().product::<usize>() || out.is_empty() {
+        return Ok(());
     }
-    Ok(())
+    let per_slab: usize = grid.counts[1..].iter().product();
+    let slab_len = grid.block[0] * grid.dims[1..].iter().product::<usize>();
+    // the blocks of each slab, by their place in `which`
+    let mut slabs: Vec<(usize, Vec<usize>)> = Vec::new();
+    for (k, &i) in which.iter().enumerate() {
+        let s = i / per_slab.max(1);
+        match slabs.last_mut() {
+            Some((at, v)) if *at == s => v.push(k),
+            _ => slabs.push((s, vec![k])),
+        }
+    }
+    let mut parts: Vec<Option<&mut [i64]>> = out.chunks_mut(slab_len).map(Some).collect();
+    let work: Vec<(usize, &mut [i64], Vec<usize>)> = slabs
+        .into_iter()
+        .filter_map(|(s, ks)| Some((s, parts.get_mut(s)?.take()?, ks)))
+        .collect();
+    let failed: Vec<Result<()>> = work
+        .into_par_iter()
+        .map(|(s, slab, ks)| {
+            let mut shape = grid.dims.clone();
+            shape[0] = slab.len() / grid.dims[1..].iter().product::<usize>().max(1);
+            let y0 = s * grid.block[0];
+            for k in ks {
+                let b = grid.bounds(which[k]);
+                let d = box_dims(&b);
+                let mut local = b.clone();
+                local[0] = b[0].start - y0..b[0].end - y0;
+                let mut dec = Decoder::new_short(streams[k]);
+                if kind == BandKind::Coarse {
+                    let v = band::decode(&mut dec, &d, kind, None, coding)?;
+                    for_each_run(&shape, &local, |at, len, from| {
+                        slab[at..at + len].copy_from_slice(&v[from..from + len])
+                    });
+                    continue;
+                }
+                let par = parent_of(&b, parent);
+                let pp = par.as_ref().map(|(data, dims)| Parent { data, dims });
+                let mut rows = Vec::with_capacity(d[..nd - 1].iter().product());
+                for_each_run(&shape, &local, |at, _, _| rows.push(at));
+                let run = d[nd - 1].max(1);
+                band::decode_rows(&mut dec, &d, pp, coding, |at, r| {
+                    let o = rows[at / run];
+                    slab[o..o + r.len()].copy_from_slice(r);
+                })?;
+            }
+            Ok(())
+        })
+        .collect();
+    failed.into_iter().collect()
 }
 
 #[cfg(test)]

@@ -386,7 +386,7 @@ pub fn meta_chunk(ch: &Chunk, seen: &mut bool, first_band: Option<u64>) -> Resul
 /// detail levels above `stop_level`. A band missing there (a `LEVL` left out, or two
 /// swapped so that a finer one comes first) is an error naming it, or with
 /// `allow_truncated` an incomplete decode (`Ok(false)`).
-fn coarse_present(
+pub(super) fn coarse_present(
     header: &Header,
     layout: &BandLayout,
     bands: &[Vec<Option<BandChunk>>],
@@ -409,7 +409,7 @@ fn coarse_present(
 /// The first chunk the header commits to that `bands` and `resi` lack, named, among the
 /// chunks a decode at level `stop_level` needs (every one at level 0: the coarse block,
 /// the detail levels above `stop_level`, and the `RESI` chunks only at level 0).
-fn first_missing(
+pub(super) fn first_missing(
     header: &Header,
     layout: &BandLayout,
     bands: &[Vec<Option<BandChunk>>],

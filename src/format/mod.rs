@@ -10,6 +10,7 @@ pub mod crc;
 pub mod header;
 pub mod meta;
 pub mod sha256;
+pub mod sparse;
 pub mod tag;
 pub mod tiles;
 pub mod version;

@@ -163,6 +163,12 @@ impl Source {
         if h.is_tiled() {
             return self.window_from_tiles(cache, limits, k, &bx);
         }
+        // a 3.0 file: the window's code-blocks read and its support synthesized alone
+        if h.version.has_blocks() {
+            let (region, origin) = full_region(&h.dims, ext, &bx);
+            let r = self.decode(k, Some(region))?;
+            return cut(&r, &origin, &bx, self.row_axis, self.col_axis);
+        }
         if level_bytes <= cache.entry_limit() {
             limits.check_elems("a decoded level", level_samples, DECODE_BYTES_PER_SAMPLE)?;
             let key = self.key(k, Vec::new());
@@ -302,6 +308,27 @@ pub fn level_index(x: usize, r: usize, d: usize) -> usize {
 /// The box `bx` (level coordinates) of a raster whose first sample sits at `origin`,
 /// as a plane of rows `row_axis` and columns `col_axis` (the other axis, if any, one
 /// sample thick).
+/// The full-resolution box (extents `dims`) whose decode at a level of extents `ext`
+/// covers the level box `bx`, and where that decode starts in the level: on each axis
+/// `[⌊lo·d/r⌋, ⌈hi·d/r⌉)`, which a decode maps back to `[⌊g₀·r/d⌋, ⌈g₁·r/d⌉) ⊇ [lo, hi)`.
+fn full_region(
+    dims: &[usize],
+    ext: &[usize],
+    bx: &[Range<usize>],
+) -> (Vec<Range<usize>>, Vec<usize>) {
+    dims.iter()
+        .zip(ext)
+        .zip(bx)
+        .map(|((&d, &r), g)| {
+            let (d, r) = (d.max(1) as u128, r.max(1) as u128);
+            let lo = (g.start as u128 * d / r) as usize;
+            let hi = ((g.end as u128 * d).div_ceil(r) as usize).clamp(lo + 1, d as usize);
+            let at = (lo as u128 * r / d) as usize;
+            (lo..hi, at)
+        })
+        .unzip()
+}
+
 fn cut(
     r: &Raster,
     origin: &[usize],

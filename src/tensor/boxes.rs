@@ -1,8 +1,52 @@
-//! Copies of strided boxes: the lines of a box, and a box copied without an inner
-//! box (the cascade's parts that stay where a level leaves them).
+//! Copies of strided boxes: the runs of a box of a row-major array, the lines of a
+//! box, and a box copied without an inner box (the cascade's parts that stay where a
+//! level leaves them).
 
 use crate::kernel::{stream_copy_unfenced, Kernels};
 use crate::scheme::Sample;
+
+/// Call `f(offset, run, packed)` for every run (a row along the last axis) of the box
+/// `ranges` of a row-major array of extents `shape`, in raster order: `offset` is the
+/// run's first sample in the array, `offset = Σ_k y[k]·Π_{j>k} shape[j]` with
+/// `y[last] = ranges[last].start`, `run = |ranges[last]|`, and `packed` the run's first
+/// sample in the box laid out compactly (the runs before it times `run`). Nothing for an
+/// empty box or an array of no axes.
+pub fn for_each_run(
+    shape: &[usize],
+    ranges: &[std::ops::Range<usize>],
+    mut f: impl FnMut(usize, usize, usize),
+) {
+    let nd = shape.len();
+    if nd == 0 || ranges.len() != nd || ranges.iter().any(|r| r.is_empty()) {
+        return;
+    }
+    let last = ranges[nd - 1].clone();
+    let run = last.len();
+    let mut strides = vec![1usize; nd];
+    for k in (0..nd - 1).rev() {
+        strides[k] = strides[k + 1] * shape[k + 1];
+    }
+    let mut idx: Vec<usize> = ranges[..nd - 1].iter().map(|r| r.start).collect();
+    let mut packed = 0;
+    loop {
+        let base: usize = idx.iter().zip(&strides).map(|(i, s)| i * s).sum::<usize>() + last.start;
+        f(base, run, packed);
+        packed += run;
+        // the odometer: the last axis of `idx` fastest
+        let mut k = nd - 1;
+        loop {
+            if k == 0 {
+                return;
+            }
+            k -= 1;
+            idx[k] += 1;
+            if idx[k] < ranges[k].end {
+                break;
+            }
+            idx[k] = ranges[k].start;
+        }
+    }
+}
 
 /// Samples laid out by nested `strides` (slowest axis first, in samples): a box of an
 /// array, or a compact copy of one.

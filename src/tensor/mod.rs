@@ -14,8 +14,10 @@ pub mod pyramid;
 mod resample;
 mod ring;
 mod transform;
+mod window;
 mod workspace;
 
+pub use boxes::for_each_run;
 pub use crate::kernel::Kernels;
 pub use array::{Array, Axis};
 pub use pages::{advise_huge_pages, zeroed_vec};
@@ -25,4 +27,5 @@ pub use pyramid::{
 };
 pub use resample::{map_lanes, resample_axis, resample_axis_in, resample_axis_with};
 pub use transform::{transform_axis, transform_axis_with};
+pub use window::WindowPlan;
 pub use workspace::Planner;

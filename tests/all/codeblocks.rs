@@ -133,6 +133,54 @@ fn code_blocks_decode_as_the_format_2_file() {
     }
 }
 
+/// A 3.0 region of a lossy file is decoded from the code-blocks its support meets and
+/// synthesized over that support alone: its samples are those of the same window cut
+/// from a whole decode, for every scheme and boundary, 2-D and 3-D, odd sizes over
+/// several blocks, levels 0 to 2, windows inside and at the edges.
+#[test]
+fn regions_of_code_blocks_are_windows_of_the_whole_decode() {
+    use mra::scheme::{Boundary, Scheme};
+    let cases: Vec<(Raster, usize)> = vec![
+        (field(&[611, 529], 1, SampleType::U8, 21, 255.0), 4),
+        (field(&[70, 139, 133], 1, SampleType::U16, 23, 4000.0), 3),
+    ];
+    for (r, levels) in cases {
+        for scheme in Scheme::ALL {
+            for boundary in Boundary::ALL {
+                if r.dims.len() == 3 && !matches!(scheme, Scheme::Cdf97 | Scheme::Haar) {
+                    continue;
+                }
+                let o = EncodeOptions {
+                    rate: Rate::Bpp(1.0),
+                    levels,
+                    scheme,
+                    boundary,
+                };
+                let two = codec::encode_tiled(&r, &o, &r.dims).unwrap();
+                let three = codec::to_blocks(&two).unwrap();
+                let wins: Vec<Vec<std::ops::Range<usize>>> = vec![
+                    r.dims.iter().map(|&d| d / 2..d / 2 + d / 7 + 1).collect(),
+                    r.dims.iter().map(|&d| 0..d / 9 + 1).collect(),
+                    r.dims.iter().map(|&d| d - d / 8 - 1..d).collect(),
+                    r.dims.iter().map(|&d| d - 1..d).collect(),
+                ];
+                for win in wins {
+                    for level in 0..=2 {
+                        let a = decoded(&two, level, Some(win.clone()));
+                        let b = decoded(&three, level, Some(win.clone()));
+                        assert_eq!(a.dims, b.dims);
+                        assert!(
+                            a.samples == b.samples,
+                            "{:?} {scheme:?} {boundary:?} {win:?} level {level}",
+                            r.dims
+                        );
+                    }
+                }
+            }
+        }
+    }
+}
+
 /// The bytes of a 3.0 file are the same on one thread and on two.
 #[test]
 fn code_blocks_do_not_depend_on_the_thread_count() {
@@ -224,22 +272,31 @@ fn damaged_block_indices_are_one_line_errors() {
             "{name}"
         );
         let input = dir.join(format!("{name}.mra"));
-        let output = dir.join(format!("{name}.png"));
         std::fs::write(&input, &bad).unwrap();
-        let o = Command::new(env!("CARGO_BIN_EXE_mra"))
-            .args([
+        // whole, and a region read by position (to an image, and streamed to NRRD)
+        for (extra, ext) in [
+            (vec![], "png"),
+            (vec!["--region", "10:200,20:100"], "png"),
+            (vec!["--region", "10:200,20:100", "--level", "1"], "nrrd"),
+        ] {
+            let output = dir.join(format!("{name}.{ext}"));
+            let mut args = vec![
                 "decode",
                 input.to_str().unwrap(),
                 "-o",
                 output.to_str().unwrap(),
-            ])
-            .output()
-            .unwrap();
-        let err = String::from_utf8_lossy(&o.stderr);
-        assert_eq!(o.status.code(), Some(2), "{name}: {err}");
-        assert_eq!(err.trim_end().lines().count(), 1, "{name}: {err}");
-        assert!(err.contains(&format!("{name}.mra")), "{name}: {err}");
-        assert!(!output.exists(), "{name}");
+            ];
+            args.extend(extra.iter().copied());
+            let o = Command::new(env!("CARGO_BIN_EXE_mra"))
+                .args(&args)
+                .output()
+                .unwrap();
+            let err = String::from_utf8_lossy(&o.stderr);
+            assert_eq!(o.status.code(), Some(2), "{name} {extra:?}: {err}");
+            assert_eq!(err.trim_end().lines().count(), 1, "{name}: {err}");
+            assert!(err.contains(&format!("{name}.mra")), "{name}: {err}");
+            assert!(!output.exists(), "{name} {extra:?}");
+        }
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
@@ -283,5 +340,66 @@ fn blocks_refuse_a_tile_grid_and_write_one_piece() {
     let h = header(&std::fs::read(&one).unwrap());
     assert!(h.version.has_blocks(), "{:?}", h.version);
     assert_eq!(h.tile, h.dims);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A region of a one-piece 3.0 file read from disk reads the heads, the code-block
+/// indices and the blocks it needs, not the file: `mra decode --region --json` reports
+/// the bytes it read (under half of this small file, whose finest bands are 3×3
+/// blocks), and the samples are the same window of the whole decode.
+#[test]
+fn a_region_reads_only_its_code_blocks() {
+    let r = field(&[1100, 1300], 1, SampleType::U8, 31, 255.0);
+    let three = codec::to_blocks(&encode(&r, Rate::Bpp(2.0), 5)).unwrap();
+    let dir = std::env::temp_dir().join(format!("mra-codeblocks-read-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let input = dir.join("a.mra");
+    std::fs::write(&input, &three).unwrap();
+    let output = dir.join("a.nrrd");
+    let o = Command::new(env!("CARGO_BIN_EXE_mra"))
+        .args([
+            "decode",
+            input.to_str().unwrap(),
+            "-o",
+            output.to_str().unwrap(),
+            "--region",
+            "700:800,600:700",
+            "--json",
+        ])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let read = v["bytes_read"].as_u64().unwrap();
+    assert!(
+        read * 2 < three.len() as u64,
+        "{read} bytes read of {}",
+        three.len()
+    );
+    let win = vec![600..700, 700..800];
+    let whole = codec::decode_file(&input, &DecodeOptions::default())
+        .unwrap()
+        .raster;
+    let part = codec::decode_file(
+        &input,
+        &DecodeOptions {
+            region: Some(win.clone()),
+            ..Default::default()
+        },
+    )
+    .unwrap()
+    .raster;
+    assert_eq!(part.dims, vec![100, 100]);
+    let w = whole.dims[1];
+    for y in 0..100 {
+        for x in 0..100 {
+            let i = (600 + y) * w + 700 + x;
+            assert_eq!(
+                part.samples.get_f64(y * 100 + x),
+                whole.samples.get_f64(i),
+                "{y} {x}"
+            );
+        }
+    }
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -265,6 +265,9 @@ fn gray(img: &image::DynamicImage) -> (u32, u32, Vec<u8>) {
 #[test]
 fn a_served_region_equals_mra_decode_of_the_same_window() {
     let d = corpus("pixels");
+    // the same indices cut into code-blocks (format 3.0): each request decodes only its
+    // window, which must be the window of the whole decode of z.mra
+    encode(&d, "z.png", "b.mra", &["--blocks"]);
     // the untiled file's levels kept whole, the tiled file's tiles one by one; and with a
     // 1 MiB cache (256 KiB a level) the untiled file's level 0 decoded for each request
     let whole = Server::start(&d.0);
@@ -274,6 +277,7 @@ fn a_served_region_equals_mra_decode_of_the_same_window() {
         (&whole, "sub%20dir%2Ftiled.mra", "sub dir/tiled.mra"),
         (&by_tile, "sub%20dir%2Ftiled.mra", "sub dir/tiled.mra"),
         (&by_tile, "z.mra", "z.mra"),
+        (&whole, "b.mra", "z.mra"),
     ] {
         // (x, y, w, h, level): aligned to 2^level, output w/2^level wide
         for (x, y, w, h, k) in [

@@ -1,0 +1,276 @@
+//! The chunks of a one-piece format 3.0 file read for a region (formats/MRA.md §15):
+//! every chunk's 8-byte head, the small chunks whole (`mETA`, `MEND`, checked as
+//! [`super::body`] checks them), and of each `LEVL` chunk only its level, each band
+//! entry's ratio, length and code-block index, never the blocks' streams. Each band's
+//! entry comes back as its `L` bytes with the index in place and zeros where the blocks
+//! are, with its offset in the file, so that the caller reads just the blocks it needs
+//! into it by positioned reads. The `LEVL` chunks' CRCs are not checked (that would
+//! read them whole); the index is checked as [`super::bands::parse_blocks`] checks it
+//! once the caller parses it.
+
+use super::body::{meta_chunk, truncated, BandChunk, BandLayout, Body, ChunkInfo};
+use super::{ChunkEnd, ChunkReader, Header, Mode, Tag, MAX_CHUNK};
+use crate::io::Metadata;
+use crate::{FormatError, Result};
+use std::io::{Read, Seek, SeekFrom};
+
+/// [`Body`] of a file read sparsely, with the file offset of each band's entry
+/// (`[channel][band]`, the first byte of its `L` bytes).
+pub struct SparseBody {
+    pub body: Body,
+    pub entries: Vec<Vec<Option<u64>>>,
+}
+
+/// A source read by position that counts what it consumes.
+struct At<'a, R> {
+    src: &'a mut R,
+    pos: u64,
+    end: u64,
+}
+
+impl<R: Read + Seek> At<'_, R> {
+    fn seek(&mut self, pos: u64) -> Result<()> {
+        self.src.seek(SeekFrom::Start(pos))?;
+        self.pos = pos;
+        Ok(())
+    }
+
+    fn bytes<const N: usize>(&mut self, what: &str) -> Result<[u8; N]> {
+        if self.end - self.pos < N as u64 {
+            return Err(FormatError::truncated(
+                format!("LEVL chunk ends inside {what} at byte {}", self.pos),
+                "band entries within the chunk",
+            ));
+        }
+        let mut b = [0u8; N];
+        self.src.read_exact(&mut b)?;
+        self.pos += N as u64;
+        Ok(b)
+    }
+
+    /// A LEB128 integer (at most 64 bits), its bytes appended to `raw` when given.
+    fn varint(&mut self, what: &str, mut raw: Option<&mut Vec<u8>>) -> Result<u64> {
+        let mut v = 0u64;
+        for k in 0..10 {
+            let [b] = self.bytes::<1>(what)?;
+            if let Some(r) = raw.as_deref_mut() {
+                r.push(b);
+            }
+            let bits = (b & 0x7F) as u64;
+            if k == 9 && bits > 1 {
+                break;
+            }
+            v |= bits << (7 * k);
+            if b & 0x80 == 0 {
+                return Ok(v);
+            }
+        }
+        Err(FormatError::invalid(
+            format!("LEVL chunk: {what} over 64 bits at byte {}", self.pos),
+            "LEB128 integers of at most 64 bits",
+        ))
+    }
+}
+
+/// The chunks after `HEAD` (the next at byte `at`) of a one-piece 3.0 file of `len`
+/// bytes whose bands are `layout`, read sparsely (module doc); reading stops at the first
+/// chunk of a level from 1 to `stop_level` as [`super::body::read_body`]'s does. `None`
+/// for a file this reader leaves to the whole read (one with `RESI` chunks).
+pub fn read_body_sparse<R: Read + Seek>(
+    src: &mut R,
+    at: u64,
+    len: u64,
+    header: &Header,
+    layout: &BandLayout,
+    stop_level: usize,
+) -> Result<Option<SparseBody>> {
+    if header.mode == Mode::MaxError {
+        return Ok(None);
+    }
+    let nb = layout.levels.len();
+    let c = header.channels;
+    let mut b = Body {
+        meta: Metadata::default(),
+        bands: (0..c).map(|_| (0..nb).map(|_| None).collect()).collect(),
+        resi: (0..c).map(|_| None).collect(),
+        complete: false,
+        chunks: Vec::new(),
+    };
+    let mut entries: Vec<Vec<Option<u64>>> = vec![vec![None; nb]; c];
+    let (mut pos, mut last) = (at, "HEAD".to_string());
+    let (mut meta_seen, mut first_band) = (false, None);
+    loop {
+        if pos == len {
+            return Err(truncated(ChunkEnd::Eof, &last, len));
+        }
+        if len - pos < 12 {
+            return Err(truncated(ChunkEnd::Truncated { offset: pos }, &last, len));
+        }
+        src.seek(SeekFrom::Start(pos))?;
+        let mut head = [0u8; 8];
+        src.read_exact(&mut head)?;
+        let n = u32::from_le_bytes(head[..4].try_into().expect("4 bytes")) as u64;
+        let kind: [u8; 4] = head[4..].try_into().expect("4 bytes");
+        if n > MAX_CHUNK {
+            return Err(FormatError::budget("chunk length", n, MAX_CHUNK));
+        }
+        if n + 12 > len - pos {
+            return Err(truncated(ChunkEnd::Truncated { offset: pos }, &last, len));
+        }
+        let tag = Tag::of(&kind);
+        last = String::from_utf8_lossy(&kind).into_owned();
+        match tag {
+            Some(Tag::Levl) => {
+                first_band.get_or_insert(pos);
+                let mut r = At {
+                    src: &mut *src,
+                    pos: pos + 8,
+                    end: pos + 8 + n,
+                };
+                let level = u16::from_le_bytes(r.bytes::<2>("the level")?) as usize;
+                let Some((_, js)) = layout.groups.iter().find(|(l, _)| *l == level) else {
+                    return Err(FormatError::out_of_range(
+                        format!("LEVL chunk for level {level} at byte {pos}"),
+                        "a level of the file's pyramid",
+                    ));
+                };
+                if stop_level > 0 && level >= 1 && level <= stop_level {
+                    super::body::coarse_present(header, layout, &b.bands, stop_level, pos, false)?;
+                    b.complete = true;
+                    break;
+                }
+                let first = js.first().copied().unwrap_or(0);
+                if let Some(pj) = layout.parents[first] {
+                    if b.bands[0][pj].is_none() {
+                        return Err(FormatError::order(
+                            format!("LEVL {level} before the level of its parent bands"),
+                            "levels in coarse-to-fine order",
+                        ));
+                    }
+                }
+                if b.bands[0][first].is_some() {
+                    return Err(FormatError::duplicate(
+                        format!("a second LEVL chunk for level {level} (byte {pos})"),
+                        "each level once",
+                    ));
+                }
+                for &j in js {
+                    // `ch` indexes both the bands and their entries
+                    #[allow(clippy::needless_range_loop)]
+                    for ch in 0..c {
+                        let ratio = f32::from_le_bytes(r.bytes::<4>("a step ratio")?);
+                        if !(ratio > 0.0 && ratio.is_finite()) {
+                            return Err(FormatError::invalid(
+                                format!(
+                                    "LEVL {level}: band {j} of channel {ch} with step ratio {ratio}"
+                                ),
+                                "a positive finite ratio",
+                            ));
+                        }
+                        let l = r.varint("a band length", None)?;
+                        let start = r.pos;
+                        if l > r.end - start {
+                            return Err(FormatError::out_of_range(
+                                format!(
+                                    "LEVL {level}: band {j} of channel {ch} declaring {l} bytes, {} left",
+                                    r.end - start
+                                ),
+                                "streams within the chunk",
+                            ));
+                        }
+                        // the code-block index: a count, then a length per block (each
+                        // at least a byte, so no more than the entry holds)
+                        let mut index = Vec::new();
+                        let mut e = At {
+                            src: &mut *r.src,
+                            pos: start,
+                            end: start + l,
+                        };
+                        let count = e.varint("a code-block count", Some(&mut index))?;
+                        if count > l {
+                            return Err(FormatError::out_of_range(
+                                format!("{count} code-blocks in an entry of {l} bytes"),
+                                "at least one index byte per block",
+                            ));
+                        }
+                        for _ in 0..count {
+                            e.varint("a code-block length", Some(&mut index))?;
+                        }
+                        // `l` is within the chunk, itself within the file
+                        let mut data = vec![0u8; l as usize];
+                        data[..index.len()].copy_from_slice(&index);
+                        b.bands[ch][j] = Some(BandChunk {
+                            step: header.step * ratio as f64,
+                            data,
+                        });
+                        entries[ch][j] = Some(start);
+                        r.seek(start + l)?;
+                    }
+                }
+                if r.pos != r.end {
+                    return Err(FormatError::invalid(
+                        format!(
+                            "LEVL {level} with {} bytes after its last band",
+                            r.end - r.pos
+                        ),
+                        "a chunk that ends with its last band",
+                    ));
+                }
+                let mut info = ChunkInfo::of(
+                    &super::Chunk {
+                        kind,
+                        payload: Vec::new(),
+                        offset: pos,
+                    },
+                    None,
+                );
+                info.bytes = n + 12;
+                info.level = Some(level);
+                b.chunks.push(info);
+            }
+            Some(Tag::Resi | Tag::Band) => return Ok(None),
+            _ => {
+                src.seek(SeekFrom::Start(pos))?;
+                let ch = match ChunkReader::at(&mut *src, pos, len).next_chunk()? {
+                    Ok(ch) => ch,
+                    Err(end) => return Err(truncated(end, &last, len)),
+                };
+                match tag {
+                    Some(Tag::Mend) => {
+                        if let Some(missing) = super::body::first_missing(
+                            header, layout, &b.bands, &b.resi, stop_level,
+                        ) {
+                            return Err(FormatError::missing(
+                                format!("{missing} missing (MEND at byte {pos})"),
+                                "every chunk the header commits to (or --allow-truncated)",
+                            ));
+                        }
+                        b.complete = true;
+                        b.chunks.push(ChunkInfo::of(&ch, None));
+                        break;
+                    }
+                    Some(Tag::Meta) => b.meta = meta_chunk(&ch, &mut meta_seen, first_band)?,
+                    Some(Tag::Head) => {
+                        return Err(FormatError::duplicate(
+                            "a second HEAD chunk",
+                            "one HEAD chunk",
+                        ))
+                    }
+                    _ if Tag::is_critical(&ch.kind) => {
+                        return Err(FormatError::UnknownChunk(ch.name()).into());
+                    }
+                    _ => {}
+                }
+                b.chunks.push(ChunkInfo::of(&ch, None));
+            }
+        }
+        pos += n + 12;
+    }
+    if header.voids && first_band.is_some() && !super::meta::lists_voids(&b.meta) {
+        return Err(FormatError::missing(
+            "no void list in mETA, though the header says the file has voids",
+            "the mETA chunk with extra.nodata.voids (format 2.4 HEAD flag)",
+        ));
+    }
+    Ok(Some(SparseBody { body: b, entries }))
+}
