@@ -40,6 +40,8 @@
 //! rows) the high-half bands at row `c − n_{l+1}`. [`StreamPlan::pull_order`] lists the
 //! resulting `(band, row)` sequence exactly, without computing anything.
 
+use super::aligned::Aligned;
+use super::fused::{AxisOp, Ctx};
 use super::pyramid::{Order, Pyramid, PyramidSpec, Subband};
 use super::transform::transform_axis_with;
 use super::workspace::{LevelOps, Planner};
@@ -94,6 +96,10 @@ struct Level {
     high: Vec<Part>,
     /// Per input row of the synthesis: the output rows that read it.
     syn_uses: Vec<u32>,
+    /// When the level's active axes are the leading `k ≥ 2` axes and the rest of the
+    /// row is whole: the box over those axes and the samples per element, for the fused
+    /// engine's row kernels ([`Ctx::finish_row`]).
+    fused: Option<(Vec<usize>, usize)>,
 }
 
 /// A planned stream: the pyramid, its bands and its levels' operators.
@@ -169,7 +175,17 @@ impl StreamPlan {
                     low,
                     high,
                     syn_uses: Vec::new(),
+                    fused: None,
                 };
+                // active axes exactly 0..k, the rest of the row whole (as
+                // `pyramid::fused_axes` asks)
+                let k = 1 + lv.others.len();
+                let leading = lv.axis0.is_some()
+                    && lv.others.iter().enumerate().all(|(j, o)| o.0 == j)
+                    && (k..shape.len()).all(|d| before[d] == shape[d]);
+                if k >= 2 && leading {
+                    lv.fused = Some((before[..k].to_vec(), shape[k..].iter().product()));
+                }
                 let mut uses = vec![0u32; lv.n];
                 for r in 0..lv.n {
                     match taps(&lv, r, false) {
@@ -223,6 +239,7 @@ impl StreamPlan {
                 .map(|lv| AnalysisLevel::new(lv))
                 .collect(),
             pool: Vec::new(),
+            scratch: self.levels.iter().map(|_| None).collect(),
         }
     }
 
@@ -255,6 +272,7 @@ impl StreamPlan {
             next: 0,
             held: self.levels.iter().map(|_| HashMap::new()).collect(),
             pool: Vec::new(),
+            scratch: self.levels.iter().map(|_| None).collect(),
             dry: false,
         }
     }
@@ -285,6 +303,7 @@ impl StreamPlan {
             next: 0,
             held: self.levels.iter().map(|_| HashMap::new()).collect(),
             pool: Vec::new(),
+            scratch: self.levels.iter().map(|_| None).collect(),
             dry: true,
         };
         for _ in 0..self.rows() {
@@ -358,8 +377,53 @@ fn take<T: Sample>(pool: &mut Vec<Vec<T>>, n: usize) -> Vec<T> {
     v
 }
 
-/// The level's other active axes over `row` (box `lv.row`), analysis or synthesis.
-fn other_axes<T: Sample>(k: Kernels, lv: &Level, row: &mut [T], analysis: bool) {
+/// The level's operators over its leading axes as the fused engine takes them.
+fn axis_ops(lv: &Level, analysis: bool) -> Vec<AxisOp<'_>> {
+    fn one(o: &LevelOps, analysis: bool) -> AxisOp<'_> {
+        if analysis {
+            AxisOp {
+                op: &o.two_scale.analysis,
+                plan: &o.analysis,
+                order: &o.analysis_order,
+                parts: &o.analysis_parts,
+            }
+        } else {
+            AxisOp {
+                op: &o.two_scale.synthesis,
+                plan: &o.synthesis,
+                order: &o.synthesis_order,
+                parts: &o.synthesis_parts,
+            }
+        }
+    }
+    lv.axis0
+        .iter()
+        .map(|o| one(o, analysis))
+        .chain(lv.others.iter().map(|(_, o)| one(o, analysis)))
+        .collect()
+}
+
+/// The level's other active axes over `row` (box `lv.row`), analysis or synthesis:
+/// through the fused engine's row kernels where the level is fused (`spare`: a buffer
+/// of the row's length, `scratch`: the level's [`Ctx::scratch`], made on first use),
+/// else axis by axis.
+fn other_axes<T: Sample>(
+    k: Kernels,
+    lv: &Level,
+    row: &mut Vec<T>,
+    spare: &mut Vec<T>,
+    scratch: &mut Option<Vec<Aligned<T>>>,
+    analysis: bool,
+) {
+    if let Some((region, e)) = &lv.fused {
+        let ops = axis_ops(lv, analysis);
+        let ctx = Ctx::new(region, *e, &ops, false);
+        let sc = scratch.get_or_insert_with(|| ctx.scratch());
+        spare.resize(row.len(), T::default());
+        ctx.finish_row(row, spare, ctx.cs(), &mut sc[1..]);
+        std::mem::swap(row, spare);
+        return;
+    }
     for (a, ops) in &lv.others {
         let op = if analysis {
             &ops.two_scale.analysis
@@ -446,6 +510,8 @@ pub struct Analysis<'p, T, F> {
     next: usize,
     state: Vec<AnalysisLevel<T>>,
     pool: Vec<Vec<T>>,
+    /// Per level, the fused row kernels' scratch.
+    scratch: Vec<Option<Vec<Aligned<T>>>>,
 }
 
 impl<T: Sample, F: FnMut(BandRow<T>)> Analysis<'_, T, F> {
@@ -477,6 +543,12 @@ impl<T: Sample, F: FnMut(BandRow<T>)> Analysis<'_, T, F> {
         }
         self.arrive(0, r, v);
         Ok(())
+    }
+
+    /// Rows held now over all levels (input rows waiting for an output row that reads
+    /// them): what bounds the stream's memory.
+    pub fn held_rows(&self) -> usize {
+        self.state.iter().map(|s| s.held.len()).sum()
     }
 
     /// Check that every row came and every band row went out; hand back the sink.
@@ -557,7 +629,9 @@ impl<T: Sample, F: FnMut(BandRow<T>)> Analysis<'_, T, F> {
                 self.pool.push(v);
             }
         }
-        other_axes(plan.kernels, lv, &mut out, true);
+        let mut spare = take(&mut self.pool, 0);
+        other_axes(plan.kernels, lv, &mut out, &mut spare, &mut self.scratch[l], true);
+        self.pool.push(spare);
         let (parts, row) = if r < lv.nc {
             (&lv.low, r)
         } else {
@@ -595,6 +669,8 @@ pub struct Synthesis<'p, T, S> {
     /// Per level: input row → (samples, output rows still to read it).
     held: Vec<HashMap<usize, (Vec<T>, u32)>>,
     pool: Vec<Vec<T>>,
+    /// Per level, the fused row kernels' scratch.
+    scratch: Vec<Option<Vec<Aligned<T>>>>,
     /// Only record what is pulled ([`StreamPlan::pull_order`]).
     dry: bool,
 }
@@ -631,6 +707,12 @@ impl<T: Sample, S: FnMut(usize, usize, &mut [T])> Synthesis<'_, T, S> {
         Ok(())
     }
 
+    /// Rows held now over all levels (input rows waiting for an output row that reads
+    /// them): what bounds the stream's memory.
+    pub fn held_rows(&self) -> usize {
+        self.held.iter().map(|h| h.len()).sum()
+    }
+
     /// Output row `r` of level `l` (box `row` of the level).
     fn produce(&mut self, l: usize, r: usize) -> Vec<T> {
         let plan = self.plan;
@@ -659,7 +741,9 @@ impl<T: Sample, S: FnMut(usize, usize, &mut [T])> Synthesis<'_, T, S> {
             }
         }
         if !self.dry {
-            other_axes(plan.kernels, lv, &mut out, false);
+            let mut spare = take(&mut self.pool, 0);
+            other_axes(plan.kernels, lv, &mut out, &mut spare, &mut self.scratch[l], false);
+            self.pool.push(spare);
         }
         out
     }

@@ -176,3 +176,37 @@ fn the_stream_refuses_what_it_cannot_run() {
     let short = plan.analysis::<f32, _>(|_| {});
     assert!(short.finish().is_err());
 }
+
+/// The rows a stream holds do not grow with the array's length: within a few rows for
+/// an image of 600 rows and one of 2400 (the levels' lengths differ in parity), every scheme and boundary (periodic ends hold the
+/// rows reaching across the lane until its end), analysis and synthesis.
+#[test]
+fn the_stream_holds_a_few_rows_per_level_whatever_the_length() {
+    let most = |rows: usize, s: usize, b: usize| {
+        let shape = [rows, 8];
+        let plan = StreamPlan::new(&shape, &spec(s, b, 5, vec![0, 1])).unwrap();
+        let mut a = plan.analysis::<f32, _>(|_| {});
+        let mut held = 0;
+        for r in 0..rows {
+            a.push(&[r as f32; 8]).unwrap();
+            held = held.max(a.held_rows());
+        }
+        assert!(a.finish().is_ok());
+        let mut syn = plan.synthesis(|_, _, d: &mut [f32]| d.fill(1.0));
+        let mut row = [0f32; 8];
+        let mut held_back = 0;
+        for _ in 0..rows {
+            syn.pull(&mut row).unwrap();
+            held_back = held_back.max(syn.held_rows());
+        }
+        (held, held_back)
+    };
+    for s in 0..Scheme::ALL.len() {
+        for b in 0..3 {
+            let (short, long) = (most(600, s, b), most(2400, s, b));
+            let what = (Scheme::ALL[s], Boundary::ALL[b], short, long);
+            assert!(long.0 <= short.0 + 4 && long.1 <= short.1 + 4, "{what:?}");
+            assert!(long.0 <= 120 && long.1 <= 120, "{long:?} rows held");
+        }
+    }
+}
