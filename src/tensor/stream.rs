@@ -537,7 +537,7 @@ impl<T: Sample, F: FnMut(BandRow<T>)> Analysis<'_, T, F> {
         let mut v = take(&mut self.pool, row.len());
         v.copy_from_slice(row);
         if plan.levels.is_empty() {
-            self.emit(0, r, &v, &plan.pyr.shape[1..].to_vec());
+            self.emit(0, r, &v, &plan.pyr.shape[1..]);
             self.pool.push(v);
             return Ok(());
         }
