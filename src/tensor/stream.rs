@@ -140,9 +140,8 @@ impl StreamPlan {
         let depth = pyr.depth();
         let region = |l: usize| pyr.region_before(l);
         let i0 = spec.axes.iter().position(|&a| a == 0).unwrap_or(0);
-        let ops = |i: usize, l: usize| {
-            planner.level_ops(spec.scheme, spec.boundary, pyr.lengths[i][l])
-        };
+        let ops =
+            |i: usize, l: usize| planner.level_ops(spec.scheme, spec.boundary, pyr.lengths[i][l]);
         let levels = (0..depth)
             .map(|l| {
                 let (before, after) = (region(l), region(l + 1));
@@ -612,7 +611,13 @@ impl<T: Sample, F: FnMut(BandRow<T>)> Analysis<'_, T, F> {
         {
             let held = &st.held;
             let op = lv.axis0.as_ref().map(|o| &o.two_scale.analysis);
-            axis0_row(plan.kernels, op, r, &mut out, |c| &held[&(c as usize)].0[..]);
+            axis0_row(
+                plan.kernels,
+                op,
+                r,
+                &mut out,
+                |c| &held[&(c as usize)].0[..],
+            );
         }
         // inputs no longer read
         let t = taps(lv, r, true);
@@ -630,7 +635,14 @@ impl<T: Sample, F: FnMut(BandRow<T>)> Analysis<'_, T, F> {
             }
         }
         let mut spare = take(&mut self.pool, 0);
-        other_axes(plan.kernels, lv, &mut out, &mut spare, &mut self.scratch[l], true);
+        other_axes(
+            plan.kernels,
+            lv,
+            &mut out,
+            &mut spare,
+            &mut self.scratch[l],
+            true,
+        );
         self.pool.push(spare);
         let (parts, row) = if r < lv.nc {
             (&lv.low, r)
@@ -730,7 +742,13 @@ impl<T: Sample, S: FnMut(usize, usize, &mut [T])> Synthesis<'_, T, S> {
         if !self.dry {
             let held = &self.held[l];
             let op = lv.axis0.as_ref().map(|o| &o.two_scale.synthesis);
-            axis0_row(plan.kernels, op, r, &mut out, |c| &held[&(c as usize)].0[..]);
+            axis0_row(
+                plan.kernels,
+                op,
+                r,
+                &mut out,
+                |c| &held[&(c as usize)].0[..],
+            );
         }
         for c in ids {
             let e = self.held[l].get_mut(&c).expect("stream: a held row");
@@ -742,7 +760,14 @@ impl<T: Sample, S: FnMut(usize, usize, &mut [T])> Synthesis<'_, T, S> {
         }
         if !self.dry {
             let mut spare = take(&mut self.pool, 0);
-            other_axes(plan.kernels, lv, &mut out, &mut spare, &mut self.scratch[l], false);
+            other_axes(
+                plan.kernels,
+                lv,
+                &mut out,
+                &mut spare,
+                &mut self.scratch[l],
+                false,
+            );
             self.pool.push(spare);
         }
         out

@@ -75,7 +75,10 @@ fn stream_agrees(shape: &[usize], spec: &PyramidSpec, seed: u64) {
         },
     )
     .unwrap();
-    assert!(seen.iter().all(|&n| n == 1), "{spec:?} {shape:?}: a sample not written once");
+    assert!(
+        seen.iter().all(|&n| n == 1),
+        "{spec:?} {shape:?}: a sample not written once"
+    );
     let same = |x: &[f32], y: &[f32]| x.iter().zip(y).all(|(x, y)| x.to_bits() == y.to_bits());
     assert!(same(&out, whole.data()), "analysis {spec:?} {shape:?}");
     if spec.boundary != Boundary::Periodic {
@@ -111,7 +114,11 @@ fn stream_agrees(shape: &[usize], spec: &PyramidSpec, seed: u64) {
     let mut sorted = pulls.clone();
     sorted.sort_unstable();
     sorted.dedup();
-    assert_eq!(sorted.len(), pulls.len(), "{spec:?} {shape:?}: a band row pulled twice");
+    assert_eq!(
+        sorted.len(),
+        pulls.len(),
+        "{spec:?} {shape:?}: a band row pulled twice"
+    );
 }
 
 proptest! {
