@@ -13,6 +13,7 @@ pub(crate) mod par;
 pub mod pyramid;
 mod resample;
 mod ring;
+pub mod stream;
 mod transform;
 mod window;
 mod workspace;

@@ -35,6 +35,7 @@ mod simd_parity;
 mod solid;
 mod solid_cli;
 mod stdio;
+mod stream;
 mod subdivide;
 mod surface;
 mod tensor;
