@@ -7,6 +7,7 @@ mod common;
 mod architecture;
 mod array;
 mod block_coder;
+mod ht_coder;
 mod cli;
 mod cli_words;
 mod codeblocks;
