@@ -78,7 +78,7 @@ proptest! {
     }
 }
 
-/// All-zero bands cost about a bit per run of zero quads; a band of one huge value
+/// All-zero bands cost little more than a byte or two a block; a band of one huge value
 /// among zeros, single positions and 3-D blocks come back; a stream cut short fails
 /// cleanly.
 #[test]
@@ -94,7 +94,10 @@ fn ht_edge_bands() {
         let n: usize = dims.iter().product();
         let zero = vec![0i32; n];
         let bytes = block::encode_ht(&zero, &dims, BandKind::Detail, shape, t, None);
-        assert!(bytes.len() * 8 <= n / 4 + 64 * n.div_ceil(64 * 64) + 64, "{dims:?}: {} bytes", bytes.len());
+        if n >= 1 << 16 {
+            // the run coder: under a sixteenth of a bit a position
+            assert!(bytes.len() * 8 * 16 < n, "{dims:?}: {} bytes", bytes.len());
+        }
         assert_eq!(block::decode_ht(&bytes, &dims, BandKind::Detail, shape, t).unwrap(), zero);
         for v in [i32::MIN, i32::MAX, -1, 1, 2, 1 << 20] {
             let mut q = zero.clone();
