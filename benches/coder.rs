@@ -20,7 +20,7 @@ use mra::entropy::band::Coding;
 use mra::entropy::block::{self, ht, Shape};
 use mra::entropy::codeblocks;
 use std::path::{Path, PathBuf};
-use std::sync::OnceLock;
+use std::sync::{Mutex, OnceLock};
 use std::time::Instant;
 
 /// A coder under test.
@@ -38,19 +38,40 @@ enum Coder {
         volume: Shape,
         parent: bool,
     },
-    /// the HT-style coder (`entropy::block::ht`): blocks, the joint (ternary) quad
-    /// alphabet or significance patterns, the codes trained here on Kodak 1–12 or the
-    /// library's standard ones
+    /// the HT-style coder (`entropy::block::ht`): blocks, the codes' kind, the codes
+    /// trained here on Kodak 1–12 (one set, or one per level 0, 1, ≥ 2 with `by_level`)
+    /// or the library's standard ones
     Ht {
         plane: Shape,
         volume: Shape,
-        joint: bool,
+        kind: ht::Kind,
+        by_level: bool,
         standard: bool,
     },
 }
 
-/// The HT-style coder's codes trained on the bands of Kodak 1–12 (joint, patterns).
-static TRAINED: OnceLock<(ht::Tables, ht::Tables)> = OnceLock::new();
+/// The bands of Kodak 1–12, on which the HT-style coder's codes are trained.
+static TRAINING: OnceLock<Vec<Bands>> = OnceLock::new();
+/// The HT-style coder's trained codes, per kind and `by_level`.
+#[allow(clippy::type_complexity)]
+static TRAINED: Mutex<Vec<((u8, bool, bool), &'static [ht::Tables])>> = Mutex::new(Vec::new());
+
+/// The codes of `kind` trained on the Kodak 1–12 bands, per level group.
+fn trained_tables(kind: ht::Kind, by_level: bool) -> &'static [ht::Tables] {
+    let key = (kind.levels, kind.parent, by_level);
+    let mut t = TRAINED.lock().unwrap();
+    if let Some((_, v)) = t.iter().find(|(k, _)| *k == key) {
+        return v;
+    }
+    let set = TRAINING.get().expect("training bands");
+    let groups = if by_level { 3 } else { 1 };
+    let v: Vec<ht::Tables> = (0..groups)
+        .map(|g| ht_counts(set, kind, |b| !by_level || b.level.min(2) == g).tables())
+        .collect();
+    let v: &'static [ht::Tables] = Vec::leak(v);
+    t.push((key, v));
+    v
+}
 
 impl Coder {
     fn name(&self) -> String {
@@ -78,17 +99,20 @@ impl Coder {
             Coder::Ht {
                 plane,
                 volume,
-                joint,
+                kind,
+                by_level,
                 standard,
             } => format!(
-                "HT-style {}×{} / {}×{}×{}, {}, {} codes",
+                "HT-style {}×{} / {}×{}×{}, L = {}{}, {} codes{}",
                 plane.y,
                 plane.x,
                 volume.z,
                 volume.y,
                 volume.x,
-                if *joint { "ternary quads" } else { "patterns" },
-                if *standard { "standard" } else { "trained" }
+                kind.levels,
+                if kind.parent { ", parent" } else { "" },
+                if *standard { "standard" } else { "trained" },
+                if *by_level { " per level" } else { "" }
             ),
         }
     }
@@ -126,17 +150,38 @@ fn coders() -> Vec<Coder> {
         tb(128, [32, 32, 32]),
         tb(256, [32, 64, 64]),
     ];
-    let ht = |p: Shape, v: Shape, joint, standard| Coder::Ht {
-        plane: p,
-        volume: v,
-        joint,
-        standard,
+    let ht = |levels, parent, by_level| Coder::Ht {
+        plane: shape(1, 256, 256),
+        volume: shape(32, 64, 64),
+        kind: ht::Kind { levels, parent },
+        by_level,
+        standard: false,
     };
     v.extend([
-        ht(shape(1, 256, 256), shape(32, 64, 64), true, false),
-        ht(shape(1, 256, 256), shape(32, 64, 64), false, false),
-        ht(shape(1, 64, 64), shape(16, 32, 32), true, false),
-        ht(shape(1, 256, 256), shape(32, 64, 64), true, true),
+        ht(2, false, false),
+        ht(3, false, false),
+        ht(4, false, false),
+        ht(3, true, false),
+        ht(4, true, false),
+        ht(3, false, true),
+        ht(4, true, true),
+        Coder::Ht {
+            plane: shape(1, 128, 128),
+            volume: shape(32, 32, 32),
+            kind: ht::Kind {
+                levels: 4,
+                parent: true,
+            },
+            by_level: false,
+            standard: false,
+        },
+        Coder::Ht {
+            plane: shape(1, 256, 256),
+            volume: shape(32, 64, 64),
+            kind: ht::Tables::standard().kind,
+            by_level: false,
+            standard: true,
+        },
     ]);
     if std::env::var_os("MRA_CODER_QUADS").is_none() {
         return v;
@@ -248,25 +293,23 @@ fn run(coder: Coder, set: &[Bands]) -> (usize, f64, f64) {
                 Coder::Ht {
                     plane,
                     volume,
-                    joint,
+                    kind,
+                    by_level,
                     standard,
                 } => {
                     let sh = if b.dims.len() >= 3 { volume } else { plane };
                     let t = if standard {
                         ht::Tables::standard()
                     } else {
-                        let tr = TRAINED.get().expect("trained first");
-                        if joint {
-                            &tr.0
-                        } else {
-                            &tr.1
-                        }
+                        let v = trained_tables(kind, by_level);
+                        &v[if by_level { b.level.min(2) } else { 0 }]
                     };
+                    let par = bs.parent32(i);
                     let t0 = Instant::now();
-                    let s = block::encode_ht(&b.q32, &b.dims, b.kind, sh, t, None);
+                    let s = block::encode_ht(&b.q32, &b.dims, b.kind, par, sh, t, None);
                     te += t0.elapsed().as_secs_f64();
                     let t0 = Instant::now();
-                    let back = block::decode_ht(&s, &b.dims, b.kind, sh, t).unwrap();
+                    let back = block::decode_ht(&s, &b.dims, b.kind, par, sh, t).unwrap();
                     td += t0.elapsed().as_secs_f64();
                     assert_eq!(back, b.q32);
                     bytes += s.len();
@@ -338,19 +381,20 @@ fn train(set: &[Bands]) {
     println!("wrote {}", path.display());
 }
 
-/// Count the HT-style coder's symbols over `set` (blocks of 256² / 32×64×64) with
-/// flat codes.
-fn ht_counts(set: &[Bands], joint: bool) -> ht::Counts {
-    let mut n = ht::Counts::new(joint);
+/// Count the HT-style coder's symbols of codes `kind` over the bands of `set` that
+/// `take` keeps (blocks of 256² / 32×64×64).
+fn ht_counts(set: &[Bands], kind: ht::Kind, take: impl Fn(&bands::Band) -> bool) -> ht::Counts {
+    let mut n = ht::Counts::new(kind);
     let flat = n.tables();
     for bs in set {
-        for b in &bs.bands {
+        for (i, b) in bs.bands.iter().enumerate().filter(|(_, b)| take(b)) {
             let sh = if b.dims.len() >= 3 {
                 shape(32, 64, 64)
             } else {
                 shape(1, 256, 256)
             };
-            block::encode_ht(&b.q32, &b.dims, b.kind, sh, &flat, Some(&mut n));
+            let par = bs.parent32(i);
+            block::encode_ht(&b.q32, &b.dims, b.kind, par, sh, &flat, Some(&mut n));
         }
     }
     n
@@ -358,8 +402,8 @@ fn ht_counts(set: &[Bands], joint: bool) -> ht::Counts {
 
 /// Write the joint codes trained on `set` as the standard ones
 /// (`src/entropy/block/ht_table.rs`).
-fn train_ht(set: &[Bands]) {
-    let (q, m) = ht_counts(set, true).lengths();
+fn train_ht(set: &[Bands], kind: ht::Kind) {
+    let (q, m) = ht_counts(set, kind, |_| true).lengths();
     let rows = |t: &[Vec<u8>]| -> String {
         let r: Vec<String> = t
             .iter()
@@ -375,14 +419,18 @@ fn train_ht(set: &[Bands]) {
          //! Generated by `cargo bench --bench coder -- train-ht`: the Huffman code lengths\n\
          //! ([`super::vlc::lengths`]) of the symbol counts of every code over the bands of\n\
          //! Kodak 1–12 at `--bpp 1`, blocks of 256×256.\n\n\
-         /// The joint (ternary) quad alphabet.\n\
-         pub const JOINT: bool = true;\n\n\
-         /// Quad code lengths per class, then the run context.\n\
+         use super::ht::Kind;\n\n\
+         /// The codes' kind.\n\
+         pub const KIND: Kind = Kind {{\n    levels: {},\n    parent: {},\n}};\n\n\
+         /// Quad code lengths per context, then the run context.\n\
          #[rustfmt::skip]\n\
-         pub const QUAD: [[u8; 81]; {}] = {};\n\n\
+         pub const QUAD: [[u8; {}]; {}] = {};\n\n\
          /// Magnitude code lengths per class.\n\
          #[rustfmt::skip]\n\
          pub const MAGNITUDE: [[u8; 16]; {}] = {};\n",
+        kind.levels,
+        kind.parent,
+        kind.symbols(),
         q.len(),
         rows(&q),
         m.len(),
@@ -418,18 +466,21 @@ fn main() {
         train(&kodak(1..=12));
         return;
     }
-    let training = kodak(1..=12);
+    let training = TRAINING.get_or_init(|| kodak(1..=12));
     if args.iter().any(|a| a == "train-ht") {
-        train_ht(&training);
+        let env = |k: &str, d: u8| {
+            std::env::var(k)
+                .ok()
+                .and_then(|v| v.parse().ok())
+                .unwrap_or(d)
+        };
+        let kind = ht::Kind {
+            levels: env("MRA_HT_LEVELS", 3),
+            parent: env("MRA_HT_PARENT", 0) == 1,
+        };
+        train_ht(training, kind);
         return;
     }
-    TRAINED.get_or_init(|| {
-        (
-            ht_counts(&training, true).tables(),
-            ht_counts(&training, false).tables(),
-        )
-    });
-    drop(training);
     let mut sets: Vec<(&str, Vec<Bands>)> = Vec::new();
     if want("kodak") {
         sets.push(("Kodak 13–24, --bpp 1", kodak(13..=24)));

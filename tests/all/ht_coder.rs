@@ -8,8 +8,8 @@ use super::common;
 #[path = "../../benches/coder/bands.rs"]
 mod bands;
 
-use mra::entropy::block::ht::{Counts, Tables};
-use mra::entropy::block::{self, Shape};
+use mra::entropy::block::ht::{Counts, Kind, Tables};
+use mra::entropy::block::{self, Parent, Shape};
 use mra::entropy::BandKind;
 use proptest::prelude::*;
 
@@ -35,10 +35,17 @@ fn band_of(dims: Vec<usize>) -> impl Strategy<Value = (Vec<usize>, Vec<i32>)> {
 }
 
 /// The codes trained on `q` itself (in `joint` alphabet), as the bench trains them.
-fn trained(q: &[i32], dims: &[usize], kind: BandKind, shape: Shape, joint: bool) -> Tables {
-    let mut n = Counts::new(joint);
+fn trained(
+    q: &[i32],
+    dims: &[usize],
+    kind: BandKind,
+    par: Option<Parent>,
+    shape: Shape,
+    k: Kind,
+) -> Tables {
+    let mut n = Counts::new(k);
     let flat = n.tables();
-    block::encode_ht(q, dims, kind, shape, &flat, Some(&mut n));
+    block::encode_ht(q, dims, kind, par, shape, &flat, Some(&mut n));
     n.tables()
 }
 
@@ -52,16 +59,23 @@ proptest! {
         (dims, q) in dims().prop_flat_map(band_of),
         z in 1usize..=5, y in 1usize..=9, x in 1usize..=9,
         coarse in any::<bool>(),
-        codes in 0u8..3,
+        pseed in prop::collection::vec(index(), 0..200),
+        levels in 1u8..=4,
+        parent in any::<bool>(),
     ) {
         let shape = Shape::new(z, y, x);
         let kind = if coarse { BandKind::Coarse } else { BandKind::Detail };
-        let t = match codes {
-            0 => Tables::standard().clone(),
-            c => trained(&q, &dims, kind, shape, c == 1),
+        let pdims: Vec<usize> = dims.iter().map(|d| d.div_ceil(2)).collect();
+        let pn: usize = pdims.iter().product();
+        let pq: Vec<i32> = (0..pn).map(|i| pseed.get(i % pseed.len().max(1)).copied().unwrap_or(0)).collect();
+        let par = Some(Parent { data: &pq, dims: &pdims });
+        // levels 1: the standard codes
+        let t = match levels {
+            1 => Tables::standard().clone(),
+            l => trained(&q, &dims, kind, par, shape, Kind { levels: l, parent }),
         };
-        let bytes = block::encode_ht(&q, &dims, kind, shape, &t, None);
-        let back = block::decode_ht(&bytes, &dims, kind, shape, &t).unwrap();
+        let bytes = block::encode_ht(&q, &dims, kind, par, shape, &t, None);
+        let back = block::decode_ht(&bytes, &dims, kind, par, shape, &t).unwrap();
         prop_assert_eq!(back, q);
     }
 
@@ -74,7 +88,7 @@ proptest! {
         coarse in any::<bool>(),
     ) {
         let kind = if coarse { BandKind::Coarse } else { BandKind::Detail };
-        let _ = block::decode_ht(&bytes, &dims, kind, Shape::new(2, 4, 6), Tables::standard());
+        let _ = block::decode_ht(&bytes, &dims, kind, None, Shape::new(2, 4, 6), Tables::standard());
     }
 }
 
@@ -93,30 +107,45 @@ fn ht_edge_bands() {
     ] {
         let n: usize = dims.iter().product();
         let zero = vec![0i32; n];
-        let bytes = block::encode_ht(&zero, &dims, BandKind::Detail, shape, t, None);
+        let bytes = block::encode_ht(&zero, &dims, BandKind::Detail, None, shape, t, None);
         if n >= 1 << 16 {
             // the run coder: under a sixteenth of a bit a position
             assert!(bytes.len() * 8 * 16 < n, "{dims:?}: {} bytes", bytes.len());
         }
-        assert_eq!(block::decode_ht(&bytes, &dims, BandKind::Detail, shape, t).unwrap(), zero);
+        assert_eq!(
+            block::decode_ht(&bytes, &dims, BandKind::Detail, None, shape, t).unwrap(),
+            zero
+        );
         for v in [i32::MIN, i32::MAX, -1, 1, 2, 1 << 20] {
             let mut q = zero.clone();
             q[n / 2] = v;
             q[n - 1] = -v.wrapping_add(1);
             for kind in [BandKind::Detail, BandKind::Coarse] {
-                let bytes = block::encode_ht(&q, &dims, kind, shape, t, None);
-                assert_eq!(block::decode_ht(&bytes, &dims, kind, shape, t).unwrap(), q, "{dims:?} {v}");
+                let bytes = block::encode_ht(&q, &dims, kind, None, shape, t, None);
+                assert_eq!(
+                    block::decode_ht(&bytes, &dims, kind, None, shape, t).unwrap(),
+                    q,
+                    "{dims:?} {v}"
+                );
             }
         }
     }
     let dims = [20usize, 30];
     let q: Vec<i32> = (0..600).map(|i: i32| (i * 7919) % 23 - 11).collect();
     let shape = Shape::new(1, 8, 8);
-    let bytes = block::encode_ht(&q, &dims, BandKind::Detail, shape, t, None);
+    let bytes = block::encode_ht(&q, &dims, BandKind::Detail, None, shape, t, None);
     for cut in 0..bytes.len() {
-        let _ = block::decode_ht(&bytes[..cut], &dims, BandKind::Detail, shape, t);
+        let _ = block::decode_ht(&bytes[..cut], &dims, BandKind::Detail, None, shape, t);
     }
-    assert!(block::decode_ht(&bytes[..bytes.len() - 1], &dims, BandKind::Detail, shape, t).is_err());
+    assert!(block::decode_ht(
+        &bytes[..bytes.len() - 1],
+        &dims,
+        BandKind::Detail,
+        None,
+        shape,
+        t
+    )
+    .is_err());
 }
 
 /// On real bands (kodim01 at 1 bpp) the HT-style coder gives every band's indices back
@@ -138,9 +167,25 @@ fn ht_real_bands_round_trip() {
     let bs = bands::Bands::of_file(&bytes).unwrap();
     let shape = Shape::new(1, 256, 256);
     let (mut today, mut ours) = (0, 0);
-    for b in &bs.bands {
-        let s = block::encode_ht(&b.q32, &b.dims, b.kind, shape, Tables::standard(), None);
-        let back = block::decode_ht(&s, &b.dims, b.kind, shape, Tables::standard()).unwrap();
+    for (i, b) in bs.bands.iter().enumerate() {
+        let s = block::encode_ht(
+            &b.q32,
+            &b.dims,
+            b.kind,
+            bs.parent32(i),
+            shape,
+            Tables::standard(),
+            None,
+        );
+        let back = block::decode_ht(
+            &s,
+            &b.dims,
+            b.kind,
+            bs.parent32(i),
+            shape,
+            Tables::standard(),
+        )
+        .unwrap();
         assert_eq!(back, b.q32);
         today += b.stream.len();
         ours += s.len();

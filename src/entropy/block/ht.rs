@@ -4,18 +4,20 @@
 //! model adapts except the run coder's state.
 //!
 //! Quads, neighbours and classes are those of [`super::quad`] (the same scratch of
-//! magnitudes, positions outside the block 0), without the parent. For the quad at
-//! `(y, x)`, the class `q` of `s = NW + N₀ + N₁ + NE + W₀ + W₁ + ΣZ` (12 classes):
+//! magnitudes, positions outside the block 0). The codes' [`Kind`] sets `L` (levels) and
+//! whether the parent P (capped magnitude of the one coefficient a quad shares one level
+//! coarser) is a context. For the quad at `(y, x)`, with the class `q` of
+//! `s = NW + N₀ + N₁ + NE + W₀ + W₁ + ΣZ` (12 classes), its context is `q` (no parent)
+//! or `3q + min(P, 2)`:
 //!
-//! - **quad symbol**: with [`Tables::joint`], `Σ t_b·3^b` where `t_b` is 0 (zero),
-//!   1 (`|v| = 1`) or 2 (`|v| ≥ 2`) for the quad's four positions in raster order
-//!   (81 symbols); otherwise the significance pattern `Σ [v_b ≠ 0]·2^b` (16 symbols).
-//!   When `q = 0` the run coder first says whether the quad is all zero; a non-zero
-//!   quad's symbol then uses the code of the context after a run ([`RUN`]). Otherwise the
-//!   symbol uses the code of class `q`.
-//! - **each non-zero position** in raster order: its magnitude `m`, unless the quad
-//!   symbol already says `m = 1`, as `v = m − 1` (`m − 2` in the joint alphabet) by the
-//!   rule of [`super::quad`]: class `c` of `u = 2(W + N + Z) + NW + NE`,
+//! - **quad symbol** `Σ t_b·L^b`, `t_b = min(|v_b|, L − 1)` for the quad's four
+//!   positions in raster order (`L = 2`: the significance pattern, 16 symbols; `L = 3`:
+//!   81; `L = 4`: 256). In context 0 the run coder first says whether the quad is all
+//!   zero; a non-zero quad's symbol then uses the code after a run ([`Kind::run`]).
+//!   Otherwise the symbol uses the code of its context.
+//! - **each non-zero position** in raster order: when `t_b = L − 1`, its magnitude `m`
+//!   as `v = m − (L − 1)` by the rule of [`super::quad`]: class `c` of
+//!   `u = 2(W + N + Z) + NW + NE` (`+ 2P` with the parent),
 //!   `k = max(c − KOFF, 0)`, `h = ⌊v / 2^k⌋` as the symbol `min(h, 15)` in the code of
 //!   class `c`, `h ≥ 15` followed by `h − 14 = 2^e + r` as `e` in 6 raw bits and `r` in
 //!   `e` raw bits; then the `k` low bits of `v`; then the sign bit (1 = negative).
@@ -31,46 +33,75 @@ use std::sync::OnceLock;
 
 /// Quad classes (of `s`).
 pub const QCLS: usize = super::quad::QCLS;
-/// The code index of a non-zero quad after the run coder (class 0).
-pub const RUN: usize = QCLS;
 /// Symbols of the magnitude codes.
 pub const MSYM: usize = 16;
 
-/// `t_b` digits of the 81 joint quad symbols.
-const DIGITS: [[u8; 4]; 81] = {
-    let mut d = [[0u8; 4]; 81];
-    let mut s = 0;
-    while s < 81 {
-        d[s] = [
-            (s % 3) as u8,
-            (s / 3 % 3) as u8,
-            (s / 9 % 3) as u8,
-            (s / 27 % 3) as u8,
-        ];
-        s += 1;
+/// The shape of a coder's codes: levels per quad position and whether the parent is a
+/// context.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Kind {
+    /// `L` in 2..=4: a quad symbol is `Σ t_b·L^b` with `t_b = min(|v_b|, L − 1)`
+    pub levels: u8,
+    /// the quad context is `q·3 + min(P, 2)` and magnitude classes count `2P`
+    pub parent: bool,
+}
+
+impl Kind {
+    /// Quad symbols.
+    pub fn symbols(self) -> usize {
+        (self.levels as usize).pow(4)
     }
-    d
-};
+
+    /// Quad codes: one per context, then the one after a run ([`Kind::run`]).
+    pub fn quad_codes(self) -> usize {
+        self.run() + 1
+    }
+
+    /// The code index of a non-zero quad after the run coder.
+    pub fn run(self) -> usize {
+        if self.parent {
+            QCLS * 3
+        } else {
+            QCLS
+        }
+    }
+}
 
 /// The prefix codes of the coder.
 #[derive(Clone, Debug)]
 pub struct Tables {
-    /// the ternary quad alphabet (81 symbols) instead of significance patterns (16)
-    pub joint: bool,
-    /// per class `q`, then [`RUN`]
+    pub kind: Kind,
+    /// per quad context, then the run code
     quad: Vec<Vlc>,
     /// per magnitude class `c`
     mag: Vec<Vlc>,
+    /// `t_b` of every quad symbol
+    digits: Vec<[u8; 4]>,
 }
 
 impl Tables {
-    /// The codes of the given lengths: `quad` has [`QCLS`] + 1 rows of 81 (joint) or 16
-    /// lengths, `mag` [`MCLS`] rows of [`MSYM`].
-    pub fn from_lengths(joint: bool, quad: &[&[u8]], mag: &[&[u8]]) -> Self {
+    /// The codes of the given lengths: `quad` has [`Kind::quad_codes`] rows of
+    /// [`Kind::symbols`] lengths, `mag` [`MCLS`] rows of [`MSYM`].
+    pub fn from_lengths(kind: Kind, quad: &[&[u8]], mag: &[&[u8]]) -> Self {
+        let l = kind.levels.clamp(2, 4) as usize;
+        let kind = Kind {
+            levels: l as u8,
+            ..kind
+        };
         Tables {
-            joint,
-            quad: quad.iter().map(|l| Vlc::new(l)).collect(),
-            mag: mag.iter().map(|l| Vlc::new(l)).collect(),
+            kind,
+            quad: quad.iter().map(|r| Vlc::new(r)).collect(),
+            mag: mag.iter().map(|r| Vlc::new(r)).collect(),
+            digits: (0..kind.symbols())
+                .map(|s| {
+                    [
+                        (s % l) as u8,
+                        (s / l % l) as u8,
+                        (s / (l * l) % l) as u8,
+                        (s / (l * l * l) % l) as u8,
+                    ]
+                })
+                .collect(),
         }
     }
 
@@ -81,7 +112,7 @@ impl Tables {
             use super::ht_table as t;
             let q: Vec<&[u8]> = t::QUAD.iter().map(|r| &r[..]).collect();
             let m: Vec<&[u8]> = t::MAGNITUDE.iter().map(|r| &r[..]).collect();
-            Tables::from_lengths(t::JOINT, &q, &m)
+            Tables::from_lengths(t::KIND, &q, &m)
         })
     }
 }
@@ -89,16 +120,16 @@ impl Tables {
 /// Symbol counts per code, for training [`Tables`].
 #[derive(Clone, Debug)]
 pub struct Counts {
-    pub joint: bool,
+    pub kind: Kind,
     pub quad: Vec<Vec<u64>>,
     pub magnitude: Vec<Vec<u64>>,
 }
 
 impl Counts {
-    pub fn new(joint: bool) -> Self {
+    pub fn new(kind: Kind) -> Self {
         Counts {
-            joint,
-            quad: vec![vec![0; if joint { 81 } else { 16 }]; QCLS + 1],
+            kind,
+            quad: vec![vec![0; kind.symbols()]; kind.quad_codes()],
             magnitude: vec![vec![0; MSYM]; MCLS],
         }
     }
@@ -116,7 +147,17 @@ impl Counts {
         let (q, m) = self.lengths();
         let q: Vec<&[u8]> = q.iter().map(|r| &r[..]).collect();
         let m: Vec<&[u8]> = m.iter().map(|r| &r[..]).collect();
-        Tables::from_lengths(self.joint, &q, &m)
+        Tables::from_lengths(self.kind, &q, &m)
+    }
+}
+
+/// The quad code context of the quad at scratch index `i` with parent magnitude `pm`.
+#[inline(always)]
+fn quad_ctx(s: &Scratch, i: usize, pm: u32, parent: bool) -> usize {
+    if parent {
+        s.quad_class(i) * 3 + pm.min(2) as usize
+    } else {
+        s.quad_class(i)
     }
 }
 
@@ -134,30 +175,28 @@ pub fn encode(
 ) {
     s.clear();
     let off = quad_offsets(s.rx());
-    let base = if t.joint { 2 } else { 1 };
+    let top = t.kind.levels as u32 - 1;
+    let (run, parent) = (t.kind.run(), t.kind.parent);
     each_quad(ext, rows, |k, y, x, valid, at| {
         let mut d = [0u8; 4];
         let mut sym = 0;
         for b in 0..4 {
-            if valid >> b & 1 == 1 && band[at[b]] != 0 {
-                d[b] = if t.joint && band[at[b]].unsigned_abs() > 1 {
-                    2
-                } else {
-                    1
-                };
+            if valid >> b & 1 == 1 {
+                d[b] = band[at[b]].unsigned_abs().min(top) as u8;
             }
         }
         for b in (0..4).rev() {
-            sym = sym * if t.joint { 3 } else { 2 } + d[b] as usize;
+            sym = sym * (top as usize + 1) + d[b] as usize;
         }
         let i = s.at(k, y, x);
-        let q = s.quad_class(i);
+        let pm = if parent { rows.parent(k, y, x) } else { 0 };
+        let q = quad_ctx(s, i, pm, parent);
         let code = if q == 0 {
             mel.event(sym == 0);
             if sym == 0 {
                 return;
             }
-            RUN
+            run
         } else {
             q
         };
@@ -171,9 +210,9 @@ pub fn encode(
             }
             let v = band[at[b]];
             let a = v.unsigned_abs();
-            if d[b] == 2 || !t.joint {
-                let c = s.mag_ctx(i + off[b], 0);
-                let m = (a - base) as u64;
+            if d[b] as u32 == top {
+                let c = s.mag_ctx(i + off[b], pm);
+                let m = (a - top) as u64;
                 if let Some(n) = counts.as_deref_mut() {
                     let k = c.saturating_sub(KOFF) as u32;
                     n.magnitude[c][(m >> k).min(15) as usize] += 1;
@@ -215,39 +254,32 @@ pub fn decode(
 ) {
     s.clear();
     let off = quad_offsets(s.rx());
-    let base = if t.joint { 2 } else { 1 };
+    let top = t.kind.levels - 1;
+    let (run, parent) = (t.kind.run(), t.kind.parent);
     let mut r = BitReader::new(data);
     let mut mel = MelReader::new(data);
     each_quad(ext, rows, |k, y, x, valid, at| {
         let i = s.at(k, y, x);
-        let q = s.quad_class(i);
+        let pm = if parent { rows.parent(k, y, x) } else { 0 };
+        let q = quad_ctx(s, i, pm, parent);
         let sym = if q == 0 {
             if mel.next() {
                 return;
             }
-            t.quad[RUN].get(&mut r)
+            t.quad[run].get(&mut r)
         } else {
             t.quad[q].get(&mut r)
         };
-        let d = if t.joint {
-            DIGITS[sym.min(80)]
-        } else {
-            [
-                (sym & 1) as u8,
-                (sym >> 1 & 1) as u8,
-                (sym >> 2 & 1) as u8,
-                (sym >> 3 & 1) as u8,
-            ]
-        };
+        let d = t.digits.get(sym).copied().unwrap_or_default();
         for b in 0..4 {
             if d[b] == 0 || valid >> b & 1 == 0 {
                 continue;
             }
-            let a = if d[b] == 2 || !t.joint {
-                let c = s.mag_ctx(i + off[b], 0);
-                get_magnitude(&mut r, &t.mag[c], c) + base
+            let a = if d[b] == top {
+                let c = s.mag_ctx(i + off[b], pm);
+                get_magnitude(&mut r, &t.mag[c], c) + top as u64
             } else {
-                1
+                d[b] as u64
             };
             let neg = r.get(1) == 1;
             let a32 = a as u32;

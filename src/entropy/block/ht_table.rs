@@ -3,8 +3,13 @@
 //! ([`super::vlc::lengths`]) of the symbol counts of every code over the bands of
 //! Kodak 1–12 at `--bpp 1`, blocks of 256×256.
 
-/// The joint (ternary) quad alphabet.
-pub const JOINT: bool = true;
+use super::ht::Kind;
+
+/// Three levels per quad position, no parent.
+pub const KIND: Kind = Kind {
+    levels: 3,
+    parent: false,
+};
 
 /// Quad code lengths per class, then the run context.
 #[rustfmt::skip]

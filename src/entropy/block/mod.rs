@@ -277,11 +277,12 @@ pub fn decode(
 /// with the HT-style coder ([`ht`]) and its codes `t`, adding every coded symbol to
 /// `counts` when given. The band's bytes are, block after block, `varint(block bytes)`
 /// and the block's bytes ([`ht`]). The coarsest band is coded as median residuals, as
-/// in [`encode`]; no parent.
+/// in [`encode`]; the parent is read only when the codes' [`ht::Kind`] asks for it.
 pub fn encode_ht(
     q: &[i32],
     dims: &[usize],
     kind: BandKind,
+    parent: Option<Parent>,
     shape: Shape,
     t: &ht::Tables,
     mut counts: Option<&mut ht::Counts>,
@@ -289,11 +290,13 @@ pub fn encode_ht(
     let w = Walk::new(dims);
     let shape = shape.normal();
     let res: Vec<i32>;
-    let v = if kind == BandKind::Coarse {
+    let (v, parent) = if kind == BandKind::Coarse {
         res = median_residuals(q, w);
-        &res[..]
+        (&res[..], None)
+    } else if t.kind.parent {
+        (q, parent_map(dims, w, parent))
     } else {
-        q
+        (q, None)
     };
     let mut out = Vec::new();
     let mut scratch: Option<(Extent, Scratch)> = None;
@@ -301,7 +304,11 @@ pub fn encode_ht(
     let mut mel = vlc::MelWriter::default();
     for b in blocks(w, shape) {
         let s = scratch_for(&mut scratch, b.ext);
-        let layout = Layout { w, b, parent: None };
+        let layout = Layout {
+            w,
+            b,
+            parent: parent.as_ref().map(|(d, pw, bases)| (*d, *pw, &bases[..])),
+        };
         bits.clear();
         mel.clear();
         ht::encode(
@@ -329,6 +336,7 @@ pub fn decode_ht(
     data: &[u8],
     dims: &[usize],
     kind: BandKind,
+    parent: Option<Parent>,
     shape: Shape,
     t: &ht::Tables,
 ) -> Result<Vec<i32>> {
@@ -336,6 +344,11 @@ pub fn decode_ht(
     let shape = shape.normal();
     let n: usize = dims.iter().product();
     let mut v = vec![0i32; n];
+    let parent = if kind == BandKind::Coarse || !t.kind.parent {
+        None
+    } else {
+        parent_map(dims, w, parent)
+    };
     let mut cur = Cursor::new(data, "code-block");
     let mut scratch: Option<(Extent, Scratch)> = None;
     for b in blocks(w, shape) {
@@ -349,7 +362,11 @@ pub fn decode_ht(
         }
         let bytes = cur.take(len as usize)?;
         let s = scratch_for(&mut scratch, b.ext);
-        let layout = Layout { w, b, parent: None };
+        let layout = Layout {
+            w,
+            b,
+            parent: parent.as_ref().map(|(d, pw, bases)| (*d, *pw, &bases[..])),
+        };
         ht::decode(&mut v, b.ext, &layout, s, t, bytes);
     }
     if kind == BandKind::Coarse {

@@ -31,8 +31,7 @@ impl BitWriter {
         self.buf |= v << self.n;
         self.n += nb;
         if self.n >= 32 {
-            self.out
-                .extend_from_slice(&(self.buf as u32).to_le_bytes());
+            self.out.extend_from_slice(&(self.buf as u32).to_le_bytes());
             self.buf >>= 32;
             self.n -= 32;
         }
@@ -42,8 +41,7 @@ impl BitWriter {
     /// bytes left in `out`.
     pub fn flush(&mut self) {
         let bytes = self.n.div_ceil(8) as usize;
-        self.out
-            .extend_from_slice(&self.buf.to_le_bytes()[..bytes]);
+        self.out.extend_from_slice(&self.buf.to_le_bytes()[..bytes]);
         self.buf = 0;
         self.n = 0;
     }
@@ -201,8 +199,11 @@ fn huffman(w: &[u64]) -> Vec<u8> {
     }
     // nodes 0..n are leaves; parents appended
     let mut parent = vec![usize::MAX; n];
-    let mut heap: BinaryHeap<Reverse<(u64, usize)>> =
-        w.iter().enumerate().map(|(i, &x)| Reverse((x, i))).collect();
+    let mut heap: BinaryHeap<Reverse<(u64, usize)>> = w
+        .iter()
+        .enumerate()
+        .map(|(i, &x)| Reverse((x, i)))
+        .collect();
     while heap.len() > 1 {
         let Reverse((a, i)) = heap.pop().expect("two nodes");
         let Reverse((b, j)) = heap.pop().expect("two nodes");
@@ -353,10 +354,15 @@ mod tests {
                 .wrapping_add(1442695040888963407);
             seed >> 33
         };
-        let counts: Vec<u64> = (0..81).map(|i| if i % 7 == 0 { 0 } else { 1000 >> (i % 9) }).collect();
+        let counts: Vec<u64> = (0..81)
+            .map(|i| if i % 7 == 0 { 0 } else { 1000 >> (i % 9) })
+            .collect();
         let vlc = Vlc::new(&lengths(&counts));
         let kraft: f64 = (0..81).map(|s| 0.5f64.powi(vlc.len(s) as i32)).sum();
-        assert!((kraft - 1.0).abs() < 1e-9, "complete code, Kraft sum {kraft}");
+        assert!(
+            (kraft - 1.0).abs() < 1e-9,
+            "complete code, Kraft sum {kraft}"
+        );
         let mut w = BitWriter::default();
         let mut mel = MelWriter::default();
         let mut log = Vec::new();
