@@ -1,7 +1,9 @@
 //! Coefficient coders on the same real bands: today's (`entropy::band`, format 2) over
 //! whole bands against the same coder per code-block (`entropy::codeblocks`, format 3.0:
 //! blocks of 64², 128², 256² and their volume sizes, block index counted) and, with
-//! `MRA_CODER_QUADS=1`, the quad-coder prototype (`entropy::block`); bits and MB/s
+//! `MRA_CODER_QUADS=1`, the quad-coder prototype (`entropy::block`); the HT-style coder
+//! (`entropy::block::ht`) in several kinds, its codes trained here on the bands of Kodak
+//! 1–12, and with its standard codes (`-- train-ht` writes those); bits and MB/s
 //! (run with `RAYON_NUM_THREADS=1` for single-thread figures).
 //!
 //! The bands are those `mra encode` writes: each input is encoded by the library

@@ -14,6 +14,10 @@
 //!
 //! The parent (one level coarser, same orientation) is a context as in
 //! [`super::band`]: blocks stay independent of each other given the coarser level.
+//!
+//! [`encode_ht`] / [`decode_ht`] code the same blocks with the HT-style coder ([`ht`]):
+//! static prefix codes ([`vlc`]) and a run coder instead of the range coder, one
+//! length per block.
 
 pub mod ht;
 mod ht_table;
