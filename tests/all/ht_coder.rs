@@ -4,9 +4,8 @@
 //! trained on the data, in both quad alphabets; damaged streams; and on real bands
 //! (kodim01 at 1 bpp, when the corpus is present) the indices back exactly.
 
+use super::block_coder::bands;
 use super::common;
-#[path = "../../benches/coder/bands.rs"]
-mod bands;
 
 use mra::entropy::block::ht::{Counts, Kind, Tables};
 use mra::entropy::block::{self, Parent, Shape};

@@ -263,7 +263,7 @@ pub fn decode(
         let pm = if parent { rows.parent(k, y, x) } else { 0 };
         let q = quad_ctx(s, i, pm, parent);
         let sym = if q == 0 {
-            if mel.next() {
+            if mel.event() {
                 return;
             }
             t.quad[run].get(&mut r)

@@ -319,7 +319,7 @@ impl<'a> MelReader<'a> {
 
     /// The next event: true for a zero.
     #[inline(always)]
-    pub fn next(&mut self) -> bool {
+    pub fn event(&mut self) -> bool {
         if self.run == 0 && !self.one {
             let e = MEL_E[self.s] as u32;
             if self.bits(1) == 1 {
@@ -385,7 +385,7 @@ mod tests {
         for &(s, raw, nb, zero) in &log {
             assert_eq!(vlc.get(&mut r), s);
             assert_eq!(r.get(nb), raw);
-            assert_eq!(mr.next(), zero);
+            assert_eq!(mr.event(), zero);
         }
     }
 }
