@@ -1,7 +1,9 @@
 //! Coefficient coders on the same real bands: today's (`entropy::band`, format 2) over
 //! whole bands against the same coder per code-block (`entropy::codeblocks`, format 3.0:
 //! blocks of 64², 128², 256² and their volume sizes, block index counted) and, with
-//! `MRA_CODER_QUADS=1`, the quad-coder prototype (`entropy::block`); bits and MB/s
+//! `MRA_CODER_QUADS=1`, the quad-coder prototype (`entropy::block`); the HT-style coder
+//! (`entropy::block::ht`) in several kinds, its codes trained here on the bands of Kodak
+//! 1–12, and with its standard codes (`-- train-ht` writes those); bits and MB/s
 //! (run with `RAYON_NUM_THREADS=1` for single-thread figures).
 //!
 //! The bands are those `mra encode` writes: each input is encoded by the library
@@ -17,9 +19,10 @@ mod bands;
 use bands::Bands;
 use mra::codec::{encode, EncodeOptions, Rate};
 use mra::entropy::band::Coding;
-use mra::entropy::block::{self, Shape};
+use mra::entropy::block::{self, ht, Shape};
 use mra::entropy::codeblocks;
 use std::path::{Path, PathBuf};
+use std::sync::{Mutex, OnceLock};
 use std::time::Instant;
 
 /// A coder under test.
@@ -37,6 +40,39 @@ enum Coder {
         volume: Shape,
         parent: bool,
     },
+    /// the HT-style coder (`entropy::block::ht`): blocks, the codes' kind, the codes
+    /// trained here on Kodak 1–12 (one set, or one per level 0, 1, ≥ 2 with `by_level`)
+    /// or the library's standard ones
+    Ht {
+        plane: Shape,
+        volume: Shape,
+        kind: ht::Kind,
+        by_level: bool,
+        standard: bool,
+    },
+}
+
+/// The bands of Kodak 1–12, on which the HT-style coder's codes are trained.
+static TRAINING: OnceLock<Vec<Bands>> = OnceLock::new();
+/// The HT-style coder's trained codes, per kind and `by_level`.
+#[allow(clippy::type_complexity)]
+static TRAINED: Mutex<Vec<((u8, bool, bool), &'static [ht::Tables])>> = Mutex::new(Vec::new());
+
+/// The codes of `kind` trained on the Kodak 1–12 bands, per level group.
+fn trained_tables(kind: ht::Kind, by_level: bool) -> &'static [ht::Tables] {
+    let key = (kind.levels, kind.parent, by_level);
+    let mut t = TRAINED.lock().unwrap();
+    if let Some((_, v)) = t.iter().find(|(k, _)| *k == key) {
+        return v;
+    }
+    let set = TRAINING.get().expect("training bands");
+    let groups = if by_level { 3 } else { 1 };
+    let v: Vec<ht::Tables> = (0..groups)
+        .map(|g| ht_counts(set, kind, |b| !by_level || b.level.min(2) == g).tables())
+        .collect();
+    let v: &'static [ht::Tables] = Vec::leak(v);
+    t.push((key, v));
+    v
 }
 
 impl Coder {
@@ -61,6 +97,24 @@ impl Coder {
                 plane.limit,
                 if plane.trained { "trained" } else { "uniform" },
                 if *parent { ", parent" } else { "" }
+            ),
+            Coder::Ht {
+                plane,
+                volume,
+                kind,
+                by_level,
+                standard,
+            } => format!(
+                "HT-style {}×{} / {}×{}×{}, L = {}{}, {} codes{}",
+                plane.y,
+                plane.x,
+                volume.z,
+                volume.y,
+                volume.x,
+                kind.levels,
+                if kind.parent { ", parent" } else { "" },
+                if *standard { "standard" } else { "trained" },
+                if *by_level { " per level" } else { "" }
             ),
         }
     }
@@ -98,6 +152,39 @@ fn coders() -> Vec<Coder> {
         tb(128, [32, 32, 32]),
         tb(256, [32, 64, 64]),
     ];
+    let ht = |levels, parent, by_level| Coder::Ht {
+        plane: shape(1, 256, 256),
+        volume: shape(32, 64, 64),
+        kind: ht::Kind { levels, parent },
+        by_level,
+        standard: false,
+    };
+    v.extend([
+        ht(2, false, false),
+        ht(3, false, false),
+        ht(4, false, false),
+        ht(3, true, false),
+        ht(4, true, false),
+        ht(3, false, true),
+        ht(4, true, true),
+        Coder::Ht {
+            plane: shape(1, 128, 128),
+            volume: shape(32, 32, 32),
+            kind: ht::Kind {
+                levels: 4,
+                parent: true,
+            },
+            by_level: false,
+            standard: false,
+        },
+        Coder::Ht {
+            plane: shape(1, 256, 256),
+            volume: shape(32, 64, 64),
+            kind: ht::Tables::standard().kind,
+            by_level: false,
+            standard: true,
+        },
+    ]);
     if std::env::var_os("MRA_CODER_QUADS").is_none() {
         return v;
     }
@@ -205,6 +292,30 @@ fn run(coder: Coder, set: &[Bands]) -> (usize, f64, f64) {
                     assert_eq!(back, b.q32);
                     bytes += s.len();
                 }
+                Coder::Ht {
+                    plane,
+                    volume,
+                    kind,
+                    by_level,
+                    standard,
+                } => {
+                    let sh = if b.dims.len() >= 3 { volume } else { plane };
+                    let t = if standard {
+                        ht::Tables::standard()
+                    } else {
+                        let v = trained_tables(kind, by_level);
+                        &v[if by_level { b.level.min(2) } else { 0 }]
+                    };
+                    let par = bs.parent32(i);
+                    let t0 = Instant::now();
+                    let s = block::encode_ht(&b.q32, &b.dims, b.kind, par, sh, t, None);
+                    te += t0.elapsed().as_secs_f64();
+                    let t0 = Instant::now();
+                    let back = block::decode_ht(&s, &b.dims, b.kind, par, sh, t).unwrap();
+                    td += t0.elapsed().as_secs_f64();
+                    assert_eq!(back, b.q32);
+                    bytes += s.len();
+                }
             }
         }
     }
@@ -272,6 +383,66 @@ fn train(set: &[Bands]) {
     println!("wrote {}", path.display());
 }
 
+/// Count the HT-style coder's symbols of codes `kind` over the bands of `set` that
+/// `take` keeps (blocks of 256² / 32×64×64).
+fn ht_counts(set: &[Bands], kind: ht::Kind, take: impl Fn(&bands::Band) -> bool) -> ht::Counts {
+    let mut n = ht::Counts::new(kind);
+    let flat = n.tables();
+    for bs in set {
+        for (i, b) in bs.bands.iter().enumerate().filter(|(_, b)| take(b)) {
+            let sh = if b.dims.len() >= 3 {
+                shape(32, 64, 64)
+            } else {
+                shape(1, 256, 256)
+            };
+            let par = bs.parent32(i);
+            block::encode_ht(&b.q32, &b.dims, b.kind, par, sh, &flat, Some(&mut n));
+        }
+    }
+    n
+}
+
+/// Write the joint codes trained on `set` as the standard ones
+/// (`src/entropy/block/ht_table.rs`).
+fn train_ht(set: &[Bands], kind: ht::Kind) {
+    let (q, m) = ht_counts(set, kind, |_| true).lengths();
+    let rows = |t: &[Vec<u8>]| -> String {
+        let r: Vec<String> = t
+            .iter()
+            .map(|l| {
+                let v: Vec<String> = l.iter().map(|x| x.to_string()).collect();
+                format!("[{}]", v.join(", "))
+            })
+            .collect();
+        format!("[\n    {},\n]", r.join(",\n    "))
+    };
+    let text = format!(
+        "//! Code lengths of the HT-style coder's default codes ([`super::ht::Tables::standard`]).\n\
+         //! Generated by `cargo bench --bench coder -- train-ht`: the Huffman code lengths\n\
+         //! ([`super::vlc::lengths`]) of the symbol counts of every code over the bands of\n\
+         //! Kodak 1–12 at `--bpp 1`, blocks of 256×256.\n\n\
+         use super::ht::Kind;\n\n\
+         /// The codes' kind.\n\
+         pub const KIND: Kind = Kind {{\n    levels: {},\n    parent: {},\n}};\n\n\
+         /// Quad code lengths per context, then the run context.\n\
+         #[rustfmt::skip]\n\
+         pub const QUAD: [[u8; {}]; {}] = {};\n\n\
+         /// Magnitude code lengths per class.\n\
+         #[rustfmt::skip]\n\
+         pub const MAGNITUDE: [[u8; 16]; {}] = {};\n",
+        kind.levels,
+        kind.parent,
+        kind.symbols(),
+        q.len(),
+        rows(&q),
+        m.len(),
+        rows(&m)
+    );
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("src/entropy/block/ht_table.rs");
+    std::fs::write(&path, text).unwrap();
+    println!("wrote {}", path.display());
+}
+
 fn main() {
     let args: Vec<String> = std::env::args()
         .skip(1)
@@ -295,6 +466,21 @@ fn main() {
     };
     if args.iter().any(|a| a == "train") {
         train(&kodak(1..=12));
+        return;
+    }
+    let training = TRAINING.get_or_init(|| kodak(1..=12));
+    if args.iter().any(|a| a == "train-ht") {
+        let env = |k: &str, d: u8| {
+            std::env::var(k)
+                .ok()
+                .and_then(|v| v.parse().ok())
+                .unwrap_or(d)
+        };
+        let kind = ht::Kind {
+            levels: env("MRA_HT_LEVELS", 3),
+            parent: env("MRA_HT_PARENT", 0) == 1,
+        };
+        train_ht(training, kind);
         return;
     }
     let mut sets: Vec<(&str, Vec<Bands>)> = Vec::new();

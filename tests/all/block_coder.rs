@@ -6,7 +6,7 @@
 
 use super::common;
 #[path = "../../benches/coder/bands.rs"]
-mod bands;
+pub(super) mod bands;
 
 use mra::entropy::block::rc::{BitReader, BitWriter, Cdf, Decoder, Encoder, SYMBOLS};
 use mra::entropy::block::{self, Parent, Shape};

@@ -18,6 +18,7 @@ mod container;
 mod curve;
 mod filters;
 mod format_spec;
+mod ht_coder;
 mod hyperpatch;
 mod inputs_outputs;
 mod io;

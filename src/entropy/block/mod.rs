@@ -14,10 +14,17 @@
 //!
 //! The parent (one level coarser, same orientation) is a context as in
 //! [`super::band`]: blocks stay independent of each other given the coarser level.
+//!
+//! [`encode_ht`] / [`decode_ht`] code the same blocks with the HT-style coder ([`ht`]):
+//! static prefix codes ([`vlc`]) and a run coder instead of the range coder, one
+//! length per block.
 
+pub mod ht;
+mod ht_table;
 pub mod prior;
 pub mod quad;
 pub mod rc;
+pub mod vlc;
 
 use super::walk::{median_residuals, parent_fits, parent_plane, undo_median, Walk};
 use super::BandKind;
@@ -263,6 +270,108 @@ pub fn decode(
             &mut rc::Decoder::new(sym),
             &mut rc::BitReader::new(raw),
         );
+    }
+    if kind == BandKind::Coarse {
+        undo_median(&mut v, w);
+    }
+    Ok(v)
+}
+
+/// Code a band of indices `q` (raster order, extents `dims`) in code-blocks of `shape`
+/// with the HT-style coder ([`ht`]) and its codes `t`, adding every coded symbol to
+/// `counts` when given. The band's bytes are, block after block, `varint(block bytes)`
+/// and the block's bytes ([`ht`]). The coarsest band is coded as median residuals, as
+/// in [`encode`]; the parent is read only when the codes' [`ht::Kind`] asks for it.
+pub fn encode_ht(
+    q: &[i32],
+    dims: &[usize],
+    kind: BandKind,
+    parent: Option<Parent>,
+    shape: Shape,
+    t: &ht::Tables,
+    mut counts: Option<&mut ht::Counts>,
+) -> Vec<u8> {
+    let w = Walk::new(dims);
+    let shape = shape.normal();
+    let res: Vec<i32>;
+    let (v, parent) = if kind == BandKind::Coarse {
+        res = median_residuals(q, w);
+        (&res[..], None)
+    } else if t.kind.parent {
+        (q, parent_map(dims, w, parent))
+    } else {
+        (q, None)
+    };
+    let mut out = Vec::new();
+    let mut scratch: Option<(Extent, Scratch)> = None;
+    let mut bits = vlc::BitWriter::default();
+    let mut mel = vlc::MelWriter::default();
+    for b in blocks(w, shape) {
+        let s = scratch_for(&mut scratch, b.ext);
+        let layout = Layout {
+            w,
+            b,
+            parent: parent.as_ref().map(|(d, pw, bases)| (*d, *pw, &bases[..])),
+        };
+        bits.clear();
+        mel.clear();
+        ht::encode(
+            v,
+            b.ext,
+            &layout,
+            s,
+            t,
+            counts.as_deref_mut(),
+            &mut bits,
+            &mut mel,
+        );
+        bits.flush();
+        mel.finish();
+        crate::format::put_varint(&mut out, (bits.out.len() + mel.w.out.len()) as u64);
+        out.extend_from_slice(&bits.out);
+        out.extend(mel.w.out.iter().rev());
+    }
+    out
+}
+
+/// Decode a band written by [`encode_ht`] with the same `dims`, `kind`, `shape` and
+/// codes. Fails when a block's declared length runs past the data.
+pub fn decode_ht(
+    data: &[u8],
+    dims: &[usize],
+    kind: BandKind,
+    parent: Option<Parent>,
+    shape: Shape,
+    t: &ht::Tables,
+) -> Result<Vec<i32>> {
+    let w = Walk::new(dims);
+    let shape = shape.normal();
+    let n: usize = dims.iter().product();
+    let mut v = vec![0i32; n];
+    let parent = if kind == BandKind::Coarse || !t.kind.parent {
+        None
+    } else {
+        parent_map(dims, w, parent)
+    };
+    let mut cur = Cursor::new(data, "code-block");
+    let mut scratch: Option<(Extent, Scratch)> = None;
+    for b in blocks(w, shape) {
+        let len = cur.varint()?;
+        let left = data.len() as u64 - cur.pos as u64;
+        if len > left {
+            return Err(Error::format(
+                format!("a code-block declaring {len} bytes, {left} left"),
+                "code-blocks within the band",
+            ));
+        }
+        let bytes = cur.take(len as usize)?;
+        let s = scratch_for(&mut scratch, b.ext);
+        let layout = Layout {
+            w,
+            b,
+            parent: parent.as_ref().map(|(d, pw, bases)| (*d, *pw, &bases[..])),
+        };
+        ht::decode(&mut v, b.ext, &layout, s, t, bytes);
     }
     if kind == BandKind::Coarse {
         undo_median(&mut v, w);

@@ -22,7 +22,7 @@ use super::prior;
 use super::rc::{BitReader, BitWriter, Cdf, Decoder, Encoder};
 use crate::entropy::walk::{class_in, classes};
 
-const QCLS: usize = 12;
+pub(super) const QCLS: usize = 12;
 pub const PCLS: usize = 3;
 /// Pattern contexts.
 pub const PATTERNS: usize = QCLS * PCLS;
@@ -30,7 +30,7 @@ pub const PATTERNS: usize = QCLS * PCLS;
 pub const MCLS: usize = 26;
 /// Classes of `u` below which magnitudes are coded whole (`k = 0`).
 pub const KOFF: usize = 5;
-const CAP: u32 = 1 << 20;
+pub(super) const CAP: u32 = 1 << 20;
 
 /// Class of the quad activity `s`: 0, 1, 2, 3, 4, 5–6, 7–9, 10–14, 15–22, 23–35, 36–60, more.
 #[inline(always)]
@@ -118,8 +118,31 @@ impl Scratch {
 
     /// Index of block position `(k, y, x)`.
     #[inline(always)]
-    fn at(&self, k: usize, y: usize, x: usize) -> usize {
+    pub(super) fn at(&self, k: usize, y: usize, x: usize) -> usize {
         (k + 1) * self.plane + (y + 1) * self.rx + x + 1
+    }
+
+    /// Zero every magnitude.
+    pub(super) fn clear(&mut self) {
+        self.mag.fill(0);
+    }
+
+    /// The row stride.
+    pub(super) fn rx(&self) -> usize {
+        self.rx
+    }
+
+    /// Set the magnitude at index `i`.
+    #[inline(always)]
+    pub(super) fn set(&mut self, i: usize, m: u32) {
+        self.mag[i] = m;
+    }
+
+    /// The class of the quad activity `s` of the quad at index `i` (the pattern context
+    /// without the parent).
+    #[inline(always)]
+    pub(super) fn quad_class(&self, i: usize) -> usize {
+        self.pattern_ctx(i, 0) / PCLS
     }
 
     /// The pattern context of the quad at index `i` with parent magnitude `pm`.
@@ -141,7 +164,7 @@ impl Scratch {
 
     /// The magnitude class of the coefficient at index `i`.
     #[inline(always)]
-    fn mag_ctx(&self, i: usize, pm: u32) -> usize {
+    pub(super) fn mag_ctx(&self, i: usize, pm: u32) -> usize {
         let (m, rx, pl) = (&self.mag, self.rx, self.plane);
         let u = 2 * (m[i - 1] + m[i - rx] + m[i - pl] + pm) + m[i - rx - 1] + m[i - rx + 1];
         mclass(u)
@@ -150,7 +173,7 @@ impl Scratch {
 
 /// Offsets of the four positions of a quad from its first, in the scratch.
 #[inline(always)]
-fn quad_offsets(rx: usize) -> [usize; 4] {
+pub(super) fn quad_offsets(rx: usize) -> [usize; 4] {
     [0, 1, rx, rx + 1]
 }
 
@@ -167,7 +190,7 @@ fn valid_bits(ext: Extent, y: usize, x: usize) -> usize {
 /// the offsets in the band of its four positions (the bottom row repeats the top one
 /// past the block's last row).
 #[inline(always)]
-fn each_quad(
+pub(super) fn each_quad(
     ext: Extent,
     rows: &impl Rows,
     mut f: impl FnMut(usize, usize, usize, usize, [usize; 4]),
