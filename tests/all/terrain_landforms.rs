@@ -255,10 +255,10 @@ fn psnr_is_the_references_range_over_the_rms_error_in_decibels() {
 #[test]
 fn level_gains_stay_within_their_range_on_a_smooth_sketch() {
     // a smooth base leaves the coarsest level's slope to its details alone: each level's
-    // gain is solved for the example's slope, limited by the next level's, and clamped
+    // gain is solved for the example's slope and clamped
     let (base, ex) = (sketch(32), grid_of(256, 256, 9, 0.6, 1000.0));
     let (_, rep) = synthesize(&base, &ex, &opts(16)).unwrap();
-    // the floor and ceiling of src/terrain/level_gain.rs (GAIN_FLOOR, GAIN_CEIL)
+    // the range of src/terrain/level_gain.rs (GAIN_RANGE)
     let (lo, hi) = (0.5, 4.0);
     assert_eq!(rep.level_gains.len(), 4);
     assert!(
