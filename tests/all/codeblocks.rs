@@ -155,6 +155,7 @@ fn regions_of_code_blocks_are_windows_of_the_whole_decode() {
                     levels,
                     scheme,
                     boundary,
+                    format: codec::Format::Bands,
                 };
                 let two = codec::encode_tiled(&r, &o, &r.dims).unwrap();
                 let three = codec::to_blocks(&two).unwrap();
