@@ -72,6 +72,196 @@ impl<R: Read + Seek> At<'_, R> {
     }
 }
 
+/// One band entry of a `LEVL` chunk at `r` (band `j` of channel `ch` of `level`): its
+/// ratio, `L` and code-block index read, the blocks' streams skipped. Returns the entry
+/// as `L` bytes (the index in place, zeros where the blocks are) and its file offset.
+fn band_entry<R: Read + Seek>(
+    r: &mut At<'_, R>,
+    header: &Header,
+    level: usize,
+    j: usize,
+    ch: usize,
+) -> Result<(BandChunk, u64)> {
+    let ratio = f32::from_le_bytes(r.bytes::<4>("a step ratio")?);
+    if !(ratio > 0.0 && ratio.is_finite()) {
+        return Err(FormatError::invalid(
+            format!("LEVL {level}: band {j} of channel {ch} with step ratio {ratio}"),
+            "a positive finite ratio",
+        ));
+    }
+    let l = r.varint("a band length", None)?;
+    let start = r.pos;
+    if l > r.end - start {
+        return Err(FormatError::out_of_range(
+            format!(
+                "LEVL {level}: band {j} of channel {ch} declaring {l} bytes, {} left",
+                r.end - start
+            ),
+            "streams within the chunk",
+        ));
+    }
+    // the code-block index: a count, then a length per block (each at least a byte, so
+    // no more than the entry holds)
+    let mut index = Vec::new();
+    let mut e = At {
+        src: &mut *r.src,
+        pos: start,
+        end: start + l,
+    };
+    let count = e.varint("a code-block count", Some(&mut index))?;
+    if count > l {
+        return Err(FormatError::out_of_range(
+            format!("{count} code-blocks in an entry of {l} bytes"),
+            "at least one index byte per block",
+        ));
+    }
+    for _ in 0..count {
+        e.varint("a code-block length", Some(&mut index))?;
+    }
+    // `l` is within the chunk, itself within the file
+    let mut data = vec![0u8; l as usize];
+    data[..index.len()].copy_from_slice(&index);
+    r.seek(start + l)?;
+    let band = BandChunk {
+        step: header.step * ratio as f64,
+        data,
+    };
+    Ok((band, start))
+}
+
+/// The state of a sparse read: what the file's header commits to and what has been
+/// gathered so far.
+struct Reading<'h> {
+    header: &'h Header,
+    layout: &'h BandLayout<'h>,
+    stop_level: usize,
+    len: u64,
+    body: Body,
+    entries: Vec<Vec<Option<u64>>>,
+    meta_seen: bool,
+    first_band: Option<u64>,
+    last: String,
+}
+
+impl Reading<'_> {
+    /// The `LEVL` chunk of `n` payload bytes at byte `pos`: its level, then every band
+    /// entry's ratio, length and index ([`band_entry`]). Returns whether the read stops
+    /// there (the first level over the one asked for).
+    fn levl<R: Read + Seek>(
+        &mut self,
+        src: &mut R,
+        pos: u64,
+        n: u64,
+        kind: [u8; 4],
+    ) -> Result<bool> {
+        let (header, layout, b) = (self.header, self.layout, &mut self.body);
+        self.first_band.get_or_insert(pos);
+        let mut r = At {
+            src,
+            pos: pos + 8,
+            end: pos + 8 + n,
+        };
+        let level = u16::from_le_bytes(r.bytes::<2>("the level")?) as usize;
+        let Some((_, js)) = layout.groups.iter().find(|(l, _)| *l == level) else {
+            return Err(FormatError::out_of_range(
+                format!("LEVL chunk for level {level} at byte {pos}"),
+                "a level of the file's pyramid",
+            ));
+        };
+        let stop = self.stop_level;
+        if stop > 0 && level >= 1 && level <= stop {
+            super::body::coarse_present(header, layout, &b.bands, stop, pos, false)?;
+            b.complete = true;
+            return Ok(true);
+        }
+        let first = js.first().copied().unwrap_or(0);
+        if let Some(pj) = layout.parents[first] {
+            if b.bands[0][pj].is_none() {
+                return Err(FormatError::order(
+                    format!("LEVL {level} before the level of its parent bands"),
+                    "levels in coarse-to-fine order",
+                ));
+            }
+        }
+        if b.bands[0][first].is_some() {
+            return Err(FormatError::duplicate(
+                format!("a second LEVL chunk for level {level} (byte {pos})"),
+                "each level once",
+            ));
+        }
+        for &j in js {
+            for ch in 0..header.channels {
+                let (band, start) = band_entry(&mut r, header, level, j, ch)?;
+                b.bands[ch][j] = Some(band);
+                self.entries[ch][j] = Some(start);
+            }
+        }
+        if r.pos != r.end {
+            return Err(FormatError::invalid(
+                format!(
+                    "LEVL {level} with {} bytes after its last band",
+                    r.end - r.pos
+                ),
+                "a chunk that ends with its last band",
+            ));
+        }
+        let chunk = super::Chunk {
+            kind,
+            payload: Vec::new(),
+            offset: pos,
+        };
+        let mut info = ChunkInfo::of(&chunk, None);
+        info.bytes = n + 12;
+        info.level = Some(level);
+        b.chunks.push(info);
+        Ok(false)
+    }
+
+    /// A chunk other than `LEVL` at byte `pos`, read whole and checked as
+    /// [`super::body::read_body`] checks it. Returns whether it ends the body (`MEND`).
+    fn whole<R: Read + Seek>(&mut self, src: &mut R, pos: u64) -> Result<bool> {
+        let (len, b) = (self.len, &mut self.body);
+        src.seek(SeekFrom::Start(pos))?;
+        let ch = match ChunkReader::at(&mut *src, pos, len).next_chunk()? {
+            Ok(ch) => ch,
+            Err(end) => return Err(truncated(end, &self.last, len)),
+        };
+        match Tag::of(&ch.kind) {
+            Some(Tag::Mend) => {
+                let missing = super::body::first_missing(
+                    self.header,
+                    self.layout,
+                    &b.bands,
+                    &b.resi,
+                    self.stop_level,
+                );
+                if let Some(missing) = missing {
+                    return Err(FormatError::missing(
+                        format!("{missing} missing (MEND at byte {pos})"),
+                        "every chunk the header commits to (or --allow-truncated)",
+                    ));
+                }
+                b.complete = true;
+                b.chunks.push(ChunkInfo::of(&ch, None));
+                return Ok(true);
+            }
+            Some(Tag::Meta) => b.meta = meta_chunk(&ch, &mut self.meta_seen, self.first_band)?,
+            Some(Tag::Head) => {
+                return Err(FormatError::duplicate(
+                    "a second HEAD chunk",
+                    "one HEAD chunk",
+                ))
+            }
+            _ if Tag::is_critical(&ch.kind) => {
+                return Err(FormatError::UnknownChunk(ch.name()).into());
+            }
+            _ => {}
+        }
+        b.chunks.push(ChunkInfo::of(&ch, None));
+        Ok(false)
+    }
+}
+
 /// The chunks after `HEAD` (the next at byte `at`) of a one-piece 3.0 file of `len`
 /// bytes whose bands are `layout`, read sparsely (module doc); reading stops at the first
 /// chunk of a level from 1 to `stop_level` as [`super::body::read_body`]'s does. `None`
@@ -89,22 +279,30 @@ pub fn read_body_sparse<R: Read + Seek>(
     }
     let nb = layout.levels.len();
     let c = header.channels;
-    let mut b = Body {
-        meta: Metadata::default(),
-        bands: (0..c).map(|_| (0..nb).map(|_| None).collect()).collect(),
-        resi: (0..c).map(|_| None).collect(),
-        complete: false,
-        chunks: Vec::new(),
+    let mut g = Reading {
+        header,
+        layout,
+        stop_level,
+        len,
+        body: Body {
+            meta: Metadata::default(),
+            bands: (0..c).map(|_| (0..nb).map(|_| None).collect()).collect(),
+            resi: (0..c).map(|_| None).collect(),
+            complete: false,
+            chunks: Vec::new(),
+        },
+        entries: vec![vec![None; nb]; c],
+        meta_seen: false,
+        first_band: None,
+        last: "HEAD".to_string(),
     };
-    let mut entries: Vec<Vec<Option<u64>>> = vec![vec![None; nb]; c];
-    let (mut pos, mut last) = (at, "HEAD".to_string());
-    let (mut meta_seen, mut first_band) = (false, None);
+    let mut pos = at;
     loop {
         if pos == len {
-            return Err(truncated(ChunkEnd::Eof, &last, len));
+            return Err(truncated(ChunkEnd::Eof, &g.last, len));
         }
         if len - pos < 12 {
-            return Err(truncated(ChunkEnd::Truncated { offset: pos }, &last, len));
+            return Err(truncated(ChunkEnd::Truncated { offset: pos }, &g.last, len));
         }
         src.seek(SeekFrom::Start(pos))?;
         let mut head = [0u8; 8];
@@ -115,162 +313,27 @@ pub fn read_body_sparse<R: Read + Seek>(
             return Err(FormatError::budget("chunk length", n, MAX_CHUNK));
         }
         if n + 12 > len - pos {
-            return Err(truncated(ChunkEnd::Truncated { offset: pos }, &last, len));
+            return Err(truncated(ChunkEnd::Truncated { offset: pos }, &g.last, len));
         }
-        let tag = Tag::of(&kind);
-        last = String::from_utf8_lossy(&kind).into_owned();
-        match tag {
-            Some(Tag::Levl) => {
-                first_band.get_or_insert(pos);
-                let mut r = At {
-                    src: &mut *src,
-                    pos: pos + 8,
-                    end: pos + 8 + n,
-                };
-                let level = u16::from_le_bytes(r.bytes::<2>("the level")?) as usize;
-                let Some((_, js)) = layout.groups.iter().find(|(l, _)| *l == level) else {
-                    return Err(FormatError::out_of_range(
-                        format!("LEVL chunk for level {level} at byte {pos}"),
-                        "a level of the file's pyramid",
-                    ));
-                };
-                if stop_level > 0 && level >= 1 && level <= stop_level {
-                    super::body::coarse_present(header, layout, &b.bands, stop_level, pos, false)?;
-                    b.complete = true;
-                    break;
-                }
-                let first = js.first().copied().unwrap_or(0);
-                if let Some(pj) = layout.parents[first] {
-                    if b.bands[0][pj].is_none() {
-                        return Err(FormatError::order(
-                            format!("LEVL {level} before the level of its parent bands"),
-                            "levels in coarse-to-fine order",
-                        ));
-                    }
-                }
-                if b.bands[0][first].is_some() {
-                    return Err(FormatError::duplicate(
-                        format!("a second LEVL chunk for level {level} (byte {pos})"),
-                        "each level once",
-                    ));
-                }
-                for &j in js {
-                    // `ch` indexes both the bands and their entries
-                    #[allow(clippy::needless_range_loop)]
-                    for ch in 0..c {
-                        let ratio = f32::from_le_bytes(r.bytes::<4>("a step ratio")?);
-                        if !(ratio > 0.0 && ratio.is_finite()) {
-                            return Err(FormatError::invalid(
-                                format!(
-                                    "LEVL {level}: band {j} of channel {ch} with step ratio {ratio}"
-                                ),
-                                "a positive finite ratio",
-                            ));
-                        }
-                        let l = r.varint("a band length", None)?;
-                        let start = r.pos;
-                        if l > r.end - start {
-                            return Err(FormatError::out_of_range(
-                                format!(
-                                    "LEVL {level}: band {j} of channel {ch} declaring {l} bytes, {} left",
-                                    r.end - start
-                                ),
-                                "streams within the chunk",
-                            ));
-                        }
-                        // the code-block index: a count, then a length per block (each
-                        // at least a byte, so no more than the entry holds)
-                        let mut index = Vec::new();
-                        let mut e = At {
-                            src: &mut *r.src,
-                            pos: start,
-                            end: start + l,
-                        };
-                        let count = e.varint("a code-block count", Some(&mut index))?;
-                        if count > l {
-                            return Err(FormatError::out_of_range(
-                                format!("{count} code-blocks in an entry of {l} bytes"),
-                                "at least one index byte per block",
-                            ));
-                        }
-                        for _ in 0..count {
-                            e.varint("a code-block length", Some(&mut index))?;
-                        }
-                        // `l` is within the chunk, itself within the file
-                        let mut data = vec![0u8; l as usize];
-                        data[..index.len()].copy_from_slice(&index);
-                        b.bands[ch][j] = Some(BandChunk {
-                            step: header.step * ratio as f64,
-                            data,
-                        });
-                        entries[ch][j] = Some(start);
-                        r.seek(start + l)?;
-                    }
-                }
-                if r.pos != r.end {
-                    return Err(FormatError::invalid(
-                        format!(
-                            "LEVL {level} with {} bytes after its last band",
-                            r.end - r.pos
-                        ),
-                        "a chunk that ends with its last band",
-                    ));
-                }
-                let mut info = ChunkInfo::of(
-                    &super::Chunk {
-                        kind,
-                        payload: Vec::new(),
-                        offset: pos,
-                    },
-                    None,
-                );
-                info.bytes = n + 12;
-                info.level = Some(level);
-                b.chunks.push(info);
-            }
+        g.last = String::from_utf8_lossy(&kind).into_owned();
+        let done = match Tag::of(&kind) {
+            Some(Tag::Levl) => g.levl(src, pos, n, kind)?,
             Some(Tag::Resi | Tag::Band) => return Ok(None),
-            _ => {
-                src.seek(SeekFrom::Start(pos))?;
-                let ch = match ChunkReader::at(&mut *src, pos, len).next_chunk()? {
-                    Ok(ch) => ch,
-                    Err(end) => return Err(truncated(end, &last, len)),
-                };
-                match tag {
-                    Some(Tag::Mend) => {
-                        if let Some(missing) = super::body::first_missing(
-                            header, layout, &b.bands, &b.resi, stop_level,
-                        ) {
-                            return Err(FormatError::missing(
-                                format!("{missing} missing (MEND at byte {pos})"),
-                                "every chunk the header commits to (or --allow-truncated)",
-                            ));
-                        }
-                        b.complete = true;
-                        b.chunks.push(ChunkInfo::of(&ch, None));
-                        break;
-                    }
-                    Some(Tag::Meta) => b.meta = meta_chunk(&ch, &mut meta_seen, first_band)?,
-                    Some(Tag::Head) => {
-                        return Err(FormatError::duplicate(
-                            "a second HEAD chunk",
-                            "one HEAD chunk",
-                        ))
-                    }
-                    _ if Tag::is_critical(&ch.kind) => {
-                        return Err(FormatError::UnknownChunk(ch.name()).into());
-                    }
-                    _ => {}
-                }
-                b.chunks.push(ChunkInfo::of(&ch, None));
-            }
+            _ => g.whole(src, pos)?,
+        };
+        if done {
+            break;
         }
         pos += n + 12;
     }
-    if header.voids && first_band.is_some() && !super::meta::lists_voids(&b.meta) {
+    if header.voids && g.first_band.is_some() && !super::meta::lists_voids(&g.body.meta) {
         return Err(FormatError::missing(
             "no void list in mETA, though the header says the file has voids",
             "the mETA chunk with extra.nodata.voids (format 2.4 HEAD flag)",
         ));
     }
-    Ok(Some(SparseBody { body: b, entries }))
+    Ok(Some(SparseBody {
+        body: g.body,
+        entries: g.entries,
+    }))
 }

@@ -159,6 +159,7 @@ fn ht_real_bands_round_trip() {
         &r,
         &mra::codec::EncodeOptions {
             rate: mra::codec::Rate::Bpp(1.0),
+            format: mra::codec::Format::Bands,
             ..Default::default()
         },
     )

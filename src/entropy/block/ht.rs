@@ -112,7 +112,11 @@ impl Tables {
             use super::ht_table as t;
             let q: Vec<&[u8]> = t::QUAD.iter().map(|r| &r[..]).collect();
             let m: Vec<&[u8]> = t::MAGNITUDE.iter().map(|r| &r[..]).collect();
-            Tables::from_lengths(t::KIND, &q, &m)
+            let kind = Kind {
+                levels: t::LEVELS,
+                parent: t::PARENT,
+            };
+            Tables::from_lengths(kind, &q, &m)
         })
     }
 }

@@ -3,13 +3,10 @@
 //! ([`super::vlc::lengths`]) of the symbol counts of every code over the bands of
 //! Kodak 1–12 at `--bpp 1`, blocks of 256×256.
 
-use super::ht::Kind;
-
-/// Three levels per quad position, no parent.
-pub const KIND: Kind = Kind {
-    levels: 3,
-    parent: false,
-};
+/// The codes' kind ([`super::ht::Kind`]): levels per quad position.
+pub const LEVELS: u8 = 3;
+/// The codes' kind: whether the parent is a context.
+pub const PARENT: bool = false;
 
 /// Quad code lengths per class, then the run context.
 #[rustfmt::skip]
