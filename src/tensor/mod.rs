@@ -18,9 +18,9 @@ mod transform;
 mod window;
 mod workspace;
 
-pub use boxes::for_each_run;
 pub use crate::kernel::Kernels;
 pub use array::{Array, Axis};
+pub use boxes::for_each_run;
 pub use pages::{advise_huge_pages, zeroed_vec};
 pub use pyramid::{
     analyze, analyze_in, analyze_with, synthesize, synthesize_in, synthesize_with, Engine, Order,
