@@ -3,7 +3,7 @@
 //! reader the pyramid's bands, and the parsed body is kept with that plan.
 
 use super::plan::Plan;
-use crate::format::body::{self, BandChunk, BandLayout, ChunkInfo};
+use crate::format::body::{self, BandChunk, ChunkInfo};
 use crate::format::{Chunk, ChunkReader, Header, Residual};
 use crate::{Error, Result};
 use std::io::Read;
@@ -50,16 +50,7 @@ pub(super) fn read_rest<R: Read>(
 ) -> Result<Parsed> {
     let plan = Plan::new(&header)?;
     let groups = plan.level_groups();
-    let layout = BandLayout {
-        groups: &groups,
-        levels: plan.bands.iter().map(|b| b.level).collect(),
-        parents: &plan.parents,
-        coefficients: plan
-            .dims
-            .iter()
-            .map(|d| d.iter().product::<usize>() as u64)
-            .collect(),
-    };
+    let layout = plan.band_layout(&groups);
     let b = body::read_body(rd, &first, &header, &layout, stop_level, allow_truncated)?;
     Ok(Parsed {
         header,

@@ -13,7 +13,8 @@ use super::plan::Plan;
 use crate::entropy::codeblocks::{self, Grid};
 use crate::entropy::range::Encoder;
 use crate::entropy::{band, BandKind, Parent};
-use crate::format::bands::{blocks_payload, level_payload};
+use crate::format::bands::{blocks_payload, level_payload, LevelGroups};
+use crate::format::body::BandLayout;
 use crate::format::{put_chunk, Tag};
 use rayon::prelude::*;
 use std::ops::Range;
@@ -46,6 +47,21 @@ impl Plan {
             }
         }
         groups
+    }
+
+    /// What the chunk reader needs to know of the bands ([`BandLayout`]), with `groups`
+    /// this plan's [`Self::level_groups`].
+    pub(super) fn band_layout<'a>(&'a self, groups: &'a LevelGroups) -> BandLayout<'a> {
+        BandLayout {
+            groups,
+            levels: self.bands.iter().map(|b| b.level).collect(),
+            parents: &self.parents,
+            coefficients: self
+                .dims
+                .iter()
+                .map(|d| d.iter().product::<usize>() as u64)
+                .collect(),
+        }
     }
 
     /// Code every band of `channels` channels; `input(c, j)` gives band `j` of channel

@@ -123,16 +123,7 @@ fn read_region<R: Read + Seek>(
 ) -> Result<Option<Parsed>> {
     let plan = super::plan::Plan::new(&header)?;
     let groups = plan.level_groups();
-    let layout = crate::format::body::BandLayout {
-        groups: &groups,
-        levels: plan.bands.iter().map(|b| b.level).collect(),
-        parents: &plan.parents,
-        coefficients: plan
-            .dims
-            .iter()
-            .map(|d| d.iter().product::<usize>() as u64)
-            .collect(),
-    };
+    let layout = plan.band_layout(&groups);
     let Some(sb) =
         crate::format::sparse::read_body_sparse(src, at, len, &header, &layout, stop_level)?
     else {

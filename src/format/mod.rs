@@ -212,6 +212,25 @@ fn read_full<R: Read>(r: &mut R, buf: &mut [u8]) -> Result<usize> {
     Ok(got)
 }
 
+/// An unsigned LEB128 integer (`v = Σ_k (b_k & 0x7F)·2^{7k}`, low group first, the top
+/// bit of each byte saying another follows) of the bytes `next` gives: at most 10 bytes,
+/// `None` when it does not fit in 64 bits.
+pub(crate) fn leb128(mut next: impl FnMut() -> Result<u8>) -> Result<Option<u64>> {
+    let mut v = 0u64;
+    for k in 0..10 {
+        let b = next()?;
+        let bits = (b & 0x7F) as u64;
+        if k == 9 && bits > 1 {
+            break;
+        }
+        v |= bits << (7 * k);
+        if b & 0x80 == 0 {
+            return Ok(Some(v));
+        }
+    }
+    Ok(None)
+}
+
 /// Little-endian cursor over a payload; every read is bounds-checked.
 pub struct Cursor<'a> {
     pub data: &'a [u8],
@@ -257,17 +276,8 @@ impl<'a> Cursor<'a> {
     /// An unsigned LEB128 integer (7 bits a byte, low first) of at most 10 bytes that
     /// fits in 64 bits.
     pub fn varint(&mut self) -> Result<u64> {
-        let mut v = 0u64;
-        for k in 0..10 {
-            let b = self.u8()?;
-            let bits = (b & 0x7F) as u64;
-            if k == 9 && bits > 1 {
-                break;
-            }
-            v |= bits << (7 * k);
-            if b & 0x80 == 0 {
-                return Ok(v);
-            }
+        if let Some(v) = leb128(|| self.u8())? {
+            return Ok(v);
         }
         Err(FormatError::invalid(
             format!(

@@ -50,20 +50,15 @@ impl<R: Read + Seek> At<'_, R> {
 
     /// A LEB128 integer (at most 64 bits), its bytes appended to `raw` when given.
     fn varint(&mut self, what: &str, mut raw: Option<&mut Vec<u8>>) -> Result<u64> {
-        let mut v = 0u64;
-        for k in 0..10 {
+        let v = super::leb128(|| {
             let [b] = self.bytes::<1>(what)?;
             if let Some(r) = raw.as_deref_mut() {
                 r.push(b);
             }
-            let bits = (b & 0x7F) as u64;
-            if k == 9 && bits > 1 {
-                break;
-            }
-            v |= bits << (7 * k);
-            if b & 0x80 == 0 {
-                return Ok(v);
-            }
+            Ok(b)
+        })?;
+        if let Some(v) = v {
+            return Ok(v);
         }
         Err(FormatError::invalid(
             format!("LEVL chunk: {what} over 64 bits at byte {}", self.pos),
