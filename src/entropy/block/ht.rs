@@ -165,8 +165,14 @@ fn quad_ctx(s: &Scratch, i: usize, pm: u32, parent: bool) -> usize {
     }
 }
 
-/// Code the block of `band` laid out by `rows` into `w` (main stream) and `mel`.
-#[allow(clippy::too_many_arguments)]
+/// The two streams a block is coded into: the main bits and the run coder's.
+#[derive(Default)]
+pub struct Writers {
+    pub bits: BitWriter,
+    pub mel: MelWriter,
+}
+
+/// Code the block of `band` laid out by `rows` into `out` (main stream and runs).
 pub fn encode(
     band: &[i32],
     ext: Extent,
@@ -174,9 +180,9 @@ pub fn encode(
     s: &mut Scratch,
     t: &Tables,
     mut counts: Option<&mut Counts>,
-    w: &mut BitWriter,
-    mel: &mut MelWriter,
+    out: &mut Writers,
 ) {
+    let (w, mel) = (&mut out.bits, &mut out.mel);
     s.clear();
     let off = quad_offsets(s.rx());
     let top = t.kind.levels as u32 - 1;

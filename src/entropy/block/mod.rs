@@ -304,8 +304,7 @@ pub fn encode_ht(
     };
     let mut out = Vec::new();
     let mut scratch: Option<(Extent, Scratch)> = None;
-    let mut bits = vlc::BitWriter::default();
-    let mut mel = vlc::MelWriter::default();
+    let mut wr = ht::Writers::default();
     for b in blocks(w, shape) {
         let s = scratch_for(&mut scratch, b.ext);
         let layout = Layout {
@@ -313,18 +312,10 @@ pub fn encode_ht(
             b,
             parent: parent.as_ref().map(|(d, pw, bases)| (*d, *pw, &bases[..])),
         };
-        bits.clear();
-        mel.clear();
-        ht::encode(
-            v,
-            b.ext,
-            &layout,
-            s,
-            t,
-            counts.as_deref_mut(),
-            &mut bits,
-            &mut mel,
-        );
+        wr.bits.clear();
+        wr.mel.clear();
+        ht::encode(v, b.ext, &layout, s, t, counts.as_deref_mut(), &mut wr);
+        let (bits, mel) = (&mut wr.bits, &mut wr.mel);
         bits.flush();
         mel.finish();
         crate::format::put_varint(&mut out, (bits.out.len() + mel.w.out.len()) as u64);
