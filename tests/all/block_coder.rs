@@ -14,7 +14,7 @@ use mra::entropy::BandKind;
 use proptest::prelude::*;
 
 /// Indices: mostly 0 and small, some huge (the extremes of `i32` included).
-fn index() -> impl Strategy<Value = i32> {
+pub(super) fn index() -> impl Strategy<Value = i32> {
     prop_oneof![
         6 => Just(0),
         4 => -3i32..=3,
@@ -25,11 +25,11 @@ fn index() -> impl Strategy<Value = i32> {
 }
 
 /// Extents of 1 to 4 axes, each 1 to 13 (at most a few thousand positions).
-fn dims() -> impl Strategy<Value = Vec<usize>> {
+pub(super) fn dims() -> impl Strategy<Value = Vec<usize>> {
     prop::collection::vec(1usize..=13, 1..=4)
 }
 
-fn band_of(dims: Vec<usize>) -> impl Strategy<Value = (Vec<usize>, Vec<i32>)> {
+pub(super) fn band_of(dims: Vec<usize>) -> impl Strategy<Value = (Vec<usize>, Vec<i32>)> {
     let n = dims.iter().product::<usize>();
     (Just(dims), prop::collection::vec(index(), n))
 }

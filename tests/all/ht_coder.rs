@@ -4,34 +4,13 @@
 //! trained on the data, in both quad alphabets; damaged streams; and on real bands
 //! (kodim01 at 1 bpp, when the corpus is present) the indices back exactly.
 
-use super::block_coder::bands;
+use super::block_coder::{band_of, bands, dims, index};
 use super::common;
 
 use mra::entropy::block::ht::{Counts, Kind, Tables};
 use mra::entropy::block::{self, Parent, Shape};
 use mra::entropy::BandKind;
 use proptest::prelude::*;
-
-/// Indices: mostly 0 and small, some huge (the extremes of `i32` included).
-fn index() -> impl Strategy<Value = i32> {
-    prop_oneof![
-        6 => Just(0),
-        4 => -3i32..=3,
-        2 => -300i32..=300,
-        1 => any::<i32>(),
-        1 => prop_oneof![Just(i32::MIN), Just(i32::MAX), Just(i32::MIN + 1)],
-    ]
-}
-
-/// Extents of 1 to 4 axes, each 1 to 13.
-fn dims() -> impl Strategy<Value = Vec<usize>> {
-    prop::collection::vec(1usize..=13, 1..=4)
-}
-
-fn band_of(dims: Vec<usize>) -> impl Strategy<Value = (Vec<usize>, Vec<i32>)> {
-    let n = dims.iter().product::<usize>();
-    (Just(dims), prop::collection::vec(index(), n))
-}
 
 /// The codes trained on `q` itself (in `joint` alphabet), as the bench trains them.
 fn trained(
