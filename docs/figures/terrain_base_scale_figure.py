@@ -20,7 +20,7 @@ ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)
 sys.path.insert(0, os.path.join(ROOT, "benches"))
 import terrain_quality as tq  # noqa: E402
 
-MRA = os.path.join(ROOT, "target", "release", "mra")
+MRA = os.environ.get("MRA_BIN", os.path.join(ROOT, "target", "release", "mra"))
 OUT = os.path.join(ROOT, "docs", "figures", "terrain_base_scale.png")
 CELL = tq.CELL
 

@@ -45,7 +45,7 @@ use super::drainage::{drain, rms_step, BREACH_STEPS};
 use super::finest_gain::{example_slope, fit_finest_gain, scale_details};
 #[cfg(test)]
 use super::finest_gain::{sub_axis, sub_block};
-use super::level_gain::{fit_level_gain, mean_gradient2};
+use super::level_gain::{level_gain, level_moments, mean_gradient2, refined_moments};
 use super::patches::{level_details, Shifts};
 use super::resample::{resample_add, resample_map, Map};
 pub use super::seams::seam_ratio;
@@ -147,6 +147,10 @@ struct ExamplePyramid {
     /// Mean squared gradient of the example's grid at each level `k − 1` (`grad2[k-1]`,
     /// the slope gains' targets), when asked for.
     grad2: Vec<f64>,
+    /// Mean squared gradient of the coarse part of the example's level-`k` block,
+    /// `P C_k` (`coarse2[k-1]`, measured as [`level_moments`] measures the result's): the
+    /// upper limit of the slope gain of level `k + 1`.
+    coarse2: Vec<f64>,
 }
 
 impl ExamplePyramid {
@@ -159,16 +163,29 @@ impl ExamplePyramid {
     ) -> Result<Self> {
         let mut blocks = Vec::with_capacity(levels);
         let mut g2 = Vec::new();
+        let mut c2 = Vec::new();
         let mut g = example.clone();
         for _ in 0..levels {
             if grad2 {
                 g2.push(mean_gradient2(&g, !blocks.is_empty()));
             }
             let (packed, ny, nx) = analyze_one(g, scheme, planner)?;
+            if grad2 {
+                let k = blocks.len() + 1;
+                let ((a, _, _), _) =
+                    level_moments(&packed, (ny, nx), k, (scheme, BOUNDARY), |g| {
+                        synthesize_one(g, scheme, planner)
+                    })?;
+                c2.push(a);
+            }
             g = packed.crop(ny, nx);
             blocks.push((packed, ny, nx));
         }
-        Ok(ExamplePyramid { blocks, grad2: g2 })
+        Ok(ExamplePyramid {
+            blocks,
+            grad2: g2,
+            coarse2: c2,
+        })
     }
 }
 
@@ -328,13 +345,26 @@ fn refine(
         // the example's block of this level is not used again
         pyr.blocks.truncate(k - 1);
         if slope_gains {
-            let g = fit_level_gain(
-                &packed,
-                (n_y, n_x),
-                (pyr.grad2[k - 1], k),
-                (o.scheme, BOUNDARY),
-                |g| synthesize_one(g, o.scheme, &planner),
-            )?;
+            let (m, xy) = level_moments(&packed, (n_y, n_x), k, (o.scheme, BOUNDARY), |g| {
+                synthesize_one(g, o.scheme, &planner)
+            })?;
+            // above the finest level, the limit: the next level's coarse part no
+            // steeper than the example's
+            let next = match xy {
+                Some((x, y)) => Some((
+                    refined_moments(
+                        &x,
+                        &y,
+                        (ly[k - 2], lx[k - 2]),
+                        k - 1,
+                        (o.scheme, BOUNDARY),
+                        |g| synthesize_one(g, o.scheme, &planner),
+                    )?,
+                    pyr.coarse2[k - 2],
+                )),
+                None => None,
+            };
+            let g = level_gain((m, pyr.grad2[k - 1]), next);
             scale_details(&mut packed, (n_y, n_x), g);
             report.level_gains.push(g);
         }

@@ -83,6 +83,22 @@ fn base_scale_is_deterministic_and_its_own_scale_is_the_default() {
 }
 
 #[test]
+fn base_scale_gives_the_same_bytes_on_one_and_two_threads() {
+    // the level gains, their limits and the drainage do not depend on the thread count
+    let (base, ex) = (sketch(32), grid_of(256, 256, 9, 0.6, 1000.0));
+    let run = |threads: usize| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| synthesize(&base, &ex, &opts(16)).unwrap())
+    };
+    let ((one, r1), (two, r2)) = (run(1), run(2));
+    assert_eq!(one.data(), two.data());
+    assert_eq!((r1.level_gains, r1.drained), (r2.level_gains, r2.drained));
+}
+
+#[test]
 fn the_trusted_scale_keeps_the_base_and_the_example_supplies_the_landforms_below_it() {
     let (base, ex) = (sketch(32), grid_of(256, 256, 9, 0.6, 1000.0));
     let (g, rep) = synthesize(&base, &ex, &opts(8)).unwrap();
@@ -255,10 +271,10 @@ fn psnr_is_the_references_range_over_the_rms_error_in_decibels() {
 #[test]
 fn level_gains_stay_within_their_range_on_a_smooth_sketch() {
     // a smooth base leaves the coarsest level's slope to its details alone: each level's
-    // gain is solved for the example's slope and clamped
+    // gain is solved for the example's slope, limited by the next level's, and clamped
     let (base, ex) = (sketch(32), grid_of(256, 256, 9, 0.6, 1000.0));
     let (_, rep) = synthesize(&base, &ex, &opts(16)).unwrap();
-    // the range of src/terrain/level_gain.rs (GAIN_RANGE)
+    // the floor and ceiling of src/terrain/level_gain.rs (GAIN_FLOOR, GAIN_CEIL)
     let (lo, hi) = (0.5, 4.0);
     assert_eq!(rep.level_gains.len(), 4);
     assert!(
