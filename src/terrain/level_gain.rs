@@ -116,6 +116,10 @@ fn moments_of(xd: &[f64], yd: &[f64], (h, w, stride): (usize, usize, usize)) -> 
     (a / n, b / n, c / n)
 }
 
+/// The moments `(a, b, c)` of a level and, above the finest level, its two reconstructed
+/// grids `P C_k` and `Q D_k`.
+pub(super) type Measured = ((f64, f64, f64), Option<(Grid, Grid)>);
+
 /// The moments `(a, b, c)` of `P C_k` and `Q D_k` for the Mallat block `packed` (coarse
 /// part `n_y × n_x`) of level `k`; `synthesize` reconstructs one level. The finest
 /// level (`k = 1`) is measured on the top-left `FINEST_SIDE²` samples, reconstructed
@@ -128,7 +132,7 @@ pub(super) fn level_moments(
     k: usize,
     (scheme, boundary): (Scheme, Boundary),
     synthesize: impl Fn(Grid) -> Result<Grid>,
-) -> Result<((f64, f64, f64), Option<(Grid, Grid)>)> {
+) -> Result<Measured> {
     let (m_y, m_x) = (packed.h(), packed.w());
     let ((ay, ax), side) = if k == 1 {
         let s = m_y.min(m_x).min(FINEST_SIDE);
@@ -220,7 +224,9 @@ pub(super) fn level_gain(
         return 1.0;
     }
     let g = root(m, t).unwrap_or(GAIN_FLOOR);
-    let limit = next.map_or(GAIN_CEIL, |(n, t)| root(n, LIMIT_SLACK * t).unwrap_or(GAIN_FLOOR));
+    let limit = next.map_or(GAIN_CEIL, |(n, t)| {
+        root(n, LIMIT_SLACK * t).unwrap_or(GAIN_FLOOR)
+    });
     g.min(limit).clamp(GAIN_FLOOR, GAIN_CEIL)
 }
 
@@ -238,7 +244,10 @@ mod tests {
         // the next level's coarse part limits the gain to the root of its own equation
         let n = (1.0, 0.0, 4.0);
         let h = level_gain((m, 10.0), Some((n, 5.0)));
-        assert!(h < g && (n.0 + h * h * n.2 - LIMIT_SLACK * 5.0).abs() < 1e-12, "{h} {g}");
+        assert!(
+            h < g && (n.0 + h * h * n.2 - LIMIT_SLACK * 5.0).abs() < 1e-12,
+            "{h} {g}"
+        );
         // a next level already steeper than the example's: the floor
         assert_eq!(level_gain((m, 10.0), Some((n, 0.5))), GAIN_FLOOR);
     }
