@@ -130,6 +130,7 @@ fn estimates(set: &[Bands], kind: rans::Kind) -> Vec<(String, f64)> {
     let nq = kind.quad_codes();
     let size = |code: usize| if code < nq { rans::QSYM } else { rans::MSYM };
     let codes = nq + 26;
+    let signs = codes;
     let prior: Vec<Vec<f64>> = (0..codes)
         .map(|c| (0..size(c)).map(|s| (-t.cost(c, s)).exp2()).collect())
         .collect();
@@ -141,6 +142,8 @@ fn estimates(set: &[Bands], kind: rans::Kind) -> Vec<(String, f64)> {
         "adaptive counts per block from trained, weight 16".to_string(),
         "adaptive counts per block from trained, weight 64".to_string(),
         "adaptive counts per band from trained, weight 16".to_string(),
+        "adaptive counts per block from trained, weight 64, + adaptive sign contexts (W, N)".to_string(),
+        "adaptive counts per block from trained, weight 32, halved above 512".to_string(),
     ];
     let mut tot = vec![0.0f64; names.len()];
     let mut other = 0.0f64;
@@ -176,6 +179,9 @@ fn estimates(set: &[Bands], kind: rans::Kind) -> Vec<(String, f64)> {
                     r.fill(0);
                 }
             };
+            let mut sign_n = [[0.5f64; 2]; 9];
+            let mut half = fresh(32.0);
+            let mut half_sum: Vec<f64> = half.iter().map(|r| r.iter().sum()).collect();
             let mut first = true;
             for &e in &tr {
                 if e == u32::MAX {
@@ -187,9 +193,26 @@ fn estimates(set: &[Bands], kind: rans::Kind) -> Vec<(String, f64)> {
                         ad[k] = fresh(w);
                         ad_sum[k] = ad[k].iter().map(|r| r.iter().sum()).collect();
                     }
+                    sign_n = [[0.5f64; 2]; 9];
+                    half = fresh(32.0);
+                    half_sum = half.iter().map(|r| r.iter().sum()).collect();
                     continue;
                 }
                 let (c, sy) = ((e >> 8) as usize, (e & 0xff) as usize);
+                if c >= signs {
+                    // a raw sign bit: its cost under adaptive counts in its context
+                    let n = &mut sign_n[c - signs];
+                    tot[7] += ((n[0] + n[1]) / n[sy]).log2() - 1.0;
+                    n[sy] += 1.0;
+                    continue;
+                }
+                tot[8] += (half_sum[c] / half[c][sy]).log2();
+                half[c][sy] += 1.0;
+                half_sum[c] += 1.0;
+                if half_sum[c] > 512.0 {
+                    half[c].iter_mut().for_each(|v| *v *= 0.5);
+                    half_sum[c] *= 0.5;
+                }
                 tot[0] += t.cost(c, sy);
                 band_n[c][sy] += 1;
                 blk_n[c][sy] += 1;
@@ -206,6 +229,7 @@ fn estimates(set: &[Bands], kind: rans::Kind) -> Vec<(String, f64)> {
             tot[1] += band_n.iter().map(|r| own_bits(r) + table_bits(r)).sum::<f64>();
         }
     }
+    tot[7] += tot[5];
     names
         .into_iter()
         .zip(tot)

@@ -56,11 +56,12 @@ impl Kind {
 }
 
 /// One static table: per symbol its start and frequency (packed `start | freq << 16`)
-/// and per slot `x mod 2^SCALE` the packed `slot − start | freq << 12 | symbol << 25`.
+/// and per slot `x mod 2^SCALE` its symbol (4 KiB a table, so that the decoder's tables
+/// stay in cache).
 #[derive(Clone, Debug)]
 pub struct Table {
     enc: Vec<u32>,
-    dec: Vec<u32>,
+    dec: Vec<u8>,
 }
 
 impl Table {
@@ -69,13 +70,11 @@ impl Table {
     pub fn from_counts(n: &[u64]) -> Self {
         let f = normalise(n);
         let mut enc = Vec::with_capacity(f.len());
-        let mut dec = vec![0u32; 1 << SCALE];
+        let mut dec = vec![0u8; 1 << SCALE];
         let mut start = 0u32;
         for (s, &fs) in f.iter().enumerate() {
             enc.push(start | fs << 16);
-            for k in 0..fs {
-                dec[(start + k) as usize] = k | fs << 12 | (s as u32) << 25;
-            }
+            dec[start as usize..(start + fs) as usize].fill(s as u8);
             start += fs;
         }
         Table { enc, dec }
@@ -133,8 +132,9 @@ impl Tables {
 }
 
 /// Symbol counts per code, for training [`Tables`]; with `trace`, every coded symbol in
-/// order as `code << 8 | symbol` (quad codes first, then magnitude classes), each
-/// block opened by `u32::MAX`; `raw_bits` and `rans_bytes` total the two streams.
+/// order as `code << 8 | symbol` (quad codes first, then magnitude classes, then the
+/// raw sign bits in the 9 contexts `3·sg(W) + sg(N)` they would have, sg = 0, 1, 2 for
+/// zero, positive, negative), each block opened by `u32::MAX`; `raw_bits` and `rans_bytes` total the two streams.
 #[derive(Clone, Debug)]
 pub struct Counts {
     pub kind: Kind,
@@ -248,6 +248,20 @@ pub fn encode(
                 bits.put(m & ((1 << kk) - 1), kk);
             }
             bits.put((v < 0) as u64, 1);
+            if let Some(tr) = counts.as_deref_mut().and_then(|n| n.trace.as_mut()) {
+                // the sign's would-be context: the signs of W and N inside the block
+                let (py, px) = (y + b / 2, x + b % 2);
+                let sg = |u: i32| (u > 0) as u32 + 2 * (u < 0) as u32;
+                let w = if px > 0 { sg(band[at[b] - 1]) } else { 0 };
+                let nn = if b >= 2 {
+                    sg(band[at[b - 2]])
+                } else if py > 0 {
+                    sg(band[rows.row(k, py - 1) + px])
+                } else {
+                    0
+                };
+                tr.push(((nq + MCLS) as u32 + 3 * w + nn) << 8 | (v < 0) as u32);
+            }
             s.set(i + off[b], a.min(CAP));
         }
     });
@@ -298,13 +312,17 @@ impl Words<'_> {
 /// Decode one symbol of table `t` by state `x`.
 #[inline(always)]
 fn get(t: &Table, x: &mut u32, r: &mut Words) -> usize {
-    let e = t.dec[(*x & MASK) as usize];
-    let f = e >> 12 & 0x1fff;
-    *x = f.wrapping_mul(*x >> SCALE).wrapping_add(e & 0xfff);
+    let slot = *x & MASK;
+    let s = t.dec[slot as usize] as usize;
+    let e = t.enc[s];
+    *x = (e >> 16)
+        .wrapping_mul(*x >> SCALE)
+        .wrapping_add(slot)
+        .wrapping_sub(e & 0xffff);
     if *x < LOW {
         *x = *x << 16 | r.next();
     }
-    (e >> 25) as usize
+    s
 }
 
 /// Decode a block written by [`encode`] (its bytes `data`, from its length on) into
