@@ -274,7 +274,7 @@ pub fn encode(
             w.words.push(*l as u16);
             *l >>= 16;
         }
-        *l = (*l / f << SCALE) + *l % f + start;
+        *l = ((*l / f) << SCALE) + *l % f + start;
     }
     let rans_len = 8 + 2 * w.words.len();
     put_varint(out, rans_len as u64);
