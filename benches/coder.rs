@@ -3,8 +3,11 @@
 //! blocks of 64², 128², 256² and their volume sizes, block index counted) and, with
 //! `MRA_CODER_QUADS=1`, the quad-coder prototype (`entropy::block`); the HT-style coder
 //! (`entropy::block::ht`) in several kinds, its codes trained here on the bands of Kodak
-//! 1–12, and with its standard codes (`-- train-ht` writes those); bits and MB/s
-//! (run with `RAYON_NUM_THREADS=1` for single-thread figures).
+//! 1–12, and with its standard codes (`-- train-ht` writes those); the rANS quad coder
+//! (`entropy::block::rans`, static tables trained here) and ideal code lengths of its
+//! symbols under other models (tables per band or block, adaptive counts, sign
+//! contexts); bits and MB/s (run with `RAYON_NUM_THREADS=1` for single-thread figures).
+//! `only-today`, `only-ht`, `only-rans` keep those rows.
 //!
 //! The bands are those `mra encode` writes: each input is encoded by the library
 //! (`--bpp 1` for the photographs and the CT, `--lossless` for the 16-bit images), its
