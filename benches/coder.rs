@@ -55,7 +55,9 @@ enum Coder {
     },
     /// the rANS quad coder (`entropy::block::rans`), blocks 256² / 32×64×64, its tables
     /// trained here on Kodak 1–12
-    Rans { kind: rans::Kind },
+    Rans {
+        kind: rans::Kind,
+    },
 }
 
 /// The bands of Kodak 1–12, on which the HT-style coder's codes are trained.
@@ -88,7 +90,15 @@ fn trained_rans(kind: rans::Kind) -> &'static rans::Tables {
     for bs in set {
         for (i, b) in bs.bands.iter().enumerate() {
             let par = bs.parent32(i);
-            block::encode_rans(&b.q32, &b.dims, b.kind, par, big_blocks(&b.dims), &flat, Some(&mut n));
+            block::encode_rans(
+                &b.q32,
+                &b.dims,
+                b.kind,
+                par,
+                big_blocks(&b.dims),
+                &flat,
+                Some(&mut n),
+            );
         }
     }
     let v: &'static rans::Tables = Box::leak(Box::new(rans::Tables::from_counts(&n)));
@@ -145,7 +155,8 @@ fn estimates(set: &[Bands], kind: rans::Kind) -> Vec<(String, f64)> {
         "adaptive counts per block from trained, weight 16".to_string(),
         "adaptive counts per block from trained, weight 64".to_string(),
         "adaptive counts per band from trained, weight 16".to_string(),
-        "adaptive counts per block from trained, weight 64, + adaptive sign contexts (W, N)".to_string(),
+        "adaptive counts per block from trained, weight 64, + adaptive sign contexts (W, N)"
+            .to_string(),
         "adaptive counts per block from trained, weight 32, halved above 512".to_string(),
     ];
     let mut tot = vec![0.0f64; names.len()];
@@ -155,7 +166,15 @@ fn estimates(set: &[Bands], kind: rans::Kind) -> Vec<(String, f64)> {
             let par = bs.parent32(i);
             let mut n = rans::Counts::new(kind);
             n.trace = Some(Vec::new());
-            let out = block::encode_rans(&b.q32, &b.dims, b.kind, par, big_blocks(&b.dims), t, Some(&mut n));
+            let out = block::encode_rans(
+                &b.q32,
+                &b.dims,
+                b.kind,
+                par,
+                big_blocks(&b.dims),
+                t,
+                Some(&mut n),
+            );
             other += out.len() as f64 - n.rans_bytes as f64;
             let tr = n.trace.take().unwrap();
             let mut band_n = vec![vec![0u32; 81]; codes];
@@ -173,11 +192,17 @@ fn estimates(set: &[Bands], kind: rans::Kind) -> Vec<(String, f64)> {
             };
             let weights = [0.0, 16.0, 64.0];
             let mut ad: Vec<Vec<Vec<f64>>> = weights.iter().map(|&w| fresh(w)).collect();
-            let mut ad_sum: Vec<Vec<f64>> = ad.iter().map(|a| a.iter().map(|r| r.iter().sum()).collect()).collect();
+            let mut ad_sum: Vec<Vec<f64>> = ad
+                .iter()
+                .map(|a| a.iter().map(|r| r.iter().sum()).collect())
+                .collect();
             let mut band_ad = fresh(16.0);
             let mut band_ad_sum: Vec<f64> = band_ad.iter().map(|r| r.iter().sum()).collect();
             let close_block = |blk_n: &mut Vec<Vec<u32>>, tot: &mut Vec<f64>| {
-                tot[2] += blk_n.iter().map(|r| own_bits(r) + table_bits(r)).sum::<f64>();
+                tot[2] += blk_n
+                    .iter()
+                    .map(|r| own_bits(r) + table_bits(r))
+                    .sum::<f64>();
                 for r in blk_n.iter_mut() {
                     r.fill(0);
                 }
@@ -229,7 +254,10 @@ fn estimates(set: &[Bands], kind: rans::Kind) -> Vec<(String, f64)> {
                 band_ad_sum[c] += 1.0;
             }
             close_block(&mut blk_n, &mut tot);
-            tot[1] += band_n.iter().map(|r| own_bits(r) + table_bits(r)).sum::<f64>();
+            tot[1] += band_n
+                .iter()
+                .map(|r| own_bits(r) + table_bits(r))
+                .sum::<f64>();
         }
     }
     tot[7] += tot[5];
@@ -656,9 +684,7 @@ fn main() {
         .skip(1)
         .filter(|a| !a.starts_with('-'))
         .collect();
-    let want = |k: &str| {
-        args.iter().all(|a| a.starts_with("only-")) || args.iter().any(|a| a == k)
-    };
+    let want = |k: &str| args.iter().all(|a| a.starts_with("only-")) || args.iter().any(|a| a == k);
     let only: Vec<&str> = args
         .iter()
         .filter_map(|a| a.strip_prefix("only-"))

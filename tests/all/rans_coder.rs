@@ -120,7 +120,15 @@ fn rans_edge_bands() {
     for cut in 0..bytes.len() {
         let _ = block::decode_rans(&bytes[..cut], &dims, BandKind::Detail, None, shape, &t);
     }
-    assert!(block::decode_rans(&bytes[..bytes.len() - 1], &dims, BandKind::Detail, None, shape, &t).is_err());
+    assert!(block::decode_rans(
+        &bytes[..bytes.len() - 1],
+        &dims,
+        BandKind::Detail,
+        None,
+        shape,
+        &t
+    )
+    .is_err());
 }
 
 /// On real bands (kodim01 at 1 bpp) the rANS coder with tables measured on the image
@@ -146,7 +154,15 @@ fn rans_real_bands_round_trip() {
     let mut n = Counts::new(k);
     let flat = Tables::from_counts(&n);
     for (i, b) in bs.bands.iter().enumerate() {
-        block::encode_rans(&b.q32, &b.dims, b.kind, bs.parent32(i), shape, &flat, Some(&mut n));
+        block::encode_rans(
+            &b.q32,
+            &b.dims,
+            b.kind,
+            bs.parent32(i),
+            shape,
+            &flat,
+            Some(&mut n),
+        );
     }
     let t = Tables::from_counts(&n);
     let (mut today, mut ours) = (0, 0);

@@ -93,10 +93,18 @@ fn normalise(n: &[u64]) -> Vec<u32> {
     let room = (1u64 << SCALE) - n.len() as u64;
     let mut f: Vec<u32> = n
         .iter()
-        .map(|&c| 1 + if total == 0 { 0 } else { (c as u128 * room as u128 / total as u128) as u32 })
+        .map(|&c| {
+            1 + if total == 0 {
+                0
+            } else {
+                (c as u128 * room as u128 / total as u128) as u32
+            }
+        })
         .collect();
     let sum: u32 = f.iter().sum();
-    let top = (0..f.len()).max_by_key(|&i| (n[i], std::cmp::Reverse(i))).unwrap_or(0);
+    let top = (0..f.len())
+        .max_by_key(|&i| (n[i], std::cmp::Reverse(i)))
+        .unwrap_or(0);
     f[top] += (1 << SCALE) - sum;
     f
 }
@@ -352,10 +360,7 @@ pub fn decode(
             .map_or(LOW, |b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
     };
     let mut x = [st(0), st(1)];
-    let mut r = Words {
-        data: body,
-        pos: 8,
-    };
+    let mut r = Words { data: body, pos: 8 };
     let mut bits = BitReader::new(raw);
     s.clear();
     let off = quad_offsets(s.rx());
