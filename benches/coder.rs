@@ -3,8 +3,11 @@
 //! blocks of 64², 128², 256² and their volume sizes, block index counted) and, with
 //! `MRA_CODER_QUADS=1`, the quad-coder prototype (`entropy::block`); the HT-style coder
 //! (`entropy::block::ht`) in several kinds, its codes trained here on the bands of Kodak
-//! 1–12, and with its standard codes (`-- train-ht` writes those); bits and MB/s
-//! (run with `RAYON_NUM_THREADS=1` for single-thread figures).
+//! 1–12, and with its standard codes (`-- train-ht` writes those); the rANS quad coder
+//! (`entropy::block::rans`, static tables trained here) and ideal code lengths of its
+//! symbols under other models (tables per band or block, adaptive counts, sign
+//! contexts); bits and MB/s (run with `RAYON_NUM_THREADS=1` for single-thread figures).
+//! `only-today`, `only-ht`, `only-rans` keep those rows.
 //!
 //! The bands are those `mra encode` writes: each input is encoded by the library
 //! (`--bpp 1` for the photographs and the CT, `--lossless` for the 16-bit images), its
@@ -19,7 +22,7 @@ mod bands;
 use bands::Bands;
 use mra::codec::{encode, EncodeOptions, Rate};
 use mra::entropy::band::Coding;
-use mra::entropy::block::{self, ht, Shape};
+use mra::entropy::block::{self, ht, rans, Shape};
 use mra::entropy::codeblocks;
 use std::path::{Path, PathBuf};
 use std::sync::{Mutex, OnceLock};
@@ -50,6 +53,11 @@ enum Coder {
         by_level: bool,
         standard: bool,
     },
+    /// the rANS quad coder (`entropy::block::rans`), blocks 256² / 32×64×64, its tables
+    /// trained here on Kodak 1–12
+    Rans {
+        kind: rans::Kind,
+    },
 }
 
 /// The bands of Kodak 1–12, on which the HT-style coder's codes are trained.
@@ -57,6 +65,208 @@ static TRAINING: OnceLock<Vec<Bands>> = OnceLock::new();
 /// The HT-style coder's trained codes, per kind and `by_level`.
 #[allow(clippy::type_complexity)]
 static TRAINED: Mutex<Vec<((u8, bool, bool), &'static [ht::Tables])>> = Mutex::new(Vec::new());
+
+/// The rANS coder's trained tables, per kind.
+static TRAINED_RANS: Mutex<Vec<(bool, &'static rans::Tables)>> = Mutex::new(Vec::new());
+
+/// Blocks of 256² / 32×64×64 for a band of `dims`.
+fn big_blocks(dims: &[usize]) -> Shape {
+    if dims.len() >= 3 {
+        shape(32, 64, 64)
+    } else {
+        shape(1, 256, 256)
+    }
+}
+
+/// The rANS coder's tables of `kind` trained on the Kodak 1–12 bands.
+fn trained_rans(kind: rans::Kind) -> &'static rans::Tables {
+    let mut t = TRAINED_RANS.lock().unwrap();
+    if let Some((_, v)) = t.iter().find(|(k, _)| *k == kind.parent) {
+        return v;
+    }
+    let set = TRAINING.get().expect("training bands");
+    let mut n = rans::Counts::new(kind);
+    let flat = rans::Tables::from_counts(&n);
+    for bs in set {
+        for (i, b) in bs.bands.iter().enumerate() {
+            let par = bs.parent32(i);
+            block::encode_rans(
+                &b.q32,
+                &b.dims,
+                b.kind,
+                par,
+                big_blocks(&b.dims),
+                &flat,
+                Some(&mut n),
+            );
+        }
+    }
+    let v: &'static rans::Tables = Box::leak(Box::new(rans::Tables::from_counts(&n)));
+    t.push((kind.parent, v));
+    v
+}
+
+/// Estimated bits of a table sent for counts `n` (used symbols only): 7 bits for the
+/// number of used symbols, per used symbol the Elias-gamma code of its index gap and 5
+/// bits of log-quantised frequency; 1 bit per context for "used".
+fn table_bits(n: &[u32]) -> f64 {
+    let mut bits = 1.0;
+    if n.iter().all(|&c| c == 0) {
+        return bits;
+    }
+    bits += 7.0;
+    let mut last = 0usize;
+    for (s, &c) in n.iter().enumerate() {
+        if c > 0 {
+            let gap = (s + 1 - last) as u32;
+            bits += 2.0 * gap.ilog2() as f64 + 1.0 + 5.0;
+            last = s + 1;
+        }
+    }
+    bits
+}
+
+/// Ideal bits of symbols with counts `n` coded by their own frequencies.
+fn own_bits(n: &[u32]) -> f64 {
+    let tot: u32 = n.iter().sum();
+    n.iter()
+        .filter(|&&c| c > 0)
+        .map(|&c| c as f64 * (tot as f64 / c as f64).log2())
+        .sum()
+}
+
+/// Estimated sizes of other ways to code the rANS coder's symbols (`kind`, blocks
+/// 256² / 32×64×64) over `set`, in bytes: the raw bits and block lengths as coded,
+/// the symbols' ideal code length under each model.
+fn estimates(set: &[Bands], kind: rans::Kind) -> Vec<(String, f64)> {
+    let t = trained_rans(kind);
+    let nq = kind.quad_codes();
+    let size = |code: usize| if code < nq { rans::QSYM } else { rans::MSYM };
+    let codes = nq + 26;
+    let signs = codes;
+    let prior: Vec<Vec<f64>> = (0..codes)
+        .map(|c| (0..size(c)).map(|s| (-t.cost(c, s)).exp2()).collect())
+        .collect();
+    let names = [
+        "static trained tables (ideal)".to_string(),
+        "tables per band, measured on the band (+ est. table bits)".to_string(),
+        "tables per block, measured on the block (+ est. table bits)".to_string(),
+        "adaptive counts per block from uniform (KT ½)".to_string(),
+        "adaptive counts per block from trained, weight 16".to_string(),
+        "adaptive counts per block from trained, weight 64".to_string(),
+        "adaptive counts per band from trained, weight 16".to_string(),
+        "adaptive counts per block from trained, weight 64, + adaptive sign contexts (W, N)"
+            .to_string(),
+        "adaptive counts per block from trained, weight 32, halved above 512".to_string(),
+    ];
+    let mut tot = vec![0.0f64; names.len()];
+    let mut other = 0.0f64;
+    for bs in set {
+        for (i, b) in bs.bands.iter().enumerate() {
+            let par = bs.parent32(i);
+            let mut n = rans::Counts::new(kind);
+            n.trace = Some(Vec::new());
+            let out = block::encode_rans(
+                &b.q32,
+                &b.dims,
+                b.kind,
+                par,
+                big_blocks(&b.dims),
+                t,
+                Some(&mut n),
+            );
+            other += out.len() as f64 - n.rans_bytes as f64;
+            let tr = n.trace.take().unwrap();
+            let mut band_n = vec![vec![0u32; 81]; codes];
+            let mut blk_n = vec![vec![0u32; 81]; codes];
+            let fresh = |w: f64| -> Vec<Vec<f64>> {
+                (0..codes)
+                    .map(|c| {
+                        if w == 0.0 {
+                            vec![0.5; size(c)]
+                        } else {
+                            prior[c].iter().map(|p| p * w).collect()
+                        }
+                    })
+                    .collect()
+            };
+            let weights = [0.0, 16.0, 64.0];
+            let mut ad: Vec<Vec<Vec<f64>>> = weights.iter().map(|&w| fresh(w)).collect();
+            let mut ad_sum: Vec<Vec<f64>> = ad
+                .iter()
+                .map(|a| a.iter().map(|r| r.iter().sum()).collect())
+                .collect();
+            let mut band_ad = fresh(16.0);
+            let mut band_ad_sum: Vec<f64> = band_ad.iter().map(|r| r.iter().sum()).collect();
+            let close_block = |blk_n: &mut Vec<Vec<u32>>, tot: &mut Vec<f64>| {
+                tot[2] += blk_n
+                    .iter()
+                    .map(|r| own_bits(r) + table_bits(r))
+                    .sum::<f64>();
+                for r in blk_n.iter_mut() {
+                    r.fill(0);
+                }
+            };
+            let mut sign_n = [[0.5f64; 2]; 9];
+            let mut half = fresh(32.0);
+            let mut half_sum: Vec<f64> = half.iter().map(|r| r.iter().sum()).collect();
+            let mut first = true;
+            for &e in &tr {
+                if e == u32::MAX {
+                    if !first {
+                        close_block(&mut blk_n, &mut tot);
+                    }
+                    first = false;
+                    for (k, &w) in weights.iter().enumerate() {
+                        ad[k] = fresh(w);
+                        ad_sum[k] = ad[k].iter().map(|r| r.iter().sum()).collect();
+                    }
+                    sign_n = [[0.5f64; 2]; 9];
+                    half = fresh(32.0);
+                    half_sum = half.iter().map(|r| r.iter().sum()).collect();
+                    continue;
+                }
+                let (c, sy) = ((e >> 8) as usize, (e & 0xff) as usize);
+                if c >= signs {
+                    // a raw sign bit: its cost under adaptive counts in its context
+                    let n = &mut sign_n[c - signs];
+                    tot[7] += ((n[0] + n[1]) / n[sy]).log2() - 1.0;
+                    n[sy] += 1.0;
+                    continue;
+                }
+                tot[8] += (half_sum[c] / half[c][sy]).log2();
+                half[c][sy] += 1.0;
+                half_sum[c] += 1.0;
+                if half_sum[c] > 512.0 {
+                    half[c].iter_mut().for_each(|v| *v *= 0.5);
+                    half_sum[c] *= 0.5;
+                }
+                tot[0] += t.cost(c, sy);
+                band_n[c][sy] += 1;
+                blk_n[c][sy] += 1;
+                for k in 0..weights.len() {
+                    tot[3 + k] += (ad_sum[k][c] / ad[k][c][sy]).log2();
+                    ad[k][c][sy] += 1.0;
+                    ad_sum[k][c] += 1.0;
+                }
+                tot[6] += (band_ad_sum[c] / band_ad[c][sy]).log2();
+                band_ad[c][sy] += 1.0;
+                band_ad_sum[c] += 1.0;
+            }
+            close_block(&mut blk_n, &mut tot);
+            tot[1] += band_n
+                .iter()
+                .map(|r| own_bits(r) + table_bits(r))
+                .sum::<f64>();
+        }
+    }
+    tot[7] += tot[5];
+    names
+        .into_iter()
+        .zip(tot)
+        .map(|(n, b)| (n, other + b / 8.0))
+        .collect()
+}
 
 /// The codes of `kind` trained on the Kodak 1–12 bands, per level group.
 fn trained_tables(kind: ht::Kind, by_level: bool) -> &'static [ht::Tables] {
@@ -115,6 +325,10 @@ impl Coder {
                 if kind.parent { ", parent" } else { "" },
                 if *standard { "standard" } else { "trained" },
                 if *by_level { " per level" } else { "" }
+            ),
+            Coder::Rans { kind } => format!(
+                "rANS 2 lanes 256² / 32×64×64, L = 3{}, static tables trained",
+                if kind.parent { ", parent" } else { "" }
             ),
         }
     }
@@ -183,6 +397,12 @@ fn coders() -> Vec<Coder> {
             kind: ht::Tables::standard().kind,
             by_level: false,
             standard: true,
+        },
+        Coder::Rans {
+            kind: rans::Kind { parent: false },
+        },
+        Coder::Rans {
+            kind: rans::Kind { parent: true },
         },
     ]);
     if std::env::var_os("MRA_CODER_QUADS").is_none() {
@@ -314,6 +534,19 @@ fn run(coder: Coder, set: &[Bands]) -> (usize, f64, f64) {
                     te += t0.elapsed().as_secs_f64();
                     let t0 = Instant::now();
                     let back = block::decode_ht(&s, &b.dims, b.kind, par, sh, t).unwrap();
+                    td += t0.elapsed().as_secs_f64();
+                    assert_eq!(back, b.q32);
+                    bytes += s.len();
+                }
+                Coder::Rans { kind } => {
+                    let sh = big_blocks(&b.dims);
+                    let t = trained_rans(kind);
+                    let par = bs.parent32(i);
+                    let t0 = Instant::now();
+                    let s = block::encode_rans(&b.q32, &b.dims, b.kind, par, sh, t, None);
+                    te += t0.elapsed().as_secs_f64();
+                    let t0 = Instant::now();
+                    let back = block::decode_rans(&s, &b.dims, b.kind, par, sh, t).unwrap();
                     td += t0.elapsed().as_secs_f64();
                     assert_eq!(back, b.q32);
                     bytes += s.len();
@@ -451,7 +684,11 @@ fn main() {
         .skip(1)
         .filter(|a| !a.starts_with('-'))
         .collect();
-    let want = |k: &str| args.is_empty() || args.iter().any(|a| a == k);
+    let want = |k: &str| args.iter().all(|a| a.starts_with("only-")) || args.iter().any(|a| a == k);
+    let only: Vec<&str> = args
+        .iter()
+        .filter_map(|a| a.strip_prefix("only-"))
+        .collect();
     let reps: usize = std::env::var("MRA_CODER_REPS")
         .ok()
         .and_then(|v| v.parse().ok())
@@ -517,7 +754,15 @@ fn main() {
         let raw: usize = set.iter().map(|b| b.raw_bytes).sum();
         let mb = raw as f64 / 1e6;
         let mut today = 0;
-        for coder in coders() {
+        for coder in coders().into_iter().filter(|c| {
+            only.is_empty()
+                || only.iter().any(|o| match (*o, c) {
+                    ("today", Coder::Today) => true,
+                    ("ht", Coder::Ht { standard, .. }) => *standard,
+                    ("rans", Coder::Rans { .. }) => true,
+                    _ => false,
+                })
+        }) {
             let (mut best_e, mut best_d, mut bytes) = (f64::INFINITY, f64::INFINITY, 0);
             for _ in 0..reps {
                 let (b, te, td) = run(coder, set);
@@ -535,6 +780,15 @@ fn main() {
                 mb / best_e,
                 mb / best_d
             );
+        }
+        for parent in [false, true] {
+            for (what, b) in estimates(set, rans::Kind { parent }) {
+                println!(
+                    "| {name} | est. rANS symbols{}: {what} | {b:.0} | {:+.2}% | | |",
+                    if parent { ", parent" } else { "" },
+                    (b / today as f64 - 1.0) * 100.0
+                );
+            }
         }
     }
 }

@@ -19,6 +19,7 @@ mod curve;
 mod filters;
 mod format_spec;
 mod ht_coder;
+mod rans_coder;
 mod hyperpatch;
 mod inputs_outputs;
 mod io;

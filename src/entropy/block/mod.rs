@@ -17,12 +17,15 @@
 //!
 //! [`encode_ht`] / [`decode_ht`] code the same blocks with the HT-style coder ([`ht`]):
 //! static prefix codes ([`vlc`]) and a run coder instead of the range coder, one
-//! length per block.
+//! length per block. [`encode_rans`] / [`decode_rans`] code the HT coder's quad and
+//! magnitude symbols with static frequency tables and two interleaved rANS lanes
+//! ([`rans`]).
 
 pub mod ht;
 mod ht_table;
 pub mod prior;
 pub mod quad;
+pub mod rans;
 pub mod rc;
 pub mod vlc;
 
@@ -363,6 +366,95 @@ pub fn decode_ht(
             parent: parent.as_ref().map(|(d, pw, bases)| (*d, *pw, &bases[..])),
         };
         ht::decode(&mut v, b.ext, &layout, s, t, bytes);
+    }
+    if kind == BandKind::Coarse {
+        undo_median(&mut v, w);
+    }
+    Ok(v)
+}
+
+/// Code a band of indices `q` (raster order, extents `dims`) in code-blocks of `shape`
+/// with the rANS quad coder ([`rans`]) and its tables `t`, adding every coded symbol to
+/// `counts` when given. The band's bytes are, block after block, `varint(block bytes)`
+/// and the block's bytes ([`rans::encode`]). The coarsest band is coded as median
+/// residuals, as in [`encode`]; the parent is read only when the tables' kind asks.
+pub fn encode_rans(
+    q: &[i32],
+    dims: &[usize],
+    kind: BandKind,
+    parent: Option<Parent>,
+    shape: Shape,
+    t: &rans::Tables,
+    mut counts: Option<&mut rans::Counts>,
+) -> Vec<u8> {
+    let w = Walk::new(dims);
+    let shape = shape.normal();
+    let res: Vec<i32>;
+    let (v, parent) = if kind == BandKind::Coarse {
+        res = median_residuals(q, w);
+        (&res[..], None)
+    } else if t.kind.parent {
+        (q, parent_map(dims, w, parent))
+    } else {
+        (q, None)
+    };
+    let mut out = Vec::new();
+    let mut blk = Vec::new();
+    let mut scratch: Option<(Extent, Scratch)> = None;
+    let mut wr = rans::Writers::default();
+    for b in blocks(w, shape) {
+        let s = scratch_for(&mut scratch, b.ext);
+        let layout = Layout {
+            w,
+            b,
+            parent: parent.as_ref().map(|(d, pw, bases)| (*d, *pw, &bases[..])),
+        };
+        blk.clear();
+        rans::encode(v, b.ext, &layout, s, t, counts.as_deref_mut(), &mut wr, &mut blk);
+        crate::format::put_varint(&mut out, blk.len() as u64);
+        out.extend_from_slice(&blk);
+    }
+    out
+}
+
+/// Decode a band written by [`encode_rans`] with the same `dims`, `kind`, `shape` and
+/// tables. Fails when a block's declared lengths run past the data.
+pub fn decode_rans(
+    data: &[u8],
+    dims: &[usize],
+    kind: BandKind,
+    parent: Option<Parent>,
+    shape: Shape,
+    t: &rans::Tables,
+) -> Result<Vec<i32>> {
+    let w = Walk::new(dims);
+    let shape = shape.normal();
+    let n: usize = dims.iter().product();
+    let mut v = vec![0i32; n];
+    let parent = if kind == BandKind::Coarse || !t.kind.parent {
+        None
+    } else {
+        parent_map(dims, w, parent)
+    };
+    let mut cur = Cursor::new(data, "code-block");
+    let mut scratch: Option<(Extent, Scratch)> = None;
+    for b in blocks(w, shape) {
+        let len = cur.varint()?;
+        let left = data.len() as u64 - cur.pos as u64;
+        if len > left {
+            return Err(Error::format(
+                format!("a code-block declaring {len} bytes, {left} left"),
+                "code-blocks within the band",
+            ));
+        }
+        let bytes = cur.take(len as usize)?;
+        let s = scratch_for(&mut scratch, b.ext);
+        let layout = Layout {
+            w,
+            b,
+            parent: parent.as_ref().map(|(d, pw, bases)| (*d, *pw, &bases[..])),
+        };
+        rans::decode(&mut v, b.ext, &layout, s, t, bytes)?;
     }
     if kind == BandKind::Coarse {
         undo_median(&mut v, w);
