@@ -132,6 +132,7 @@ fn every_lossy_mode_round_trips_every_type_and_shape() {
                         levels: 4,
                         rate,
                         format: Default::default(),
+                        effort: mra::codec::DEFAULT_EFFORT,
                     };
                     let d = round_trip(&r, &o);
                     assert_eq!(d.dims, r.dims);
@@ -412,7 +413,7 @@ proptest! {
     ) {
         let ty = TYPES[t];
         let r = field(&[h, w], ch, ty, seed);
-        let o = EncodeOptions { scheme: Scheme::ALL[scheme], boundary: Boundary::Symmetric, levels: 4, rate: Rate::MaxError(e), format: Default::default() };
+        let o = EncodeOptions { scheme: Scheme::ALL[scheme], boundary: Boundary::Symmetric, levels: 4, rate: Rate::MaxError(e), format: Default::default(), effort: mra::codec::DEFAULT_EFFORT };
         let d = round_trip(&r, &o);
         let m = max_err(&r, &d);
         prop_assert!(m <= e, "{ty} {h}x{w}x{ch} e {e}: {m}");
