@@ -98,7 +98,7 @@ fn every_coder_round_trips_every_mode() {
             let r = field(dims, ch, ty, dims.len() as u64 * 7 + ch as u64, hi);
             for effort in [1u8, 5, 7, 9] {
                 let ht = effort <= 6;
-                for rate in [Rate::Lossless, Rate::MaxError(hi / 500.0), Rate::Quality(60.0)] {
+                for rate in [Rate::Lossless, Rate::MaxError(hi / 100.0), Rate::Quality(60.0)] {
                     let what = format!("{dims:?}×{ch} {ty:?} effort {effort} {rate:?}");
                     let bytes = codec::encode(&r, &opts(rate, effort)).unwrap();
                     let info = codec::info(&bytes).unwrap();
