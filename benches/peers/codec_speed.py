@@ -117,7 +117,7 @@ def ladder(a):
         for img in images:
             name = os.path.basename(img).rsplit(".", 1)[0]
             ppm = os.path.join(tmp, name + ".ppm")
-            subprocess.run([a.mra, "convert", img, ppm], check=True, capture_output=True)
+            subprocess.run([a.mra, "convert", img, "-o", ppm], check=True, capture_output=True)
             for t in threads:
                 env = dict(os.environ, RAYON_NUM_THREADS=str(t))
                 for e in efforts:
