@@ -264,17 +264,8 @@ fn run(coder: Coder, set: &[Bands]) -> (usize, f64, f64) {
                     let all: Vec<usize> = (0..grid.len()).collect();
                     let mut back = vec![0i64; b.q.len()];
                     let t = Instant::now();
-                    codeblocks::decode_blocks(
-                        &mut back,
-                        &grid,
-                        &all,
-                        &refs,
-                        b.kind,
-                        par,
-                        c,
-                        ctx,
-                    )
-                    .unwrap();
+                    codeblocks::decode_blocks(&mut back, &grid, &all, &refs, b.kind, par, c, ctx)
+                        .unwrap();
                     td += t.elapsed().as_secs_f64();
                     assert_eq!(back, b.q);
                     bytes += s.iter().map(|v| v.len() + leb_len(v.len())).sum::<usize>()

@@ -69,7 +69,9 @@ fn decode_band(
         .collect();
     let mut v = vec![0i64; dims.iter().product()];
     let coder = super::plan::coder_of(h);
-    entropy::codeblocks::decode_blocks(&mut v, &grid, &which, &streams, kind, parent, coding, coder)?;
+    entropy::codeblocks::decode_blocks(
+        &mut v, &grid, &which, &streams, kind, parent, coding, coder,
+    )?;
     Ok(v)
 }
 

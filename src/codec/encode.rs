@@ -281,12 +281,19 @@ fn code_plane_band(plan: &Plan, plane: &[i32], j: usize) -> Vec<u8> {
         dims: &plan.dims[p],
     });
     if let Some(g) = plan.grid(j) {
-        let blocks = codeblocks::encode_blocks_by(&g, BandKind::Detail, parent, plan.coding, plan.coder, |b| {
-            layout::gather(plane, shape, &plan.in_plane(j, b))
-                .into_iter()
-                .map(i64::from)
-                .collect()
-        });
+        let blocks = codeblocks::encode_blocks_by(
+            &g,
+            BandKind::Detail,
+            parent,
+            plan.coding,
+            plan.coder,
+            |b| {
+                layout::gather(plane, shape, &plan.in_plane(j, b))
+                    .into_iter()
+                    .map(i64::from)
+                    .collect()
+            },
+        );
         return blocks_payload(&blocks);
     }
     let offs = plan.row_offsets(j);

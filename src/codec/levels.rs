@@ -183,8 +183,7 @@ impl Plan {
                 if level > 0 && grid.is_some() =>
             {
                 let g = grid.expect("a block grid");
-                let (streams, q) =
-                    codeblocks::encode_blocks_rdo_by(
+                let (streams, q) = codeblocks::encode_blocks_rdo_by(
                     &g,
                     parent,
                     lambda,
@@ -196,7 +195,8 @@ impl Plan {
                             .into_iter()
                             .map(|x| (x as f64 / step) as f32)
                             .collect()
-                    });
+                    },
+                );
                 stream = blocks_payload(&streams);
                 q.unwrap_or_default()
             }

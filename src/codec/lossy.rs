@@ -4,9 +4,9 @@
 use super::colour::{channel_weights, planes_f32};
 use super::levels::{BandInput, Choice, CodedBand};
 use super::options::{EncodeOptions, Format};
-use crate::entropy::codeblocks::Coder;
 use super::plan::{band_rho, dequantize_into, lossy_values, Plan};
 use super::{layout, meta};
+use crate::entropy::codeblocks::Coder;
 use crate::format::header::Colour;
 use crate::format::tag::{HEAD, MEND, META};
 use crate::format::{self, put_chunk, Header, Mode};

@@ -81,7 +81,9 @@ impl Coder {
                 encode: |v, d, k, p| {
                     block::encode_ht(v, d, k, p, whole(), block::ht::Tables::standard(), None)
                 },
-                decode: |s, d, k, p| block::decode_ht(s, d, k, p, whole(), block::ht::Tables::standard()),
+                decode: |s, d, k, p| {
+                    block::decode_ht(s, d, k, p, whole(), block::ht::Tables::standard())
+                },
             },
         }
     }
@@ -275,7 +277,9 @@ pub fn encode_blocks(
     coding: Coding,
     coder: Coder,
 ) -> Vec<Vec<u8>> {
-    encode_blocks_by(grid, kind, parent, coding, coder, |b| extract(q, &grid.dims, b))
+    encode_blocks_by(grid, kind, parent, coding, coder, |b| {
+        extract(q, &grid.dims, b)
+    })
 }
 
 /// [`encode_blocks`] with the values of the block of box `b` (raster order over the
@@ -346,9 +350,10 @@ pub fn encode_blocks_rdo_by(
             let mut e = super::range::Encoder::new();
             let cols = d.last().copied().unwrap_or(1);
             let other = coder != Coder::Context;
-            let q = band::encode_rdo_with(&mut e, &d, pp, lambda, coding, keep || other, |g, out| {
-                out.copy_from_slice(&v[g * cols..(g + 1) * cols])
-            });
+            let q =
+                band::encode_rdo_with(&mut e, &d, pp, lambda, coding, keep || other, |g, out| {
+                    out.copy_from_slice(&v[g * cols..(g + 1) * cols])
+                });
             let q = q.unwrap_or_default();
             if other {
                 let s = encode_one(coder, &q, &d, BandKind::Detail, par.as_ref(), coding);
@@ -425,7 +430,9 @@ pub fn decode_blocks(
                     } else {
                         parent_of(&b, parent).map(|(data, dims)| (narrow(&data), dims))
                     };
-                    let pp = par.as_ref().map(|(data, dims)| block::Parent { data, dims });
+                    let pp = par
+                        .as_ref()
+                        .map(|(data, dims)| block::Parent { data, dims });
                     let v = decode(streams[k], &d, kind, pp)?;
                     for_each_run(&shape, &local, |at, len, from| {
                         for (o, &x) in slab[at..at + len].iter_mut().zip(&v[from..from + len]) {

@@ -65,7 +65,10 @@ fn recrc(b: &mut [u8], start: usize, end: usize) {
 
 fn max_abs(a: &Raster, b: &Raster) -> f64 {
     let (x, y) = (a.samples.to_f64(), b.samples.to_f64());
-    x.iter().zip(&y).map(|(p, q)| (p - q).abs()).fold(0.0, f64::max)
+    x.iter()
+        .zip(&y)
+        .map(|(p, q)| (p - q).abs())
+        .fold(0.0, f64::max)
 }
 
 /// The ladder's ends: efforts 1–6 the HT coder, 7–9 the context coder; RDO from 4;
@@ -92,21 +95,46 @@ fn the_ladder_names_its_coders() {
 /// sets; a file of the HT coder is 3.1 and says so, the others 3.0.
 #[test]
 fn every_coder_round_trips_every_mode() {
-    let shapes: [(&[usize], usize); 4] = [(&[67, 45], 3), (&[33, 70], 1), (&[19, 23, 29], 1), (&[9, 130], 2)];
+    let shapes: [(&[usize], usize); 4] = [
+        (&[67, 45], 3),
+        (&[33, 70], 1),
+        (&[19, 23, 29], 1),
+        (&[9, 130], 2),
+    ];
     for (dims, ch) in shapes {
-        for (ty, hi) in [(SampleType::U8, 255.0), (SampleType::U16, 60000.0), (SampleType::I16, 3000.0)] {
+        for (ty, hi) in [
+            (SampleType::U8, 255.0),
+            (SampleType::U16, 60000.0),
+            (SampleType::I16, 3000.0),
+        ] {
             let r = field(dims, ch, ty, dims.len() as u64 * 7 + ch as u64, hi);
             for effort in [1u8, 5, 7, 9] {
                 let ht = effort <= 6;
-                for rate in [Rate::Lossless, Rate::MaxError(hi / 100.0), Rate::Quality(60.0)] {
+                for rate in [
+                    Rate::Lossless,
+                    Rate::MaxError(hi / 100.0),
+                    Rate::Quality(60.0),
+                ] {
                     let what = format!("{dims:?}×{ch} {ty:?} effort {effort} {rate:?}");
                     let bytes = codec::encode(&r, &opts(rate, effort)).unwrap();
                     let info = codec::info(&bytes).unwrap();
-                    let want = if ht && !matches!(rate, Rate::MaxError(_)) { "ht" } else { "context" };
+                    let want = if ht && !matches!(rate, Rate::MaxError(_)) {
+                        "ht"
+                    } else {
+                        "context"
+                    };
                     assert_eq!(info.coder.as_deref(), Some(want), "{what}");
-                    assert_eq!(info.version, if want == "ht" { "3.1" } else { "3.0" }, "{what}");
+                    assert_eq!(
+                        info.version,
+                        if want == "ht" { "3.1" } else { "3.0" },
+                        "{what}"
+                    );
                     let d = decoded(&bytes);
-                    assert_eq!((d.dims.clone(), d.channels), (r.dims.clone(), r.channels), "{what}");
+                    assert_eq!(
+                        (d.dims.clone(), d.channels),
+                        (r.dims.clone(), r.channels),
+                        "{what}"
+                    );
                     match rate {
                         Rate::Lossless => assert!(d.samples == r.samples, "{what}"),
                         Rate::MaxError(e) => assert!(max_abs(&d, &r) <= e, "{what}"),
@@ -127,8 +155,18 @@ fn the_ht_coder_on_optimised_indices_decodes_the_context_coders_samples() {
     for r in [&r, &v] {
         let fast = codec::encode(r, &opts(Rate::Quality(55.0), 5)).unwrap();
         let slow = codec::encode(r, &opts(Rate::Quality(55.0), 7)).unwrap();
-        assert!(decoded(&fast).samples == decoded(&slow).samples, "{}", r.summary());
-        assert!(fast.len() > slow.len(), "{} {} {}", r.summary(), fast.len(), slow.len());
+        assert!(
+            decoded(&fast).samples == decoded(&slow).samples,
+            "{}",
+            r.summary()
+        );
+        assert!(
+            fast.len() > slow.len(),
+            "{} {} {}",
+            r.summary(),
+            fast.len(),
+            slow.len()
+        );
     }
 }
 
@@ -138,7 +176,12 @@ fn each_coder_writes_the_same_bytes_on_any_thread_count() {
     let r = field(&[300, 270], 3, SampleType::U8, 11, 255.0);
     let v = field(&[40, 70, 66], 1, SampleType::U16, 12, 4000.0);
     for effort in [1u8, 4, 7] {
-        for (r, rate) in [(&r, Rate::Bpp(1.0)), (&r, Rate::Lossless), (&v, Rate::Quality(50.0)), (&v, Rate::Lossless)] {
+        for (r, rate) in [
+            (&r, Rate::Bpp(1.0)),
+            (&r, Rate::Lossless),
+            (&v, Rate::Quality(50.0)),
+            (&v, Rate::Lossless),
+        ] {
             let on = |threads: usize| {
                 rayon::ThreadPoolBuilder::new()
                     .num_threads(threads)
@@ -159,7 +202,15 @@ fn each_coder_writes_the_same_bytes_on_any_thread_count() {
 fn the_default_effort_writes_the_3_0_file() {
     let r = field(&[64, 80], 3, SampleType::U8, 3, 255.0);
     for rate in [Rate::Bpp(1.0), Rate::Lossless, Rate::Quality(70.0)] {
-        let d = codec::encode(&r, &EncodeOptions { rate, levels: 4, ..Default::default() }).unwrap();
+        let d = codec::encode(
+            &r,
+            &EncodeOptions {
+                rate,
+                levels: 4,
+                ..Default::default()
+            },
+        )
+        .unwrap();
         assert_eq!(d, codec::encode(&r, &opts(rate, DEFAULT_EFFORT)).unwrap());
         let h = codec::header_of(&d).unwrap();
         assert_eq!((h.version.to_string(), h.coder), ("3.0".to_string(), 0));
@@ -184,7 +235,10 @@ fn a_coder_byte_no_reader_knows_is_refused() {
         recrc(&mut b, s, e);
         let err = codec::decode(&b, &DecodeOptions::default()).unwrap_err();
         assert_eq!(err.kind(), ErrorKind::Format, "{id}: {err}");
-        assert!(err.to_string().contains(&format!("block coder {id}")), "{err}");
+        assert!(
+            err.to_string().contains(&format!("block coder {id}")),
+            "{err}"
+        );
         let f = dir.join(format!("coder{id}.mra"));
         std::fs::write(&f, &b).unwrap();
         let out = dir.join(format!("coder{id}.png"));
@@ -215,13 +269,33 @@ fn a_coder_byte_no_reader_knows_is_refused() {
 fn cli_effort_picks_the_coder_info_reports() {
     let dir = common::scratch_dir("effort_cli");
     let png = dir.join("z.png");
-    let o = common::mra_with_stdin(None, &["generate", "zone-plate", "-o", png.to_str().unwrap(), "--size", "96"], b"");
+    let o = common::mra_with_stdin(
+        None,
+        &[
+            "generate",
+            "zone-plate",
+            "-o",
+            png.to_str().unwrap(),
+            "--size",
+            "96",
+        ],
+        b"",
+    );
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     for (effort, coder) in [("1", "ht"), ("9", "context")] {
         let f = dir.join(format!("z{effort}.mra"));
         let o = common::mra_with_stdin(
             None,
-            &["encode", png.to_str().unwrap(), "-o", f.to_str().unwrap(), "--bpp", "1", "--effort", effort],
+            &[
+                "encode",
+                png.to_str().unwrap(),
+                "-o",
+                f.to_str().unwrap(),
+                "--bpp",
+                "1",
+                "--effort",
+                effort,
+            ],
             b"",
         );
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
@@ -233,7 +307,14 @@ fn cli_effort_picks_the_coder_info_reports() {
         let f = dir.join("bad.mra");
         let o = common::mra_with_stdin(
             None,
-            &["encode", png.to_str().unwrap(), "-o", f.to_str().unwrap(), "--effort", bad],
+            &[
+                "encode",
+                png.to_str().unwrap(),
+                "-o",
+                f.to_str().unwrap(),
+                "--effort",
+                bad,
+            ],
             b"",
         );
         assert_eq!(o.status.code(), Some(2), "{bad}");

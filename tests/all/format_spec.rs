@@ -6,8 +6,9 @@
 use mra::codec::{self, DecodeOptions, EncodeOptions, Rate};
 use mra::entropy::codeblocks::Coder;
 use mra::format::header::{
-    boundary_code, coder_name, CODERS, boundary_of, kind_code, kind_name, kind_of, mode_code, mode_name, mode_of,
-    sample_type_code, sample_type_of, scheme_code, scheme_of, Colour, KINDS, TYPES,
+    boundary_code, boundary_of, coder_name, kind_code, kind_name, kind_of, mode_code, mode_name,
+    mode_of, sample_type_code, sample_type_of, scheme_code, scheme_of, Colour, CODERS, KINDS,
+    TYPES,
 };
 use mra::format::{Mode, Tag, Version};
 use mra::scheme::{Boundary, Scheme};
