@@ -32,14 +32,19 @@ pub enum Coder {
     Ht = 1,
 }
 
+/// A narrow coder's encoder of a block (values, extents, kind, parent box).
+type NarrowEncode = fn(&[i32], &[usize], BandKind, Option<block::Parent>) -> Vec<u8>;
+/// A narrow coder's decoder of a block (stream, extents, kind, parent box).
+type NarrowDecode = fn(&[u8], &[usize], BandKind, Option<block::Parent>) -> Result<Vec<i32>>;
+
 /// How one block is coded: by the context coder, or by a coder of `i32` blocks (its
 /// encoder and decoder of a block as a band of its own, as [`block::encode_ht`]).
 #[derive(Clone, Copy)]
 enum PerBlock {
     Context,
     Narrow {
-        encode: fn(&[i32], &[usize], BandKind, Option<block::Parent>) -> Vec<u8>,
-        decode: fn(&[u8], &[usize], BandKind, Option<block::Parent>) -> Result<Vec<i32>>,
+        encode: NarrowEncode,
+        decode: NarrowDecode,
     },
 }
 
