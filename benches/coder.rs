@@ -477,22 +477,15 @@ fn run(coder: Coder, set: &[Bands]) -> (usize, f64, f64) {
                     let par = bs.parent(i);
                     let t = Instant::now();
                     // format 3.0 codes every block with the chosen classes (§9.1)
-                    let s = codeblocks::encode_blocks(&b.q, &grid, b.kind, par, Coding::Chosen);
+                    let (c, ctx) = (Coding::Chosen, codeblocks::Coder::Context);
+                    let s = codeblocks::encode_blocks(&b.q, &grid, b.kind, par, c, ctx);
                     te += t.elapsed().as_secs_f64();
                     let refs: Vec<&[u8]> = s.iter().map(|v| v.as_slice()).collect();
                     let all: Vec<usize> = (0..grid.len()).collect();
                     let mut back = vec![0i64; b.q.len()];
                     let t = Instant::now();
-                    codeblocks::decode_blocks(
-                        &mut back,
-                        &grid,
-                        &all,
-                        &refs,
-                        b.kind,
-                        par,
-                        Coding::Chosen,
-                    )
-                    .unwrap();
+                    codeblocks::decode_blocks(&mut back, &grid, &all, &refs, b.kind, par, c, ctx)
+                        .unwrap();
                     td += t.elapsed().as_secs_f64();
                     assert_eq!(back, b.q);
                     bytes += s.iter().map(|v| v.len() + leb_len(v.len())).sum::<usize>()

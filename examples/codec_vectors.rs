@@ -215,6 +215,43 @@ fn main() {
             Rate::Quality(40.0),
             0,
         ),
+        // format 3.1: the same code-blocks coded by block coder 1 (HT, `--effort 1`)
+        (
+            "blocks31_rgb8_bpp1",
+            "530x40 RGB u8, cdf97 symmetric, --bpp 1, format 3.1 (HT block coder, --effort 1)",
+            raster(&[40, 530], 3, SampleType::U8, DataKind::Image),
+            Scheme::Cdf97,
+            Boundary::Symmetric,
+            Rate::Bpp(1.0),
+            0,
+        ),
+        (
+            "blocks31_rgb8_bpp1_level1",
+            "the previous file decoded with --level 1",
+            raster(&[40, 530], 3, SampleType::U8, DataKind::Image),
+            Scheme::Cdf97,
+            Boundary::Symmetric,
+            Rate::Bpp(1.0),
+            1,
+        ),
+        (
+            "blocks31_gray16_lossless",
+            "520x8 gray u16, lossless, format 3.1 (HT block coder, --effort 1)",
+            raster(&[8, 520], 1, SampleType::U16, DataKind::Image),
+            Scheme::Haar,
+            Boundary::Symmetric,
+            Rate::Lossless,
+            0,
+        ),
+        (
+            "blocks31_vol_u16_q40",
+            "140x8x8 volume u16, cdf97 symmetric, quality 40, format 3.1 (HT block coder, --effort 1)",
+            raster(&[8, 8, 140], 1, SampleType::U16, DataKind::Volume),
+            Scheme::Cdf97,
+            Boundary::Symmetric,
+            Rate::Quality(40.0),
+            0,
+        ),
     ];
     // format 2.1: tiles (extents slowest axis first); the lossy one is kept as a 2.1
     // encoder wrote it (today's encoder writes lossy tiles compact, 2.2)
@@ -315,6 +352,8 @@ fn main() {
         let bytes = if frozen.contains(&name.trim_end_matches("_level1")) {
             std::fs::read(dir.join(&file)).unwrap()
         } else {
+            // 3.1: written directly, in code-blocks by the HT coder (effort 1)
+            let ht = name.starts_with("blocks31_");
             let bytes = codec::encode_tiled(
                 &r,
                 &EncodeOptions {
@@ -323,7 +362,12 @@ fn main() {
                     levels: 3,
                     rate,
                     // the 2.x vectors stay 2.x; the 3.0 ones are cut from them
-                    format: codec::Format::Bands,
+                    format: if ht {
+                        codec::Format::Blocks
+                    } else {
+                        codec::Format::Bands
+                    },
+                    effort: if ht { 1 } else { mra::codec::DEFAULT_EFFORT },
                 },
                 &tile,
             )

@@ -16,19 +16,26 @@ along z to 256 planes and shifted to u16, written as raw little-endian samples.
 Needs: opj_compress/opj_decompress (libopenjp2-tools), `pip install pysz numpy`.
 Usage (from the repository root, after `cargo build --release`):
   python3 benches/peers/codec_speed.py [--corpus ../shared/corpus] [--mra BIN] [--bpp 1]
+
+The effort ladder (`--ladder`): the flower and kodim01 read as PPM and written as PPM, at
+`--bpp`, `mra encode --effort N` for each of `--efforts` (default 1, 7 = the default, 9)
+and OpenJPEG, each on `RAYON_NUM_THREADS` / `-threads` of each of `--threads` (default 1
+and 2): bytes, PSNR (`mra compare`), best encode and decode wall, and the load average
+before and after (ratios within one run are what to read on a shared machine):
+  python3 benches/peers/codec_speed.py --ladder [--efforts 1,7,9] [--threads 1,2]
 """
 import argparse, gzip, os, re, subprocess, sys, tempfile, time
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
 
-def timed(cmd, repeat):
+def timed(cmd, repeat, env=None):
     """(best wall seconds, peak RSS in MB) of `cmd` run `repeat` times."""
     best, rss = float("inf"), 0.0
     for _ in range(repeat):
         t = time.perf_counter()
         p = subprocess.run(["/usr/bin/time", "-v"] + cmd, stdout=subprocess.DEVNULL,
-                           stderr=subprocess.PIPE, text=True)
+                           stderr=subprocess.PIPE, text=True, env=env)
         dt = time.perf_counter() - t
         if p.returncode != 0:
             sys.exit(f"failed: {' '.join(cmd)}\n{p.stderr[-2000:]}")
@@ -91,6 +98,51 @@ def sz3(u, e, repeat):
     return c.size * 8 / u.size, te, td
 
 
+def psnr(mra, a, b):
+    """PSNR in dB of `b` against `a` as `mra compare` prints it."""
+    out = subprocess.run([mra, "compare", a, b], capture_output=True, text=True).stdout
+    m = re.search(r"PSNR[^0-9]*([0-9.]+|inf)", out)
+    return float(m.group(1)) if m else float("nan")
+
+
+def ladder(a):
+    """The effort ladder table (module doc)."""
+    images = [os.path.join(a.corpus, "images", "large", "flower_foveon_rgb8.png"),
+              os.path.join(a.corpus, "images", "kodak", "kodim01.png")]
+    efforts = [int(e) for e in a.efforts.split(",")]
+    threads = [int(t) for t in a.threads.split(",")]
+    load0 = os.getloadavg()
+    rows = []
+    with tempfile.TemporaryDirectory() as tmp:
+        for img in images:
+            name = os.path.basename(img).rsplit(".", 1)[0]
+            ppm = os.path.join(tmp, name + ".ppm")
+            subprocess.run([a.mra, "convert", img, "-o", ppm], check=True, capture_output=True)
+            for t in threads:
+                env = dict(os.environ, RAYON_NUM_THREADS=str(t))
+                for e in efforts:
+                    enc, out = os.path.join(tmp, "a.mra"), os.path.join(tmp, "m.ppm")
+                    me = timed([a.mra, "encode", ppm, "-o", enc, "--bpp", str(a.bpp),
+                                "--effort", str(e), "--quiet"], a.repeat, env)
+                    md = timed([a.mra, "decode", enc, "-o", out, "--quiet"], a.repeat, env)
+                    rows.append((name, t, f"mra --effort {e}", os.path.getsize(enc),
+                                 psnr(a.mra, ppm, out), me, md))
+                j2k, out = os.path.join(tmp, "a.j2k"), os.path.join(tmp, "o.ppm")
+                oe = timed(["opj_compress", "-i", ppm, "-o", j2k, "-r", str(24.0 / a.bpp),
+                            "-threads", str(t)], a.repeat)
+                od = timed(["opj_decompress", "-i", j2k, "-o", out, "-threads", str(t)], a.repeat)
+                rows.append((name, t, "OpenJPEG", os.path.getsize(j2k), psnr(a.mra, ppm, out), oe, od))
+    load1 = os.getloadavg()
+    print(f"Whole process, PPM in and out, --bpp {a.bpp:g}, best of {a.repeat}; load average "
+          f"{load0[0]:.1f} before, {load1[0]:.1f} after.\n")
+    print("| image | threads | coder | bytes | PSNR dB | encode s | decode s | encode vs OpenJPEG | decode vs OpenJPEG |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    for name, t, what, size, db, me, md in rows:
+        opj = next(r for r in rows if r[0] == name and r[1] == t and r[2] == "OpenJPEG")
+        print(f"| {name} | {t} | {what} | {size} | {db:.2f} | {me[0]:.3f} | {md[0]:.3f} | "
+              f"{opj[5][0] / me[0]:.2f}× | {opj[6][0] / md[0]:.2f}× |")
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--corpus", default=os.path.join(ROOT, "..", "shared", "corpus"))
@@ -99,7 +151,12 @@ def main():
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--out", default="ppm", choices=["ppm", "png"])
     ap.add_argument("--no-volume", action="store_true")
+    ap.add_argument("--ladder", action="store_true", help="the effort ladder table instead")
+    ap.add_argument("--efforts", default="1,7,9")
+    ap.add_argument("--threads", default="1,2")
     a = ap.parse_args()
+    if a.ladder:
+        return ladder(a)
     images = [os.path.join(a.corpus, "images", "kodak", "kodim01.png"),
               os.path.join(a.corpus, "images", "large", "flower_foveon_rgb8.png")]
     rows = []

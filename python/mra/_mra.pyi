@@ -21,6 +21,8 @@ def encode(
     levels: int,
     channels_last: bool,
     tile: Optional[List[int]] = None,
+    format: int = 3,
+    effort: int = 7,
 ) -> bytes: ...
 def decode(
     data: _Bytes,

@@ -238,7 +238,7 @@ fn rate(kind: &str, value: f64, data_range: Option<f64>) -> PyResult<Rate> {
 
 /// Encode an array into the bytes of an `.mra` file.
 #[pyfunction]
-#[pyo3(signature = (a, rate_kind, value, data_range, scheme, boundary, levels, channels_last, tile=None, format=3))]
+#[pyo3(signature = (a, rate_kind, value, data_range, scheme, boundary, levels, channels_last, tile=None, format=3, effort=7))]
 #[allow(clippy::too_many_arguments)]
 fn encode<'py>(
     py: Python<'py>,
@@ -252,6 +252,7 @@ fn encode<'py>(
     channels_last: bool,
     tile: Option<Vec<usize>>,
     format: usize,
+    effort: i64,
 ) -> PyResult<Bound<'py, PyBytes>> {
     let opts = EncodeOptions {
         scheme: parse::<Scheme>(scheme)?,
@@ -259,6 +260,8 @@ fn encode<'py>(
         levels,
         rate: rate(rate_kind, value, data_range)?,
         format: codec::Format::of_major(format).map_err(py_err)?,
+        // out of u8's range: 255, which the library refuses as it refuses 0 or 10
+        effort: effort.clamp(0, 255) as u8,
     };
     let bytes = with_input(a, |input, shape| {
         run(py, "encode", || {

@@ -68,7 +68,10 @@ fn decode_band(
         .map(|&i| &data[set.streams[i].clone()])
         .collect();
     let mut v = vec![0i64; dims.iter().product()];
-    entropy::codeblocks::decode_blocks(&mut v, &grid, &which, &streams, kind, parent, coding)?;
+    let coder = super::plan::coder_of(h);
+    entropy::codeblocks::decode_blocks(
+        &mut v, &grid, &which, &streams, kind, parent, coding, coder,
+    )?;
     Ok(v)
 }
 

@@ -65,7 +65,7 @@ pub(super) fn encode_slabs<S: SlabSource + ?Sized>(
     let p = super::lossy::prepare_slabs(src, opts, Mode::Lossy)?;
     let src = std::cell::RefCell::new(src);
     let lossless = || encode_lossless_src(&mut **src.borrow_mut(), opts);
-    rate::encode_prepared(p, opts.rate, None, &lossless).map(Some)
+    rate::encode_prepared(p, opts.rate, opts.ladder(), None, &lossless).map(Some)
 }
 
 fn lossless_int(x: f64, t: SampleType) -> i64 {
@@ -281,12 +281,19 @@ fn code_plane_band(plan: &Plan, plane: &[i32], j: usize) -> Vec<u8> {
         dims: &plan.dims[p],
     });
     if let Some(g) = plan.grid(j) {
-        let blocks = codeblocks::encode_blocks_by(&g, BandKind::Detail, parent, plan.coding, |b| {
-            layout::gather(plane, shape, &plan.in_plane(j, b))
-                .into_iter()
-                .map(i64::from)
-                .collect()
-        });
+        let blocks = codeblocks::encode_blocks_by(
+            &g,
+            BandKind::Detail,
+            parent,
+            plan.coding,
+            plan.coder,
+            |b| {
+                layout::gather(plane, shape, &plan.in_plane(j, b))
+                    .into_iter()
+                    .map(i64::from)
+                    .collect()
+            },
+        );
         return blocks_payload(&blocks);
     }
     let offs = plan.row_offsets(j);
@@ -425,6 +432,7 @@ mod tests {
                 levels: 5,
                 rate: Rate::Lossless,
                 format: Default::default(),
+                effort: crate::codec::DEFAULT_EFFORT,
             };
             let wide = encode_lossless_wide(&r.view(), &opts).unwrap();
             let narrow = encode_lossless_narrow(&mut MemorySlabs::new(&r), &opts)
@@ -453,6 +461,7 @@ mod tests {
                 levels: 4,
                 rate: Rate::Lossless,
                 format: Default::default(),
+                effort: crate::codec::DEFAULT_EFFORT,
             };
             let file = crate::codec::encode(&r, &opts).unwrap();
             for k in 0..3 {

@@ -36,6 +36,9 @@ pub struct Info {
     pub tile: Vec<usize>,
     /// Number of tiles (1 for a file of one tile).
     pub tiles: usize,
+    /// The block coder of the code-blocks (`context`, `ht`; formats/MRA.md §15.1),
+    /// `None` in a file without code-blocks.
+    pub coder: Option<String>,
     pub chunks: Vec<ChunkInfo>,
 }
 
@@ -122,6 +125,10 @@ pub fn info(bytes: &[u8]) -> Result<Info> {
         levels_bytes,
         tile: h.tile.clone(),
         tiles,
+        coder: h
+            .version
+            .has_blocks()
+            .then(|| super::plan::coder_of(h).name().to_string()),
         chunks,
     })
 }

@@ -183,13 +183,20 @@ impl Plan {
                 if level > 0 && grid.is_some() =>
             {
                 let g = grid.expect("a block grid");
-                let (streams, q) =
-                    codeblocks::encode_blocks_rdo_by(&g, parent, lambda, self.coding, keep, |b| {
+                let (streams, q) = codeblocks::encode_blocks_rdo_by(
+                    &g,
+                    parent,
+                    lambda,
+                    self.coding,
+                    self.coder,
+                    keep,
+                    |b| {
                         layout::gather(plane, &self.pyr.shape, &self.in_plane(j, b))
                             .into_iter()
                             .map(|x| (x as f64 / step) as f32)
                             .collect()
-                    });
+                    },
+                );
                 stream = blocks_payload(&streams);
                 q.unwrap_or_default()
             }
@@ -240,7 +247,14 @@ impl Plan {
         parent: Option<Parent>,
     ) -> Vec<u8> {
         match self.grid(j) {
-            Some(g) => blocks_payload(&codeblocks::encode_blocks(q, &g, kind, parent, self.coding)),
+            Some(g) => blocks_payload(&codeblocks::encode_blocks(
+                q,
+                &g,
+                kind,
+                parent,
+                self.coding,
+                self.coder,
+            )),
             None => band::encode_stream(q, &self.dims[j], kind, parent, self.coding),
         }
     }

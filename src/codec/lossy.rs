@@ -6,6 +6,7 @@ use super::levels::{BandInput, Choice, CodedBand};
 use super::options::{EncodeOptions, Format};
 use super::plan::{band_rho, dequantize_into, lossy_values, Plan};
 use super::{layout, meta};
+use crate::entropy::codeblocks::Coder;
 use crate::format::header::Colour;
 use crate::format::tag::{HEAD, MEND, META};
 use crate::format::{self, put_chunk, Header, Mode};
@@ -89,7 +90,8 @@ pub(super) fn header_with(
         // 2.4: the header says the mETA lists voids, so a file without it is refused
         header.voids = true;
         let blocks = header.version.has_blocks();
-        header.version = format::Version::for_file(mode == Mode::Lossless, true, blocks);
+        header.version = format::Version::for_file(mode == Mode::Lossless, true, blocks)
+            .with_coder(header.coder);
     }
     Ok(header)
 }
@@ -127,9 +129,18 @@ impl Frame<'_> {
         if opts.levels > format::header::MAX_LEVELS {
             return Err(Error::parameter("levels", opts.levels, "0 to 32"));
         }
+        if !super::options::EFFORTS.contains(&opts.effort) {
+            return Err(Error::parameter("effort", opts.effort, "1 to 9"));
+        }
         let blocks = opts.format == Format::Blocks;
+        let coder = if blocks {
+            coder_for(opts.ladder().coder, self.sample_type, mode)
+        } else {
+            Coder::Context
+        };
         Ok(Header {
-            version: format::Version::for_file(mode == Mode::Lossless, false, blocks),
+            version: format::Version::for_file(mode == Mode::Lossless, false, blocks)
+                .with_coder(coder.id()),
             kind: self.kind,
             sample_type: self.sample_type,
             dims: dims.to_vec(),
@@ -151,7 +162,23 @@ impl Frame<'_> {
             } else {
                 Vec::new()
             },
+            coder: coder.id(),
         })
+    }
+}
+
+/// The block coder a file of samples `t` in mode `mode` gets when its effort asks for
+/// `asked`: a narrow coder ([`Coder::is_narrow`], `i32` indices) only for integer
+/// samples of 16 bits or fewer in modes lossy and lossless, whose indices fit (a
+/// lossless band of 16-bit samples grows by a few bits; a lossy step is at least
+/// 10^−7 of the range); the context coder else.
+pub(super) fn coder_for(asked: Coder, t: crate::io::SampleType, mode: Mode) -> Coder {
+    use crate::io::SampleType as T;
+    let small = matches!(t, T::U8 | T::I8 | T::U16 | T::I16);
+    if !asked.is_narrow() || (small && matches!(mode, Mode::Lossy | Mode::Lossless)) {
+        asked
+    } else {
+        Coder::Context
     }
 }
 
@@ -401,6 +428,7 @@ mod tests {
                     levels: 4,
                     rate: Rate::Quality(50.0),
                     format: Default::default(),
+                    effort: crate::codec::DEFAULT_EFFORT,
                 };
                 let p = prepare(&r.view(), &opts, Mode::Lossy).unwrap();
                 let range = p.header.max - p.header.min;

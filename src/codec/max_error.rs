@@ -347,6 +347,7 @@ mod tests {
                 levels: 6,
                 rate: Rate::MaxError(e),
                 format: Default::default(),
+                effort: crate::codec::DEFAULT_EFFORT,
             };
             let s = residual_step(e, SampleType::I16);
             let mut p = prepare(&r.view(), &opts, Mode::MaxError).unwrap();

@@ -42,7 +42,9 @@ pub use crate::format::body::ChunkInfo;
 pub use decode::coarse_offset;
 pub use frames::frames;
 pub use info::{depth_of, info, kind_name, Info};
-pub use options::{DecodeOptions, Decoded, EncodeOptions, Format, Rate};
+pub use options::{
+    DecodeOptions, Decoded, EncodeOptions, Format, Ladder, Rate, DEFAULT_EFFORT, EFFORTS,
+};
 pub use rate::keep_psnr;
 pub use read::{
     decode, decode_file, decode_file_slabs, decode_seek, decode_stream, header_of, header_of_file,

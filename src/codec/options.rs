@@ -1,6 +1,7 @@
 //! What the encoder and decoder are asked to do: the rate mode and the options of
 //! each side, and what a decode returns.
 
+use crate::entropy::codeblocks::Coder;
 use crate::format::Header;
 use crate::io::Raster;
 use crate::scheme::{Boundary, Scheme};
@@ -54,6 +55,44 @@ impl Format {
     }
 }
 
+/// The effort of [`EncodeOptions::default`] and of `mra encode` without `--effort`:
+/// the one constant to move when a faster coder meets issue 48's ratio target (Kodak
+/// BD-PSNR at most 0.15 dB below the context coder's). Today it keeps the context coder.
+pub const DEFAULT_EFFORT: u8 = 7;
+
+/// The efforts the encoder takes: 1 (fastest) to 9 (smallest file).
+pub const EFFORTS: std::ops::RangeInclusive<u8> = 1..=9;
+
+/// What an effort level makes the encoder do (docs/codec.md "The effort ladder").
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Ladder {
+    /// The block coder of a code-block file (format 3.1 when not the context coder);
+    /// a narrow coder ([`Coder::is_narrow`]) only for samples of 16 bits or fewer in
+    /// modes lossy and lossless, whose indices fit `i32`.
+    pub coder: Coder,
+    /// Whether `--quality`, `--psnr` and `--bpp` choose the indices by
+    /// rate–distortion optimisation (else deadzone quantization, reconstruction offset
+    /// δ).
+    pub rdo: bool,
+    /// `--bpp` accepts a file within this share under the budget (`0.99`: 1% under).
+    pub bpp_floor: f64,
+}
+
+impl Ladder {
+    /// Effort `e` (clamped to [`EFFORTS`]): 1–3 the HT coder without RDO, `--bpp`
+    /// within 3% under the budget; 4–6 the HT coder on RDO indices (chosen by the
+    /// context coder's rates: its encode time, the HT coder's decode); 7–9 the context
+    /// coder on RDO indices (the files of before the ladder).
+    pub fn of(e: u8) -> Ladder {
+        let e = e.clamp(*EFFORTS.start(), *EFFORTS.end());
+        Ladder {
+            coder: if e <= 6 { Coder::Ht } else { Coder::Context },
+            rdo: e >= 4,
+            bpp_floor: if e <= 3 { 0.97 } else { 0.99 },
+        }
+    }
+}
+
 /// Encoder settings.
 #[derive(Clone, Debug, PartialEq)]
 pub struct EncodeOptions {
@@ -63,6 +102,8 @@ pub struct EncodeOptions {
     pub rate: Rate,
     /// The layout of a one-piece file.
     pub format: Format,
+    /// 1..=9: speed against size ([`Ladder::of`]); [`DEFAULT_EFFORT`] by default.
+    pub effort: u8,
 }
 
 impl EncodeOptions {
@@ -74,6 +115,10 @@ impl EncodeOptions {
 
     /// These options with one-piece files written as format 2 (what every tile of a
     /// tiled file is).
+    pub fn ladder(&self) -> Ladder {
+        Ladder::of(self.effort)
+    }
+
     pub(crate) fn in_bands(&self) -> EncodeOptions {
         EncodeOptions {
             format: Format::Bands,
@@ -90,6 +135,7 @@ impl Default for EncodeOptions {
             levels: 6,
             rate: Rate::Quality(50.0),
             format: Format::Blocks,
+            effort: DEFAULT_EFFORT,
         }
     }
 }

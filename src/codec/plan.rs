@@ -5,6 +5,7 @@
 use super::colour::ycocg_inverse;
 use super::{layout, lossless};
 use crate::entropy::band::Coding;
+use crate::entropy::codeblocks::Coder;
 use crate::format::header::Colour;
 use crate::format::{Header, Mode};
 use crate::io::{SampleType, Samples};
@@ -12,6 +13,16 @@ use crate::quantize::{self, RHO};
 use crate::tensor::{self, Array, Order, Pyramid, PyramidSpec, Subband};
 use crate::Result;
 use rayon::prelude::*;
+
+/// The block coder of a file of header `h`: its coder byte in a code-block file (3.1;
+/// 3.0 is coder 0), the context coder else. `Header::parse` has checked the byte.
+pub(super) fn coder_of(h: &Header) -> Coder {
+    if h.version.has_blocks() {
+        Coder::of(h.coder).unwrap_or_default()
+    } else {
+        Coder::Context
+    }
+}
 
 /// The coefficient coding of a file of header `h`: from format 2.3 on each band
 /// chooses its magnitude classes (formats/MRA.md §9).
@@ -34,6 +45,8 @@ pub(super) struct Plan {
     /// The code-block extents of a format 3 file (every band cut into them, §15);
     /// `None` before.
     pub(super) blocks: Option<Vec<usize>>,
+    /// The coder of every code-block (format 3.1; [`Coder::Context`] before).
+    pub(super) coder: Coder,
 }
 
 impl Plan {
@@ -79,6 +92,7 @@ impl Plan {
             dims,
             coding: coding_of(h),
             blocks: h.version.has_blocks().then(|| h.block_extents()),
+            coder: coder_of(h),
         })
     }
 

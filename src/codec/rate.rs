@@ -5,7 +5,7 @@
 use super::colour::{map3, ycocg_inverse};
 use super::layout;
 use super::lossy::{prepare, Prepared};
-use super::options::{EncodeOptions, Rate};
+use super::options::{EncodeOptions, Ladder, Rate};
 use super::plan::band_rho;
 use crate::entropy::range::Encoder;
 use crate::entropy::{band, BandKind};
@@ -31,7 +31,8 @@ pub(super) fn encode_lossy(
     rate: Rate,
     lossless: &dyn Fn() -> Result<Vec<u8>>,
 ) -> Result<Vec<u8>> {
-    encode_prepared(prepare(r, opts, Mode::Lossy)?, rate, Some(r), lossless)
+    let p = prepare(r, opts, Mode::Lossy)?;
+    encode_prepared(p, rate, opts.ladder(), Some(r), lossless)
 }
 
 /// Check the rate mode's number: a quality from 1 to 100, a keep percentage from 0 to
@@ -89,6 +90,7 @@ pub(crate) fn keep_step(w: &mut [f32], k: f64, range: f64) -> f64 {
 pub(super) fn encode_prepared(
     mut p: Prepared,
     rate: Rate,
+    ladder: Ladder,
     r: Option<&RasterView<'_>>,
     lossless: &dyn Fn() -> Result<Vec<u8>>,
 ) -> Result<Vec<u8>> {
@@ -96,7 +98,8 @@ pub(super) fn encode_prepared(
     if matches!(
         rate,
         Rate::Quality(_) | Rate::Psnr(_) | Rate::PsnrRange(..) | Rate::Bpp(_)
-    ) {
+    ) && ladder.rdo
+    {
         p.optimise();
     }
     let range = (p.header.max - p.header.min).max(1e-30);
@@ -115,7 +118,7 @@ pub(super) fn encode_prepared(
             };
             return encode_psnr(&p, rate, db, r, lossless);
         }
-        Rate::Bpp(b) => return encode_bpp(&p, b, lossless),
+        Rate::Bpp(b) => return encode_bpp(&p, b, ladder.bpp_floor, lossless),
         _ => unreachable!(),
     };
     let lossy = p.code(step);
@@ -164,8 +167,14 @@ fn encode_psnr(
 }
 
 /// `--bpp b` of the prepared transform `p`: the lossless file when it fits the budget
-/// near the lossless cost, else the calibrated or searched step.
-fn encode_bpp(p: &Prepared, b: f64, lossless: &dyn Fn() -> Result<Vec<u8>>) -> Result<Vec<u8>> {
+/// near the lossless cost, else the calibrated or searched step, a file of at least
+/// `floor · b` bits per position.
+fn encode_bpp(
+    p: &Prepared,
+    b: f64,
+    floor: f64,
+    lossless: &dyn Fn() -> Result<Vec<u8>>,
+) -> Result<Vec<u8>> {
     let range = (p.header.max - p.header.min).max(1e-30);
     let pos = p.header.dims.iter().product::<usize>() as f64;
     // v = ln b − ln bpp: met when the file is within the budget, within
@@ -180,10 +189,10 @@ fn encode_bpp(p: &Prepared, b: f64, lossless: &dyn Fn() -> Result<Vec<u8>>) -> R
             return Ok(bytes);
         }
     }
-    if let Some(bytes) = calibrated_bpp(p, range, b * pos, &model) {
+    if let Some(bytes) = calibrated_bpp(p, range, b * pos, floor, &model) {
         return Ok(bytes);
     }
-    search(p, range, true, -(0.99f64.ln()), Some(&model), |step| {
+    search(p, range, true, -(floor.ln()), Some(&model), |step| {
         let bytes = p.code(step);
         Ok((b.ln() - (bytes.len() as f64 * 8.0 / pos).ln(), Some(bytes)))
     })
@@ -358,13 +367,16 @@ fn calibrated_bpp(
     p: &Prepared,
     range: f64,
     budget: f64,
+    floor: f64,
     model: &dyn Fn(f64) -> f64,
 ) -> Option<Vec<u8>> {
     const ROUNDS: usize = 6;
     let (x_min, x_max) = ((range * 1e-7).ln(), (range * 4.0).ln());
-    let aim = (0.995 * budget).ln();
-    // the model's ln b − ln bpp rises with x; met at 0.5% under the budget
-    let x0 = model_root(model, 0.0, -(0.995f64.ln()), 1.0, (range / 32.0).ln()).clamp(x_min, x_max);
+    // the middle of the window [floor, 1] of the budget
+    let mid = 0.5 * (1.0 + floor);
+    let aim = (mid * budget).ln();
+    // the model's ln b − ln bpp rises with x; met at the window's middle
+    let x0 = model_root(model, 0.0, -(mid.ln()), 1.0, (range / 32.0).ln()).clamp(x_min, x_max);
     // where r·Ŝ meets the aim, from `x` where ln(r·Ŝ) − aim = `g`
     let sampled_root = |x: f64, g: f64, cal: f64| -> f64 {
         let (mut xa, mut ga) = (x, g);
@@ -392,7 +404,9 @@ fn calibrated_bpp(
         }
         xa
     };
-    let cal0 = SAMPLED_RATIO.ln();
+    // a narrow coder's static codes spend about 9% more than the context coder
+    let narrow = if p.plan.coder.is_narrow() { 1.09 } else { 1.0 };
+    let cal0 = (SAMPLED_RATIO * narrow).ln();
     let s0 = p.sampled_bits(x0.exp());
     if s0.is_nan() || s0 <= 0.0 {
         return None;
@@ -404,7 +418,7 @@ fn calibrated_bpp(
     for _ in 0..ROUNDS {
         let bytes = p.code(x.exp());
         let real = bytes.len() as f64 * 8.0;
-        if real <= budget && real >= 0.99 * budget {
+        if real <= budget && real >= floor * budget {
             return Some(bytes);
         }
         if real.is_nan() || real <= 0.0 {
@@ -656,6 +670,7 @@ pub fn keep_psnr(
         levels,
         rate: Rate::Keep(keep),
         format: Default::default(),
+        effort: crate::codec::DEFAULT_EFFORT,
     };
     let mut p = prepare(&r.view(), &opts, Mode::Lossy)?;
     if !weighted {
@@ -762,7 +777,7 @@ mod tests {
         let sizes = p.rate_model();
         for b in [0.5f64, 1.0, 2.0] {
             let model = |x: f64| b.ln() - (sizes.bits(x.exp()) / pos).ln();
-            let bytes = calibrated_bpp(&p, range, b * pos, &model)
+            let bytes = calibrated_bpp(&p, range, b * pos, 0.99, &model)
                 .unwrap_or_else(|| panic!("{b} bpp: no file within 1% under the budget"));
             let got = bytes.len() as f64 * 8.0 / pos;
             assert!(got <= b && got >= 0.99 * b, "{b} bpp: {got}");

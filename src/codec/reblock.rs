@@ -71,7 +71,14 @@ pub fn to_blocks(bytes: &[u8]) -> Result<Vec<u8>> {
                 })
             });
             let band = q[c][j].as_deref().unwrap_or(&[]);
-            let streams = codeblocks::encode_blocks(band, &grid, kind, parent, Coding::Chosen);
+            let streams = codeblocks::encode_blocks(
+                band,
+                &grid,
+                kind,
+                parent,
+                Coding::Chosen,
+                codeblocks::Coder::Context,
+            );
             blocks_payload(&streams)
         })
         .collect();

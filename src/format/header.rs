@@ -61,6 +61,19 @@ pub struct Header {
     /// Format 3.0: the code-block extents, `2^x[k]` on axis `k` of every band (the
     /// `HEAD`'s last `N` bytes, §15); empty before 3.0.
     pub blocks: Vec<u8>,
+    /// Format 3.1: the id of the block coder of every code-block (the `HEAD`'s last
+    /// byte, §15.1, one of [`CODERS`]); 0 (today's context coder) before 3.1.
+    pub coder: u8,
+}
+
+/// The block coders of format 3.1 by id (formats/MRA.md §15.1): 0 the adaptive context
+/// coder of §9 (every 3.0 file's), 1 the HT-style coder of §15.2. A reader rejects any
+/// other id. `entropy::codeblocks::Coder` holds the coders under these ids.
+pub const CODERS: [&str; 2] = ["context", "ht"];
+
+/// The name of block coder `id` ([`CODERS`]); `None` for an id no reader knows.
+pub fn coder_name(id: u8) -> Option<&'static str> {
+    CODERS.get(id as usize).copied()
 }
 
 pub const MAX_AXES: usize = 4;
@@ -253,6 +266,9 @@ impl Header {
         if self.version.has_blocks() {
             b.extend_from_slice(&self.blocks);
         }
+        if self.version.has_coder_choice() {
+            b.push(self.coder);
+        }
         b
     }
 
@@ -337,6 +353,18 @@ impl Header {
         } else {
             Vec::new()
         };
+        let coder = if version.has_coder_choice() {
+            let id = c.u8()?;
+            if coder_name(id).is_none() {
+                return Err(bad(
+                    format!("block coder {id}"),
+                    "0 context, 1 ht (formats/MRA.md §15.1)",
+                ));
+            }
+            id
+        } else {
+            0
+        };
         Ok(Header {
             version,
             kind,
@@ -356,6 +384,7 @@ impl Header {
             tile,
             voids,
             blocks,
+            coder,
         })
     }
 }

@@ -37,12 +37,15 @@ impl Version {
     /// `LEVL` band entry an index of block lengths and the blocks (§15); the chosen
     /// coding of 2.3 and the flags byte of 2.4. Tiled files stay 2.x.
     pub const BLOCKS: Version = Version::new(3, 0);
+    /// 3.1: 3.0 with a coder byte at the end of `HEAD`: which block coder codes every
+    /// code-block of the file (§15.1; 3.0 is coder 0).
+    pub const CODER_CHOICE: Version = Version::new(3, 1);
     /// The latest version this reader implements: it refuses later minors of its major.
-    pub const LATEST: Version = Version::BLOCKS;
+    pub const LATEST: Version = Version::CODER_CHOICE;
     /// The latest minor of format 2 this reader implements.
     pub const LATEST_2: Version = Version::HEAD_FLAGS;
     /// Every version this reader decodes, oldest first.
-    pub const ALL: [Version; 7] = [
+    pub const ALL: [Version; 8] = [
         Version::V1,
         Version::V2_0,
         Version::TILED,
@@ -50,6 +53,7 @@ impl Version {
         Version::CHOSEN_CODING,
         Version::HEAD_FLAGS,
         Version::BLOCKS,
+        Version::CODER_CHOICE,
     ];
     /// The oldest major version readers still decode.
     pub const OLDEST_MAJOR: u8 = 1;
@@ -122,9 +126,26 @@ impl Version {
         self.at_least(Version::CHOSEN_CODING)
     }
 
+    /// Whether `HEAD` ends, after the code-block exponents, with the coder byte that
+    /// names the block coder of every code-block (3.1 and later 3.x); else coder 0.
+    pub fn has_coder_choice(self) -> bool {
+        self.major == 3 && self.minor >= 1
+    }
+
     /// Whether `HEAD` ends with the flags byte (2.4 and later, 3.0).
     pub fn has_head_flags(self) -> bool {
         self.at_least(Version::HEAD_FLAGS)
+    }
+
+    /// The version of a code-block file whose blocks are coded by coder `coder`: 3.0
+    /// for coder 0 (so that default files stay readable by 3.0 readers), 3.1 else.
+    /// Other versions are returned as they are.
+    pub fn with_coder(self, coder: u8) -> Version {
+        if self.has_blocks() && coder != 0 {
+            self.max(Version::CODER_CHOICE)
+        } else {
+            self
+        }
     }
 
     /// The version the writer gives a one-piece file: 3.0 when cut into code-blocks
@@ -186,13 +207,17 @@ mod tests {
             assert_eq!(v.has_chosen_coding(), two(3) || three, "{v}");
             assert_eq!(v.has_head_flags(), two(4) || three, "{v}");
             assert_eq!(v.has_blocks(), three, "{v}");
+            assert_eq!(v.has_coder_choice(), three && v.minor >= 1, "{v}");
         }
         // format 1 has none of format 2's minors, whatever its minor byte
         assert!(!Version::new(1, 9).has_tiles() && !Version::new(1, 9).has_head_flags());
         assert!(Version::new(2, Version::LATEST_2.minor + 1)
             .check()
             .is_err());
-        assert!(Version::new(3, 1).check().is_err() && Version::new(4, 0).check().is_err());
+        assert!(Version::new(3, 2).check().is_err() && Version::new(4, 0).check().is_err());
+        assert_eq!(Version::BLOCKS.with_coder(0), Version::BLOCKS);
+        assert_eq!(Version::BLOCKS.with_coder(1), Version::CODER_CHOICE);
+        assert_eq!(Version::HEAD_FLAGS.with_coder(1), Version::HEAD_FLAGS);
         assert!(Version::new(0, 0).check().is_err());
     }
 }

@@ -156,6 +156,7 @@ fn regions_of_code_blocks_are_windows_of_the_whole_decode() {
                     scheme,
                     boundary,
                     format: codec::Format::Bands,
+                    effort: mra::codec::DEFAULT_EFFORT,
                 };
                 let two = codec::encode_tiled(&r, &o, &r.dims).unwrap();
                 let three = codec::to_blocks(&two).unwrap();

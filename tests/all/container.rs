@@ -36,6 +36,7 @@ fn opts(rate: Rate) -> EncodeOptions {
         levels: 4,
         rate,
         format: Default::default(),
+        effort: mra::codec::DEFAULT_EFFORT,
     }
 }
 

@@ -4,9 +4,11 @@
 //! container's faults come out as typed errors by cause.
 
 use mra::codec::{self, DecodeOptions, EncodeOptions, Rate};
+use mra::entropy::codeblocks::Coder;
 use mra::format::header::{
-    boundary_code, boundary_of, kind_code, kind_name, kind_of, mode_code, mode_name, mode_of,
-    sample_type_code, sample_type_of, scheme_code, scheme_of, Colour, KINDS, TYPES,
+    boundary_code, boundary_of, coder_name, kind_code, kind_name, kind_of, mode_code, mode_name,
+    mode_of, sample_type_code, sample_type_of, scheme_code, scheme_of, Colour, CODERS, KINDS,
+    TYPES,
 };
 use mra::format::{Mode, Tag, Version};
 use mra::scheme::{Boundary, Scheme};
@@ -144,6 +146,17 @@ fn spec_tables_match_the_code() {
     check("boundaries", &codes(&text, "boundaries"), &bounds, |c| {
         boundary_of(c).is_some()
     });
+
+    // the block coders of 3.1: the entropy's enum, the header's names, the spec's table
+    let coders: Vec<(u8, &str)> = Coder::ALL.iter().map(|c| (c.id(), c.name())).collect();
+    check("coders", &codes(&text, "coders"), &coders, |c| {
+        coder_name(c).is_some() && Coder::of(c).is_some()
+    });
+    for (c, n) in &coders {
+        assert_eq!(coder_name(*c), Some(*n));
+        assert_eq!(Coder::of(*c).map(Coder::id), Some(*c));
+    }
+    assert_eq!(CODERS.len(), Coder::ALL.len());
 
     // chunk types: the same set, the same critical bit
     let rows = table(&text, "chunk-types");

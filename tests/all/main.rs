@@ -16,6 +16,7 @@ mod codec_bpp;
 mod codec_rate;
 mod container;
 mod curve;
+mod effort;
 mod filters;
 mod format_spec;
 mod ht_coder;

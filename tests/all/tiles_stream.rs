@@ -42,6 +42,7 @@ fn opts(rate: Rate) -> EncodeOptions {
         levels: 4,
         rate,
         format: Default::default(),
+        effort: mra::codec::DEFAULT_EFFORT,
     }
 }
 
