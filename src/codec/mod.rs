@@ -23,6 +23,7 @@ pub mod demo;
 mod encode;
 mod frames;
 mod info;
+mod int_window;
 pub mod layout;
 mod levels;
 pub mod lossless;

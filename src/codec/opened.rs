@@ -72,7 +72,10 @@ impl Sparse {
                 };
                 let set = crate::format::bands::parse_blocks(&bc.data, &plan.dims[j], &block)
                     .map_err(|e| {
-                        crate::Error::format(format!("band {j} of channel {c}: {e}"), "a valid band")
+                        crate::Error::format(
+                            format!("band {j} of channel {c}: {e}"),
+                            "a valid band",
+                        )
                     })?;
                 let head = set.streams.first().map_or(bc.data.len(), |r| r.start);
                 row.push(Some(Entry {
@@ -115,7 +118,7 @@ impl Sparse {
             chunks: self.chunks.clone(),
             window: Some(region.to_vec()),
         };
-        let wins = super::decode::band_windows(&p);
+        let wins = super::decode::band_windows(&p, level);
         let block = self.header.block_extents();
         let mut bands = Vec::with_capacity(self.entries.len());
         for row in &self.entries {

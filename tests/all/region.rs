@@ -189,8 +189,222 @@ fn an_opened_file_serves_two_threads() {
     });
     let cut = dir.join("cut.mra");
     std::fs::write(&cut, &bytes[..bytes.len() * 2 / 3]).unwrap();
-    let e = Opened::open(&cut).err().expect("a truncated file fails at open");
+    let e = Opened::open(&cut)
+        .err()
+        .expect("a truncated file fails at open");
     assert!(!e.to_string().contains('\n'), "{e}");
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// The boxes a window's synthesis reads in each band ([`mra::tensor::WindowPlan::reads`],
+/// the coarse block's [`mra::tensor::WindowPlan::coarse_box`]) are its exact support:
+/// every coefficient outside them zeroed, the whole synthesis gives the same window
+/// (within rounding); and the coefficient at each end of each box, perturbed, changes
+/// the window. Every scheme and boundary, 1-D to 3-D, odd extents, levels 1 to 3,
+/// windows inside, at the corners and one sample wide.
+#[test]
+fn window_reads_are_the_exact_support() {
+    use mra::scheme::{Boundary, Scheme};
+    use mra::tensor::{analyze, synthesize, Array, Order, PyramidSpec, WindowPlan};
+    let mut seed = 11u64;
+    let mut rnd = move || {
+        seed = seed
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((seed >> 33) % 1000) as f64 / 7.0 - 60.0
+    };
+    for shape in [vec![53usize], vec![29, 23], vec![13, 15, 11]] {
+        let n: usize = shape.iter().product();
+        let st: Vec<usize> = (0..shape.len())
+            .map(|a| shape[a + 1..].iter().product())
+            .collect();
+        let positions: Vec<Vec<usize>> = (0..n)
+            .map(|i| st.iter().zip(&shape).map(|(s, e)| i / s % e).collect())
+            .collect();
+        for scheme in Scheme::ALL {
+            for boundary in Boundary::ALL {
+                for levels in 1..=3 {
+                    let spec = PyramidSpec {
+                        scheme,
+                        boundary,
+                        levels,
+                        order: Order::NonStandard,
+                        axes: (0..shape.len()).collect(),
+                    };
+                    let data: Vec<f64> = (0..n).map(|_| rnd()).collect();
+                    let mut a = Array::from_shape_vec(&shape, data).unwrap();
+                    let Ok(pyr) = analyze(&mut a, &spec) else {
+                        continue;
+                    };
+                    let coeffs = a.data().to_vec();
+                    let whole = |c: &[f64]| {
+                        let mut s = Array::from_shape_vec(&shape, c.to_vec()).unwrap();
+                        synthesize(&mut s, &pyr).unwrap();
+                        s.data().to_vec()
+                    };
+                    let base = whole(&coeffs);
+                    let windows: Vec<Vec<Range<usize>>> = vec![
+                        shape.iter().map(|&e| e / 3..e / 2 + 1).collect(),
+                        shape.iter().map(|_| 0..1).collect(),
+                        shape.iter().map(|&e| e - 2..e).collect(),
+                        shape.iter().map(|&e| e / 2..e / 2 + 1).collect(),
+                    ];
+                    for w in windows {
+                        let plan = WindowPlan::new(&pyr, &w).unwrap();
+                        // the support, as plane boxes
+                        let boxes: Vec<Vec<Range<usize>>> = pyr
+                            .subbands()
+                            .iter()
+                            .map(|b| {
+                                let r = if b.level == 0 {
+                                    plan.coarse_box.clone()
+                                } else {
+                                    plan.reads(b.level - 1, &b.ranges)
+                                };
+                                r.iter()
+                                    .zip(&b.ranges)
+                                    .map(|(x, br)| x.start + br.start..x.end + br.start)
+                                    .collect()
+                            })
+                            .collect();
+                        let inside = |p: &[usize]| {
+                            boxes
+                                .iter()
+                                .any(|bx| bx.iter().zip(p).all(|(r, x)| r.contains(x)))
+                        };
+                        let pos = |i: usize| -> &[usize] { &positions[i] };
+                        let in_window: Vec<bool> = (0..n)
+                            .map(|i| pos(i).iter().zip(&w).all(|(x, r)| r.contains(x)))
+                            .collect();
+                        let differs = |c: &[f64], tol: f64| {
+                            let got = whole(c);
+                            (0..n).any(|i| in_window[i] && (got[i] - base[i]).abs() > tol)
+                        };
+                        let zeroed: Vec<f64> = (0..n)
+                            .map(|i| if inside(pos(i)) { coeffs[i] } else { 0.0 })
+                            .collect();
+                        let what = format!("{shape:?} {scheme:?} {boundary:?} {levels} {w:?}");
+                        assert!(!differs(&zeroed, 1e-6), "not sufficient: {what}");
+                        for bx in boxes.iter().filter(|b| b.iter().all(|r| !r.is_empty())) {
+                            for ax in 0..shape.len() {
+                                for end in [bx[ax].start, bx[ax].end - 1] {
+                                    let mut p: Vec<usize> = bx.iter().map(|r| r.start).collect();
+                                    p[ax] = end;
+                                    let i: usize = p.iter().zip(&st).map(|(x, s)| x * s).sum();
+                                    let mut c = coeffs.clone();
+                                    c[i] += 1000.0;
+                                    // some point of the box's face changes the window
+                                    let face_matters = differs(&c, 1e-6) || {
+                                        let mut c = coeffs.clone();
+                                        let mut any = false;
+                                        for j in 0..n {
+                                            let q = pos(j);
+                                            if q[ax] == end
+                                                && bx.iter().zip(q).all(|(r, x)| r.contains(x))
+                                            {
+                                                c[j] += 1000.0 * (1.0 + j as f64 * 0.37);
+                                                any = true;
+                                            }
+                                        }
+                                        any && differs(&c, 1e-6)
+                                    };
+                                    assert!(
+                                        face_matters,
+                                        "not tight on axis {ax} at {end}: {what} {bx:?}"
+                                    );
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// A region of a lossless 3.0 file is computed from the window's support alone (the
+/// integer lifting of the window), and of a `--max-error` file from the window's
+/// lossy synthesis with the residual layer added over it: the samples of the same box
+/// of the whole decode, for both lossless schemes, RGB (YCoCg-R) and gray, 8 and 16
+/// bits and floats, 2-D and 3-D, odd sizes over several blocks, levels 0 to 3, windows
+/// inside, at the corners, at the far edges and one sample wide.
+#[test]
+fn lossless_and_max_error_regions_are_windows_of_the_whole_decode() {
+    use mra::scheme::Scheme;
+    let cases: Vec<(Raster, usize, Rate)> = vec![
+        (field(&[301, 277], 3, SampleType::U8, 31, 255.0), 4, Rate::Lossless),
+        (field(&[263, 300], 1, SampleType::U16, 33, 60000.0), 5, Rate::Lossless),
+        (field(&[97, 89], 1, SampleType::F32, 35, 7.0), 3, Rate::Lossless),
+        (field(&[41, 70, 67], 1, SampleType::I16, 37, 3000.0), 3, Rate::Lossless),
+        (field(&[203, 177], 3, SampleType::U8, 39, 255.0), 4, Rate::MaxError(3.0)),
+        (field(&[37, 50, 61], 1, SampleType::U16, 41, 4000.0), 3, Rate::MaxError(20.0)),
+    ];
+    for (r, levels, rate) in cases {
+        let schemes = if rate == Rate::Lossless {
+            vec![Scheme::Linear, Scheme::Haar]
+        } else {
+            vec![Scheme::Cdf97]
+        };
+        for scheme in schemes {
+            let o = EncodeOptions {
+                rate,
+                levels,
+                scheme,
+                ..Default::default()
+            };
+            let bytes = codec::encode_tiled(&r, &o, &r.dims).unwrap();
+            assert!(mra::codec::header_of(&bytes).unwrap().version.has_blocks());
+            for level in 0..=levels.min(3) {
+                let whole = fresh(&bytes, level, None);
+                if level == 0 && rate == Rate::Lossless {
+                    assert_eq!(whole.samples, r.samples, "{:?} {scheme:?}", r.dims);
+                }
+                let mut wins = windows(&r.dims);
+                wins.push(r.dims.iter().map(|&d| d - 1..d).collect());
+                wins.push(r.dims.iter().map(|&d| 0..d).collect());
+                for win in wins {
+                    let part = fresh(&bytes, level, Some(win.clone()));
+                    let cut = crop(&whole, &bytes, level, &win);
+                    assert!(
+                        part.samples == cut,
+                        "{:?} {rate:?} {scheme:?} {win:?} level {level}",
+                        r.dims
+                    );
+                }
+            }
+        }
+    }
+}
+
+/// The samples of `whole` (a decode at `level`) over the level's box that the
+/// full-resolution `win` maps to (as `DecodeOptions::region` maps it).
+fn crop(whole: &Raster, bytes: &[u8], level: usize, win: &[Range<usize>]) -> Samples {
+    let h = mra::codec::header_of(bytes).unwrap();
+    let ext = codec::level_extents(&h, level).unwrap();
+    let bx: Vec<Range<usize>> = win
+        .iter()
+        .zip(&h.dims)
+        .zip(&ext)
+        .map(|((r, &d), &e)| r.start * e / d..(r.end * e).div_ceil(d))
+        .collect();
+    let c = whole.channels;
+    let st: Vec<usize> = (0..ext.len())
+        .map(|a| ext[a + 1..].iter().product())
+        .collect();
+    let mut idx = Vec::new();
+    let total: usize = bx.iter().map(|r| r.len()).product();
+    for t in 0..total {
+        let mut rem = t;
+        let mut at = 0;
+        for a in (0..bx.len()).rev() {
+            let len = bx[a].len();
+            at += (bx[a].start + rem % len) * st[a];
+            rem /= len;
+        }
+        for ch in 0..c {
+            idx.push(at * c + ch);
+        }
+    }
+    let v: Vec<f64> = idx.iter().map(|&i| whole.samples.get_f64(i)).collect();
+    Samples::from_f64(&v, whole.samples.sample_type())
+}
