@@ -14,7 +14,14 @@ encoder's default layout (tiled 2.x where the raster is over the one-piece limit
 the one-piece 3.0 encoder of huge rasters lands; rerun the script then). Run from the
 repository root after `cargo build --release`:
 
-    python3 benches/region_cost.py [--cases 8k,vol] [--huge] [--reps 3] [--keep DIR]
+    python3 benches/region_cost.py [--cases 8k,vol] [--huge] [--one-piece] [--reps 3] [--keep DIR]
+
+(`--one-piece` encodes the huge cases with `--tile whole --blocks` as well.)
+
+The huge inputs are made by `mra generate` in memory: its budget (MRA_MAX_BYTES,
+8 GiB by default) refuses the 16384² gradient (12.9 GB estimated); raise it on a machine
+with the memory, or put an input of that name in --keep's folder beforehand (e.g. the
+u16 image benches/tiles.py writes).
 
 Inputs and files go to DIR (default: a temporary folder under /dev/shm when it has the
 room, else TMPDIR), removed after unless --keep is given; an input or file already in
@@ -101,6 +108,8 @@ def main():
     ap.add_argument("--reps", type=int, default=3, help="best of N for the region decodes")
     ap.add_argument("--whole-reps", type=int, default=1, help="best of N for the whole decodes")
     ap.add_argument("--keep", help="folder for the inputs and files, kept after")
+    ap.add_argument("--one-piece", action="store_true",
+                    help="encode the huge cases as one-piece 3.0 too (--tile whole --blocks)")
     a = ap.parse_args()
     names = [c for c in a.cases.split(",") if c]
     if a.huge:
@@ -111,8 +120,10 @@ def main():
     try:
         for name in names:
             gen, ext, enc, regions = CASES[name]
+            if a.one_piece and not enc:
+                enc = ["--tile", "whole", "--blocks"]
             src = os.path.join(tmp, f"{name}.{ext}")
-            mra = os.path.join(tmp, f"{name}.mra")
+            mra = os.path.join(tmp, f"{name}{'-1p' if a.one_piece and name in ('16k', '1024') else ''}.mra")
             if not os.path.exists(src):
                 run(["generate", *gen, "-o", src])
             if not os.path.exists(mra):
