@@ -662,12 +662,13 @@ pub(super) fn reconstruct(p: &Parsed, k: usize) -> Result<Raster> {
     finish(p, region, samples, k)
 }
 
-/// A file without residual layer or voids, of non-standard pyramid, decoded at level
+/// A file without voids, of non-standard pyramid, decoded at level
 /// `k` over the box `out` of the level's raster alone: each channel's bands decoded
 /// over the code-blocks the window needs ([`band_windows`]) into a plane whose other
 /// pages are never written, then only the window's support synthesized level by level
 /// ([`crate::tensor::WindowPlan`]; a lossless file's integer lifting by
-/// [`IntWindow`], [`lossless_window`]). The samples are those of the same box of a
+/// [`IntWindow`], [`lossless_window`]; a `--max-error` file's residual layer added over
+/// the window, [`add_residuals_window`]). The samples are those of the same box of a
 /// whole decode. `None` where this does not apply (the caller then decodes whole).
 pub(super) fn reconstruct_window(
     p: &Parsed,
@@ -676,12 +677,12 @@ pub(super) fn reconstruct_window(
 ) -> Result<Option<Raster>> {
     let (h, plan) = (&p.header, &p.plan);
     let k = k.min(plan.pyr.depth());
-    if h.mode == Mode::MaxError || h.voids || p.window.is_none() {
+    if h.voids || p.window.is_none() {
         return Ok(None);
     }
     let dims: Vec<usize> = out.iter().map(|r| r.len()).collect();
     let npos: usize = dims.iter().product();
-    let samples = if h.mode == Mode::Lossless {
+    let mut samples = if h.mode == Mode::Lossless {
         let Some(iw) = IntWindow::new(&plan.sub(k), out) else {
             return Ok(None);
         };
@@ -708,6 +709,9 @@ pub(super) fn reconstruct_window(
             h.sample_type,
         )
     };
+    if k == 0 && h.mode == Mode::MaxError {
+        add_residuals_window(p, &mut samples, out)?;
+    }
     let region = plan.region(k);
     let mut r = Raster::new(dims.clone(), h.channels, samples, h.kind)?;
     let meta = if k > 0 {
@@ -857,6 +861,93 @@ fn add_residuals(p: &Parsed, samples: &mut Samples) -> Result<()> {
             for &(i, v) in &r.exceptions {
                 if (i as usize) < npos {
                     all.push((i as usize * c + ch, v));
+                }
+            }
+        }
+    }
+    if !all.is_empty() {
+        for ch in 0..c {
+            add_row(samples, c, ch, 0, &[], 0.0);
+        }
+        for (i, x) in all {
+            set_sample(samples, i, x);
+        }
+    }
+    Ok(())
+}
+
+/// [`add_residuals`] over the window `out` (a box of the full raster) alone: `samples`
+/// holds the base of the window's positions; each channel's residual rows are decoded
+/// whole (the row coder has no random access) and added where they cross the window,
+/// and the exceptions inside it written, each sample taken as the whole decode takes it.
+fn add_residuals_window(p: &Parsed, samples: &mut Samples, out: &[Range<usize>]) -> Result<()> {
+    let h = &p.header;
+    let c = h.channels;
+    let w = h.dims.last().copied().unwrap_or(1).max(1);
+    let nd = h.dims.len();
+    let wdims: Vec<usize> = out.iter().map(|r| r.len()).collect();
+    // the window position of the full raster's position `g`, if inside
+    let inside = |g: usize| -> Option<usize> {
+        let mut rem = g;
+        let mut at = 0;
+        let mut scale = 1;
+        for a in (0..nd).rev() {
+            let x = rem % h.dims[a];
+            rem /= h.dims[a];
+            if !out[a].contains(&x) {
+                return None;
+            }
+            at += (x - out[a].start) * scale;
+            scale *= wdims[a];
+        }
+        Some(at)
+    };
+    let (x0, x1) = (out[nd - 1].start, out[nd - 1].end);
+    for ch in 0..c {
+        let failed =
+            |e: Error| Error::format(format!("RESI of channel {ch}: {e}"), "a valid residual");
+        let mut add = |at: usize, q: &[i64], step: f64| {
+            // `q` from position `at`, cut into rows of the last axis
+            let mut t = 0;
+            while t < q.len() {
+                let g = at + t;
+                let (x, n) = (g % w, (w - g % w).min(q.len() - t));
+                let (lo, hi) = (x.max(x0), (x + n).min(x1));
+                if lo < hi {
+                    if let Some(wat) = inside(g - x + lo) {
+                        add_row(samples, c, ch, wat, &q[t + lo - x..t + hi - x], step);
+                    }
+                }
+                t += n;
+            }
+        };
+        match p.resi.get(ch).and_then(|r| r.as_ref()) {
+            Some(r) if h.version.has_levels() => {
+                let mut d = Decoder::new_short(&r.data);
+                let coding = super::plan::coding_of(h);
+                entropy::band::decode_rows(&mut d, &h.dims, None, coding, |at, q| {
+                    add(at, q, r.step)
+                })
+                .map_err(failed)?;
+            }
+            Some(r) => {
+                let q = decode_band(h, &r.data, &h.dims, BandKind::Detail, None, None)
+                    .map_err(failed)?;
+                let npos: usize = h.dims.iter().product();
+                add(0, &q[..npos.min(q.len())], r.step);
+            }
+            None => add_row(samples, c, ch, 0, &[], 0.0),
+        }
+    }
+    let npos: usize = h.dims.iter().product();
+    let mut all: Vec<(usize, f64)> = Vec::new();
+    for (ch, r) in p.resi.iter().enumerate() {
+        if let Some(r) = r {
+            for &(i, v) in &r.exceptions {
+                if (i as usize) < npos {
+                    if let Some(wat) = inside(i as usize) {
+                        all.push((wat * c + ch, v));
+                    }
                 }
             }
         }

@@ -332,12 +332,36 @@ fn window_reads_are_the_exact_support() {
 fn lossless_and_max_error_regions_are_windows_of_the_whole_decode() {
     use mra::scheme::Scheme;
     let cases: Vec<(Raster, usize, Rate)> = vec![
-        (field(&[301, 277], 3, SampleType::U8, 31, 255.0), 4, Rate::Lossless),
-        (field(&[263, 300], 1, SampleType::U16, 33, 60000.0), 5, Rate::Lossless),
-        (field(&[97, 89], 1, SampleType::F32, 35, 7.0), 3, Rate::Lossless),
-        (field(&[41, 70, 67], 1, SampleType::I16, 37, 3000.0), 3, Rate::Lossless),
-        (field(&[203, 177], 3, SampleType::U8, 39, 255.0), 4, Rate::MaxError(3.0)),
-        (field(&[37, 50, 61], 1, SampleType::U16, 41, 4000.0), 3, Rate::MaxError(20.0)),
+        (
+            field(&[301, 277], 3, SampleType::U8, 31, 255.0),
+            4,
+            Rate::Lossless,
+        ),
+        (
+            field(&[263, 300], 1, SampleType::U16, 33, 60000.0),
+            5,
+            Rate::Lossless,
+        ),
+        (
+            field(&[97, 89], 1, SampleType::F32, 35, 7.0),
+            3,
+            Rate::Lossless,
+        ),
+        (
+            field(&[41, 70, 67], 1, SampleType::I16, 37, 3000.0),
+            3,
+            Rate::Lossless,
+        ),
+        (
+            field(&[203, 177], 3, SampleType::U8, 39, 255.0),
+            4,
+            Rate::MaxError(3.0),
+        ),
+        (
+            field(&[37, 50, 61], 1, SampleType::U16, 41, 4000.0),
+            3,
+            Rate::MaxError(20.0),
+        ),
     ];
     for (r, levels, rate) in cases {
         let schemes = if rate == Rate::Lossless {
