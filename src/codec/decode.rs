@@ -122,7 +122,7 @@ fn hull(a: &[Range<usize>], b: &[Range<usize>]) -> Vec<Range<usize>> {
         .collect()
 }
 
-/// The exact support of the full-resolution box `win` decoded at level `k` in each
+/// The exact support of the window (`p.out_box`, the box of level `k` that `p.window` maps to) in each
 /// band (band coordinates; `None` where the window synthesis does not plan the
 /// pyramid): the coefficients the window's synthesis reads
 /// ([`crate::tensor::WindowPlan::reads`]: on each axis the span of the columns its
@@ -130,10 +130,10 @@ fn hull(a: &[Range<usize>], b: &[Range<usize>]) -> Vec<Range<usize>> {
 /// coarse block, whose box is [`crate::tensor::WindowPlan::coarse_box`]; of a lossless
 /// file the integer lifting's, [`IntWindow::reads`]); the bands of the levels a decode
 /// at `k` skips need nothing.
-fn exact_support(p: &Parsed, k: usize, win: &[Range<usize>]) -> Option<Vec<Vec<Range<usize>>>> {
+fn exact_support(p: &Parsed, k: usize) -> Option<Vec<Vec<Range<usize>>>> {
     let (h, plan) = (&p.header, &p.plan);
     let k = k.min(plan.pyr.depth());
-    let st = super::tiles::Stitch::new(h, k, Some(win)).ok()?;
+    let out = p.out_box.as_deref()?;
     let nd = h.dims.len();
     let support = |coarse: &[Range<usize>],
                    reads: &dyn Fn(usize, &[Range<usize>]) -> Vec<Range<usize>>| {
@@ -147,10 +147,10 @@ fn exact_support(p: &Parsed, k: usize, win: &[Range<usize>]) -> Option<Vec<Vec<R
             .collect()
     };
     if h.mode == Mode::Lossless {
-        let iw = IntWindow::new(&plan.sub(k), st.out_box())?;
+        let iw = IntWindow::new(&plan.sub(k), out)?;
         return Some(support(&iw.coarse_box, &|l, r| iw.reads(l, r)));
     }
-    let wp = crate::tensor::WindowPlan::new(&plan.sub(k), st.out_box())?;
+    let wp = crate::tensor::WindowPlan::new(&plan.sub(k), out)?;
     Some(support(&wp.coarse_box, &|l, r| wp.reads(l, r)))
 }
 
@@ -169,7 +169,7 @@ pub(super) fn band_windows(p: &Parsed, k: usize) -> Vec<Option<Vec<Range<usize>>
         Some(w) if h.version.has_blocks() && w.len() == h.dims.len() && block.len() == w.len() => w,
         _ => return vec![None; nb],
     };
-    let exact = exact_support(p, k, win);
+    let exact = exact_support(p, k);
     if exact.is_none() && h.boundary == Boundary::Periodic {
         return vec![None; nb];
     }

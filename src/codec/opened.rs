@@ -117,6 +117,9 @@ impl Sparse {
             complete: self.complete,
             chunks: self.chunks.clone(),
             window: Some(region.to_vec()),
+            out_box: super::tiles::Stitch::new(&self.header, level, Some(region))
+                .ok()
+                .map(|st| st.out_box().to_vec()),
         };
         let wins = super::decode::band_windows(&p, level);
         let block = self.header.block_extents();

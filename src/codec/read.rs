@@ -50,6 +50,7 @@ pub(super) fn one_tile(mut p: Parsed, opts: &DecodeOptions) -> Result<Decoded> {
     };
     // a format 3 file decodes only the code-blocks the region needs
     p.window = opts.region.clone();
+    p.out_box = stitch.as_ref().map(|st| st.out_box().to_vec());
     if let Some(st) = &stitch {
         if let Some(raster) = reconstruct_window(&p, opts.level, st.out_box())? {
             return Ok(Decoded {
