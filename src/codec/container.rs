@@ -22,6 +22,9 @@ pub(super) struct Parsed {
     /// The full-resolution box a decode needs (its region): a format 3 file decodes
     /// only the code-blocks its support meets; `None`: every block.
     pub(super) window: Option<Vec<std::ops::Range<usize>>>,
+    /// The box of the decoded level's raster that `window` maps to (as
+    /// [`super::tiles::Stitch`] maps it), when known: the box the window synthesis makes.
+    pub(super) out_box: Option<Vec<std::ops::Range<usize>>>,
 }
 
 pub(super) fn read_chunks<R: Read>(
@@ -61,5 +64,6 @@ pub(super) fn read_rest<R: Read>(
         complete: b.complete,
         chunks: b.chunks,
         window: None,
+        out_box: None,
     })
 }

@@ -4,6 +4,7 @@
 
 use super::colour::map3;
 use super::container::{read_head, read_rest, Parsed};
+use super::int_window::IntWindow;
 use super::options::{DecodeOptions, Decoded};
 use super::plan::Plan;
 use super::plan::{band_delta, band_rows, dequantize_row, lossy_values};
@@ -99,32 +100,80 @@ fn parent_of<'a>(
 }
 
 /// Band samples added on each side of a region's span in a band when choosing its
-/// code-blocks: more than the synthesis support of every scheme summed over the
-/// coarser levels (the longest synthesis filter reaches 4 samples a level, and
-/// `4·(1 + ½ + ¼ + …) < 8`).
+/// code-blocks where the window's exact support is not known (a pyramid
+/// [`crate::tensor::WindowPlan`] does not plan): more than the synthesis support of
+/// every scheme summed over the coarser levels (the longest synthesis filter reaches 4
+/// samples a level, and `4·(1 + ½ + ¼ + …) < 8`).
 const SUPPORT: usize = 16;
 
+/// Whether a box is empty (an empty range on some axis).
+fn is_empty_box(b: &[Range<usize>]) -> bool {
+    b.iter().any(|r| r.is_empty())
+}
+
+/// The smallest box holding boxes `a` and `b` (either possibly empty).
+fn hull(a: &[Range<usize>], b: &[Range<usize>]) -> Vec<Range<usize>> {
+    if is_empty_box(a) {
+        return b.to_vec();
+    }
+    if is_empty_box(b) {
+        return a.to_vec();
+    }
+    a.iter()
+        .zip(b)
+        .map(|(a, b)| a.start.min(b.start)..a.end.max(b.end))
+        .collect()
+}
+
+/// The exact support of the window (`p.out_box`, the box of level `k` that `p.window` maps to) in each
+/// band (band coordinates; `None` where the window synthesis does not plan the
+/// pyramid): the coefficients the window's synthesis reads
+/// ([`crate::tensor::WindowPlan::reads`]: on each axis the span of the columns its
+/// operator rows touch inside the band, level by level from the window down to the
+/// coarse block, whose box is [`crate::tensor::WindowPlan::coarse_box`]; of a lossless
+/// file the integer lifting's, [`IntWindow::reads`]); the bands of the levels a decode
+/// at `k` skips need nothing.
+fn exact_support(p: &Parsed, k: usize) -> Option<Vec<Vec<Range<usize>>>> {
+    let (h, plan) = (&p.header, &p.plan);
+    let k = k.min(plan.pyr.depth());
+    let out = p.out_box.as_deref()?;
+    let nd = h.dims.len();
+    let support = |coarse: &[Range<usize>],
+                   reads: &dyn Fn(usize, &[Range<usize>]) -> Vec<Range<usize>>| {
+        plan.bands
+            .iter()
+            .map(|b| match b.level {
+                0 => coarse.to_vec(),
+                l if l <= k => vec![0..0; nd],
+                l => reads(l - k - 1, &b.ranges),
+            })
+            .collect()
+    };
+    if h.mode == Mode::Lossless {
+        let iw = IntWindow::new(&plan.sub(k), out)?;
+        return Some(support(&iw.coarse_box, &|l, r| iw.reads(l, r)));
+    }
+    let wp = crate::tensor::WindowPlan::new(&plan.sub(k), out)?;
+    Some(support(&wp.coarse_box, &|l, r| wp.reads(l, r)))
+}
+
 /// The box of each band (in the band's coordinates) whose code-blocks a decode of
-/// `p.window` needs (`None`: every block): the window's span in the band
-/// widened by [`SUPPORT`], joined with the parent boxes of the blocks its child band
-/// needs (a band's only child is the next one in its chain, [`Plan::chains`]). Every
-/// block is needed without a window, in files before format 3 and with periodic ends
-/// (whose synthesis wraps around).
-pub(super) fn band_windows(p: &Parsed) -> Vec<Option<Vec<Range<usize>>>> {
+/// `p.window` at level `k` needs (`None`: every block): the window's exact support in
+/// the band ([`exact_support`]; where that is not planned, its span widened by
+/// [`SUPPORT`]), joined with the parent boxes of the blocks its child band needs (a
+/// band's only child is the next one in its chain, [`Plan::chains`]). Every block is
+/// needed without a window, in files before format 3, and with periodic ends (whose
+/// synthesis wraps around) where the support is not planned.
+pub(super) fn band_windows(p: &Parsed, k: usize) -> Vec<Option<Vec<Range<usize>>>> {
     let (h, plan) = (&p.header, &p.plan);
     let nb = plan.bands.len();
+    let block = h.block_extents();
     let win = match &p.window {
-        Some(w)
-            if h.version.has_blocks()
-                && h.boundary != Boundary::Periodic
-                && w.len() == h.dims.len() =>
-        {
-            w
-        }
+        Some(w) if h.version.has_blocks() && w.len() == h.dims.len() && block.len() == w.len() => w,
         _ => return vec![None; nb],
     };
-    let block = h.block_extents();
-    if block.len() != h.dims.len() {
+    let exact = exact_support(p, k);
+    if exact.is_none() && h.boundary == Boundary::Periodic {
         return vec![None; nb];
     }
     let mut out = vec![None; nb];
@@ -133,20 +182,23 @@ pub(super) fn band_windows(p: &Parsed) -> Vec<Option<Vec<Range<usize>>>> {
         let mut child: Option<Vec<Range<usize>>> = None;
         for &j in chain.iter().rev() {
             let bd = &plan.dims[j];
-            let mut w: Vec<Range<usize>> = bd
-                .iter()
-                .zip(&h.dims)
-                .zip(win)
-                .map(|((&b, &d), r)| {
-                    let (b, d) = (b as u128, d.max(1) as u128);
-                    let lo = (r.start as u128 * b / d) as usize;
-                    let hi = (r.end as u128 * b).div_ceil(d) as usize;
-                    lo.saturating_sub(SUPPORT)..hi.saturating_add(SUPPORT).min(b as usize)
-                })
-                .collect();
+            let mut w: Vec<Range<usize>> = match &exact {
+                Some(e) => e[j].clone(),
+                None => bd
+                    .iter()
+                    .zip(&h.dims)
+                    .zip(win)
+                    .map(|((&b, &d), r)| {
+                        let (b, d) = (b as u128, d.max(1) as u128);
+                        let lo = (r.start as u128 * b / d) as usize;
+                        let hi = (r.end as u128 * b).div_ceil(d) as usize;
+                        lo.saturating_sub(SUPPORT)..hi.saturating_add(SUPPORT).min(b as usize)
+                    })
+                    .collect(),
+            };
             if let Some(cw) = &child {
-                for (a, pb) in w.iter_mut().zip(parent_box(cw, bd)) {
-                    *a = a.start.min(pb.start)..a.end.max(pb.end);
+                if !is_empty_box(cw) {
+                    w = hull(&w, &parent_box(cw, bd));
                 }
             }
             child = Some(
@@ -154,6 +206,9 @@ pub(super) fn band_windows(p: &Parsed) -> Vec<Option<Vec<Range<usize>>>> {
                     .zip(&block)
                     .zip(bd)
                     .map(|((r, &b), &e)| {
+                        if r.is_empty() {
+                            return 0..0;
+                        }
                         (r.start / b * b)..r.end.div_ceil(b).saturating_mul(b).min(e)
                     })
                     .collect(),
@@ -169,7 +224,7 @@ pub(super) fn band_windows(p: &Parsed) -> Vec<Option<Vec<Range<usize>>>> {
 /// in parallel, level after level from the coarse block down.
 pub(super) fn decode_channel(p: &Parsed, c: usize, k: usize) -> Result<Vec<Option<Vec<i64>>>> {
     let plan = &p.plan;
-    let wins = band_windows(p);
+    let wins = band_windows(p, k);
     let nb = plan.bands.len();
     let mut q: Vec<Option<Vec<i64>>> = (0..nb).map(|_| None).collect();
     let mut levels: Vec<usize> = plan.bands.iter().map(|b| b.level).collect();
@@ -226,7 +281,7 @@ type ChainRows<'a, 'p> = (&'a Vec<usize>, Vec<Vec<&'p mut [f32]>>);
 /// the first in file order is reported, as a decoder going level by level would.
 fn decode_channel_into(p: &Parsed, c: usize, k: usize, plane: &mut [f32]) -> Result<()> {
     let (h, plan) = (&p.header, &p.plan);
-    let wins = band_windows(p);
+    let wins = band_windows(p, k);
     let nb = plan.bands.len();
     let has_children: Vec<bool> = (0..nb).map(|j| plan.parents.contains(&Some(j))).collect();
     let skipped = |j: usize| {
@@ -373,7 +428,7 @@ fn dequantize_band(
 /// index does not fit 32 bits (the plane then holds garbage).
 fn decode_channel_narrow(p: &Parsed, c: usize, k: usize, plane: &mut [i32]) -> Result<bool> {
     let (h, plan) = (&p.header, &p.plan);
-    let wins = band_windows(p);
+    let wins = band_windows(p, k);
     let nb = plan.bands.len();
     let has_children: Vec<bool> = (0..nb).map(|j| plan.parents.contains(&Some(j))).collect();
     let width = rayon::current_num_threads().max(1);
@@ -610,12 +665,14 @@ pub(super) fn reconstruct(p: &Parsed, k: usize) -> Result<Raster> {
     finish(p, region, samples, k)
 }
 
-/// A lossy file (no residual layer, no voids) of non-standard pyramid decoded at level
+/// A file without voids, of non-standard pyramid, decoded at level
 /// `k` over the box `out` of the level's raster alone: each channel's bands decoded
 /// over the code-blocks the window needs ([`band_windows`]) into a plane whose other
 /// pages are never written, then only the window's support synthesized level by level
-/// ([`crate::tensor::WindowPlan`]). The samples are those of the same box of a whole
-/// decode. `None` where this does not apply (the caller then decodes whole).
+/// ([`crate::tensor::WindowPlan`]; a lossless file's integer lifting by
+/// [`IntWindow`], [`lossless_window`]; a `--max-error` file's residual layer added over
+/// the window, [`add_residuals_window`]). The samples are those of the same box of a
+/// whole decode. `None` where this does not apply (the caller then decodes whole).
 pub(super) fn reconstruct_window(
     p: &Parsed,
     k: usize,
@@ -623,30 +680,41 @@ pub(super) fn reconstruct_window(
 ) -> Result<Option<Raster>> {
     let (h, plan) = (&p.header, &p.plan);
     let k = k.min(plan.pyr.depth());
-    if h.mode == Mode::Lossless || h.mode == Mode::MaxError || h.voids || p.window.is_none() {
+    if h.voids || p.window.is_none() {
         return Ok(None);
     }
-    let Some(wp) = crate::tensor::WindowPlan::new(&plan.sub(k), out) else {
-        return Ok(None);
-    };
-    check_budget(p, k, false)?;
     let dims: Vec<usize> = out.iter().map(|r| r.len()).collect();
     let npos: usize = dims.iter().product();
-    let planes = (0..h.channels)
-        .into_par_iter()
-        .map(|ch| {
-            let mut plane = vec![0f32; plan.pyr.shape.iter().product()];
-            decode_channel_into(p, ch, k, &mut plane)?;
-            Ok(wp.synthesize(&plane, &plan.pyr.shape))
-        })
-        .collect::<Result<Vec<_>>>()?;
-    let samples = super::plan::to_samples(
-        planes,
-        npos,
-        h.colour == Colour::YCoCg,
-        (h.min, h.max),
-        h.sample_type,
-    );
+    let mut samples = if h.mode == Mode::Lossless {
+        let Some(iw) = IntWindow::new(&plan.sub(k), out) else {
+            return Ok(None);
+        };
+        check_budget(p, k, true)?;
+        lossless_window(p, k, &iw, npos)?
+    } else {
+        let Some(wp) = crate::tensor::WindowPlan::new(&plan.sub(k), out) else {
+            return Ok(None);
+        };
+        check_budget(p, k, false)?;
+        let planes = (0..h.channels)
+            .into_par_iter()
+            .map(|ch| {
+                let mut plane = vec![0f32; plan.pyr.shape.iter().product()];
+                decode_channel_into(p, ch, k, &mut plane)?;
+                Ok(wp.synthesize(&plane, &plan.pyr.shape))
+            })
+            .collect::<Result<Vec<_>>>()?;
+        super::plan::to_samples(
+            planes,
+            npos,
+            h.colour == Colour::YCoCg,
+            (h.min, h.max),
+            h.sample_type,
+        )
+    };
+    if k == 0 && h.mode == Mode::MaxError {
+        add_residuals_window(p, &mut samples, out)?;
+    }
     let region = plan.region(k);
     let mut r = Raster::new(dims.clone(), h.channels, samples, h.kind)?;
     let meta = if k > 0 {
@@ -662,13 +730,47 @@ pub(super) fn reconstruct_window(
     Ok(Some(r))
 }
 
+/// The window `iw` (of `npos` positions) of a lossless file at level `k`: each
+/// channel's bands decoded over the code-blocks the window needs ([`decode_channel`]),
+/// the window's integer inverse computed from them alone ([`IntWindow::synthesize`]),
+/// and taken to the sample type as a whole decode takes its planes ([`wide_samples`]).
+fn lossless_window(p: &Parsed, k: usize, iw: &IntWindow, npos: usize) -> Result<Samples> {
+    let plan = &p.plan;
+    let planes = (0..p.header.channels)
+        .into_par_iter()
+        .map(|ch| {
+            let q = decode_channel(p, ch, k)?;
+            let coef = |pos: &[usize]| -> i64 {
+                for (j, b) in plan.bands.iter().enumerate() {
+                    if b.level >= 1 && b.level <= k {
+                        continue;
+                    }
+                    if pos.iter().zip(&b.ranges).all(|(x, r)| r.contains(x)) {
+                        let Some(v) = &q[j] else {
+                            return 0;
+                        };
+                        let mut at = 0;
+                        for (x, r) in pos.iter().zip(&b.ranges) {
+                            at = at * r.len() + (x - r.start);
+                        }
+                        return v[at];
+                    }
+                }
+                0
+            };
+            Ok(iw.synthesize(&coef))
+        })
+        .collect::<Result<Vec<_>>>()?;
+    Ok(wide_samples(&p.header, planes, npos))
+}
+
 /// A lossless file decoded at level `k` in `i64` planes: every sample type (floats as
 /// their mapped bit patterns or multiples of the quantum).
 pub(super) fn lossless_wide(p: &Parsed, k: usize) -> Result<Samples> {
     let (h, plan) = (&p.header, &p.plan);
     let region = plan.region(k);
     let npos: usize = region.iter().product();
-    let (c, ty) = (h.channels, h.sample_type);
+    let c = h.channels;
     let planes = (0..c)
         .into_par_iter()
         .map(|ch| {
@@ -684,11 +786,18 @@ pub(super) fn lossless_wide(p: &Parsed, k: usize) -> Result<Samples> {
             Ok(layout::gather(&plane, &plan.pyr.shape, &full))
         })
         .collect::<Result<Vec<_>>>()?;
-    let mut planes = planes;
+    Ok(wide_samples(h, planes, npos))
+}
+
+/// The samples of a lossless file of header `h` from its `i64` planes of `npos`
+/// values each: YCoCg-R undone, floats from their mapped bit patterns or multiples of
+/// the quantum, integers clamped to the type's range.
+fn wide_samples(h: &Header, mut planes: Vec<Vec<i64>>, npos: usize) -> Samples {
+    let (c, ty) = (h.channels, h.sample_type);
     if h.colour == Colour::YCoCgR {
         map3(&mut planes, lossless::ycocg_r_inv);
     }
-    let samples = match ty {
+    match ty {
         SampleType::F16 | SampleType::F32 | SampleType::F64 if h.delta > 0.0 => {
             // mode 3: integer multiples of the quantum δ, exact in the sample type
             let values: Vec<f64> = (0..npos * c)
@@ -717,8 +826,7 @@ pub(super) fn lossless_wide(p: &Parsed, k: usize) -> Result<Samples> {
             let values: Vec<f64> = (0..npos * c).map(|i| planes[i % c][i / c] as f64).collect();
             Samples::from_f64(&values, ty)
         }
-    };
-    Ok(samples)
+    }
 }
 
 /// The residual layer of a `--max-error` file added to its decoded base `samples` in
@@ -756,6 +864,93 @@ fn add_residuals(p: &Parsed, samples: &mut Samples) -> Result<()> {
             for &(i, v) in &r.exceptions {
                 if (i as usize) < npos {
                     all.push((i as usize * c + ch, v));
+                }
+            }
+        }
+    }
+    if !all.is_empty() {
+        for ch in 0..c {
+            add_row(samples, c, ch, 0, &[], 0.0);
+        }
+        for (i, x) in all {
+            set_sample(samples, i, x);
+        }
+    }
+    Ok(())
+}
+
+/// [`add_residuals`] over the window `out` (a box of the full raster) alone: `samples`
+/// holds the base of the window's positions; each channel's residual rows are decoded
+/// whole (the row coder has no random access) and added where they cross the window,
+/// and the exceptions inside it written, each sample taken as the whole decode takes it.
+fn add_residuals_window(p: &Parsed, samples: &mut Samples, out: &[Range<usize>]) -> Result<()> {
+    let h = &p.header;
+    let c = h.channels;
+    let w = h.dims.last().copied().unwrap_or(1).max(1);
+    let nd = h.dims.len();
+    let wdims: Vec<usize> = out.iter().map(|r| r.len()).collect();
+    // the window position of the full raster's position `g`, if inside
+    let inside = |g: usize| -> Option<usize> {
+        let mut rem = g;
+        let mut at = 0;
+        let mut scale = 1;
+        for a in (0..nd).rev() {
+            let x = rem % h.dims[a];
+            rem /= h.dims[a];
+            if !out[a].contains(&x) {
+                return None;
+            }
+            at += (x - out[a].start) * scale;
+            scale *= wdims[a];
+        }
+        Some(at)
+    };
+    let (x0, x1) = (out[nd - 1].start, out[nd - 1].end);
+    for ch in 0..c {
+        let failed =
+            |e: Error| Error::format(format!("RESI of channel {ch}: {e}"), "a valid residual");
+        let mut add = |at: usize, q: &[i64], step: f64| {
+            // `q` from position `at`, cut into rows of the last axis
+            let mut t = 0;
+            while t < q.len() {
+                let g = at + t;
+                let (x, n) = (g % w, (w - g % w).min(q.len() - t));
+                let (lo, hi) = (x.max(x0), (x + n).min(x1));
+                if lo < hi {
+                    if let Some(wat) = inside(g - x + lo) {
+                        add_row(samples, c, ch, wat, &q[t + lo - x..t + hi - x], step);
+                    }
+                }
+                t += n;
+            }
+        };
+        match p.resi.get(ch).and_then(|r| r.as_ref()) {
+            Some(r) if h.version.has_levels() => {
+                let mut d = Decoder::new_short(&r.data);
+                let coding = super::plan::coding_of(h);
+                entropy::band::decode_rows(&mut d, &h.dims, None, coding, |at, q| {
+                    add(at, q, r.step)
+                })
+                .map_err(failed)?;
+            }
+            Some(r) => {
+                let q = decode_band(h, &r.data, &h.dims, BandKind::Detail, None, None)
+                    .map_err(failed)?;
+                let npos: usize = h.dims.iter().product();
+                add(0, &q[..npos.min(q.len())], r.step);
+            }
+            None => add_row(samples, c, ch, 0, &[], 0.0),
+        }
+    }
+    let npos: usize = h.dims.iter().product();
+    let mut all: Vec<(usize, f64)> = Vec::new();
+    for (ch, r) in p.resi.iter().enumerate() {
+        if let Some(r) = r {
+            for &(i, v) in &r.exceptions {
+                if (i as usize) < npos {
+                    if let Some(wat) = inside(i as usize) {
+                        all.push((wat * c + ch, v));
+                    }
                 }
             }
         }

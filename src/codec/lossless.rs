@@ -154,7 +154,7 @@ fn s_forward(lane: &mut [i64]) {
     lane.copy_from_slice(&out);
 }
 
-fn s_inverse(lane: &mut [i64]) {
+pub(super) fn s_inverse(lane: &mut [i64]) {
     let n = lane.len();
     let c = n.div_ceil(2);
     let mut out = vec![0i64; n];

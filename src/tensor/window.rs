@@ -111,6 +111,29 @@ impl WindowPlan {
         })
     }
 
+    /// The box that synthesis level `l` (0: the finest) reads of the box `band` of its
+    /// input lane (the plane's coordinates, e.g. a band's ranges): on each axis the span
+    /// of the columns its operator rows read that fall in `band`'s range, relative to
+    /// its start (`0..0` when none does).
+    pub fn reads(&self, l: usize, band: &[Range<usize>]) -> Vec<Range<usize>> {
+        let Some(lv) = self.levels.get(l) else {
+            return band.iter().map(|_| 0..0).collect();
+        };
+        lv.cols
+            .iter()
+            .zip(band)
+            .map(|(c, r)| {
+                let lo = c.partition_point(|&x| x < r.start);
+                let hi = c.partition_point(|&x| x < r.end);
+                if lo < hi {
+                    c[lo] - r.start..c[hi - 1] + 1 - r.start
+                } else {
+                    0..0
+                }
+            })
+            .collect()
+    }
+
     /// The window's samples (raster order over its box) from the coefficients of the
     /// pyramid laid out at the origin of `plane` (a row-major array of extents `shape`,
     /// each at least the pyramid's): only the coefficients the window depends on are read.
