@@ -215,7 +215,7 @@ fn encode_slabs(
 ) -> Result<Encoded, Failure> {
     let shape = crate::io::slab::SlabSource::shape(src).clone();
     let tile = match a.tile.as_deref() {
-        None if a.blocks => shape.dims.clone(),
+        None if a.blocks || codec::streams(&shape, opts) => shape.dims.clone(),
         None => codec::default_tile(&shape.dims, shape.channels),
         Some(s) => tile_extents(s, &shape.dims)?,
     };

@@ -156,7 +156,7 @@ impl Frame<'_> {
 }
 
 /// The colour transform of a lossy encode: YCoCg for three channels or more.
-fn lossy_colour(channels: usize) -> Colour {
+pub(super) fn lossy_colour(channels: usize) -> Colour {
     if channels >= 3 {
         Colour::YCoCg
     } else {
