@@ -50,6 +50,6 @@ pub use read::{
     SlabDecode, SlabDecoder,
 };
 pub use reblock::to_blocks;
-pub use streamed::encode_streamed;
+pub use streamed::{decodes_streamed, encode_streamed, StreamedDecoder};
 pub use tiles::{default_tile, level_extents};
 pub use write::{encode, encode_stream, encode_tiled, encode_tiled_view, encode_view, streams};

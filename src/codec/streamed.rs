@@ -18,7 +18,7 @@
 //! done (half a 16384² image); the stream quantizes without it.
 
 use super::colour::{channel_weights, planes_f32};
-use super::levels::CodedBand;
+use super::levels::{round_index, CodedBand};
 use super::lossy::{header_with, lossy_colour, prepare, Frame};
 use super::options::{EncodeOptions, Format, Rate};
 use super::plan::{band_rho, Plan};
@@ -31,7 +31,7 @@ use crate::format::bands::blocks_payload;
 use crate::format::tag::{HEAD, MEND, META};
 use crate::format::{self, put_chunk, Header, Mode};
 use crate::io::slab::{Shape, SlabSource};
-use crate::io::Raster;
+use crate::io::{Raster, Samples};
 use crate::quantize::{self, RHO};
 use crate::tensor::stream::{BandRow, StreamPlan};
 use crate::{Error, Result};
@@ -103,34 +103,71 @@ pub fn encode_streamed<S: SlabSource + ?Sized, W: std::io::Write>(
     };
     let mut header = header_with(&frame, opts, Mode::Lossy, colour, range, &shape.meta)?;
     header.step = step;
-    let bytes = encode_at(src, &header, &meta::to_bytes(&shape.meta))?;
+    let rdo = rdo_of(opts.rate);
+    if rdo.is_some() {
+        // reconstruction at the index, as the whole-array encoder's optimised files
+        header.delta = 0.0;
+    }
+    let bytes = encode_at(src, &header, &meta::to_bytes(&shape.meta), rdo)?;
     out.write_all(&bytes)?;
     Ok(bytes.len() as u64)
 }
 
+/// The multiplier of the rate–distortion optimised indices of the rate mode (those the
+/// whole-array encoder optimises: `--quality`, `--bpp`), given to the bands without
+/// children ([`Coder`]).
+fn rdo_of(rate: Rate) -> Option<f32> {
+    matches!(rate, Rate::Quality(_) | Rate::Bpp(_)).then_some(quantize::LAMBDA)
+}
+
 /// The base step of `--bpp b`: the search of the tiled files ([`tiles::search`]) on the
 /// bits per position of one-piece files of (every ⌈n/[`BPP_SAMPLE`]⌉-th of) the sampled
-/// tiles, coded as the stream codes them.
+/// tiles, each coded as the stream codes the raster ([`encode_at`]).
 fn bpp_step(mut sample: Vec<Raster>, opts: &EncodeOptions, span: f64, b: f64) -> Result<f64> {
     let every = sample.len().div_ceil(BPP_SAMPLE).max(1);
     sample = sample.into_iter().step_by(every).collect();
     let positions: f64 = sample.iter().map(|t| t.positions() as f64).sum();
-    let prepared = sample
-        .into_par_iter()
-        .map(|t| prepare(&t.view(), opts, Mode::Lossy))
-        .collect::<Result<Vec<_>>>()?;
+    let rdo = rdo_of(opts.rate);
+    let heads = sample
+        .iter()
+        .map(|t| {
+            let frame = Frame {
+                dims: &t.dims,
+                channels: t.channels,
+                sample_type: t.sample_type(),
+                kind: t.kind,
+            };
+            let colour = lossy_colour(t.channels);
+            let mut h = header_with(&frame, opts, Mode::Lossy, colour, (0.0, 0.0), &t.meta)?;
+            h.delta = if rdo.is_some() { 0.0 } else { h.delta };
+            Ok(h)
+        })
+        .collect::<Result<Vec<Header>>>()?;
     tiles::search(span, true, -(0.99f64.ln()), |step| {
-        let bytes: usize = prepared.par_iter().map(|p| p.code(step).len()).sum();
+        let bytes = sample
+            .par_iter()
+            .zip(&heads)
+            .map(|(t, h)| {
+                let mut h = h.clone();
+                h.step = step;
+                let mut src = crate::io::slab::MemorySlabs::new(t);
+                Ok(encode_at(&mut src, &h, &[], rdo)?.len())
+            })
+            .collect::<Result<Vec<usize>>>()?;
+        let bytes: usize = bytes.iter().sum();
         Ok(b.ln() - (bytes as f64 * 8.0 / positions.max(1.0)).ln())
     })
 }
 
 /// The file of header `h` (its base step set) of the raster of `src`, with `mETA`
-/// bytes `meta`: the raster streamed through the pyramid a slab at a time.
+/// bytes `meta`: the raster streamed through the pyramid a slab at a time. With `rdo`
+/// (a multiplier λ) the bands without children get rate–distortion optimised indices
+/// and the others are rounded; without, every band is dead-zone quantized.
 pub(super) fn encode_at<S: SlabSource + ?Sized>(
     src: &mut S,
     h: &Header,
     meta: &[u8],
+    rdo: Option<f32>,
 ) -> Result<Vec<u8>> {
     let plan = Plan::new(h)?;
     let sp = StreamPlan::new(&h.dims, &plan.pyr.spec)?;
@@ -150,7 +187,7 @@ pub(super) fn encode_at<S: SlabSource + ?Sized>(
             let steps = (0..plan.bands.len())
                 .map(|j| h.step * ratio(j, c) as f64)
                 .collect();
-            Coder::new(&plan, steps)
+            Coder::new(&plan, steps, rdo)
         })
         .collect();
     {
@@ -201,6 +238,9 @@ struct BandState {
     /// rows a stripe holds (the block extent on axis 0)
     tall: usize,
     rows: BTreeMap<usize, Vec<i32>>,
+    /// the values over the step of the rows not yet let go (bands whose indices are
+    /// optimised as they are coded)
+    values: BTreeMap<usize, Vec<f32>>,
     /// rows received per stripe
     got: Vec<usize>,
     coded: Vec<bool>,
@@ -217,7 +257,17 @@ impl BandState {
         s * self.tall..((s + 1) * self.tall).min(self.grid.dims[0])
     }
 
-    /// The values of box `b` of the band (its rows held), raster order.
+    /// The values over the step of box `b` of the band (its rows held), raster order.
+    fn gather_values(&self, b: &[Range<usize>]) -> Vec<f32> {
+        let n: usize = b.iter().map(|r| r.len()).product();
+        let mut out = Vec::with_capacity(n);
+        for y in b[0].clone() {
+            out.extend(extract(&self.values[&y], &self.grid.dims[1..], &b[1..]));
+        }
+        out
+    }
+
+    /// The indices of box `b` of the band (its rows held), raster order.
     fn gather(&self, b: &[Range<usize>]) -> Vec<i64> {
         let n: usize = b.iter().map(|r| r.len()).product();
         let mut out = Vec::with_capacity(n);
@@ -241,11 +291,13 @@ struct Coder<'p> {
     bands: Vec<BandState>,
     /// each band's child (the band whose parent it is)
     children: Vec<Option<usize>>,
+    /// the multiplier of optimised indices (bands without children), see [`encode_at`]
+    rdo: Option<f32>,
     err: Option<Error>,
 }
 
 impl<'p> Coder<'p> {
-    fn new(plan: &'p Plan, steps: Vec<f64>) -> Coder<'p> {
+    fn new(plan: &'p Plan, steps: Vec<f64>, rdo: Option<f32>) -> Coder<'p> {
         let bands = (0..plan.bands.len())
             .map(|j| {
                 let grid = plan.grid(j).expect("a format 3 plan has code-blocks");
@@ -254,6 +306,7 @@ impl<'p> Coder<'p> {
                 BandState {
                     tall,
                     rows: BTreeMap::new(),
+                    values: BTreeMap::new(),
                     got: vec![0; n],
                     coded: vec![false; n],
                     streams: vec![Vec::new(); grid.len()],
@@ -272,6 +325,7 @@ impl<'p> Coder<'p> {
             steps,
             bands,
             children,
+            rdo,
             err: None,
         }
     }
@@ -292,18 +346,29 @@ impl<'p> Coder<'p> {
             return Ok(());
         }
         let (s, rho) = (self.steps[j], band_rho(self.plan, j));
-        let q = row
-            .data
-            .iter()
-            .map(|&x| {
-                i32::try_from(quantize::quantize(x as f64, s, rho)).map_err(|_| {
-                    Error::parameter("step", s, "a step whose indices fit 32 bits")
+        let stripe = row.row / self.bands[j].tall;
+        if self.optimised(j) {
+            let v = row.data.iter().map(|&x| (x as f64 / s) as f32).collect();
+            self.bands[j].values.insert(row.row, v);
+        } else {
+            let rounded = self.rdo.is_some();
+            let q = row
+                .data
+                .iter()
+                .map(|&x| {
+                    let q = if rounded {
+                        round_index((x as f64 / s) as f32)
+                    } else {
+                        quantize::quantize(x as f64, s, rho)
+                    };
+                    i32::try_from(q).map_err(|_| {
+                        Error::parameter("step", s, "a step whose indices fit 32 bits")
+                    })
                 })
-            })
-            .collect::<Result<Vec<i32>>>()?;
+                .collect::<Result<Vec<i32>>>()?;
+            self.bands[j].rows.insert(row.row, q);
+        }
         let b = &mut self.bands[j];
-        let stripe = row.row / b.tall;
-        b.rows.insert(row.row, q);
         b.got[stripe] += 1;
         self.try_code(j, stripe)?;
         if let Some(k) = self.children[j] {
@@ -323,6 +388,12 @@ impl<'p> Coder<'p> {
             }
         }
         Ok(())
+    }
+
+    /// Whether band `j`'s indices are optimised as its blocks are coded: a detail band
+    /// without children, when the rate mode optimises.
+    fn optimised(&self, j: usize) -> bool {
+        self.rdo.is_some() && self.plan.bands[j].level > 0 && self.children[j].is_none()
     }
 
     /// The parent band of `j` and the rows of it that stripe `s` of `j` reads (the
@@ -375,18 +446,30 @@ impl<'p> Coder<'p> {
         };
         let coding: Coding = self.plan.coding;
         let pb = parent.map(|p| &self.bands[p]);
+        let lambda = self.rdo.filter(|_| self.optimised(j));
         let streams: Vec<Vec<u8>> = (s * per..(s + 1) * per)
             .into_par_iter()
             .map(|i| {
                 let bx = g.bounds(i);
                 let d = box_dims(&bx);
-                let v = b.gather(&bx);
                 let par = pb.map(|pb| {
                     let pbox = parent_box(&bx, &pb.grid.dims);
                     (pb.gather(&pbox), box_dims(&pbox))
                 });
                 let pp = par.as_ref().map(|(data, dims)| Parent { data, dims });
-                band::encode_stream(&v, &d, kind, pp, coding)
+                match lambda {
+                    // as codeblocks::encode_blocks_rdo_by codes a block
+                    Some(lambda) => {
+                        let v = b.gather_values(&bx);
+                        let cols = d.last().copied().unwrap_or(1);
+                        let mut e = crate::entropy::range::Encoder::new();
+                        band::encode_rdo_with(&mut e, &d, pp, lambda, coding, false, |g, out| {
+                            out.copy_from_slice(&v[g * cols..(g + 1) * cols])
+                        });
+                        e.finish_short()
+                    }
+                    None => band::encode_stream(&b.gather(&bx), &d, kind, pp, coding),
+                }
             })
             .collect();
         let b = &mut self.bands[j];
@@ -412,6 +495,7 @@ impl<'p> Coder<'p> {
         let coded = &b.coded;
         b.rows
             .retain(|&y, _| !coded[y / tall] || waiting.iter().any(|r| r.contains(&y)));
+        b.values.retain(|&y, _| !coded[y / tall]);
     }
 
     /// The coded bands of the channel, once every row has streamed through.
@@ -435,5 +519,342 @@ impl<'p> Coder<'p> {
                 })
             })
             .collect()
+    }
+}
+
+/// Whether a whole decode of the file of header `h` goes through [`StreamedDecoder`]
+/// in [`super::SlabDecoder`]: a one-piece lossy 3.0 file (no residual layer, no voids)
+/// of 2 or 3 axes over the one-piece limit ([`tiles::default_tile`] would cut it).
+pub fn decodes_streamed(h: &Header) -> bool {
+    !h.is_tiled()
+        && h.version.has_blocks()
+        && h.mode == Mode::Lossy
+        && !h.voids
+        && (2..=3).contains(&h.dims.len())
+        && h.levels > 0
+        && tiles::default_tile(&h.dims, h.channels) != h.dims
+}
+
+/// Rows of the output a slab of [`StreamedDecoder`] holds (about 2^20 positions).
+fn slab_rows(row_len: usize, d0: usize) -> usize {
+    ((1usize << 20) / row_len.max(1)).clamp(1, d0.max(1))
+}
+
+/// A whole decode of a one-piece lossy 3.0 file in bounded memory: the band rows pulled
+/// through the streamed synthesis ([`StreamPlan::synthesis`]), each stripe of
+/// code-blocks decoded (its blocks in parallel) when its first row is asked for and
+/// kept while it is read (the last [`KEPT_STRIPES`] of a band, as 32-bit indices), the
+/// rows converted to samples a slab at a time. The synthesis runs on a thread of its
+/// own that hands the slabs over; the samples are those of the whole-array decode
+/// (the stream's synthesis gives its bits).
+pub struct StreamedDecoder {
+    shape: Shape,
+    rx: std::sync::mpsc::Receiver<Result<Samples>>,
+    done: bool,
+}
+
+/// Decoded stripes a band keeps (an older one asked again is decoded again).
+const KEPT_STRIPES: usize = 2;
+
+impl StreamedDecoder {
+    /// Read the file at `path` (its chunks checked, the code-blocks' bytes held) and
+    /// start the synthesis.
+    pub fn open(path: &std::path::Path) -> Result<StreamedDecoder> {
+        let f = std::fs::File::open(path)?;
+        let len = f.metadata()?.len();
+        let p = super::container::read_chunks(std::io::BufReader::new(f), len, 0, false)?;
+        StreamedDecoder::of(p)
+    }
+
+    pub(super) fn of(p: super::container::Parsed) -> Result<StreamedDecoder> {
+        let h = &p.header;
+        if !h.version.has_blocks() || h.mode != Mode::Lossy || h.voids || h.dims.len() < 2 {
+            return Err(Error::format(
+                format!("a {:?} file of {:?}", h.mode, h.dims),
+                "a lossy 3.0 file of 2 or 3 axes without voids",
+            ));
+        }
+        let shape = Shape {
+            dims: h.dims.clone(),
+            channels: h.channels,
+            sample_type: h.sample_type,
+            kind: h.kind,
+            meta: p.meta.clone(),
+        };
+        // the plan is checked here, before the thread starts
+        let sp = StreamPlan::new(&h.dims, &p.plan.pyr.spec)?;
+        if sp.bands() != p.plan.bands.as_slice() {
+            return Err(Error::format(
+                format!("a pyramid of {} levels", h.levels),
+                "a pyramid the stream lays out as the file does",
+            ));
+        }
+        let (tx, rx) = std::sync::mpsc::sync_channel(1);
+        drop(sp);
+        std::thread::spawn(move || {
+            let r = StreamPlan::new(&p.header.dims, &p.plan.pyr.spec)
+                .and_then(|sp| synthesize(&p, &sp, &mut |s| tx.send(Ok(s)).is_ok()));
+            if let Err(e) = r {
+                let _ = tx.send(Err(e));
+            }
+        });
+        Ok(StreamedDecoder {
+            shape,
+            rx,
+            done: false,
+        })
+    }
+
+    /// The output's extents, type and metadata.
+    pub fn shape(&self) -> &Shape {
+        &self.shape
+    }
+
+    /// The next rows of the output, `None` after the last.
+    pub fn next_slab(&mut self) -> Result<Option<Samples>> {
+        if self.done {
+            return Ok(None);
+        }
+        match self.rx.recv() {
+            Ok(r) => r.map(Some),
+            Err(_) => {
+                self.done = true;
+                Ok(None)
+            }
+        }
+    }
+}
+
+/// Pull every row of the file `p` through the synthesis `sp` and hand its samples to
+/// `send` a slab at a time (until it returns false).
+fn synthesize(
+    p: &super::container::Parsed,
+    sp: &StreamPlan,
+    send: &mut dyn FnMut(Samples) -> bool,
+) -> Result<()> {
+    let h = &p.header;
+    let nc = h.channels;
+    let err = std::rc::Rc::new(std::cell::RefCell::new(None::<Error>));
+    let mut sources = (0..nc)
+        .map(|c| BandSource::new(p, c, err.clone()))
+        .collect::<Result<Vec<_>>>()?;
+    let mut syn: Vec<_> = sources
+        .iter_mut()
+        .map(|s| sp.synthesis(move |j: usize, r: usize, out: &mut [f32]| s.fill(j, r, out)))
+        .collect();
+    let (d0, row_len) = (h.dims[0], sp.row_len());
+    let rows = slab_rows(row_len, d0);
+    for r0 in (0..d0).step_by(rows) {
+        let n = (r0 + rows).min(d0) - r0;
+        let mut planes: Vec<Vec<f32>> = (0..nc).map(|_| vec![0f32; n * row_len]).collect();
+        for r in 0..n {
+            for (s, plane) in syn.iter_mut().zip(planes.iter_mut()) {
+                s.pull(&mut plane[r * row_len..(r + 1) * row_len])?;
+            }
+            if let Some(e) = err.borrow_mut().take() {
+                return Err(e);
+            }
+        }
+        let samples = super::plan::to_samples(
+            planes,
+            n * row_len,
+            h.colour == crate::format::header::Colour::YCoCg,
+            (h.min, h.max),
+            h.sample_type,
+        );
+        if !send(samples) {
+            return Ok(());
+        }
+    }
+    Ok(())
+}
+
+/// The band rows of one channel of a file, decoded a stripe of code-blocks at a time.
+struct BandSource<'a> {
+    p: &'a super::container::Parsed,
+    c: usize,
+    grids: Vec<Grid>,
+    /// each band's blocks (byte ranges in its entry); `None`: the band is absent
+    sets: Vec<Option<Vec<Range<usize>>>>,
+    steps: Vec<f64>,
+    deltas: Vec<f64>,
+    /// decoded stripes of each band (indices, the stripe's rows in raster order)
+    kept: Vec<BTreeMap<usize, Vec<i32>>>,
+    err: std::rc::Rc<std::cell::RefCell<Option<Error>>>,
+}
+
+impl<'a> BandSource<'a> {
+    fn new(
+        p: &'a super::container::Parsed,
+        c: usize,
+        err: std::rc::Rc<std::cell::RefCell<Option<Error>>>,
+    ) -> Result<BandSource<'a>> {
+        let plan = &p.plan;
+        let nb = plan.bands.len();
+        let grids: Vec<Grid> = (0..nb)
+            .map(|j| plan.grid(j).expect("a format 3 plan has code-blocks"))
+            .collect();
+        let sets = (0..nb)
+            .map(|j| {
+                p.bands[c][j]
+                    .as_ref()
+                    .map(|bc| {
+                        crate::format::bands::parse_blocks(&bc.data, &grids[j].dims, &grids[j].block)
+                            .map(|s| s.streams)
+                            .map_err(|e| {
+                                Error::format(
+                                    format!("band {j} of channel {c}: {e}"),
+                                    "a valid band",
+                                )
+                            })
+                    })
+                    .transpose()
+            })
+            .collect::<Result<Vec<_>>>()?;
+        let steps = (0..nb)
+            .map(|j| p.bands[c][j].as_ref().map_or(0.0, |bc| bc.step))
+            .collect();
+        let deltas = (0..nb)
+            .map(|j| super::plan::band_delta(&p.header, plan, j))
+            .collect();
+        Ok(BandSource {
+            p,
+            c,
+            grids,
+            sets,
+            steps,
+            deltas,
+            kept: vec![BTreeMap::new(); nb],
+            err,
+        })
+    }
+
+    /// Row `r` of band `j`, dequantized, into `out` (zeros after an error).
+    fn fill(&mut self, j: usize, r: usize, out: &mut [f32]) {
+        out.fill(0.0);
+        if self.err.borrow().is_some() || self.sets[j].is_none() {
+            return;
+        }
+        let tall = self.grids[j].block[0];
+        let s = r / tall;
+        if let Err(e) = self.ensure(j, s) {
+            *self.err.borrow_mut() = Some(e);
+            return;
+        }
+        let len = out.len();
+        let at = (r - s * tall) * len;
+        let q: Vec<i64> = self.kept[j][&s][at..at + len]
+            .iter()
+            .map(|&v| v as i64)
+            .collect();
+        super::plan::dequantize_row(&q, self.steps[j], self.deltas[j], out);
+    }
+
+    /// The parent band of `j` and the rows of it that stripe `s` of `j` reads.
+    fn parent_rows(&self, j: usize, s: usize) -> Option<(usize, Range<usize>)> {
+        let plan = &self.p.plan;
+        if plan.bands[j].level == 0 {
+            return None;
+        }
+        let pj = plan.parents[j]?;
+        let pd = &self.grids[pj].dims;
+        if pd.contains(&0) {
+            return None;
+        }
+        let g = &self.grids[j];
+        let tall = g.block[0];
+        let rows = s * tall..((s + 1) * tall).min(g.dims[0]);
+        Some((pj, parent_box(&[rows], &pd[..1])[0].clone()))
+    }
+
+    /// Decode stripe `s` of band `j` (and the parent stripes it reads) unless kept.
+    fn ensure(&mut self, j: usize, s: usize) -> Result<()> {
+        if self.kept[j].contains_key(&s) {
+            return Ok(());
+        }
+        let parent = self.parent_rows(j, s);
+        // the parent's rows the stripe reads, as one array (rows `prows`)
+        let mut par: Option<(Vec<usize>, Range<usize>, Vec<i32>)> = None;
+        if let Some((pj, prows)) = parent.clone() {
+            if self.sets[pj].is_some() {
+                let pt = self.grids[pj].block[0];
+                let plen: usize = self.grids[pj].dims[1..].iter().product();
+                let mut v = Vec::with_capacity(prows.len() * plen);
+                for y in prows.clone() {
+                    self.ensure(pj, y / pt)?;
+                    let st = &self.kept[pj][&(y / pt)];
+                    let at = (y - (y / pt) * pt) * plen;
+                    v.extend_from_slice(&st[at..at + plen]);
+                }
+                par = Some((self.grids[pj].dims.clone(), prows, v));
+            }
+        }
+        let g = &self.grids[j];
+        let per: usize = g.counts[1..].iter().product();
+        let tall = g.block[0];
+        let rows = s * tall..((s + 1) * tall).min(g.dims[0]);
+        let row_len: usize = g.dims[1..].iter().product();
+        let kind = if self.p.plan.bands[j].level == 0 {
+            BandKind::Coarse
+        } else {
+            BandKind::Detail
+        };
+        let coding = self.p.plan.coding;
+        let data = &self.p.bands[self.c][j]
+            .as_ref()
+            .expect("a band with blocks is present")
+            .data;
+        let set = self.sets[j].as_ref().expect("checked by the caller");
+        let blocks: Vec<Result<Vec<i64>>> = (s * per..(s + 1) * per)
+            .into_par_iter()
+            .map(|i| {
+                let b = g.bounds(i);
+                let d = box_dims(&b);
+                let pv = par.as_ref().map(|(pdims, prows, v)| {
+                    let pb = parent_box(&b, pdims);
+                    let mut local = pb.clone();
+                    local[0] = pb[0].start - prows.start..pb[0].end - prows.start;
+                    let mut ldims = pdims.clone();
+                    ldims[0] = prows.len();
+                    let vals: Vec<i64> = extract(v, &ldims, &local)
+                        .into_iter()
+                        .map(i64::from)
+                        .collect();
+                    (vals, box_dims(&pb))
+                });
+                let pp = pv.as_ref().map(|(data, dims)| Parent { data, dims });
+                let mut dec = crate::entropy::range::Decoder::new_short(&data[set[i].clone()]);
+                band::decode(&mut dec, &d, kind, pp, coding).map_err(|e| {
+                    Error::format(
+                        format!("code-block {i} of band {j} of channel {}: {e}", self.c),
+                        "a valid code-block",
+                    )
+                })
+            })
+            .collect();
+        let mut stripe = vec![0i32; rows.len() * row_len];
+        let mut sdims = g.dims.clone();
+        sdims[0] = rows.len();
+        for (k, v) in blocks.into_iter().enumerate() {
+            let v = v?;
+            let mut b = g.bounds(s * per + k);
+            b[0] = b[0].start - rows.start..b[0].end - rows.start;
+            let v: Vec<i32> = v
+                .into_iter()
+                .map(|x| {
+                    i32::try_from(x).map_err(|_| {
+                        Error::format(format!("index {x} in band {j}"), "indices of 32 bits")
+                    })
+                })
+                .collect::<Result<_>>()?;
+            crate::entropy::codeblocks::insert(&mut stripe, &sdims, &b, &v);
+        }
+        let kept = &mut self.kept[j];
+        kept.insert(s, stripe);
+        while kept.len() > KEPT_STRIPES {
+            let old = *kept.keys().find(|&&k| k != s).expect("more than one");
+            kept.remove(&old);
+        }
+        Ok(())
     }
 }
