@@ -60,7 +60,9 @@ pub struct EncodeArgs {
     pub lossless: bool,
     /// Tile extents, fastest axis first: `N` (every axis), `X,Y[,Z]`, or `whole` (one
     /// tile). Default: one tile up to 2^24 positions or 2^26 samples (positions ×
-    /// channels), else 1024 per axis in 2-D and 128 in 3-D. Each tile is coded on its
+    /// channels); above, integer rasters read in slabs (raw, NRRD, TIFF) at --quality,
+    /// --keep, --threshold or --bpp are one transform streamed a slab at a time (format
+    /// 3.0), the rest 1024 per axis in 2-D and 128 in 3-D. Each tile is coded on its
     /// own at the step of the whole raster.
     #[arg(long, value_name = "T")]
     pub tile: Option<String>,
