@@ -1,12 +1,13 @@
 #!/usr/bin/env python3
 """One transform against tiles on huge rasters (docs/tiles.md, "One transform at any
-size"): a 16384² u16 image (`mra generate strokes`) and a 1024³ u16 volume (16 copies of
-`mra generate phantom` 1024×1024×64, stacked), raw files in a temporary folder (/dev/shm
-when it has room), coded at `--bpp 1` by default (one transform streamed, format 3.0),
-with `--tile` (2.x tiles of 1024² / 128³), and `--lossless` (tiled); decoded to raw.
-Prints per file: format version, bytes, bits per position, PSNR (chunked,
-`examples/raw_psnr.rs`, peak 65535), encode and decode wall s / CPU s / peak RSS MiB
-(`/usr/bin/time -v`), decode MB/s of samples. Everything is removed at the end.
+size"): a 16384² u16 image (4×4 `mra generate terrain` of 4096²) and a 1024³ u16
+volume (64 terrains of 1024², each 16 planes thick: the phantom would be exact at
+1 bpp), raw files in a temporary folder (/dev/shm when it has room), coded at `--bpp 1`
+by default (one transform streamed, format 3.0), with `--tile` (2.x tiles of 1024² /
+128³), and `--lossless` (tiled); decoded to raw. Prints per file: format version,
+bytes, bits per position, PSNR (chunked, `examples/raw_psnr.rs`, peak 65535), encode
+and decode wall s / CPU s / peak RSS MiB (`/usr/bin/time -v`), decode MB/s of samples.
+Everything is removed at the end.
 
 Run from the repository root after
 `cargo build --release && cargo build --release --example raw_psnr`:
@@ -55,8 +56,8 @@ def one(label, raw, dims, rate, tile, tmp, env):
                            *rate, *extra], env)
     size = os.path.getsize(f)
     _, dw, dc, dr = timed([MRA, "decode", f, "-o", back], env)
-    info = subprocess.run([MRA, "info", f], capture_output=True, text=True).stdout
-    ver = re.search(r"(?:version|format)\D*(\d+\.\d+)", info)
+    info = subprocess.run([MRA, "info", f, "--json"], capture_output=True, text=True).stdout
+    ver = re.search(r'"version": *"([^"]*)"', info)
     n = os.path.getsize(raw)
     psnr = subprocess.run([PSNR, raw, back], capture_output=True, text=True).stdout.strip()
     bpp = size * 8 / (n / 2)
@@ -65,6 +66,27 @@ def one(label, raw, dims, rate, tile, tmp, env):
           f"{dr:.0f} | {n / 1e6 / dw:.1f} |", flush=True)
     os.remove(f)
     os.remove(back)
+
+
+def mosaic(raw, tmp):
+    """A 16384² u16 image: 4×4 terrains of 4096² (`mra generate terrain`, seeds 1–16;
+    one of 16384² would take about 5 GB to generate)."""
+    parts = []
+    for k in range(16):
+        p = os.path.join(tmp, f"t{k}.raw")
+        subprocess.run([MRA, "generate", "terrain", "-o", p, "--size", "4096", "--dtype", "u16",
+                        "--seed", str(k + 1)], check=True, capture_output=True)
+        parts.append(p)
+    with open(raw, "wb") as out:
+        for ty in range(4):
+            files = [open(parts[ty * 4 + tx], "rb") for tx in range(4)]
+            for _ in range(4096):
+                for f in files:
+                    out.write(f.read(8192))
+            for f in files:
+                f.close()
+    for p in parts:
+        os.remove(p)
 
 
 def run(label, raw, dims, tile, args, tmp, env):
@@ -89,19 +111,21 @@ def main():
         print("|---|---|---|---|---|---|---|---|")
         if not args.skip_image:
             raw = os.path.join(tmp, "img.raw")
-            subprocess.run([MRA, "generate", "strokes", "-o", raw, "--size", "16384",
-                            "--dtype", "u16"], check=True, capture_output=True)
+            mosaic(raw, tmp)
             run("16384² u16", raw, "16384x16384", "1024", args, tmp, env)
             os.remove(raw)
         if not args.skip_volume:
             part = os.path.join(tmp, "part.raw")
             raw = os.path.join(tmp, "vol.raw")
-            subprocess.run([MRA, "generate", "phantom", "-o", part, "--size", "1024x1024x64",
-                            "--dtype", "u16"], check=True, capture_output=True)
             with open(raw, "wb") as out:
-                for _ in range(16):
+                for k in range(64):
+                    subprocess.run([MRA, "generate", "terrain", "-o", part, "--size", "1024",
+                                    "--dtype", "u16", "--seed", str(101 + k)], check=True,
+                                   capture_output=True)
                     with open(part, "rb") as src:
-                        shutil.copyfileobj(src, out, 1 << 24)
+                        plane = src.read()
+                    for _ in range(16):
+                        out.write(plane)
             os.remove(part)
             run("1024³ u16", raw, "1024x1024x1024", "128", args, tmp, env)
             os.remove(raw)

@@ -163,7 +163,7 @@ fn a_truncated_streamed_file_is_a_one_line_error() {
 fn the_stream_is_the_default_over_the_one_piece_limit() {
     let small = field(&[4, 4], 1, SampleType::U16, 1, 100.0);
     let mut big = Shape::of(&small);
-    big.dims = vec![8192, 4100];
+    big.dims = vec![16384, 8192];
     let o = |rate| opts(rate, 6, Boundary::Symmetric);
     assert!(codec::streams(&big, &o(Rate::Bpp(1.0))));
     assert!(codec::streams(&big, &o(Rate::Quality(50.0))));
