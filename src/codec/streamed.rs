@@ -543,7 +543,8 @@ fn slab_rows(row_len: usize, d0: usize) -> usize {
 /// A whole decode of a one-piece lossy 3.0 file in bounded memory: the band rows pulled
 /// through the streamed synthesis ([`StreamPlan::synthesis`]), each stripe of
 /// code-blocks decoded (its blocks in parallel) when its first row is asked for and
-/// kept while it is read (the last [`KEPT_STRIPES`] of a band, as 32-bit indices), the
+/// kept while it is read (the last [`KEPT_STRIPES`] of a band with children, the last
+/// one of a band without, as 32-bit indices), the
 /// rows converted to samples a slab at a time. The synthesis runs on a thread of its
 /// own that hands the slabs over; the samples are those of the whole-array decode
 /// (the stream's synthesis gives its bits).
@@ -553,7 +554,8 @@ pub struct StreamedDecoder {
     done: bool,
 }
 
-/// Decoded stripes a band keeps (an older one asked again is decoded again).
+/// Decoded stripes a band with children keeps (an older one asked again is decoded
+/// again).
 const KEPT_STRIPES: usize = 2;
 
 impl StreamedDecoder {
@@ -849,9 +851,15 @@ impl<'a> BandSource<'a> {
                 .collect::<Result<_>>()?;
             crate::entropy::codeblocks::insert(&mut stripe, &sdims, &b, &v);
         }
+        // a band without children is read in order: its last stripe is enough
+        let keep = if self.p.plan.parents.contains(&Some(j)) {
+            KEPT_STRIPES
+        } else {
+            1
+        };
         let kept = &mut self.kept[j];
         kept.insert(s, stripe);
-        while kept.len() > KEPT_STRIPES {
+        while kept.len() > keep {
             let old = *kept.keys().find(|&&k| k != s).expect("more than one");
             kept.remove(&old);
         }
