@@ -11,7 +11,9 @@ fn main() {
         eprintln!("usage: raw_psnr A B [PEAK]");
         std::process::exit(2);
     }
-    let peak: f64 = args.get(3).map_or(65535.0, |p| p.parse().expect("a number"));
+    let peak: f64 = args
+        .get(3)
+        .map_or(65535.0, |p| p.parse().expect("a number"));
     let open = |p: &str| std::io::BufReader::new(std::fs::File::open(p).expect(p));
     let (mut a, mut b) = (open(&args[1]), open(&args[2]));
     let (mut ba, mut bb) = (vec![0u8; 1 << 22], vec![0u8; 1 << 22]);
@@ -24,7 +26,8 @@ fn main() {
         b.read_exact(&mut bb[..k]).expect("B as long as A");
         let mut part = 0u64;
         for (x, y) in ba[..k].chunks_exact(2).zip(bb[..k].chunks_exact(2)) {
-            let d = u16::from_le_bytes([x[0], x[1]]).abs_diff(u16::from_le_bytes([y[0], y[1]])) as u32;
+            let d =
+                u16::from_le_bytes([x[0], x[1]]).abs_diff(u16::from_le_bytes([y[0], y[1]])) as u32;
             max = max.max(d);
             part += (d * d) as u64;
         }
@@ -32,5 +35,8 @@ fn main() {
         n += (k / 2) as u64;
     }
     let mse = sum / n.max(1) as f64;
-    println!("psnr {:.4} mse {mse:.4} max {max}", 10.0 * (peak * peak / mse).log10());
+    println!(
+        "psnr {:.4} mse {mse:.4} max {max}",
+        10.0 * (peak * peak / mse).log10()
+    );
 }

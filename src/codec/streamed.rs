@@ -701,14 +701,15 @@ impl<'a> BandSource<'a> {
                 p.bands[c][j]
                     .as_ref()
                     .map(|bc| {
-                        crate::format::bands::parse_blocks(&bc.data, &grids[j].dims, &grids[j].block)
-                            .map(|s| s.streams)
-                            .map_err(|e| {
-                                Error::format(
-                                    format!("band {j} of channel {c}: {e}"),
-                                    "a valid band",
-                                )
-                            })
+                        crate::format::bands::parse_blocks(
+                            &bc.data,
+                            &grids[j].dims,
+                            &grids[j].block,
+                        )
+                        .map(|s| s.streams)
+                        .map_err(|e| {
+                            Error::format(format!("band {j} of channel {c}: {e}"), "a valid band")
+                        })
                     })
                     .transpose()
             })

@@ -61,7 +61,11 @@ fn streamed_files_are_the_whole_encoders_bytes() {
         (field(&[131, 97], 3, SampleType::U8, 1, 255.0), 4, 3.0),
         (field(&[1100, 75], 1, SampleType::U16, 2, 60000.0), 5, 400.0),
         (field(&[70, 41, 33], 1, SampleType::U16, 3, 4000.0), 3, 20.0),
-        (field(&[150, 23, 19], 2, SampleType::I16, 4, 3000.0), 4, 10.0),
+        (
+            field(&[150, 23, 19], 2, SampleType::I16, 4, 3000.0),
+            4,
+            10.0,
+        ),
         (field(&[5, 6, 7, 9], 1, SampleType::U8, 5, 255.0), 2, 2.0),
     ];
     for (r, levels, t) in &cases {
@@ -182,10 +186,26 @@ fn the_stream_is_the_default_over_the_one_piece_limit() {
 #[test]
 fn the_streamed_decode_gives_the_whole_decodes_samples() {
     let cases: [(Raster, usize, Boundary); 4] = [
-        (field(&[1100, 75], 1, SampleType::U16, 2, 60000.0), 5, Boundary::Symmetric),
-        (field(&[301, 67], 3, SampleType::U8, 6, 255.0), 4, Boundary::Periodic),
-        (field(&[70, 41, 33], 1, SampleType::U16, 3, 4000.0), 3, Boundary::Symmetric),
-        (field(&[45, 20, 17], 2, SampleType::I16, 4, 3000.0), 3, Boundary::Periodic),
+        (
+            field(&[1100, 75], 1, SampleType::U16, 2, 60000.0),
+            5,
+            Boundary::Symmetric,
+        ),
+        (
+            field(&[301, 67], 3, SampleType::U8, 6, 255.0),
+            4,
+            Boundary::Periodic,
+        ),
+        (
+            field(&[70, 41, 33], 1, SampleType::U16, 3, 4000.0),
+            3,
+            Boundary::Symmetric,
+        ),
+        (
+            field(&[45, 20, 17], 2, SampleType::I16, 4, 3000.0),
+            3,
+            Boundary::Periodic,
+        ),
     ];
     let dir = common::scratch_dir("streamed_decode");
     for (r, levels, boundary) in &cases {

@@ -567,7 +567,12 @@ fn search_step(
 /// steps of doubling size until the target is bracketed, then the secant between the
 /// bracket's ends kept inside its middle half (the bracket shrinks by at least a quarter
 /// each time); stops at a met step within `tol` or a bracket under 0.1% of the step.
-pub(in crate::codec) fn search(range: f64, large_ok: bool, tol: f64, f: impl Fn(f64) -> Result<f64>) -> Result<f64> {
+pub(in crate::codec) fn search(
+    range: f64,
+    large_ok: bool,
+    tol: f64,
+    f: impl Fn(f64) -> Result<f64>,
+) -> Result<f64> {
     let (x_min, x_max) = ((range * 1e-7).ln(), (range * 4.0).ln());
     let mut met: Option<(f64, f64)> = None;
     let mut unmet: Option<(f64, f64)> = None;
