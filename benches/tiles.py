@@ -148,7 +148,10 @@ def big(name, raw, dims, tile_label, rate, region, crop_dims, tmp, bpp, threads=
     rows = []
     for t in threads:
         env = {"RAYON_NUM_THREADS": t}
-        out, te, me = run(["encode", raw, "--dims", xyz, "--dtype", "u16", "-o", f, *rate, "--json"], env)
+        # the tiles explicitly: over the one-piece limit the default is one transform
+        # (benches/huge.py measures it)
+        out, te, me = run(["encode", raw, "--dims", xyz, "--dtype", "u16", "-o", f, *rate,
+                           "--tile", tile_label, "--json"], env)
         ce = CPU["last"]
         enc = json.loads(out)
         _, td, md = run(["decode", f, "-o", back], env)

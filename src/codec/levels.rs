@@ -316,7 +316,7 @@ pub(super) enum BandInput<'a> {
 
 /// `round(v)` half away from zero, 0 for values that are not finite, capped at 9·10^15.
 #[inline]
-fn round_index(v: f32) -> i64 {
+pub(super) fn round_index(v: f32) -> i64 {
     if !v.is_finite() {
         return 0;
     }

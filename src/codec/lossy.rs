@@ -183,7 +183,7 @@ pub(super) fn coder_for(asked: Coder, t: crate::io::SampleType, mode: Mode) -> C
 }
 
 /// The colour transform of a lossy encode: YCoCg for three channels or more.
-fn lossy_colour(channels: usize) -> Colour {
+pub(super) fn lossy_colour(channels: usize) -> Colour {
     if channels >= 3 {
         Colour::YCoCg
     } else {

@@ -36,6 +36,7 @@ mod plan;
 mod rate;
 mod read;
 mod reblock;
+mod streamed;
 pub mod tiles;
 mod voids;
 mod write;
@@ -54,5 +55,6 @@ pub use read::{
     SlabDecode, SlabDecoder,
 };
 pub use reblock::to_blocks;
+pub use streamed::{decodes_streamed, encode_streamed, StreamedDecoder};
 pub use tiles::{default_tile, level_extents};
-pub use write::{encode, encode_stream, encode_tiled, encode_tiled_view, encode_view};
+pub use write::{encode, encode_stream, encode_tiled, encode_tiled_view, encode_view, streams};

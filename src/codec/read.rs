@@ -191,6 +191,8 @@ type CountedFile = Counting<std::io::BufReader<std::fs::File>>;
 /// tile decoded whole and handed over as one slab.
 pub struct SlabDecoder {
     tiled: Option<tiles::TiledSlabs<CountedFile>>,
+    /// A one-piece lossy 3.0 file over the one-piece limit, synthesized a row at a time.
+    streamed: Option<super::streamed::StreamedDecoder>,
     /// A file of one tile: its samples (until handed over) and completeness.
     whole: Option<Samples>,
     whole_complete: bool,
@@ -216,6 +218,23 @@ impl SlabDecoder {
             return Ok(SlabDecoder {
                 shape: t.shape().clone(),
                 tiled: Some(t),
+                streamed: None,
+                whole: None,
+                whole_complete: true,
+                count,
+            });
+        }
+        if opts.region.is_none()
+            && opts.level == 0
+            && !opts.allow_truncated
+            && super::streamed::decodes_streamed(&header)
+        {
+            let s = super::streamed::StreamedDecoder::open(path)?;
+            count.set(len);
+            return Ok(SlabDecoder {
+                shape: s.shape().clone(),
+                tiled: None,
+                streamed: Some(s),
                 whole: None,
                 whole_complete: true,
                 count,
@@ -226,6 +245,7 @@ impl SlabDecoder {
         Ok(SlabDecoder {
             shape: Shape::of(&d.raster),
             tiled: None,
+            streamed: None,
             whole: Some(d.raster.samples),
             whole_complete: d.complete,
             count,
@@ -239,6 +259,9 @@ impl SlabDecoder {
 
     /// The next rows of the output (along the slowest axis), `None` after the last.
     pub fn next_slab(&mut self) -> Result<Option<Samples>> {
+        if let Some(s) = &mut self.streamed {
+            return s.next_slab();
+        }
         match &mut self.tiled {
             Some(t) => t.next_slab(),
             None => Ok(self.whole.take()),

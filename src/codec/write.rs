@@ -4,7 +4,7 @@
 use super::encode::encode_filled;
 use super::options::EncodeOptions;
 use super::voids::with_voids_filled;
-use crate::io::slab::SlabSource;
+use crate::io::slab::{Shape, SlabSource};
 use crate::io::{Raster, RasterView};
 use crate::{Error, Result};
 
@@ -46,6 +46,16 @@ pub fn encode_tiled_view(
     }
 }
 
+/// Whether [`encode_stream`] writes the raster of `shape` as one transform streamed a
+/// slab at a time ([`super::encode_streamed`], format 3.0) when it is given the whole
+/// raster as its tile: a raster over the one-piece limit
+/// ([`super::tiles::default_tile`] cuts it) at options the stream covers (lossy at one
+/// base step, integer samples without voids). The CLI's default tile for such a raster.
+pub fn streams(shape: &Shape, opts: &EncodeOptions) -> bool {
+    super::tiles::default_tile(&shape.dims, shape.channels) != shape.dims
+        && super::streamed::covers(shape, opts)
+}
+
 /// An error unless the raster holds dims × channels samples.
 fn check_count(r: &RasterView<'_>) -> Result<()> {
     let n = crate::io::bytes::sample_count(r.dims, r.channels)?;
@@ -72,6 +82,9 @@ pub fn encode_stream<S: SlabSource + ?Sized, W: std::io::Write + std::io::Seek>(
     out: &mut W,
 ) -> Result<u64> {
     let shape = src.shape().clone();
+    if tile == shape.dims.as_slice() && streams(&shape, opts) {
+        return super::streamed::encode_streamed(src, opts, out);
+    }
     if tile != shape.dims.as_slice() {
         return super::tiles::encode_slabs(src, opts, tile, out);
     }

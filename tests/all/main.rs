@@ -40,6 +40,7 @@ mod solid;
 mod solid_cli;
 mod stdio;
 mod stream;
+mod streamed;
 mod subdivide;
 mod surface;
 mod tensor;

@@ -221,6 +221,23 @@ pub(crate) fn encode_slabs<S: SlabSource + ?Sized, W: Write + Seek>(
     Ok(at - start)
 }
 
+/// The first pass of a one-transform file over the raster of `src`
+/// ([`crate::codec::streamed`]): the least and greatest finite sample and, when
+/// `sampled`, every ⌈n/64⌉-th tile of the default grid (the whole raster when that is
+/// one tile), as [`encode_slabs`] measures them.
+pub(in crate::codec) fn first_pass<S: SlabSource + ?Sized>(
+    src: &mut S,
+    sampled: bool,
+) -> Result<((f64, f64), Vec<Raster>)> {
+    let shape = src.shape().clone();
+    let grid = Grid::new(
+        &shape.dims,
+        &super::default_tile(&shape.dims, shape.channels),
+    )?;
+    let (ranges, sample) = measure_slabs(src, &grid, &shape, sampled)?;
+    Ok((ranges.finite(), sample))
+}
+
 /// The rows of the raster in tile row `g0` of `grid`.
 fn rows_of(grid: &Grid, g0: usize) -> std::ops::Range<usize> {
     g0 * grid.tile[0]..g0 * grid.tile[0] + grid.extent(0, g0)
@@ -550,7 +567,12 @@ fn search_step(
 /// steps of doubling size until the target is bracketed, then the secant between the
 /// bracket's ends kept inside its middle half (the bracket shrinks by at least a quarter
 /// each time); stops at a met step within `tol` or a bracket under 0.1% of the step.
-fn search(range: f64, large_ok: bool, tol: f64, f: impl Fn(f64) -> Result<f64>) -> Result<f64> {
+pub(in crate::codec) fn search(
+    range: f64,
+    large_ok: bool,
+    tol: f64,
+    f: impl Fn(f64) -> Result<f64>,
+) -> Result<f64> {
     let (x_min, x_max) = ((range * 1e-7).ln(), (range * 4.0).ln());
     let mut met: Option<(f64, f64)> = None;
     let mut unmet: Option<(f64, f64)> = None;

@@ -1,0 +1,869 @@
+//! One transform at any size: a format 3.0 file written from a raster that is never
+//! whole in memory. The rows of the raster (a line of an image, a plane of a volume)
+//! are read a slab at a time and pushed through the streamed pyramid
+//! ([`crate::tensor::stream`]); each band row is quantized as it comes (the dead-zone
+//! quantizer, `q = sign(c)·⌊|c|/Δ_b + ρ⌋`, `Δ_b = Δ / (G_b·w_c)`), and as soon as a stripe
+//! of a band one code-block tall is complete, and its parent band holds the rows of the
+//! stripe's parent boxes, the stripe's blocks are coded (in parallel, streams in block
+//! order) and only their bytes are kept. The file is the one [`super::lossy::Prepared::code`]
+//! writes of the whole raster at the same base step (the same header, transform,
+//! indices and streams: tested), so every 3.0 reader reads it unchanged.
+//!
+//! Memory: the stream's few rows per level, the quantized rows of each band's open
+//! stripe (and of a parent's rows until its children's stripes are coded), and the
+//! coded blocks. The base step comes from a first pass ([`super::tiles::first_pass`]):
+//! the range, and for `--keep` and `--bpp` a sample of tiles of the default grid.
+//! Rate–distortion optimised indices need a parent's final indices before a child is
+//! coded, which would hold a band's values until its coarsest ancestor's stripe is
+//! done (half a 16384² image); the stream quantizes without it.
+
+use super::colour::{channel_weights, planes_f32};
+use super::levels::{round_index, CodedBand};
+use super::lossy::{header_with, lossy_colour, prepare, Frame};
+use super::options::{EncodeOptions, Format, Rate};
+use super::plan::{band_rho, Plan};
+use super::rate::{check_rate, keep_step, quality_step};
+use super::{meta, tiles};
+use crate::entropy::band::{self, Coding};
+use crate::entropy::codeblocks::{box_dims, extract, parent_box, Grid};
+use crate::entropy::{BandKind, Parent};
+use crate::format::bands::blocks_payload;
+use crate::format::tag::{HEAD, MEND, META};
+use crate::format::{self, put_chunk, Header, Mode};
+use crate::io::slab::{Shape, SlabSource};
+use crate::io::{Raster, Samples};
+use crate::quantize::{self, RHO};
+use crate::tensor::stream::{BandRow, StreamPlan};
+use crate::{Error, Result};
+use rayon::prelude::*;
+use std::collections::BTreeMap;
+use std::ops::Range;
+
+/// Whether [`encode_streamed`] writes the file of these options and raster: a format
+/// 3.0 file of integer samples without a nodata value (no voids to fill), of 2 to 4
+/// axes and at least one level, at a rate mode that sets one base step
+/// (`--quality`, `--keep`, `--threshold`, `--bpp`). `--lossless` and `--max-error`
+/// (the integer transform, a residual of the whole raster) and `--psnr` stay tiled
+/// above the one-piece limit.
+pub fn covers(shape: &Shape, opts: &EncodeOptions) -> bool {
+    opts.format == Format::Blocks
+        && !shape.sample_type.is_float()
+        && shape.meta.nodata.is_none()
+        && !super::voids::lists_voids(&shape.meta)
+        && (2..=4).contains(&shape.dims.len())
+        && opts.levels > 0
+        && matches!(
+            opts.rate,
+            Rate::Quality(_) | Rate::Keep(_) | Rate::Threshold(_) | Rate::Bpp(_)
+        )
+}
+
+/// Tiles of the first pass measured by the `--bpp` search (of the ⌈n/64⌉-th tiles).
+const BPP_SAMPLE: usize = 16;
+
+/// The one-transform file of the raster `src` hands out in slabs (module doc), written
+/// into `out`; returns the bytes written. An error for the options [`covers`] refuses.
+pub fn encode_streamed<S: SlabSource + ?Sized, W: std::io::Write>(
+    src: &mut S,
+    opts: &EncodeOptions,
+    out: &mut W,
+) -> Result<u64> {
+    check_rate(opts.rate)?;
+    let shape = src.shape().clone();
+    if !covers(&shape, opts) {
+        return Err(Error::parameter(
+            "rate",
+            format!("{:?}", opts.rate),
+            "a one-transform file of integer samples at --quality, --keep, --threshold or --bpp",
+        ));
+    }
+    let sampled = matches!(opts.rate, Rate::Keep(_) | Rate::Bpp(_));
+    let (range, sample) = tiles::first_pass(src, sampled)?;
+    let span = (range.1 - range.0).max(1e-30);
+    let step = match opts.rate {
+        Rate::Quality(q) => quality_step(q, span),
+        Rate::Threshold(t) => t / (1.0 - RHO),
+        Rate::Keep(k) => {
+            let mut w: Vec<f32> = sample
+                .par_iter()
+                .map(|t| Ok(prepare(&t.view(), opts, Mode::Lossy)?.weighted_details()))
+                .collect::<Result<Vec<_>>>()?
+                .concat();
+            keep_step(&mut w, k, span)
+        }
+        Rate::Bpp(b) => bpp_step(sample, opts, span, b)?,
+        _ => unreachable!("refused by covers"),
+    };
+    let colour = lossy_colour(shape.channels);
+    let frame = Frame {
+        dims: &shape.dims,
+        channels: shape.channels,
+        sample_type: shape.sample_type,
+        kind: shape.kind,
+    };
+    let mut header = header_with(&frame, opts, Mode::Lossy, colour, range, &shape.meta)?;
+    header.step = step;
+    let rdo = rdo_of(opts.rate);
+    if rdo.is_some() {
+        // reconstruction at the index, as the whole-array encoder's optimised files
+        header.delta = 0.0;
+    }
+    let bytes = encode_at(src, &header, &meta::to_bytes(&shape.meta), rdo)?;
+    out.write_all(&bytes)?;
+    Ok(bytes.len() as u64)
+}
+
+/// The multiplier of the rate–distortion optimised indices of the rate mode (those the
+/// whole-array encoder optimises: `--quality`, `--bpp`), given to the bands without
+/// children ([`Coder`]).
+fn rdo_of(rate: Rate) -> Option<f32> {
+    matches!(rate, Rate::Quality(_) | Rate::Bpp(_)).then_some(quantize::LAMBDA)
+}
+
+/// The base step of `--bpp b`: the search of the tiled files ([`tiles::search`]) on the
+/// bits per position of one-piece files of (every ⌈n/[`BPP_SAMPLE`]⌉-th of) the sampled
+/// tiles, each coded as the stream codes the raster ([`encode_at`]).
+fn bpp_step(mut sample: Vec<Raster>, opts: &EncodeOptions, span: f64, b: f64) -> Result<f64> {
+    let every = sample.len().div_ceil(BPP_SAMPLE).max(1);
+    sample = sample.into_iter().step_by(every).collect();
+    let positions: f64 = sample.iter().map(|t| t.positions() as f64).sum();
+    let rdo = rdo_of(opts.rate);
+    let heads = sample
+        .iter()
+        .map(|t| {
+            let frame = Frame {
+                dims: &t.dims,
+                channels: t.channels,
+                sample_type: t.sample_type(),
+                kind: t.kind,
+            };
+            let colour = lossy_colour(t.channels);
+            let mut h = header_with(&frame, opts, Mode::Lossy, colour, (0.0, 0.0), &t.meta)?;
+            h.delta = if rdo.is_some() { 0.0 } else { h.delta };
+            Ok(h)
+        })
+        .collect::<Result<Vec<Header>>>()?;
+    tiles::search(span, true, -(0.99f64.ln()), |step| {
+        let bytes = sample
+            .par_iter()
+            .zip(&heads)
+            .map(|(t, h)| {
+                let mut h = h.clone();
+                h.step = step;
+                let mut src = crate::io::slab::MemorySlabs::new(t);
+                Ok(encode_at(&mut src, &h, &[], rdo)?.len())
+            })
+            .collect::<Result<Vec<usize>>>()?;
+        let bytes: usize = bytes.iter().sum();
+        Ok(b.ln() - (bytes as f64 * 8.0 / positions.max(1.0)).ln())
+    })
+}
+
+/// The file of header `h` (its base step set) of the raster of `src`, with `mETA`
+/// bytes `meta`: the raster streamed through the pyramid a slab at a time. With `rdo`
+/// (a multiplier λ) the bands without children get rate–distortion optimised indices
+/// and the others are rounded; without, every band is dead-zone quantized.
+pub(super) fn encode_at<S: SlabSource + ?Sized>(
+    src: &mut S,
+    h: &Header,
+    meta: &[u8],
+    rdo: Option<f32>,
+) -> Result<Vec<u8>> {
+    let plan = Plan::new(h)?;
+    let sp = StreamPlan::new(&h.dims, &plan.pyr.spec)?;
+    if sp.bands() != plan.bands.as_slice() {
+        return Err(Error::parameter(
+            "levels",
+            h.levels,
+            "a pyramid the stream lays out as the file does",
+        ));
+    }
+    let gains = quantize::band_gains(&plan.pyr, &plan.bands);
+    let weights = channel_weights(h.colour, h.channels);
+    let ratio = |j: usize, c: usize| (1.0 / (gains[j] * weights[c])) as f32;
+    let nc = h.channels;
+    let mut coders: Vec<Coder> = (0..nc)
+        .map(|c| {
+            let steps = (0..plan.bands.len())
+                .map(|j| h.step * ratio(j, c) as f64)
+                .collect();
+            Coder::new(&plan, steps, rdo)
+        })
+        .collect();
+    {
+        let mut analyses: Vec<_> = coders
+            .iter_mut()
+            .map(|k| sp.analysis(move |row: BandRow<f32>| k.take(row)))
+            .collect();
+        let d0 = h.dims[0];
+        let row_len = sp.row_len();
+        // about 2^20 positions a slab
+        let rows = ((1usize << 20) / row_len.max(1)).clamp(1, d0);
+        let shape = src.shape().clone();
+        for r0 in (0..d0).step_by(rows) {
+            let r1 = (r0 + rows).min(d0);
+            let mut dims = shape.dims.clone();
+            dims[0] = r1 - r0;
+            let slab = Raster::new(dims, nc, src.read_rows(r0..r1)?, shape.kind)?;
+            let planes = planes_f32(&slab.view(), h.colour);
+            drop(slab);
+            for r in 0..r1 - r0 {
+                for (a, p) in analyses.iter_mut().zip(&planes) {
+                    a.push(&p[r * row_len..(r + 1) * row_len])?;
+                }
+            }
+        }
+        for a in analyses {
+            let _sink = a.finish()?;
+        }
+    }
+    let mut coded: Vec<Vec<CodedBand>> = Vec::with_capacity(nc);
+    for k in coders {
+        coded.push(k.finish()?);
+    }
+    let mut out = format::SIGNATURE.to_vec();
+    put_chunk(&mut out, HEAD, &h.to_bytes());
+    if !meta.is_empty() {
+        put_chunk(&mut out, META, meta);
+    }
+    plan.put_levels(&mut out, &coded, |c, j| ratio(j, c));
+    put_chunk(&mut out, MEND, &[]);
+    Ok(out)
+}
+
+/// One band of one channel while it streams: its quantized rows not yet let go, which
+/// of its stripes are coded, and the coded blocks.
+struct BandState {
+    grid: Grid,
+    /// rows a stripe holds (the block extent on axis 0)
+    tall: usize,
+    rows: BTreeMap<usize, Vec<i32>>,
+    /// the values over the step of the rows not yet let go (bands whose indices are
+    /// optimised as they are coded)
+    values: BTreeMap<usize, Vec<f32>>,
+    /// rows received per stripe
+    got: Vec<usize>,
+    coded: Vec<bool>,
+    streams: Vec<Vec<u8>>,
+}
+
+impl BandState {
+    fn stripes(&self) -> usize {
+        self.got.len()
+    }
+
+    /// The rows of stripe `s`.
+    fn stripe_rows(&self, s: usize) -> Range<usize> {
+        s * self.tall..((s + 1) * self.tall).min(self.grid.dims[0])
+    }
+
+    /// The values over the step of box `b` of the band (its rows held), raster order.
+    fn gather_values(&self, b: &[Range<usize>]) -> Vec<f32> {
+        let n: usize = b.iter().map(|r| r.len()).product();
+        let mut out = Vec::with_capacity(n);
+        for y in b[0].clone() {
+            out.extend(extract(&self.values[&y], &self.grid.dims[1..], &b[1..]));
+        }
+        out
+    }
+
+    /// The indices of box `b` of the band (its rows held), raster order.
+    fn gather(&self, b: &[Range<usize>]) -> Vec<i64> {
+        let n: usize = b.iter().map(|r| r.len()).product();
+        let mut out = Vec::with_capacity(n);
+        for y in b[0].clone() {
+            let row = &self.rows[&y];
+            out.extend(
+                extract(row, &self.grid.dims[1..], &b[1..])
+                    .into_iter()
+                    .map(i64::from),
+            );
+        }
+        out
+    }
+}
+
+/// The bands of one channel as their rows stream in ([`BandState`]).
+struct Coder<'p> {
+    plan: &'p Plan,
+    /// each band's step `Δ_b`
+    steps: Vec<f64>,
+    bands: Vec<BandState>,
+    /// each band's child (the band whose parent it is)
+    children: Vec<Option<usize>>,
+    /// the multiplier of optimised indices (bands without children), see [`encode_at`]
+    rdo: Option<f32>,
+    err: Option<Error>,
+}
+
+impl<'p> Coder<'p> {
+    fn new(plan: &'p Plan, steps: Vec<f64>, rdo: Option<f32>) -> Coder<'p> {
+        let bands = (0..plan.bands.len())
+            .map(|j| {
+                let grid = plan.grid(j).expect("a format 3 plan has code-blocks");
+                let tall = grid.block[0];
+                let n = if grid.is_empty() { 0 } else { grid.counts[0] };
+                BandState {
+                    tall,
+                    rows: BTreeMap::new(),
+                    values: BTreeMap::new(),
+                    got: vec![0; n],
+                    coded: vec![false; n],
+                    streams: vec![Vec::new(); grid.len()],
+                    grid,
+                }
+            })
+            .collect();
+        let mut children = vec![None; plan.bands.len()];
+        for (j, p) in plan.parents.iter().enumerate() {
+            if let Some(p) = *p {
+                children[p] = Some(j);
+            }
+        }
+        Coder {
+            plan,
+            steps,
+            bands,
+            children,
+            rdo,
+            err: None,
+        }
+    }
+
+    /// The sink of the stream: quantize a band row, keep it, and code what it completes.
+    fn take(&mut self, row: BandRow<f32>) {
+        if self.err.is_some() {
+            return;
+        }
+        if let Err(e) = self.take_row(row) {
+            self.err = Some(e);
+        }
+    }
+
+    fn take_row(&mut self, row: BandRow<f32>) -> Result<()> {
+        let j = row.band;
+        if self.bands[j].grid.is_empty() {
+            return Ok(());
+        }
+        let (s, rho) = (self.steps[j], band_rho(self.plan, j));
+        let stripe = row.row / self.bands[j].tall;
+        if self.optimised(j) {
+            let v = row.data.iter().map(|&x| (x as f64 / s) as f32).collect();
+            self.bands[j].values.insert(row.row, v);
+        } else {
+            let rounded = self.rdo.is_some();
+            let q = row
+                .data
+                .iter()
+                .map(|&x| {
+                    let q = if rounded {
+                        round_index((x as f64 / s) as f32)
+                    } else {
+                        quantize::quantize(x as f64, s, rho)
+                    };
+                    i32::try_from(q).map_err(|_| {
+                        Error::parameter("step", s, "a step whose indices fit 32 bits")
+                    })
+                })
+                .collect::<Result<Vec<i32>>>()?;
+            self.bands[j].rows.insert(row.row, q);
+        }
+        let b = &mut self.bands[j];
+        b.got[stripe] += 1;
+        self.try_code(j, stripe)?;
+        if let Some(k) = self.children[j] {
+            // the child's stripes whose parent boxes hold this row
+            let ch = &self.bands[k];
+            let last = self.bands[j].grid.dims[0] - 1;
+            let hi = if row.row == last {
+                ch.grid.dims[0]
+            } else {
+                (2 * row.row + 2).min(ch.grid.dims[0])
+            };
+            let lo = (2 * row.row).min(hi);
+            if lo < hi {
+                for t in lo / ch.tall..=(hi - 1) / ch.tall {
+                    self.try_code(k, t)?;
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Whether band `j`'s indices are optimised as its blocks are coded: a detail band
+    /// without children, when the rate mode optimises.
+    fn optimised(&self, j: usize) -> bool {
+        self.rdo.is_some() && self.plan.bands[j].level > 0 && self.children[j].is_none()
+    }
+
+    /// The parent band of `j` and the rows of it that stripe `s` of `j` reads (the
+    /// parent boxes of its blocks), when it has one.
+    fn parent_rows(&self, j: usize, s: usize) -> Option<(usize, Range<usize>)> {
+        if self.plan.bands[j].level == 0 {
+            return None;
+        }
+        let p = self.plan.parents[j]?;
+        let pd = &self.bands[p].grid.dims;
+        if pd.len() != self.bands[j].grid.dims.len() || pd.contains(&0) {
+            return None;
+        }
+        let r = self.bands[j].stripe_rows(s);
+        let pb = parent_box(&[r], &pd[..1]);
+        Some((p, pb[0].clone()))
+    }
+
+    /// Code stripe `s` of band `j` when all its rows and its parent rows are there.
+    fn try_code(&mut self, j: usize, s: usize) -> Result<()> {
+        let b = &self.bands[j];
+        if s >= b.stripes() || b.coded[s] || b.got[s] < b.stripe_rows(s).len() {
+            return Ok(());
+        }
+        let parent = self.parent_rows(j, s);
+        if let Some((p, rows)) = &parent {
+            let pb = &self.bands[*p];
+            if rows.clone().any(|y| !pb.rows.contains_key(&y)) {
+                return Ok(());
+            }
+        }
+        let parent = parent.map(|(p, _)| p);
+        self.code_stripe(j, s, parent);
+        self.prune(j);
+        if let Some(p) = parent {
+            self.prune(p);
+        }
+        Ok(())
+    }
+
+    /// Code the blocks of stripe `s` of band `j` (parent band `parent`) in parallel.
+    fn code_stripe(&mut self, j: usize, s: usize, parent: Option<usize>) {
+        let b = &self.bands[j];
+        let g = &b.grid;
+        let per: usize = g.counts[1..].iter().product();
+        let kind = if self.plan.bands[j].level == 0 {
+            BandKind::Coarse
+        } else {
+            BandKind::Detail
+        };
+        let coding: Coding = self.plan.coding;
+        let pb = parent.map(|p| &self.bands[p]);
+        let lambda = self.rdo.filter(|_| self.optimised(j));
+        let streams: Vec<Vec<u8>> = (s * per..(s + 1) * per)
+            .into_par_iter()
+            .map(|i| {
+                let bx = g.bounds(i);
+                let d = box_dims(&bx);
+                let par = pb.map(|pb| {
+                    let pbox = parent_box(&bx, &pb.grid.dims);
+                    (pb.gather(&pbox), box_dims(&pbox))
+                });
+                let pp = par.as_ref().map(|(data, dims)| Parent { data, dims });
+                match lambda {
+                    // as codeblocks::encode_blocks_rdo_by codes a block
+                    Some(lambda) => {
+                        let v = b.gather_values(&bx);
+                        let cols = d.last().copied().unwrap_or(1);
+                        let mut e = crate::entropy::range::Encoder::new();
+                        band::encode_rdo_with(&mut e, &d, pp, lambda, coding, false, |g, out| {
+                            out.copy_from_slice(&v[g * cols..(g + 1) * cols])
+                        });
+                        e.finish_short()
+                    }
+                    None => band::encode_stream(&b.gather(&bx), &d, kind, pp, coding),
+                }
+            })
+            .collect();
+        let b = &mut self.bands[j];
+        for (k, st) in streams.into_iter().enumerate() {
+            b.streams[s * per + k] = st;
+        }
+        b.coded[s] = true;
+    }
+
+    /// Let go of the rows of band `j` no stripe left to code reads: its own coded
+    /// stripes' rows that no uncoded stripe of its child reads as parent rows.
+    fn prune(&mut self, j: usize) {
+        let child = self.children[j];
+        let waiting: Vec<Range<usize>> = match child {
+            Some(k) => (0..self.bands[k].stripes())
+                .filter(|&t| !self.bands[k].coded[t])
+                .filter_map(|t| self.parent_rows(k, t).map(|(_, r)| r))
+                .collect(),
+            None => Vec::new(),
+        };
+        let b = &mut self.bands[j];
+        let tall = b.tall;
+        let coded = &b.coded;
+        b.rows
+            .retain(|&y, _| !coded[y / tall] || waiting.iter().any(|r| r.contains(&y)));
+        b.values.retain(|&y, _| !coded[y / tall]);
+    }
+
+    /// The coded bands of the channel, once every row has streamed through.
+    fn finish(self) -> Result<Vec<CodedBand>> {
+        if let Some(e) = self.err {
+            return Err(e);
+        }
+        self.bands
+            .into_iter()
+            .map(|b| {
+                if b.coded.contains(&false) {
+                    return Err(Error::parameter(
+                        "raster",
+                        "a band",
+                        "every stripe of code-blocks complete at the end of the stream",
+                    ));
+                }
+                Ok(CodedBand {
+                    q: Vec::new(),
+                    stream: blocks_payload(&b.streams),
+                })
+            })
+            .collect()
+    }
+}
+
+/// Whether a whole decode of the file of header `h` goes through [`StreamedDecoder`]
+/// in [`super::SlabDecoder`]: a one-piece lossy 3.0 file (no residual layer, no voids)
+/// of 2 or 3 axes over the one-piece limit ([`tiles::default_tile`] would cut it).
+pub fn decodes_streamed(h: &Header) -> bool {
+    !h.is_tiled()
+        && h.version.has_blocks()
+        && h.mode == Mode::Lossy
+        && !h.voids
+        && (2..=3).contains(&h.dims.len())
+        && h.levels > 0
+        && tiles::default_tile(&h.dims, h.channels) != h.dims
+}
+
+/// Rows of the output a slab of [`StreamedDecoder`] holds (about 2^20 positions).
+fn slab_rows(row_len: usize, d0: usize) -> usize {
+    ((1usize << 20) / row_len.max(1)).clamp(1, d0.max(1))
+}
+
+/// A whole decode of a one-piece lossy 3.0 file in bounded memory: the band rows pulled
+/// through the streamed synthesis ([`StreamPlan::synthesis`]), each stripe of
+/// code-blocks decoded (its blocks in parallel) when its first row is asked for and
+/// kept while it is read (the last [`KEPT_STRIPES`] of a band with children, the last
+/// one of a band without, as 32-bit indices), the
+/// rows converted to samples a slab at a time. The synthesis runs on a thread of its
+/// own that hands the slabs over; the samples are those of the whole-array decode
+/// (the stream's synthesis gives its bits).
+pub struct StreamedDecoder {
+    shape: Shape,
+    rx: std::sync::mpsc::Receiver<Result<Samples>>,
+    done: bool,
+}
+
+/// Decoded stripes a band with children keeps (an older one asked again is decoded
+/// again).
+const KEPT_STRIPES: usize = 2;
+
+impl StreamedDecoder {
+    /// Read the file at `path` (its chunks checked, the code-blocks' bytes held) and
+    /// start the synthesis.
+    pub fn open(path: &std::path::Path) -> Result<StreamedDecoder> {
+        let f = std::fs::File::open(path)?;
+        let len = f.metadata()?.len();
+        let p = super::container::read_chunks(std::io::BufReader::new(f), len, 0, false)?;
+        StreamedDecoder::of(p)
+    }
+
+    pub(super) fn of(p: super::container::Parsed) -> Result<StreamedDecoder> {
+        let h = &p.header;
+        if !h.version.has_blocks() || h.mode != Mode::Lossy || h.voids || h.dims.len() < 2 {
+            return Err(Error::format(
+                format!("a {:?} file of {:?}", h.mode, h.dims),
+                "a lossy 3.0 file of 2 or 3 axes without voids",
+            ));
+        }
+        let shape = Shape {
+            dims: h.dims.clone(),
+            channels: h.channels,
+            sample_type: h.sample_type,
+            kind: h.kind,
+            meta: p.meta.clone(),
+        };
+        // the plan is checked here, before the thread starts
+        let sp = StreamPlan::new(&h.dims, &p.plan.pyr.spec)?;
+        if sp.bands() != p.plan.bands.as_slice() {
+            return Err(Error::format(
+                format!("a pyramid of {} levels", h.levels),
+                "a pyramid the stream lays out as the file does",
+            ));
+        }
+        let (tx, rx) = std::sync::mpsc::sync_channel(1);
+        drop(sp);
+        std::thread::spawn(move || {
+            let r = StreamPlan::new(&p.header.dims, &p.plan.pyr.spec)
+                .and_then(|sp| synthesize(&p, &sp, &mut |s| tx.send(Ok(s)).is_ok()));
+            if let Err(e) = r {
+                let _ = tx.send(Err(e));
+            }
+        });
+        Ok(StreamedDecoder {
+            shape,
+            rx,
+            done: false,
+        })
+    }
+
+    /// The output's extents, type and metadata.
+    pub fn shape(&self) -> &Shape {
+        &self.shape
+    }
+
+    /// The next rows of the output, `None` after the last.
+    pub fn next_slab(&mut self) -> Result<Option<Samples>> {
+        if self.done {
+            return Ok(None);
+        }
+        match self.rx.recv() {
+            Ok(r) => r.map(Some),
+            Err(_) => {
+                self.done = true;
+                Ok(None)
+            }
+        }
+    }
+}
+
+/// Pull every row of the file `p` through the synthesis `sp` and hand its samples to
+/// `send` a slab at a time (until it returns false).
+fn synthesize(
+    p: &super::container::Parsed,
+    sp: &StreamPlan,
+    send: &mut dyn FnMut(Samples) -> bool,
+) -> Result<()> {
+    let h = &p.header;
+    let nc = h.channels;
+    let err = std::rc::Rc::new(std::cell::RefCell::new(None::<Error>));
+    let mut sources = (0..nc)
+        .map(|c| BandSource::new(p, c, err.clone()))
+        .collect::<Result<Vec<_>>>()?;
+    let mut syn: Vec<_> = sources
+        .iter_mut()
+        .map(|s| sp.synthesis(move |j: usize, r: usize, out: &mut [f32]| s.fill(j, r, out)))
+        .collect();
+    let (d0, row_len) = (h.dims[0], sp.row_len());
+    let rows = slab_rows(row_len, d0);
+    for r0 in (0..d0).step_by(rows) {
+        let n = (r0 + rows).min(d0) - r0;
+        let mut planes: Vec<Vec<f32>> = (0..nc).map(|_| vec![0f32; n * row_len]).collect();
+        for r in 0..n {
+            for (s, plane) in syn.iter_mut().zip(planes.iter_mut()) {
+                s.pull(&mut plane[r * row_len..(r + 1) * row_len])?;
+            }
+            if let Some(e) = err.borrow_mut().take() {
+                return Err(e);
+            }
+        }
+        let samples = super::plan::to_samples(
+            planes,
+            n * row_len,
+            h.colour == crate::format::header::Colour::YCoCg,
+            (h.min, h.max),
+            h.sample_type,
+        );
+        if !send(samples) {
+            return Ok(());
+        }
+    }
+    Ok(())
+}
+
+/// The band rows of one channel of a file, decoded a stripe of code-blocks at a time.
+struct BandSource<'a> {
+    p: &'a super::container::Parsed,
+    c: usize,
+    grids: Vec<Grid>,
+    /// each band's blocks (byte ranges in its entry); `None`: the band is absent
+    sets: Vec<Option<Vec<Range<usize>>>>,
+    steps: Vec<f64>,
+    deltas: Vec<f64>,
+    /// decoded stripes of each band (indices, the stripe's rows in raster order)
+    kept: Vec<BTreeMap<usize, Vec<i32>>>,
+    err: std::rc::Rc<std::cell::RefCell<Option<Error>>>,
+}
+
+impl<'a> BandSource<'a> {
+    fn new(
+        p: &'a super::container::Parsed,
+        c: usize,
+        err: std::rc::Rc<std::cell::RefCell<Option<Error>>>,
+    ) -> Result<BandSource<'a>> {
+        let plan = &p.plan;
+        let nb = plan.bands.len();
+        let grids: Vec<Grid> = (0..nb)
+            .map(|j| plan.grid(j).expect("a format 3 plan has code-blocks"))
+            .collect();
+        let sets = (0..nb)
+            .map(|j| {
+                p.bands[c][j]
+                    .as_ref()
+                    .map(|bc| {
+                        crate::format::bands::parse_blocks(
+                            &bc.data,
+                            &grids[j].dims,
+                            &grids[j].block,
+                        )
+                        .map(|s| s.streams)
+                        .map_err(|e| {
+                            Error::format(format!("band {j} of channel {c}: {e}"), "a valid band")
+                        })
+                    })
+                    .transpose()
+            })
+            .collect::<Result<Vec<_>>>()?;
+        let steps = (0..nb)
+            .map(|j| p.bands[c][j].as_ref().map_or(0.0, |bc| bc.step))
+            .collect();
+        let deltas = (0..nb)
+            .map(|j| super::plan::band_delta(&p.header, plan, j))
+            .collect();
+        Ok(BandSource {
+            p,
+            c,
+            grids,
+            sets,
+            steps,
+            deltas,
+            kept: vec![BTreeMap::new(); nb],
+            err,
+        })
+    }
+
+    /// Row `r` of band `j`, dequantized, into `out` (zeros after an error).
+    fn fill(&mut self, j: usize, r: usize, out: &mut [f32]) {
+        out.fill(0.0);
+        if self.err.borrow().is_some() || self.sets[j].is_none() {
+            return;
+        }
+        let tall = self.grids[j].block[0];
+        let s = r / tall;
+        if let Err(e) = self.ensure(j, s) {
+            *self.err.borrow_mut() = Some(e);
+            return;
+        }
+        let len = out.len();
+        let at = (r - s * tall) * len;
+        let q: Vec<i64> = self.kept[j][&s][at..at + len]
+            .iter()
+            .map(|&v| v as i64)
+            .collect();
+        super::plan::dequantize_row(&q, self.steps[j], self.deltas[j], out);
+    }
+
+    /// The parent band of `j` and the rows of it that stripe `s` of `j` reads.
+    fn parent_rows(&self, j: usize, s: usize) -> Option<(usize, Range<usize>)> {
+        let plan = &self.p.plan;
+        if plan.bands[j].level == 0 {
+            return None;
+        }
+        let pj = plan.parents[j]?;
+        let pd = &self.grids[pj].dims;
+        if pd.contains(&0) {
+            return None;
+        }
+        let g = &self.grids[j];
+        let tall = g.block[0];
+        let rows = s * tall..((s + 1) * tall).min(g.dims[0]);
+        Some((pj, parent_box(&[rows], &pd[..1])[0].clone()))
+    }
+
+    /// Decode stripe `s` of band `j` (and the parent stripes it reads) unless kept.
+    fn ensure(&mut self, j: usize, s: usize) -> Result<()> {
+        if self.kept[j].contains_key(&s) {
+            return Ok(());
+        }
+        let parent = self.parent_rows(j, s);
+        // the parent's rows the stripe reads, as one array (rows `prows`)
+        let mut par: Option<(Vec<usize>, Range<usize>, Vec<i32>)> = None;
+        if let Some((pj, prows)) = parent.clone() {
+            if self.sets[pj].is_some() {
+                let pt = self.grids[pj].block[0];
+                let plen: usize = self.grids[pj].dims[1..].iter().product();
+                let mut v = Vec::with_capacity(prows.len() * plen);
+                for y in prows.clone() {
+                    self.ensure(pj, y / pt)?;
+                    let st = &self.kept[pj][&(y / pt)];
+                    let at = (y - (y / pt) * pt) * plen;
+                    v.extend_from_slice(&st[at..at + plen]);
+                }
+                par = Some((self.grids[pj].dims.clone(), prows, v));
+            }
+        }
+        let g = &self.grids[j];
+        let per: usize = g.counts[1..].iter().product();
+        let tall = g.block[0];
+        let rows = s * tall..((s + 1) * tall).min(g.dims[0]);
+        let row_len: usize = g.dims[1..].iter().product();
+        let kind = if self.p.plan.bands[j].level == 0 {
+            BandKind::Coarse
+        } else {
+            BandKind::Detail
+        };
+        let coding = self.p.plan.coding;
+        let data = &self.p.bands[self.c][j]
+            .as_ref()
+            .expect("a band with blocks is present")
+            .data;
+        let set = self.sets[j].as_ref().expect("checked by the caller");
+        let blocks: Vec<Result<Vec<i64>>> = (s * per..(s + 1) * per)
+            .into_par_iter()
+            .map(|i| {
+                let b = g.bounds(i);
+                let d = box_dims(&b);
+                let pv = par.as_ref().map(|(pdims, prows, v)| {
+                    let pb = parent_box(&b, pdims);
+                    let mut local = pb.clone();
+                    local[0] = pb[0].start - prows.start..pb[0].end - prows.start;
+                    let mut ldims = pdims.clone();
+                    ldims[0] = prows.len();
+                    let vals: Vec<i64> = extract(v, &ldims, &local)
+                        .into_iter()
+                        .map(i64::from)
+                        .collect();
+                    (vals, box_dims(&pb))
+                });
+                let pp = pv.as_ref().map(|(data, dims)| Parent { data, dims });
+                let mut dec = crate::entropy::range::Decoder::new_short(&data[set[i].clone()]);
+                band::decode(&mut dec, &d, kind, pp, coding).map_err(|e| {
+                    Error::format(
+                        format!("code-block {i} of band {j} of channel {}: {e}", self.c),
+                        "a valid code-block",
+                    )
+                })
+            })
+            .collect();
+        let mut stripe = vec![0i32; rows.len() * row_len];
+        let mut sdims = g.dims.clone();
+        sdims[0] = rows.len();
+        for (k, v) in blocks.into_iter().enumerate() {
+            let v = v?;
+            let mut b = g.bounds(s * per + k);
+            b[0] = b[0].start - rows.start..b[0].end - rows.start;
+            let v: Vec<i32> = v
+                .into_iter()
+                .map(|x| {
+                    i32::try_from(x).map_err(|_| {
+                        Error::format(format!("index {x} in band {j}"), "indices of 32 bits")
+                    })
+                })
+                .collect::<Result<_>>()?;
+            crate::entropy::codeblocks::insert(&mut stripe, &sdims, &b, &v);
+        }
+        // a band without children is read in order: its last stripe is enough
+        let keep = if self.p.plan.parents.contains(&Some(j)) {
+            KEPT_STRIPES
+        } else {
+            1
+        };
+        let kept = &mut self.kept[j];
+        kept.insert(s, stripe);
+        while kept.len() > keep {
+            let old = *kept.keys().find(|&&k| k != s).expect("more than one");
+            kept.remove(&old);
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,224 @@
+//! The one-transform file of a raster streamed a slab at a time
+//! (`codec::encode_streamed`, what `mra encode` writes above the one-piece limit): the
+//! bytes of the whole-array 3.0 encode at the same step, whatever the thread count; a
+//! region of it is the whole decode cropped; a truncated one is a one-line error.
+
+use super::common;
+use mra::codec::{self, DecodeOptions, EncodeOptions, Format, Rate};
+use mra::io::slab::{MemorySlabs, Shape};
+use mra::io::{DataKind, Raster, SampleType, Samples};
+use mra::scheme::{Boundary, Scheme};
+
+/// A smooth field with texture (xorshift) over `[0, hi]`, `channels` channels of `ty`.
+fn field(dims: &[usize], channels: usize, ty: SampleType, seed: u64, hi: f64) -> Raster {
+    let n: usize = dims.iter().product::<usize>() * channels;
+    let w = *dims.last().unwrap();
+    let mut x = seed | 1;
+    let v: Vec<f64> = (0..n)
+        .map(|i| {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            let p = i / channels;
+            let (px, py) = ((p % w) as f64, (p / w) as f64);
+            let s = 0.5 + 0.35 * (px * 0.11 + (i % channels) as f64).sin() * (py * 0.05).cos();
+            hi * (s + 0.06 * ((x >> 40) as f64 / (1u64 << 24) as f64 - 0.5)).clamp(0.0, 1.0)
+        })
+        .collect();
+    let kind = if dims.len() >= 3 {
+        DataKind::Volume
+    } else {
+        DataKind::Image
+    };
+    Raster::new(dims.to_vec(), channels, Samples::from_f64(&v, ty), kind).unwrap()
+}
+
+fn opts(rate: Rate, levels: usize, boundary: Boundary) -> EncodeOptions {
+    EncodeOptions {
+        rate,
+        levels,
+        boundary,
+        scheme: Scheme::Cdf97,
+        format: Format::Blocks,
+    }
+}
+
+fn streamed(r: &Raster, o: &EncodeOptions) -> Vec<u8> {
+    let mut out = Vec::new();
+    let n = codec::encode_streamed(&mut MemorySlabs::new(r), o, &mut out).unwrap();
+    assert_eq!(n as usize, out.len());
+    out
+}
+
+/// At a fixed step (`--threshold`: the dead-zone quantizer on both paths) the streamed
+/// file is the whole-array encoder's file byte for byte: the same transform, indices and
+/// code-block streams, for RGB, 16-bit, volumes and 4-D, odd sizes, bands of several
+/// stripes of code-blocks (rows 256 tall in images, planes 32 deep in volumes), and
+/// periodic ends (whose first rows come last).
+#[test]
+fn streamed_files_are_the_whole_encoders_bytes() {
+    let cases: [(Raster, usize, f64); 5] = [
+        (field(&[131, 97], 3, SampleType::U8, 1, 255.0), 4, 3.0),
+        (field(&[1100, 75], 1, SampleType::U16, 2, 60000.0), 5, 400.0),
+        (field(&[70, 41, 33], 1, SampleType::U16, 3, 4000.0), 3, 20.0),
+        (
+            field(&[150, 23, 19], 2, SampleType::I16, 4, 3000.0),
+            4,
+            10.0,
+        ),
+        (field(&[5, 6, 7, 9], 1, SampleType::U8, 5, 255.0), 2, 2.0),
+    ];
+    for (r, levels, t) in &cases {
+        for boundary in [Boundary::Symmetric, Boundary::Periodic] {
+            let o = opts(Rate::Threshold(*t), *levels, boundary);
+            let whole = codec::encode(r, &o).unwrap();
+            assert_eq!(codec::info(&whole).unwrap().version, "3.0");
+            let s = streamed(r, &o);
+            assert!(
+                s == whole,
+                "{} {boundary:?}: {} vs {} bytes",
+                r.summary(),
+                s.len(),
+                whole.len()
+            );
+        }
+    }
+}
+
+/// The streamed file does not depend on the thread count (rate modes that take a first
+/// pass included), and `--bpp` lands near its budget.
+#[test]
+fn streamed_files_do_not_depend_on_the_thread_count() {
+    let r = field(&[600, 210], 1, SampleType::U16, 7, 50000.0);
+    let v = field(&[66, 40, 37], 3, SampleType::U8, 8, 255.0);
+    for (r, rate) in [
+        (&r, Rate::Bpp(1.0)),
+        (&r, Rate::Quality(60.0)),
+        (&v, Rate::Keep(4.0)),
+        (&v, Rate::Bpp(0.5)),
+    ] {
+        let o = opts(rate, 4, Boundary::Symmetric);
+        let on = |threads: usize| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap()
+                .install(|| streamed(r, &o))
+        };
+        let one = on(1);
+        assert!(one == on(2), "{} {rate:?}", r.summary());
+        if let Rate::Bpp(b) = rate {
+            let got = one.len() as f64 * 8.0 / r.positions() as f64;
+            assert!(got <= b * 1.05 && got >= b * 0.7, "{rate:?}: {got} bpp");
+        }
+    }
+}
+
+/// A region of a streamed file decodes to the whole decode cut to the region.
+#[test]
+fn a_region_of_a_streamed_file_is_the_whole_decode_cropped() {
+    let r = field(&[700, 90], 3, SampleType::U8, 9, 255.0);
+    let s = streamed(&r, &opts(Rate::Bpp(1.5), 5, Boundary::Symmetric));
+    let whole = codec::decode(&s, &DecodeOptions::default()).unwrap().raster;
+    let (ys, xs) = (300..420, 17..61);
+    let part = codec::decode(
+        &s,
+        &DecodeOptions {
+            region: Some(vec![ys.clone(), xs.clone()]),
+            ..Default::default()
+        },
+    )
+    .unwrap()
+    .raster;
+    assert_eq!(part.dims, vec![ys.len(), xs.len()]);
+    let (w, c) = (r.dims[1], r.channels);
+    let all = whole.samples.to_f64();
+    let want: Vec<f64> = ys
+        .flat_map(|y| {
+            let xs = xs.clone();
+            let all = &all;
+            xs.flat_map(move |x| (0..c).map(move |k| all[(y * w + x) * c + k]))
+        })
+        .collect();
+    assert_eq!(part.samples.to_f64(), want);
+}
+
+/// A truncated streamed file is an error (the library's and the CLI's: one line, exit
+/// code 2, no output).
+#[test]
+fn a_truncated_streamed_file_is_a_one_line_error() {
+    let r = field(&[300, 80], 1, SampleType::U16, 10, 9000.0);
+    let s = streamed(&r, &opts(Rate::Quality(50.0), 4, Boundary::Symmetric));
+    let cut = &s[..s.len() * 2 / 3];
+    assert!(codec::decode(cut, &DecodeOptions::default()).is_err());
+    let dir = common::scratch_dir("streamed_truncated");
+    std::fs::write(dir.join("cut.mra"), cut).unwrap();
+    let o = common::mra_with_stdin(Some(&dir), &["decode", "cut.mra", "-o", "out.nrrd"], &[]);
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(err.trim().lines().count(), 1, "{err}");
+    assert!(err.contains("cut.mra"), "{err}");
+    assert!(!dir.join("out.nrrd").exists());
+}
+
+/// Over the one-piece limit the default file streams for the lossy modes of one step
+/// and integer samples; lossless, `--max-error`, `--psnr`, floats and small rasters do not.
+#[test]
+fn the_stream_is_the_default_over_the_one_piece_limit() {
+    let small = field(&[4, 4], 1, SampleType::U16, 1, 100.0);
+    let mut big = Shape::of(&small);
+    big.dims = vec![16384, 8192];
+    let o = |rate| opts(rate, 6, Boundary::Symmetric);
+    assert!(codec::streams(&big, &o(Rate::Bpp(1.0))));
+    assert!(codec::streams(&big, &o(Rate::Quality(50.0))));
+    assert!(!codec::streams(&big, &o(Rate::Lossless)));
+    assert!(!codec::streams(&big, &o(Rate::MaxError(2.0))));
+    assert!(!codec::streams(&big, &o(Rate::Psnr(40.0))));
+    assert!(!codec::streams(&Shape::of(&small), &o(Rate::Bpp(1.0))));
+    let mut float = big.clone();
+    float.sample_type = SampleType::F32;
+    assert!(!codec::streams(&float, &o(Rate::Bpp(1.0))));
+}
+
+/// A whole decode through the streamed synthesis (what `mra decode` to raw, NRRD or
+/// TIFF does with a file over the one-piece limit) gives the samples of the whole-array
+/// decode, slab by slab, for images and volumes, colour and periodic ends.
+#[test]
+fn the_streamed_decode_gives_the_whole_decodes_samples() {
+    let cases: [(Raster, usize, Boundary); 4] = [
+        (
+            field(&[1100, 75], 1, SampleType::U16, 2, 60000.0),
+            5,
+            Boundary::Symmetric,
+        ),
+        (
+            field(&[301, 67], 3, SampleType::U8, 6, 255.0),
+            4,
+            Boundary::Periodic,
+        ),
+        (
+            field(&[70, 41, 33], 1, SampleType::U16, 3, 4000.0),
+            3,
+            Boundary::Symmetric,
+        ),
+        (
+            field(&[45, 20, 17], 2, SampleType::I16, 4, 3000.0),
+            3,
+            Boundary::Periodic,
+        ),
+    ];
+    let dir = common::scratch_dir("streamed_decode");
+    for (r, levels, boundary) in &cases {
+        let s = streamed(r, &opts(Rate::Bpp(1.0), *levels, *boundary));
+        let path = dir.join("s.mra");
+        std::fs::write(&path, &s).unwrap();
+        let whole = codec::decode(&s, &DecodeOptions::default()).unwrap().raster;
+        let mut d = codec::StreamedDecoder::open(&path).unwrap();
+        assert_eq!(d.shape().dims, r.dims);
+        let mut got: Vec<f64> = Vec::new();
+        while let Some(slab) = d.next_slab().unwrap() {
+            got.extend(slab.to_f64());
+        }
+        assert_eq!(got, whole.samples.to_f64(), "{} {boundary:?}", r.summary());
+    }
+}
