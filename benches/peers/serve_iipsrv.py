@@ -166,11 +166,12 @@ fastcgi.server = ( "/fcgi-bin/iipsrv.fcgi" => ((
             ("mra serve (.mra)", port_mra, "/iiif/3/img.mra/"),
         ]
         print(f"\n{a.requests} tile requests, {a.clients} clients, {a.size}² image\n")
-        print("| server | p50 ms | p99 ms | tiles/s |\n|---|---|---|---|")
+        print("| server | p50 ms | p99 ms | tiles/s | load average |\n|---|---|---|---|---|")
         for name, port, prefix in servers:
             run_clients("127.0.0.1", port, prefix, warm, a.clients)
             lat, wall = run_clients("127.0.0.1", port, prefix, reqs, a.clients)
-            print(f"| {name} | {pct(lat, 50) * 1e3:.1f} | {pct(lat, 99) * 1e3:.1f} | {len(lat) / wall:.0f} |")
+            load = os.getloadavg()[0]
+            print(f"| {name} | {pct(lat, 50) * 1e3:.1f} | {pct(lat, 99) * 1e3:.1f} | {len(lat) / wall:.0f} | {load:.1f} |")
     finally:
         for p in procs:
             p.terminate()

@@ -11,7 +11,7 @@
 //! URL           at most MAX_URL bytes (414)
 //! ```
 
-use super::cache::LevelCache;
+use super::cache::{AnswerCache, AnswerKey, LevelCache};
 use super::ident::{self, IdentError};
 use super::iiif::ImageRequest;
 use super::source::Source;
@@ -43,16 +43,23 @@ pub struct State {
     pub root: PathBuf,
     pub addr: SocketAddr,
     pub cache: LevelCache,
+    /// Encoded answers of image requests.
+    pub answers: AnswerCache,
     pub limits: Limits,
     pub work: Arc<Semaphore>,
 }
 
 impl State {
+    /// The cache budget (`--cache`, at most `MRA_MAX_BYTES`) is shared: 7/8 for decoded
+    /// samples, 1/8 for encoded answers.
     pub fn new(root: PathBuf, addr: SocketAddr, c: &Config) -> Arc<State> {
+        let budget = c.cache_bytes.min(c.limits.max_bytes);
+        let levels = budget - budget / 8;
         Arc::new(State {
             root,
             addr,
-            cache: LevelCache::new(c.cache_bytes.min(c.limits.max_bytes)),
+            cache: LevelCache::new(levels),
+            answers: AnswerCache::new(budget - levels),
             limits: c.limits,
             work: Arc::new(Semaphore::new(c.workers.max(1))),
         })
@@ -208,6 +215,15 @@ fn window_param(uri: &Uri) -> Result<Option<(f64, f64)>, ServeError> {
     Ok(None)
 }
 
+/// An answer: status, `ETag`, content type, body.
+type Answer = (StatusCode, String, Option<&'static str>, Body);
+
+/// Where the first step of an image request leaves it.
+enum Step {
+    Done(Answer),
+    Render(Box<(Source, ImageRequest, super::iiif::Caps, AnswerKey)>),
+}
+
 async fn iiif(AxState(st): AxState<Arc<State>>, uri: Uri, headers: HeaderMap) -> Response {
     if uri.path().len() + uri.query().map_or(0, str::len) > MAX_URL {
         return plain(StatusCode::URI_TOO_LONG, "URL too long");
@@ -256,12 +272,14 @@ async fn iiif(AxState(st): AxState<Arc<State>>, uri: Uri, headers: HeaderMap) ->
         Err(IdentError::NotFound) => return plain(StatusCode::NOT_FOUND, "no such image"),
     };
     let base = base_uri(&st, &headers, &id);
-    let Ok(permit) = st.work.clone().acquire_owned().await else {
-        return plain(StatusCode::SERVICE_UNAVAILABLE, "shutting down");
+    let request = match uri.query() {
+        Some(q) => format!("{}?{q}", uri.path()),
+        None => uri.path().to_string(),
     };
+    // first, without a decode permit: the file's version, a 304, info.json or an
+    // answer already encoded
     let st2 = st.clone();
-    let job = tokio::task::spawn_blocking(move || {
-        let _permit = permit;
+    let first = tokio::task::spawn_blocking(move || -> Result<Step, ServeError> {
         let path = ident::locate(&st2.root, &ident).map_err(|_| ServeError::NotFound)?;
         let src = Source::open(&path, ident.slice)?;
         let etag = src.etag();
@@ -270,7 +288,7 @@ async fn iiif(AxState(st): AxState<Arc<State>>, uri: Uri, headers: HeaderMap) ->
             .and_then(|v| v.to_str().ok())
             .is_some_and(|v| v.split(',').any(|t| t.trim() == etag || t.trim() == "*"))
         {
-            return Ok((StatusCode::NOT_MODIFIED, etag, None, Vec::new()));
+            return Ok(Step::Done((StatusCode::NOT_MODIFIED, etag, None, Vec::new().into())));
         }
         let caps = info::caps(&src, st2.limits.max_bytes);
         match req {
@@ -286,25 +304,56 @@ async fn iiif(AxState(st): AxState<Arc<State>>, uri: Uri, headers: HeaderMap) ->
                     "application/json"
                 };
                 let body = serde_json::to_vec_pretty(&doc).unwrap_or_default();
-                Ok((StatusCode::OK, etag, Some(mime), body))
+                Ok(Step::Done((StatusCode::OK, etag, Some(mime), body.into())))
             }
             Some(req) => {
-                let (w, h) = src.size();
-                let r = req.resolve(w, h, &caps)?;
-                let body = render::render(&src, &st2.cache, &st2.limits, &req, &r, window)?;
-                Ok((StatusCode::OK, etag, Some(req.format.mime()), body))
+                let key = AnswerKey {
+                    path: src.path.clone(),
+                    len: src.len,
+                    mtime: src.mtime,
+                    request,
+                };
+                let mime = Some(req.format.mime());
+                if let Some(body) = st2.answers.get(&key) {
+                    return Ok(Step::Done((StatusCode::OK, etag, mime, body.into())));
+                }
+                Ok(Step::Render(Box::new((src, req, caps, key))))
             }
         }
     });
-    let done: Result<_, ServeError> = match job.await {
+    let step = match first.await {
         Ok(r) => r,
-        Err(_) => {
-            return plain(StatusCode::INTERNAL_SERVER_ERROR, "the request failed");
+        Err(_) => return plain(StatusCode::INTERNAL_SERVER_ERROR, "the request failed"),
+    };
+    let done = match step {
+        Ok(Step::Done(d)) => Ok(d),
+        Err(e) => Err(e),
+        Ok(Step::Render(job)) => {
+            let Ok(permit) = st.work.clone().acquire_owned().await else {
+                return plain(StatusCode::SERVICE_UNAVAILABLE, "shutting down");
+            };
+            let st2 = st.clone();
+            let job = tokio::task::spawn_blocking(move || {
+                let _permit = permit;
+                let (src, req, caps, key) = *job;
+                let etag = src.etag();
+                let (w, h) = src.size();
+                let r = req.resolve(w, h, &caps)?;
+                let body = axum::body::Bytes::from(render::render(
+                    &src, &st2.cache, &st2.limits, &req, &r, window,
+                )?);
+                st2.answers.put(key, body.len() as u64, body.clone());
+                Ok((StatusCode::OK, etag, Some(req.format.mime()), Body::from(body)))
+            });
+            match job.await {
+                Ok(r) => r,
+                Err(_) => return plain(StatusCode::INTERNAL_SERVER_ERROR, "the request failed"),
+            }
         }
     };
     match done {
         Ok((status, etag, mime, body)) => {
-            let mut resp = Response::new(Body::from(body));
+            let mut resp = Response::new(body);
             *resp.status_mut() = status;
             let h = resp.headers_mut();
             if let Some(m) = mime {
