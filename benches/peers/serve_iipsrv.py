@@ -106,6 +106,8 @@ def main():
                     help="write the .mra as format 3.0 code-blocks (mra encode --blocks; "
                          "with --mra-tile whole: one piece, each tile request decoding "
                          "only the code-blocks its window needs)")
+    ap.add_argument("--work", help="a folder to keep the generated files in and reuse them "
+                    "from on the next run (default: a temporary folder, removed)")
     a = ap.parse_args()
     for tool in ["vips", "lighttpd"]:
         if not shutil.which(tool):
@@ -113,24 +115,28 @@ def main():
     if not os.path.exists(IIPSRV):
         raise SystemExit("iipsrv missing: apt-get install iipimage-server")
     mra = os.environ.get("MRA", os.path.join(ROOT, "target", "release", "mra"))
-    work = tempfile.mkdtemp(prefix="mra-iipsrv-")
+    work = a.work or tempfile.mkdtemp(prefix="mra-iipsrv-")
+    os.makedirs(work, exist_ok=True)
     procs = []
     try:
         src = os.path.join(work, "src.png")
-        sh(mra, "generate", "strokes", "-o", src, "--size", str(a.size))
+        if not os.path.exists(src):
+            sh(mra, "generate", "strokes", "-o", src, "--size", str(a.size))
         tif = os.path.join(work, "img.tif")
-        sh("vips", "tiffsave", src, tif, "--tile", "--pyramid", "--compression", "jpeg",
-           "--Q", "90", "--tile-width", str(TILE), "--tile-height", str(TILE))
+        if not os.path.exists(tif):
+            sh("vips", "tiffsave", src, tif, "--tile", "--pyramid", "--compression", "jpeg",
+               "--Q", "90", "--tile-width", str(TILE), "--tile-height", str(TILE))
         full = os.path.join(work, "tif_full.png")
         sh("vips", "copy", tif + "[page=0]", full)
         cmp_tif = json.loads(sh(mra, "compare", src, full, "--json"))
-        served = os.path.join(work, "served")
-        os.makedirs(served)
+        served = os.path.join(work, f"served-{a.mra_tile}{'-blocks' if a.blocks else ''}")
+        os.makedirs(served, exist_ok=True)
         coded = os.path.join(served, "img.mra")
         tile = [] if a.mra_tile == "default" else ["--tile", a.mra_tile]
         if a.blocks:
             tile.append("--blocks")
-        sh(mra, "encode", src, "-o", coded, "--psnr", f"{cmp_tif['psnr']:.2f}", *tile)
+        if not os.path.exists(coded):
+            sh(mra, "encode", src, "-o", coded, "--psnr", f"{cmp_tif['psnr']:.2f}", *tile)
         dec = os.path.join(work, "mra_full.png")
         sh(mra, "decode", coded, "-o", dec)
         cmp_mra = json.loads(sh(mra, "compare", src, dec, "--json"))
@@ -176,7 +182,8 @@ fastcgi.server = ( "/fcgi-bin/iipsrv.fcgi" => ((
         for p in procs:
             p.terminate()
             p.wait()
-        shutil.rmtree(work, ignore_errors=True)
+        if not a.work:
+            shutil.rmtree(work, ignore_errors=True)
 
 
 if __name__ == "__main__":
