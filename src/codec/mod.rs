@@ -28,6 +28,7 @@ mod levels;
 pub mod lossless;
 mod lossy;
 mod max_error;
+mod opened;
 pub use crate::format::meta;
 mod options;
 mod plan;
@@ -42,6 +43,7 @@ pub use crate::format::body::ChunkInfo;
 pub use decode::coarse_offset;
 pub use frames::frames;
 pub use info::{depth_of, info, kind_name, Info};
+pub use opened::Opened;
 pub use options::{DecodeOptions, Decoded, EncodeOptions, Format, Rate};
 pub use rate::keep_psnr;
 pub use read::{

@@ -4,6 +4,7 @@
 
 use super::container::{read_head, read_rest, Parsed};
 use super::decode::{reconstruct, reconstruct_window};
+use super::opened::Sparse;
 use super::options::{DecodeOptions, Decoded};
 use super::tiles;
 use crate::format::{Chunk, ChunkReader, Header};
@@ -16,7 +17,7 @@ use std::path::Path;
 
 /// `level` is one the file of `header` holds (`0 ..= depth`, [`super::depth_of`]): a
 /// deeper level is [`crate::Error::Level`], never clamped to the coarsest.
-fn check_level(header: &Header, level: usize) -> Result<()> {
+pub(super) fn check_level(header: &Header, level: usize) -> Result<()> {
     if level == 0 {
         return Ok(());
     }
@@ -42,7 +43,7 @@ pub fn decode_stream<R: Read>(src: R, len: u64, opts: &DecodeOptions) -> Result<
 }
 
 /// A one-tile file's chunks reconstructed, and cut to the region asked for.
-fn one_tile(mut p: Parsed, opts: &DecodeOptions) -> Result<Decoded> {
+pub(super) fn one_tile(mut p: Parsed, opts: &DecodeOptions) -> Result<Decoded> {
     let stitch = match &opts.region {
         Some(region) => Some(tiles::Stitch::new(&p.header, opts.level, Some(region))?),
         None => None,
@@ -110,9 +111,8 @@ fn one_piece<R: Read + Seek>(
 
 /// The chunks after `HEAD` (the next at byte `at` of `len`) of a one-piece 3.0 file read
 /// for the full-resolution box `region` at level `stop_level`: the heads, `mETA` and
-/// code-block indices ([`crate::format::sparse`]), then by positioned reads only the
-/// code-blocks each band's decode needs ([`super::decode::band_windows`]; runs of
-/// neighbouring blocks in one read). `None` for a file left to the whole read.
+/// code-block indices, then only the code-blocks each band's decode needs
+/// ([`Sparse`]). `None` for a file left to the whole read.
 fn read_region<R: Read + Seek>(
     src: &mut R,
     at: u64,
@@ -121,57 +121,10 @@ fn read_region<R: Read + Seek>(
     stop_level: usize,
     region: &[Range<usize>],
 ) -> Result<Option<Parsed>> {
-    let plan = super::plan::Plan::new(&header)?;
-    let groups = plan.level_groups();
-    let layout = plan.band_layout(&groups);
-    let Some(sb) =
-        crate::format::sparse::read_body_sparse(src, at, len, &header, &layout, stop_level)?
-    else {
-        return Ok(None);
-    };
-    let b = sb.body;
-    let mut p = Parsed {
-        header,
-        meta: b.meta,
-        plan,
-        bands: b.bands,
-        resi: b.resi,
-        complete: b.complete,
-        chunks: b.chunks,
-        window: Some(region.to_vec()),
-    };
-    let wins = super::decode::band_windows(&p);
-    let block = p.header.block_extents();
-    for (c, bands) in p.bands.iter_mut().enumerate() {
-        for (j, bc) in bands.iter_mut().enumerate() {
-            let (Some(bc), Some(off)) = (bc.as_mut(), sb.entries[c][j]) else {
-                continue;
-            };
-            let dims = &p.plan.dims[j];
-            let set = crate::format::bands::parse_blocks(&bc.data, dims, &block).map_err(|e| {
-                crate::Error::format(format!("band {j} of channel {c}: {e}"), "a valid band")
-            })?;
-            let grid = crate::entropy::codeblocks::Grid::new(dims, &block);
-            let which = match &wins[j] {
-                Some(w) => grid.touching(w),
-                None => (0..grid.len()).collect(),
-            };
-            // runs of blocks that follow one another in the entry, one read each
-            let mut runs: Vec<Range<usize>> = Vec::new();
-            for i in which {
-                let r = set.streams[i].clone();
-                match runs.last_mut() {
-                    Some(last) if last.end == r.start => last.end = r.end,
-                    _ => runs.push(r),
-                }
-            }
-            for r in runs {
-                src.seek(SeekFrom::Start(off + r.start as u64))?;
-                src.read_exact(&mut bc.data[r])?;
-            }
-        }
+    match Sparse::parse(src, at, len, header, stop_level)? {
+        Some(s) => Ok(Some(s.parsed(src, stop_level, region)?)),
+        None => Ok(None),
     }
-    Ok(Some(p))
 }
 
 /// The `HEAD` of an `.mra` file, read alone.

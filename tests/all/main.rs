@@ -29,6 +29,7 @@ mod metadata;
 mod metrics;
 mod nodata;
 mod raster_view;
+mod region;
 mod robust;
 mod scheme;
 mod serve;
