@@ -5,6 +5,7 @@ loopback only. Prints file sizes and PSNR of both codings, then p50/p99 latency 
 throughput of each server, as markdown table rows.
 
 usage: python3 benches/peers/serve_iipsrv.py [--size 8192] [--requests 4000] [--clients 8] [--mra-tile 256]
+       [--blocks] [--warm] [--work DIR]
 needs: apt-get install iipimage-server lighttpd libvips-tools; MRA (default target/release/mra)
 """
 import argparse
@@ -106,6 +107,9 @@ def main():
                     help="write the .mra as format 3.0 code-blocks (mra encode --blocks; "
                          "with --mra-tile whole: one piece, each tile request decoding "
                          "only the code-blocks its window needs)")
+    ap.add_argument("--warm", action="store_true",
+                    help="start mra serve with --warm (the levels the cache keeps decoded "
+                         "before serving, as the pyramid TIFF is built before iipsrv serves it)")
     ap.add_argument("--work", help="a folder to keep the generated files in and reuse them "
                     "from on the next run (default: a temporary folder, removed)")
     a = ap.parse_args()
@@ -161,9 +165,13 @@ fastcgi.server = ( "/fcgi-bin/iipsrv.fcgi" => ((
 """)
         procs.append(subprocess.Popen(["lighttpd", "-D", "-f", conf]))
         wait_port(port_iip)
-        srv = subprocess.Popen([mra, "serve", served, "--bind", "127.0.0.1:0"], stdout=subprocess.PIPE, text=True)
+        t0 = time.perf_counter()
+        srv = subprocess.Popen([mra, "serve", served, "--bind", "127.0.0.1:0"] + (["--warm"] if a.warm else []),
+                               stdout=subprocess.PIPE, text=True)
         procs.append(srv)
         port_mra = int(srv.stdout.readline().split("http://")[1].strip().rstrip("/").split(":")[1])
+        if a.warm:
+            print(f"\nmra serve --warm ready after {time.perf_counter() - t0:.1f} s")
 
         reqs = trace(a.size, a.requests, a.seed)
         warm = trace(a.size, 200, a.seed + 1000)

@@ -1,6 +1,7 @@
 //! What is kept between requests, least recently used first out, within a byte budget:
-//! decoded levels, tiles of levels and patches of levels ([`LevelCache`]), and encoded
-//! answers ([`AnswerCache`], as iipsrv keeps its JPEG tiles). A value is made once
+//! decoded levels, tiles of levels and patches of levels ([`LevelCache`]), files parsed
+//! once ([`OpenedCache`]) and encoded answers ([`AnswerCache`], as iipsrv keeps its JPEG
+//! tiles). A value is made once
 //! however many requests ask for it at the same time: the first makes it, the others
 //! wait for its result. A file replaced on disk has a new length or modification time,
 //! so new keys: its old values age out.
@@ -36,6 +37,10 @@ pub type Shared = std::result::Result<Arc<Raster>, Arc<Error>>;
 
 /// Decoded samples by [`Key`].
 pub type LevelCache = Lru<Key, Arc<Raster>>;
+
+/// Files parsed once ([`crate::codec::Opened`]) by path and version (a [`Key`] of level
+/// 0 and no tile), counted at the file's length (what their indices take at most).
+pub type OpenedCache = Lru<Key, Arc<crate::codec::Opened>>;
 
 /// Encoded answers (the bytes sent) by [`AnswerKey`].
 pub type AnswerCache = Lru<AnswerKey, axum::body::Bytes>;

@@ -11,10 +11,10 @@
 //! URL           at most MAX_URL bytes (414)
 //! ```
 
-use super::cache::{AnswerCache, AnswerKey, LevelCache};
+use super::cache::{AnswerCache, AnswerKey, Key, LevelCache, OpenedCache};
 use super::ident::{self, IdentError};
 use super::iiif::ImageRequest;
-use super::source::Source;
+use super::source::{OpenedFile, Source};
 use super::{info, render, viewer, Config, ServeError};
 use crate::limits::Limits;
 use axum::body::Body;
@@ -45,21 +45,27 @@ pub struct State {
     pub cache: LevelCache,
     /// Encoded answers of image requests.
     pub answers: AnswerCache,
+    /// One-piece 3.0 files parsed once.
+    pub opened: OpenedCache,
+    /// Held while a file's levels are decoded in the background (one file at a time).
+    pub warming: std::sync::Mutex<()>,
     pub limits: Limits,
     pub work: Arc<Semaphore>,
 }
 
 impl State {
-    /// The cache budget (`--cache`, at most `MRA_MAX_BYTES`) is shared: 7/8 for decoded
-    /// samples, 1/8 for encoded answers.
+    /// The cache budget (`--cache`, at most `MRA_MAX_BYTES`) is shared: 3/4 for decoded
+    /// samples, 1/8 for encoded answers, 1/8 for parsed files.
     pub fn new(root: PathBuf, addr: SocketAddr, c: &Config) -> Arc<State> {
         let budget = c.cache_bytes.min(c.limits.max_bytes);
-        let levels = budget - budget / 8;
+        let levels = budget - budget / 4;
         Arc::new(State {
             root,
             addr,
             cache: LevelCache::new(levels),
-            answers: AnswerCache::new(budget - levels),
+            answers: AnswerCache::new(budget / 8),
+            opened: OpenedCache::new(budget / 8),
+            warming: std::sync::Mutex::new(()),
             limits: c.limits,
             work: Arc::new(Semaphore::new(c.workers.max(1))),
         })
@@ -215,6 +221,60 @@ fn window_param(uri: &Uri) -> Result<Option<(f64, f64)>, ServeError> {
     Ok(None)
 }
 
+/// A one-piece 3.0 file parsed once per version ([`crate::codec::Opened`], kept in the
+/// state) and set in `src`; on the first parse of a version, with `background`, its
+/// levels decoded in the background ([`Source::warm`]).
+fn parse_once(st: &Arc<State>, src: &mut Source, background: bool) -> Result<(), ServeError> {
+    if !src.parses_once() {
+        return Ok(());
+    }
+    let k = Key {
+        path: src.path.clone(),
+        len: src.len,
+        mtime: src.mtime,
+        level: 0,
+        tile: Vec::new(),
+    };
+    let o = st
+        .opened
+        .get_or_decode(k, src.len, || {
+            let o = Arc::new(crate::codec::Opened::open(&src.path)?);
+            if background {
+                let mut w = src.clone();
+                w.opened = Some(OpenedFile(o.clone()));
+                let st = st.clone();
+                let _ = std::thread::Builder::new()
+                    .name("mra-serve-warm".into())
+                    .spawn(move || {
+                        let _one = st.warming.lock();
+                        // on one thread of its own, so that it takes at most one
+                        // core from the requests
+                        match rayon::ThreadPoolBuilder::new().num_threads(1).build() {
+                            Ok(pool) => pool.install(|| w.warm(&st.cache, &st.limits)),
+                            Err(_) => w.warm(&st.cache, &st.limits),
+                        }
+                    });
+            }
+            Ok(o)
+        })
+        .map_err(ServeError::File)?;
+    src.opened = Some(OpenedFile(o));
+    Ok(())
+}
+
+/// `--warm`: every one-piece 3.0 file under the root parsed and its levels that the
+/// cache keeps decoded ([`Source::warm`]), before the first request is taken.
+pub fn warm_all(st: &Arc<State>) {
+    for rel in viewer::files(&st.root) {
+        let Ok(mut src) = Source::open(&st.root.join(&rel), None) else {
+            continue;
+        };
+        if parse_once(st, &mut src, false).is_ok() {
+            src.warm(&st.cache, &st.limits);
+        }
+    }
+}
+
 /// An answer: status, `ETag`, content type, body.
 type Answer = (StatusCode, String, Option<&'static str>, Body);
 
@@ -335,7 +395,8 @@ async fn iiif(AxState(st): AxState<Arc<State>>, uri: Uri, headers: HeaderMap) ->
             let st2 = st.clone();
             let job = tokio::task::spawn_blocking(move || {
                 let _permit = permit;
-                let (src, req, caps, key) = *job;
+                let (mut src, req, caps, key) = *job;
+                parse_once(&st2, &mut src, true)?;
                 let etag = src.etag();
                 let (w, h) = src.size();
                 let r = req.resolve(w, h, &caps)?;

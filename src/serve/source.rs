@@ -49,6 +49,19 @@ pub struct Source {
     /// The axes of the image: rows, then columns (indices into `header.dims`).
     pub row_axis: usize,
     pub col_axis: usize,
+    /// A one-piece 3.0 file parsed once (its code-block indices), when the server keeps
+    /// it: patches are then decoded from it without reading the indices again.
+    pub opened: Option<OpenedFile>,
+}
+
+/// A file parsed once ([`codec::Opened`]), shared by the requests of its version.
+#[derive(Clone)]
+pub struct OpenedFile(pub Arc<codec::Opened>);
+
+impl std::fmt::Debug for OpenedFile {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("OpenedFile")
+    }
 }
 
 impl Source {
@@ -108,6 +121,7 @@ impl Source {
             slice,
             row_axis,
             col_axis,
+            opened: None,
         })
     }
 
@@ -127,6 +141,12 @@ impl Source {
     /// The deepest level.
     pub fn depth(&self) -> usize {
         self.levels.len() - 1
+    }
+
+    /// Whether patches of this file are decoded from a parsed [`codec::Opened`]: a
+    /// one-piece 3.0 file (code-blocks).
+    pub fn parses_once(&self) -> bool {
+        self.header.version.has_blocks() && !self.header.is_tiled()
     }
 
     /// The entity tag of this version of the file.
@@ -165,6 +185,12 @@ impl Source {
         }
         // a 3.0 file: the window's code-blocks read and its support synthesized alone
         if h.version.has_blocks() {
+            // the whole level when it is decoded and kept ([`Source::warm`]), without
+            // waiting for a decode of it under way
+            if let Some(r) = cache.get(&self.key(k, Vec::new())) {
+                let zero: Vec<usize> = vec![0; ext.len()];
+                return cut(&r, &zero, &bx, self.row_axis, self.col_axis);
+            }
             return self.window_from_patches(cache, limits, k, &bx);
         }
         if level_bytes <= cache.entry_limit() {
@@ -187,6 +213,39 @@ impl Source {
         cut(&r, &zero, &bx, self.row_axis, self.col_axis)
     }
 
+    /// Decode whole, coarsest first, the levels of a one-piece 3.0 image that the cache
+    /// keeps (each at most [`LevelCache::entry_limit`], all of them at most half the
+    /// budget, each decode within `limits`), and keep them: the pyramid a tile server
+    /// reads. Requests meanwhile decode their patches; a level once kept is cut from.
+    pub fn warm(&self, cache: &LevelCache, limits: &Limits) {
+        if !self.parses_once() || self.slice.is_some() {
+            return;
+        }
+        let h = &self.header;
+        let mut total = 0u64;
+        for k in (0..self.levels.len()).rev() {
+            let samples = self.levels[k]
+                .iter()
+                .fold(h.channels as u64, |n, &e| n.saturating_mul(e as u64));
+            let bytes = samples.saturating_mul(h.sample_type.size() as u64);
+            total = total.saturating_add(bytes);
+            if bytes > cache.entry_limit()
+                || total > cache.budget() / 2
+                || limits
+                    .check_elems("a decoded level", samples, DECODE_BYTES_PER_SAMPLE)
+                    .is_err()
+            {
+                break;
+            }
+            if cache
+                .get_or_decode(self.key(k, Vec::new()), bytes, || self.decode(k, None))
+                .is_err()
+            {
+                break;
+            }
+        }
+    }
+
     fn key(&self, level: usize, tile: Vec<usize>) -> Key {
         Key {
             path: self.path.clone(),
@@ -199,6 +258,9 @@ impl Source {
 
     /// Level `k` of the file, or of the full-resolution box `region` (slowest axis first).
     fn decode(&self, k: usize, region: Option<Vec<Range<usize>>>) -> crate::Result<Arc<Raster>> {
+        if let Some(o) = &self.opened {
+            return o.0.region(k, region.as_deref()).map(|d| Arc::new(d.raster));
+        }
         let opts = DecodeOptions {
             level: k,
             region,

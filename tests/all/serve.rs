@@ -279,8 +279,11 @@ fn a_served_region_equals_mra_decode_of_the_same_window() {
     let by_tile = Server::start_with(&d.0, &["--cache", "1M"]);
     // the 3.0 file's levels cut into 64² patches: windows assembled from many decodes
     let patches = Server::start_env(&d.0, &[], &[("MRA_SERVE_PATCH", "64")]);
+    // and with its levels decoded whole before serving: every window cut from them
+    let warm = Server::start_with(&d.0, &["--warm"]);
     for (s, id, file) in [
         (&patches, "b.mra", "z.mra"),
+        (&warm, "b.mra", "z.mra"),
         (&whole, "z.mra", "z.mra"),
         (&whole, "sub%20dir%2Ftiled.mra", "sub dir/tiled.mra"),
         (&by_tile, "sub%20dir%2Ftiled.mra", "sub dir/tiled.mra"),
