@@ -192,7 +192,10 @@ impl<K: Clone + Eq + std::hash::Hash, V: Clone> Lru<K, V> {
         if r.is_err() {
             // a failure is not kept: the file may be fixed or replaced
             let mut g = self.lock();
-            if g.entries.get(&key).is_some_and(|e| Arc::ptr_eq(&e.cell, &cell)) {
+            if g.entries
+                .get(&key)
+                .is_some_and(|e| Arc::ptr_eq(&e.cell, &cell))
+            {
                 if let Some(e) = g.entries.remove(&key) {
                     g.held -= e.bytes;
                 }

@@ -348,7 +348,12 @@ async fn iiif(AxState(st): AxState<Arc<State>>, uri: Uri, headers: HeaderMap) ->
             .and_then(|v| v.to_str().ok())
             .is_some_and(|v| v.split(',').any(|t| t.trim() == etag || t.trim() == "*"))
         {
-            return Ok(Step::Done((StatusCode::NOT_MODIFIED, etag, None, Vec::new().into())));
+            return Ok(Step::Done((
+                StatusCode::NOT_MODIFIED,
+                etag,
+                None,
+                Vec::new().into(),
+            )));
         }
         let caps = info::caps(&src, st2.limits.max_bytes);
         match req {
@@ -401,10 +406,20 @@ async fn iiif(AxState(st): AxState<Arc<State>>, uri: Uri, headers: HeaderMap) ->
                 let (w, h) = src.size();
                 let r = req.resolve(w, h, &caps)?;
                 let body = axum::body::Bytes::from(render::render(
-                    &src, &st2.cache, &st2.limits, &req, &r, window,
+                    &src,
+                    &st2.cache,
+                    &st2.limits,
+                    &req,
+                    &r,
+                    window,
                 )?);
                 st2.answers.put(key, body.len() as u64, body.clone());
-                Ok((StatusCode::OK, etag, Some(req.format.mime()), Body::from(body)))
+                Ok((
+                    StatusCode::OK,
+                    etag,
+                    Some(req.format.mime()),
+                    Body::from(body),
+                ))
             });
             match job.await {
                 Ok(r) => r,

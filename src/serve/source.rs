@@ -319,7 +319,9 @@ impl Source {
             let region: Vec<Range<usize>> = (0..nd)
                 .map(|a| coords[a] * h.tile[a]..((coords[a] + 1) * h.tile[a]).min(h.dims[a]))
                 .collect();
-            let samples = boxes.iter().fold(h.channels as u64, |n, g| n * g.len() as u64);
+            let samples = boxes
+                .iter()
+                .fold(h.channels as u64, |n, g| n * g.len() as u64);
             limits.check_elems("a decoded tile", samples, DECODE_BYTES_PER_SAMPLE)?;
             let bytes = samples * h.sample_type.size() as u64;
             let r = cache
@@ -381,7 +383,10 @@ impl Source {
         &self,
         bx: &[Range<usize>],
         pieces: &[Vec<(usize, Range<usize>)>],
-        mut fetch: impl FnMut(&[usize], &[Range<usize>]) -> Result<(Arc<Raster>, Vec<usize>), ServeError>,
+        mut fetch: impl FnMut(
+            &[usize],
+            &[Range<usize>],
+        ) -> Result<(Arc<Raster>, Vec<usize>), ServeError>,
     ) -> Result<Plane, ServeError> {
         let nd = bx.len();
         let c = self.header.channels;

@@ -399,7 +399,14 @@ fn the_etag_changes_with(blocks: &[&str], name: &str) {
         "the new file's pixels"
     );
     let out = d.s("new.png");
-    run(&["decode", &d.s("z.mra"), "-o", &out, "--region", "0:256,0:256"]);
+    run(&[
+        "decode",
+        &d.s("z.mra"),
+        "-o",
+        &out,
+        "--region",
+        "0:256,0:256",
+    ]);
     assert!(
         gray(&b.image()).2 == gray(&image::open(&out).unwrap()).2,
         "the answer is the new file's decode"
