@@ -5,6 +5,7 @@ loopback only. Prints file sizes and PSNR of both codings, then p50/p99 latency 
 throughput of each server, as markdown table rows.
 
 usage: python3 benches/peers/serve_iipsrv.py [--size 8192] [--requests 4000] [--clients 8] [--mra-tile 256]
+       [--blocks] [--warm] [--work DIR]
 needs: apt-get install iipimage-server lighttpd libvips-tools; MRA (default target/release/mra)
 """
 import argparse
@@ -106,6 +107,11 @@ def main():
                     help="write the .mra as format 3.0 code-blocks (mra encode --blocks; "
                          "with --mra-tile whole: one piece, each tile request decoding "
                          "only the code-blocks its window needs)")
+    ap.add_argument("--warm", action="store_true",
+                    help="start mra serve with --warm (the levels the cache keeps decoded "
+                         "before serving, as the pyramid TIFF is built before iipsrv serves it)")
+    ap.add_argument("--work", help="a folder to keep the generated files in and reuse them "
+                    "from on the next run (default: a temporary folder, removed)")
     a = ap.parse_args()
     for tool in ["vips", "lighttpd"]:
         if not shutil.which(tool):
@@ -113,24 +119,28 @@ def main():
     if not os.path.exists(IIPSRV):
         raise SystemExit("iipsrv missing: apt-get install iipimage-server")
     mra = os.environ.get("MRA", os.path.join(ROOT, "target", "release", "mra"))
-    work = tempfile.mkdtemp(prefix="mra-iipsrv-")
+    work = a.work or tempfile.mkdtemp(prefix="mra-iipsrv-")
+    os.makedirs(work, exist_ok=True)
     procs = []
     try:
         src = os.path.join(work, "src.png")
-        sh(mra, "generate", "strokes", "-o", src, "--size", str(a.size))
+        if not os.path.exists(src):
+            sh(mra, "generate", "strokes", "-o", src, "--size", str(a.size))
         tif = os.path.join(work, "img.tif")
-        sh("vips", "tiffsave", src, tif, "--tile", "--pyramid", "--compression", "jpeg",
-           "--Q", "90", "--tile-width", str(TILE), "--tile-height", str(TILE))
+        if not os.path.exists(tif):
+            sh("vips", "tiffsave", src, tif, "--tile", "--pyramid", "--compression", "jpeg",
+               "--Q", "90", "--tile-width", str(TILE), "--tile-height", str(TILE))
         full = os.path.join(work, "tif_full.png")
         sh("vips", "copy", tif + "[page=0]", full)
         cmp_tif = json.loads(sh(mra, "compare", src, full, "--json"))
-        served = os.path.join(work, "served")
-        os.makedirs(served)
+        served = os.path.join(work, f"served-{a.mra_tile}{'-blocks' if a.blocks else ''}")
+        os.makedirs(served, exist_ok=True)
         coded = os.path.join(served, "img.mra")
         tile = [] if a.mra_tile == "default" else ["--tile", a.mra_tile]
         if a.blocks:
             tile.append("--blocks")
-        sh(mra, "encode", src, "-o", coded, "--psnr", f"{cmp_tif['psnr']:.2f}", *tile)
+        if not os.path.exists(coded):
+            sh(mra, "encode", src, "-o", coded, "--psnr", f"{cmp_tif['psnr']:.2f}", *tile)
         dec = os.path.join(work, "mra_full.png")
         sh(mra, "decode", coded, "-o", dec)
         cmp_mra = json.loads(sh(mra, "compare", src, dec, "--json"))
@@ -155,9 +165,13 @@ fastcgi.server = ( "/fcgi-bin/iipsrv.fcgi" => ((
 """)
         procs.append(subprocess.Popen(["lighttpd", "-D", "-f", conf]))
         wait_port(port_iip)
-        srv = subprocess.Popen([mra, "serve", served, "--bind", "127.0.0.1:0"], stdout=subprocess.PIPE, text=True)
+        t0 = time.perf_counter()
+        srv = subprocess.Popen([mra, "serve", served, "--bind", "127.0.0.1:0"] + (["--warm"] if a.warm else []),
+                               stdout=subprocess.PIPE, text=True)
         procs.append(srv)
         port_mra = int(srv.stdout.readline().split("http://")[1].strip().rstrip("/").split(":")[1])
+        if a.warm:
+            print(f"\nmra serve --warm ready after {time.perf_counter() - t0:.1f} s")
 
         reqs = trace(a.size, a.requests, a.seed)
         warm = trace(a.size, 200, a.seed + 1000)
@@ -166,16 +180,18 @@ fastcgi.server = ( "/fcgi-bin/iipsrv.fcgi" => ((
             ("mra serve (.mra)", port_mra, "/iiif/3/img.mra/"),
         ]
         print(f"\n{a.requests} tile requests, {a.clients} clients, {a.size}² image\n")
-        print("| server | p50 ms | p99 ms | tiles/s |\n|---|---|---|---|")
+        print("| server | p50 ms | p99 ms | tiles/s | load average |\n|---|---|---|---|---|")
         for name, port, prefix in servers:
             run_clients("127.0.0.1", port, prefix, warm, a.clients)
             lat, wall = run_clients("127.0.0.1", port, prefix, reqs, a.clients)
-            print(f"| {name} | {pct(lat, 50) * 1e3:.1f} | {pct(lat, 99) * 1e3:.1f} | {len(lat) / wall:.0f} |")
+            load = os.getloadavg()[0]
+            print(f"| {name} | {pct(lat, 50) * 1e3:.1f} | {pct(lat, 99) * 1e3:.1f} | {len(lat) / wall:.0f} | {load:.1f} |")
     finally:
         for p in procs:
             p.terminate()
             p.wait()
-        shutil.rmtree(work, ignore_errors=True)
+        if not a.work:
+            shutil.rmtree(work, ignore_errors=True)
 
 
 if __name__ == "__main__":

@@ -26,6 +26,10 @@ pub struct ServeArgs {
     /// requests answered from the cache are not held behind a long decode).
     #[arg(long)]
     pub workers: Option<usize>,
+    /// Before serving, decode the levels of every one-piece 3.0 file (mra encode --blocks)
+    /// that the cache keeps (otherwise done in the background after a file's first request).
+    #[arg(long)]
+    pub warm: bool,
 }
 
 pub fn run(a: ServeArgs) -> CliResult {
@@ -48,6 +52,7 @@ pub fn run(a: ServeArgs) -> CliResult {
         cache_bytes,
         limits: crate::limits::Limits::from_env()?,
         workers,
+        warm: a.warm,
     };
     let dir = a.dir.display().to_string();
     serve::serve(config, |addr| {

@@ -1,16 +1,19 @@
-//! Decoded levels kept between requests, least recently used first out, within a byte
-//! budget. A level is decoded once however many requests ask for it at the same time:
-//! the first decodes, the others wait for its result. A file replaced on disk has a new
-//! length or modification time, so a new key: its old levels age out.
+//! What is kept between requests, least recently used first out, within a byte budget:
+//! decoded levels, tiles of levels and patches of levels ([`LevelCache`]), files parsed
+//! once ([`OpenedCache`]) and encoded answers ([`AnswerCache`], as iipsrv keeps its JPEG
+//! tiles). A value is made once
+//! however many requests ask for it at the same time: the first makes it, the others
+//! wait for its result. A file replaced on disk has a new length or modification time,
+//! so new keys: its old values age out.
 
 use crate::io::Raster;
 use crate::{Error, Result};
 use std::path::PathBuf;
 use std::sync::{Arc, Mutex, OnceLock};
 
-/// What names a decoded level (or one tile of it): the file, its version, the level,
-/// the tile's coordinates (empty for the whole level).
-#[derive(Clone, Debug, PartialEq, Eq)]
+/// What names a decoded level (or one tile or patch of it): the file, its version, the
+/// level, the piece's coordinates (empty for the whole level).
+#[derive(Clone, Debug, PartialEq, Eq, Hash)]
 pub struct Key {
     pub path: PathBuf,
     pub len: u64,
@@ -19,40 +22,64 @@ pub struct Key {
     pub tile: Vec<usize>,
 }
 
+/// What names an encoded answer: the file, its version, and the request's path and
+/// query as received.
+#[derive(Clone, Debug, PartialEq, Eq, Hash)]
+pub struct AnswerKey {
+    pub path: PathBuf,
+    pub len: u64,
+    pub mtime: u128,
+    pub request: String,
+}
+
 /// A decode's result, shared by the requests that waited for it.
 pub type Shared = std::result::Result<Arc<Raster>, Arc<Error>>;
 
-type Cell = Arc<OnceLock<Shared>>;
+/// Decoded samples by [`Key`].
+pub type LevelCache = Lru<Key, Arc<Raster>>;
 
-struct Entry {
-    key: Key,
-    cell: Cell,
+/// Files parsed once ([`crate::codec::Opened`]) by path and version (a [`Key`] of level
+/// 0 and no tile), counted at the file's length (what their indices take at most).
+pub type OpenedCache = Lru<Key, Arc<crate::codec::Opened>>;
+
+/// Encoded answers (the bytes sent) by [`AnswerKey`].
+pub type AnswerCache = Lru<AnswerKey, axum::body::Bytes>;
+
+type Cell<V> = Arc<OnceLock<std::result::Result<V, Arc<Error>>>>;
+
+struct Entry<K, V> {
+    key: K,
+    cell: Cell<V>,
     bytes: u64,
     used: u64,
 }
 
-/// The cache of decoded levels.
-pub struct LevelCache {
+/// A least-recently-used map of at most `budget` bytes whose values are made once.
+pub struct Lru<K, V> {
     budget: u64,
-    inner: Mutex<Inner>,
+    inner: Mutex<Inner<K, V>>,
 }
 
-#[derive(Default)]
-struct Inner {
-    entries: Vec<Entry>,
+struct Inner<K, V> {
+    entries: std::collections::HashMap<K, Entry<K, V>>,
+    held: u64,
     tick: u64,
 }
 
-impl LevelCache {
-    /// A cache of at most `budget` bytes of decoded samples.
-    pub fn new(budget: u64) -> LevelCache {
-        LevelCache {
+impl<K: Clone + Eq + std::hash::Hash, V: Clone> Lru<K, V> {
+    /// A cache of at most `budget` bytes.
+    pub fn new(budget: u64) -> Lru<K, V> {
+        Lru {
             budget,
-            inner: Mutex::new(Inner::default()),
+            inner: Mutex::new(Inner {
+                entries: std::collections::HashMap::new(),
+                held: 0,
+                tick: 0,
+            }),
         }
     }
 
-    /// The largest level kept: a quarter of the budget, so that a few levels of the
+    /// The largest value kept: a quarter of the budget, so that a few levels of the
     /// files being viewed stay together.
     pub fn entry_limit(&self) -> u64 {
         self.budget / 4
@@ -60,51 +87,119 @@ impl LevelCache {
 
     /// Bytes held now.
     pub fn held(&self) -> u64 {
-        self.lock().entries.iter().map(|e| e.bytes).sum()
+        self.lock().held
     }
 
-    fn lock(&self) -> std::sync::MutexGuard<'_, Inner> {
-        // a panic while holding the lock leaves the list valid: take it back
+    /// The budget.
+    pub fn budget(&self) -> u64 {
+        self.budget
+    }
+
+    fn lock(&self) -> std::sync::MutexGuard<'_, Inner<K, V>> {
+        // a panic while holding the lock leaves the map valid: take it back
         self.inner.lock().unwrap_or_else(|p| p.into_inner())
     }
 
-    /// The level of `key` (`bytes` large), decoded by `decode` unless held or being
-    /// decoded by another request.
+    /// Make room for `bytes` more: the least recently used entries leave.
+    fn evict(&self, g: &mut Inner<K, V>, bytes: u64) {
+        while g.held + bytes > self.budget && !g.entries.is_empty() {
+            let Some(oldest) = g
+                .entries
+                .values()
+                .min_by_key(|e| e.used)
+                .map(|e| e.key.clone())
+            else {
+                break;
+            };
+            if let Some(e) = g.entries.remove(&oldest) {
+                g.held -= e.bytes;
+            }
+        }
+    }
+
+    /// The value of `key`, if held and made.
+    pub fn get(&self, key: &K) -> Option<V> {
+        let mut g = self.lock();
+        g.tick += 1;
+        let tick = g.tick;
+        let e = g.entries.get_mut(key)?;
+        e.used = tick;
+        e.cell.get().and_then(|r| r.as_ref().ok()).cloned()
+    }
+
+    /// Keep `value` (`bytes` large) under `key`; a value over the budget is not kept.
+    pub fn put(&self, key: K, bytes: u64, value: V) {
+        if bytes > self.budget {
+            return;
+        }
+        let mut g = self.lock();
+        g.tick += 1;
+        let tick = g.tick;
+        if let Some(e) = g.entries.remove(&key) {
+            g.held -= e.bytes;
+        }
+        self.evict(&mut g, bytes);
+        let cell: Cell<V> = Arc::new(OnceLock::new());
+        let _ = cell.set(Ok(value));
+        g.held += bytes;
+        g.entries.insert(
+            key.clone(),
+            Entry {
+                key,
+                cell,
+                bytes,
+                used: tick,
+            },
+        );
+    }
+
+    /// The value of `key` (`bytes` large), made by `make` unless held or being made by
+    /// another request (which this one then waits for).
     pub fn get_or_decode(
         &self,
-        key: Key,
+        key: K,
         bytes: u64,
-        decode: impl FnOnce() -> Result<Arc<Raster>>,
-    ) -> Shared {
+        make: impl FnOnce() -> Result<V>,
+    ) -> std::result::Result<V, Arc<Error>> {
+        if bytes > self.budget {
+            // never kept: made for this request alone
+            return make().map_err(Arc::new);
+        }
         let cell = {
             let mut g = self.lock();
             g.tick += 1;
             let tick = g.tick;
-            if let Some(e) = g.entries.iter_mut().find(|e| e.key == key) {
+            if let Some(e) = g.entries.get_mut(&key) {
                 e.used = tick;
                 e.cell.clone()
             } else {
-                let mut held: u64 = g.entries.iter().map(|e| e.bytes).sum();
-                while held + bytes > self.budget && !g.entries.is_empty() {
-                    let oldest = (0..g.entries.len())
-                        .min_by_key(|&i| g.entries[i].used)
-                        .unwrap_or(0);
-                    held -= g.entries.swap_remove(oldest).bytes;
-                }
-                let cell: Cell = Arc::new(OnceLock::new());
-                g.entries.push(Entry {
-                    key: key.clone(),
-                    cell: cell.clone(),
-                    bytes,
-                    used: tick,
-                });
+                self.evict(&mut g, bytes);
+                let cell: Cell<V> = Arc::new(OnceLock::new());
+                g.held += bytes;
+                g.entries.insert(
+                    key.clone(),
+                    Entry {
+                        key: key.clone(),
+                        cell: cell.clone(),
+                        bytes,
+                        used: tick,
+                    },
+                );
                 cell
             }
         };
-        let r = cell.get_or_init(|| decode().map_err(Arc::new)).clone();
+        let r = cell.get_or_init(|| make().map_err(Arc::new)).clone();
         if r.is_err() {
             // a failure is not kept: the file may be fixed or replaced
-            self.lock().entries.retain(|e| e.key != key);
+            let mut g = self.lock();
+            if g.entries
+                .get(&key)
+                .is_some_and(|e| Arc::ptr_eq(&e.cell, &cell))
+            {
+                if let Some(e) = g.entries.remove(&key) {
+                    g.held -= e.bytes;
+                }
+            }
         }
         r
     }
@@ -167,5 +262,60 @@ mod tests {
         assert!(e.is_err());
         assert_eq!(c.held(), 0);
         assert!(c.get_or_decode(key(0), 10, raster).is_ok());
+    }
+
+    #[test]
+    fn concurrent_requests_for_one_key_decode_once() {
+        let c = Arc::new(LevelCache::new(1000));
+        let calls = Arc::new(std::sync::atomic::AtomicUsize::new(0));
+        let threads: Vec<_> = (0..8)
+            .map(|_| {
+                let (c, calls) = (c.clone(), calls.clone());
+                std::thread::spawn(move || {
+                    c.get_or_decode(key(3), 40, || {
+                        calls.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
+                        std::thread::sleep(std::time::Duration::from_millis(50));
+                        raster()
+                    })
+                    .unwrap()
+                })
+            })
+            .collect();
+        let got: Vec<_> = threads.into_iter().map(|t| t.join().unwrap()).collect();
+        assert_eq!(calls.load(std::sync::atomic::Ordering::SeqCst), 1);
+        assert!(got.iter().all(|r| Arc::ptr_eq(r, &got[0])));
+    }
+
+    #[test]
+    fn the_budget_is_never_exceeded() {
+        let c = AnswerCache::new(1000);
+        for i in 0..100u64 {
+            let bytes = 37 + i * 7 % 300;
+            let k = AnswerKey {
+                path: "a.mra".into(),
+                len: 1,
+                mtime: 2,
+                request: format!("r{i}"),
+            };
+            c.put(k.clone(), bytes, vec![0u8; bytes as usize].into());
+            assert!(c.held() <= 1000, "{} held after {i}", c.held());
+            assert!(c.get(&k).is_some(), "the value just kept is there");
+        }
+        // one over the budget is not kept and evicts nothing
+        let held = c.held();
+        let big = AnswerKey {
+            path: "a.mra".into(),
+            len: 1,
+            mtime: 2,
+            request: "big".into(),
+        };
+        c.put(big.clone(), 1001, Vec::new().into());
+        assert!(c.get(&big).is_none());
+        assert_eq!(c.held(), held);
+        let l = LevelCache::new(100);
+        for k in 0..20 {
+            l.get_or_decode(key(k), 30, raster).unwrap();
+            assert!(l.held() <= 100);
+        }
     }
 }

@@ -11,10 +11,10 @@
 //! URL           at most MAX_URL bytes (414)
 //! ```
 
-use super::cache::LevelCache;
+use super::cache::{AnswerCache, AnswerKey, Key, LevelCache, OpenedCache};
 use super::ident::{self, IdentError};
 use super::iiif::ImageRequest;
-use super::source::Source;
+use super::source::{OpenedFile, Source};
 use super::{info, render, viewer, Config, ServeError};
 use crate::limits::Limits;
 use axum::body::Body;
@@ -43,16 +43,29 @@ pub struct State {
     pub root: PathBuf,
     pub addr: SocketAddr,
     pub cache: LevelCache,
+    /// Encoded answers of image requests.
+    pub answers: AnswerCache,
+    /// One-piece 3.0 files parsed once.
+    pub opened: OpenedCache,
+    /// Held while a file's levels are decoded in the background (one file at a time).
+    pub warming: std::sync::Mutex<()>,
     pub limits: Limits,
     pub work: Arc<Semaphore>,
 }
 
 impl State {
+    /// The cache budget (`--cache`, at most `MRA_MAX_BYTES`) is shared: 3/4 for decoded
+    /// samples, 1/8 for encoded answers, 1/8 for parsed files.
     pub fn new(root: PathBuf, addr: SocketAddr, c: &Config) -> Arc<State> {
+        let budget = c.cache_bytes.min(c.limits.max_bytes);
+        let levels = budget - budget / 4;
         Arc::new(State {
             root,
             addr,
-            cache: LevelCache::new(c.cache_bytes.min(c.limits.max_bytes)),
+            cache: LevelCache::new(levels),
+            answers: AnswerCache::new(budget / 8),
+            opened: OpenedCache::new(budget / 8),
+            warming: std::sync::Mutex::new(()),
             limits: c.limits,
             work: Arc::new(Semaphore::new(c.workers.max(1))),
         })
@@ -208,6 +221,69 @@ fn window_param(uri: &Uri) -> Result<Option<(f64, f64)>, ServeError> {
     Ok(None)
 }
 
+/// A one-piece 3.0 file parsed once per version ([`crate::codec::Opened`], kept in the
+/// state) and set in `src`; on the first parse of a version, with `background`, its
+/// levels decoded in the background ([`Source::warm`]).
+fn parse_once(st: &Arc<State>, src: &mut Source, background: bool) -> Result<(), ServeError> {
+    if !src.parses_once() {
+        return Ok(());
+    }
+    let k = Key {
+        path: src.path.clone(),
+        len: src.len,
+        mtime: src.mtime,
+        level: 0,
+        tile: Vec::new(),
+    };
+    let o = st
+        .opened
+        .get_or_decode(k, src.len, || {
+            let o = Arc::new(crate::codec::Opened::open(&src.path)?);
+            if background {
+                let mut w = src.clone();
+                w.opened = Some(OpenedFile(o.clone()));
+                let st = st.clone();
+                let _ = std::thread::Builder::new()
+                    .name("mra-serve-warm".into())
+                    .spawn(move || {
+                        let _one = st.warming.lock();
+                        // on one thread of its own, so that it takes at most one
+                        // core from the requests
+                        match rayon::ThreadPoolBuilder::new().num_threads(1).build() {
+                            Ok(pool) => pool.install(|| w.warm(&st.cache, &st.limits)),
+                            Err(_) => w.warm(&st.cache, &st.limits),
+                        }
+                    });
+            }
+            Ok(o)
+        })
+        .map_err(ServeError::File)?;
+    src.opened = Some(OpenedFile(o));
+    Ok(())
+}
+
+/// `--warm`: every one-piece 3.0 file under the root parsed and its levels that the
+/// cache keeps decoded ([`Source::warm`]), before the first request is taken.
+pub fn warm_all(st: &Arc<State>) {
+    for rel in viewer::files(&st.root) {
+        let Ok(mut src) = Source::open(&st.root.join(&rel), None) else {
+            continue;
+        };
+        if parse_once(st, &mut src, false).is_ok() {
+            src.warm(&st.cache, &st.limits);
+        }
+    }
+}
+
+/// An answer: status, `ETag`, content type, body.
+type Answer = (StatusCode, String, Option<&'static str>, Body);
+
+/// Where the first step of an image request leaves it.
+enum Step {
+    Done(Answer),
+    Render(Box<(Source, ImageRequest, super::iiif::Caps, AnswerKey)>),
+}
+
 async fn iiif(AxState(st): AxState<Arc<State>>, uri: Uri, headers: HeaderMap) -> Response {
     if uri.path().len() + uri.query().map_or(0, str::len) > MAX_URL {
         return plain(StatusCode::URI_TOO_LONG, "URL too long");
@@ -256,12 +332,14 @@ async fn iiif(AxState(st): AxState<Arc<State>>, uri: Uri, headers: HeaderMap) ->
         Err(IdentError::NotFound) => return plain(StatusCode::NOT_FOUND, "no such image"),
     };
     let base = base_uri(&st, &headers, &id);
-    let Ok(permit) = st.work.clone().acquire_owned().await else {
-        return plain(StatusCode::SERVICE_UNAVAILABLE, "shutting down");
+    let request = match uri.query() {
+        Some(q) => format!("{}?{q}", uri.path()),
+        None => uri.path().to_string(),
     };
+    // first, without a decode permit: the file's version, a 304, info.json or an
+    // answer already encoded
     let st2 = st.clone();
-    let job = tokio::task::spawn_blocking(move || {
-        let _permit = permit;
+    let first = tokio::task::spawn_blocking(move || -> Result<Step, ServeError> {
         let path = ident::locate(&st2.root, &ident).map_err(|_| ServeError::NotFound)?;
         let src = Source::open(&path, ident.slice)?;
         let etag = src.etag();
@@ -270,7 +348,12 @@ async fn iiif(AxState(st): AxState<Arc<State>>, uri: Uri, headers: HeaderMap) ->
             .and_then(|v| v.to_str().ok())
             .is_some_and(|v| v.split(',').any(|t| t.trim() == etag || t.trim() == "*"))
         {
-            return Ok((StatusCode::NOT_MODIFIED, etag, None, Vec::new()));
+            return Ok(Step::Done((
+                StatusCode::NOT_MODIFIED,
+                etag,
+                None,
+                Vec::new().into(),
+            )));
         }
         let caps = info::caps(&src, st2.limits.max_bytes);
         match req {
@@ -286,25 +369,67 @@ async fn iiif(AxState(st): AxState<Arc<State>>, uri: Uri, headers: HeaderMap) ->
                     "application/json"
                 };
                 let body = serde_json::to_vec_pretty(&doc).unwrap_or_default();
-                Ok((StatusCode::OK, etag, Some(mime), body))
+                Ok(Step::Done((StatusCode::OK, etag, Some(mime), body.into())))
             }
             Some(req) => {
-                let (w, h) = src.size();
-                let r = req.resolve(w, h, &caps)?;
-                let body = render::render(&src, &st2.cache, &st2.limits, &req, &r, window)?;
-                Ok((StatusCode::OK, etag, Some(req.format.mime()), body))
+                let key = AnswerKey {
+                    path: src.path.clone(),
+                    len: src.len,
+                    mtime: src.mtime,
+                    request,
+                };
+                let mime = Some(req.format.mime());
+                if let Some(body) = st2.answers.get(&key) {
+                    return Ok(Step::Done((StatusCode::OK, etag, mime, body.into())));
+                }
+                Ok(Step::Render(Box::new((src, req, caps, key))))
             }
         }
     });
-    let done: Result<_, ServeError> = match job.await {
+    let step = match first.await {
         Ok(r) => r,
-        Err(_) => {
-            return plain(StatusCode::INTERNAL_SERVER_ERROR, "the request failed");
+        Err(_) => return plain(StatusCode::INTERNAL_SERVER_ERROR, "the request failed"),
+    };
+    let done = match step {
+        Ok(Step::Done(d)) => Ok(d),
+        Err(e) => Err(e),
+        Ok(Step::Render(job)) => {
+            let Ok(permit) = st.work.clone().acquire_owned().await else {
+                return plain(StatusCode::SERVICE_UNAVAILABLE, "shutting down");
+            };
+            let st2 = st.clone();
+            let job = tokio::task::spawn_blocking(move || {
+                let _permit = permit;
+                let (mut src, req, caps, key) = *job;
+                parse_once(&st2, &mut src, true)?;
+                let etag = src.etag();
+                let (w, h) = src.size();
+                let r = req.resolve(w, h, &caps)?;
+                let body = axum::body::Bytes::from(render::render(
+                    &src,
+                    &st2.cache,
+                    &st2.limits,
+                    &req,
+                    &r,
+                    window,
+                )?);
+                st2.answers.put(key, body.len() as u64, body.clone());
+                Ok((
+                    StatusCode::OK,
+                    etag,
+                    Some(req.format.mime()),
+                    Body::from(body),
+                ))
+            });
+            match job.await {
+                Ok(r) => r,
+                Err(_) => return plain(StatusCode::INTERNAL_SERVER_ERROR, "the request failed"),
+            }
         }
     };
     match done {
         Ok((status, etag, mime, body)) => {
-            let mut resp = Response::new(Body::from(body));
+            let mut resp = Response::new(body);
             *resp.status_mut() = status;
             let h = resp.headers_mut();
             if let Some(m) = mime {

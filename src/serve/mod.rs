@@ -86,6 +86,8 @@ pub struct Config {
     pub limits: Limits,
     /// Requests decoding at the same time (the others wait).
     pub workers: usize,
+    /// Decode the levels the cache keeps of every one-piece 3.0 file before serving.
+    pub warm: bool,
 }
 
 /// Why the server could not start or stopped.
@@ -119,8 +121,12 @@ pub fn serve(config: Config, ready: impl FnOnce(SocketAddr)) -> Result<(), Start
     rt.block_on(async move {
         let listener = tokio::net::TcpListener::bind(config.bind).await?;
         let addr = listener.local_addr()?;
-        ready(addr);
         let state = http::State::new(root, addr, &config);
+        if config.warm {
+            let st = state.clone();
+            let _ = tokio::task::spawn_blocking(move || http::warm_all(&st)).await;
+        }
+        ready(addr);
         http::run(listener, state).await
     })?;
     Ok(())

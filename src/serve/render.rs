@@ -288,7 +288,8 @@ fn orient(p: Plane, mirror: bool, quarters: u8) -> Plane {
 }
 
 /// 8-bit samples (rounded, clamped) encoded as PNG (fast compression) or JPEG
-/// (quality [`JPEG_QUALITY`], at most 65535 pixels a side as the format allows).
+/// (quality [`JPEG_QUALITY`], chroma 4:2:0, at most 65535 pixels a side as the format
+/// allows).
 fn encode(p: &Plane, f: Format) -> Result<Vec<u8>, ServeError> {
     use image::ImageEncoder;
     let px: Vec<u8> = p
@@ -331,8 +332,11 @@ fn encode(p: &Plane, f: Format) -> Result<Vec<u8>, ServeError> {
             } else {
                 jpeg_encoder::ColorType::Luma
             };
-            jpeg_encoder::Encoder::new(&mut out, JPEG_QUALITY)
-                .encode(&px, w, h, ct)
+            let mut enc = jpeg_encoder::Encoder::new(&mut out, JPEG_QUALITY);
+            // chroma at half resolution both ways (4:2:0), as libjpeg's default and
+            // iipsrv's tiles
+            enc.set_sampling_factor(jpeg_encoder::SamplingFactor::F_2_2);
+            enc.encode(&px, w, h, ct)
                 .map_err(|e| failed(e.to_string()))?;
         }
     }

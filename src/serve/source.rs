@@ -49,6 +49,19 @@ pub struct Source {
     /// The axes of the image: rows, then columns (indices into `header.dims`).
     pub row_axis: usize,
     pub col_axis: usize,
+    /// A one-piece 3.0 file parsed once (its code-block indices), when the server keeps
+    /// it: patches are then decoded from it without reading the indices again.
+    pub opened: Option<OpenedFile>,
+}
+
+/// A file parsed once ([`codec::Opened`]), shared by the requests of its version.
+#[derive(Clone)]
+pub struct OpenedFile(pub Arc<codec::Opened>);
+
+impl std::fmt::Debug for OpenedFile {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("OpenedFile")
+    }
 }
 
 impl Source {
@@ -108,6 +121,7 @@ impl Source {
             slice,
             row_axis,
             col_axis,
+            opened: None,
         })
     }
 
@@ -127,6 +141,12 @@ impl Source {
     /// The deepest level.
     pub fn depth(&self) -> usize {
         self.levels.len() - 1
+    }
+
+    /// Whether patches of this file are decoded from a parsed [`codec::Opened`]: a
+    /// one-piece 3.0 file (code-blocks).
+    pub fn parses_once(&self) -> bool {
+        self.header.version.has_blocks() && !self.header.is_tiled()
     }
 
     /// The entity tag of this version of the file.
@@ -165,9 +185,13 @@ impl Source {
         }
         // a 3.0 file: the window's code-blocks read and its support synthesized alone
         if h.version.has_blocks() {
-            let (region, origin) = full_region(&h.dims, ext, &bx);
-            let r = self.decode(k, Some(region))?;
-            return cut(&r, &origin, &bx, self.row_axis, self.col_axis);
+            // the whole level when it is decoded and kept ([`Source::warm`]), without
+            // waiting for a decode of it under way
+            if let Some(r) = cache.get(&self.key(k, Vec::new())) {
+                let zero: Vec<usize> = vec![0; ext.len()];
+                return cut(&r, &zero, &bx, self.row_axis, self.col_axis);
+            }
+            return self.window_from_patches(cache, limits, k, &bx);
         }
         if level_bytes <= cache.entry_limit() {
             limits.check_elems("a decoded level", level_samples, DECODE_BYTES_PER_SAMPLE)?;
@@ -189,6 +213,39 @@ impl Source {
         cut(&r, &zero, &bx, self.row_axis, self.col_axis)
     }
 
+    /// Decode whole, coarsest first, the levels of a one-piece 3.0 image that the cache
+    /// keeps (each at most [`LevelCache::entry_limit`], all of them at most half the
+    /// budget, each decode within `limits`), and keep them: the pyramid a tile server
+    /// reads. Requests meanwhile decode their patches; a level once kept is cut from.
+    pub fn warm(&self, cache: &LevelCache, limits: &Limits) {
+        if !self.parses_once() || self.slice.is_some() {
+            return;
+        }
+        let h = &self.header;
+        let mut total = 0u64;
+        for k in (0..self.levels.len()).rev() {
+            let samples = self.levels[k]
+                .iter()
+                .fold(h.channels as u64, |n, &e| n.saturating_mul(e as u64));
+            let bytes = samples.saturating_mul(h.sample_type.size() as u64);
+            total = total.saturating_add(bytes);
+            if bytes > cache.entry_limit()
+                || total > cache.budget() / 2
+                || limits
+                    .check_elems("a decoded level", samples, DECODE_BYTES_PER_SAMPLE)
+                    .is_err()
+            {
+                break;
+            }
+            if cache
+                .get_or_decode(self.key(k, Vec::new()), bytes, || self.decode(k, None))
+                .is_err()
+            {
+                break;
+            }
+        }
+    }
+
     fn key(&self, level: usize, tile: Vec<usize>) -> Key {
         Key {
             path: self.path.clone(),
@@ -201,6 +258,9 @@ impl Source {
 
     /// Level `k` of the file, or of the full-resolution box `region` (slowest axis first).
     fn decode(&self, k: usize, region: Option<Vec<Range<usize>>>) -> crate::Result<Arc<Raster>> {
+        if let Some(o) = &self.opened {
+            return o.0.region(k, region.as_deref()).map(|d| Arc::new(d.raster));
+        }
         let opts = DecodeOptions {
             level: k,
             region,
@@ -250,8 +310,93 @@ impl Source {
                 "a window within the level",
             )));
         }
-        let c = h.channels;
+        let pieces: Vec<Vec<(usize, Range<usize>)>> = meets
+            .iter()
+            .enumerate()
+            .map(|(a, m)| m.iter().map(|&j| (j, level_box(a, j))).collect())
+            .collect();
+        self.assemble(bx, &pieces, |coords, boxes| {
+            let region: Vec<Range<usize>> = (0..nd)
+                .map(|a| coords[a] * h.tile[a]..((coords[a] + 1) * h.tile[a]).min(h.dims[a]))
+                .collect();
+            let samples = boxes
+                .iter()
+                .fold(h.channels as u64, |n, g| n * g.len() as u64);
+            limits.check_elems("a decoded tile", samples, DECODE_BYTES_PER_SAMPLE)?;
+            let bytes = samples * h.sample_type.size() as u64;
+            let r = cache
+                .get_or_decode(self.key(k, coords.to_vec()), bytes, || {
+                    self.decode(k, Some(region))
+                })
+                .map_err(ServeError::File)?;
+            Ok((r, boxes.iter().map(|g| g.start).collect()))
+        })
+    }
+
+    /// The window `bx` of level `k` of a one-piece 3.0 file from the patches it meets:
+    /// level k cut on the image's axes into `PATCH × PATCH` squares aligned to multiples
+    /// of `PATCH` (a level no larger is one patch), each decoded as `mra decode --level
+    /// k --region …` of its box and kept in the cache, so that neighbouring tiles share
+    /// one decode of their code-blocks and of the synthesis of their support.
+    fn window_from_patches(
+        &self,
+        cache: &LevelCache,
+        limits: &Limits,
+        k: usize,
+        bx: &[Range<usize>],
+    ) -> Result<Plane, ServeError> {
+        let h = &self.header;
+        let ext = &self.levels[k];
+        let p = patch_extent();
+        let pieces: Vec<Vec<(usize, Range<usize>)>> = (0..ext.len())
+            .map(|a| {
+                if a != self.row_axis && a != self.col_axis {
+                    // the slice axis: the window's one sample
+                    return vec![(bx[a].start, bx[a].clone())];
+                }
+                (bx[a].start / p..bx[a].end.div_ceil(p))
+                    .map(|j| (j, j * p..((j + 1) * p).min(ext[a])))
+                    .collect()
+            })
+            .collect();
+        self.assemble(bx, &pieces, |coords, boxes| {
+            let (region, origin) = full_region(&h.dims, ext, boxes);
+            // the decode may hold a sample more on each side of the box
+            let samples = boxes
+                .iter()
+                .fold(h.channels as u64, |n, g| n * (g.len() as u64 + 2));
+            limits.check_elems("a decoded patch", samples, DECODE_BYTES_PER_SAMPLE)?;
+            let bytes = samples * h.sample_type.size() as u64;
+            let r = cache
+                .get_or_decode(self.key(k, coords.to_vec()), bytes, || {
+                    self.decode(k, Some(region))
+                })
+                .map_err(ServeError::File)?;
+            Ok((r, origin))
+        })
+    }
+
+    /// The window `bx` from pieces: on each axis the pieces meeting it, each an index
+    /// and its box of the level; `fetch(indices, boxes)` gives a piece's decode and the
+    /// level position of its first sample. Every piece's part of the window is copied.
+    fn assemble(
+        &self,
+        bx: &[Range<usize>],
+        pieces: &[Vec<(usize, Range<usize>)>],
+        mut fetch: impl FnMut(
+            &[usize],
+            &[Range<usize>],
+        ) -> Result<(Arc<Raster>, Vec<usize>), ServeError>,
+    ) -> Result<Plane, ServeError> {
+        let nd = bx.len();
+        let c = self.header.channels;
         let (oh, ow) = (bx[self.row_axis].len(), bx[self.col_axis].len());
+        if pieces.iter().any(|m| m.is_empty()) {
+            return Err(ServeError::from(crate::Error::format(
+                format!("no piece meets the window {bx:?}"),
+                "a window within the level",
+            )));
+        }
         let mut out = Plane {
             h: oh,
             w: ow,
@@ -259,37 +404,30 @@ impl Source {
             data: vec![0.0; oh * ow * c],
         };
         let mut at = vec![0usize; nd];
-        'tiles: loop {
-            let coords: Vec<usize> = (0..nd).map(|a| meets[a][at[a]]).collect();
-            let region: Vec<Range<usize>> = (0..nd)
-                .map(|a| coords[a] * h.tile[a]..((coords[a] + 1) * h.tile[a]).min(h.dims[a]))
-                .collect();
-            let boxes: Vec<Range<usize>> = (0..nd).map(|a| level_box(a, coords[a])).collect();
-            let samples = boxes.iter().fold(c as u64, |n, g| n * g.len() as u64);
-            limits.check_elems("a decoded tile", samples, DECODE_BYTES_PER_SAMPLE)?;
-            let bytes = samples * h.sample_type.size() as u64;
-            let r = cache
-                .get_or_decode(self.key(k, coords), bytes, || self.decode(k, Some(region)))
-                .map_err(ServeError::File)?;
-            let origin: Vec<usize> = boxes.iter().map(|g| g.start).collect();
+        'pieces: loop {
+            let coords: Vec<usize> = (0..nd).map(|a| pieces[a][at[a]].0).collect();
+            let boxes: Vec<Range<usize>> = (0..nd).map(|a| pieces[a][at[a]].1.clone()).collect();
             let part: Vec<Range<usize>> = (0..nd)
                 .map(|a| bx[a].start.max(boxes[a].start)..bx[a].end.min(boxes[a].end))
                 .collect();
-            let p = cut(&r, &origin, &part, self.row_axis, self.col_axis)?;
-            let (y0, x0) = (
-                part[self.row_axis].start - bx[self.row_axis].start,
-                part[self.col_axis].start - bx[self.col_axis].start,
-            );
-            for y in 0..p.h {
-                let dst = ((y0 + y) * ow + x0) * c;
-                out.data[dst..dst + p.w * c]
-                    .copy_from_slice(&p.data[y * p.w * c..(y + 1) * p.w * c]);
+            if part.iter().all(|g| !g.is_empty()) {
+                let (r, origin) = fetch(&coords, &boxes)?;
+                let p = cut(&r, &origin, &part, self.row_axis, self.col_axis)?;
+                let (y0, x0) = (
+                    part[self.row_axis].start - bx[self.row_axis].start,
+                    part[self.col_axis].start - bx[self.col_axis].start,
+                );
+                for y in 0..p.h {
+                    let dst = ((y0 + y) * ow + x0) * c;
+                    out.data[dst..dst + p.w * c]
+                        .copy_from_slice(&p.data[y * p.w * c..(y + 1) * p.w * c]);
+                }
             }
-            // the next tile, last axis fastest
+            // the next piece, last axis fastest
             for a in (0..nd).rev() {
                 at[a] += 1;
-                if at[a] < meets[a].len() {
-                    continue 'tiles;
+                if at[a] < pieces[a].len() {
+                    continue 'pieces;
                 }
                 at[a] = 0;
             }
@@ -297,6 +435,17 @@ impl Source {
         }
         Ok(out)
     }
+}
+
+/// The side of a patch of a one-piece 3.0 file's level, in level samples.
+pub const PATCH: usize = 512;
+
+fn patch_extent() -> usize {
+    std::env::var("MRA_SERVE_PATCH")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .filter(|&p: &usize| p >= 16)
+        .unwrap_or(PATCH)
 }
 
 /// The level index of full-resolution index `x` on an axis of extent `d` and level
