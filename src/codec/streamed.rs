@@ -101,7 +101,14 @@ pub fn encode_streamed<S: SlabSource + ?Sized, W: std::io::Write>(
         sample_type: shape.sample_type,
         kind: shape.kind,
     };
-    let mut header = header_with(&frame, opts, Mode::Lossy, colour, range, &shape.meta)?;
+    let mut header = context_coded(header_with(
+        &frame,
+        opts,
+        Mode::Lossy,
+        colour,
+        range,
+        &shape.meta,
+    )?);
     header.step = step;
     let rdo = rdo_of(opts.rate);
     if rdo.is_some() {
@@ -138,7 +145,14 @@ fn bpp_step(mut sample: Vec<Raster>, opts: &EncodeOptions, span: f64, b: f64) ->
                 kind: t.kind,
             };
             let colour = lossy_colour(t.channels);
-            let mut h = header_with(&frame, opts, Mode::Lossy, colour, (0.0, 0.0), &t.meta)?;
+            let mut h = context_coded(header_with(
+                &frame,
+                opts,
+                Mode::Lossy,
+                colour,
+                (0.0, 0.0),
+                &t.meta,
+            )?);
             h.delta = if rdo.is_some() { 0.0 } else { h.delta };
             Ok(h)
         })
@@ -522,12 +536,22 @@ impl<'p> Coder<'p> {
     }
 }
 
+/// The header `h` with its blocks coded by the context coder (coder 0, format 3.0):
+/// the streamed encoder codes every block with it whatever `--effort` asks (the HT
+/// coder is not streamed), so the header must say so.
+fn context_coded(mut h: Header) -> Header {
+    h.coder = 0;
+    h.version = crate::format::Version::for_file(false, h.voids, true);
+    h
+}
+
 /// Whether a whole decode of the file of header `h` goes through [`StreamedDecoder`]
 /// in [`super::SlabDecoder`]: a one-piece lossy 3.0 file (no residual layer, no voids)
 /// of 2 or 3 axes over the one-piece limit ([`tiles::default_tile`] would cut it).
 pub fn decodes_streamed(h: &Header) -> bool {
     !h.is_tiled()
         && h.version.has_blocks()
+        && h.coder == 0
         && h.mode == Mode::Lossy
         && !h.voids
         && (2..=3).contains(&h.dims.len())

@@ -50,7 +50,8 @@ pub fn encode_tiled_view(
 /// slab at a time ([`super::encode_streamed`], format 3.0) when it is given the whole
 /// raster as its tile: a raster over the one-piece limit
 /// ([`super::tiles::default_tile`] cuts it) at options the stream covers (lossy at one
-/// base step, integer samples without voids). The CLI's default tile for such a raster.
+/// base step, integer samples without voids): what `--tile whole` (or `--blocks`) gives such a
+/// raster; the default stays tiles until the stream's coarser bands are optimised.
 pub fn streams(shape: &Shape, opts: &EncodeOptions) -> bool {
     super::tiles::default_tile(&shape.dims, shape.channels) != shape.dims
         && super::streamed::covers(shape, opts)

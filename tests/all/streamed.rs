@@ -40,6 +40,7 @@ fn opts(rate: Rate, levels: usize, boundary: Boundary) -> EncodeOptions {
         boundary,
         scheme: Scheme::Cdf97,
         format: Format::Blocks,
+        effort: codec::DEFAULT_EFFORT,
     }
 }
 
@@ -114,6 +115,22 @@ fn streamed_files_do_not_depend_on_the_thread_count() {
     }
 }
 
+/// The streamed encoder codes every block with the context coder, so at a low effort
+/// (which asks for the HT coder) its header says coder 0 and the file decodes to the
+/// default effort's samples.
+#[test]
+fn a_low_effort_streamed_file_says_its_coder() {
+    let r = field(&[300, 90], 1, SampleType::U16, 12, 30000.0);
+    let mut fast = opts(Rate::Threshold(40.0), 4, Boundary::Symmetric);
+    fast.effort = 1;
+    let s = streamed(&r, &fast);
+    assert_eq!(codec::header_of(&s).unwrap().coder, 0);
+    let d = codec::decode(&s, &DecodeOptions::default()).unwrap();
+    let base = streamed(&r, &opts(Rate::Threshold(40.0), 4, Boundary::Symmetric));
+    let e = codec::decode(&base, &DecodeOptions::default()).unwrap();
+    assert!(d.raster.samples == e.raster.samples);
+}
+
 /// A region of a streamed file decodes to the whole decode cut to the region.
 #[test]
 fn a_region_of_a_streamed_file_is_the_whole_decode_cropped() {
@@ -161,10 +178,11 @@ fn a_truncated_streamed_file_is_a_one_line_error() {
     assert!(!dir.join("out.nrrd").exists());
 }
 
-/// Over the one-piece limit the default file streams for the lossy modes of one step
-/// and integer samples; lossless, `--max-error`, `--psnr`, floats and small rasters do not.
+/// Over the one-piece limit a one-tile encode (`--tile whole`) streams for the lossy
+/// modes of one step and integer samples; lossless, `--max-error`, `--psnr`, floats and
+/// small rasters do not.
 #[test]
-fn the_stream_is_the_default_over_the_one_piece_limit() {
+fn a_whole_tile_streams_over_the_one_piece_limit() {
     let small = field(&[4, 4], 1, SampleType::U16, 1, 100.0);
     let mut big = Shape::of(&small);
     big.dims = vec![16384, 8192];

@@ -410,7 +410,16 @@ pub fn encode_rans(
             parent: parent.as_ref().map(|(d, pw, bases)| (*d, *pw, &bases[..])),
         };
         blk.clear();
-        rans::encode(v, b.ext, &layout, s, t, counts.as_deref_mut(), &mut wr, &mut blk);
+        rans::encode(
+            v,
+            b.ext,
+            &layout,
+            s,
+            t,
+            counts.as_deref_mut(),
+            &mut wr,
+            &mut blk,
+        );
         crate::format::put_varint(&mut out, blk.len() as u64);
         out.extend_from_slice(&blk);
     }
