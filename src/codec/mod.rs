@@ -30,6 +30,7 @@ pub mod lossless;
 mod lossy;
 mod max_error;
 mod opened;
+mod sparse_read;
 pub use crate::format::meta;
 mod options;
 mod plan;

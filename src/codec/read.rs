@@ -4,8 +4,8 @@
 
 use super::container::{read_head, read_rest, Parsed};
 use super::decode::{reconstruct, reconstruct_window};
-use super::opened::Sparse;
 use super::options::{DecodeOptions, Decoded};
+use super::sparse_read::Sparse;
 use super::tiles;
 use crate::format::{Chunk, ChunkReader, Header};
 use crate::io::slab::{Shape, SlabSink};
