@@ -125,6 +125,9 @@ fn hull(a: &[Range<usize>], b: &[Range<usize>]) -> Vec<Range<usize>> {
         .collect()
 }
 
+/// The box a band's synthesis reads at a level, from the box it must give.
+type Reads<'a> = &'a dyn Fn(usize, &[Range<usize>]) -> Vec<Range<usize>>;
+
 /// The exact support of the window (`p.out_box`, the box of level `k` that `p.window` maps to) in each
 /// band (band coordinates; `None` where the window synthesis does not plan the
 /// pyramid): the coefficients the window's synthesis reads
@@ -138,8 +141,7 @@ fn exact_support(p: &Parsed, k: usize) -> Option<Vec<Vec<Range<usize>>>> {
     let k = k.min(plan.pyr.depth());
     let out = p.out_box.as_deref()?;
     let nd = h.dims.len();
-    let support = |coarse: &[Range<usize>],
-                   reads: &dyn Fn(usize, &[Range<usize>]) -> Vec<Range<usize>>| {
+    let support = |coarse: &[Range<usize>], reads: Reads<'_>| {
         plan.bands
             .iter()
             .map(|b| match b.level {

@@ -40,13 +40,17 @@ fn segment(
     (a..b, c0..c0 + len.div_ceil(2), c0..c0 + len / 2)
 }
 
+/// The ranges one axis of a window's inverse level lifts: the segment, its coarse and
+/// its detail part.
+type Lift = (Range<usize>, Range<usize>, Range<usize>);
+
 /// One inverse level of a window: its output box, and on each axis it lifts (in
 /// decreasing axis order) the segment, coarse and detail ranges; the coarse block's
 /// extents (the level's `m` per axis).
 struct Level {
     out: Vec<Range<usize>>,
     /// Per axis: `Some((segment, coarse, detail))` when the axis is lifted at this level.
-    lifts: Vec<Option<(Range<usize>, Range<usize>, Range<usize>)>>,
+    lifts: Vec<Option<Lift>>,
     coarse: Vec<usize>,
 }
 

@@ -297,12 +297,12 @@ fn window_reads_are_the_exact_support() {
                                     let face_matters = differs(&c, 1e-6) || {
                                         let mut c = coeffs.clone();
                                         let mut any = false;
-                                        for j in 0..n {
+                                        for (j, cj) in c.iter_mut().enumerate().take(n) {
                                             let q = pos(j);
                                             if q[ax] == end
                                                 && bx.iter().zip(q).all(|(r, x)| r.contains(x))
                                             {
-                                                c[j] += 1000.0 * (1.0 + j as f64 * 0.37);
+                                                *cj += 1000.0 * (1.0 + j as f64 * 0.37);
                                                 any = true;
                                             }
                                         }
