@@ -21,7 +21,7 @@
 //! [`super::lossless::inverse`] does.
 
 use crate::scheme::Scheme;
-use crate::tensor::Pyramid;
+use crate::tensor::{box_dims, box_lists, for_each_index, strides, Pyramid};
 use std::ops::Range;
 
 /// The segment of a lane of length `n` that gives the samples `o` exactly (module doc),
@@ -239,47 +239,4 @@ fn lift_axis(
         }
     }
     out
-}
-
-fn strides(shape: &[usize]) -> Vec<usize> {
-    let mut s = vec![1usize; shape.len()];
-    for k in (0..shape.len().saturating_sub(1)).rev() {
-        s[k] = s[k + 1] * shape[k + 1];
-    }
-    s
-}
-
-fn box_dims(b: &[Range<usize>]) -> Vec<usize> {
-    b.iter().map(|r| r.len()).collect()
-}
-
-fn box_lists(b: &[Range<usize>]) -> Vec<Vec<usize>> {
-    b.iter().map(|r| r.clone().collect()).collect()
-}
-
-/// Call `f(p)` for every point of the product of the index lists (raster order).
-fn for_each_index(lists: &[Vec<usize>], mut f: impl FnMut(&[usize])) {
-    if lists.iter().any(|l| l.is_empty()) {
-        return;
-    }
-    let nd = lists.len();
-    let mut k = vec![0usize; nd];
-    let mut p: Vec<usize> = lists.iter().map(|l| l[0]).collect();
-    loop {
-        f(&p);
-        let mut a = nd;
-        loop {
-            if a == 0 {
-                return;
-            }
-            a -= 1;
-            k[a] += 1;
-            if k[a] < lists[a].len() {
-                p[a] = lists[a][k[a]];
-                break;
-            }
-            k[a] = 0;
-            p[a] = lists[a][0];
-        }
-    }
 }

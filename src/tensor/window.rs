@@ -177,18 +177,18 @@ impl WindowPlan {
 }
 
 /// The extents of a box.
-fn box_dims(b: &[Range<usize>]) -> Vec<usize> {
+pub(crate) fn box_dims(b: &[Range<usize>]) -> Vec<usize> {
     b.iter().map(|r| r.len()).collect()
 }
 
 /// The indices of a box, one list per axis.
-fn box_lists(b: &[Range<usize>]) -> Vec<Vec<usize>> {
+pub(crate) fn box_lists(b: &[Range<usize>]) -> Vec<Vec<usize>> {
     b.iter().map(|r| r.clone().collect()).collect()
 }
 
 /// Call `f(p)` for every point of the product of the index lists `lists` (raster order,
 /// the last axis fastest).
-fn for_each_index(lists: &[Vec<usize>], mut f: impl FnMut(&[usize])) {
+pub(crate) fn for_each_index(lists: &[Vec<usize>], mut f: impl FnMut(&[usize])) {
     if lists.iter().any(|l| l.is_empty()) {
         return;
     }

@@ -338,11 +338,39 @@ pub fn decode_ht(
     shape: Shape,
     t: &ht::Tables,
 ) -> Result<Vec<i32>> {
+    decode_sized(
+        data,
+        dims,
+        kind,
+        parent,
+        shape,
+        t.kind.parent,
+        |v, ext, layout, s, bytes| {
+            ht::decode(v, ext, layout, s, t, bytes);
+            Ok(())
+        },
+    )
+}
+
+/// Decode a band whose blocks are each `varint(length)` and that many bytes (the HT and
+/// rANS coders' bands), handing each block's bytes to `block` with the block's layout
+/// and scratch, over a band of zeros; the parent is read where `uses_parent` (never in
+/// the coarsest band), whose median residuals are undone at the end. Fails when a
+/// block's declared length runs past the data.
+fn decode_sized(
+    data: &[u8],
+    dims: &[usize],
+    kind: BandKind,
+    parent: Option<Parent>,
+    shape: Shape,
+    uses_parent: bool,
+    mut block: impl FnMut(&mut [i32], Extent, &Layout<'_>, &mut Scratch, &[u8]) -> Result<()>,
+) -> Result<Vec<i32>> {
     let w = Walk::new(dims);
     let shape = shape.normal();
     let n: usize = dims.iter().product();
     let mut v = vec![0i32; n];
-    let parent = if kind == BandKind::Coarse || !t.kind.parent {
+    let parent = if kind == BandKind::Coarse || !uses_parent {
         None
     } else {
         parent_map(dims, w, parent)
@@ -365,7 +393,7 @@ pub fn decode_ht(
             b,
             parent: parent.as_ref().map(|(d, pw, bases)| (*d, *pw, &bases[..])),
         };
-        ht::decode(&mut v, b.ext, &layout, s, t, bytes);
+        block(&mut v, b.ext, &layout, s, bytes)?;
     }
     if kind == BandKind::Coarse {
         undo_median(&mut v, w);
@@ -436,37 +464,13 @@ pub fn decode_rans(
     shape: Shape,
     t: &rans::Tables,
 ) -> Result<Vec<i32>> {
-    let w = Walk::new(dims);
-    let shape = shape.normal();
-    let n: usize = dims.iter().product();
-    let mut v = vec![0i32; n];
-    let parent = if kind == BandKind::Coarse || !t.kind.parent {
-        None
-    } else {
-        parent_map(dims, w, parent)
-    };
-    let mut cur = Cursor::new(data, "code-block");
-    let mut scratch: Option<(Extent, Scratch)> = None;
-    for b in blocks(w, shape) {
-        let len = cur.varint()?;
-        let left = data.len() as u64 - cur.pos as u64;
-        if len > left {
-            return Err(Error::format(
-                format!("a code-block declaring {len} bytes, {left} left"),
-                "code-blocks within the band",
-            ));
-        }
-        let bytes = cur.take(len as usize)?;
-        let s = scratch_for(&mut scratch, b.ext);
-        let layout = Layout {
-            w,
-            b,
-            parent: parent.as_ref().map(|(d, pw, bases)| (*d, *pw, &bases[..])),
-        };
-        rans::decode(&mut v, b.ext, &layout, s, t, bytes)?;
-    }
-    if kind == BandKind::Coarse {
-        undo_median(&mut v, w);
-    }
-    Ok(v)
+    decode_sized(
+        data,
+        dims,
+        kind,
+        parent,
+        shape,
+        t.kind.parent,
+        |v, ext, layout, s, bytes| rans::decode(v, ext, layout, s, t, bytes),
+    )
 }
