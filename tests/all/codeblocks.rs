@@ -3,33 +3,21 @@
 //! lossless, odd sizes; the bytes do not depend on the thread count; a damaged block
 //! index is a one-line error, exit 2, no output.
 
+use super::common;
 use mra::codec::{self, DecodeOptions, EncodeOptions, Rate};
 use mra::format::{put_chunk, put_varint, ChunkReader, Cursor, Header};
-use mra::io::{DataKind, Raster, SampleType, Samples};
+use mra::io::{Raster, SampleType};
 use std::process::Command;
 
 /// A smooth field with texture (xorshift), `channels` channels of type `ty`.
+/// The codec tests' wave ([`common::wave_field`]).
 fn field(dims: &[usize], channels: usize, ty: SampleType, seed: u64, hi: f64) -> Raster {
-    let n: usize = dims.iter().product::<usize>() * channels;
-    let w = *dims.last().unwrap();
-    let mut x = seed | 1;
-    let v: Vec<f64> = (0..n)
-        .map(|i| {
-            x ^= x << 13;
-            x ^= x >> 7;
-            x ^= x << 17;
-            let p = i / channels;
-            let (px, py) = ((p % w) as f64, (p / w) as f64);
-            let s = 0.5 + 0.35 * (px * 0.13 + (i % channels) as f64).sin() * (py * 0.07).cos();
-            hi * (s + 0.08 * ((x >> 40) as f64 / (1u64 << 24) as f64 - 0.5)).clamp(0.0, 1.0)
-        })
-        .collect();
-    let kind = if dims.len() == 3 {
-        DataKind::Volume
-    } else {
-        DataKind::Image
+    let wave = common::Wave {
+        fx: 0.13,
+        fy: 0.07,
+        noise: 0.08,
     };
-    Raster::new(dims.to_vec(), channels, Samples::from_f64(&v, ty), kind).unwrap()
+    common::wave_field(dims, channels, ty, seed, hi, wave)
 }
 
 /// The one-piece format 2 file of `r` (what `to_blocks` cuts).

@@ -6,6 +6,7 @@
 //!   parallel never share a file.
 //! - [`mra_with_stdin`]: the `mra` binary run with bytes on its standard input.
 //! - [`grid_obj`]: a bumpy grid of triangles as OBJ text.
+//! - [`wave_field`]: a smooth wave with a little xorshift noise, the codec tests' raster.
 //! - [`vector_builds`]: whether the kernels' AVX2 builds can be compared with the scalar
 //!   one here; a printed skip otherwise, a failure with `MRA_REQUIRE_AVX2=1`.
 //!
@@ -243,4 +244,57 @@ pub fn grid_obj(n: usize, bumps: usize, step: f64) -> String {
         }
     }
     obj
+}
+
+/// The frequencies and noise of [`wave_field`].
+#[derive(Clone, Copy)]
+pub struct Wave {
+    /// Radians per sample along the last axis.
+    pub fx: f64,
+    /// Radians per row (position / last extent).
+    pub fy: f64,
+    /// Peak-to-peak noise, as a fraction of `hi`.
+    pub noise: f64,
+}
+
+/// A raster of `dims` (a volume from three axes on) whose sample `i` (channel `c`, at `x`
+/// along the last axis and row `y` before it) is
+/// `hi · clamp(0.5 + 0.35·sin(fx·x + c)·cos(fy·y) + noise·(u − 0.5), 0, 1)`,
+/// `u` uniform in [0, 1) from an xorshift stream seeded by `seed`.
+pub fn wave_field(
+    dims: &[usize],
+    channels: usize,
+    ty: mra::io::SampleType,
+    seed: u64,
+    hi: f64,
+    wave: Wave,
+) -> mra::io::Raster {
+    let n: usize = dims.iter().product::<usize>() * channels;
+    let w = *dims.last().unwrap();
+    let mut x = seed | 1;
+    let v: Vec<f64> = (0..n)
+        .map(|i| {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            let p = i / channels;
+            let (px, py) = ((p % w) as f64, (p / w) as f64);
+            let s =
+                0.5 + 0.35 * (px * wave.fx + (i % channels) as f64).sin() * (py * wave.fy).cos();
+            let u = (x >> 40) as f64 / (1u64 << 24) as f64;
+            hi * (s + wave.noise * (u - 0.5)).clamp(0.0, 1.0)
+        })
+        .collect();
+    let kind = if dims.len() >= 3 {
+        mra::io::DataKind::Volume
+    } else {
+        mra::io::DataKind::Image
+    };
+    mra::io::Raster::new(
+        dims.to_vec(),
+        channels,
+        mra::io::Samples::from_f64(&v, ty),
+        kind,
+    )
+    .unwrap()
 }
