@@ -186,7 +186,6 @@ fn view<'a>(
     RasterView::new(dims, channels, input.view(), kind_of(dims), meta)
 }
 
-
 fn nd<'py, T: Element>(py: Python<'py>, shape: &[usize], v: Vec<T>) -> PyResult<Bound<'py, PyAny>> {
     let a = ArrayD::from_shape_vec(IxDyn(shape), v)
         .map_err(|e| MraError::new_err(format!("{e} (expected samples for shape {shape:?})")))?;
@@ -360,6 +359,23 @@ fn info(py: Python<'_>, data: &Bound<'_, PyAny>) -> PyResult<String> {
 /// per array axis)`, coarse block first.
 type Blocks = Vec<(usize, Vec<bool>, Vec<(usize, usize)>)>;
 
+/// The non-standard pyramid over `axes` that [`analyze`] and [`synthesize`] share, its
+/// scheme and boundary parsed from their names.
+fn nonstandard_spec(
+    scheme: &str,
+    boundary: &str,
+    levels: usize,
+    axes: Vec<usize>,
+) -> PyResult<PyramidSpec> {
+    Ok(PyramidSpec {
+        scheme: parse(scheme)?,
+        boundary: parse(boundary)?,
+        levels,
+        order: Order::NonStandard,
+        axes,
+    })
+}
+
 /// Decompose a float array (Mallat layout, in a new array of the same type and shape)
 /// over `axes`; returns the coefficients, every axis' lane lengths level by level and the
 /// blocks.
@@ -373,13 +389,7 @@ fn analyze<'py>(
     levels: usize,
     axes: Vec<usize>,
 ) -> PyResult<(Bound<'py, PyAny>, Vec<Vec<usize>>, Blocks)> {
-    let spec = PyramidSpec {
-        scheme: parse(scheme)?,
-        boundary: parse(boundary)?,
-        levels,
-        order: Order::NonStandard,
-        axes,
-    };
+    let spec = nonstandard_spec(scheme, boundary, levels, axes)?;
     macro_rules! go {
         ($c:expr, $shape:expr) => {{
             let shape = $shape;
@@ -424,13 +434,7 @@ fn synthesize<'py>(
     levels: usize,
     axes: Vec<usize>,
 ) -> PyResult<Bound<'py, PyAny>> {
-    let spec = PyramidSpec {
-        scheme: parse(scheme)?,
-        boundary: parse(boundary)?,
-        levels,
-        order: Order::NonStandard,
-        axes,
-    };
+    let spec = nonstandard_spec(scheme, boundary, levels, axes)?;
     macro_rules! go {
         ($c:expr, $shape:expr) => {{
             let shape = $shape;
