@@ -364,7 +364,13 @@ fn refine(
                 )),
                 None => None,
             };
-            let g = level_gain((m, pyr.grad2[k - 1]), next);
+            let mut g = level_gain((m, pyr.grad2[k - 1]), next);
+            if let Ok(v) = std::env::var("MRA_T49_GAINS") {
+                let v: Vec<f64> = v.split(',').filter_map(|x| x.parse().ok()).collect();
+                if let Some(x) = v.get(l - k) {
+                    g = if *x < 0.0 { g * -x } else { *x };
+                }
+            }
             scale_details(&mut packed, (n_y, n_x), g);
             report.level_gains.push(g);
         }
@@ -451,7 +457,7 @@ pub fn synthesize(base: &Grid, example: &Grid, o: &SynthOptions) -> Result<(Grid
             // after the back-projection, whose smooth correction would close the
             // channels again; the depth is halved (at most 4 times) while the channels
             // would take the block means below MIN_DRAINED_PSNR
-            if o.base_scale > 1 && o.details == Details::Matched {
+            if o.base_scale > 1 && o.details == Details::Matched && std::env::var("MRA_T49_NODRAIN").is_err() {
                 let mut depth = BREACH_STEPS * rms_step(example);
                 for _ in 0..5 {
                     let mut d = g.clone();
