@@ -7,6 +7,9 @@
 //! parent patch's source and those of its 8 neighbours, each doubled to this level and
 //! moved by up to one cell (so ridges and valleys continue from level to level and from
 //! patch to patch), plus a sparse grid of `candidates/16` windows, the best one kept.
+//! With a base scale above the base's own (`--base-scale`), the finer levels search
+//! nothing: each patch takes its parent's source doubled, so every coarsest patch is one
+//! piece of the example transplanted with all its levels in register ([`inherits`]).
 //!
 //! **Blending.** Each detail sample gathers the (up to four) patches whose windows cover
 //! it, with separable ramps `w` rising over `2o` cells across each border; patches taking
@@ -201,17 +204,16 @@ pub(super) fn level_details(
     Ok((acc, shifts, mean_d))
 }
 
-/// Whether the patches of `level` take their parents' sources as they are (doubled, not
-/// searched again): with a base scale above the base's own, at every level finer than the
-/// coarsest but the finest [`FREE_LEVELS`], so that each piece of the result holds the
-/// details of one piece of the example at every scale (its whole ridges and valleys).
-fn inherits(o: &SynthOptions, level: usize) -> bool {
-    let free = std::env::var("MRA_T49_FREE").ok().and_then(|v| v.parse().ok()).unwrap_or(FREE_LEVELS);
-    o.base_scale > 1 && level > free
+/// Whether the patches of `level` (which has a parent level) take their parents' sources
+/// as they are (doubled, not searched again): with a base scale above the base's own, at
+/// every level finer than the coarsest, so that each coarsest patch of the result holds
+/// the details of one piece of the example at every level, in register (a ridge is the
+/// sum of its levels' details; a source moved by one cell at one level breaks it into
+/// bumps). Patches are then joined level by level over their overlaps: wide ramps at the
+/// coarse levels, narrow ones at the fine (a multiresolution blend).
+fn inherits(o: &SynthOptions, _level: usize) -> bool {
+    o.base_scale > 1
 }
-
-/// The finest levels whose patches are matched again below an inherited coarse piece.
-pub(super) const FREE_LEVELS: usize = 0;
 
 /// The source of patch `(a, b)` of `t` taken from its parent: the parent's shift doubled
 /// (example index = output index + shift at each level), the window kept inside the

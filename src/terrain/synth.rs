@@ -24,8 +24,10 @@
 //! of the `choices` best is picked by a generator seeded with (seed, level, patch); at
 //! each finer level a patch's candidates are its parent's source and the 8 neighbouring
 //! parents' sources, doubled and moved by up to one cell, plus a sparse grid of
-//! `candidates/16` windows, and the best is kept. Ridges and valleys thus continue across
-//! levels and across patches. Deterministic: the same bytes for any thread count.
+//! `candidates/16` windows, and the best is kept (with `--base-scale` above the base's own,
+//! the parent's source doubled as it is: whole pieces of the example, [`super::patches`]).
+//! Ridges and valleys thus continue across levels and across patches. Deterministic: the
+//! same bytes for any thread count.
 //!
 //! **Blending** ([`super::patches`]). Each sample gathers the (up to four) patches whose windows cover it, with
 //! separable ramps `w` rising over `2o` cells across each border; patches taking the same
@@ -364,13 +366,7 @@ fn refine(
                 )),
                 None => None,
             };
-            let mut g = level_gain((m, pyr.grad2[k - 1]), next);
-            if let Ok(v) = std::env::var("MRA_T49_GAINS") {
-                let v: Vec<f64> = v.split(',').filter_map(|x| x.parse().ok()).collect();
-                if let Some(x) = v.get(l - k) {
-                    g = if *x < 0.0 { g * -x } else { *x };
-                }
-            }
+            let g = level_gain((m, pyr.grad2[k - 1]), next);
             scale_details(&mut packed, (n_y, n_x), g);
             report.level_gains.push(g);
         }
@@ -457,7 +453,7 @@ pub fn synthesize(base: &Grid, example: &Grid, o: &SynthOptions) -> Result<(Grid
             // after the back-projection, whose smooth correction would close the
             // channels again; the depth is halved (at most 4 times) while the channels
             // would take the block means below MIN_DRAINED_PSNR
-            if o.base_scale > 1 && o.details == Details::Matched && std::env::var("MRA_T49_NODRAIN").is_err() {
+            if o.base_scale > 1 && o.details == Details::Matched {
                 let mut depth = BREACH_STEPS * rms_step(example);
                 for _ in 0..5 {
                     let mut d = g.clone();
