@@ -7,6 +7,9 @@
 //! parent patch's source and those of its 8 neighbours, each doubled to this level and
 //! moved by up to one cell (so ridges and valleys continue from level to level and from
 //! patch to patch), plus a sparse grid of `candidates/16` windows, the best one kept.
+//! With a base scale above the base's own (`--base-scale`), the finer levels search
+//! nothing: each patch takes its parent's source doubled, so every coarsest patch is one
+//! piece of the example transplanted with all its levels in register ([`inherits`]).
 //!
 //! **Blending.** Each detail sample gathers the (up to four) patches whose windows cover
 //! it, with separable ramps `w` rising over `2o` cells across each border; patches taking
@@ -117,6 +120,10 @@ impl Shifts {
     fn at(&self, a: usize, b: usize) -> (i64, i64) {
         self.shift[a.min(self.rows - 1) * self.cols + b.min(self.cols - 1)]
     }
+
+    fn gain_at(&self, a: usize, b: usize) -> f64 {
+        self.gain[a.min(self.rows - 1) * self.cols + b.min(self.cols - 1)]
+    }
 }
 
 /// Top-left of the `q`-window around the core at `t` (overlap `o`), kept inside `[0, n − q]`.
@@ -146,7 +153,22 @@ pub(super) fn level_details(
         gain: vec![1.0; npy * npx],
     };
     let mut mean_d = 0.0;
+    let inherit = parent.filter(|_| o.details == Details::Matched && inherits(o, level));
     match o.details {
+        Details::Matched if inherit.is_some() => {
+            let par = inherit.unwrap_or_else(|| unreachable!());
+            let tables = Tables::new(&e.crop(*ne_y, *ne_x));
+            let chosen: Vec<((i64, i64), f64)> = (0..npy * npx)
+                .into_par_iter()
+                .map(|idx| inherited(&tables, t, (idx / npx, idx % npx), cnt, q, o, par))
+                .collect();
+            mean_d = chosen.iter().map(|c| c.1).sum::<f64>() / chosen.len().max(1) as f64;
+            shifts.shift = chosen.into_iter().map(|c| c.0).collect();
+            // the relief gain of the piece, too
+            shifts.gain = (0..npy * npx)
+                .map(|idx| par.gain_at((idx / npx) * p / 2 / p, (idx % npx) * p / 2 / p))
+                .collect();
+        }
         Details::Matched => {
             let cands = Candidates::new(&e.crop(*ne_y, *ne_x), cnt, q, o, level, parent.is_some());
             let chosen: Vec<((i64, i64), f64, f64)> = (0..npy * npx)
@@ -180,6 +202,44 @@ pub(super) fn level_details(
     }
     acc.paste(t);
     Ok((acc, shifts, mean_d))
+}
+
+/// Whether the patches of `level` (which has a parent level) take their parents' sources
+/// as they are (doubled, not searched again): with a base scale above the base's own, at
+/// every level finer than the coarsest, so that each coarsest patch of the result holds
+/// the details of one piece of the example at every level, in register (a ridge is the
+/// sum of its levels' details; a source moved by one cell at one level breaks it into
+/// bumps). Patches are then joined level by level over their overlaps: wide ramps at the
+/// coarse levels, narrow ones at the fine (a multiresolution blend).
+fn inherits(o: &SynthOptions, _level: usize) -> bool {
+    o.base_scale > 1
+}
+
+/// The source of patch `(a, b)` of `t` taken from its parent: the parent's shift doubled
+/// (example index = output index + shift at each level), the window kept inside the
+/// `cnt` origins; with the matching distance of that window.
+fn inherited(
+    tables: &Tables,
+    t: &Grid,
+    (a, b): (usize, usize),
+    cnt: (usize, usize),
+    q: usize,
+    o: &SynthOptions,
+    par: &Shifts,
+) -> ((i64, i64), f64) {
+    let p = o.patch;
+    let wy = window_origin(a * p, o.overlap, q, t.h());
+    let wx = window_origin(b * p, o.overlap, q, t.w());
+    let sh = par.at((a * p / 2) / p, (b * p / 2) / p);
+    let y = (wy as i64 + 2 * sh.0).clamp(0, cnt.0 as i64 - 1);
+    let x = (wx as i64 + 2 * sh.1).clamp(0, cnt.1 as i64 - 1);
+    let (mut f, mut v) = ([0.0f32; LEN], [0.0f32; LEN]);
+    Tables::window_descriptor(t, wy, wx, q, &mut f);
+    tables.descriptor(y as usize, x as usize, q, &mut v);
+    (
+        (y - wy as i64, x - wx as i64),
+        distance(&f, &v, o.slope_weight),
+    )
 }
 
 /// The number of example window origins `(rows, columns)` for windows of `q`: they must

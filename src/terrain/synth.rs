@@ -24,8 +24,10 @@
 //! of the `choices` best is picked by a generator seeded with (seed, level, patch); at
 //! each finer level a patch's candidates are its parent's source and the 8 neighbouring
 //! parents' sources, doubled and moved by up to one cell, plus a sparse grid of
-//! `candidates/16` windows, and the best is kept. Ridges and valleys thus continue across
-//! levels and across patches. Deterministic: the same bytes for any thread count.
+//! `candidates/16` windows, and the best is kept (with `--base-scale` above the base's own,
+//! the parent's source doubled as it is: whole pieces of the example, [`super::patches`]).
+//! Ridges and valleys thus continue across levels and across patches. Deterministic: the
+//! same bytes for any thread count.
 //!
 //! **Blending** ([`super::patches`]). Each sample gathers the (up to four) patches whose windows cover it, with
 //! separable ramps `w` rising over `2o` cells across each border; patches taking the same

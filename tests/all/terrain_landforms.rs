@@ -283,3 +283,192 @@ fn level_gains_stay_within_their_range_on_a_smooth_sketch() {
         rep.level_gains
     );
 }
+
+/// A separable Gaussian blur of `σ` cells (radius 4σ, ends repeated) followed by the
+/// 5-point Laplacian (ends repeated): the curvature of the relief at the scale `σ`.
+fn gaussian_laplace(g: &Grid, sigma: f64) -> Vec<f64> {
+    let (h, w) = (g.h(), g.w());
+    let r = (4.0 * sigma).ceil() as i64;
+    let k: Vec<f64> = (-r..=r)
+        .map(|d| (-((d * d) as f64) / (2.0 * sigma * sigma)).exp())
+        .collect();
+    let ks: f64 = k.iter().sum();
+    let pass = |src: &[f64], along_x: bool| -> Vec<f64> {
+        let mut out = vec![0.0; h * w];
+        for y in 0..h {
+            for x in 0..w {
+                let mut s = 0.0;
+                for (j, kv) in k.iter().enumerate() {
+                    let d = j as i64 - r;
+                    let (yy, xx) = if along_x {
+                        (y, (x as i64 + d).clamp(0, w as i64 - 1) as usize)
+                    } else {
+                        ((y as i64 + d).clamp(0, h as i64 - 1) as usize, x)
+                    };
+                    s += kv * src[yy * w + xx];
+                }
+                out[y * w + x] = s / ks;
+            }
+        }
+        out
+    };
+    let b = pass(&pass(g.data(), true), false);
+    let at = |y: i64, x: i64| {
+        b[y.clamp(0, h as i64 - 1) as usize * w + x.clamp(0, w as i64 - 1) as usize]
+    };
+    (0..h * w)
+        .map(|i| {
+            let (y, x) = ((i / w) as i64, (i % w) as i64);
+            at(y - 1, x) + at(y + 1, x) + at(y, x - 1) + at(y, x + 1) - 4.0 * at(y, x)
+        })
+        .collect()
+}
+
+/// The cell-weighted mean size `Σ s² / Σ s` of the 8-connected runs of `mask` (`h × w`).
+fn run_size(mask: &[bool], h: usize, w: usize) -> f64 {
+    let mut seen = vec![false; h * w];
+    let (mut s2, mut s1) = (0.0, 0.0);
+    for start in 0..h * w {
+        if !mask[start] || seen[start] {
+            continue;
+        }
+        seen[start] = true;
+        let (mut stack, mut n) = (vec![start], 0usize);
+        while let Some(i) = stack.pop() {
+            n += 1;
+            let (y, x) = ((i / w) as i64, (i % w) as i64);
+            for dy in -1i64..=1 {
+                for dx in -1i64..=1 {
+                    let (yy, xx) = (y + dy, x + dx);
+                    if yy < 0 || xx < 0 || yy >= h as i64 || xx >= w as i64 {
+                        continue;
+                    }
+                    let j = yy as usize * w + xx as usize;
+                    if mask[j] && !seen[j] {
+                        seen[j] = true;
+                        stack.push(j);
+                    }
+                }
+            }
+        }
+        s2 += (n * n) as f64;
+        s1 += n as f64;
+    }
+    s2 / s1.max(1.0)
+}
+
+/// The 10th and 90th percentiles of the curvature of [`gaussian_laplace`] at σ = 2:
+/// the example's most convex (crest) and most concave (valley floor) cells.
+fn crest_thresholds(example: &Grid) -> (f64, f64) {
+    let mut l = gaussian_laplace(example, 2.0);
+    l.sort_by(f64::total_cmp);
+    let n = l.len() - 1;
+    (l[n / 10], l[9 * n / 10])
+}
+
+/// The crest length of `benches/terrain_quality.py`: the mean of the cell-weighted mean
+/// run sizes of the crest cells (curvature below `lo`) and of the valley-floor cells
+/// (above `hi`), on the top-left `th × tw` tile of `g` (the example's shape).
+fn crest_length(g: &Grid, (th, tw): (usize, usize), (lo, hi): (f64, f64)) -> f64 {
+    let tile = Grid::new(
+        th,
+        tw,
+        1,
+        (0..th * tw).map(|i| g.at(i / tw, i % tw, 0)).collect(),
+    )
+    .unwrap();
+    let l = gaussian_laplace(&tile, 2.0);
+    let crest: Vec<bool> = l.iter().map(|v| *v < lo).collect();
+    let floor: Vec<bool> = l.iter().map(|v| *v > hi).collect();
+    0.5 * (run_size(&crest, th, tw) + run_size(&floor, th, tw))
+}
+
+/// A noise texture with the example's own relief: the smooth base's upscale plus the
+/// example's detail (the example minus its 9×9 box mean) cut into 16×16 tiles laid in a
+/// shuffled order: the example's slopes and curvatures, its landforms cut short.
+fn tile_texture(up: &Grid, example: &Grid, seed: u64) -> Grid {
+    let (eh, ew) = (example.h(), example.w());
+    let mean = |y: usize, x: usize| {
+        let (mut s, mut n) = (0.0, 0.0);
+        for yy in y.saturating_sub(4)..(y + 5).min(eh) {
+            for xx in x.saturating_sub(4)..(x + 5).min(ew) {
+                s += example.at(yy, xx, 0);
+                n += 1.0;
+            }
+        }
+        s / n
+    };
+    let mut out = up.clone();
+    let mut r = mra::generate::rng::SplitMix64::new(seed);
+    let t = 16;
+    for ty in (0..up.h()).step_by(t) {
+        for tx in (0..up.w()).step_by(t) {
+            let sy = (r.next_u64() % (eh - t) as u64) as usize;
+            let sx = (r.next_u64() % (ew - t) as u64) as usize;
+            for y in 0..t.min(up.h() - ty) {
+                for x in 0..t.min(up.w() - tx) {
+                    *out.at_mut(ty + y, tx + x, 0) +=
+                        example.at(sy + y, sx + x, 0) - mean(sy + y, sx + x);
+                }
+            }
+        }
+    }
+    out
+}
+
+/// Issue 49's look on the bench's example (N44W072 rows 801–1201, cols 857–1201): from a
+/// smooth 128² sketch with `--base-scale 16`, the result has crest and valley-floor lines
+/// of at least half the example's length, the plain upscale has no cell as curved, and a
+/// texture of the example's own 16-cell tiles has short runs (corpus; skipped without it).
+#[test]
+fn base_scale_results_have_the_examples_long_crests_and_a_texture_does_not() {
+    let Some(path) = common::corpus("terrain/N44W072.hgt") else {
+        return;
+    };
+    let r = mra::io::read(&path).unwrap();
+    let (tile, _) = mra::terrain::raster::to_grid(&r).unwrap();
+    let (eh, ew) = (400, 344);
+    let ex = Grid::new(
+        eh,
+        ew,
+        1,
+        (0..eh * ew)
+            .map(|i| tile.at(801 + i / ew, 857 + i % ew, 0))
+            .collect(),
+    )
+    .unwrap();
+    let base = Grid::new(
+        128,
+        128,
+        1,
+        sketch(128).data().iter().map(|v| 4.0 * v).collect(),
+    )
+    .unwrap();
+    let o = SynthOptions {
+        levels: 2,
+        seed: 1,
+        base_scale: 16,
+        ..SynthOptions::default()
+    };
+    let (g, _) = synthesize(&base, &ex, &o).unwrap();
+    let (up, _) = synthesize(
+        &base,
+        &ex,
+        &SynthOptions {
+            details: mra::terrain::synth::Details::None,
+            base_scale: 1,
+            ..o.clone()
+        },
+    )
+    .unwrap();
+    let thr = crest_thresholds(&ex);
+    let want = crest_length(&ex, (eh, ew), thr);
+    let [got, smooth, texture] =
+        [&g, &up, &tile_texture(&up, &ex, 7)].map(|h| crest_length(h, (eh, ew), thr) / want);
+    // the bench's target is 0.8 (not yet met there: 0.74 and 0.69); here the measure must
+    // part the three: no curved cells, short runs, long runs
+    assert!(
+        got >= 0.5 && got >= 1.5 * texture && smooth < 0.25,
+        "crest length ÷ example's: result {got:.2}, upscale {smooth:.2}, tile texture {texture:.2}"
+    );
+}
