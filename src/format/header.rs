@@ -76,6 +76,12 @@ pub fn coder_name(id: u8) -> Option<&'static str> {
     CODERS.get(id as usize).copied()
 }
 
+/// Format 3.2's floor on a code-block exponent of a raster of 1 or 2 axes (§15.3):
+/// blocks shrink with coarser levels to 32 samples a side, not below.
+pub const BLOCK_FLOOR_2D: u8 = 5;
+/// Format 3.2's floor on a code-block exponent of a raster of 3 or 4 axes (§15.3): 16.
+pub const BLOCK_FLOOR_3D: u8 = 4;
+
 pub const MAX_AXES: usize = 4;
 pub const MAX_CHANNELS: usize = 256;
 pub const MAX_LEVELS: usize = 32;
@@ -272,9 +278,34 @@ impl Header {
         b
     }
 
-    /// The code-block extents of a format 3.0 file (`2^x[k]` per axis), empty before.
+    /// The code-block extents of a format 3.0 file (`2^x[k]` per axis), empty before:
+    /// the finest level's ([`Header::block_extents_at`] gives every level's).
     pub fn block_extents(&self) -> Vec<usize> {
         self.blocks.iter().map(|&x| 1usize << x.min(31)).collect()
+    }
+
+    /// The code-block extents of the bands of level `level` (1 the finest detail level;
+    /// the coarse block counts as the coarsest detail level, 0 as 1), formats/MRA.md
+    /// §15.3: from format 3.2, `2^max(min(x, f), x − (level − 1))` on an axis of `HEAD`
+    /// exponent `x`, the floor `f` = [`BLOCK_FLOOR_2D`] for 1 or 2 axes and
+    /// [`BLOCK_FLOOR_3D`] for more; before 3.2, `2^x` at every level. Empty before 3.0.
+    pub fn block_extents_at(&self, level: usize) -> Vec<usize> {
+        if !self.version.has_level_blocks() {
+            return self.block_extents();
+        }
+        let f = if self.blocks.len() <= 2 {
+            BLOCK_FLOOR_2D
+        } else {
+            BLOCK_FLOOR_3D
+        };
+        let shrink = level.saturating_sub(1).min(31) as u8;
+        self.blocks
+            .iter()
+            .map(|&x| {
+                let x = x.min(31);
+                1usize << x.min(f).max(x.saturating_sub(shrink))
+            })
+            .collect()
     }
 
     /// Parse and validate a `HEAD` payload.

@@ -124,11 +124,7 @@ fn every_coder_round_trips_every_mode() {
                         "context"
                     };
                     assert_eq!(info.coder.as_deref(), Some(want), "{what}");
-                    assert_eq!(
-                        info.version,
-                        if want == "ht" { "3.1" } else { "3.0" },
-                        "{what}"
-                    );
+                    assert_eq!(info.version, "3.2", "{what}");
                     let d = decoded(&bytes);
                     assert_eq!(
                         (d.dims.clone(), d.channels),
@@ -213,10 +209,10 @@ fn the_default_effort_writes_the_3_0_file() {
         .unwrap();
         assert_eq!(d, codec::encode(&r, &opts(rate, DEFAULT_EFFORT)).unwrap());
         let h = codec::header_of(&d).unwrap();
-        assert_eq!((h.version.to_string(), h.coder), ("3.0".to_string(), 0));
+        assert_eq!((h.version.to_string(), h.coder), ("3.2".to_string(), 0));
         let (s, e) = head(&d);
-        // 3.0's HEAD: 52 + 8N bytes, the flags byte and N exponents, no coder byte
-        assert_eq!(e - s, 52 + 8 * 2 + 1 + 2);
+        // 3.2's HEAD: 52 + 8N bytes, the flags byte, N exponents and the coder byte
+        assert_eq!(e - s, 52 + 8 * 2 + 1 + 2 + 1);
     }
 }
 
