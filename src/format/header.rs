@@ -77,9 +77,10 @@ pub fn coder_name(id: u8) -> Option<&'static str> {
 }
 
 /// Format 3.2's floor on a code-block exponent of a raster of 1 or 2 axes (§15.3):
-/// blocks shrink with coarser levels to 32 samples a side, not below.
+/// blocks shrink from the third level to 32 samples a side, not below.
 pub const BLOCK_FLOOR_2D: u8 = 5;
-/// Format 3.2's floor on a code-block exponent of a raster of 3 or 4 axes (§15.3): 16.
+/// Format 3.2's floor on a code-block exponent of a raster of 3 or 4 axes (§15.3):
+/// blocks shrink from the second level to 16 samples a side.
 pub const BLOCK_FLOOR_3D: u8 = 4;
 
 pub const MAX_AXES: usize = 4;
@@ -286,19 +287,20 @@ impl Header {
 
     /// The code-block extents of the bands of level `level` (1 the finest detail level;
     /// the coarse block counts as the coarsest detail level, 0 as 1), formats/MRA.md
-    /// §15.3: from format 3.2, `2^max(min(x, f), x − (level − 1))` on an axis of `HEAD`
-    /// exponent `x`, the floor `f` = [`BLOCK_FLOOR_2D`] for 1 or 2 axes and
-    /// [`BLOCK_FLOOR_3D`] for more; before 3.2, `2^x` at every level. Empty before 3.0.
+    /// §15.3: from format 3.2, `2^max(min(x, f), x − max(0, level − s))` on an axis of
+    /// `HEAD` exponent `x`: for 1 or 2 axes `(f, s)` = ([`BLOCK_FLOOR_2D`], 2) (the two
+    /// finest levels at `2^x`), for more ([`BLOCK_FLOOR_3D`], 1); before 3.2, `2^x` at
+    /// every level. Empty before 3.0.
     pub fn block_extents_at(&self, level: usize) -> Vec<usize> {
         if !self.version.has_level_blocks() {
             return self.block_extents();
         }
-        let f = if self.blocks.len() <= 2 {
-            BLOCK_FLOOR_2D
+        let (f, s) = if self.blocks.len() <= 2 {
+            (BLOCK_FLOOR_2D, 2)
         } else {
-            BLOCK_FLOOR_3D
+            (BLOCK_FLOOR_3D, 1)
         };
-        let shrink = level.saturating_sub(1).min(31) as u8;
+        let shrink = level.saturating_sub(s).min(31) as u8;
         self.blocks
             .iter()
             .map(|&x| {

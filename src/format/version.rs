@@ -138,8 +138,8 @@ impl Version {
     }
 
     /// Whether the code-block extents shrink with coarser levels (3.2 and later 3.x,
-    /// §15.3): a band of level `ℓ` has blocks of `2^max(min(x, f), x − (ℓ − 1))` on an
-    /// axis of `HEAD` exponent `x`; else every band has `HEAD`'s extents.
+    /// §15.3, [`crate::format::Header::block_extents_at`]); else every band has
+    /// `HEAD`'s extents.
     pub fn has_level_blocks(self) -> bool {
         self.major == 3 && self.minor >= 2
     }
