@@ -2,7 +2,7 @@
 """Usage: python3 benches/codeblocks_rd.py MRA_BINARY CORPUS_DIR
 
 Kodak 13-24: mra encode --bpp B --format 2 (one stream per band) vs the default
-(format 3.0, code-blocks with per-block RDO), both one piece. Prints the mean bpp and
+(format 3.x, code-blocks with per-block RDO), both one piece. Prints the mean bpp and
 PSNR of each per rate, BD-rate and BD-PSNR (Bjontegaard, cubic in log rate, over the
 common range) of the mean curves."""
 import json, os, subprocess, sys, math
@@ -28,7 +28,7 @@ for b in RATES:
             got.append((os.path.getsize(f) * 8 / npx, p))
         ra += got[0][0]; pa += got[0][1]; rb += got[1][0]; pb += got[1][1]; n += 1
     rows[b] = (ra / n, rb / n, pa / n, pb / n)
-    print(f"bpp {b}: format 2 {ra/n:.4f} bpp {pa/n:.3f} dB, 3.0 {rb/n:.4f} bpp {pb/n:.3f} dB", flush=True)
+    print(f"bpp {b}: format 2 {ra/n:.4f} bpp {pa/n:.3f} dB, 3.x {rb/n:.4f} bpp {pb/n:.3f} dB", flush=True)
 def fit(xs, ys):
     # cubic through 4 points: solve Vandermonde
     n = len(xs); A = [[x ** j for j in range(n)] + [y] for x, y in zip(xs, ys)]
@@ -49,4 +49,4 @@ bd_psnr = (integ(cb, lo, hi) - integ(ca, lo, hi)) / (hi - lo)
 plo, phi = max(min(pa), min(pb)), min(max(pa), max(pb))
 ra_, rb_ = fit(pa, la), fit(pb, lb)
 bd_rate = (10 ** ((integ(rb_, plo, phi) - integ(ra_, plo, phi)) / (phi - plo)) - 1) * 100
-print(f"BD-PSNR of 3.0 vs format 2: {bd_psnr:+.4f} dB; BD-rate {bd_rate:+.3f}%")
+print(f"BD-PSNR of 3.x vs format 2: {bd_psnr:+.4f} dB; BD-rate {bd_rate:+.3f}%")

@@ -252,6 +252,44 @@ fn main() {
             Rate::Quality(40.0),
             0,
         ),
+        // format 3.2: code-blocks that shrink with coarser levels (§15.3): two blocks
+        // across every band of the 530-wide file, 256 wide at level 1 to 64 at level 3
+        (
+            "blocks32_rgb8_bpp1",
+            "530x40 RGB u8, cdf97 symmetric, --bpp 1, format 3.2 (per-level code-blocks)",
+            raster(&[40, 530], 3, SampleType::U8, DataKind::Image),
+            Scheme::Cdf97,
+            Boundary::Symmetric,
+            Rate::Bpp(1.0),
+            0,
+        ),
+        (
+            "blocks32_rgb8_bpp1_level1",
+            "the previous file decoded with --level 1",
+            raster(&[40, 530], 3, SampleType::U8, DataKind::Image),
+            Scheme::Cdf97,
+            Boundary::Symmetric,
+            Rate::Bpp(1.0),
+            1,
+        ),
+        (
+            "blocks32_gray16_lossless",
+            "520x8 gray u16, lossless, format 3.2 (per-level code-blocks)",
+            raster(&[8, 520], 1, SampleType::U16, DataKind::Image),
+            Scheme::Haar,
+            Boundary::Symmetric,
+            Rate::Lossless,
+            0,
+        ),
+        (
+            "blocks32_vol_u16_q40",
+            "140x8x8 volume u16, cdf97 symmetric, quality 40, format 3.2 (per-level code-blocks)",
+            raster(&[8, 8, 140], 1, SampleType::U16, DataKind::Volume),
+            Scheme::Cdf97,
+            Boundary::Symmetric,
+            Rate::Quality(40.0),
+            0,
+        ),
     ];
     // format 2.1: tiles (extents slowest axis first); the lossy one is kept as a 2.1
     // encoder wrote it (today's encoder writes lossy tiles compact, 2.2)
@@ -331,8 +369,15 @@ fn main() {
     ];
     // files of an older format or encoder, kept as written: decoded, not encoded again
     // (the lossless ones are 2.0 files, or 2.0 tiles, from before 2.3's classes; the
-    // max-error one has the base step of an earlier encoder)
+    // max-error one has the base step of an earlier encoder; the 3.0 and 3.1 ones from
+    // before 3.2's per-level code-blocks)
     let frozen = [
+        "blocks30_rgb8_bpp1",
+        "blocks30_gray16_lossless",
+        "blocks30_vol_u8_q40",
+        "blocks31_rgb8_bpp1",
+        "blocks31_gray16_lossless",
+        "blocks31_vol_u16_q40",
         "tiled_gray16_q40",
         "gray8_lossless",
         "rgba16_lossless",
@@ -352,8 +397,9 @@ fn main() {
         let bytes = if frozen.contains(&name.trim_end_matches("_level1")) {
             std::fs::read(dir.join(&file)).unwrap()
         } else {
-            // 3.1: written directly, in code-blocks by the HT coder (effort 1)
+            // 3.2: written directly, in code-blocks (the 3.1 ones by the HT coder, effort 1)
             let ht = name.starts_with("blocks31_");
+            let direct = ht || name.starts_with("blocks32_");
             let bytes = codec::encode_tiled(
                 &r,
                 &EncodeOptions {
@@ -362,7 +408,7 @@ fn main() {
                     levels: 3,
                     rate,
                     // the 2.x vectors stay 2.x; the 3.0 ones are cut from them
-                    format: if ht {
+                    format: if direct {
                         codec::Format::Blocks
                     } else {
                         codec::Format::Bands

@@ -40,12 +40,13 @@ fn kind_of(level: usize) -> BandKind {
 }
 
 /// One band's indices from its coded bytes, by the coding of the file of header `h`. In
-/// format 3 (formats/MRA.md §15) the code-block index is parsed and the blocks `window`
+/// format 3 (formats/MRA.md §15) the code-block index (blocks of extents `block`) is parsed and the blocks `window`
 /// meets (every block without one) are decoded, in parallel, into their boxes of the band.
 fn decode_band(
     h: &Header,
     data: &[u8],
     dims: &[usize],
+    block: &[usize],
     kind: BandKind,
     parent: Option<Parent>,
     window: Option<&[Range<usize>]>,
@@ -57,9 +58,8 @@ fn decode_band(
     if !h.version.has_blocks() {
         return entropy::decode_band(data, dims, kind, parent);
     }
-    let block = h.block_extents();
-    let set = crate::format::bands::parse_blocks(data, dims, &block)?;
-    let grid = Grid::new(dims, &block);
+    let set = crate::format::bands::parse_blocks(data, dims, block)?;
+    let grid = Grid::new(dims, block);
     let which: Vec<usize> = match window {
         Some(w) => grid.touching(w),
         None => (0..grid.len()).collect(),
@@ -169,9 +169,14 @@ fn exact_support(p: &Parsed, k: usize) -> Option<Vec<Vec<Range<usize>>>> {
 pub(super) fn band_windows(p: &Parsed, k: usize) -> Vec<Option<Vec<Range<usize>>>> {
     let (h, plan) = (&p.header, &p.plan);
     let nb = plan.bands.len();
-    let block = h.block_extents();
     let win = match &p.window {
-        Some(w) if h.version.has_blocks() && w.len() == h.dims.len() && block.len() == w.len() => w,
+        Some(w)
+            if h.version.has_blocks()
+                && w.len() == h.dims.len()
+                && plan.block(0).len() == w.len() =>
+        {
+            w
+        }
         _ => return vec![None; nb],
     };
     let exact = exact_support(p, k);
@@ -205,7 +210,7 @@ pub(super) fn band_windows(p: &Parsed, k: usize) -> Vec<Option<Vec<Range<usize>>
             }
             child = Some(
                 w.iter()
-                    .zip(&block)
+                    .zip(plan.block(j))
                     .zip(bd)
                     .map(|((r, &b), &e)| {
                         if r.is_empty() {
@@ -254,6 +259,7 @@ pub(super) fn decode_channel(p: &Parsed, c: usize, k: usize) -> Result<Vec<Optio
                     &p.header,
                     &bc.data,
                     &plan.dims[j],
+                    plan.block(j),
                     kind,
                     parent,
                     wins[j].as_deref(),
@@ -339,6 +345,7 @@ fn decode_channel_into(p: &Parsed, c: usize, k: usize, plane: &mut [f32]) -> Res
                         h,
                         &bc.data,
                         dims,
+                        plan.block(j),
                         kind_of(level),
                         parent,
                         wins[j].as_deref(),
@@ -349,7 +356,7 @@ fn decode_channel_into(p: &Parsed, c: usize, k: usize, plane: &mut [f32]) -> Res
                     dequantize_band(
                         &v,
                         dims,
-                        decoded_box(h, dims, wins[j].as_deref()),
+                        decoded_box(dims, plan.block(j), wins[j].as_deref()),
                         (step, delta),
                         &mut rows,
                     );
@@ -376,18 +383,17 @@ fn decode_channel_into(p: &Parsed, c: usize, k: usize, plane: &mut [f32]) -> Res
     }
 }
 
-/// The box of a band of extents `dims` that a decode of its window `w` fills: the
+/// The box of a band of extents `dims` and code-blocks `block` that a decode of its window `w` fills: the
 /// code-blocks `w` meets ([`band_windows`]), `None` for the whole band.
 fn decoded_box(
-    h: &Header,
     dims: &[usize],
+    block: &[usize],
     w: Option<&[Range<usize>]>,
 ) -> Option<Vec<Range<usize>>> {
     let w = w?;
-    let block = h.block_extents();
     (w.len() == dims.len() && block.len() == dims.len()).then(|| {
         w.iter()
-            .zip(&block)
+            .zip(block)
             .zip(dims)
             .map(|((r, &b), &e)| {
                 let b = b.max(1);
@@ -470,6 +476,7 @@ fn decode_channel_narrow(p: &Parsed, c: usize, k: usize, plane: &mut [i32]) -> R
                             h,
                             &bc.data,
                             dims,
+                            plan.block(j),
                             kind_of(level),
                             parent,
                             wins[j].as_deref(),
@@ -853,7 +860,7 @@ fn add_residuals(p: &Parsed, samples: &mut Samples) -> Result<()> {
                 .map_err(failed)?;
             }
             Some(r) => {
-                let q = decode_band(h, &r.data, &h.dims, BandKind::Detail, None, None)
+                let q = decode_band(h, &r.data, &h.dims, &[], BandKind::Detail, None, None)
                     .map_err(failed)?;
                 add_row(samples, c, ch, 0, &q[..npos.min(q.len())], r.step);
             }
@@ -936,7 +943,7 @@ fn add_residuals_window(p: &Parsed, samples: &mut Samples, out: &[Range<usize>])
                 .map_err(failed)?;
             }
             Some(r) => {
-                let q = decode_band(h, &r.data, &h.dims, BandKind::Detail, None, None)
+                let q = decode_band(h, &r.data, &h.dims, &[], BandKind::Detail, None, None)
                     .map_err(failed)?;
                 let npos: usize = h.dims.iter().product();
                 add(0, &q[..npos.min(q.len())], r.step);

@@ -259,9 +259,17 @@ impl Plan {
         }
     }
 
-    /// The code-block grid of band `j` in a format 3 file; `None` before.
+    /// The code-block grid of band `j` in a format 3 file (its level's extents,
+    /// [`Header::block_extents_at`](crate::format::Header::block_extents_at)); `None` before.
     pub(super) fn grid(&self, j: usize) -> Option<Grid> {
-        self.blocks.as_ref().map(|b| Grid::new(&self.dims[j], b))
+        self.blocks
+            .as_ref()
+            .map(|b| Grid::new(&self.dims[j], &b[j]))
+    }
+
+    /// The code-block extents of band `j` in a format 3 file; empty before.
+    pub(super) fn block(&self, j: usize) -> &[usize] {
+        self.blocks.as_ref().map_or(&[], |b| &b[j])
     }
 
     /// Box `b` of band `j` (in the band's coordinates) as a box of the pyramid's plane.

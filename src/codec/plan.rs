@@ -42,9 +42,9 @@ pub(super) struct Plan {
     pub(super) dims: Vec<Vec<usize>>,
     /// The coefficient coding (format 2.3 and later: each band's classes chosen).
     pub(super) coding: Coding,
-    /// The code-block extents of a format 3 file (every band cut into them, §15);
-    /// `None` before.
-    pub(super) blocks: Option<Vec<usize>>,
+    /// The code-block extents of each band of a format 3 file (every band cut into
+    /// its own, §15; from 3.2 they shrink with coarser levels, §15.3); `None` before.
+    pub(super) blocks: Option<Vec<Vec<usize>>>,
     /// The coder of every code-block (format 3.1; [`Coder::Context`] before).
     pub(super) coder: Coder,
 }
@@ -70,6 +70,14 @@ impl Plan {
             Pyramid::plan(&h.dims, &spec)?
         };
         let bands = pyr.subbands();
+        // §15.3: the coarse block's blocks are those of the coarsest detail level
+        let block_extents = |h: &Header, bands: &[Subband]| -> Vec<Vec<usize>> {
+            let top = bands.iter().map(|b| b.level).max().unwrap_or(0);
+            bands
+                .iter()
+                .map(|b| h.block_extents_at(if b.level == 0 { top } else { b.level }))
+                .collect()
+        };
         let parents = bands
             .iter()
             .map(|b| {
@@ -85,13 +93,14 @@ impl Plan {
             .iter()
             .map(|b| b.ranges.iter().map(|r| r.len()).collect())
             .collect();
+        let blocks = h.version.has_blocks().then(|| block_extents(h, &bands));
         Ok(Plan {
             pyr,
             bands,
             parents,
             dims,
             coding: coding_of(h),
-            blocks: h.version.has_blocks().then(|| h.block_extents()),
+            blocks,
             coder: coder_of(h),
         })
     }

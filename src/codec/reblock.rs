@@ -1,4 +1,4 @@
-//! Format 3.0 files (formats/MRA.md §15) from one-piece format 2 files: every band's
+//! Format 3.2 files (formats/MRA.md §15) from one-piece format 2 files: every band's
 //! indices decoded and coded again in independent code-blocks ([`crate::entropy::codeblocks`],
 //! the blocks of all bands and channels in parallel, the streams gathered in block
 //! order, so the bytes do not depend on the thread count). The indices, and so the
@@ -51,14 +51,14 @@ pub fn to_blocks(bytes: &[u8]) -> Result<Vec<u8>> {
         .collect::<Result<_>>()?;
     let nb = plan.bands.len();
     let mut h3 = h.clone();
-    h3.version = Version::BLOCKS;
+    h3.version = Version::LEVEL_BLOCKS;
     h3.blocks = exponents(h.dims.len());
-    let block = h3.block_extents();
+    let plan3 = super::plan::Plan::new(&h3)?;
     let entries: Vec<Vec<u8>> = (0..h.channels * nb)
         .into_par_iter()
         .map(|i| {
             let (c, j) = (i / nb, i % nb);
-            let grid = Grid::new(&plan.dims[j], &block);
+            let grid = Grid::new(&plan.dims[j], plan3.block(j));
             let kind = if plan.bands[j].level == 0 {
                 BandKind::Coarse
             } else {

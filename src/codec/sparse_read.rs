@@ -62,7 +62,6 @@ impl Sparse {
         else {
             return Ok(None);
         };
-        let block = header.block_extents();
         let mut entries = Vec::with_capacity(sb.body.bands.len());
         for (c, bands) in sb.body.bands.into_iter().enumerate() {
             let mut row = Vec::with_capacity(bands.len());
@@ -71,13 +70,14 @@ impl Sparse {
                     row.push(None);
                     continue;
                 };
-                let set = crate::format::bands::parse_blocks(&bc.data, &plan.dims[j], &block)
-                    .map_err(|e| {
-                        crate::Error::format(
-                            format!("band {j} of channel {c}: {e}"),
-                            "a valid band",
-                        )
-                    })?;
+                let set =
+                    crate::format::bands::parse_blocks(&bc.data, &plan.dims[j], plan.block(j))
+                        .map_err(|e| {
+                            crate::Error::format(
+                                format!("band {j} of channel {c}: {e}"),
+                                "a valid band",
+                            )
+                        })?;
                 let head = set.streams.first().map_or(bc.data.len(), |r| r.start);
                 row.push(Some(Entry {
                     at: off,
@@ -123,7 +123,6 @@ impl Sparse {
                 .map(|st| st.out_box().to_vec()),
         };
         let wins = super::decode::band_windows(&p, level);
-        let block = self.header.block_extents();
         let mut bands = Vec::with_capacity(self.entries.len());
         for row in &self.entries {
             let mut out = Vec::with_capacity(row.len());
@@ -135,7 +134,7 @@ impl Sparse {
                 };
                 let mut data = vec![0u8; e.len];
                 data[..e.index.len()].copy_from_slice(&e.index);
-                let grid = crate::entropy::codeblocks::Grid::new(&p.plan.dims[j], &block);
+                let grid = crate::entropy::codeblocks::Grid::new(&p.plan.dims[j], p.plan.block(j));
                 let which = match &wins[j] {
                     Some(w) => grid.touching(w),
                     None => (0..grid.len()).collect(),

@@ -174,34 +174,14 @@ pub fn read_body<R: Read>(
             }
             Some(Tag::Mend) => {
                 b.chunks.push(info);
-                match first_missing(header, layout, &b.bands, &b.resi, 0) {
-                    Some(missing) if !allow_truncated => {
-                        return Err(FormatError::missing(
-                            format!("{missing} missing (MEND at byte {})", ch.offset),
-                            "every chunk the header commits to (or --allow-truncated)",
-                        ));
-                    }
-                    Some(_) => break,
-                    None => {
-                        b.complete = true;
-                        break;
-                    }
-                }
+                let (bands, resi) = (&b.bands, &b.resi);
+                b.complete = mend(header, layout, (bands, resi), 0, ch.offset, allow_truncated)?;
+                break;
             }
-            Some(Tag::Meta) => {
-                b.meta = meta_chunk(&ch, &mut meta_seen, first_band)?;
+            _ => {
+                other_chunk(&ch, &mut b.meta, &mut meta_seen, first_band)?;
                 None
             }
-            Some(Tag::Head) => {
-                return Err(FormatError::duplicate(
-                    "a second HEAD chunk",
-                    "one HEAD chunk",
-                ))
-            }
-            _ if Tag::is_critical(&ch.kind) => {
-                return Err(FormatError::UnknownChunk(ch.name()).into());
-            }
-            _ => None,
         };
         if let Some(complete) = stop {
             b.complete = complete;
@@ -379,6 +359,52 @@ pub fn meta_chunk(ch: &Chunk, seen: &mut bool, first_band: Option<u64>) -> Resul
     }
     *seen = true;
     Ok(meta::parse(&ch.payload))
+}
+
+/// A chunk of the body other than a band's, `RESI` or `MEND`, checked: `mETA` parsed
+/// into `meta` ([`meta_chunk`]'s rules), a second `HEAD` or an unknown critical chunk
+/// an error, any other ancillary chunk skipped.
+pub(super) fn other_chunk(
+    ch: &Chunk,
+    meta: &mut Metadata,
+    meta_seen: &mut bool,
+    first_band: Option<u64>,
+) -> Result<()> {
+    match ch.tag() {
+        Some(Tag::Meta) => *meta = meta_chunk(ch, meta_seen, first_band)?,
+        Some(Tag::Head) => {
+            return Err(FormatError::duplicate(
+                "a second HEAD chunk",
+                "one HEAD chunk",
+            ))
+        }
+        _ if Tag::is_critical(&ch.kind) => {
+            return Err(FormatError::UnknownChunk(ch.name()).into());
+        }
+        _ => {}
+    }
+    Ok(())
+}
+
+/// `MEND` at byte `at`: whether the body before it is complete (every chunk the header
+/// commits to that a decode at `stop_level` needs, [`first_missing`]); one missing is
+/// an error naming it, or with `allow_truncated` an incomplete body (`Ok(false)`).
+pub(super) fn mend(
+    header: &Header,
+    layout: &BandLayout,
+    (bands, resi): (&[Vec<Option<BandChunk>>], &[Option<Residual>]),
+    stop_level: usize,
+    at: u64,
+    allow_truncated: bool,
+) -> Result<bool> {
+    match first_missing(header, layout, bands, resi, stop_level) {
+        None => Ok(true),
+        Some(_) if allow_truncated => Ok(false),
+        Some(missing) => Err(FormatError::missing(
+            format!("{missing} missing (MEND at byte {at})"),
+            "every chunk the header commits to (or --allow-truncated)",
+        )),
+    }
 }
 
 /// Whether a decode stopping at level `stop_level` (on reaching a chunk of a level it

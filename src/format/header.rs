@@ -76,6 +76,13 @@ pub fn coder_name(id: u8) -> Option<&'static str> {
     CODERS.get(id as usize).copied()
 }
 
+/// Format 3.2's floor on a code-block exponent of a raster of 1 or 2 axes (§15.3):
+/// blocks shrink from the third level to 32 samples a side, not below.
+pub const BLOCK_FLOOR_2D: u8 = 5;
+/// Format 3.2's floor on a code-block exponent of a raster of 3 or 4 axes (§15.3):
+/// blocks shrink from the second level to 16 samples a side.
+pub const BLOCK_FLOOR_3D: u8 = 4;
+
 pub const MAX_AXES: usize = 4;
 pub const MAX_CHANNELS: usize = 256;
 pub const MAX_LEVELS: usize = 32;
@@ -272,9 +279,35 @@ impl Header {
         b
     }
 
-    /// The code-block extents of a format 3.0 file (`2^x[k]` per axis), empty before.
+    /// The code-block extents of a format 3.0 file (`2^x[k]` per axis), empty before:
+    /// the finest level's ([`Header::block_extents_at`] gives every level's).
     pub fn block_extents(&self) -> Vec<usize> {
         self.blocks.iter().map(|&x| 1usize << x.min(31)).collect()
+    }
+
+    /// The code-block extents of the bands of level `level` (1 the finest detail level;
+    /// the coarse block counts as the coarsest detail level, 0 as 1), formats/MRA.md
+    /// §15.3: from format 3.2, `2^max(min(x, f), x − max(0, level − s))` on an axis of
+    /// `HEAD` exponent `x`: for 1 or 2 axes `(f, s)` = ([`BLOCK_FLOOR_2D`], 2) (the two
+    /// finest levels at `2^x`), for more ([`BLOCK_FLOOR_3D`], 1); before 3.2, `2^x` at
+    /// every level. Empty before 3.0.
+    pub fn block_extents_at(&self, level: usize) -> Vec<usize> {
+        if !self.version.has_level_blocks() {
+            return self.block_extents();
+        }
+        let (f, s) = if self.blocks.len() <= 2 {
+            (BLOCK_FLOOR_2D, 2)
+        } else {
+            (BLOCK_FLOOR_3D, 1)
+        };
+        let shrink = level.saturating_sub(s).min(31) as u8;
+        self.blocks
+            .iter()
+            .map(|&x| {
+                let x = x.min(31);
+                1usize << x.min(f).max(x.saturating_sub(shrink))
+            })
+            .collect()
     }
 
     /// Parse and validate a `HEAD` payload.

@@ -8,7 +8,7 @@
 //! read them whole); the index is checked as [`super::bands::parse_blocks`] checks it
 //! once the caller parses it.
 
-use super::body::{meta_chunk, truncated, BandChunk, BandLayout, Body, ChunkInfo};
+use super::body::{mend, other_chunk, truncated, BandChunk, BandLayout, Body, ChunkInfo};
 use super::{ChunkEnd, ChunkReader, Header, Mode, Tag, MAX_CHUNK};
 use crate::io::Metadata;
 use crate::{FormatError, Result};
@@ -221,37 +221,20 @@ impl Reading<'_> {
             Ok(ch) => ch,
             Err(end) => return Err(truncated(end, &self.last, len)),
         };
-        match Tag::of(&ch.kind) {
-            Some(Tag::Mend) => {
-                let missing = super::body::first_missing(
-                    self.header,
-                    self.layout,
-                    &b.bands,
-                    &b.resi,
-                    self.stop_level,
-                );
-                if let Some(missing) = missing {
-                    return Err(FormatError::missing(
-                        format!("{missing} missing (MEND at byte {pos})"),
-                        "every chunk the header commits to (or --allow-truncated)",
-                    ));
-                }
-                b.complete = true;
-                b.chunks.push(ChunkInfo::of(&ch, None));
-                return Ok(true);
-            }
-            Some(Tag::Meta) => b.meta = meta_chunk(&ch, &mut self.meta_seen, self.first_band)?,
-            Some(Tag::Head) => {
-                return Err(FormatError::duplicate(
-                    "a second HEAD chunk",
-                    "one HEAD chunk",
-                ))
-            }
-            _ if Tag::is_critical(&ch.kind) => {
-                return Err(FormatError::UnknownChunk(ch.name()).into());
-            }
-            _ => {}
+        if Tag::of(&ch.kind) == Some(Tag::Mend) {
+            let (bands, resi) = (&b.bands, &b.resi);
+            b.complete = mend(
+                self.header,
+                self.layout,
+                (bands, resi),
+                self.stop_level,
+                pos,
+                false,
+            )?;
+            b.chunks.push(ChunkInfo::of(&ch, None));
+            return Ok(true);
         }
+        other_chunk(&ch, &mut b.meta, &mut self.meta_seen, self.first_band)?;
         b.chunks.push(ChunkInfo::of(&ch, None));
         Ok(false)
     }

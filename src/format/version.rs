@@ -40,12 +40,16 @@ impl Version {
     /// 3.1: 3.0 with a coder byte at the end of `HEAD`: which block coder codes every
     /// code-block of the file (§15.1; 3.0 is coder 0).
     pub const CODER_CHOICE: Version = Version::new(3, 1);
+    /// 3.2: the code-block extents shrink with coarser levels by the rule of §15.3
+    /// ([`crate::format::Header::block_extents_at`]): no new bytes, `HEAD`'s exponents
+    /// are the finest level's.
+    pub const LEVEL_BLOCKS: Version = Version::new(3, 2);
     /// The latest version this reader implements: it refuses later minors of its major.
-    pub const LATEST: Version = Version::CODER_CHOICE;
+    pub const LATEST: Version = Version::LEVEL_BLOCKS;
     /// The latest minor of format 2 this reader implements.
     pub const LATEST_2: Version = Version::HEAD_FLAGS;
     /// Every version this reader decodes, oldest first.
-    pub const ALL: [Version; 8] = [
+    pub const ALL: [Version; 9] = [
         Version::V1,
         Version::V2_0,
         Version::TILED,
@@ -54,6 +58,7 @@ impl Version {
         Version::HEAD_FLAGS,
         Version::BLOCKS,
         Version::CODER_CHOICE,
+        Version::LEVEL_BLOCKS,
     ];
     /// The oldest major version readers still decode.
     pub const OLDEST_MAJOR: u8 = 1;
@@ -132,13 +137,20 @@ impl Version {
         self.major == 3 && self.minor >= 1
     }
 
+    /// Whether the code-block extents shrink with coarser levels (3.2 and later 3.x,
+    /// §15.3, [`crate::format::Header::block_extents_at`]); else every band has
+    /// `HEAD`'s extents.
+    pub fn has_level_blocks(self) -> bool {
+        self.major == 3 && self.minor >= 2
+    }
+
     /// Whether `HEAD` ends with the flags byte (2.4 and later, 3.0).
     pub fn has_head_flags(self) -> bool {
         self.at_least(Version::HEAD_FLAGS)
     }
 
-    /// The version of a code-block file whose blocks are coded by coder `coder`: 3.0
-    /// for coder 0 (so that default files stay readable by 3.0 readers), 3.1 else.
+    /// The version of a code-block file whose blocks are coded by coder `coder`: at
+    /// least 3.1 for a coder other than 0, the version as it is for coder 0.
     /// Other versions are returned as they are.
     pub fn with_coder(self, coder: u8) -> Version {
         if self.has_blocks() && coder != 0 {
@@ -148,13 +160,13 @@ impl Version {
         }
     }
 
-    /// The version the writer gives a one-piece file: 3.0 when cut into code-blocks
-    /// (`blocks`); else 2.3 when lossless (each band chooses its classes), 2.0 when
+    /// The version the writer gives a one-piece file: 3.2 when cut into code-blocks
+    /// (`blocks`: blocks that shrink with coarser levels); else 2.3 when lossless (each band chooses its classes), 2.0 when
     /// lossy, 2.4 at least when the `HEAD` says the file has voids. (The one-tile files
     /// inside a tiled file are never cut into code-blocks.)
     pub fn for_file(lossless: bool, voids: bool, blocks: bool) -> Version {
         if blocks {
-            return Version::BLOCKS;
+            return Version::LEVEL_BLOCKS;
         }
         let v = if lossless {
             Version::CHOSEN_CODING
@@ -208,13 +220,15 @@ mod tests {
             assert_eq!(v.has_head_flags(), two(4) || three, "{v}");
             assert_eq!(v.has_blocks(), three, "{v}");
             assert_eq!(v.has_coder_choice(), three && v.minor >= 1, "{v}");
+            assert_eq!(v.has_level_blocks(), three && v.minor >= 2, "{v}");
         }
         // format 1 has none of format 2's minors, whatever its minor byte
         assert!(!Version::new(1, 9).has_tiles() && !Version::new(1, 9).has_head_flags());
         assert!(Version::new(2, Version::LATEST_2.minor + 1)
             .check()
             .is_err());
-        assert!(Version::new(3, 2).check().is_err() && Version::new(4, 0).check().is_err());
+        assert!(Version::new(3, 3).check().is_err() && Version::new(4, 0).check().is_err());
+        assert_eq!(Version::LEVEL_BLOCKS.with_coder(1), Version::LEVEL_BLOCKS);
         assert_eq!(Version::BLOCKS.with_coder(0), Version::BLOCKS);
         assert_eq!(Version::BLOCKS.with_coder(1), Version::CODER_CHOICE);
         assert_eq!(Version::HEAD_FLAGS.with_coder(1), Version::HEAD_FLAGS);

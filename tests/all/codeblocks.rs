@@ -88,7 +88,7 @@ fn code_blocks_decode_as_the_format_2_file() {
         let two = encode(&r, rate, levels);
         let three = codec::to_blocks(&two).unwrap();
         assert_eq!(header(&two).version.major, 2);
-        assert_eq!(header(&three).version, mra::format::Version::BLOCKS);
+        assert_eq!(header(&three).version, mra::format::Version::LEVEL_BLOCKS);
         assert_eq!(
             codec::to_blocks(&three).unwrap(),
             three,

@@ -87,7 +87,7 @@ fn every_mode_writes_3_0_by_default_and_round_trips() {
             let what = format!("{} {rate:?}", r.summary());
             let three = codec::encode(&r, &opts(rate, Format::Blocks)).unwrap();
             let two = codec::encode(&r, &opts(rate, Format::Bands)).unwrap();
-            assert_eq!(version(&three), "3.0", "{what}");
+            assert_eq!(version(&three), "3.2", "{what}");
             assert!(version(&two).starts_with("2."), "{what}");
             let d3 = decoded(&three);
             let d2 = decoded(&two);
@@ -148,7 +148,7 @@ fn default_files_do_not_depend_on_the_thread_count() {
                 .install(|| codec::encode(r, &opts(rate, Format::Blocks)).unwrap())
         };
         let one = on(1);
-        assert_eq!(version(&one), "3.0");
+        assert_eq!(version(&one), "3.2");
         assert!(one == on(3), "{} {rate:?}", r.summary());
     }
 }
@@ -210,9 +210,9 @@ fn the_cli_writes_3_0_by_default_and_2_x_with_format_2() {
             .unwrap()
     };
     for (extra, want) in [
-        (&[][..], "3.0"),
-        (&["--blocks"][..], "3.0"),
-        (&["--format", "3", "--lossless"][..], "3.0"),
+        (&[][..], "3.2"),
+        (&["--blocks"][..], "3.2"),
+        (&["--format", "3", "--lossless"][..], "3.2"),
         (&["--format", "2"][..], "2.0"),
         (&["--format", "2", "--lossless"][..], "2.3"),
     ] {

@@ -225,7 +225,7 @@ fn files_are_format_3_0_or_2_x_and_exact_on_wide_16_bit_data() {
     )
     .unwrap();
     let bytes = codec::encode(&r, &opts(Rate::Lossless)).unwrap();
-    assert_eq!(codec::info(&bytes).unwrap().version, "3.0");
+    assert_eq!(codec::info(&bytes).unwrap().version, "3.2");
     let bands = EncodeOptions {
         format: codec::Format::Bands,
         ..opts(Rate::Lossless)
@@ -257,7 +257,7 @@ fn files_are_format_3_0_or_2_x_and_exact_on_wide_16_bit_data() {
         );
     }
     let lossy = codec::encode(&r, &opts(Rate::Quality(50.0))).unwrap();
-    assert_eq!(codec::info(&lossy).unwrap().version, "3.0");
+    assert_eq!(codec::info(&lossy).unwrap().version, "3.2");
     let bands = EncodeOptions {
         format: codec::Format::Bands,
         ..opts(Rate::Quality(50.0))
@@ -776,15 +776,15 @@ fn test_vectors_decode_to_their_digests() {
             let bytes = std::fs::read(dir.join(v["file"].as_str().unwrap())).unwrap();
             // format 3 vectors (code-blocks) sit beside the format 2 ones
             let name = v["name"].as_str().unwrap();
-            let want = if name.starts_with("blocks30_") || name.starts_with("blocks31_") {
-                3
-            } else {
-                major
-            };
+            let three = ["blocks30_", "blocks31_", "blocks32_"]
+                .iter()
+                .position(|p| name.starts_with(p));
+            let want = if three.is_some() { 3 } else { major };
             assert_eq!(bytes[16], want, "{name} is not a format {want} file");
-            // 3.1 vectors (the HT block coder) say so in their minor
-            if name.starts_with("blocks31_") {
-                assert_eq!(bytes[17], 1, "{name} is not a 3.1 file");
+            // 3.1 vectors (the HT block coder) and 3.2 ones (per-level code-blocks) say
+            // so in their minor
+            if let Some(minor) = three {
+                assert_eq!(bytes[17] as usize, minor, "{name} is not a 3.{minor} file");
             }
             let level = v["level"].as_u64().unwrap() as usize;
             let d = codec::decode(

@@ -309,10 +309,10 @@ fn a_file_whose_header_says_it_has_voids_is_refused_without_its_meta() {
             assert!(err.to_string().contains("void"), "{rate:?}: {err}");
         }
     }
-    // a raster without voids keeps the version it had: 3.0, or 2.0 in format 2
+    // a raster without voids keeps the version it had: 3.2, or 2.0 in format 2
     let plain = field(&[20, 24], 1, SampleType::F32);
     let h = codec::header_of(&codec::encode(&plain, &opts(Rate::Quality(50.0))).unwrap()).unwrap();
-    assert!(!h.voids && h.version == mra::format::Version::BLOCKS);
+    assert!(!h.voids && h.version == mra::format::Version::LEVEL_BLOCKS);
     let two = EncodeOptions {
         format: codec::Format::Bands,
         ..opts(Rate::Quality(50.0))

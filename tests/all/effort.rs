@@ -111,11 +111,7 @@ fn every_coder_round_trips_every_mode() {
                         "context"
                     };
                     assert_eq!(info.coder.as_deref(), Some(want), "{what}");
-                    assert_eq!(
-                        info.version,
-                        if want == "ht" { "3.1" } else { "3.0" },
-                        "{what}"
-                    );
+                    assert_eq!(info.version, "3.2", "{what}");
                     let d = decoded(&bytes);
                     assert_eq!(
                         (d.dims.clone(), d.channels),
@@ -200,10 +196,10 @@ fn the_default_effort_writes_the_3_0_file() {
         .unwrap();
         assert_eq!(d, codec::encode(&r, &opts(rate, DEFAULT_EFFORT)).unwrap());
         let h = codec::header_of(&d).unwrap();
-        assert_eq!((h.version.to_string(), h.coder), ("3.0".to_string(), 0));
+        assert_eq!((h.version.to_string(), h.coder), ("3.2".to_string(), 0));
         let (s, e) = head(&d);
-        // 3.0's HEAD: 52 + 8N bytes, the flags byte and N exponents, no coder byte
-        assert_eq!(e - s, 52 + 8 * 2 + 1 + 2);
+        // 3.2's HEAD: 52 + 8N bytes, the flags byte, N exponents and the coder byte
+        assert_eq!(e - s, 52 + 8 * 2 + 1 + 2 + 1);
     }
 }
 
@@ -240,13 +236,21 @@ fn a_coder_byte_no_reader_knows_is_refused() {
         assert!(msg.contains("block coder"), "{msg}");
         assert!(!out.exists());
     }
-    // a 3.0 HEAD relabelled 3.1 lacks its coder byte
-    let mut b = codec::encode(&r, &opts(Rate::Quality(50.0), 9)).unwrap();
-    let (s, e) = head(&b);
-    assert_eq!(b[s..s + 2], [3, 0]);
-    b[s + 1] = 1;
-    recrc(&mut b, s, e);
-    let err = codec::decode(&b, &DecodeOptions::default()).unwrap_err();
+    // a 3.0 HEAD (a 3.2 one without its coder byte) relabelled 3.1 lacks its coder byte
+    let b = codec::encode(&r, &opts(Rate::Quality(50.0), 9)).unwrap();
+    let (s, _) = head(&b);
+    assert_eq!(b[s..s + 2], [3, 2]);
+    let mut rd = mra::format::ChunkReader::new(&b[..], b.len() as u64).unwrap();
+    let mut out = mra::format::SIGNATURE.to_vec();
+    while let Ok(ch) = rd.next_chunk().unwrap() {
+        let mut p = ch.payload.clone();
+        if &ch.kind == b"HEAD" {
+            p.pop();
+            p[1] = 1;
+        }
+        mra::format::put_chunk(&mut out, &ch.kind, &p);
+    }
+    let err = codec::decode(&out, &DecodeOptions::default()).unwrap_err();
     assert_eq!(err.kind(), ErrorKind::Format, "{err}");
 }
 

@@ -24,6 +24,7 @@ mod hyperpatch;
 mod inputs_outputs;
 mod io;
 mod kernel_tables;
+mod level_blocks;
 mod library_rules;
 mod mesh;
 mod metadata;

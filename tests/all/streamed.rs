@@ -60,7 +60,7 @@ fn streamed_files_are_the_whole_encoders_bytes() {
         for boundary in [Boundary::Symmetric, Boundary::Periodic] {
             let o = opts(Rate::Threshold(*t), *levels, boundary);
             let whole = codec::encode(r, &o).unwrap();
-            assert_eq!(codec::info(&whole).unwrap().version, "3.0");
+            assert_eq!(codec::info(&whole).unwrap().version, "3.2");
             let s = streamed(r, &o);
             assert!(
                 s == whole,
