@@ -213,7 +213,9 @@ pub(super) fn lossy_values(
     let planes = (0..c)
         .into_par_iter()
         .map(|ch| {
-            let mut plane = vec![0f32; plan.pyr.shape.iter().product()];
+            // on huge pages where the kernel allows: the bands are written into fresh
+            // pages, a fault for each 4 KB otherwise
+            let mut plane: Vec<f32> = tensor::zeroed_vec(plan.pyr.shape.iter().product());
             fill(ch, &mut plane)?;
             let full: Vec<std::ops::Range<usize>> = region.iter().map(|&e| 0..e).collect();
             let small = if k == 0 {
