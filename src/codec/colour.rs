@@ -76,7 +76,9 @@ fn split<T: Copy>(v: &[T], c: usize, n: usize, f: impl Fn(T) -> f32) -> Vec<Vec<
     if c == 1 {
         return vec![v[..n].iter().map(|&x| f(x)).collect()];
     }
-    let mut planes = vec![vec![0f32; n]; c];
+    // fresh zeroed planes on huge pages where the kernel allows (`vec![plane; c]` would
+    // copy the first plane's zeros into the others, a page fault and a copy per page)
+    let mut planes: Vec<Vec<f32>> = (0..c).map(|_| crate::tensor::zeroed_vec(n)).collect();
     for (i, px) in v[..n * c].chunks_exact(c).enumerate() {
         for (p, &x) in planes.iter_mut().zip(px) {
             p[i] = f(x);

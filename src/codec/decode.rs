@@ -58,22 +58,74 @@ fn decode_band(
     if !h.version.has_blocks() {
         return entropy::decode_band(data, dims, kind, parent);
     }
-    let set = crate::format::bands::parse_blocks(data, dims, block)?;
-    let grid = Grid::new(dims, block);
-    let which: Vec<usize> = match window {
-        Some(w) => grid.touching(w),
-        None => (0..grid.len()).collect(),
-    };
-    let streams: Vec<&[u8]> = which
-        .iter()
-        .map(|&i| &data[set.streams[i].clone()])
-        .collect();
+    let (grid, which, streams) = block_streams(data, dims, block, window)?;
     let mut v = vec![0i64; dims.iter().product()];
     let coder = super::plan::coder_of(h);
     entropy::codeblocks::decode_blocks(
         &mut v, &grid, &which, &streams, kind, parent, coding, coder,
     )?;
     Ok(v)
+}
+
+/// The code-block grid (blocks of extents `block`) of a band of a code-block file (format 3), the blocks `window`
+/// meets (every block without one) and their streams in `data`.
+fn block_streams<'d>(
+    data: &'d [u8],
+    dims: &[usize],
+    block: &[usize],
+    window: Option<&[Range<usize>]>,
+) -> Result<(Grid, Vec<usize>, Vec<&'d [u8]>)> {
+    let set = crate::format::bands::parse_blocks(data, dims, block)?;
+    let grid = Grid::new(dims, block);
+    let which: Vec<usize> = match window {
+        Some(w) => grid.touching(w),
+        None => (0..grid.len()).collect(),
+    };
+    let streams = which
+        .iter()
+        .map(|&i| &data[set.streams[i].clone()])
+        .collect();
+    Ok((grid, which, streams))
+}
+
+/// A band of a code-block file decoded and dequantized straight into its `rows` of a
+/// plane (`x = dequantize(q, step, δ)`), only the blocks `window` meets (the others'
+/// positions stay as they are): the samples of [`decode_band`] then
+/// [`dequantize_band`], without the band of `i64` indices between them.
+fn decode_band_into(
+    h: &Header,
+    data: &[u8],
+    (dims, block): (&[usize], &[usize]),
+    (kind, parent): (BandKind, Option<Parent>),
+    window: Option<&[Range<usize>]>,
+    (step, delta): (f64, f64),
+    rows: Vec<&mut [f32]>,
+) -> Result<()> {
+    let (grid, which, streams) = block_streams(data, dims, block, window)?;
+    let put = entropy::codeblocks::Put {
+        wide: |o: &mut [f32], q: &[i64]| dequantize_row(q, step, delta, o),
+        narrow: |o: &mut [f32], q: &[i32]| {
+            // widened a few at a time: the same `dequantize` of the same values
+            let mut wide = [0i64; 64];
+            for (o, q) in o.chunks_mut(64).zip(q.chunks(64)) {
+                for (w, &x) in wide.iter_mut().zip(q) {
+                    *w = x as i64;
+                }
+                dequantize_row(&wide[..q.len()], step, delta, o);
+            }
+        },
+    };
+    let (coding, coder) = (super::plan::coding_of(h), super::plan::coder_of(h));
+    entropy::codeblocks::decode_blocks_into(
+        rows,
+        &grid,
+        &which,
+        &streams,
+        (kind, parent),
+        coding,
+        coder,
+        &put,
+    )
 }
 
 /// The parent of band `j` of channel `c` from `held` (a band number and its indices):
@@ -340,6 +392,23 @@ fn decode_channel_into(p: &Parsed, c: usize, k: usize, plane: &mut [f32]) -> Res
                 };
                 let (step, delta) = (bc.step, band_delta(h, plan, j));
                 let dims = &plan.dims[j];
+                if h.version.has_blocks() && !has_children[j] {
+                    let at = (kind_of(level), parent);
+                    let done = decode_band_into(
+                        h,
+                        &bc.data,
+                        (dims, plan.block(j)),
+                        at,
+                        wins[j].as_deref(),
+                        (step, delta),
+                        rows,
+                    );
+                    if let Err(e) = done {
+                        return Some((j, failed(e)));
+                    }
+                    prev = None;
+                    continue;
+                }
                 if decoded_whole(h, level, has_children[j]) {
                     let v = match decode_band(
                         h,

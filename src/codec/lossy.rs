@@ -314,10 +314,15 @@ impl Prepared {
     pub(super) fn quantized(&self, step: f64, j: usize, c: usize) -> Vec<i64> {
         let plan = &self.plan;
         let (s, rho) = (self.band_step(step, j, c), band_rho(plan, j));
-        layout::gather(&self.coeffs[c], &plan.pyr.shape, &plan.bands[j].ranges)
-            .into_iter()
-            .map(|x| quantize::quantize(x as f64, s, rho))
-            .collect()
+        // read from the plane row by row (no gathered copy of the band)
+        let (plane, ranges) = (&self.coeffs[c], &plan.bands[j].ranges);
+        let mut q = vec![0i64; ranges.iter().map(|r| r.len()).product()];
+        layout::rows(&plan.pyr.shape, ranges, |off, run, b| {
+            for (q, &x) in q[b..b + run].iter_mut().zip(&plane[off..off + run]) {
+                *q = quantize::quantize(x as f64, s, rho);
+            }
+        });
+        q
     }
 
     /// What a decoder makes of [`Prepared::code`]`(step)`, at full size, computed from the

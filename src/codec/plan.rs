@@ -222,7 +222,9 @@ pub(super) fn lossy_values(
     let planes = (0..c)
         .into_par_iter()
         .map(|ch| {
-            let mut plane = vec![0f32; plan.pyr.shape.iter().product()];
+            // on huge pages where the kernel allows: the bands are written into fresh
+            // pages, a fault for each 4 KB otherwise
+            let mut plane: Vec<f32> = tensor::zeroed_vec(plan.pyr.shape.iter().product());
             fill(ch, &mut plane)?;
             let full: Vec<std::ops::Range<usize>> = region.iter().map(|&e| 0..e).collect();
             let small = if k == 0 {
@@ -384,6 +386,28 @@ fn interleave<T: Send + Copy>(
                 return;
             }
             let first = if ycocg && c >= 3 { 3 } else { 0 };
+            if first == 3 && c == 3 {
+                // a lane of positions at a time: the colour inverse and `conv` over
+                // arrays (loops the compiler vectorizes), then interleaved; the same
+                // operations on each value as below
+                const LANE: usize = 64;
+                let z = conv(0.0);
+                let mut t = [[z; LANE]; 3];
+                let p = [0, 1, 2].map(|ch| &planes[ch][i0..i0 + n]);
+                for (k, px) in chunk.chunks_mut(3 * LANE).enumerate() {
+                    let (at, m) = (k * LANE, px.len() / 3);
+                    let [y, co, cg] = p.map(|q| &q[at..at + m]);
+                    let [tr, tg, tb] = &mut t;
+                    for i in 0..m {
+                        let (r, g, b) = ycocg_inverse(y[i], co[i], cg[i]);
+                        (tr[i], tg[i], tb[i]) = (conv(r), conv(g), conv(b));
+                    }
+                    for (i, o) in px.chunks_exact_mut(3).enumerate() {
+                        (o[0], o[1], o[2]) = (tr[i], tg[i], tb[i]);
+                    }
+                }
+                return;
+            }
             for (i, px) in chunk.chunks_exact_mut(c).enumerate() {
                 let at = i0 + i;
                 if first == 3 {

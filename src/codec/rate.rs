@@ -625,20 +625,24 @@ impl Prepared {
                 let mut bins = vec![0.0f64; nbins];
                 let mut zeros = 0.0;
                 let scale = (self.gains[j] * self.weights[c]) as f32;
-                let band = layout::gather(&self.coeffs[c], &plan.pyr.shape, &plan.bands[j].ranges);
-                for &v in &band {
-                    let a = v.abs() * scale;
-                    if !(a > 0.0 && a.is_finite()) {
-                        zeros += 1.0;
-                        continue;
+                let plane = &self.coeffs[c];
+                // the band read in place, row by row (counts: any order sums the same)
+                layout::rows(&plan.pyr.shape, &plan.bands[j].ranges, |off, run, _| {
+                    for &v in &plane[off..off + run] {
+                        let a = v.abs() * scale;
+                        if !(a > 0.0 && a.is_finite()) {
+                            zeros += 1.0;
+                            continue;
+                        }
+                        // log2 from the bits: exponent plus the mantissa as a fraction
+                        // (off by under 0.09 octave, about a bin)
+                        let b = a.to_bits();
+                        let y =
+                            ((b >> 23) as i32 - 127) as f32 + (b & 0x7F_FFFF) as f32 / 8_388_608.0;
+                        let k = ((y as f64 - RateModel::LOW) * RateModel::BINS_PER_OCTAVE) as isize;
+                        bins[k.clamp(0, nbins as isize - 1) as usize] += 1.0;
                     }
-                    // log2 from the bits: exponent plus the mantissa as a fraction (off
-                    // by under 0.09 octave, about a bin)
-                    let b = a.to_bits();
-                    let y = ((b >> 23) as i32 - 127) as f32 + (b & 0x7F_FFFF) as f32 / 8_388_608.0;
-                    let k = ((y as f64 - RateModel::LOW) * RateModel::BINS_PER_OCTAVE) as isize;
-                    bins[k.clamp(0, nbins as isize - 1) as usize] += 1.0;
-                }
+                });
                 (bins, zeros)
             })
             .reduce(

@@ -380,12 +380,8 @@ pub fn encode_blocks_rdo_by(
 
 /// Decode blocks `which` (ascending block numbers; their streams `streams[k]` for
 /// `which[k]`) of a band straight into `out` (extents `grid.dims`; the other positions
-/// are left as they are). The band is cut into slabs of `block[0]` along its first
-/// axis, each its own part of `out`: the slabs decode in parallel, the blocks of a slab
-/// one after another, a detail block a row at a time ([`band::decode_rows`]) into its
-/// rows of the band (a coarse block whole, its LOCO-I prediction undone over the box).
-/// The parent band must hold the parent boxes of those blocks. A block of a narrow
-/// coder ([`Coder::is_narrow`]) decodes whole into its box.
+/// are left as they are): [`decode_blocks_into`] over the rows of `out`, each index
+/// copied.
 // the band, its blocks and their streams, their coding: one call per band entry
 #[allow(clippy::too_many_arguments)]
 pub fn decode_blocks(
@@ -398,12 +394,70 @@ pub fn decode_blocks(
     coding: Coding,
     coder: Coder,
 ) -> Result<()> {
+    if grid.dims.is_empty() || out.len() != grid.dims.iter().product::<usize>() || out.is_empty() {
+        return Ok(());
+    }
+    let cols = grid.dims[grid.dims.len() - 1].max(1);
+    let rows: Vec<&mut [i64]> = out.chunks_mut(cols).collect();
+    let put = Put {
+        wide: |o: &mut [i64], v: &[i64]| o.copy_from_slice(v),
+        narrow: |o: &mut [i64], v: &[i32]| {
+            for (o, &x) in o.iter_mut().zip(v) {
+                *o = x as i64;
+            }
+        },
+    };
+    decode_blocks_into(rows, grid, which, streams, (kind, parent), coding, coder, &put)
+}
+
+/// How [`decode_blocks_into`] writes a run of decoded indices into a run of the output
+/// of the same length: `wide` from the context coder's `i64` indices, `narrow` from a
+/// narrow coder's `i32` ones (a copy, or the dequantization into a plane's samples).
+pub struct Put<W, N> {
+    /// Writes `i64` indices.
+    pub wide: W,
+    /// Writes `i32` indices.
+    pub narrow: N,
+}
+
+/// Decode blocks `which` (ascending block numbers; their streams `streams[k]` for
+/// `which[k]`) of a band of kind and parent `(kind, parent)` into `rows`, the band's
+/// rows in raster order (each as long as the band's last extent; a 1-D band is one
+/// row), through `put` (the positions of other blocks are left as they are). The band is
+/// cut into slabs of `block[0]` along its first axis, each its own rows: the slabs
+/// decode in parallel, the blocks of a slab one after another, a detail block a row at a
+/// time ([`band::decode_rows`]) into its rows of the band (a coarse block whole, its
+/// LOCO-I prediction undone over the box). The parent band must hold the parent boxes
+/// of those blocks. A block of a narrow coder ([`Coder::is_narrow`]) decodes whole into
+/// its box. No band-sized buffer is made: a plane's rows take the indices directly.
+#[allow(clippy::too_many_arguments)]
+pub fn decode_blocks_into<T, W, N>(
+    rows: Vec<&mut [T]>,
+    grid: &Grid,
+    which: &[usize],
+    streams: &[&[u8]],
+    (kind, parent): (BandKind, Option<Parent>),
+    coding: Coding,
+    coder: Coder,
+    put: &Put<W, N>,
+) -> Result<()>
+where
+    T: Send,
+    W: Fn(&mut [T], &[i64]) + Sync,
+    N: Fn(&mut [T], &[i32]) + Sync,
+{
     let nd = grid.dims.len();
-    if nd == 0 || out.len() != grid.dims.iter().product::<usize>() || out.is_empty() {
+    if nd == 0 || grid.dims.contains(&0) {
+        return Ok(());
+    }
+    let cols = grid.dims[nd - 1];
+    // rows per plane of the first axis
+    let inner: usize = grid.dims[1.min(nd - 1)..nd - 1].iter().product();
+    let nrows: usize = grid.dims[..nd - 1].iter().product();
+    if rows.len() != nrows.max(1) || rows.iter().any(|r| r.len() != cols) {
         return Ok(());
     }
     let per_slab: usize = grid.counts[1..].iter().product();
-    let slab_len = grid.block[0] * grid.dims[1..].iter().product::<usize>();
     // the blocks of each slab, by their place in `which`
     let mut slabs: Vec<(usize, Vec<usize>)> = Vec::new();
     for (k, &i) in which.iter().enumerate() {
@@ -413,16 +467,36 @@ pub fn decode_blocks(
             _ => slabs.push((s, vec![k])),
         }
     }
-    let mut parts: Vec<Option<&mut [i64]>> = out.chunks_mut(slab_len).map(Some).collect();
-    let work: Vec<(usize, &mut [i64], Vec<usize>)> = slabs
+    // each slab's rows: `block[0]` planes of rows, or pieces of a 1-D band's one row
+    let mut parts: Vec<Option<Vec<&mut [T]>>> = if nd == 1 {
+        let row = rows.into_iter().next().expect("one row");
+        row.chunks_mut(grid.block[0].max(1))
+            .map(|c| Some(vec![c]))
+            .collect()
+    } else {
+        let per = grid.block[0].max(1) * inner;
+        let mut it = rows.into_iter();
+        let mut parts = Vec::new();
+        loop {
+            let part: Vec<&mut [T]> = it.by_ref().take(per).collect();
+            if part.is_empty() {
+                break;
+            }
+            parts.push(Some(part));
+        }
+        parts
+    };
+    let work: Vec<(usize, Vec<&mut [T]>, Vec<usize>)> = slabs
         .into_iter()
         .filter_map(|(s, ks)| Some((s, parts.get_mut(s)?.take()?, ks)))
         .collect();
     let failed: Vec<Result<()>> = work
         .into_par_iter()
-        .map(|(s, slab, ks)| {
+        .map(|(s, mut slab, ks)| {
+            // the slab's extents, its rows' length, and the row and column of an offset
+            let len = slab[0].len().max(1);
             let mut shape = grid.dims.clone();
-            shape[0] = slab.len() / grid.dims[1..].iter().product::<usize>().max(1);
+            shape[0] = if nd == 1 { slab[0].len() } else { slab.len() / inner };
             let y0 = s * grid.block[0];
             for k in ks {
                 let b = grid.bounds(which[k]);
@@ -439,29 +513,30 @@ pub fn decode_blocks(
                         .as_ref()
                         .map(|(data, dims)| block::Parent { data, dims });
                     let v = decode(streams[k], &d, kind, pp)?;
-                    for_each_run(&shape, &local, |at, len, from| {
-                        for (o, &x) in slab[at..at + len].iter_mut().zip(&v[from..from + len]) {
-                            *o = x as i64;
-                        }
+                    for_each_run(&shape, &local, |at, n, from| {
+                        let (r, c) = (at / len, at % len);
+                        (put.narrow)(&mut slab[r][c..c + n], &v[from..from + n]);
                     });
                     continue;
                 }
                 let mut dec = Decoder::new_short(streams[k]);
                 if kind == BandKind::Coarse {
                     let v = band::decode(&mut dec, &d, kind, None, coding)?;
-                    for_each_run(&shape, &local, |at, len, from| {
-                        slab[at..at + len].copy_from_slice(&v[from..from + len])
+                    for_each_run(&shape, &local, |at, n, from| {
+                        let (r, c) = (at / len, at % len);
+                        (put.wide)(&mut slab[r][c..c + n], &v[from..from + n]);
                     });
                     continue;
                 }
                 let par = parent_of(&b, parent);
                 let pp = par.as_ref().map(|(data, dims)| Parent { data, dims });
-                let mut rows = Vec::with_capacity(d[..nd - 1].iter().product());
-                for_each_run(&shape, &local, |at, _, _| rows.push(at));
+                let mut starts = Vec::with_capacity(d[..nd - 1].iter().product());
+                for_each_run(&shape, &local, |at, _, _| starts.push(at));
                 let run = d[nd - 1].max(1);
-                band::decode_rows(&mut dec, &d, pp, coding, |at, r| {
-                    let o = rows[at / run];
-                    slab[o..o + r.len()].copy_from_slice(r);
+                band::decode_rows(&mut dec, &d, pp, coding, |at, v| {
+                    let o = starts[at / run];
+                    let (r, c) = (o / len, o % len);
+                    (put.wide)(&mut slab[r][c..c + v.len()], v);
                 })?;
             }
             Ok(())
@@ -555,6 +630,67 @@ mod tests {
                     &vec![true; box_dims(&win).iter().product()],
                 );
                 assert!(inwin.iter().zip(&mask).all(|(&w, &m)| !w || m));
+            }
+        }
+    }
+
+    /// `decode_blocks_into` writes every index through `put` into rows that need not be
+    /// contiguous (a band's rows inside a wider plane, as a decode's plane holds them),
+    /// touching nothing else: the values `decode_blocks` gives, on 1- to 4-D bands.
+    #[test]
+    fn blocks_decode_into_rows_of_a_plane() {
+        for (dims, block) in [
+            (vec![37usize], vec![8usize]),
+            (vec![13, 17], vec![4, 6]),
+            (vec![5, 9, 7], vec![2, 4, 4]),
+            (vec![2, 3, 5, 6], vec![1, 2, 2, 4]),
+        ] {
+            let n: usize = dims.iter().product();
+            let q = sample(n, n as u64 + 7, 40);
+            let pdims: Vec<usize> = dims.iter().map(|d| d.div_ceil(2)).collect();
+            let pq = sample(pdims.iter().product(), 5, 3);
+            let parent = Some(Parent {
+                data: &pq,
+                dims: &pdims,
+            });
+            let grid = Grid::new(&dims, &block);
+            let (cols, pad) = (dims[dims.len() - 1], 3);
+            let stride = cols + 2 * pad;
+            let put = Put {
+                wide: |o: &mut [f64], v: &[i64]| {
+                    for (o, &x) in o.iter_mut().zip(v) {
+                        *o = x as f64 * 0.5;
+                    }
+                },
+                narrow: |o: &mut [f64], v: &[i32]| {
+                    for (o, &x) in o.iter_mut().zip(v) {
+                        *o = x as f64 * 0.5;
+                    }
+                },
+            };
+            for (kind, coder) in [BandKind::Coarse, BandKind::Detail]
+                .into_iter()
+                .flat_map(|k| Coder::ALL.map(|c| (k, c)))
+            {
+                let s = encode_blocks(&q, &grid, kind, parent, Coding::Chosen, coder);
+                let all: Vec<usize> = (0..grid.len()).collect();
+                let refs: Vec<&[u8]> = s.iter().map(|v| v.as_slice()).collect();
+                let mut plane = vec![f64::NAN; n / cols * stride];
+                let rows: Vec<&mut [f64]> = plane
+                    .chunks_mut(stride)
+                    .map(|r| &mut r[pad..pad + cols])
+                    .collect();
+                let at = (kind, parent);
+                decode_blocks_into(rows, &grid, &all, &refs, at, Coding::Chosen, coder, &put)
+                    .unwrap();
+                for (r, row) in plane.chunks(stride).enumerate() {
+                    let mut edge = row[..pad].iter().chain(&row[pad + cols..]);
+                    assert!(edge.all(|x| x.is_nan()), "{dims:?} row {r}");
+                    for (c, &got) in row[pad..pad + cols].iter().enumerate() {
+                        let want = q[r * cols + c] as f64 * 0.5;
+                        assert_eq!(got, want, "{dims:?} {kind:?} {coder:?} at {r},{c}");
+                    }
+                }
             }
         }
     }

@@ -38,6 +38,46 @@ pub fn write<W: Write>(w: &mut W, r: &Raster) -> Result<()> {
             }
         };
     w.write_all(header.as_bytes())?;
-    w.write_all(&super::bytes::encode(&r.samples, true))?;
+    // 8-bit samples are their own bytes; wider ones go big-endian a piece at a time (no
+    // copy of the whole raster)
+    if let super::Samples::U8(v) = &r.samples {
+        w.write_all(v)?;
+        return Ok(());
+    }
+    const PIECE: usize = 1 << 16;
+    let (n, mut buf) = (r.samples.len(), Vec::new());
+    for at in (0..n).step_by(PIECE) {
+        super::bytes::encode_into(&r.samples, at..(at + PIECE).min(n), true, &mut buf);
+        w.write_all(&buf)?;
+    }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::io::{DataKind, Samples};
+
+    /// The samples follow the header as they are (8-bit) or big-endian (16-bit), also
+    /// past the first piece of 2^16 samples.
+    #[test]
+    fn samples_follow_the_header_big_endian() {
+        let (w, h, c) = (200usize, 150usize, 3usize);
+        let n = w * h * c;
+        let wide: Vec<u16> = (0..n).map(|i| (i as u32).wrapping_mul(40_503) as u16).collect();
+        let narrow: Vec<u8> = wide.iter().map(|&x| (x >> 5) as u8).collect();
+        for (samples, maxval) in [(Samples::U16(wide.clone()), 65535), (Samples::U8(narrow), 255)] {
+            let want: Vec<u8> = match &samples {
+                Samples::U16(v) => v.iter().flat_map(|x| x.to_be_bytes()).collect(),
+                Samples::U8(v) => v.clone(),
+                _ => unreachable!(),
+            };
+            let r = Raster::new(vec![h, w], c, samples, DataKind::Image).unwrap();
+            let mut out = Vec::new();
+            write(&mut out, &r).unwrap();
+            let head = format!("P6\n{w} {h}\n{maxval}\n");
+            assert_eq!(&out[..head.len()], head.as_bytes());
+            assert_eq!(out[head.len()..], want[..], "maxval {maxval}");
+        }
+    }
 }
