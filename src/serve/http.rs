@@ -19,7 +19,7 @@ use super::{info, render, viewer, Config, ServeError};
 use crate::limits::Limits;
 use axum::body::Body;
 use axum::extract::State as AxState;
-use axum::http::{header, HeaderMap, HeaderValue, Method, StatusCode, Uri};
+use axum::http::{header, HeaderMap, HeaderName, HeaderValue, Method, StatusCode, Uri};
 use axum::response::{IntoResponse, Response};
 use axum::routing::get;
 use axum::Router;
@@ -284,7 +284,37 @@ enum Step {
     Render(Box<(Source, ImageRequest, super::iiif::Caps, AnswerKey)>),
 }
 
+/// The `Server-Timing` header of an image answer: what it did (`kept`, or `render` with
+/// the level read, where the window came from and whether it was resampled) and, in
+/// milliseconds, the file's version and kept answers looked up (`open`), the wait for a
+/// decode permit (`queue`), the window's values (`window`, decodes included), resampling
+/// (`resample`), encoding (`encode`) and all of it (`total`).
+fn server_timing(
+    open: Duration,
+    render: Option<(Duration, &render::Trace)>,
+    total: Duration,
+) -> String {
+    let ms = |d: Duration| d.as_secs_f64() * 1e3;
+    match render {
+        None => format!("kept, open;dur={:.3}, total;dur={:.3}", ms(open), ms(total)),
+        Some((queue, t)) => format!(
+            "render;desc=\"{} level={} {}\", open;dur={:.3}, queue;dur={:.3}, \
+             window;dur={:.3}, resample;dur={:.3}, encode;dur={:.3}, total;dur={:.3}",
+            t.via.name(),
+            t.level,
+            if t.resampled { "resampled" } else { "exact" },
+            ms(open),
+            ms(queue),
+            ms(t.window),
+            ms(t.resample),
+            ms(t.encode),
+            ms(total)
+        ),
+    }
+}
+
 async fn iiif(AxState(st): AxState<Arc<State>>, uri: Uri, headers: HeaderMap) -> Response {
+    let t0 = std::time::Instant::now();
     if uri.path().len() + uri.query().map_or(0, str::len) > MAX_URL {
         return plain(StatusCode::URI_TOO_LONG, "URL too long");
     }
@@ -331,6 +361,7 @@ async fn iiif(AxState(st): AxState<Arc<State>>, uri: Uri, headers: HeaderMap) ->
         Err(IdentError::Malformed) => return plain(StatusCode::BAD_REQUEST, "bad identifier"),
         Err(IdentError::NotFound) => return plain(StatusCode::NOT_FOUND, "no such image"),
     };
+    let req_is_image = req.is_some();
     let base = base_uri(&st, &headers, &id);
     let request = match uri.query() {
         Some(q) => format!("{}?{q}", uri.path()),
@@ -390,6 +421,8 @@ async fn iiif(AxState(st): AxState<Arc<State>>, uri: Uri, headers: HeaderMap) ->
         Ok(r) => r,
         Err(_) => return plain(StatusCode::INTERNAL_SERVER_ERROR, "the request failed"),
     };
+    let opened = t0.elapsed();
+    let mut timing = None;
     let done = match step {
         Ok(Step::Done(d)) => Ok(d),
         Err(e) => Err(e),
@@ -397,6 +430,7 @@ async fn iiif(AxState(st): AxState<Arc<State>>, uri: Uri, headers: HeaderMap) ->
             let Ok(permit) = st.work.clone().acquire_owned().await else {
                 return plain(StatusCode::SERVICE_UNAVAILABLE, "shutting down");
             };
+            let queue = t0.elapsed() - opened;
             let st2 = st.clone();
             let job = tokio::task::spawn_blocking(move || {
                 let _permit = permit;
@@ -405,6 +439,7 @@ async fn iiif(AxState(st): AxState<Arc<State>>, uri: Uri, headers: HeaderMap) ->
                 let etag = src.etag();
                 let (w, h) = src.size();
                 let r = req.resolve(w, h, &caps)?;
+                let mut trace = render::Trace::default();
                 let body = axum::body::Bytes::from(render::render(
                     &src,
                     &st2.cache,
@@ -412,21 +447,30 @@ async fn iiif(AxState(st): AxState<Arc<State>>, uri: Uri, headers: HeaderMap) ->
                     &req,
                     &r,
                     window,
+                    &mut trace,
                 )?);
                 st2.answers.put(key, body.len() as u64, body.clone());
                 Ok((
-                    StatusCode::OK,
-                    etag,
-                    Some(req.format.mime()),
-                    Body::from(body),
+                    (
+                        StatusCode::OK,
+                        etag,
+                        Some(req.format.mime()),
+                        Body::from(body),
+                    ),
+                    trace,
                 ))
             });
             match job.await {
-                Ok(r) => r,
+                Ok(Ok((answer, trace))) => {
+                    timing = Some((queue, trace));
+                    Ok(answer)
+                }
+                Ok(Err(e)) => Err(e),
                 Err(_) => return plain(StatusCode::INTERNAL_SERVER_ERROR, "the request failed"),
             }
         }
     };
+    let kept = matches!(&done, Ok((StatusCode::OK, ..))) && timing.is_none() && req_is_image;
     match done {
         Ok((status, etag, mime, body)) => {
             let mut resp = Response::new(body);
@@ -448,6 +492,12 @@ async fn iiif(AxState(st): AxState<Arc<State>>, uri: Uri, headers: HeaderMap) ->
                     "<http://iiif.io/api/image/3/level2.json>;rel=\"profile\"",
                 ),
             );
+            if kept || timing.is_some() {
+                let t = server_timing(opened, timing.as_ref().map(|(q, t)| (*q, t)), t0.elapsed());
+                if let Ok(v) = HeaderValue::from_str(&t) {
+                    h.insert(HeaderName::from_static("server-timing"), v);
+                }
+            }
             resp
         }
         Err(e) => error_response(&e),

@@ -29,6 +29,35 @@ pub struct Plane {
     pub data: Vec<f32>,
 }
 
+/// Where a window came from (for the `Server-Timing` header of an answer).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Via {
+    /// Cut from a whole level decoded before.
+    #[default]
+    Level,
+    /// The whole level decoded for this request (and kept if it fits).
+    LevelDecoded,
+    /// From patches of a one-piece 3.0 file, `decoded` of them decoded for this request.
+    Patches { decoded: usize },
+    /// From tiles of a tiled file, `decoded` of them decoded for this request.
+    Tiles { decoded: usize },
+}
+
+impl Via {
+    /// A short name: `level`, `level-decoded`, `patches-kept`, `patches-decoded`,
+    /// `tiles-kept`, `tiles-decoded`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Via::Level => "level",
+            Via::LevelDecoded => "level-decoded",
+            Via::Patches { decoded: 0 } => "patches-kept",
+            Via::Patches { .. } => "patches-decoded",
+            Via::Tiles { decoded: 0 } => "tiles-kept",
+            Via::Tiles { .. } => "tiles-decoded",
+        }
+    }
+}
+
 /// Bytes a decoder may take per decoded sample beyond the samples themselves (its
 /// coefficient planes in `f32`, the pyramid's scratch): the planning factor of the
 /// memory check before a decode.
@@ -162,6 +191,7 @@ impl Source {
         k: usize,
         rows: Range<usize>,
         cols: Range<usize>,
+        via: &mut Via,
     ) -> Result<Plane, ServeError> {
         let h = &self.header;
         let ext = &self.levels[k];
@@ -181,23 +211,28 @@ impl Source {
         // a tiled file is read tile by tile (the first request of a level must not wait
         // for every tile of it); a file of one tile is decoded whole once and kept
         if h.is_tiled() {
-            return self.window_from_tiles(cache, limits, k, &bx);
+            return self.window_from_tiles(cache, limits, k, &bx, via);
         }
         // a 3.0 file: the window's code-blocks read and its support synthesized alone
         if h.version.has_blocks() {
             // the whole level when it is decoded and kept ([`Source::warm`]), without
             // waiting for a decode of it under way
             if let Some(r) = cache.get(&self.key(k, Vec::new())) {
+                *via = Via::Level;
                 let zero: Vec<usize> = vec![0; ext.len()];
                 return cut(&r, &zero, &bx, self.row_axis, self.col_axis);
             }
-            return self.window_from_patches(cache, limits, k, &bx);
+            return self.window_from_patches(cache, limits, k, &bx, via);
         }
         if level_bytes <= cache.entry_limit() {
             limits.check_elems("a decoded level", level_samples, DECODE_BYTES_PER_SAMPLE)?;
             let key = self.key(k, Vec::new());
+            *via = Via::Level;
             let r = cache
-                .get_or_decode(key, level_bytes, || self.decode(k, None))
+                .get_or_decode(key, level_bytes, || {
+                    *via = Via::LevelDecoded;
+                    self.decode(k, None)
+                })
                 .map_err(ServeError::File)?;
             let zero: Vec<usize> = vec![0; ext.len()];
             return cut(&r, &zero, &bx, self.row_axis, self.col_axis);
@@ -208,6 +243,7 @@ impl Source {
             level_samples,
             DECODE_BYTES_PER_SAMPLE,
         )?;
+        *via = Via::LevelDecoded;
         let r = self.decode(k, None)?;
         let zero: Vec<usize> = vec![0; ext.len()];
         cut(&r, &zero, &bx, self.row_axis, self.col_axis)
@@ -278,10 +314,12 @@ impl Source {
         limits: &Limits,
         k: usize,
         bx: &[Range<usize>],
+        via: &mut Via,
     ) -> Result<Plane, ServeError> {
         let h = &self.header;
         let ext = &self.levels[k];
         let nd = ext.len();
+        let mut decoded = 0;
         let level_box = |a: usize, j: usize| -> Range<usize> {
             let (d, r, t) = (h.dims[a] as u128, ext[a] as u128, h.tile[a] as u128);
             let j = j as u128;
@@ -315,7 +353,7 @@ impl Source {
             .enumerate()
             .map(|(a, m)| m.iter().map(|&j| (j, level_box(a, j))).collect())
             .collect();
-        self.assemble(bx, &pieces, |coords, boxes| {
+        let out = self.assemble(bx, &pieces, |coords, boxes| {
             let region: Vec<Range<usize>> = (0..nd)
                 .map(|a| coords[a] * h.tile[a]..((coords[a] + 1) * h.tile[a]).min(h.dims[a]))
                 .collect();
@@ -326,11 +364,14 @@ impl Source {
             let bytes = samples * h.sample_type.size() as u64;
             let r = cache
                 .get_or_decode(self.key(k, coords.to_vec()), bytes, || {
+                    decoded += 1;
                     self.decode(k, Some(region))
                 })
                 .map_err(ServeError::File)?;
             Ok((r, boxes.iter().map(|g| g.start).collect()))
-        })
+        });
+        *via = Via::Tiles { decoded };
+        out
     }
 
     /// The window `bx` of level `k` of a one-piece 3.0 file from the patches it meets:
@@ -344,10 +385,12 @@ impl Source {
         limits: &Limits,
         k: usize,
         bx: &[Range<usize>],
+        via: &mut Via,
     ) -> Result<Plane, ServeError> {
         let h = &self.header;
         let ext = &self.levels[k];
         let p = patch_extent();
+        let mut decoded = 0;
         let pieces: Vec<Vec<(usize, Range<usize>)>> = (0..ext.len())
             .map(|a| {
                 if a != self.row_axis && a != self.col_axis {
@@ -359,7 +402,7 @@ impl Source {
                     .collect()
             })
             .collect();
-        self.assemble(bx, &pieces, |coords, boxes| {
+        let out = self.assemble(bx, &pieces, |coords, boxes| {
             let (region, origin) = full_region(&h.dims, ext, boxes);
             // the decode may hold a sample more on each side of the box
             let samples = boxes
@@ -369,11 +412,14 @@ impl Source {
             let bytes = samples * h.sample_type.size() as u64;
             let r = cache
                 .get_or_decode(self.key(k, coords.to_vec()), bytes, || {
+                    decoded += 1;
                     self.decode(k, Some(region))
                 })
                 .map_err(ServeError::File)?;
             Ok((r, origin))
-        })
+        });
+        *via = Via::Patches { decoded };
+        out
     }
 
     /// The window `bx` from pieces: on each axis the pieces meeting it, each an index
