@@ -117,6 +117,8 @@ pub async fn run(listener: tokio::net::TcpListener, state: Arc<State>) -> std::i
             drop(stream);
             continue;
         };
+        // an answer goes out as soon as it is written, not held for the next one's bytes
+        let _ = stream.set_nodelay(true);
         let svc = TowerToHyperService::new(app.clone());
         tokio::spawn(async move {
             let conn = hyper::server::conn::http1::Builder::new()
@@ -281,7 +283,48 @@ type Answer = (StatusCode, String, Option<&'static str>, Body);
 /// Where the first step of an image request leaves it.
 enum Step {
     Done(Answer),
-    Render(Box<(Source, ImageRequest, super::iiif::Caps, AnswerKey)>),
+    /// Rendered at once (a decode permit was free): the answer, what the render did, the
+    /// time until the render began.
+    Rendered(Answer, render::Trace, Duration),
+    Render(Box<Job>),
+}
+
+/// What a render needs: the file, the request, its limits, the key its answer is kept by.
+type Job = (Source, ImageRequest, super::iiif::Caps, AnswerKey);
+
+/// Render `job` holding a decode `permit`, and keep the answer.
+fn render_job(
+    st: &Arc<State>,
+    job: Job,
+    window: Option<(f64, f64)>,
+    permit: tokio::sync::OwnedSemaphorePermit,
+) -> Result<(Answer, render::Trace), ServeError> {
+    let _permit = permit;
+    let (mut src, req, caps, key) = job;
+    parse_once(st, &mut src, true)?;
+    let etag = src.etag();
+    let (w, h) = src.size();
+    let r = req.resolve(w, h, &caps)?;
+    let mut trace = render::Trace::default();
+    let body = axum::body::Bytes::from(render::render(
+        &src,
+        &st.cache,
+        &st.limits,
+        &req,
+        &r,
+        window,
+        &mut trace,
+    )?);
+    st.answers.put(key, body.len() as u64, body.clone());
+    Ok((
+        (
+            StatusCode::OK,
+            etag,
+            Some(req.format.mime()),
+            Body::from(body),
+        ),
+        trace,
+    ))
 }
 
 /// The `Server-Timing` header of an image answer: what it did (`kept`, or `render` with
@@ -413,7 +456,16 @@ async fn iiif(AxState(st): AxState<Arc<State>>, uri: Uri, headers: HeaderMap) ->
                 if let Some(body) = st2.answers.get(&key) {
                     return Ok(Step::Done((StatusCode::OK, etag, mime, body.into())));
                 }
-                Ok(Step::Render(Box::new((src, req, caps, key))))
+                let job = (src, req, caps, key);
+                // a permit free: rendered on this thread at once (no second hand-over)
+                match st2.work.clone().try_acquire_owned() {
+                    Ok(permit) => {
+                        let open = t0.elapsed();
+                        let (answer, trace) = render_job(&st2, job, window, permit)?;
+                        Ok(Step::Rendered(answer, trace, open))
+                    }
+                    Err(_) => Ok(Step::Render(Box::new(job))),
+                }
             }
         }
     });
@@ -421,10 +473,15 @@ async fn iiif(AxState(st): AxState<Arc<State>>, uri: Uri, headers: HeaderMap) ->
         Ok(r) => r,
         Err(_) => return plain(StatusCode::INTERNAL_SERVER_ERROR, "the request failed"),
     };
-    let opened = t0.elapsed();
+    let mut opened = t0.elapsed();
     let mut timing = None;
     let done = match step {
         Ok(Step::Done(d)) => Ok(d),
+        Ok(Step::Rendered(answer, trace, open)) => {
+            opened = open;
+            timing = Some((Duration::ZERO, trace));
+            Ok(answer)
+        }
         Err(e) => Err(e),
         Ok(Step::Render(job)) => {
             let Ok(permit) = st.work.clone().acquire_owned().await else {
@@ -432,34 +489,7 @@ async fn iiif(AxState(st): AxState<Arc<State>>, uri: Uri, headers: HeaderMap) ->
             };
             let queue = t0.elapsed() - opened;
             let st2 = st.clone();
-            let job = tokio::task::spawn_blocking(move || {
-                let _permit = permit;
-                let (mut src, req, caps, key) = *job;
-                parse_once(&st2, &mut src, true)?;
-                let etag = src.etag();
-                let (w, h) = src.size();
-                let r = req.resolve(w, h, &caps)?;
-                let mut trace = render::Trace::default();
-                let body = axum::body::Bytes::from(render::render(
-                    &src,
-                    &st2.cache,
-                    &st2.limits,
-                    &req,
-                    &r,
-                    window,
-                    &mut trace,
-                )?);
-                st2.answers.put(key, body.len() as u64, body.clone());
-                Ok((
-                    (
-                        StatusCode::OK,
-                        etag,
-                        Some(req.format.mime()),
-                        Body::from(body),
-                    ),
-                    trace,
-                ))
-            });
+            let job = tokio::task::spawn_blocking(move || render_job(&st2, *job, window, permit));
             match job.await {
                 Ok(Ok((answer, trace))) => {
                     timing = Some((queue, trace));

@@ -334,7 +334,8 @@ fn encode(p: &Plane, f: Format) -> Result<Vec<u8>, ServeError> {
     let px: Vec<u8> = p
         .data
         .iter()
-        .map(|&v| v.round().clamp(0.0, 255.0) as u8)
+        // round(clamp(v)): for v ≥ 0, ⌊v + ½⌋ is the cast's truncation (NaN gives 0)
+        .map(|&v| (v.clamp(0.0, 255.0) + 0.5) as u8)
         .collect();
     let failed = |e: String| {
         ServeError::from(crate::Error::format(

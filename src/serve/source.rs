@@ -37,20 +37,22 @@ pub enum Via {
     Level,
     /// The whole level decoded for this request (and kept if it fits).
     LevelDecoded,
-    /// From patches of a one-piece 3.0 file, `decoded` of them decoded for this request.
-    Patches { decoded: usize },
+    /// From patches of a one-piece 3.0 file, `decoded` of them decoded for this request
+    /// and kept, `own` of them (first asked) read by decoding the window's part alone.
+    Patches { decoded: usize, own: usize },
     /// From tiles of a tiled file, `decoded` of them decoded for this request.
     Tiles { decoded: usize },
 }
 
 impl Via {
     /// A short name: `level`, `level-decoded`, `patches-kept`, `patches-decoded`,
-    /// `tiles-kept`, `tiles-decoded`.
+    /// `window-decoded`, `tiles-kept`, `tiles-decoded`.
     pub fn name(self) -> &'static str {
         match self {
             Via::Level => "level",
             Via::LevelDecoded => "level-decoded",
-            Via::Patches { decoded: 0 } => "patches-kept",
+            Via::Patches { own: 1.., .. } => "window-decoded",
+            Via::Patches { decoded: 0, .. } => "patches-kept",
             Via::Patches { .. } => "patches-decoded",
             Via::Tiles { decoded: 0 } => "tiles-kept",
             Via::Tiles { .. } => "tiles-decoded",
@@ -402,7 +404,26 @@ impl Source {
                     .collect()
             })
             .collect();
+        let mut own = 0;
         let out = self.assemble(bx, &pieces, |coords, boxes| {
+            let key = self.key(k, coords.to_vec());
+            if !cache.seen_before(&key) {
+                // the first request of a patch decodes its own part of it alone (what
+                // it waits for is its window's support, not the patch's); a second
+                // request of the patch decodes the patch and keeps it
+                let part: Vec<Range<usize>> = boxes
+                    .iter()
+                    .zip(bx)
+                    .map(|(g, w)| w.start.max(g.start)..w.end.min(g.end))
+                    .collect();
+                let (region, origin) = full_region(&h.dims, ext, &part);
+                let samples = part
+                    .iter()
+                    .fold(h.channels as u64, |n, g| n * (g.len() as u64 + 2));
+                limits.check_elems("a decoded window", samples, DECODE_BYTES_PER_SAMPLE)?;
+                own += 1;
+                return Ok((self.decode(k, Some(region))?, origin));
+            }
             let (region, origin) = full_region(&h.dims, ext, boxes);
             // the decode may hold a sample more on each side of the box
             let samples = boxes
@@ -411,14 +432,14 @@ impl Source {
             limits.check_elems("a decoded patch", samples, DECODE_BYTES_PER_SAMPLE)?;
             let bytes = samples * h.sample_type.size() as u64;
             let r = cache
-                .get_or_decode(self.key(k, coords.to_vec()), bytes, || {
+                .get_or_decode(key, bytes, || {
                     decoded += 1;
                     self.decode(k, Some(region))
                 })
                 .map_err(ServeError::File)?;
             Ok((r, origin))
         });
-        *via = Via::Patches { decoded };
+        *via = Via::Patches { decoded, own };
         out
     }
 
@@ -552,6 +573,21 @@ fn cut(
         .sum();
     let (hh, ww) = (bx[row_axis].len(), bx[col_axis].len());
     let mut data = Vec::with_capacity(hh * ww * c);
+    let x0 = bx[col_axis].start - origin[col_axis];
+    if stride[col_axis] == 1 {
+        // a row of the window is contiguous in the raster: copied row by row
+        for y in 0..hh {
+            let ry = bx[row_axis].start - origin[row_axis] + y;
+            let p = (base + ry * stride[row_axis] + x0) * c;
+            push_samples(&r.samples, p, ww * c, &mut data);
+        }
+        return Ok(Plane {
+            h: hh,
+            w: ww,
+            c,
+            data,
+        });
+    }
     for y in 0..hh {
         let ry = bx[row_axis].start - origin[row_axis] + y;
         for x in 0..ww {
@@ -568,12 +604,12 @@ fn cut(
     })
 }
 
-/// Samples `p .. p + c` as `f32`, appended.
-fn push_samples(s: &Samples, p: usize, c: usize, out: &mut Vec<f32>) {
+/// Samples `p .. p + n` as `f32`, appended.
+fn push_samples(s: &Samples, p: usize, n: usize, out: &mut Vec<f32>) {
     match s {
-        Samples::U8(v) => out.extend(v[p..p + c].iter().map(|&x| x as f32)),
-        Samples::U16(v) => out.extend(v[p..p + c].iter().map(|&x| x as f32)),
-        Samples::F32(v) => out.extend_from_slice(&v[p..p + c]),
-        _ => out.extend((p..p + c).map(|i| s.get_f64(i) as f32)),
+        Samples::U8(v) => out.extend(v[p..p + n].iter().map(|&x| x as f32)),
+        Samples::U16(v) => out.extend(v[p..p + n].iter().map(|&x| x as f32)),
+        Samples::F32(v) => out.extend_from_slice(&v[p..p + n]),
+        _ => out.extend((p..p + n).map(|i| s.get_f64(i) as f32)),
     }
 }
