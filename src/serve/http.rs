@@ -7,7 +7,8 @@
 //! connection    closed after CONNECTION_LIFETIME whatever it does
 //! requests      at most MAX_IN_FLIGHT handled at once, the others wait; an answer
 //!               not ready within REQUEST_TIMEOUT is 408
-//! decoding      at most `workers` requests decode at once, on blocking threads
+//! decoding      at most `workers` requests decode at once, on blocking threads (a cut
+//!               from a level held whole is not counted)
 //! URL           at most MAX_URL bytes (414)
 //! ```
 
@@ -292,12 +293,13 @@ enum Step {
 /// What a render needs: the file, the request, its limits, the key its answer is kept by.
 type Job = (Source, ImageRequest, super::iiif::Caps, AnswerKey);
 
-/// Render `job` holding a decode `permit`, and keep the answer.
+/// Render `job` holding a decode `permit` (none for a cut from a level held whole), and
+/// keep the answer.
 fn render_job(
     st: &Arc<State>,
     job: Job,
     window: Option<(f64, f64)>,
-    permit: tokio::sync::OwnedSemaphorePermit,
+    permit: Option<tokio::sync::OwnedSemaphorePermit>,
 ) -> Result<(Answer, render::Trace), ServeError> {
     let _permit = permit;
     let (mut src, req, caps, key) = job;
@@ -456,16 +458,26 @@ async fn iiif(AxState(st): AxState<Arc<State>>, uri: Uri, headers: HeaderMap) ->
                 if let Some(body) = st2.answers.get(&key) {
                     return Ok(Step::Done((StatusCode::OK, etag, mime, body.into())));
                 }
+                // a cut from a level held whole needs no decode, so no decode permit:
+                // it is not queued behind decodes
+                let (w, h) = src.size();
+                let cut = req
+                    .resolve(w, h, &caps)
+                    .is_ok_and(|r| src.level_held(&st2.cache, render::choose_level(&src, &r)));
                 let job = (src, req, caps, key);
-                // a permit free: rendered on this thread at once (no second hand-over)
-                match st2.work.clone().try_acquire_owned() {
-                    Ok(permit) => {
-                        let open = t0.elapsed();
-                        let (answer, trace) = render_job(&st2, job, window, permit)?;
-                        Ok(Step::Rendered(answer, trace, open))
+                // else, a permit free: rendered on this thread at once (no second
+                // hand-over)
+                let permit = if cut {
+                    None
+                } else {
+                    match st2.work.clone().try_acquire_owned() {
+                        Ok(p) => Some(p),
+                        Err(_) => return Ok(Step::Render(Box::new(job))),
                     }
-                    Err(_) => Ok(Step::Render(Box::new(job))),
-                }
+                };
+                let open = t0.elapsed();
+                let (answer, trace) = render_job(&st2, job, window, permit)?;
+                Ok(Step::Rendered(answer, trace, open))
             }
         }
     });
@@ -489,7 +501,7 @@ async fn iiif(AxState(st): AxState<Arc<State>>, uri: Uri, headers: HeaderMap) ->
             };
             let queue = t0.elapsed() - opened;
             let st2 = st.clone();
-            let job = tokio::task::spawn_blocking(move || render_job(&st2, *job, window, permit));
+            let job = tokio::task::spawn_blocking(move || render_job(&st2, *job, window, Some(permit)));
             match job.await {
                 Ok(Ok((answer, trace))) => {
                     timing = Some((queue, trace));

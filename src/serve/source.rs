@@ -180,6 +180,11 @@ impl Source {
         self.header.version.has_blocks() && !self.header.is_tiled()
     }
 
+    /// Whether level `k` is held whole in `cache`, decoded: a window of it is a cut.
+    pub fn level_held(&self, cache: &LevelCache, k: usize) -> bool {
+        cache.get(&self.key(k, Vec::new())).is_some()
+    }
+
     /// The entity tag of this version of the file.
     pub fn etag(&self) -> String {
         format!("\"{:x}-{:x}\"", self.len, self.mtime)
