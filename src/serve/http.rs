@@ -284,8 +284,9 @@ type Answer = (StatusCode, String, Option<&'static str>, Body);
 /// Where the first step of an image request leaves it.
 enum Step {
     Done(Answer),
-    /// Rendered at once (a decode permit was free): the answer, what the render did, the
-    /// time until the render began.
+    /// Rendered at once on the thread that looked it up (a cut from a level held whole,
+    /// or a decode permit was free): the answer, what the render did, the time until the
+    /// render began.
     Rendered(Answer, render::Trace, Duration),
     Render(Box<Job>),
 }
