@@ -5,7 +5,12 @@ loopback only. Prints file sizes and PSNR of both codings, then p50/p99 latency 
 throughput of each server, as markdown table rows.
 
 usage: python3 benches/peers/serve_iipsrv.py [--size 8192] [--requests 4000] [--clients 8] [--mra-tile 256]
-       [--blocks] [--warm] [--work DIR]
+       [--blocks] [--warm] [--work DIR] [--rounds N] [--split]
+
+--rounds N measures the two servers N times, alternating, each round a new trace (the
+servers keep what they cached). --split prints, for `mra serve`, the latency by what each
+request did, from the answer's `Server-Timing` header (kept answer, or render: the level
+read, where its window came from, resampled or not) with the server's own time.
 needs: apt-get install iipimage-server lighttpd libvips-tools; MRA (default target/release/mra)
 """
 import argparse
@@ -47,8 +52,25 @@ def trace(size, n, seed):
     return out
 
 
-def run_clients(host, port, prefix, reqs, clients):
-    """Latencies (s) of every request and the wall time, `clients` threads with keep-alive."""
+def parse_timing(v):
+    """A `Server-Timing` value as (what, {name: ms})."""
+    what, durs = "?", {}
+    for part in (v or "").split(","):
+        fields = [f.strip() for f in part.split(";")]
+        name = fields[0]
+        for f in fields[1:]:
+            if f.startswith("dur="):
+                durs[name] = float(f[4:])
+            elif f.startswith("desc="):
+                what = f"{name} {f[5:].strip(chr(34))}"
+        if name == "kept":
+            what = "kept"
+    return what, durs
+
+
+def run_clients(host, port, prefix, reqs, clients, timings=None):
+    """Latencies (s) of every request and the wall time, `clients` threads with keep-alive;
+    with `timings` (a list), each request's (latency, Server-Timing header) appended to it."""
     lat = []
     lock = threading.Lock()
     errors = []
@@ -57,17 +79,22 @@ def run_clients(host, port, prefix, reqs, clients):
     def worker(chunk):
         c = http.client.HTTPConnection(host, port, timeout=60)
         mine = []
+        seen = []
         for r in chunk:
             t = time.perf_counter()
             c.request("GET", prefix + r)
             resp = c.getresponse()
             body = resp.read()
             mine.append(time.perf_counter() - t)
+            if timings is not None:
+                seen.append((mine[-1], resp.getheader("Server-Timing")))
             if resp.status != 200 or len(body) < 100:
                 errors.append((resp.status, r))
         c.close()
         with lock:
             lat.extend(mine)
+            if timings is not None:
+                timings.extend(seen)
 
     threads = [threading.Thread(target=worker, args=(ch,)) for ch in chunks]
     t0 = time.perf_counter()
@@ -83,6 +110,26 @@ def run_clients(host, port, prefix, reqs, clients):
 
 def pct(v, p):
     return v[min(len(v) - 1, int(p / 100 * len(v)))]
+
+
+def split_table(timings):
+    """Latency by what the request did, and where the server's time went."""
+    groups = {}
+    for lat, hdr in timings:
+        what, durs = parse_timing(hdr)
+        groups.setdefault(what, []).append((lat * 1e3, durs))
+    slow = sorted(lat for lat, _ in timings)
+    p99 = pct(slow, 99) * 1e3
+    print("\n| mra serve: what the request did | n | ≥ p99 | p50 ms | p99 ms | server total p50 / p99 ms "
+          "| queue p50 / p99 | window p50 / p99 | encode p50 / p99 |\n|---|---|---|---|---|---|---|---|---|")
+    for what, v in sorted(groups.items(), key=lambda kv: -len(kv[1])):
+        lats = sorted(l for l, _ in v)
+        d = lambda name: sorted(x.get(name, 0.0) for _, x in v)
+        tot = d("total")
+        print(f"| {what} | {len(v)} | {sum(l >= p99 for l in lats)} | {pct(lats, 50):.1f} | {pct(lats, 99):.1f} "
+              f"| {pct(tot, 50):.2f} / {pct(tot, 99):.2f} "
+              + " ".join(f"| {pct(d(n), 50):.2f} / {pct(d(n), 99):.2f}" for n in ("queue", "window", "encode"))
+              + " |")
 
 
 def wait_port(port):
@@ -110,6 +157,10 @@ def main():
     ap.add_argument("--warm", action="store_true",
                     help="start mra serve with --warm (the levels the cache keeps decoded "
                          "before serving, as the pyramid TIFF is built before iipsrv serves it)")
+    ap.add_argument("--rounds", type=int, default=1,
+                    help="measure both servers this many times, alternating, a new trace each round")
+    ap.add_argument("--split", action="store_true",
+                    help="mra serve's latency by what each request did (its Server-Timing header)")
     ap.add_argument("--work", help="a folder to keep the generated files in and reuse them "
                     "from on the next run (default: a temporary folder, removed)")
     a = ap.parse_args()
@@ -173,7 +224,6 @@ fastcgi.server = ( "/fcgi-bin/iipsrv.fcgi" => ((
         if a.warm:
             print(f"\nmra serve --warm ready after {time.perf_counter() - t0:.1f} s")
 
-        reqs = trace(a.size, a.requests, a.seed)
         warm = trace(a.size, 200, a.seed + 1000)
         servers = [
             ("iipsrv (pyramid TIFF)", port_iip, f"/fcgi-bin/iipsrv.fcgi?IIIF={tif}/"),
@@ -183,9 +233,17 @@ fastcgi.server = ( "/fcgi-bin/iipsrv.fcgi" => ((
         print("| server | p50 ms | p99 ms | tiles/s | load average |\n|---|---|---|---|---|")
         for name, port, prefix in servers:
             run_clients("127.0.0.1", port, prefix, warm, a.clients)
-            lat, wall = run_clients("127.0.0.1", port, prefix, reqs, a.clients)
-            load = os.getloadavg()[0]
-            print(f"| {name} | {pct(lat, 50) * 1e3:.1f} | {pct(lat, 99) * 1e3:.1f} | {len(lat) / wall:.0f} | {load:.1f} |")
+        timings = []
+        for rnd in range(a.rounds):
+            reqs = trace(a.size, a.requests, a.seed + rnd)
+            for name, port, prefix in servers:
+                mine = timings if name.startswith("mra") else None
+                lat, wall = run_clients("127.0.0.1", port, prefix, reqs, a.clients, mine)
+                load = os.getloadavg()[0]
+                print(f"| {name} | {pct(lat, 50) * 1e3:.1f} | {pct(lat, 99) * 1e3:.1f} | {len(lat) / wall:.0f} | {load:.1f} |",
+                      flush=True)
+        if a.split:
+            split_table(timings)
     finally:
         for p in procs:
             p.terminate()

@@ -45,6 +45,9 @@ pub type OpenedCache = Lru<Key, Arc<crate::codec::Opened>>;
 /// Encoded answers (the bytes sent) by [`AnswerKey`].
 pub type AnswerCache = Lru<AnswerKey, axum::body::Bytes>;
 
+/// How many keys [`Lru::seen_before`] remembers.
+pub const SEEN_MAX: usize = 1 << 16;
+
 type Cell<V> = Arc<OnceLock<std::result::Result<V, Arc<Error>>>>;
 
 struct Entry<K, V> {
@@ -62,6 +65,8 @@ pub struct Lru<K, V> {
 
 struct Inner<K, V> {
     entries: std::collections::HashMap<K, Entry<K, V>>,
+    /// Keys asked by [`Lru::seen_before`] (at most [`SEEN_MAX`], forgotten together).
+    seen: std::collections::HashSet<K>,
     held: u64,
     tick: u64,
 }
@@ -73,6 +78,7 @@ impl<K: Clone + Eq + std::hash::Hash, V: Clone> Lru<K, V> {
             budget,
             inner: Mutex::new(Inner {
                 entries: std::collections::HashMap::new(),
+                seen: std::collections::HashSet::new(),
                 held: 0,
                 tick: 0,
             }),
@@ -115,6 +121,19 @@ impl<K: Clone + Eq + std::hash::Hash, V: Clone> Lru<K, V> {
                 g.held -= e.bytes;
             }
         }
+    }
+
+    /// Whether `key` is held, being made, or was asked here before; it is recorded as
+    /// asked (the records of at most [`SEEN_MAX`] keys, forgotten together past that).
+    pub fn seen_before(&self, key: &K) -> bool {
+        let mut g = self.lock();
+        if g.entries.contains_key(key) {
+            return true;
+        }
+        if g.seen.len() >= SEEN_MAX {
+            g.seen.clear();
+        }
+        !g.seen.insert(key.clone())
     }
 
     /// The value of `key`, if held and made.
@@ -284,6 +303,20 @@ mod tests {
         let got: Vec<_> = threads.into_iter().map(|t| t.join().unwrap()).collect();
         assert_eq!(calls.load(std::sync::atomic::Ordering::SeqCst), 1);
         assert!(got.iter().all(|r| Arc::ptr_eq(r, &got[0])));
+    }
+
+    #[test]
+    fn a_key_is_seen_once_asked_or_held() {
+        let c = LevelCache::new(100);
+        assert!(!c.seen_before(&key(0)), "first ask");
+        assert!(c.seen_before(&key(0)), "asked before");
+        c.get_or_decode(key(1), 10, raster).unwrap();
+        assert!(c.seen_before(&key(1)), "held");
+        for k in 2..SEEN_MAX + 3 {
+            c.seen_before(&key(k));
+        }
+        // the records are bounded: past SEEN_MAX they are forgotten
+        assert!(c.lock().seen.len() <= SEEN_MAX);
     }
 
     #[test]

@@ -7,7 +7,8 @@
 //! connection    closed after CONNECTION_LIFETIME whatever it does
 //! requests      at most MAX_IN_FLIGHT handled at once, the others wait; an answer
 //!               not ready within REQUEST_TIMEOUT is 408
-//! decoding      at most `workers` requests decode at once, on blocking threads
+//! decoding      at most `workers` requests decode at once, on blocking threads (a cut
+//!               from a level held whole is not counted)
 //! URL           at most MAX_URL bytes (414)
 //! ```
 
@@ -19,7 +20,7 @@ use super::{info, render, viewer, Config, ServeError};
 use crate::limits::Limits;
 use axum::body::Body;
 use axum::extract::State as AxState;
-use axum::http::{header, HeaderMap, HeaderValue, Method, StatusCode, Uri};
+use axum::http::{header, HeaderMap, HeaderName, HeaderValue, Method, StatusCode, Uri};
 use axum::response::{IntoResponse, Response};
 use axum::routing::get;
 use axum::Router;
@@ -117,6 +118,8 @@ pub async fn run(listener: tokio::net::TcpListener, state: Arc<State>) -> std::i
             drop(stream);
             continue;
         };
+        // an answer goes out as soon as it is written, not held for the next one's bytes
+        let _ = stream.set_nodelay(true);
         let svc = TowerToHyperService::new(app.clone());
         tokio::spawn(async move {
             let conn = hyper::server::conn::http1::Builder::new()
@@ -281,10 +284,83 @@ type Answer = (StatusCode, String, Option<&'static str>, Body);
 /// Where the first step of an image request leaves it.
 enum Step {
     Done(Answer),
-    Render(Box<(Source, ImageRequest, super::iiif::Caps, AnswerKey)>),
+    /// Rendered at once on the thread that looked it up (a cut from a level held whole,
+    /// or a decode permit was free): the answer, what the render did, the time until the
+    /// render began.
+    Rendered(Answer, render::Trace, Duration),
+    Render(Box<Job>),
+}
+
+/// What a render needs: the file, the request, its limits, the key its answer is kept by.
+type Job = (Source, ImageRequest, super::iiif::Caps, AnswerKey);
+
+/// Render `job` holding a decode `permit` (none for a cut from a level held whole), and
+/// keep the answer.
+fn render_job(
+    st: &Arc<State>,
+    job: Job,
+    window: Option<(f64, f64)>,
+    permit: Option<tokio::sync::OwnedSemaphorePermit>,
+) -> Result<(Answer, render::Trace), ServeError> {
+    let _permit = permit;
+    let (mut src, req, caps, key) = job;
+    parse_once(st, &mut src, true)?;
+    let etag = src.etag();
+    let (w, h) = src.size();
+    let r = req.resolve(w, h, &caps)?;
+    let mut trace = render::Trace::default();
+    let body = axum::body::Bytes::from(render::render(
+        &src,
+        &st.cache,
+        &st.limits,
+        &req,
+        &r,
+        window,
+        &mut trace,
+    )?);
+    st.answers.put(key, body.len() as u64, body.clone());
+    Ok((
+        (
+            StatusCode::OK,
+            etag,
+            Some(req.format.mime()),
+            Body::from(body),
+        ),
+        trace,
+    ))
+}
+
+/// The `Server-Timing` header of an image answer: what it did (`kept`, or `render` with
+/// the level read, where the window came from and whether it was resampled) and, in
+/// milliseconds, the file's version and kept answers looked up (`open`), the wait for a
+/// decode permit (`queue`), the window's values (`window`, decodes included), resampling
+/// (`resample`), encoding (`encode`) and all of it (`total`).
+fn server_timing(
+    open: Duration,
+    render: Option<(Duration, &render::Trace)>,
+    total: Duration,
+) -> String {
+    let ms = |d: Duration| d.as_secs_f64() * 1e3;
+    match render {
+        None => format!("kept, open;dur={:.3}, total;dur={:.3}", ms(open), ms(total)),
+        Some((queue, t)) => format!(
+            "render;desc=\"{} level={} {}\", open;dur={:.3}, queue;dur={:.3}, \
+             window;dur={:.3}, resample;dur={:.3}, encode;dur={:.3}, total;dur={:.3}",
+            t.via.name(),
+            t.level,
+            if t.resampled { "resampled" } else { "exact" },
+            ms(open),
+            ms(queue),
+            ms(t.window),
+            ms(t.resample),
+            ms(t.encode),
+            ms(total)
+        ),
+    }
 }
 
 async fn iiif(AxState(st): AxState<Arc<State>>, uri: Uri, headers: HeaderMap) -> Response {
+    let t0 = std::time::Instant::now();
     if uri.path().len() + uri.query().map_or(0, str::len) > MAX_URL {
         return plain(StatusCode::URI_TOO_LONG, "URL too long");
     }
@@ -331,6 +407,7 @@ async fn iiif(AxState(st): AxState<Arc<State>>, uri: Uri, headers: HeaderMap) ->
         Err(IdentError::Malformed) => return plain(StatusCode::BAD_REQUEST, "bad identifier"),
         Err(IdentError::NotFound) => return plain(StatusCode::NOT_FOUND, "no such image"),
     };
+    let req_is_image = req.is_some();
     let base = base_uri(&st, &headers, &id);
     let request = match uri.query() {
         Some(q) => format!("{}?{q}", uri.path()),
@@ -382,7 +459,26 @@ async fn iiif(AxState(st): AxState<Arc<State>>, uri: Uri, headers: HeaderMap) ->
                 if let Some(body) = st2.answers.get(&key) {
                     return Ok(Step::Done((StatusCode::OK, etag, mime, body.into())));
                 }
-                Ok(Step::Render(Box::new((src, req, caps, key))))
+                // a cut from a level held whole needs no decode, so no decode permit:
+                // it is not queued behind decodes
+                let (w, h) = src.size();
+                let cut = req
+                    .resolve(w, h, &caps)
+                    .is_ok_and(|r| src.level_held(&st2.cache, render::choose_level(&src, &r)));
+                let job = (src, req, caps, key);
+                // else, a permit free: rendered on this thread at once (no second
+                // hand-over)
+                let permit = if cut {
+                    None
+                } else {
+                    match st2.work.clone().try_acquire_owned() {
+                        Ok(p) => Some(p),
+                        Err(_) => return Ok(Step::Render(Box::new(job))),
+                    }
+                };
+                let open = t0.elapsed();
+                let (answer, trace) = render_job(&st2, job, window, permit)?;
+                Ok(Step::Rendered(answer, trace, open))
             }
         }
     });
@@ -390,43 +486,34 @@ async fn iiif(AxState(st): AxState<Arc<State>>, uri: Uri, headers: HeaderMap) ->
         Ok(r) => r,
         Err(_) => return plain(StatusCode::INTERNAL_SERVER_ERROR, "the request failed"),
     };
+    let mut opened = t0.elapsed();
+    let mut timing = None;
     let done = match step {
         Ok(Step::Done(d)) => Ok(d),
+        Ok(Step::Rendered(answer, trace, open)) => {
+            opened = open;
+            timing = Some((Duration::ZERO, trace));
+            Ok(answer)
+        }
         Err(e) => Err(e),
         Ok(Step::Render(job)) => {
             let Ok(permit) = st.work.clone().acquire_owned().await else {
                 return plain(StatusCode::SERVICE_UNAVAILABLE, "shutting down");
             };
+            let queue = t0.elapsed() - opened;
             let st2 = st.clone();
-            let job = tokio::task::spawn_blocking(move || {
-                let _permit = permit;
-                let (mut src, req, caps, key) = *job;
-                parse_once(&st2, &mut src, true)?;
-                let etag = src.etag();
-                let (w, h) = src.size();
-                let r = req.resolve(w, h, &caps)?;
-                let body = axum::body::Bytes::from(render::render(
-                    &src,
-                    &st2.cache,
-                    &st2.limits,
-                    &req,
-                    &r,
-                    window,
-                )?);
-                st2.answers.put(key, body.len() as u64, body.clone());
-                Ok((
-                    StatusCode::OK,
-                    etag,
-                    Some(req.format.mime()),
-                    Body::from(body),
-                ))
-            });
+            let job = tokio::task::spawn_blocking(move || render_job(&st2, *job, window, Some(permit)));
             match job.await {
-                Ok(r) => r,
+                Ok(Ok((answer, trace))) => {
+                    timing = Some((queue, trace));
+                    Ok(answer)
+                }
+                Ok(Err(e)) => Err(e),
                 Err(_) => return plain(StatusCode::INTERNAL_SERVER_ERROR, "the request failed"),
             }
         }
     };
+    let kept = matches!(&done, Ok((StatusCode::OK, ..))) && timing.is_none() && req_is_image;
     match done {
         Ok((status, etag, mime, body)) => {
             let mut resp = Response::new(body);
@@ -448,6 +535,12 @@ async fn iiif(AxState(st): AxState<Arc<State>>, uri: Uri, headers: HeaderMap) ->
                     "<http://iiif.io/api/image/3/level2.json>;rel=\"profile\"",
                 ),
             );
+            if kept || timing.is_some() {
+                let t = server_timing(opened, timing.as_ref().map(|(q, t)| (*q, t)), t0.elapsed());
+                if let Ok(v) = HeaderValue::from_str(&t) {
+                    h.insert(HeaderName::from_static("server-timing"), v);
+                }
+            }
             resp
         }
         Err(e) => error_response(&e),

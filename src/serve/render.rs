@@ -17,7 +17,7 @@
 
 use super::cache::LevelCache;
 use super::iiif::{Format, ImageRequest, Quality, Resolved};
-use super::source::{Plane, Source};
+use super::source::{Plane, Source, Via};
 use super::ServeError;
 use crate::io::{DataKind, SampleType};
 use crate::limits::Limits;
@@ -57,6 +57,23 @@ fn span(start: u64, len: u64, level: usize, full: u64) -> (f64, f64) {
     (snap(start as f64 * s), snap((start + len) as f64 * s))
 }
 
+/// What a render did and where its time went (the `Server-Timing` header of an answer).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Trace {
+    /// The level read.
+    pub level: usize,
+    /// Where its window came from.
+    pub via: Via,
+    /// Whether the window was resampled (its size is not the output's).
+    pub resampled: bool,
+    /// Getting the window's display values (decodes included).
+    pub window: std::time::Duration,
+    /// Resampling, quality and orientation.
+    pub resample: std::time::Duration,
+    /// Encoding.
+    pub encode: std::time::Duration,
+}
+
 /// Render a resolved request to encoded bytes.
 pub fn render(
     src: &Source,
@@ -65,7 +82,10 @@ pub fn render(
     req: &ImageRequest,
     r: &Resolved,
     window: Option<(f64, f64)>,
+    trace: &mut Trace,
 ) -> Result<Vec<u8>, ServeError> {
+    use std::time::Instant;
+    let t0 = Instant::now();
     limits.check_elems(
         "the output of a request",
         r.out_w.saturating_mul(r.out_h),
@@ -78,18 +98,25 @@ pub fn render(
     let (y0, y1) = span(r.y, r.h, lh, fh);
     let cols = (x0.floor() as usize)..(x1.ceil() as usize).min(lw).max(x0.floor() as usize + 1);
     let rows = (y0.floor() as usize)..(y1.ceil() as usize).min(lh).max(y0.floor() as usize + 1);
+    trace.level = k;
     let shown = if src.header.kind == DataKind::Heightmap {
-        shaded(src, cache, limits, k, rows.clone(), cols.clone())?
+        shaded(src, cache, limits, k, rows.clone(), cols.clone(), &mut trace.via)?
     } else {
         display(
             src,
-            src.window(cache, limits, k, rows.clone(), cols.clone())?,
+            src.window(cache, limits, k, rows.clone(), cols.clone(), &mut trace.via)?,
             window,
         )
     };
     let (ow, oh) = (r.out_w as usize, r.out_h as usize);
+    let t1 = Instant::now();
+    trace.window = t1 - t0;
+    trace.resampled = !(shown.w == ow
+        && shown.h == oh
+        && x0 == cols.start as f64
+        && y0 == rows.start as f64);
     let out = resample(
-        &shown,
+        shown,
         (x0 - cols.start as f64, x1 - cols.start as f64),
         (y0 - rows.start as f64, y1 - rows.start as f64),
         ow,
@@ -97,7 +124,11 @@ pub fn render(
     );
     let out = apply_quality(out, req.quality);
     let out = orient(out, req.rotation.mirror, req.rotation.quarters);
-    encode(&out, req.format)
+    let t2 = Instant::now();
+    trace.resample = t2 - t1;
+    let bytes = encode(&out, req.format);
+    trace.encode = t2.elapsed();
+    bytes
 }
 
 /// Display values (0..255, 1 or 3 channels) of a window of samples.
@@ -111,6 +142,9 @@ fn display(src: &Source, p: Plane, window: Option<(f64, f64)>) -> Plane {
     let scale = if hi > lo { 255.0 / (hi - lo) } else { 0.0 };
     let keep = if p.c >= 3 { 3 } else { 1 };
     let identity = window.is_none() && h.sample_type == SampleType::U8;
+    if identity && keep == p.c {
+        return p;
+    }
     let mut data = Vec::with_capacity(p.h * p.w * keep);
     for px in p.data.chunks_exact(p.c) {
         for &v in &px[..keep] {
@@ -138,11 +172,12 @@ fn shaded(
     k: usize,
     rows: std::ops::Range<usize>,
     cols: std::ops::Range<usize>,
+    via: &mut Via,
 ) -> Result<Plane, ServeError> {
     let (lw, lh) = src.level_size(k);
     let mr = rows.start.saturating_sub(1)..(rows.end + 1).min(lh);
     let mc = cols.start.saturating_sub(1)..(cols.end + 1).min(lw);
-    let p = src.window(cache, limits, k, mr.clone(), mc.clone())?;
+    let p = src.window(cache, limits, k, mr.clone(), mc.clone(), via)?;
     let heights: Vec<f64> = p.data.chunks_exact(p.c).map(|s| s[0] as f64).collect();
     let g = Grid::new(p.h, p.w, 1, heights)?;
     let (fw, fh) = src.size();
@@ -192,7 +227,11 @@ fn weights(a: f64, b: f64, n: usize, len: usize) -> Vec<Vec<(usize, f32)>> {
 }
 
 /// The area-mean resampling of the fractional window `xs × ys` of `p` to `ow × oh`.
-fn resample(p: &Plane, xs: (f64, f64), ys: (f64, f64), ow: usize, oh: usize) -> Plane {
+fn resample(p: Plane, xs: (f64, f64), ys: (f64, f64), ow: usize, oh: usize) -> Plane {
+    if (p.w, p.h) == (ow, oh) && xs == (0.0, ow as f64) && ys == (0.0, oh as f64) {
+        // the window is the output: every weight is 1
+        return p;
+    }
     let c = p.c;
     let wx = weights(xs.0, xs.1, ow, p.w);
     let wy = weights(ys.0, ys.1, oh, p.h);
@@ -295,7 +334,8 @@ fn encode(p: &Plane, f: Format) -> Result<Vec<u8>, ServeError> {
     let px: Vec<u8> = p
         .data
         .iter()
-        .map(|&v| v.round().clamp(0.0, 255.0) as u8)
+        // round(clamp(v)): for v ≥ 0, ⌊v + ½⌋ is the cast's truncation (NaN gives 0)
+        .map(|&v| (v.clamp(0.0, 255.0) + 0.5) as u8)
         .collect();
     let failed = |e: String| {
         ServeError::from(crate::Error::format(
@@ -359,7 +399,14 @@ mod tests {
     #[test]
     fn a_window_of_the_output_size_is_copied() {
         let p = plane(4, 5, 3);
-        assert_eq!(resample(&p, (0.0, 5.0), (0.0, 4.0), 5, 4), p);
+        assert_eq!(resample(p.clone(), (0.0, 5.0), (0.0, 4.0), 5, 4), p);
+        // the same through the weights: a window one sample wider, its first column
+        // left out
+        let q = plane(4, 6, 3);
+        let r = resample(q.clone(), (1.0, 6.0), (0.0, 4.0), 5, 4);
+        for y in 0..4 {
+            assert_eq!(r.data[y * 15..(y + 1) * 15], q.data[y * 18 + 3..(y + 1) * 18]);
+        }
     }
 
     #[test]
@@ -370,7 +417,7 @@ mod tests {
             c: 1,
             data: vec![0.0, 4.0, 8.0, 12.0],
         };
-        assert_eq!(resample(&p, (0.0, 2.0), (0.0, 2.0), 1, 1).data, vec![6.0]);
+        assert_eq!(resample(p, (0.0, 2.0), (0.0, 2.0), 1, 1).data, vec![6.0]);
         // a fractional window: the mean of 1½ samples weighs them 2:1
         let q = Plane {
             h: 1,
@@ -378,7 +425,7 @@ mod tests {
             c: 1,
             data: vec![3.0, 6.0],
         };
-        let r = resample(&q, (0.0, 1.5), (0.0, 1.0), 1, 1);
+        let r = resample(q, (0.0, 1.5), (0.0, 1.0), 1, 1);
         assert!((r.data[0] - 4.0).abs() < 1e-5, "{:?}", r.data);
     }
 

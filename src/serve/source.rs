@@ -29,6 +29,37 @@ pub struct Plane {
     pub data: Vec<f32>,
 }
 
+/// Where a window came from (for the `Server-Timing` header of an answer).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Via {
+    /// Cut from a whole level decoded before.
+    #[default]
+    Level,
+    /// The whole level decoded for this request (and kept if it fits).
+    LevelDecoded,
+    /// From patches of a one-piece 3.0 file, `decoded` of them decoded for this request
+    /// and kept, `own` of them (first asked) read by decoding the window's part alone.
+    Patches { decoded: usize, own: usize },
+    /// From tiles of a tiled file, `decoded` of them decoded for this request.
+    Tiles { decoded: usize },
+}
+
+impl Via {
+    /// A short name: `level`, `level-decoded`, `patches-kept`, `patches-decoded`,
+    /// `window-decoded`, `tiles-kept`, `tiles-decoded`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Via::Level => "level",
+            Via::LevelDecoded => "level-decoded",
+            Via::Patches { own: 1.., .. } => "window-decoded",
+            Via::Patches { decoded: 0, .. } => "patches-kept",
+            Via::Patches { .. } => "patches-decoded",
+            Via::Tiles { decoded: 0 } => "tiles-kept",
+            Via::Tiles { .. } => "tiles-decoded",
+        }
+    }
+}
+
 /// Bytes a decoder may take per decoded sample beyond the samples themselves (its
 /// coefficient planes in `f32`, the pyramid's scratch): the planning factor of the
 /// memory check before a decode.
@@ -149,6 +180,11 @@ impl Source {
         self.header.version.has_blocks() && !self.header.is_tiled()
     }
 
+    /// Whether level `k` is held whole in `cache`, decoded: a window of it is a cut.
+    pub fn level_held(&self, cache: &LevelCache, k: usize) -> bool {
+        cache.get(&self.key(k, Vec::new())).is_some()
+    }
+
     /// The entity tag of this version of the file.
     pub fn etag(&self) -> String {
         format!("\"{:x}-{:x}\"", self.len, self.mtime)
@@ -162,6 +198,7 @@ impl Source {
         k: usize,
         rows: Range<usize>,
         cols: Range<usize>,
+        via: &mut Via,
     ) -> Result<Plane, ServeError> {
         let h = &self.header;
         let ext = &self.levels[k];
@@ -181,23 +218,28 @@ impl Source {
         // a tiled file is read tile by tile (the first request of a level must not wait
         // for every tile of it); a file of one tile is decoded whole once and kept
         if h.is_tiled() {
-            return self.window_from_tiles(cache, limits, k, &bx);
+            return self.window_from_tiles(cache, limits, k, &bx, via);
         }
         // a 3.0 file: the window's code-blocks read and its support synthesized alone
         if h.version.has_blocks() {
             // the whole level when it is decoded and kept ([`Source::warm`]), without
             // waiting for a decode of it under way
             if let Some(r) = cache.get(&self.key(k, Vec::new())) {
+                *via = Via::Level;
                 let zero: Vec<usize> = vec![0; ext.len()];
                 return cut(&r, &zero, &bx, self.row_axis, self.col_axis);
             }
-            return self.window_from_patches(cache, limits, k, &bx);
+            return self.window_from_patches(cache, limits, k, &bx, via);
         }
         if level_bytes <= cache.entry_limit() {
             limits.check_elems("a decoded level", level_samples, DECODE_BYTES_PER_SAMPLE)?;
             let key = self.key(k, Vec::new());
+            *via = Via::Level;
             let r = cache
-                .get_or_decode(key, level_bytes, || self.decode(k, None))
+                .get_or_decode(key, level_bytes, || {
+                    *via = Via::LevelDecoded;
+                    self.decode(k, None)
+                })
                 .map_err(ServeError::File)?;
             let zero: Vec<usize> = vec![0; ext.len()];
             return cut(&r, &zero, &bx, self.row_axis, self.col_axis);
@@ -208,6 +250,7 @@ impl Source {
             level_samples,
             DECODE_BYTES_PER_SAMPLE,
         )?;
+        *via = Via::LevelDecoded;
         let r = self.decode(k, None)?;
         let zero: Vec<usize> = vec![0; ext.len()];
         cut(&r, &zero, &bx, self.row_axis, self.col_axis)
@@ -278,10 +321,12 @@ impl Source {
         limits: &Limits,
         k: usize,
         bx: &[Range<usize>],
+        via: &mut Via,
     ) -> Result<Plane, ServeError> {
         let h = &self.header;
         let ext = &self.levels[k];
         let nd = ext.len();
+        let mut decoded = 0;
         let level_box = |a: usize, j: usize| -> Range<usize> {
             let (d, r, t) = (h.dims[a] as u128, ext[a] as u128, h.tile[a] as u128);
             let j = j as u128;
@@ -315,7 +360,7 @@ impl Source {
             .enumerate()
             .map(|(a, m)| m.iter().map(|&j| (j, level_box(a, j))).collect())
             .collect();
-        self.assemble(bx, &pieces, |coords, boxes| {
+        let out = self.assemble(bx, &pieces, |coords, boxes| {
             let region: Vec<Range<usize>> = (0..nd)
                 .map(|a| coords[a] * h.tile[a]..((coords[a] + 1) * h.tile[a]).min(h.dims[a]))
                 .collect();
@@ -326,11 +371,14 @@ impl Source {
             let bytes = samples * h.sample_type.size() as u64;
             let r = cache
                 .get_or_decode(self.key(k, coords.to_vec()), bytes, || {
+                    decoded += 1;
                     self.decode(k, Some(region))
                 })
                 .map_err(ServeError::File)?;
             Ok((r, boxes.iter().map(|g| g.start).collect()))
-        })
+        });
+        *via = Via::Tiles { decoded };
+        out
     }
 
     /// The window `bx` of level `k` of a one-piece 3.0 file from the patches it meets:
@@ -344,10 +392,12 @@ impl Source {
         limits: &Limits,
         k: usize,
         bx: &[Range<usize>],
+        via: &mut Via,
     ) -> Result<Plane, ServeError> {
         let h = &self.header;
         let ext = &self.levels[k];
         let p = patch_extent();
+        let mut decoded = 0;
         let pieces: Vec<Vec<(usize, Range<usize>)>> = (0..ext.len())
             .map(|a| {
                 if a != self.row_axis && a != self.col_axis {
@@ -359,7 +409,26 @@ impl Source {
                     .collect()
             })
             .collect();
-        self.assemble(bx, &pieces, |coords, boxes| {
+        let mut own = 0;
+        let out = self.assemble(bx, &pieces, |coords, boxes| {
+            let key = self.key(k, coords.to_vec());
+            if !cache.seen_before(&key) {
+                // the first request of a patch decodes its own part of it alone (what
+                // it waits for is its window's support, not the patch's); a second
+                // request of the patch decodes the patch and keeps it
+                let part: Vec<Range<usize>> = boxes
+                    .iter()
+                    .zip(bx)
+                    .map(|(g, w)| w.start.max(g.start)..w.end.min(g.end))
+                    .collect();
+                let (region, origin) = full_region(&h.dims, ext, &part);
+                let samples = part
+                    .iter()
+                    .fold(h.channels as u64, |n, g| n * (g.len() as u64 + 2));
+                limits.check_elems("a decoded window", samples, DECODE_BYTES_PER_SAMPLE)?;
+                own += 1;
+                return Ok((self.decode(k, Some(region))?, origin));
+            }
             let (region, origin) = full_region(&h.dims, ext, boxes);
             // the decode may hold a sample more on each side of the box
             let samples = boxes
@@ -368,12 +437,15 @@ impl Source {
             limits.check_elems("a decoded patch", samples, DECODE_BYTES_PER_SAMPLE)?;
             let bytes = samples * h.sample_type.size() as u64;
             let r = cache
-                .get_or_decode(self.key(k, coords.to_vec()), bytes, || {
+                .get_or_decode(key, bytes, || {
+                    decoded += 1;
                     self.decode(k, Some(region))
                 })
                 .map_err(ServeError::File)?;
             Ok((r, origin))
-        })
+        });
+        *via = Via::Patches { decoded, own };
+        out
     }
 
     /// The window `bx` from pieces: on each axis the pieces meeting it, each an index
@@ -506,6 +578,21 @@ fn cut(
         .sum();
     let (hh, ww) = (bx[row_axis].len(), bx[col_axis].len());
     let mut data = Vec::with_capacity(hh * ww * c);
+    let x0 = bx[col_axis].start - origin[col_axis];
+    if stride[col_axis] == 1 {
+        // a row of the window is contiguous in the raster: copied row by row
+        for y in 0..hh {
+            let ry = bx[row_axis].start - origin[row_axis] + y;
+            let p = (base + ry * stride[row_axis] + x0) * c;
+            push_samples(&r.samples, p, ww * c, &mut data);
+        }
+        return Ok(Plane {
+            h: hh,
+            w: ww,
+            c,
+            data,
+        });
+    }
     for y in 0..hh {
         let ry = bx[row_axis].start - origin[row_axis] + y;
         for x in 0..ww {
@@ -522,12 +609,12 @@ fn cut(
     })
 }
 
-/// Samples `p .. p + c` as `f32`, appended.
-fn push_samples(s: &Samples, p: usize, c: usize, out: &mut Vec<f32>) {
+/// Samples `p .. p + n` as `f32`, appended.
+fn push_samples(s: &Samples, p: usize, n: usize, out: &mut Vec<f32>) {
     match s {
-        Samples::U8(v) => out.extend(v[p..p + c].iter().map(|&x| x as f32)),
-        Samples::U16(v) => out.extend(v[p..p + c].iter().map(|&x| x as f32)),
-        Samples::F32(v) => out.extend_from_slice(&v[p..p + c]),
-        _ => out.extend((p..p + c).map(|i| s.get_f64(i) as f32)),
+        Samples::U8(v) => out.extend(v[p..p + n].iter().map(|&x| x as f32)),
+        Samples::U16(v) => out.extend(v[p..p + n].iter().map(|&x| x as f32)),
+        Samples::F32(v) => out.extend_from_slice(&v[p..p + n]),
+        _ => out.extend((p..p + n).map(|i| s.get_f64(i) as f32)),
     }
 }

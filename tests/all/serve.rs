@@ -278,6 +278,8 @@ fn a_served_region_equals_mra_decode_of_the_same_window() {
     let whole = Server::start(&d.0);
     let by_tile = Server::start_with(&d.0, &["--cache", "1M"]);
     // the 3.0 file's levels cut into 64² patches: windows assembled from many decodes
+    // (the first request of a patch decodes its own part of it, the next the patch: each
+    // window is asked twice, as default and as gray, which a gray image answers alike)
     let patches = Server::start_env(&d.0, &[], &[("MRA_SERVE_PATCH", "64")]);
     // and with its levels decoded whole before serving: every window cut from them
     let warm = Server::start_with(&d.0, &["--warm"]);
@@ -304,6 +306,10 @@ fn a_served_region_equals_mra_decode_of_the_same_window() {
             let r = s.get_ok(&path);
             assert_eq!(r.header("content-type"), Some("image/png"));
             let served = gray(&r.image());
+            let again = std::ptr::eq(s, &patches).then(|| {
+                let r = s.get_ok(&path.replace("default.png", "gray.png"));
+                (gray(&r.image()), r.header("server-timing").map(str::to_string))
+            });
             let out = d.s(&format!("ref-{k}-{x}-{y}-{}.png", s.addr.port()));
             run(&[
                 "decode",
@@ -318,6 +324,11 @@ fn a_served_region_equals_mra_decode_of_the_same_window() {
             let want = gray(&image::open(&out).unwrap());
             assert_eq!((served.0, served.1), (want.0, want.1), "{path}");
             assert!(served.2 == want.2, "{path}: pixels differ from mra decode");
+            if let Some((again, timing)) = again {
+                assert!(again.2 == want.2, "{path} as gray: pixels differ from mra decode");
+                let timing = timing.unwrap_or_default();
+                assert!(timing.contains("render;"), "{path} as gray: {timing}");
+            }
         }
     }
 }
