@@ -40,12 +40,15 @@ impl Version {
     /// 3.1: 3.0 with a coder byte at the end of `HEAD`: which block coder codes every
     /// code-block of the file (§15.1; 3.0 is coder 0).
     pub const CODER_CHOICE: Version = Version::new(3, 1);
+    /// 3.2: 3.1 whose coder byte may also name coder 2, the adaptive quad coder
+    /// (§15.3).
+    pub const ADAPTIVE_CODER: Version = Version::new(3, 2);
     /// The latest version this reader implements: it refuses later minors of its major.
-    pub const LATEST: Version = Version::CODER_CHOICE;
+    pub const LATEST: Version = Version::ADAPTIVE_CODER;
     /// The latest minor of format 2 this reader implements.
     pub const LATEST_2: Version = Version::HEAD_FLAGS;
     /// Every version this reader decodes, oldest first.
-    pub const ALL: [Version; 8] = [
+    pub const ALL: [Version; 9] = [
         Version::V1,
         Version::V2_0,
         Version::TILED,
@@ -54,6 +57,7 @@ impl Version {
         Version::HEAD_FLAGS,
         Version::BLOCKS,
         Version::CODER_CHOICE,
+        Version::ADAPTIVE_CODER,
     ];
     /// The oldest major version readers still decode.
     pub const OLDEST_MAJOR: u8 = 1;
@@ -132,19 +136,33 @@ impl Version {
         self.major == 3 && self.minor >= 1
     }
 
+    /// Whether the coder byte of a file of this version may name block coder `id`: 0
+    /// always, 1 from 3.1, 2 from 3.2; no other id.
+    pub fn has_coder(self, id: u8) -> bool {
+        match id {
+            0 => true,
+            1 => self.has_coder_choice(),
+            2 => self.has_coder_choice() && self.minor >= 2,
+            _ => false,
+        }
+    }
+
     /// Whether `HEAD` ends with the flags byte (2.4 and later, 3.0).
     pub fn has_head_flags(self) -> bool {
         self.at_least(Version::HEAD_FLAGS)
     }
 
     /// The version of a code-block file whose blocks are coded by coder `coder`: 3.0
-    /// for coder 0 (so that default files stay readable by 3.0 readers), 3.1 else.
-    /// Other versions are returned as they are.
+    /// for coder 0 (so that default files stay readable by 3.0 readers), 3.1 for coder
+    /// 1, 3.2 for coder 2 (the oldest that has it). Other versions are returned as they
+    /// are.
     pub fn with_coder(self, coder: u8) -> Version {
-        if self.has_blocks() && coder != 0 {
+        if !self.has_blocks() || coder == 0 {
+            self
+        } else if coder == 1 {
             self.max(Version::CODER_CHOICE)
         } else {
-            self
+            self.max(Version::ADAPTIVE_CODER)
         }
     }
 
@@ -214,9 +232,16 @@ mod tests {
         assert!(Version::new(2, Version::LATEST_2.minor + 1)
             .check()
             .is_err());
-        assert!(Version::new(3, 2).check().is_err() && Version::new(4, 0).check().is_err());
+        assert!(Version::new(3, 3).check().is_err() && Version::new(4, 0).check().is_err());
         assert_eq!(Version::BLOCKS.with_coder(0), Version::BLOCKS);
         assert_eq!(Version::BLOCKS.with_coder(1), Version::CODER_CHOICE);
+        assert_eq!(Version::BLOCKS.with_coder(2), Version::ADAPTIVE_CODER);
+        assert_eq!(Version::ADAPTIVE_CODER.with_coder(1), Version::ADAPTIVE_CODER);
+        for v in Version::ALL {
+            assert!(v.has_coder(0) && !v.has_coder(3), "{v}");
+            assert_eq!(v.has_coder(1), v >= Version::CODER_CHOICE, "{v}");
+            assert_eq!(v.has_coder(2), v >= Version::ADAPTIVE_CODER, "{v}");
+        }
         assert_eq!(Version::HEAD_FLAGS.with_coder(1), Version::HEAD_FLAGS);
         assert!(Version::new(0, 0).check().is_err());
     }

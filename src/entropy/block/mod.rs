@@ -45,6 +45,9 @@ pub struct Shape {
     pub limit: u8,
     /// Start from the trained priors ([`prior`]) instead of uniform models.
     pub trained: bool,
+    /// Code each sign as an adaptive bit in the context of the W and N signs
+    /// ([`quad::SIGNS`]) instead of a raw bit.
+    pub signs: bool,
 }
 
 impl Shape {
@@ -56,6 +59,20 @@ impl Shape {
             x,
             limit: rc::LIMIT,
             trained: false,
+            signs: false,
+        }
+    }
+
+    /// Coder 2's code-blocks (formats/MRA.md §15.3): one block over the whole box,
+    /// adaptation window 2^[`LIMIT2`], models from the trained priors, signs in context.
+    pub const fn coder2() -> Self {
+        Shape {
+            z: 1 << 30,
+            y: 1 << 30,
+            x: 1 << 30,
+            limit: LIMIT2,
+            trained: true,
+            signs: true,
         }
     }
 
@@ -67,9 +84,13 @@ impl Shape {
             x: self.x.max(2).next_multiple_of(2),
             limit: self.limit,
             trained: self.trained,
+            signs: self.signs,
         }
     }
 }
+
+/// Coder 2's adaptation limit: windows of about 2^7 symbols.
+pub const LIMIT2: u8 = 7;
 
 /// The parent band of a detail band: its indices and extents.
 #[derive(Clone, Copy, Debug)]
@@ -204,7 +225,7 @@ pub fn encode_counting(
             b.ext,
             &layout,
             s,
-            (shape.limit, shape.trained),
+            (shape.limit, shape.trained, shape.signs),
             counts.as_deref_mut(),
             (&mut e, &mut bits),
         );
@@ -269,7 +290,7 @@ pub fn decode(
             b.ext,
             &layout,
             s,
-            (shape.limit, shape.trained),
+            (shape.limit, shape.trained, shape.signs),
             &mut rc::Decoder::new(sym),
             &mut rc::BitReader::new(raw),
         );
