@@ -776,7 +776,10 @@ fn test_vectors_decode_to_their_digests() {
             let bytes = std::fs::read(dir.join(v["file"].as_str().unwrap())).unwrap();
             // format 3 vectors (code-blocks) sit beside the format 2 ones
             let name = v["name"].as_str().unwrap();
-            let want = if name.starts_with("blocks30_") || name.starts_with("blocks31_") {
+            let want = if ["blocks30_", "blocks31_", "blocks32_"]
+                .iter()
+                .any(|p| name.starts_with(p))
+            {
                 3
             } else {
                 major
@@ -785,6 +788,10 @@ fn test_vectors_decode_to_their_digests() {
             // 3.1 vectors (the HT block coder) say so in their minor
             if name.starts_with("blocks31_") {
                 assert_eq!(bytes[17], 1, "{name} is not a 3.1 file");
+            }
+            // 3.2 vectors (block coder 2)
+            if name.starts_with("blocks32_") {
+                assert_eq!(bytes[17], 2, "{name} is not a 3.2 file");
             }
             let level = v["level"].as_u64().unwrap() as usize;
             let d = codec::decode(
