@@ -392,15 +392,16 @@ fn main() {
             // 3.1 and 3.2: written directly, in code-blocks by the HT coder (effort 1)
             // or by coder 2 (the lowest effort that names it)
             let adaptive = name.starts_with("blocks32_");
-            let ht = name.starts_with("blocks31_") || adaptive;
+            let direct = name.starts_with("blocks31_") || adaptive;
             let effort = if adaptive {
-                mra::codec::EFFORTS
+                let mut efforts = mra::codec::EFFORTS;
+                efforts
                     .find(|&e| {
                         mra::codec::Ladder::of(e).coder
                             == mra::entropy::codeblocks::Coder::Adaptive
                     })
                     .expect("an effort of coder 2")
-            } else if ht {
+            } else if direct {
                 1
             } else {
                 mra::codec::DEFAULT_EFFORT
@@ -413,7 +414,7 @@ fn main() {
                     levels: 3,
                     rate,
                     // the 2.x vectors stay 2.x; the 3.0 ones are cut from them
-                    format: if ht {
+                    format: if direct {
                         codec::Format::Blocks
                     } else {
                         codec::Format::Bands
