@@ -290,6 +290,43 @@ fn main() {
             Rate::Quality(40.0),
             0,
         ),
+        // format 3.2: the same code-blocks coded by block coder 2 (adaptive, §15.4)
+        (
+            "blocks32a_rgb8_bpp1",
+            "530x40 RGB u8, cdf97 symmetric, --bpp 1, format 3.2 (adaptive block coder)",
+            raster(&[40, 530], 3, SampleType::U8, DataKind::Image),
+            Scheme::Cdf97,
+            Boundary::Symmetric,
+            Rate::Bpp(1.0),
+            0,
+        ),
+        (
+            "blocks32a_rgb8_bpp1_level1",
+            "the previous file decoded with --level 1",
+            raster(&[40, 530], 3, SampleType::U8, DataKind::Image),
+            Scheme::Cdf97,
+            Boundary::Symmetric,
+            Rate::Bpp(1.0),
+            1,
+        ),
+        (
+            "blocks32a_gray16_lossless",
+            "520x8 gray u16, lossless, format 3.2 (adaptive block coder)",
+            raster(&[8, 520], 1, SampleType::U16, DataKind::Image),
+            Scheme::Haar,
+            Boundary::Symmetric,
+            Rate::Lossless,
+            0,
+        ),
+        (
+            "blocks32a_vol_u16_q40",
+            "140x8x8 volume u16, cdf97 symmetric, quality 40, format 3.2 (adaptive block coder)",
+            raster(&[8, 8, 140], 1, SampleType::U16, DataKind::Volume),
+            Scheme::Cdf97,
+            Boundary::Symmetric,
+            Rate::Quality(40.0),
+            0,
+        ),
     ];
     // format 2.1: tiles (extents slowest axis first); the lossy one is kept as a 2.1
     // encoder wrote it (today's encoder writes lossy tiles compact, 2.2)
@@ -397,9 +434,23 @@ fn main() {
         let bytes = if frozen.contains(&name.trim_end_matches("_level1")) {
             std::fs::read(dir.join(&file)).unwrap()
         } else {
-            // 3.2: written directly, in code-blocks (the 3.1 ones by the HT coder, effort 1)
+            // 3.1 and 3.2: written directly, in code-blocks: the 3.1 ones by the HT coder
+            // (effort 1), the blocks32a ones by coder 2 (the lowest effort that names it)
+            let adaptive = name.starts_with("blocks32a_");
             let ht = name.starts_with("blocks31_");
-            let direct = ht || name.starts_with("blocks32_");
+            let direct = ht || name.starts_with("blocks32");
+            let effort = if adaptive {
+                let mut efforts = mra::codec::EFFORTS;
+                efforts
+                    .find(|&e| {
+                        mra::codec::Ladder::of(e).coder == mra::entropy::codeblocks::Coder::Adaptive
+                    })
+                    .expect("an effort of coder 2")
+            } else if ht {
+                1
+            } else {
+                mra::codec::DEFAULT_EFFORT
+            };
             let bytes = codec::encode_tiled(
                 &r,
                 &EncodeOptions {
@@ -413,7 +464,7 @@ fn main() {
                     } else {
                         codec::Format::Bands
                     },
-                    effort: if ht { 1 } else { mra::codec::DEFAULT_EFFORT },
+                    effort,
                 },
                 &tile,
             )

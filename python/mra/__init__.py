@@ -153,8 +153,9 @@ def encode(
 
     ``effort`` (1..9, as ``mra encode --effort``) trades speed for size: 1–3 code the
     blocks with the HT-style coder (format 3.1, about 4× faster decode for 7–10% more
-    bits) without rate–distortion optimisation, 4–6 with it, 7–9 (7 the default) with
-    the adaptive context coder.
+    bits) without rate–distortion optimisation, 4–6 with it and the adaptive quad coder
+    (format 3.2, between the two in bits and speed), 7–9 (7 the default) with the
+    adaptive context coder.
     """
     mode, value = _rate_of(
         lossless=lossless,

@@ -80,13 +80,17 @@ pub struct Ladder {
 
 impl Ladder {
     /// Effort `e` (clamped to [`EFFORTS`]): 1–3 the HT coder without RDO, `--bpp`
-    /// within 3% under the budget; 4–6 the HT coder on RDO indices (chosen by the
-    /// context coder's rates: its encode time, the HT coder's decode); 7–9 the context
-    /// coder on RDO indices (the files of before the ladder).
+    /// within 3% under the budget; 4–6 the adaptive coder (coder 2) on RDO indices
+    /// (chosen by the context coder's rates: its encode time, coder 2's bits and
+    /// decode); 7–9 the context coder on RDO indices (the files of before the ladder).
     pub fn of(e: u8) -> Ladder {
         let e = e.clamp(*EFFORTS.start(), *EFFORTS.end());
         Ladder {
-            coder: if e <= 6 { Coder::Ht } else { Coder::Context },
+            coder: match e {
+                ..=3 => Coder::Ht,
+                4..=6 => Coder::Adaptive,
+                _ => Coder::Context,
+            },
             rdo: e >= 4,
             bpp_floor: if e <= 3 { 0.97 } else { 0.99 },
         }

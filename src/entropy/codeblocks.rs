@@ -30,6 +30,10 @@ pub enum Coder {
     /// codes and a run coder on `i32` indices, about 4× the context coder's decode
     /// speed for 7–10% more bits.
     Ht = 1,
+    /// 2: the adaptive quad coder ([`block::quad`] with [`block::Shape::coder2`]):
+    /// 16-symbol adaptive CDFs from trained priors, the parent as a context, signs in
+    /// the context of the W and N signs, on `i32` indices.
+    Adaptive = 2,
 }
 
 /// A narrow coder's encoder of a block (values, extents, kind, parent box).
@@ -55,7 +59,7 @@ fn whole() -> block::Shape {
 
 impl Coder {
     /// Every coder, by id.
-    pub const ALL: [Coder; 2] = [Coder::Context, Coder::Ht];
+    pub const ALL: [Coder; 3] = [Coder::Context, Coder::Ht, Coder::Adaptive];
 
     /// The coder byte.
     pub fn id(self) -> u8 {
@@ -89,6 +93,10 @@ impl Coder {
                 decode: |s, d, k, p| {
                     block::decode_ht(s, d, k, p, whole(), block::ht::Tables::standard())
                 },
+            },
+            Coder::Adaptive => PerBlock::Narrow {
+                encode: |v, d, k, p| block::encode(v, d, k, p, block::Shape::coder2()),
+                decode: |s, d, k, p| block::decode(s, d, k, p, block::Shape::coder2()),
             },
         }
     }
@@ -407,7 +415,16 @@ pub fn decode_blocks(
             }
         },
     };
-    decode_blocks_into(rows, grid, which, streams, (kind, parent), coding, coder, &put)
+    decode_blocks_into(
+        rows,
+        grid,
+        which,
+        streams,
+        (kind, parent),
+        coding,
+        coder,
+        &put,
+    )
 }
 
 /// How [`decode_blocks_into`] writes a run of decoded indices into a run of the output
@@ -496,7 +513,11 @@ where
             // the slab's extents, its rows' length, and the row and column of an offset
             let len = slab[0].len().max(1);
             let mut shape = grid.dims.clone();
-            shape[0] = if nd == 1 { slab[0].len() } else { slab.len() / inner };
+            shape[0] = if nd == 1 {
+                slab[0].len()
+            } else {
+                slab.len() / inner
+            };
             let y0 = s * grid.block[0];
             for k in ks {
                 let b = grid.bounds(which[k]);

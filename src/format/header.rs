@@ -67,9 +67,10 @@ pub struct Header {
 }
 
 /// The block coders of format 3.1 by id (formats/MRA.md §15.1): 0 the adaptive context
-/// coder of §9 (every 3.0 file's), 1 the HT-style coder of §15.2. A reader rejects any
-/// other id. `entropy::codeblocks::Coder` holds the coders under these ids.
-pub const CODERS: [&str; 2] = ["context", "ht"];
+/// coder of §9 (every 3.0 file's), 1 the HT-style coder of §15.2, 2 the adaptive quad
+/// coder of §15.4 (format 3.2). A reader rejects any other id, and an id its file's
+/// version does not have ([`Version::has_coder`]). `entropy::codeblocks::Coder` holds the coders under these ids.
+pub const CODERS: [&str; 3] = ["context", "ht", "adaptive"];
 
 /// The name of block coder `id` ([`CODERS`]); `None` for an id no reader knows.
 pub fn coder_name(id: u8) -> Option<&'static str> {
@@ -388,10 +389,10 @@ impl Header {
         };
         let coder = if version.has_coder_choice() {
             let id = c.u8()?;
-            if coder_name(id).is_none() {
+            if coder_name(id).is_none() || !version.has_coder(id) {
                 return Err(bad(
-                    format!("block coder {id}"),
-                    "0 context, 1 ht (formats/MRA.md §15.1)",
+                    format!("block coder {id} in a {version} file"),
+                    "0 context, 1 ht (3.1 and later), 2 adaptive (3.2 and later) (formats/MRA.md §15.1)",
                 ));
             }
             id

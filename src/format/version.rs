@@ -42,8 +42,11 @@ impl Version {
     pub const CODER_CHOICE: Version = Version::new(3, 1);
     /// 3.2: the code-block extents shrink with coarser levels by the rule of §15.3
     /// ([`crate::format::Header::block_extents_at`]): no new bytes, `HEAD`'s exponents
-    /// are the finest level's.
+    /// are the finest level's; and the coder byte may also name coder 2, the adaptive
+    /// quad coder (§15.4).
     pub const LEVEL_BLOCKS: Version = Version::new(3, 2);
+    /// The version that brought coder 2: [`Version::LEVEL_BLOCKS`] (3.2 brought both).
+    pub const ADAPTIVE_CODER: Version = Version::LEVEL_BLOCKS;
     /// The latest version this reader implements: it refuses later minors of its major.
     pub const LATEST: Version = Version::LEVEL_BLOCKS;
     /// The latest minor of format 2 this reader implements.
@@ -144,19 +147,32 @@ impl Version {
         self.major == 3 && self.minor >= 2
     }
 
+    /// Whether the coder byte of a file of this version may name block coder `id`: 0
+    /// always, 1 from 3.1, 2 from 3.2; no other id.
+    pub fn has_coder(self, id: u8) -> bool {
+        match id {
+            0 => true,
+            1 => self.has_coder_choice(),
+            2 => self.has_level_blocks(),
+            _ => false,
+        }
+    }
+
     /// Whether `HEAD` ends with the flags byte (2.4 and later, 3.0).
     pub fn has_head_flags(self) -> bool {
         self.at_least(Version::HEAD_FLAGS)
     }
 
-    /// The version of a code-block file whose blocks are coded by coder `coder`: at
-    /// least 3.1 for a coder other than 0, the version as it is for coder 0.
-    /// Other versions are returned as they are.
+    /// The version of a code-block file of version `self` whose blocks are coded by
+    /// coder `coder`: `self` for coder 0, at least 3.1 for coder 1 and 3.2 for coder 2
+    /// (the oldest that has it). Versions without code-blocks are returned as they are.
     pub fn with_coder(self, coder: u8) -> Version {
-        if self.has_blocks() && coder != 0 {
+        if !self.has_blocks() || coder == 0 {
+            self
+        } else if coder == 1 {
             self.max(Version::CODER_CHOICE)
         } else {
-            self
+            self.max(Version::ADAPTIVE_CODER)
         }
     }
 
@@ -231,6 +247,16 @@ mod tests {
         assert_eq!(Version::LEVEL_BLOCKS.with_coder(1), Version::LEVEL_BLOCKS);
         assert_eq!(Version::BLOCKS.with_coder(0), Version::BLOCKS);
         assert_eq!(Version::BLOCKS.with_coder(1), Version::CODER_CHOICE);
+        assert_eq!(Version::BLOCKS.with_coder(2), Version::ADAPTIVE_CODER);
+        assert_eq!(
+            Version::ADAPTIVE_CODER.with_coder(1),
+            Version::ADAPTIVE_CODER
+        );
+        for v in Version::ALL {
+            assert!(v.has_coder(0) && !v.has_coder(3), "{v}");
+            assert_eq!(v.has_coder(1), v >= Version::CODER_CHOICE, "{v}");
+            assert_eq!(v.has_coder(2), v >= Version::ADAPTIVE_CODER, "{v}");
+        }
         assert_eq!(Version::HEAD_FLAGS.with_coder(1), Version::HEAD_FLAGS);
         assert!(Version::new(0, 0).check().is_err());
     }

@@ -64,9 +64,14 @@ mod tests {
     fn samples_follow_the_header_big_endian() {
         let (w, h, c) = (200usize, 150usize, 3usize);
         let n = w * h * c;
-        let wide: Vec<u16> = (0..n).map(|i| (i as u32).wrapping_mul(40_503) as u16).collect();
+        let wide: Vec<u16> = (0..n)
+            .map(|i| (i as u32).wrapping_mul(40_503) as u16)
+            .collect();
         let narrow: Vec<u8> = wide.iter().map(|&x| (x >> 5) as u8).collect();
-        for (samples, maxval) in [(Samples::U16(wide.clone()), 65535), (Samples::U8(narrow), 255)] {
+        for (samples, maxval) in [
+            (Samples::U16(wide.clone()), 65535),
+            (Samples::U8(narrow), 255),
+        ] {
             let want: Vec<u8> = match &samples {
                 Samples::U16(v) => v.iter().flat_map(|x| x.to_be_bytes()).collect(),
                 Samples::U8(v) => v.clone(),

@@ -310,13 +310,7 @@ fn render_job(
     let r = req.resolve(w, h, &caps)?;
     let mut trace = render::Trace::default();
     let body = axum::body::Bytes::from(render::render(
-        &src,
-        &st.cache,
-        &st.limits,
-        &req,
-        &r,
-        window,
-        &mut trace,
+        &src, &st.cache, &st.limits, &req, &r, window, &mut trace,
     )?);
     st.answers.put(key, body.len() as u64, body.clone());
     Ok((
@@ -502,7 +496,8 @@ async fn iiif(AxState(st): AxState<Arc<State>>, uri: Uri, headers: HeaderMap) ->
             };
             let queue = t0.elapsed() - opened;
             let st2 = st.clone();
-            let job = tokio::task::spawn_blocking(move || render_job(&st2, *job, window, Some(permit)));
+            let job =
+                tokio::task::spawn_blocking(move || render_job(&st2, *job, window, Some(permit)));
             match job.await {
                 Ok(Ok((answer, trace))) => {
                     timing = Some((queue, trace));

@@ -100,7 +100,15 @@ pub fn render(
     let rows = (y0.floor() as usize)..(y1.ceil() as usize).min(lh).max(y0.floor() as usize + 1);
     trace.level = k;
     let shown = if src.header.kind == DataKind::Heightmap {
-        shaded(src, cache, limits, k, rows.clone(), cols.clone(), &mut trace.via)?
+        shaded(
+            src,
+            cache,
+            limits,
+            k,
+            rows.clone(),
+            cols.clone(),
+            &mut trace.via,
+        )?
     } else {
         display(
             src,
@@ -111,10 +119,8 @@ pub fn render(
     let (ow, oh) = (r.out_w as usize, r.out_h as usize);
     let t1 = Instant::now();
     trace.window = t1 - t0;
-    trace.resampled = !(shown.w == ow
-        && shown.h == oh
-        && x0 == cols.start as f64
-        && y0 == rows.start as f64);
+    trace.resampled =
+        !(shown.w == ow && shown.h == oh && x0 == cols.start as f64 && y0 == rows.start as f64);
     let out = resample(
         shown,
         (x0 - cols.start as f64, x1 - cols.start as f64),
@@ -405,7 +411,10 @@ mod tests {
         let q = plane(4, 6, 3);
         let r = resample(q.clone(), (1.0, 6.0), (0.0, 4.0), 5, 4);
         for y in 0..4 {
-            assert_eq!(r.data[y * 15..(y + 1) * 15], q.data[y * 18 + 3..(y + 1) * 18]);
+            assert_eq!(
+                r.data[y * 15..(y + 1) * 15],
+                q.data[y * 18 + 3..(y + 1) * 18]
+            );
         }
     }
 

@@ -46,8 +46,9 @@ proptest! {
         z in 1usize..=5, y in 1usize..=9, x in 1usize..=9, limit in 1u8..=8, trained in any::<bool>(),
         with_parent in any::<bool>(),
         coarse in any::<bool>(),
+        signs in any::<bool>(),
     ) {
-        let shape = Shape { z, y, x, limit, trained };
+        let shape = Shape { z, y, x, limit, trained, signs };
         let pdims: Vec<usize> = dims.iter().map(|d| d.div_ceil(2)).collect();
         let pn: usize = pdims.iter().product();
         let pq: Vec<i32> = (0..pn).map(|i| pseed.get(i % pseed.len().max(1)).copied().unwrap_or(0)).collect();
@@ -65,9 +66,10 @@ proptest! {
         bytes in prop::collection::vec(any::<u8>(), 0..400),
         dims in dims(),
         coarse in any::<bool>(),
+        coder2 in any::<bool>(),
     ) {
         let kind = if coarse { BandKind::Coarse } else { BandKind::Detail };
-        let shape = Shape::new(2, 4, 6);
+        let shape = if coder2 { Shape::coder2() } else { Shape::new(2, 4, 6) };
         let _ = block::decode(&bytes, &dims, kind, None, shape);
     }
 }

@@ -1,5 +1,5 @@
-//! The effort ladder (`EncodeOptions::effort`, `mra encode --effort`) and format 3.1's
-//! block coder: every coder round-trips every mode it is given (lossy, lossless, and
+//! The effort ladder (`EncodeOptions::effort`, `mra encode --effort`) and the block
+//! coders of formats 3.1 and 3.2: every coder round-trips every mode it is given (lossy, lossless, and
 //! max-error, which keeps the context coder), 2-D and 3-D, 8 and 16 bits, odd sizes;
 //! the bytes do not depend on the thread count; the default effort writes the 3.0 file
 //! of before the ladder; a coder byte no reader knows is refused in one line.
@@ -58,13 +58,15 @@ fn max_abs(a: &Raster, b: &Raster) -> f64 {
         .fold(0.0, f64::max)
 }
 
-/// The ladder's ends: efforts 1–6 the HT coder, 7–9 the context coder; RDO from 4;
-/// the default is the context coder (issue 48's ratio target is not met by HT).
+/// The ladder: efforts 1–3 the HT coder, 4–6 the adaptive coder, 7–9 the context
+/// coder; RDO from 4; the default is the context coder (issue 48's ratio target is
+/// met by neither narrow coder).
 #[test]
 fn the_ladder_names_its_coders() {
     for e in 1..=9u8 {
         let l = Ladder::of(e);
-        assert_eq!(l.coder == Coder::Ht, e <= 6, "{e}");
+        assert_eq!(l.coder == Coder::Ht, e <= 3, "{e}");
+        assert_eq!(l.coder == Coder::Adaptive, (4..=6).contains(&e), "{e}");
         assert_eq!(l.rdo, e >= 4, "{e}");
     }
     assert_eq!(Ladder::of(DEFAULT_EFFORT).coder, Coder::Context);
@@ -79,7 +81,8 @@ fn the_ladder_names_its_coders() {
 
 /// Every coder × mode × shape × depth round-trips: lossless exactly, max-error within
 /// its bound (the context coder, whatever the effort), lossy at the step the rate mode
-/// sets; a file of the HT coder is 3.1 and says so, the others 3.0.
+/// sets; a file of the HT coder is 3.1, of the adaptive coder 3.2, and says so, the
+/// others 3.0.
 #[test]
 fn every_coder_round_trips_every_mode() {
     let shapes: [(&[usize], usize); 4] = [
@@ -96,7 +99,11 @@ fn every_coder_round_trips_every_mode() {
         ] {
             let r = field(dims, ch, ty, dims.len() as u64 * 7 + ch as u64, hi);
             for effort in [1u8, 5, 7, 9] {
-                let ht = effort <= 6;
+                let narrow = match effort {
+                    ..=3 => "ht",
+                    4..=6 => "adaptive",
+                    _ => "context",
+                };
                 for rate in [
                     Rate::Lossless,
                     Rate::MaxError(hi / 100.0),
@@ -105,10 +112,10 @@ fn every_coder_round_trips_every_mode() {
                     let what = format!("{dims:?}×{ch} {ty:?} effort {effort} {rate:?}");
                     let bytes = codec::encode(&r, &opts(rate, effort)).unwrap();
                     let info = codec::info(&bytes).unwrap();
-                    let want = if ht && !matches!(rate, Rate::MaxError(_)) {
-                        "ht"
-                    } else {
+                    let want = if matches!(rate, Rate::MaxError(_)) {
                         "context"
+                    } else {
+                        narrow
                     };
                     assert_eq!(info.coder.as_deref(), Some(want), "{what}");
                     assert_eq!(info.version, "3.2", "{what}");
@@ -130,9 +137,9 @@ fn every_coder_round_trips_every_mode() {
 }
 
 /// Efforts 4–6 code the indices that the context coder's rate–distortion choice gives
-/// (effort 7): the same samples decode from both files, the HT file larger.
+/// (effort 7): the same samples decode from both files, coder 2's the larger.
 #[test]
-fn the_ht_coder_on_optimised_indices_decodes_the_context_coders_samples() {
+fn the_adaptive_coder_on_optimised_indices_decodes_the_context_coders_samples() {
     let r = field(&[150, 203], 3, SampleType::U8, 5, 255.0);
     let v = field(&[21, 40, 37], 1, SampleType::U16, 6, 30000.0);
     for r in [&r, &v] {
@@ -203,8 +210,9 @@ fn the_default_effort_writes_the_3_0_file() {
     }
 }
 
-/// A 3.1 file whose coder byte names no coder is refused with one line naming it, by
-/// the library (a format error) and by `mra decode` (exit 2, no output).
+/// A 3.1 file whose coder byte names no coder, or coder 2 (which 3.1 lacks), is
+/// refused with one line naming it, by the library (a format error) and by `mra
+/// decode` (exit 2, no output); so is a 3.2 file of an unknown coder.
 #[test]
 fn a_coder_byte_no_reader_knows_is_refused() {
     let r = field(&[40, 52], 1, SampleType::U8, 9, 255.0);
@@ -235,6 +243,22 @@ fn a_coder_byte_no_reader_knows_is_refused() {
         assert_eq!(msg.trim().lines().count(), 1, "{msg}");
         assert!(msg.contains("block coder"), "{msg}");
         assert!(!out.exists());
+    }
+    // a 3.2 file (coder 2) whose coder byte names no coder
+    let good = codec::encode(&r, &opts(Rate::Quality(50.0), 5)).unwrap();
+    let (s, e) = head(&good);
+    assert_eq!((good[s + 1], good[e - 1]), (2, Coder::Adaptive.id()));
+    assert!(decoded(&good).dims == r.dims);
+    for id in [3u8, 200] {
+        let mut b = good.clone();
+        b[e - 1] = id;
+        recrc(&mut b, s, e);
+        let err = codec::decode(&b, &DecodeOptions::default()).unwrap_err();
+        assert_eq!(err.kind(), ErrorKind::Format, "{id}: {err}");
+        assert!(
+            err.to_string().contains(&format!("block coder {id}")),
+            "{err}"
+        );
     }
     // a 3.0 HEAD (a 3.2 one without its coder byte) relabelled 3.1 lacks its coder byte
     let b = codec::encode(&r, &opts(Rate::Quality(50.0), 9)).unwrap();
@@ -273,7 +297,7 @@ fn cli_effort_picks_the_coder_info_reports() {
         b"",
     );
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    for (effort, coder) in [("1", "ht"), ("9", "context")] {
+    for (effort, coder) in [("1", "ht"), ("5", "adaptive"), ("9", "context")] {
         let f = dir.join(format!("z{effort}.mra"));
         let o = common::mra_with_stdin(
             None,

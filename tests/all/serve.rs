@@ -308,7 +308,10 @@ fn a_served_region_equals_mra_decode_of_the_same_window() {
             let served = gray(&r.image());
             let again = std::ptr::eq(s, &patches).then(|| {
                 let r = s.get_ok(&path.replace("default.png", "gray.png"));
-                (gray(&r.image()), r.header("server-timing").map(str::to_string))
+                (
+                    gray(&r.image()),
+                    r.header("server-timing").map(str::to_string),
+                )
             });
             let out = d.s(&format!("ref-{k}-{x}-{y}-{}.png", s.addr.port()));
             run(&[
@@ -325,7 +328,10 @@ fn a_served_region_equals_mra_decode_of_the_same_window() {
             assert_eq!((served.0, served.1), (want.0, want.1), "{path}");
             assert!(served.2 == want.2, "{path}: pixels differ from mra decode");
             if let Some((again, timing)) = again {
-                assert!(again.2 == want.2, "{path} as gray: pixels differ from mra decode");
+                assert!(
+                    again.2 == want.2,
+                    "{path} as gray: pixels differ from mra decode"
+                );
                 let timing = timing.unwrap_or_default();
                 assert!(timing.contains("render;"), "{path} as gray: {timing}");
             }

@@ -45,6 +45,9 @@ pub struct Shape {
     pub limit: u8,
     /// Start from the trained priors ([`prior`]) instead of uniform models.
     pub trained: bool,
+    /// Code each sign as an adaptive bit in the context of the W and N signs
+    /// ([`quad::SIGNS`]) instead of a raw bit.
+    pub signs: bool,
 }
 
 impl Shape {
@@ -56,6 +59,20 @@ impl Shape {
             x,
             limit: rc::LIMIT,
             trained: false,
+            signs: false,
+        }
+    }
+
+    /// Coder 2's code-blocks (formats/MRA.md §15.4): one block over the whole box,
+    /// adaptation window 2^[`LIMIT2`], models from the trained priors, signs in context.
+    pub const fn coder2() -> Self {
+        Shape {
+            z: 1 << 30,
+            y: 1 << 30,
+            x: 1 << 30,
+            limit: LIMIT2,
+            trained: true,
+            signs: true,
         }
     }
 
@@ -67,9 +84,13 @@ impl Shape {
             x: self.x.max(2).next_multiple_of(2),
             limit: self.limit,
             trained: self.trained,
+            signs: self.signs,
         }
     }
 }
+
+/// Coder 2's adaptation limit: windows of about 2^7 symbols.
+pub const LIMIT2: u8 = 7;
 
 /// The parent band of a detail band: its indices and extents.
 #[derive(Clone, Copy, Debug)]
@@ -179,16 +200,46 @@ pub fn encode_counting(
     shape: Shape,
     mut counts: Option<&mut quad::Counts>,
 ) -> Vec<u8> {
+    let mut out = Vec::new();
+    let models = (shape.limit, shape.trained, shape.signs);
+    encode_walk(q, dims, kind, parent, shape, true, |v, ext, layout, s| {
+        let mut e = rc::Encoder::new();
+        let mut bits = rc::BitWriter::default();
+        let c = counts.as_deref_mut();
+        quad::encode(v, ext, layout, s, models, c, (&mut e, &mut bits));
+        let (sym, raw) = (e.finish(), bits.finish());
+        crate::format::put_varint(&mut out, sym.len() as u64);
+        crate::format::put_varint(&mut out, raw.len() as u64);
+        out.extend_from_slice(&sym);
+        out.extend_from_slice(&raw);
+    });
+    out
+}
+
+/// The one band walk of every encoder: the values coded (the median residuals in the
+/// coarsest band, the indices else) and, block after block of `shape` in coding
+/// order, its extent, layout and scratch handed to `block`; the parent is read where
+/// `uses_parent` (never in the coarsest band). [`decode_sized`] is its decoding twin.
+fn encode_walk(
+    q: &[i32],
+    dims: &[usize],
+    kind: BandKind,
+    parent: Option<Parent>,
+    shape: Shape,
+    uses_parent: bool,
+    mut block: impl FnMut(&[i32], Extent, &Layout<'_>, &mut Scratch),
+) {
     let w = Walk::new(dims);
     let shape = shape.normal();
     let res: Vec<i32>;
     let (v, parent) = if kind == BandKind::Coarse {
         res = median_residuals(q, w);
         (&res[..], None)
-    } else {
+    } else if uses_parent {
         (q, parent_map(dims, w, parent))
+    } else {
+        (q, None)
     };
-    let mut out = Vec::new();
     let mut scratch: Option<(Extent, Scratch)> = None;
     for b in blocks(w, shape) {
         let s = scratch_for(&mut scratch, b.ext);
@@ -197,24 +248,8 @@ pub fn encode_counting(
             b,
             parent: parent.as_ref().map(|(d, pw, bases)| (*d, *pw, &bases[..])),
         };
-        let mut e = rc::Encoder::new();
-        let mut bits = rc::BitWriter::default();
-        quad::encode(
-            v,
-            b.ext,
-            &layout,
-            s,
-            (shape.limit, shape.trained),
-            counts.as_deref_mut(),
-            (&mut e, &mut bits),
-        );
-        let (sym, raw) = (e.finish(), bits.finish());
-        crate::format::put_varint(&mut out, sym.len() as u64);
-        crate::format::put_varint(&mut out, raw.len() as u64);
-        out.extend_from_slice(&sym);
-        out.extend_from_slice(&raw);
+        block(v, b.ext, &layout, s);
     }
-    out
 }
 
 /// A scratch for a block of extents `ext`, kept while blocks keep the same extents.
@@ -269,7 +304,7 @@ pub fn decode(
             b.ext,
             &layout,
             s,
-            (shape.limit, shape.trained),
+            (shape.limit, shape.trained, shape.signs),
             &mut rc::Decoder::new(sym),
             &mut rc::BitReader::new(raw),
         );
@@ -294,37 +329,27 @@ pub fn encode_ht(
     t: &ht::Tables,
     mut counts: Option<&mut ht::Counts>,
 ) -> Vec<u8> {
-    let w = Walk::new(dims);
-    let shape = shape.normal();
-    let res: Vec<i32>;
-    let (v, parent) = if kind == BandKind::Coarse {
-        res = median_residuals(q, w);
-        (&res[..], None)
-    } else if t.kind.parent {
-        (q, parent_map(dims, w, parent))
-    } else {
-        (q, None)
-    };
     let mut out = Vec::new();
-    let mut scratch: Option<(Extent, Scratch)> = None;
     let mut wr = ht::Writers::default();
-    for b in blocks(w, shape) {
-        let s = scratch_for(&mut scratch, b.ext);
-        let layout = Layout {
-            w,
-            b,
-            parent: parent.as_ref().map(|(d, pw, bases)| (*d, *pw, &bases[..])),
-        };
-        wr.bits.clear();
-        wr.mel.clear();
-        ht::encode(v, b.ext, &layout, s, t, counts.as_deref_mut(), &mut wr);
-        let (bits, mel) = (&mut wr.bits, &mut wr.mel);
-        bits.flush();
-        mel.finish();
-        crate::format::put_varint(&mut out, (bits.out.len() + mel.w.out.len()) as u64);
-        out.extend_from_slice(&bits.out);
-        out.extend(mel.w.out.iter().rev());
-    }
+    encode_walk(
+        q,
+        dims,
+        kind,
+        parent,
+        shape,
+        t.kind.parent,
+        |v, ext, layout, s| {
+            wr.bits.clear();
+            wr.mel.clear();
+            ht::encode(v, ext, layout, s, t, counts.as_deref_mut(), &mut wr);
+            let (bits, mel) = (&mut wr.bits, &mut wr.mel);
+            bits.flush();
+            mel.finish();
+            crate::format::put_varint(&mut out, (bits.out.len() + mel.w.out.len()) as u64);
+            out.extend_from_slice(&bits.out);
+            out.extend(mel.w.out.iter().rev());
+        },
+    );
     out
 }
 
@@ -415,42 +440,24 @@ pub fn encode_rans(
     t: &rans::Tables,
     mut counts: Option<&mut rans::Counts>,
 ) -> Vec<u8> {
-    let w = Walk::new(dims);
-    let shape = shape.normal();
-    let res: Vec<i32>;
-    let (v, parent) = if kind == BandKind::Coarse {
-        res = median_residuals(q, w);
-        (&res[..], None)
-    } else if t.kind.parent {
-        (q, parent_map(dims, w, parent))
-    } else {
-        (q, None)
-    };
     let mut out = Vec::new();
     let mut blk = Vec::new();
-    let mut scratch: Option<(Extent, Scratch)> = None;
     let mut wr = rans::Writers::default();
-    for b in blocks(w, shape) {
-        let s = scratch_for(&mut scratch, b.ext);
-        let layout = Layout {
-            w,
-            b,
-            parent: parent.as_ref().map(|(d, pw, bases)| (*d, *pw, &bases[..])),
-        };
-        blk.clear();
-        rans::encode(
-            v,
-            b.ext,
-            &layout,
-            s,
-            t,
-            counts.as_deref_mut(),
-            &mut wr,
-            &mut blk,
-        );
-        crate::format::put_varint(&mut out, blk.len() as u64);
-        out.extend_from_slice(&blk);
-    }
+    encode_walk(
+        q,
+        dims,
+        kind,
+        parent,
+        shape,
+        t.kind.parent,
+        |v, ext, layout, s| {
+            blk.clear();
+            let c = counts.as_deref_mut();
+            rans::encode(v, ext, layout, s, t, c, &mut wr, &mut blk);
+            crate::format::put_varint(&mut out, blk.len() as u64);
+            out.extend_from_slice(&blk);
+        },
+    );
     out
 }
 

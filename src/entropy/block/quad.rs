@@ -16,10 +16,13 @@
 //!   before it included), class `c = 0` for `u = 0`, else `1 + ⌊log₂ u⌋` (at most
 //!   [`MCLS`] − 1), and shift `k = max(c − KOFF, 0)`: symbol `h = ⌊(m − 1) / 2^k⌋` in
 //!   context `c` when `h < 15`, else 15 and `h − 14 = 2^e + r` as `e` in 6 raw bits and
-//!   `r` in `e` raw bits; then the `k` low bits of `m − 1` and the sign, raw.
+//!   `r` in `e` raw bits; then the `k` low bits of `m − 1` and the sign, raw; or, with
+//!   sign contexts (coder 2, formats/MRA.md §15.4), the `k` low bits raw and the sign
+//!   as an adaptive [`Bit`] in context `3w + n` ([`SIGNS`]: the signs of W and N, 0
+//!   for zero or outside the block, 1 positive, 2 negative).
 
 use super::prior;
-use super::rc::{BitReader, BitWriter, Cdf, Decoder, Encoder};
+use super::rc::{Bit, BitReader, BitWriter, Cdf, Decoder, Encoder};
 use crate::entropy::walk::{class_in, classes};
 
 pub(super) const QCLS: usize = 12;
@@ -48,10 +51,15 @@ fn mclass(u: u32) -> usize {
     }
 }
 
+/// Sign contexts: `3·w + n`, `w` and `n` the signs of the W and N neighbours (0 zero
+/// or outside the block, 1 positive, 2 negative).
+pub const SIGNS: usize = 9;
+
 /// The models of one code-block, fresh at its start.
 pub struct Models {
     pattern: [Cdf; QCLS * PCLS],
     mag: [Cdf; MCLS],
+    sign: [Bit; SIGNS],
 }
 
 impl Models {
@@ -62,12 +70,14 @@ impl Models {
             return Models {
                 pattern: [Cdf::uniform(limit); PATTERNS],
                 mag: [Cdf::uniform(limit); MCLS],
+                sign: [Bit::default(); SIGNS],
             };
         }
         let from = |c: &[u16; 16]| Cdf::from_cumulative(*c, prior::WEIGHT, limit);
         Models {
             pattern: std::array::from_fn(|i| from(&prior::PATTERN[i])),
             mag: std::array::from_fn(|i| from(&prior::MAGNITUDE[i])),
+            sign: [Bit::default(); SIGNS],
         }
     }
 }
@@ -101,6 +111,8 @@ pub struct Extent {
 /// even (the positions past the block stay 0).
 pub struct Scratch {
     mag: Vec<u32>,
+    /// signs where the signs have contexts (0 zero, 1 positive, 2 negative)
+    sgn: Vec<u8>,
     rx: usize,
     plane: usize,
 }
@@ -111,6 +123,7 @@ impl Scratch {
         let rx = ext.cols.next_multiple_of(2) + 2;
         Scratch {
             mag: vec![0; (ext.planes + 1) * ry * rx],
+            sgn: vec![0; (ext.planes + 1) * ry * rx],
             rx,
             plane: ry * rx,
         }
@@ -125,6 +138,12 @@ impl Scratch {
     /// Zero every magnitude.
     pub(super) fn clear(&mut self) {
         self.mag.fill(0);
+    }
+
+    /// The sign context of the coefficient at index `i` ([`SIGNS`]).
+    #[inline(always)]
+    fn sign_ctx(&self, i: usize) -> usize {
+        3 * self.sgn[i - 1] as usize + self.sgn[i - self.rx] as usize
     }
 
     /// The row stride.
@@ -224,12 +243,15 @@ pub fn encode(
     ext: Extent,
     rows: &impl Rows,
     s: &mut Scratch,
-    (limit, trained): (u8, bool),
+    (limit, trained, signs): (u8, bool, bool),
     mut counts: Option<&mut Counts>,
     (e, w): (&mut Encoder, &mut BitWriter),
 ) {
     let mut m = Models::new(limit, trained);
-    s.mag.fill(0);
+    s.clear();
+    if signs {
+        s.sgn.fill(0);
+    }
     let off = quad_offsets(s.rx);
     each_quad(ext, rows, |k, y, x, valid, at| {
         let mut pattern = 0;
@@ -254,15 +276,29 @@ pub fn encode(
                     let k = c.saturating_sub(KOFF) as u32;
                     n.magnitude[c][(((a - 1) as u64 >> k).min(15)) as usize] += 1;
                 }
-                put_magnitude(e, w, &mut m.mag[c], c, a, v < 0);
-                s.mag[i + off[b]] = a.min(CAP);
+                let j = i + off[b];
+                if signs {
+                    put_magnitude(e, w, &mut m.mag[c], c, a, None);
+                    e.bit(&mut m.sign[s.sign_ctx(j)], v < 0, limit);
+                    s.sgn[j] = 1 + (v < 0) as u8;
+                } else {
+                    put_magnitude(e, w, &mut m.mag[c], c, a, Some(v < 0));
+                }
+                s.mag[j] = a.min(CAP);
             }
         }
     });
 }
 
 #[inline(always)]
-fn put_magnitude(e: &mut Encoder, w: &mut BitWriter, cdf: &mut Cdf, c: usize, a: u32, neg: bool) {
+fn put_magnitude(
+    e: &mut Encoder,
+    w: &mut BitWriter,
+    cdf: &mut Cdf,
+    c: usize,
+    a: u32,
+    neg: Option<bool>,
+) {
     let k = c.saturating_sub(KOFF) as u32;
     let v = (a - 1) as u64;
     let h = v >> k;
@@ -275,7 +311,10 @@ fn put_magnitude(e: &mut Encoder, w: &mut BitWriter, cdf: &mut Cdf, c: usize, a:
         w.put(nb as u64, 6);
         w.put(x, nb);
     }
-    w.put(((v & ((1 << k) - 1)) << 1) | neg as u64, k + 1);
+    match neg {
+        Some(neg) => w.put(((v & ((1 << k) - 1)) << 1) | neg as u64, k + 1),
+        None => w.put(v & ((1 << k) - 1), k),
+    }
 }
 
 /// Decode a block written by [`encode`] into `band`, which holds zeros at the block's
@@ -285,12 +324,15 @@ pub fn decode(
     ext: Extent,
     rows: &impl Rows,
     s: &mut Scratch,
-    (limit, trained): (u8, bool),
+    (limit, trained, signs): (u8, bool, bool),
     d: &mut Decoder,
     r: &mut BitReader,
 ) {
     let mut m = Models::new(limit, trained);
-    s.mag.fill(0);
+    s.clear();
+    if signs {
+        s.sgn.fill(0);
+    }
     let off = quad_offsets(s.rx);
     each_quad(ext, rows, |k, y, x, valid, at| {
         let i = s.at(k, y, x);
@@ -300,25 +342,42 @@ pub fn decode(
         while bits != 0 {
             let b = bits.trailing_zeros() as usize;
             bits &= bits - 1;
-            let c = s.mag_ctx(i + off[b], pm);
-            let (a, neg) = get_magnitude(d, r, &mut m.mag[c], c);
+            let j = i + off[b];
+            let c = s.mag_ctx(j, pm);
+            let (a, neg) = if signs {
+                let a = get_magnitude(d, r, &mut m.mag[c], c, false).0;
+                let neg = d.bit(&mut m.sign[s.sign_ctx(j)], limit);
+                s.sgn[j] = 1 + neg as u8;
+                (a, neg)
+            } else {
+                get_magnitude(d, r, &mut m.mag[c], c, true)
+            };
             band[at[b]] = if neg {
                 (a as u32 as i32).wrapping_neg()
             } else {
                 a as u32 as i32
             };
-            s.mag[i + off[b]] = a.min(CAP as u64) as u32;
+            s.mag[j] = a.min(CAP as u64) as u32;
         }
     });
 }
 
 #[inline(always)]
-fn get_magnitude(d: &mut Decoder, r: &mut BitReader, cdf: &mut Cdf, c: usize) -> (u64, bool) {
+fn get_magnitude(
+    d: &mut Decoder,
+    r: &mut BitReader,
+    cdf: &mut Cdf,
+    c: usize,
+    sign: bool,
+) -> (u64, bool) {
     let k = c.saturating_sub(KOFF) as u32;
     let mut h = d.symbol(cdf) as u64;
     if h == 15 {
         let nb = (r.get(6) as u32).min(32);
         h = ((1u64 << nb) | r.get(nb)) + 14;
+    }
+    if !sign {
+        return (((h << k) | r.get(k)) + 1, false);
     }
     let low = r.get(k + 1);
     (((h << k) | (low >> 1)) + 1, low & 1 == 1)

@@ -124,6 +124,43 @@ impl Cdf {
     }
 }
 
+/// An adaptive binary model for the same coder: `p = P(0)·2^15`, starting at ½; after
+/// each bit `p += (t − p) >> rate` with `t = 2^15 − 32` after a 0 and `32` after a 1,
+/// `rate = min(⌊log₂(n + 2)⌋, limit)` after `n` bits (as [`Cdf`]), so `p` stays in
+/// `[32, 2^15 − 32]`. Coding a bit splits the interval at `s = ⌊range / 2^15⌋·p`: a 0
+/// keeps `[0, s)`, a 1 takes `[s, range)`.
+#[derive(Clone, Copy, Debug)]
+pub struct Bit {
+    p: u16,
+    count: u8,
+}
+
+impl Default for Bit {
+    fn default() -> Self {
+        Bit {
+            p: (ONE / 2) as u16,
+            count: 0,
+        }
+    }
+}
+
+impl Bit {
+    #[inline(always)]
+    fn update(&mut self, bit: bool, limit: u8) {
+        let rate = (self.count as u32 + 2).ilog2().min(limit as u32);
+        self.count = self.count.saturating_add(1);
+        let t = if bit { 32 } else { ONE - 32 };
+        let p = self.p as i32;
+        self.p = (p + ((t - p) >> rate)) as u16;
+    }
+
+    /// `−log₂ P(bit)` in bits.
+    pub fn cost(&self, bit: bool) -> f64 {
+        let p0 = self.p as f64 / ONE as f64;
+        -(if bit { 1.0 - p0 } else { p0 }).log2()
+    }
+}
+
 /// `N` CDFs: `seen[k]` at context `k·step`, every other context uniform
 /// (`c[i] = 2^11·(i + 1)`, the CDF of a context without counts).
 pub const fn spread<const N: usize>(seen: &[[u16; 16]], step: usize) -> [[u16; 16]; N] {
@@ -168,6 +205,23 @@ impl<'a> Decoder<'a> {
         d.renormalise();
         s
     }
+
+    /// Decode one bit with `m`, then adapt it (up to `limit`).
+    #[inline(always)]
+    pub fn bit(&mut self, m: &mut Bit, limit: u8) -> bool {
+        let d = &mut self.0;
+        let split = (d.range >> PROB_BITS) * m.p as u32;
+        let bit = d.code >= split;
+        if bit {
+            d.code -= split;
+            d.range -= split;
+        } else {
+            d.range = split;
+        }
+        m.update(bit, limit);
+        d.renormalise();
+        bit
+    }
 }
 
 /// Range encoder of [`Cdf`] symbols.
@@ -192,6 +246,21 @@ impl Encoder {
         (lo, w.range) = cdf.interval(w.range, s);
         w.low += lo as u64;
         cdf.update(s);
+        w.renormalise();
+    }
+
+    /// Code `bit` with `m`, then adapt it (up to `limit`).
+    #[inline(always)]
+    pub fn bit(&mut self, m: &mut Bit, bit: bool, limit: u8) {
+        let w = &mut self.0;
+        let split = (w.range >> PROB_BITS) * m.p as u32;
+        if bit {
+            w.low += split as u64;
+            w.range -= split;
+        } else {
+            w.range = split;
+        }
+        m.update(bit, limit);
         w.renormalise();
     }
 
