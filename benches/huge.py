@@ -11,7 +11,8 @@ Everything is removed at the end.
 
 Run from the repository root after
 `cargo build --release && cargo build --release --example raw_psnr`:
-    python3 benches/huge.py [--skip-image] [--skip-volume] [--skip-lossless] [--threads N]
+    python3 benches/huge.py [--skip-image] [--skip-volume] [--skip-lossless] [--skip-tiles]
+                            [--threads N]
 """
 import argparse
 import os
@@ -91,7 +92,8 @@ def mosaic(raw, tmp):
 
 def run(label, raw, dims, tile, args, tmp, env):
     one(label, raw, dims, ["--bpp", "1"], None, tmp, env)
-    one(label, raw, dims, ["--bpp", "1"], tile, tmp, env)
+    if not args.skip_tiles:
+        one(label, raw, dims, ["--bpp", "1"], tile, tmp, env)
     if not args.skip_lossless:
         one(label, raw, dims, ["--lossless"], None, tmp, env)
 
@@ -101,6 +103,7 @@ def main():
     ap.add_argument("--skip-image", action="store_true")
     ap.add_argument("--skip-volume", action="store_true")
     ap.add_argument("--skip-lossless", action="store_true")
+    ap.add_argument("--skip-tiles", action="store_true")
     ap.add_argument("--threads", default="2")
     args = ap.parse_args()
     env = dict(os.environ, RAYON_NUM_THREADS=args.threads)
