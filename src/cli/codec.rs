@@ -74,8 +74,8 @@ pub struct EncodeArgs {
           value_parser = clap::value_parser!(u8).range(2..=3))]
     pub format: u8,
     /// Format 3.0 in one piece whatever the size (without it, rasters over the
-    /// one-piece limit of `--tile` are cut into format 2 tiles). Format 3.0 itself is
-    /// the default.
+    /// one-piece limit of `--tile` that are not streamed as one transform are cut into
+    /// format 2 tiles). Format 3.0 itself is the default.
     #[arg(long, conflicts_with = "format")]
     pub blocks: bool,
     /// Effort 1..9, speed against size (as `cjxl -e`): 1–3 the HT-style block coder
