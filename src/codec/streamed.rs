@@ -140,13 +140,13 @@ fn rdo_of(rate: Rate) -> Option<f32> {
 /// Most passes of the whole stream [`fit_bpp`] codes.
 const BPP_PASSES: usize = 4;
 
-/// The file of `--bpp b` (at most `b` bits per position, within 1% under it when the
+/// The file of `--bpp b` (at most `b` bits per position, within 0.5% under it when the
 /// passes allow): the whole stream coded at the sampled tiles' step `step` (their bits
 /// per position `r(Δ)` differ from the raster's, each tile its own small pyramid), then
-/// at the secant step on `ln r` against `ln Δ` aimed at `0.995·b` (the first secant's
+/// at the secant step on `ln r` against `ln Δ` aimed at `0.998·b` (the first secant's
 /// slope `slope = d ln r / d ln Δ` measured on the sample), at most [`BPP_PASSES`]
-/// passes; the last met file (the one nearest `b`) when none lands in `[0.99·b, b]`, the
-/// smallest when none meets `b`.
+/// passes; the met file nearest `b` when none lands in `[0.995·b, b]`, the smallest
+/// when none meets `b`.
 fn fit_bpp<S: SlabSource + ?Sized>(
     src: &mut S,
     h: &mut Header,
@@ -157,7 +157,7 @@ fn fit_bpp<S: SlabSource + ?Sized>(
     slope: f64,
 ) -> Result<Vec<u8>> {
     let positions = h.dims.iter().product::<usize>().max(1) as f64;
-    let aim = (0.995 * b).ln();
+    let aim = (0.998 * b).ln();
     let mut x = step.ln();
     let mut last: Option<(f64, f64)> = None;
     let mut met: Option<Vec<u8>> = None;
@@ -166,7 +166,7 @@ fn fit_bpp<S: SlabSource + ?Sized>(
         h.step = x.exp();
         let bytes = encode_at(src, h, meta, rdo)?;
         let r = bytes.len() as f64 * 8.0 / positions;
-        if r <= b && r >= 0.99 * b {
+        if r <= b && r >= 0.995 * b {
             return Ok(bytes);
         }
         let y = r.ln();
