@@ -206,6 +206,14 @@ fn a_whole_tile_streams_over_the_one_piece_limit() {
     let mut two = o(Rate::Bpp(1.0));
     two.format = Format::Bands;
     assert_eq!(codec::default_layout(&big, &two), tiles);
+    // volumes stay tiled by default (their stream is below the tiles, docs/tiles.md)
+    let mut vol = big.clone();
+    vol.dims = vec![1024, 1024, 1024];
+    assert!(codec::streams(&vol, &o(Rate::Bpp(1.0))));
+    assert_eq!(
+        codec::default_layout(&vol, &o(Rate::Bpp(1.0))),
+        codec::default_tile(&vol.dims, 1)
+    );
     let small = Shape::of(&small);
     assert_eq!(
         codec::default_layout(&small, &o(Rate::Lossless)),
