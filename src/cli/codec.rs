@@ -60,11 +60,11 @@ pub struct EncodeArgs {
     pub lossless: bool,
     /// Tile extents, fastest axis first: `N` (every axis), `X,Y[,Z]`, or `whole` (one
     /// tile). Default: one tile up to 2^24 positions or 2^26 samples (positions ×
-    /// channels), else 1024 per axis in 2-D and 128 in 3-D. `whole` above that limit:
-    /// integer rasters read in slabs (raw, NRRD, TIFF) at --quality, --keep,
-    /// --threshold or --bpp are one transform streamed a slab at a time (format 3.0,
-    /// bounded memory; today 0.2 dB below the tiles at 1 bpp). Each tile is coded on its
-    /// own at the step of the whole raster.
+    /// channels); above that limit integer images read in slabs (raw, NRRD, TIFF) at
+    /// --quality, --keep, --threshold or --bpp are one transform streamed a slab at a
+    /// time (format 3.0, bounded memory; volumes too with `whole`), the others 1024 per
+    /// axis in 2-D and 128 in 3-D. Each tile is coded on its own at the step of the
+    /// whole raster.
     #[arg(long, value_name = "T")]
     pub tile: Option<String>,
     /// Format of a one-piece file: 3 (the default: every band cut into independent
@@ -75,8 +75,8 @@ pub struct EncodeArgs {
           value_parser = clap::value_parser!(u8).range(2..=3))]
     pub format: u8,
     /// Format 3.0 in one piece whatever the size (without it, rasters over the
-    /// one-piece limit of `--tile` are cut into format 2 tiles). Format 3.0 itself is
-    /// the default.
+    /// one-piece limit of `--tile` that are not streamed as one transform are cut into
+    /// format 2 tiles). Format 3.0 itself is the default.
     #[arg(long, conflicts_with = "format")]
     pub blocks: bool,
     /// Effort 1..9, speed against size (as `cjxl -e`): 1–3 the HT-style block coder
@@ -228,7 +228,7 @@ fn encode_slabs(
     let shape = crate::io::slab::SlabSource::shape(src).clone();
     let tile = match a.tile.as_deref() {
         None if a.blocks => shape.dims.clone(),
-        None => codec::default_tile(&shape.dims, shape.channels),
+        None => codec::default_layout(&shape, opts),
         Some(s) => tile_extents(s, &shape.dims)?,
     };
     let t = std::time::Instant::now();

@@ -58,4 +58,6 @@ pub use read::{
 pub use reblock::to_blocks;
 pub use streamed::{decodes_streamed, encode_streamed, StreamedDecoder};
 pub use tiles::{default_tile, level_extents};
-pub use write::{encode, encode_stream, encode_tiled, encode_tiled_view, encode_view, streams};
+pub use write::{
+    default_layout, encode, encode_stream, encode_tiled, encode_tiled_view, encode_view, streams,
+};

@@ -12,10 +12,13 @@
 //! Memory: the stream's few rows per level, the quantized rows of each band's open
 //! stripe (and of a parent's rows until its children's stripes are coded), and the
 //! coded blocks. The base step comes from a first pass ([`super::tiles::first_pass`]):
-//! the range, and for `--keep` and `--bpp` a sample of tiles of the default grid.
-//! Rate–distortion optimised indices need a parent's final indices before a child is
-//! coded, which would hold a band's values until its coarsest ancestor's stripe is
-//! done (half a 16384² image); the stream quantizes without it.
+//! the range, and for `--keep` and `--bpp` a sample of tiles of the default grid; `--bpp`
+//! then codes the whole stream once or a few times to land on its budget ([`fit_bpp`]).
+//! Rate–distortion optimised indices: a child is coded with its parent's final indices
+//! as context, so a parent band's indices are chosen a stripe at a time as soon as the
+//! stripe is complete, coded without its own parent ([`Coder::settled`]); waiting for
+//! the parent's own parent would hold a band's values until its coarsest ancestor's
+//! stripe is done (half a 16384² image).
 
 use super::colour::{channel_weights, planes_f32};
 use super::levels::{round_index, CodedBand};
@@ -91,7 +94,7 @@ pub fn encode_streamed<S: SlabSource + ?Sized, W: std::io::Write>(
                 .concat();
             keep_step(&mut w, k, span)
         }
-        Rate::Bpp(b) => bpp_step(sample, opts, span, b)?,
+        Rate::Bpp(_) => 0.0,
         _ => unreachable!("refused by covers"),
     };
     let colour = lossy_colour(shape.channels);
@@ -115,22 +118,87 @@ pub fn encode_streamed<S: SlabSource + ?Sized, W: std::io::Write>(
         // reconstruction at the index, as the whole-array encoder's optimised files
         header.delta = 0.0;
     }
-    let bytes = encode_at(src, &header, &meta::to_bytes(&shape.meta), rdo)?;
+    let meta = meta::to_bytes(&shape.meta);
+    let bytes = match opts.rate {
+        Rate::Bpp(b) => {
+            let (step, slope) = bpp_step(sample, opts, span, b)?;
+            fit_bpp(src, &mut header, &meta, rdo, b, step, slope)?
+        }
+        _ => encode_at(src, &header, &meta, rdo)?,
+    };
     out.write_all(&bytes)?;
     Ok(bytes.len() as u64)
 }
 
 /// The multiplier of the rate–distortion optimised indices of the rate mode (those the
-/// whole-array encoder optimises: `--quality`, `--bpp`), given to the bands without
-/// children ([`Coder`]).
+/// whole-array encoder optimises: `--quality`, `--bpp`), given to the detail bands
+/// ([`Coder`]).
 fn rdo_of(rate: Rate) -> Option<f32> {
     matches!(rate, Rate::Quality(_) | Rate::Bpp(_)).then_some(quantize::LAMBDA)
 }
 
-/// The base step of `--bpp b`: the search of the tiled files ([`tiles::search`]) on the
-/// bits per position of one-piece files of (every ⌈n/[`BPP_SAMPLE`]⌉-th of) the sampled
-/// tiles, each coded as the stream codes the raster ([`encode_at`]).
-fn bpp_step(mut sample: Vec<Raster>, opts: &EncodeOptions, span: f64, b: f64) -> Result<f64> {
+/// Most passes of the whole stream [`fit_bpp`] codes.
+const BPP_PASSES: usize = 4;
+
+/// The file of `--bpp b` (at most `b` bits per position, within 0.5% under it when the
+/// passes allow): the whole stream coded at the sampled tiles' step `step` (their bits
+/// per position `r(Δ)` differ from the raster's, each tile its own small pyramid), then
+/// at the secant step on `ln r` against `ln Δ` aimed at `0.998·b` (the first secant's
+/// slope `slope = d ln r / d ln Δ` measured on the sample), at most [`BPP_PASSES`]
+/// passes; the met file nearest `b` when none lands in `[0.995·b, b]`, the smallest
+/// when none meets `b`.
+fn fit_bpp<S: SlabSource + ?Sized>(
+    src: &mut S,
+    h: &mut Header,
+    meta: &[u8],
+    rdo: Option<f32>,
+    b: f64,
+    step: f64,
+    slope: f64,
+) -> Result<Vec<u8>> {
+    let positions = h.dims.iter().product::<usize>().max(1) as f64;
+    let aim = (0.998 * b).ln();
+    let mut x = step.ln();
+    let mut last: Option<(f64, f64)> = None;
+    let mut met: Option<Vec<u8>> = None;
+    let mut unmet: Option<Vec<u8>> = None;
+    for _ in 0..BPP_PASSES {
+        h.step = x.exp();
+        let bytes = encode_at(src, h, meta, rdo)?;
+        let r = bytes.len() as f64 * 8.0 / positions;
+        if r <= b && r >= 0.995 * b {
+            return Ok(bytes);
+        }
+        let y = r.ln();
+        let g = match last {
+            Some((x0, y0)) if (x - x0).abs() > 1e-9 && y != y0 => (y - y0) / (x - x0),
+            _ => slope,
+        };
+        last = Some((x, y));
+        if r <= b {
+            if met.as_ref().is_none_or(|m| bytes.len() > m.len()) {
+                met = Some(bytes);
+            }
+        } else if unmet.as_ref().is_none_or(|u| bytes.len() < u.len()) {
+            unmet = Some(bytes);
+        }
+        // bits fall as the step grows: a slope that is not negative is noise
+        let g = if g < -1e-3 { g } else { slope };
+        x += ((aim - y) / g).clamp(-0.7, 0.7);
+    }
+    Ok(met.or(unmet).expect("at least one pass"))
+}
+
+/// The base step of `--bpp b` measured on (every ⌈n/[`BPP_SAMPLE`]⌉-th of) the sampled
+/// tiles, each coded as the stream codes the raster ([`encode_at`]): the search of the
+/// tiled files ([`tiles::search`]) on their bits per position `r(Δ)`, and the slope
+/// `d ln r / d ln Δ` there (from `Δ` and `1.1·Δ`) for [`fit_bpp`].
+fn bpp_step(
+    mut sample: Vec<Raster>,
+    opts: &EncodeOptions,
+    span: f64,
+    b: f64,
+) -> Result<(f64, f64)> {
     let every = sample.len().div_ceil(BPP_SAMPLE).max(1);
     sample = sample.into_iter().step_by(every).collect();
     let positions: f64 = sample.iter().map(|t| t.positions() as f64).sum();
@@ -157,7 +225,7 @@ fn bpp_step(mut sample: Vec<Raster>, opts: &EncodeOptions, span: f64, b: f64) ->
             Ok(h)
         })
         .collect::<Result<Vec<Header>>>()?;
-    tiles::search(span, true, -(0.99f64.ln()), |step| {
+    let bits = |step: f64| -> Result<f64> {
         let bytes = sample
             .par_iter()
             .zip(&heads)
@@ -169,14 +237,22 @@ fn bpp_step(mut sample: Vec<Raster>, opts: &EncodeOptions, span: f64, b: f64) ->
             })
             .collect::<Result<Vec<usize>>>()?;
         let bytes: usize = bytes.iter().sum();
-        Ok(b.ln() - (bytes as f64 * 8.0 / positions.max(1.0)).ln())
-    })
+        Ok((bytes as f64 * 8.0 / positions.max(1.0)).max(1e-9))
+    };
+    let step = tiles::search(span, true, -(0.99f64.ln()), |step| {
+        Ok(b.ln() - bits(step)?.ln())
+    })?;
+    let slope = (bits(step * 1.1)?.ln() - bits(step)?.ln()) / 1.1f64.ln();
+    // a flat sample (all its indices 0 at both steps) says nothing: a typical slope
+    let slope = if slope < -0.05 { slope } else { -0.8 };
+    Ok((step, slope))
 }
 
 /// The file of header `h` (its base step set) of the raster of `src`, with `mETA`
 /// bytes `meta`: the raster streamed through the pyramid a slab at a time. With `rdo`
-/// (a multiplier λ) the bands without children get rate–distortion optimised indices
-/// and the others are rounded; without, every band is dead-zone quantized.
+/// (a multiplier λ) the detail bands get rate–distortion optimised indices (those with
+/// children chosen before they are coded, [`Coder::settled`]) and the coarse band is
+/// rounded; without, every band is dead-zone quantized.
 pub(super) fn encode_at<S: SlabSource + ?Sized>(
     src: &mut S,
     h: &Header,
@@ -253,7 +329,7 @@ struct BandState {
     tall: usize,
     rows: BTreeMap<usize, Vec<i32>>,
     /// the values over the step of the rows not yet let go (bands whose indices are
-    /// optimised as they are coded)
+    /// optimised as they are coded, or settled a stripe at a time)
     values: BTreeMap<usize, Vec<f32>>,
     /// rows received per stripe
     got: Vec<usize>,
@@ -305,7 +381,7 @@ struct Coder<'p> {
     bands: Vec<BandState>,
     /// each band's child (the band whose parent it is)
     children: Vec<Option<usize>>,
-    /// the multiplier of optimised indices (bands without children), see [`encode_at`]
+    /// the multiplier of optimised indices (detail bands), see [`encode_at`]
     rdo: Option<f32>,
     err: Option<Error>,
 }
@@ -361,7 +437,7 @@ impl<'p> Coder<'p> {
         }
         let (s, rho) = (self.steps[j], band_rho(self.plan, j));
         let stripe = row.row / self.bands[j].tall;
-        if self.optimised(j) {
+        if self.optimised(j) || self.settled(j) {
             let v = row.data.iter().map(|&x| (x as f64 / s) as f32).collect();
             self.bands[j].values.insert(row.row, v);
         } else {
@@ -382,19 +458,27 @@ impl<'p> Coder<'p> {
                 .collect::<Result<Vec<i32>>>()?;
             self.bands[j].rows.insert(row.row, q);
         }
+        let settled = self.settled(j);
         let b = &mut self.bands[j];
         b.got[stripe] += 1;
+        let held = if !settled {
+            row.row..row.row + 1
+        } else if b.got[stripe] == b.stripe_rows(stripe).len() {
+            self.settle(j, stripe)?
+        } else {
+            return Ok(());
+        };
         self.try_code(j, stripe)?;
         if let Some(k) = self.children[j] {
-            // the child's stripes whose parent boxes hold this row
+            // the child's stripes whose parent boxes hold these rows
             let ch = &self.bands[k];
             let last = self.bands[j].grid.dims[0] - 1;
-            let hi = if row.row == last {
+            let hi = if held.end > last {
                 ch.grid.dims[0]
             } else {
-                (2 * row.row + 2).min(ch.grid.dims[0])
+                (2 * held.end).min(ch.grid.dims[0])
             };
-            let lo = (2 * row.row).min(hi);
+            let lo = (2 * held.start).min(hi);
             if lo < hi {
                 for t in lo / ch.tall..=(hi - 1) / ch.tall {
                     self.try_code(k, t)?;
@@ -402,6 +486,69 @@ impl<'p> Coder<'p> {
             }
         }
         Ok(())
+    }
+
+    /// Whether band `j`'s indices are optimised a stripe at a time before it is coded:
+    /// a detail band with children, when the rate mode optimises. Its children are
+    /// coded with its final indices as context (as the whole-array encoder codes
+    /// them), so they cannot wait for its own parent's stripe (a chain up to the
+    /// coarsest band): its indices are chosen as the whole-array encoder chooses them
+    /// (`(|v| − a)² + λ·bits(a)` least among `round(|v|)`, `round(|v|) − 1`, 0, the bits
+    /// those of the context coder's adaptive models as it codes the block), the block
+    /// coded without its parent, and those indices are then coded with their parent as
+    /// any rounded band's.
+    fn settled(&self, j: usize) -> bool {
+        self.rdo.is_some() && self.plan.bands[j].level > 0 && self.children[j].is_some()
+    }
+
+    /// Choose the indices of stripe `s` of band `j` (complete, [`Coder::settled`]) from
+    /// its values, block by block in parallel; its values go, its rows are kept as
+    /// indices. Returns the stripe's rows.
+    fn settle(&mut self, j: usize, s: usize) -> Result<Range<usize>> {
+        let lambda = self.rdo.unwrap_or(quantize::LAMBDA);
+        let coding: Coding = self.plan.coding;
+        let b = &self.bands[j];
+        let g = &b.grid;
+        let per: usize = g.counts[1..].iter().product();
+        let rows = b.stripe_rows(s);
+        let qs: Vec<Vec<i64>> = (s * per..(s + 1) * per)
+            .into_par_iter()
+            .map(|i| {
+                let bx = g.bounds(i);
+                let d = box_dims(&bx);
+                let v = b.gather_values(&bx);
+                let cols = d.last().copied().unwrap_or(1);
+                let mut e = crate::entropy::range::Encoder::new();
+                band::encode_rdo_with(&mut e, &d, None, lambda, coding, true, |g, out| {
+                    out.copy_from_slice(&v[g * cols..(g + 1) * cols])
+                })
+                .unwrap_or_default()
+            })
+            .collect();
+        let row_len: usize = g.dims[1..].iter().product();
+        let mut sdims = g.dims.clone();
+        sdims[0] = rows.len();
+        let mut stripe = vec![0i64; rows.len() * row_len];
+        for (k, q) in qs.into_iter().enumerate() {
+            let mut bx = g.bounds(s * per + k);
+            bx[0] = bx[0].start - rows.start..bx[0].end - rows.start;
+            crate::entropy::codeblocks::insert(&mut stripe, &sdims, &bx, &q);
+        }
+        let step = self.steps[j];
+        let b = &mut self.bands[j];
+        for (k, y) in rows.clone().enumerate() {
+            let row = stripe[k * row_len..(k + 1) * row_len]
+                .iter()
+                .map(|&q| {
+                    i32::try_from(q).map_err(|_| {
+                        Error::parameter("step", step, "a step whose indices fit 32 bits")
+                    })
+                })
+                .collect::<Result<Vec<i32>>>()?;
+            b.values.remove(&y);
+            b.rows.insert(y, row);
+        }
+        Ok(rows)
     }
 
     /// Whether band `j`'s indices are optimised as its blocks are coded: a detail band
