@@ -67,6 +67,9 @@ fn decode_band(
     Ok(v)
 }
 
+/// A band's code-block grid, the blocks to decode and their streams.
+type BlockStreams<'d> = (Grid, Vec<usize>, Vec<&'d [u8]>);
+
 /// The code-block grid (blocks of extents `block`) of a band of a code-block file (format 3), the blocks `window`
 /// meets (every block without one) and their streams in `data`.
 fn block_streams<'d>(
@@ -74,7 +77,7 @@ fn block_streams<'d>(
     dims: &[usize],
     block: &[usize],
     window: Option<&[Range<usize>]>,
-) -> Result<(Grid, Vec<usize>, Vec<&'d [u8]>)> {
+) -> Result<BlockStreams<'d>> {
     let set = crate::format::bands::parse_blocks(data, dims, block)?;
     let grid = Grid::new(dims, block);
     let which: Vec<usize> = match window {

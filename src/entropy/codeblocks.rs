@@ -503,7 +503,9 @@ where
         }
         parts
     };
-    let work: Vec<(usize, Vec<&mut [T]>, Vec<usize>)> = slabs
+    // each slab: its number, its rows of the output and the blocks it holds
+    type Slab<'r, T> = (usize, Vec<&'r mut [T]>, Vec<usize>);
+    let work: Vec<Slab<T>> = slabs
         .into_iter()
         .filter_map(|(s, ks)| Some((s, parts.get_mut(s)?.take()?, ks)))
         .collect();
