@@ -15,7 +15,7 @@
 use super::cache::{AnswerCache, AnswerKey, Key, LevelCache, OpenedCache};
 use super::ident::{self, IdentError};
 use super::iiif::ImageRequest;
-use super::source::{OpenedFile, Source};
+use super::source::{self, OpenedFile, Source};
 use super::{info, render, viewer, Config, ServeError};
 use crate::limits::Limits;
 use axum::body::Body;
@@ -407,6 +407,11 @@ async fn iiif(AxState(st): AxState<Arc<State>>, uri: Uri, headers: HeaderMap) ->
         Some(q) => format!("{}?{q}", uri.path()),
         None => uri.path().to_string(),
     };
+    if let Some(r) = &req {
+        if let Some(resp) = kept_answer(&st, &ident, &request, r, &headers, t0) {
+            return resp;
+        }
+    }
     // first, without a decode permit: the file's version, a 304, info.json or an
     // answer already encoded
     let st2 = st.clone();
@@ -511,33 +516,79 @@ async fn iiif(AxState(st): AxState<Arc<State>>, uri: Uri, headers: HeaderMap) ->
     let kept = matches!(&done, Ok((StatusCode::OK, ..))) && timing.is_none() && req_is_image;
     match done {
         Ok((status, etag, mime, body)) => {
-            let mut resp = Response::new(body);
-            *resp.status_mut() = status;
-            let h = resp.headers_mut();
-            if let Some(m) = mime {
-                h.insert(header::CONTENT_TYPE, HeaderValue::from_static(m));
-            }
-            if let Ok(v) = HeaderValue::from_str(&etag) {
-                h.insert(header::ETAG, v);
-            }
-            h.insert(
-                header::CACHE_CONTROL,
-                HeaderValue::from_static(CACHE_CONTROL),
-            );
-            h.insert(
-                header::LINK,
-                HeaderValue::from_static(
-                    "<http://iiif.io/api/image/3/level2.json>;rel=\"profile\"",
-                ),
-            );
-            if kept || timing.is_some() {
-                let t = server_timing(opened, timing.as_ref().map(|(q, t)| (*q, t)), t0.elapsed());
-                if let Ok(v) = HeaderValue::from_str(&t) {
-                    h.insert(HeaderName::from_static("server-timing"), v);
-                }
-            }
-            resp
+            let t = (kept || timing.is_some()).then(|| {
+                server_timing(opened, timing.as_ref().map(|(q, t)| (*q, t)), t0.elapsed())
+            });
+            answer(status, &etag, mime, body, t)
         }
         Err(e) => error_response(&e),
     }
+}
+
+/// An IIIF answer: its status, body and type, the file version's `ETag`, the caching and
+/// profile headers every answer carries, and `Server-Timing` when given.
+fn answer(
+    status: StatusCode,
+    etag: &str,
+    mime: Option<&'static str>,
+    body: Body,
+    timing: Option<String>,
+) -> Response {
+    let mut resp = Response::new(body);
+    *resp.status_mut() = status;
+    let h = resp.headers_mut();
+    if let Some(m) = mime {
+        h.insert(header::CONTENT_TYPE, HeaderValue::from_static(m));
+    }
+    if let Ok(v) = HeaderValue::from_str(etag) {
+        h.insert(header::ETAG, v);
+    }
+    h.insert(
+        header::CACHE_CONTROL,
+        HeaderValue::from_static(CACHE_CONTROL),
+    );
+    h.insert(
+        header::LINK,
+        HeaderValue::from_static("<http://iiif.io/api/image/3/level2.json>;rel=\"profile\""),
+    );
+    if let Some(t) = timing.and_then(|t| HeaderValue::from_str(&t).ok()) {
+        h.insert(HeaderName::from_static("server-timing"), t);
+    }
+    resp
+}
+
+/// An answer already kept, found on the connection's own thread without the blocking
+/// pool: the file located and its length and modification time read (`stat`, the
+/// version [`Source::open`] reads), the answer looked up under the same key. `None` sends
+/// the request the long way: not kept, a conditional request (its 304 is answered
+/// there), or any error.
+fn kept_answer(
+    st: &State,
+    id: &ident::Ident,
+    request: &str,
+    req: &ImageRequest,
+    headers: &HeaderMap,
+    t0: std::time::Instant,
+) -> Option<Response> {
+    if headers.contains_key(header::IF_NONE_MATCH) {
+        return None;
+    }
+    let path = ident::locate(&st.root, id).ok()?;
+    let (len, mtime) = source::version(&std::fs::metadata(&path).ok()?);
+    let key = AnswerKey {
+        path,
+        len,
+        mtime,
+        request: request.to_string(),
+    };
+    let body = st.answers.get(&key)?;
+    let open = t0.elapsed();
+    let timing = server_timing(open, None, t0.elapsed());
+    Some(answer(
+        StatusCode::OK,
+        &source::etag(len, mtime),
+        Some(req.format.mime()),
+        body.into(),
+        Some(timing),
+    ))
 }

@@ -95,16 +95,28 @@ impl std::fmt::Debug for OpenedFile {
     }
 }
 
+/// A file's version: its length and modification time (nanoseconds since the epoch, 0
+/// where the system gives none); a file replaced on disk has another.
+pub fn version(md: &std::fs::Metadata) -> (u64, u128) {
+    let mtime = md
+        .modified()
+        .ok()
+        .and_then(|t| t.duration_since(UNIX_EPOCH).ok())
+        .map_or(0, |d| d.as_nanos());
+    (md.len(), mtime)
+}
+
+/// The `ETag` of a file's version: `"len-mtime"` in hexadecimal.
+pub fn etag(len: u64, mtime: u128) -> String {
+    format!("\"{len:x}-{mtime:x}\"")
+}
+
 impl Source {
     /// Read the header of `path` and plan the image of `slice` (a volume without one is
     /// shown at its middle z slice).
     pub fn open(path: &Path, slice: Option<Slice>) -> Result<Source, ServeError> {
         let md = std::fs::metadata(path).map_err(|_| ServeError::NotFound)?;
-        let mtime = md
-            .modified()
-            .ok()
-            .and_then(|t| t.duration_since(UNIX_EPOCH).ok())
-            .map_or(0, |d| d.as_nanos());
+        let (_, mtime) = version(&md);
         let header = codec::header_of_file(path)?;
         let nd = header.dims.len();
         let (slice, row_axis, col_axis) = match (nd, slice) {
@@ -187,7 +199,7 @@ impl Source {
 
     /// The entity tag of this version of the file.
     pub fn etag(&self) -> String {
-        format!("\"{:x}-{:x}\"", self.len, self.mtime)
+        etag(self.len, self.mtime)
     }
 
     /// The window `rows × cols` of level `k` (level coordinates, within the level).
