@@ -134,7 +134,25 @@ pub(super) fn level_moments(
     synthesize: impl Fn(Grid) -> Result<Grid>,
 ) -> Result<Measured> {
     let (m_y, m_x) = (packed.h(), packed.w());
-    let ((ay, ax), side) = if k == 1 {
+    let ((ay, ax), side) = measured_box(k, (m_y, m_x), (n_y, n_x), (scheme, boundary));
+    let x = synthesize(sub_block(packed, (n_y, n_x), ay, ax, true))?;
+    let y = synthesize(sub_block(packed, (n_y, n_x), ay, ax, false))?;
+    let m = moments_at(&x, &y, k, side);
+    Ok((m, (k > 1).then_some((x, y))))
+}
+
+/// The sub-block measured at level `k` of an `m_y × m_x` output from `n_y × n_x`
+/// coarse samples, as [`sub_axis`] gives it per axis, and the side of the measured
+/// part: at the finest level (k = 1) a top-left square of `min(m_y, m_x, FINEST_SIDE)`,
+/// else the whole level.
+#[allow(clippy::type_complexity)]
+fn measured_box(
+    k: usize,
+    (m_y, m_x): (usize, usize),
+    (n_y, n_x): (usize, usize),
+    (scheme, boundary): (Scheme, Boundary),
+) -> (((usize, usize), (usize, usize)), (usize, usize)) {
+    if k == 1 {
         let s = m_y.min(m_x).min(FINEST_SIDE);
         let a = (
             sub_axis(scheme, boundary, m_y, n_y, s),
@@ -143,11 +161,7 @@ pub(super) fn level_moments(
         (a, (s, s))
     } else {
         (((m_y, n_y), (m_x, n_x)), (m_y, m_x))
-    };
-    let x = synthesize(sub_block(packed, (n_y, n_x), ay, ax, true))?;
-    let y = synthesize(sub_block(packed, (n_y, n_x), ay, ax, false))?;
-    let m = moments_at(&x, &y, k, side);
-    Ok((m, (k > 1).then_some((x, y))))
+    }
 }
 
 /// The moments of [`level_moments`] of two reconstructed level-`(k − 1)` grids: on the
@@ -175,16 +189,7 @@ pub(super) fn refined_moments(
     synthesize: impl Fn(Grid) -> Result<Grid>,
 ) -> Result<(f64, f64, f64)> {
     let (n_y, n_x) = (x.h(), x.w());
-    let ((ay, ax), side) = if k == 1 {
-        let s = m_y.min(m_x).min(FINEST_SIDE);
-        let a = (
-            sub_axis(scheme, boundary, m_y, n_y, s),
-            sub_axis(scheme, boundary, m_x, n_x, s),
-        );
-        (a, (s, s))
-    } else {
-        (((m_y, n_y), (m_x, n_x)), (m_y, m_x))
-    };
+    let ((ay, ax), side) = measured_box(k, (m_y, m_x), (n_y, n_x), (scheme, boundary));
     let up = |g: &Grid| {
         let mut b = Grid::zeros(ay.0, ax.0, 1);
         for r in 0..ay.1 {
