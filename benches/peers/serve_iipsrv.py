@@ -5,20 +5,27 @@ loopback only. Prints file sizes and PSNR of both codings, then p50/p99 latency 
 throughput of each server, as markdown table rows.
 
 usage: python3 benches/peers/serve_iipsrv.py [--size 8192] [--requests 4000] [--clients 8] [--mra-tile 256]
-       [--blocks] [--warm] [--work DIR] [--rounds N] [--split]
+       [--blocks] [--warm] [--work DIR] [--rounds N] [--split] [--floor] [--threads]
 
 --rounds N measures the two servers N times, alternating, each round a new trace (the
 servers keep what they cached). --split prints, for `mra serve`, the latency by what each
 request did, from the answer's `Server-Timing` header (kept answer, or render: the level
-read, where its window came from, resampled or not) with the server's own time.
+read, where its window came from, resampled or not) with the server's own time. --floor adds,
+after each round, what the client measures against a server that does nothing: the round's
+answers as static files served by lighttpd, and mra serve asked the same trace again (all
+kept). Each client is a process of its own (--threads: threads of one process, which wait for
+each other's interpreter lock).
 needs: apt-get install iipimage-server lighttpd libvips-tools; MRA (default target/release/mra)
 """
 import argparse
+import hashlib
 import http.client
 import json
+import multiprocessing
 import os
 import random
 import shutil
+import socket
 import subprocess
 import sys
 import tempfile
@@ -68,44 +75,86 @@ def parse_timing(v):
     return what, durs
 
 
-def run_clients(host, port, prefix, reqs, clients, timings=None):
-    """Latencies (s) of every request and the wall time, `clients` threads with keep-alive;
-    with `timings` (a list), each request's (latency, Server-Timing header) appended to it."""
-    lat = []
-    lock = threading.Lock()
-    errors = []
-    chunks = [reqs[i::clients] for i in range(clients)]
+def _client(host, port, prefix, chunk, want_timing, start, out):
+    """One client: its requests in order over one keep-alive connection, after `start`
+    (a barrier); puts (first start, last end, [(latency, Server-Timing)], errors, connections reopened) on `out`."""
+    c = http.client.HTTPConnection(host, port, timeout=60)
+    c.connect()
+    c.sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+    mine, errors, reopened = [], [], 0
+    start.wait()
+    t_first = time.perf_counter()
+    for r in chunk:
+        # http.client opens a new connection when the server closed the last one
+        reopened += c.sock is None
+        t = time.perf_counter()
+        c.request("GET", prefix + r)
+        resp = c.getresponse()
+        body = resp.read()
+        lat = time.perf_counter() - t
+        mine.append((lat, resp.getheader("Server-Timing") if want_timing else None))
+        if resp.status != 200 or len(body) < 100:
+            errors.append((resp.status, r))
+    t_last = time.perf_counter()
+    c.close()
+    out.put((t_first, t_last, mine, errors, reopened))
 
-    def worker(chunk):
-        c = http.client.HTTPConnection(host, port, timeout=60)
-        mine = []
-        seen = []
-        for r in chunk:
-            t = time.perf_counter()
+
+def run_clients(host, port, prefix, reqs, clients, timings=None, threads=False):
+    """Latencies (s) of every request and the wall time, `clients` clients with keep-alive,
+    each a process of its own (so that no client waits for another's interpreter lock;
+    `threads`: threads of this process, the bench's old client); with `timings` (a list),
+    each request's (latency, Server-Timing header) appended to it."""
+    chunks = [reqs[i::clients] for i in range(clients)]
+    if threads:
+        import queue
+        out, start = queue.Queue(), threading.Barrier(clients)
+        workers = [threading.Thread(target=_client, args=(host, port, prefix, ch, timings is not None, start, out))
+                   for ch in chunks]
+    else:
+        ctx = multiprocessing.get_context("fork")
+        out, start = ctx.Queue(), ctx.Barrier(clients)
+        workers = [ctx.Process(target=_client, args=(host, port, prefix, ch, timings is not None, start, out))
+                   for ch in chunks]
+    for w in workers:
+        w.start()
+    got = [out.get() for _ in workers]
+    for w in workers:
+        w.join()
+    # perf_counter is the system's monotonic clock: comparable between processes
+    wall = max(g[1] for g in got) - min(g[0] for g in got)
+    errors = [e for g in got for e in g[3]]
+    if errors:
+        raise SystemExit(f"{len(errors)} failed requests, first {errors[0]}")
+    reopened = sum(g[4] for g in got)
+    if reopened:
+        print(f"({port}: {reopened} connections reopened: keep-alive not kept)", file=sys.stderr)
+    seen = [m for g in got for m in g[2]]
+    if timings is not None:
+        timings.extend(seen)
+    return sorted(lat for lat, _ in seen), wall
+
+
+def static_copy(host, port, prefix, reqs, folder):
+    """Each answer of `reqs` (asked of the server at `port`, one client) saved in `folder`
+    under a name of its request; the names, in the order of `reqs`."""
+    os.makedirs(folder, exist_ok=True)
+    c = http.client.HTTPConnection(host, port, timeout=60)
+    names = []
+    for r in reqs:
+        name = hashlib.sha1(r.encode()).hexdigest()[:16] + ".jpg"
+        path = os.path.join(folder, name)
+        if not os.path.exists(path):
             c.request("GET", prefix + r)
             resp = c.getresponse()
             body = resp.read()
-            mine.append(time.perf_counter() - t)
-            if timings is not None:
-                seen.append((mine[-1], resp.getheader("Server-Timing")))
-            if resp.status != 200 or len(body) < 100:
-                errors.append((resp.status, r))
-        c.close()
-        with lock:
-            lat.extend(mine)
-            if timings is not None:
-                timings.extend(seen)
-
-    threads = [threading.Thread(target=worker, args=(ch,)) for ch in chunks]
-    t0 = time.perf_counter()
-    for t in threads:
-        t.start()
-    for t in threads:
-        t.join()
-    wall = time.perf_counter() - t0
-    if errors:
-        raise SystemExit(f"{len(errors)} failed requests, first {errors[0]}")
-    return sorted(lat), wall
+            if resp.status != 200:
+                raise SystemExit(f"{r}: {resp.status} while copying the answers")
+            with open(path, "wb") as f:
+                f.write(body)
+        names.append(name)
+    c.close()
+    return names
 
 
 def pct(v, p):
@@ -161,6 +210,14 @@ def main():
                     help="measure both servers this many times, alternating, a new trace each round")
     ap.add_argument("--split", action="store_true",
                     help="mra serve's latency by what each request did (its Server-Timing header)")
+    ap.add_argument("--threads", action="store_true",
+                    help="the clients as threads of one Python process (they then wait for each "
+                         "other's interpreter lock, which is most of a tail of a few ms) instead of "
+                         "one process each")
+    ap.add_argument("--floor", action="store_true",
+                    help="after each round, the client's floor: the same trace asked of lighttpd "
+                         "serving mra's answers as static files, and of mra serve again (every "
+                         "answer then kept)")
     ap.add_argument("--work", help="a folder to keep the generated files in and reuse them "
                     "from on the next run (default: a temporary folder, removed)")
     a = ap.parse_args()
@@ -232,16 +289,26 @@ fastcgi.server = ( "/fcgi-bin/iipsrv.fcgi" => ((
         print(f"\n{a.requests} tile requests, {a.clients} clients, {a.size}² image\n")
         print("| server | p50 ms | p99 ms | tiles/s | load average |\n|---|---|---|---|---|")
         for name, port, prefix in servers:
-            run_clients("127.0.0.1", port, prefix, warm, a.clients)
+            run_clients("127.0.0.1", port, prefix, warm, a.clients, threads=a.threads)
         timings = []
         for rnd in range(a.rounds):
             reqs = trace(a.size, a.requests, a.seed + rnd)
-            for name, port, prefix in servers:
+            runs = [(name, port, prefix, reqs) for name, port, prefix in servers]
+            for name, port, prefix, rr in runs:
                 mine = timings if name.startswith("mra") else None
-                lat, wall = run_clients("127.0.0.1", port, prefix, reqs, a.clients, mine)
+                lat, wall = run_clients("127.0.0.1", port, prefix, rr, a.clients, mine, a.threads)
                 load = os.getloadavg()[0]
                 print(f"| {name} | {pct(lat, 50) * 1e3:.1f} | {pct(lat, 99) * 1e3:.1f} | {len(lat) / wall:.0f} | {load:.1f} |",
                       flush=True)
+            if a.floor:
+                # not before the round: the copies would warm the servers' caches
+                names = static_copy("127.0.0.1", port_mra, "/iiif/3/img.mra/", reqs, os.path.join(work, "static"))
+                for name, port, prefix, rr in [("floor: lighttpd, static files", port_iip, "/static/", names),
+                                               ("floor: mra serve, all kept", port_mra, "/iiif/3/img.mra/", reqs)]:
+                    lat, wall = run_clients("127.0.0.1", port, prefix, rr, a.clients, threads=a.threads)
+                    load = os.getloadavg()[0]
+                    print(f"| {name} | {pct(lat, 50) * 1e3:.1f} | {pct(lat, 99) * 1e3:.1f} | {len(lat) / wall:.0f} | {load:.1f} |",
+                          flush=True)
         if a.split:
             split_table(timings)
     finally:

@@ -7,8 +7,8 @@
 //! connection    closed after CONNECTION_LIFETIME whatever it does
 //! requests      at most MAX_IN_FLIGHT handled at once, the others wait; an answer
 //!               not ready within REQUEST_TIMEOUT is 408
-//! decoding      at most `workers` requests decode at once, on blocking threads (a cut
-//!               from a level held whole is not counted)
+//! decoding      at most `workers` requests decode at once, on blocking threads; a cut
+//!               from a level held whole is rendered on the connection's thread
 //! URL           at most MAX_URL bytes (414)
 //! ```
 
@@ -36,6 +36,10 @@ pub const HEADER_TIMEOUT: Duration = Duration::from_secs(10);
 pub const REQUEST_TIMEOUT: Duration = Duration::from_secs(30);
 pub const CONNECTION_LIFETIME: Duration = Duration::from_secs(300);
 pub const MAX_URL: usize = 4096;
+/// The largest cut from a level held whole rendered on the connection's thread, in
+/// output pixels (512², two viewer tiles of 256² a side; its window is at most twice
+/// as wide and high): larger ones go to the blocking pool.
+pub const INLINE_CUT: u64 = 512 * 512;
 /// How long a client may keep an answer before asking again (with its `ETag`).
 pub const CACHE_CONTROL: &str = "public, max-age=60";
 
@@ -281,14 +285,92 @@ pub fn warm_all(st: &Arc<State>) {
 /// An answer: status, `ETag`, content type, body.
 type Answer = (StatusCode, String, Option<&'static str>, Body);
 
+/// The first step of an IIIF request, on the connection's thread: the file located and
+/// its header read, then a 304, info.json, an answer kept, or (no decode needed, so no
+/// decode permit) a cut from a level held whole rendered at once; a request that decodes
+/// is left as [`Step::Render`] for the blocking pool. A cut of at most [`INLINE_CUT`]
+/// output pixels is a copy of its window, a resampling and one JPEG or PNG encode
+/// (about half a millisecond for a viewer's 256² tile), less than the two hand-overs
+/// between threads it would otherwise cost.
+#[allow(clippy::too_many_arguments)]
+fn first_step(
+    st: &Arc<State>,
+    ident: ident::Ident,
+    req: Option<ImageRequest>,
+    request: String,
+    headers: &HeaderMap,
+    base: &str,
+    window: Option<(f64, f64)>,
+    t0: std::time::Instant,
+) -> Result<Step, ServeError> {
+    let path = ident::locate(&st.root, &ident).map_err(|_| ServeError::NotFound)?;
+    let src = Source::open(&path, ident.slice)?;
+    let etag = src.etag();
+    if headers
+        .get(header::IF_NONE_MATCH)
+        .and_then(|v| v.to_str().ok())
+        .is_some_and(|v| v.split(',').any(|t| t.trim() == etag || t.trim() == "*"))
+    {
+        return Ok(Step::Done((
+            StatusCode::NOT_MODIFIED,
+            etag,
+            None,
+            Vec::new().into(),
+        )));
+    }
+    let caps = info::caps(&src, st.limits.max_bytes);
+    let Some(req) = req else {
+        let doc = info::info_json(&src, base, &caps);
+        let ld = headers
+            .get(header::ACCEPT)
+            .and_then(|v| v.to_str().ok())
+            .is_some_and(|a| a.contains("application/ld+json"));
+        let mime = if ld {
+            "application/ld+json;profile=\"http://iiif.io/api/image/3/context.json\""
+        } else {
+            "application/json"
+        };
+        let body = serde_json::to_vec_pretty(&doc).unwrap_or_default();
+        return Ok(Step::Done((StatusCode::OK, etag, Some(mime), body.into())));
+    };
+    let key = AnswerKey {
+        path: src.path.clone(),
+        len: src.len,
+        mtime: src.mtime,
+        request,
+    };
+    let mime = Some(req.format.mime());
+    if let Some(body) = st.answers.get(&key) {
+        return Ok(Step::Done((StatusCode::OK, etag, mime, body.into())));
+    }
+    // a cut from a level held whole needs no decode, so no decode permit: it is not
+    // queued behind decodes; a small one is rendered here
+    let (w, h) = src.size();
+    let (cut, small) = match req.resolve(w, h, &caps) {
+        Ok(r) => (
+            src.level_held(&st.cache, render::choose_level(&src, &r)),
+            r.out_w.saturating_mul(r.out_h) <= INLINE_CUT,
+        ),
+        Err(_) => (false, false),
+    };
+    let job = Box::new((src, req, caps, key));
+    if !(cut && small) {
+        return Ok(Step::Render(job, !cut));
+    }
+    let open = t0.elapsed();
+    let (answer, trace) = render_job(st, *job, window, None)?;
+    Ok(Step::Rendered(answer, trace, open))
+}
+
 /// Where the first step of an image request leaves it.
 enum Step {
     Done(Answer),
-    /// Rendered at once on the thread that looked it up (a cut from a level held whole,
-    /// or a decode permit was free): the answer, what the render did, the time until the
-    /// render began.
+    /// A cut from a level held whole, rendered at once on the connection's thread: the
+    /// answer, what the render did, the time until the render began.
     Rendered(Answer, render::Trace, Duration),
-    Render(Box<Job>),
+    /// Rendered on the blocking pool: a decode needed (`true`: holding a decode permit),
+    /// or a cut of more than [`INLINE_CUT`] output pixels.
+    Render(Box<Job>, bool),
 }
 
 /// What a render needs: the file, the request, its limits, the key its answer is kept by.
@@ -412,79 +494,10 @@ async fn iiif(AxState(st): AxState<Arc<State>>, uri: Uri, headers: HeaderMap) ->
             return resp;
         }
     }
-    // first, without a decode permit: the file's version, a 304, info.json or an
-    // answer already encoded
-    let st2 = st.clone();
-    let first = tokio::task::spawn_blocking(move || -> Result<Step, ServeError> {
-        let path = ident::locate(&st2.root, &ident).map_err(|_| ServeError::NotFound)?;
-        let src = Source::open(&path, ident.slice)?;
-        let etag = src.etag();
-        if headers
-            .get(header::IF_NONE_MATCH)
-            .and_then(|v| v.to_str().ok())
-            .is_some_and(|v| v.split(',').any(|t| t.trim() == etag || t.trim() == "*"))
-        {
-            return Ok(Step::Done((
-                StatusCode::NOT_MODIFIED,
-                etag,
-                None,
-                Vec::new().into(),
-            )));
-        }
-        let caps = info::caps(&src, st2.limits.max_bytes);
-        match req {
-            None => {
-                let doc = info::info_json(&src, &base, &caps);
-                let ld = headers
-                    .get(header::ACCEPT)
-                    .and_then(|v| v.to_str().ok())
-                    .is_some_and(|a| a.contains("application/ld+json"));
-                let mime = if ld {
-                    "application/ld+json;profile=\"http://iiif.io/api/image/3/context.json\""
-                } else {
-                    "application/json"
-                };
-                let body = serde_json::to_vec_pretty(&doc).unwrap_or_default();
-                Ok(Step::Done((StatusCode::OK, etag, Some(mime), body.into())))
-            }
-            Some(req) => {
-                let key = AnswerKey {
-                    path: src.path.clone(),
-                    len: src.len,
-                    mtime: src.mtime,
-                    request,
-                };
-                let mime = Some(req.format.mime());
-                if let Some(body) = st2.answers.get(&key) {
-                    return Ok(Step::Done((StatusCode::OK, etag, mime, body.into())));
-                }
-                // a cut from a level held whole needs no decode, so no decode permit:
-                // it is not queued behind decodes
-                let (w, h) = src.size();
-                let cut = req
-                    .resolve(w, h, &caps)
-                    .is_ok_and(|r| src.level_held(&st2.cache, render::choose_level(&src, &r)));
-                let job = (src, req, caps, key);
-                // else, a permit free: rendered on this thread at once (no second
-                // hand-over)
-                let permit = if cut {
-                    None
-                } else {
-                    match st2.work.clone().try_acquire_owned() {
-                        Ok(p) => Some(p),
-                        Err(_) => return Ok(Step::Render(Box::new(job))),
-                    }
-                };
-                let open = t0.elapsed();
-                let (answer, trace) = render_job(&st2, job, window, permit)?;
-                Ok(Step::Rendered(answer, trace, open))
-            }
-        }
-    });
-    let step = match first.await {
-        Ok(r) => r,
-        Err(_) => return plain(StatusCode::INTERNAL_SERVER_ERROR, "the request failed"),
-    };
+    // on the connection's own thread (no hand-over to another thread): the file's
+    // version, a 304, info.json, an answer already encoded, or a cut from a level held
+    // whole; only a request that decodes goes to the blocking pool
+    let step = first_step(&st, ident, req, request, &headers, &base, window, t0);
     let mut opened = t0.elapsed();
     let mut timing = None;
     let done = match step {
@@ -495,14 +508,18 @@ async fn iiif(AxState(st): AxState<Arc<State>>, uri: Uri, headers: HeaderMap) ->
             Ok(answer)
         }
         Err(e) => Err(e),
-        Ok(Step::Render(job)) => {
-            let Ok(permit) = st.work.clone().acquire_owned().await else {
-                return plain(StatusCode::SERVICE_UNAVAILABLE, "shutting down");
+        Ok(Step::Render(job, decodes)) => {
+            let permit = if decodes {
+                let Ok(permit) = st.work.clone().acquire_owned().await else {
+                    return plain(StatusCode::SERVICE_UNAVAILABLE, "shutting down");
+                };
+                Some(permit)
+            } else {
+                None
             };
             let queue = t0.elapsed() - opened;
             let st2 = st.clone();
-            let job =
-                tokio::task::spawn_blocking(move || render_job(&st2, *job, window, Some(permit)));
+            let job = tokio::task::spawn_blocking(move || render_job(&st2, *job, window, permit));
             match job.await {
                 Ok(Ok((answer, trace))) => {
                     timing = Some((queue, trace));

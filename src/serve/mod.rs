@@ -101,6 +101,15 @@ pub enum StartError {
     Io(#[from] std::io::Error),
 }
 
+/// The threads handling connections: `MRA_SERVE_THREADS` (1 to 64) when set, else
+/// tokio's default (one per core).
+fn runtime_threads() -> Option<usize> {
+    std::env::var("MRA_SERVE_THREADS")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .filter(|n: &usize| (1..=64).contains(n))
+}
+
 /// Serve until the process ends; `ready` is told the address bound (port 0 picks one).
 pub fn serve(config: Config, ready: impl FnOnce(SocketAddr)) -> Result<(), StartError> {
     if !config.public && !config.bind.ip().is_loopback() {
@@ -114,10 +123,11 @@ pub fn serve(config: Config, ready: impl FnOnce(SocketAddr)) -> Result<(), Start
         .ok_or_else(|| StartError::NotAFolder {
             root: config.root.clone(),
         })?;
-    let rt = tokio::runtime::Builder::new_multi_thread()
-        .enable_all()
-        .thread_name("mra-serve")
-        .build()?;
+    let mut rt = tokio::runtime::Builder::new_multi_thread();
+    if let Some(n) = runtime_threads() {
+        rt.worker_threads(n);
+    }
+    let rt = rt.enable_all().thread_name("mra-serve").build()?;
     rt.block_on(async move {
         let listener = tokio::net::TcpListener::bind(config.bind).await?;
         let addr = listener.local_addr()?;

@@ -300,11 +300,22 @@ fn a_served_region_equals_mra_decode_of_the_same_window() {
             (512, 512, 512, 512, 2),
             (0, 0, 1024, 1024, 3),
             (200, 328, 400, 300, 0),
+            // more output pixels than a cut rendered on the connection's thread
+            // (INLINE_CUT): with --warm, cut on the blocking pool
+            (0, 0, 1024, 1024, 0),
         ] {
             let ow = w >> k;
             let path = format!("/iiif/3/{id}/{x},{y},{w},{h}/{ow},/0/default.png");
             let r = s.get_ok(&path);
             assert_eq!(r.header("content-type"), Some("image/png"));
+            if std::ptr::eq(s, &warm) {
+                // every level held whole: a cut, small or large, wherever it is rendered
+                let timing = r.header("server-timing").unwrap_or_default();
+                assert!(
+                    timing.starts_with("render;desc=\"level level="),
+                    "{path}: {timing}"
+                );
+            }
             let served = gray(&r.image());
             let again = std::ptr::eq(s, &patches).then(|| {
                 let r = s.get_ok(&path.replace("default.png", "gray.png"));
