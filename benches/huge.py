@@ -2,10 +2,11 @@
 """One transform against tiles on huge rasters (docs/tiles.md, "One transform at any
 size"): a 16384² u16 image (4×4 `mra generate terrain` of 4096²) and a 1024³ u16
 volume (64 terrains of 1024², each 16 planes thick: the phantom would be exact at
-1 bpp), raw files in a temporary folder (/dev/shm when it has room), coded at `--bpp 1`
-as one transform streamed (format 3.0: the image's default, the volume with `--tile
-whole`), with `--tile` (2.x tiles of 1024² /
-128³), and `--lossless` (tiled); decoded to raw. Prints per file: format version,
+1 bpp; `--first N`: the first terrain N planes thick, the last 16 − N, so that no
+change of terrain lies on a face of the 128³ tiles, which do not code the changes on
+their faces), raw files in a temporary folder (/dev/shm when it has room), coded at `--bpp 1`
+as one transform streamed (format 3.2, the default of both), with `--tile` (2.x tiles
+of 1024² / 128³), and `--lossless` (tiled); decoded to raw. Prints per file: format version,
 bytes, bits per position, PSNR (chunked, `examples/raw_psnr.rs`, peak 65535), encode
 and decode wall s / CPU s / peak RSS MiB (`/usr/bin/time -v`), decode MB/s of samples.
 Everything is removed at the end.
@@ -13,7 +14,7 @@ Everything is removed at the end.
 Run from the repository root after
 `cargo build --release && cargo build --release --example raw_psnr`:
     python3 benches/huge.py [--skip-image] [--skip-volume] [--skip-lossless] [--skip-tiles]
-                            [--threads N]
+                            [--threads N] [--first N]
 """
 import argparse
 import os
@@ -92,8 +93,8 @@ def mosaic(raw, tmp):
 
 
 def run(label, raw, dims, tile, args, tmp, env):
-    # one transform: the image's default, a volume's with --tile whole
-    one(label, raw, dims, ["--bpp", "1"], "whole" if "³" in label else None, tmp, env)
+    # one transform: the default layout of both
+    one(label, raw, dims, ["--bpp", "1"], None, tmp, env)
     if not args.skip_tiles:
         one(label, raw, dims, ["--bpp", "1"], tile, tmp, env)
     if not args.skip_lossless:
@@ -107,7 +108,10 @@ def main():
     ap.add_argument("--skip-lossless", action="store_true")
     ap.add_argument("--skip-tiles", action="store_true")
     ap.add_argument("--threads", default="2")
+    ap.add_argument("--first", type=int, default=16, help="planes of the first terrain")
     args = ap.parse_args()
+    if not 1 <= args.first <= 16:
+        sys.exit("--first: 1 to 16 planes")
     env = dict(os.environ, RAYON_NUM_THREADS=args.threads)
     tmp = scratch()
     try:
@@ -123,13 +127,15 @@ def main():
             part = os.path.join(tmp, "part.raw")
             raw = os.path.join(tmp, "vol.raw")
             with open(raw, "wb") as out:
-                for k in range(64):
+                for k in range(65 if args.first % 16 else 64):
                     subprocess.run([MRA, "generate", "terrain", "-o", part, "--size", "1024",
                                     "--dtype", "u16", "--seed", str(101 + k)], check=True,
                                    capture_output=True)
                     with open(part, "rb") as src:
                         plane = src.read()
-                    for _ in range(16):
+                    # the first terrain --first planes thick, the last 16 − that
+                    thick = args.first if k == 0 else 16 - args.first if k == 64 else 16
+                    for _ in range(thick):
                         out.write(plane)
             os.remove(part)
             run("1024³ u16", raw, "1024x1024x1024", "128", args, tmp, env)

@@ -58,12 +58,12 @@ pub fn streams(shape: &Shape, opts: &EncodeOptions) -> bool {
 
 /// The default tile extents of [`encode_stream`] for a raster of `shape` read in slabs
 /// at `opts`: the whole raster (one transform) when it is one piece or when [`streams`]
-/// covers it and it has at most 2 axes, else [`super::tiles::default_tile`]'s grid (the
-/// modes the stream does not cover: `--lossless`, `--max-error`, `--psnr`, floats,
-/// voids, format 2; and volumes, whose streamed file is still 0.14 dB below the tiles'
-/// at 1 bit per position on the 1024³ benchmark, docs/tiles.md).
+/// covers it and it has 2 or 3 axes (images and volumes: the axes
+/// [`super::StreamedDecoder`] decodes in bounded memory), else
+/// [`super::tiles::default_tile`]'s grid (the modes the stream does not cover:
+/// `--lossless`, `--max-error`, `--psnr`, floats, voids, format 2; and 4 axes).
 pub fn default_layout(shape: &Shape, opts: &EncodeOptions) -> Vec<usize> {
-    if streams(shape, opts) && shape.dims.len() <= 2 {
+    if streams(shape, opts) && shape.dims.len() <= 3 {
         shape.dims.clone()
     } else {
         super::tiles::default_tile(&shape.dims, shape.channels)

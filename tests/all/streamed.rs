@@ -193,13 +193,22 @@ fn a_whole_tile_streams_over_the_one_piece_limit() {
     let mut two = o(Rate::Bpp(1.0));
     two.format = Format::Bands;
     assert_eq!(codec::default_layout(&big, &two), tiles);
-    // volumes stay tiled by default (their stream is below the tiles, docs/tiles.md)
+    // volumes are one transform by default too; 4 axes (not decoded streamed) and the
+    // modes the stream does not cover stay tiled
     let mut vol = big.clone();
     vol.dims = vec![1024, 1024, 1024];
     assert!(codec::streams(&vol, &o(Rate::Bpp(1.0))));
+    assert_eq!(codec::default_layout(&vol, &o(Rate::Bpp(1.0))), vol.dims);
     assert_eq!(
-        codec::default_layout(&vol, &o(Rate::Bpp(1.0))),
+        codec::default_layout(&vol, &o(Rate::Lossless)),
         codec::default_tile(&vol.dims, 1)
+    );
+    let mut four = big.clone();
+    four.dims = vec![16, 256, 256, 256];
+    assert!(codec::streams(&four, &o(Rate::Bpp(1.0))));
+    assert_eq!(
+        codec::default_layout(&four, &o(Rate::Bpp(1.0))),
+        codec::default_tile(&four.dims, 1)
     );
     let small = Shape::of(&small);
     assert_eq!(
@@ -309,5 +318,47 @@ fn streamed_optimised_files_are_near_the_whole_encoders() {
             "{}: mse {ds} vs {dw}",
             r.summary()
         );
+    }
+}
+
+/// A volume is one transform by default over the one-piece limit because the stream is
+/// not below the tiles: at `--bpp` both land within the budget and the streamed file's
+/// error is below the tiled file's (tiles of 16³, each its own pyramid, seams at their
+/// faces), on a smooth field and on one whose content changes every 8 planes away from
+/// the tiles' faces (the kind of change tiles would leave uncoded on a face).
+#[test]
+fn a_streamed_volume_is_not_below_its_tiles() {
+    let smooth = field(&[48, 40, 36], 1, SampleType::U16, 41, 20000.0);
+    // planes 0..4, 4..12, 12..20, …: each group a plane of a different field
+    let planes = field(&[7, 40, 36], 1, SampleType::U16, 42, 20000.0);
+    let (pl, n) = (40 * 36, 48);
+    let src = planes.samples.to_f64();
+    let stepped: Vec<u16> = (0..n)
+        .flat_map(|z| {
+            let k = (z + 4) / 8;
+            src[k * pl..(k + 1) * pl].iter().map(|&v| v as u16)
+        })
+        .collect();
+    let stepped = Raster::new(
+        vec![n, 40, 36],
+        1,
+        mra::io::Samples::U16(stepped),
+        smooth.kind,
+    )
+    .unwrap();
+    for r in [&smooth, &stepped] {
+        let o = opts(Rate::Bpp(1.0), 3, Boundary::Symmetric);
+        let s = streamed(r, &o);
+        let t = codec::encode_tiled(r, &o, &[16, 16, 16]).unwrap();
+        let bits = |f: &[u8]| f.len() as f64 * 8.0 / r.positions() as f64;
+        assert!(bits(&s) <= 1.0 && bits(&t) <= 1.0, "{}", r.summary());
+        let (ms, mt) = (mse(r, &s), mse(r, &t));
+        eprintln!(
+            "{}: streamed {} bpp mse {ms}, tiles {} bpp mse {mt}",
+            r.summary(),
+            bits(&s),
+            bits(&t)
+        );
+        assert!(ms < mt, "{}: mse {ms} streamed vs {mt} tiled", r.summary());
     }
 }
