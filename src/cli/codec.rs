@@ -422,7 +422,7 @@ pub fn decode(a: DecodeArgs) -> CliResult {
         && !super::io_cmds::is_std(&a.output)
         && crate::io::stream::streams_output(&a.output)
     {
-        // raw, NRRD and TIFF outputs are written a tile-row (or tile-slab) at a time
+        // raw, NRRD, TIFF and PNM outputs are written a slab of rows at a time
         let mut got = None;
         super::io_cmds::write_streamed(&a.output, &name, |w| {
             let mut d = codec::SlabDecoder::open(&a.input, &opts)?;

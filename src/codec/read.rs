@@ -229,14 +229,27 @@ impl SlabDecoder {
             && !opts.allow_truncated
             && super::streamed::decodes_streamed(&header)
         {
-            let s = super::streamed::StreamedDecoder::open(path)?;
-            count.set(len);
+            let p = read_rest(rd, first, header, 0, false)?;
+            let p = match super::streamed::StreamedDecoder::streaming(p)? {
+                Ok(s) => {
+                    return Ok(SlabDecoder {
+                        shape: s.shape().clone(),
+                        tiled: None,
+                        streamed: Some(s),
+                        whole: None,
+                        whole_complete: true,
+                        count,
+                    })
+                }
+                Err(p) => p,
+            };
+            let d = one_tile(p, opts)?;
             return Ok(SlabDecoder {
-                shape: s.shape().clone(),
+                shape: Shape::of(&d.raster),
                 tiled: None,
-                streamed: Some(s),
-                whole: None,
-                whole_complete: true,
+                streamed: None,
+                whole: Some(d.raster.samples),
+                whole_complete: d.complete,
                 count,
             });
         }

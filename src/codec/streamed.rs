@@ -693,40 +693,44 @@ fn context_coded(mut h: Header) -> Header {
 }
 
 /// Whether a whole decode of the file of header `h` goes through [`StreamedDecoder`]
-/// in [`super::SlabDecoder`]: a one-piece lossy 3.0 file (no residual layer, no voids)
-/// of 2 or 3 axes over the one-piece limit ([`tiles::default_tile`] would cut it).
+/// in [`super::SlabDecoder`]: a one-piece lossy file of code-blocks (no residual
+/// layer, no voids) of 2 or 3 axes, at any size (over the one-piece limit
+/// [`tiles::default_tile`] would cut it; under it, the stripes keep the decode's
+/// working set in cache instead of whole planes, bands and raster).
 pub fn decodes_streamed(h: &Header) -> bool {
     !h.is_tiled()
         && h.version.has_blocks()
-        && h.coder == 0
         && h.mode == Mode::Lossy
         && !h.voids
         && (2..=3).contains(&h.dims.len())
         && h.levels > 0
-        && tiles::default_tile(&h.dims, h.channels) != h.dims
 }
 
-/// Rows of the output a slab of [`StreamedDecoder`] holds (about 2^20 positions).
+/// Rows of the output a slab of [`StreamedDecoder`] holds (about 2^16 positions: its
+/// planes stay in cache and under the allocator's mapping threshold, so that they are
+/// reused rather than mapped and faulted in afresh).
 fn slab_rows(row_len: usize, d0: usize) -> usize {
-    ((1usize << 20) / row_len.max(1)).clamp(1, d0.max(1))
+    ((1usize << 16) / row_len.max(1)).clamp(1, d0.max(1))
 }
 
-/// A whole decode of a one-piece lossy 3.0 file in bounded memory: the band rows pulled
-/// through the streamed synthesis ([`StreamPlan::synthesis`]), each stripe of
-/// code-blocks decoded (its blocks in parallel) when its first row is asked for and
-/// kept while it is read (the last [`KEPT_STRIPES`] of a band with children, the last
-/// one of a band without, as 32-bit indices), the
-/// rows converted to samples a slab at a time. The synthesis runs on a thread of its
-/// own that hands the slabs over; the samples are those of the whole-array decode
-/// (the stream's synthesis gives its bits).
+/// A whole decode of a one-piece lossy code-block file in bounded memory: the band rows
+/// pulled through the streamed synthesis ([`StreamPlan::synthesis`]), each batch of
+/// stripes of code-blocks (as many stripes as threads, decoded in parallel by
+/// [`crate::entropy::codeblocks::decode_blocks_into`], any block coder) decoded when its
+/// first row is asked for and kept while it is read (the last [`KEPT_STRIPES`] batches
+/// of a band with children, as indices; the last one of a band without, dequantized),
+/// the channels synthesized in parallel and the rows converted to samples a slab at a
+/// time. The synthesis runs on a thread of its own that hands the slabs over; the
+/// samples are those of the whole-array decode (the stream's synthesis gives its bits,
+/// the blocks decode to the same indices in any batch).
 pub struct StreamedDecoder {
     shape: Shape,
     rx: std::sync::mpsc::Receiver<Result<Samples>>,
     done: bool,
 }
 
-/// Decoded stripes a band with children keeps (an older one asked again is decoded
-/// again).
+/// Decoded batches of stripes a band with children keeps (an older one asked again is
+/// decoded again).
 const KEPT_STRIPES: usize = 2;
 
 impl StreamedDecoder {
@@ -739,13 +743,26 @@ impl StreamedDecoder {
         StreamedDecoder::of(p)
     }
 
+    /// Start the synthesis of the read file `p` (an error when the stream does not decode it).
     pub(super) fn of(p: super::container::Parsed) -> Result<StreamedDecoder> {
         let h = &p.header;
+        let what = format!("a {:?} file of {:?} in {} levels", h.mode, h.dims, h.levels);
+        StreamedDecoder::streaming(p)?.map_err(|_| {
+            Error::format(
+                what,
+                "a lossy 3.0 file of 2 or 3 axes without voids, laid out as the stream lays out its pyramid",
+            )
+        })
+    }
+
+    /// [`StreamedDecoder::of`], the file handed back when it is not one the stream
+    /// decodes (its pyramid laid out otherwise than [`StreamPlan`] lays it out).
+    pub(super) fn streaming(
+        p: super::container::Parsed,
+    ) -> Result<std::result::Result<StreamedDecoder, super::container::Parsed>> {
+        let h = &p.header;
         if !h.version.has_blocks() || h.mode != Mode::Lossy || h.voids || h.dims.len() < 2 {
-            return Err(Error::format(
-                format!("a {:?} file of {:?}", h.mode, h.dims),
-                "a lossy 3.0 file of 2 or 3 axes without voids",
-            ));
+            return Ok(Err(p));
         }
         let shape = Shape {
             dims: h.dims.clone(),
@@ -757,10 +774,7 @@ impl StreamedDecoder {
         // the plan is checked here, before the thread starts
         let sp = StreamPlan::new(&h.dims, &p.plan.pyr.spec)?;
         if sp.bands() != p.plan.bands.as_slice() {
-            return Err(Error::format(
-                format!("a pyramid of {} levels", h.levels),
-                "a pyramid the stream lays out as the file does",
-            ));
+            return Ok(Err(p));
         }
         let (tx, rx) = std::sync::mpsc::sync_channel(1);
         drop(sp);
@@ -771,11 +785,11 @@ impl StreamedDecoder {
                 let _ = tx.send(Err(e));
             }
         });
-        Ok(StreamedDecoder {
+        Ok(Ok(StreamedDecoder {
             shape,
             rx,
             done: false,
-        })
+        }))
     }
 
     /// The output's extents, type and metadata.
@@ -807,9 +821,9 @@ fn synthesize(
 ) -> Result<()> {
     let h = &p.header;
     let nc = h.channels;
-    let err = std::rc::Rc::new(std::cell::RefCell::new(None::<Error>));
+    let errs: Vec<Failed> = (0..nc).map(|_| Failed::default()).collect();
     let mut sources = (0..nc)
-        .map(|c| BandSource::new(p, c, err.clone()))
+        .map(|c| BandSource::new(p, c, errs[c].clone()))
         .collect::<Result<Vec<_>>>()?;
     let mut syn: Vec<_> = sources
         .iter_mut()
@@ -820,14 +834,22 @@ fn synthesize(
     for r0 in (0..d0).step_by(rows) {
         let n = (r0 + rows).min(d0) - r0;
         let mut planes: Vec<Vec<f32>> = (0..nc).map(|_| vec![0f32; n * row_len]).collect();
-        for r in 0..n {
-            for (s, plane) in syn.iter_mut().zip(planes.iter_mut()) {
-                s.pull(&mut plane[r * row_len..(r + 1) * row_len])?;
-            }
-            if let Some(e) = err.borrow_mut().take() {
-                return Err(e);
-            }
-        }
+        // the channels' syntheses in parallel (each one's stripes too)
+        let done: Vec<Result<()>> = syn
+            .par_iter_mut()
+            .zip(planes.par_iter_mut())
+            .zip(&errs)
+            .map(|((s, plane), err)| {
+                for row in plane.chunks_mut(row_len.max(1)) {
+                    s.pull(row)?;
+                    if let Some(e) = err.take() {
+                        return Err(e);
+                    }
+                }
+                Ok(())
+            })
+            .collect();
+        done.into_iter().collect::<Result<()>>()?;
         let samples = super::plan::to_samples(
             planes,
             n * row_len,
@@ -842,7 +864,41 @@ fn synthesize(
     Ok(())
 }
 
-/// The band rows of one channel of a file, decoded a stripe of code-blocks at a time.
+/// The first error of a channel's band source, read by the loop that pulls its rows.
+#[derive(Clone, Default)]
+struct Failed(std::sync::Arc<std::sync::Mutex<Option<Error>>>);
+
+impl Failed {
+    fn is_set(&self) -> bool {
+        self.0.lock().map_or(true, |e| e.is_some())
+    }
+
+    fn set(&self, e: Error) {
+        if let Ok(mut g) = self.0.lock() {
+            g.get_or_insert(e);
+        }
+    }
+
+    fn take(&self) -> Option<Error> {
+        self.0.lock().ok().and_then(|mut g| g.take())
+    }
+}
+
+/// A batch of decoded stripes of a band: its first row and its rows in raster order,
+/// dequantized (a band without children: what the synthesis reads) or as indices (a
+/// band with children: its children's context, dequantized as it is read).
+struct Batch {
+    y0: usize,
+    values: Values,
+}
+
+enum Values {
+    Samples(Vec<f32>),
+    Indices(Vec<i64>),
+}
+
+/// The band rows of one channel of a file, decoded a batch of stripes of code-blocks
+/// at a time (the stripes of a batch in parallel, [`entropy::codeblocks::decode_blocks_into`]).
 struct BandSource<'a> {
     p: &'a super::container::Parsed,
     c: usize,
@@ -851,17 +907,20 @@ struct BandSource<'a> {
     sets: Vec<Option<Vec<Range<usize>>>>,
     steps: Vec<f64>,
     deltas: Vec<f64>,
-    /// decoded stripes of each band (indices, the stripe's rows in raster order)
-    kept: Vec<BTreeMap<usize, Vec<i32>>>,
-    err: std::rc::Rc<std::cell::RefCell<Option<Error>>>,
+    /// whether each band is another's parent
+    parent: Vec<bool>,
+    /// rows of a batch of each band (whole stripes)
+    batch_rows: Vec<usize>,
+    /// decoded batches of each band, by batch number
+    kept: Vec<BTreeMap<usize, Batch>>,
+    /// each band's last dropped batch, whose buffer the next one reuses (a fresh one
+    /// of a megabyte or more would be mapped and faulted in afresh)
+    spare: Vec<Option<Values>>,
+    err: Failed,
 }
 
 impl<'a> BandSource<'a> {
-    fn new(
-        p: &'a super::container::Parsed,
-        c: usize,
-        err: std::rc::Rc<std::cell::RefCell<Option<Error>>>,
-    ) -> Result<BandSource<'a>> {
+    fn new(p: &'a super::container::Parsed, c: usize, err: Failed) -> Result<BandSource<'a>> {
         let plan = &p.plan;
         let nb = plan.bands.len();
         let grids: Vec<Grid> = (0..nb)
@@ -891,6 +950,22 @@ impl<'a> BandSource<'a> {
         let deltas = (0..nb)
             .map(|j| super::plan::band_delta(&p.header, plan, j))
             .collect();
+        let parent = (0..nb).map(|j| plan.parents.contains(&Some(j))).collect();
+        // a batch of as many stripes as threads, so that its stripes decode in
+        // parallel; a band of odd stripes (blocks one row tall) in one batch, since a
+        // batch's parent rows must start at half its first row
+        let per = rayon::current_num_threads().max(1);
+        let batch_rows = grids
+            .iter()
+            .map(|g| {
+                let t = g.block[0].max(1);
+                if t % 2 == 1 {
+                    g.dims[0].max(1)
+                } else {
+                    t.saturating_mul(per)
+                }
+            })
+            .collect();
         Ok(BandSource {
             p,
             c,
@@ -898,34 +973,46 @@ impl<'a> BandSource<'a> {
             sets,
             steps,
             deltas,
-            kept: vec![BTreeMap::new(); nb],
+            parent,
+            batch_rows,
+            kept: (0..nb).map(|_| BTreeMap::new()).collect(),
+            spare: (0..nb).map(|_| None).collect(),
             err,
         })
     }
 
     /// Row `r` of band `j`, dequantized, into `out` (zeros after an error).
     fn fill(&mut self, j: usize, r: usize, out: &mut [f32]) {
-        out.fill(0.0);
-        if self.err.borrow().is_some() || self.sets[j].is_none() {
+        if self.err.is_set() || self.sets[j].is_none() {
+            out.fill(0.0);
             return;
         }
-        let tall = self.grids[j].block[0];
-        let s = r / tall;
-        if let Err(e) = self.ensure(j, s) {
-            *self.err.borrow_mut() = Some(e);
+        let b = r / self.batch_rows[j];
+        if let Err(e) = self.ensure(j, b) {
+            self.err.set(e);
+            out.fill(0.0);
             return;
         }
         let len = out.len();
-        let at = (r - s * tall) * len;
-        let q: Vec<i64> = self.kept[j][&s][at..at + len]
-            .iter()
-            .map(|&v| v as i64)
-            .collect();
-        super::plan::dequantize_row(&q, self.steps[j], self.deltas[j], out);
+        let batch = &self.kept[j][&b];
+        let at = (r - batch.y0) * len;
+        match &batch.values {
+            Values::Samples(v) => out.copy_from_slice(&v[at..at + len]),
+            Values::Indices(q) => {
+                super::plan::dequantize_row(&q[at..at + len], self.steps[j], self.deltas[j], out)
+            }
+        }
     }
 
-    /// The parent band of `j` and the rows of it that stripe `s` of `j` reads.
-    fn parent_rows(&self, j: usize, s: usize) -> Option<(usize, Range<usize>)> {
+    /// The rows of band `j`'s batch `b`.
+    fn batch(&self, j: usize, b: usize) -> Range<usize> {
+        let n = self.batch_rows[j];
+        let d0 = self.grids[j].dims[0];
+        (b * n).min(d0)..((b + 1) * n).min(d0)
+    }
+
+    /// The parent band of `j` and the rows of it that `rows` of `j` read.
+    fn parent_rows(&self, j: usize, rows: &Range<usize>) -> Option<(usize, Range<usize>)> {
         let plan = &self.p.plan;
         if plan.bands[j].level == 0 {
             return None;
@@ -935,105 +1022,151 @@ impl<'a> BandSource<'a> {
         if pd.contains(&0) {
             return None;
         }
-        let g = &self.grids[j];
-        let tall = g.block[0];
-        let rows = s * tall..((s + 1) * tall).min(g.dims[0]);
-        Some((pj, parent_box(&[rows], &pd[..1])[0].clone()))
+        Some((
+            pj,
+            parent_box(std::slice::from_ref(rows), &pd[..1])[0].clone(),
+        ))
     }
 
-    /// Decode stripe `s` of band `j` (and the parent stripes it reads) unless kept.
-    fn ensure(&mut self, j: usize, s: usize) -> Result<()> {
-        if self.kept[j].contains_key(&s) {
+    /// Decode batch `b` of band `j` (and the parent batches it reads) unless kept.
+    fn ensure(&mut self, j: usize, b: usize) -> Result<()> {
+        if self.kept[j].contains_key(&b) {
             return Ok(());
         }
-        let parent = self.parent_rows(j, s);
-        // the parent's rows the stripe reads, as one array (rows `prows`)
-        let mut par: Option<(Vec<usize>, Range<usize>, Vec<i32>)> = None;
-        if let Some((pj, prows)) = parent.clone() {
+        let rows = self.batch(j, b);
+        // the parent's rows the batch reads, as one array of extents `pdims`
+        let mut par: Option<(Vec<usize>, Vec<i64>)> = None;
+        if let Some((pj, prows)) = self.parent_rows(j, &rows) {
             if self.sets[pj].is_some() {
-                let pt = self.grids[pj].block[0];
                 let plen: usize = self.grids[pj].dims[1..].iter().product();
                 let mut v = Vec::with_capacity(prows.len() * plen);
                 for y in prows.clone() {
-                    self.ensure(pj, y / pt)?;
-                    let st = &self.kept[pj][&(y / pt)];
-                    let at = (y - (y / pt) * pt) * plen;
-                    v.extend_from_slice(&st[at..at + plen]);
+                    let pb = y / self.batch_rows[pj];
+                    self.ensure(pj, pb)?;
+                    let batch = &self.kept[pj][&pb];
+                    let Values::Indices(q) = &batch.values else {
+                        unreachable!("a parent band keeps its indices")
+                    };
+                    let at = (y - batch.y0) * plen;
+                    v.extend_from_slice(&q[at..at + plen]);
                 }
-                par = Some((self.grids[pj].dims.clone(), prows, v));
+                let mut pdims = self.grids[pj].dims.clone();
+                pdims[0] = prows.len();
+                par = Some((pdims, v));
             }
         }
         let g = &self.grids[j];
         let per: usize = g.counts[1..].iter().product();
         let tall = g.block[0];
-        let rows = s * tall..((s + 1) * tall).min(g.dims[0]);
-        let row_len: usize = g.dims[1..].iter().product();
-        let kind = if self.p.plan.bands[j].level == 0 {
-            BandKind::Coarse
-        } else {
-            BandKind::Detail
-        };
-        let coding = self.p.plan.coding;
+        let mut ldims = g.dims.clone();
+        ldims[0] = rows.len();
+        let local = Grid::new(&ldims, &g.block);
+        let first = rows.start / tall * per;
+        let which: Vec<usize> = (0..local.len()).collect();
         let data = &self.p.bands[self.c][j]
             .as_ref()
             .expect("a band with blocks is present")
             .data;
         let set = self.sets[j].as_ref().expect("checked by the caller");
-        let blocks: Vec<Result<Vec<i64>>> = (s * per..(s + 1) * per)
-            .into_par_iter()
-            .map(|i| {
-                let b = g.bounds(i);
-                let d = box_dims(&b);
-                let pv = par.as_ref().map(|(pdims, prows, v)| {
-                    let pb = parent_box(&b, pdims);
-                    let mut local = pb.clone();
-                    local[0] = pb[0].start - prows.start..pb[0].end - prows.start;
-                    let mut ldims = pdims.clone();
-                    ldims[0] = prows.len();
-                    let vals: Vec<i64> = extract(v, &ldims, &local)
-                        .into_iter()
-                        .map(i64::from)
-                        .collect();
-                    (vals, box_dims(&pb))
-                });
-                let pp = pv.as_ref().map(|(data, dims)| Parent { data, dims });
-                let mut dec = crate::entropy::range::Decoder::new_short(&data[set[i].clone()]);
-                band::decode(&mut dec, &d, kind, pp, coding).map_err(|e| {
-                    Error::format(
-                        format!("code-block {i} of band {j} of channel {}: {e}", self.c),
-                        "a valid code-block",
-                    )
-                })
-            })
+        let streams: Vec<&[u8]> = which
+            .iter()
+            .map(|&i| set.get(first + i).map(|r| &data[r.clone()]).unwrap_or(&[]))
             .collect();
-        let mut stripe = vec![0i32; rows.len() * row_len];
-        let mut sdims = g.dims.clone();
-        sdims[0] = rows.len();
-        for (k, v) in blocks.into_iter().enumerate() {
-            let v = v?;
-            let mut b = g.bounds(s * per + k);
-            b[0] = b[0].start - rows.start..b[0].end - rows.start;
-            let v: Vec<i32> = v
-                .into_iter()
-                .map(|x| {
-                    i32::try_from(x).map_err(|_| {
-                        Error::format(format!("index {x} in band {j}"), "indices of 32 bits")
-                    })
-                })
-                .collect::<Result<_>>()?;
-            crate::entropy::codeblocks::insert(&mut stripe, &sdims, &b, &v);
-        }
-        // a band without children is read in order: its last stripe is enough
-        let keep = if self.p.plan.parents.contains(&Some(j)) {
-            KEPT_STRIPES
+        let kind = if self.p.plan.bands[j].level == 0 {
+            BandKind::Coarse
         } else {
-            1
+            BandKind::Detail
         };
+        let parent = par.as_ref().map(|(dims, data)| Parent { data, dims });
+        let h = &self.p.header;
+        let (coding, coder) = (super::plan::coding_of(h), super::plan::coder_of(h));
+        let row_len = *g.dims.last().expect("a band of 2 or 3 axes");
+        let n = ldims.iter().product::<usize>();
+        let failed = |e: Error| {
+            Error::format(
+                format!("band {j} of channel {}: {e}", self.c),
+                "a valid band",
+            )
+        };
+        let spare = self.spare[j].take();
+        let values = if self.parent[j] {
+            let mut q = match spare {
+                Some(Values::Indices(v)) => v,
+                _ => Vec::new(),
+            };
+            q.clear();
+            q.resize(n, 0);
+            let put = crate::entropy::codeblocks::Put {
+                wide: |o: &mut [i64], q: &[i64]| o.copy_from_slice(q),
+                narrow: |o: &mut [i64], q: &[i32]| {
+                    for (o, &x) in o.iter_mut().zip(q) {
+                        *o = x as i64;
+                    }
+                },
+            };
+            let out: Vec<&mut [i64]> = q.chunks_mut(row_len.max(1)).collect();
+            crate::entropy::codeblocks::decode_blocks_into(
+                out,
+                &local,
+                &which,
+                &streams,
+                (kind, parent),
+                coding,
+                coder,
+                &put,
+            )
+            .map_err(failed)?;
+            Values::Indices(q)
+        } else {
+            let (step, delta) = (self.steps[j], self.deltas[j]);
+            let mut x = match spare {
+                Some(Values::Samples(v)) => v,
+                _ => Vec::new(),
+            };
+            x.clear();
+            x.resize(n, 0.0);
+            let put = crate::entropy::codeblocks::Put {
+                wide: |o: &mut [f32], q: &[i64]| super::plan::dequantize_row(q, step, delta, o),
+                narrow: |o: &mut [f32], q: &[i32]| {
+                    // widened a few at a time: the same `dequantize` of the same values
+                    let mut wide = [0i64; 64];
+                    for (o, q) in o.chunks_mut(64).zip(q.chunks(64)) {
+                        for (w, &x) in wide.iter_mut().zip(q) {
+                            *w = x as i64;
+                        }
+                        super::plan::dequantize_row(&wide[..q.len()], step, delta, o);
+                    }
+                },
+            };
+            let out: Vec<&mut [f32]> = x.chunks_mut(row_len.max(1)).collect();
+            crate::entropy::codeblocks::decode_blocks_into(
+                out,
+                &local,
+                &which,
+                &streams,
+                (kind, parent),
+                coding,
+                coder,
+                &put,
+            )
+            .map_err(failed)?;
+            Values::Samples(x)
+        };
+        // a band without children is read in order: its last batch is enough
+        let keep = if self.parent[j] { KEPT_STRIPES } else { 1 };
         let kept = &mut self.kept[j];
-        kept.insert(s, stripe);
+        kept.insert(
+            b,
+            Batch {
+                y0: rows.start,
+                values,
+            },
+        );
         while kept.len() > keep {
-            let old = *kept.keys().find(|&&k| k != s).expect("more than one");
-            kept.remove(&old);
+            let old = *kept.keys().find(|&&k| k != b).expect("more than one");
+            if let Some(batch) = kept.remove(&old) {
+                self.spare[j] = Some(batch.values);
+            }
         }
         Ok(())
     }

@@ -7,12 +7,67 @@ use std::path::Path;
 
 use image::ImageFormat;
 
-use super::{Raster, SampleType};
-use crate::Result;
+use super::slab::Shape;
+use super::{Raster, SampleType, Samples};
+use crate::{Error, Result};
 
 /// Read a PNM file.
 pub fn read(path: &Path) -> Result<Raster> {
     super::png::decode_with_image(path, ImageFormat::Pnm)
+}
+
+/// The header of a PGM (`P5`, gray), PPM (`P6`, RGB) or PAM (`P7`, gray+alpha or RGBA)
+/// of a 2-D image of `shape`: u8 or u16 samples of 1–4 channels, else an error naming
+/// what PNM takes (the same check as the whole writer's).
+fn header(shape: &Shape) -> Result<String> {
+    let (ty, c) = (shape.sample_type, shape.channels);
+    if shape.dims.len() != 2 {
+        return Err(Error::Unsupported {
+            what: "PNM output",
+            value: format!(
+                "{}-D data (write volumes as .nrrd, .nii or .tif)",
+                shape.dims.len()
+            ),
+        });
+    }
+    if !matches!(ty, SampleType::U8 | SampleType::U16) || !(1..=4).contains(&c) {
+        return Err(Error::Unsupported {
+            what: "PNM output",
+            value: format!(
+                "{c} channels of {ty} (u8 or u16 with 1-4 channels; use .tif, .exr or .nrrd)"
+            ),
+        });
+    }
+    let maxval = if ty == SampleType::U8 { 255 } else { 65535 };
+    let (wd, ht) = (shape.dims[1], shape.dims[0]);
+    Ok(match c {
+        1 => format!("P5\n{wd} {ht}\n{maxval}\n"),
+        3 => format!("P6\n{wd} {ht}\n{maxval}\n"),
+        c => format!(
+            "P7\nWIDTH {wd}\nHEIGHT {ht}\nDEPTH {c}\nMAXVAL {maxval}\nTUPLTYPE {}\nENDHDR\n",
+            if c == 2 {
+                "GRAYSCALE_ALPHA"
+            } else {
+                "RGB_ALPHA"
+            }
+        ),
+    })
+}
+
+/// Samples after the header: 8-bit ones as their own bytes, wider ones big-endian a
+/// piece at a time (no copy of the whole slab).
+fn samples<W: Write>(w: &mut W, s: &Samples) -> Result<()> {
+    if let Samples::U8(v) = s {
+        w.write_all(v)?;
+        return Ok(());
+    }
+    const PIECE: usize = 1 << 16;
+    let (n, mut buf) = (s.len(), Vec::new());
+    for at in (0..n).step_by(PIECE) {
+        super::bytes::encode_into(s, at..(at + PIECE).min(n), true, &mut buf);
+        w.write_all(&buf)?;
+    }
+    Ok(())
 }
 
 /// Write a 2-D u8/u16 raster as binary PGM (`P5`, gray), PPM (`P6`, RGB) or PAM (`P7`,
@@ -20,35 +75,38 @@ pub fn read(path: &Path) -> Result<Raster> {
 pub fn write<W: Write>(w: &mut W, r: &Raster) -> Result<()> {
     // validates the layout (2-D, u8/u16, 1–4 channels)
     super::png::color_type(r, "PNM output")?;
-    let maxval = if r.sample_type() == SampleType::U8 {
-        255
-    } else {
-        65535
-    };
-    let (wd, ht) = (r.width(), r.height());
-    let header =
-        match r.channels {
-            1 => format!("P5\n{wd} {ht}\n{maxval}\n"),
-            3 => format!("P6\n{wd} {ht}\n{maxval}\n"),
-            c => {
-                format!(
-            "P7\nWIDTH {wd}\nHEIGHT {ht}\nDEPTH {c}\nMAXVAL {maxval}\nTUPLTYPE {}\nENDHDR\n",
-            if c == 2 { "GRAYSCALE_ALPHA" } else { "RGB_ALPHA" }
-        )
-            }
-        };
-    w.write_all(header.as_bytes())?;
-    // 8-bit samples are their own bytes; wider ones go big-endian a piece at a time (no
-    // copy of the whole raster)
-    if let super::Samples::U8(v) = &r.samples {
-        w.write_all(v)?;
-        return Ok(());
+    w.write_all(header(&Shape::of(r))?.as_bytes())?;
+    samples(w, &r.samples)
+}
+
+/// [`write`] of an image handed over in slabs of rows (`next` gives them in order,
+/// `None` at the end): the header from `shape`, then each slab's samples as they come.
+/// A slab of another sample type is an error; the bytes are those of [`write`].
+pub fn write_slabs<W: Write>(
+    w: &mut W,
+    shape: &Shape,
+    next: &mut dyn FnMut() -> Result<Option<Samples>>,
+) -> Result<()> {
+    w.write_all(header(shape)?.as_bytes())?;
+    let row = shape.dims[1] * shape.channels;
+    let mut left = shape.dims[0] * row;
+    while let Some(s) = next()? {
+        if s.sample_type() != shape.sample_type || s.len() % row.max(1) != 0 || s.len() > left {
+            return Err(Error::parameter(
+                "slab",
+                s.len(),
+                "whole rows of the image's sample type, no more than it holds",
+            ));
+        }
+        left -= s.len();
+        samples(w, &s)?;
     }
-    const PIECE: usize = 1 << 16;
-    let (n, mut buf) = (r.samples.len(), Vec::new());
-    for at in (0..n).step_by(PIECE) {
-        super::bytes::encode_into(&r.samples, at..(at + PIECE).min(n), true, &mut buf);
-        w.write_all(&buf)?;
+    if left != 0 {
+        return Err(Error::parameter(
+            "samples missing",
+            left,
+            "every row of the image",
+        ));
     }
     Ok(())
 }

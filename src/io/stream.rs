@@ -3,8 +3,9 @@
 //!
 //! Reading ([`open`]): a headerless `.raw` of a given layout and a NRRD of raw encoding
 //! are read by seeking to the slab's first byte, a TIFF by its strips, tiles or pages.
-//! Writing ([`write_slabs`]): `.raw`, NRRD of raw encoding ([`sink_for`]) and TIFF take
-//! the slabs in order after the header (a TIFF image in strips, a volume page by page).
+//! Writing ([`write_slabs`]): `.raw`, NRRD of raw encoding ([`sink_for`]), TIFF and PNM
+//! take the slabs in order after the header (a TIFF image in strips, a volume page by
+//! page).
 //!
 //! A slab of rows `a..b` of a raster of extents `[d0, d1, …]` × `c` channels holds the
 //! `(b − a)·d1·…·c` samples of those rows, row-major, as the whole raster would.
@@ -83,11 +84,11 @@ pub fn open(path: &Path, opts: &ReadOptions) -> Result<Option<Slabs>> {
 }
 
 /// Which outputs [`write_slabs`] writes a slab at a time: `.raw`, attached `.nrrd`
-/// (raw encoding) and `.tif` (uncompressed).
+/// (raw encoding), `.tif` (uncompressed) and PGM / PPM / PAM.
 pub fn streams_output(path: &Path) -> bool {
     matches!(
         Format::from_extension(path),
-        Some(Format::Raw | Format::Nrrd | Format::Tiff)
+        Some(Format::Raw | Format::Nrrd | Format::Tiff | Format::Pnm)
     ) && !path
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("nhdr"))
@@ -112,8 +113,10 @@ pub fn write_slabs<W: Write + Seek>(
     shape: &Shape,
     next: &mut dyn FnMut() -> Result<Option<Samples>>,
 ) -> Result<()> {
-    if Format::from_extension(path) == Some(Format::Tiff) {
-        return super::tiff::write_slabs(w, shape, next);
+    match Format::from_extension(path) {
+        Some(Format::Tiff) => return super::tiff::write_slabs(w, shape, next),
+        Some(Format::Pnm) => return super::pnm::write_slabs(w, shape, next),
+        _ => {}
     }
     let mut sink = sink_for(path, w)?;
     sink.begin(shape)?;

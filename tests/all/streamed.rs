@@ -362,3 +362,84 @@ fn a_streamed_volume_is_not_below_its_tiles() {
         assert!(ms < mt, "{}: mse {ms} streamed vs {mt} tiled", r.summary());
     }
 }
+
+/// A one-piece file of every block coder (efforts 1, 4 and 7: HT, adaptive, context),
+/// per-level code-blocks included, decoded whole slab by slab (`SlabDecoder`: what
+/// `mra decode` to PPM, raw, NRRD or TIFF does, the bands decoded a batch of stripes of
+/// code-blocks at a time and synthesized a few rows at a time) gives the samples of the
+/// whole-array decode, for colour, 16-bit gray, periodic ends and a volume; `mra decode`
+/// to PPM writes the bytes of the whole raster's PPM.
+#[test]
+fn a_one_piece_file_decodes_in_stripes_to_the_whole_decodes_samples() {
+    let cases: [(Raster, usize, Boundary); 4] = [
+        (
+            field(&[389, 301], 3, SampleType::U8, 31, 255.0),
+            5,
+            Boundary::Symmetric,
+        ),
+        (
+            field(&[517, 70], 1, SampleType::U16, 32, 60000.0),
+            4,
+            Boundary::Periodic,
+        ),
+        (
+            field(&[133, 250], 3, SampleType::U8, 33, 255.0),
+            3,
+            Boundary::Periodic,
+        ),
+        (
+            field(&[40, 37, 45], 1, SampleType::U16, 34, 4000.0),
+            3,
+            Boundary::Symmetric,
+        ),
+    ];
+    let dir = common::scratch_dir("stripes_decode");
+    for (r, levels, boundary) in &cases {
+        for effort in [1u8, 4, 7] {
+            let o = EncodeOptions {
+                effort,
+                ..opts(Rate::Bpp(1.5), *levels, *boundary)
+            };
+            let file = codec::encode(r, &o).unwrap();
+            let path = dir.join("s.mra");
+            std::fs::write(&path, &file).unwrap();
+            let whole = codec::decode(&file, &DecodeOptions::default())
+                .unwrap()
+                .raster;
+            let mut d = codec::SlabDecoder::open(&path, &DecodeOptions::default()).unwrap();
+            assert_eq!(d.shape().dims, r.dims);
+            let (mut got, mut slabs) = (Vec::new(), 0);
+            while let Some(slab) = d.next_slab().unwrap() {
+                got.extend(slab.to_f64());
+                slabs += 1;
+            }
+            let what = format!("{} effort {effort} {boundary:?}", r.summary());
+            assert!(d.complete(), "{what}");
+            assert_eq!(got, whole.samples.to_f64(), "{what}");
+            if r.positions() > 1 << 16 {
+                assert!(slabs > 1, "{what}: {slabs} slab");
+            }
+            if r.dims.len() == 2 && r.channels == 3 && effort == 7 {
+                let ppm = dir.join("s.ppm");
+                let out = common::mra_with_stdin(
+                    None,
+                    &[
+                        "decode",
+                        path.to_str().unwrap(),
+                        "-o",
+                        ppm.to_str().unwrap(),
+                    ],
+                    b"",
+                );
+                assert!(
+                    out.status.success(),
+                    "{}",
+                    String::from_utf8_lossy(&out.stderr)
+                );
+                let mut want = Vec::new();
+                mra::io::pnm::write(&mut want, &whole).unwrap();
+                assert_eq!(std::fs::read(&ppm).unwrap(), want, "{what}");
+            }
+        }
+    }
+}
