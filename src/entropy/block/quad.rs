@@ -368,11 +368,11 @@ pub fn encode_rdo(
                     z[b] = ax[b] * ax[b];
                 }
             }
-            for b in 0..4 {
+            for (b, &o) in off.iter().enumerate() {
                 if cand >> b & 1 == 1 {
-                    s.mag[i + off[b]] = 0;
+                    s.mag[i + o] = 0;
                     if signs {
-                        s.sgn[i + off[b]] = 0;
+                        s.sgn[i + o] = 0;
                     }
                 }
             }
