@@ -415,6 +415,11 @@ fn main() {
         "blocks31_rgb8_bpp1",
         "blocks31_gray16_lossless",
         "blocks31_vol_u16_q40",
+        // coder 2's files as its first encoder wrote them (the indices the context
+        // coder's rate–distortion choice gave); today's choose by coder 2's own costs
+        "blocks32a_rgb8_bpp1",
+        "blocks32a_gray16_lossless",
+        "blocks32a_vol_u16_q40",
         "tiled_gray16_q40",
         "gray8_lossless",
         "rgba16_lossless",

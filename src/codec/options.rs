@@ -81,8 +81,8 @@ pub struct Ladder {
 impl Ladder {
     /// Effort `e` (clamped to [`EFFORTS`]): 1–3 the HT coder without RDO, `--bpp`
     /// within 3% under the budget; 4–6 the adaptive coder (coder 2) on RDO indices
-    /// (chosen by the context coder's rates: its encode time, coder 2's bits and
-    /// decode); 7–9 the context coder on RDO indices (the files of before the ladder).
+    /// chosen by its own costs (`block::encode_rdo`); 7–9 the context coder on RDO
+    /// indices (the files of before the ladder).
     pub fn of(e: u8) -> Ladder {
         let e = e.clamp(*EFFORTS.start(), *EFFORTS.end());
         Ladder {

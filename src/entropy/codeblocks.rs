@@ -40,6 +40,10 @@ pub enum Coder {
 type NarrowEncode = fn(&[i32], &[usize], BandKind, Option<block::Parent>) -> Vec<u8>;
 /// A narrow coder's decoder of a block (stream, extents, kind, parent box).
 type NarrowDecode = fn(&[u8], &[usize], BandKind, Option<block::Parent>) -> Result<Vec<i32>>;
+/// A narrow coder's rate–distortion optimised encoder of a detail block (values over
+/// the step, extents, parent box, λ): its stream and the indices it chose by its own
+/// costs.
+type NarrowRdo = fn(&[f32], &[usize], Option<block::Parent>, f32) -> (Vec<u8>, Vec<i32>);
 
 /// How one block is coded: by the context coder, or by a coder of `i32` blocks (its
 /// encoder and decoder of a block as a band of its own, as [`block::encode_ht`]).
@@ -49,6 +53,8 @@ enum PerBlock {
     Narrow {
         encode: NarrowEncode,
         decode: NarrowDecode,
+        /// `None`: the indices are chosen by the context coder's costs
+        rdo: Option<NarrowRdo>,
     },
 }
 
@@ -93,10 +99,14 @@ impl Coder {
                 decode: |s, d, k, p| {
                     block::decode_ht(s, d, k, p, whole(), block::ht::Tables::standard())
                 },
+                rdo: None,
             },
             Coder::Adaptive => PerBlock::Narrow {
                 encode: |v, d, k, p| block::encode(v, d, k, p, block::Shape::coder2()),
                 decode: |s, d, k, p| block::decode(s, d, k, p, block::Shape::coder2()),
+                rdo: Some(|x, d, p, lambda| {
+                    block::encode_rdo(x, d, p, block::Shape::coder2(), lambda)
+                }),
             },
         }
     }
@@ -323,9 +333,10 @@ pub fn encode_blocks_by(
 
 /// Choose (rate–distortion optimised, [`band::encode_rdo`]) and code the indices of
 /// every block of a detail band whose values divided by the step are `x`, in parallel:
-/// the streams in block order and the band's indices. With a coder other than
-/// [`Coder::Context`], the indices are chosen as the context coder would code them and
-/// then coded by `coder`.
+/// the streams in block order and the band's indices. A coder with its own
+/// rate–distortion choice (coder 2, [`block::encode_rdo`]) chooses by its own costs;
+/// another coder than [`Coder::Context`] (HT) codes the indices the context coder
+/// would choose.
 pub fn encode_blocks_rdo(
     x: &[f32],
     grid: &Grid,
@@ -360,6 +371,17 @@ pub fn encode_blocks_rdo_by(
             let v = values(&b);
             let par = parent_of(&b, parent);
             let pp = par.as_ref().map(|(data, dims)| Parent { data, dims });
+            if let PerBlock::Narrow { rdo: Some(rdo), .. } = coder.per_block() {
+                let pn = par.as_ref().map(|(data, dims)| (narrow(data), dims));
+                let pp = pn.as_ref().map(|(data, dims)| block::Parent { data, dims });
+                let (s, qb) = rdo(&v, &d, pp, lambda);
+                let qb = if keep {
+                    qb.into_iter().map(i64::from).collect()
+                } else {
+                    Vec::new()
+                };
+                return (s, qb);
+            }
             let mut e = super::range::Encoder::new();
             let cols = d.last().copied().unwrap_or(1);
             let other = coder != Coder::Context;

@@ -59,6 +59,47 @@ proptest! {
         prop_assert_eq!(back, q);
     }
 
+    /// Coder 2's rate–distortion choice (`block::encode_rdo`) on any detail band, with
+    /// or without its parent: the stream decodes to the indices it returns; each index
+    /// is `round(|x|)`, one less, or 0, with the sign of `x`; at λ = 0 they are the
+    /// rounded values and the stream is `block::encode`'s of them, byte for byte.
+    #[test]
+    fn coder2_rdo_streams_decode_to_the_indices_chosen(
+        dims in dims(),
+        seed in any::<u64>(),
+        scale in prop_oneof![Just(0.7f32), Just(3.0), Just(40.0), Just(5000.0)],
+        lambda in prop_oneof![Just(0.0f32), Just(0.1), Just(0.4), Just(3.0)],
+        with_parent in any::<bool>(),
+    ) {
+        let n: usize = dims.iter().product();
+        let x = values(n, seed, scale);
+        let pdims: Vec<usize> = dims.iter().map(|d| d.div_ceil(2)).collect();
+        let pq: Vec<i32> = values(pdims.iter().product(), seed ^ 7, scale)
+            .iter()
+            .map(|v| v.round() as i32)
+            .collect();
+        let parent = with_parent.then_some(Parent { data: &pq, dims: &pdims });
+        let shape = Shape::coder2();
+        let (bytes, q) = block::encode_rdo(&x, &dims, parent, shape, lambda);
+        let back = block::decode(&bytes, &dims, BandKind::Detail, parent, shape).unwrap();
+        prop_assert_eq!(&back, &q);
+        for (&v, &i) in x.iter().zip(&q) {
+            let a0 = (v.abs() + 0.5) as i32;
+            let a = i.abs();
+            prop_assert!(a == a0 || a == 0 || (a0 >= 2 && a == a0 - 1), "{} -> {}", v, i);
+            prop_assert!(i == 0 || (i < 0) == (v < 0.0), "{} -> {}", v, i);
+        }
+        if lambda == 0.0 {
+            // round half away from zero, in f32 as the encoder does
+            let rounded: Vec<i32> = x
+                .iter()
+                .map(|&v| ((v.abs() + 0.5) as i32) * if v < 0.0 { -1 } else { 1 })
+                .collect();
+            prop_assert_eq!(&q, &rounded);
+            prop_assert_eq!(bytes, block::encode(&rounded, &dims, BandKind::Detail, parent, shape));
+        }
+    }
+
     /// Damaged or arbitrary bytes decode to something or fail with an error, never a
     /// panic.
     #[test]
@@ -72,6 +113,53 @@ proptest! {
         let shape = if coder2 { Shape::coder2() } else { Shape::new(2, 4, 6) };
         let _ = block::decode(&bytes, &dims, kind, None, shape);
     }
+}
+
+/// Laplacian-like coefficients (in units of the step) of scale `scale`, from `seed`:
+/// mostly small, a few large, both signs.
+fn values(n: usize, seed: u64, scale: f32) -> Vec<f32> {
+    let mut s = seed | 1;
+    (0..n)
+        .map(|_| {
+            s ^= s << 13;
+            s ^= s >> 7;
+            s ^= s << 17;
+            let u = ((s >> 11) as f64 / (1u64 << 53) as f64).max(1e-12);
+            let m = (-u.ln() * 0.5) as f32 * scale;
+            if s & 1 == 1 {
+                -m
+            } else {
+                m
+            }
+        })
+        .collect()
+}
+
+/// On a band of Laplacian coefficients, coder 2's own rate–distortion choice costs
+/// less `D + λ·R` than rounding (`D` the squared error in steps², `R` the stream's
+/// bits), and fewer bits; a larger λ spends fewer bits still.
+#[test]
+fn coder2_rdo_lowers_the_rate_distortion_cost() {
+    let dims = [96usize, 128];
+    let x = values(96 * 128, 99, 1.5);
+    let shape = Shape::coder2();
+    let cost = |lambda: f32| {
+        let (bytes, q) = block::encode_rdo(&x, &dims, None, shape, lambda);
+        let d: f64 = x
+            .iter()
+            .zip(&q)
+            .map(|(&v, &i)| ((v - i as f32) as f64).powi(2))
+            .sum();
+        (d, bytes.len() as f64 * 8.0)
+    };
+    let (d0, r0) = cost(0.0);
+    let (d1, r1) = cost(0.2);
+    let (_, r2) = cost(1.0);
+    assert!(
+        d1 + 0.2 * r1 < d0 + 0.2 * r0,
+        "{d1} + 0.2·{r1} against {d0} + 0.2·{r0}"
+    );
+    assert!(r1 < r0 && r2 < r1, "{r0} {r1} {r2}");
 }
 
 /// A stream cut short fails or decodes without a panic, and a band of one block whose

@@ -59,8 +59,8 @@ fn max_abs(a: &Raster, b: &Raster) -> f64 {
 }
 
 /// The ladder: efforts 1–3 the HT coder, 4–6 the adaptive coder, 7–9 the context
-/// coder; RDO from 4; the default is the context coder (issue 48's ratio target is
-/// met by neither narrow coder).
+/// coder; RDO from 4; the default is the context coder (coder 2 meets issue 48's
+/// lossy ratio target, not its lossless one on 16-bit data: docs/codec.md).
 #[test]
 fn the_ladder_names_its_coders() {
     for e in 1..=9u8 {
@@ -136,27 +136,27 @@ fn every_coder_round_trips_every_mode() {
     }
 }
 
-/// Efforts 4–6 code the indices that the context coder's rate–distortion choice gives
-/// (effort 7): the same samples decode from both files, coder 2's the larger.
+/// Efforts 4–6 choose their indices by coder 2's own costs, not the context coder's
+/// (effort 7): the samples decoded differ, and at the same `--bpp` (a file within the
+/// budget) the PSNR is within 0.5 dB of effort 7's.
 #[test]
-fn the_adaptive_coder_on_optimised_indices_decodes_the_context_coders_samples() {
+fn the_adaptive_coder_chooses_its_own_indices_near_the_context_coders_quality() {
     let r = field(&[150, 203], 3, SampleType::U8, 5, 255.0);
     let v = field(&[21, 40, 37], 1, SampleType::U16, 6, 30000.0);
-    for r in [&r, &v] {
-        let fast = codec::encode(r, &opts(Rate::Quality(55.0), 5)).unwrap();
-        let slow = codec::encode(r, &opts(Rate::Quality(55.0), 7)).unwrap();
-        assert!(
-            decoded(&fast).samples == decoded(&slow).samples,
-            "{}",
-            r.summary()
-        );
-        assert!(
-            fast.len() > slow.len(),
-            "{} {} {}",
-            r.summary(),
-            fast.len(),
-            slow.len()
-        );
+    for (r, hi) in [(&r, 255.0), (&v, 30000.0)] {
+        let fast = codec::encode(r, &opts(Rate::Bpp(1.0), 5)).unwrap();
+        let slow = codec::encode(r, &opts(Rate::Bpp(1.0), 7)).unwrap();
+        let (df, ds) = (decoded(&fast), decoded(&slow));
+        assert!(df.samples != ds.samples, "{}", r.summary());
+        let psnr = |d: &Raster| {
+            let (x, y) = (d.samples.to_f64(), r.samples.to_f64());
+            let mse = x.iter().zip(&y).map(|(p, q)| (p - q).powi(2)).sum::<f64>() / x.len() as f64;
+            10.0 * (hi * hi / mse).log10()
+        };
+        let (pf, ps) = (psnr(&df), psnr(&ds));
+        assert!(pf > ps - 0.5, "{}: {pf} dB against {ps}", r.summary());
+        let bits = |b: &[u8]| b.len() as f64 * 8.0 / (r.dims.iter().product::<usize>() as f64);
+        assert!(bits(&fast) <= 1.0, "{}", bits(&fast));
     }
 }
 

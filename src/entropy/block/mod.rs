@@ -216,6 +216,56 @@ pub fn encode_counting(
     out
 }
 
+/// Choose the indices of a detail band by rate–distortion optimisation against the
+/// quad coder's own models ([`quad::encode_rdo`], Lagrange multiplier `lambda` in units
+/// of the step squared per bit) and code them in code-blocks of `shape` exactly as
+/// [`encode`] codes them: `x` = the band's coefficients divided by its step (raster
+/// order, extents `dims`). Returns the stream and the indices chosen.
+pub fn encode_rdo(
+    x: &[f32],
+    dims: &[usize],
+    parent: Option<Parent>,
+    shape: Shape,
+    lambda: f32,
+) -> (Vec<u8>, Vec<i32>) {
+    let w = Walk::new(dims);
+    let shape = shape.normal();
+    let mut q = vec![0i32; x.len()];
+    let mut out = Vec::new();
+    if x.len() != dims.iter().product::<usize>() {
+        return (out, q);
+    }
+    let parent = parent_map(dims, w, parent);
+    let models = (shape.limit, shape.trained, shape.signs);
+    let mut scratch: Option<(Extent, Scratch)> = None;
+    for b in blocks(w, shape) {
+        let s = scratch_for(&mut scratch, b.ext);
+        let layout = Layout {
+            w,
+            b,
+            parent: parent.as_ref().map(|(d, pw, bases)| (*d, *pw, &bases[..])),
+        };
+        let mut e = rc::Encoder::new();
+        let mut bits = rc::BitWriter::default();
+        quad::encode_rdo(
+            x,
+            &mut q,
+            b.ext,
+            &layout,
+            s,
+            models,
+            lambda,
+            (&mut e, &mut bits),
+        );
+        let (sym, raw) = (e.finish(), bits.finish());
+        crate::format::put_varint(&mut out, sym.len() as u64);
+        crate::format::put_varint(&mut out, raw.len() as u64);
+        out.extend_from_slice(&sym);
+        out.extend_from_slice(&raw);
+    }
+    (out, q)
+}
+
 /// The one band walk of every encoder: the values coded (the median residuals in the
 /// coarsest band, the indices else) and, block after block of `shape` in coding
 /// order, its extent, layout and scratch handed to `block`; the parent is read where

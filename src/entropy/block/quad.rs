@@ -290,6 +290,167 @@ pub fn encode(
     });
 }
 
+/// Choose the indices of a detail block by rate–distortion and code them as [`encode`]
+/// codes them: `x` holds the coefficients divided by the band's step at the positions
+/// `rows` gives, `q` receives the indices chosen there. Each coefficient of magnitude
+/// `|x|` may take `a₀ = round(|x|)`, `a₀ − 1` (when ≥ 1) or 0; with `J(a) = (|x| − a)² +
+/// λ·bits(a)` read from the block's models as they stand:
+///
+/// - the quad's pattern is the subset `S` of its coefficients with `a₀ ≥ 1` minimising
+///   `λ·bits(S) + Σ_{S} min(J(a₀), J(a₀ − 1)) + Σ_{not S} |x|²`, the non-zero costs
+///   estimated with the quad's earlier coefficients at `a₀`;
+/// - then each coefficient of `S`, in order, takes the one of `a₀`, `a₀ − 1` (≥ 1)
+///   with the least `J`, its magnitude context now the coded one.
+///
+/// `λ = 0` gives `a₀` everywhere (rounding).
+// the block's values and indices, its layout, scratch and models, λ, the streams
+#[allow(clippy::too_many_arguments)]
+pub fn encode_rdo(
+    x: &[f32],
+    q: &mut [i32],
+    ext: Extent,
+    rows: &impl Rows,
+    s: &mut Scratch,
+    (limit, trained, signs): (u8, bool, bool),
+    lambda: f32,
+    (e, w): (&mut Encoder, &mut BitWriter),
+) {
+    let mut m = Models::new(limit, trained);
+    s.clear();
+    if signs {
+        s.sgn.fill(0);
+    }
+    let off = quad_offsets(s.rx);
+    let sign_cost = |m: &Models, s: &Scratch, j: usize, neg: bool| {
+        if signs {
+            m.sign[s.sign_ctx(j)].cost_fast(neg)
+        } else {
+            1.0
+        }
+    };
+    each_quad(ext, rows, |k, y, xq, valid, at| {
+        let i = s.at(k, y, xq);
+        let pm = rows.parent(k, y, xq);
+        let mut a0 = [0u32; 4];
+        let mut ax = [0f32; 4];
+        let mut cand = 0usize;
+        for b in 0..4 {
+            if valid >> b & 1 == 1 {
+                q[at[b]] = 0;
+                let t = x[at[b]].abs();
+                if t.is_finite() {
+                    let r = (t + 0.5).min(2.0e9) as u32;
+                    (a0[b], ax[b]) = (r, t);
+                    cand |= ((r > 0) as usize) << b;
+                }
+            }
+        }
+        let pc = s.pattern_ctx(i, pm);
+        let mut pattern = cand;
+        if cand != 0 && lambda > 0.0 {
+            // the non-zero choices' costs, the quad's earlier coefficients at a₀
+            for b in 0..4 {
+                if cand >> b & 1 == 1 {
+                    s.mag[i + off[b]] = a0[b].min(CAP);
+                    if signs {
+                        s.sgn[i + off[b]] = 1 + (x[at[b]] < 0.0) as u8;
+                    }
+                }
+            }
+            let mut nz = [0f32; 4];
+            let mut z = [0f32; 4];
+            for b in 0..4 {
+                if cand >> b & 1 == 1 {
+                    let j = i + off[b];
+                    let c = s.mag_ctx(j, pm);
+                    let sc = sign_cost(&m, s, j, x[at[b]] < 0.0);
+                    nz[b] = best_magnitude(&m.mag[c], c, a0[b], ax[b], lambda).1 + lambda * sc;
+                    z[b] = ax[b] * ax[b];
+                }
+            }
+            for (b, &o) in off.iter().enumerate() {
+                if cand >> b & 1 == 1 {
+                    s.mag[i + o] = 0;
+                    if signs {
+                        s.sgn[i + o] = 0;
+                    }
+                }
+            }
+            let cdf = &m.pattern[pc];
+            let mut best = f32::INFINITY;
+            let mut sub = cand;
+            loop {
+                let mut j = lambda * cdf.cost_fast(sub);
+                for b in 0..4 {
+                    if cand >> b & 1 == 1 {
+                        j += if sub >> b & 1 == 1 { nz[b] } else { z[b] };
+                    }
+                }
+                if j < best {
+                    (best, pattern) = (j, sub);
+                }
+                if sub == 0 {
+                    break;
+                }
+                sub = (sub - 1) & cand;
+            }
+        }
+        e.symbol(&mut m.pattern[pc], pattern);
+        for b in 0..4 {
+            if pattern >> b & 1 == 1 {
+                let j = i + off[b];
+                let c = s.mag_ctx(j, pm);
+                let a = if lambda > 0.0 {
+                    best_magnitude(&m.mag[c], c, a0[b], ax[b], lambda).0
+                } else {
+                    a0[b]
+                };
+                let neg = x[at[b]] < 0.0;
+                q[at[b]] = if neg { -(a as i32) } else { a as i32 };
+                if signs {
+                    put_magnitude(e, w, &mut m.mag[c], c, a, None);
+                    e.bit(&mut m.sign[s.sign_ctx(j)], neg, limit);
+                    s.sgn[j] = 1 + neg as u8;
+                } else {
+                    put_magnitude(e, w, &mut m.mag[c], c, a, Some(neg));
+                }
+                s.mag[j] = a.min(CAP);
+            }
+        }
+    });
+}
+
+/// Of `a₀` and `a₀ − 1` (when ≥ 1), the magnitude with the least
+/// `(|x| − a)² + λ·bits(a)` in magnitude class `c`, and that cost (sign not counted).
+#[inline(always)]
+fn best_magnitude(cdf: &Cdf, c: usize, a0: u32, ax: f32, lambda: f32) -> (u32, f32) {
+    let d = ax - a0 as f32;
+    let j0 = d * d + lambda * magnitude_bits(cdf, c, a0);
+    if a0 < 2 {
+        return (a0, j0);
+    }
+    let d = ax - (a0 - 1) as f32;
+    let j1 = d * d + lambda * magnitude_bits(cdf, c, a0 - 1);
+    if j1 < j0 {
+        (a0 - 1, j1)
+    } else {
+        (a0, j0)
+    }
+}
+
+/// The bits of magnitude `a ≥ 1` in class `c` as [`put_magnitude`] codes it, sign
+/// left out.
+#[inline(always)]
+fn magnitude_bits(cdf: &Cdf, c: usize, a: u32) -> f32 {
+    let k = c.saturating_sub(KOFF) as u32;
+    let h = (a - 1) >> k;
+    if h < 15 {
+        cdf.cost_fast(h as usize) + k as f32
+    } else {
+        cdf.cost_fast(15) + (6 + (h - 14).ilog2() + k) as f32
+    }
+}
+
 #[inline(always)]
 fn put_magnitude(
     e: &mut Encoder,

@@ -122,6 +122,24 @@ impl Cdf {
         let lo = if s == 0 { 0.0 } else { self.c[s - 1] as f64 };
         -((self.c[s] as f64 - lo) / ONE as f64).log2()
     }
+
+    /// [`Cdf::cost`] to about 0.01 bit ([`bits_of`]), for the encoder's choices.
+    #[inline(always)]
+    pub fn cost_fast(&self, s: usize) -> f32 {
+        let lo = if s == 0 { 0 } else { self.c[s - 1] as u32 };
+        bits_of(self.c[s] as u32 - lo)
+    }
+}
+
+/// `−log₂(f / 2^15)` for a frequency `1 ≤ f ≤ 2^15`, to about 0.01 bit: with
+/// `f = 2^e·m`, `m ∈ [1, 2)`, `log₂ f = e + log₂ m` and
+/// `log₂ m ≈ t(1.3466 − 0.3466t)`, `t = m − 1`.
+#[inline(always)]
+pub fn bits_of(f: u32) -> f32 {
+    let b = (f.max(1) as f32).to_bits();
+    let e = ((b >> 23) as i32 - 127) as f32;
+    let t = f32::from_bits((b & 0x007f_ffff) | 0x3f80_0000) - 1.0;
+    PROB_BITS as f32 - (e + t * (1.3466 - 0.3466 * t))
 }
 
 /// An adaptive binary model for the same coder: `p = P(0)·2^15`, starting at ½; after
@@ -158,6 +176,13 @@ impl Bit {
     pub fn cost(&self, bit: bool) -> f64 {
         let p0 = self.p as f64 / ONE as f64;
         -(if bit { 1.0 - p0 } else { p0 }).log2()
+    }
+
+    /// [`Bit::cost`] to about 0.01 bit ([`bits_of`]).
+    #[inline(always)]
+    pub fn cost_fast(&self, bit: bool) -> f32 {
+        let p = self.p as u32;
+        bits_of(if bit { ONE as u32 - p } else { p })
     }
 }
 
@@ -364,5 +389,14 @@ mod tests {
         let t: [[u16; 16]; 5] = spread(&seen, 2);
         let uniform = Cdf::uniform(LIMIT).cumulative();
         assert_eq!(t, [seen[0], uniform, seen[1], uniform, uniform]);
+    }
+
+    /// The fast costs stay within 0.01 bit of the exact ones over every frequency.
+    #[test]
+    fn fast_costs_are_within_a_hundredth_of_a_bit() {
+        for f in 1..=ONE as u32 {
+            let exact = -(f as f64 / ONE as f64).log2();
+            assert!((bits_of(f) as f64 - exact).abs() < 0.01, "f = {f}");
+        }
     }
 }
