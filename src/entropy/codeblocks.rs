@@ -835,8 +835,8 @@ mod tests {
                         .collect();
                     let refs: Vec<&[u8]> = which.iter().map(|&i| s[i].as_slice()).collect();
                     // the parent held over the hull of the blocks' parent boxes
-                    let mut held: Vec<Range<usize>> = vec![usize::MAX..0; nd];
-                    for &i in &which {
+                    let mut held = parent_box(&grid.bounds(which[0]), &pdims);
+                    for &i in &which[1..] {
                         for (h, r) in held.iter_mut().zip(parent_box(&grid.bounds(i), &pdims)) {
                             *h = h.start.min(r.start)..h.end.max(r.end);
                         }
