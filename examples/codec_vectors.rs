@@ -177,7 +177,7 @@ fn main() {
             Rate::Quality(50.0),
             0,
         ),
-        // format 3.0: the bands in code-blocks (256×256, volumes 32×64×64), two
+        // format 3.0: the bands in code-blocks (256×256, volumes 32³), two
         // blocks across the finest bands
         (
             "blocks30_rgb8_bpp1",

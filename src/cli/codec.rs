@@ -68,7 +68,7 @@ pub struct EncodeArgs {
     #[arg(long, value_name = "T")]
     pub tile: Option<String>,
     /// Format of a one-piece file: 3 (the default: every band cut into independent
-    /// code-blocks, 256×256, volumes 32×64×64, decoded in parallel and only those a
+    /// code-blocks, 256×256, volumes 32×32×32, decoded in parallel and only those a
     /// `--region` needs; formats/MRA.md §15) or 2 (one stream per band, for readers
     /// older than format 3). Tiled files are format 2 either way.
     #[arg(long, value_name = "V", default_value_t = 3,

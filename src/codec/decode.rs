@@ -9,6 +9,7 @@ use super::options::{DecodeOptions, Decoded};
 use super::plan::Plan;
 use super::plan::{band_delta, band_rows, dequantize_row, lossy_values};
 use super::voids::mark_voids;
+use super::window_decode;
 use super::{layout, lossless};
 use crate::entropy::codeblocks::{parent_box, Grid};
 use crate::entropy::range::Decoder;
@@ -748,11 +749,11 @@ pub(super) fn reconstruct(p: &Parsed, k: usize) -> Result<Raster> {
 
 /// A file without voids, of non-standard pyramid, decoded at level
 /// `k` over the box `out` of the level's raster alone: each channel's bands decoded
-/// over the code-blocks the window needs ([`band_windows`]) into a plane whose other
-/// pages are never written, then only the window's support synthesized level by level
+/// over the code-blocks the window needs ([`band_windows`]) into buffers of their boxes
+/// ([`window_decode`]; a file before code-blocks: whole bands into a plane), then only the window's support synthesized level by level
 /// ([`crate::tensor::WindowPlan`]; a lossless file's integer lifting by
-/// [`IntWindow`], [`lossless_window`]; a `--max-error` file's residual layer added over
-/// the window, [`add_residuals_window`]). The samples are those of the same box of a
+/// [`IntWindow`]; a `--max-error` file's residual layer added over the window,
+/// [`add_residuals_window`]). The samples are those of the same box of a
 /// whole decode. `None` where this does not apply (the caller then decodes whole).
 pub(super) fn reconstruct_window(
     p: &Parsed,
@@ -770,21 +771,30 @@ pub(super) fn reconstruct_window(
         let Some(iw) = IntWindow::new(&plan.sub(k), out) else {
             return Ok(None);
         };
-        check_budget(p, k, true)?;
-        lossless_window(p, k, &iw, npos)?
+        if h.version.has_blocks() {
+            wide_samples(h, window_decode::lossless_window(p, k, &iw)?, npos)
+        } else {
+            check_budget(p, k, true)?;
+            lossless_window(p, k, &iw, npos)?
+        }
     } else {
         let Some(wp) = crate::tensor::WindowPlan::new(&plan.sub(k), out) else {
             return Ok(None);
         };
-        check_budget(p, k, false)?;
-        let planes = (0..h.channels)
-            .into_par_iter()
-            .map(|ch| {
-                let mut plane = vec![0f32; plan.pyr.shape.iter().product()];
-                decode_channel_into(p, ch, k, &mut plane)?;
-                Ok(wp.synthesize(&plane, &plan.pyr.shape))
-            })
-            .collect::<Result<Vec<_>>>()?;
+        let planes = if h.version.has_blocks() {
+            window_decode::lossy_window(p, k, &wp)?
+        } else {
+            // a file before code-blocks: its bands decoded whole into the plane
+            check_budget(p, k, false)?;
+            (0..h.channels)
+                .into_par_iter()
+                .map(|ch| {
+                    let mut plane = vec![0f32; plan.pyr.shape.iter().product()];
+                    decode_channel_into(p, ch, k, &mut plane)?;
+                    Ok(wp.synthesize(&plane, &plan.pyr.shape))
+                })
+                .collect::<Result<Vec<_>>>()?
+        };
         super::plan::to_samples(
             planes,
             npos,

@@ -21,7 +21,7 @@
 //! [`super::lossless::inverse`] does.
 
 use crate::scheme::Scheme;
-use crate::tensor::{box_dims, box_lists, for_each_index, strides, Pyramid};
+use crate::tensor::{box_lists, for_each_index, gather, Pyramid};
 use std::ops::Range;
 
 /// The segment of a lane of length `n` that gives the samples `o` exactly (module doc),
@@ -132,19 +132,7 @@ impl IntWindow {
         if l >= self.levels.len() {
             return band.iter().map(|_| 0..0).collect();
         }
-        self.cols(l)
-            .iter()
-            .zip(band)
-            .map(|(c, r)| {
-                let lo = c.partition_point(|&x| x < r.start);
-                let hi = c.partition_point(|&x| x < r.end);
-                if lo < hi {
-                    c[lo] - r.start..c[hi - 1] + 1 - r.start
-                } else {
-                    0..0
-                }
-            })
-            .collect()
+        crate::tensor::reads_of(&self.cols(l), band)
     }
 
     /// The window's samples (raster order over its box): `coef(p)` gives the
@@ -159,22 +147,7 @@ impl IntWindow {
         for (l, lv) in self.levels.iter().enumerate().rev() {
             let cols = self.cols(l);
             let mut dims: Vec<usize> = cols.iter().map(|c| c.len()).collect();
-            let mut x: Vec<i64> = Vec::with_capacity(dims.iter().product());
-            let cst = strides(&box_dims(&cur_box));
-            for_each_index(&cols, |p| {
-                let coarse = p.iter().zip(&lv.coarse).all(|(&x, &m)| x < m);
-                x.push(if coarse {
-                    let o: usize = p
-                        .iter()
-                        .zip(&cur_box)
-                        .zip(&cst)
-                        .map(|((&x, r), s)| (x - r.start) * s)
-                        .sum();
-                    cur[o]
-                } else {
-                    coef(p)
-                });
-            });
+            let mut x = gather(&cols, &lv.coarse, (&cur, &cur_box), &mut |p| coef(p));
             for a in (0..dims.len()).rev() {
                 let Some((seg, c, _)) = &lv.lifts[a] else {
                     continue;

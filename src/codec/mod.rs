@@ -40,6 +40,7 @@ mod reblock;
 mod streamed;
 pub mod tiles;
 mod voids;
+mod window_decode;
 mod write;
 
 pub use crate::format::body::ChunkInfo;

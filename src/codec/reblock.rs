@@ -19,8 +19,10 @@ use rayon::prelude::*;
 /// The side of the code-blocks of 2-D rasters (and `SIDE²` samples of 1-D ones), chosen
 /// by `benches/coder.rs` (docs/codec.md, "Code-blocks").
 pub const SIDE: usize = 256;
-/// The code-blocks of rasters of three axes or more (Z, Y, X; 1 on any axis before).
-pub const VOLUME: [usize; 3] = [32, 64, 64];
+/// The code-blocks of rasters of three axes or more (Z, Y, X; 1 on any axis before):
+/// 32³ at the finest level (then 16³, formats/MRA.md §15.3), so that a 64³ window
+/// meets blocks of about its own size at every level (docs/codec.md, "Regions").
+pub const VOLUME: [usize; 3] = [32, 32, 32];
 
 /// The block extents of a raster of `nd` axes, as the exponents `HEAD` stores.
 pub(super) fn exponents(nd: usize) -> Vec<u8> {

@@ -282,12 +282,41 @@ pub fn box_dims(b: &[Range<usize>]) -> Vec<usize> {
 
 /// The parent of block box `b` as its own band (values of the parent box).
 fn parent_of(b: &[Range<usize>], parent: Option<Parent>) -> Option<(Vec<i64>, Vec<usize>)> {
+    parent_in(b, parent, None)
+}
+
+/// The parent of block box `b` as its own band, from a parent band (`parent.dims` its
+/// extents) whose indices `parent.data` are held over the box `held` of it (raster order
+/// over the box; `None`: the whole band). `None` when the parent box is not inside `held`.
+fn parent_in(
+    b: &[Range<usize>],
+    parent: Option<Parent>,
+    held: Option<&[Range<usize>]>,
+) -> Option<(Vec<i64>, Vec<usize>)> {
     let p = parent?;
     if p.dims.len() != b.len() || p.dims.contains(&0) {
         return None;
     }
     let pb = parent_box(b, p.dims);
-    Some((extract(p.data, p.dims, &pb), box_dims(&pb)))
+    let Some(held) = held else {
+        return Some((extract(p.data, p.dims, &pb), box_dims(&pb)));
+    };
+    let hd = box_dims(held);
+    if held.len() != pb.len()
+        || hd.iter().product::<usize>() != p.data.len()
+        || pb
+            .iter()
+            .zip(held)
+            .any(|(r, h)| r.start < h.start || r.end > h.end)
+    {
+        return None;
+    }
+    let local: Vec<Range<usize>> = pb
+        .iter()
+        .zip(held)
+        .map(|(r, h)| r.start - h.start..r.end - h.start)
+        .collect();
+    Some((extract(p.data, &hd, &local), box_dims(&pb)))
 }
 
 /// Code every block of band `q` (extents `grid.dims`) in parallel: one stream per block
@@ -485,22 +514,116 @@ where
     W: Fn(&mut [T], &[i64]) + Sync,
     N: Fn(&mut [T], &[i32]) + Sync,
 {
+    let band: Vec<Range<usize>> = grid.dims.iter().map(|&e| 0..e).collect();
+    let over = Over {
+        rows: &band,
+        parent: None,
+    };
+    decode_blocks_over(
+        rows,
+        &over,
+        grid,
+        which,
+        streams,
+        (kind, parent),
+        (coding, coder),
+        put,
+    )
+}
+
+/// Whether a block of `which` has its parent box outside the box `held` of the parent
+/// band that the parent's indices cover.
+fn parent_outside(
+    grid: &Grid,
+    which: &[usize],
+    kind: BandKind,
+    parent: Option<Parent>,
+    held: Option<&[Range<usize>]>,
+) -> bool {
+    let (Some(p), Some(held), BandKind::Detail) = (parent, held, kind) else {
+        return false;
+    };
+    if held.len() != p.dims.len() || box_dims(held).iter().product::<usize>() != p.data.len() {
+        return true;
+    }
+    which.iter().any(|&i| {
+        parent_box(&grid.bounds(i), p.dims)
+            .iter()
+            .zip(held)
+            .any(|(r, h)| r.start < h.start || r.end > h.end)
+    })
+}
+
+/// The boxes [`decode_blocks_over`] works on (band coordinates): `rows`, the box of the
+/// band its rows cover (block-aligned: its start a multiple of the block on every
+/// axis), and `parent`, the box of the parent band its parent's indices hold (`None`:
+/// the whole parent band).
+pub struct Over<'a> {
+    /// The box of the band the output rows cover.
+    pub rows: &'a [Range<usize>],
+    /// The box of the parent band the parent's `data` holds.
+    pub parent: Option<&'a [Range<usize>]>,
+}
+
+/// [`decode_blocks_into`] over a box of the band: `rows` are the rows of `over.rows`
+/// (raster order over the box, each as long as its last extent), every block of
+/// `which` inside it, and the parent's indices held over `over.parent` (each block's
+/// parent box inside it). Buffers the size of the blocks' boxes stand for the band's.
+#[allow(clippy::too_many_arguments)]
+pub fn decode_blocks_over<T, W, N>(
+    rows: Vec<&mut [T]>,
+    over: &Over,
+    grid: &Grid,
+    which: &[usize],
+    streams: &[&[u8]],
+    (kind, parent): (BandKind, Option<Parent>),
+    (coding, coder): (Coding, Coder),
+    put: &Put<W, N>,
+) -> Result<()>
+where
+    T: Send,
+    W: Fn(&mut [T], &[i64]) + Sync,
+    N: Fn(&mut [T], &[i32]) + Sync,
+{
     let nd = grid.dims.len();
-    if nd == 0 || grid.dims.contains(&0) {
+    if nd == 0 || grid.dims.contains(&0) || over.rows.len() != nd {
         return Ok(());
     }
-    let cols = grid.dims[nd - 1];
+    let bx = over.rows;
+    let bd = box_dims(bx);
+    let outside = |b: &[Range<usize>]| {
+        b.iter()
+            .zip(bx)
+            .any(|(r, o)| r.start < o.start || r.end > o.end)
+    };
+    if bd.contains(&0)
+        || bx
+            .iter()
+            .zip(&grid.block)
+            .zip(&grid.dims)
+            .any(|((r, &b), &e)| r.start % b != 0 || r.end > e)
+        || which.iter().any(|&i| outside(&grid.bounds(i)))
+        || parent_outside(grid, which, kind, parent, over.parent)
+    {
+        return Err(crate::Error::format(
+            "code-blocks outside the box decoded",
+            "blocks inside a block-aligned box",
+        ));
+    }
+    let cols = bd[nd - 1];
     // rows per plane of the first axis
-    let inner: usize = grid.dims[1.min(nd - 1)..nd - 1].iter().product();
-    let nrows: usize = grid.dims[..nd - 1].iter().product();
+    let inner: usize = bd[1.min(nd - 1)..nd - 1].iter().product();
+    let nrows: usize = bd[..nd - 1].iter().product();
     if rows.len() != nrows.max(1) || rows.iter().any(|r| r.len() != cols) {
         return Ok(());
     }
     let per_slab: usize = grid.counts[1..].iter().product();
-    // the blocks of each slab, by their place in `which`
+    // the first slab of the box
+    let s0 = bx[0].start / grid.block[0];
+    // the blocks of each slab (counted from the box's first), by their place in `which`
     let mut slabs: Vec<(usize, Vec<usize>)> = Vec::new();
     for (k, &i) in which.iter().enumerate() {
-        let s = i / per_slab.max(1);
+        let s = i / per_slab.max(1) - s0;
         match slabs.last_mut() {
             Some((at, v)) if *at == s => v.push(k),
             _ => slabs.push((s, vec![k])),
@@ -536,23 +659,27 @@ where
         .map(|(s, mut slab, ks)| {
             // the slab's extents, its rows' length, and the row and column of an offset
             let len = slab[0].len().max(1);
-            let mut shape = grid.dims.clone();
+            let mut shape = bd.clone();
             shape[0] = if nd == 1 {
                 slab[0].len()
             } else {
                 slab.len() / inner
             };
-            let y0 = s * grid.block[0];
+            let y0 = (s + s0) * grid.block[0];
             for k in ks {
                 let b = grid.bounds(which[k]);
                 let d = box_dims(&b);
-                let mut local = b.clone();
+                let mut local: Vec<Range<usize>> = b
+                    .iter()
+                    .zip(bx)
+                    .map(|(r, o)| r.start - o.start..r.end - o.start)
+                    .collect();
                 local[0] = b[0].start - y0..b[0].end - y0;
                 if let PerBlock::Narrow { decode, .. } = coder.per_block() {
                     let par = if kind == BandKind::Coarse {
                         None
                     } else {
-                        parent_of(&b, parent).map(|(data, dims)| (narrow(&data), dims))
+                        parent_in(&b, parent, over.parent).map(|(data, dims)| (narrow(&data), dims))
                     };
                     let pp = par
                         .as_ref()
@@ -573,7 +700,7 @@ where
                     });
                     continue;
                 }
-                let par = parent_of(&b, parent);
+                let par = parent_in(&b, parent, over.parent);
                 let pp = par.as_ref().map(|(data, dims)| Parent { data, dims });
                 let mut starts = Vec::with_capacity(d[..nd - 1].iter().product());
                 for_each_run(&shape, &local, |at, _, _| starts.push(at));
@@ -675,6 +802,143 @@ mod tests {
                     &vec![true; box_dims(&win).iter().product()],
                 );
                 assert!(inwin.iter().zip(&mask).all(|(&w, &m)| !w || m));
+            }
+        }
+    }
+
+    /// `decode_blocks_over` decodes the blocks of a block-aligned box into a buffer of
+    /// the box alone, its parent context read from a box of the parent band: the values
+    /// of the same box of the whole band's decode, on 1- to 4-D bands, every coder,
+    /// boxes at the start, middle and end; a block outside the box, or a parent box
+    /// outside the parent's held box, is an error.
+    #[test]
+    fn blocks_decode_over_a_box_with_a_held_parent() {
+        for (dims, block) in [
+            (vec![37usize], vec![8usize]),
+            (vec![13, 17], vec![4, 6]),
+            (vec![5, 9, 7], vec![2, 4, 4]),
+            (vec![2, 3, 5, 6], vec![1, 2, 2, 4]),
+        ] {
+            let n: usize = dims.iter().product();
+            let nd = dims.len();
+            let q = sample(n, n as u64 + 11, 40);
+            let pdims: Vec<usize> = dims.iter().map(|d| d.div_ceil(2)).collect();
+            let pq = sample(pdims.iter().product(), 9, 3);
+            let parent = Some(Parent {
+                data: &pq,
+                dims: &pdims,
+            });
+            let grid = Grid::new(&dims, &block);
+            let copy = Put {
+                wide: |o: &mut [i64], v: &[i64]| o.copy_from_slice(v),
+                narrow: |o: &mut [i64], v: &[i32]| {
+                    for (o, &x) in o.iter_mut().zip(v) {
+                        *o = x as i64;
+                    }
+                },
+            };
+            for coder in Coder::ALL {
+                let kind = BandKind::Detail;
+                let s = encode_blocks(&q, &grid, kind, parent, Coding::Chosen, coder);
+                let windows: Vec<Vec<Range<usize>>> = vec![
+                    dims.iter().map(|_| 0..1).collect(),
+                    dims.iter().map(|&d| d / 3..d / 2 + 1).collect(),
+                    dims.iter().map(|&d| d - 1..d).collect(),
+                ];
+                for win in windows {
+                    let which = grid.touching(&win);
+                    let bx: Vec<Range<usize>> = win
+                        .iter()
+                        .zip(&block)
+                        .zip(&dims)
+                        .map(|((r, &b), &e)| {
+                            r.start / b * b..r.end.div_ceil(b).saturating_mul(b).min(e)
+                        })
+                        .collect();
+                    let refs: Vec<&[u8]> = which.iter().map(|&i| s[i].as_slice()).collect();
+                    // the parent held over the hull of the blocks' parent boxes
+                    let mut held = parent_box(&grid.bounds(which[0]), &pdims);
+                    for &i in &which[1..] {
+                        for (h, r) in held.iter_mut().zip(parent_box(&grid.bounds(i), &pdims)) {
+                            *h = h.start.min(r.start)..h.end.max(r.end);
+                        }
+                    }
+                    let pheld = extract(&pq, &pdims, &held);
+                    let bd = box_dims(&bx);
+                    let mut out = vec![i64::MIN; bd.iter().product()];
+                    let rows: Vec<&mut [i64]> = out.chunks_mut(bd[nd - 1]).collect();
+                    let over = Over {
+                        rows: &bx,
+                        parent: Some(&held),
+                    };
+                    let par = Some(Parent {
+                        data: &pheld,
+                        dims: &pdims,
+                    });
+                    let at = (Coding::Chosen, coder);
+                    decode_blocks_over(rows, &over, &grid, &which, &refs, (kind, par), at, &copy)
+                        .unwrap();
+                    assert_eq!(out, extract(&q, &dims, &bx), "{dims:?} {coder:?} {win:?}");
+                    // a parent box outside the held box
+                    if held
+                        .iter()
+                        .zip(&pdims)
+                        .any(|(h, &p)| h.start > 0 || h.end < p)
+                    {
+                        let small: Vec<Range<usize>> =
+                            held.iter().map(|h| h.start..h.start + 1).collect();
+                        let ps = extract(&pq, &pdims, &small);
+                        let rows: Vec<&mut [i64]> = out.chunks_mut(bd[nd - 1]).collect();
+                        let over = Over {
+                            rows: &bx,
+                            parent: Some(&small),
+                        };
+                        let par = Some(Parent {
+                            data: &ps,
+                            dims: &pdims,
+                        });
+                        let bad = decode_blocks_over(
+                            rows,
+                            &over,
+                            &grid,
+                            &which,
+                            &refs,
+                            (kind, par),
+                            at,
+                            &copy,
+                        );
+                        assert!(
+                            bad.is_err()
+                                || which.iter().all(|&i| {
+                                    parent_box(&grid.bounds(i), &pdims)
+                                        .iter()
+                                        .zip(&small)
+                                        .all(|(r, h)| r.start >= h.start && r.end <= h.end)
+                                })
+                        );
+                    }
+                    // a block outside the box
+                    if which.len() < grid.len() {
+                        let all: Vec<usize> = (0..grid.len()).collect();
+                        let refs: Vec<&[u8]> = s.iter().map(|v| v.as_slice()).collect();
+                        let rows: Vec<&mut [i64]> = out.chunks_mut(bd[nd - 1]).collect();
+                        let over = Over {
+                            rows: &bx,
+                            parent: None,
+                        };
+                        let bad = decode_blocks_over(
+                            rows,
+                            &over,
+                            &grid,
+                            &all,
+                            &refs,
+                            (kind, parent),
+                            at,
+                            &copy,
+                        );
+                        assert!(bad.is_err());
+                    }
+                }
             }
         }
     }

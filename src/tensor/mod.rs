@@ -19,7 +19,6 @@ mod window;
 mod workspace;
 
 pub use crate::kernel::Kernels;
-pub(crate) use array::strides;
 pub use array::{Array, Axis};
 pub use boxes::for_each_run;
 pub use pages::{advise_huge_pages, zeroed_vec};
@@ -30,5 +29,5 @@ pub use pyramid::{
 pub use resample::{map_lanes, resample_axis, resample_axis_in, resample_axis_with};
 pub use transform::{transform_axis, transform_axis_with};
 pub use window::WindowPlan;
-pub(crate) use window::{box_dims, box_lists, for_each_index};
+pub(crate) use window::{box_lists, for_each_index, gather, reads_of};
 pub use workspace::Planner;

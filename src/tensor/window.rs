@@ -119,19 +119,7 @@ impl WindowPlan {
         let Some(lv) = self.levels.get(l) else {
             return band.iter().map(|_| 0..0).collect();
         };
-        lv.cols
-            .iter()
-            .zip(band)
-            .map(|(c, r)| {
-                let lo = c.partition_point(|&x| x < r.start);
-                let hi = c.partition_point(|&x| x < r.end);
-                if lo < hi {
-                    c[lo] - r.start..c[hi - 1] + 1 - r.start
-                } else {
-                    0..0
-                }
-            })
-            .collect()
+        reads_of(&lv.cols, band)
     }
 
     /// The window's samples (raster order over its box) from the coefficients of the
@@ -139,31 +127,22 @@ impl WindowPlan {
     /// each at least the pyramid's): only the coefficients the window depends on are read.
     pub fn synthesize<T: Sample>(&self, plane: &[T], shape: &[usize]) -> Vec<T> {
         let st = super::array::strides(shape);
-        let at = |p: &[usize]| p.iter().zip(&st).map(|(x, s)| x * s).sum::<usize>();
+        self.synthesize_by(|p| plane[p.iter().zip(&st).map(|(x, s)| x * s).sum::<usize>()])
+    }
+
+    /// [`WindowPlan::synthesize`] with the coefficient at each position of the
+    /// pyramid's plane given by `coef` (called only at the positions the window depends
+    /// on, so that the coefficients may be held over boxes of their bands alone).
+    pub fn synthesize_by<T: Sample>(&self, mut coef: impl FnMut(&[usize]) -> T) -> Vec<T> {
         // the coarse block's box
         let mut cur: Vec<T> = Vec::new();
         let mut cur_box = self.coarse_box.clone();
         if cur_box.iter().all(|r| !r.is_empty()) {
-            for_each_index(&box_lists(&cur_box), |p| cur.push(plane[at(p)]));
+            for_each_index(&box_lists(&cur_box), |p| cur.push(coef(p)));
         }
         for lv in self.levels.iter().rev() {
             let dims: Vec<usize> = lv.cols.iter().map(|c| c.len()).collect();
-            let mut input: Vec<T> = Vec::with_capacity(dims.iter().product());
-            let cst = super::array::strides(&box_dims(&cur_box));
-            for_each_index(&lv.cols, |p| {
-                let coarse = p.iter().zip(&lv.coarse).all(|(&x, &m)| x < m);
-                input.push(if coarse {
-                    let o: usize = p
-                        .iter()
-                        .zip(&cur_box)
-                        .zip(&cst)
-                        .map(|((&x, r), s)| (x - r.start) * s)
-                        .sum();
-                    cur[o]
-                } else {
-                    plane[at(p)]
-                });
-            });
+            let mut input = gather(&lv.cols, &lv.coarse, (&cur, &cur_box), &mut coef);
             let mut shape_now = dims;
             for (a, op) in &lv.ops {
                 input = apply_axis(&input, &shape_now, *a, op);
@@ -174,6 +153,54 @@ impl WindowPlan {
         }
         cur
     }
+}
+
+/// The span, relative to `band`'s start on each axis, of the columns `cols` (one
+/// ascending list per axis, the lane's coordinates) that fall in `band` (`0..0` on an
+/// axis where none does): the box of a band that a window's level reads.
+pub(crate) fn reads_of(cols: &[Vec<usize>], band: &[Range<usize>]) -> Vec<Range<usize>> {
+    cols.iter()
+        .zip(band)
+        .map(|(c, r)| {
+            let lo = c.partition_point(|&x| x < r.start);
+            let hi = c.partition_point(|&x| x < r.end);
+            if lo < hi {
+                c[lo] - r.start..c[hi - 1] + 1 - r.start
+            } else {
+                0..0
+            }
+        })
+        .collect()
+}
+
+/// A window level's input over the product of the columns `cols` (raster order): at a
+/// position inside the coarse block (`p[a] < coarse[a]` on every axis) the value the
+/// level below gave (`cur`, raster order over the box `cur_box`), elsewhere the
+/// coefficient `coef(p)`. The one gather of every window synthesis (this one and the
+/// integer lifting's).
+pub(crate) fn gather<T: Copy>(
+    cols: &[Vec<usize>],
+    coarse: &[usize],
+    (cur, cur_box): (&[T], &[Range<usize>]),
+    coef: &mut impl FnMut(&[usize]) -> T,
+) -> Vec<T> {
+    let mut input: Vec<T> = Vec::with_capacity(cols.iter().map(|c| c.len()).product());
+    let cst = super::array::strides(&box_dims(cur_box));
+    for_each_index(cols, |p| {
+        let inside = p.iter().zip(coarse).all(|(&x, &m)| x < m);
+        input.push(if inside {
+            let o: usize = p
+                .iter()
+                .zip(cur_box)
+                .zip(&cst)
+                .map(|((&x, r), s)| (x - r.start) * s)
+                .sum();
+            cur[o]
+        } else {
+            coef(p)
+        });
+    });
+    input
 }
 
 /// The extents of a box.
