@@ -63,7 +63,7 @@ fn bpp_levels(
         let bytes = encode_prepared(p, rate, o.ladder(), Some(r), lossless)?;
         let err = squared_error(r, &bytes, voids.as_deref())?;
         let exact = err == 0.0;
-        if best.as_ref().map_or(true, |(e, _)| err < *e) {
+        if best.as_ref().is_none_or(|(e, _)| err < *e) {
             best = Some((err, bytes));
         }
         crate::tuning::release_freed();
@@ -75,8 +75,11 @@ fn bpp_levels(
 }
 
 /// `Σ (x − x̂)²` of the decode of `file` against `r`, over the samples that are neither
-/// void (`voids`) nor, in the source, infinite or NaN.
+/// void (`voids`) nor, in the source, infinite or NaN: summed in runs of 2^16 samples in
+/// parallel, then the runs' sums in order, so that the total (and the file kept) does not
+/// depend on the thread count.
 fn squared_error(r: &RasterView<'_>, file: &[u8], voids: Option<&[bool]>) -> Result<f64> {
+    const RUN: usize = 1 << 16;
     let dec = super::decode::decode_untiled(
         file,
         file.len() as u64,
@@ -84,18 +87,24 @@ fn squared_error(r: &RasterView<'_>, file: &[u8], voids: Option<&[bool]>) -> Res
     )?
     .raster
     .samples;
-    Ok((0..r.samples.len())
+    let n = r.samples.len();
+    let runs: Vec<f64> = (0..n.div_ceil(RUN))
         .into_par_iter()
-        .filter(|&i| !voids.is_some_and(|m| m[i]))
-        .map(|i| {
-            let x = r.samples.get_f64(i);
-            if x.is_finite() {
-                (x - dec.get_f64(i)).powi(2)
-            } else {
-                0.0
-            }
+        .map(|k| {
+            (k * RUN..((k + 1) * RUN).min(n))
+                .filter(|&i| !voids.is_some_and(|m| m[i]))
+                .map(|i| {
+                    let x = r.samples.get_f64(i);
+                    if x.is_finite() {
+                        (x - dec.get_f64(i)).powi(2)
+                    } else {
+                        0.0
+                    }
+                })
+                .sum::<f64>()
         })
-        .sum())
+        .collect();
+    Ok(runs.iter().sum())
 }
 
 /// Check the rate mode's number: a quality from 1 to 100, a keep percentage from 0 to

@@ -366,7 +366,11 @@ fn effort_9_bpp_keeps_the_level_count_of_least_error() {
         codec::encode(&r, &o).unwrap()
     };
     let chosen = at(3, 9);
-    assert!(chosen.len() as f64 * 8.0 <= budget, "{} bytes", chosen.len());
+    assert!(
+        chosen.len() as f64 * 8.0 <= budget,
+        "{} bytes",
+        chosen.len()
+    );
     let err = squared_error(&r, &decoded(&chosen));
     let each: Vec<(usize, f64)> = (1..=3)
         .map(|l| (l, squared_error(&r, &decoded(&at(l, 7)))))
