@@ -1,11 +1,14 @@
 #!/usr/bin/env python3
-"""The codec on every corpus volume and DEM against SZ3 (`pysz`), ZFP (`zfpy`), OpenJPEG
-and Zstd/Blosc, in three tables:
+"""The codec on every corpus volume and DEM against SZ3 (`pysz`), SPERR (its `sperr3d` /
+`sperr2d` commands), ZFP (`zfpy`), OpenJPEG and Zstd/Blosc, in three tables:
 
-1. fixed rates 0.5 / 1 / 2 bits per sample: PSNR of `mra encode --bpp B`, of ZFP's
-   fixed-rate mode and of SZ3 with its absolute bound searched (bisection) to the same rate;
-2. `--max-error E` (E = 0.5, 1, 2, 5, 10 on volumes; 0.5, 1, 5 m on DEMs): bits per sample of
-   mra and of SZ3 at the same absolute bound, and the largest error each decodes with;
+1. fixed rates 0.5 / 1 / 2 bits per sample: PSNR of `mra encode --bpp B` (at each effort of
+   `--efforts`), of SPERR's fixed-rate mode (its `--bpp` lowered until the file, header
+   included, is within B), of ZFP's fixed-rate mode and of SZ3
+   with its absolute bound searched (bisection) to the same rate;
+2. `--max-error E` (E = 0.5, 1, 2, 5, 10, metres on DEMs): bits per sample of mra (at each
+   effort) and of SZ3 and SPERR (its point-wise error mode, `--pwe E`) at the same absolute
+   bound, and the largest error each decodes with;
 3. lossless: bits per sample of `mra encode --lossless`, OpenJPEG reversible 5/3 (slice by
    slice through imagecodecs), Zstd (level 19) and Blosc (zstd, byte shuffle, level 9) on the
    raw samples. Every lossless result is checked bit-exact.
@@ -14,9 +17,11 @@ Peers get the samples as stored (voids included: the SRTM tiles' -32768, the ESR
 nodata) as float32 for SZ3 and ZFP, their output rounded back to the sample type. PSNR is
 `10 log10(R² / MSE)` with R the peak-to-peak range of the samples, over all samples.
 
-Needs: `pip install pysz zfpy imagecodecs numpy`. Usage (repository root, after
-`cargo build --release`):
+Needs: `pip install pysz zfpy imagecodecs numpy`; SPERR is built from its source (CMake; its
+`sperr3d` and `sperr2d` in one folder, given as `--sperr DIR`; without it the SPERR columns
+say so). Usage (repository root, after `cargo build --release`):
   python3 benches/peers/codec_volumes.py [--corpus ../shared/corpus] [--mra BIN] [--only NAME]
+      [--sperr DIR] [--efforts default,9] [--tables rate,max-error,lossless]
 """
 import argparse, json, os, subprocess, sys, tempfile
 import numpy as np
@@ -64,9 +69,10 @@ class Item:
             return np.clip(np.round(d), info.min, info.max).astype(self.a.dtype)
         return d.astype(self.a.dtype)
 
-    def mra_run(self, args):
+    def mra_run(self, args, effort="default"):
         enc, out = os.path.join(self.tmp, "v.mra"), os.path.join(self.tmp, "v.raw")
-        run([self.mra, "encode", self.path, "-o", enc] + self.extra + args)
+        eff = [] if effort == "default" else ["--effort", str(effort)]
+        run([self.mra, "encode", self.path, "-o", enc] + self.extra + args + eff)
         run([self.mra, "decode", enc, "-o", out])
         d = np.fromfile(out, dtype=DTYPES[self.dtype]).reshape(self.a.shape)
         return os.path.getsize(enc) * 8 / self.n, d
@@ -97,33 +103,75 @@ def sz3_at_rate(it, bits):
     return best
 
 
+def sperr(it, sperr_dir, mode, q):
+    """SPERR on the samples as float32 (`mode` `bpp` or `pwe`, value `q`): (bits per sample,
+    decoded float32 array), or None without `--sperr`."""
+    if not sperr_dir:
+        return None
+    src, bs, out = (os.path.join(it.tmp, n) for n in ("sp.f32", "sp.bin", "sp.out"))
+    it.f.tofile(src)
+    dims = [str(d) for d in it.f.shape[::-1]]  # fastest-varying first
+    exe = os.path.join(sperr_dir, "sperr3d" if it.f.ndim == 3 else "sperr2d")
+    run([exe, src, "-c", "--ftype", "32", "--dims"] + dims + [f"--{mode}", str(q), "--bitstream", bs])
+    run([exe, bs, "-d", "--decomp_f", out])
+    d = np.fromfile(out, dtype=np.float32).reshape(it.f.shape)
+    return os.path.getsize(bs) * 8 / it.n, d
+
+
+def sperr_at_rate(it, sperr_dir, bits):
+    """SPERR's fixed-rate mode held to the budget as mra and SZ3 are (its file counts a
+    header its `--bpp` leaves out): the rate asked lowered until the file is within it."""
+    q = bits
+    for _ in range(5):
+        s = sperr(it, sperr_dir, "bpp", q)
+        if s is None or s[0] <= bits:
+            return s
+        q *= bits / s[0] * 0.999
+    return s
+
+
 def zfp_at_rate(it, bits):
     import zfpy
     c = zfpy.compress_numpy(it.f, rate=bits)
     return len(c) * 8 / it.n, zfpy.decompress_numpy(c)
 
 
-def fixed_rates(it, name, rows):
+def fixed_rates(it, name, rows, a):
     for bits in [0.5, 1, 2]:
-        mb, md = it.mra_run(["--bpp", str(bits)])
+        ms = []
+        for eff in a.efforts:
+            mb, md = it.mra_run(["--bpp", str(bits)], eff)
+            ms.append(f"{it.psnr(md):.2f} ({mb:.3f})")
         s = sz3_at_rate(it, bits)
+        sp = sperr_at_rate(it, a.sperr, bits)
+        spr = f"{it.psnr(it.back(sp[1])):.2f} ({sp[0]:.3f})" if sp else "n/a"
         if it.a.ndim == 2 and bits < 1:
             z = "n/a (zfpy aborts below 1 bit in 2-D)"
         else:
             zb, zd = zfp_at_rate(it, bits)
             z = f"{it.psnr(it.back(zd)):.2f} ({zb:.3f})"
         sz = f"{it.psnr(it.back(s[1])):.2f} ({s[0]:.3f})" if s else "n/a"
-        rows.append(f"| {name} | {bits} | {it.psnr(md):.2f} ({mb:.3f}) | {sz} | {z} |")
+        rows.append(f"| {name} | {bits} | {' | '.join(ms)} | {sz} | {spr} | {z} |")
 
 
-def max_errors(it, name, dem, rows):
-    for e in ([0.5, 1, 5] if dem else [0.5, 1, 2, 5, 10]):
-        mb, md = it.mra_run(["--max-error", str(e)])
-        me = np.abs(md.astype(np.float64) - it.a).max()
+def max_errors(it, name, rows, a):
+    for e in [0.5, 1, 2, 5, 10]:
+        ms, mbs = [], []
+        for eff in a.efforts:
+            mb, md = it.mra_run(["--max-error", str(e)], eff)
+            me = np.abs(md.astype(np.float64) - it.a).max()
+            assert me <= e, f"mra over the bound on {name} at E = {e}: {me}"
+            ms.append(f"{mb:.3f} ({me:g})")
+            mbs.append(mb)
         sb, sd = sz3(it.f, e)
         se = np.abs(sd.astype(np.float64) - it.a).max()  # SZ3's own bound, before rounding
-        won = "yes" if mb < sb else "no"
-        rows.append(f"| {name} | {e:g} | {mb:.3f} | {me:g} | {sb:.3f} | {se:g} | {won} |")
+        sp = sperr(it, a.sperr, "pwe", e)
+        spr = "n/a"
+        if sp:  # SPERR's own bound too, before rounding
+            spr = f"{sp[0]:.3f} ({np.abs(sp[1].astype(np.float64) - it.a).max():g})"
+        peers = [sb] + ([sp[0]] if sp else [])
+        won = "yes" if min(mbs) < min(peers) else "no"
+        rows.append(f"| {name} | {e:g} | {' | '.join(ms)} | {sb:.3f} ({se:g}) | {spr} | {won} |")
 
 
 def lossless(it, name, rows):
@@ -154,28 +202,37 @@ def main():
     ap.add_argument("--mra", default=os.path.join(ROOT, "target", "release", "mra"))
     ap.add_argument("--only", default=None, help="run the data sets whose name contains this")
     ap.add_argument("--tables", default="rate,max-error,lossless")
+    ap.add_argument("--sperr", default=None, help="folder holding SPERR's sperr3d and sperr2d")
+    ap.add_argument("--efforts", default="default", help="mra efforts, comma-separated: default or 1-9")
     a = ap.parse_args()
+    a.efforts = a.efforts.split(",")
+    if not a.sperr:
+        print("SPERR columns skipped: no --sperr DIR (build SPERR with CMake, give its bin folder)",
+              file=sys.stderr)
     tables = a.tables.split(",")
     rate, maxe, loss = [], [], []
     with tempfile.TemporaryDirectory() as tmp:
-        for name, rel, dem in DATA:
+        for name, rel, _dem in DATA:
             if a.only and a.only not in name:
                 continue
             print(f"{name} ...", file=sys.stderr, flush=True)
             it = Item(a.mra, os.path.join(a.corpus, rel), tmp)
             if "rate" in tables:
-                fixed_rates(it, name, rate)
+                fixed_rates(it, name, rate, a)
             if "max-error" in tables:
-                max_errors(it, name, dem, maxe)
+                max_errors(it, name, maxe, a)
             if "lossless" in tables:
                 lossless(it, name, loss)
+    mras = " | ".join(f"mra {'default' if e == 'default' else 'effort ' + e}" for e in a.efforts)
+    bars = "---|" * len(a.efforts)
     if rate:
         print("PSNR (dB) at a fixed rate, (bits per sample) in brackets\n")
-        print("| data | bits | mra | SZ3 | ZFP |\n|---|---|---|---|---|")
+        print(f"| data | bits | {mras} | SZ3 | SPERR | ZFP |\n|---|---|{bars}---|---|---|")
         print("\n".join(rate) + "\n")
     if maxe:
         print("bits per sample at a guaranteed maximum error E\n")
-        print("| data | E | mra | mra max error | SZ3 | SZ3 max error | mra fewer |\n|---|---|---|---|---|---|---|")
+        print("(largest error in brackets)\n")
+        print(f"| data | E | {mras} | SZ3 | SPERR | mra fewer |\n|---|---|{bars}---|---|---|")
         print("\n".join(maxe) + "\n")
     if loss:
         print("lossless bits per sample\n")

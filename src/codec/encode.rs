@@ -54,6 +54,8 @@ pub(super) fn encode_slabs<S: SlabSource + ?Sized>(
         return Ok(None);
     }
     match opts.rate {
+        // effort 9's `--bpp` measures each candidate's error against the samples
+        Rate::Bpp(_) if opts.ladder().bpp_levels => return Ok(None),
         Rate::Quality(_) | Rate::Keep(_) | Rate::Threshold(_) | Rate::Bpp(_) => {}
         Rate::Lossless => return encode_lossless_src(src, opts).map(Some),
         Rate::MaxError(e) if max_error::is_exact(e, ty)? => {

@@ -76,13 +76,22 @@ pub struct Ladder {
     pub rdo: bool,
     /// `--bpp` accepts a file within this share under the budget (`0.99`: 1% under).
     pub bpp_floor: f64,
+    /// Whether `--bpp` chooses the number of levels per file (effort 9): `--levels`
+    /// is then the most, and the file of [`BPP_LEVEL_CHOICES`] counts from it down with
+    /// the least squared error is kept.
+    pub bpp_levels: bool,
 }
+
+/// How many level counts `--bpp` tries at effort 9: `--levels` and the ones below it,
+/// down to 1 (each a whole encode).
+pub const BPP_LEVEL_CHOICES: usize = 5;
 
 impl Ladder {
     /// Effort `e` (clamped to [`EFFORTS`]): 1–3 the HT coder without RDO, `--bpp`
     /// within 3% under the budget; 4–6 the adaptive coder (coder 2) on RDO indices
     /// chosen by its own costs (`block::encode_rdo`); 7–9 the context coder on RDO
-    /// indices (the files of before the ladder).
+    /// indices (the files of before the ladder); 9 also chooses `--bpp`'s number of
+    /// levels per file.
     pub fn of(e: u8) -> Ladder {
         let e = e.clamp(*EFFORTS.start(), *EFFORTS.end());
         Ladder {
@@ -93,6 +102,7 @@ impl Ladder {
             },
             rdo: e >= 4,
             bpp_floor: if e <= 3 { 0.97 } else { 0.99 },
+            bpp_levels: e >= 9,
         }
     }
 }

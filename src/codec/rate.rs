@@ -5,7 +5,7 @@
 use super::colour::{map3, ycocg_inverse};
 use super::layout;
 use super::lossy::{prepare, Prepared};
-use super::options::{EncodeOptions, Ladder, Rate};
+use super::options::{EncodeOptions, Ladder, Rate, BPP_LEVEL_CHOICES};
 use super::plan::band_rho;
 use crate::entropy::range::Encoder;
 use crate::entropy::{band, BandKind};
@@ -31,8 +31,80 @@ pub(super) fn encode_lossy(
     rate: Rate,
     lossless: &dyn Fn() -> Result<Vec<u8>>,
 ) -> Result<Vec<u8>> {
+    if matches!(rate, Rate::Bpp(_)) && opts.ladder().bpp_levels {
+        return bpp_levels(r, opts, rate, lossless);
+    }
     let p = prepare(r, opts, Mode::Lossy)?;
     encode_prepared(p, rate, opts.ladder(), Some(r), lossless)
+}
+
+/// Effort 9's `--bpp`: the file at each number of levels from `opts.levels` down
+/// ([`BPP_LEVEL_CHOICES`] counts, at least 1), each within the budget, and the one
+/// whose decode has the least squared error `Σ (x − x̂)²` over the samples that are not
+/// void (the first of equal ones). Fewer levels pay on small rasters, where each
+/// band's adaptive models learn from few coefficients: the Boulder grid (240×144) at
+/// 0.5 bits per sample, 6 levels 44.12 dB, 2 levels 44.94 dB.
+fn bpp_levels(
+    r: &RasterView<'_>,
+    opts: &EncodeOptions,
+    rate: Rate,
+    lossless: &dyn Fn() -> Result<Vec<u8>>,
+) -> Result<Vec<u8>> {
+    let voids = super::voids::void_mask(r);
+    let most = opts.levels;
+    let least = most.saturating_sub(BPP_LEVEL_CHOICES - 1).max(1).min(most);
+    let mut best: Option<(f64, Vec<u8>)> = None;
+    for levels in (least..=most).rev() {
+        let o = EncodeOptions {
+            levels,
+            ..opts.clone()
+        };
+        let p = prepare(r, &o, Mode::Lossy)?;
+        let bytes = encode_prepared(p, rate, o.ladder(), Some(r), lossless)?;
+        let err = squared_error(r, &bytes, voids.as_deref())?;
+        let exact = err == 0.0;
+        if best.as_ref().is_none_or(|(e, _)| err < *e) {
+            best = Some((err, bytes));
+        }
+        crate::tuning::release_freed();
+        if exact {
+            break; // the lossless file, or one as good
+        }
+    }
+    Ok(best.expect("at least one level count").1)
+}
+
+/// `Σ (x − x̂)²` of the decode of `file` against `r`, over the samples that are neither
+/// void (`voids`) nor, in the source, infinite or NaN: summed in runs of 2^16 samples in
+/// parallel, then the runs' sums in order, so that the total (and the file kept) does not
+/// depend on the thread count.
+fn squared_error(r: &RasterView<'_>, file: &[u8], voids: Option<&[bool]>) -> Result<f64> {
+    const RUN: usize = 1 << 16;
+    let dec = super::decode::decode_untiled(
+        file,
+        file.len() as u64,
+        &super::options::DecodeOptions::default(),
+    )?
+    .raster
+    .samples;
+    let n = r.samples.len();
+    let runs: Vec<f64> = (0..n.div_ceil(RUN))
+        .into_par_iter()
+        .map(|k| {
+            (k * RUN..((k + 1) * RUN).min(n))
+                .filter(|&i| !voids.is_some_and(|m| m[i]))
+                .map(|i| {
+                    let x = r.samples.get_f64(i);
+                    if x.is_finite() {
+                        (x - dec.get_f64(i)).powi(2)
+                    } else {
+                        0.0
+                    }
+                })
+                .sum::<f64>()
+        })
+        .collect();
+    Ok(runs.iter().sum())
 }
 
 /// Check the rate mode's number: a quality from 1 to 100, a keep percentage from 0 to

@@ -341,3 +341,49 @@ fn cli_effort_picks_the_coder_info_reports() {
         assert!(!f.exists());
     }
 }
+
+/// `Σ (x − x̂)²` of two rasters of the same shape.
+fn squared_error(a: &Raster, b: &Raster) -> f64 {
+    let (x, y) = (a.samples.to_f64(), b.samples.to_f64());
+    x.iter().zip(&y).map(|(p, q)| (p - q).powi(2)).sum()
+}
+
+/// Effort 9's `--bpp` chooses the number of levels per file: of the files at
+/// `--levels` and each count below it (all tried here: 3, 2, 1), within the budget, it
+/// keeps the one with the least squared error, which is never more than effort 7's
+/// (the same coder and indices at `--levels`); the other efforts keep `--levels`.
+#[test]
+fn effort_9_bpp_keeps_the_level_count_of_least_error() {
+    assert!(Ladder::of(9).bpp_levels);
+    assert!((1..=8).all(|e| !Ladder::of(e).bpp_levels));
+    let r = field(&[64, 96], 1, SampleType::U16, 3, 4000.0);
+    let budget = (64 * 96) as f64;
+    let at = |levels: usize, effort: u8| {
+        let o = EncodeOptions {
+            levels,
+            ..opts(Rate::Bpp(1.0), effort)
+        };
+        codec::encode(&r, &o).unwrap()
+    };
+    let chosen = at(3, 9);
+    assert!(
+        chosen.len() as f64 * 8.0 <= budget,
+        "{} bytes",
+        chosen.len()
+    );
+    let err = squared_error(&r, &decoded(&chosen));
+    let each: Vec<(usize, f64)> = (1..=3)
+        .map(|l| (l, squared_error(&r, &decoded(&at(l, 7)))))
+        .collect();
+    let least = each.iter().map(|e| e.1).fold(f64::INFINITY, f64::min);
+    assert_eq!(err, least, "{each:?}");
+    let levels = codec::decode(&chosen[..], &DecodeOptions::default())
+        .unwrap()
+        .header
+        .levels;
+    assert_eq!(each.iter().find(|e| e.1 == least).unwrap().0, levels);
+    assert!(err <= each[2].1, "{err} vs effort 7's {}", each[2].1);
+    // effort 7 keeps the levels asked
+    let seven = codec::decode(&at(3, 7)[..], &DecodeOptions::default()).unwrap();
+    assert_eq!(seven.header.levels, 3);
+}
