@@ -14,9 +14,10 @@ against imagecodecs' HTJ2K and OpenJPEG lossless, side by side in one run.
    the corpus' 16-bit gray images, and the CT slice by slice for the peers. Every decode is
    checked bit-exact.
 
-Times are the best wall time of `--repeat` calls (time.perf_counter), so a machine shared
-with other work shows in the absolute figures more than in the ratios; the load average
-before and after is printed. mra runs on `RAYON_NUM_THREADS` threads (all cores by
+Times are the best wall time of `--repeat` calls (time.perf_counter) and, in brackets,
+the best CPU time of the process (`time.process_time`: user + system of every thread),
+the figure to read on a machine shared with other work (wall times there swing 3× between
+calls); the load average before and after is printed. mra runs on `RAYON_NUM_THREADS` threads (all cores by
 default), SZ3 and OpenJPEG on one, HTJ2K on one.
 
 Needs: the `mra` package (`pip install ./python`), `pip install pysz imagecodecs numpy pillow`.
@@ -40,14 +41,26 @@ def read_nrrd_gzip(path):
     return a.reshape(sizes[::-1]).copy()  # (z, y, x)
 
 
+class Time(float):
+    """Best wall seconds, with `.cpu` the best CPU seconds of the process (every thread:
+    user + system, `time.process_time`), the figure to read on a shared machine."""
+
+
 def best(f, repeat):
-    """(best seconds, last result) of `f()` called `repeat` times."""
-    t_best, out = float("inf"), None
+    """(best seconds as a [`Time`], last result) of `f()` called `repeat` times."""
+    t_best, c_best, out = float("inf"), float("inf"), None
     for _ in range(repeat):
-        t = time.perf_counter()
+        t, c = time.perf_counter(), time.process_time()
         out = f()
+        c_best = min(c_best, time.process_time() - c)
         t_best = min(t_best, time.perf_counter() - t)
-    return t_best, out
+    t = Time(t_best)
+    t.cpu = c_best
+    return t, out
+
+
+def secs(t):
+    return f"{t:.3f} ({t.cpu:.3f} CPU)"
 
 
 def psnr(a, d, rng):
@@ -87,7 +100,7 @@ def sz3_at_bits(a, bits):
 def lossy(a, mra, efforts, bpp, repeat):
     rng = float(a.max()) - float(a.min())
     print(f"CT {'×'.join(map(str, a.shape[::-1]))} {a.dtype}, --bpp {bpp:g}, in process, best of {repeat}\n")
-    print("| coder | bits/voxel | PSNR dB | encode s | decode s | encode MB/s | decode MB/s | encode vs SZ3 | decode vs SZ3 | PSNR − SZ3 |")
+    print("| coder | bits/voxel | PSNR dB | encode s (CPU s) | decode s (CPU s) | encode MB/s | decode MB/s | encode vs SZ3 (CPU) | decode vs SZ3 (CPU) | PSNR − SZ3 |")
     print("|---|---|---|---|---|---|---|---|---|---|")
     mb = a.nbytes / 1e6
     for e in efforts:
@@ -102,9 +115,9 @@ def lossy(a, mra, efforts, bpp, repeat):
         sd, sdd = best(lambda: dec(sc, a), repeat)
         sbits = sc.size * 8 / a.size
         sp = psnr(a, sdd, rng)
-        print(f"| mra effort {e} | {bits:.3f} | {p:.2f} | {te:.3f} | {td:.3f} | {mb / te:.0f} | {mb / td:.0f} | "
-              f"{se / te:.2f}× | {sd / td:.2f}× | {p - sp:+.2f} dB |")
-        print(f"| SZ3 E={eb:.3g} | {sbits:.3f} | {sp:.2f} | {se:.3f} | {sd:.3f} | {mb / se:.0f} | {mb / sd:.0f} | | | |")
+        print(f"| mra effort {e} | {bits:.3f} | {p:.2f} | {secs(te)} | {secs(td)} | {mb / te:.0f} | {mb / td:.0f} | "
+              f"{se / te:.2f}× ({se.cpu / te.cpu:.2f}×) | {sd / td:.2f}× ({sd.cpu / td.cpu:.2f}×) | {p - sp:+.2f} dB |")
+        print(f"| SZ3 E={eb:.3g} | {sbits:.3f} | {sp:.2f} | {secs(se)} | {secs(sd)} | {mb / se:.0f} | {mb / sd:.0f} | | | |")
 
 
 def lossless_rows(name, a, mra, efforts, repeat, slices):
@@ -142,7 +155,7 @@ def lossless(corpus, mra, efforts, repeat, kodak):
     items.append(("CT 256×256×134 i16", read_nrrd_gzip(os.path.join(corpus, "volumes", "ct_pancreas_256.nrrd")), True))
     print(f"\nLossless, in process, best of {repeat} (Kodak RGB as one array channels last; "
           "the CT slice by slice for the peers)\n")
-    print("| input | coder | bits/sample | encode s | decode s | decode vs HTJ2K | bits vs OpenJPEG |")
+    print("| input | coder | bits/sample | encode s (CPU s) | decode s (CPU s) | decode vs HTJ2K (CPU) | bits vs OpenJPEG |")
     print("|---|---|---|---|---|---|---|")
     for name, a, vol in items:
         # mra takes channels last through the package's keyword
@@ -158,7 +171,8 @@ def lossless(corpus, mra, efforts, repeat, kodak):
         ht = next(r for r in rows if r[0] == "HTJ2K")
         oj = next(r for r in rows if r[0] == "OpenJPEG 5/3")
         for coder, bits, te, td in rows:
-            print(f"| {name} | {coder} | {bits:.3f} | {te:.3f} | {td:.3f} | {ht[3] / td:.2f}× | {bits / oj[1]:.3f} |")
+            print(f"| {name} | {coder} | {bits:.3f} | {secs(te)} | {secs(td)} | {ht[3] / td:.2f}× "
+                  f"({ht[3].cpu / td.cpu:.2f}×) | {bits / oj[1]:.3f} |")
 
 
 def main():
