@@ -179,6 +179,26 @@ impl Plan {
                 stream = self.code_indices(&q, j, kind, parent);
                 q
             }
+            (BandInput::Quantize { plane, step, rho }, _) => match &grid {
+                // nobody's context and not asked for: each block quantized as coded
+                Some(g) if !keep => {
+                    let shape = &self.pyr.shape;
+                    stream = blocks_payload(&codeblocks::encode_blocks_by(
+                        g,
+                        kind,
+                        parent,
+                        self.coding,
+                        self.coder,
+                        |b| quantize_box(plane, shape, &self.in_plane(j, b), step, rho),
+                    ));
+                    Vec::new()
+                }
+                _ => {
+                    let q = quantize_box(plane, &self.pyr.shape, &self.bands[j].ranges, step, rho);
+                    stream = self.code_indices(&q, j, kind, parent);
+                    q
+                }
+            },
             (BandInput::Coefficients { plane, step }, Choice::Rdo(lambda))
                 if level > 0 && grid.is_some() =>
             {
@@ -320,6 +340,33 @@ pub(super) enum BandInput<'a> {
     /// to be divided by `step` (as `f64`, then taken to `f32`) as they are coded: no
     /// copy of the band.
     Coefficients { plane: &'a [f32], step: f64 },
+    /// Its indices `quantize(x, step, ρ)` of its coefficients `x` where they sit in
+    /// `plane` ([`quantize_box`]): a band without children in a file of code-blocks is
+    /// quantized block by block as it is coded (no `i64` band), any other band whole.
+    /// The indices and so the streams are those of [`BandInput::Indices`].
+    Quantize {
+        plane: &'a [f32],
+        step: f64,
+        rho: f64,
+    },
+}
+
+/// The indices `quantize(x, step, ρ)` of the coefficients `x` of box `ranges` of `plane`
+/// (laid out as `shape`), in raster order over the box.
+pub(super) fn quantize_box(
+    plane: &[f32],
+    shape: &[usize],
+    ranges: &[Range<usize>],
+    step: f64,
+    rho: f64,
+) -> Vec<i64> {
+    let mut q = vec![0i64; ranges.iter().map(|r| r.len()).product()];
+    layout::rows(shape, ranges, |off, run, b| {
+        for (q, &x) in q[b..b + run].iter_mut().zip(&plane[off..off + run]) {
+            *q = crate::quantize::quantize(x as f64, step, rho);
+        }
+    });
+    q
 }
 
 /// `round(v)` half away from zero, 0 for values that are not finite, capped at 9·10^15.

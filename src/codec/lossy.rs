@@ -2,7 +2,7 @@
 //! ([`Prepared`]), then quantized and coded at any base step.
 
 use super::colour::{channel_weights, planes_f32};
-use super::levels::{BandInput, Choice, CodedBand};
+use super::levels::{quantize_box, BandInput, Choice, CodedBand};
 use super::options::{EncodeOptions, Format};
 use super::plan::{band_rho, dequantize_into, lossy_values, Plan};
 use super::{layout, meta};
@@ -305,7 +305,11 @@ impl Prepared {
                 }
             }),
             None => plan.code_levels_with(nc, Choice::Given, keep_indices, |c, j| {
-                BandInput::Indices(self.quantized(step, j, c))
+                BandInput::Quantize {
+                    plane: &self.coeffs[c],
+                    step: self.band_step(step, j, c),
+                    rho: band_rho(plan, j),
+                }
             }),
         }
     }
@@ -315,14 +319,7 @@ impl Prepared {
         let plan = &self.plan;
         let (s, rho) = (self.band_step(step, j, c), band_rho(plan, j));
         // read from the plane row by row (no gathered copy of the band)
-        let (plane, ranges) = (&self.coeffs[c], &plan.bands[j].ranges);
-        let mut q = vec![0i64; ranges.iter().map(|r| r.len()).product()];
-        layout::rows(&plan.pyr.shape, ranges, |off, run, b| {
-            for (q, &x) in q[b..b + run].iter_mut().zip(&plane[off..off + run]) {
-                *q = quantize::quantize(x as f64, s, rho);
-            }
-        });
-        q
+        quantize_box(&self.coeffs[c], &plan.pyr.shape, &plan.bands[j].ranges, s, rho)
     }
 
     /// What a decoder makes of [`Prepared::code`]`(step)`, at full size, computed from the
@@ -406,6 +403,33 @@ mod tests {
     use crate::generate::{images, phantom};
     use crate::io::SampleType;
     use crate::scheme::{Boundary, Scheme};
+
+    /// Bands quantized block by block as they are coded ([`BandInput::Quantize`]) code
+    /// to the streams of the same bands quantized whole ([`BandInput::Indices`]), with
+    /// every coder of the ladder.
+    #[test]
+    fn bands_quantized_by_blocks_code_as_quantized_whole() {
+        let r = phantom::shepp_logan(20, 36, 44)
+            .to_raster(SampleType::U16)
+            .unwrap();
+        for effort in [1, 4, 7] {
+            let opts = EncodeOptions {
+                effort,
+                ..EncodeOptions::default()
+            };
+            let p = prepare(&r.view(), &opts, Mode::Lossy).unwrap();
+            let range = p.header.max - p.header.min;
+            for step in [range * 1e-3, range * 0.02] {
+                let by_blocks = p.coded(step, false);
+                let whole = p.plan.code_levels_with(1, Choice::Given, false, |c, j| {
+                    BandInput::Indices(p.quantized(step, j, c))
+                });
+                for (j, (a, b)) in by_blocks[0].iter().zip(&whole[0]).enumerate() {
+                    assert_eq!(a.stream, b.stream, "effort {effort} step {step} band {j}");
+                }
+            }
+        }
+    }
 
     /// The `--psnr` search measures [`Prepared::decoded`] instead of decoding each
     /// candidate file: it must be exactly what the decoder makes of that file.
