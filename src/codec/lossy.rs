@@ -319,7 +319,13 @@ impl Prepared {
         let plan = &self.plan;
         let (s, rho) = (self.band_step(step, j, c), band_rho(plan, j));
         // read from the plane row by row (no gathered copy of the band)
-        quantize_box(&self.coeffs[c], &plan.pyr.shape, &plan.bands[j].ranges, s, rho)
+        quantize_box(
+            &self.coeffs[c],
+            &plan.pyr.shape,
+            &plan.bands[j].ranges,
+            s,
+            rho,
+        )
     }
 
     /// What a decoder makes of [`Prepared::code`]`(step)`, at full size, computed from the

@@ -38,6 +38,7 @@ mod rate;
 mod read;
 mod reblock;
 mod streamed;
+mod support;
 pub mod tiles;
 mod voids;
 mod window_decode;

@@ -172,6 +172,32 @@ pub(super) fn dequantize_row(q: &[i64], step: f64, delta: f64, out: &mut [f32]) 
     }
 }
 
+/// The writer of a lossy band's decoded indices into `f32` rows: `x = sign(q)·(|q| + δ)·Δ`
+/// ([`dequantize_row`]), the `i32` indices of a narrow coder widened 64 at a time (the
+/// same `dequantize` of the same values).
+// the two closure types cannot be named in a type alias (`impl Trait`)
+#[allow(clippy::type_complexity)]
+pub(super) fn dequantizing_put(
+    step: f64,
+    delta: f64,
+) -> crate::entropy::codeblocks::Put<
+    impl Fn(&mut [f32], &[i64]) + Sync,
+    impl Fn(&mut [f32], &[i32]) + Sync,
+> {
+    crate::entropy::codeblocks::Put {
+        wide: move |o: &mut [f32], q: &[i64]| dequantize_row(q, step, delta, o),
+        narrow: move |o: &mut [f32], q: &[i32]| {
+            let mut wide = [0i64; 64];
+            for (o, q) in o.chunks_mut(64).zip(q.chunks(64)) {
+                for (w, &x) in wide.iter_mut().zip(q) {
+                    *w = x as i64;
+                }
+                dequantize_row(&wide[..q.len()], step, delta, o);
+            }
+        },
+    }
+}
+
 /// The rows of bands `js` in `plane` (laid out as the pyramid's shape), split into
 /// disjoint slices: for each band, its rows in raster order (the band's row `r` is
 /// `out[i][r]`, as long as the band's last extent). The bands of one level can so be

@@ -100,7 +100,7 @@ impl Sparse {
     }
 
     /// The chunks a decode at level `level` of the full-resolution box `region` needs,
-    /// with the code-blocks its bands' decodes need ([`super::decode::band_windows`]) read
+    /// with the code-blocks its bands' decodes need ([`super::support::band_windows`]) read
     /// from `src` by positioned reads (runs of neighbouring blocks in one read); the
     /// other blocks' bytes are zeros and never decoded.
     pub(super) fn parsed<R: Read + Seek>(
@@ -122,7 +122,7 @@ impl Sparse {
                 .ok()
                 .map(|st| st.out_box().to_vec()),
         };
-        let wins = super::decode::band_windows(&p, level);
+        let wins = super::support::band_windows(&p, level);
         let mut bands = Vec::with_capacity(self.entries.len());
         for row in &self.entries {
             let mut out = Vec::with_capacity(row.len());

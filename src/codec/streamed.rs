@@ -1125,19 +1125,7 @@ impl<'a> BandSource<'a> {
             };
             x.clear();
             x.resize(n, 0.0);
-            let put = crate::entropy::codeblocks::Put {
-                wide: |o: &mut [f32], q: &[i64]| super::plan::dequantize_row(q, step, delta, o),
-                narrow: |o: &mut [f32], q: &[i32]| {
-                    // widened a few at a time: the same `dequantize` of the same values
-                    let mut wide = [0i64; 64];
-                    for (o, q) in o.chunks_mut(64).zip(q.chunks(64)) {
-                        for (w, &x) in wide.iter_mut().zip(q) {
-                            *w = x as i64;
-                        }
-                        super::plan::dequantize_row(&wide[..q.len()], step, delta, o);
-                    }
-                },
-            };
+            let put = super::plan::dequantizing_put(step, delta);
             let out: Vec<&mut [f32]> = x.chunks_mut(row_len.max(1)).collect();
             crate::entropy::codeblocks::decode_blocks_into(
                 out,

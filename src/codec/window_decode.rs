@@ -1,5 +1,5 @@
 //! A region's coefficients decoded into buffers the size of its code-blocks' boxes: in
-//! each band, the blocks the window's support meets ([`super::decode::band_windows`])
+//! each band, the blocks the window's support meets ([`super::support::band_windows`])
 //! decode into a buffer of their block-aligned box alone (never a band- or plane-sized
 //! one), a band's parent context read from the box held of its parent band; the
 //! window's synthesis ([`crate::tensor::WindowPlan::synthesize_by`], or the integer
@@ -7,9 +7,9 @@
 //! ([`Boxes`]). Memory and page faults scale with the boxes, not with the raster.
 
 use super::container::Parsed;
-use super::decode::band_windows;
 use super::int_window::IntWindow;
 use super::plan::{band_delta, coder_of, coding_of, dequantize_row};
+use super::support::band_windows;
 use crate::entropy::codeblocks::{box_dims, decode_blocks_over, Grid, Over, Put};
 use crate::entropy::{BandKind, Parent};
 use crate::tensor::WindowPlan;
@@ -260,18 +260,7 @@ fn decode_channel(
                 let children = plan.parents.contains(&Some(j));
                 let (step, delta) = (bc.step, band_delta(h, plan, j));
                 if lossy && !children {
-                    let put = Put {
-                        wide: |o: &mut [f32], q: &[i64]| dequantize_row(q, step, delta, o),
-                        narrow: |o: &mut [f32], q: &[i32]| {
-                            let mut wide = [0i64; 64];
-                            for (o, q) in o.chunks_mut(64).zip(q.chunks(64)) {
-                                for (w, &x) in wide.iter_mut().zip(q) {
-                                    *w = x as i64;
-                                }
-                                dequantize_row(&wide[..q.len()], step, delta, o);
-                            }
-                        },
-                    };
+                    let put = super::plan::dequantizing_put(step, delta);
                     let v = decode_box(p, &bc.data, j, bx, kind, parent, &put).map_err(failed)?;
                     return Ok((
                         None,

@@ -742,17 +742,23 @@ mod tests {
         }
     }
 
+    /// The band shapes (1- to 4-D, odd extents, partial edge blocks) and block extents
+    /// the code-block tests run on.
+    fn band_shapes() -> [(Vec<usize>, Vec<usize>); 4] {
+        [
+            (vec![37], vec![8]),
+            (vec![13, 17], vec![4, 6]),
+            (vec![5, 9, 7], vec![2, 4, 4]),
+            (vec![2, 3, 5, 6], vec![1, 2, 2, 4]),
+        ]
+    }
+
     /// Blocks of 1- to 4-D bands, coarse and detail, with a parent, decode to the band;
     /// decoding a subset fills exactly those boxes; `touching` finds the blocks a
     /// window meets.
     #[test]
     fn blocks_round_trip_and_subsets_fill_their_boxes() {
-        for (dims, block) in [
-            (vec![37usize], vec![8usize]),
-            (vec![13, 17], vec![4, 6]),
-            (vec![5, 9, 7], vec![2, 4, 4]),
-            (vec![2, 3, 5, 6], vec![1, 2, 2, 4]),
-        ] {
+        for (dims, block) in band_shapes() {
             let n: usize = dims.iter().product();
             let q = sample(n, n as u64, 40);
             let pdims: Vec<usize> = dims.iter().map(|d| d.div_ceil(2)).collect();
@@ -813,12 +819,7 @@ mod tests {
     /// outside the parent's held box, is an error.
     #[test]
     fn blocks_decode_over_a_box_with_a_held_parent() {
-        for (dims, block) in [
-            (vec![37usize], vec![8usize]),
-            (vec![13, 17], vec![4, 6]),
-            (vec![5, 9, 7], vec![2, 4, 4]),
-            (vec![2, 3, 5, 6], vec![1, 2, 2, 4]),
-        ] {
+        for (dims, block) in band_shapes() {
             let n: usize = dims.iter().product();
             let nd = dims.len();
             let q = sample(n, n as u64 + 11, 40);
@@ -948,12 +949,7 @@ mod tests {
     /// touching nothing else: the values `decode_blocks` gives, on 1- to 4-D bands.
     #[test]
     fn blocks_decode_into_rows_of_a_plane() {
-        for (dims, block) in [
-            (vec![37usize], vec![8usize]),
-            (vec![13, 17], vec![4, 6]),
-            (vec![5, 9, 7], vec![2, 4, 4]),
-            (vec![2, 3, 5, 6], vec![1, 2, 2, 4]),
-        ] {
+        for (dims, block) in band_shapes() {
             let n: usize = dims.iter().product();
             let q = sample(n, n as u64 + 7, 40);
             let pdims: Vec<usize> = dims.iter().map(|d| d.div_ceil(2)).collect();
