@@ -954,13 +954,16 @@ impl<'a> BandSource<'a> {
             .map(|j| super::plan::band_delta(&p.header, plan, j))
             .collect();
         let parent = (0..nb).map(|j| plan.parents.contains(&Some(j))).collect();
-        // a batch of as many stripes as threads, so that its stripes decode in
-        // parallel; a band of odd stripes (blocks one row tall) in one batch, since a
+        // a batch of as many stripes as threads in an image, so that its stripes
+        // decode in parallel (a volume's stripe is many planes: one a batch, its
+        // blocks in parallel, keeps a 1024³ decode under 1 GiB — 1.63 GB on 2 threads
+        // with two); a band of odd stripes (blocks one row tall) in one batch, since a
         // batch's parent rows must start at half its first row
-        let per = rayon::current_num_threads().max(1);
+        let threads = rayon::current_num_threads().max(1);
         let batch_rows = grids
             .iter()
             .map(|g| {
+                let per = if g.dims.len() > 2 { 1 } else { threads };
                 let t = g.block[0].max(1);
                 if t % 2 == 1 {
                     g.dims[0].max(1)
