@@ -230,7 +230,7 @@ impl SlabDecoder {
             && super::streamed::decodes_streamed(&header)
         {
             let p = read_rest(rd, first, header, 0, false)?;
-            let p = match super::streamed::StreamedDecoder::streaming(p)? {
+            let p = match super::StreamedDecoder::streaming(p)? {
                 Ok(s) => {
                     return Ok(SlabDecoder {
                         shape: s.shape().clone(),
