@@ -295,10 +295,21 @@ impl StreamPlan {
     /// The `(band, row)` pairs a synthesis pulls from its source, in order (computed
     /// without arithmetic).
     pub fn pull_order(&self) -> Vec<(usize, usize)> {
+        self.pulls_by_row().0
+    }
+
+    /// [`StreamPlan::pull_order`] with, for each row `r` of the array, how many of the
+    /// pairs are pulled up to the end of [`Synthesis::pull`] of row `r`.
+    pub fn pulls_by_row(&self) -> (Vec<(usize, usize)>, Vec<usize>) {
         let mut order = Vec::new();
+        let mut ends = Vec::with_capacity(self.rows());
+        let count = std::cell::Cell::new(0usize);
         let mut s = Synthesis::<f32, _> {
             plan: self,
-            source: |b: usize, r: usize, _: &mut [f32]| order.push((b, r)),
+            source: |b: usize, r: usize, _: &mut [f32]| {
+                order.push((b, r));
+                count.set(count.get() + 1);
+            },
             next: 0,
             held: self.levels.iter().map(|_| HashMap::new()).collect(),
             pool: Vec::new(),
@@ -307,9 +318,10 @@ impl StreamPlan {
         };
         for _ in 0..self.rows() {
             s.pull(&mut []).expect("pull_order: a dry pull");
+            ends.push(count.get());
         }
         drop(s);
-        order
+        (order, ends)
     }
 }
 
@@ -782,7 +794,9 @@ impl<T: Sample, S: FnMut(usize, usize, &mut [T])> Synthesis<'_, T, S> {
         let lv = &plan.levels[l];
         let dry = self.dry;
         let mut row = take(&mut self.pool, if dry { 0 } else { volume(&lv.row) });
-        let mut band = Vec::new();
+        // a pooled buffer: a band row of the finest level is a megabyte or more, which a
+        // fresh one would map and fault in afresh at every row
+        let mut band = take(&mut self.pool, 0);
         let (parts, at) = if c < lv.nc {
             if l + 1 < plan.levels.len() {
                 let coarse = self.produce(l + 1, c);
@@ -809,6 +823,7 @@ impl<T: Sample, S: FnMut(usize, usize, &mut [T])> Synthesis<'_, T, S> {
                 copy_in(&band, &mut row, &lv.row, &p.ranges);
             }
         }
+        self.pool.push(band);
         let uses = lv.syn_uses[c];
         self.held[l].insert(c, (row, uses));
     }

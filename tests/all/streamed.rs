@@ -260,6 +260,52 @@ fn the_streamed_decode_gives_the_whole_decodes_samples() {
     }
 }
 
+/// A streamed decode of many stripes of code-blocks per band (each batch decoded ahead,
+/// beside the synthesis of the rows before it, and dropped after its last row is read;
+/// a parent band's batches held while its children's decode reads them) gives the
+/// samples of the whole-array decode: long volumes and images, one and two channels,
+/// symmetric and periodic ends (whose first rows are read again at the end).
+#[test]
+fn a_long_streamed_decode_gives_the_whole_decodes_samples() {
+    let cases: [(Raster, usize, Boundary); 4] = [
+        (
+            field(&[160, 96, 128], 1, SampleType::U16, 7, 4000.0),
+            3,
+            Boundary::Symmetric,
+        ),
+        (
+            field(&[136, 64, 80], 2, SampleType::I16, 8, 3000.0),
+            4,
+            Boundary::Periodic,
+        ),
+        (
+            field(&[2300, 512], 1, SampleType::U16, 9, 60000.0),
+            5,
+            Boundary::Periodic,
+        ),
+        (
+            field(&[1700, 700], 3, SampleType::U8, 10, 255.0),
+            3,
+            Boundary::Symmetric,
+        ),
+    ];
+    let dir = common::scratch_dir("streamed_long");
+    for (r, levels, boundary) in &cases {
+        let s = streamed(r, &opts(Rate::Bpp(2.0), *levels, *boundary));
+        let path = dir.join("s.mra");
+        std::fs::write(&path, &s).unwrap();
+        let whole = codec::decode(&s, &DecodeOptions::default()).unwrap().raster;
+        let mut d = codec::StreamedDecoder::open(&path).unwrap();
+        let (mut got, mut slabs) = (Vec::new(), 0);
+        while let Some(slab) = d.next_slab().unwrap() {
+            got.extend(slab.to_f64());
+            slabs += 1;
+        }
+        assert!(slabs > 8, "{}: {slabs} slabs", r.summary());
+        assert_eq!(got, whole.samples.to_f64(), "{} {boundary:?}", r.summary());
+    }
+}
+
 /// `--bpp` codes the whole stream until it lands within 1% under the budget (the sampled
 /// tiles alone, each its own small pyramid, miss it by a few percent), for images,
 /// colour and volumes at several budgets.

@@ -10,7 +10,8 @@ use crate::io::Samples;
 use crate::tensor::stream::StreamPlan;
 use crate::{Error, Result};
 use rayon::prelude::*;
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, HashMap};
+use std::sync::{Arc, Mutex};
 use std::ops::Range;
 
 /// Whether a whole decode of the file of header `h` goes through [`StreamedDecoder`]
@@ -52,10 +53,6 @@ pub struct StreamedDecoder {
     rx: std::sync::mpsc::Receiver<Result<Samples>>,
     done: bool,
 }
-
-/// Decoded batches of stripes a band with children keeps (an older one asked again is
-/// decoded again).
-const KEPT_STRIPES: usize = 2;
 
 impl StreamedDecoder {
     /// Read the file at `path` (its chunks checked, the code-blocks' bytes held) and
@@ -137,55 +134,173 @@ impl StreamedDecoder {
 }
 
 /// Pull every row of the file `p` through the synthesis `sp` and hand its samples to
-/// `send` a slab at a time (until it returns false).
+/// `send` a slab at a time (until it returns false). The slabs go in runs
+/// ([`Schedule`]); while one run is synthesized (the channels in parallel), the batches
+/// the next runs first read are decoded beside it (`rayon::join`: one after the other
+/// on one thread, side by side on two, a batch's blocks in parallel either way).
 fn synthesize(
     p: &crate::codec::container::Parsed,
     sp: &StreamPlan,
-    send: &mut dyn FnMut(Samples) -> bool,
+    send: &mut (dyn FnMut(Samples) -> bool + Send),
 ) -> Result<()> {
     let h = &p.header;
     let nc = h.channels;
     let errs: Vec<Failed> = (0..nc).map(|_| Failed::default()).collect();
-    let mut sources = (0..nc)
+    let sources = (0..nc)
         .map(|c| BandSource::new(p, c, errs[c].clone()))
         .collect::<Result<Vec<_>>>()?;
-    let mut syn: Vec<_> = sources
-        .iter_mut()
-        .map(|s| sp.synthesis(move |j: usize, r: usize, out: &mut [f32]| s.fill(j, r, out)))
-        .collect();
     let (d0, row_len) = (h.dims[0], sp.row_len());
     let rows = slab_rows(row_len, d0);
-    for r0 in (0..d0).step_by(rows) {
-        let n = (r0 + rows).min(d0) - r0;
-        let mut planes: Vec<Vec<f32>> = (0..nc).map(|_| vec![0f32; n * row_len]).collect();
-        // the channels' syntheses in parallel (each one's stripes too)
-        let done: Vec<Result<()>> = syn
-            .par_iter_mut()
-            .zip(planes.par_iter_mut())
-            .zip(&errs)
-            .map(|((s, plane), err)| {
-                for row in plane.chunks_mut(row_len.max(1)) {
-                    s.pull(row)?;
-                    if let Some(e) = err.take() {
-                        return Err(e);
+    let sched = Schedule::new(sp, &sources, rows);
+    let decode_run = |k: usize| -> Result<Vec<Vec<Decoded>>> {
+        sources
+            .iter()
+            .zip(&sched.decode)
+            .map(|(s, d)| s.decode_all(&d[k]))
+            .collect()
+    };
+    let settle = |got: Vec<Vec<Decoded>>, end: usize| {
+        for ((s, got), last) in sources.iter().zip(got).zip(&sched.last) {
+            s.settle(got, last, end);
+        }
+    };
+    settle(decode_run(0)?, 0);
+    let mut syn: Vec<_> = sources
+        .iter()
+        .map(|s| sp.synthesis(move |j: usize, r: usize, out: &mut [f32]| s.fill(j, r, out)))
+        .collect();
+    let runs = sched.starts.len() - 1;
+    for k in 0..runs {
+        let slabs = sched.starts[k]..sched.starts[k + 1];
+        let (made, next) = rayon::join(
+            || -> Result<bool> {
+                for slab in slabs {
+                    let r0 = slab * rows;
+                    let n = (r0 + rows).min(d0) - r0;
+                    let mut planes: Vec<Vec<f32>> =
+                        (0..nc).map(|_| vec![0f32; n * row_len]).collect();
+                    let done: Vec<Result<()>> = syn
+                        .par_iter_mut()
+                        .zip(planes.par_iter_mut())
+                        .zip(&errs)
+                        .map(|((s, plane), err)| {
+                            for row in plane.chunks_mut(row_len.max(1)) {
+                                s.pull(row)?;
+                                if let Some(e) = err.take() {
+                                    return Err(e);
+                                }
+                            }
+                            Ok(())
+                        })
+                        .collect();
+                    done.into_iter().collect::<Result<()>>()?;
+                    let samples = crate::codec::plan::to_samples(
+                        planes,
+                        n * row_len,
+                        h.colour == crate::format::header::Colour::YCoCg,
+                        (h.min, h.max),
+                        h.sample_type,
+                    );
+                    if !send(samples) {
+                        return Ok(false);
                     }
                 }
-                Ok(())
-            })
-            .collect();
-        done.into_iter().collect::<Result<()>>()?;
-        let samples = crate::codec::plan::to_samples(
-            planes,
-            n * row_len,
-            h.colour == crate::format::header::Colour::YCoCg,
-            (h.min, h.max),
-            h.sample_type,
+                Ok(true)
+            },
+            || decode_run(k + 1),
         );
-        if !send(samples) {
+        if !made? {
             return Ok(());
         }
+        settle(next?, sched.starts[k + 1]);
     }
     Ok(())
+}
+
+/// A batch `(band, batch number)` of one channel.
+type BatchId = (usize, usize);
+
+/// A decoded batch and its name.
+type Decoded = (BatchId, Arc<Batch>);
+
+/// Slabs a run's decode looks ahead past the next run's start at least.
+const LOOKAHEAD: usize = 8;
+
+/// When each batch of each channel is decoded and dropped, from the order the synthesis
+/// reads band rows ([`StreamPlan::pulls_by_row`]): a batch is first read at some slab
+/// (as a band row, or as the parent of a batch first read there) and last read at
+/// another. The slabs are cut into runs at every first and every last read + 1; before
+/// run `k` starts, every batch it reads is decoded (by the previous run's side decode,
+/// which takes every batch first read before the start of the run after `k`, or
+/// [`LOOKAHEAD`] slabs past the start of `k`, whichever is later); after it ends, every
+/// batch last read in it goes. A band without children so holds its stripe being read
+/// and the next one, never a third.
+struct Schedule {
+    /// The slab each run starts at, then the number of slabs.
+    starts: Vec<usize>,
+    /// Per channel: the batches decoded before the first run (0), then by run `k`'s side
+    /// decode (`k + 1`), in the order first read (a parent before its children).
+    decode: Vec<Vec<Vec<BatchId>>>,
+    /// Per channel: the slab each batch is last read at.
+    last: Vec<HashMap<BatchId, usize>>,
+}
+
+impl Schedule {
+    fn new(sp: &StreamPlan, sources: &[BandSource], rows: usize) -> Schedule {
+        let (order, ends) = sp.pulls_by_row();
+        let slabs = ends.len().div_ceil(rows.max(1));
+        // per channel: the batches in the order first read, with that slab
+        let mut firsts: Vec<Vec<(BatchId, usize)>> = Vec::new();
+        let mut last: Vec<HashMap<BatchId, usize>> = Vec::new();
+        for s in sources {
+            let (mut first, mut lst) = (Vec::new(), HashMap::new());
+            let mut at = 0;
+            for (r, &end) in ends.iter().enumerate() {
+                for &(j, row) in &order[at..end] {
+                    s.read(j, row / s.batch_rows[j], r / rows, &mut first, &mut lst);
+                }
+                at = end;
+            }
+            firsts.push(first);
+            last.push(lst);
+        }
+        let mut starts: Vec<usize> = firsts
+            .iter()
+            .flatten()
+            .map(|&(_, f)| f)
+            .chain(last.iter().flat_map(|l| l.values().map(|&e| e + 1)))
+            .chain([0, slabs])
+            .filter(|&e| e <= slabs)
+            .collect();
+        starts.sort_unstable();
+        starts.dedup();
+        let at = |i: usize| starts.get(i).copied().unwrap_or(slabs);
+        // everything first read before `until[i]` is decoded by step `i`
+        let runs = starts.len() - 1;
+        let until: Vec<usize> = (0..runs)
+            .map(|k| at(k + 1).max(at(k) + LOOKAHEAD))
+            .chain([usize::MAX])
+            .collect();
+        let decode = firsts
+            .iter()
+            .map(|first| {
+                let mut steps: Vec<Vec<BatchId>> = vec![Vec::new(); runs + 1];
+                let mut i = 0;
+                for &(id, f) in first {
+                    while f >= until[i] {
+                        i += 1;
+                    }
+                    steps[i].push(id);
+                }
+                steps
+            })
+            .collect();
+        Schedule {
+            starts,
+            decode,
+            last,
+        }
+    }
 }
 
 /// The first error of a channel's band source, read by the loop that pulls its rows.
@@ -193,10 +308,6 @@ fn synthesize(
 struct Failed(std::sync::Arc<std::sync::Mutex<Option<Error>>>);
 
 impl Failed {
-    fn is_set(&self) -> bool {
-        self.0.lock().map_or(true, |e| e.is_some())
-    }
-
     fn set(&self, e: Error) {
         if let Ok(mut g) = self.0.lock() {
             g.get_or_insert(e);
@@ -221,8 +332,17 @@ enum Values {
     Indices(Vec<i64>),
 }
 
+/// The decoded batches a channel holds, and each band's last dropped one, whose buffer
+/// the next one reuses (a fresh one of a megabyte or more would be mapped and faulted
+/// in afresh).
+struct Held {
+    kept: Vec<BTreeMap<usize, Arc<Batch>>>,
+    spare: Vec<Option<Values>>,
+}
+
 /// The band rows of one channel of a file, decoded a batch of stripes of code-blocks
-/// at a time (the stripes of a batch in parallel, [`entropy::codeblocks::decode_blocks_into`]).
+/// at a time (every block of a batch in parallel, [`decode_grid`]) when [`Schedule`]
+/// says, read by the synthesis ([`BandSource::fill`]) while the next batches decode.
 struct BandSource<'a> {
     p: &'a crate::codec::container::Parsed,
     c: usize,
@@ -235,11 +355,7 @@ struct BandSource<'a> {
     parent: Vec<bool>,
     /// rows of a batch of each band (whole stripes)
     batch_rows: Vec<usize>,
-    /// decoded batches of each band, by batch number
-    kept: Vec<BTreeMap<usize, Batch>>,
-    /// each band's last dropped batch, whose buffer the next one reuses (a fresh one
-    /// of a megabyte or more would be mapped and faulted in afresh)
-    spare: Vec<Option<Values>>,
+    held: Mutex<Held>,
     err: Failed,
 }
 
@@ -306,26 +422,65 @@ impl<'a> BandSource<'a> {
             deltas,
             parent,
             batch_rows,
-            kept: (0..nb).map(|_| BTreeMap::new()).collect(),
-            spare: (0..nb).map(|_| None).collect(),
+            held: Mutex::new(Held {
+                kept: (0..nb).map(|_| BTreeMap::new()).collect(),
+                spare: (0..nb).map(|_| None).collect(),
+            }),
             err,
         })
     }
 
-    /// Row `r` of band `j`, dequantized, into `out` (zeros after an error).
-    fn fill(&mut self, j: usize, r: usize, out: &mut [f32]) {
-        if self.err.is_set() || self.sets[j].is_none() {
+
+    /// Note that the synthesis reads batch `b` of band `j` at slab `slab` (and, the
+    /// first time, its parent batches, first): `first` lists the batches in the order
+    /// first read, `last` the slab each is last read at.
+    fn read(
+        &self,
+        j: usize,
+        b: usize,
+        slab: usize,
+        first: &mut Vec<(BatchId, usize)>,
+        last: &mut HashMap<BatchId, usize>,
+    ) {
+        if self.sets[j].is_none() {
+            return;
+        }
+        if let Some(e) = last.get_mut(&(j, b)) {
+            *e = slab;
+            return;
+        }
+        last.insert((j, b), slab);
+        if let Some((pj, prows)) = self.parent_rows(j, &self.batch(j, b)) {
+            let n = self.batch_rows[pj];
+            for pb in prows.start / n..prows.end.div_ceil(n) {
+                self.read(pj, pb, slab, first, last);
+            }
+        }
+        first.push(((j, b), slab));
+    }
+
+    /// Row `r` of band `j`, dequantized, into `out` (zeros after an error, or when the
+    /// band is absent).
+    fn fill(&self, j: usize, r: usize, out: &mut [f32]) {
+        if self.sets[j].is_none() {
             out.fill(0.0);
             return;
         }
         let b = r / self.batch_rows[j];
-        if let Err(e) = self.ensure(j, b) {
-            self.err.set(e);
+        let batch = self
+            .held
+            .lock()
+            .ok()
+            .and_then(|h| h.kept[j].get(&b).cloned());
+        let Some(batch) = batch else {
+            self.err.set(Error::format(
+                format!("band {j} of channel {}: row {r} read before it was decoded", self.c),
+                "the streamed decode's schedule",
+            ));
             out.fill(0.0);
             return;
-        }
+        };
         let len = out.len();
-        let batch = &self.kept[j][&b];
         let at = (r - batch.y0) * len;
         match &batch.values {
             Values::Samples(v) => out.copy_from_slice(&v[at..at + len]),
@@ -362,11 +517,60 @@ impl<'a> BandSource<'a> {
         ))
     }
 
-    /// Decode batch `b` of band `j` (and the parent batches it reads) unless kept.
-    fn ensure(&mut self, j: usize, b: usize) -> Result<()> {
-        if self.kept[j].contains_key(&b) {
-            return Ok(());
+    /// Decode the batches `ids` in order (a parent before its children).
+    fn decode_all(&self, ids: &[BatchId]) -> Result<Vec<Decoded>> {
+        let mut done: Vec<Decoded> = Vec::with_capacity(ids.len());
+        for &(j, b) in ids {
+            let batch = self.decode(j, b, &done)?;
+            done.push(((j, b), Arc::new(batch)));
         }
+        Ok(done)
+    }
+
+    /// Hold the decoded batches `got`, then drop every batch last read before slab
+    /// `end` (`last`), its buffer kept for the band's next batch.
+    fn settle(&self, got: Vec<Decoded>, last: &HashMap<BatchId, usize>, end: usize) {
+        let Ok(mut held) = self.held.lock() else {
+            return;
+        };
+        let held = &mut *held;
+        for ((j, b), batch) in got {
+            held.kept[j].insert(b, batch);
+        }
+        for (j, kept) in held.kept.iter_mut().enumerate() {
+            let gone: Vec<usize> = kept
+                .keys()
+                .copied()
+                .filter(|&b| last.get(&(j, b)).map_or(true, |&e| e < end))
+                .collect();
+            for b in gone {
+                if let Some(batch) = kept.remove(&b).and_then(|a| Arc::try_unwrap(a).ok()) {
+                    held.spare[j] = Some(batch.values);
+                }
+            }
+        }
+    }
+
+    /// Batch `b` of band `j` from the batches `fresh` or those held.
+    fn decoded(&self, j: usize, b: usize, fresh: &[Decoded]) -> Result<Arc<Batch>> {
+        let found = match fresh.iter().find(|(id, _)| *id == (j, b)) {
+            Some((_, a)) => Some(a.clone()),
+            None => self
+                .held
+                .lock()
+                .ok()
+                .and_then(|h| h.kept[j].get(&b).cloned()),
+        };
+        found.ok_or_else(|| {
+            Error::format(
+                format!("band {j} of channel {}: batch {b} read before it was decoded", self.c),
+                "the streamed decode's schedule",
+            )
+        })
+    }
+
+    /// Batch `b` of band `j`, its parent's rows from the batches `fresh` or those held.
+    fn decode(&self, j: usize, b: usize, fresh: &[Decoded]) -> Result<Batch> {
         let rows = self.batch(j, b);
         // the parent's rows the batch reads, as one array of extents `pdims`
         let mut par: Option<(Vec<usize>, Vec<i64>)> = None;
@@ -374,10 +578,13 @@ impl<'a> BandSource<'a> {
             if self.sets[pj].is_some() {
                 let plen: usize = self.grids[pj].dims[1..].iter().product();
                 let mut v = Vec::with_capacity(prows.len() * plen);
+                let mut got: Option<(usize, Arc<Batch>)> = None;
                 for y in prows.clone() {
                     let pb = y / self.batch_rows[pj];
-                    self.ensure(pj, pb)?;
-                    let batch = &self.kept[pj][&pb];
+                    if got.as_ref().map_or(true, |g| g.0 != pb) {
+                        got = Some((pb, self.decoded(pj, pb, fresh)?));
+                    }
+                    let batch = &got.as_ref().expect("just set").1;
                     let Values::Indices(q) = &batch.values else {
                         unreachable!("a parent band keeps its indices")
                     };
@@ -396,15 +603,13 @@ impl<'a> BandSource<'a> {
         ldims[0] = rows.len();
         let local = Grid::new(&ldims, &g.block);
         let first = rows.start / tall * per;
-        let which: Vec<usize> = (0..local.len()).collect();
         let data = &self.p.bands[self.c][j]
             .as_ref()
             .expect("a band with blocks is present")
             .data;
         let set = self.sets[j].as_ref().expect("checked by the caller");
-        let streams: Vec<&[u8]> = which
-            .iter()
-            .map(|&i| set.get(first + i).map(|r| &data[r.clone()]).unwrap_or(&[]))
+        let streams: Vec<&[u8]> = (0..local.len())
+            .map(|i| set.get(first + i).map(|r| &data[r.clone()]).unwrap_or(&[]))
             .collect();
         let kind = if self.p.plan.bands[j].level == 0 {
             BandKind::Coarse
@@ -413,11 +618,10 @@ impl<'a> BandSource<'a> {
         };
         let parent = par.as_ref().map(|(dims, data)| Parent { data, dims });
         let h = &self.p.header;
-        let (coding, coder) = (
+        let cc = (
             crate::codec::plan::coding_of(h),
             crate::codec::plan::coder_of(h),
         );
-        let row_len = *g.dims.last().expect("a band of 2 or 3 axes");
         let n = ldims.iter().product::<usize>();
         let failed = |e: Error| {
             Error::format(
@@ -425,14 +629,8 @@ impl<'a> BandSource<'a> {
                 "a valid band",
             )
         };
-        let spare = self.spare[j].take();
+        let spare = self.held.lock().ok().and_then(|mut h| h.spare[j].take());
         let values = if self.parent[j] {
-            let mut q = match spare {
-                Some(Values::Indices(v)) => v,
-                _ => Vec::new(),
-            };
-            q.clear();
-            q.resize(n, 0);
             let put = crate::entropy::codeblocks::Put {
                 wide: |o: &mut [i64], q: &[i64]| o.copy_from_slice(q),
                 narrow: |o: &mut [i64], q: &[i32]| {
@@ -441,58 +639,97 @@ impl<'a> BandSource<'a> {
                     }
                 },
             };
-            let out: Vec<&mut [i64]> = q.chunks_mut(row_len.max(1)).collect();
-            crate::entropy::codeblocks::decode_blocks_into(
-                out,
-                &local,
-                &which,
-                &streams,
-                (kind, parent),
-                coding,
-                coder,
-                &put,
-            )
-            .map_err(failed)?;
-            Values::Indices(q)
+            let q = match spare {
+                Some(Values::Indices(v)) => v,
+                _ => Vec::new(),
+            };
+            let q = decode_grid(q, n, &local, &streams, (kind, parent), cc, &put);
+            Values::Indices(q.map_err(failed)?)
         } else {
-            let (step, delta) = (self.steps[j], self.deltas[j]);
-            let mut x = match spare {
+            let put = crate::codec::plan::dequantizing_put(self.steps[j], self.deltas[j]);
+            let x = match spare {
                 Some(Values::Samples(v)) => v,
                 _ => Vec::new(),
             };
-            x.clear();
-            x.resize(n, 0.0);
-            let put = crate::codec::plan::dequantizing_put(step, delta);
-            let out: Vec<&mut [f32]> = x.chunks_mut(row_len.max(1)).collect();
-            crate::entropy::codeblocks::decode_blocks_into(
-                out,
-                &local,
-                &which,
-                &streams,
-                (kind, parent),
-                coding,
-                coder,
-                &put,
-            )
-            .map_err(failed)?;
-            Values::Samples(x)
+            let x = decode_grid(x, n, &local, &streams, (kind, parent), cc, &put);
+            Values::Samples(x.map_err(failed)?)
         };
-        // a band without children is read in order: its last batch is enough
-        let keep = if self.parent[j] { KEPT_STRIPES } else { 1 };
-        let kept = &mut self.kept[j];
-        kept.insert(
-            b,
-            Batch {
-                y0: rows.start,
-                values,
-            },
-        );
-        while kept.len() > keep {
-            let old = *kept.keys().find(|&&k| k != b).expect("more than one");
-            if let Some(batch) = kept.remove(&old) {
-                self.spare[j] = Some(batch.values);
-            }
-        }
-        Ok(())
+        Ok(Batch {
+            y0: rows.start,
+            values,
+        })
     }
+}
+
+/// Decode every block of the grid `local` (block `i` from `streams[i]`) of a band of
+/// kind and parent `kp` into `buf` (reused), resized to the grid's `n` samples in raster
+/// order, through `put`: each block is decoded on the pool on its own
+/// ([`crate::entropy::codeblocks::decode_blocks_over`] over the block's box, its rows
+/// the pieces of the grid's rows it covers), so that a stripe one block tall (a
+/// volume's batch) decodes on every thread. A block's indices do not depend on the
+/// others': the same samples on any thread count.
+fn decode_grid<T, W, N>(
+    mut buf: Vec<T>,
+    n: usize,
+    local: &Grid,
+    streams: &[&[u8]],
+    (kind, parent): (BandKind, Option<Parent>),
+    (coding, coder): (crate::entropy::band::Coding, crate::entropy::codeblocks::Coder),
+    put: &crate::entropy::codeblocks::Put<W, N>,
+) -> Result<Vec<T>>
+where
+    T: Send + Clone + Default,
+    W: Fn(&mut [T], &[i64]) + Sync,
+    N: Fn(&mut [T], &[i32]) + Sync,
+{
+    buf.clear();
+    buf.resize(n, T::default());
+    let nd = local.dims.len();
+    let row_len = local.dims[nd - 1].max(1);
+    let wide = local.block[nd - 1];
+    // each block's rows: the pieces of the grid's rows inside its box, in raster order
+    let mut pieces: Vec<Vec<&mut [T]>> = (0..local.len()).map(|_| Vec::new()).collect();
+    let mut idx = vec![0usize; nd - 1];
+    for row in buf.chunks_mut(row_len) {
+        let mut base = 0;
+        for k in 0..nd - 1 {
+            base = base * local.counts[k] + idx[k] / local.block[k];
+        }
+        let base = base * local.counts[nd - 1];
+        for (b, piece) in row.chunks_mut(wide).enumerate() {
+            pieces[base + b].push(piece);
+        }
+        for k in (0..nd - 1).rev() {
+            idx[k] += 1;
+            if idx[k] < local.dims[k] {
+                break;
+            }
+            idx[k] = 0;
+        }
+    }
+    let parent = parent.as_ref().map(|p| (p.data, p.dims));
+    let failed: Vec<Result<()>> = pieces
+        .into_par_iter()
+        .enumerate()
+        .map(|(i, rows)| {
+            let bounds = local.bounds(i);
+            let over = crate::entropy::codeblocks::Over {
+                rows: &bounds,
+                parent: None,
+            };
+            let parent = parent.map(|(data, dims)| Parent { data, dims });
+            crate::entropy::codeblocks::decode_blocks_over(
+                rows,
+                &over,
+                local,
+                &[i],
+                &streams[i..=i],
+                (kind, parent),
+                (coding, coder),
+                put,
+            )
+        })
+        .collect();
+    failed.into_iter().collect::<Result<()>>()?;
+    Ok(buf)
 }
