@@ -300,16 +300,50 @@ pub(super) fn to_samples(
 ) -> Samples {
     let c = planes.len();
     let mut out = Samples::zeros(ty, npos * c);
-    let (tlo, thi) = ty.range();
     let mut end = npos;
     while end > 0 {
         let start = end.saturating_sub(TAIL);
         let part: Vec<&[f32]> = planes.iter().map(|p| &p[start..end]).collect();
-        let (a, b) = (start * c, end * c);
+        convert_into(&mut out, start * c..end * c, &part, ycocg, (lo, hi));
+        for p in &mut planes {
+            p.truncate(start);
+            p.shrink_to_fit();
+        }
+        end = start;
+    }
+    out
+}
+
+/// [`to_samples`] of planes the caller keeps (a streamed decode's slab buffers, reused
+/// from slab to slab): every position of `planes` (as long as each other) converted.
+pub(super) fn slab_samples(
+    planes: &[&[f32]],
+    ycocg: bool,
+    range: (f64, f64),
+    ty: SampleType,
+) -> Samples {
+    let n = planes.iter().map(|p| p.len()).sum();
+    let mut out = Samples::zeros(ty, n);
+    convert_into(&mut out, 0..n, planes, ycocg, range);
+    out
+}
+
+/// Interleave `part` (one slice a channel) into `out[a..b]`, converted as [`to_samples`]
+/// says.
+fn convert_into(
+    out: &mut Samples,
+    std::ops::Range { start: a, end: b }: std::ops::Range<usize>,
+    part: &[&[f32]],
+    ycocg: bool,
+    (lo, hi): (f64, f64),
+) {
+    let (tlo, thi) = out.sample_type().range();
+    // (a block of its own: the macros below were the body of `to_samples`' loop)
+    {
         macro_rules! fill {
             ($v:expr, $conv:expr) => {{
                 let conv = $conv;
-                interleave(&mut $v[a..b], &part, ycocg, |x: f32| {
+                interleave(&mut $v[a..b], part, ycocg, |x: f32| {
                     conv((x as f64).clamp(lo, hi))
                 })
             }};
@@ -330,7 +364,7 @@ pub(super) fn to_samples(
             ($v:expr, $t:ty) => {
                 if in_f32 {
                     let (tl, th) = (tlo as i32, thi as i32);
-                    interleave(&mut $v[a..b], &part, ycocg, |x: f32| {
+                    interleave(&mut $v[a..b], part, ycocg, |x: f32| {
                         round_to_f32(x.clamp(flo, fhi), tl, th) as $t
                     })
                 } else {
@@ -338,7 +372,7 @@ pub(super) fn to_samples(
                 }
             };
         }
-        match &mut out {
+        match out {
             Samples::U8(v) => small!(v, u8),
             Samples::I8(v) => small!(v, i8),
             Samples::U16(v) => small!(v, u16),
@@ -349,13 +383,7 @@ pub(super) fn to_samples(
             Samples::F32(v) => fill!(v, |x: f64| x as f32),
             Samples::F64(v) => fill!(v, |x: f64| x),
         }
-        for p in &mut planes {
-            p.truncate(start);
-            p.shrink_to_fit();
-        }
-        end = start;
     }
-    out
 }
 
 /// Positions [`to_samples`] converts before it shortens the planes (4 MB of one `f32`

@@ -11,8 +11,8 @@ use crate::tensor::stream::StreamPlan;
 use crate::{Error, Result};
 use rayon::prelude::*;
 use std::collections::{BTreeMap, HashMap};
-use std::sync::{Arc, Mutex};
 use std::ops::Range;
+use std::sync::{Arc, Mutex};
 
 /// Whether a whole decode of the file of header `h` goes through [`StreamedDecoder`]
 /// in [`crate::codec::SlabDecoder`]: a one-piece lossy file of code-blocks (no residual
@@ -170,6 +170,8 @@ fn synthesize(
         .map(|s| sp.synthesis(move |j: usize, r: usize, out: &mut [f32]| s.fill(j, r, out)))
         .collect();
     let runs = sched.starts.len() - 1;
+    // the slabs' planes, reused (fresh ones of megabytes would be faulted in at every slab)
+    let mut planes: Vec<Vec<f32>> = (0..nc).map(|_| vec![0f32; rows * row_len]).collect();
     for k in 0..runs {
         let slabs = sched.starts[k]..sched.starts[k + 1];
         let (made, next) = rayon::join(
@@ -177,11 +179,11 @@ fn synthesize(
                 for slab in slabs {
                     let r0 = slab * rows;
                     let n = (r0 + rows).min(d0) - r0;
-                    let mut planes: Vec<Vec<f32>> =
-                        (0..nc).map(|_| vec![0f32; n * row_len]).collect();
+                    let mut bufs: Vec<&mut [f32]> =
+                        planes.iter_mut().map(|p| &mut p[..n * row_len]).collect();
                     let done: Vec<Result<()>> = syn
                         .par_iter_mut()
-                        .zip(planes.par_iter_mut())
+                        .zip(bufs.par_iter_mut())
                         .zip(&errs)
                         .map(|((s, plane), err)| {
                             for row in plane.chunks_mut(row_len.max(1)) {
@@ -194,9 +196,9 @@ fn synthesize(
                         })
                         .collect();
                     done.into_iter().collect::<Result<()>>()?;
-                    let samples = crate::codec::plan::to_samples(
-                        planes,
-                        n * row_len,
+                    let bufs: Vec<&[f32]> = bufs.into_iter().map(|p| &*p).collect();
+                    let samples = crate::codec::plan::slab_samples(
+                        &bufs,
                         h.colour == crate::format::header::Colour::YCoCg,
                         (h.min, h.max),
                         h.sample_type,
@@ -395,21 +397,18 @@ impl<'a> BandSource<'a> {
             .map(|j| crate::codec::plan::band_delta(&p.header, plan, j))
             .collect();
         let parent = (0..nb).map(|j| plan.parents.contains(&Some(j))).collect();
-        // a batch of as many stripes as threads in an image, so that its stripes
-        // decode in parallel (a volume's stripe is many planes: one a batch, its
-        // blocks in parallel, keeps a 1024³ decode under 1 GiB — 1.63 GB on 2 threads
-        // with two); a band of odd stripes (blocks one row tall) in one batch, since a
-        // batch's parent rows must start at half its first row
-        let threads = rayon::current_num_threads().max(1);
+        // a batch of one stripe (its blocks decode in parallel, [`decode_grid`]; two
+        // stripes a batch took a 1024³ decode on 2 threads to 1.63 GB); a band of odd
+        // stripes (blocks one row tall) in one batch, since a batch's parent rows must
+        // start at half its first row
         let batch_rows = grids
             .iter()
             .map(|g| {
-                let per = if g.dims.len() > 2 { 1 } else { threads };
                 let t = g.block[0].max(1);
                 if t % 2 == 1 {
                     g.dims[0].max(1)
                 } else {
-                    t.saturating_mul(per)
+                    t
                 }
             })
             .collect();
@@ -429,7 +428,6 @@ impl<'a> BandSource<'a> {
             err,
         })
     }
-
 
     /// Note that the synthesis reads batch `b` of band `j` at slab `slab` (and, the
     /// first time, its parent batches, first): `first` lists the batches in the order
@@ -474,7 +472,10 @@ impl<'a> BandSource<'a> {
             .and_then(|h| h.kept[j].get(&b).cloned());
         let Some(batch) = batch else {
             self.err.set(Error::format(
-                format!("band {j} of channel {}: row {r} read before it was decoded", self.c),
+                format!(
+                    "band {j} of channel {}: row {r} read before it was decoded",
+                    self.c
+                ),
                 "the streamed decode's schedule",
             ));
             out.fill(0.0);
@@ -563,7 +564,10 @@ impl<'a> BandSource<'a> {
         };
         found.ok_or_else(|| {
             Error::format(
-                format!("band {j} of channel {}: batch {b} read before it was decoded", self.c),
+                format!(
+                    "band {j} of channel {}: batch {b} read before it was decoded",
+                    self.c
+                ),
                 "the streamed decode's schedule",
             )
         })
@@ -674,7 +678,10 @@ fn decode_grid<T, W, N>(
     local: &Grid,
     streams: &[&[u8]],
     (kind, parent): (BandKind, Option<Parent>),
-    (coding, coder): (crate::entropy::band::Coding, crate::entropy::codeblocks::Coder),
+    (coding, coder): (
+        crate::entropy::band::Coding,
+        crate::entropy::codeblocks::Coder,
+    ),
     put: &crate::entropy::codeblocks::Put<W, N>,
 ) -> Result<Vec<T>>
 where
