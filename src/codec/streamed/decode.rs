@@ -542,7 +542,7 @@ impl<'a> BandSource<'a> {
             let gone: Vec<usize> = kept
                 .keys()
                 .copied()
-                .filter(|&b| last.get(&(j, b)).map_or(true, |&e| e < end))
+                .filter(|&b| last.get(&(j, b)).is_none_or(|&e| e < end))
                 .collect();
             for b in gone {
                 if let Some(batch) = kept.remove(&b).and_then(|a| Arc::try_unwrap(a).ok()) {
@@ -585,7 +585,7 @@ impl<'a> BandSource<'a> {
                 let mut got: Option<(usize, Arc<Batch>)> = None;
                 for y in prows.clone() {
                     let pb = y / self.batch_rows[pj];
-                    if got.as_ref().map_or(true, |g| g.0 != pb) {
+                    if got.as_ref().is_none_or(|g| g.0 != pb) {
                         got = Some((pb, self.decoded(pj, pb, fresh)?));
                     }
                     let batch = &got.as_ref().expect("just set").1;
@@ -699,8 +699,8 @@ where
     let mut idx = vec![0usize; nd - 1];
     for row in buf.chunks_mut(row_len) {
         let mut base = 0;
-        for k in 0..nd - 1 {
-            base = base * local.counts[k] + idx[k] / local.block[k];
+        for (&i, (&n, &b)) in idx.iter().zip(local.counts.iter().zip(&local.block)) {
+            base = base * n + i / b;
         }
         let base = base * local.counts[nd - 1];
         for (b, piece) in row.chunks_mut(wide).enumerate() {
