@@ -252,8 +252,8 @@ fn strip_53_inverse(
     for j in 0..n {
         let (c, dl, dr) = (row(j), row(n + j.saturating_sub(1)), row(n + j.min(s - 1)));
         let out = &mut data[base + 2 * j * st..][..cw];
-        for i in 0..cw {
-            out[i] = c[i] - ((dl[i] + dr[i] + 2) >> 2);
+        for (((o, &c), &l), &r) in out.iter_mut().zip(c).zip(dl).zip(dr) {
+            *o = c - ((l + r + 2) >> 2);
         }
     }
     for j in 0..s {
@@ -266,8 +266,8 @@ fn strip_53_inverse(
         } else {
             left
         };
-        for i in 0..cw {
-            out[i] = d[i] + ((left[i] + right[i]) >> 1);
+        for (((o, &d), &l), &r) in out.iter_mut().zip(d).zip(left).zip(right) {
+            *o = d + ((l + r) >> 1);
         }
     }
     true
