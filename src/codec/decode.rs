@@ -446,8 +446,15 @@ fn decode_channel_narrow(p: &Parsed, c: usize, k: usize, plane: &mut [i32]) -> R
                     if h.version.has_blocks() {
                         let bands = (dims.as_slice(), plan.block(j));
                         let at = (kind_of(level), parent);
-                        return decode_band_narrow(h, &bc.data, bands, at, wins[j].as_deref(), rows)
-                            .map_err(failed);
+                        return decode_band_narrow(
+                            h,
+                            &bc.data,
+                            bands,
+                            at,
+                            wins[j].as_deref(),
+                            rows,
+                        )
+                        .map_err(failed);
                     }
                     if decoded_whole(h, level, has_children[j]) {
                         let v = decode_band(

@@ -617,12 +617,21 @@ mod tests {
                 region[0] = region[0].div_ceil(2).max(1).max(region[0] - 1);
                 let mut w = wide.clone();
                 let mut q: Vec<i32> = wide.iter().map(|&v| v as i32).collect();
-                assert!(i64::inverse_level(&mut w, &dims, &region, axis, Scheme::Linear));
+                assert!(i64::inverse_level(
+                    &mut w,
+                    &dims,
+                    &region,
+                    axis,
+                    Scheme::Linear
+                ));
                 let ok = i32::inverse_level(&mut q, &dims, &region, axis, Scheme::Linear);
                 let fit = w.iter().all(|&v| i32::try_from(v).is_ok());
                 assert_eq!(ok, fit, "{dims:?} axis {axis}");
                 if ok {
-                    assert!(q.iter().zip(&w).all(|(&a, &b)| a as i64 == b), "{dims:?} {axis}");
+                    assert!(
+                        q.iter().zip(&w).all(|(&a, &b)| a as i64 == b),
+                        "{dims:?} {axis}"
+                    );
                 }
             }
         }

@@ -400,7 +400,12 @@ mod tests {
     fn cumulative_counts_ascend_below_2_15_under_updates() {
         use super::super::prior::{MAGNITUDE, PATTERN, WEIGHT};
         let mut starts: Vec<Cdf> = vec![Cdf::uniform(LIMIT), Cdf::uniform(14)];
-        starts.extend(PATTERN.iter().chain(&MAGNITUDE).map(|c| Cdf::from_cumulative(*c, WEIGHT, 7)));
+        starts.extend(
+            PATTERN
+                .iter()
+                .chain(&MAGNITUDE)
+                .map(|c| Cdf::from_cumulative(*c, WEIGHT, 7)),
+        );
         let mut f = [0u32; SYMBOLS];
         f[3] = 1000;
         starts.push(Cdf::from_freqs(&f));
@@ -410,15 +415,25 @@ mod tests {
                 let c = m.cumulative();
                 assert!(c[..SYMBOLS - 1].iter().all(|&v| v < ONE as u16), "{c:?}");
                 assert!(c.windows(2).all(|w| w[0] <= w[1]), "{c:?}");
-                x = x.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+                x = x
+                    .wrapping_mul(6364136223846793005)
+                    .wrapping_add(1442695040888963407);
                 // runs of one symbol, then any
-                let s = if step % 100 < 50 { 15 * (step / 100 % 2) } else { (x >> 60) as usize };
+                let s = if step % 100 < 50 {
+                    15 * (step / 100 % 2)
+                } else {
+                    (x >> 60) as usize
+                };
                 let before = m;
                 m.update(s);
                 // the 32-bit update's result
                 let rate = (before.count as u32 + 2).ilog2().min(before.limit as u32);
                 for i in 0..SYMBOLS - 1 {
-                    let t = if i < s { i as i32 + 1 } else { ONE - (SYMBOLS - 1 - i) as i32 };
+                    let t = if i < s {
+                        i as i32 + 1
+                    } else {
+                        ONE - (SYMBOLS - 1 - i) as i32
+                    };
                     let c = before.c[i] as i32;
                     assert_eq!(m.c[i] as i32, c + ((t - c) >> rate));
                 }
