@@ -121,6 +121,43 @@ fn decode_band_into(
     )
 }
 
+/// The code-blocks of a band of a lossless code-block file decoded straight into its
+/// `rows` of an `i32` plane ([`decode_band_into`]'s way: the blocks `window` meets, the
+/// others left as they are): a narrow coder's indices copied, the context coder's
+/// stored when they fit. False when an index does not fit 32 bits.
+fn decode_band_narrow(
+    h: &Header,
+    data: &[u8],
+    (dims, block): (&[usize], &[usize]),
+    (kind, parent): (BandKind, Option<Parent>),
+    window: Option<&[Range<usize>]>,
+    rows: Vec<&mut [i32]>,
+) -> Result<bool> {
+    use std::sync::atomic::{AtomicBool, Ordering};
+    let (grid, which, streams) = block_streams(data, dims, block, window)?;
+    let fits = AtomicBool::new(true);
+    let put = entropy::codeblocks::Put {
+        wide: |o: &mut [i32], v: &[i64]| {
+            if !narrow_row(v, o) {
+                fits.store(false, Ordering::Relaxed);
+            }
+        },
+        narrow: |o: &mut [i32], v: &[i32]| o.copy_from_slice(v),
+    };
+    let (coding, coder) = (super::plan::coding_of(h), super::plan::coder_of(h));
+    entropy::codeblocks::decode_blocks_into(
+        rows,
+        &grid,
+        &which,
+        &streams,
+        (kind, parent),
+        coding,
+        coder,
+        &put,
+    )?;
+    Ok(fits.into_inner())
+}
+
 /// The parent of band `j` of channel `c` from `held` (a band number and its indices):
 /// none for a band without one, an error when `held` is not its parent.
 fn parent_of<'a>(
@@ -406,6 +443,19 @@ fn decode_channel_narrow(p: &Parsed, c: usize, k: usize, plane: &mut [i32]) -> R
                         Error::format(format!("band {j} of channel {c}: {e}"), "a valid band")
                     };
                     let mut ok = true;
+                    if h.version.has_blocks() {
+                        let bands = (dims.as_slice(), plan.block(j));
+                        let at = (kind_of(level), parent);
+                        return decode_band_narrow(
+                            h,
+                            &bc.data,
+                            bands,
+                            at,
+                            wins[j].as_deref(),
+                            rows,
+                        )
+                        .map_err(failed);
+                    }
                     if decoded_whole(h, level, has_children[j]) {
                         let v = decode_band(
                             h,

@@ -60,6 +60,17 @@ pub trait Store: Copy + Default + Send + Sync {
     fn wide(self) -> i64;
     /// `v` stored, `None` when it does not fit.
     fn narrow(v: i64) -> Option<Self>;
+    /// One inverse level of `scheme` on every lane along `axis` inside `region` (as
+    /// [`lanes`] with [`level_inverse`]); false when a result does not fit.
+    fn inverse_level(
+        data: &mut [Self],
+        shape: &[usize],
+        region: &[usize],
+        axis: usize,
+        scheme: Scheme,
+    ) -> bool {
+        lanes(data, shape, region, axis, &mut level_inverse(scheme))
+    }
 }
 
 impl Store for i64 {
@@ -82,6 +93,184 @@ impl Store for i32 {
     fn narrow(v: i64) -> Option<Self> {
         i32::try_from(v).ok()
     }
+    /// The 5/3 level in `i32` arithmetic ([`inverse_53_narrow`]), the S-transform's
+    /// through `i64` lanes.
+    fn inverse_level(
+        data: &mut [Self],
+        shape: &[usize],
+        region: &[usize],
+        axis: usize,
+        scheme: Scheme,
+    ) -> bool {
+        if scheme == Scheme::Linear {
+            inverse_53_narrow(data, shape, region, axis)
+        } else {
+            lanes(data, shape, region, axis, &mut level_inverse(scheme))
+        }
+    }
+}
+
+/// Inputs of a 5/3 inverse level below this in magnitude give outputs below 2^30, every
+/// intermediate sum inside `i32`: `|C|, |D| < 2^28` ⇒ even outputs `< 2^28 + 2^27 + 1`,
+/// their pair sums `< 2^30`, odd outputs `< 2^28 + 2^29`.
+const NARROW_BOUND: i32 = 1 << 28;
+
+/// Columns of the lanes [`inverse_53_narrow`] lifts together across an axis other than
+/// the last (adjacent in memory, so each lifting step runs along rows of this many).
+const STRIP: usize = 64;
+
+/// The offsets of the positions of `region` whose indices on the axes `skip` are 0, in
+/// raster order (`strides` of the plane).
+fn bases(region: &[usize], strides: &[usize], skip: &[usize]) -> Vec<usize> {
+    let mut out = vec![0usize];
+    for (k, (&r, &st)) in region.iter().zip(strides).enumerate() {
+        if skip.contains(&k) {
+            continue;
+        }
+        out = out
+            .iter()
+            .flat_map(|&b| (0..r).map(move |i| b + i * st))
+            .collect();
+    }
+    out
+}
+
+/// [`crate::scheme::linear::lift_inverse`] on every lane along `axis` inside `region`
+/// of an `i32` plane, computed in `i32` where a group of lanes holds only values below
+/// [`NARROW_BOUND`] (the same integers as the `i64` lifting: the floors are arithmetic
+/// shifts, no sum overflows) and through `i64` lanes elsewhere: lanes along the last
+/// axis one at a time, those along another axis [`STRIP`] adjacent lanes together,
+/// each lifting step a pass over rows of the strip. False when a result does not fit
+/// 32 bits (the plane then holds garbage).
+fn inverse_53_narrow(data: &mut [i32], shape: &[usize], region: &[usize], axis: usize) -> bool {
+    let nd = shape.len();
+    let m = region[axis];
+    if m < 2 || region.contains(&0) {
+        return true;
+    }
+    let mut strides = vec![1usize; nd];
+    for k in (0..nd - 1).rev() {
+        strides[k] = strides[k + 1] * shape[k + 1];
+    }
+    let st = strides[axis];
+    let mut fits = true;
+    let last = nd - 1;
+    if axis == last {
+        let mut buf = vec![0i32; m];
+        for b in bases(region, &strides, &[axis]) {
+            if !row_53_inverse(&mut data[b..b + m], &mut buf) {
+                fits &= lane_wide(data, b, 1, m);
+            }
+        }
+        return fits;
+    }
+    let w = region[last];
+    let mut buf = vec![0i32; m * STRIP.min(w)];
+    for b in bases(region, &strides, &[axis, last]) {
+        for x0 in (0..w).step_by(STRIP) {
+            let cw = STRIP.min(w - x0);
+            if !strip_53_inverse(data, b + x0, st, m, cw, &mut buf[..m * cw]) {
+                for x in x0..x0 + cw {
+                    fits &= lane_wide(data, b + x, st, m);
+                }
+            }
+        }
+    }
+    fits
+}
+
+/// The 5/3 inverse of one lane (`m` values from `base`, `stride` apart) through `i64`;
+/// false when a result does not fit 32 bits.
+fn lane_wide(data: &mut [i32], base: usize, stride: usize, m: usize) -> bool {
+    let mut lane: Vec<i64> = (0..m).map(|j| data[base + j * stride] as i64).collect();
+    let mut scratch = vec![0i64; m];
+    crate::scheme::linear::lift_inverse(&mut lane, &mut scratch);
+    let mut fits = true;
+    for (j, &v) in lane.iter().enumerate() {
+        match i32::try_from(v) {
+            Ok(v) => data[base + j * stride] = v,
+            Err(_) => fits = false,
+        }
+    }
+    fits
+}
+
+/// `|v|` or `|v| − 1` of every value OR-ed together: below [`NARROW_BOUND`] exactly
+/// when every `|v|` is.
+#[inline(always)]
+fn magnitudes(v: &[i32]) -> i32 {
+    v.iter().fold(0, |a, &x| a | (x ^ (x >> 31)))
+}
+
+/// The 5/3 inverse of a contiguous lane in `i32`, `buf` as long; false (the lane
+/// untouched) when a value is not below [`NARROW_BOUND`].
+fn row_53_inverse(lane: &mut [i32], buf: &mut [i32]) -> bool {
+    let m = lane.len();
+    if magnitudes(lane) >= NARROW_BOUND {
+        return false;
+    }
+    buf.copy_from_slice(lane);
+    let (n, s) = (m.div_ceil(2), m / 2);
+    let (c, d) = buf.split_at(n);
+    for j in 0..n {
+        let (dl, dr) = (d[j.saturating_sub(1)], d[j.min(s - 1)]);
+        lane[2 * j] = c[j] - ((dl + dr + 2) >> 2);
+    }
+    for j in 0..s {
+        let right = if 2 * j + 2 < m {
+            lane[2 * j + 2]
+        } else {
+            lane[2 * j]
+        };
+        lane[2 * j + 1] = d[j] + ((lane[2 * j] + right) >> 1);
+    }
+    true
+}
+
+/// The 5/3 inverse of `cw` adjacent lanes of `m` values from `base`, `st` apart (each
+/// lane's values a row of `buf`, `m × cw`, then each lifting step a pass over rows);
+/// false (the lanes untouched) when a value is not below [`NARROW_BOUND`].
+fn strip_53_inverse(
+    data: &mut [i32],
+    base: usize,
+    st: usize,
+    m: usize,
+    cw: usize,
+    buf: &mut [i32],
+) -> bool {
+    let mut big = 0;
+    for (j, row) in buf.chunks_exact_mut(cw).enumerate() {
+        let src = &data[base + j * st..][..cw];
+        big |= magnitudes(src);
+        row.copy_from_slice(src);
+    }
+    if big >= NARROW_BOUND {
+        return false;
+    }
+    let (n, s) = (m.div_ceil(2), m / 2);
+    let row = |j: usize| &buf[j * cw..(j + 1) * cw];
+    for j in 0..n {
+        let (c, dl, dr) = (row(j), row(n + j.saturating_sub(1)), row(n + j.min(s - 1)));
+        let out = &mut data[base + 2 * j * st..][..cw];
+        for (((o, &c), &l), &r) in out.iter_mut().zip(c).zip(dl).zip(dr) {
+            *o = c - ((l + r + 2) >> 2);
+        }
+    }
+    for j in 0..s {
+        let d = row(n + j);
+        let (head, tail) = data.split_at_mut(base + (2 * j + 1) * st);
+        let left = &head[base + 2 * j * st..][..cw];
+        let (out, after) = tail.split_at_mut(cw);
+        let right = if 2 * j + 2 < m {
+            &after[st - cw..][..cw]
+        } else {
+            left
+        };
+        for (((o, &d), &l), &r) in out.iter_mut().zip(d).zip(left).zip(right) {
+            *o = d + ((l + r) >> 1);
+        }
+    }
+    true
 }
 
 /// Apply `f` to every lane along `axis` inside `region` (extents from the origin), each
@@ -221,7 +410,6 @@ pub fn forward<T: Store>(data: &mut [T], pyr: &Pyramid) -> bool {
 /// Inverse of [`forward`], stopping `skip` levels early (the result then holds the
 /// coarse block of level `skip` at the origin); false as [`forward`].
 pub fn inverse<T: Store>(data: &mut [T], pyr: &Pyramid, skip: usize) -> bool {
-    let mut f = level_inverse(pyr.spec.scheme);
     let mut regions = vec![pyr.shape.clone()];
     for l in 0..pyr.depth() {
         let mut r = regions[l].clone();
@@ -234,7 +422,9 @@ pub fn inverse<T: Store>(data: &mut [T], pyr: &Pyramid, skip: usize) -> bool {
     }
     for l in (skip..pyr.depth()).rev() {
         for (i, &a) in pyr.spec.axes.iter().enumerate().rev() {
-            if l < pyr.axis_levels(i) && !lanes(data, &pyr.shape, &regions[l], a, &mut f) {
+            if l < pyr.axis_levels(i)
+                && !T::inverse_level(data, &pyr.shape, &regions[l], a, pyr.spec.scheme)
+            {
                 return false;
             }
         }
@@ -391,6 +581,60 @@ mod tests {
         }
         let mut big = [i32::MAX, i32::MIN, i32::MAX, i32::MIN, 0, 5];
         assert!(!forward(&mut big[..], &plan(&[6], 2, Scheme::Linear)));
+    }
+
+    /// The `i32` 5/3 inverse (lanes in `i32` where their values are below
+    /// [`NARROW_BOUND`], through `i64` elsewhere) gives the `i64` lifting's integers:
+    /// lanes along the last axis and strips across the others (narrower than, as wide
+    /// as and wider than [`STRIP`]), odd and even lengths, some lanes past the bound.
+    #[test]
+    fn narrow_5_3_inverse_is_the_wide_one_past_the_bound_too() {
+        for dims in [
+            vec![2usize],
+            vec![3],
+            vec![37],
+            vec![5, 70],
+            vec![6, 129],
+            vec![33, 7],
+            vec![3, 5, 66],
+        ] {
+            let n: usize = dims.iter().product();
+            let mut s = 11u64;
+            let wide: Vec<i64> = (0..n)
+                .map(|i| {
+                    crate::entropy::testing::lcg(&mut s);
+                    let v = (s >> 40) as i64 - (1 << 23);
+                    // a few values past the bound, most far below
+                    if i % 97 == 5 {
+                        v.signum() * (NARROW_BOUND as i64 + 12345)
+                    } else {
+                        v
+                    }
+                })
+                .collect();
+            for axis in 0..dims.len() {
+                let mut region = dims.clone();
+                region[0] = region[0].div_ceil(2).max(1).max(region[0] - 1);
+                let mut w = wide.clone();
+                let mut q: Vec<i32> = wide.iter().map(|&v| v as i32).collect();
+                assert!(i64::inverse_level(
+                    &mut w,
+                    &dims,
+                    &region,
+                    axis,
+                    Scheme::Linear
+                ));
+                let ok = i32::inverse_level(&mut q, &dims, &region, axis, Scheme::Linear);
+                let fit = w.iter().all(|&v| i32::try_from(v).is_ok());
+                assert_eq!(ok, fit, "{dims:?} axis {axis}");
+                if ok {
+                    assert!(
+                        q.iter().zip(&w).all(|(&a, &b)| a as i64 == b),
+                        "{dims:?} {axis}"
+                    );
+                }
+            }
+        }
     }
 
     /// On a smooth ramp the 5/3 details vanish (two zeros at π: it predicts lines

@@ -92,14 +92,16 @@ impl Cdf {
     fn update(&mut self, s: usize) {
         let rate = (self.count as u32 + 2).ilog2().min(self.limit as u32);
         self.count = self.count.saturating_add(1);
+        // in 16-bit lanes: the targets and every c[i] (i < 15) lie in 0..2^15, so
+        // `t − c` and the result fit an i16 and the shift floors as in i32
         for i in 0..SYMBOLS - 1 {
             let t = if i < s {
-                i as i32 + 1
+                i as i16 + 1
             } else {
-                ONE - (SYMBOLS - 1 - i) as i32
+                (ONE - (SYMBOLS - 1 - i) as i32) as i16
             };
-            let c = self.c[i] as i32;
-            self.c[i] = (c + ((t - c) >> rate)) as u16;
+            let c = self.c[i] as i16;
+            self.c[i] = c.wrapping_add(t.wrapping_sub(c) >> rate) as u16;
         }
     }
 
@@ -389,6 +391,54 @@ mod tests {
         let t: [[u16; 16]; 5] = spread(&seen, 2);
         let uniform = Cdf::uniform(LIMIT).cumulative();
         assert_eq!(t, [seen[0], uniform, seen[1], uniform, uniform]);
+    }
+
+    /// Every model's cumulative counts below the last stay in `0..2^15` and ascend, from
+    /// every start (the trained priors included) and after any symbols:
+    /// what the 16-bit update and the decoder's search rely on.
+    #[test]
+    fn cumulative_counts_ascend_below_2_15_under_updates() {
+        use super::super::prior::{MAGNITUDE, PATTERN, WEIGHT};
+        let mut starts: Vec<Cdf> = vec![Cdf::uniform(LIMIT), Cdf::uniform(14)];
+        starts.extend(
+            PATTERN
+                .iter()
+                .chain(&MAGNITUDE)
+                .map(|c| Cdf::from_cumulative(*c, WEIGHT, 7)),
+        );
+        let mut f = [0u32; SYMBOLS];
+        f[3] = 1000;
+        starts.push(Cdf::from_freqs(&f));
+        let mut x = 5u64;
+        for mut m in starts {
+            for step in 0..400 {
+                let c = m.cumulative();
+                assert!(c[..SYMBOLS - 1].iter().all(|&v| v < ONE as u16), "{c:?}");
+                assert!(c.windows(2).all(|w| w[0] <= w[1]), "{c:?}");
+                x = x
+                    .wrapping_mul(6364136223846793005)
+                    .wrapping_add(1442695040888963407);
+                // runs of one symbol, then any
+                let s = if step % 100 < 50 {
+                    15 * (step / 100 % 2)
+                } else {
+                    (x >> 60) as usize
+                };
+                let before = m;
+                m.update(s);
+                // the 32-bit update's result
+                let rate = (before.count as u32 + 2).ilog2().min(before.limit as u32);
+                for i in 0..SYMBOLS - 1 {
+                    let t = if i < s {
+                        i as i32 + 1
+                    } else {
+                        ONE - (SYMBOLS - 1 - i) as i32
+                    };
+                    let c = before.c[i] as i32;
+                    assert_eq!(m.c[i] as i32, c + ((t - c) >> rate));
+                }
+            }
+        }
     }
 
     /// The fast costs stay within 0.01 bit of the exact ones over every frequency.
