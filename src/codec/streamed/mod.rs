@@ -46,14 +46,16 @@ mod decode;
 pub use decode::{decodes_streamed, StreamedDecoder};
 
 /// Whether [`encode_streamed`] writes the file of these options and raster: a format
-/// 3.0 file of integer samples without a nodata value (no voids to fill), of 2 to 4
-/// axes and at least one level, at a rate mode that sets one base step
-/// (`--quality`, `--keep`, `--threshold`, `--bpp`). `--lossless` and `--max-error`
-/// (the integer transform, a residual of the whole raster) and `--psnr` stay tiled
-/// above the one-piece limit.
+/// 3.0 file of samples of any type without a nodata value, of 2 to 4 axes and at least
+/// one level, at a rate mode that sets one base step (`--quality`, `--keep`,
+/// `--threshold`, `--bpp`). Float samples are coded as the whole-array encoder codes
+/// them (the same finite range in the header, non-finite samples 0 in the planes, the
+/// context coder, no lossless file tried); a float raster with NaN samples (voids, found
+/// by the first pass) is not streamed ([`encode_streamed`]). `--lossless` and
+/// `--max-error` (the integer transform, a residual of the whole raster) and `--psnr`
+/// stay tiled above the one-piece limit.
 pub fn covers(shape: &Shape, opts: &EncodeOptions) -> bool {
     opts.format == Format::Blocks
-        && !shape.sample_type.is_float()
         && shape.meta.nodata.is_none()
         && !super::voids::lists_voids(&shape.meta)
         && (2..=4).contains(&shape.dims.len())
@@ -68,23 +70,44 @@ pub fn covers(shape: &Shape, opts: &EncodeOptions) -> bool {
 const BPP_SAMPLE: usize = 16;
 
 /// The one-transform file of the raster `src` hands out in slabs (module doc), written
-/// into `out`; returns the bytes written. An error for the options [`covers`] refuses.
+/// into `out`; returns the bytes written. An error for the options [`covers`] refuses
+/// and for a raster with NaN samples (voids: [`super::encode_stream`] writes its tiles,
+/// which fill them).
 pub fn encode_streamed<S: SlabSource + ?Sized, W: std::io::Write>(
     src: &mut S,
     opts: &EncodeOptions,
     out: &mut W,
 ) -> Result<u64> {
+    encode_unless_voids(src, opts, out)?.ok_or_else(|| {
+        Error::parameter(
+            "samples",
+            "NaN",
+            "a one-transform file of a raster without voids",
+        )
+    })
+}
+
+/// [`encode_streamed`], or `None` (nothing written) when the first pass finds a NaN
+/// sample (a void the stream does not fill).
+pub(in crate::codec) fn encode_unless_voids<S: SlabSource + ?Sized, W: std::io::Write>(
+    src: &mut S,
+    opts: &EncodeOptions,
+    out: &mut W,
+) -> Result<Option<u64>> {
     check_rate(opts.rate)?;
     let shape = src.shape().clone();
     if !covers(&shape, opts) {
         return Err(Error::parameter(
             "rate",
             format!("{:?}", opts.rate),
-            "a one-transform file of integer samples at --quality, --keep, --threshold or --bpp",
+            "a one-transform file without nodata at --quality, --keep, --threshold or --bpp",
         ));
     }
     let sampled = matches!(opts.rate, Rate::Keep(_) | Rate::Bpp(_));
-    let (range, sample) = tiles::first_pass(src, sampled)?;
+    let (range, nan, sample) = tiles::first_pass(src, sampled)?;
+    if nan {
+        return Ok(None);
+    }
     let span = (range.1 - range.0).max(1e-30);
     let step = match opts.rate {
         Rate::Quality(q) => quality_step(q, span),
@@ -130,7 +153,7 @@ pub fn encode_streamed<S: SlabSource + ?Sized, W: std::io::Write>(
         _ => encode_at(src, &header, &meta, rdo)?,
     };
     out.write_all(&bytes)?;
-    Ok(bytes.len() as u64)
+    Ok(Some(bytes.len() as u64))
 }
 
 /// The multiplier of the rate–distortion optimised indices of the rate mode (those the

@@ -1,0 +1,176 @@
+//! Float samples through the one-transform file (`codec::encode_streamed`) and the one
+//! layout rule: `codec::encode` (in memory, Python's entry) writes what `mra encode`
+//! writes from a file (`codec::encode_stream` at `codec::default_layout`), streamed or
+//! tiled, floats and voids included.
+
+use super::common;
+use mra::codec::{self, DecodeOptions, EncodeOptions, Format, Rate};
+use mra::io::slab::{MemorySlabs, Shape};
+use mra::io::{GeoTag, GeoValue, Raster, SampleType, Samples};
+use mra::scheme::{Boundary, Scheme};
+
+/// A smooth field with texture over `[−hi/2, hi/2]` of `ty` (floats keep the fractions).
+fn field(dims: &[usize], channels: usize, ty: SampleType, seed: u64, hi: f64) -> Raster {
+    let wave = common::Wave {
+        fx: 0.07,
+        fy: 0.04,
+        noise: 0.05,
+    };
+    let mut r = common::wave_field(dims, channels, SampleType::F64, seed, hi, wave);
+    let v: Vec<f64> = r.samples.to_f64().iter().map(|x| x - hi / 2.0).collect();
+    r.samples = Samples::from_f64(&v, ty);
+    r
+}
+
+fn opts(rate: Rate, levels: usize) -> EncodeOptions {
+    EncodeOptions {
+        rate,
+        levels,
+        boundary: Boundary::Symmetric,
+        scheme: Scheme::Cdf97,
+        format: Format::Blocks,
+        effort: codec::DEFAULT_EFFORT,
+    }
+}
+
+fn streamed(r: &Raster, o: &EncodeOptions) -> Vec<u8> {
+    let mut out = Vec::new();
+    codec::encode_streamed(&mut MemorySlabs::new(r), o, &mut out).unwrap();
+    out
+}
+
+/// What `mra encode` writes of `r` read from a file: `encode_stream` at the default
+/// layout.
+fn cli_path(r: &Raster, o: &EncodeOptions) -> Vec<u8> {
+    let tile = codec::default_layout(&Shape::of(r), o);
+    let mut out = std::io::Cursor::new(Vec::new());
+    codec::encode_stream(&mut MemorySlabs::new(r), o, &tile, &mut out).unwrap();
+    out.into_inner()
+}
+
+/// At a fixed step (`--threshold`) the streamed file of float samples is the
+/// whole-array encoder's byte for byte (the same finite range in the header, the same
+/// planes, the same indices), f32 and f64, images, colour and volumes; an infinite
+/// sample is coded as the whole-array encoder codes it.
+#[test]
+fn streamed_float_files_are_the_whole_encoders_bytes() {
+    let mut inf = field(&[300, 77], 1, SampleType::F32, 3, 2.0);
+    if let Samples::F32(v) = &mut inf.samples {
+        v[1000] = f32::INFINITY;
+        v[2000] = f32::NEG_INFINITY;
+    }
+    let cases = [
+        (field(&[300, 77], 1, SampleType::F32, 1, 2.0), 5, 0.002),
+        (field(&[131, 97], 3, SampleType::F32, 2, 1000.0), 4, 1.5),
+        (field(&[40, 33, 29], 1, SampleType::F64, 4, 7.5e4), 3, 30.0),
+        (inf, 5, 0.002),
+    ];
+    for (r, levels, t) in &cases {
+        let o = opts(Rate::Threshold(*t), *levels);
+        let whole = codec::encode(r, &o).unwrap();
+        let s = streamed(r, &o);
+        assert!(
+            s == whole,
+            "{}: {} vs {} bytes",
+            r.summary(),
+            s.len(),
+            whole.len()
+        );
+    }
+}
+
+/// The streamed decode of a float file gives the samples of the whole-array decode,
+/// and the file (with its spacing, origin and GeoTIFF tags) does not depend on the
+/// thread count; `--bpp` lands within 1% under its budget.
+#[test]
+fn streamed_float_files_decode_as_whole_and_keep_their_metadata() {
+    let dir = common::scratch_dir("streamed_float");
+    let mut img = field(&[520, 130], 1, SampleType::F32, 5, 300.0);
+    img.meta.spacing = Some(vec![30.0, 30.0]);
+    img.meta.origin = Some(vec![500000.0, 4100000.0]);
+    img.meta.geotiff = vec![
+        GeoTag {
+            tag: 33550,
+            value: GeoValue::Doubles(vec![30.0, 30.0, 0.0]),
+        },
+        GeoTag {
+            tag: 34735,
+            value: GeoValue::Shorts(vec![1, 1, 0, 1, 1024, 0, 1, 1]),
+        },
+    ];
+    img.meta.units = Some("m".into());
+    let vol = field(&[48, 40, 36], 1, SampleType::F64, 6, 1.0);
+    for (r, rate) in [
+        (&img, Rate::Bpp(1.0)),
+        (&img, Rate::Quality(60.0)),
+        (&vol, Rate::Keep(4.0)),
+        (&vol, Rate::Bpp(0.5)),
+    ] {
+        let o = opts(rate, 4);
+        let on = |threads: usize| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap()
+                .install(|| streamed(r, &o))
+        };
+        let s = on(1);
+        assert!(s == on(2), "{} {rate:?}", r.summary());
+        if let Rate::Bpp(b) = rate {
+            let got = s.len() as f64 * 8.0 / r.positions() as f64;
+            assert!(got <= b && got >= 0.99 * b, "{rate:?}: {got} bpp");
+        }
+        let whole = codec::decode(&s, &DecodeOptions::default()).unwrap().raster;
+        assert_eq!(whole.sample_type(), r.sample_type());
+        assert_eq!(whole.meta, r.meta, "{} {rate:?}", r.summary());
+        let path = dir.join("f.mra");
+        std::fs::write(&path, &s).unwrap();
+        let mut d = codec::StreamedDecoder::open(&path).unwrap();
+        let mut got: Vec<f64> = Vec::new();
+        while let Some(slab) = d.next_slab().unwrap() {
+            got.extend(slab.to_f64());
+        }
+        assert_eq!(got, whole.samples.to_f64(), "{} {rate:?}", r.summary());
+    }
+}
+
+/// One rule for every caller, at the real one-piece limit (a 4097×4097 image, just
+/// over 2^24 positions): `codec::encode` writes the bytes of the CLI's path, one
+/// transform for integer and float samples alike; a float raster with NaN voids is
+/// written as the default tiles by both (the stream does not fill voids), and its
+/// voids decode as NaN.
+#[test]
+fn in_memory_and_cli_encodes_are_one_file_over_the_limit() {
+    let n = 4097;
+    let o = opts(Rate::Quality(40.0), 5);
+    let mut f = field(&[n, n], 1, SampleType::F32, 7, 100.0);
+    let ints = Raster::new(
+        vec![n, n],
+        1,
+        Samples::from_f64(
+            &f.samples.to_f64().iter().map(|x| x + 50.0).collect::<Vec<_>>(),
+            SampleType::U16,
+        ),
+        f.kind,
+    )
+    .unwrap();
+    for r in [&ints, &f] {
+        let mem = codec::encode(r, &o).unwrap();
+        assert!(mem == cli_path(r, &o), "{}", r.summary());
+        let h = codec::header_of(&mem).unwrap();
+        assert!(!h.is_tiled(), "{}: one transform", r.summary());
+    }
+    let holes = [5usize, n * 2000 + 17, n * n - 3];
+    if let Samples::F32(v) = &mut f.samples {
+        for &i in &holes {
+            v[i] = f32::NAN;
+        }
+    }
+    let mem = codec::encode(&f, &o).unwrap();
+    assert!(mem == cli_path(&f, &o));
+    assert!(codec::header_of(&mem).unwrap().is_tiled());
+    let d = codec::decode(&mem, &DecodeOptions::default()).unwrap().raster;
+    let v = d.samples.to_f64();
+    assert!(holes.iter().all(|&i| v[i].is_nan()));
+    assert_eq!(v.iter().filter(|x| x.is_nan()).count(), holes.len());
+}
