@@ -226,21 +226,42 @@ pub(crate) fn encode_slabs<S: SlabSource + ?Sized, W: Write + Seek>(
     Ok(at - start)
 }
 
+/// What the first pass of a one-transform file learns of its raster.
+pub(in crate::codec) struct FirstPass {
+    /// The least and greatest finite sample, `(0, 0)` when there is none.
+    pub(in crate::codec) range: (f64, f64),
+    /// The default PSNR peak of the whole raster (of its least and greatest non-NaN
+    /// samples, as the tiled `--psnr` takes it).
+    pub(in crate::codec) peak: f64,
+    /// Whether a sample is NaN (a void).
+    pub(in crate::codec) nan: bool,
+    /// The sampled tiles (voids filled).
+    pub(in crate::codec) sample: Vec<Raster>,
+}
+
 /// The first pass of a one-transform file over the raster of `src`
-/// ([`crate::codec::streamed`]): the least and greatest finite sample, whether a
-/// sample is NaN (a void) and, when `sampled`, every ⌈n/64⌉-th tile of the default
-/// grid (the whole raster when that is one tile), as [`encode_slabs`] measures them.
+/// ([`crate::codec::streamed`], [`FirstPass`]): when `sampled`, every ⌈n/64⌉-th tile
+/// of the default grid (the whole raster when that is one tile) is kept, as
+/// [`encode_slabs`] measures them.
 pub(in crate::codec) fn first_pass<S: SlabSource + ?Sized>(
     src: &mut S,
     sampled: bool,
-) -> Result<((f64, f64), bool, Vec<Raster>)> {
+) -> Result<FirstPass> {
     let shape = src.shape().clone();
     let grid = Grid::new(
         &shape.dims,
         &super::default_tile(&shape.dims, shape.channels),
     )?;
     let (ranges, sample) = measure_slabs(src, &grid, &shape, sampled)?;
-    Ok((ranges.finite(), ranges.nan, sample))
+    let (a, b) = ranges.all.unwrap_or((0.0, 0.0));
+    let peak =
+        crate::metrics::skimage_data_range(Samples::from_f64(&[a, b], shape.sample_type).view());
+    Ok(FirstPass {
+        range: ranges.finite(),
+        peak,
+        nan: ranges.nan,
+        sample,
+    })
 }
 
 /// The rows of the raster in tile row `g0` of `grid`.
