@@ -135,46 +135,56 @@ fn streamed_float_files_decode_as_whole_and_keep_their_metadata() {
     }
 }
 
-/// One rule for every caller, at the real one-piece limit (a 4097×4097 image, just
-/// over 2^24 positions): `codec::encode` writes the bytes of the CLI's path, one
-/// transform for integer and float samples alike; a float raster with NaN voids is
-/// written as the default tiles by both (the stream does not fill voids), and its
-/// voids decode as NaN.
+/// One rule for every caller, over the real one-piece limit (a 4736² RGB u8 image:
+/// 2^24 positions and 2^26 samples exceeded): `codec::encode` writes the bytes of the
+/// CLI's path, one transform streamed.
 #[test]
 fn in_memory_and_cli_encodes_are_one_file_over_the_limit() {
-    let n = 4097;
+    let n = 4736;
+    let r = common::wave_field(
+        &[n, n],
+        3,
+        SampleType::U8,
+        7,
+        255.0,
+        common::Wave {
+            fx: 0.02,
+            fy: 0.01,
+            noise: 0.04,
+        },
+    );
     let o = opts(Rate::Quality(40.0), 5);
-    let mut f = field(&[n, n], 1, SampleType::F32, 7, 100.0);
-    let ints = Raster::new(
-        vec![n, n],
-        1,
-        Samples::from_f64(
-            &f.samples.to_f64().iter().map(|x| x + 50.0).collect::<Vec<_>>(),
-            SampleType::U16,
-        ),
-        f.kind,
-    )
-    .unwrap();
-    for r in [&ints, &f] {
-        let mem = codec::encode(r, &o).unwrap();
-        assert!(mem == cli_path(r, &o), "{}", r.summary());
-        let h = codec::header_of(&mem).unwrap();
-        assert!(!h.is_tiled(), "{}: one transform", r.summary());
-    }
-    let holes = [5usize, n * 2000 + 17, n * n - 3];
+    assert!(codec::streams(&Shape::of(&r), &o));
+    let mem = codec::encode(&r, &o).unwrap();
+    assert!(mem == cli_path(&r, &o));
+    assert!(!codec::header_of(&mem).unwrap().is_tiled());
+}
+
+/// Under the limit too `codec::encode` is the CLI's path (one piece, the whole-array
+/// encoder), a float raster with NaN voids included (filled, listed, marked again);
+/// the stream itself refuses a raster with NaN samples (it does not fill voids:
+/// over the limit `encode_stream` writes the default tiles instead), writing nothing.
+#[test]
+fn in_memory_and_cli_encodes_agree_with_voids() {
+    let mut f = field(&[300, 210], 1, SampleType::F32, 8, 100.0);
+    let holes = [5usize, 300 * 100 + 17, 300 * 210 - 3];
     if let Samples::F32(v) = &mut f.samples {
         for &i in &holes {
             v[i] = f32::NAN;
         }
     }
-    let mem = codec::encode(&f, &o).unwrap();
-    assert!(mem == cli_path(&f, &o));
-    let h = codec::header_of(&mem).unwrap();
-    assert!(h.is_tiled(), "{h:?}");
-    let d = codec::decode(&mem, &DecodeOptions::default()).unwrap().raster;
-    let v = d.samples.to_f64();
-    assert!(holes.iter().all(|&i| v[i].is_nan()));
-    assert_eq!(v.iter().filter(|x| x.is_nan()).count(), holes.len());
+    for rate in [Rate::Quality(40.0), Rate::Bpp(1.0)] {
+        let o = opts(rate, 4);
+        let mem = codec::encode(&f, &o).unwrap();
+        assert!(mem == cli_path(&f, &o), "{rate:?}");
+        let d = codec::decode(&mem, &DecodeOptions::default()).unwrap().raster;
+        let v = d.samples.to_f64();
+        assert!(holes.iter().all(|&i| v[i].is_nan()));
+        assert_eq!(v.iter().filter(|x| x.is_nan()).count(), holes.len());
+        let mut out = Vec::new();
+        assert!(codec::encode_streamed(&mut MemorySlabs::new(&f), &o, &mut out).is_err());
+        assert!(out.is_empty());
+    }
 }
 
 /// `--psnr` of a one-transform file lands within 0.1 dB over its target (the step from
