@@ -22,20 +22,14 @@ pub fn encode(r: &Raster, opts: &EncodeOptions) -> Result<Vec<u8>> {
 /// [`encode`] of a borrowed raster (samples read where they are, e.g. in a NumPy array).
 pub fn encode_view(r: &RasterView<'_>, opts: &EncodeOptions) -> Result<Vec<u8>> {
     check_count(r)?;
-    let shape = Shape::of_view(r);
-    let tile = default_layout(&shape, opts);
-    if tile == r.dims && streams(&shape, opts) {
-        // the raster as a slab source, as `mra encode` reads a file
-        let mut out = std::io::Cursor::new(Vec::new());
-        encode_stream(&mut MemorySlabs::of_view(*r), opts, &tile, &mut out)?;
-        return Ok(out.into_inner());
-    }
-    encode_tiled_view(r, opts, &tile)
+    encode_tiled_view(r, opts, &default_layout(&Shape::of_view(r), opts))
 }
 
 /// [`encode`] with the raster cut into tiles of extents `tile` (slowest axis first,
 /// each from 1 to the axis extent; equal to the extents: one tile, a format 2.0 file),
 /// each coded on its own at one base step for the whole raster (formats/MRA.md §14).
+/// One tile over the one-piece limit is the streamed file where [`streams`] covers the
+/// raster, as [`encode_stream`] writes it.
 pub fn encode_tiled(r: &Raster, opts: &EncodeOptions, tile: &[usize]) -> Result<Vec<u8>> {
     encode_tiled_view(&r.view(), opts, tile)
 }
@@ -47,6 +41,12 @@ pub fn encode_tiled_view(
     tile: &[usize],
 ) -> Result<Vec<u8>> {
     check_count(r)?;
+    if tile == r.dims && streams(&Shape::of_view(r), opts) {
+        // the raster as a slab source, as `mra encode` reads a file
+        let mut out = std::io::Cursor::new(Vec::new());
+        encode_stream(&mut MemorySlabs::of_view(*r), opts, tile, &mut out)?;
+        return Ok(out.into_inner());
+    }
     if tile != r.dims {
         // voids are filled tile by tile (each tile's file lists its own)
         return super::tiles::encode_tiled(r, opts, tile);
