@@ -61,7 +61,7 @@ pub fn encode_tiled_view(
 /// slab at a time ([`super::encode_streamed`], format 3.0) when it is given the whole
 /// raster as its tile: a raster over the one-piece limit
 /// ([`super::tiles::default_tile`] cuts it) at options the stream covers (lossy at one
-/// base step, no nodata value; [`super::streamed::covers`]). A float raster with NaN
+/// base step or `--psnr`, no nodata value; [`super::streamed::covers`]). A float raster with NaN
 /// samples (voids) is then written as [`super::tiles::default_tile`]'s tiles, which fill
 /// them (found by the stream's first pass).
 pub fn streams(shape: &Shape, opts: &EncodeOptions) -> bool {
@@ -69,12 +69,12 @@ pub fn streams(shape: &Shape, opts: &EncodeOptions) -> bool {
         && super::streamed::covers(shape, opts)
 }
 
-/// The default tile extents of [`encode_stream`] for a raster of `shape` read in slabs
-/// at `opts`: the whole raster (one transform) when it is one piece or when [`streams`]
+/// The default tile extents of a raster of `shape` at `opts`, read in slabs
+/// ([`encode_stream`], `mra encode`) or in memory ([`encode`], Python): the whole raster (one transform) when it is one piece or when [`streams`]
 /// covers it and it has 2 or 3 axes (images and volumes: the axes
 /// [`super::StreamedDecoder`] decodes in bounded memory), else
 /// [`super::tiles::default_tile`]'s grid (the modes the stream does not cover:
-/// `--lossless`, `--max-error`, `--psnr`, a nodata value, format 2; and 4 axes).
+/// `--lossless`, `--max-error`, a nodata value, format 2; and 4 axes).
 pub fn default_layout(shape: &Shape, opts: &EncodeOptions) -> Vec<usize> {
     if streams(shape, opts) && shape.dims.len() <= 3 {
         shape.dims.clone()
