@@ -258,7 +258,7 @@ fn encode_whole(
     let r = read_input(&a.input, read_opts)?;
     let tile = match a.tile.as_deref() {
         None if a.blocks => r.dims.clone(),
-        None => codec::default_tile(&r.dims, r.channels),
+        None => codec::default_layout(&crate::io::slab::Shape::of(&r), opts),
         Some(s) => tile_extents(s, &r.dims)?,
     };
     let t = std::time::Instant::now();

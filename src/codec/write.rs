@@ -4,14 +4,17 @@
 use super::encode::encode_filled;
 use super::options::EncodeOptions;
 use super::voids::with_voids_filled;
-use crate::io::slab::{Shape, SlabSource};
+use crate::io::slab::{MemorySlabs, Shape, SlabSource};
 use crate::io::{Raster, RasterView};
 use crate::{Error, Result};
 
 /// Encode a raster into the bytes of an `.mra` file. Void samples (NaN, `meta.nodata`)
 /// are filled by pull-push before the transform and listed in the metadata, so that the
-/// decoder marks them again ([`crate::io::nodata`]). Large rasters are cut into the
-/// tiles of [`super::tiles::default_tile`] ([`encode_tiled`]).
+/// decoder marks them again ([`crate::io::nodata`]). The layout is [`default_layout`]'s,
+/// as [`encode_stream`] writes it for `mra encode`: over the one-piece limit one
+/// transform streamed a slab at a time where [`streams`] covers the raster, else the
+/// tiles of [`super::tiles::default_tile`] ([`encode_tiled`]); so a raster gives the same
+/// file whether it is encoded in memory (Python) or from a file.
 pub fn encode(r: &Raster, opts: &EncodeOptions) -> Result<Vec<u8>> {
     encode_view(&r.view(), opts)
 }
@@ -19,12 +22,14 @@ pub fn encode(r: &Raster, opts: &EncodeOptions) -> Result<Vec<u8>> {
 /// [`encode`] of a borrowed raster (samples read where they are, e.g. in a NumPy array).
 pub fn encode_view(r: &RasterView<'_>, opts: &EncodeOptions) -> Result<Vec<u8>> {
     check_count(r)?;
-    encode_tiled_view(r, opts, &super::tiles::default_tile(r.dims, r.channels))
+    encode_tiled_view(r, opts, &default_layout(&Shape::of_view(r), opts))
 }
 
 /// [`encode`] with the raster cut into tiles of extents `tile` (slowest axis first,
 /// each from 1 to the axis extent; equal to the extents: one tile, a format 2.0 file),
 /// each coded on its own at one base step for the whole raster (formats/MRA.md §14).
+/// One tile over the one-piece limit is the streamed file where [`streams`] covers the
+/// raster, as [`encode_stream`] writes it.
 pub fn encode_tiled(r: &Raster, opts: &EncodeOptions, tile: &[usize]) -> Result<Vec<u8>> {
     encode_tiled_view(&r.view(), opts, tile)
 }
@@ -36,6 +41,12 @@ pub fn encode_tiled_view(
     tile: &[usize],
 ) -> Result<Vec<u8>> {
     check_count(r)?;
+    if tile == r.dims && streams(&Shape::of_view(r), opts) {
+        // the raster as a slab source, as `mra encode` reads a file
+        let mut out = std::io::Cursor::new(Vec::new());
+        encode_stream(&mut MemorySlabs::of_view(*r), opts, tile, &mut out)?;
+        return Ok(out.into_inner());
+    }
     if tile != r.dims {
         // voids are filled tile by tile (each tile's file lists its own)
         return super::tiles::encode_tiled(r, opts, tile);
@@ -50,18 +61,20 @@ pub fn encode_tiled_view(
 /// slab at a time ([`super::encode_streamed`], format 3.0) when it is given the whole
 /// raster as its tile: a raster over the one-piece limit
 /// ([`super::tiles::default_tile`] cuts it) at options the stream covers (lossy at one
-/// base step, integer samples without voids).
+/// base step or `--psnr`, no nodata value; [`super::streamed::covers`]). A float raster with NaN
+/// samples (voids) is then written as [`super::tiles::default_tile`]'s tiles, which fill
+/// them (found by the stream's first pass).
 pub fn streams(shape: &Shape, opts: &EncodeOptions) -> bool {
     super::tiles::default_tile(&shape.dims, shape.channels) != shape.dims
         && super::streamed::covers(shape, opts)
 }
 
-/// The default tile extents of [`encode_stream`] for a raster of `shape` read in slabs
-/// at `opts`: the whole raster (one transform) when it is one piece or when [`streams`]
+/// The default tile extents of a raster of `shape` at `opts`, read in slabs
+/// ([`encode_stream`], `mra encode`) or in memory ([`encode`], Python): the whole raster (one transform) when it is one piece or when [`streams`]
 /// covers it and it has 2 or 3 axes (images and volumes: the axes
 /// [`super::StreamedDecoder`] decodes in bounded memory), else
 /// [`super::tiles::default_tile`]'s grid (the modes the stream does not cover:
-/// `--lossless`, `--max-error`, `--psnr`, floats, voids, format 2; and 4 axes).
+/// `--lossless`, `--max-error`, a nodata value, format 2; and 4 axes).
 pub fn default_layout(shape: &Shape, opts: &EncodeOptions) -> Vec<usize> {
     if streams(shape, opts) && shape.dims.len() <= 3 {
         shape.dims.clone()
@@ -97,7 +110,12 @@ pub fn encode_stream<S: SlabSource + ?Sized, W: std::io::Write + std::io::Seek>(
 ) -> Result<u64> {
     let shape = src.shape().clone();
     if tile == shape.dims.as_slice() && streams(&shape, opts) {
-        return super::streamed::encode_streamed(src, opts, out);
+        if let Some(n) = super::streamed::encode_unless_voids(src, opts, out)? {
+            return Ok(n);
+        }
+        // NaN voids: the tiles fill them
+        let tile = super::tiles::default_tile(&shape.dims, shape.channels);
+        return super::tiles::encode_slabs(src, opts, &tile, out);
     }
     if tile != shape.dims.as_slice() {
         return super::tiles::encode_slabs(src, opts, tile, out);

@@ -42,6 +42,7 @@ mod solid_cli;
 mod stdio;
 mod stream;
 mod streamed;
+mod streamed_float;
 mod subdivide;
 mod surface;
 mod tensor;

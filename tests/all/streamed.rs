@@ -166,8 +166,8 @@ fn a_truncated_streamed_file_is_a_one_line_error() {
 }
 
 /// Over the one-piece limit a one-tile encode (the default layout there, or `--tile
-/// whole`) streams for the lossy modes of one step and integer samples; lossless,
-/// `--max-error`, `--psnr`, floats, format 2 and small rasters do not.
+/// whole`) streams for the lossy modes of one step and `--psnr`, integer or float
+/// samples; lossless, `--max-error`, a nodata value, format 2 and small rasters do not.
 #[test]
 fn a_whole_tile_streams_over_the_one_piece_limit() {
     let small = field(&[4, 4], 1, SampleType::U16, 1, 100.0);
@@ -178,18 +178,22 @@ fn a_whole_tile_streams_over_the_one_piece_limit() {
     assert!(codec::streams(&big, &o(Rate::Quality(50.0))));
     assert!(!codec::streams(&big, &o(Rate::Lossless)));
     assert!(!codec::streams(&big, &o(Rate::MaxError(2.0))));
-    assert!(!codec::streams(&big, &o(Rate::Psnr(40.0))));
+    assert!(codec::streams(&big, &o(Rate::Psnr(40.0))));
     assert!(!codec::streams(&Shape::of(&small), &o(Rate::Bpp(1.0))));
     let mut float = big.clone();
     float.sample_type = SampleType::F32;
-    assert!(!codec::streams(&float, &o(Rate::Bpp(1.0))));
+    assert!(codec::streams(&float, &o(Rate::Bpp(1.0))));
+    let mut nodata = big.clone();
+    nodata.meta.nodata = Some(0.0);
+    assert!(!codec::streams(&nodata, &o(Rate::Bpp(1.0))));
     // the default layout: one transform where the stream covers, else the tiles
     assert_eq!(codec::default_layout(&big, &o(Rate::Bpp(1.0))), big.dims);
     assert_eq!(codec::default_layout(&big, &o(Rate::Keep(5.0))), big.dims);
     let tiles = codec::default_tile(&big.dims, 1);
     assert_ne!(tiles, big.dims);
     assert_eq!(codec::default_layout(&big, &o(Rate::Lossless)), tiles);
-    assert_eq!(codec::default_layout(&float, &o(Rate::Bpp(1.0))), tiles);
+    assert_eq!(codec::default_layout(&float, &o(Rate::Bpp(1.0))), float.dims);
+    assert_eq!(codec::default_layout(&nodata, &o(Rate::Bpp(1.0))), tiles);
     let mut two = o(Rate::Bpp(1.0));
     two.format = Format::Bands;
     assert_eq!(codec::default_layout(&big, &two), tiles);

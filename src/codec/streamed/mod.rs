@@ -12,8 +12,9 @@
 //! Memory: the stream's few rows per level, the quantized rows of each band's open
 //! stripe (and of a parent's rows until its children's stripes are coded), and the
 //! coded blocks. The base step comes from a first pass ([`super::tiles::first_pass`]):
-//! the range, and for `--keep` and `--bpp` a sample of tiles of the default grid; `--bpp`
-//! then codes the whole stream once or a few times to land on its budget ([`fit_bpp`]).
+//! the range, and for `--keep`, `--bpp` and `--psnr` a sample of tiles of the default
+//! grid; `--bpp` then codes the whole stream once or a few times to land on its budget
+//! ([`fit_bpp`]), `--psnr` to land on its target ([`psnr::fit_psnr`]).
 //! Rate–distortion optimised indices: a child is coded with its parent's final indices
 //! as context, so a parent band's indices are chosen a stripe at a time as soon as the
 //! stripe is complete, coded without its own parent ([`Coder::settled`]); waiting for
@@ -43,24 +44,32 @@ use std::collections::BTreeMap;
 use std::ops::Range;
 
 mod decode;
+mod psnr;
 pub use decode::{decodes_streamed, StreamedDecoder};
 
 /// Whether [`encode_streamed`] writes the file of these options and raster: a format
-/// 3.0 file of integer samples without a nodata value (no voids to fill), of 2 to 4
-/// axes and at least one level, at a rate mode that sets one base step
-/// (`--quality`, `--keep`, `--threshold`, `--bpp`). `--lossless` and `--max-error`
-/// (the integer transform, a residual of the whole raster) and `--psnr` stay tiled
+/// 3.0 file of samples of any type without a nodata value, of 2 to 4 axes and at least
+/// one level, at a rate mode that sets one base step (`--quality`, `--keep`,
+/// `--threshold`, `--bpp`, `--psnr`). Float samples are coded as the whole-array encoder codes
+/// them (the same finite range in the header, non-finite samples 0 in the planes, the
+/// context coder, no lossless file tried); a float raster with NaN samples (voids, found
+/// by the first pass) is not streamed ([`encode_streamed`]). `--lossless` and
+/// `--max-error` (the integer transform, a residual of the whole raster) stay tiled
 /// above the one-piece limit.
 pub fn covers(shape: &Shape, opts: &EncodeOptions) -> bool {
     opts.format == Format::Blocks
-        && !shape.sample_type.is_float()
         && shape.meta.nodata.is_none()
         && !super::voids::lists_voids(&shape.meta)
         && (2..=4).contains(&shape.dims.len())
         && opts.levels > 0
         && matches!(
             opts.rate,
-            Rate::Quality(_) | Rate::Keep(_) | Rate::Threshold(_) | Rate::Bpp(_)
+            Rate::Quality(_)
+                | Rate::Keep(_)
+                | Rate::Threshold(_)
+                | Rate::Bpp(_)
+                | Rate::Psnr(_)
+                | Rate::PsnrRange(..)
         )
 }
 
@@ -68,23 +77,48 @@ pub fn covers(shape: &Shape, opts: &EncodeOptions) -> bool {
 const BPP_SAMPLE: usize = 16;
 
 /// The one-transform file of the raster `src` hands out in slabs (module doc), written
-/// into `out`; returns the bytes written. An error for the options [`covers`] refuses.
+/// into `out`; returns the bytes written. An error for the options [`covers`] refuses
+/// and for a raster with NaN samples (voids: [`super::encode_stream`] writes its tiles,
+/// which fill them).
 pub fn encode_streamed<S: SlabSource + ?Sized, W: std::io::Write>(
     src: &mut S,
     opts: &EncodeOptions,
     out: &mut W,
 ) -> Result<u64> {
+    encode_unless_voids(src, opts, out)?.ok_or_else(|| {
+        Error::parameter(
+            "samples",
+            "NaN",
+            "a one-transform file of a raster without voids",
+        )
+    })
+}
+
+/// [`encode_streamed`], or `None` (nothing written) when the first pass finds a NaN
+/// sample (a void the stream does not fill).
+pub(in crate::codec) fn encode_unless_voids<S: SlabSource + ?Sized, W: std::io::Write>(
+    src: &mut S,
+    opts: &EncodeOptions,
+    out: &mut W,
+) -> Result<Option<u64>> {
     check_rate(opts.rate)?;
     let shape = src.shape().clone();
     if !covers(&shape, opts) {
         return Err(Error::parameter(
             "rate",
             format!("{:?}", opts.rate),
-            "a one-transform file of integer samples at --quality, --keep, --threshold or --bpp",
+            "a one-transform file without nodata at --quality, --keep, --threshold, --bpp or --psnr",
         ));
     }
-    let sampled = matches!(opts.rate, Rate::Keep(_) | Rate::Bpp(_));
-    let (range, sample) = tiles::first_pass(src, sampled)?;
+    let sampled = matches!(
+        opts.rate,
+        Rate::Keep(_) | Rate::Bpp(_) | Rate::Psnr(_) | Rate::PsnrRange(..)
+    );
+    let first = tiles::first_pass(src, sampled)?;
+    if first.nan {
+        return Ok(None);
+    }
+    let (range, sample) = (first.range, first.sample);
     let span = (range.1 - range.0).max(1e-30);
     let step = match opts.rate {
         Rate::Quality(q) => quality_step(q, span),
@@ -97,7 +131,7 @@ pub fn encode_streamed<S: SlabSource + ?Sized, W: std::io::Write>(
                 .concat();
             keep_step(&mut w, k, span)
         }
-        Rate::Bpp(_) => 0.0,
+        Rate::Bpp(_) | Rate::Psnr(_) | Rate::PsnrRange(..) => 0.0,
         _ => unreachable!("refused by covers"),
     };
     let colour = lossy_colour(shape.channels);
@@ -127,17 +161,30 @@ pub fn encode_streamed<S: SlabSource + ?Sized, W: std::io::Write>(
             let (step, slope) = bpp_step(sample, opts, span, b)?;
             fit_bpp(src, &mut header, &meta, rdo, b, step, slope)?
         }
+        Rate::Psnr(db) | Rate::PsnrRange(db, _) => {
+            let peak = match opts.rate {
+                Rate::PsnrRange(_, p) => p,
+                _ => first.peak,
+            };
+            let step = psnr::psnr_step(&sample, opts, span, peak, db)?;
+            drop(sample);
+            psnr::fit_psnr(src, &mut header, &meta, rdo, (db, peak), step)?
+        }
         _ => encode_at(src, &header, &meta, rdo)?,
     };
     out.write_all(&bytes)?;
-    Ok(bytes.len() as u64)
+    Ok(Some(bytes.len() as u64))
 }
 
 /// The multiplier of the rate–distortion optimised indices of the rate mode (those the
-/// whole-array encoder optimises: `--quality`, `--bpp`), given to the detail bands
-/// ([`Coder`]).
+/// whole-array encoder optimises: `--quality`, `--bpp`, `--psnr`), given to the detail
+/// bands ([`Coder`]).
 fn rdo_of(rate: Rate) -> Option<f32> {
-    matches!(rate, Rate::Quality(_) | Rate::Bpp(_)).then_some(quantize::LAMBDA)
+    matches!(
+        rate,
+        Rate::Quality(_) | Rate::Bpp(_) | Rate::Psnr(_) | Rate::PsnrRange(..)
+    )
+    .then_some(quantize::LAMBDA)
 }
 
 /// Most passes of the whole stream [`fit_bpp`] codes.

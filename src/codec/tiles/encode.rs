@@ -33,11 +33,12 @@ use rayon::prelude::*;
 use std::io::{Seek, SeekFrom, Write};
 
 /// The range of finite samples and the range of all non-NaN samples (for the PSNR's
-/// default peak), merged slab by slab.
+/// default peak), and whether a sample is NaN (a void), merged slab by slab.
 #[derive(Clone, Copy)]
 struct Ranges {
     finite: (f64, f64),
     all: Option<(f64, f64)>,
+    nan: bool,
 }
 
 impl Ranges {
@@ -45,6 +46,7 @@ impl Ranges {
         Ranges {
             finite: (f64::INFINITY, f64::NEG_INFINITY),
             all: None,
+            nan: false,
         }
     }
 
@@ -70,6 +72,7 @@ impl Ranges {
             (Some(a), Some(b)) => Some((a.0.min(b.0), a.1.max(b.1))),
             (a, b) => a.or(b),
         };
+        self.nan |= o.nan;
     }
 
     fn add_range(&mut self, s: &Samples, r: std::ops::Range<usize>) {
@@ -84,6 +87,7 @@ impl Ranges {
                     self.merge(&Ranges {
                         finite: (lo as f64, hi as f64),
                         all: Some((lo as f64, hi as f64)),
+                        nan: false,
                     });
                 }
                 return;
@@ -112,6 +116,7 @@ impl Ranges {
             if x > hi {
                 hi = x;
             }
+            self.nan |= x.is_nan();
         }
         self.finite = (flo, fhi);
         self.all = (lo <= hi).then_some((lo, hi));
@@ -221,21 +226,42 @@ pub(crate) fn encode_slabs<S: SlabSource + ?Sized, W: Write + Seek>(
     Ok(at - start)
 }
 
+/// What the first pass of a one-transform file learns of its raster.
+pub(in crate::codec) struct FirstPass {
+    /// The least and greatest finite sample, `(0, 0)` when there is none.
+    pub(in crate::codec) range: (f64, f64),
+    /// The default PSNR peak of the whole raster (of its least and greatest non-NaN
+    /// samples, as the tiled `--psnr` takes it).
+    pub(in crate::codec) peak: f64,
+    /// Whether a sample is NaN (a void).
+    pub(in crate::codec) nan: bool,
+    /// The sampled tiles (voids filled).
+    pub(in crate::codec) sample: Vec<Raster>,
+}
+
 /// The first pass of a one-transform file over the raster of `src`
-/// ([`crate::codec::streamed`]): the least and greatest finite sample and, when
-/// `sampled`, every ⌈n/64⌉-th tile of the default grid (the whole raster when that is
-/// one tile), as [`encode_slabs`] measures them.
+/// ([`crate::codec::streamed`], [`FirstPass`]): when `sampled`, every ⌈n/64⌉-th tile
+/// of the default grid (the whole raster when that is one tile) is kept, as
+/// [`encode_slabs`] measures them.
 pub(in crate::codec) fn first_pass<S: SlabSource + ?Sized>(
     src: &mut S,
     sampled: bool,
-) -> Result<((f64, f64), Vec<Raster>)> {
+) -> Result<FirstPass> {
     let shape = src.shape().clone();
     let grid = Grid::new(
         &shape.dims,
         &super::default_tile(&shape.dims, shape.channels),
     )?;
     let (ranges, sample) = measure_slabs(src, &grid, &shape, sampled)?;
-    Ok((ranges.finite(), sample))
+    let (a, b) = ranges.all.unwrap_or((0.0, 0.0));
+    let peak =
+        crate::metrics::skimage_data_range(Samples::from_f64(&[a, b], shape.sample_type).view());
+    Ok(FirstPass {
+        range: ranges.finite(),
+        peak,
+        nan: ranges.nan,
+        sample,
+    })
 }
 
 /// The rows of the raster in tile row `g0` of `grid`.
