@@ -42,6 +42,7 @@ mod solid_cli;
 mod stdio;
 mod stream;
 mod streamed;
+mod streamed_lossless;
 mod subdivide;
 mod surface;
 mod tensor;

@@ -23,7 +23,7 @@ use std::ops::Range;
 pub fn decodes_streamed(h: &Header) -> bool {
     !h.is_tiled()
         && h.version.has_blocks()
-        && h.mode == Mode::Lossy
+        && (h.mode == Mode::Lossy || super::lossless::decode::decodes(h))
         && !h.voids
         && (2..=3).contains(&h.dims.len())
         && h.levels > 0
@@ -85,7 +85,12 @@ impl StreamedDecoder {
         p: crate::codec::container::Parsed,
     ) -> Result<std::result::Result<StreamedDecoder, crate::codec::container::Parsed>> {
         let h = &p.header;
-        if !h.version.has_blocks() || h.mode != Mode::Lossy || h.voids || h.dims.len() < 2 {
+        let lossless = super::lossless::decode::decodes(h);
+        if !h.version.has_blocks()
+            || !(h.mode == Mode::Lossy || lossless)
+            || h.voids
+            || h.dims.len() < 2
+        {
             return Ok(Err(p));
         }
         let shape = Shape {
@@ -95,6 +100,15 @@ impl StreamedDecoder {
             kind: h.kind,
             meta: p.meta.clone(),
         };
+        if lossless {
+            return super::lossless::decode::start(p).map(|rx| {
+                Ok(StreamedDecoder {
+                    shape,
+                    rx,
+                    done: false,
+                })
+            });
+        }
         // the plan is checked here, before the thread starts
         let sp = StreamPlan::new(&h.dims, &p.plan.pyr.spec)?;
         if sp.bands() != p.plan.bands.as_slice() {
@@ -190,10 +204,10 @@ fn synthesize(
 
 /// The first error of a channel's band source, read by the loop that pulls its rows.
 #[derive(Clone, Default)]
-struct Failed(std::sync::Arc<std::sync::Mutex<Option<Error>>>);
+pub(super) struct Failed(std::sync::Arc<std::sync::Mutex<Option<Error>>>);
 
 impl Failed {
-    fn is_set(&self) -> bool {
+    pub(super) fn is_set(&self) -> bool {
         self.0.lock().map_or(true, |e| e.is_some())
     }
 
@@ -203,7 +217,7 @@ impl Failed {
         }
     }
 
-    fn take(&self) -> Option<Error> {
+    pub(super) fn take(&self) -> Option<Error> {
         self.0.lock().ok().and_then(|mut g| g.take())
     }
 }
@@ -223,7 +237,7 @@ enum Values {
 
 /// The band rows of one channel of a file, decoded a batch of stripes of code-blocks
 /// at a time (the stripes of a batch in parallel, [`entropy::codeblocks::decode_blocks_into`]).
-struct BandSource<'a> {
+pub(super) struct BandSource<'a> {
     p: &'a crate::codec::container::Parsed,
     c: usize,
     grids: Vec<Grid>,
@@ -244,7 +258,7 @@ struct BandSource<'a> {
 }
 
 impl<'a> BandSource<'a> {
-    fn new(
+    pub(super) fn new(
         p: &'a crate::codec::container::Parsed,
         c: usize,
         err: Failed,
@@ -338,6 +352,28 @@ impl<'a> BandSource<'a> {
         }
     }
 
+    /// Row `r` of band `j` as indices (a lossless file: the transform's values) into
+    /// `out` (zeros after an error).
+    pub(super) fn fill_indices(&mut self, j: usize, r: usize, out: &mut [i64]) {
+        if self.err.is_set() || self.sets[j].is_none() {
+            out.fill(0);
+            return;
+        }
+        let b = r / self.batch_rows[j];
+        if let Err(e) = self.ensure(j, b) {
+            self.err.set(e);
+            out.fill(0);
+            return;
+        }
+        let len = out.len();
+        let batch = &self.kept[j][&b];
+        let at = (r - batch.y0) * len;
+        match &batch.values {
+            Values::Indices(q) => out.copy_from_slice(&q[at..at + len]),
+            Values::Samples(_) => unreachable!("a lossless band keeps its indices"),
+        }
+    }
+
     /// The rows of band `j`'s batch `b`.
     fn batch(&self, j: usize, b: usize) -> Range<usize> {
         let n = self.batch_rows[j];
@@ -426,7 +462,7 @@ impl<'a> BandSource<'a> {
             )
         };
         let spare = self.spare[j].take();
-        let values = if self.parent[j] {
+        let values = if self.parent[j] || self.p.header.mode == Mode::Lossless {
             let mut q = match spare {
                 Some(Values::Indices(v)) => v,
                 _ => Vec::new(),

@@ -28,7 +28,7 @@ use super::plan::{band_rho, Plan};
 use super::rate::{check_rate, keep_step, quality_step};
 use super::{meta, tiles};
 use crate::entropy::band::{self, Coding};
-use crate::entropy::codeblocks::{box_dims, extract, parent_box, Grid};
+use crate::entropy::codeblocks::{self, box_dims, extract, parent_box, Grid};
 use crate::entropy::{BandKind, Parent};
 use crate::format::bands::blocks_payload;
 use crate::format::tag::{HEAD, MEND, META};
@@ -43,6 +43,8 @@ use std::collections::BTreeMap;
 use std::ops::Range;
 
 mod decode;
+mod lift;
+mod lossless;
 pub use decode::{decodes_streamed, StreamedDecoder};
 
 /// Whether [`encode_streamed`] writes the file of these options and raster: a format
@@ -58,10 +60,10 @@ pub fn covers(shape: &Shape, opts: &EncodeOptions) -> bool {
         && !super::voids::lists_voids(&shape.meta)
         && (2..=4).contains(&shape.dims.len())
         && opts.levels > 0
-        && matches!(
+        && (matches!(
             opts.rate,
             Rate::Quality(_) | Rate::Keep(_) | Rate::Threshold(_) | Rate::Bpp(_)
-        )
+        ) || lossless::streams(shape, opts))
 }
 
 /// Tiles of the first pass measured by the `--bpp` search (of the ⌈n/64⌉-th tiles).
@@ -82,6 +84,9 @@ pub fn encode_streamed<S: SlabSource + ?Sized, W: std::io::Write>(
             format!("{:?}", opts.rate),
             "a one-transform file of integer samples at --quality, --keep, --threshold or --bpp",
         ));
+    }
+    if lossless::streams(&shape, opts) {
+        return lossless::encode(src, opts, out);
     }
     let sampled = matches!(opts.rate, Rate::Keep(_) | Rate::Bpp(_));
     let (range, sample) = tiles::first_pass(src, sampled)?;
@@ -439,7 +444,6 @@ impl<'p> Coder<'p> {
             return Ok(());
         }
         let (s, rho) = (self.steps[j], band_rho(self.plan, j));
-        let stripe = row.row / self.bands[j].tall;
         if self.optimised(j) || self.settled(j) {
             let v = row.data.iter().map(|&x| (x as f64 / s) as f32).collect();
             self.bands[j].values.insert(row.row, v);
@@ -461,11 +465,18 @@ impl<'p> Coder<'p> {
                 .collect::<Result<Vec<i32>>>()?;
             self.bands[j].rows.insert(row.row, q);
         }
+        self.landed(j, row.row)
+    }
+
+    /// Row `y` of band `j` is held (its indices, or its values for a band whose indices
+    /// are chosen later): code the stripes it completes, its own and its child's.
+    fn landed(&mut self, j: usize, y: usize) -> Result<()> {
+        let stripe = y / self.bands[j].tall;
         let settled = self.settled(j);
         let b = &mut self.bands[j];
         b.got[stripe] += 1;
         let held = if !settled {
-            row.row..row.row + 1
+            y..y + 1
         } else if b.got[stripe] == b.stripe_rows(stripe).len() {
             self.settle(j, stripe)?
         } else {
@@ -611,6 +622,7 @@ impl<'p> Coder<'p> {
         let coding: Coding = self.plan.coding;
         let pb = parent.map(|p| &self.bands[p]);
         let lambda = self.rdo.filter(|_| self.optimised(j));
+        let coder = self.plan.coder;
         let streams: Vec<Vec<u8>> = (s * per..(s + 1) * per)
             .into_par_iter()
             .map(|i| {
@@ -632,7 +644,16 @@ impl<'p> Coder<'p> {
                         });
                         e.finish_short()
                     }
-                    None => band::encode_stream(&b.gather(&bx), &d, kind, pp, coding),
+                    // the context coder in a lossy stream ([`context_coded`]), the
+                    // file's in a lossless one
+                    None => codeblocks::encode_one(
+                        coder,
+                        &b.gather(&bx),
+                        &d,
+                        kind,
+                        par.as_ref(),
+                        coding,
+                    ),
                 }
             })
             .collect();
