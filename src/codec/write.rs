@@ -50,7 +50,7 @@ pub fn encode_tiled_view(
 /// slab at a time ([`super::encode_streamed`], format 3.0) when it is given the whole
 /// raster as its tile: a raster over the one-piece limit
 /// ([`super::tiles::default_tile`] cuts it) at options the stream covers (lossy at one
-/// base step, integer samples without voids).
+/// base step or 8/16-bit lossless, integer samples without voids).
 pub fn streams(shape: &Shape, opts: &EncodeOptions) -> bool {
     super::tiles::default_tile(&shape.dims, shape.channels) != shape.dims
         && super::streamed::covers(shape, opts)
@@ -61,7 +61,7 @@ pub fn streams(shape: &Shape, opts: &EncodeOptions) -> bool {
 /// covers it and it has 2 or 3 axes (images and volumes: the axes
 /// [`super::StreamedDecoder`] decodes in bounded memory), else
 /// [`super::tiles::default_tile`]'s grid (the modes the stream does not cover:
-/// `--lossless`, `--max-error`, `--psnr`, floats, voids, format 2; and 4 axes).
+/// `--max-error`, `--psnr`, floats, voids, format 2, lossless 32-bit; and 4 axes).
 pub fn default_layout(shape: &Shape, opts: &EncodeOptions) -> Vec<usize> {
     if streams(shape, opts) && shape.dims.len() <= 3 {
         shape.dims.clone()

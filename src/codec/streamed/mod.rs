@@ -50,9 +50,9 @@ pub use decode::{decodes_streamed, StreamedDecoder};
 /// Whether [`encode_streamed`] writes the file of these options and raster: a format
 /// 3.0 file of integer samples without a nodata value (no voids to fill), of 2 to 4
 /// axes and at least one level, at a rate mode that sets one base step
-/// (`--quality`, `--keep`, `--threshold`, `--bpp`). `--lossless` and `--max-error`
-/// (the integer transform, a residual of the whole raster) and `--psnr` stay tiled
-/// above the one-piece limit.
+/// (`--quality`, `--keep`, `--threshold`, `--bpp`), or lossless on 8- or 16-bit
+/// samples ([`lossless::streams`]: the integer transform streamed). `--max-error` (a
+/// residual to the decoded base) and `--psnr` stay tiled above the one-piece limit.
 pub fn covers(shape: &Shape, opts: &EncodeOptions) -> bool {
     opts.format == Format::Blocks
         && !shape.sample_type.is_float()
