@@ -8,14 +8,13 @@
 
 use super::lift::LiftPlan;
 use super::Coder;
-use crate::codec::levels::CodedBand;
 use crate::codec::lossy::{header_with, Frame};
 use crate::codec::options::{EncodeOptions, Format, Rate};
 use crate::codec::plan::Plan;
 use crate::codec::{lossless, max_error, meta, tiles};
 use crate::format::header::Colour;
-use crate::format::tag::{HEAD, MEND, META};
-use crate::format::{self, put_chunk, Mode};
+use crate::format::tag::{HEAD, LEVL, MEND, META};
+use crate::format::{self, Mode};
 use crate::io::slab::{Shape, SlabSource};
 use crate::io::Samples;
 use crate::{Error, Result};
@@ -95,13 +94,18 @@ pub(super) fn encode<S: SlabSource + ?Sized, W: std::io::Write>(
     )?;
     let plan = Plan::new(&header)?;
     let lp = LiftPlan::new(&plan.pyr, &plan.bands)?;
-    let mut coders: Vec<Coder> = (0..nc)
-        .map(|_| Coder::new(&plan, vec![1.0; plan.bands.len()], None))
-        .collect();
+    let mut chans = (0..nc)
+        .map(|_| {
+            Ok(Channel {
+                coder: Coder::new(&plan, vec![1.0; plan.bands.len()], None),
+                spill: Spill::new(plan.bands.len())?,
+            })
+        })
+        .collect::<Result<Vec<Channel>>>()?;
     {
-        let mut analyses: Vec<_> = coders
+        let mut analyses: Vec<_> = chans
             .iter_mut()
-            .map(|k| lp.analysis(move |j, y, d: &[i64]| k.take_indices(j, y, d)))
+            .map(|ch| lp.analysis(move |j, y, d: &[i64]| ch.take(j, y, d)))
             .collect();
         let d0 = shape.dims[0];
         let row_len = lp.row_len();
@@ -126,20 +130,205 @@ pub(super) fn encode<S: SlabSource + ?Sized, W: std::io::Write>(
             let _sink = a.finish()?;
         }
     }
-    let coded = coders
-        .into_iter()
-        .map(|k| k.finish())
-        .collect::<Result<Vec<Vec<CodedBand>>>>()?;
-    let mut bytes = format::SIGNATURE.to_vec();
-    put_chunk(&mut bytes, HEAD, &header.to_bytes());
-    let meta = meta::to_bytes(&shape.meta);
-    if !meta.is_empty() {
-        put_chunk(&mut bytes, META, &meta);
+    write_file(out, &header, &meta::to_bytes(&shape.meta), &plan, chans)
+}
+
+/// One channel while it streams: its bands' stripes ([`Coder`]) and the scratch file
+/// their coded blocks go to.
+struct Channel<'p> {
+    coder: Coder<'p>,
+    spill: Spill,
+}
+
+impl Channel<'_> {
+    /// Band row `y` of band `j` to the coder, and the stripes it completes to the
+    /// scratch file.
+    fn take(&mut self, j: usize, y: usize, d: &[i64]) {
+        self.coder.take_indices(j, y, d);
+        if self.spill.err.is_none() {
+            if let Err(e) = self.spill.take(&mut self.coder) {
+                self.spill.err = Some(e);
+            }
+        }
     }
-    plan.put_levels(&mut bytes, &coded, |_, _| 1.0);
-    put_chunk(&mut bytes, MEND, &[]);
-    out.write_all(&bytes)?;
-    Ok(bytes.len() as u64)
+}
+
+/// The coded blocks of a channel's bands moved out of memory as their stripes are
+/// coded: appended to a scratch file in the temporary folder (unlinked at once where
+/// the system allows, else when dropped), each block's place kept. A lossless file is
+/// about as large as its samples' bits: held whole, a 16384² RGB u16 file alone would
+/// be most of a gigabyte.
+struct Spill {
+    file: std::io::BufWriter<std::fs::File>,
+    path: std::path::PathBuf,
+    at: u64,
+    /// per band, each block's `(offset, length)` in the file
+    places: Vec<Vec<(u64, u64)>>,
+    /// per band, the stripes moved
+    moved: Vec<usize>,
+    err: Option<Error>,
+}
+
+impl Spill {
+    fn new(bands: usize) -> Result<Spill> {
+        static NEXT: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+        let n = NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        let path =
+            std::env::temp_dir().join(format!(".mra-lossless-{}-{n}.tmp", std::process::id()));
+        let file = std::fs::OpenOptions::new()
+            .read(true)
+            .write(true)
+            .create_new(true)
+            .open(&path)?;
+        let _ = std::fs::remove_file(&path);
+        Ok(Spill {
+            file: std::io::BufWriter::with_capacity(1 << 20, file),
+            path,
+            at: 0,
+            places: vec![Vec::new(); bands],
+            moved: vec![0; bands],
+            err: None,
+        })
+    }
+
+    /// Move the coded stripes of `k`'s bands not yet moved (each band's in order).
+    fn take(&mut self, k: &mut Coder<'_>) -> Result<()> {
+        use std::io::Write;
+        for (j, b) in k.bands.iter_mut().enumerate() {
+            let per: usize = b.grid.counts[1..].iter().product();
+            while self.moved[j] < b.stripes() && b.coded[self.moved[j]] {
+                let s = self.moved[j];
+                for st in &mut b.streams[s * per..(s + 1) * per] {
+                    self.file.write_all(st)?;
+                    self.places[j].push((self.at, st.len() as u64));
+                    self.at += st.len() as u64;
+                    *st = Vec::new();
+                }
+                self.moved[j] += 1;
+            }
+        }
+        Ok(())
+    }
+}
+
+impl Drop for Spill {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_file(&self.path);
+    }
+}
+
+/// Write the file: signature, `HEAD`, `mETA` (when `meta` is not empty), the `LEVL`
+/// chunks ([`Plan::put_levels`]'s bytes, every band's step ratio 1) with the blocks read
+/// back from the channels' scratch files, and `MEND`; returns the bytes written.
+fn write_file<W: std::io::Write>(
+    out: &mut W,
+    header: &crate::format::Header,
+    meta: &[u8],
+    plan: &Plan,
+    mut chans: Vec<Channel<'_>>,
+) -> Result<u64> {
+    use std::io::{Read, Seek, SeekFrom, Write};
+    for ch in &mut chans {
+        if let Some(e) = ch.coder.err.take().or(ch.spill.err.take()) {
+            return Err(e);
+        }
+        if ch.coder.bands.iter().any(|b| b.coded.contains(&false)) {
+            return Err(Error::parameter(
+                "raster",
+                "a band",
+                "every stripe of code-blocks complete at the end of the stream",
+            ));
+        }
+        ch.spill.take(&mut ch.coder)?;
+        ch.spill.file.flush().map_err(Error::from)?;
+    }
+    let mut n = format::SIGNATURE.len() as u64;
+    out.write_all(&format::SIGNATURE)?;
+    n += format::write_chunk(out, HEAD, &[&header.to_bytes()])?;
+    if !meta.is_empty() {
+        n += format::write_chunk(out, META, &[meta])?;
+    }
+    let mut buf = vec![0u8; 1 << 20];
+    for (level, js) in plan.level_groups() {
+        // the entries' heads in memory, the blocks' bytes in the scratch files
+        let mut pieces: Vec<Piece> = vec![Piece::Head((level as u16).to_le_bytes().to_vec())];
+        for &j in &js {
+            for (c, ch) in chans.iter().enumerate() {
+                let places = &ch.spill.places[j];
+                let mut idx = Vec::new();
+                format::put_varint(&mut idx, places.len() as u64);
+                for p in places {
+                    format::put_varint(&mut idx, p.1);
+                }
+                let len = idx.len() as u64 + places.iter().map(|p| p.1).sum::<u64>();
+                let mut head = 1.0f32.to_le_bytes().to_vec();
+                format::put_varint(&mut head, len);
+                head.extend_from_slice(&idx);
+                pieces.push(Piece::Head(head));
+                for &(at, len) in places {
+                    match pieces.last_mut() {
+                        Some(Piece::Spilled(pc, pat, plen)) if *pc == c && *pat + *plen == at => {
+                            *plen += len
+                        }
+                        _ => pieces.push(Piece::Spilled(c, at, len)),
+                    }
+                }
+            }
+        }
+        let total: u64 = pieces.iter().map(Piece::len).sum();
+        let total = u32::try_from(total).map_err(|_| {
+            Error::parameter(
+                "raster",
+                "a level of over 4 GiB coded",
+                "a LEVL chunk under 4 GiB",
+            )
+        })?;
+        let kind = LEVL;
+        out.write_all(&total.to_le_bytes())?;
+        out.write_all(kind)?;
+        let mut crc = crate::format::crc::Crc32c::new();
+        crc.update(kind);
+        for p in &pieces {
+            match p {
+                Piece::Head(h) => {
+                    out.write_all(h)?;
+                    crc.update(h);
+                }
+                Piece::Spilled(c, at, len) => {
+                    let f = chans[*c].spill.file.get_mut();
+                    f.seek(SeekFrom::Start(*at))?;
+                    let mut left = *len;
+                    while left > 0 {
+                        let k = left.min(buf.len() as u64) as usize;
+                        f.read_exact(&mut buf[..k])?;
+                        out.write_all(&buf[..k])?;
+                        crc.update(&buf[..k]);
+                        left -= k as u64;
+                    }
+                }
+            }
+        }
+        out.write_all(&crc.finish().to_le_bytes())?;
+        n += total as u64 + 12;
+    }
+    n += format::write_chunk(out, MEND, &[])?;
+    Ok(n)
+}
+
+/// A piece of a `LEVL` chunk's payload: bytes in memory, or `(channel, offset,
+/// length)` in a channel's scratch file.
+enum Piece {
+    Head(Vec<u8>),
+    Spilled(usize, u64, u64),
+}
+
+impl Piece {
+    fn len(&self) -> u64 {
+        match self {
+            Piece::Head(h) => h.len() as u64,
+            Piece::Spilled(_, _, len) => *len,
+        }
+    }
 }
 
 /// The channel planes of interleaved 8- or 16-bit samples `s` (`c` channels) as
