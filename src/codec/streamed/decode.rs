@@ -101,13 +101,12 @@ impl StreamedDecoder {
             meta: p.meta.clone(),
         };
         if lossless {
-            return super::lossless::decode::start(p).map(|rx| {
-                Ok(StreamedDecoder {
-                    shape,
-                    rx,
-                    done: false,
-                })
-            });
+            let rx = super::lossless::decode::start(p)?;
+            return Ok(Ok(StreamedDecoder {
+                shape,
+                rx,
+                done: false,
+            }));
         }
         // the plan is checked here, before the thread starts
         let sp = StreamPlan::new(&h.dims, &p.plan.pyr.spec)?;

@@ -400,7 +400,7 @@ impl<S: FnMut(usize, usize, &mut [i64])> Synthesis<'_, S> {
         }
         let m = lv.m;
         let s = m / 2;
-        let out = if r % 2 == 0 {
+        let out = if r.is_multiple_of(2) {
             self.even(l, r / 2).clone()
         } else {
             let j = r / 2;
