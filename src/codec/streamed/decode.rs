@@ -13,6 +13,8 @@ use rayon::prelude::*;
 use std::collections::BTreeMap;
 use std::ops::Range;
 
+mod lossless;
+
 /// Whether a whole decode of the file of header `h` goes through [`StreamedDecoder`]
 /// in [`crate::codec::SlabDecoder`]: a one-piece lossy file of code-blocks (no residual
 /// layer, no voids, any block coder) of 2 or 3 axes over the one-piece limit
@@ -23,7 +25,7 @@ use std::ops::Range;
 pub fn decodes_streamed(h: &Header) -> bool {
     !h.is_tiled()
         && h.version.has_blocks()
-        && (h.mode == Mode::Lossy || super::lossless::decode::decodes(h))
+        && (h.mode == Mode::Lossy || lossless::decodes(h))
         && !h.voids
         && (2..=3).contains(&h.dims.len())
         && h.levels > 0
@@ -85,9 +87,9 @@ impl StreamedDecoder {
         p: crate::codec::container::Parsed,
     ) -> Result<std::result::Result<StreamedDecoder, crate::codec::container::Parsed>> {
         let h = &p.header;
-        let lossless = super::lossless::decode::decodes(h);
+        let integer = lossless::decodes(h);
         if !h.version.has_blocks()
-            || !(h.mode == Mode::Lossy || lossless)
+            || !(h.mode == Mode::Lossy || integer)
             || h.voids
             || h.dims.len() < 2
         {
@@ -100,8 +102,8 @@ impl StreamedDecoder {
             kind: h.kind,
             meta: p.meta.clone(),
         };
-        if lossless {
-            let rx = super::lossless::decode::start(p)?;
+        if integer {
+            let rx = lossless::start(p)?;
             return Ok(Ok(StreamedDecoder {
                 shape,
                 rx,

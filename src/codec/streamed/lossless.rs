@@ -4,7 +4,7 @@
 //! values, the file's block coder). The file is the whole-array lossless encoder's
 //! ([`crate::codec::encode`] of the same raster: the same header, transform values,
 //! blocks and bytes; tested), so every 3.x reader reads it; it decodes streamed too
-//! ([`decode`]).
+//! (`StreamedDecoder`).
 
 use super::lift::LiftPlan;
 use super::Coder;
@@ -19,8 +19,6 @@ use crate::io::slab::{Shape, SlabSource};
 use crate::io::Samples;
 use crate::{Error, Result};
 use rayon::prelude::*;
-
-pub(super) mod decode;
 
 /// Whether the options and raster make a lossless file the stream writes: `--lossless`
 /// (or a `--max-error` bound that keeps every sample exact) on 8- or 16-bit integer

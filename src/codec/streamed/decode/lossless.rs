@@ -1,11 +1,11 @@
 //! The streamed whole decode of a one-piece lossless file: its band rows (indices, the
 //! transform's values) read a batch of stripes of code-blocks at a time
-//! ([`super::super::decode::BandSource`]) and pulled through the integer synthesis
+//! ([`super::BandSource`]) and pulled through the integer synthesis
 //! ([`super::super::lift`]), the channels in parallel, the rows taken to samples a slab
 //! at a time: the samples of the whole-array decode, exactly.
 
-use super::super::decode::{BandSource, Failed};
 use super::super::lift::LiftPlan;
+use super::{BandSource, Failed};
 use crate::codec::container::Parsed;
 use crate::codec::lossless;
 use crate::format::header::Colour;
@@ -16,7 +16,7 @@ use crate::Result;
 use rayon::prelude::*;
 
 /// Whether the streamed synthesis decodes the lossless file of header `h`: the 5/3
-/// lifting, 8- or 16-bit samples (what [`super::encode`] writes).
+/// lifting, 8- or 16-bit samples (what the streamed lossless encoder writes).
 pub(in crate::codec::streamed) fn decodes(h: &Header) -> bool {
     h.mode == Mode::Lossless && h.scheme == Scheme::Linear && lossless::narrow(h.sample_type)
 }
