@@ -60,10 +60,10 @@ pub struct EncodeArgs {
     pub lossless: bool,
     /// Tile extents, fastest axis first: `N` (every axis), `X,Y[,Z]`, or `whole` (one
     /// tile). Default: one tile up to 2^24 positions or 2^26 samples (positions ×
-    /// channels); above that limit integer images read in slabs (raw, NRRD, TIFF) at
-    /// --quality, --keep, --threshold or --bpp are one transform streamed a slab at a
-    /// time (format 3.0, bounded memory; volumes too with `whole`), the others 1024 per
-    /// axis in 2-D and 128 in 3-D. Each tile is coded on its own at the step of the
+    /// channels); above that limit integer images and volumes read in slabs (raw, NRRD,
+    /// TIFF) at --quality, --keep, --threshold or --bpp, and 8- or 16-bit ones at
+    /// --lossless, are one transform streamed a slab at a time (format 3, bounded
+    /// memory), the others 1024 per axis in 2-D and 128 in 3-D. Each tile is coded on its own at the step of the
     /// whole raster.
     #[arg(long, value_name = "T")]
     pub tile: Option<String>,

@@ -76,7 +76,7 @@ fn lossless_int(x: f64, t: SampleType) -> i64 {
 }
 
 /// The options of a `--lossless` file: the 5/3 lifting, whole-sample symmetric ends.
-fn lossless_options(opts: &EncodeOptions) -> EncodeOptions {
+pub(super) fn lossless_options(opts: &EncodeOptions) -> EncodeOptions {
     let mut o = opts.clone();
     o.scheme = Scheme::Linear;
     o.boundary = Boundary::Symmetric;

@@ -119,8 +119,9 @@ fn narrow(v: &[i64]) -> Vec<i32> {
         .collect()
 }
 
-/// Code the block of values `v` (extents `d`, parent box `par`) by `coder`.
-fn encode_one(
+/// Code the block of values `v` (extents `d`, parent box `par`) by `coder`: the stream
+/// [`encode_blocks`] writes for it.
+pub fn encode_one(
     coder: Coder,
     v: &[i64],
     d: &[usize],

@@ -43,6 +43,7 @@ mod stdio;
 mod stream;
 mod streamed;
 mod streamed_float;
+mod streamed_lossless;
 mod subdivide;
 mod surface;
 mod tensor;

@@ -167,7 +167,10 @@ fn a_truncated_streamed_file_is_a_one_line_error() {
 
 /// Over the one-piece limit a one-tile encode (the default layout there, or `--tile
 /// whole`) streams for the lossy modes of one step and `--psnr`, integer or float
-/// samples; lossless, `--max-error`, a nodata value, format 2 and small rasters do not.
+/// samples, and for `--lossless` (and exact `--max-error`) of 8- and 16-bit integer
+/// samples; `--max-error` over 1, a nodata value, format 2 and small rasters do not. The
+/// default layout streams the lossy ones (a lossless stream's decode holds its blocks
+/// whole: tiled by default).
 #[test]
 fn a_whole_tile_streams_over_the_one_piece_limit() {
     let small = field(&[4, 4], 1, SampleType::U16, 1, 100.0);
@@ -176,7 +179,8 @@ fn a_whole_tile_streams_over_the_one_piece_limit() {
     let o = |rate| opts(rate, 6, Boundary::Symmetric);
     assert!(codec::streams(&big, &o(Rate::Bpp(1.0))));
     assert!(codec::streams(&big, &o(Rate::Quality(50.0))));
-    assert!(!codec::streams(&big, &o(Rate::Lossless)));
+    assert!(codec::streams(&big, &o(Rate::Lossless)));
+    assert!(codec::streams(&big, &o(Rate::MaxError(0.5))));
     assert!(!codec::streams(&big, &o(Rate::MaxError(2.0))));
     assert!(codec::streams(&big, &o(Rate::Psnr(40.0))));
     assert!(!codec::streams(&Shape::of(&small), &o(Rate::Bpp(1.0))));
@@ -192,6 +196,7 @@ fn a_whole_tile_streams_over_the_one_piece_limit() {
     let tiles = codec::default_tile(&big.dims, 1);
     assert_ne!(tiles, big.dims);
     assert_eq!(codec::default_layout(&big, &o(Rate::Lossless)), tiles);
+    assert_eq!(codec::default_layout(&big, &o(Rate::MaxError(2.0))), tiles);
     assert_eq!(codec::default_layout(&float, &o(Rate::Bpp(1.0))), float.dims);
     assert_eq!(codec::default_layout(&nodata, &o(Rate::Bpp(1.0))), tiles);
     let mut two = o(Rate::Bpp(1.0));
@@ -203,8 +208,11 @@ fn a_whole_tile_streams_over_the_one_piece_limit() {
     vol.dims = vec![1024, 1024, 1024];
     assert!(codec::streams(&vol, &o(Rate::Bpp(1.0))));
     assert_eq!(codec::default_layout(&vol, &o(Rate::Bpp(1.0))), vol.dims);
+    assert_eq!(codec::default_layout(&vol, &o(Rate::Lossless)), vol.dims);
+    let mut wide = vol.clone();
+    wide.sample_type = SampleType::U32;
     assert_eq!(
-        codec::default_layout(&vol, &o(Rate::Lossless)),
+        codec::default_layout(&wide, &o(Rate::Lossless)),
         codec::default_tile(&vol.dims, 1)
     );
     let mut four = big.clone();

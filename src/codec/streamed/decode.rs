@@ -1,5 +1,8 @@
 //! The streamed whole decode ([`StreamedDecoder`]): the band rows of a one-piece lossy
-//! code-block file pulled through the streamed synthesis a batch of stripes at a time.
+//! or lossless code-block file pulled through the streamed synthesis a batch of stripes at
+//! a time (a lossless file through the integer synthesis, [`lossless`]).
+
+mod lossless;
 
 use crate::codec::tiles;
 use crate::entropy::codeblocks::{parent_box, Grid};
@@ -24,7 +27,7 @@ use std::sync::{Arc, Mutex};
 pub fn decodes_streamed(h: &Header) -> bool {
     !h.is_tiled()
         && h.version.has_blocks()
-        && h.mode == Mode::Lossy
+        && (h.mode == Mode::Lossy || lossless::decodes(h))
         && !h.voids
         && (2..=3).contains(&h.dims.len())
         && h.levels > 0
@@ -82,7 +85,12 @@ impl StreamedDecoder {
         p: crate::codec::container::Parsed,
     ) -> Result<std::result::Result<StreamedDecoder, crate::codec::container::Parsed>> {
         let h = &p.header;
-        if !h.version.has_blocks() || h.mode != Mode::Lossy || h.voids || h.dims.len() < 2 {
+        let integer = lossless::decodes(h);
+        if !h.version.has_blocks()
+            || !(h.mode == Mode::Lossy || integer)
+            || h.voids
+            || h.dims.len() < 2
+        {
             return Ok(Err(p));
         }
         let shape = Shape {
@@ -92,6 +100,14 @@ impl StreamedDecoder {
             kind: h.kind,
             meta: p.meta.clone(),
         };
+        if integer {
+            let rx = lossless::start(p)?;
+            return Ok(Ok(StreamedDecoder {
+                shape,
+                rx,
+                done: false,
+            }));
+        }
         // the plan is checked here, before the thread starts
         let sp = StreamPlan::new(&h.dims, &p.plan.pyr.spec)?;
         if sp.bands() != p.plan.bands.as_slice() {
@@ -222,6 +238,9 @@ fn synthesize(
 /// A batch `(band, batch number)` of one channel.
 type BatchId = (usize, usize);
 
+/// Batches of a band [`BandSource::ensure`] keeps.
+const KEPT_ON_DEMAND: usize = 2;
+
 /// A decoded batch and its name.
 type Decoded = (BatchId, Arc<Batch>);
 
@@ -307,16 +326,20 @@ impl Schedule {
 
 /// The first error of a channel's band source, read by the loop that pulls its rows.
 #[derive(Clone, Default)]
-struct Failed(std::sync::Arc<std::sync::Mutex<Option<Error>>>);
+pub(super) struct Failed(std::sync::Arc<std::sync::Mutex<Option<Error>>>);
 
 impl Failed {
+    fn is_set(&self) -> bool {
+        self.0.lock().map_or(true, |e| e.is_some())
+    }
+
     fn set(&self, e: Error) {
         if let Ok(mut g) = self.0.lock() {
             g.get_or_insert(e);
         }
     }
 
-    fn take(&self) -> Option<Error> {
+    pub(super) fn take(&self) -> Option<Error> {
         self.0.lock().ok().and_then(|mut g| g.take())
     }
 }
@@ -345,7 +368,7 @@ struct Held {
 /// The band rows of one channel of a file, decoded a batch of stripes of code-blocks
 /// at a time (every block of a batch in parallel, [`decode_grid`]) when [`Schedule`]
 /// says, read by the synthesis ([`BandSource::fill`]) while the next batches decode.
-struct BandSource<'a> {
+pub(super) struct BandSource<'a> {
     p: &'a crate::codec::container::Parsed,
     c: usize,
     grids: Vec<Grid>,
@@ -362,7 +385,7 @@ struct BandSource<'a> {
 }
 
 impl<'a> BandSource<'a> {
-    fn new(
+    pub(super) fn new(
         p: &'a crate::codec::container::Parsed,
         c: usize,
         err: Failed,
@@ -492,6 +515,67 @@ impl<'a> BandSource<'a> {
                 out,
             ),
         }
+    }
+
+    /// Row `r` of band `j` as indices (a lossless file: the transform's values) into
+    /// `out` (zeros after an error), its batch decoded when first asked ([`Self::ensure`]).
+    pub(super) fn fill_indices(&self, j: usize, r: usize, out: &mut [i64]) {
+        if self.err.is_set() || self.sets[j].is_none() {
+            out.fill(0);
+            return;
+        }
+        let batch = match self.ensure(j, r / self.batch_rows[j]) {
+            Ok(a) => a,
+            Err(e) => {
+                self.err.set(e);
+                out.fill(0);
+                return;
+            }
+        };
+        let len = out.len();
+        let at = (r - batch.y0) * len;
+        match &batch.values {
+            Values::Indices(q) => out.copy_from_slice(&q[at..at + len]),
+            Values::Samples(_) => unreachable!("a lossless band keeps its indices"),
+        }
+    }
+
+    /// Batch `b` of band `j`, decoded now (its parent batches first) unless held: the
+    /// path of a synthesis without a [`Schedule`] (the lossless stream's). A band keeps
+    /// its last [`KEPT_ON_DEMAND`] batches; an older one asked again is decoded again.
+    fn ensure(&self, j: usize, b: usize) -> Result<Arc<Batch>> {
+        if let Some(a) = self
+            .held
+            .lock()
+            .ok()
+            .and_then(|h| h.kept[j].get(&b).cloned())
+        {
+            return Ok(a);
+        }
+        let mut fresh: Vec<Decoded> = Vec::new();
+        if let Some((pj, prows)) = self.parent_rows(j, &self.batch(j, b)) {
+            if self.sets[pj].is_some() {
+                let n = self.batch_rows[pj];
+                for pb in prows.start / n..prows.end.div_ceil(n) {
+                    fresh.push(((pj, pb), self.ensure(pj, pb)?));
+                }
+            }
+        }
+        let batch = Arc::new(self.decode(j, b, &fresh)?);
+        if let Ok(mut held) = self.held.lock() {
+            let held = &mut *held;
+            held.kept[j].insert(b, batch.clone());
+            while held.kept[j].len() > KEPT_ON_DEMAND {
+                let oldest = *held.kept[j].keys().next().expect("more than one held");
+                if let Some(old) = held.kept[j]
+                    .remove(&oldest)
+                    .and_then(|a| Arc::try_unwrap(a).ok())
+                {
+                    held.spare[j] = Some(old.values);
+                }
+            }
+        }
+        Ok(batch)
     }
 
     /// The rows of band `j`'s batch `b`.
@@ -634,7 +718,7 @@ impl<'a> BandSource<'a> {
             )
         };
         let spare = self.held.lock().ok().and_then(|mut h| h.spare[j].take());
-        let values = if self.parent[j] {
+        let values = if self.parent[j] || self.p.header.mode == Mode::Lossless {
             let put = crate::entropy::codeblocks::Put {
                 wide: |o: &mut [i64], q: &[i64]| o.copy_from_slice(q),
                 narrow: |o: &mut [i64], q: &[i32]| {

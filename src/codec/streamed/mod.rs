@@ -29,7 +29,7 @@ use super::plan::{band_rho, Plan};
 use super::rate::{check_rate, keep_step, quality_step};
 use super::{meta, tiles};
 use crate::entropy::band::{self, Coding};
-use crate::entropy::codeblocks::{box_dims, extract, parent_box, Grid};
+use crate::entropy::codeblocks::{self, box_dims, extract, parent_box, Grid};
 use crate::entropy::{BandKind, Parent};
 use crate::format::bands::blocks_payload;
 use crate::format::tag::{HEAD, MEND, META};
@@ -44,25 +44,28 @@ use std::collections::BTreeMap;
 use std::ops::Range;
 
 mod decode;
+mod lift;
+mod lossless;
 mod psnr;
 pub use decode::{decodes_streamed, StreamedDecoder};
 
 /// Whether [`encode_streamed`] writes the file of these options and raster: a format
 /// 3.0 file of samples of any type without a nodata value, of 2 to 4 axes and at least
 /// one level, at a rate mode that sets one base step (`--quality`, `--keep`,
-/// `--threshold`, `--bpp`, `--psnr`). Float samples are coded as the whole-array encoder codes
-/// them (the same finite range in the header, non-finite samples 0 in the planes, the
-/// context coder, no lossless file tried); a float raster with NaN samples (voids, found
-/// by the first pass) is not streamed ([`encode_streamed`]). `--lossless` and
-/// `--max-error` (the integer transform, a residual of the whole raster) stay tiled
-/// above the one-piece limit.
+/// `--threshold`, `--bpp`, `--psnr`), or lossless on 8- or 16-bit samples
+/// ([`lossless::streams`]: the integer transform streamed). Float samples are coded as
+/// the whole-array encoder codes them (the same finite range in the header, non-finite
+/// samples 0 in the planes, the context coder, no lossless file tried); a float raster
+/// with NaN samples (voids, found by the first pass) is not streamed
+/// ([`encode_streamed`]). `--max-error` over 1 (a residual to the decoded base) stays
+/// tiled above the one-piece limit.
 pub fn covers(shape: &Shape, opts: &EncodeOptions) -> bool {
     opts.format == Format::Blocks
         && shape.meta.nodata.is_none()
         && !super::voids::lists_voids(&shape.meta)
         && (2..=4).contains(&shape.dims.len())
         && opts.levels > 0
-        && matches!(
+        && (matches!(
             opts.rate,
             Rate::Quality(_)
                 | Rate::Keep(_)
@@ -70,7 +73,13 @@ pub fn covers(shape: &Shape, opts: &EncodeOptions) -> bool {
                 | Rate::Bpp(_)
                 | Rate::Psnr(_)
                 | Rate::PsnrRange(..)
-        )
+        ) || lossless::streams(shape, opts))
+}
+
+/// Whether [`encode_streamed`] writes the file of these options as a lossless stream
+/// (the integer transform; [`covers`] holds too when the raster is over the limit).
+pub(in crate::codec) fn streams_lossless(shape: &Shape, opts: &EncodeOptions) -> bool {
+    lossless::streams(shape, opts)
 }
 
 /// Tiles of the first pass measured by the `--bpp` search (of the ⌈n/64⌉-th tiles).
@@ -107,8 +116,11 @@ pub(in crate::codec) fn encode_unless_voids<S: SlabSource + ?Sized, W: std::io::
         return Err(Error::parameter(
             "rate",
             format!("{:?}", opts.rate),
-            "a one-transform file without nodata at --quality, --keep, --threshold, --bpp or --psnr",
+            "a one-transform file without nodata at --quality, --keep, --threshold, --bpp, --psnr or 8/16-bit --lossless",
         ));
+    }
+    if lossless::streams(&shape, opts) {
+        return lossless::encode(src, opts, out).map(Some);
     }
     let sampled = matches!(
         opts.rate,
@@ -486,7 +498,6 @@ impl<'p> Coder<'p> {
             return Ok(());
         }
         let (s, rho) = (self.steps[j], band_rho(self.plan, j));
-        let stripe = row.row / self.bands[j].tall;
         if self.optimised(j) || self.settled(j) {
             let v = row.data.iter().map(|&x| (x as f64 / s) as f32).collect();
             self.bands[j].values.insert(row.row, v);
@@ -508,11 +519,18 @@ impl<'p> Coder<'p> {
                 .collect::<Result<Vec<i32>>>()?;
             self.bands[j].rows.insert(row.row, q);
         }
+        self.landed(j, row.row)
+    }
+
+    /// Row `y` of band `j` is held (its indices, or its values for a band whose indices
+    /// are chosen later): code the stripes it completes, its own and its child's.
+    fn landed(&mut self, j: usize, y: usize) -> Result<()> {
+        let stripe = y / self.bands[j].tall;
         let settled = self.settled(j);
         let b = &mut self.bands[j];
         b.got[stripe] += 1;
         let held = if !settled {
-            row.row..row.row + 1
+            y..y + 1
         } else if b.got[stripe] == b.stripe_rows(stripe).len() {
             self.settle(j, stripe)?
         } else {
@@ -658,6 +676,7 @@ impl<'p> Coder<'p> {
         let coding: Coding = self.plan.coding;
         let pb = parent.map(|p| &self.bands[p]);
         let lambda = self.rdo.filter(|_| self.optimised(j));
+        let coder = self.plan.coder;
         let streams: Vec<Vec<u8>> = (s * per..(s + 1) * per)
             .into_par_iter()
             .map(|i| {
@@ -679,7 +698,16 @@ impl<'p> Coder<'p> {
                         });
                         e.finish_short()
                     }
-                    None => band::encode_stream(&b.gather(&bx), &d, kind, pp, coding),
+                    // the context coder in a lossy stream ([`context_coded`]), the
+                    // file's in a lossless one
+                    None => codeblocks::encode_one(
+                        coder,
+                        &b.gather(&bx),
+                        &d,
+                        kind,
+                        par.as_ref(),
+                        coding,
+                    ),
                 }
             })
             .collect();
