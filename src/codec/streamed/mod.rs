@@ -27,9 +27,9 @@ use super::options::{EncodeOptions, Format, Rate};
 use super::plan::{band_rho, Plan};
 use super::rate::{check_rate, keep_step, quality_step};
 use super::{meta, tiles};
-use crate::entropy::band::{self, Coding};
-use crate::entropy::codeblocks::{box_dims, extract, parent_box, Grid};
-use crate::entropy::{BandKind, Parent};
+use crate::entropy::band::Coding;
+use crate::entropy::codeblocks::{self, box_dims, extract, parent_box, Grid};
+use crate::entropy::BandKind;
 use crate::format::bands::blocks_payload;
 use crate::format::tag::{HEAD, MEND, META};
 use crate::format::{self, put_chunk, Header, Mode};
@@ -107,14 +107,7 @@ pub fn encode_streamed<S: SlabSource + ?Sized, W: std::io::Write>(
         sample_type: shape.sample_type,
         kind: shape.kind,
     };
-    let mut header = context_coded(header_with(
-        &frame,
-        opts,
-        Mode::Lossy,
-        colour,
-        range,
-        &shape.meta,
-    )?);
+    let mut header = header_with(&frame, opts, Mode::Lossy, colour, range, &shape.meta)?;
     header.step = step;
     let rdo = rdo_of(opts.rate);
     if rdo.is_some() {
@@ -216,14 +209,7 @@ fn bpp_step(
                 kind: t.kind,
             };
             let colour = lossy_colour(t.channels);
-            let mut h = context_coded(header_with(
-                &frame,
-                opts,
-                Mode::Lossy,
-                colour,
-                (0.0, 0.0),
-                &t.meta,
-            )?);
+            let mut h = header_with(&frame, opts, Mode::Lossy, colour, (0.0, 0.0), &t.meta)?;
             h.delta = if rdo.is_some() { 0.0 } else { h.delta };
             Ok(h)
         })
@@ -514,18 +500,14 @@ impl<'p> Coder<'p> {
         let g = &b.grid;
         let per: usize = g.counts[1..].iter().product();
         let rows = b.stripe_rows(s);
+        let coder = self.plan.coder;
         let qs: Vec<Vec<i64>> = (s * per..(s + 1) * per)
             .into_par_iter()
             .map(|i| {
                 let bx = g.bounds(i);
                 let d = box_dims(&bx);
                 let v = b.gather_values(&bx);
-                let cols = d.last().copied().unwrap_or(1);
-                let mut e = crate::entropy::range::Encoder::new();
-                band::encode_rdo_with(&mut e, &d, None, lambda, coding, true, |g, out| {
-                    out.copy_from_slice(&v[g * cols..(g + 1) * cols])
-                })
-                .unwrap_or_default()
+                codeblocks::encode_one_rdo(coder, &v, &d, None, lambda, coding, true).1
             })
             .collect();
         let row_len: usize = g.dims[1..].iter().product();
@@ -611,6 +593,7 @@ impl<'p> Coder<'p> {
         let coding: Coding = self.plan.coding;
         let pb = parent.map(|p| &self.bands[p]);
         let lambda = self.rdo.filter(|_| self.optimised(j));
+        let coder = self.plan.coder;
         let streams: Vec<Vec<u8>> = (s * per..(s + 1) * per)
             .into_par_iter()
             .map(|i| {
@@ -620,19 +603,29 @@ impl<'p> Coder<'p> {
                     let pbox = parent_box(&bx, &pb.grid.dims);
                     (pb.gather(&pbox), box_dims(&pbox))
                 });
-                let pp = par.as_ref().map(|(data, dims)| Parent { data, dims });
+                // as codeblocks::encode_blocks(_rdo_by) codes a block
                 match lambda {
-                    // as codeblocks::encode_blocks_rdo_by codes a block
                     Some(lambda) => {
                         let v = b.gather_values(&bx);
-                        let cols = d.last().copied().unwrap_or(1);
-                        let mut e = crate::entropy::range::Encoder::new();
-                        band::encode_rdo_with(&mut e, &d, pp, lambda, coding, false, |g, out| {
-                            out.copy_from_slice(&v[g * cols..(g + 1) * cols])
-                        });
-                        e.finish_short()
+                        let (st, _) = codeblocks::encode_one_rdo(
+                            coder,
+                            &v,
+                            &d,
+                            par.as_ref(),
+                            lambda,
+                            coding,
+                            false,
+                        );
+                        st
                     }
-                    None => band::encode_stream(&b.gather(&bx), &d, kind, pp, coding),
+                    None => codeblocks::encode_one(
+                        coder,
+                        &b.gather(&bx),
+                        &d,
+                        kind,
+                        par.as_ref(),
+                        coding,
+                    ),
                 }
             })
             .collect();
@@ -684,13 +677,4 @@ impl<'p> Coder<'p> {
             })
             .collect()
     }
-}
-
-/// The header `h` with its blocks coded by the context coder (coder 0, format 3.0):
-/// the streamed encoder codes every block with it whatever `--effort` asks (the HT
-/// coder is not streamed), so the header must say so.
-fn context_coded(mut h: Header) -> Header {
-    h.coder = 0;
-    h.version = crate::format::Version::for_file(false, h.voids, true);
-    h
 }
