@@ -109,7 +109,7 @@ pub fn encode_streamed<S: SlabSource + ?Sized, W: std::io::Write>(
     };
     let mut header = header_with(&frame, opts, Mode::Lossy, colour, range, &shape.meta)?;
     header.step = step;
-    let rdo = rdo_of(opts.rate);
+    let rdo = rdo_of(opts);
     if rdo.is_some() {
         // reconstruction at the index, as the whole-array encoder's optimised files
         header.delta = 0.0;
@@ -127,10 +127,11 @@ pub fn encode_streamed<S: SlabSource + ?Sized, W: std::io::Write>(
 }
 
 /// The multiplier of the rate–distortion optimised indices of the rate mode (those the
-/// whole-array encoder optimises: `--quality`, `--bpp`), given to the detail bands
-/// ([`Coder`]).
-fn rdo_of(rate: Rate) -> Option<f32> {
-    matches!(rate, Rate::Quality(_) | Rate::Bpp(_)).then_some(quantize::LAMBDA)
+/// whole-array encoder optimises: `--quality`, `--bpp`, at an effort that optimises,
+/// [`super::options::Ladder::rdo`]), given to the detail bands ([`Coder`]).
+fn rdo_of(opts: &EncodeOptions) -> Option<f32> {
+    let optimises = matches!(opts.rate, Rate::Quality(_) | Rate::Bpp(_));
+    (optimises && opts.ladder().rdo).then_some(quantize::LAMBDA)
 }
 
 /// Most passes of the whole stream [`fit_bpp`] codes.
@@ -198,7 +199,7 @@ fn bpp_step(
     let every = sample.len().div_ceil(BPP_SAMPLE).max(1);
     sample = sample.into_iter().step_by(every).collect();
     let positions: f64 = sample.iter().map(|t| t.positions() as f64).sum();
-    let rdo = rdo_of(opts.rate);
+    let rdo = rdo_of(opts);
     let heads = sample
         .iter()
         .map(|t| {
