@@ -218,7 +218,10 @@ fn the_default_effort_writes_coder_2_lossy_and_the_context_coder_lossless() {
         } else {
             Coder::Adaptive
         };
-        assert_eq!((h.version.to_string(), h.coder), ("3.2".to_string(), coder.id()));
+        assert_eq!(
+            (h.version.to_string(), h.coder),
+            ("3.2".to_string(), coder.id())
+        );
         let (s, e) = head(&d);
         // 3.2's HEAD: 52 + 8N bytes, the flags byte, N exponents and the coder byte
         assert_eq!(e - s, 52 + 8 * 2 + 1 + 2 + 1);
