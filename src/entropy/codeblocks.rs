@@ -88,6 +88,13 @@ impl Coder {
         !matches!(self.per_block(), PerBlock::Context)
     }
 
+    /// Whether the coder chooses a detail block's indices by its own costs (coder 2,
+    /// [`block::encode_rdo`]) when they are rate–distortion optimised; else the context
+    /// coder's choice is coded.
+    pub fn chooses_its_indices(self) -> bool {
+        matches!(self.per_block(), PerBlock::Narrow { rdo: Some(_), .. })
+    }
+
     /// The one place a coder's block functions are named: a new coder is one arm.
     fn per_block(self) -> PerBlock {
         match self {
