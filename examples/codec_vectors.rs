@@ -454,7 +454,8 @@ fn main() {
             } else if ht {
                 1
             } else {
-                mra::codec::DEFAULT_EFFORT
+                // the context coder's files (coder 0), whatever the default effort
+                7
             };
             let bytes = codec::encode_tiled(
                 &r,

@@ -18,11 +18,11 @@ Usage (from the repository root, after `cargo build --release`):
   python3 benches/peers/codec_speed.py [--corpus ../shared/corpus] [--mra BIN] [--bpp 1]
 
 The effort ladder (`--ladder`): the flower and kodim01 read as PPM and written as PPM, at
-`--bpp`, `mra encode --effort N` for each of `--efforts` (default 1, 7 = the default, 9)
+`--bpp`, `mra encode --effort N` for each of `--efforts` (default 1, 4 = the default, 7)
 and OpenJPEG, each on `RAYON_NUM_THREADS` / `-threads` of each of `--threads` (default 1
 and 2): bytes, PSNR (`mra compare`), best encode and decode wall, and the load average
 before and after (ratios within one run are what to read on a shared machine):
-  python3 benches/peers/codec_speed.py --ladder [--efforts 1,7,9] [--threads 1,2]
+  python3 benches/peers/codec_speed.py --ladder [--efforts 1,4,7] [--threads 1,2]
 """
 import argparse, gzip, os, re, subprocess, sys, tempfile, time
 
@@ -152,7 +152,7 @@ def main():
     ap.add_argument("--out", default="ppm", choices=["ppm", "png"])
     ap.add_argument("--no-volume", action="store_true")
     ap.add_argument("--ladder", action="store_true", help="the effort ladder table instead")
-    ap.add_argument("--efforts", default="1,7,9")
+    ap.add_argument("--efforts", default="1,4,7")
     ap.add_argument("--threads", default="1,2")
     a = ap.parse_args()
     if a.ladder:

@@ -131,7 +131,7 @@ def encode(
     channels_last: bool = False,
     tile: Optional[Sequence[int]] = None,
     format: int = 3,
-    effort: int = 7,
+    effort: int = _mra.DEFAULT_EFFORT,
 ) -> bytes:
     """Encode ``a`` into the bytes of an ``.mra`` file (the ``mra encode`` format).
 
@@ -154,8 +154,9 @@ def encode(
     ``effort`` (1..9, as ``mra encode --effort``) trades speed for size: 1–3 code the
     blocks with the HT-style coder (format 3.1, about 4× faster decode for 7–10% more
     bits) without rate–distortion optimisation, 4–6 with it and the adaptive quad coder
-    (format 3.2, between the two in bits and speed), 7–9 (7 the default) with the
-    adaptive context coder.
+    (format 3.2, between the two in bits and speed; ``lossless=True`` keeps the context
+    coder), 7–9 with the adaptive context coder. The default is the library's
+    (``mra._mra.DEFAULT_EFFORT``, 4).
     """
     mode, value = _rate_of(
         lossless=lossless,

@@ -237,7 +237,7 @@ fn rate(kind: &str, value: f64, data_range: Option<f64>) -> PyResult<Rate> {
 
 /// Encode an array into the bytes of an `.mra` file.
 #[pyfunction]
-#[pyo3(signature = (a, rate_kind, value, data_range, scheme, boundary, levels, channels_last, tile=None, format=3, effort=7))]
+#[pyo3(signature = (a, rate_kind, value, data_range, scheme, boundary, levels, channels_last, tile=None, format=3, effort=None))]
 #[allow(clippy::too_many_arguments)]
 fn encode<'py>(
     py: Python<'py>,
@@ -251,7 +251,7 @@ fn encode<'py>(
     channels_last: bool,
     tile: Option<Vec<usize>>,
     format: usize,
-    effort: i64,
+    effort: Option<i64>,
 ) -> PyResult<Bound<'py, PyBytes>> {
     let opts = EncodeOptions {
         scheme: parse::<Scheme>(scheme)?,
@@ -260,7 +260,7 @@ fn encode<'py>(
         rate: rate(rate_kind, value, data_range)?,
         format: codec::Format::of_major(format).map_err(py_err)?,
         // out of u8's range: 255, which the library refuses as it refuses 0 or 10
-        effort: effort.clamp(0, 255) as u8,
+        effort: effort.map_or(codec::DEFAULT_EFFORT, |e| e.clamp(0, 255) as u8),
     };
     let bytes = with_input(a, |input, shape| {
         run(py, "encode", || {
@@ -577,6 +577,8 @@ fn compare(
 #[pymodule]
 fn _mra(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("MraError", m.py().get_type::<MraError>())?;
+    // the library's default effort: Python's `encode(effort=)` has no default of its own
+    m.add("DEFAULT_EFFORT", codec::DEFAULT_EFFORT)?;
     m.add_function(wrap_pyfunction!(encode, m)?)?;
     m.add_function(wrap_pyfunction!(decode, m)?)?;
     m.add_function(wrap_pyfunction!(info, m)?)?;

@@ -83,7 +83,8 @@ pub struct EncodeArgs {
     /// (format 3.1, about 4× faster decode for 7–10% more bits) without rate–distortion
     /// optimisation, `--bpp` within 3% under the budget; 4–6 the adaptive quad coder
     /// (format 3.2, about 3% more bits, 1.4–2.4× faster decode) on optimised indices;
-    /// 7–9 today's adaptive context coder (format 3.0). Default 7.
+    /// 7–9 the adaptive context coder. `--lossless` keeps the context coder at 4–6.
+    /// The default is the library's (`codec::DEFAULT_EFFORT`).
     #[arg(long, value_name = "N", default_value_t = codec::DEFAULT_EFFORT,
           value_parser = clap::value_parser!(u8).range(1..=9))]
     pub effort: u8,

@@ -134,7 +134,13 @@ impl Frame<'_> {
         }
         let blocks = opts.format == Format::Blocks;
         let coder = if blocks {
-            coder_for(opts.ladder().coder, self.sample_type, mode)
+            let ladder = opts.ladder();
+            let asked = if mode == Mode::Lossless {
+                ladder.lossless
+            } else {
+                ladder.coder
+            };
+            coder_for(asked, self.sample_type, mode)
         } else {
             Coder::Context
         };

@@ -478,13 +478,14 @@ fn calibrated_bpp(
         xa
     };
     // a narrow coder's static codes spend about 9% more than the context coder (which
-    // codes the sample when the indices are rate–distortion optimised; else the file's
-    // coder codes it, [`Prepared::sampled_bits`])
-    let narrow = if p.plan.coder.is_narrow() && p.rdo.is_some() {
-        1.09
-    } else {
-        1.0
-    };
+    // codes the sample when the indices are rate–distortion optimised by its costs;
+    // else the file's coder codes it, [`Prepared::sampled_bits`])
+    let narrow =
+        if p.plan.coder.is_narrow() && p.rdo.is_some() && !p.plan.coder.chooses_its_indices() {
+            1.09
+        } else {
+            1.0
+        };
     let cal0 = (SAMPLED_RATIO * narrow).ln();
     let s0 = p.sampled_bits(x0.exp());
     if s0.is_nan() || s0 <= 0.0 {
@@ -626,7 +627,8 @@ impl Prepared {
     /// [`Self::SAMPLE_EVERY`] (all of a band shorter than two periods of one), coded as one
     /// band of their own with no parent context (by the context coder, or, when the
     /// indices are not optimised, by a narrow coder's file's own coder in code-blocks of
-    /// the file's extents), the bits scaled by the band's count over
+    /// the file's extents, and by coder 2 by its own choice when it chooses them), the
+    /// bits scaled by the band's count over
     /// the count coded. Biased (the parent context is missing, the models learn
     /// each sample afresh), but by a ratio nearly constant between nearby steps, which
     /// [`calibrated_bpp`] measures.
@@ -666,6 +668,23 @@ impl Prepared {
                 }
                 let s = self.band_step(step, j, c);
                 let bytes = match (self.rdo, plan.bands[j].level) {
+                    // coder 2's file: the sample chosen and coded by coder 2's own
+                    // rate–distortion choice, as the file's blocks are (a third of the
+                    // context coder's time)
+                    (Some(lambda), l) if l > 0 && plan.coder.chooses_its_indices() => {
+                        let scaled: Vec<f32> = x.iter().map(|&v| (v as f64 / s) as f32).collect();
+                        let g = codeblocks::Grid::new(&dims, plan.block(j));
+                        let (streams, _) = codeblocks::encode_blocks_rdo_by(
+                            &g,
+                            None,
+                            lambda,
+                            plan.coding,
+                            plan.coder,
+                            false,
+                            |b| codeblocks::extract(&scaled, &dims, b),
+                        );
+                        blocks_payload(&streams).len()
+                    }
                     (Some(lambda), l) if l > 0 => {
                         let scaled: Vec<f32> = x.iter().map(|&v| (v as f64 / s) as f32).collect();
                         let mut e = Encoder::new();
@@ -686,7 +705,10 @@ impl Prepared {
                         match plan.grid(j) {
                             // a narrow coder's file: the sample coded by that coder (a
                             // fraction of the context coder's time)
-                            Some(_) if plan.coder.is_narrow() && self.rdo.is_none() => {
+                            Some(_)
+                                if plan.coder.is_narrow()
+                                    && (self.rdo.is_none() || plan.coder.chooses_its_indices()) =>
+                            {
                                 let g = codeblocks::Grid::new(&dims, plan.block(j));
                                 blocks_payload(&codeblocks::encode_blocks(
                                     &q,

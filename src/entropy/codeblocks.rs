@@ -88,6 +88,13 @@ impl Coder {
         !matches!(self.per_block(), PerBlock::Context)
     }
 
+    /// Whether the coder chooses a detail block's indices by its own costs (coder 2,
+    /// [`block::encode_rdo`]) when they are rate–distortion optimised; else the context
+    /// coder's choice is coded.
+    pub fn chooses_its_indices(self) -> bool {
+        matches!(self.per_block(), PerBlock::Narrow { rdo: Some(_), .. })
+    }
+
     /// The one place a coder's block functions are named: a new coder is one arm.
     fn per_block(self) -> PerBlock {
         match self {
@@ -119,8 +126,8 @@ fn narrow(v: &[i64]) -> Vec<i32> {
         .collect()
 }
 
-/// Code the block of values `v` (extents `d`, parent box `par`) by `coder`: the stream
-/// [`encode_blocks`] writes for it.
+/// Code the block of values `v` (extents `d`, parent box `par`: its indices and
+/// extents) by `coder`: one block of [`encode_blocks`].
 pub fn encode_one(
     coder: Coder,
     v: &[i64],
@@ -398,33 +405,8 @@ pub fn encode_blocks_rdo_by(
         .map(|i| {
             let b = grid.bounds(i);
             let d = box_dims(&b);
-            let v = values(&b);
             let par = parent_of(&b, parent);
-            let pp = par.as_ref().map(|(data, dims)| Parent { data, dims });
-            if let PerBlock::Narrow { rdo: Some(rdo), .. } = coder.per_block() {
-                let pn = par.as_ref().map(|(data, dims)| (narrow(data), dims));
-                let pp = pn.as_ref().map(|(data, dims)| block::Parent { data, dims });
-                let (s, qb) = rdo(&v, &d, pp, lambda);
-                let qb = if keep {
-                    qb.into_iter().map(i64::from).collect()
-                } else {
-                    Vec::new()
-                };
-                return (s, qb);
-            }
-            let mut e = super::range::Encoder::new();
-            let cols = d.last().copied().unwrap_or(1);
-            let other = coder != Coder::Context;
-            let q =
-                band::encode_rdo_with(&mut e, &d, pp, lambda, coding, keep || other, |g, out| {
-                    out.copy_from_slice(&v[g * cols..(g + 1) * cols])
-                });
-            let q = q.unwrap_or_default();
-            if other {
-                let s = encode_one(coder, &q, &d, BandKind::Detail, par.as_ref(), coding);
-                return (s, if keep { q } else { Vec::new() });
-            }
-            (e.finish_short(), q)
+            encode_one_rdo(coder, &values(&b), &d, par.as_ref(), lambda, coding, keep)
         })
         .collect();
     let mut q = keep.then(|| vec![0i64; grid.dims.iter().product()]);
@@ -436,6 +418,45 @@ pub fn encode_blocks_rdo_by(
         streams.push(s);
     }
     (streams, q)
+}
+
+/// Choose (rate–distortion optimised) and code the indices of the detail block whose
+/// values divided by the step are `v` (extents `d`, parent box `par`: its indices and
+/// extents) by `coder`: one block of [`encode_blocks_rdo`], its stream and, when
+/// `keep`, its indices (else empty).
+pub fn encode_one_rdo(
+    coder: Coder,
+    v: &[f32],
+    d: &[usize],
+    par: Option<&(Vec<i64>, Vec<usize>)>,
+    lambda: f32,
+    coding: Coding,
+    keep: bool,
+) -> (Vec<u8>, Vec<i64>) {
+    if let PerBlock::Narrow { rdo: Some(rdo), .. } = coder.per_block() {
+        let pn = par.map(|(data, dims)| (narrow(data), dims));
+        let pp = pn.as_ref().map(|(data, dims)| block::Parent { data, dims });
+        let (s, qb) = rdo(v, d, pp, lambda);
+        let qb = if keep {
+            qb.into_iter().map(i64::from).collect()
+        } else {
+            Vec::new()
+        };
+        return (s, qb);
+    }
+    let pp = par.map(|(data, dims)| Parent { data, dims });
+    let mut e = super::range::Encoder::new();
+    let cols = d.last().copied().unwrap_or(1);
+    let other = coder != Coder::Context;
+    let q = band::encode_rdo_with(&mut e, d, pp, lambda, coding, keep || other, |g, out| {
+        out.copy_from_slice(&v[g * cols..(g + 1) * cols])
+    });
+    let q = q.unwrap_or_default();
+    if other {
+        let s = encode_one(coder, &q, d, BandKind::Detail, par, coding);
+        return (s, if keep { q } else { Vec::new() });
+    }
+    (e.finish_short(), q)
 }
 
 /// Decode blocks `which` (ascending block numbers; their streams `streams[k]` for

@@ -1,8 +1,8 @@
 //! The effort ladder (`EncodeOptions::effort`, `mra encode --effort`) and the block
 //! coders of formats 3.1 and 3.2: every coder round-trips every mode it is given (lossy, lossless, and
 //! max-error, which keeps the context coder), 2-D and 3-D, 8 and 16 bits, odd sizes;
-//! the bytes do not depend on the thread count; the default effort writes the 3.0 file
-//! of before the ladder; a coder byte no reader knows is refused in one line.
+//! the bytes do not depend on the thread count; the default effort writes coder 2, and
+//! the context coder's file when lossless; a coder byte no reader knows is refused in one line.
 
 use super::common;
 use mra::codec::{self, DecodeOptions, EncodeOptions, Ladder, Rate, DEFAULT_EFFORT};
@@ -59,8 +59,9 @@ fn max_abs(a: &Raster, b: &Raster) -> f64 {
 }
 
 /// The ladder: efforts 1–3 the HT coder, 4–6 the adaptive coder, 7–9 the context
-/// coder; RDO from 4; the default is the context coder (coder 2 meets issue 48's
-/// lossy ratio target, not its lossless one on 16-bit data: docs/codec.md).
+/// coder; RDO from 4; `--lossless` keeps the context coder at 4–6 (coder 2 meets issue
+/// 48's lossy ratio target, not its lossless one on 16-bit data: docs/codec.md); the
+/// default is coder 2.
 #[test]
 fn the_ladder_names_its_coders() {
     for e in 1..=9u8 {
@@ -68,8 +69,11 @@ fn the_ladder_names_its_coders() {
         assert_eq!(l.coder == Coder::Ht, e <= 3, "{e}");
         assert_eq!(l.coder == Coder::Adaptive, (4..=6).contains(&e), "{e}");
         assert_eq!(l.rdo, e >= 4, "{e}");
+        let lossless = if e <= 3 { Coder::Ht } else { Coder::Context };
+        assert_eq!(l.lossless, lossless, "{e}");
     }
-    assert_eq!(Ladder::of(DEFAULT_EFFORT).coder, Coder::Context);
+    assert_eq!(Ladder::of(DEFAULT_EFFORT).coder, Coder::Adaptive);
+    assert_eq!(Ladder::of(DEFAULT_EFFORT).lossless, Coder::Context);
     assert_eq!(EncodeOptions::default().effort, DEFAULT_EFFORT);
     for e in [0u8, 10, 255] {
         let r = field(&[20, 24], 1, SampleType::U8, 1, 255.0);
@@ -79,8 +83,9 @@ fn the_ladder_names_its_coders() {
     }
 }
 
-/// Every coder × mode × shape × depth round-trips: lossless exactly, max-error within
-/// its bound (the context coder, whatever the effort), lossy at the step the rate mode
+/// Every coder × mode × shape × depth round-trips: lossless exactly (the context coder
+/// at efforts 4–6), max-error within its bound (the context coder, whatever the
+/// effort), lossy at the step the rate mode
 /// sets; a file of the HT coder is 3.1, of the adaptive coder 3.2, and says so, the
 /// others 3.0.
 #[test]
@@ -112,10 +117,12 @@ fn every_coder_round_trips_every_mode() {
                     let what = format!("{dims:?}×{ch} {ty:?} effort {effort} {rate:?}");
                     let bytes = codec::encode(&r, &opts(rate, effort)).unwrap();
                     let info = codec::info(&bytes).unwrap();
-                    let want = if matches!(rate, Rate::MaxError(_)) {
-                        "context"
-                    } else {
-                        narrow
+                    // lossless at 4–6 is the context coder's (`Ladder::lossless`);
+                    // coder 2's lossless decode is the vector blocks32a_gray16_lossless'
+                    let want = match rate {
+                        Rate::MaxError(_) => "context",
+                        Rate::Lossless if (4..=6).contains(&effort) => "context",
+                        _ => narrow,
                     };
                     assert_eq!(info.coder.as_deref(), Some(want), "{what}");
                     assert_eq!(info.version, "3.2", "{what}");
@@ -186,10 +193,12 @@ fn each_coder_writes_the_same_bytes_on_any_thread_count() {
     }
 }
 
-/// The default effort writes 3.0 (no coder byte: a 3.0 reader reads it) whose HEAD
-/// parses back to coder 0, the bytes of an explicit `effort: DEFAULT_EFFORT`.
+/// The default effort writes coder 2 (format 3.2, its coder byte 2) when lossy, the
+/// bytes of an explicit `effort: DEFAULT_EFFORT`; its `--lossless` file is effort 7's
+/// byte for byte (the context coder: a 3.2 HEAD whose coder byte is 0), so the default's
+/// lossless bits are those of before the default moved.
 #[test]
-fn the_default_effort_writes_the_3_0_file() {
+fn the_default_effort_writes_coder_2_lossy_and_the_context_coder_lossless() {
     let r = field(&[64, 80], 3, SampleType::U8, 3, 255.0);
     for rate in [Rate::Bpp(1.0), Rate::Lossless, Rate::Quality(70.0)] {
         let d = codec::encode(
@@ -203,10 +212,20 @@ fn the_default_effort_writes_the_3_0_file() {
         .unwrap();
         assert_eq!(d, codec::encode(&r, &opts(rate, DEFAULT_EFFORT)).unwrap());
         let h = codec::header_of(&d).unwrap();
-        assert_eq!((h.version.to_string(), h.coder), ("3.2".to_string(), 0));
+        let coder = if rate == Rate::Lossless {
+            assert_eq!(d, codec::encode(&r, &opts(rate, 7)).unwrap());
+            Coder::Context
+        } else {
+            Coder::Adaptive
+        };
+        assert_eq!(
+            (h.version.to_string(), h.coder),
+            ("3.2".to_string(), coder.id())
+        );
         let (s, e) = head(&d);
         // 3.2's HEAD: 52 + 8N bytes, the flags byte, N exponents and the coder byte
         assert_eq!(e - s, 52 + 8 * 2 + 1 + 2 + 1);
+        assert!(decoded(&d).dims == r.dims);
     }
 }
 

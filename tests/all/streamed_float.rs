@@ -177,7 +177,9 @@ fn in_memory_and_cli_encodes_agree_with_voids() {
         let o = opts(rate, 4);
         let mem = codec::encode(&f, &o).unwrap();
         assert!(mem == cli_path(&f, &o), "{rate:?}");
-        let d = codec::decode(&mem, &DecodeOptions::default()).unwrap().raster;
+        let d = codec::decode(&mem, &DecodeOptions::default())
+            .unwrap()
+            .raster;
         let v = d.samples.to_f64();
         assert!(holes.iter().all(|&i| v[i].is_nan()));
         assert_eq!(v.iter().filter(|x| x.is_nan()).count(), holes.len());

@@ -28,9 +28,9 @@ use super::options::{EncodeOptions, Format, Rate};
 use super::plan::{band_rho, Plan};
 use super::rate::{check_rate, keep_step, quality_step};
 use super::{meta, tiles};
-use crate::entropy::band::{self, Coding};
+use crate::entropy::band::Coding;
 use crate::entropy::codeblocks::{self, box_dims, extract, parent_box, Grid};
-use crate::entropy::{BandKind, Parent};
+use crate::entropy::BandKind;
 use crate::format::bands::blocks_payload;
 use crate::format::tag::{HEAD, MEND, META};
 use crate::format::{self, put_chunk, Header, Mode};
@@ -153,16 +153,9 @@ pub(in crate::codec) fn encode_unless_voids<S: SlabSource + ?Sized, W: std::io::
         sample_type: shape.sample_type,
         kind: shape.kind,
     };
-    let mut header = context_coded(header_with(
-        &frame,
-        opts,
-        Mode::Lossy,
-        colour,
-        range,
-        &shape.meta,
-    )?);
+    let mut header = header_with(&frame, opts, Mode::Lossy, colour, range, &shape.meta)?;
     header.step = step;
-    let rdo = rdo_of(opts.rate);
+    let rdo = rdo_of(opts);
     if rdo.is_some() {
         // reconstruction at the index, as the whole-array encoder's optimised files
         header.delta = 0.0;
@@ -189,14 +182,14 @@ pub(in crate::codec) fn encode_unless_voids<S: SlabSource + ?Sized, W: std::io::
 }
 
 /// The multiplier of the rate–distortion optimised indices of the rate mode (those the
-/// whole-array encoder optimises: `--quality`, `--bpp`, `--psnr`), given to the detail
-/// bands ([`Coder`]).
-fn rdo_of(rate: Rate) -> Option<f32> {
-    matches!(
-        rate,
+/// whole-array encoder optimises: `--quality`, `--bpp`, `--psnr`, at an effort that
+/// optimises, [`super::options::Ladder::rdo`]), given to the detail bands ([`Coder`]).
+fn rdo_of(opts: &EncodeOptions) -> Option<f32> {
+    let optimises = matches!(
+        opts.rate,
         Rate::Quality(_) | Rate::Bpp(_) | Rate::Psnr(_) | Rate::PsnrRange(..)
-    )
-    .then_some(quantize::LAMBDA)
+    );
+    (optimises && opts.ladder().rdo).then_some(quantize::LAMBDA)
 }
 
 /// Most passes of the whole stream [`fit_bpp`] codes.
@@ -264,7 +257,7 @@ fn bpp_step(
     let every = sample.len().div_ceil(BPP_SAMPLE).max(1);
     sample = sample.into_iter().step_by(every).collect();
     let positions: f64 = sample.iter().map(|t| t.positions() as f64).sum();
-    let rdo = rdo_of(opts.rate);
+    let rdo = rdo_of(opts);
     let heads = sample
         .iter()
         .map(|t| {
@@ -275,14 +268,7 @@ fn bpp_step(
                 kind: t.kind,
             };
             let colour = lossy_colour(t.channels);
-            let mut h = context_coded(header_with(
-                &frame,
-                opts,
-                Mode::Lossy,
-                colour,
-                (0.0, 0.0),
-                &t.meta,
-            )?);
+            let mut h = header_with(&frame, opts, Mode::Lossy, colour, (0.0, 0.0), &t.meta)?;
             h.delta = if rdo.is_some() { 0.0 } else { h.delta };
             Ok(h)
         })
@@ -579,18 +565,14 @@ impl<'p> Coder<'p> {
         let g = &b.grid;
         let per: usize = g.counts[1..].iter().product();
         let rows = b.stripe_rows(s);
+        let coder = self.plan.coder;
         let qs: Vec<Vec<i64>> = (s * per..(s + 1) * per)
             .into_par_iter()
             .map(|i| {
                 let bx = g.bounds(i);
                 let d = box_dims(&bx);
                 let v = b.gather_values(&bx);
-                let cols = d.last().copied().unwrap_or(1);
-                let mut e = crate::entropy::range::Encoder::new();
-                band::encode_rdo_with(&mut e, &d, None, lambda, coding, true, |g, out| {
-                    out.copy_from_slice(&v[g * cols..(g + 1) * cols])
-                })
-                .unwrap_or_default()
+                codeblocks::encode_one_rdo(coder, &v, &d, None, lambda, coding, true).1
             })
             .collect();
         let row_len: usize = g.dims[1..].iter().product();
@@ -686,20 +668,21 @@ impl<'p> Coder<'p> {
                     let pbox = parent_box(&bx, &pb.grid.dims);
                     (pb.gather(&pbox), box_dims(&pbox))
                 });
-                let pp = par.as_ref().map(|(data, dims)| Parent { data, dims });
+                // as codeblocks::encode_blocks(_rdo_by) codes a block
                 match lambda {
-                    // as codeblocks::encode_blocks_rdo_by codes a block
                     Some(lambda) => {
                         let v = b.gather_values(&bx);
-                        let cols = d.last().copied().unwrap_or(1);
-                        let mut e = crate::entropy::range::Encoder::new();
-                        band::encode_rdo_with(&mut e, &d, pp, lambda, coding, false, |g, out| {
-                            out.copy_from_slice(&v[g * cols..(g + 1) * cols])
-                        });
-                        e.finish_short()
+                        let (st, _) = codeblocks::encode_one_rdo(
+                            coder,
+                            &v,
+                            &d,
+                            par.as_ref(),
+                            lambda,
+                            coding,
+                            false,
+                        );
+                        st
                     }
-                    // the context coder in a lossy stream ([`context_coded`]), the
-                    // file's in a lossless one
                     None => codeblocks::encode_one(
                         coder,
                         &b.gather(&bx),
@@ -759,13 +742,4 @@ impl<'p> Coder<'p> {
             })
             .collect()
     }
-}
-
-/// The header `h` with its blocks coded by the context coder (coder 0, format 3.0):
-/// the streamed encoder codes every block with it whatever `--effort` asks (the HT
-/// coder is not streamed), so the header must say so.
-fn context_coded(mut h: Header) -> Header {
-    h.coder = 0;
-    h.version = crate::format::Version::for_file(false, h.voids, true);
-    h
 }

@@ -103,11 +103,11 @@ pub(super) fn fit_psnr<S: SlabSource + ?Sized>(
         } else if best.as_ref().is_none_or(|(q, _)| p > *q) {
             best = Some((p, bytes));
         }
-        step *= 10f64.powf((p - db - TOLERANCE / 2.0) / 20.0).clamp(0.25, 4.0);
+        step *= 10f64
+            .powf((p - db - TOLERANCE / 2.0) / 20.0)
+            .clamp(0.25, 4.0);
     }
-    Ok(met
-        .or(best.map(|(_, b)| b))
-        .expect("at least one pass"))
+    Ok(met.or(best.map(|(_, b)| b)).expect("at least one pass"))
 }
 
 /// The PSNR (peak `peak`) of the one-transform file `bytes` against the raster of
