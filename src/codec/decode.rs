@@ -106,8 +106,27 @@ fn decode_band_into(
     (step, delta): (f64, f64),
     rows: Vec<&mut [f32]>,
 ) -> Result<()> {
-    let (grid, which, streams) = block_streams(data, dims, block, window)?;
     let put = super::plan::dequantizing_put(step, delta);
+    decode_band_by(h, data, (dims, block), (kind, parent), window, rows, &put)
+}
+
+/// The code-blocks of a band (those `window` meets, or all) decoded into its `rows`
+/// through `put` (the shared body of [`decode_band_into`] and [`decode_band_narrow`]).
+fn decode_band_by<T, W, N>(
+    h: &Header,
+    data: &[u8],
+    (dims, block): (&[usize], &[usize]),
+    (kind, parent): (BandKind, Option<Parent>),
+    window: Option<&[Range<usize>]>,
+    rows: Vec<&mut [T]>,
+    put: &entropy::codeblocks::Put<W, N>,
+) -> Result<()>
+where
+    T: Send,
+    W: Fn(&mut [T], &[i64]) + Sync,
+    N: Fn(&mut [T], &[i32]) + Sync,
+{
+    let (grid, which, streams) = block_streams(data, dims, block, window)?;
     let (coding, coder) = (super::plan::coding_of(h), super::plan::coder_of(h));
     entropy::codeblocks::decode_blocks_into(
         rows,
@@ -117,7 +136,7 @@ fn decode_band_into(
         (kind, parent),
         coding,
         coder,
-        &put,
+        put,
     )
 }
 
@@ -134,7 +153,6 @@ fn decode_band_narrow(
     rows: Vec<&mut [i32]>,
 ) -> Result<bool> {
     use std::sync::atomic::{AtomicBool, Ordering};
-    let (grid, which, streams) = block_streams(data, dims, block, window)?;
     let fits = AtomicBool::new(true);
     let put = entropy::codeblocks::Put {
         wide: |o: &mut [i32], v: &[i64]| {
@@ -144,17 +162,7 @@ fn decode_band_narrow(
         },
         narrow: |o: &mut [i32], v: &[i32]| o.copy_from_slice(v),
     };
-    let (coding, coder) = (super::plan::coding_of(h), super::plan::coder_of(h));
-    entropy::codeblocks::decode_blocks_into(
-        rows,
-        &grid,
-        &which,
-        &streams,
-        (kind, parent),
-        coding,
-        coder,
-        &put,
-    )?;
+    decode_band_by(h, data, (dims, block), (kind, parent), window, rows, &put)?;
     Ok(fits.into_inner())
 }
 
@@ -557,44 +565,12 @@ pub(super) fn lossless_narrow(p: &Parsed, k: usize) -> Result<Option<Samples>> {
 /// from their ends ([`super::plan::to_samples`]'s way), so that the samples and the
 /// planes are not both held whole.
 fn narrow_samples(mut planes: Vec<Vec<i32>>, npos: usize, ycocg: bool, ty: SampleType) -> Samples {
-    let c = planes.len();
-    let mut out = Samples::zeros(ty, npos * c);
-    let (lo, hi) = ty.range();
-    let (lo, hi) = (lo as i64, hi as i64);
+    let mut out = Samples::zeros(ty, npos * planes.len());
     let mut end = npos;
     while end > 0 {
         let start = end.saturating_sub(super::plan::TAIL);
-        macro_rules! fill {
-            ($v:expr, $t:ty) => {{
-                let out = &mut $v[start * c..end * c];
-                for (i, px) in out.chunks_exact_mut(c).enumerate() {
-                    let at = start + i;
-                    let first = if ycocg && c >= 3 {
-                        let (r, g, b) = lossless::ycocg_r_inv(
-                            planes[0][at] as i64,
-                            planes[1][at] as i64,
-                            planes[2][at] as i64,
-                        );
-                        px[0] = r.clamp(lo, hi) as $t;
-                        px[1] = g.clamp(lo, hi) as $t;
-                        px[2] = b.clamp(lo, hi) as $t;
-                        3
-                    } else {
-                        0
-                    };
-                    for (o, p) in px[first..].iter_mut().zip(&planes[first..]) {
-                        *o = (p[at] as i64).clamp(lo, hi) as $t;
-                    }
-                }
-            }};
-        }
-        match &mut out {
-            Samples::U8(v) => fill!(v, u8),
-            Samples::I8(v) => fill!(v, i8),
-            Samples::U16(v) => fill!(v, u16),
-            Samples::I16(v) => fill!(v, i16),
-            _ => unreachable!("narrow_samples of a type over 16 bits"),
-        }
+        let views: Vec<&[i32]> = planes.iter().map(|p| p.as_slice()).collect();
+        lossless::interleave(&views, start..end, ycocg, &mut out);
         for p in &mut planes {
             p.truncate(start);
             p.shrink_to_fit();

@@ -5,6 +5,7 @@
 //! and the order-preserving map from float bit patterns to integers. All arithmetic
 //! wraps, so every step inverts exactly for any input.
 
+use crate::io::Samples;
 use crate::scheme::{Boundary, Scheme};
 use crate::tensor::{Order, Pyramid, PyramidSpec};
 
@@ -440,6 +441,51 @@ pub fn ycocg_r(r: i64, g: i64, b: i64) -> (i64, i64, i64) {
     let t = b.wrapping_add(co >> 1);
     let cg = g.wrapping_sub(t);
     (t.wrapping_add(cg >> 1), co, cg)
+}
+
+/// Positions `range` of the channel planes interleaved into `out` (from its sample
+/// `range.start × planes.len()` on; an 8- or 16-bit type): the first three channels
+/// taken back from YCoCg-R when `ycocg`, every sample clamped to the type's range — the
+/// samples of a lossless decode.
+pub(crate) fn interleave<P: Store>(
+    planes: &[&[P]],
+    range: std::ops::Range<usize>,
+    ycocg: bool,
+    out: &mut Samples,
+) {
+    let c = planes.len();
+    let (lo, hi) = out.sample_type().range();
+    let (lo, hi) = (lo as i64, hi as i64);
+    macro_rules! fill {
+        ($v:expr, $t:ty) => {{
+            let out = &mut $v[range.start * c..range.end * c];
+            for (px, at) in out.chunks_exact_mut(c).zip(range.clone()) {
+                let first = if ycocg && c >= 3 {
+                    let (r, g, b) = ycocg_r_inv(
+                        planes[0][at].wide(),
+                        planes[1][at].wide(),
+                        planes[2][at].wide(),
+                    );
+                    px[0] = r.clamp(lo, hi) as $t;
+                    px[1] = g.clamp(lo, hi) as $t;
+                    px[2] = b.clamp(lo, hi) as $t;
+                    3
+                } else {
+                    0
+                };
+                for (o, p) in px[first..].iter_mut().zip(&planes[first..]) {
+                    *o = p[at].wide().clamp(lo, hi) as $t;
+                }
+            }
+        }};
+    }
+    match out {
+        Samples::U8(v) => fill!(v, u8),
+        Samples::I8(v) => fill!(v, i8),
+        Samples::U16(v) => fill!(v, u16),
+        Samples::I16(v) => fill!(v, i16),
+        _ => unreachable!("lossless::interleave of a type over 16 bits"),
+    }
 }
 
 /// Inverse of [`ycocg_r`].

@@ -263,7 +263,7 @@ mod encode;
 mod index;
 use compact::{tile_file, Ratios};
 pub(crate) use encode::encode_slabs;
-pub(super) use encode::{first_pass, search};
+pub(super) use encode::{first_pass, sampled_keep_step, search};
 pub(super) use index::read_tiled_info;
 use index::{check_end, fetch_tile, parse_index, read_index, tile_payload};
 

@@ -23,10 +23,10 @@
 
 use super::colour::{channel_weights, planes_f32};
 use super::levels::{round_index, CodedBand};
-use super::lossy::{header_with, lossy_colour, prepare, Frame};
+use super::lossy::{header_with, lossy_colour, Frame};
 use super::options::{EncodeOptions, Format, Rate};
 use super::plan::{band_rho, Plan};
-use super::rate::{check_rate, keep_step, quality_step};
+use super::rate::{check_rate, quality_step};
 use super::{meta, tiles};
 use crate::entropy::band::Coding;
 use crate::entropy::codeblocks::{self, box_dims, extract, parent_box, Grid};
@@ -135,14 +135,7 @@ pub(in crate::codec) fn encode_unless_voids<S: SlabSource + ?Sized, W: std::io::
     let step = match opts.rate {
         Rate::Quality(q) => quality_step(q, span),
         Rate::Threshold(t) => t / (1.0 - RHO),
-        Rate::Keep(k) => {
-            let mut w: Vec<f32> = sample
-                .par_iter()
-                .map(|t| Ok(prepare(&t.view(), opts, Mode::Lossy)?.weighted_details()))
-                .collect::<Result<Vec<_>>>()?
-                .concat();
-            keep_step(&mut w, k, span)
-        }
+        Rate::Keep(k) => tiles::sampled_keep_step(&sample, opts, k, span)?,
         Rate::Bpp(_) | Rate::Psnr(_) | Rate::PsnrRange(..) => 0.0,
         _ => unreachable!("refused by covers"),
     };

@@ -226,6 +226,22 @@ pub(crate) fn encode_slabs<S: SlabSource + ?Sized, W: Write + Seek>(
     Ok(at - start)
 }
 
+/// The `--keep k` step of a raster from its first pass's sampled tiles: the threshold
+/// of the largest k% of their weighted details ([`keep_step`], `span` the range).
+pub(in crate::codec) fn sampled_keep_step(
+    sample: &[Raster],
+    opts: &EncodeOptions,
+    k: f64,
+    span: f64,
+) -> Result<f64> {
+    let mut w: Vec<f32> = sample
+        .par_iter()
+        .map(|t| Ok(prepare(&t.view(), opts, Mode::Lossy)?.weighted_details()))
+        .collect::<Result<Vec<_>>>()?
+        .concat();
+    Ok(keep_step(&mut w, k, span))
+}
+
 /// What the first pass of a one-transform file learns of its raster.
 pub(in crate::codec) struct FirstPass {
     /// The least and greatest finite sample, `(0, 0)` when there is none.
@@ -315,16 +331,10 @@ fn choose_coding(
             step: quality_step(q, range),
             rdo: true,
         },
-        Rate::Keep(k) => {
-            // the threshold of the largest k% over the sampled tiles' details
-            let mut w: Vec<f32> = sample
-                .par_iter()
-                .map(|t| Ok(prepare(&t.view(), opts, Mode::Lossy)?.weighted_details()))
-                .collect::<Result<Vec<_>>>()?
-                .concat();
-            let step = keep_step(&mut w, k, range);
-            Coding::Step { step, rdo: false }
-        }
+        Rate::Keep(k) => Coding::Step {
+            step: sampled_keep_step(&sample, opts, k, range)?,
+            rdo: false,
+        },
         Rate::Psnr(_) | Rate::PsnrRange(..) | Rate::Bpp(_) => {
             let peak = match (opts.rate, ranges.all) {
                 (Rate::PsnrRange(_, p), _) => p,

@@ -81,36 +81,9 @@ fn synthesize(p: &Parsed, send: &mut dyn FnMut(Samples) -> bool) -> Result<()> {
 /// three taken back from YCoCg-R when `ycocg`), clamped to the type's range, as the
 /// whole-array lossless decode makes them.
 fn samples(planes: &[Vec<i64>], ycocg: bool, ty: SampleType) -> Samples {
-    let c = planes.len();
     let npos = planes.first().map_or(0, |p| p.len());
-    let mut out = Samples::zeros(ty, npos * c);
-    let (lo, hi) = ty.range();
-    let (lo, hi) = (lo as i64, hi as i64);
-    macro_rules! fill {
-        ($v:expr, $t:ty) => {{
-            for (at, px) in $v.chunks_exact_mut(c).enumerate() {
-                let first = if ycocg && c >= 3 {
-                    let (r, g, b) =
-                        lossless::ycocg_r_inv(planes[0][at], planes[1][at], planes[2][at]);
-                    px[0] = r.clamp(lo, hi) as $t;
-                    px[1] = g.clamp(lo, hi) as $t;
-                    px[2] = b.clamp(lo, hi) as $t;
-                    3
-                } else {
-                    0
-                };
-                for (o, p) in px[first..].iter_mut().zip(&planes[first..]) {
-                    *o = p[at].clamp(lo, hi) as $t;
-                }
-            }
-        }};
-    }
-    match &mut out {
-        Samples::U8(v) => fill!(v, u8),
-        Samples::I8(v) => fill!(v, i8),
-        Samples::U16(v) => fill!(v, u16),
-        Samples::I16(v) => fill!(v, i16),
-        _ => unreachable!("decodes() takes 8- and 16-bit samples"),
-    }
+    let mut out = Samples::zeros(ty, npos * planes.len());
+    let views: Vec<&[i64]> = planes.iter().map(|p| p.as_slice()).collect();
+    lossless::interleave(&views, 0..npos, ycocg, &mut out);
     out
 }
