@@ -4,8 +4,7 @@
 //! trained on the data, in both quad alphabets; damaged streams; and on real bands
 //! (kodim01 at 1 bpp, when the corpus is present) the indices back exactly.
 
-use super::block_coder::{band_of, bands, dims, index};
-use super::common;
+use super::block_coder::{band_of, dims, index, kodim01_bands};
 
 use mra::entropy::block::ht::{Counts, Kind, Tables};
 use mra::entropy::block::{self, Parent, Shape};
@@ -130,20 +129,9 @@ fn ht_edge_bands() {
 /// exactly, within a third more bits than today's coder.
 #[test]
 fn ht_real_bands_round_trip() {
-    let Some(path) = common::corpus("images/kodak/kodim01.png") else {
+    let Some((bs, _)) = kodim01_bands() else {
         return;
     };
-    let r = mra::io::read(&path).unwrap();
-    let bytes = mra::codec::encode(
-        &r,
-        &mra::codec::EncodeOptions {
-            rate: mra::codec::Rate::Bpp(1.0),
-            format: mra::codec::Format::Bands,
-            ..Default::default()
-        },
-    )
-    .unwrap();
-    let bs = bands::Bands::of_file(&bytes).unwrap();
     let shape = Shape::new(1, 256, 256);
     let (mut today, mut ours) = (0, 0);
     for (i, b) in bs.bands.iter().enumerate() {

@@ -4,8 +4,7 @@
 //! and without the parent context; arbitrary and cut bytes never panic; and on real
 //! bands (kodim01 at 1 bpp, when the corpus is present) the indices back exactly.
 
-use super::block_coder::{band_of, bands, dims, index};
-use super::common;
+use super::block_coder::{band_of, dims, index, kodim01_bands};
 
 use mra::entropy::block::rans::{Counts, Kind, Tables};
 use mra::entropy::block::{self, Parent, Shape};
@@ -135,20 +134,9 @@ fn rans_edge_bands() {
 /// gives every band's indices back exactly, within a third more bits than today's coder.
 #[test]
 fn rans_real_bands_round_trip() {
-    let Some(path) = common::corpus("images/kodak/kodim01.png") else {
+    let Some((bs, _)) = kodim01_bands() else {
         return;
     };
-    let r = mra::io::read(&path).unwrap();
-    let bytes = mra::codec::encode(
-        &r,
-        &mra::codec::EncodeOptions {
-            rate: mra::codec::Rate::Bpp(1.0),
-            format: mra::codec::Format::Bands,
-            ..Default::default()
-        },
-    )
-    .unwrap();
-    let bs = bands::Bands::of_file(&bytes).unwrap();
     let shape = Shape::new(1, 256, 256);
     let k = Kind { parent: false };
     let mut n = Counts::new(k);
