@@ -420,6 +420,9 @@ fn main() {
         "blocks32a_rgb8_bpp1",
         "blocks32a_gray16_lossless",
         "blocks32a_vol_u16_q40",
+        // the 3.2 volume as its first writer coded it, before volumes took 32³
+        // code-blocks (the file names its own block extents: a valid 3.2 file)
+        "blocks32_vol_u16_q40",
         "tiled_gray16_q40",
         "gray8_lossless",
         "rgba16_lossless",
