@@ -25,20 +25,12 @@ Usage (repository root):
   python3 benches/peers/codec_inprocess.py [--corpus ../shared/corpus] [--efforts 1,4,7]
       [--bpp 1] [--repeat 3] [--no-lossy] [--no-lossless] [--kodak 4]
 """
-import argparse, gzip, os, sys, time
+import argparse, os, sys, time
 import numpy as np
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-
-
-def read_nrrd_gzip(path):
-    data = open(path, "rb").read()
-    head, _, body = data.partition(b"\n\n")
-    fields = dict(l.split(": ", 1) for l in head.decode().splitlines() if ": " in l)
-    sizes = [int(s) for s in fields["sizes"].split()]
-    assert fields["type"] == "int16" and fields["encoding"] == "gzip", fields
-    a = np.frombuffer(gzip.decompress(body), dtype="<i2")
-    return a.reshape(sizes[::-1]).copy()  # (z, y, x)
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from codec_speed import read_nrrd_gzip  # noqa: E402  (the corpus CT as (z, y, x) int16)
 
 
 class Time(float):

@@ -53,7 +53,7 @@ def read_nrrd_gzip(path):
     sizes = [int(s) for s in fields["sizes"].split()]
     assert fields["type"] == "int16" and fields["encoding"] == "gzip", fields
     a = np.frombuffer(gzip.decompress(body), dtype="<i2")
-    return a.reshape(sizes[::-1])  # (z, y, x)
+    return a.reshape(sizes[::-1]).copy()  # (z, y, x), writable
 
 
 def volume(corpus, tmp):
