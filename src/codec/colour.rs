@@ -52,13 +52,19 @@ pub(super) fn planes_f32(r: &RasterView<'_>, colour: Colour) -> Vec<Vec<f32>> {
         SamplesRef::U32(v) => split(v, c, n, ycocg, |x| x as f32),
         SamplesRef::I32(v) => split(v, c, n, ycocg, |x| x as f32),
         SamplesRef::F32(v) => split(v, c, n, ycocg, |x| if x.is_finite() { x } else { 0.0 }),
-        SamplesRef::F64(v) => split(v, c, n, ycocg, |x| {
-            if x.is_finite() {
-                x as f32
-            } else {
-                0.0
-            }
-        }),
+        SamplesRef::F64(v) => split(
+            v,
+            c,
+            n,
+            ycocg,
+            |x| {
+                if x.is_finite() {
+                    x as f32
+                } else {
+                    0.0
+                }
+            },
+        ),
         SamplesRef::F16(v) => split(v, c, n, ycocg, |x| {
             let x = x.to_f64();
             if x.is_finite() {
@@ -198,7 +204,11 @@ mod tests {
                     let mut want = vec![t + cg * 0.5, co, cg];
                     want.extend_from_slice(&px[3..]);
                     for k in 0..c {
-                        assert_eq!(planes[k][i].to_bits(), want[k].to_bits(), "{c} {threads} {i} {k}");
+                        assert_eq!(
+                            planes[k][i].to_bits(),
+                            want[k].to_bits(),
+                            "{c} {threads} {i} {k}"
+                        );
                     }
                 }
             }

@@ -523,8 +523,24 @@ mod tests {
     #[test]
     fn ycocg_planes_convert_as_the_f64_rule() {
         let special = [
-            0.0f32, -0.0, 0.5, -0.5, 1.5, 2.5, 254.5, 255.5, 256.0, -3.0, 1e30, -1e30,
-            f32::INFINITY, f32::NEG_INFINITY, f32::NAN, 127.49999, 0.49999997, 65535.5,
+            0.0f32,
+            -0.0,
+            0.5,
+            -0.5,
+            1.5,
+            2.5,
+            254.5,
+            255.5,
+            256.0,
+            -3.0,
+            1e30,
+            -1e30,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::NAN,
+            127.49999,
+            0.49999997,
+            65535.5,
         ];
         for npos in [1usize, 63, 65, 70_001] {
             let planes: Vec<Vec<f32>> = (0..3u32)
@@ -541,14 +557,22 @@ mod tests {
                         .collect()
                 })
                 .collect();
-            for (ty, range) in [(SampleType::U8, (0.0, 255.0)), (SampleType::U16, (3.0, 200.0))] {
+            for (ty, range) in [
+                (SampleType::U8, (0.0, 255.0)),
+                (SampleType::U16, (3.0, 200.0)),
+            ] {
                 let got = to_samples(planes.clone(), npos, true, range, ty);
                 let (tlo, thi) = ty.range();
                 for i in 0..npos {
                     let (r, g, b) = ycocg_inverse(planes[0][i], planes[1][i], planes[2][i]);
                     for (ch, x) in [r, g, b].into_iter().enumerate() {
-                        let want = round_to((x as f64).clamp(range.0, range.1), tlo as i64, thi as i64);
-                        assert_eq!(got.get_f64(3 * i + ch), want as f64, "{ty:?} {npos} {i} {ch} {x}");
+                        let want =
+                            round_to((x as f64).clamp(range.0, range.1), tlo as i64, thi as i64);
+                        assert_eq!(
+                            got.get_f64(3 * i + ch),
+                            want as f64,
+                            "{ty:?} {npos} {i} {ch} {x}"
+                        );
                     }
                 }
             }

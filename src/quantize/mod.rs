@@ -319,7 +319,11 @@ mod tests {
                         .unwrap();
                     let got = pool.install(|| band_gains(&pyr, &bands));
                     let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
-                    assert_eq!(bits(&got), bits(&want), "{shape:?} {scheme:?} {order:?} {threads}");
+                    assert_eq!(
+                        bits(&got),
+                        bits(&want),
+                        "{shape:?} {scheme:?} {order:?} {threads}"
+                    );
                 }
             }
         }
