@@ -5,6 +5,7 @@
 
 use crate::format::header::Colour;
 use crate::io::{RasterView, SamplesRef};
+use rayon::prelude::*;
 
 /// Squared synthesis gain of each channel after the colour transform (inverse YCoCg
 /// columns: Y → (1,1,1), Co → (½,0,−½), Cg → (−½,½,−½)).
@@ -42,16 +43,29 @@ pub(super) fn planes_f32(r: &RasterView<'_>, colour: Colour) -> Vec<Vec<f32>> {
     let c = r.channels;
     let n = r.positions();
     // integers convert exactly through f64 or straight (one rounding either way)
-    let mut planes = match r.samples {
-        SamplesRef::U8(v) => split(v, c, n, |x| x as f32),
-        SamplesRef::I8(v) => split(v, c, n, |x| x as f32),
-        SamplesRef::U16(v) => split(v, c, n, |x| x as f32),
-        SamplesRef::I16(v) => split(v, c, n, |x| x as f32),
-        SamplesRef::U32(v) => split(v, c, n, |x| x as f32),
-        SamplesRef::I32(v) => split(v, c, n, |x| x as f32),
-        SamplesRef::F32(v) => split(v, c, n, |x| if x.is_finite() { x } else { 0.0 }),
-        SamplesRef::F64(v) => split(v, c, n, |x| if x.is_finite() { x as f32 } else { 0.0 }),
-        SamplesRef::F16(v) => split(v, c, n, |x| {
+    let ycocg = colour == Colour::YCoCg;
+    match r.samples {
+        SamplesRef::U8(v) => split(v, c, n, ycocg, |x| x as f32),
+        SamplesRef::I8(v) => split(v, c, n, ycocg, |x| x as f32),
+        SamplesRef::U16(v) => split(v, c, n, ycocg, |x| x as f32),
+        SamplesRef::I16(v) => split(v, c, n, ycocg, |x| x as f32),
+        SamplesRef::U32(v) => split(v, c, n, ycocg, |x| x as f32),
+        SamplesRef::I32(v) => split(v, c, n, ycocg, |x| x as f32),
+        SamplesRef::F32(v) => split(v, c, n, ycocg, |x| if x.is_finite() { x } else { 0.0 }),
+        SamplesRef::F64(v) => split(
+            v,
+            c,
+            n,
+            ycocg,
+            |x| {
+                if x.is_finite() {
+                    x as f32
+                } else {
+                    0.0
+                }
+            },
+        ),
+        SamplesRef::F16(v) => split(v, c, n, ycocg, |x| {
             let x = x.to_f64();
             if x.is_finite() {
                 x as f32
@@ -59,31 +73,68 @@ pub(super) fn planes_f32(r: &RasterView<'_>, colour: Colour) -> Vec<Vec<f32>> {
                 0.0
             }
         }),
-    };
-    if colour == Colour::YCoCg {
-        map3(&mut planes, |r, g, b| {
-            let co = r - b;
-            let t = b + co * 0.5;
-            let cg = g - t;
-            (t + cg * 0.5, co, cg)
-        });
     }
-    planes
 }
 
-/// The `c` planes of `n` interleaved positions, `f` applied to every sample.
-fn split<T: Copy>(v: &[T], c: usize, n: usize, f: impl Fn(T) -> f32) -> Vec<Vec<f32>> {
-    if c == 1 {
-        return vec![v[..n].iter().map(|&x| f(x)).collect()];
-    }
+/// Forward YCoCg in real arithmetic: `(R, G, B) → (Y, Co, Cg)`, the inverse of
+/// [`ycocg_inverse`].
+#[inline(always)]
+fn ycocg_forward(r: f32, g: f32, b: f32) -> (f32, f32, f32) {
+    let co = r - b;
+    let t = b + co * 0.5;
+    let cg = g - t;
+    (t + cg * 0.5, co, cg)
+}
+
+/// The `c` planes of `n` interleaved positions, `f` applied to every sample, then the
+/// first three taken to YCoCg when `ycocg` ([`ycocg_forward`]). Blocks of positions go
+/// in parallel; each position is converted on its own, so the planes are the same on
+/// any number of threads.
+fn split<T: Copy + Sync>(
+    v: &[T],
+    c: usize,
+    n: usize,
+    ycocg: bool,
+    f: impl Fn(T) -> f32 + Sync,
+) -> Vec<Vec<f32>> {
+    const BLOCK: usize = 1 << 15;
     // fresh zeroed planes on huge pages where the kernel allows (`vec![plane; c]` would
     // copy the first plane's zeros into the others, a page fault and a copy per page)
     let mut planes: Vec<Vec<f32>> = (0..c).map(|_| crate::tensor::zeroed_vec(n)).collect();
-    for (i, px) in v[..n * c].chunks_exact(c).enumerate() {
-        for (p, &x) in planes.iter_mut().zip(px) {
-            p[i] = f(x);
+    // each block's slices of the planes
+    let mut parts: Vec<Vec<&mut [f32]>> = (0..n.div_ceil(BLOCK)).map(|_| Vec::new()).collect();
+    for p in planes.iter_mut() {
+        for (k, part) in p.chunks_mut(BLOCK).enumerate() {
+            parts[k].push(part);
         }
     }
+    parts.into_par_iter().enumerate().for_each(|(k, mut part)| {
+        let m = part[0].len();
+        let src = &v[k * BLOCK * c..(k * BLOCK + m) * c];
+        if let [p0, p1, p2] = &mut part[..] {
+            // (zipped, not indexed: no bounds checks)
+            let outs = p0.iter_mut().zip(p1.iter_mut()).zip(p2.iter_mut());
+            for (((a, b), d), px) in outs.zip(src.chunks_exact(3)) {
+                (*a, *b, *d) = (f(px[0]), f(px[1]), f(px[2]));
+                if ycocg {
+                    (*a, *b, *d) = ycocg_forward(*a, *b, *d);
+                }
+            }
+            return;
+        }
+        for (i, px) in src.chunks_exact(c).enumerate() {
+            for (p, &x) in part.iter_mut().zip(px) {
+                p[i] = f(x);
+            }
+        }
+        if let [p0, p1, p2, ..] = &mut part[..] {
+            if ycocg {
+                for ((a, b), d) in p0.iter_mut().zip(p1.iter_mut()).zip(p2.iter_mut()) {
+                    (*a, *b, *d) = ycocg_forward(*a, *b, *d);
+                }
+            }
+        }
+    });
     planes
 }
 
@@ -121,6 +172,43 @@ mod tests {
                         let x = r.samples.get_f64(i * c + k);
                         let want = if x.is_finite() { x as f32 } else { 0.0 };
                         assert_eq!(p[i].to_bits(), want.to_bits(), "{ty:?} {c} {i} {k}");
+                    }
+                }
+            }
+        }
+    }
+
+    /// YCoCg planes of 3 and 4 channels over several blocks of positions are the
+    /// samples as `f32` through the forward transform one position at a time (the 4th
+    /// channel untouched), the same on one and two threads.
+    #[test]
+    fn ycocg_planes_are_the_per_position_transform() {
+        let n = 3 * (1 << 15) + 17;
+        for c in [3usize, 4] {
+            let v: Vec<u16> = (0..n * c)
+                .map(|i| (i as u32).wrapping_mul(2_654_435_761) as u16)
+                .collect();
+            let r = Raster::new(vec![n, 1], c, Samples::U16(v.clone()), DataKind::Image).unwrap();
+            for threads in [1, 2] {
+                let pool = rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .build()
+                    .unwrap();
+                let planes = pool.install(|| planes_f32(&r.view(), Colour::YCoCg));
+                for i in (0..n).step_by(7) {
+                    let px: Vec<f32> = (0..c).map(|k| v[i * c + k] as f32).collect();
+                    // Co = R − B, t = B + Co/2, Cg = G − t, Y = t + Cg/2
+                    let co = px[0] - px[2];
+                    let t = px[2] + co * 0.5;
+                    let cg = px[1] - t;
+                    let mut want = vec![t + cg * 0.5, co, cg];
+                    want.extend_from_slice(&px[3..]);
+                    for k in 0..c {
+                        assert_eq!(
+                            planes[k][i].to_bits(),
+                            want[k].to_bits(),
+                            "{c} {threads} {i} {k}"
+                        );
                     }
                 }
             }

@@ -20,8 +20,13 @@ use rayon::prelude::*;
 /// The least and greatest finite sample, `(0, 0)` when there is none (integers compared
 /// as they are stored, floats through `f64`).
 pub(super) fn finite_range(s: SamplesRef<'_>) -> (f64, f64) {
-    fn ints<T: Copy + Ord + Into<f64>>(v: &[T]) -> Option<(f64, f64)> {
-        Some(((*v.iter().min()?).into(), (*v.iter().max()?).into()))
+    // integers: blocks in parallel (the least and greatest of any split are the same)
+    fn ints<T: Copy + Ord + Into<f64> + Send + Sync>(v: &[T]) -> Option<(f64, f64)> {
+        let (lo, hi) = v
+            .par_chunks(1 << 16)
+            .filter_map(|b| Some((*b.iter().min()?, *b.iter().max()?)))
+            .reduce_with(|(a, b), (c, d)| (a.min(c), b.max(d)))?;
+        Some((lo.into(), hi.into()))
     }
     fn floats(it: impl Iterator<Item = f64>) -> Option<(f64, f64)> {
         let (lo, hi) = it
@@ -250,11 +255,34 @@ pub(super) fn prepare_slabs<S: SlabSource + ?Sized>(
 /// The pyramid of each plane, analysed in place, and what a lossy encode keeps beside it.
 fn analysed(header: Header, planes: Vec<Vec<f32>>, meta: Vec<u8>) -> Result<Prepared> {
     let plan = Plan::new(&header)?;
-    let gains = quantize::band_gains(&plan.pyr, &plan.bands);
     let weights = channel_weights(header.colour, header.channels);
     let spec = plan.pyr.spec.clone();
     let dims = header.dims.clone();
-    let coeffs = planes
+    // the gains beside the analysis (they need only the plan): a thread left over by
+    // the channels (three on two threads) computes them
+    let (gains, coeffs) = rayon::join(
+        || quantize::band_gains(&plan.pyr, &plan.bands),
+        || analyse_planes(planes, &dims, &spec),
+    );
+    Ok(Prepared {
+        header,
+        plan,
+        gains,
+        weights,
+        coeffs: coeffs?,
+        meta,
+        rdo: None,
+    })
+}
+
+/// Each plane (extents `dims`) analysed in place by `spec`'s pyramid, the planes in
+/// parallel.
+fn analyse_planes(
+    planes: Vec<Vec<f32>>,
+    dims: &[usize],
+    spec: &tensor::PyramidSpec,
+) -> Result<Vec<Vec<f32>>> {
+    planes
         .into_par_iter()
         .map(|p| {
             let mut a = Array::from_shape_vec(&dims, p)?;
@@ -267,19 +295,10 @@ fn analysed(header: Header, planes: Vec<Vec<f32>>, meta: Vec<u8>) -> Result<Prep
             } else {
                 tensor::Engine::tuned()
             };
-            tensor::analyze_with(&mut a, &spec, engine)?;
+            tensor::analyze_with(&mut a, spec, engine)?;
             Ok(a.into_data())
         })
-        .collect::<Result<Vec<_>>>()?;
-    Ok(Prepared {
-        header,
-        plan,
-        gains,
-        weights,
-        coeffs,
-        meta,
-        rdo: None,
-    })
+        .collect()
 }
 
 impl Prepared {

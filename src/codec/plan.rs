@@ -172,9 +172,20 @@ pub(super) fn dequantize_row(q: &[i64], step: f64, delta: f64, out: &mut [f32]) 
     }
 }
 
+/// [`dequantize_row`] of `i32` indices: the same arithmetic on the same `f64` values
+/// (an `i32` converts exactly), written as selects so that the loop vectorises.
+#[inline]
+pub(super) fn dequantize_row_i32(q: &[i32], step: f64, delta: f64, out: &mut [f32]) {
+    for (o, &x) in out.iter_mut().zip(q) {
+        let a = x as f64;
+        let v = (if x < 0 { a - delta } else { a + delta }) * step;
+        *o = if x == 0 { 0.0 } else { v as f32 };
+    }
+}
+
 /// The writer of a lossy band's decoded indices into `f32` rows: `x = sign(q)·(|q| + δ)·Δ`
-/// ([`dequantize_row`]), the `i32` indices of a narrow coder widened 64 at a time (the
-/// same `dequantize` of the same values).
+/// ([`dequantize_row`]; a narrow coder's `i32` indices by [`dequantize_row_i32`], the
+/// same values).
 // the two closure types cannot be named in a type alias (`impl Trait`)
 #[allow(clippy::type_complexity)]
 pub(super) fn dequantizing_put(
@@ -186,15 +197,7 @@ pub(super) fn dequantizing_put(
 > {
     crate::entropy::codeblocks::Put {
         wide: move |o: &mut [f32], q: &[i64]| dequantize_row(q, step, delta, o),
-        narrow: move |o: &mut [f32], q: &[i32]| {
-            let mut wide = [0i64; 64];
-            for (o, q) in o.chunks_mut(64).zip(q.chunks(64)) {
-                for (w, &x) in wide.iter_mut().zip(q) {
-                    *w = x as i64;
-                }
-                dequantize_row(&wide[..q.len()], step, delta, o);
-            }
-        },
+        narrow: move |o: &mut [f32], q: &[i32]| dequantize_row_i32(q, step, delta, o),
     }
 }
 
@@ -365,7 +368,7 @@ fn convert_into(
                 if in_f32 {
                     let (tl, th) = (tlo as i32, thi as i32);
                     interleave(&mut $v[a..b], part, ycocg, |x: f32| {
-                        round_to_f32(x.clamp(flo, fhi), tl, th) as $t
+                        round_to_f32(clamp_f32(x, flo, fhi), tl, th) as $t
                     })
                 } else {
                     int!($v, $t)
@@ -406,6 +409,18 @@ fn round_to(x: f64, lo: i64, hi: i64) -> i64 {
 
 /// Whole numbers up to this magnitude are exact in `f32`.
 const F32_EXACT: f64 = (1u32 << 24) as f64;
+
+/// `x` clamped to `lo..=hi` (`lo ≤ hi`) as [`f32::clamp`] does it, NaN staying NaN:
+/// two selects, without `clamp`'s check of the bounds, so that a loop of it vectorises.
+#[inline(always)]
+fn clamp_f32(x: f32, lo: f32, hi: f32) -> f32 {
+    let x = if x < lo { lo } else { x };
+    if x > hi {
+        hi
+    } else {
+        x
+    }
+}
 
 /// [`round_to`] of an `f32` value within ±2^24 (or NaN → 0) into `lo..=hi`.
 #[inline(always)]
@@ -452,12 +467,16 @@ fn interleave<T: Send + Copy>(
                     let (at, m) = (k * LANE, px.len() / 3);
                     let [y, co, cg] = p.map(|q| &q[at..at + m]);
                     let [tr, tg, tb] = &mut t;
-                    for i in 0..m {
-                        let (r, g, b) = ycocg_inverse(y[i], co[i], cg[i]);
-                        (tr[i], tg[i], tb[i]) = (conv(r), conv(g), conv(b));
+                    // zipped, not indexed: no bounds checks, so the loop vectorises
+                    let outs = tr.iter_mut().zip(tg.iter_mut()).zip(tb.iter_mut());
+                    let ins = y.iter().zip(co).zip(cg);
+                    for (((or, og), ob), ((&y, &co), &cg)) in outs.zip(ins) {
+                        let (r, g, b) = ycocg_inverse(y, co, cg);
+                        (*or, *og, *ob) = (conv(r), conv(g), conv(b));
                     }
-                    for (i, o) in px.chunks_exact_mut(3).enumerate() {
-                        (o[0], o[1], o[2]) = (tr[i], tg[i], tb[i]);
+                    let ts = tr.iter().zip(tg.iter()).zip(tb.iter());
+                    for (o, ((&r, &g), &b)) in px.chunks_exact_mut(3).zip(ts) {
+                        (o[0], o[1], o[2]) = (r, g, b);
                     }
                 }
                 return;
@@ -475,4 +494,88 @@ fn interleave<T: Send + Copy>(
                 }
             }
         });
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `i32` indices dequantize to the bits [`dequantize_row`] gives their `i64` values,
+    /// at the extremes, around zero and at several steps and offsets.
+    #[test]
+    fn narrow_dequantization_is_the_wide_one() {
+        let mut q: Vec<i32> = vec![0, 1, -1, 2, -2, i32::MAX, i32::MIN, i32::MIN + 1, 1 << 24];
+        q.extend((0..500).map(|i: i32| i.wrapping_mul(7919).wrapping_sub(1 << 11) % 4099));
+        for (step, delta) in [(1.0, 0.0), (0.37, 0.12), (1234.5, 0.5), (1e-9, 0.25)] {
+            let wide: Vec<i64> = q.iter().map(|&x| x as i64).collect();
+            let (mut a, mut b) = (vec![1f32; q.len()], vec![2f32; q.len()]);
+            dequantize_row(&wide, step, delta, &mut a);
+            dequantize_row_i32(&q, step, delta, &mut b);
+            let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&a), bits(&b), "step {step} delta {delta}");
+        }
+    }
+
+    /// Three YCoCg planes to 8- and 16-bit samples: each sample is the inverse colour
+    /// transform clamped to the range and rounded half away from zero in `f64`, for
+    /// halves, values out of range, infinities and NaN, over lengths that end inside a
+    /// lane and span several blocks.
+    #[test]
+    fn ycocg_planes_convert_as_the_f64_rule() {
+        let special = [
+            0.0f32,
+            -0.0,
+            0.5,
+            -0.5,
+            1.5,
+            2.5,
+            254.5,
+            255.5,
+            256.0,
+            -3.0,
+            1e30,
+            -1e30,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::NAN,
+            127.49999,
+            0.49999997,
+            65535.5,
+        ];
+        for npos in [1usize, 63, 65, 70_001] {
+            let planes: Vec<Vec<f32>> = (0..3u32)
+                .map(|ch| {
+                    (0..npos as u32)
+                        .map(|i| {
+                            let k = i.wrapping_mul(2_654_435_761).wrapping_add(ch * 97);
+                            if k % 5 == 0 {
+                                special[(k as usize / 5) % special.len()]
+                            } else {
+                                (k % 70_000) as f32 / 256.0 - 20.0
+                            }
+                        })
+                        .collect()
+                })
+                .collect();
+            for (ty, range) in [
+                (SampleType::U8, (0.0, 255.0)),
+                (SampleType::U16, (3.0, 200.0)),
+            ] {
+                let got = to_samples(planes.clone(), npos, true, range, ty);
+                let (tlo, thi) = ty.range();
+                for i in 0..npos {
+                    let (r, g, b) = ycocg_inverse(planes[0][i], planes[1][i], planes[2][i]);
+                    for (ch, x) in [r, g, b].into_iter().enumerate() {
+                        let want =
+                            round_to((x as f64).clamp(range.0, range.1), tlo as i64, thi as i64);
+                        assert_eq!(
+                            got.get_f64(3 * i + ch),
+                            want as f64,
+                            "{ty:?} {npos} {i} {ch} {x}"
+                        );
+                    }
+                }
+            }
+        }
+    }
 }

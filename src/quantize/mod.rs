@@ -93,37 +93,60 @@ fn gain_1d_with(ops: &[TwoScale], lengths: &[usize], level: usize, high: bool) -
 }
 
 /// The synthesis gain `G_b` (square root of the mean squared norm) of every band of
-/// `pyr`, in [`Pyramid::subbands`] order.
+/// `pyr`, in [`Pyramid::subbands`] order: the product over axes of the 1-D gains
+/// ([`gain_1d`]) of the band's level and pass along each axis. Each distinct 1-D gain is
+/// computed once, and they (and every axis' operators before them) are computed in
+/// parallel: each is a pure function of its axis, level and pass, so the gains are the
+/// same numbers on any number of threads.
 pub fn band_gains(pyr: &Pyramid, bands: &[Subband]) -> Vec<f64> {
+    use rayon::prelude::*;
     let (scheme, boundary) = (pyr.spec.scheme, pyr.spec.boundary);
-    let mut cache = std::collections::HashMap::new();
-    // every axis' operators built once, for all its levels (not once a band)
-    let ops: Vec<Vec<TwoScale>> = (0..pyr.spec.axes.len())
-        .map(|i| {
-            (0..pyr.axis_levels(i))
-                .map(|l| TwoScale::new(scheme, boundary, pyr.lengths[i][l]))
-                .collect()
-        })
+    // the level of a band's coefficients along axis i and whether it is high-pass there
+    let key = |b: &Subband, i: usize| {
+        let al = pyr.axis_levels(i);
+        if b.level == 0 || b.level > al {
+            (i, al, false)
+        } else {
+            (i, b.level, b.high[i])
+        }
+    };
+    let naxes = pyr.spec.axes.len();
+    let mut keys: Vec<(usize, usize, bool)> = bands
+        .iter()
+        .flat_map(|b| (0..naxes).map(move |i| key(b, i)))
         .collect();
+    keys.sort_unstable();
+    keys.dedup();
+    // every axis' operators built once, for all the levels a gain needs (not once a band)
+    let mut need = vec![0usize; naxes];
+    for &(i, l, _) in &keys {
+        need[i] = need[i].max(l);
+    }
+    let built: Vec<TwoScale> = need
+        .iter()
+        .enumerate()
+        .flat_map(|(i, &n)| (0..n).map(move |l| (i, l)))
+        .collect::<Vec<_>>()
+        .into_par_iter()
+        .map(|(i, l)| TwoScale::new(scheme, boundary, pyr.lengths[i][l]))
+        .collect();
+    let mut ops: Vec<&[TwoScale]> = Vec::with_capacity(naxes);
+    let mut at = 0;
+    for &n in &need {
+        ops.push(&built[at..at + n]);
+        at += n;
+    }
+    let gains: Vec<f64> = keys
+        .par_iter()
+        .map(|&(i, l, high)| gain_1d_with(ops[i], &pyr.lengths[i], l, high))
+        .collect();
+    let gain = |k: (usize, usize, bool)| gains[keys.binary_search(&k).expect("a key")];
     bands
         .iter()
         .map(|b| {
             let mut g2 = 1.0;
-            for (i, _) in pyr.spec.axes.iter().enumerate() {
-                let al = pyr.axis_levels(i);
-                // level of this coefficient along axis i and whether it is high-pass
-                let (lvl, high) = if b.level == 0 || b.level > al {
-                    (al, false)
-                } else {
-                    (b.level, b.high[i])
-                };
-                // for a low-pass coefficient at level l the packed lane is lengths[l-1]
-                // with the coefficient in the coarse part
-                let key = (i, lvl, high);
-                let g = *cache
-                    .entry(key)
-                    .or_insert_with(|| gain_1d_with(&ops[i], &pyr.lengths[i], lvl, high));
-                g2 *= g;
+            for i in 0..naxes {
+                g2 *= gain(key(b, i));
             }
             g2.sqrt()
         })
@@ -245,6 +268,62 @@ mod tests {
                             "{scheme:?} {boundary:?} {level} {high}"
                         );
                     }
+                }
+            }
+        }
+    }
+
+    /// Every band's gain is the product over its axes of the 1-D gains, each computed
+    /// alone ([`gain_1d`]), to the bit: on images and volumes of uneven extents, with
+    /// axes of different level counts, standard and non-standard orders, and the same
+    /// on one and two threads.
+    #[test]
+    fn band_gains_are_the_products_of_lone_axis_gains() {
+        let cases: [(&[usize], &[usize], crate::tensor::Order); 4] = [
+            (&[151, 226], &[0, 1], crate::tensor::Order::NonStandard),
+            (&[9, 300], &[0, 1], crate::tensor::Order::NonStandard),
+            (&[17, 40, 33], &[0, 1, 2], crate::tensor::Order::NonStandard),
+            (&[40, 57], &[0, 1], crate::tensor::Order::Standard),
+        ];
+        for (shape, axes, order) in cases {
+            for scheme in [Scheme::Cdf97, Scheme::Haar] {
+                let spec = crate::tensor::PyramidSpec {
+                    scheme,
+                    boundary: Boundary::Symmetric,
+                    levels: 5,
+                    order,
+                    axes: axes.to_vec(),
+                };
+                let pyr = Pyramid::plan(shape, &spec).unwrap();
+                let bands = pyr.subbands();
+                let want: Vec<f64> = bands
+                    .iter()
+                    .map(|b| {
+                        let mut g2 = 1.0;
+                        for i in 0..axes.len() {
+                            let al = pyr.axis_levels(i);
+                            let (lvl, high) = if b.level == 0 || b.level > al {
+                                (al, false)
+                            } else {
+                                (b.level, b.high[i])
+                            };
+                            g2 *= gain_1d(scheme, Boundary::Symmetric, &pyr.lengths[i], lvl, high);
+                        }
+                        g2.sqrt()
+                    })
+                    .collect();
+                for threads in [1, 2] {
+                    let pool = rayon::ThreadPoolBuilder::new()
+                        .num_threads(threads)
+                        .build()
+                        .unwrap();
+                    let got = pool.install(|| band_gains(&pyr, &bands));
+                    let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                    assert_eq!(
+                        bits(&got),
+                        bits(&want),
+                        "{shape:?} {scheme:?} {order:?} {threads}"
+                    );
                 }
             }
         }

@@ -115,6 +115,10 @@ pub struct Scratch {
     sgn: Vec<u8>,
     rx: usize,
     plane: usize,
+    /// whether `mag` / `sgn` are known to be all zeros (fresh, not yet handed out):
+    /// [`Scratch::clear`] then has nothing to do
+    mag_zero: bool,
+    sgn_zero: bool,
 }
 
 impl Scratch {
@@ -126,6 +130,8 @@ impl Scratch {
             sgn: vec![0; (ext.planes + 1) * ry * rx],
             rx,
             plane: ry * rx,
+            mag_zero: true,
+            sgn_zero: true,
         }
     }
 
@@ -135,9 +141,21 @@ impl Scratch {
         (k + 1) * self.plane + (y + 1) * self.rx + x + 1
     }
 
-    /// Zero every magnitude.
+    /// Zero every magnitude (nothing to do on a fresh scratch: its allocation is
+    /// zeroed already); the caller writes them from here on.
     pub(super) fn clear(&mut self) {
-        self.mag.fill(0);
+        if !self.mag_zero {
+            self.mag.fill(0);
+        }
+        self.mag_zero = false;
+    }
+
+    /// Zero every sign, as [`Scratch::clear`] the magnitudes.
+    pub(super) fn clear_signs(&mut self) {
+        if !self.sgn_zero {
+            self.sgn.fill(0);
+        }
+        self.sgn_zero = false;
     }
 
     /// The sign context of the coefficient at index `i` ([`SIGNS`]).
@@ -250,7 +268,7 @@ pub fn encode(
     let mut m = Models::new(limit, trained);
     s.clear();
     if signs {
-        s.sgn.fill(0);
+        s.clear_signs();
     }
     let off = quad_offsets(s.rx);
     each_quad(ext, rows, |k, y, x, valid, at| {
@@ -318,7 +336,7 @@ pub fn encode_rdo(
     let mut m = Models::new(limit, trained);
     s.clear();
     if signs {
-        s.sgn.fill(0);
+        s.clear_signs();
     }
     let off = quad_offsets(s.rx);
     let sign_cost = |m: &Models, s: &Scratch, j: usize, neg: bool| {
@@ -492,7 +510,7 @@ pub fn decode(
     let mut m = Models::new(limit, trained);
     s.clear();
     if signs {
-        s.sgn.fill(0);
+        s.clear_signs();
     }
     let off = quad_offsets(s.rx);
     each_quad(ext, rows, |k, y, x, valid, at| {
