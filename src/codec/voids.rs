@@ -421,7 +421,7 @@ mod tests {
                         c.push(chunk);
                     }
                     let text = c.finish();
-                    if density == 0 {
+                    if !mask.contains(&true) {
                         assert_eq!(text, None);
                         continue;
                     }
