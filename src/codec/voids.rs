@@ -19,11 +19,18 @@ const CODED: &str = "m1:";
 /// channel count last.
 #[inline]
 fn context(mask: &[bool], i: usize, shape: &[usize]) -> usize {
+    context_of(|j| mask[j], i, shape)
+}
+
+/// [`context`] with the flag of sample `j` read by `get` (a mask held in part: the
+/// flags [`lookback`] before `i` and those after).
+#[inline(always)]
+fn context_of(get: impl Fn(usize) -> bool, i: usize, shape: &[usize]) -> usize {
     let nd = shape.len();
     let c = shape[nd - 1];
     let k = i % c;
     let pos = i / c;
-    let get = |j: usize| mask[j] as usize;
+    let get = |j: usize| get(j) as usize;
     let mut ctx = 0;
     if k > 0 {
         ctx |= get(i - 1);
@@ -78,6 +85,155 @@ fn decode_mask(data: &[u8], n: usize, shape: &[usize]) -> Vec<bool> {
     mask
 }
 
+/// How far back [`context`] reads from sample `i` (the most of its neighbours' offsets):
+/// the slice before (4 or more entries in `shape`), else the row before and a position.
+fn lookback(shape: &[usize]) -> usize {
+    let nd = shape.len();
+    let c = shape[nd - 1];
+    let mut back = c.max(1);
+    if nd >= 3 {
+        back = back.max(c * shape[nd - 2] + c);
+    }
+    if nd >= 4 {
+        back = back.max(c * shape[nd - 2] * shape[nd - 3]);
+    }
+    back
+}
+
+/// [`code_mask`] a few rows at a time: the flags handed to [`MaskCoder::push`] in raster
+/// order give the bytes `code_mask` gives of the whole mask, while only the last
+/// [`lookback`] flags are held. Leading clear flags are counted, and coded (0 in context
+/// 0, as their neighbours are clear too) only when a void comes.
+pub(super) struct MaskCoder {
+    shape: Vec<usize>,
+    keep: usize,
+    models: [Mix; 64],
+    enc: Encoder,
+    /// flags from sample `base` on: the last `keep` coded ones, then those being coded
+    held: Vec<bool>,
+    base: usize,
+    /// flags received
+    next: usize,
+    voids: usize,
+}
+
+impl MaskCoder {
+    /// The coder of a mask of `shape` (slowest first, the channel count last).
+    pub(super) fn new(shape: &[usize]) -> MaskCoder {
+        MaskCoder {
+            shape: shape.to_vec(),
+            keep: lookback(shape),
+            models: [Mix::default(); 64],
+            enc: Encoder::new(),
+            held: Vec::new(),
+            base: 0,
+            next: 0,
+            voids: 0,
+        }
+    }
+
+    /// Code the next `flags` (the samples after those pushed before, raster order).
+    pub(super) fn push(&mut self, flags: &[bool]) {
+        let voids = flags.iter().filter(|&&f| f).count();
+        if self.voids == 0 {
+            if voids == 0 {
+                self.next += flags.len();
+                return;
+            }
+            // the clear flags so far, each in context 0
+            for _ in 0..self.next {
+                self.enc.bit(&mut self.models[0], false);
+            }
+            let h = self.keep.min(self.next);
+            self.held = vec![false; h];
+            self.base = self.next - h;
+        }
+        self.voids += voids;
+        self.held.extend_from_slice(flags);
+        let (held, base, shape) = (&self.held, self.base, &self.shape);
+        for i in self.next..self.next + flags.len() {
+            let ctx = context_of(|j| held[j - base], i, shape);
+            self.enc.bit(&mut self.models[ctx], held[i - base]);
+        }
+        self.next += flags.len();
+        let drop = self.held.len().saturating_sub(self.keep);
+        self.held.drain(..drop);
+        self.base += drop;
+    }
+
+    /// Void flags pushed so far.
+    pub(super) fn voids(&self) -> usize {
+        self.voids
+    }
+
+    /// The coded mask as [`VOID_RUNS`] holds it (`m1:` and base64); `None` when no
+    /// flag was set.
+    pub(super) fn finish(self) -> Option<String> {
+        (self.voids > 0).then(|| coded_text(&self.enc.finish_short()))
+    }
+}
+
+/// [`decode_mask`] a few rows at a time ([`MaskCoder`]'s inverse).
+pub(super) struct MaskDecoder<'a> {
+    shape: Vec<usize>,
+    keep: usize,
+    models: [Mix; 64],
+    dec: Decoder<'a>,
+    held: Vec<bool>,
+    base: usize,
+    next: usize,
+}
+
+impl<'a> MaskDecoder<'a> {
+    /// The decoder of the coded mask `data` of `shape` ([`coded_bytes`]).
+    pub(super) fn new(data: &'a [u8], shape: &[usize]) -> MaskDecoder<'a> {
+        MaskDecoder {
+            shape: shape.to_vec(),
+            keep: lookback(shape),
+            models: [Mix::default(); 64],
+            dec: Decoder::new_short(data),
+            held: Vec::new(),
+            base: 0,
+            next: 0,
+        }
+    }
+
+    /// The next `n` flags (raster order).
+    pub(super) fn next_flags(&mut self, n: usize) -> Vec<bool> {
+        let start = self.held.len();
+        self.held.reserve(n);
+        for i in self.next..self.next + n {
+            let (held, base) = (&self.held, self.base);
+            let ctx = context_of(|j| held[j - base], i, &self.shape);
+            let bit = self.dec.bit(&mut self.models[ctx]);
+            self.held.push(bit);
+        }
+        self.next += n;
+        let out = self.held[start..].to_vec();
+        let drop = self.held.len().saturating_sub(self.keep);
+        self.held.drain(..drop);
+        self.base += drop;
+        out
+    }
+}
+
+/// The `VOID_RUNS` text of a coded mask.
+fn coded_text(coded: &[u8]) -> String {
+    format!(
+        "{CODED}{}",
+        base64::engine::general_purpose::STANDARD_NO_PAD.encode(coded)
+    )
+}
+
+/// The bytes of the coded mask `meta` lists (`m1:` and base64); `None` without one, for
+/// a run list, and when the base64 is malformed.
+pub(super) fn coded_bytes(meta: &crate::io::Metadata) -> Option<Vec<u8>> {
+    let b64 = meta.extra.get(VOID_RUNS)?.strip_prefix(CODED)?;
+    base64::engine::general_purpose::STANDARD_NO_PAD
+        .decode(b64)
+        .ok()
+}
+
 /// Whether `meta` lists void samples (a filled raster's, or a decoded file's `mETA`).
 pub(super) fn lists_voids(meta: &crate::io::Metadata) -> bool {
     crate::format::meta::lists_voids(meta)
@@ -125,11 +281,7 @@ pub(super) fn with_voids_filled(r: &RasterView<'_>, exact: bool) -> Result<Optio
     });
     let mut out = Raster::new(r.dims.to_vec(), r.channels, samples, r.kind)?;
     out.meta = r.meta.clone();
-    let text = format!(
-        "{CODED}{}",
-        base64::engine::general_purpose::STANDARD_NO_PAD.encode(coded)
-    );
-    out.meta.extra.insert(VOID_RUNS.into(), text);
+    out.meta.extra.insert(VOID_RUNS.into(), coded_text(&coded));
     Ok(Some(out))
 }
 
@@ -161,10 +313,19 @@ fn parse_runs(runs: &str, n: usize) -> Option<Vec<bool>> {
 /// The void mask a filled raster's metadata lists ([`with_voids_filled`]; one flag per
 /// sample, channels interleaved), `None` without one or when it is malformed.
 pub(super) fn void_mask(r: &RasterView<'_>) -> Option<Vec<bool>> {
-    let runs = r.meta.extra.get(VOID_RUNS)?;
-    let n = crate::io::bytes::sample_count(r.dims, r.channels).ok()?;
-    let mut shape = r.dims.to_vec();
-    shape.push(r.channels);
+    listed_mask(r.meta, r.dims, r.channels)
+}
+
+/// The void mask `meta` lists for a raster of `dims` × `channels` ([`void_mask`]).
+pub(super) fn listed_mask(
+    meta: &crate::io::Metadata,
+    dims: &[usize],
+    channels: usize,
+) -> Option<Vec<bool>> {
+    let runs = meta.extra.get(VOID_RUNS)?;
+    let n = crate::io::bytes::sample_count(dims, channels).ok()?;
+    let mut shape = dims.to_vec();
+    shape.push(channels);
     match runs.strip_prefix(CODED) {
         Some(b64) => base64::engine::general_purpose::STANDARD_NO_PAD
             .decode(b64)
@@ -230,6 +391,48 @@ mod tests {
                     .collect();
                 let coded = code_mask(&mask, &shape);
                 assert_eq!(decode_mask(&coded, n, &shape), mask, "{shape:?} {density}%");
+            }
+        }
+    }
+
+    #[test]
+    fn masks_coded_rows_at_a_time_are_the_whole_masks() {
+        let mut seed = 11u64;
+        for shape in [
+            vec![40, 1],
+            vec![9, 13, 2],
+            vec![6, 7, 5, 1],
+            vec![3, 4, 5, 6, 2],
+        ] {
+            let n: usize = shape.iter().product();
+            let row = n / shape[0];
+            for density in [0u64, 2, 40] {
+                // voids only after the first rows too (the clear prefix counted)
+                let mask: Vec<bool> = (0..n)
+                    .map(|i| {
+                        crate::entropy::testing::lcg(&mut seed);
+                        i >= 2 * row && (seed >> 33) % 100 < density
+                    })
+                    .collect();
+                let whole = code_mask(&mask, &shape);
+                for rows in [1, 2, 5] {
+                    let mut c = MaskCoder::new(&shape);
+                    for chunk in mask.chunks(rows * row) {
+                        c.push(chunk);
+                    }
+                    let text = c.finish();
+                    if !mask.contains(&true) {
+                        assert_eq!(text, None);
+                        continue;
+                    }
+                    assert_eq!(text.as_deref(), Some(coded_text(&whole).as_str()));
+                    let mut d = MaskDecoder::new(&whole, &shape);
+                    let back: Vec<bool> = mask
+                        .chunks(rows * row)
+                        .flat_map(|ch| d.next_flags(ch.len()))
+                        .collect();
+                    assert_eq!(back, mask, "{shape:?} {density}% {rows} rows");
+                }
             }
         }
     }

@@ -61,10 +61,9 @@ pub fn encode_tiled_view(
 /// slab at a time ([`super::encode_streamed`], format 3.0) when it is given the whole
 /// raster as its tile: a raster over the one-piece limit
 /// ([`super::tiles::default_tile`] cuts it) at options the stream covers (lossy at one
-/// base step or `--psnr`, no nodata value; or 8/16-bit lossless;
-/// [`super::streamed::covers`]). A float raster with NaN samples (voids) is then written
-/// as [`super::tiles::default_tile`]'s tiles, which fill them (found by the stream's
-/// first pass).
+/// base step or `--psnr`, or 8/16-bit lossless, voids or not: NaN samples and samples
+/// equal to the nodata value are filled and listed as the whole-array encoder does;
+/// [`super::streamed::covers`]).
 pub fn streams(shape: &Shape, opts: &EncodeOptions) -> bool {
     super::tiles::default_tile(&shape.dims, shape.channels) != shape.dims
         && super::streamed::covers(shape, opts)
@@ -75,7 +74,7 @@ pub fn streams(shape: &Shape, opts: &EncodeOptions) -> bool {
 /// covers it and it has 2 or 3 axes (images and volumes: the axes
 /// [`super::StreamedDecoder`] decodes in bounded memory), else
 /// [`super::tiles::default_tile`]'s grid (the modes the stream does not cover:
-/// `--max-error` over 1, a nodata value, format 2, lossless 32-bit; and 4 axes). A
+/// `--max-error` over 1, format 2, lossless 32-bit; and 4 axes). A
 /// lossless file over the limit is also tiled by default (`--tile whole` streams it):
 /// its streamed decode holds the coded blocks whole (a 16384² RGB u16 lossless file of
 /// 746 MB peaks at 1.9 GB), its tiles decode in bounded memory.
@@ -117,12 +116,7 @@ pub fn encode_stream<S: SlabSource + ?Sized, W: std::io::Write + std::io::Seek>(
 ) -> Result<u64> {
     let shape = src.shape().clone();
     if tile == shape.dims.as_slice() && streams(&shape, opts) {
-        if let Some(n) = super::streamed::encode_unless_voids(src, opts, out)? {
-            return Ok(n);
-        }
-        // NaN voids: the tiles fill them
-        let tile = super::tiles::default_tile(&shape.dims, shape.channels);
-        return super::tiles::encode_slabs(src, opts, &tile, out);
+        return super::encode_streamed(src, opts, out);
     }
     if tile != shape.dims.as_slice() {
         return super::tiles::encode_slabs(src, opts, tile, out);

@@ -44,6 +44,7 @@ mod stream;
 mod streamed;
 mod streamed_float;
 mod streamed_lossless;
+mod streamed_voids;
 mod subdivide;
 mod surface;
 mod tensor;

@@ -19,7 +19,8 @@ use std::sync::{Arc, Mutex};
 
 /// Whether a whole decode of the file of header `h` goes through [`StreamedDecoder`]
 /// in [`crate::codec::SlabDecoder`]: a one-piece lossy file of code-blocks (no residual
-/// layer, no voids, any block coder) of 2 or 3 axes over the one-piece limit
+/// layer, any block coder; voids marked from the coded mask, [`super::voids::marking`])
+/// of 2 or 3 axes over the one-piece limit
 /// ([`tiles::default_tile`] would cut it). Under the limit the whole-array decode is
 /// kept: measured side by side on idle cores, the stripes saved memory (flower peak
 /// RSS 74 → 62 MB) but not time, and lost the parallel speed-up of small images
@@ -28,7 +29,6 @@ pub fn decodes_streamed(h: &Header) -> bool {
     !h.is_tiled()
         && h.version.has_blocks()
         && (h.mode == Mode::Lossy || lossless::decodes(h))
-        && !h.voids
         && (2..=3).contains(&h.dims.len())
         && h.levels > 0
         && tiles::default_tile(&h.dims, h.channels) != h.dims
@@ -53,8 +53,15 @@ fn slab_rows(row_len: usize, d0: usize) -> usize {
 /// the blocks decode to the same indices in any batch).
 pub struct StreamedDecoder {
     shape: Shape,
-    rx: std::sync::mpsc::Receiver<Result<Samples>>,
+    rx: Slabs,
     done: bool,
+}
+
+/// Where [`StreamedDecoder`]'s slabs come from: the synthesis, or the synthesis through
+/// the marking of voids ([`super::voids::marking`]).
+enum Slabs {
+    Plain(std::sync::mpsc::Receiver<Result<Samples>>),
+    Marked(std::sync::mpsc::Receiver<super::voids::Marked>),
 }
 
 impl StreamedDecoder {
@@ -74,7 +81,7 @@ impl StreamedDecoder {
         StreamedDecoder::streaming(p)?.map_err(|_| {
             Error::format(
                 what,
-                "a lossy 3.0 file of 2 or 3 axes without voids, laid out as the stream lays out its pyramid",
+                "a lossy 3.0 file of 2 or 3 axes (voids listed as a coded mask), laid out as the stream lays out its pyramid",
             )
         })
     }
@@ -86,27 +93,29 @@ impl StreamedDecoder {
     ) -> Result<std::result::Result<StreamedDecoder, crate::codec::container::Parsed>> {
         let h = &p.header;
         let integer = lossless::decodes(h);
-        if !h.version.has_blocks()
-            || !(h.mode == Mode::Lossy || integer)
-            || h.voids
-            || h.dims.len() < 2
-        {
+        if !h.version.has_blocks() || !(h.mode == Mode::Lossy || integer) || h.dims.len() < 2 {
             return Ok(Err(p));
         }
-        let shape = Shape {
+        // voids: the coded mask (a run list of older files is marked by the whole decode)
+        let voids = match h.voids {
+            true => match crate::codec::voids::coded_bytes(&p.meta) {
+                Some(coded) => Some(coded),
+                None => return Ok(Err(p)),
+            },
+            false => None,
+        };
+        let mut shape = Shape {
             dims: h.dims.clone(),
             channels: h.channels,
             sample_type: h.sample_type,
             kind: h.kind,
             meta: p.meta.clone(),
         };
+        // the key goes as the whole decode drops it once the voids are marked
+        shape.meta.extra.remove(crate::format::meta::VOID_RUNS);
         if integer {
             let rx = lossless::start(p)?;
-            return Ok(Ok(StreamedDecoder {
-                shape,
-                rx,
-                done: false,
-            }));
+            return Ok(Ok(StreamedDecoder::marking(shape, rx, voids)));
         }
         // the plan is checked here, before the thread starts
         let sp = StreamPlan::new(&h.dims, &p.plan.pyr.spec)?;
@@ -122,11 +131,34 @@ impl StreamedDecoder {
                 let _ = tx.send(Err(e));
             }
         });
-        Ok(Ok(StreamedDecoder {
+        Ok(Ok(StreamedDecoder::marking(shape, rx, voids)))
+    }
+
+    /// The decoder of the slabs `rx` of a raster of `shape`, the voids of the coded
+    /// mask `voids` marked when there is one.
+    fn marking(
+        shape: Shape,
+        rx: std::sync::mpsc::Receiver<Result<Samples>>,
+        voids: Option<Vec<u8>>,
+    ) -> StreamedDecoder {
+        let rx = match voids {
+            Some(coded) => {
+                let marker = shape.meta.nodata.unwrap_or(f64::NAN);
+                Slabs::Marked(super::voids::marking(
+                    rx,
+                    &shape.dims,
+                    shape.channels,
+                    coded,
+                    marker,
+                ))
+            }
+            None => Slabs::Plain(rx),
+        };
+        StreamedDecoder {
             shape,
             rx,
             done: false,
-        }))
+        }
     }
 
     /// The output's extents, type and metadata.
@@ -136,10 +168,22 @@ impl StreamedDecoder {
 
     /// The next rows of the output, `None` after the last.
     pub fn next_slab(&mut self) -> Result<Option<Samples>> {
+        Ok(self.next_slab_voids()?.map(|(s, _)| s))
+    }
+
+    /// [`StreamedDecoder::next_slab`] and its void flags (one per sample) when the file
+    /// lists voids.
+    pub(in crate::codec) fn next_slab_voids(
+        &mut self,
+    ) -> Result<Option<(Samples, Option<Vec<bool>>)>> {
         if self.done {
             return Ok(None);
         }
-        match self.rx.recv() {
+        let got = match &self.rx {
+            Slabs::Plain(rx) => rx.recv().map(|r| r.map(|s| (s, None))),
+            Slabs::Marked(rx) => rx.recv().map(|r| r.map(|(s, f)| (s, Some(f)))),
+        };
+        match got {
             Ok(r) => r.map(Some),
             Err(_) => {
                 self.done = true;

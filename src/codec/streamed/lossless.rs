@@ -68,8 +68,9 @@ pub(super) fn encode<S: SlabSource + ?Sized, W: std::io::Write>(
     opts: &EncodeOptions,
     out: &mut W,
 ) -> Result<u64> {
-    let shape = src.shape().clone();
     let range = tiles::first_pass(src, false)?.range;
+    // after the first pass: the metadata lists the voids it found (`super::voids`)
+    let shape = src.shape().clone();
     let nc = shape.channels;
     let colour = if nc >= 3 {
         Colour::YCoCgR

@@ -47,21 +47,21 @@ mod decode;
 mod lift;
 mod lossless;
 mod psnr;
+mod voids;
 pub use decode::{decodes_streamed, StreamedDecoder};
 
 /// Whether [`encode_streamed`] writes the file of these options and raster: a format
-/// 3.0 file of samples of any type without a nodata value, of 2 to 4 axes and at least
-/// one level, at a rate mode that sets one base step (`--quality`, `--keep`,
-/// `--threshold`, `--bpp`, `--psnr`), or lossless on 8- or 16-bit samples
-/// ([`lossless::streams`]: the integer transform streamed). Float samples are coded as
-/// the whole-array encoder codes them (the same finite range in the header, non-finite
-/// samples 0 in the planes, the context coder, no lossless file tried); a float raster
-/// with NaN samples (voids, found by the first pass) is not streamed
-/// ([`encode_streamed`]). `--max-error` over 1 (a residual to the decoded base) stays
-/// tiled above the one-piece limit.
+/// 3.0 file of samples of any type, of 2 to 4 axes and at least one level, at a rate
+/// mode that sets one base step (`--quality`, `--keep`, `--threshold`, `--bpp`,
+/// `--psnr`), or lossless on 8- or 16-bit samples ([`lossless::streams`]: the integer
+/// transform streamed). Float samples are coded as the whole-array encoder codes them
+/// (the same finite range in the header, non-finite samples 0 in the planes, the
+/// context coder, no lossless file tried). Voids (NaN samples, samples equal to the
+/// nodata value) are filled and their mask listed as the whole-array encoder lists it
+/// ([`voids`]). `--max-error` over 1 (a residual to the decoded base) stays tiled above
+/// the one-piece limit, and so does a raster whose metadata already lists voids.
 pub fn covers(shape: &Shape, opts: &EncodeOptions) -> bool {
     opts.format == Format::Blocks
-        && shape.meta.nodata.is_none()
         && !super::voids::lists_voids(&shape.meta)
         && (2..=4).contains(&shape.dims.len())
         && opts.levels > 0
@@ -86,50 +86,47 @@ pub(in crate::codec) fn streams_lossless(shape: &Shape, opts: &EncodeOptions) ->
 const BPP_SAMPLE: usize = 16;
 
 /// The one-transform file of the raster `src` hands out in slabs (module doc), written
-/// into `out`; returns the bytes written. An error for the options [`covers`] refuses
-/// and for a raster with NaN samples (voids: [`super::encode_stream`] writes its tiles,
-/// which fill them).
+/// into `out`; returns the bytes written. An error for the options [`covers`] refuses.
+/// A raster that can hold voids (float samples, a nodata value) is read through
+/// [`voids::FilledSlabs`]: its voids filled, their mask in the metadata.
 pub fn encode_streamed<S: SlabSource + ?Sized, W: std::io::Write>(
     src: &mut S,
     opts: &EncodeOptions,
     out: &mut W,
 ) -> Result<u64> {
-    encode_unless_voids(src, opts, out)?.ok_or_else(|| {
-        Error::parameter(
-            "samples",
-            "NaN",
-            "a one-transform file of a raster without voids",
-        )
-    })
-}
-
-/// [`encode_streamed`], or `None` (nothing written) when the first pass finds a NaN
-/// sample (a void the stream does not fill).
-pub(in crate::codec) fn encode_unless_voids<S: SlabSource + ?Sized, W: std::io::Write>(
-    src: &mut S,
-    opts: &EncodeOptions,
-    out: &mut W,
-) -> Result<Option<u64>> {
     check_rate(opts.rate)?;
     let shape = src.shape().clone();
     if !covers(&shape, opts) {
         return Err(Error::parameter(
             "rate",
             format!("{:?}", opts.rate),
-            "a one-transform file without nodata at --quality, --keep, --threshold, --bpp, --psnr or 8/16-bit --lossless",
+            "a one-transform file at --quality, --keep, --threshold, --bpp, --psnr or 8/16-bit --lossless",
         ));
     }
-    if lossless::streams(&shape, opts) {
-        return lossless::encode(src, opts, out).map(Some);
+    if voids::may_hold(&shape) {
+        encode_void_free(&mut voids::FilledSlabs::new(src), opts, out)
+    } else {
+        encode_void_free(src, opts, out)
+    }
+}
+
+/// [`encode_streamed`] of a raster without voids (or with them filled and listed in the
+/// metadata by the end of the first pass).
+fn encode_void_free<S: SlabSource + ?Sized, W: std::io::Write>(
+    src: &mut S,
+    opts: &EncodeOptions,
+    out: &mut W,
+) -> Result<u64> {
+    if lossless::streams(src.shape(), opts) {
+        return lossless::encode(src, opts, out);
     }
     let sampled = matches!(
         opts.rate,
         Rate::Keep(_) | Rate::Bpp(_) | Rate::Psnr(_) | Rate::PsnrRange(..)
     );
     let first = tiles::first_pass(src, sampled)?;
-    if first.nan {
-        return Ok(None);
-    }
+    // after the first pass: the metadata lists the voids it found
+    let shape = src.shape().clone();
     let (range, sample) = (first.range, first.sample);
     let span = (range.1 - range.0).max(1e-30);
     let step = match opts.rate {
@@ -171,7 +168,7 @@ pub(in crate::codec) fn encode_unless_voids<S: SlabSource + ?Sized, W: std::io::
         _ => encode_at(src, &header, &meta, rdo)?,
     };
     out.write_all(&bytes)?;
-    Ok(Some(bytes.len() as u64))
+    Ok(bytes.len() as u64)
 }
 
 /// The multiplier of the rate–distortion optimised indices of the rate mode (those the

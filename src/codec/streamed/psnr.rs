@@ -64,6 +64,24 @@ fn squared_error(a: &[f64], b: &[f64]) -> f64 {
         .sum()
 }
 
+/// [`squared_error`] and the number of samples it sums, over the samples `voids` does
+/// not flag (all of them without flags), as the whole-array `--psnr` leaves voids out.
+fn valid_error(a: &[f64], b: &[f64], voids: Option<&[bool]>) -> (f64, usize) {
+    match voids {
+        None => (squared_error(a, b), a.len()),
+        Some(f) => {
+            let (mut sse, mut n) = (0.0, 0usize);
+            for ((x, y), _) in a.iter().zip(b).zip(f).filter(|(_, &v)| !v) {
+                if x.is_finite() && y.is_finite() {
+                    sse += (x - y) * (x - y);
+                }
+                n += 1;
+            }
+            (sse, n)
+        }
+    }
+}
+
 /// `10·log10(peak² / mse)`, infinite at `mse = 0`.
 fn psnr(peak: f64, mse: f64) -> f64 {
     if mse > 0.0 {
@@ -126,22 +144,23 @@ fn psnr_of<S: SlabSource + ?Sized>(bytes: &[u8], src: &mut S, peak: f64) -> Resu
     match super::StreamedDecoder::streaming(parsed)? {
         Ok(mut dec) => {
             let mut row = 0;
-            while let Some(slab) = dec.next_slab()? {
+            while let Some((slab, voids)) = dec.next_slab_voids()? {
                 let rows = slab.len() / per.max(1);
                 if rows == 0 || row + rows > shape.dims[0] {
                     return Err(Error::format("the streamed decode", "rows of the raster"));
                 }
                 let a = src.read_rows(row..row + rows)?.to_f64();
-                sse += squared_error(&a, &slab.to_f64());
-                n += a.len();
+                let (e, k) = valid_error(&a, &slab.to_f64(), voids.as_deref());
+                sse += e;
+                n += k;
                 row += rows;
             }
         }
-        Err(_) => {
+        Err(p) => {
+            let voids = crate::codec::voids::listed_mask(&p.meta, &shape.dims, shape.channels);
             let d = crate::codec::decode(bytes, &Default::default())?.raster;
             let a = src.read_rows(0..shape.dims[0])?.to_f64();
-            sse = squared_error(&a, &d.samples.to_f64());
-            n = a.len();
+            (sse, n) = valid_error(&a, &d.samples.to_f64(), voids.as_deref());
         }
     }
     Ok(psnr(peak, sse / n.max(1) as f64))

@@ -33,12 +33,11 @@ use rayon::prelude::*;
 use std::io::{Seek, SeekFrom, Write};
 
 /// The range of finite samples and the range of all non-NaN samples (for the PSNR's
-/// default peak), and whether a sample is NaN (a void), merged slab by slab.
+/// default peak), merged slab by slab.
 #[derive(Clone, Copy)]
 struct Ranges {
     finite: (f64, f64),
     all: Option<(f64, f64)>,
-    nan: bool,
 }
 
 impl Ranges {
@@ -46,7 +45,6 @@ impl Ranges {
         Ranges {
             finite: (f64::INFINITY, f64::NEG_INFINITY),
             all: None,
-            nan: false,
         }
     }
 
@@ -72,7 +70,6 @@ impl Ranges {
             (Some(a), Some(b)) => Some((a.0.min(b.0), a.1.max(b.1))),
             (a, b) => a.or(b),
         };
-        self.nan |= o.nan;
     }
 
     fn add_range(&mut self, s: &Samples, r: std::ops::Range<usize>) {
@@ -87,7 +84,6 @@ impl Ranges {
                     self.merge(&Ranges {
                         finite: (lo as f64, hi as f64),
                         all: Some((lo as f64, hi as f64)),
-                        nan: false,
                     });
                 }
                 return;
@@ -116,7 +112,6 @@ impl Ranges {
             if x > hi {
                 hi = x;
             }
-            self.nan |= x.is_nan();
         }
         self.finite = (flo, fhi);
         self.all = (lo <= hi).then_some((lo, hi));
@@ -249,8 +244,6 @@ pub(in crate::codec) struct FirstPass {
     /// The default PSNR peak of the whole raster (of its least and greatest non-NaN
     /// samples, as the tiled `--psnr` takes it).
     pub(in crate::codec) peak: f64,
-    /// Whether a sample is NaN (a void).
-    pub(in crate::codec) nan: bool,
     /// The sampled tiles (voids filled).
     pub(in crate::codec) sample: Vec<Raster>,
 }
@@ -275,7 +268,6 @@ pub(in crate::codec) fn first_pass<S: SlabSource + ?Sized>(
     Ok(FirstPass {
         range: ranges.finite(),
         peak,
-        nan: ranges.nan,
         sample,
     })
 }
