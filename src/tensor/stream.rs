@@ -94,6 +94,10 @@ struct Level {
     /// The detail bands of rows `< nc` (low along axis 0) and of rows `≥ nc`.
     low: Vec<Part>,
     high: Vec<Part>,
+    /// Whether the coarse box and the low parts, and the high parts, cover the row box
+    /// (disjoint boxes whose samples add up to the box's): then a synthesis input row
+    /// is written whole by its parts and need not be zeroed first.
+    covered: [bool; 2],
     /// Per input row of the synthesis: the output rows that read it.
     syn_uses: Vec<u32>,
     /// When the level's active axes are the leading `k ≥ 2` axes and the rest of the
@@ -171,6 +175,12 @@ impl StreamPlan {
                     nc: after[0],
                     axis0,
                     others,
+                    covered: [
+                        volume(&after[1..]) + low.iter().map(|p| volume(&p.shape)).sum::<usize>()
+                            == volume(&before[1..]),
+                        high.iter().map(|p| volume(&p.shape)).sum::<usize>()
+                            == volume(&before[1..]),
+                    ],
                     low,
                     high,
                     syn_uses: Vec::new(),
@@ -259,8 +269,9 @@ impl StreamPlan {
     }
 
     /// A streamed synthesis pulling band rows from `source(band, row, samples)` (the
-    /// order of the module's documentation, [`StreamPlan::pull_order`]): the array's
-    /// rows come out of [`Synthesis::pull`] in order.
+    /// order of the module's documentation, [`StreamPlan::pull_order`]), which writes
+    /// every sample of `samples` (the buffer is not cleared before): the array's rows
+    /// come out of [`Synthesis::pull`] in order.
     pub fn synthesis<T: Sample, S: FnMut(usize, usize, &mut [T])>(
         &self,
         source: S,
@@ -388,6 +399,16 @@ fn take<T: Sample>(pool: &mut Vec<Vec<T>>, n: usize) -> Vec<T> {
     v
 }
 
+/// A row buffer of `n` samples from `pool` whose samples the caller overwrites: only
+/// what it grows by is zeroed (a megabyte plane zeroed before every row was a pass
+/// over memory of its own).
+fn take_dirty<T: Sample>(pool: &mut Vec<Vec<T>>, n: usize) -> Vec<T> {
+    let mut v = pool.pop().unwrap_or_default();
+    v.truncate(n);
+    v.resize(n, T::default());
+    v
+}
+
 /// The level's operators over its leading axes as the fused engine takes them.
 fn axis_ops(lv: &Level, analysis: bool) -> Vec<AxisOp<'_>> {
     fn one(o: &LevelOps, analysis: bool) -> AxisOp<'_> {
@@ -445,19 +466,43 @@ fn other_axes<T: Sample>(
     }
 }
 
+/// Rows of at least this many samples are combined along axis 0 in pieces of
+/// [`PIECE`] samples on the pool (a volume's planes: a 1024² plane is a few
+/// milliseconds of sums that the other threads would otherwise wait through).
+const PAR_ROW: usize = 1 << 17;
+/// Samples of one piece of a row combined on the pool.
+const PIECE: usize = 1 << 15;
+
 /// Output row `r` of a level along axis 0: `Σ_c W_rc · input(c)` over the box `len`
 /// samples long, or the input row itself when axis 0 is not active (or a lane of one).
+/// A row of [`PAR_ROW`] samples or more is cut into pieces summed on the pool: every
+/// sample sums the same taps in the same order, the same bits on any thread count.
 fn axis0_row<'t, T: Sample + 't>(
     k: Kernels,
     op: Option<&crate::scheme::sparse::Csr>,
     r: usize,
     out: &mut [T],
-    input: impl Fn(u32) -> &'t [T],
+    input: impl Fn(u32) -> &'t [T] + Sync,
 ) {
+    use rayon::prelude::*;
+    let par = out.len() >= PAR_ROW && rayon::current_num_threads() > 1;
     match op {
         Some(op) if op.rows() > 1 => {
             let (cols, ws) = op.row_slices(r);
-            combine_taps(k, out, cols, ws, input);
+            if par {
+                out.par_chunks_mut(PIECE).enumerate().for_each(|(i, o)| {
+                    let (at, n) = (i * PIECE, o.len());
+                    combine_taps(k, o, cols, ws, |c| &input(c)[at..at + n]);
+                });
+            } else {
+                combine_taps(k, out, cols, ws, input);
+            }
+        }
+        _ if par => {
+            let src = input(r as u32);
+            out.par_chunks_mut(PIECE)
+                .zip(src.par_chunks(PIECE))
+                .for_each(|(o, s)| o.copy_from_slice(s));
         }
         _ => out.copy_from_slice(input(r as u32)),
     }
@@ -750,7 +795,8 @@ impl<T: Sample, S: FnMut(usize, usize, &mut [T])> Synthesis<'_, T, S> {
         for &c in &ids {
             self.input(l, c);
         }
-        let mut out = take(&mut self.pool, if self.dry { 0 } else { volume(&lv.row) });
+        // (written whole by the sums along axis 0: not zeroed first)
+        let mut out = take_dirty(&mut self.pool, if self.dry { 0 } else { volume(&lv.row) });
         if !self.dry {
             let held = &self.held[l];
             let op = lv.axis0.as_ref().map(|o| &o.two_scale.synthesis);
@@ -771,7 +817,8 @@ impl<T: Sample, S: FnMut(usize, usize, &mut [T])> Synthesis<'_, T, S> {
             }
         }
         if !self.dry {
-            let mut spare = take(&mut self.pool, 0);
+            // (written whole by the other axes, or not read)
+            let mut spare = self.pool.pop().unwrap_or_default();
             other_axes(
                 plan.kernels,
                 lv,
@@ -793,10 +840,16 @@ impl<T: Sample, S: FnMut(usize, usize, &mut [T])> Synthesis<'_, T, S> {
         let plan = self.plan;
         let lv = &plan.levels[l];
         let dry = self.dry;
-        let mut row = take(&mut self.pool, if dry { 0 } else { volume(&lv.row) });
+        let n = if dry { 0 } else { volume(&lv.row) };
+        let mut row = if lv.covered[usize::from(c >= lv.nc)] {
+            take_dirty(&mut self.pool, n)
+        } else {
+            take(&mut self.pool, n)
+        };
         // a pooled buffer: a band row of the finest level is a megabyte or more, which a
         // fresh one would map and fault in afresh at every row
-        let mut band = take(&mut self.pool, 0);
+        // (kept as long as it is: each band row is written whole by the source)
+        let mut band = self.pool.pop().unwrap_or_default();
         let (parts, at) = if c < lv.nc {
             if l + 1 < plan.levels.len() {
                 let coarse = self.produce(l + 1, c);
@@ -805,7 +858,9 @@ impl<T: Sample, S: FnMut(usize, usize, &mut [T])> Synthesis<'_, T, S> {
                 }
                 self.pool.push(coarse);
             } else {
-                band.resize(if dry { 0 } else { volume(&lv.coarse_row) }, T::default());
+                let m = if dry { 0 } else { volume(&lv.coarse_row) };
+                band.truncate(m);
+                band.resize(m, T::default());
                 (self.source)(0, c, &mut band);
                 if !dry {
                     copy_in(&band, &mut row, &lv.row, &prefix(&lv.coarse_row));
@@ -816,7 +871,8 @@ impl<T: Sample, S: FnMut(usize, usize, &mut [T])> Synthesis<'_, T, S> {
             (&lv.high, c - lv.nc)
         };
         for p in parts {
-            band.clear();
+            // (the source writes every sample: not zeroed first)
+            band.truncate(if dry { 0 } else { volume(&p.shape) });
             band.resize(if dry { 0 } else { volume(&p.shape) }, T::default());
             (self.source)(p.band, at, &mut band);
             if !dry {

@@ -308,12 +308,19 @@ fn the_streamed_decode_gives_the_whole_decodes_samples() {
 /// beside the synthesis of the rows before it, and dropped after its last row is read;
 /// a parent band's batches held while its children's decode reads them) gives the
 /// samples of the whole-array decode: long volumes and images, one and two channels,
-/// symmetric and periodic ends (whose first rows are read again at the end).
+/// symmetric and periodic ends (whose first rows are read again at the end), planes
+/// large enough to be summed in pieces on the pool.
 #[test]
 fn a_long_streamed_decode_gives_the_whole_decodes_samples() {
-    let cases: [(Raster, usize, Boundary); 4] = [
+    let cases: [(Raster, usize, Boundary); 5] = [
         (
             field(&[160, 96, 128], 1, SampleType::U16, 7, 4000.0),
+            3,
+            Boundary::Symmetric,
+        ),
+        // planes of over 2^17 samples: their sums along axis 0 cut into pieces on the pool
+        (
+            field(&[24, 384, 352], 1, SampleType::U16, 11, 9000.0),
             3,
             Boundary::Symmetric,
         ),
