@@ -152,6 +152,7 @@ impl Reading<'_> {
     ) -> Result<bool> {
         if self.crc {
             check_crc(src, pos, n, kind)?;
+            src.seek(SeekFrom::Start(pos + 8))?;
         }
         let (header, layout, b) = (self.header, self.layout, &mut self.body);
         self.first_band.get_or_insert(pos);
