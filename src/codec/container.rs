@@ -25,6 +25,10 @@ pub(super) struct Parsed {
     /// The box of the decoded level's raster that `window` maps to (as
     /// [`super::tiles::Stitch`] maps it), when known: the box the window synthesis makes.
     pub(super) out_box: Option<Vec<std::ops::Range<usize>>>,
+    /// Where the code-blocks' bytes are when `bands` holds each entry's index alone
+    /// ([`super::block_file::read_indexed`]: read from the file as they are decoded,
+    /// by [`super::StreamedDecoder`] only); `None`: `bands` holds the entries whole.
+    pub(super) blocks_in: Option<std::sync::Arc<super::block_file::BlockFile>>,
 }
 
 pub(super) fn read_chunks<R: Read>(
@@ -65,5 +69,6 @@ pub(super) fn read_rest<R: Read>(
         chunks: b.chunks,
         window: None,
         out_box: None,
+        blocks_in: None,
     })
 }

@@ -14,6 +14,7 @@
 //! chunks in `container`; [`encode`] and [`decode`] in their files; [`info`] and
 //! [`frames`] beside them.
 
+mod block_file;
 mod colour;
 mod container;
 mod decode;

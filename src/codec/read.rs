@@ -229,7 +229,16 @@ impl SlabDecoder {
             && !opts.allow_truncated
             && super::streamed::decodes_streamed(&header)
         {
-            let p = read_rest(rd, first, header, 0, false)?;
+            // the code-blocks left in the file, read a batch at a time as decoded
+            let at = rd.position();
+            let file = src.inner.get_ref().try_clone()?;
+            let p = match super::block_file::read_indexed(&mut src, file, (at, len), header.clone())? {
+                Some(p) => p,
+                None => {
+                    src.seek(SeekFrom::Start(at))?;
+                    read_rest(ChunkReader::at(&mut src, at, len), first.clone(), header.clone(), 0, false)?
+                }
+            };
             let p = match super::StreamedDecoder::streaming(p)? {
                 Ok(s) => {
                     return Ok(SlabDecoder {
@@ -240,6 +249,11 @@ impl SlabDecoder {
                         whole_complete: true,
                         count,
                     })
+                }
+                // not laid out as the stream lays out its pyramid: read whole
+                Err(p) if p.blocks_in.is_some() => {
+                    src.seek(SeekFrom::Start(at))?;
+                    read_rest(ChunkReader::at(&mut src, at, len), first, header, 0, false)?
                 }
                 Err(p) => p,
             };

@@ -58,7 +58,7 @@ impl Sparse {
         let groups = plan.level_groups();
         let layout = plan.band_layout(&groups);
         let Some(sb) =
-            crate::format::sparse::read_body_sparse(src, at, len, &header, &layout, stop_level)?
+            crate::format::sparse::read_body_sparse(src, at, len, &header, &layout, (stop_level, false))?
         else {
             return Ok(None);
         };
@@ -66,24 +66,24 @@ impl Sparse {
         for (c, bands) in sb.body.bands.into_iter().enumerate() {
             let mut row = Vec::with_capacity(bands.len());
             for (j, bc) in bands.into_iter().enumerate() {
-                let (Some(bc), Some(off)) = (bc, sb.entries[c][j]) else {
+                let (Some(bc), Some((off, l))) = (bc, sb.entries[c][j]) else {
                     row.push(None);
                     continue;
                 };
-                let set =
-                    crate::format::bands::parse_blocks(&bc.data, &plan.dims[j], plan.block(j))
-                        .map_err(|e| {
-                            crate::Error::format(
-                                format!("band {j} of channel {c}: {e}"),
-                                "a valid band",
-                            )
-                        })?;
-                let head = set.streams.first().map_or(bc.data.len(), |r| r.start);
+                let set = crate::format::bands::parse_index(
+                    &bc.data,
+                    l,
+                    &plan.dims[j],
+                    plan.block(j),
+                )
+                .map_err(|e| {
+                    crate::Error::format(format!("band {j} of channel {c}: {e}"), "a valid band")
+                })?;
                 row.push(Some(Entry {
                     at: off,
                     step: bc.step,
-                    len: bc.data.len(),
-                    index: bc.data[..head].to_vec(),
+                    len: l as usize,
+                    index: bc.data,
                     streams: set.streams,
                 }));
             }
@@ -121,6 +121,7 @@ impl Sparse {
             out_box: super::tiles::Stitch::new(&self.header, level, Some(region))
                 .ok()
                 .map(|st| st.out_box().to_vec()),
+            blocks_in: None,
         };
         let wins = super::support::band_windows(&p, level);
         let mut bands = Vec::with_capacity(self.entries.len());

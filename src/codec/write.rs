@@ -70,19 +70,15 @@ pub fn streams(shape: &Shape, opts: &EncodeOptions) -> bool {
 }
 
 /// The default tile extents of a raster of `shape` at `opts`, read in slabs
-/// ([`encode_stream`], `mra encode`) or in memory ([`encode`], Python): the whole raster (one transform) when it is one piece or when [`streams`]
-/// covers it and it has 2 or 3 axes (images and volumes: the axes
-/// [`super::StreamedDecoder`] decodes in bounded memory), else
+/// ([`encode_stream`], `mra encode`) or in memory ([`encode`], Python): the whole raster
+/// (one transform) when it is one piece or when [`streams`] covers it and it has 2 or 3
+/// axes (images and volumes: the axes [`super::StreamedDecoder`] decodes in bounded
+/// memory, lossy or 8/16-bit lossless and exact `--max-error` alike, with voids or not:
+/// its code-blocks read from the file a batch at a time), else
 /// [`super::tiles::default_tile`]'s grid (the modes the stream does not cover:
-/// `--max-error` over 1, format 2, lossless 32-bit; and 4 axes). A
-/// lossless file over the limit is also tiled by default (`--tile whole` streams it):
-/// its streamed decode holds the coded blocks whole (a 16384² RGB u16 lossless file of
-/// 746 MB peaks at 1.9 GB), its tiles decode in bounded memory.
+/// `--max-error` over 1, format 2, lossless 32-bit; and 4 axes).
 pub fn default_layout(shape: &Shape, opts: &EncodeOptions) -> Vec<usize> {
-    if streams(shape, opts)
-        && shape.dims.len() <= 3
-        && !super::streamed::streams_lossless(shape, opts)
-    {
+    if streams(shape, opts) && shape.dims.len() <= 3 {
         shape.dims.clone()
     } else {
         super::tiles::default_tile(&shape.dims, shape.channels)

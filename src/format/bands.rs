@@ -127,7 +127,14 @@ pub fn blocks_payload(streams: &[Vec<u8>]) -> Vec<u8> {
 /// grid's, and block lengths that must tile the rest of the entry exactly (no block
 /// outside the entry, none overlapping, no byte left over).
 pub fn parse_blocks(data: &[u8], dims: &[usize], block: &[usize]) -> Result<BlockSet> {
-    let mut cur = Cursor::new(data, "code-block index");
+    parse_index(data, data.len() as u64, dims, block)
+}
+
+/// [`parse_blocks`] of a band entry of `len` bytes of which only the first, `head`, are
+/// at hand (at least its index: the count and the block lengths; the blocks' streams
+/// are read later by position, e.g. [`super::sparse`]): the same checks against `len`.
+pub fn parse_index(head: &[u8], len: u64, dims: &[usize], block: &[usize]) -> Result<BlockSet> {
+    let mut cur = Cursor::new(head, "code-block index");
     let count = dims.iter().zip(block).fold(1u64, |n, (&d, &b)| {
         n.saturating_mul(d.div_ceil(b.max(1)) as u64)
     });
@@ -138,9 +145,9 @@ pub fn parse_blocks(data: &[u8], dims: &[usize], block: &[usize]) -> Result<Bloc
             "the band's block count",
         ));
     }
-    if n > (data.len() - cur.pos) as u64 {
+    if n > len.saturating_sub(cur.pos as u64) {
         return Err(FormatError::out_of_range(
-            format!("{n} code-blocks in an entry of {} bytes", data.len()),
+            format!("{n} code-blocks in an entry of {len} bytes"),
             "at least one index byte per block",
         ));
     }
@@ -149,24 +156,18 @@ pub fn parse_blocks(data: &[u8], dims: &[usize], block: &[usize]) -> Result<Bloc
     let mut streams = Vec::with_capacity(lens.len());
     for (i, &l) in lens.iter().enumerate() {
         let end = at.saturating_add(l);
-        if end > data.len() as u64 {
+        if end > len {
             return Err(FormatError::out_of_range(
-                format!(
-                    "code-block {i} at bytes {at}..{end} of an entry of {} bytes",
-                    data.len()
-                ),
+                format!("code-block {i} at bytes {at}..{end} of an entry of {len} bytes"),
                 "blocks within the band's entry",
             ));
         }
         streams.push(at as usize..end as usize);
         at = end;
     }
-    if at != data.len() as u64 {
+    if at != len {
         return Err(FormatError::invalid(
-            format!(
-                "code-blocks ending at byte {at} of an entry of {} bytes",
-                data.len()
-            ),
+            format!("code-blocks ending at byte {at} of an entry of {len} bytes"),
             "blocks that fill the band's entry exactly",
         ));
     }

@@ -2,11 +2,12 @@
 //! every chunk's 8-byte head, the small chunks whole (`mETA`, `MEND`, checked as
 //! [`super::body`] checks them), and of each `LEVL` chunk only its level, each band
 //! entry's ratio, length and code-block index, never the blocks' streams. Each band's
-//! entry comes back as its `L` bytes with the index in place and zeros where the blocks
-//! are, with its offset in the file, so that the caller reads just the blocks it needs
-//! into it by positioned reads. The `LEVL` chunks' CRCs are not checked (that would
-//! read them whole); the index is checked as [`super::bands::parse_blocks`] checks it
-//! once the caller parses it.
+//! entry comes back as its index bytes, with its offset and length `L` in the file, so
+//! that the caller reads just the blocks it needs by positioned reads. The `LEVL`
+//! chunks' CRCs are checked only when asked (a whole decode: each chunk's payload read
+//! through the CRC a piece at a time, nothing held; a region read skips them, that
+//! would read them whole); the index is checked as [`super::bands::parse_index`] checks
+//! it once the caller parses it.
 
 use super::body::{mend, other_chunk, truncated, BandChunk, BandLayout, Body, ChunkInfo};
 use super::{ChunkEnd, ChunkReader, Header, Mode, Tag, MAX_CHUNK};
@@ -14,11 +15,12 @@ use crate::io::Metadata;
 use crate::{FormatError, Result};
 use std::io::{Read, Seek, SeekFrom};
 
-/// [`Body`] of a file read sparsely, with the file offset of each band's entry
-/// (`[channel][band]`, the first byte of its `L` bytes).
+/// [`Body`] of a file read sparsely (each band's [`BandChunk::data`] its entry's
+/// code-block index alone), with the file offset and length `L` of each band's entry
+/// (`[channel][band]`, the offset of the first of its `L` bytes).
 pub struct SparseBody {
     pub body: Body,
-    pub entries: Vec<Vec<Option<u64>>>,
+    pub entries: Vec<Vec<Option<(u64, u64)>>>,
 }
 
 /// A source read by position that counts what it consumes.
@@ -69,14 +71,14 @@ impl<R: Read + Seek> At<'_, R> {
 
 /// One band entry of a `LEVL` chunk at `r` (band `j` of channel `ch` of `level`): its
 /// ratio, `L` and code-block index read, the blocks' streams skipped. Returns the entry
-/// as `L` bytes (the index in place, zeros where the blocks are) and its file offset.
+/// as its index bytes, and its file offset and `L`.
 fn band_entry<R: Read + Seek>(
     r: &mut At<'_, R>,
     header: &Header,
     level: usize,
     j: usize,
     ch: usize,
-) -> Result<(BandChunk, u64)> {
+) -> Result<(BandChunk, (u64, u64))> {
     let ratio = f32::from_le_bytes(r.bytes::<4>("a step ratio")?);
     if !(ratio > 0.0 && ratio.is_finite()) {
         return Err(FormatError::invalid(
@@ -114,14 +116,12 @@ fn band_entry<R: Read + Seek>(
         e.varint("a code-block length", Some(&mut index))?;
     }
     // `l` is within the chunk, itself within the file
-    let mut data = vec![0u8; l as usize];
-    data[..index.len()].copy_from_slice(&index);
     r.seek(start + l)?;
     let band = BandChunk {
         step: header.step * ratio as f64,
-        data,
+        data: index,
     };
-    Ok((band, start))
+    Ok((band, (start, l)))
 }
 
 /// The state of a sparse read: what the file's header commits to and what has been
@@ -131,8 +131,9 @@ struct Reading<'h> {
     layout: &'h BandLayout<'h>,
     stop_level: usize,
     len: u64,
+    crc: bool,
     body: Body,
-    entries: Vec<Vec<Option<u64>>>,
+    entries: Vec<Vec<Option<(u64, u64)>>>,
     meta_seen: bool,
     first_band: Option<u64>,
     last: String,
@@ -149,6 +150,10 @@ impl Reading<'_> {
         n: u64,
         kind: [u8; 4],
     ) -> Result<bool> {
+        if self.crc {
+            check_crc(src, pos, n, kind)?;
+            src.seek(SeekFrom::Start(pos + 8))?;
+        }
         let (header, layout, b) = (self.header, self.layout, &mut self.body);
         self.first_band.get_or_insert(pos);
         let mut r = At {
@@ -243,14 +248,15 @@ impl Reading<'_> {
 /// The chunks after `HEAD` (the next at byte `at`) of a one-piece 3.0 file of `len`
 /// bytes whose bands are `layout`, read sparsely (module doc); reading stops at the first
 /// chunk of a level from 1 to `stop_level` as [`super::body::read_body`]'s does. `None`
-/// for a file this reader leaves to the whole read (one with `RESI` chunks).
+/// for a file this reader leaves to the whole read (one with `RESI` chunks). With `crc`
+/// every `LEVL` chunk's CRC is checked too ([`check_crc`]).
 pub fn read_body_sparse<R: Read + Seek>(
     src: &mut R,
     at: u64,
     len: u64,
     header: &Header,
     layout: &BandLayout,
-    stop_level: usize,
+    (stop_level, crc): (usize, bool),
 ) -> Result<Option<SparseBody>> {
     if header.mode == Mode::MaxError {
         return Ok(None);
@@ -262,6 +268,7 @@ pub fn read_body_sparse<R: Read + Seek>(
         layout,
         stop_level,
         len,
+        crc,
         body: Body {
             meta: Metadata::default(),
             bands: (0..c).map(|_| (0..nb).map(|_| None).collect()).collect(),
@@ -314,4 +321,43 @@ pub fn read_body_sparse<R: Read + Seek>(
         body: g.body,
         entries: g.entries,
     }))
+}
+
+/// Bytes of a chunk's payload [`check_crc`] reads at a time.
+const CRC_PIECE: usize = 1 << 20;
+
+/// Check the CRC of the chunk of type `kind` and `n` payload bytes at byte `pos` (its
+/// 8-byte head there, the payload and CRC after; within the file, as the caller
+/// checked), reading the payload a piece of [`CRC_PIECE`] bytes at a time: an error
+/// naming the chunk when it does not match, as [`super::ChunkReader`] gives.
+pub fn check_crc<R: Read + Seek>(src: &mut R, pos: u64, n: u64, kind: [u8; 4]) -> Result<()> {
+    src.seek(SeekFrom::Start(pos + 8))?;
+    let mut c = super::crc::Crc32c::new();
+    c.update(&kind);
+    let mut buf = vec![0u8; CRC_PIECE.min(n as usize)];
+    let mut left = n;
+    while left > 0 {
+        let k = (left as usize).min(buf.len());
+        src.read_exact(&mut buf[..k])?;
+        c.update(&buf[..k]);
+        left -= k as u64;
+    }
+    let mut crc4 = [0u8; 4];
+    src.read_exact(&mut crc4)?;
+    let (stored, computed) = (u32::from_le_bytes(crc4), c.finish());
+    if stored != computed {
+        let chunk = super::Chunk {
+            kind,
+            payload: Vec::new(),
+            offset: pos,
+        };
+        return Err(FormatError::Crc {
+            chunk: chunk.name(),
+            offset: pos,
+            stored,
+            computed,
+        }
+        .into());
+    }
+    Ok(())
 }

@@ -26,6 +26,7 @@ mod io;
 mod kernel_tables;
 mod level_blocks;
 mod library_rules;
+mod lossless_default;
 mod mesh;
 mod metadata;
 mod metrics;

@@ -193,9 +193,8 @@ fn a_truncated_streamed_file_is_a_one_line_error() {
 /// whole`) streams for the lossy modes of one step and `--psnr`, integer or float
 /// samples, and for `--lossless` (and exact `--max-error`) of 8- and 16-bit integer
 /// samples, with a nodata value or not; `--max-error` over 1, format 2 and small rasters
-/// do not. The
-/// default layout streams the lossy ones (a lossless stream's decode holds its blocks
-/// whole: tiled by default).
+/// do not. The default layout streams them all, the lossless ones too (their streamed
+/// decode reads the code-blocks from the file a batch at a time).
 #[test]
 fn a_whole_tile_streams_over_the_one_piece_limit() {
     let small = field(&[4, 4], 1, SampleType::U16, 1, 100.0);
@@ -220,7 +219,8 @@ fn a_whole_tile_streams_over_the_one_piece_limit() {
     assert_eq!(codec::default_layout(&big, &o(Rate::Keep(5.0))), big.dims);
     let tiles = codec::default_tile(&big.dims, 1);
     assert_ne!(tiles, big.dims);
-    assert_eq!(codec::default_layout(&big, &o(Rate::Lossless)), tiles);
+    assert_eq!(codec::default_layout(&big, &o(Rate::Lossless)), big.dims);
+    assert_eq!(codec::default_layout(&big, &o(Rate::MaxError(0.5))), big.dims);
     assert_eq!(codec::default_layout(&big, &o(Rate::MaxError(2.0))), tiles);
     assert_eq!(
         codec::default_layout(&float, &o(Rate::Bpp(1.0))),
@@ -237,10 +237,7 @@ fn a_whole_tile_streams_over_the_one_piece_limit() {
     assert!(codec::streams(&vol, &o(Rate::Bpp(1.0))));
     assert_eq!(codec::default_layout(&vol, &o(Rate::Bpp(1.0))), vol.dims);
     assert!(codec::streams(&vol, &o(Rate::Lossless)));
-    assert_eq!(
-        codec::default_layout(&vol, &o(Rate::Lossless)),
-        codec::default_tile(&vol.dims, 1)
-    );
+    assert_eq!(codec::default_layout(&vol, &o(Rate::Lossless)), vol.dims);
     let mut wide = vol.clone();
     wide.sample_type = SampleType::U32;
     assert_eq!(

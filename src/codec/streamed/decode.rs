@@ -65,13 +65,11 @@ enum Slabs {
 }
 
 impl StreamedDecoder {
-    /// Read the file at `path` (its chunks checked, the code-blocks' bytes held) and
-    /// start the synthesis.
+    /// Read the file at `path` (its chunks checked; a one-piece 3.0 file's code-blocks
+    /// left in the file, each batch read from it as it is decoded,
+    /// [`crate::codec::block_file`]) and start the synthesis.
     pub fn open(path: &std::path::Path) -> Result<StreamedDecoder> {
-        let f = std::fs::File::open(path)?;
-        let len = f.metadata()?.len();
-        let p = crate::codec::container::read_chunks(std::io::BufReader::new(f), len, 0, false)?;
-        StreamedDecoder::of(p)
+        StreamedDecoder::of(crate::codec::block_file::read_for_stream(path)?)
     }
 
     /// Start the synthesis of the read file `p` (an error when the stream does not decode it).
@@ -390,7 +388,8 @@ impl Failed {
 
 /// A batch of decoded stripes of a band: its first row and its rows in raster order,
 /// dequantized (a band without children: what the synthesis reads) or as indices (a
-/// band with children: its children's context, dequantized as it is read).
+/// band with children: its children's context, dequantized as it is read; every band
+/// of a lossless file, the transform's values).
 struct Batch {
     y0: usize,
     values: Values,
@@ -399,14 +398,19 @@ struct Batch {
 enum Values {
     Samples(Vec<f32>),
     Indices(Vec<i64>),
+    /// Indices of a lossless band that all fit in `i32` (half the memory of
+    /// [`Values::Indices`], which a batch with a value past `i32` keeps instead).
+    Narrow(Vec<i32>),
 }
 
 /// The decoded batches a channel holds, and each band's last dropped one, whose buffer
 /// the next one reuses (a fresh one of a megabyte or more would be mapped and faulted
-/// in afresh).
+/// in afresh); and the buffer a batch's coded bytes are read into from a file
+/// ([`crate::codec::block_file`]), reused from batch to batch.
 struct Held {
     kept: Vec<BTreeMap<usize, Arc<Batch>>>,
     spare: Vec<Option<Values>>,
+    bytes: Vec<u8>,
 }
 
 /// The band rows of one channel of a file, decoded a batch of stripes of code-blocks
@@ -444,8 +448,15 @@ impl<'a> BandSource<'a> {
                 p.bands[c][j]
                     .as_ref()
                     .map(|bc| {
-                        crate::format::bands::parse_blocks(
+                        // the entry's length: its bytes', or the file's entry's (the
+                        // index alone held, [`crate::codec::block_file`])
+                        let len = match &p.blocks_in {
+                            Some(f) => f.entry_len(c, j).unwrap_or(0),
+                            None => bc.data.len() as u64,
+                        };
+                        crate::format::bands::parse_index(
                             &bc.data,
+                            len,
                             &grids[j].dims,
                             &grids[j].block,
                         )
@@ -491,6 +502,7 @@ impl<'a> BandSource<'a> {
             held: Mutex::new(Held {
                 kept: (0..nb).map(|_| BTreeMap::new()).collect(),
                 spare: (0..nb).map(|_| None).collect(),
+                bytes: Vec::new(),
             }),
             err,
         })
@@ -558,6 +570,7 @@ impl<'a> BandSource<'a> {
                 self.deltas[j],
                 out,
             ),
+            Values::Narrow(_) => unreachable!("a lossy band is dequantized from i64 indices"),
         }
     }
 
@@ -580,6 +593,11 @@ impl<'a> BandSource<'a> {
         let at = (r - batch.y0) * len;
         match &batch.values {
             Values::Indices(q) => out.copy_from_slice(&q[at..at + len]),
+            Values::Narrow(q) => {
+                for (o, &x) in out.iter_mut().zip(&q[at..at + len]) {
+                    *o = x as i64;
+                }
+            }
             Values::Samples(_) => unreachable!("a lossless band keeps its indices"),
         }
     }
@@ -717,11 +735,12 @@ impl<'a> BandSource<'a> {
                         got = Some((pb, self.decoded(pj, pb, fresh)?));
                     }
                     let batch = &got.as_ref().expect("just set").1;
-                    let Values::Indices(q) = &batch.values else {
-                        unreachable!("a parent band keeps its indices")
-                    };
                     let at = (y - batch.y0) * plen;
-                    v.extend_from_slice(&q[at..at + plen]);
+                    match &batch.values {
+                        Values::Indices(q) => v.extend_from_slice(&q[at..at + plen]),
+                        Values::Narrow(q) => v.extend(q[at..at + plen].iter().map(|&x| x as i64)),
+                        Values::Samples(_) => unreachable!("a parent band keeps its indices"),
+                    }
                 }
                 let mut pdims = self.grids[pj].dims.clone();
                 pdims[0] = prows.len();
@@ -735,13 +754,39 @@ impl<'a> BandSource<'a> {
         ldims[0] = rows.len();
         let local = Grid::new(&ldims, &g.block);
         let first = rows.start / tall * per;
-        let data = &self.p.bands[self.c][j]
-            .as_ref()
-            .expect("a band with blocks is present")
-            .data;
         let set = self.sets[j].as_ref().expect("checked by the caller");
+        let mine = &set[first.min(set.len())..(first + local.len()).min(set.len())];
+        // the batch's blocks follow one another in the entry: held, or read from the
+        // file in one read into the channel's reused buffer
+        let mut bytes = Vec::new();
+        let (data, base) = match &self.p.blocks_in {
+            Some(f) => {
+                let span = match (mine.first(), mine.last()) {
+                    (Some(a), Some(b)) => a.start..b.end,
+                    _ => 0..0,
+                };
+                bytes = self
+                    .held
+                    .lock()
+                    .map(|mut h| std::mem::take(&mut h.bytes))
+                    .unwrap_or_default();
+                f.read(self.c, j, span.clone(), &mut bytes)?;
+                (&bytes[..], span.start)
+            }
+            None => {
+                let data = &self.p.bands[self.c][j]
+                    .as_ref()
+                    .expect("a band with blocks is present")
+                    .data;
+                (&data[..], 0)
+            }
+        };
         let streams: Vec<&[u8]> = (0..local.len())
-            .map(|i| set.get(first + i).map(|r| &data[r.clone()]).unwrap_or(&[]))
+            .map(|i| {
+                mine.get(i)
+                    .map(|r| &data[r.start - base..r.end - base])
+                    .unwrap_or(&[])
+            })
             .collect();
         let kind = if self.p.plan.bands[j].level == 0 {
             BandKind::Coarse
@@ -762,7 +807,42 @@ impl<'a> BandSource<'a> {
             )
         };
         let spare = self.held.lock().ok().and_then(|mut h| h.spare[j].take());
-        let values = if self.parent[j] || self.p.header.mode == Mode::Lossless {
+        let values = if self.p.header.mode == Mode::Lossless {
+            // `i32` unless a value is past it (then decoded again as `i64`)
+            let past = std::sync::atomic::AtomicBool::new(false);
+            let put = crate::entropy::codeblocks::Put {
+                wide: |o: &mut [i32], q: &[i64]| {
+                    for (o, &x) in o.iter_mut().zip(q) {
+                        match i32::try_from(x) {
+                            Ok(v) => *o = v,
+                            Err(_) => past.store(true, std::sync::atomic::Ordering::Relaxed),
+                        }
+                    }
+                },
+                narrow: |o: &mut [i32], q: &[i32]| o.copy_from_slice(q),
+            };
+            let q = match spare {
+                Some(Values::Narrow(v)) => v,
+                _ => Vec::new(),
+            };
+            let pt = par.as_ref().map(|(dims, data)| Parent { data, dims });
+            let q = decode_grid(q, n, &local, &streams, (kind, pt), cc, &put).map_err(failed)?;
+            if !past.load(std::sync::atomic::Ordering::Relaxed) {
+                Values::Narrow(q)
+            } else {
+                let put = crate::entropy::codeblocks::Put {
+                    wide: |o: &mut [i64], q: &[i64]| o.copy_from_slice(q),
+                    narrow: |o: &mut [i64], q: &[i32]| {
+                        for (o, &x) in o.iter_mut().zip(q) {
+                            *o = x as i64;
+                        }
+                    },
+                };
+                let pt = par.as_ref().map(|(dims, data)| Parent { data, dims });
+                let q = decode_grid(Vec::new(), n, &local, &streams, (kind, pt), cc, &put);
+                Values::Indices(q.map_err(failed)?)
+            }
+        } else if self.parent[j] {
             let put = crate::entropy::codeblocks::Put {
                 wide: |o: &mut [i64], q: &[i64]| o.copy_from_slice(q),
                 narrow: |o: &mut [i64], q: &[i32]| {
@@ -786,6 +866,12 @@ impl<'a> BandSource<'a> {
             let x = decode_grid(x, n, &local, &streams, (kind, parent), cc, &put);
             Values::Samples(x.map_err(failed)?)
         };
+        drop(streams);
+        if self.p.blocks_in.is_some() {
+            if let Ok(mut h) = self.held.lock() {
+                h.bytes = bytes;
+            }
+        }
         Ok(Batch {
             y0: rows.start,
             values,

@@ -76,12 +76,6 @@ pub fn covers(shape: &Shape, opts: &EncodeOptions) -> bool {
         ) || lossless::streams(shape, opts))
 }
 
-/// Whether [`encode_streamed`] writes the file of these options as a lossless stream
-/// (the integer transform; [`covers`] holds too when the raster is over the limit).
-pub(in crate::codec) fn streams_lossless(shape: &Shape, opts: &EncodeOptions) -> bool {
-    lossless::streams(shape, opts)
-}
-
 /// Tiles of the first pass measured by the `--bpp` search (of the ⌈n/64⌉-th tiles).
 const BPP_SAMPLE: usize = 16;
 
