@@ -61,7 +61,8 @@ pub fn encode_tiled_view(
 /// slab at a time ([`super::encode_streamed`], format 3.0) when it is given the whole
 /// raster as its tile: a raster over the one-piece limit
 /// ([`super::tiles::default_tile`] cuts it) at options the stream covers (lossy at one
-/// base step or `--psnr`, no nodata value; or 8/16-bit lossless;
+/// base step or `--psnr`, or `--max-error` above the lossless range, no nodata value;
+/// or 8/16-bit lossless;
 /// [`super::streamed::covers`]). A float raster with NaN samples (voids) is then written
 /// as [`super::tiles::default_tile`]'s tiles, which fill them (found by the stream's
 /// first pass).
@@ -75,7 +76,7 @@ pub fn streams(shape: &Shape, opts: &EncodeOptions) -> bool {
 /// covers it and it has 2 or 3 axes (images and volumes: the axes
 /// [`super::StreamedDecoder`] decodes in bounded memory), else
 /// [`super::tiles::default_tile`]'s grid (the modes the stream does not cover:
-/// `--max-error` over 1, a nodata value, format 2, lossless 32-bit; and 4 axes). A
+/// a nodata value, format 2, lossless 32-bit; and 4 axes). A
 /// lossless file over the limit is also tiled by default (`--tile whole` streams it):
 /// its streamed decode holds the coded blocks whole (a 16384² RGB u16 lossless file of
 /// 746 MB peaks at 1.9 GB), its tiles decode in bounded memory.

@@ -44,6 +44,7 @@ mod stream;
 mod streamed;
 mod streamed_float;
 mod streamed_lossless;
+mod streamed_max_error;
 mod subdivide;
 mod surface;
 mod tensor;

@@ -192,8 +192,8 @@ fn a_truncated_streamed_file_is_a_one_line_error() {
 /// Over the one-piece limit a one-tile encode (the default layout there, or `--tile
 /// whole`) streams for the lossy modes of one step and `--psnr`, integer or float
 /// samples, and for `--lossless` (and exact `--max-error`) of 8- and 16-bit integer
-/// samples; `--max-error` over 1, a nodata value, format 2 and small rasters do not. The
-/// default layout streams the lossy ones (a lossless stream's decode holds its blocks
+/// samples, and `--max-error` above the lossless range (a base and its residual); a nodata
+/// value, format 2 and small rasters do not. The default layout streams the lossy ones (a lossless stream's decode holds its blocks
 /// whole: tiled by default).
 #[test]
 fn a_whole_tile_streams_over_the_one_piece_limit() {
@@ -205,7 +205,7 @@ fn a_whole_tile_streams_over_the_one_piece_limit() {
     assert!(codec::streams(&big, &o(Rate::Quality(50.0))));
     assert!(codec::streams(&big, &o(Rate::Lossless)));
     assert!(codec::streams(&big, &o(Rate::MaxError(0.5))));
-    assert!(!codec::streams(&big, &o(Rate::MaxError(2.0))));
+    assert!(codec::streams(&big, &o(Rate::MaxError(2.0))));
     assert!(codec::streams(&big, &o(Rate::Psnr(40.0))));
     assert!(!codec::streams(&Shape::of(&small), &o(Rate::Bpp(1.0))));
     let mut float = big.clone();
@@ -220,7 +220,10 @@ fn a_whole_tile_streams_over_the_one_piece_limit() {
     let tiles = codec::default_tile(&big.dims, 1);
     assert_ne!(tiles, big.dims);
     assert_eq!(codec::default_layout(&big, &o(Rate::Lossless)), tiles);
-    assert_eq!(codec::default_layout(&big, &o(Rate::MaxError(2.0))), tiles);
+    assert_eq!(
+        codec::default_layout(&big, &o(Rate::MaxError(2.0))),
+        big.dims
+    );
     assert_eq!(
         codec::default_layout(&float, &o(Rate::Bpp(1.0))),
         float.dims

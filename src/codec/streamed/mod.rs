@@ -46,6 +46,7 @@ use std::ops::Range;
 mod decode;
 mod lift;
 mod lossless;
+mod max_error;
 mod psnr;
 pub use decode::{decodes_streamed, StreamedDecoder};
 
@@ -57,8 +58,8 @@ pub use decode::{decodes_streamed, StreamedDecoder};
 /// the whole-array encoder codes them (the same finite range in the header, non-finite
 /// samples 0 in the planes, the context coder, no lossless file tried); a float raster
 /// with NaN samples (voids, found by the first pass) is not streamed
-/// ([`encode_streamed`]). `--max-error` over 1 (a residual to the decoded base) stays
-/// tiled above the one-piece limit.
+/// ([`encode_streamed`]). `--max-error` above the lossless range (E ≥ 1 on integers, any
+/// E > 0 on floats) is a streamed base and its residual layer ([`max_error`]).
 pub fn covers(shape: &Shape, opts: &EncodeOptions) -> bool {
     opts.format == Format::Blocks
         && shape.meta.nodata.is_none()
@@ -73,7 +74,19 @@ pub fn covers(shape: &Shape, opts: &EncodeOptions) -> bool {
                 | Rate::Bpp(_)
                 | Rate::Psnr(_)
                 | Rate::PsnrRange(..)
-        ) || lossless::streams(shape, opts))
+        ) || lossy_max_error(shape, opts)
+            || lossless::streams(shape, opts))
+}
+
+/// Whether the options ask for `--max-error E` above the lossless range of the samples
+/// (E ≥ 1 on integers, E > 0 on floats: a base and a residual layer, [`max_error`]).
+fn lossy_max_error(shape: &Shape, opts: &EncodeOptions) -> bool {
+    match opts.rate {
+        Rate::MaxError(e) => {
+            super::max_error::is_exact(e, shape.sample_type).is_ok_and(|exact| !exact)
+        }
+        _ => false,
+    }
 }
 
 /// Whether [`encode_streamed`] writes the file of these options as a lossless stream
@@ -116,11 +129,14 @@ pub(in crate::codec) fn encode_unless_voids<S: SlabSource + ?Sized, W: std::io::
         return Err(Error::parameter(
             "rate",
             format!("{:?}", opts.rate),
-            "a one-transform file without nodata at --quality, --keep, --threshold, --bpp, --psnr or 8/16-bit --lossless",
+            "a one-transform file without nodata at --quality, --keep, --threshold, --bpp, --psnr, --max-error or 8/16-bit --lossless",
         ));
     }
     if lossless::streams(&shape, opts) {
         return lossless::encode(src, opts, out).map(Some);
+    }
+    if let Rate::MaxError(e) = opts.rate {
+        return max_error::encode(src, opts, e, out);
     }
     let sampled = matches!(
         opts.rate,
