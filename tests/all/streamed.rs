@@ -191,10 +191,11 @@ fn a_truncated_streamed_file_is_a_one_line_error() {
 
 /// Over the one-piece limit a one-tile encode (the default layout there, or `--tile
 /// whole`) streams for the lossy modes of one step and `--psnr`, integer or float
-/// samples, and for `--lossless` (and exact `--max-error`) of 8- and 16-bit integer
-/// samples, and `--max-error` above the lossless range (a base and its residual); a nodata
-/// value, format 2 and small rasters do not. The default layout streams the lossy ones (a lossless stream's decode holds its blocks
-/// whole: tiled by default).
+/// samples, for `--lossless` (and exact `--max-error`) of 8- and 16-bit integer samples,
+/// and for `--max-error` above the lossless range (a base and its residual); a nodata
+/// value, format 2 and small rasters do not. The default layout streams the lossy ones
+/// and `--max-error` (a lossless stream's decode holds its blocks whole: tiled by
+/// default).
 #[test]
 fn a_whole_tile_streams_over_the_one_piece_limit() {
     let small = field(&[4, 4], 1, SampleType::U16, 1, 100.0);
