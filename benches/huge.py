@@ -9,12 +9,16 @@ as one transform streamed (format 3.2, the default of both), with `--tile` (2.x 
 of 1024² / 128³), and `--lossless` (tiled); decoded to raw. Prints per file: format version,
 bytes, bits per position, PSNR (chunked, `examples/raw_psnr.rs`, peak 65535), encode
 and decode wall s / CPU s / peak RSS MiB (`/usr/bin/time -v`), decode MB/s of samples.
-Everything is removed at the end.
+Everything is removed at the end (`HUGE_TMP=dir`: the temporary folder there).
 
 Run from the repository root after
 `cargo build --release && cargo build --release --example raw_psnr`:
     python3 benches/huge.py [--skip-image] [--skip-volume] [--skip-lossless] [--skip-tiles]
-                            [--threads N] [--first N]
+                            [--threads N] [--first N] [--rate "--max-error 5"]
+                            [--volume 512x512x264] [--tiles 128,1024]
+`--rate` replaces `--bpp 1` (the rate of the one-transform and tiled rows); `--volume
+XxYxZ` (X = Y) builds the volume of terrains of X² instead of 1024³; `--tiles` lists the
+tile extents of the tiled rows (default: 1024 for the image, 128 for the volume).
 """
 import argparse
 import os
@@ -42,6 +46,8 @@ def timed(args, env):
 
 
 def scratch():
+    if os.environ.get("HUGE_TMP"):
+        return tempfile.mkdtemp(prefix="mra-huge-", dir=os.environ["HUGE_TMP"])
     try:
         st = os.statvfs("/dev/shm")
         if st.f_bavail * st.f_frsize >= 8 * 2**30:
@@ -93,10 +99,12 @@ def mosaic(raw, tmp):
 
 
 def run(label, raw, dims, tile, args, tmp, env):
+    rate = args.rate.split()
     # one transform: the default layout of both
-    one(label, raw, dims, ["--bpp", "1"], None, tmp, env)
+    one(label, raw, dims, rate, None, tmp, env)
     if not args.skip_tiles:
-        one(label, raw, dims, ["--bpp", "1"], tile, tmp, env)
+        for t in args.tiles.split(",") if args.tiles else [tile]:
+            one(label, raw, dims, rate, t, tmp, env)
     if not args.skip_lossless:
         one(label, raw, dims, ["--lossless"], None, tmp, env)
 
@@ -109,6 +117,9 @@ def main():
     ap.add_argument("--skip-tiles", action="store_true")
     ap.add_argument("--threads", default="2")
     ap.add_argument("--first", type=int, default=16, help="planes of the first terrain")
+    ap.add_argument("--rate", default="--bpp 1")
+    ap.add_argument("--volume", default="1024x1024x1024")
+    ap.add_argument("--tiles", default=None)
     args = ap.parse_args()
     if not 1 <= args.first <= 16:
         sys.exit("--first: 1 to 16 planes")
@@ -126,19 +137,22 @@ def main():
         if not args.skip_volume:
             part = os.path.join(tmp, "part.raw")
             raw = os.path.join(tmp, "vol.raw")
+            side, _, depth = (int(x) for x in args.volume.split("x"))
             with open(raw, "wb") as out:
-                for k in range(65 if args.first % 16 else 64):
-                    subprocess.run([MRA, "generate", "terrain", "-o", part, "--size", "1024",
+                left, k = depth, 0
+                while left > 0:
+                    subprocess.run([MRA, "generate", "terrain", "-o", part, "--size", str(side),
                                     "--dtype", "u16", "--seed", str(101 + k)], check=True,
                                    capture_output=True)
                     with open(part, "rb") as src:
                         plane = src.read()
-                    # the first terrain --first planes thick, the last 16 − that
-                    thick = args.first if k == 0 else 16 - args.first if k == 64 else 16
+                    # the first terrain --first planes thick, the others 16
+                    thick = min(args.first if k == 0 else 16, left)
                     for _ in range(thick):
                         out.write(plane)
+                    left, k = left - thick, k + 1
             os.remove(part)
-            run("1024³ u16", raw, "1024x1024x1024", "128", args, tmp, env)
+            run(f"{args.volume.replace('x', '×')} u16", raw, args.volume, "128", args, tmp, env)
             os.remove(raw)
     finally:
         shutil.rmtree(tmp, ignore_errors=True)

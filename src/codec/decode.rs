@@ -947,7 +947,14 @@ fn add_residuals_window(p: &Parsed, samples: &mut Samples, out: &[Range<usize>])
 
 /// `s[(at + t)·c + ch] = x̂ + q[t]·step` taken to the sample type, for `t` over `q`; for
 /// every position of channel `ch` (`x̂` alone) when `q` is empty.
-fn add_row(s: &mut Samples, c: usize, ch: usize, at: usize, q: &[i64], step: f64) {
+pub(in crate::codec) fn add_row(
+    s: &mut Samples,
+    c: usize,
+    ch: usize,
+    at: usize,
+    q: &[i64],
+    step: f64,
+) {
     let (lo, hi) = s.sample_type().range();
     macro_rules! go {
         ($v:expr, $conv:expr) => {{
@@ -988,7 +995,7 @@ fn add_row(s: &mut Samples, c: usize, ch: usize, at: usize, q: &[i64], step: f64
 }
 
 /// `s[i] = x` taken to the sample type (as `Samples::from_f64` does).
-fn set_sample(s: &mut Samples, i: usize, x: f64) {
+pub(in crate::codec) fn set_sample(s: &mut Samples, i: usize, x: f64) {
     let ty = s.sample_type();
     let one = Samples::from_f64(&[x], ty);
     s.copy_from(i, &one, 0, 1).expect("same type, in range");

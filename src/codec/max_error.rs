@@ -39,7 +39,7 @@ pub(super) fn is_exact(e: f64, t: SampleType) -> Result<bool> {
 }
 
 /// Step of the residual layer for bound `e` on samples of type `t`.
-fn residual_step(e: f64, t: SampleType) -> f64 {
+pub(super) fn residual_step(e: f64, t: SampleType) -> f64 {
     if t.is_float() {
         2.0 * e * (1.0 - 1e-9)
     } else {
@@ -195,7 +195,7 @@ fn residual_file(
 /// coding the distance from it to the fill cost the N22W160 tile an index of about 3000
 /// at each of its 4279 voids) and for a sample that is not finite.
 #[inline]
-fn residual_index(
+pub(super) fn residual_index(
     r: &RasterView<'_>,
     dec: &Samples,
     i: usize,
@@ -215,7 +215,7 @@ fn residual_index(
 /// `dec` leaves outside the bound `e`: `x̂ + q·s` taken to the sample type (as
 /// `Samples::from_f64` does) further than `e` from `x` (NaN for NaN is within). Void
 /// samples are no exceptions.
-fn exceptions(
+pub(super) fn exceptions(
     r: &RasterView<'_>,
     dec: &Samples,
     k: usize,

@@ -61,9 +61,9 @@ pub fn encode_tiled_view(
 /// slab at a time ([`super::encode_streamed`], format 3.0) when it is given the whole
 /// raster as its tile: a raster over the one-piece limit
 /// ([`super::tiles::default_tile`] cuts it) at options the stream covers (lossy at one
-/// base step or `--psnr`, or 8/16-bit lossless, voids or not: NaN samples and samples
-/// equal to the nodata value are filled and listed as the whole-array encoder does;
-/// [`super::streamed::covers`]).
+/// base step or `--psnr`, `--max-error` above the lossless range, or 8/16-bit lossless,
+/// voids or not: NaN samples and samples equal to the nodata value are filled and listed
+/// as the whole-array encoder does; [`super::streamed::covers`]).
 pub fn streams(shape: &Shape, opts: &EncodeOptions) -> bool {
     super::tiles::default_tile(&shape.dims, shape.channels) != shape.dims
         && super::streamed::covers(shape, opts)
@@ -73,10 +73,10 @@ pub fn streams(shape: &Shape, opts: &EncodeOptions) -> bool {
 /// ([`encode_stream`], `mra encode`) or in memory ([`encode`], Python): the whole raster
 /// (one transform) when it is one piece or when [`streams`] covers it and it has 2 or 3
 /// axes (images and volumes: the axes [`super::StreamedDecoder`] decodes in bounded
-/// memory, lossy or 8/16-bit lossless and exact `--max-error` alike, with voids or not:
+/// memory, lossy, `--max-error` and 8/16-bit lossless alike, with voids or not:
 /// its code-blocks read from the file a batch at a time), else
 /// [`super::tiles::default_tile`]'s grid (the modes the stream does not cover:
-/// `--max-error` over 1, format 2, lossless 32-bit; and 4 axes).
+/// format 2, lossless 32-bit; and 4 axes).
 pub fn default_layout(shape: &Shape, opts: &EncodeOptions) -> Vec<usize> {
     if streams(shape, opts) && shape.dims.len() <= 3 {
         shape.dims.clone()

@@ -32,6 +32,9 @@ use super::walk::{class_in, classes, median_residuals, parent_plane, undo_median
 use super::{BandKind, Parent};
 use crate::Result;
 
+mod rows;
+pub use rows::{RowDecoder, RowEncoder};
+
 const ZCLS: usize = 12;
 const PCLS: usize = 3;
 /// Magnitude classes of [`Classes::Wide`]: the nine of [`Classes::Narrow`], then one per

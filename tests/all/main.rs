@@ -46,6 +46,7 @@ mod streamed;
 mod streamed_float;
 mod streamed_lossless;
 mod streamed_voids;
+mod streamed_max_error;
 mod subdivide;
 mod surface;
 mod tensor;

@@ -3,6 +3,7 @@
 //! a time (a lossless file through the integer synthesis, [`lossless`]).
 
 mod lossless;
+mod residual;
 
 use crate::codec::tiles;
 use crate::entropy::codeblocks::{parent_box, Grid};
@@ -18,9 +19,10 @@ use std::ops::Range;
 use std::sync::{Arc, Mutex};
 
 /// Whether a whole decode of the file of header `h` goes through [`StreamedDecoder`]
-/// in [`crate::codec::SlabDecoder`]: a one-piece lossy file of code-blocks (no residual
-/// layer, any block coder; voids marked from the coded mask, [`super::voids::marking`])
-/// of 2 or 3 axes over the one-piece limit
+/// in [`crate::codec::SlabDecoder`]: a one-piece lossy or `--max-error` file of
+/// code-blocks (its residual layer added slab by slab, [`residual`]; voids marked from
+/// the coded mask after it, [`super::voids::marking`]; any block coder) of 2 or 3 axes
+/// over the one-piece limit
 /// ([`tiles::default_tile`] would cut it). Under the limit the whole-array decode is
 /// kept: measured side by side on idle cores, the stripes saved memory (flower peak
 /// RSS 74 → 62 MB) but not time, and lost the parallel speed-up of small images
@@ -28,7 +30,7 @@ use std::sync::{Arc, Mutex};
 pub fn decodes_streamed(h: &Header) -> bool {
     !h.is_tiled()
         && h.version.has_blocks()
-        && (h.mode == Mode::Lossy || lossless::decodes(h))
+        && (matches!(h.mode, Mode::Lossy | Mode::MaxError) || lossless::decodes(h))
         && (2..=3).contains(&h.dims.len())
         && h.levels > 0
         && tiles::default_tile(&h.dims, h.channels) != h.dims
@@ -91,7 +93,10 @@ impl StreamedDecoder {
     ) -> Result<std::result::Result<StreamedDecoder, crate::codec::container::Parsed>> {
         let h = &p.header;
         let integer = lossless::decodes(h);
-        if !h.version.has_blocks() || !(h.mode == Mode::Lossy || integer) || h.dims.len() < 2 {
+        if !h.version.has_blocks()
+            || !(matches!(h.mode, Mode::Lossy | Mode::MaxError) || integer)
+            || h.dims.len() < 2
+        {
             return Ok(Err(p));
         }
         // voids: the coded mask (a run list of older files is marked by the whole decode)
@@ -123,8 +128,17 @@ impl StreamedDecoder {
         let (tx, rx) = std::sync::mpsc::sync_channel(1);
         drop(sp);
         std::thread::spawn(move || {
-            let r = StreamPlan::new(&p.header.dims, &p.plan.pyr.spec)
-                .and_then(|sp| synthesize(&p, &sp, &mut |s| tx.send(Ok(s)).is_ok()));
+            // a --max-error file's residual added to each slab of its base
+            let r = residual::Residuals::new(&p).and_then(|mut resi| {
+                let sp = StreamPlan::new(&p.header.dims, &p.plan.pyr.spec)?;
+                synthesize(&p, &sp, &mut |mut s| match resi.add(&mut s) {
+                    Ok(()) => tx.send(Ok(s)).is_ok(),
+                    Err(e) => {
+                        let _ = tx.send(Err(e));
+                        false
+                    }
+                })
+            });
             if let Err(e) = r {
                 let _ = tx.send(Err(e));
             }

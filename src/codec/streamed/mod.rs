@@ -46,6 +46,7 @@ use std::ops::Range;
 mod decode;
 mod lift;
 mod lossless;
+mod max_error;
 mod psnr;
 mod voids;
 pub use decode::{decodes_streamed, StreamedDecoder};
@@ -58,8 +59,9 @@ pub use decode::{decodes_streamed, StreamedDecoder};
 /// (the same finite range in the header, non-finite samples 0 in the planes, the
 /// context coder, no lossless file tried). Voids (NaN samples, samples equal to the
 /// nodata value) are filled and their mask listed as the whole-array encoder lists it
-/// ([`voids`]). `--max-error` over 1 (a residual to the decoded base) stays tiled above
-/// the one-piece limit, and so does a raster whose metadata already lists voids.
+/// ([`voids`]). `--max-error` above the lossless range (E ≥ 1 on integers, any E > 0 on
+/// floats) is a streamed base and its residual layer ([`max_error`]). A raster whose
+/// metadata already lists voids stays tiled above the one-piece limit.
 pub fn covers(shape: &Shape, opts: &EncodeOptions) -> bool {
     opts.format == Format::Blocks
         && !super::voids::lists_voids(&shape.meta)
@@ -73,7 +75,19 @@ pub fn covers(shape: &Shape, opts: &EncodeOptions) -> bool {
                 | Rate::Bpp(_)
                 | Rate::Psnr(_)
                 | Rate::PsnrRange(..)
-        ) || lossless::streams(shape, opts))
+        ) || lossy_max_error(shape, opts)
+            || lossless::streams(shape, opts))
+}
+
+/// Whether the options ask for `--max-error E` above the lossless range of the samples
+/// (E ≥ 1 on integers, E > 0 on floats: a base and a residual layer, [`max_error`]).
+fn lossy_max_error(shape: &Shape, opts: &EncodeOptions) -> bool {
+    match opts.rate {
+        Rate::MaxError(e) => {
+            super::max_error::is_exact(e, shape.sample_type).is_ok_and(|exact| !exact)
+        }
+        _ => false,
+    }
 }
 
 /// Tiles of the first pass measured by the `--bpp` search (of the ⌈n/64⌉-th tiles).
@@ -94,7 +108,7 @@ pub fn encode_streamed<S: SlabSource + ?Sized, W: std::io::Write>(
         return Err(Error::parameter(
             "rate",
             format!("{:?}", opts.rate),
-            "a one-transform file at --quality, --keep, --threshold, --bpp, --psnr or 8/16-bit --lossless",
+            "a one-transform file at --quality, --keep, --threshold, --bpp, --psnr, --max-error or 8/16-bit --lossless",
         ));
     }
     if voids::may_hold(&shape) {
@@ -113,6 +127,9 @@ fn encode_void_free<S: SlabSource + ?Sized, W: std::io::Write>(
 ) -> Result<u64> {
     if lossless::streams(src.shape(), opts) {
         return lossless::encode(src, opts, out);
+    }
+    if let Rate::MaxError(e) = opts.rate {
+        return max_error::encode(src, opts, e, out);
     }
     let sampled = matches!(
         opts.rate,
