@@ -26,7 +26,7 @@ pub(super) struct Parsed {
     /// [`super::tiles::Stitch`] maps it), when known: the box the window synthesis makes.
     pub(super) out_box: Option<Vec<std::ops::Range<usize>>>,
     /// Where the code-blocks' bytes are when `bands` holds each entry's index alone
-    /// ([`super::block_file::read_indexed`]: read from the file as they are decoded,
+    /// (the one-piece file read by `indexed_read`: read from the file as they are decoded,
     /// by [`super::StreamedDecoder`] only); `None`: `bands` holds the entries whole.
     pub(super) blocks_in: Option<std::sync::Arc<super::block_file::BlockFile>>,
 }

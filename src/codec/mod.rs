@@ -15,6 +15,7 @@
 //! [`frames`] beside them.
 
 mod block_file;
+mod indexed_read;
 mod colour;
 mod container;
 mod decode;

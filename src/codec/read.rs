@@ -232,7 +232,7 @@ impl SlabDecoder {
             // the code-blocks left in the file, read a batch at a time as decoded
             let at = rd.position();
             let file = src.inner.get_ref().try_clone()?;
-            let p = match super::block_file::read_indexed(&mut src, file, (at, len), header.clone())? {
+            let p = match super::indexed_read::read_indexed(&mut src, file, (at, len), header.clone())? {
                 Some(p) => p,
                 None => {
                     src.seek(SeekFrom::Start(at))?;

@@ -303,3 +303,39 @@ fn voids_over_the_limit_are_one_transform() {
         assert!(rmse < span * 0.01, "{}: rmse {rmse}", r.summary());
     }
 }
+
+/// `--max-error` of a raster with voids through the stream: the voids come back where
+/// they were (the nodata value of 16-bit samples, NaN among floats), every valid sample
+/// within the bound, and the streamed decode (the residual added, then the voids marked)
+/// gives the whole decode's samples.
+#[test]
+fn streamed_max_error_keeps_voids_and_the_bound() {
+    let dims = [300, 260];
+    let at = holes(&dims, Some([40..90, 0..70]));
+    let mut dem = with_voids(field(&dims, 1, SampleType::I16, 7, 4000.0), &at, -9999.0);
+    dem.meta.nodata = Some(-9999.0);
+    let nan = with_voids(field(&dims, 2, SampleType::F32, 8, 10.0), &at, f64::NAN);
+    for (r, e) in [(&dem, 2.0), (&nan, 0.01)] {
+        let s = streamed(r, &opts(Rate::MaxError(e), 4));
+        let whole = codec::decode(&s, &DecodeOptions::default()).unwrap().raster;
+        assert_eq!(whole.meta, r.meta, "{}", r.summary());
+        let (shape, got) = stream_decode(&s, "max_error");
+        assert_eq!(shape.meta, r.meta);
+        let want = whole.samples.to_f64();
+        assert!(
+            got.iter()
+                .zip(&want)
+                .all(|(a, b)| a == b || (a.is_nan() && b.is_nan())),
+            "{}",
+            r.summary()
+        );
+        let nodata = r.meta.nodata;
+        for (i, (&a, &g)) in r.samples.to_f64().iter().zip(&got).enumerate() {
+            let void = mra::io::nodata::is_void(a, nodata);
+            assert_eq!(is_marker(g, nodata), void, "{} sample {i}", r.summary());
+            if !void {
+                assert!((a - g).abs() <= e, "{} sample {i}: {a} vs {g}", r.summary());
+            }
+        }
+    }
+}

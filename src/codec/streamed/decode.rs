@@ -71,7 +71,7 @@ impl StreamedDecoder {
     /// left in the file, each batch read from it as it is decoded,
     /// [`crate::codec::block_file`]) and start the synthesis.
     pub fn open(path: &std::path::Path) -> Result<StreamedDecoder> {
-        StreamedDecoder::of(crate::codec::block_file::read_for_stream(path)?)
+        StreamedDecoder::of(crate::codec::indexed_read::read_for_stream(path)?)
     }
 
     /// Start the synthesis of the read file `p` (an error when the stream does not decode it).
