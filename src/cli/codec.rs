@@ -60,11 +60,11 @@ pub struct EncodeArgs {
     pub lossless: bool,
     /// Tile extents, fastest axis first: `N` (every axis), `X,Y[,Z]`, or `whole` (one
     /// tile). Default: one tile up to 2^24 positions or 2^26 samples (positions ×
-    /// channels); above that limit integer images and volumes read in slabs (raw, NRRD,
-    /// TIFF) at --quality, --keep, --threshold or --bpp, and 8- or 16-bit ones at
-    /// --lossless, are one transform streamed a slab at a time (format 3, bounded
-    /// memory), the others 1024 per axis in 2-D and 128 in 3-D. Each tile is coded on its own at the step of the
-    /// whole raster.
+    /// channels); above that limit images and volumes of integer or float samples,
+    /// voids or not, at every rate mode (8- and 16-bit only at --lossless) are one
+    /// transform streamed a slab at a time (format 3, bounded memory; `codec::default_layout`),
+    /// the others (4 axes, 32-bit lossless) tiles of 1024 per axis in 2-D and 128 in 3-D
+    /// and 4-D. Each tile is coded on its own at the step of the whole raster.
     #[arg(long, value_name = "T")]
     pub tile: Option<String>,
     /// Format of a one-piece file: 3 (the default: every band cut into independent
