@@ -88,7 +88,11 @@ fn a_lossless_file_over_the_limit_streams_and_decodes_exactly() {
     let dir = common::scratch_dir("lossless_default");
     let r = big();
     mra::io::write(&dir.join("in.nrrd"), &r).unwrap();
-    let o = mra(&dir, 2, &["encode", "in.nrrd", "-o", "in.mra", "--lossless"]);
+    let o = mra(
+        &dir,
+        2,
+        &["encode", "in.nrrd", "-o", "in.mra", "--lossless"],
+    );
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let file = std::fs::read(dir.join("in.mra")).unwrap();
     let info = codec::info(&file).unwrap();
@@ -117,7 +121,11 @@ fn a_lossless_file_over_the_limit_streams_and_decodes_exactly() {
     skip_varint(&file, &mut at); // the block count
     let mut bad_index = file.clone();
     // the first block one byte longer: the blocks no longer fill the entry
-    assert_ne!(bad_index[at] & 0x7F, 0x7F, "a length whose low bits take one more");
+    assert_ne!(
+        bad_index[at] & 0x7F,
+        0x7F,
+        "a length whose low bits take one more"
+    );
     bad_index[at] += 1;
     fix_crc(&mut bad_index, levl, n);
     let mut bad_block = file.clone();

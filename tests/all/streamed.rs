@@ -221,8 +221,14 @@ fn a_whole_tile_streams_over_the_one_piece_limit() {
     let tiles = codec::default_tile(&big.dims, 1);
     assert_ne!(tiles, big.dims);
     assert_eq!(codec::default_layout(&big, &o(Rate::Lossless)), big.dims);
-    assert_eq!(codec::default_layout(&big, &o(Rate::MaxError(0.5))), big.dims);
-    assert_eq!(codec::default_layout(&big, &o(Rate::MaxError(2.0))), big.dims);
+    assert_eq!(
+        codec::default_layout(&big, &o(Rate::MaxError(0.5))),
+        big.dims
+    );
+    assert_eq!(
+        codec::default_layout(&big, &o(Rate::MaxError(2.0))),
+        big.dims
+    );
     assert_eq!(
         codec::default_layout(&float, &o(Rate::Bpp(1.0))),
         float.dims

@@ -4,10 +4,9 @@
 //! tiled, floats and voids included.
 
 use super::common;
-use mra::codec::{self, DecodeOptions, EncodeOptions, Format, Rate};
+use mra::codec::{self, DecodeOptions, EncodeOptions, Rate};
 use mra::io::slab::{MemorySlabs, Shape};
 use mra::io::{GeoTag, GeoValue, Raster, SampleType, Samples};
-use mra::scheme::{Boundary, Scheme};
 
 /// A smooth field with texture over `[−hi/2, hi/2]` of `ty` (floats keep the fractions).
 fn field(dims: &[usize], channels: usize, ty: SampleType, seed: u64, hi: f64) -> Raster {
@@ -22,22 +21,7 @@ fn field(dims: &[usize], channels: usize, ty: SampleType, seed: u64, hi: f64) ->
     r
 }
 
-fn opts(rate: Rate, levels: usize) -> EncodeOptions {
-    EncodeOptions {
-        rate,
-        levels,
-        boundary: Boundary::Symmetric,
-        scheme: Scheme::Cdf97,
-        format: Format::Blocks,
-        effort: codec::DEFAULT_EFFORT,
-    }
-}
-
-fn streamed(r: &Raster, o: &EncodeOptions) -> Vec<u8> {
-    let mut out = Vec::new();
-    codec::encode_streamed(&mut MemorySlabs::new(r), o, &mut out).unwrap();
-    out
-}
+use common::{stream_encode as streamed, stream_opts as opts};
 
 /// What `mra encode` writes of `r` read from a file: `encode_stream` at the default
 /// layout.

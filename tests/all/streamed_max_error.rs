@@ -5,10 +5,9 @@
 //! bytes on 1 and 2 threads, the metadata kept.
 
 use super::common;
-use mra::codec::{self, DecodeOptions, EncodeOptions, Format, Rate};
-use mra::io::slab::{MemorySlabs, Shape};
+use mra::codec::{self, DecodeOptions, EncodeOptions, Rate};
+use mra::io::slab::Shape;
 use mra::io::{Raster, SampleType, Samples};
-use mra::scheme::{Boundary, Scheme};
 
 /// A smooth field with texture over `[0, hi]` (floats keep the fractions).
 fn field(dims: &[usize], channels: usize, ty: SampleType, seed: u64, hi: f64) -> Raster {
@@ -23,22 +22,10 @@ fn field(dims: &[usize], channels: usize, ty: SampleType, seed: u64, hi: f64) ->
 }
 
 fn opts(e: f64, levels: usize) -> EncodeOptions {
-    EncodeOptions {
-        rate: Rate::MaxError(e),
-        levels,
-        boundary: Boundary::Symmetric,
-        scheme: Scheme::Cdf97,
-        format: Format::Blocks,
-        effort: codec::DEFAULT_EFFORT,
-    }
+    common::stream_opts(Rate::MaxError(e), levels)
 }
 
-fn streamed(r: &Raster, o: &EncodeOptions) -> Vec<u8> {
-    let mut out = Vec::new();
-    let n = codec::encode_streamed(&mut MemorySlabs::new(r), o, &mut out).unwrap();
-    assert_eq!(n as usize, out.len());
-    out
-}
+use common::stream_encode as streamed;
 
 /// The streamed decode of the file at `path`: its shape and samples.
 fn streamed_decode(path: &std::path::Path) -> (Shape, Vec<f64>) {
@@ -142,13 +129,7 @@ fn streamed_max_error_files_do_not_depend_on_the_thread_count() {
     let vol = field(&[40, 36, 33], 1, SampleType::F32, 10, 100.0);
     for (r, e) in [(&img, 3.0), (&vol, 0.05)] {
         let o = opts(e, 4);
-        let on = |threads: usize| {
-            rayon::ThreadPoolBuilder::new()
-                .num_threads(threads)
-                .build()
-                .unwrap()
-                .install(|| streamed(r, &o))
-        };
+        let on = |threads: usize| common::on_threads(threads, || streamed(r, &o));
         assert!(on(1) == on(2), "{} E = {e}", r.summary());
     }
 }

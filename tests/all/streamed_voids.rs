@@ -3,10 +3,9 @@
 //! encoder codes it, and marked again by the streamed decode.
 
 use super::common;
-use mra::codec::{self, DecodeOptions, EncodeOptions, Format, Rate};
+use mra::codec::{self, DecodeOptions, Rate};
 use mra::io::slab::{MemorySlabs, Shape};
 use mra::io::{GeoTag, GeoValue, Raster, SampleType, Samples};
-use mra::scheme::{Boundary, Scheme};
 
 /// A smooth field with texture over `[−hi/2, hi/2]` of `ty`.
 fn field(dims: &[usize], channels: usize, ty: SampleType, seed: u64, hi: f64) -> Raster {
@@ -60,30 +59,9 @@ fn with_voids(mut r: Raster, at: &[usize], v: f64) -> Raster {
     r
 }
 
-fn opts(rate: Rate, levels: usize) -> EncodeOptions {
-    EncodeOptions {
-        rate,
-        levels,
-        boundary: Boundary::Symmetric,
-        scheme: Scheme::Cdf97,
-        format: Format::Blocks,
-        effort: codec::DEFAULT_EFFORT,
-    }
-}
+use common::{stream_encode as streamed, stream_opts as opts};
 
-fn streamed(r: &Raster, o: &EncodeOptions) -> Vec<u8> {
-    let mut out = Vec::new();
-    codec::encode_streamed(&mut MemorySlabs::new(r), o, &mut out).unwrap();
-    out
-}
-
-fn on<T: Send>(threads: usize, f: impl FnOnce() -> T + Send) -> T {
-    rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build()
-        .unwrap()
-        .install(f)
-}
+use common::on_threads as on;
 
 /// The samples of the streamed decode of `file` (`codec::StreamedDecoder`, slab by slab).
 fn stream_decode(file: &[u8], tag: &str) -> (Shape, Vec<f64>) {

@@ -298,3 +298,35 @@ pub fn wave_field(
     )
     .unwrap()
 }
+
+/// `f` run on a pool of `threads` threads (files and decodes must not depend on it).
+pub fn on_threads<T: Send>(threads: usize, f: impl FnOnce() -> T + Send) -> T {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .unwrap()
+        .install(f)
+}
+
+/// The options of the streamed tests: `rate` at `levels` levels, CDF 9/7 with symmetric
+/// ends, code-blocks, the default effort.
+pub fn stream_opts(rate: mra::codec::Rate, levels: usize) -> mra::codec::EncodeOptions {
+    mra::codec::EncodeOptions {
+        rate,
+        levels,
+        boundary: mra::scheme::Boundary::Symmetric,
+        scheme: mra::scheme::Scheme::Cdf97,
+        format: mra::codec::Format::Blocks,
+        effort: mra::codec::DEFAULT_EFFORT,
+    }
+}
+
+/// The one-transform file of `r` (`codec::encode_streamed` of the raster as a slab
+/// source); the byte count it returns is the file's length.
+pub fn stream_encode(r: &mra::io::Raster, o: &mra::codec::EncodeOptions) -> Vec<u8> {
+    let mut out = Vec::new();
+    let n =
+        mra::codec::encode_streamed(&mut mra::io::slab::MemorySlabs::new(r), o, &mut out).unwrap();
+    assert_eq!(n as usize, out.len());
+    out
+}
