@@ -22,7 +22,11 @@ pub(super) struct BlockFile {
 impl BlockFile {
     /// The band entries `entries` (`[channel][band]`: offset and length `L`) of `file`,
     /// `len` bytes.
-    pub(super) fn new(file: std::fs::File, len: u64, entries: Vec<Vec<Option<(u64, u64)>>>) -> BlockFile {
+    pub(super) fn new(
+        file: std::fs::File,
+        len: u64,
+        entries: Vec<Vec<Option<(u64, u64)>>>,
+    ) -> BlockFile {
         BlockFile {
             file,
             len,
@@ -40,8 +44,20 @@ impl BlockFile {
     /// Bytes `r` of the entry of band `j` of channel `c` into `buf` (resized to them):
     /// an error, nothing read, unless the entry is present and `r` lies within it and
     /// the entry within the file.
-    pub(super) fn read(&self, c: usize, j: usize, r: Range<usize>, buf: &mut Vec<u8>) -> Result<()> {
-        let Some((at, l)) = self.entries.get(c).and_then(|e| e.get(j)).copied().flatten() else {
+    pub(super) fn read(
+        &self,
+        c: usize,
+        j: usize,
+        r: Range<usize>,
+        buf: &mut Vec<u8>,
+    ) -> Result<()> {
+        let Some((at, l)) = self
+            .entries
+            .get(c)
+            .and_then(|e| e.get(j))
+            .copied()
+            .flatten()
+        else {
             return Err(Error::format(
                 format!("band {j} of channel {c}: no entry"),
                 "a band read from its LEVL chunk",
@@ -71,13 +87,13 @@ impl BlockFile {
     #[cfg(not(unix))]
     fn read_at(&self, buf: &mut [u8], at: u64) -> Result<()> {
         use std::io::{Read, Seek, SeekFrom};
-        let _g = self.lock.lock().map_err(|_| {
-            Error::format("a reader of the file that failed", "a readable file")
-        })?;
+        let _g = self
+            .lock
+            .lock()
+            .map_err(|_| Error::format("a reader of the file that failed", "a readable file"))?;
         let mut f = &self.file;
         f.seek(SeekFrom::Start(at))?;
         f.read_exact(buf)?;
         Ok(())
     }
 }
-

@@ -29,8 +29,7 @@ pub(super) fn read_indexed<R: std::io::Read + std::io::Seek>(
     let plan = Plan::new(&header)?;
     let groups = plan.level_groups();
     let layout = plan.band_layout(&groups);
-    let sb =
-        crate::format::sparse::read_body_sparse(src, at, len, &header, &layout, (0, true))?;
+    let sb = crate::format::sparse::read_body_sparse(src, at, len, &header, &layout, (0, true))?;
     let Some(sb) = sb else {
         return Ok(None);
     };

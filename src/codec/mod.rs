@@ -15,10 +15,10 @@
 //! [`frames`] beside them.
 
 mod block_file;
-mod indexed_read;
 mod colour;
 mod container;
 mod decode;
+mod indexed_read;
 // `mra demo`'s rows: built with the command line only
 #[cfg(feature = "cli")]
 pub mod demo;

@@ -232,13 +232,21 @@ impl SlabDecoder {
             // the code-blocks left in the file, read a batch at a time as decoded
             let at = rd.position();
             let file = src.inner.get_ref().try_clone()?;
-            let p = match super::indexed_read::read_indexed(&mut src, file, (at, len), header.clone())? {
-                Some(p) => p,
-                None => {
-                    src.seek(SeekFrom::Start(at))?;
-                    read_rest(ChunkReader::at(&mut src, at, len), first.clone(), header.clone(), 0, false)?
-                }
-            };
+            let p =
+                match super::indexed_read::read_indexed(&mut src, file, (at, len), header.clone())?
+                {
+                    Some(p) => p,
+                    None => {
+                        src.seek(SeekFrom::Start(at))?;
+                        read_rest(
+                            ChunkReader::at(&mut src, at, len),
+                            first.clone(),
+                            header.clone(),
+                            0,
+                            false,
+                        )?
+                    }
+                };
             let p = match super::StreamedDecoder::streaming(p)? {
                 Ok(s) => {
                     return Ok(SlabDecoder {

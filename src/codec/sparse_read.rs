@@ -57,8 +57,14 @@ impl Sparse {
         let plan = Plan::new(&header)?;
         let groups = plan.level_groups();
         let layout = plan.band_layout(&groups);
-        let Some(sb) =
-            crate::format::sparse::read_body_sparse(src, at, len, &header, &layout, (stop_level, false))?
+        let Some(sb) = crate::format::sparse::read_body_sparse(
+            src,
+            at,
+            len,
+            &header,
+            &layout,
+            (stop_level, false),
+        )?
         else {
             return Ok(None);
         };
@@ -70,15 +76,14 @@ impl Sparse {
                     row.push(None);
                     continue;
                 };
-                let set = crate::format::bands::parse_index(
-                    &bc.data,
-                    l,
-                    &plan.dims[j],
-                    plan.block(j),
-                )
-                .map_err(|e| {
-                    crate::Error::format(format!("band {j} of channel {c}: {e}"), "a valid band")
-                })?;
+                let set =
+                    crate::format::bands::parse_index(&bc.data, l, &plan.dims[j], plan.block(j))
+                        .map_err(|e| {
+                            crate::Error::format(
+                                format!("band {j} of channel {c}: {e}"),
+                                "a valid band",
+                            )
+                        })?;
                 row.push(Some(Entry {
                     at: off,
                     step: bc.step,
